@@ -1,0 +1,106 @@
+"""One input-check helper for shapes, dtypes and finiteness.
+
+Every public function validates its arrays with :func:`check_array`, which
+raises :class:`ShapeError` (a ``ValueError``) naming the argument and showing
+the expected against the actual shape or dtype. Bad files and table rows raise
+:class:`InputError`, whose message is the one plain sentence the command line
+prints before exiting with status 2.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+__all__ = ["InputError", "ShapeError", "check_array"]
+
+
+class InputError(ValueError):
+    """Bad user input: a file, row, key or argument the user can fix.
+
+    The message is one sentence naming the file, row or key at fault.
+    """
+
+
+class ShapeError(InputError):
+    """An array argument has the wrong shape, dtype or non-finite values."""
+
+
+def _dims_match(expected: Sequence[int | str | None], shape: tuple[int, ...],
+                bound: dict[str, int]) -> bool:
+    if len(expected) != len(shape):
+        return False
+    for e, s in zip(expected, shape, strict=True):
+        if e is None:
+            continue
+        if isinstance(e, str):
+            if e in bound and bound[e] != s:
+                return False
+            bound[e] = s
+        elif int(e) != s:
+            return False
+    return True
+
+
+def _dtype_name(d: object) -> str:
+    if isinstance(d, type) and issubclass(d, np.generic) and d.__name__ in _ABSTRACT:
+        return _ABSTRACT[d.__name__]
+    return np.dtype(d).name  # type: ignore[arg-type]
+
+
+_ABSTRACT = {"floating": "float", "integer": "integer", "number": "numeric",
+             "unsignedinteger": "unsigned integer", "signedinteger": "signed integer"}
+
+
+def check_array(
+    x: object,
+    name: str,
+    shapes: Sequence[Sequence[int | str | None]],
+    *,
+    dtype: type | np.dtype | tuple | None = None,
+    finite: bool = False,
+) -> np.ndarray:
+    """Check an array argument against allowed shapes, dtype and finiteness.
+
+    Parameters
+    ----------
+    x : array_like
+        The argument to check. It is converted with ``np.asarray`` (no copy
+        when it already is an ndarray); it is never reshaped or recast.
+    name : str
+        Argument name, used in the error message.
+    shapes : sequence of sequence of {int, str, None}
+        Allowed shapes. An int fixes a dimension, ``None`` accepts any size,
+        and a string names a dimension whose size must agree wherever the
+        same string appears, e.g. ``[("H", "W", 3), ("N", "H", "W", 3)]``.
+    dtype : numpy dtype, type or tuple of them, optional
+        Allowed dtype(s), tested with ``np.issubdtype``.
+    finite : bool, default False
+        Require every element to be finite.
+
+    Returns
+    -------
+    arr : ndarray
+        ``np.asarray(x)``.
+
+    Raises
+    ------
+    ShapeError
+        When the shape, dtype or finiteness is wrong; the message names the
+        argument and shows expected against actual.
+    """
+    arr = np.asarray(x)
+    if not any(_dims_match(s, arr.shape, {}) for s in shapes):
+        want = " or ".join("(" + ", ".join("?" if d is None else str(d) for d in s) + ")"
+                           for s in shapes)
+        raise ShapeError(f"{name} must have shape {want}, got {arr.shape}")
+    if dtype is not None:
+        allowed = dtype if isinstance(dtype, tuple) else (dtype,)
+        if not any(np.issubdtype(arr.dtype, d) for d in allowed):
+            names = " or ".join(_dtype_name(d) for d in allowed)
+            raise ShapeError(f"{name} must have dtype {names}, got {arr.dtype}")
+    if finite and not np.all(np.isfinite(arr)):
+        bad = int(np.size(arr) - np.count_nonzero(np.isfinite(arr)))
+        raise ShapeError(f"{name} must be finite, found {bad} NaN or infinite value(s)")
+    return arr

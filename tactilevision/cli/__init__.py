@@ -1,0 +1,67 @@
+"""The ``tactilevision`` command line.
+
+Each sub-command lives in its own module with ``add_parser(subparsers)`` and
+``run(args) -> int``. Bad input raises :class:`tactilevision.InputError`; the
+command prints its one-sentence message on standard error and exits with
+status 2, deleting nothing already written (``../shared/formats.md`` §3).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+
+from .._checks import InputError
+from . import _fit, _optics, _reconstruct
+
+__all__ = ["build_parser", "main"]
+
+_COMMANDS = (_reconstruct, _optics, _fit)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """Build the argument parser with every sub-command registered.
+
+    Returns
+    -------
+    parser : argparse.ArgumentParser
+    """
+    from .. import __version__
+
+    parser = argparse.ArgumentParser(
+        prog="tactilevision",
+        description="Vision-based tactile sensors: height maps by photometric stereo, "
+        "in-situ elastomer calibration (E, nu), contact forces.",
+    )
+    parser.add_argument("--version", action="version", version=f"tactilevision {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    for mod in _COMMANDS:
+        mod.add_parser(sub)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the command line; return the exit status.
+
+    Parameters
+    ----------
+    argv : sequence of str, optional
+        Arguments without the program name; ``sys.argv[1:]`` when None.
+
+    Returns
+    -------
+    status : int
+        0 on success, 2 on bad input (message on standard error).
+    """
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.func(args) or 0)
+    except InputError as exc:
+        print(f"tactilevision {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,162 @@
+"""``tactilevision fit``: E and nu from a measurements table (formats.md §3)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import sys
+import warnings
+from pathlib import Path
+
+from .._checks import InputError
+from ..io import read_measurements
+from ..mechanics import (
+    EFFECT_NAMES,
+    IndentationFit,
+    beta_relation,
+    check_fit_effects,
+    fit_indentation,
+)
+
+_DESCRIPTION = """\
+Fit the paper's law P/w = c beta (w/h) + c (eq. 5) to a measurements table
+(one row per certified press: depth_mm, force_n, ...), then nu from the beta
+table and E from Hayes' kappa (eq. 4). h and a come from the options or from
+session.toml next to the table ([sensor] gel_thickness_mm, [indenter] radius_mm).
+The beta table 'paper' (relation 7, a/h = 0.8) is the default until the FEM
+table of a later issue exists. Exit status 2 on bad input."""
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    """Register the ``fit`` sub-command.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The sub-parsers of the ``tactilevision`` parser.
+    """
+    p = sub.add_parser("fit", help="fit E and nu to a measurements table",
+                       description=_DESCRIPTION,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("measurements", metavar="MEASUREMENTS.csv", type=Path,
+                   help="table of certified presses (formats.md section 2)")
+    p.add_argument("--thickness-mm", type=float, metavar="H",
+                   help="gel thickness h in mm (default: session.toml [sensor] gel_thickness_mm)")
+    p.add_argument("--radius-mm", type=float, metavar="A",
+                   help="indenter radius a in mm (default: session.toml [indenter] radius_mm)")
+    p.add_argument("--beta-table", choices=("paper", "fem"), default="paper",
+                   help="source of nu(beta) (default: paper; fem is not built yet)")
+    p.add_argument("--effects", default="large_deformation", metavar="E1,E2",
+                   help="comma-separated effects; fit supports large_deformation (the base "
+                        f"model); catalogue: {', '.join(EFFECT_NAMES)}")
+    p.add_argument("--a-over-h", type=float, metavar="X",
+                   help="a/h at which kappa is read (default: the exact a/h; 0.8 reproduces "
+                        "the paper)")
+    p.add_argument("--json", metavar="FILE",
+                   help="write the result as JSON to FILE ('-' for standard output)")
+    p.set_defaults(func=run)
+
+
+def _fmt_ci(ci: tuple[float, float], digits: int) -> str:
+    return f"[{ci[0]:.{digits}f}, {ci[1]:.{digits}f}]"
+
+
+def summary(fit: IndentationFit, path: Path) -> str:
+    """Human-readable summary of a fit, a few lines.
+
+    Parameters
+    ----------
+    fit : IndentationFit
+    path : Path
+        The table the fit came from.
+
+    Returns
+    -------
+    text : str
+    """
+    pct = f"{fit.confidence:.0%}"
+    lines = [
+        f"{path}: {fit.n_presses} presses, h = {fit.thickness_mm:g} mm, "
+        f"a = {fit.radius_mm:g} mm, kappa read at a/h = {fit.a_over_h:.4f}",
+        f"  eq. (5) P/w = c beta (w/h) + c: c = {fit.c_n_per_mm:.4f} N/mm, "
+        f"beta = {fit.beta:.4f} {pct} CI {_fmt_ci(fit.beta_ci95, 4)}, "
+        f"R^2 = {fit.r_squared:.5f}, rmse = {fit.rmse_n:.4g} N",
+    ]
+    if fit.out_of_table:
+        lines.append(f"  OUT OF TABLE: {fit.out_of_table_message}")
+    else:
+        lines += [
+            f"  E  = {fit.E_mpa:.4f} MPa  {pct} CI {_fmt_ci(fit.E_ci95_mpa, 4)} MPa",
+            f"  nu = {fit.nu:.4f}      {pct} CI {_fmt_ci(fit.nu_ci95, 4)}",
+            f"  Neo-Hookean (Abaqus): C10 = {fit.C10_mpa:.4f} MPa, "
+            f"D1 = {fit.D1_per_mpa:.4f} 1/MPa",
+        ]
+    lines.append(f"  beta table: {fit.beta_table} (the paper's relation (7) is the default "
+                 "until the FEM table of a later issue exists); kappa: Hayes 1972")
+    lines += [f"  note: {n}" for n in fit.notes if not n.startswith(("intervals:", "beta table"))]
+    return "\n".join(lines)
+
+
+def _write_json(obj: dict, dest: str) -> None:
+    text = json.dumps(obj, indent=2, allow_nan=False) + "\n"
+    if dest == "-":
+        sys.stdout.write(text)
+        return
+    target = Path(dest)
+    tmp = target.with_name(target.name + ".tmp")
+    try:
+        tmp.write_text(text, encoding="utf-8")
+        os.replace(tmp, target)  # the old file stays whole until the new one is complete
+    except OSError as exc:
+        raise InputError(f"cannot write the JSON result to {dest}: {exc.strerror}") from None
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run ``fit``: read, fit, print a summary or the JSON, write ``--json FILE``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        Parsed options of :func:`add_parser`.
+
+    Returns
+    -------
+    status : int
+        0 on success.
+
+    Raises
+    ------
+    InputError
+        For bad input (the command line turns it into exit status 2); nothing
+        is written then.
+    """
+    check_fit_effects([e.strip() for e in args.effects.split(",") if e.strip()])
+    try:
+        beta_relation(args.beta_table)
+    except NotImplementedError as exc:
+        raise InputError(f"--beta-table {args.beta_table}: {exc}") from None
+    if args.a_over_h is not None and not math.isfinite(args.a_over_h):
+        raise InputError(f"--a-over-h must be a finite number, got {args.a_over_h}")
+    path = args.measurements
+    table = read_measurements(path, thickness_mm=args.thickness_mm, radius_mm=args.radius_mm)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            fit = fit_indentation(table.depth_mm, table.force_n,
+                                  thickness_mm=table.thickness_mm, radius_mm=table.radius_mm,
+                                  beta_table=args.beta_table, a_over_h=args.a_over_h)
+        except InputError as exc:
+            raise InputError(f"{path}: {exc}") from None
+    for w in caught:
+        print(f"tactilevision fit: warning: {path}: {w.message}", file=sys.stderr)
+    obj = fit.to_json_dict()
+    obj["measurements"] = str(path)
+    obj["thickness_source"] = table.thickness_source
+    obj["radius_source"] = table.radius_source
+    if args.json is not None:
+        _write_json(obj, args.json)  # first: a failed write prints nothing else
+    if args.json != "-":
+        print(summary(fit, path))
+    return 0

@@ -1,0 +1,24 @@
+"""File and folder I/O: frame folders, ball-press sets, measurement tables.
+
+Everything that touches the file system lives here (and in ``cli``); the
+modules under ``optics``, ``mechanics`` and ``fem`` work on arrays.
+"""
+
+# frames and ball presses (optics)
+from ._frames import (
+    BallPressSet,
+    find_reference,
+    list_frames,
+    read_ball_presses,
+    read_image,
+    read_reference,
+    taxim_datapack,
+)
+
+__all__ = ["BallPressSet", "find_reference", "list_frames", "read_ball_presses", "read_image",
+           "read_reference", "taxim_datapack"]
+
+# measurements tables (mechanics): names appended below
+from ._measurements import REQUIRED_COLUMNS, Measurements, read_measurements
+
+__all__ += ["REQUIRED_COLUMNS", "Measurements", "read_measurements"]

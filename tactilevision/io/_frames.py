@@ -1,0 +1,277 @@
+"""Frame folders, reference frames and ball-press sets."""
+
+from __future__ import annotations
+
+import csv
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from .._checks import InputError
+
+__all__ = ["BallPressSet", "find_reference", "list_frames", "read_ball_presses", "read_image",
+           "read_reference", "taxim_datapack"]
+
+IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg")
+REFERENCE_NAMES = ("reference.png", "reference.jpg", "ref.png", "ref.jpg")
+
+
+def _natural_key(p: Path) -> list:
+    return [int(t) if t.isdigit() else t.lower() for t in re.split(r"(\d+)", p.name)]
+
+
+def read_image(path: str | Path) -> np.ndarray:
+    """Read a colour image as BGR uint8 (as ``cv2.imread`` gives).
+
+    Parameters
+    ----------
+    path : str or Path
+        A .png or .jpg file.
+
+    Returns
+    -------
+    image : (H, W, 3) uint8 ndarray
+        BGR.
+
+    Raises
+    ------
+    InputError
+        If the file is missing or not a readable colour image.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"image {path} does not exist")
+    img = cv2.imread(str(path), cv2.IMREAD_COLOR)
+    if img is None:
+        raise InputError(f"image {path} is not a readable image")
+    return img
+
+
+def list_frames(folder: str | Path) -> list[Path]:
+    """Frame files of a folder in name order (numbers compared as numbers).
+
+    Parameters
+    ----------
+    folder : str or Path
+        Folder of .png / .jpg frames; reference frames (``reference.*``,
+        ``ref.*``) are left out.
+
+    Returns
+    -------
+    paths : list of Path
+
+    Raises
+    ------
+    InputError
+        If the folder does not exist or holds no frames.
+    """
+    folder = Path(folder)
+    if not folder.is_dir():
+        raise InputError(f"frames folder {folder} does not exist")
+    paths = [p for p in folder.iterdir()
+             if p.suffix.lower() in IMAGE_SUFFIXES and p.name.lower() not in REFERENCE_NAMES]
+    if not paths:
+        raise InputError(f"frames folder {folder} holds no .png or .jpg frames")
+    return sorted(paths, key=_natural_key)
+
+
+def find_reference(frames_dir: str | Path) -> Path | None:
+    """Find the no-contact reference frame of a frame folder.
+
+    Looks for ``reference.png``, ``reference.jpg``, ``ref.png`` or ``ref.jpg``
+    in the folder, then in its parent (the session-folder layout of
+    ``formats.md``: ``<session>/reference.png`` beside ``<session>/frames/``).
+
+    Parameters
+    ----------
+    frames_dir : str or Path
+
+    Returns
+    -------
+    path : Path or None
+    """
+    frames_dir = Path(frames_dir)
+    for folder in (frames_dir, frames_dir.parent):
+        for name in REFERENCE_NAMES:
+            if (folder / name).is_file():
+                return folder / name
+    return None
+
+
+def read_reference(path: str | Path, shape: tuple[int, int] | None = None) -> np.ndarray:
+    """Read a reference frame and check its size.
+
+    Parameters
+    ----------
+    path : str or Path
+    shape : tuple of int, optional
+        Required (H, W).
+
+    Returns
+    -------
+    reference : (H, W, 3) uint8 ndarray
+
+    Raises
+    ------
+    InputError
+        If unreadable or of the wrong size.
+    """
+    ref = read_image(path)
+    if shape is not None and ref.shape[:2] != tuple(shape):
+        raise InputError(f"reference {path} is {ref.shape[1]} x {ref.shape[0]} px but the "
+                         f"calibration expects {shape[1]} x {shape[0]} px")
+    return ref
+
+
+@dataclass
+class BallPressSet:
+    """Ball-press calibration frames.
+
+    Attributes
+    ----------
+    reference : (H, W, 3) uint8 ndarray
+        No-contact frame, BGR.
+    frames : (N, H, W, 3) uint8 ndarray
+        Presses, BGR.
+    centers_px : (N, 2) float64 ndarray or None
+        Annotated circle centres (x, y), px, when known.
+    radii_px : (N,) float64 ndarray or None
+        Annotated circle radii, px, when known.
+    names : list of str
+        Frame names.
+    """
+
+    reference: np.ndarray
+    frames: np.ndarray
+    centers_px: np.ndarray | None
+    radii_px: np.ndarray | None
+    names: list[str]
+
+
+def read_ball_presses(path: str | Path) -> BallPressSet:
+    """Read a ball-press set from an ``.npz`` file or a folder.
+
+    Parameters
+    ----------
+    path : str or Path
+        Either an ``.npz`` with ``reference``, ``frames`` and optionally
+        ``centers_px``, ``radii_px`` (or the ``taxim`` layout ``f0``,
+        ``imgs``, ``touch_center``, ``touch_radius``), or a folder with a
+        reference frame (see :func:`find_reference`), the press frames and
+        optionally ``circles.csv`` with columns ``frame,x_px,y_px,radius_px``.
+
+    Returns
+    -------
+    presses : BallPressSet
+
+    Raises
+    ------
+    InputError
+        Naming the file, key, row or frame at fault.
+    """
+    path = Path(path)
+    if path.suffix == ".npz":
+        return _read_npz(path)
+    if not path.is_dir():
+        raise InputError(f"ball presses {path} is neither an .npz file nor a folder")
+    ref_path = find_reference(path)
+    if ref_path is None:
+        raise InputError(f"ball-press folder {path} has no reference.png / ref.jpg")
+    reference = read_image(ref_path)
+    files = list_frames(path)
+    frames = []
+    for f in files:
+        img = read_image(f)
+        if img.shape != reference.shape:
+            raise InputError(f"frame {f} is {img.shape[1]} x {img.shape[0]} px but the "
+                             f"reference is {reference.shape[1]} x {reference.shape[0]} px")
+        frames.append(img)
+    names = [f.name for f in files]
+    centers = radii = None
+    circles = path / "circles.csv"
+    if circles.is_file():
+        centers, radii = _read_circles(circles, names)
+    return BallPressSet(reference, np.stack(frames), centers, radii, names)
+
+
+def _read_circles(path: Path, names: list[str]) -> tuple[np.ndarray, np.ndarray]:
+    rows: dict[str, tuple[float, float, float]] = {}
+    with path.open(newline="") as fh:
+        reader = csv.DictReader(fh)
+        need = {"frame", "x_px", "y_px", "radius_px"}
+        if reader.fieldnames is None or not need <= set(reader.fieldnames):
+            raise InputError(f"{path} must have the columns frame,x_px,y_px,radius_px")
+        for line, row in enumerate(reader, start=2):
+            try:
+                rows[row["frame"]] = (float(row["x_px"]), float(row["y_px"]),
+                                      float(row["radius_px"]))
+            except (TypeError, ValueError):
+                raise InputError(f"{path} line {line}: non-numeric circle "
+                                 f"({row.get('x_px')}, {row.get('y_px')}, "
+                                 f"{row.get('radius_px')})") from None
+    missing = [n for n in names if n not in rows]
+    if missing:
+        raise InputError(f"{path} has no circle for frame {missing[0]}")
+    arr = np.array([rows[n] for n in names], np.float64)
+    return arr[:, :2], arr[:, 2]
+
+
+def _read_npz(path: Path) -> BallPressSet:
+    if not path.is_file():
+        raise InputError(f"ball presses {path} does not exist")
+    try:
+        z = np.load(path, allow_pickle=False)
+    except (OSError, ValueError) as exc:
+        raise InputError(f"ball presses {path} is not a readable .npz ({exc})") from None
+    with z:
+        keys = set(z.files)
+        if {"f0", "imgs"} <= keys:  # the taxim dataPack layout
+            ref, frames = z["f0"], z["imgs"]
+            centers = z["touch_center"].astype(np.float64) if "touch_center" in keys else None
+            radii = z["touch_radius"].astype(np.float64) if "touch_radius" in keys else None
+        elif {"reference", "frames"} <= keys:
+            ref, frames = z["reference"], z["frames"]
+            centers = z["centers_px"].astype(np.float64) if "centers_px" in keys else None
+            radii = z["radii_px"].astype(np.float64) if "radii_px" in keys else None
+        else:
+            raise InputError(f"ball presses {path} needs the keys 'reference' and 'frames' "
+                             f"(or taxim's 'f0' and 'imgs'); it has {sorted(keys)}")
+    if ref.dtype != np.uint8 or ref.ndim != 3 or frames.ndim != 4 \
+            or frames.shape[1:] != ref.shape:
+        raise InputError(f"ball presses {path}: frames {frames.shape} {frames.dtype} do not "
+                         f"match the reference {ref.shape} {ref.dtype} (uint8 BGR expected)")
+    names = [f"press_{i}" for i in range(len(frames))]
+    return BallPressSet(ref, frames, centers, radii, names)
+
+
+def taxim_datapack(sensor: str = "gelsight") -> Path:
+    """Path of the ball-press data pack shipped inside the ``taxim`` package.
+
+    Parameters
+    ----------
+    sensor : {'gelsight', 'gelsight_mini'}
+        Which data pack. Only 'gelsight' has a documented ball radius
+        (2.0 mm at 0.0295 mm/px); see ``shared/real/README.md``.
+
+    Returns
+    -------
+    path : Path
+        ``taxim/calib/<sensor>/dataPack.npz`` (MIT licence, CMURoboTouch).
+
+    Raises
+    ------
+    InputError
+        If ``taxim`` is not installed (``pip install tactilevision[test]``).
+    """
+    import importlib.resources
+    import importlib.util
+
+    if importlib.util.find_spec("taxim") is None:
+        raise InputError("the taxim package is not installed: pip install 'tactilevision[test]'")
+    path = Path(str(importlib.resources.files("taxim") / "calib" / sensor / "dataPack.npz"))
+    if not path.is_file():
+        raise InputError(f"taxim has no data pack for sensor '{sensor}' ({path})")
+    return path

@@ -1,0 +1,249 @@
+"""Read a measurements table (``formats.md`` §2) and its sidecar ``session.toml``."""
+
+from __future__ import annotations
+
+import csv
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .._checks import InputError
+
+__all__ = ["REQUIRED_COLUMNS", "Measurements", "read_measurements"]
+
+#: Columns every measurements table must have (formats.md §2).
+REQUIRED_COLUMNS = ("depth_mm", "force_n")
+
+# Optional columns of formats.md §2 that must be numeric when present.
+# ``indenter`` is an id and may be text; unknown columns are covariates when
+# every cell is a number, else kept as labels.
+_NUMERIC_COLUMNS = frozenset({
+    "press", "force_std_n", "fx_n", "fy_n", "time_s", "hold_s", "wait_s",
+    "x_mm", "y_mm", "day", "temperature_c",
+})
+
+# (table, key, argument name) of the sidecar values.
+_SIDECAR = {"thickness_mm": ("sensor", "gel_thickness_mm"),
+            "radius_mm": ("indenter", "radius_mm")}
+
+
+@dataclass(frozen=True)
+class Measurements:
+    """One row per certified press, with the geometry the fit needs.
+
+    Attributes
+    ----------
+    path : Path
+        The table read.
+    columns : dict of str to (N,) float64 ndarray
+        Every numeric column, in file order, NaN for empty cells;
+        ``depth_mm`` (mm) and ``force_n`` (N) are always present and finite.
+    labels : dict of str to tuple of str
+        Columns holding text (e.g. an ``indenter`` id), kept as read.
+    line_numbers : (N,) int64 ndarray
+        Line of the file each row was read from (the header is line 1).
+    thickness_mm, radius_mm : float, mm
+        Gel thickness h and indenter radius a.
+    thickness_source, radius_source : str
+        ``'argument'`` or ``'<session.toml path> [table] key'``.
+    """
+
+    path: Path
+    columns: dict[str, np.ndarray] = field(hash=False)
+    labels: dict[str, tuple[str, ...]] = field(hash=False)
+    line_numbers: np.ndarray = field(hash=False)
+    thickness_mm: float
+    radius_mm: float
+    thickness_source: str
+    radius_source: str
+
+    @property
+    def depth_mm(self) -> np.ndarray:
+        """(N,) float64 ndarray, mm: certified depth w of each press."""
+        return self.columns["depth_mm"]
+
+    @property
+    def force_n(self) -> np.ndarray:
+        """(N,) float64 ndarray, N: normal force P of each press."""
+        return self.columns["force_n"]
+
+    @property
+    def covariates(self) -> tuple[str, ...]:
+        """Names of the numeric columns other than ``depth_mm`` and ``force_n``."""
+        return tuple(k for k in self.columns if k not in REQUIRED_COLUMNS)
+
+    def __len__(self) -> int:
+        return int(self.depth_mm.shape[0])
+
+
+def _number(text: str) -> float | None:
+    """Parse a cell; NaN when empty, None when not a number."""
+    text = text.strip()
+    if not text:
+        return math.nan
+    try:
+        return float(text)
+    except ValueError:
+        return None
+
+
+def _read_table(path: Path) -> tuple[list[str], list[list[str]], list[int]]:
+    try:
+        with path.open(newline="", encoding="utf-8-sig") as fh:
+            reader = csv.reader(fh)
+            header = next(reader, None)
+            rows, lines = [], []
+            for row in reader:
+                if not row:
+                    continue  # blank line
+                if len(row) != len(header or ()):
+                    raise InputError(f"{path} line {reader.line_num} has {len(row)} cells, "
+                                     f"the header has {len(header or ())}")
+                rows.append(row)
+                lines.append(reader.line_num)
+    except FileNotFoundError:
+        raise InputError(f"measurements table {path} not found") from None
+    except IsADirectoryError:
+        raise InputError(f"{path} is a folder, not a measurements table") from None
+    except OSError as exc:
+        raise InputError(f"cannot read {path}: {exc.strerror}") from None
+    except (UnicodeDecodeError, csv.Error) as exc:
+        raise InputError(f"{path} is not a readable CSV text file ({exc})") from None
+    if header is None:
+        raise InputError(f"{path} is empty: no header line")
+    names = [h.strip() for h in header]
+    for i, name in enumerate(names):
+        if not name:
+            raise InputError(f"{path} line 1: column {i + 1} has no name")
+        if name in names[:i]:
+            raise InputError(f"{path} line 1: column '{name}' appears twice")
+    return names, rows, lines
+
+
+def _parse_columns(path: Path, names: list[str], rows: list[list[str]], lines: list[int]
+                   ) -> tuple[dict[str, np.ndarray], dict[str, tuple[str, ...]]]:
+    columns: dict[str, np.ndarray] = {}
+    labels: dict[str, tuple[str, ...]] = {}
+    for j, name in enumerate(names):
+        cells = [row[j] for row in rows]
+        values = [_number(t) for t in cells]
+        must = name in REQUIRED_COLUMNS or name in _NUMERIC_COLUMNS
+        bad = next((i for i, v in enumerate(values) if v is None), None)
+        if bad is not None and not must:
+            labels[name] = tuple(t.strip() for t in cells)
+            continue
+        if bad is not None:
+            raise InputError(f"{path} line {lines[bad]}, column {name}: "
+                             f"'{cells[bad].strip()}' is not a number")
+        arr = np.array(values, dtype=np.float64)  # (N,)
+        if name in REQUIRED_COLUMNS and not np.all(np.isfinite(arr)):
+            i = int(np.argmax(~np.isfinite(arr)))
+            what = "empty cell" if not cells[i].strip() else f"'{cells[i].strip()}'"
+            raise InputError(f"{path} line {lines[i]}, column {name}: {what}; "
+                             f"{' and '.join(REQUIRED_COLUMNS)} need a finite number in every row")
+        columns[name] = arr
+    return columns, labels
+
+
+def _geometry(path: Path, given: dict[str, float | None]) -> tuple[dict[str, float],
+                                                                  dict[str, str]]:
+    values: dict[str, float] = {}
+    sources: dict[str, str] = {}
+    for arg, v in given.items():
+        if v is not None:
+            x = float(v)
+            if not (math.isfinite(x) and x > 0):
+                raise InputError(f"{arg} must be a positive number of mm, got {v!r}")
+            values[arg], sources[arg] = x, "argument"
+    need = [arg for arg in _SIDECAR if arg not in values]
+    if not need:
+        return values, sources
+    toml = path.parent / "session.toml"
+    flag = "--" + need[0].replace("_", "-")
+    if not toml.is_file():
+        table, key = _SIDECAR[need[0]]
+        raise InputError(f"{path}: {need[0]} not given and no session.toml next to it "
+                         f"(give {need[0]} / {flag}, or add [{table}] {key} to {toml})")
+    try:
+        with toml.open("rb") as fh:
+            doc = tomllib.load(fh)
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise InputError(f"{toml} is not valid TOML: {exc}") from None
+    for arg in need:
+        table, key = _SIDECAR[arg]
+        section = doc.get(table)
+        if not isinstance(section, dict) or key not in section:
+            raise InputError(f"{toml}: missing key [{table}] {key} "
+                             f"(or give {arg} / --{arg.replace('_', '-')})")
+        v = section[key]
+        if isinstance(v, bool) or not isinstance(v, int | float) or not (
+                math.isfinite(v) and v > 0):
+            raise InputError(f"{toml}: [{table}] {key} must be a positive number of mm, "
+                             f"got {v!r}")
+        values[arg], sources[arg] = float(v), f"{toml} [{table}] {key}"
+    return values, sources
+
+
+def read_measurements(path: str | Path, *, thickness_mm: float | None = None,
+                      radius_mm: float | None = None) -> Measurements:
+    """Read ``measurements.csv`` (formats.md §2) and the geometry of its session.
+
+    Parameters
+    ----------
+    path : str or Path
+        The CSV table: a header line, then one row per certified press.
+        ``depth_mm`` and ``force_n`` are required and must be finite in every
+        row; other columns are optional, empty cells are missing values.
+    thickness_mm : float, optional
+        Gel thickness h, mm. Default: ``[sensor] gel_thickness_mm`` of the
+        ``session.toml`` in the same folder.
+    radius_mm : float, optional
+        Flat indenter radius a, mm. Default: ``[indenter] radius_mm`` of the
+        same ``session.toml``.
+
+    Returns
+    -------
+    table : Measurements
+        Numeric columns as (N,) float64 arrays (NaN where empty), text columns
+        as labels, and h, a with where each came from. ``session.toml`` is
+        read only when an argument is missing.
+
+    Raises
+    ------
+    InputError
+        With one sentence naming the file and the line, column or key: file
+        missing or unreadable, a missing required column, a row of the wrong
+        length, a non-numeric cell in a numeric column (the bad text is
+        quoted), an empty required cell, a depth not positive, no data rows,
+        ``session.toml`` absent, malformed or missing a key when the value was
+        not given, or a geometry value that is not a positive number.
+
+    Notes
+    -----
+    Presses deeper than w/h = 0.2 are not refused here;
+    :func:`tactilevision.mechanics.fit_indentation` warns about them.
+    """
+    path = Path(path)
+    names, rows, lines = _read_table(path)
+    missing = [c for c in REQUIRED_COLUMNS if c not in names]
+    if missing:
+        raise InputError(f"{path} line 1: missing required column(s) {', '.join(missing)} "
+                         f"(found: {', '.join(names)})")
+    if not rows:
+        raise InputError(f"{path} has a header but no data rows")
+    columns, labels = _parse_columns(path, names, rows, lines)
+    depth = columns["depth_mm"]
+    if np.any(depth <= 0):
+        i = int(np.argmax(depth <= 0))
+        raise InputError(f"{path} line {lines[i]}, column depth_mm: depth {depth[i]:g} mm "
+                         "must be positive")
+    geo, src = _geometry(path, {"thickness_mm": thickness_mm, "radius_mm": radius_mm})
+    return Measurements(
+        path=path, columns=columns, labels=labels,
+        line_numbers=np.array(lines, dtype=np.int64),
+        thickness_mm=geo["thickness_mm"], radius_mm=geo["radius_mm"],
+        thickness_source=src["thickness_mm"], radius_source=src["radius_mm"],
+    )

@@ -1,0 +1,43 @@
+"""Mechanics of the gel pad: kappa and beta tables, the in-situ fit of E and nu.
+
+The method is the paper's, "In-situ Mechanical Calibration for Vision-based
+Tactile Sensors": presses of a flat cylindrical indenter of radius a to
+certified depths w into a gel layer of thickness h bonded to a rigid base,
+forces P, and the law eq. (5) ``P/w = c beta (w/h) + c``.
+
+Tables (every literature number lives in one table with its source):
+
+- :data:`HAYES_1972`, :func:`kappa` -- kappa(nu, a/h), Hayes et al. 1972.
+- :data:`PAPER_BETA_RELATION`, :func:`nu_from_beta`, :func:`beta_from_nu` --
+  the paper's relation (7) at a/h = 0.8.
+
+Fit:
+
+- :func:`fit_indentation` -> :class:`IndentationFit`.
+- :func:`neo_hookean_constants` -- Abaqus C10, D1 from E, nu.
+"""
+
+from ._beta import PAPER_BETA_RELATION, BetaRelation, beta_from_nu, beta_relation, nu_from_beta
+from ._effects import EFFECT_NAMES, FIT_EFFECTS, check_fit_effects
+from ._fit import MAX_W_OVER_H, fit_indentation
+from ._kappa import HAYES_1972, KappaTable, kappa
+from ._neohookean import neo_hookean_constants
+from ._result import IndentationFit
+
+__all__ = [
+    "EFFECT_NAMES",
+    "FIT_EFFECTS",
+    "HAYES_1972",
+    "MAX_W_OVER_H",
+    "PAPER_BETA_RELATION",
+    "BetaRelation",
+    "IndentationFit",
+    "KappaTable",
+    "beta_from_nu",
+    "beta_relation",
+    "check_fit_effects",
+    "fit_indentation",
+    "kappa",
+    "neo_hookean_constants",
+    "nu_from_beta",
+]

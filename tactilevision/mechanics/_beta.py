@@ -1,0 +1,224 @@
+"""The large-deformation factor beta(nu) and its inverse nu(beta).
+
+eq. (2) of the paper: ``kappa_n = kappa (1 + beta w/h)``. The only beta table
+available so far is the paper's fitted relation (7) at a/h = 0.8; the
+project's own FEM table arrives in a later issue.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._checks import InputError
+
+__all__ = ["PAPER_BETA_RELATION", "BetaRelation", "beta_from_nu", "beta_relation", "nu_from_beta"]
+
+
+@dataclass(frozen=True)
+class BetaRelation:
+    """A logarithmic relation ``nu = slope ln(beta) + intercept`` with its range.
+
+    Attributes
+    ----------
+    slope : float, dimensionless
+    intercept : float, dimensionless
+    a_over_h : float, dimensionless
+        The aspect ratio the relation was built for.
+    nu_min, nu_max : float, dimensionless
+        The relation is used for ``nu_min <= nu < nu_max``.
+    source : str
+        Where the relation comes from.
+    range_reason : str
+        Why the range is what it is.
+    """
+
+    slope: float
+    intercept: float
+    a_over_h: float
+    nu_min: float
+    nu_max: float
+    source: str
+    range_reason: str
+
+    @property
+    def beta_min(self) -> float:
+        """Smallest beta in range, ``exp((nu_min - intercept) / slope)``."""
+        return math.exp((self.nu_min - self.intercept) / self.slope)
+
+    @property
+    def beta_max(self) -> float:
+        """Supremum of beta in range (excluded), ``exp((nu_max - intercept) / slope)``."""
+        return math.exp((self.nu_max - self.intercept) / self.slope)
+
+    def dnu_dbeta(self, beta: float) -> float:
+        """Slope of the relation, ``slope / beta``, 1 per unit beta."""
+        return self.slope / beta
+
+    def range_text(self) -> str:
+        """The range as one phrase, for messages."""
+        return (f"beta in [{self.beta_min:.4f}, {self.beta_max:.4f}), "
+                f"i.e. nu in [{self.nu_min:.2f}, {self.nu_max:.2f})")
+
+
+#: The paper's relation (7) at a/h = 0.8, nu = 0.0813 ln(beta) + 0.4464
+#: (R^2 = 0.9842), fitted to beta values derived from Zhang et al. 1997.
+PAPER_BETA_RELATION = BetaRelation(
+    slope=0.0813,
+    intercept=0.4464,
+    a_over_h=0.8,
+    nu_min=0.30,
+    nu_max=0.50,
+    source=(
+        "'In-situ Mechanical Calibration for Vision-based Tactile Sensors', eq. (7), "
+        "nu = 0.0813 ln(beta) + 0.4464 at a/h = 0.8 (R^2 = 0.9842), from the "
+        "finite-element data of Zhang, Zheng and Mak 1997, Med. Eng. Phys. 19:512-517"
+    ),
+    range_reason=(
+        "nu < 0.30 is below the Hayes kappa table that E needs; nu >= 0.5 is "
+        "not a compressible solid (the logarithm does not saturate there)"
+    ),
+)
+
+_TABLES = {"paper": PAPER_BETA_RELATION}
+
+
+def _relation(table: str) -> BetaRelation:
+    if table == "fem":
+        raise NotImplementedError(
+            "the FEM beta table is not built yet (models/kappa_fem*, a later issue); "
+            "use table='paper', the paper's relation (7)"
+        )
+    if table not in _TABLES:
+        raise ValueError(f"table must be 'paper' or 'fem', got {table!r}")
+    return _TABLES[table]
+
+
+def _out(x: np.ndarray | float) -> float | np.ndarray:
+    arr = np.asarray(x, dtype=np.float64)
+    return float(arr) if arr.ndim == 0 else arr
+
+
+def nu_from_beta(beta: float | np.ndarray, *, table: str = "paper") -> float | np.ndarray:
+    """Poisson's ratio from the large-deformation factor beta.
+
+    Parameters
+    ----------
+    beta : float or (...) array_like, dimensionless
+        Stiffening factor of eq. (2), the slope over the intercept of eq. (5).
+    table : {'paper', 'fem'}, default 'paper'
+        ``'paper'``: :data:`PAPER_BETA_RELATION`, eq. (7), built for
+        a/h = 0.8. ``'fem'``: the project's FEM table, not built yet.
+
+    Returns
+    -------
+    nu : float or (...) float64 ndarray, dimensionless
+        A float for a scalar `beta`.
+
+    Raises
+    ------
+    InputError
+        (a ``ValueError``) when a `beta` is not finite or outside the
+        relation's range (see :attr:`BetaRelation.range_text`); it is never
+        clamped.
+    NotImplementedError
+        For ``table='fem'``: the FEM table is not built yet.
+    ValueError
+        For an unknown `table`.
+
+    Notes
+    -----
+    ``nu = 0.0813 ln(beta) + 0.4464``, eq. (7) of [1]_, valid at a/h = 0.8.
+    Range: nu in [0.30, 0.50), i.e. beta in [0.1652, 1.9334). The lower end is
+    where the Hayes kappa table starts (E cannot be computed below it); the
+    upper end is incompressibility, which the logarithm crosses without
+    noticing. The range of nu over which the paper fitted (7) is not stated.
+
+    References
+    ----------
+    .. [1] "In-situ Mechanical Calibration for Vision-based Tactile Sensors",
+       eq. (7).
+    .. [2] M. Zhang, Y. P. Zheng, A. F. T. Mak, "Estimating the effective
+       Young's modulus of soft tissues from indentation tests - nonlinear finite
+       element analysis of effects of friction and large deformation",
+       Med. Eng. Phys. 19:512-517, 1997.
+
+    Examples
+    --------
+    >>> from tactilevision.mechanics import nu_from_beta
+    >>> round(nu_from_beta(5.2662 / 3.4943), 4)
+    0.4797
+    """
+    rel = _relation(table)
+    b = np.asarray(beta, dtype=np.float64)
+    bad = ~((b >= rel.beta_min) & (b < rel.beta_max))
+    if np.any(bad):
+        v = float(np.ravel(b)[np.argmax(np.ravel(bad))])
+        raise InputError(
+            f"beta = {v:g} is outside the range of the {table} beta table ({rel.range_text()})"
+        )
+    return _out(rel.slope * np.log(b) + rel.intercept)
+
+
+def beta_from_nu(nu: float | np.ndarray, *, table: str = "paper") -> float | np.ndarray:
+    """Large-deformation factor beta from Poisson's ratio; inverse of :func:`nu_from_beta`.
+
+    Parameters
+    ----------
+    nu : float or (...) array_like, dimensionless
+        Poisson's ratio, within [0.30, 0.50) for ``table='paper'``.
+    table : {'paper', 'fem'}, default 'paper'
+        As in :func:`nu_from_beta`.
+
+    Returns
+    -------
+    beta : float or (...) float64 ndarray, dimensionless
+        ``exp((nu - 0.4464) / 0.0813)``, eq. (7) inverted. A float for a
+        scalar `nu`.
+
+    Raises
+    ------
+    InputError
+        (a ``ValueError``) when a `nu` is not finite or outside the range.
+    NotImplementedError
+        For ``table='fem'``: the FEM table is not built yet.
+    ValueError
+        For an unknown `table`.
+
+    References
+    ----------
+    .. [1] "In-situ Mechanical Calibration for Vision-based Tactile Sensors",
+       eq. (7).
+    """
+    rel = _relation(table)
+    n = np.asarray(nu, dtype=np.float64)
+    bad = ~((n >= rel.nu_min) & (n < rel.nu_max))
+    if np.any(bad):
+        v = float(np.ravel(n)[np.argmax(np.ravel(bad))])
+        raise InputError(
+            f"nu = {v:g} is outside the range of the {table} beta table ({rel.range_text()})"
+        )
+    return _out(np.exp((n - rel.intercept) / rel.slope))
+
+
+def beta_relation(table: str = "paper") -> BetaRelation:
+    """The beta relation named `table`.
+
+    Parameters
+    ----------
+    table : {'paper', 'fem'}, default 'paper'
+
+    Returns
+    -------
+    relation : BetaRelation
+
+    Raises
+    ------
+    NotImplementedError
+        For ``table='fem'``: the FEM table is not built yet.
+    ValueError
+        For an unknown `table`.
+    """
+    return _relation(table)

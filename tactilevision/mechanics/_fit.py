@@ -1,0 +1,239 @@
+"""The paper's in-situ fit: presses (w, P) -> c, beta -> nu, E (eq. 4-7)."""
+
+from __future__ import annotations
+
+import math
+import warnings
+
+import numpy as np
+from scipy import stats
+
+from .._checks import InputError, check_array
+from ._beta import beta_relation, nu_from_beta
+from ._effects import FIT_EFFECTS
+from ._kappa import HAYES_1972, _dkappa_dnu, kappa
+from ._neohookean import neo_hookean_constants
+from ._result import IndentationFit
+
+__all__ = ["MAX_W_OVER_H", "fit_indentation"]
+
+#: Largest w/h for which the linear law (2) holds (paper, section VI.1).
+MAX_W_OVER_H = 0.2
+
+_NAN2 = (math.nan, math.nan)
+_CI_METHOD = ("delta method through the HC3 (heteroscedasticity-consistent) covariance of "
+              "slope and intercept, Student t with n - 2 degrees of freedom")
+
+
+def _positive(x: float, name: str) -> float:
+    v = float(x)
+    if not (math.isfinite(v) and v > 0):
+        raise InputError(f"{name} must be a positive number, got {x!r}")
+    return v
+
+
+def _covariance(X: np.ndarray, resid: np.ndarray) -> tuple[np.ndarray, str | None]:
+    """HC3 covariance of OLS coefficients; classical or NaN where HC3 is undefined."""
+    n = X.shape[0]
+    xtx_inv = np.linalg.inv(X.T @ X)  # 2x2
+    if n <= 2:
+        return np.full((2, 2), np.nan), "no residual degrees of freedom: intervals undefined"
+    lev = np.einsum("ij,jk,ik->i", X, xtx_inv, X)  # (N,) leverages
+    if np.max(lev) > 1 - 1e-9:
+        cov = float(resid @ resid) / (n - 2) * xtx_inv
+        return cov, ("a depth with a single press has leverage 1: classical OLS covariance "
+                     "used instead of HC3")
+    meat = X.T @ (X * (resid**2 / (1 - lev) ** 2)[:, None])
+    return xtx_inv @ meat @ xtx_inv, None
+
+
+def fit_indentation(depth_mm: np.ndarray, force_n: np.ndarray, *, thickness_mm: float,
+                    radius_mm: float, beta_table: str = "paper",
+                    a_over_h: float | None = None,
+                    confidence: float = 0.95) -> IndentationFit:
+    """Fit E and nu of a bonded gel layer to flat-punch presses (the paper's method).
+
+    Parameters
+    ----------
+    depth_mm : (N,) array_like of float, mm
+        Certified indentation depth w of each press, positive; at least two
+        distinct depths.
+    force_n : (N,) array_like of float, N
+        Normal force P of each press, positive into the gel.
+    thickness_mm : float, mm
+        Gel thickness h.
+    radius_mm : float, mm
+        Flat indenter radius a.
+    beta_table : {'paper', 'fem'}, default 'paper'
+        Source of nu(beta): the paper's relation (7) (a/h = 0.8), or the
+        project's FEM table (not built yet).
+    a_over_h : float, optional
+        a/h at which kappa is read. Default: the exact ``radius_mm /
+        thickness_mm``. The paper rounds a = 2.5, h = 3.0 to a/h = 0.8; pass
+        0.8 to reproduce it.
+    confidence : float, default 0.95
+        Level of the intervals, in (0, 1).
+
+    Returns
+    -------
+    fit : IndentationFit
+
+    Raises
+    ------
+    ShapeError
+        When `depth_mm` or `force_n` is not 1-D, not numeric, not finite, or
+        their lengths differ.
+    InputError
+        When a depth is not positive, fewer than two depths are distinct,
+        `thickness_mm` or `radius_mm` is not positive, or a/h is outside the
+        Hayes table [0.2, 2.0].
+    NotImplementedError
+        For ``beta_table='fem'``: the FEM table is not built yet.
+    ValueError
+        For an unknown `beta_table` or a `confidence` outside (0, 1).
+
+    Warns
+    -----
+    UserWarning
+        When a press exceeds w/h = 0.2, where the linear law (2) fails
+        (paper, section VI.1); the fit goes on and says so in `notes`.
+
+    Notes
+    -----
+    Ordinary least squares of ``y = P/w`` on ``x = w/h``, eq. (5):
+    ``P/w = c beta (w/h) + c``, so the intercept is c and ``beta = slope / c``.
+    Then nu = nu(beta) from the beta table (eq. 7 for ``'paper'``),
+    ``E = c (1 - nu^2) / (2 a kappa(nu, a/h))`` (eq. 4, kappa from Hayes
+    1972, :func:`kappa`), and the Neo-Hookean constants of
+    :func:`neo_hookean_constants`. The beta table never enters the
+    regression: residuals do not depend on it.
+
+    Intervals: delta method (first-order propagation) of the covariance of
+    intercept and slope through beta, nu and E, with a Student t quantile on
+    ``n - 2`` degrees of freedom. The covariance is the HC3
+    heteroscedasticity-consistent estimate (MacKinnon and White 1985) because
+    a constant force noise makes the noise of P/w grow as 1/w; the classical
+    OLS covariance then covers nu only about 85% of the time at the nominal
+    95% (tests/test_mechanics_fit.py measures the coverage). The kappa and
+    beta tables are taken as exact: the intervals hold only the press scatter.
+
+    References
+    ----------
+    .. [1] "In-situ Mechanical Calibration for Vision-based Tactile Sensors",
+       eq. (4)-(7) and section IV.
+    .. [2] W. C. Hayes et al., J. Biomech. 5:541-551, 1972.
+       doi:10.1016/0021-9290(72)90010-3
+    .. [3] J. G. MacKinnon, H. White, "Some heteroskedasticity-consistent
+       covariance matrix estimators with improved finite sample properties",
+       J. Econometrics 29:305-325, 1985. doi:10.1016/0304-4076(85)90158-7
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from tactilevision.mechanics import fit_indentation
+    >>> w = np.array([0.15, 0.30, 0.40, 0.50, 0.60])
+    >>> P = w * (5.2662 * w / 3.0 + 3.4943)            # the paper's line (6)
+    >>> fit = fit_indentation(w, P, thickness_mm=3.0, radius_mm=2.5, a_over_h=0.8)
+    >>> round(fit.nu, 4), round(fit.beta, 4)
+    (0.4797, 1.5071)
+    """
+    w = check_array(depth_mm, "depth_mm", [("N",)], dtype=np.number, finite=True)
+    P = check_array(force_n, "force_n", [(w.shape[0],)], dtype=np.number, finite=True)
+    w, P = w.astype(np.float64), P.astype(np.float64)
+    h = _positive(thickness_mm, "thickness_mm")
+    a = _positive(radius_mm, "radius_mm")
+    if not 0 < confidence < 1:
+        raise ValueError(f"confidence must be in (0, 1), got {confidence!r}")
+    if np.any(w <= 0):
+        i = int(np.argmax(w <= 0))
+        raise InputError(f"depth_mm[{i}] = {w[i]:g} mm: depths must be positive")
+    depths = np.unique(w)
+    if depths.size < 2:
+        raise InputError(f"depth_mm holds {depths.size} distinct depth(s); the fit of "
+                         "eq. (5) needs presses at two depths or more")
+    rel = beta_relation(beta_table)  # raises for 'fem' before any work
+    ah_exact = a / h
+    lo, hi = float(HAYES_1972.a_over_h[0]), float(HAYES_1972.a_over_h[-1])
+    if a_over_h is None:
+        ah = ah_exact
+        if not lo <= ah <= hi:
+            raise InputError(f"radius_mm / thickness_mm = {ah:g} is outside the Hayes 1972 "
+                             f"kappa table range [{lo:g}, {hi:g}]")
+    else:
+        ah = float(a_over_h)
+        if not lo <= ah <= hi:
+            raise InputError(f"a_over_h = {ah:g} is outside the Hayes 1972 kappa table "
+                             f"range [{lo:g}, {hi:g}]")
+    notes: list[str] = []
+
+    # eq. (5): y = c + (c beta) x, ordinary least squares
+    x, y = w / h, P / w  # (N,), (N,)
+    X = np.column_stack([np.ones_like(x), x])  # Nx2
+    coef, *_ = np.linalg.lstsq(X, y, rcond=None)
+    c, s = float(coef[0]), float(coef[1])
+    resid = y - X @ coef
+    tss = float(np.sum((y - y.mean()) ** 2))
+    r2 = 1.0 - float(resid @ resid) / tss if tss > 0 else 1.0
+    rmse = float(np.sqrt(np.mean((P - w * (X @ coef)) ** 2)))
+    cov, cov_note = _covariance(X, resid)
+    n = w.size
+    tq = float(stats.t.ppf(0.5 + confidence / 2, n - 2)) if n > 2 else math.nan
+    beta = s / c if c != 0 else math.nan
+
+    def interval(est: float, grad: np.ndarray) -> tuple[float, tuple[float, float]]:
+        se = float(np.sqrt(grad @ cov @ grad))
+        return se, (est - tq * se, est + tq * se)
+
+    beta_se, beta_ci = interval(beta, np.array([-s / c**2, 1 / c])) if c else (math.nan, _NAN2)
+    E = nu = C10 = D1 = kap = nu_se = E_se = math.nan
+    E_ci = nu_ci = _NAN2
+    msg = None
+    if not (c > 0 and rel.beta_min <= beta < rel.beta_max):
+        msg = (f"c = {c:.4g} N/mm and beta = {beta:.4g} are outside the {beta_table} beta "
+               f"table (c > 0, {rel.range_text()}): E and nu not computed")
+        notes.append(msg)
+    else:
+        nu = float(nu_from_beta(beta, table=beta_table))  # eq. (7)
+        kap = float(kappa(nu, ah))
+        E = c * (1 - nu**2) / (2 * a * kap)  # eq. (4)
+        C10, D1 = neo_hookean_constants(E, nu)
+        g_nu = rel.dnu_dbeta(beta) * np.array([-s / c**2, 1 / c])  # d nu / d(c, s)
+        dlnE_dnu = -2 * nu / (1 - nu**2) - _dkappa_dnu(nu, ah) / kap
+        nu_se, nu_ci = interval(nu, g_nu)
+        E_se, E_ci = interval(E, E * (np.array([1 / c, 0.0]) + dlnE_dnu * g_nu))
+        if np.all(np.isfinite(nu_ci)) and not (rel.nu_min <= nu_ci[0] and nu_ci[1] < rel.nu_max):
+            notes.append(f"the {confidence:.0%} interval of nu, [{nu_ci[0]:.4f}, "
+                         f"{nu_ci[1]:.4f}], reaches outside the beta table "
+                         f"({rel.range_text()})")
+
+    notes.append(f"intervals: {_CI_METHOD}; the kappa and beta tables are taken as exact")
+    if cov_note:
+        notes.append(cov_note)
+    notes.append(f"beta table '{beta_table}': {rel.source}; 'paper' is the default until "
+                 "the FEM table of a later issue exists")
+    if abs(ah - rel.a_over_h) > 1e-6:
+        notes.append(f"relation (7) was built for a/h = {rel.a_over_h:g} and is used here at "
+                     f"a/h = {ah:.4f}")
+    if a_over_h is None:
+        notes.append(f"kappa read at the exact a/h = {a:g}/{h:g} = {ah:.4f}; the paper rounds "
+                     "to 0.8 (a_over_h=0.8 reproduces it)")
+    else:
+        notes.append(f"kappa read at a/h = {ah:g} as given (exact a/h = {ah_exact:.4f})")
+    wh = float(np.max(w)) / h
+    if wh > MAX_W_OVER_H + 1e-12:
+        text = (f"deepest press has w/h = {wh:.3f} > {MAX_W_OVER_H}: the linear law (2) "
+                "may fail there (paper, section VI.1)")
+        warnings.warn(text, UserWarning, stacklevel=2)
+        notes.append(text)
+    cs = float(np.sqrt(cov[0, 0])), float(np.sqrt(cov[1, 1]))
+    return IndentationFit(
+        E_mpa=E, nu=nu, c_n_per_mm=c, beta=beta, E_ci95_mpa=E_ci, nu_ci95=nu_ci,
+        rmse_n=rmse, n_presses=n, effects=FIT_EFFECTS, effect_params={"beta": beta},
+        C10_mpa=C10, D1_per_mpa=D1, a_over_h=ah, a_over_h_exact=ah_exact,
+        thickness_mm=h, radius_mm=a, kappa=kap, beta_table=beta_table, slope_n_per_mm=s,
+        c_se_n_per_mm=cs[0], slope_se_n_per_mm=cs[1],
+        corr_c_slope=float(cov[0, 1] / (cs[0] * cs[1])) if cs[0] * cs[1] > 0 else math.nan,
+        beta_se=beta_se, beta_ci95=beta_ci, nu_se=nu_se, E_se_mpa=E_se, r_squared=r2,
+        confidence=confidence, ci_method=_CI_METHOD, max_w_over_h=wh,
+        out_of_table=msg is not None, out_of_table_message=msg, notes=tuple(notes),
+    )

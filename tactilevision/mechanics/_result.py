@@ -1,0 +1,114 @@
+"""The result of the in-situ fit, with its ``fit --json`` form (formats.md §3)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+__all__ = ["IndentationFit"]
+
+
+@dataclass(frozen=True)
+class IndentationFit:
+    """Result of :func:`fit_indentation`. Units are in the names.
+
+    The first ten attributes are the ``fit --json`` contract (formats.md §3).
+    Out of the beta table's range, E, nu, C10, D1 and their intervals are NaN
+    (``null`` in JSON) and `out_of_table` is set with a message.
+
+    Attributes
+    ----------
+    E_mpa, nu : float
+        Young's modulus (MPa) and Poisson's ratio.
+    c_n_per_mm : float
+        Intercept c of eq. (5), N/mm.
+    beta : float
+        Slope over intercept of eq. (5), dimensionless.
+    E_ci95_mpa, nu_ci95 : (float, float)
+        Intervals at `confidence` (0.95 by default; the names follow the
+        contract whatever `confidence` is).
+    rmse_n : float
+        Root mean square of ``P - P_pred`` over the presses, N.
+    n_presses : int
+    effects : tuple of str
+        ``('large_deformation',)``.
+    effect_params : dict
+        ``{'beta': beta}``.
+    C10_mpa, D1_per_mpa : float
+        Abaqus Neo-Hookean constants, MPa and 1/MPa.
+    a_over_h, a_over_h_exact : float
+        a/h used for kappa, and radius over thickness.
+    thickness_mm, radius_mm, kappa : float
+        h, a, and kappa(nu, a_over_h) from Hayes 1972.
+    beta_table : str
+        The beta table used (``'paper'``).
+    slope_n_per_mm, c_se_n_per_mm, slope_se_n_per_mm, corr_c_slope : float
+        Slope c*beta of eq. (5), the standard errors and correlation of
+        intercept and slope.
+    beta_se, nu_se, E_se_mpa : float
+        Standard errors; `beta_ci95` is the interval of beta.
+    r_squared : float
+        Coefficient of determination of P/w against w/h, as the paper's.
+    confidence : float
+    ci_method : str
+    max_w_over_h : float
+        Largest w/h among the presses.
+    out_of_table : bool
+    out_of_table_message : str or None
+    notes : tuple of str
+        Decisions and warnings in plain sentences.
+    """
+
+    E_mpa: float
+    nu: float
+    c_n_per_mm: float
+    beta: float
+    E_ci95_mpa: tuple[float, float]
+    nu_ci95: tuple[float, float]
+    rmse_n: float
+    n_presses: int
+    effects: tuple[str, ...]
+    effect_params: dict[str, float] = field(hash=False)
+    C10_mpa: float
+    D1_per_mpa: float
+    a_over_h: float
+    a_over_h_exact: float
+    thickness_mm: float
+    radius_mm: float
+    kappa: float
+    beta_table: str
+    slope_n_per_mm: float
+    c_se_n_per_mm: float
+    slope_se_n_per_mm: float
+    corr_c_slope: float
+    beta_se: float
+    beta_ci95: tuple[float, float]
+    nu_se: float
+    E_se_mpa: float
+    r_squared: float
+    confidence: float
+    ci_method: str
+    max_w_over_h: float
+    out_of_table: bool
+    out_of_table_message: str | None
+    notes: tuple[str, ...]
+
+    def to_json_dict(self) -> dict[str, Any]:
+        """The ``fit --json`` object: the contract's keys first, then extras.
+
+        Returns
+        -------
+        obj : dict
+            JSON-ready: tuples become lists, NaN becomes ``None`` (``null``).
+        """
+        def clean(v: Any) -> Any:
+            if isinstance(v, float):
+                return v if math.isfinite(v) else None
+            if isinstance(v, tuple | list):
+                return [clean(x) for x in v]
+            if isinstance(v, dict):
+                return {k: clean(x) for k, x in v.items()}
+            return v
+
+        return {name: clean(getattr(self, name)) for name in self.__dataclass_fields__}

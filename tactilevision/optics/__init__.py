@@ -1,0 +1,51 @@
+"""Photometric stereo: tactile frame -> surface gradient -> height map.
+
+The public names live in small private modules and are re-exported here.
+"""
+
+from ._ball import (
+    BallPressMetrics,
+    ball_gradients,
+    ball_press_metrics,
+    fit_ball_centre,
+    gradients_from_normals,
+    normals_from_gradients,
+)
+from ._calibration import PhotometricCalibration
+from ._circles import detect_contact_circle, detect_contact_circles, fit_circle
+from ._evaluate import BallPressReport, evaluate_ball_presses
+from ._features import colour_change, frame_gain, reference_inverse
+from ._lut import ColourLUT, fit_colour_lut
+from ._markers import fill_masked, marker_mask
+from ._mlp import MLPGradientModel, mlp_inputs, train_mlp
+from ._poisson import PoissonSolver, divergence, integrate_poisson
+from ._reconstructor import DepthReconstructor
+
+__all__ = [
+    "BallPressMetrics",
+    "BallPressReport",
+    "ColourLUT",
+    "DepthReconstructor",
+    "MLPGradientModel",
+    "PhotometricCalibration",
+    "PoissonSolver",
+    "ball_gradients",
+    "ball_press_metrics",
+    "colour_change",
+    "detect_contact_circle",
+    "detect_contact_circles",
+    "divergence",
+    "evaluate_ball_presses",
+    "fill_masked",
+    "fit_ball_centre",
+    "fit_circle",
+    "fit_colour_lut",
+    "frame_gain",
+    "gradients_from_normals",
+    "integrate_poisson",
+    "marker_mask",
+    "mlp_inputs",
+    "normals_from_gradients",
+    "reference_inverse",
+    "train_mlp",
+]

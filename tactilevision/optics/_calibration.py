@@ -1,0 +1,350 @@
+"""Photometric calibration from ball presses: colour -> surface normal.
+
+Pressing a ball of known radius R into the gel gives, inside each contact
+circle, pixels whose surface normal is known exactly (:mod:`._ball`). Those
+pixels, plus flat background pixels far from the contact, train a model from
+colour change (and, for the MLP, reference colour and pixel position) to the
+in-plane normal (n_x, n_y).
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import io
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+from tqdm.auto import tqdm
+
+from .._checks import InputError, check_array
+from ._ball import ball_gradients, fit_ball_centre, normals_from_gradients
+from ._circles import detect_contact_circles
+from ._features import colour_change, reference_inverse
+from ._lut import ColourLUT, fit_colour_lut
+from ._markers import marker_mask
+from ._mlp import mlp_inputs, train_mlp
+
+__all__ = ["PhotometricCalibration"]
+
+ModelKind = Literal["lut", "mlp"]
+FORMAT_VERSION = 1
+
+
+@dataclass
+class PhotometricCalibration:
+    """A sensor's colour-to-normal model, with its reference frame and scale.
+
+    Build one with :meth:`from_ball_presses` or :meth:`load`; hand it to
+    :class:`DepthReconstructor`.
+
+    Attributes
+    ----------
+    model : {'lut', 'mlp'}
+        The colour-to-normal model kind.
+    reference : (H, W, 3) uint8 ndarray
+        No-contact reference frame (BGR) the model was calibrated against.
+    mm_per_px : float
+        Image scale on the gel surface, mm per pixel.
+    lut : ColourLUT or None
+        The binned table (``model == 'lut'``).
+    onnx_bytes : bytes or None
+        The network (``model == 'mlp'``).
+    use_position : bool
+        Whether the network sees the pixel position.
+    markers : bool
+        Whether the gel carries marker dots (masked and filled in).
+    blur_sigma : float
+        Gaussian blur (px) of frames before the colour change.
+    contact_threshold : float
+        Colour change (max over channels) above which a pixel is in contact;
+        the 99.9th percentile of the calibration frames' background.
+    provenance : dict
+        Source, date, press count, ball radius, version: how it was made.
+    """
+
+    model: ModelKind
+    reference: np.ndarray
+    mm_per_px: float
+    lut: ColourLUT | None = None
+    onnx_bytes: bytes | None = None
+    use_position: bool = True
+    markers: bool = False
+    blur_sigma: float = 1.0
+    contact_threshold: float = 0.05
+    provenance: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """(H, W) of the frames this calibration applies to."""
+        return (int(self.reference.shape[0]), int(self.reference.shape[1]))
+
+    # ------------------------------------------------------------------ build
+    @classmethod
+    def from_ball_presses(
+        cls,
+        reference: np.ndarray,
+        frames: np.ndarray,
+        centers_px: np.ndarray | None = None,
+        radii_px: np.ndarray | None = None,
+        *,
+        ball_radius_mm: float,
+        mm_per_px: float,
+        model: ModelKind = "mlp",
+        use_position: bool = True,
+        markers: bool | None = None,
+        label_fraction: float | None = None,
+        refine_centers: bool | None = None,
+        bins: int = 32,
+        epochs: int = 30,
+        blur_sigma: float = 1.0,
+        seed: int = 0,
+        source: str = "",
+        progress: bool = False,
+    ) -> PhotometricCalibration:
+        """Calibrate from frames of a ball pressed into the gel.
+
+        Parameters
+        ----------
+        reference : (H, W, 3) uint8 ndarray
+            No-contact frame, BGR.
+        frames : (N, H, W, 3) uint8 ndarray
+            Ball presses, BGR, one contact each.
+        centers_px : (N, 2) float ndarray, optional
+            Contact-circle centres (x = column, y = row), px. None: detected
+            (:func:`detect_contact_circles`).
+        radii_px : (N,) float ndarray, optional
+            Contact-circle radii, px; given together with ``centers_px``.
+        ball_radius_mm : float
+            Ball radius R, mm.
+        mm_per_px : float
+            Image scale on the gel, mm per px.
+        model : {'lut', 'mlp'}, default 'mlp'
+            Binned colour table or position-aware network (needs torch).
+        use_position : bool, default True
+            MLP only: feed the pixel position (False: colour-only ablation).
+        markers : bool, optional
+            Whether the gel has marker dots; None detects them (more than 2%
+            of the reference's pixels are dark dots).
+        label_fraction : float, optional
+            Pixels within ``label_fraction * radius`` of the centre are
+            labelled. Default 1.0 for given circles and 0.85 for detected
+            ones (the detected radius marks the colour edge, slightly outside
+            the contact).
+        refine_centers : bool, optional
+            Refit every centre to the first model's gradients and calibrate
+            again (:func:`fit_ball_centre`). Default: True for detected
+            circles, False for given ones.
+        bins : int, default 32
+            LUT cells per colour channel.
+        epochs : int, default 30
+            MLP training epochs.
+        blur_sigma : float, default 1.0
+            Frame blur (px) before the colour change.
+        seed : int, default 0
+            Seed of the background sampling and of the network.
+        source : str, optional
+            Where the frames came from, stored in ``provenance``.
+        progress : bool, default False
+            Progress bars.
+
+        Returns
+        -------
+        calibration : PhotometricCalibration
+
+        Raises
+        ------
+        ShapeError
+            If frames and reference differ in size or are not uint8 BGR.
+        InputError
+            If only one of centres and radii is given, a circle is larger
+            than the ball, or fewer than two presses are given.
+        ImportError
+            For ``model='mlp'`` without torch.
+        """
+        reference = check_array(reference, "reference", [("H", "W", 3)], dtype=np.uint8)
+        frames = check_array(frames, "frames", [("N", *reference.shape)], dtype=np.uint8)
+        if model not in ("lut", "mlp"):
+            raise InputError(f"model must be 'lut' or 'mlp', got {model!r}")
+        if len(frames) < 2:
+            raise InputError(f"need at least 2 ball presses, got {len(frames)}")
+        if not (ball_radius_mm > 0 and mm_per_px > 0):
+            raise InputError("ball_radius_mm and mm_per_px must be positive")
+        detected = centers_px is None and radii_px is None
+        if detected:
+            centers_px, radii_px = detect_contact_circles(frames, reference)
+        elif centers_px is None or radii_px is None:
+            raise InputError("give both centers_px and radii_px, or neither (to detect them)")
+        centers = check_array(centers_px, "centers_px", [(len(frames), 2)], finite=True)
+        radii = check_array(radii_px, "radii_px", [(len(frames),)], finite=True)
+        centers = centers.astype(np.float64).copy()
+        radii = radii.astype(np.float64)
+        ball_px = ball_radius_mm / mm_per_px
+        if label_fraction is None:
+            label_fraction = 0.85 if detected else 1.0
+        if refine_centers is None:
+            refine_centers = detected
+        bad = np.nonzero(radii * label_fraction >= ball_px)[0]
+        if bad.size:
+            raise InputError(f"press {bad[0]}: contact radius {radii[bad[0]]:.1f} px is not "
+                             f"smaller than the ball radius {ball_px:.1f} px")
+        if markers is None:
+            markers = bool(marker_mask(reference).mean() > 0.02)
+        ref_mask = marker_mask(reference) if markers else None
+        ref_inv = reference_inverse(reference, marker_mask=ref_mask)
+        ref_colour = 1.0 / ref_inv
+        h, w = reference.shape[:2]
+        rng = np.random.default_rng(seed)
+        changes = [colour_change(f, ref_inv, blur_sigma=blur_sigma) for f in
+                   tqdm(frames, desc="colour change", disable=not progress)]
+        valid = [~marker_mask(f) if markers else np.ones((h, w), bool) for f in frames]
+        background = [(rng.random((h, w)) < 0.03) & v for v in valid]
+
+        cal = cls(model=model, reference=reference.copy(), mm_per_px=float(mm_per_px),
+                  use_position=use_position, markers=markers, blur_sigma=blur_sigma)
+        rounds = 2 if refine_centers else 1
+        for rnd in range(rounds):
+            xs, ys, feats, labels, bg_mag = [], [], [], [], []
+            for i in range(len(frames)):
+                gx, gy, inside = ball_gradients((h, w), centers[i],
+                                                label_fraction * radii[i], ball_px)
+                dx = np.arange(w)[None, :] - centers[i, 0]
+                dy = np.arange(h)[:, None] - centers[i, 1]
+                far = (dx * dx + dy * dy) > (2.0 * radii[i]) ** 2
+                sel = (inside & valid[i]) | (far & background[i])
+                yy, xx = np.nonzero(sel)
+                xs.append(xx)
+                ys.append(yy)
+                feats.append(changes[i][sel])
+                labels.append(normals_from_gradients(gx[sel], gy[sel])[:, :2])
+                bg_mag.append(np.abs(changes[i][far & background[i]]).max(axis=-1))
+            x_all, y_all = np.concatenate(xs), np.concatenate(ys)
+            f_all, n_all = np.concatenate(feats), np.concatenate(labels)
+            cal.contact_threshold = float(np.percentile(np.concatenate(bg_mag), 99.9))
+            if model == "lut":
+                cal.lut = fit_colour_lut(f_all, n_all, bins=bins)
+            else:
+                inputs = mlp_inputs(f_all, ref_colour[y_all, x_all], x_all, y_all, (h, w),
+                                    use_position=use_position)
+                cal.onnx_bytes = train_mlp(inputs, n_all, epochs=epochs, seed=seed,
+                                           progress=progress)
+            if rnd + 1 < rounds:
+                from ._reconstructor import DepthReconstructor
+
+                recon = DepthReconstructor(cal, mask_contact=False)
+                for i, f in enumerate(frames):
+                    gx, gy = recon.gradients(f)
+                    centers[i] = fit_ball_centre(gx, gy, centers[i], label_fraction * radii[i],
+                                                 ball_px)
+        cal.provenance = {
+            "source": source,
+            "created": _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds"),
+            "n_presses": len(frames),
+            "ball_radius_mm": float(ball_radius_mm),
+            "circles": "detected" if detected else "given",
+            "centers_refined": bool(refine_centers),
+            "label_fraction": float(label_fraction),
+            "centers_px": centers.round(2).tolist(),
+            "radii_px": radii.round(2).tolist(),
+            "tactilevision": _version(),
+        }
+        return cal
+
+    # ------------------------------------------------------------------- I/O
+    def save(self, path: str | Path) -> Path:
+        """Write the calibration to an ``.npz`` file (no pickle).
+
+        Parameters
+        ----------
+        path : str or Path
+            Destination; ``.npz`` is appended when missing.
+
+        Returns
+        -------
+        path : Path
+            The file written.
+        """
+        path = Path(path)
+        if path.suffix != ".npz":
+            path = path.with_suffix(path.suffix + ".npz")
+        meta = {
+            "format_version": FORMAT_VERSION, "model": self.model, "mm_per_px": self.mm_per_px,
+            "use_position": self.use_position, "markers": self.markers,
+            "blur_sigma": self.blur_sigma, "contact_threshold": self.contact_threshold,
+            "provenance": self.provenance,
+        }
+        arrays: dict[str, np.ndarray] = {
+            "meta": np.frombuffer(json.dumps(meta).encode(), np.uint8),
+            "reference": self.reference,
+        }
+        if self.lut is not None:
+            arrays.update(lut_table=self.lut.table, lut_lo=self.lut.lo, lut_hi=self.lut.hi,
+                          lut_counts=self.lut.counts.astype(np.int32))
+        if self.onnx_bytes is not None:
+            arrays["onnx"] = np.frombuffer(self.onnx_bytes, np.uint8)
+        buf = io.BytesIO()
+        np.savez_compressed(buf, **arrays)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_bytes(buf.getvalue())
+        return path
+
+    @classmethod
+    def load(cls, path: str | Path) -> PhotometricCalibration:
+        """Read a calibration written by :meth:`save`; needs no torch.
+
+        Parameters
+        ----------
+        path : str or Path
+            The ``.npz`` file.
+
+        Returns
+        -------
+        calibration : PhotometricCalibration
+
+        Raises
+        ------
+        InputError
+            If the file is missing, unreadable or not a calibration (names
+            the file and the missing key).
+        """
+        path = Path(path)
+        if not path.is_file():
+            raise InputError(f"calibration file {path} does not exist")
+        try:
+            with np.load(path, allow_pickle=False) as z:
+                data = {k: z[k] for k in z.files}
+        except (OSError, ValueError) as exc:
+            raise InputError(f"calibration file {path} is not a readable .npz ({exc})") from None
+        for key in ("meta", "reference"):
+            if key not in data:
+                raise InputError(f"calibration file {path} lacks the key '{key}'")
+        meta = json.loads(data["meta"].tobytes().decode())
+        if meta.get("format_version", 0) > FORMAT_VERSION:
+            raise InputError(f"calibration file {path} has format version "
+                             f"{meta['format_version']}; this tactilevision reads up to "
+                             f"{FORMAT_VERSION}")
+        lut = None
+        if meta["model"] == "lut":
+            if "lut_table" not in data:
+                raise InputError(f"calibration file {path} lacks the key 'lut_table'")
+            lut = ColourLUT(data["lut_table"], data["lut_lo"], data["lut_hi"],
+                            data["lut_counts"].astype(np.int64))
+        onnx_bytes = None
+        if meta["model"] == "mlp":
+            if "onnx" not in data:
+                raise InputError(f"calibration file {path} lacks the key 'onnx'")
+            onnx_bytes = data["onnx"].tobytes()
+        return cls(model=meta["model"], reference=data["reference"],
+                   mm_per_px=float(meta["mm_per_px"]), lut=lut, onnx_bytes=onnx_bytes,
+                   use_position=bool(meta["use_position"]), markers=bool(meta["markers"]),
+                   blur_sigma=float(meta["blur_sigma"]),
+                   contact_threshold=float(meta["contact_threshold"]),
+                   provenance=dict(meta.get("provenance", {})))
+
+
+def _version() -> str:
+    from .. import __version__
+
+    return __version__

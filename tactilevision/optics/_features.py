@@ -1,0 +1,105 @@
+"""Colour features of tactile frames: change against the reference frame.
+
+Under the sensor's lights a pixel's colour is (to first order) the local
+illumination times a shading term that depends on the surface normal. The
+ratio of a frame to the no-contact reference divides out the illumination
+that varies across the pad, and dividing by the frame's median ratio per
+channel removes global gain drift (LED brightness, camera exposure) between
+the reference and the frame. The feature is ``ratio / gain - 1``: zero where
+the gel is flat.
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from .._checks import check_array
+
+__all__ = ["colour_change", "frame_gain", "reference_inverse"]
+
+
+def reference_inverse(reference: np.ndarray, *, blur_sigma: float = 2.0,
+                      marker_mask: np.ndarray | None = None) -> np.ndarray:
+    """Per-pixel inverse of the smoothed reference frame.
+
+    Parameters
+    ----------
+    reference : (H, W, 3) uint8 ndarray
+        No-contact frame, BGR.
+    blur_sigma : float, default 2.0
+        Gaussian blur (px) against camera noise; 0 for none.
+    marker_mask : (H, W) bool ndarray, optional
+        Marker pixels, inpainted (Telea) before blurring.
+
+    Returns
+    -------
+    inv : (H, W, 3) float32 ndarray
+        ``1 / max(reference, 1)``, per channel.
+    """
+    reference = check_array(reference, "reference", [("H", "W", 3)], dtype=np.uint8)
+    ref = reference
+    if marker_mask is not None and marker_mask.any():
+        ref = cv2.inpaint(reference, marker_mask.astype(np.uint8), 5, cv2.INPAINT_TELEA)
+    ref = ref.astype(np.float32)
+    if blur_sigma > 0:
+        ref = cv2.GaussianBlur(ref, (0, 0), blur_sigma)
+    return 1.0 / np.maximum(ref, 1.0)
+
+
+def frame_gain(ratio: np.ndarray, *, step: int = 4) -> np.ndarray:
+    """Global per-channel gain of a frame against the reference.
+
+    Parameters
+    ----------
+    ratio : ([N, ]H, W, 3) float ndarray
+        Frame divided by reference.
+    step : int, default 4
+        Subsampling step of the median (speed).
+
+    Returns
+    -------
+    gain : ([N, ]1, 1, 3) float32 ndarray
+        Median ratio per channel; robust while contact covers under half
+        the frame.
+    """
+    sub = ratio[..., ::step, ::step, :]
+    flat = sub.reshape(*sub.shape[:-3], -1, 3)
+    return np.median(flat, axis=-2)[..., None, None, :].astype(np.float32)
+
+
+def colour_change(frames: np.ndarray, ref_inv: np.ndarray, *, blur_sigma: float = 0.0,
+                  normalise_gain: bool = True) -> np.ndarray:
+    """Colour change of frames against the reference, ``ratio / gain - 1``.
+
+    Parameters
+    ----------
+    frames : ([N, ]H, W, 3) uint8 ndarray
+        Tactile frames, BGR.
+    ref_inv : (H, W, 3) float32 ndarray
+        From :func:`reference_inverse`.
+    blur_sigma : float, default 0
+        Gaussian blur of the frame (px) before the ratio.
+    normalise_gain : bool, default True
+        Divide by the per-channel median ratio (:func:`frame_gain`).
+
+    Returns
+    -------
+    change : ([N, ]H, W, 3) float32 ndarray
+        Zero where the frame matches the reference, unitless.
+    """
+    frames = check_array(frames, "frames", [("H", "W", 3), ("N", "H", "W", 3)], dtype=np.uint8)
+    check_array(ref_inv, "ref_inv", [frames.shape[-3:]], dtype=np.floating)
+    if blur_sigma > 0:
+        if frames.ndim == 3:
+            f = cv2.GaussianBlur(frames.astype(np.float32), (0, 0), blur_sigma)
+        else:
+            f = np.stack([cv2.GaussianBlur(x.astype(np.float32), (0, 0), blur_sigma)
+                          for x in frames])
+        ratio = f * ref_inv
+    else:
+        ratio = frames.astype(np.float32) * ref_inv
+    if normalise_gain:
+        ratio /= frame_gain(ratio)
+    ratio -= 1.0
+    return ratio

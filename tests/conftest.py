@@ -1,0 +1,79 @@
+"""Shared fixtures.
+
+mechanics (tests/test_mechanics_*.py): ``hand_kappa``, kappa of the Hayes 1972
+table interpolated by the documented rule written out by hand (no scipy).
+"""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+# Hayes et al. 1972 kappa as listed in method.md, typed independently of the
+# package: rows a/h, columns nu.
+HAYES_AH = (0.2, 0.4, 0.6, 0.8, 1.0, 1.5, 2.0)
+HAYES_NU = (0.30, 0.35, 0.40, 0.45, 0.50)
+HAYES_ROWS = (
+    (1.207, 1.218, 1.232, 1.252, 1.281),
+    (1.472, 1.502, 1.542, 1.599, 1.683),
+    (1.784, 1.839, 1.917, 2.031, 2.211),
+    (2.124, 2.211, 2.337, 2.532, 2.855),
+    (2.480, 2.603, 2.789, 3.085, 3.609),
+    (3.400, 3.629, 3.994, 4.645, 6.033),
+    (4.336, 4.679, 5.249, 6.332, 8.980),
+)
+
+
+def _pchip(xs, ys, x):
+    """Piecewise cubic Hermite with Fritsch-Butland slopes (Moler's pchip).
+
+    Interior slope: weighted harmonic mean of the adjacent secants,
+    ``(w1 + w2) / (w1 / m_left + w2 / m_right)`` with ``w1 = 2 h_right + h_left``,
+    ``w2 = h_right + 2 h_left`` (0 when the secants differ in sign or one is 0).
+    End slope: one-sided three-point ``((2 h0 + h1) m0 - h0 m1) / (h0 + h1)``,
+    set to 0 if its sign differs from m0, to 3 m0 if m0, m1 differ in sign and
+    it exceeds 3 |m0|.
+    """
+    n = len(xs)
+    h = [xs[k + 1] - xs[k] for k in range(n - 1)]
+    m = [(ys[k + 1] - ys[k]) / h[k] for k in range(n - 1)]
+    d = [0.0] * n
+    for k in range(1, n - 1):
+        if m[k - 1] * m[k] > 0:
+            w1, w2 = 2 * h[k] + h[k - 1], h[k] + 2 * h[k - 1]
+            d[k] = (w1 + w2) / (w1 / m[k - 1] + w2 / m[k])
+
+    def end(h0, h1, m0, m1):
+        e = ((2 * h0 + h1) * m0 - h0 * m1) / (h0 + h1)
+        if math.copysign(1, e) != math.copysign(1, m0):
+            return 0.0
+        if math.copysign(1, m0) != math.copysign(1, m1) and abs(e) > 3 * abs(m0):
+            return 3 * m0
+        return e
+
+    d[0] = end(h[0], h[1], m[0], m[1])
+    d[-1] = end(h[-1], h[-2], m[-1], m[-2])
+    k = min(max(next(i for i in range(n - 1) if x <= xs[i + 1]), 0), n - 2)
+    t = (x - xs[k]) / h[k]
+    h00, h10 = 2 * t**3 - 3 * t**2 + 1, t**3 - 2 * t**2 + t
+    h01, h11 = -2 * t**3 + 3 * t**2, t**3 - t**2
+    return h00 * ys[k] + h10 * h[k] * d[k] + h01 * ys[k + 1] + h11 * h[k] * d[k + 1]
+
+
+def _hand_kappa(nu: float, a_over_h: float) -> float:
+    """The documented rule: PCHIP along nu within each a/h row, then along a/h."""
+    col = [_pchip(HAYES_NU, row, nu) for row in HAYES_ROWS]
+    return _pchip(HAYES_AH, col, a_over_h)
+
+
+@pytest.fixture
+def hand_kappa():
+    """kappa(nu, a_over_h) from the Hayes table by the rule written out by hand."""
+    return _hand_kappa
+
+
+@pytest.fixture
+def hayes_table():
+    """(a_over_h, nu, rows) of the Hayes 1972 table, typed from method.md."""
+    return HAYES_AH, HAYES_NU, HAYES_ROWS

@@ -1,0 +1,256 @@
+"""``tactilevision fit``: exit status, stderr sentences, JSON values (formats.md §3)."""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tactilevision.cli import main
+from tactilevision.mechanics import fit_indentation
+
+ROOT = Path(__file__).resolve().parent.parent
+SAMPLE = ROOT / "sample_frames" / "paper_line6"
+DEPTHS = (0.15, 0.30, 0.40, 0.50, 0.60)
+SESSION = "[sensor]\ngel_thickness_mm = 3.0\n\n[indenter]\nradius_mm = 2.5\n"
+
+
+def line6(w: float) -> float:
+    """Force on the paper's line (6), N."""
+    return w * (5.2662 * w / 3.0 + 3.4943)
+
+
+def write_table(folder: Path, text: str | None = None, session: str | None = SESSION) -> Path:
+    """Write measurements.csv (default: the paper's line at the five depths) and session.toml."""
+    if text is None:
+        text = "press,depth_mm,force_n,hold_s\n" + "".join(
+            f"{i},{w},{line6(w):.6f},{'' if i == 2 else 1.5}\n" for i, w in enumerate(DEPTHS))
+    csv = folder / "measurements.csv"
+    csv.write_text(text)
+    if session is not None:
+        (folder / "session.toml").write_text(session)
+    return csv
+
+
+def run_json(argv: list[str], capsys) -> dict:
+    assert main([*argv, "--json", "-"]) == 0
+    return json.loads(capsys.readouterr().out)
+
+
+def error_line(argv: list[str], capsys) -> str:
+    """Run, expect exit status 2 and one sentence on stderr; return it."""
+    assert main(argv) == 2
+    cap = capsys.readouterr()
+    lines = cap.err.strip().splitlines()
+    assert len(lines) == 1, cap.err
+    assert lines[0].startswith("tactilevision fit: error: ")
+    assert cap.out == ""
+    return lines[0]
+
+
+# ------------------------------------------------------------------ success
+
+
+def test_json_paper_line(tmp_path, capsys):
+    csv = write_table(tmp_path)
+    d = run_json(["fit", str(csv), "--a-over-h", "0.8"], capsys)
+    assert d["nu"] == pytest.approx(0.4797, abs=1e-3)
+    assert d["E_mpa"] == pytest.approx(0.1981, rel=0.01)
+    assert d["c_n_per_mm"] == pytest.approx(3.4943, abs=1e-4)
+    assert d["beta"] == pytest.approx(1.5071, abs=1e-4)
+    assert d["n_presses"] == 5
+    assert d["effects"] == ["large_deformation"]
+    assert d["effect_params"]["beta"] == d["beta"]
+    assert len(d["E_ci95_mpa"]) == 2 and len(d["nu_ci95"]) == 2
+    assert d["rmse_n"] == pytest.approx(0.0, abs=1e-5)
+    assert d["a_over_h"] == 0.8 and d["beta_table"] == "paper"
+    assert d["thickness_source"].endswith("session.toml [sensor] gel_thickness_mm")
+
+
+def test_json_default_uses_exact_a_over_h(tmp_path, capsys):
+    csv = write_table(tmp_path)
+    d = run_json(["fit", str(csv)], capsys)
+    w = np.array(DEPTHS)
+    lib = fit_indentation(w, [float(f"{line6(x):.6f}") for x in w], thickness_mm=3.0,
+                          radius_mm=2.5)
+    assert d["a_over_h"] == pytest.approx(2.5 / 3.0)
+    assert d["E_mpa"] == pytest.approx(lib.E_mpa, rel=1e-12)
+    assert d["E_mpa"] < 0.1981 * 0.97  # kappa at 0.8333 > kappa at 0.8
+
+
+def test_summary_and_json_file(tmp_path, capsys):
+    csv = write_table(tmp_path)
+    out = tmp_path / "fit.json"
+    assert main(["fit", str(csv), "--effects", "large_deformation", "--json", str(out)]) == 0
+    text = capsys.readouterr().out
+    for word in ("E  =", "nu =", "95% CI", "c = ", "beta = ", "C10", "D1", "R^2", "paper",
+                 "default until the FEM table"):
+        assert word in text
+    d = json.loads(out.read_text())
+    assert d["n_presses"] == 5 and math.isfinite(d["E_mpa"])
+    assert not (tmp_path / "fit.json.tmp").exists()
+
+
+def test_geometry_from_options_without_session(tmp_path, capsys):
+    csv = write_table(tmp_path, session=None)
+    d = run_json(["fit", str(csv), "--thickness-mm", "3", "--radius-mm", "2.5",
+                  "--a-over-h", "0.8"], capsys)
+    assert d["nu"] == pytest.approx(0.4797, abs=1e-3)
+    assert d["thickness_source"] == d["radius_source"] == "argument"
+
+
+def test_options_override_session(tmp_path, capsys):
+    csv = write_table(tmp_path, session="[sensor]\ngel_thickness_mm = 9.0\n")
+    d = run_json(["fit", str(csv), "--thickness-mm", "3.0", "--radius-mm", "2.5"], capsys)
+    assert d["thickness_mm"] == 3.0
+
+
+def test_deep_press_warns_but_fits(tmp_path, capsys):
+    rows = "".join(f"{w},{line6(w):.6f}\n" for w in (0.15, 0.3, 0.6, 0.9))
+    csv = write_table(tmp_path, "depth_mm,force_n\n" + rows)
+    assert main(["fit", str(csv), "--json", "-"]) == 0
+    cap = capsys.readouterr()
+    assert "warning" in cap.err and "w/h = 0.300 > 0.2" in cap.err and str(csv) in cap.err
+    assert any("w/h = 0.300" in n for n in json.loads(cap.out)["notes"])
+
+
+def test_out_of_table_reported_with_exit_0(tmp_path, capsys):
+    rows = "".join(f"{w},{w * (9.0 * w / 3 + 3.0):.6f}\n" for w in DEPTHS)  # beta = 3
+    csv = write_table(tmp_path, "depth_mm,force_n\n" + rows)
+    d = run_json(["fit", str(csv)], capsys)
+    assert d["out_of_table"] is True and d["E_mpa"] is None and d["nu"] is None
+    assert "nu in [0.30, 0.50)" in d["out_of_table_message"]
+    assert main(["fit", str(csv)]) == 0
+    assert "OUT OF TABLE" in capsys.readouterr().out
+
+
+def test_help(capsys):
+    with pytest.raises(SystemExit) as info:
+        main(["fit", "--help"])
+    assert info.value.code == 0
+    out = capsys.readouterr().out
+    for opt in ("--thickness-mm", "--radius-mm", "--beta-table", "--effects", "--a-over-h",
+                "--json"):
+        assert opt in out
+
+
+# ---------------------------------------------------------------- bad input
+
+
+@pytest.mark.parametrize("text, expected", [
+    ("depth_mm,weight\n0.15,0.5\n", ["line 1", "missing required column(s) force_n"]),
+    ("press,force_n\n0,0.5\n", ["line 1", "depth_mm"]),
+    ("depth_mm,force_n\n0.15,0.56\n0.30,abc\n", ["line 3", "column force_n", "'abc'"]),
+    ("depth_mm,force_n,hold_s\n0.15,0.56,1\n0.3,1.2,1.5s\n", ["line 3", "column hold_s",
+                                                               "'1.5s'"]),
+    ("depth_mm,force_n\n0.15,0.56\n0.30,\n", ["line 3", "column force_n", "empty cell"]),
+    ("depth_mm,force_n\n0.15,0.56\n-0.30,1.2\n", ["line 3", "depth_mm", "positive"]),
+    ("depth_mm,force_n\n0.15,0.56\n0,1.2\n", ["line 3", "depth_mm", "positive"]),
+    ("depth_mm,force_n\n0.15,0.56\n0.30,1.2,7\n", ["line 3", "3 cells", "header has 2"]),
+    ("depth_mm,force_n\n", ["no data rows"]),
+    ("", ["empty"]),
+    ("depth_mm,force_n,depth_mm\n0.1,0.2,0.3\n", ["line 1", "'depth_mm' appears twice"]),
+    ("depth_mm,force_n\n0.3,1.2\n0.3,1.21\n", ["two depths"]),
+])
+def test_bad_table(tmp_path, capsys, text, expected):
+    csv = write_table(tmp_path, text)
+    msg = error_line(["fit", str(csv)], capsys)
+    assert str(csv) in msg
+    for part in expected:
+        assert part in msg
+
+
+def test_missing_file(tmp_path, capsys):
+    msg = error_line(["fit", str(tmp_path / "nope.csv")], capsys)
+    assert "nope.csv" in msg and "not found" in msg
+
+
+@pytest.mark.parametrize("session, expected", [
+    (None, ["no session.toml", "thickness_mm", "--thickness-mm"]),
+    ("[sensor]\ngel_thickness_mm = 3.0\n", ["session.toml", "missing key [indenter] radius_mm"]),
+    ("[indenter]\nradius_mm = 2.5\n", ["session.toml",
+                                       "missing key [sensor] gel_thickness_mm"]),
+    ("[sensor]\ngel_thickness_mm = 3.0\n[indenter\nradius_mm = 2.5\n",
+     ["session.toml", "not valid TOML", "line 3"]),
+    ("[sensor]\ngel_thickness_mm = \"3\"\n[indenter]\nradius_mm = 2.5\n",
+     ["session.toml", "[sensor] gel_thickness_mm must be a positive number"]),
+    ("[sensor]\ngel_thickness_mm = 3.0\n[indenter]\nradius_mm = -2.5\n",
+     ["session.toml", "[indenter] radius_mm must be a positive number"]),
+])
+def test_bad_session(tmp_path, capsys, session, expected):
+    csv = write_table(tmp_path, session=session)
+    msg = error_line(["fit", str(csv)], capsys)
+    for part in expected:
+        assert part in msg
+
+
+def test_missing_radius_only(tmp_path, capsys):
+    csv = write_table(tmp_path, session=None)
+    msg = error_line(["fit", str(csv), "--thickness-mm", "3"], capsys)
+    assert "radius_mm" in msg and "--radius-mm" in msg
+
+
+@pytest.mark.parametrize("argv, expected", [
+    (["--beta-table", "fem"], ["--beta-table fem", "not built yet"]),
+    (["--effects", "aging"], ["'aging' is in the catalogue", "diagnose"]),
+    (["--effects", "large_deformation,force_drift"], ["'force_drift'", "diagnose"]),
+    (["--effects", "stiffness_trend:day"], ["stiffness_trend:day", "diagnose"]),
+    (["--effects", "creep"], ["unknown effect 'creep'", "valid names", "large_deformation",
+                              "viscoelastic_relaxation"]),
+    (["--thickness-mm", "-3"], ["thickness_mm must be a positive number"]),
+    (["--radius-mm", "0"], ["radius_mm must be a positive number"]),
+    (["--a-over-h", "3"], ["a_over_h = 3", "[0.2, 2]"]),
+    (["--a-over-h", "nan"], ["--a-over-h must be a finite number"]),
+])
+def test_bad_options(tmp_path, capsys, argv, expected):
+    csv = write_table(tmp_path)
+    msg = error_line(["fit", str(csv), *argv], capsys)
+    for part in expected:
+        assert part in msg
+
+
+def test_error_keeps_previous_json(tmp_path, capsys):
+    csv = write_table(tmp_path, "depth_mm,force_n\n0.15,x\n")
+    out = tmp_path / "fit.json"
+    out.write_text('{"old": true}\n')
+    error_line(["fit", str(csv), "--json", str(out)], capsys)
+    assert out.read_text() == '{"old": true}\n'
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["fit.json", "measurements.csv",
+                                                          "session.toml"]
+
+
+def test_unwritable_json_is_input_error(tmp_path, capsys):
+    csv = write_table(tmp_path)
+    msg = error_line(["fit", str(csv), "--json", str(tmp_path / "no" / "dir" / "f.json")],
+                     capsys)
+    assert "cannot write the JSON result" in msg
+
+
+# ------------------------------------------------------------- demo sample
+
+
+def _generator():
+    spec = importlib.util.spec_from_file_location(
+        "make_paper_line6", ROOT / "benchmarks" / "make_paper_line6.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_sample_is_what_the_generator_writes():
+    gen = _generator()
+    assert (SAMPLE / "measurements.csv").read_text() == gen.measurements_csv()
+    assert (SAMPLE / "session.toml").read_text() == gen.SESSION_TOML
+    assert (SAMPLE / "README.md").read_text() == gen.readme()
+
+
+def test_sample_fit_near_paper(capsys):
+    d = run_json(["fit", str(SAMPLE / "measurements.csv"), "--a-over-h", "0.8"], capsys)
+    assert d["n_presses"] == 50
+    assert d["nu"] == pytest.approx(0.4797, abs=0.005)
+    assert d["E_mpa"] == pytest.approx(0.1981, rel=0.02)
+    assert d["nu_ci95"][0] < d["nu"] < d["nu_ci95"][1]
