@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-__all__ = ["asset_dir", "default_calibration_path", "KNOWN_SENSORS"]
+__all__ = ["KNOWN_SENSORS", "asset_dir", "default_calibration_path"]
 
 _PKG = Path(__file__).resolve().parent
 

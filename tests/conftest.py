@@ -77,3 +77,34 @@ def hand_kappa():
 def hayes_table():
     """(a_over_h, nu, rows) of the Hayes 1972 table, typed from method.md."""
     return HAYES_AH, HAYES_NU, HAYES_ROWS
+
+
+# optics fixtures
+@pytest.fixture(scope="session")
+def torch_one_thread():
+    """Train networks on one torch thread: small nets on a loaded 2-core machine
+    run ~50x slower with two contending OpenMP threads."""
+    torch = pytest.importorskip("torch")
+    before = torch.get_num_threads()
+    torch.set_num_threads(1)
+    yield
+    torch.set_num_threads(before)
+
+
+@pytest.fixture(scope="session")
+def taxim_presses():
+    """The taxim GelSight ball presses (48 frames, hand-annotated circles), read once."""
+    from tactilevision.io import read_ball_presses, taxim_datapack
+
+    return read_ball_presses(taxim_datapack())
+
+
+@pytest.fixture(scope="session")
+def taxim_lut(taxim_presses):
+    """LUT calibration on the even taxim presses with their annotated circles."""
+    from tactilevision.optics import PhotometricCalibration
+
+    ps = taxim_presses
+    return PhotometricCalibration.from_ball_presses(
+        ps.reference, ps.frames[0::2], ps.centers_px[0::2], ps.radii_px[0::2],
+        ball_radius_mm=2.0, mm_per_px=0.0295, model="lut", source="taxim dataPack.npz")

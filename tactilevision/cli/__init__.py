@@ -55,7 +55,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         0 on success, 2 on bad input (message on standard error).
     """
     parser = build_parser()
+    argv = list(sys.argv[1:] if argv is None else argv)
     args = parser.parse_args(argv)
+    args.argv = argv
     try:
         return int(args.func(args) or 0)
     except InputError as exc:

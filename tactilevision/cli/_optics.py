@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -61,10 +60,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         description="Fit a photometric calibration from frames of a ball pressed into the gel. "
         "BALL_PRESSES is a folder (reference.png or ref.jpg, the press frames, optionally "
         "circles.csv with frame,x_px,y_px,radius_px) or an .npz (reference, frames[, "
-        "centers_px, radii_px], or taxim's dataPack.npz). Circles are detected when not given. "
+        "centers_px, radii_px], or taxim's dataPack.npz; 'taxim:gelsight' names the one inside "
+        "the installed taxim package). Circles are detected when not given. "
         "Presses left out by --presses are used to report the accuracy.",
     )
-    c.add_argument("ball_presses", metavar="BALL_PRESSES", type=Path)
+    c.add_argument("ball_presses", metavar="BALL_PRESSES", type=Path,
+                   help="folder, .npz, or taxim:gelsight")
     c.add_argument("--ball-radius-mm", type=float, required=True, help="ball radius R (mm)")
     c.add_argument("--mm-per-px", type=float, required=True, help="image scale (mm per px)")
     c.add_argument("--model", choices=("lut", "mlp"), default="mlp",
@@ -87,12 +88,14 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 def run_calibrate(args: argparse.Namespace) -> int:
     """Run ``optics calibrate``."""
-    from ..io import read_ball_presses
+    from ..io import read_ball_presses, taxim_datapack
     from ..optics import DepthReconstructor, PhotometricCalibration, evaluate_ball_presses
 
     if args.ball_radius_mm <= 0 or args.mm_per_px <= 0:
         raise InputError("--ball-radius-mm and --mm-per-px must be positive")
-    ps = read_ball_presses(args.ball_presses)
+    src = str(args.ball_presses)
+    ps = read_ball_presses(taxim_datapack(src.split(":", 1)[1]) if src.startswith("taxim:")
+                           else args.ball_presses)
     idx = parse_presses(args.presses, len(ps.frames))
     given = ps.centers_px is not None and ps.radii_px is not None and not args.detect_circles
     cal = PhotometricCalibration.from_ball_presses(
@@ -103,7 +106,7 @@ def run_calibrate(args: argparse.Namespace) -> int:
         progress=True,
     )
     cal.provenance["presses"] = [int(i) for i in idx]
-    cal.provenance["command"] = "tactilevision " + " ".join(sys.argv[1:])
+    cal.provenance["command"] = "tactilevision " + " ".join(args.argv)
     if args.credit:
         cal.provenance["credit"] = args.credit
     path = cal.save(args.out)

@@ -99,17 +99,23 @@ def gradients_from_normals(nx: np.ndarray, ny: np.ndarray, *, max_slope: float =
     nx, ny : (...) float ndarray
         x and y components of the unit normal ``(-gx, -gy, 1) / norm``.
     max_slope : float, default 6.0
-        Cap on the gradient magnitude (80.5 degrees), where ``nx^2 + ny^2``
-        reaches or exceeds 1 because of model noise.
+        Cap on the gradient magnitude (80.5 degrees): in-plane normals
+        longer than ``max_slope / sqrt(1 + max_slope^2)`` (model noise can
+        reach or pass 1) are shortened to that length first.
 
     Returns
     -------
     gx, gy : (...) float32 ndarray
         ``-nx / nz`` and ``-ny / nz`` with ``nz = sqrt(1 - nx^2 - ny^2)``.
     """
-    nz_min = 1.0 / np.sqrt(1.0 + max_slope * max_slope)
-    nz = np.sqrt(np.maximum(1.0 - nx * nx - ny * ny, nz_min * nz_min)).astype(np.float32)
-    return (-nx / nz).astype(np.float32), (-ny / nz).astype(np.float32)
+    nx = np.asarray(nx, np.float32)
+    ny = np.asarray(ny, np.float32)
+    s_max = np.float32(max_slope / np.sqrt(1.0 + max_slope * max_slope))  # |n_xy| at the cap
+    norm = np.sqrt(nx * nx + ny * ny)
+    shrink = np.minimum(np.float32(1.0), s_max / np.maximum(norm, np.float32(1e-12)))
+    nx, ny = nx * shrink, ny * shrink
+    inv_nz = 1.0 / np.sqrt(1.0 - nx * nx - ny * ny)
+    return (-nx * inv_nz).astype(np.float32), (-ny * inv_nz).astype(np.float32)
 
 
 @dataclass(frozen=True)

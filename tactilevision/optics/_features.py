@@ -16,7 +16,7 @@ import numpy as np
 
 from .._checks import check_array
 
-__all__ = ["colour_change", "frame_gain", "reference_inverse"]
+__all__ = ["blur_frames", "colour_change", "frame_gain", "reference_inverse"]
 
 
 def reference_inverse(reference: np.ndarray, *, blur_sigma: float = 2.0,
@@ -68,6 +68,26 @@ def frame_gain(ratio: np.ndarray, *, step: int = 4) -> np.ndarray:
     return np.median(flat, axis=-2)[..., None, None, :].astype(np.float32)
 
 
+def blur_frames(frames: np.ndarray, sigma: float) -> np.ndarray:
+    """Gaussian blur of uint8 frames against camera noise (OpenCV, uint8 out).
+
+    Parameters
+    ----------
+    frames : ([N, ]H, W, 3) uint8 ndarray
+    sigma : float
+        Standard deviation, px; the kernel is truncated at 2 sigma (5 x 5
+        for sigma = 1).
+
+    Returns
+    -------
+    blurred : ([N, ]H, W, 3) uint8 ndarray
+    """
+    k = 2 * int(np.ceil(2.0 * sigma)) + 1
+    if frames.ndim == 3:
+        return cv2.GaussianBlur(frames, (k, k), sigma)
+    return np.stack([cv2.GaussianBlur(f, (k, k), sigma) for f in frames])
+
+
 def colour_change(frames: np.ndarray, ref_inv: np.ndarray, *, blur_sigma: float = 0.0,
                   normalise_gain: bool = True) -> np.ndarray:
     """Colour change of frames against the reference, ``ratio / gain - 1``.
@@ -79,7 +99,8 @@ def colour_change(frames: np.ndarray, ref_inv: np.ndarray, *, blur_sigma: float 
     ref_inv : (H, W, 3) float32 ndarray
         From :func:`reference_inverse`.
     blur_sigma : float, default 0
-        Gaussian blur of the frame (px) before the ratio.
+        Gaussian blur of the frame (px) before the ratio
+        (:func:`blur_frames`, on the uint8 values).
     normalise_gain : bool, default True
         Divide by the per-channel median ratio (:func:`frame_gain`).
 
@@ -91,14 +112,8 @@ def colour_change(frames: np.ndarray, ref_inv: np.ndarray, *, blur_sigma: float 
     frames = check_array(frames, "frames", [("H", "W", 3), ("N", "H", "W", 3)], dtype=np.uint8)
     check_array(ref_inv, "ref_inv", [frames.shape[-3:]], dtype=np.floating)
     if blur_sigma > 0:
-        if frames.ndim == 3:
-            f = cv2.GaussianBlur(frames.astype(np.float32), (0, 0), blur_sigma)
-        else:
-            f = np.stack([cv2.GaussianBlur(x.astype(np.float32), (0, 0), blur_sigma)
-                          for x in frames])
-        ratio = f * ref_inv
-    else:
-        ratio = frames.astype(np.float32) * ref_inv
+        frames = blur_frames(frames, blur_sigma)
+    ratio = frames.astype(np.float32) * ref_inv
     if normalise_gain:
         ratio /= frame_gain(ratio)
     ratio -= 1.0

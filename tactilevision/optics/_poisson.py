@@ -22,13 +22,15 @@ __all__ = ["PoissonSolver", "divergence", "integrate_poisson"]
 Boundary = Literal["neumann", "dirichlet"]
 
 
-def divergence(gx: np.ndarray, gy: np.ndarray) -> np.ndarray:
+def divergence(gx: np.ndarray, gy: np.ndarray, *, scale: float = 0.5) -> np.ndarray:
     """Divergence of a gradient field by central differences.
 
     Parameters
     ----------
     gx, gy : ([N, ]H, W) float ndarray
         d(z)/dx along columns and d(z)/dy along rows, in height units per pixel.
+    scale : float, default 0.5
+        Factor applied to the differences (0.5: the central difference).
 
     Returns
     -------
@@ -38,14 +40,19 @@ def divergence(gx: np.ndarray, gy: np.ndarray) -> np.ndarray:
         ``(g[j] + g[j+1]) / 2`` for the forward difference, which the 5-point
         Laplacian of :class:`PoissonSolver` inverts exactly.
     """
-    div = np.zeros_like(gx)
-    div[..., :, 1:-1] = gx[..., :, 2:] - gx[..., :, :-2]
-    div[..., :, 0] = gx[..., :, 1] + gx[..., :, 0]
-    div[..., :, -1] = -gx[..., :, -1] - gx[..., :, -2]
-    div[..., 1:-1, :] += gy[..., 2:, :] - gy[..., :-2, :]
-    div[..., 0, :] += gy[..., 1, :] + gy[..., 0, :]
-    div[..., -1, :] += -gy[..., -1, :] - gy[..., -2, :]
-    div *= 0.5
+    div = np.empty_like(gx)
+    np.subtract(gx[..., :, 2:], gx[..., :, :-2], out=div[..., :, 1:-1])
+    np.add(gx[..., :, 1], gx[..., :, 0], out=div[..., :, 0])
+    np.add(gx[..., :, -1], gx[..., :, -2], out=div[..., :, -1])
+    np.negative(div[..., :, -1], out=div[..., :, -1])
+    div[..., 1:-1, :] += gy[..., 2:, :]
+    div[..., 1:-1, :] -= gy[..., :-2, :]
+    div[..., 0, :] += gy[..., 1, :]
+    div[..., 0, :] += gy[..., 0, :]
+    div[..., -1, :] -= gy[..., -1, :]
+    div[..., -1, :] -= gy[..., -2, :]
+    if scale != 1.0:
+        div *= scale
     return div
 
 
@@ -94,7 +101,7 @@ class PoissonSolver:
         lam = ky[:, None] + kx[None, :]
         if boundary == "neumann":
             lam[0, 0] = 1.0  # the mean is free; fixed afterwards
-        inv = (1.0 / lam).astype(dtype)
+        inv = (0.5 / lam).astype(dtype)  # 0.5: the central difference of divergence()
         if boundary == "neumann":
             inv[0, 0] = 0.0
         self._inv_lambda = inv
@@ -109,8 +116,9 @@ class PoissonSolver:
             Gradients along columns (x) and rows (y), height units per pixel.
         zero_mask : ([N, ]H, W) bool ndarray, optional
             Neumann only: pixels whose median height is set to zero (for a
-            tactile frame, the no-contact region). Without it the median of
-            the image border is set to zero.
+            tactile frame, the no-contact region). Without it the median over
+            the image (every 4th pixel along rows and columns) is zero: right
+            for a tactile frame whose contact covers under half of it.
 
         Returns
         -------
@@ -119,8 +127,10 @@ class PoissonSolver:
         """
         gx = check_array(gx, "gx", [(*self.shape,), ("N", *self.shape)], dtype=np.floating)
         gy = check_array(gy, "gy", [gx.shape], dtype=np.floating)
+        if zero_mask is not None:
+            zero_mask = check_array(zero_mask, "zero_mask", [gx.shape], dtype=np.bool_)
         dt = self._inv_lambda.dtype
-        f = divergence(gx.astype(dt, copy=False), gy.astype(dt, copy=False))
+        f = divergence(gx.astype(dt, copy=False), gy.astype(dt, copy=False), scale=1.0)
         axes = (-2, -1)
         if self.boundary == "neumann":
             z = sfft.idctn(sfft.dctn(f, type=2, axes=axes, workers=1) * self._inv_lambda,
@@ -138,7 +148,7 @@ def _fix_offset(z: np.ndarray, zero_mask: np.ndarray | None) -> np.ndarray:
     if zero_mask is not None and np.count_nonzero(zero_mask) > 0:
         ref = np.median(z[zero_mask])
     else:
-        ref = np.median(np.concatenate([z[0], z[-1], z[1:-1, 0], z[1:-1, -1]]))
+        ref = np.median(z[::4, ::4])
     z -= ref
     return z
 
@@ -156,7 +166,8 @@ def integrate_poisson(gx: np.ndarray, gy: np.ndarray, *, boundary: Boundary = "n
     boundary : {'neumann', 'dirichlet'}, default 'neumann'
         Boundary condition, see :class:`PoissonSolver`.
     zero_mask : ([N, ]H, W) bool ndarray, optional
-        Neumann only: region whose median height is zero.
+        Neumann only: region whose median height is zero (default: the
+        whole image).
 
     Returns
     -------
@@ -175,7 +186,8 @@ def integrate_poisson(gx: np.ndarray, gy: np.ndarray, *, boundary: Boundary = "n
     >>> z = np.exp(-((x - 40) ** 2 + (y - 32) ** 2) / 200.0)
     >>> gy, gx = np.gradient(z)
     >>> zr = integrate_poisson(gx.astype(np.float32), gy.astype(np.float32))
-    >>> bool(np.abs(zr - z).max() < 0.01)
+    >>> err = zr - z
+    >>> bool(np.abs(err - np.median(err)).max() < 0.01)  # equal up to the free offset
     True
     """
     gx = check_array(gx, "gx", [("H", "W"), ("N", "H", "W")], dtype=np.floating)

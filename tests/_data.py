@@ -1,0 +1,167 @@
+"""Test data with known answers: Lambertian ball-press renders and real-frame paths.
+
+Synthetic frames follow a model written out here, independently of the package:
+three lights, one per colour channel (B, G, R), at elevation ``LIGHT_ELEVATION_DEG``
+and azimuths ``LIGHT_AZIMUTH_DEG``; channel k of a pixel with unit normal n
+(pointing out of the gel, ``(-gx, -gy, 1) / norm``) reads
+
+    colour_k = E_k(x, y) * (AMBIENT + n . l_k) / (AMBIENT + sin(elevation))
+
+with ``E_k`` a smooth illumination field (the no-contact reference). The colour
+change ``colour / reference - 1`` is therefore an exactly linear function of the
+normal, ``(L n - sin(elevation)) / s_flat``, and the in-plane normal an exactly
+linear function of the colour change (:func:`nxy_from_change`): the known
+answer for lookup tables and networks.
+
+A ball of radius R pressed to contact radius a has the depth (positive into
+the gel) ``sqrt(R^2 - r^2) - sqrt(R^2 - a^2)`` inside the contact and 0
+outside; its slope stays below ``a / sqrt(R^2 - a^2)`` so with ``a <= 0.6 R``
+every light sees every surface element (n . l_k > 0): no shadows.
+
+Real frames: ``GELSLIM`` is ``../shared/real/gelslim3`` next to the repository
+(see ``shared/real/README.md``); tests using it skip when it is absent.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+GELSLIM = ROOT.parent / "shared" / "real" / "gelslim3"
+GELSLIM_REASON = f"GelSlim 3.0 frames not found at {GELSLIM}"
+#: GelSlim release's ball (7.6 mm diameter). Its calibration script names two
+#: scales, 0.10577 mm/px and "0.0806 x 1.5" (shared/real/README.md: uncertain).
+#: The frames rule out 0.10577: the ball would be 35.9 px in radius, yet the
+#: visible contact circles reach 40 to 47 px (set_2020_09) and a contact
+#: circle is a section of the ball. 0.0806 mm/px (ball 47.1 px) is the only
+#: stated scale consistent with every press; benchmarks/bench_optics_real.py
+#: uses the same.
+GELSLIM_BALL_RADIUS_MM = 3.8
+GELSLIM_MM_PER_PX = 0.0806
+#: taxim GelSight data pack (shared/real/README.md).
+TAXIM_BALL_RADIUS_MM = 2.0
+TAXIM_MM_PER_PX = 0.0295
+
+LIGHT_ELEVATION_DEG = 60.0
+LIGHT_AZIMUTH_DEG = (90.0, 210.0, 330.0)
+AMBIENT = 0.3
+
+
+def light_matrix() -> np.ndarray:
+    """(3, 3) rows: unit light direction of channel B, G, R."""
+    el = np.radians(LIGHT_ELEVATION_DEG)
+    az = np.radians(LIGHT_AZIMUTH_DEG)
+    return np.stack([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az),
+                     np.full(3, np.sin(el))], axis=1)
+
+
+def flat_shading() -> float:
+    """Shading of a flat pixel, the same for all three lights."""
+    return AMBIENT + float(np.sin(np.radians(LIGHT_ELEVATION_DEG)))
+
+
+def change_from_normals(n: np.ndarray) -> np.ndarray:
+    """Exact colour change ``(L n - sin(el)) / s_flat`` of unit normals (..., 3)."""
+    el = np.sin(np.radians(LIGHT_ELEVATION_DEG))
+    return (n @ light_matrix().T - el) / flat_shading()
+
+
+def change_to_nxy_matrix() -> tuple[np.ndarray, np.ndarray]:
+    """(A, b) with ``nxy = change @ A.T + b`` exactly (inverse of the light model)."""
+    el = np.sin(np.radians(LIGHT_ELEVATION_DEG))
+    inv = np.linalg.inv(light_matrix())
+    a = flat_shading() * inv[:2]
+    b = el * inv[:2].sum(axis=1)
+    return a, b
+
+
+def nxy_from_change(change: np.ndarray) -> np.ndarray:
+    """In-plane normal (n_x, n_y) of colour changes (..., 3) under the light model."""
+    a, b = change_to_nxy_matrix()
+    return change @ a.T + b
+
+
+def unit_normals(gx: np.ndarray, gy: np.ndarray) -> np.ndarray:
+    """``(-gx, -gy, 1) / norm``, written out independently of the package."""
+    norm = np.sqrt(1.0 + gx * gx + gy * gy)
+    return np.stack([-gx / norm, -gy / norm, 1.0 / norm], axis=-1)
+
+
+def illumination(shape: tuple[int, int], *, dark_red_right: bool = False) -> np.ndarray:
+    """Smooth, uneven illumination E (H, W, 3), counts (the noiseless reference).
+
+    ``dark_red_right``: the red channel is 1 count over the right half, as on
+    the GelSlim 3.0 pad where the red LED does not reach a quarter of the gel.
+    """
+    h, w = shape
+    y, x = np.mgrid[0:h, 0:w].astype(np.float64)
+    u, v = x / (w - 1) - 0.5, y / (h - 1) - 0.5
+    e = np.stack([150.0 * (1 + 0.25 * u - 0.15 * v),
+                  140.0 * (1 - 0.20 * u + 0.20 * v),
+                  130.0 * (1 + 0.10 * u + 0.25 * v + 0.3 * u * v)], axis=-1)
+    if dark_red_right:
+        e[..., 2] = np.where(x > w / 2, 1.0, e[..., 2])
+    return e
+
+
+def ball_depth(shape: tuple[int, int], centre: tuple[float, float], contact_radius: float,
+               ball_radius: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Depth (px, positive into the gel) and its exact gradients for a ball press.
+
+    Returns ``depth, gx, gy`` (H, W) float64: ``sqrt(R^2 - r^2) - sqrt(R^2 - a^2)``
+    inside the contact disc r < a, 0 (and zero gradient) outside.
+    """
+    h, w = shape
+    y, x = np.mgrid[0:h, 0:w].astype(np.float64)
+    dx, dy = x - centre[0], y - centre[1]
+    r2 = dx * dx + dy * dy
+    inside = r2 < contact_radius**2
+    s = np.sqrt(np.maximum(ball_radius**2 - r2, 1e-9))
+    depth = np.where(inside, s - np.sqrt(ball_radius**2 - contact_radius**2), 0.0)
+    gx = np.where(inside, -dx / s, 0.0)
+    gy = np.where(inside, -dy / s, 0.0)
+    return depth, gx, gy
+
+
+def _to_uint8(img: np.ndarray, noise: float, rng: np.random.Generator) -> np.ndarray:
+    if noise > 0:
+        img = img + rng.normal(0.0, noise, img.shape)
+    return np.clip(np.rint(img), 0, 255).astype(np.uint8)
+
+
+def render_reference(shape: tuple[int, int], *, noise: float = 1.0, seed: int = 0,
+                     dark_red_right: bool = False) -> np.ndarray:
+    """No-contact frame (H, W, 3) uint8 BGR: the illumination plus camera noise."""
+    rng = np.random.default_rng(seed)
+    return _to_uint8(illumination(shape, dark_red_right=dark_red_right), noise, rng)
+
+
+def render_press(shape: tuple[int, int], centre: tuple[float, float], contact_radius: float,
+                 ball_radius: float, *, noise: float = 1.0, gain: float = 1.0, seed: int = 1,
+                 dark_red_right: bool = False) -> np.ndarray:
+    """Ball-press frame (H, W, 3) uint8 BGR under the Lambertian light model."""
+    _, gx, gy = ball_depth(shape, centre, contact_radius, ball_radius)
+    rho = 1.0 + change_from_normals(unit_normals(gx, gy))
+    rng = np.random.default_rng(seed)
+    img = gain * illumination(shape, dark_red_right=dark_red_right) * rho
+    return _to_uint8(img, noise, rng)
+
+
+def synthetic_presses(n: int = 6, *, shape: tuple[int, int] = (120, 160),
+                      ball_radius: float = 40.0, seed: int = 0
+                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``reference, frames (n, H, W, 3), centres (n, 2), radii (n,)`` of ball presses.
+
+    Centres spread over the pad, contact radii between 0.45 R and 0.6 R.
+    """
+    rng = np.random.default_rng(seed)
+    h, w = shape
+    ref = render_reference(shape, seed=seed)
+    centres = np.column_stack([rng.uniform(0.35 * w, 0.65 * w, n),
+                               rng.uniform(0.35 * h, 0.65 * h, n)])
+    radii = rng.uniform(0.45, 0.6, n) * ball_radius
+    frames = np.stack([render_press(shape, tuple(c), r, ball_radius, seed=seed + 1 + i)
+                       for i, (c, r) in enumerate(zip(centres, radii, strict=True))])
+    return ref, frames, centres, radii

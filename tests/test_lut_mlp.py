@@ -1,0 +1,519 @@
+"""Colour-to-normal models against the exact inverse of a Lambertian light model.
+
+Under the three-light model of ``tests/_data.py`` the in-plane normal is an
+exactly linear function of the colour change, ``nxy = A change + b``; so
+inside one LUT cell the normals of two colours differ by at most
+``||A||_2`` times the cell diagonal: the bound a binned table must meet.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import onnxruntime as ort
+import pytest
+from _data import (
+    GELSLIM,
+    GELSLIM_BALL_RADIUS_MM,
+    GELSLIM_MM_PER_PX,
+    GELSLIM_REASON,
+    TAXIM_BALL_RADIUS_MM,
+    TAXIM_MM_PER_PX,
+    ball_depth,
+    change_from_normals,
+    change_to_nxy_matrix,
+    synthetic_presses,
+    unit_normals,
+)
+
+from tactilevision import InputError, ShapeError
+from tactilevision.optics import (
+    ColourLUT,
+    DepthReconstructor,
+    MLPGradientModel,
+    PhotometricCalibration,
+    detect_contact_circles,
+    evaluate_ball_presses,
+    fit_colour_lut,
+    mlp_inputs,
+    train_mlp,
+)
+
+MAX_SLOPE_DEG = 35.0
+
+
+def sample_normals(m: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """Colour change (M, 3) and in-plane normal (M, 2) of random surface slopes."""
+    rng = np.random.default_rng(seed)
+    g = np.tan(np.radians(MAX_SLOPE_DEG)) * np.sqrt(rng.random(m))
+    th = rng.uniform(0, 2 * np.pi, m)
+    n = unit_normals(g * np.cos(th), g * np.sin(th))
+    return change_from_normals(n).astype(np.float32), n[:, :2].astype(np.float32)
+
+
+@pytest.fixture(scope="module")
+def train():
+    return sample_normals(200_000, seed=0)
+
+
+@pytest.fixture(scope="module")
+def held_out():
+    return sample_normals(20_000, seed=1)
+
+
+def lut_bound(lut: ColourLUT) -> float:
+    a, _ = change_to_nxy_matrix()
+    diag = float(np.linalg.norm((lut.hi - lut.lo) / lut.bins))
+    return float(np.linalg.norm(a, 2)) * diag
+
+
+def in_range(lut: ColourLUT, change: np.ndarray) -> np.ndarray:
+    return np.all((change >= lut.lo) & (change <= lut.hi), axis=1)
+
+
+@pytest.mark.parametrize("smooth_sigma", [0.0, 0.7])
+def test_lut_maps_held_out_colours_within_cell_bound(train, held_out, smooth_sigma):
+    lut = fit_colour_lut(*train, bins=32, smooth_sigma=smooth_sigma)
+    change, nxy = held_out
+    ok = in_range(lut, change)
+    assert ok.mean() > 0.98  # default range: 0.1..99.9 percentiles per channel
+    err = np.linalg.norm(lut.normals(change[ok]) - nxy[ok], axis=1)
+    # a held-out colour and the calibration colours averaged into its cell lie
+    # within one cell diagonal of each other (smoothing by 0.7 cells of an
+    # exactly linear table moves it only at the table's edges)
+    assert err.max() < lut_bound(lut)
+
+
+def test_lut_error_shrinks_with_bin_width(train, held_out):
+    change, nxy = held_out
+    errs = {}
+    for bins in (8, 32):
+        lut = fit_colour_lut(*train, bins=bins, smooth_sigma=0.0)
+        ok = in_range(lut, change)
+        err = np.linalg.norm(lut.normals(change[ok]) - nxy[ok], axis=1)
+        assert err.max() < lut_bound(lut)
+        errs[bins] = np.median(err)
+    # quantisation error ~ bin width: 4x narrower cells, at least 2.5x smaller error
+    assert errs[32] < errs[8] / 2.5
+
+
+def test_lut_counts_and_shapes(train):
+    change, nxy = train
+    lut = fit_colour_lut(change, nxy, bins=16)
+    assert lut.bins == 16
+    assert lut.table.shape == (16, 16, 16, 2) and lut.table.dtype == np.float32
+    assert lut.counts.shape == (16, 16, 16)
+    assert int(lut.counts.sum()) == len(change)
+    assert lut.lo.shape == (3,) and lut.hi.shape == (3,)
+    np.testing.assert_allclose(lut.lo, np.percentile(change, 0.1, axis=0), rtol=1e-5)
+    np.testing.assert_allclose(lut.hi, np.percentile(change, 99.9, axis=0), rtol=1e-5)
+    # counts are the histogram of cell indices
+    np.testing.assert_array_equal(
+        lut.counts.ravel(), np.bincount(lut.index(change), minlength=16**3))
+    # normals() keeps leading dimensions
+    assert lut.normals(change[:12].reshape(3, 4, 3)).shape == (3, 4, 2)
+
+
+def test_lut_empty_cells_take_nearest_filled(train):
+    change, nxy = train
+    lut = fit_colour_lut(change, nxy, bins=12, smooth_sigma=0.0)
+    filled = np.argwhere(lut.counts > 0)
+    empty = np.argwhere(lut.counts == 0)
+    assert 0 < len(filled) < 12**3  # a 2-D surface in 3-D colour space leaves cells empty
+    rng = np.random.default_rng(0)
+    for cell in empty[rng.choice(len(empty), 40, replace=False)]:
+        d2 = ((filled - cell) ** 2).sum(axis=1)
+        nearest = filled[d2 == d2.min()]
+        values = lut.table[tuple(nearest.T)]
+        # equal to one of the equidistant filled neighbours
+        got = lut.table[tuple(cell)]
+        assert np.any(np.all(np.abs(values - got) < 1e-6, axis=1))
+    # filled cells hold the mean normal of their pixels
+    idx = lut.index(change)
+    cell = np.bincount(idx).argmax()
+    np.testing.assert_allclose(lut.table.reshape(-1, 2)[cell], nxy[idx == cell].mean(axis=0),
+                               atol=1e-5)
+
+
+def test_lut_index_clips_to_table():
+    b = 8
+    lut = ColourLUT(np.zeros((b, b, b, 2), np.float32), np.full(3, -1.0, np.float32),
+                    np.full(3, 1.0, np.float32), np.zeros((b, b, b), np.int64))
+    change = np.array([[-5.0, -5.0, -5.0],   # below lo -> cell 0
+                       [5.0, 5.0, 5.0],      # above hi -> last cell
+                       [-1.0, 0.0, 0.99],    # (0, 4, 7)
+                       [5.0, -5.0, 0.1]],    # (7, 0, 4)
+                      np.float32)
+    idx = lut.index(change)
+    assert idx.dtype == np.int32
+    np.testing.assert_array_equal(idx, [0, b**3 - 1, (0 * b + 4) * b + 7, (7 * b + 0) * b + 4])
+
+
+def test_fit_lut_rejects_bad_input():
+    c = np.zeros((100, 3), np.float32)
+    with pytest.raises(ShapeError, match="nxy"):
+        fit_colour_lut(c, np.zeros((99, 2), np.float32))
+    with pytest.raises(ShapeError, match="change"):
+        fit_colour_lut(np.zeros((100, 4), np.float32), np.zeros((100, 2), np.float32))
+    bad = c.copy()
+    bad[3, 1] = np.nan
+    with pytest.raises(ShapeError, match="change must be finite"):
+        fit_colour_lut(bad, np.zeros((100, 2), np.float32))
+    with pytest.raises(ValueError, match="at least 32"):
+        fit_colour_lut(c[:10], np.zeros((10, 2), np.float32), bins=32)
+
+
+# ------------------------------------------------------------------ MLP
+SHAPE = (120, 160)
+
+
+def inputs_for(change: np.ndarray, seed: int, *, use_position: bool = True):
+    rng = np.random.default_rng(seed)
+    m = len(change)
+    x = rng.integers(0, SHAPE[1], m)
+    y = rng.integers(0, SHAPE[0], m)
+    ref = rng.uniform(50, 200, (m, 3)).astype(np.float32)
+    return mlp_inputs(change, ref, x, y, SHAPE, use_position=use_position), x, y
+
+
+def test_mlp_inputs_layout():
+    change = np.array([[0.1, -0.2, 0.3], [0.0, 0.0, 0.0]], np.float32)
+    ref = np.array([[255.0, 0.0, 51.0], [102.0, 204.0, 153.0]], np.float32)
+    x = np.array([0, SHAPE[1] - 1])
+    y = np.array([SHAPE[0] - 1, 0])
+    inp = mlp_inputs(change, ref, x, y, SHAPE)
+    assert inp.shape == (2, 8) and inp.dtype == np.float32
+    np.testing.assert_allclose(inp[:, 0:3], change)
+    np.testing.assert_allclose(inp[:, 3:6], ref / 255.0, rtol=1e-6)
+    # positions scaled to [-1, 1]: first column -1, last column +1
+    np.testing.assert_allclose(inp[:, 6], [-1.0, 1.0], atol=1e-6)
+    np.testing.assert_allclose(inp[:, 7], [1.0, -1.0], atol=1e-6)
+    off = mlp_inputs(change, ref, x, y, SHAPE, use_position=False)
+    np.testing.assert_array_equal(off[:, 6:8], 0.0)
+    np.testing.assert_array_equal(off[:, :6], inp[:, :6])
+
+
+@pytest.fixture(scope="module")
+def linear_mlp(torch_one_thread):
+    """A small network trained on the exact light model (8k pixels, 3 epochs)."""
+    change, nxy = sample_normals(8192, seed=2)
+    inp, _, _ = inputs_for(change, seed=2)
+    onnx_bytes = train_mlp(inp, nxy, hidden=32, epochs=3, batch_size=256,
+                           learning_rate=1e-2, seed=0)
+    return onnx_bytes, inp, nxy
+
+
+def test_mlp_onnx_learns_known_mapping(linear_mlp):
+    onnx_bytes, _, _ = linear_mlp
+    change, nxy = sample_normals(4096, seed=3)
+    inp, _, _ = inputs_for(change, seed=3)
+    sess = ort.InferenceSession(onnx_bytes, providers=["CPUExecutionProvider"])
+    assert [i.name for i in sess.get_inputs()] == ["x"]
+    assert [o.name for o in sess.get_outputs()] == ["nxy"]
+    pred = sess.run(None, {"x": inp})[0]
+    assert pred.shape == (4096, 2) and pred.dtype == np.float32
+    rms = float(np.sqrt(np.mean((pred - nxy) ** 2)))
+    # labels spread 0.31 (std); a network that learnt nothing scores ~0.31:
+    # require a tenth of that (R^2 > 0.99)
+    assert rms < 0.1 * float(nxy.std())
+    # the onnxruntime wrapper runs the same graph
+    np.testing.assert_allclose(MLPGradientModel(onnx_bytes).normals(inp), pred, atol=1e-6)
+
+
+def test_mlp_training_deterministic(linear_mlp, torch_one_thread):
+    onnx_bytes, inp, nxy = linear_mlp
+    again = train_mlp(inp, nxy, hidden=32, epochs=3, batch_size=256, learning_rate=1e-2, seed=0)
+    assert again == onnx_bytes
+    other = train_mlp(inp, nxy, hidden=32, epochs=3, batch_size=256, learning_rate=1e-2, seed=1)
+    assert other != onnx_bytes
+
+
+def test_mlp_position_inputs_matter(torch_one_thread):
+    # a field that depends on position only: nxy = 0.2 * (u, v), u, v in [-1, 1]
+    change = np.zeros((8192, 3), np.float32)
+    errs = {}
+    for use_position in (True, False):
+        inp, x, y = inputs_for(change, seed=4, use_position=use_position)
+        target = 0.2 * np.stack([2 * x / (SHAPE[1] - 1) - 1, 2 * y / (SHAPE[0] - 1) - 1],
+                                axis=1).astype(np.float32)
+        net = MLPGradientModel(train_mlp(inp, target, hidden=32, epochs=3, batch_size=256,
+                                         learning_rate=1e-2, seed=0))
+        errs[use_position] = float(np.sqrt(np.mean((net.normals(inp) - target) ** 2)))
+        spread = float(target.std())
+    assert errs[True] < 0.1 * spread
+    # without position the best constant predicts the mean: error = spread (~0.115)
+    assert errs[False] > 0.8 * spread
+
+
+def test_mlp_model_input_checks(linear_mlp):
+    net = MLPGradientModel(linear_mlp[0])
+    assert net.normals(np.zeros((0, 8), np.float32)).shape == (0, 2)
+    with pytest.raises(ShapeError, match="inputs"):
+        net.normals(np.zeros((5, 7), np.float32))
+    with pytest.raises(ShapeError, match="inputs must have dtype float32"):
+        net.normals(np.zeros((5, 8), np.float64))
+
+
+def test_train_mlp_input_checks(torch_one_thread):
+    x = np.zeros((64, 8), np.float32)
+    with pytest.raises(ShapeError, match="nxy"):
+        train_mlp(x, np.zeros((63, 2), np.float32), epochs=1)
+    bad = x.copy()
+    bad[0, 0] = np.inf
+    with pytest.raises(ShapeError, match="inputs must be finite"):
+        train_mlp(bad, np.zeros((64, 2), np.float32), epochs=1)
+
+
+# -------------------------------------------- calibration and reconstruction
+BALL_PX = 40.0
+MM_PER_PX = 0.05
+
+
+@pytest.fixture(scope="module")
+def synth():
+    """8 Lambertian ball presses (160 x 120), known centres and contact radii."""
+    return synthetic_presses(8, ball_radius=BALL_PX, seed=0)
+
+
+@pytest.fixture(scope="module")
+def synth_lut(synth):
+    ref, frames, centres, radii = synth
+    return PhotometricCalibration.from_ball_presses(
+        ref, frames[0::2], centres[0::2], radii[0::2], ball_radius_mm=BALL_PX * MM_PER_PX,
+        mm_per_px=MM_PER_PX, model="lut", source="synthetic")
+
+
+@pytest.fixture(scope="module")
+def synth_mlp(synth, torch_one_thread):
+    ref, frames, centres, radii = synth
+    return PhotometricCalibration.from_ball_presses(
+        ref, frames[0::2], centres[0::2], radii[0::2], ball_radius_mm=BALL_PX * MM_PER_PX,
+        mm_per_px=MM_PER_PX, model="mlp", epochs=2, source="synthetic")
+
+
+def test_lut_calibration_recovers_synthetic_ball(synth, synth_lut):
+    ref, frames, centres, radii = synth
+    cal = synth_lut
+    assert cal.model == "lut" and cal.shape == ref.shape[:2]
+    assert cal.provenance["n_presses"] == 4
+    assert cal.provenance["ball_radius_mm"] == pytest.approx(BALL_PX * MM_PER_PX)
+    rep = evaluate_ball_presses(DepthReconstructor(cal), frames[1::2], centres[1::2],
+                                radii[1::2], BALL_PX)
+    # the light model makes n_xy exactly linear in the colour change, so the
+    # table errs by at most one cell's worth (lut_bound, in n_xy ~ radians)
+    bound = lut_bound(cal.lut)
+    assert rep.normal_angle_deg < np.degrees(bound)
+    # a slope error of `bound` against the mean slope of the contact discs
+    # (~0.35) scales the reconstructed ball by at most that fraction
+    _, gx, gy = ball_depth(ref.shape[:2], centres[1], radii[1], BALL_PX)
+    mean_slope = float(np.hypot(gx, gy)[np.hypot(gx, gy) > 0].mean())
+    assert abs(rep.fitted_radius_px / BALL_PX - 1) < bound / mean_slope
+
+
+def test_reconstructor_heights_and_sign(synth, synth_lut):
+    ref, frames, centres, radii = synth
+    recon = DepthReconstructor(synth_lut)
+    i = 3
+    height = recon(frames[i])
+    assert height.shape == ref.shape[:2] and height.dtype == np.float32
+    depth, tgx, _ = ball_depth(ref.shape[:2], centres[i], radii[i], BALL_PX)
+    depth_mm = depth * MM_PER_PX
+    cx, cy = (round(float(v)) for v in centres[i])
+    # positive into the gel: the contact centre is the deepest point; its
+    # depth R - sqrt(R^2 - a^2) is off by at most the slope error (cell bound
+    # times (1 + g_rim^2)^1.5 for a normal error) integrated over the radius a
+    g_rim = radii[i] / np.sqrt(BALL_PX**2 - radii[i] ** 2)
+    dg = lut_bound(synth_lut.lut) * (1 + g_rim**2) ** 1.5
+    assert height[cy, cx] > 0
+    assert height[cy, cx] == pytest.approx(depth_mm.max(), abs=dg * radii[i] * MM_PER_PX)
+    # the flat gel around the contact stays at ~0 (median zero)
+    assert abs(float(np.median(height[depth == 0]))) < 0.05 * depth_mm.max()
+    gx, gy = recon.gradients(frames[i])
+    assert gx.dtype == np.float32 and gx.shape == ref.shape[:2]
+    # d(depth)/dx < 0 right of the centre, > 0 left of it (depth falls outwards)
+    disc = depth > 0
+    right = disc & (np.arange(ref.shape[1])[None, :] > centres[i][0] + 3)
+    left = disc & (np.arange(ref.shape[1])[None, :] < centres[i][0] - 3)
+    assert gx[right].mean() < 0 < gx[left].mean()
+    below = disc & (np.arange(ref.shape[0])[:, None] > centres[i][1] + 3)
+    assert gy[below].mean() < 0
+    # and they agree with the ball's slope to the cell bound (mean over the disc)
+    assert np.abs(gx[disc] - tgx[disc]).mean() < dg
+
+
+def test_reconstructor_batch_equals_single(synth, synth_lut):
+    _, frames, _, _ = synth
+    recon = DepthReconstructor(synth_lut)
+    batch = recon(frames[:3])
+    assert batch.shape == (3, *frames.shape[1:3]) and batch.dtype == np.float32
+    gxb, gyb = recon.gradients(frames[:3])
+    assert gxb.shape == (3, *frames.shape[1:3])
+    for i in range(3):
+        np.testing.assert_allclose(batch[i], recon(frames[i]), atol=1e-6)
+        gx, gy = recon.gradients(frames[i])
+        np.testing.assert_allclose(gxb[i], gx, atol=1e-6)
+        np.testing.assert_allclose(gyb[i], gy, atol=1e-6)
+
+
+def test_reconstructor_rejects_wrong_frames(synth, synth_lut):
+    ref, frames, _, _ = synth
+    recon = DepthReconstructor(synth_lut)
+    with pytest.raises(ShapeError, match="frame"):
+        recon(frames[0][:-1])
+    with pytest.raises(ShapeError, match="frame"):
+        recon(frames[0].astype(np.float32))
+    with pytest.raises(ShapeError, match="frame"):
+        recon.gradients(frames[0][:, :-2])
+    with pytest.raises(ShapeError, match="reference"):
+        DepthReconstructor(synth_lut, reference=ref[:-1])
+
+
+def test_taxim_lut_smoke(taxim_presses, taxim_lut):
+    # calibrated on the even presses, evaluated on the odd ones. Loose bounds
+    # that a broken pipeline fails: with zero gradients the mean normal angle
+    # over these discs (a / R ~ 0.9) is ~35 deg; a sign or scale error shows
+    # in the fitted radius. (Measured at writing: 7.0 deg, 2.03 mm.)
+    ps = taxim_presses
+    recon = DepthReconstructor(taxim_lut)
+    ball_px = TAXIM_BALL_RADIUS_MM / TAXIM_MM_PER_PX
+    rep = evaluate_ball_presses(recon, ps.frames[1::2], ps.centers_px[1::2],
+                                ps.radii_px[1::2], ball_px)
+    assert len(rep.per_press) == 24
+    assert rep.normal_angle_deg < 10.0
+    assert rep.fitted_radius_px * TAXIM_MM_PER_PX == pytest.approx(TAXIM_BALL_RADIUS_MM,
+                                                                   rel=0.15)
+    # sign: the contact centre is pressed in by at least the spherical cap
+    # R - sqrt(R^2 - a^2) (the rim itself sinks below the free surface);
+    # 20% allowance for reconstruction error
+    heights = recon(ps.frames[1:8:2])
+    for h, c, a in zip(heights, ps.centers_px[1:8:2], ps.radii_px[1:8:2], strict=True):
+        cap = TAXIM_BALL_RADIUS_MM - np.sqrt(TAXIM_BALL_RADIUS_MM**2
+                                             - (a * TAXIM_MM_PER_PX) ** 2)
+        assert h[round(float(c[1])), round(float(c[0]))] > 0.8 * cap
+
+
+@pytest.mark.skipif(not GELSLIM.is_dir(), reason=GELSLIM_REASON)
+@pytest.mark.parametrize("name", [
+    "set_2020_11",
+    "set_2020_09",
+])
+def test_gelslim_lut_fitted_radius_consistent(name):
+    from tactilevision.io import read_ball_presses
+
+    ps = read_ball_presses(GELSLIM / name)
+    cal = PhotometricCalibration.from_ball_presses(
+        ps.reference, ps.frames[0::3], ball_radius_mm=GELSLIM_BALL_RADIUS_MM,
+        mm_per_px=GELSLIM_MM_PER_PX, model="lut")
+    assert cal.markers == (name == "set_2020_09")
+    test = ps.frames[1::3]
+    centres, radii = detect_contact_circles(test, ps.reference)
+    ball_px = GELSLIM_BALL_RADIUS_MM / GELSLIM_MM_PER_PX
+    rep = evaluate_ball_presses(DepthReconstructor(cal), test, centres, radii, ball_px,
+                                disc_fraction=cal.provenance["label_fraction"])
+    fitted = np.array([m.fitted_radius_px for m in rep.per_press])
+    # one ball: the fitted radius must not vary much between presses. On the
+    # taxim presses (annotated circles, ~62 px contacts) it varies by 6%; here
+    # circles are detected and contacts half as wide, so allow 15%. (Measured
+    # with the scale of tests/_data.py: 13% and median 47.9 px on set_2020_11,
+    # 12% and 47.1 px on set_2020_09.) It must lie near R = 47.1 px; the
+    # README calls the scale uncertain, so 30% (the release's other scale,
+    # 35.9 px, lies inside, its 4.76 mm ball, 2.38 mm / 0.0806 = 29.5 px, not).
+    assert fitted.std() / fitted.mean() < 0.15
+    assert np.median(fitted) == pytest.approx(ball_px, rel=0.3)
+
+
+# ---------------------------------------------------------------- save / load
+@pytest.mark.parametrize("kind", ["lut", "mlp"])
+def test_save_load_round_trip(kind, synth, synth_lut, synth_mlp, tmp_path):
+    cal = synth_lut if kind == "lut" else synth_mlp
+    path = cal.save(tmp_path / f"cal_{kind}")  # suffix appended
+    assert path == tmp_path / f"cal_{kind}.npz" and path.is_file()
+    back = PhotometricCalibration.load(path)
+    assert back.model == kind
+    assert back.mm_per_px == cal.mm_per_px
+    assert back.markers == cal.markers and back.use_position == cal.use_position
+    assert back.contact_threshold == pytest.approx(cal.contact_threshold)
+    assert back.provenance == cal.provenance
+    np.testing.assert_array_equal(back.reference, cal.reference)
+    if kind == "lut":
+        np.testing.assert_array_equal(back.lut.table, cal.lut.table)
+        np.testing.assert_array_equal(back.lut.counts, cal.lut.counts)
+    else:
+        assert back.onnx_bytes == cal.onnx_bytes
+    frames = synth[1][:2]
+    np.testing.assert_array_equal(DepthReconstructor(back)(frames),
+                                  DepthReconstructor(cal)(frames))
+
+
+def test_load_missing_file(tmp_path):
+    path = tmp_path / "nope.npz"
+    with pytest.raises(InputError, match=r"nope\.npz"):
+        PhotometricCalibration.load(path)
+
+
+def test_load_not_npz(tmp_path):
+    path = tmp_path / "text.npz"
+    path.write_text("not a zip archive\n")
+    with pytest.raises(InputError, match=r"text\.npz"):
+        PhotometricCalibration.load(path)
+
+
+@pytest.mark.parametrize("drop", ["meta", "reference", "lut_table"])
+def test_load_missing_key(drop, synth_lut, tmp_path):
+    path = synth_lut.save(tmp_path / "full.npz")
+    with np.load(path) as z:
+        data = {k: z[k] for k in z.files if k != drop}
+    bad = tmp_path / "partial.npz"
+    np.savez(bad, **data)
+    with pytest.raises(InputError, match=f"partial.npz.*'{drop}'"):
+        PhotometricCalibration.load(bad)
+
+
+def test_mlp_calibration_without_onnx_key(synth_mlp, tmp_path):
+    path = synth_mlp.save(tmp_path / "mlp.npz")
+    with np.load(path) as z:
+        data = {k: z[k] for k in z.files if k != "onnx"}
+    np.savez(tmp_path / "mlp_bad.npz", **data)
+    with pytest.raises(InputError, match="'onnx'"):
+        PhotometricCalibration.load(tmp_path / "mlp_bad.npz")
+
+
+def test_from_ball_presses_input_errors(synth):
+    ref, frames, centres, radii = synth
+    kw = dict(ball_radius_mm=BALL_PX * MM_PER_PX, mm_per_px=MM_PER_PX, model="lut")
+    with pytest.raises(InputError, match="both"):
+        PhotometricCalibration.from_ball_presses(ref, frames, centres, None, **kw)
+    with pytest.raises(InputError, match="at least 2"):
+        PhotometricCalibration.from_ball_presses(ref, frames[:1], centres[:1], radii[:1], **kw)
+    too_big = radii.copy()
+    too_big[2] = BALL_PX + 1
+    with pytest.raises(InputError, match="press 2"):
+        PhotometricCalibration.from_ball_presses(ref, frames, centres, too_big, **kw)
+    with pytest.raises(ShapeError, match="frames"):
+        PhotometricCalibration.from_ball_presses(ref, frames[:, :-1], centres, radii, **kw)
+    with pytest.raises(ShapeError, match="centers_px"):
+        PhotometricCalibration.from_ball_presses(ref, frames, centres[:-1], radii, **kw)
+    with pytest.raises(InputError, match="model"):
+        PhotometricCalibration.from_ball_presses(ref, frames, centres, radii,
+                                                 **{**kw, "model": "poly"})
+
+
+@pytest.mark.parametrize("field", ["model", "colour_lo"])
+def test_load_meta_missing_field(field, synth_lut, tmp_path):
+    import json
+
+    path = synth_lut.save(tmp_path / "full.npz")
+    with np.load(path) as z:
+        data = {k: z[k] for k in z.files}
+    meta = json.loads(data["meta"].tobytes().decode())
+    assert field in meta
+    del meta[field]
+    data["meta"] = np.frombuffer(json.dumps(meta).encode(), np.uint8)
+    bad = tmp_path / "old.npz"
+    np.savez(bad, **data)
+    # either it loads (an older file stays readable) or it names the field
+    try:
+        cal = PhotometricCalibration.load(bad)
+    except InputError as exc:
+        assert "old.npz" in str(exc) and field in str(exc)
+    else:
+        assert cal.model == "lut"
