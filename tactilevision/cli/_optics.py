@@ -76,6 +76,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     c.add_argument("--presses", metavar="SEL", default=None,
                    help="presses to calibrate on: slice '0::2' or list '0,2,4' (default all)")
     c.add_argument("--epochs", type=int, default=30, help="MLP training epochs (default 30)")
+    c.add_argument("--hidden", type=int, default=128,
+                   help="MLP units per hidden layer (default 128)")
     c.add_argument("--bins", type=int, default=32, help="LUT cells per channel (default 32)")
     c.add_argument("--detect-circles", action="store_true",
                    help="ignore given circles and detect them")
@@ -102,7 +104,8 @@ def run_calibrate(args: argparse.Namespace) -> int:
         ps.reference, ps.frames[idx],
         ps.centers_px[idx] if given else None, ps.radii_px[idx] if given else None,
         ball_radius_mm=args.ball_radius_mm, mm_per_px=args.mm_per_px, model=args.model,
-        bins=args.bins, epochs=args.epochs, seed=args.seed, source=str(args.ball_presses),
+        bins=args.bins, epochs=args.epochs, hidden=args.hidden, seed=args.seed,
+        source=str(args.ball_presses),
         progress=True,
     )
     cal.provenance["presses"] = [int(i) for i in idx]

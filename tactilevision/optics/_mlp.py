@@ -66,7 +66,8 @@ class MLPGradientModel:
         The serialised ONNX model: input ``x`` (M, 8) float32, output
         ``nxy`` (M, 2) float32.
     threads : int, default 1
-        onnxruntime intra-op threads (1: one core, as embedded users run it).
+        onnxruntime intra-op threads (1: one core, as embedded users run it;
+        0: all cores).
     """
 
     onnx_bytes: bytes
@@ -131,7 +132,7 @@ def _onnx_from_layers(layers: list[tuple[np.ndarray, np.ndarray]]) -> bytes:
     return model.SerializeToString()
 
 
-def train_mlp(inputs: np.ndarray, nxy: np.ndarray, *, hidden: int = 64, epochs: int = 12,
+def train_mlp(inputs: np.ndarray, nxy: np.ndarray, *, hidden: int = 128, epochs: int = 12,
               batch_size: int = 4096, learning_rate: float = 3e-3, seed: int = 0,
               progress: bool = False) -> bytes:
     """Train the colour-to-normal network and return it as ONNX bytes.
@@ -142,7 +143,7 @@ def train_mlp(inputs: np.ndarray, nxy: np.ndarray, *, hidden: int = 64, epochs: 
         From :func:`mlp_inputs`.
     nxy : (M, 2) float32 ndarray
         True in-plane normal components.
-    hidden : int, default 64
+    hidden : int, default 128
         Units per hidden layer (two layers).
     epochs : int, default 12
         Passes over the data (Adam, one-cycle learning rate, MSE loss).

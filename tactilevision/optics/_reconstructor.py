@@ -40,9 +40,10 @@ class DepthReconstructor:
     engine : {'table', 'onnx'}, default 'table'
         How the colour-to-gradient model runs per frame. 'table': one
         lookup per pixel in a gradient table (a LUT calibration's own
-        table, or an MLP tabulated over colour cells and 80 px position
-        cells at construction, about 0.5 s). 'onnx': the MLP evaluated per
-        pixel by onnxruntime (exact, about 20 times slower).
+        table, or an MLP tabulated over colour cells and 40 px position
+        cells at construction, 2 to 3 s at 640 x 480 on 2 cores). 'onnx':
+        the MLP evaluated per pixel by onnxruntime (exact, about 40 times
+        slower).
     boundary : {'neumann', 'dirichlet'}, default 'neumann'
         Poisson boundary condition (:class:`PoissonSolver`).
     table_bins : int, default 32
@@ -90,8 +91,9 @@ class DepthReconstructor:
             if calibration.onnx_bytes is None:
                 raise ValueError("MLP calibration without a network")
             self._mlp = MLPGradientModel(calibration.onnx_bytes, threads=threads)
-            if engine == "table":
-                self._table = tabulate_mlp(self._mlp, self._ref_inv, lo=calibration.colour_lo,
+            if engine == "table":  # tabulated once on all cores
+                self._table = tabulate_mlp(MLPGradientModel(calibration.onnx_bytes, threads=0),
+                                           self._ref_inv, lo=calibration.colour_lo,
                                            hi=calibration.colour_hi, bins=table_bins,
                                            use_position=calibration.use_position)
         self.engine = engine
