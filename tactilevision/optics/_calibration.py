@@ -200,12 +200,13 @@ class PhotometricCalibration:
             refine_centers = detected
         bad = np.nonzero(radii * label_fraction >= ball_px)[0]
         if bad.size:
-            raise InputError(f"press {bad[0]}: contact radius {radii[bad[0]]:.1f} px is not "
-                             f"smaller than the ball radius {ball_px:.1f} px")
+            raise InputError(f"press {bad[0]}: contact radius {radii[bad[0]]:.1f} px (x label "
+                             f"fraction {label_fraction:g}) is not smaller than the ball radius "
+                             f"{ball_px:.1f} px: check ball_radius_mm and mm_per_px")
+        ref_mask = marker_mask(reference)
         if markers is None:
-            markers = bool(marker_mask(reference).mean() > 0.02)
-        ref_mask = marker_mask(reference) if markers else None
-        ref_inv = reference_inverse(reference, marker_mask=ref_mask)
+            markers = bool(ref_mask.mean() > 0.02)
+        ref_inv = reference_inverse(reference, marker_mask=ref_mask if markers else None)
         ref_colour = 1.0 / ref_inv
         h, w = reference.shape[:2]
         rng = np.random.default_rng(seed)
@@ -218,23 +219,9 @@ class PhotometricCalibration:
                   use_position=use_position, markers=markers, blur_sigma=blur_sigma)
         rounds = 2 if refine_centers else 1
         for rnd in range(rounds):
-            xs, ys, feats, labels, bg_mag = [], [], [], [], []
-            for i in range(len(frames)):
-                gx, gy, inside = ball_gradients((h, w), centers[i],
-                                                label_fraction * radii[i], ball_px)
-                dx = np.arange(w)[None, :] - centers[i, 0]
-                dy = np.arange(h)[:, None] - centers[i, 1]
-                far = (dx * dx + dy * dy) > (2.0 * radii[i]) ** 2
-                sel = (inside & valid[i]) | (far & background[i])
-                yy, xx = np.nonzero(sel)
-                xs.append(xx)
-                ys.append(yy)
-                feats.append(changes[i][sel])
-                labels.append(normals_from_gradients(gx[sel], gy[sel])[:, :2])
-                bg_mag.append(np.abs(changes[i][far & background[i]]).max(axis=-1))
-            x_all, y_all = np.concatenate(xs), np.concatenate(ys)
-            f_all, n_all = np.concatenate(feats), np.concatenate(labels)
-            cal.contact_threshold = float(np.percentile(np.concatenate(bg_mag), 99.9))
+            x_all, y_all, f_all, n_all, bg_mag = _training_samples(
+                changes, valid, background, centers, label_fraction * radii, ball_px)
+            cal.contact_threshold = float(np.percentile(bg_mag, 99.9))
             cal.colour_lo = np.percentile(f_all, 0.1, axis=0).astype(np.float32)
             cal.colour_hi = np.percentile(f_all, 99.9, axis=0).astype(np.float32)
             if model == "lut":
@@ -374,6 +361,36 @@ class PhotometricCalibration:
                                                     defaults.contact_threshold)),
                    colour_lo=np.asarray(lo, np.float32), colour_hi=np.asarray(hi, np.float32),
                    provenance=dict(meta.get("provenance", {})))
+
+
+def _training_samples(changes: list[np.ndarray], valid: list[np.ndarray],
+                      background: list[np.ndarray], centers: np.ndarray,
+                      label_radii: np.ndarray, ball_px: float
+                      ) -> tuple[np.ndarray, ...]:
+    """Labelled pixels of all presses: inside each label disc the ball's normal,
+    beyond twice the contact radius (sampled) the flat normal; the ring
+    between, where the gel leaves the ball in an unknown shape, is left out.
+
+    Returns x (M,), y (M,), colour change (M, 3), in-plane normal (M, 2) and
+    the background colour-change magnitudes (for the contact threshold).
+    """
+    h, w = changes[0].shape[:2]
+    xs, ys, feats, labels, bg_mag = [], [], [], [], []
+    for change, ok, bg, centre, rad in zip(changes, valid, background, centers, label_radii,
+                                           strict=True):
+        gx, gy, inside = ball_gradients((h, w), centre, rad, ball_px)
+        dx = np.arange(w)[None, :] - centre[0]
+        dy = np.arange(h)[:, None] - centre[1]
+        far = (dx * dx + dy * dy) > (2.0 * rad) ** 2
+        sel = (inside & ok) | (far & bg)
+        yy, xx = np.nonzero(sel)
+        xs.append(xx)
+        ys.append(yy)
+        feats.append(change[sel])
+        labels.append(normals_from_gradients(gx[sel], gy[sel])[:, :2])
+        bg_mag.append(np.abs(change[far & bg]).max(axis=-1))
+    return (np.concatenate(xs), np.concatenate(ys), np.concatenate(feats),
+            np.concatenate(labels), np.concatenate(bg_mag))
 
 
 def _version() -> str:
