@@ -1,0 +1,11 @@
+"""Finite elements of the gel pad: axisymmetric indentation (linear and
+Neo-Hookean) for the kappa and beta tables, and (later) the 3D pad and inverse
+FEM. Assembled with scikit-fem; lengths in units of the layer thickness h.
+"""
+
+from ._mesh import indentation_mesh
+
+__all__ = ["indentation_mesh"]
+
+# linear small-strain indentation: names appended below
+# finite-strain Neo-Hookean indentation: names appended below
