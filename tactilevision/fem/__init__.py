@@ -8,4 +8,6 @@ from ._mesh import indentation_mesh
 __all__ = ["indentation_mesh"]
 
 # linear small-strain indentation: names appended below
-# finite-strain Neo-Hookean indentation: names appended below
+from ._linear import LinearIndentation, LinearIndentationSolver, linear_indentation
+
+__all__ += ["LinearIndentation", "LinearIndentationSolver", "linear_indentation"]
