@@ -94,9 +94,7 @@ def test_kappa_out_of_range_names_argument_and_range(nu, ah, name):
     assert rng in str(info.value)
 
 
-def test_kappa_fem_not_built_yet():
-    with pytest.raises(NotImplementedError, match="not built yet"):
-        kappa(0.45, 0.8, source="fem")
+def test_kappa_unknown_source():
     with pytest.raises(ValueError, match="source"):
         kappa(0.45, 0.8, source="abaqus")
 

@@ -70,9 +70,6 @@ HAYES_1972 = KappaTable(
     doi="10.1016/0021-9290(72)90010-3",
 )
 
-_ROWS = tuple(PchipInterpolator(HAYES_1972.nu, row) for row in HAYES_1972.values)
-
-
 def _at_nodes(x: np.ndarray, xq: np.ndarray, y: np.ndarray, yq: np.ndarray) -> np.ndarray:
     """Replace interpolated ``yq`` by ``y[i]`` where ``xq`` equals the node ``x[i]``.
 
@@ -84,17 +81,18 @@ def _at_nodes(x: np.ndarray, xq: np.ndarray, y: np.ndarray, yq: np.ndarray) -> n
     return np.where(hit, y[i], yq)
 
 
-def _check_range(x: np.ndarray, name: str, lo: float, hi: float) -> None:
+def _check_range(x: np.ndarray, name: str, lo: float, hi: float, source: str = "") -> None:
     bad = ~((x >= lo) & (x <= hi))
     if np.any(bad):
         v = float(np.ravel(x)[np.argmax(np.ravel(bad))])
+        which = "FEM" if source.startswith("tactilevision FEM") else "Hayes 1972"
         raise InputError(
-            f"{name} = {v:g} is outside the Hayes 1972 kappa table range [{lo:g}, {hi:g}]"
+            f"{name} = {v:g} is outside the {which} kappa table range [{lo:g}, {hi:g}]"
         )
 
 
 def kappa(nu: float | np.ndarray, a_over_h: float | np.ndarray, *,
-          source: str = "hayes") -> float | np.ndarray:
+          source: str = "hayes", contact: str = "frictionless") -> float | np.ndarray:
     """Layer factor kappa(nu, a/h) of a flat punch on a bonded layer.
 
     Parameters
@@ -106,7 +104,10 @@ def kappa(nu: float | np.ndarray, a_over_h: float | np.ndarray, *,
         Broadcast against `nu`.
     source : {'hayes', 'fem'}, default 'hayes'
         ``'hayes'``: :data:`HAYES_1972`. ``'fem'``: the project's own FEM
-        table (``models/kappa_fem*``), not built yet.
+        table ``models/kappa_fem.npz`` (nu 0.30 to 0.499, a/h 0.2 to 2.0;
+        ``tactilevision fem tables`` rebuilds it).
+    contact : {'frictionless', 'bonded'}, default 'frictionless'
+        Punch condition; Hayes is frictionless only.
 
     Returns
     -------
@@ -118,11 +119,10 @@ def kappa(nu: float | np.ndarray, a_over_h: float | np.ndarray, *,
     ------
     InputError
         (a ``ValueError``) when `nu` or `a_over_h` is outside the table or
-        not finite; the message names the argument and the range.
-    NotImplementedError
-        For ``source='fem'``: the FEM table is not built yet.
+        not finite (the message names the argument and the range), or the
+        FEM table file is missing.
     ValueError
-        For an unknown `source`.
+        For an unknown `source`, or a bonded punch with ``source='hayes'``.
 
     Notes
     -----
@@ -154,18 +154,32 @@ def kappa(nu: float | np.ndarray, a_over_h: float | np.ndarray, *,
     >>> kappa(0.45, 0.8)
     2.532
     """
-    if source == "fem":
-        raise NotImplementedError(
-            "the FEM kappa table is not built yet (models/kappa_fem*, a later issue); "
-            "use source='hayes'"
-        )
-    if source != "hayes":
-        raise ValueError(f"source must be 'hayes' or 'fem', got {source!r}")
+    table = _table(source, contact)
     n = np.asarray(nu, dtype=np.float64)
     r = np.asarray(a_over_h, dtype=np.float64)
-    t = HAYES_1972
-    _check_range(n, "nu", float(t.nu[0]), float(t.nu[-1]))
-    _check_range(r, "a_over_h", float(t.a_over_h[0]), float(t.a_over_h[-1]))
+    out = _interpolate(table, n, r)
+    if out.ndim == 0:
+        return float(out)
+    return out
+
+
+def _table(source: str, contact: str) -> KappaTable:
+    if source == "hayes":
+        if contact != "frictionless":
+            raise ValueError("the Hayes 1972 table is for a frictionless punch only")
+        return HAYES_1972
+    if source == "fem":
+        from ._fem_tables import fem_kappa_table
+
+        return fem_kappa_table(contact)
+    raise ValueError(f"source must be 'hayes' or 'fem', got {source!r}")
+
+
+def _interpolate(t: KappaTable, n: np.ndarray, r: np.ndarray) -> np.ndarray:
+    """PCHIP along nu within each a/h row, then along a/h (see :func:`kappa`)."""
+    _check_range(n, "nu", float(t.nu[0]), float(t.nu[-1]), t.source)
+    _check_range(r, "a_over_h", float(t.a_over_h[0]), float(t.a_over_h[-1]), t.source)
+    rows = _rows(t)
     n, r = np.broadcast_arrays(n, r)
     out = np.empty(n.shape)
     flat_n, flat_r, flat_out = n.ravel(), r.ravel(), out.reshape(-1)
@@ -174,20 +188,31 @@ def kappa(nu: float | np.ndarray, a_over_h: float | np.ndarray, *,
         if nv in t.nu:  # a table column, exactly
             col = t.values[:, int(np.searchsorted(t.nu, nv))]
         else:
-            col = np.array([float(row(nv)) for row in _ROWS])  # (M,) kappa at this nu
+            col = np.array([float(row(nv)) for row in rows])  # (M,) kappa at this nu
         rq = flat_r[sel]
         flat_out[sel] = _at_nodes(t.a_over_h, rq, col, PchipInterpolator(t.a_over_h, col)(rq))
-    if out.ndim == 0:
-        return float(out)
     return out
 
 
-def _dkappa_dnu(nu: float, a_over_h: float, *, step: float = 1e-6) -> float:
+_ROW_CACHE: dict[int, tuple] = {}
+
+
+def _rows(t: KappaTable) -> tuple:
+    key = id(t)
+    if key not in _ROW_CACHE:
+        _ROW_CACHE[key] = tuple(PchipInterpolator(t.nu, row) for row in t.values)
+    return _ROW_CACHE[key]
+
+
+def _dkappa_dnu(nu: float, a_over_h: float, *, step: float = 1e-6, source: str = "hayes",
+                contact: str = "frictionless") -> float:
     """Derivative of :func:`kappa` along nu by a central difference.
 
     One-sided at the ends of the nu range. Used by the delta-method intervals
     of :func:`~tactilevision.mechanics.fit_indentation`.
     """
-    lo = max(nu - step, float(HAYES_1972.nu[0]))
-    hi = min(nu + step, float(HAYES_1972.nu[-1]))
-    return (kappa(hi, a_over_h) - kappa(lo, a_over_h)) / (hi - lo)
+    t = _table(source, contact)
+    lo = max(nu - step, float(t.nu[0]))
+    hi = min(nu + step, float(t.nu[-1]))
+    k = [kappa(v, a_over_h, source=source, contact=contact) for v in (hi, lo)]
+    return (k[0] - k[1]) / (hi - lo)

@@ -1,0 +1,52 @@
+"""``tactilevision fem tables``: rebuild the FEM kappa and beta tables of ``models/``."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+__all__ = ["add_parser", "run_tables"]
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    """Register ``fem`` and its ``tables`` sub-command."""
+    p = sub.add_parser("fem", help="finite-element tables of the gel layer",
+                       description="Finite elements of the gel layer.")
+    fsub = p.add_subparsers(dest="fem_command", metavar="SUBCOMMAND", required=True)
+    t = fsub.add_parser(
+        "tables", help="rebuild models/kappa_fem.npz and models/beta_fem.npz",
+        description="Compute kappa(nu, a/h) (small strain) and kappa_n(nu, a/h, w/h), "
+        "beta(nu, a/h) (finite-strain Neo-Hookean) for a frictionless and a bonded punch on "
+        "the grids of tactilevision.fem.NU_GRID and A_OVER_H_GRID, and write them with their "
+        "provenance. kappa takes about 10 minutes on 2 cores; beta much longer.")
+    t.add_argument("--what", default="kappa,beta", help="kappa, beta or both (default both)")
+    t.add_argument("--out-dir", type=Path, default=Path("models"),
+                   help="folder for kappa_fem.npz and beta_fem.npz (default models/)")
+    t.add_argument("--quick", action="store_true",
+                   help="a 3 x 3 grid on coarse meshes, for a smoke test (not for use)")
+    t.set_defaults(func=run_tables)
+
+
+def run_tables(args: argparse.Namespace) -> int:
+    """Run ``fem tables``."""
+    from .._checks import InputError
+    from ..fem._tables import build_beta_table, build_kappa_table, write_table
+
+    what = {w.strip() for w in args.what.split(",") if w.strip()}
+    if not what or not what <= {"kappa", "beta"}:
+        raise InputError(f"--what must name kappa and/or beta, got '{args.what}'")
+    command = "tactilevision " + " ".join(args.argv)
+    grid = {}
+    if args.quick:
+        grid = {"nu": [0.3, 0.45, 0.49], "a_over_h": [0.4, 0.8, 1.2]}
+    if "kappa" in what:
+        mesh = {"cell": 0.25, "edge_refinements": 6} if args.quick else {}
+        path = write_table(args.out_dir / "kappa_fem.npz", build_kappa_table(**grid, **mesh),
+                           command=command)
+        print(f"wrote {path}")
+    if "beta" in what:
+        mesh = {"cell": 0.5, "edge_refinements": 4, "steps": 4} if args.quick else {}
+        path = write_table(args.out_dir / "beta_fem.npz", build_beta_table(**grid, **mesh),
+                           command=command)
+        print(f"wrote {path}")
+    return 0

@@ -1,0 +1,190 @@
+"""Build the kappa and beta tables of ``models/`` from our own FEM.
+
+``tactilevision fem tables`` runs :func:`build_kappa_table` (small strain,
+:class:`LinearIndentationSolver`) and :func:`build_beta_table` (finite strain,
+:func:`neo_hookean_indentation`) on a grid of nu and a/h for a frictionless
+and a bonded punch, and writes each as an ``.npz`` with a JSON provenance
+record (command, mesh, solver versions, date, wall time) inside it.
+:mod:`tactilevision.mechanics` reads them with numpy alone.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import io
+import json
+import platform
+import time
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["A_OVER_H_GRID", "CONTACTS", "KAPPA_NU_GRID", "NU_GRID", "build_beta_table", "build_kappa_table",
+           "write_table"]
+
+#: Poisson's ratios of the tables (dense towards 0.5, where kappa and beta rise fastest).
+NU_GRID = np.array([0.30, 0.33, 0.36, 0.39, 0.42, 0.44, 0.45, 0.46, 0.47, 0.48, 0.485, 0.49,
+                    0.495, 0.499])
+#: Poisson's ratios of the kappa table: :data:`NU_GRID` and the incompressible 0.5,
+#: which the mixed small-strain solver reaches exactly (Hayes' last column).
+KAPPA_NU_GRID = np.append(NU_GRID, 0.5)
+#: a/h of the tables (the Hayes range).
+A_OVER_H_GRID = np.array([0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0, 1.2, 1.4, 1.6, 1.8, 2.0])
+#: Punch conditions, in table order.
+CONTACTS = ("frictionless", "bonded")
+
+
+def _versions() -> dict:
+    import scipy
+    import skfem
+
+    from .. import __version__
+
+    return {"tactilevision": __version__, "scikit-fem": skfem.__version__,
+            "scipy": scipy.__version__, "numpy": np.__version__,
+            "python": platform.python_version()}
+
+
+def build_kappa_table(*, nu: np.ndarray = KAPPA_NU_GRID, a_over_h: np.ndarray = A_OVER_H_GRID,
+                      contacts: tuple[str, ...] = CONTACTS, pad_radius_over_h: float = 20.0,
+                      cell: float = 0.125, edge_refinements: int = 10,
+                      progress: bool = True) -> dict:
+    """kappa(nu, a/h) of the small-strain problem on a grid.
+
+    Parameters
+    ----------
+    nu : (N,) float ndarray, default :data:`KAPPA_NU_GRID`
+    a_over_h : (A,) float ndarray, default :data:`A_OVER_H_GRID`
+    contacts : tuple of str, default ('frictionless', 'bonded')
+    pad_radius_over_h : float, default 20.0
+        R_pad / h: 20 is the infinite layer to < 0.001% (pad study of
+        ``benchmarks/bench_fem_linear.py``).
+    cell, edge_refinements : float, int
+        Mesh of :func:`~tactilevision.fem.indentation_mesh`; the defaults are
+        within 0.01% of a 500k-dof mesh at a/h = 0.8.
+    progress : bool, default True
+
+    Returns
+    -------
+    table : dict
+        ``nu`` (N,), ``a_over_h`` (A,), ``contacts`` (C,) str, ``kappa``
+        (C, A, N) float64 and ``meta`` (dict: mesh, dofs, versions, seconds).
+    """
+    from tqdm.auto import tqdm
+
+    from ._linear import LinearIndentationSolver
+
+    nu = np.asarray(nu, np.float64)
+    a_over_h = np.asarray(a_over_h, np.float64)
+    kap = np.empty((len(contacts), a_over_h.size, nu.size))
+    dofs = np.empty((len(contacts), a_over_h.size), np.int64)
+    t0 = time.perf_counter()
+    jobs = [(c, i) for c in range(len(contacts)) for i in range(a_over_h.size)]
+    for c, i in tqdm(jobs, desc="kappa table", unit="a/h", disable=not progress):
+        solver = LinearIndentationSolver(a_over_h[i], contact=contacts[c],
+                                         pad_radius_over_h=pad_radius_over_h, cell=cell,
+                                         edge_refinements=edge_refinements)
+        kap[c, i] = solver.kappa(nu)
+        dofs[c, i] = solver.n_dofs
+    meta = {"quantity": "kappa = P (1 - nu^2) / (2 a E w), small strain, linear elastic",
+            "solver": "tactilevision.fem.LinearIndentationSolver (Taylor-Hood P2/P1, "
+                      "axisymmetric, bonded base, punch by prescribed u_z)",
+            "mesh": {"cell": cell, "edge_refinements": edge_refinements,
+                     "pad_radius_over_h": pad_radius_over_h,
+                     "dofs_min": int(dofs.min()), "dofs_max": int(dofs.max())},
+            "seconds": round(time.perf_counter() - t0, 1)}
+    return {"nu": nu, "a_over_h": a_over_h, "contacts": np.array(contacts), "kappa": kap,
+            "meta": meta}
+
+
+def build_beta_table(*, nu: np.ndarray = NU_GRID, a_over_h: np.ndarray = A_OVER_H_GRID,
+                     contacts: tuple[str, ...] = CONTACTS, w_over_h_max: float = 0.2,
+                     steps: int = 10, pad_radius_over_h: float = 20.0, cell: float = 0.25,
+                     edge_refinements: int = 6, progress: bool = True) -> dict:
+    """kappa_n(nu, a/h, w/h) and beta(nu, a/h) of the finite-strain problem on a grid.
+
+    Parameters
+    ----------
+    nu, a_over_h, contacts, pad_radius_over_h
+        As :func:`build_kappa_table`.
+    w_over_h_max : float, default 0.2
+        Deepest press (the paper keeps w/h within 20%).
+    steps : int, default 10
+        Depth increments; kappa_n is stored at ``w/h = (1..steps) w_max / steps``.
+    cell, edge_refinements : float, int
+        Mesh (coarser than the kappa table: a sweep costs many solves).
+    progress : bool, default True
+
+    Returns
+    -------
+    table : dict
+        ``nu`` (N,), ``a_over_h`` (A,), ``contacts`` (C,), ``w_over_h`` (K,),
+        ``kappa_n`` (C, A, N, K) (NaN where a sweep stopped early),
+        ``beta_secant``, ``beta_tangent``, ``kappa0``, ``linearity_r2``
+        (C, A, N), ``complete`` (C, A, N) bool, and ``meta``.
+    """
+    from tqdm.auto import tqdm
+
+    from ._finite import neo_hookean_indentation
+
+    nu = np.asarray(nu, np.float64)
+    a_over_h = np.asarray(a_over_h, np.float64)
+    shape = (len(contacts), a_over_h.size, nu.size)
+    w_grid = w_over_h_max * np.arange(1, steps + 1) / steps
+    kn = np.full((*shape, steps), np.nan)
+    out = {k: np.full(shape, np.nan) for k in ("beta_secant", "beta_tangent", "kappa0",
+                                                 "linearity_r2")}
+    complete = np.zeros(shape, bool)
+    t0 = time.perf_counter()
+    jobs = [(c, i, j) for c in range(shape[0]) for i in range(shape[1]) for j in range(shape[2])]
+    for c, i, j in tqdm(jobs, desc="beta table", unit="sweep", disable=not progress):
+        res = neo_hookean_indentation(a_over_h[i], nu[j], contact=contacts[c],
+                                      w_over_h_max=w_over_h_max, steps=steps,
+                                      pad_radius_over_h=pad_radius_over_h, cell=cell,
+                                      edge_refinements=edge_refinements)
+        kn[c, i, j] = np.interp(w_grid, res.w_over_h, res.kappa_n, right=np.nan)
+        for k in out:
+            out[k][c, i, j] = getattr(res, k)
+        complete[c, i, j] = res.complete
+    meta = {"quantity": "kappa_n = P (1 - nu^2) / (2 a E w) at finite strain; beta from "
+                        "P/w = c (1 + beta w/h) fitted over the depths (secant, eq. 5) and "
+                        "from the tangent stiffness",
+            "material": "compressible Neo-Hookean, Abaqus form, C10 = E / (4 (1 + nu)), "
+                        "D1 = 6 (1 - 2 nu) / E",
+            "solver": "tactilevision.fem.neo_hookean_indentation (total Lagrangian, mixed "
+                      "u-p Taylor-Hood, Newton)",
+            "mesh": {"cell": cell, "edge_refinements": edge_refinements,
+                     "pad_radius_over_h": pad_radius_over_h},
+            "sweeps_incomplete": int((~complete).sum()),
+            "seconds": round(time.perf_counter() - t0, 1)}
+    return {"nu": nu, "a_over_h": a_over_h, "contacts": np.array(contacts), "w_over_h": w_grid,
+            "kappa_n": kn, **out, "complete": complete, "meta": meta}
+
+
+def write_table(path: str | Path, table: dict, *, command: str) -> Path:
+    """Write a table as ``.npz`` with its provenance (JSON under the key ``meta``).
+
+    Parameters
+    ----------
+    path : str or Path
+        Destination ``.npz``.
+    table : dict
+        From :func:`build_kappa_table` or :func:`build_beta_table`.
+    command : str
+        The command line that built it (recorded).
+
+    Returns
+    -------
+    path : Path
+    """
+    meta = dict(table["meta"])
+    meta.update(command=command, versions=_versions(),
+                created=_dt.datetime.now(_dt.UTC).isoformat(timespec="seconds"))
+    arrays = {k: v for k, v in table.items() if k != "meta"}
+    arrays["meta"] = np.frombuffer(json.dumps(meta).encode(), np.uint8)
+    buf = io.BytesIO()
+    np.savez_compressed(buf, **arrays)
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_bytes(buf.getvalue())
+    return path
