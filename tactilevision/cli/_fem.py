@@ -18,10 +18,14 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         description="Compute kappa(nu, a/h) (small strain) and kappa_n(nu, a/h, w/h), "
         "beta(nu, a/h) (finite-strain Neo-Hookean) for a frictionless and a bonded punch on "
         "the grids of tactilevision.fem.NU_GRID and A_OVER_H_GRID, and write them with their "
-        "provenance. kappa takes about 10 minutes on 2 cores; beta much longer.")
+        "provenance. kappa takes about 10 minutes on 2 cores; beta (bonded punch only: a "
+        "frictionless sharp punch does not converge at finite strain) about 15 minutes with "
+        "--jobs 2.")
     t.add_argument("--what", default="kappa,beta", help="kappa, beta or both (default both)")
     t.add_argument("--out-dir", type=Path, default=Path("models"),
                    help="folder for kappa_fem.npz and beta_fem.npz (default models/)")
+    t.add_argument("--jobs", type=int, default=1, metavar="N",
+                   help="worker processes for the beta sweeps (default 1)")
     t.add_argument("--quick", action="store_true",
                    help="a 3 x 3 grid on coarse meshes, for a smoke test (not for use)")
     t.set_defaults(func=run_tables)
@@ -46,7 +50,9 @@ def run_tables(args: argparse.Namespace) -> int:
         print(f"wrote {path}")
     if "beta" in what:
         mesh = {"cell": 0.5, "edge_refinements": 4, "steps": 4} if args.quick else {}
-        path = write_table(args.out_dir / "beta_fem.npz", build_beta_table(**grid, **mesh),
-                           command=command)
+        if args.jobs < 1:
+            raise InputError(f"--jobs must be at least 1, got {args.jobs}")
+        path = write_table(args.out_dir / "beta_fem.npz",
+                           build_beta_table(**grid, **mesh, jobs=args.jobs), command=command)
         print(f"wrote {path}")
     return 0

@@ -11,3 +11,8 @@ __all__ = ["indentation_mesh"]
 from ._linear import LinearIndentation, LinearIndentationSolver, linear_indentation
 
 __all__ += ["LinearIndentation", "LinearIndentationSolver", "linear_indentation"]
+
+# finite-strain Neo-Hookean indentation: names appended below
+from ._finite import FiniteIndentation, neo_hookean_indentation  # noqa: E402
+
+__all__ += ["FiniteIndentation", "neo_hookean_indentation"]
