@@ -112,7 +112,7 @@ def main(argv: list[str] | None = None) -> int:
     t = read_measurements(args.out / "measurements.csv")
     for ah, label in ((0.8, "a/h = 0.8 (paper)"), (None, "exact a/h")):
         f = fit_indentation(t.depth_mm, t.force_n, thickness_mm=t.thickness_mm,
-                            radius_mm=t.radius_mm, a_over_h=ah)
+                            radius_mm=t.radius_mm, a_over_h=ah, beta_table="paper")
         print(f"{label}: c = {f.c_n_per_mm:.4f} N/mm, beta = {f.beta:.4f}, "
               f"nu = {f.nu:.4f} {np.round(f.nu_ci95, 4)}, "
               f"E = {f.E_mpa:.4f} MPa {np.round(f.E_ci95_mpa, 4)}  "

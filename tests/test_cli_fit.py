@@ -36,14 +36,23 @@ def write_table(folder: Path, text: str | None = None, session: str | None = SES
     return csv
 
 
+# These tests check the paper's method on the paper's numbers: they run with
+# --beta-table paper unless they name a table (the FEM default is tested below).
+PAPER = ["--beta-table", "paper"]
+
+
+def _paper(argv: list[str]) -> list[str]:
+    return argv if argv[:1] != ["fit"] or "--beta-table" in argv else [*argv, *PAPER]
+
+
 def run_json(argv: list[str], capsys) -> dict:
-    assert main([*argv, "--json", "-"]) == 0
+    assert main([*_paper(argv), "--json", "-"]) == 0
     return json.loads(capsys.readouterr().out)
 
 
 def error_line(argv: list[str], capsys) -> str:
     """Run, expect exit status 2 and one sentence on stderr; return it."""
-    assert main(argv) == 2
+    assert main(_paper(argv)) == 2
     cap = capsys.readouterr()
     lines = cap.err.strip().splitlines()
     assert len(lines) == 1, cap.err
@@ -76,7 +85,7 @@ def test_json_default_uses_exact_a_over_h(tmp_path, capsys):
     d = run_json(["fit", str(csv)], capsys)
     w = np.array(DEPTHS)
     lib = fit_indentation(w, [float(f"{line6(x):.6f}") for x in w], thickness_mm=3.0,
-                          radius_mm=2.5)
+                          radius_mm=2.5, beta_table="paper")
     assert d["a_over_h"] == pytest.approx(2.5 / 3.0)
     assert d["E_mpa"] == pytest.approx(lib.E_mpa, rel=1e-12)
     assert d["E_mpa"] < 0.1981 * 0.97  # kappa at 0.8333 > kappa at 0.8
@@ -85,10 +94,11 @@ def test_json_default_uses_exact_a_over_h(tmp_path, capsys):
 def test_summary_and_json_file(tmp_path, capsys):
     csv = write_table(tmp_path)
     out = tmp_path / "fit.json"
-    assert main(["fit", str(csv), "--effects", "large_deformation", "--json", str(out)]) == 0
+    assert main(["fit", str(csv), "--effects", "large_deformation", *PAPER,
+                 "--json", str(out)]) == 0
     text = capsys.readouterr().out
-    for word in ("E  =", "nu =", "95% CI", "c = ", "beta = ", "C10", "D1", "R^2", "paper",
-                 "default until the FEM table"):
+    for word in ("E  =", "nu =", "95% CI", "c = ", "beta = ", "C10", "D1", "R^2",
+                 "the paper's relation (7)", "Hayes 1972"):
         assert word in text
     d = json.loads(out.read_text())
     assert d["n_presses"] == 5 and math.isfinite(d["E_mpa"])
@@ -112,7 +122,7 @@ def test_options_override_session(tmp_path, capsys):
 def test_deep_press_warns_but_fits(tmp_path, capsys):
     rows = "".join(f"{w},{line6(w):.6f}\n" for w in (0.15, 0.3, 0.6, 0.9))
     csv = write_table(tmp_path, "depth_mm,force_n\n" + rows)
-    assert main(["fit", str(csv), "--json", "-"]) == 0
+    assert main(["fit", str(csv), *PAPER, "--json", "-"]) == 0
     cap = capsys.readouterr()
     assert "warning" in cap.err and "w/h = 0.300 > 0.2" in cap.err and str(csv) in cap.err
     assert any("w/h = 0.300" in n for n in json.loads(cap.out)["notes"])
@@ -124,7 +134,7 @@ def test_out_of_table_reported_with_exit_0(tmp_path, capsys):
     d = run_json(["fit", str(csv)], capsys)
     assert d["out_of_table"] is True and d["E_mpa"] is None and d["nu"] is None
     assert "nu in [0.30, 0.50)" in d["out_of_table_message"]
-    assert main(["fit", str(csv)]) == 0
+    assert main(["fit", str(csv), *PAPER]) == 0
     assert "OUT OF TABLE" in capsys.readouterr().out
 
 
@@ -195,7 +205,6 @@ def test_missing_radius_only(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("argv, expected", [
-    (["--beta-table", "fem"], ["--beta-table fem", "not built yet"]),
     (["--effects", "aging"], ["'aging' is in the catalogue", "diagnose"]),
     (["--effects", "large_deformation,force_drift"], ["'force_drift'", "diagnose"]),
     (["--effects", "stiffness_trend:day"], ["stiffness_trend:day", "diagnose"]),
@@ -254,3 +263,42 @@ def test_sample_fit_near_paper(capsys):
     assert d["nu"] == pytest.approx(0.4797, abs=0.005)
     assert d["E_mpa"] == pytest.approx(0.1981, rel=0.02)
     assert d["nu_ci95"][0] < d["nu"] < d["nu_ci95"][1]
+
+
+# ------------------------------------------------- the default: FEM tables
+
+
+def test_default_fem_tables_on_the_papers_line(tmp_path, capsys):
+    # the paper's beta = 1.507 is beyond a bonded Neo-Hookean layer at
+    # a/h = 0.83 (tests/test_fem_beta_table.py): no E, nu, and the message
+    # names the FEM range; exit status 0, as for any out-of-table fit
+    csv = write_table(tmp_path)
+    assert main(["fit", str(csv), "--json", "-"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["beta_table"] == "fem" and d["kappa_source"] == "fem"
+    assert d["contact"] == "bonded"
+    assert d["out_of_table"] is True and d["nu"] is None
+    assert "bonded punch" in d["out_of_table_message"]
+    assert d["beta"] == pytest.approx(1.5071, abs=1e-4)
+
+
+def test_default_fem_tables_recover_a_fem_layer(tmp_path, capsys):
+    # presses on the FEM's own force-depth law: kappa_n of the stored table at
+    # a/h = 1.2, nu = 0.47 and five of its depths (w/h = 0.04 ... 0.2), P =
+    # 2 a E kappa_n w / (1 - nu^2) (eq. 1): the default fit returns E and nu
+    from tactilevision.mechanics._fem_tables import _load
+
+    t = _load("beta_fem.npz")
+    h, a, E, nu = 2.5, 3.0, 0.15, 0.47
+    i, j = list(t["a_over_h"]).index(a / h), list(t["nu"]).index(nu)
+    k = np.arange(1, 10, 2)
+    w = t["w_over_h"][k] * h
+    P = 2 * a * E * t["kappa_n"][0, i, j, k] * w / (1 - nu**2)
+    rows = "".join(f"{x:.6f},{f:.10f}\n" for x, f in zip(w, P, strict=True))
+    csv = write_table(tmp_path, "depth_mm,force_n\n" + rows,
+                      session=f"[sensor]\ngel_thickness_mm = {h}\n\n[indenter]\nradius_mm = {a}\n")
+    assert main(["fit", str(csv), "--json", "-"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["E_mpa"] == pytest.approx(E, rel=1e-6) and d["nu"] == pytest.approx(nu, abs=1e-6)
+    assert main(["fit", str(csv)]) == 0
+    assert "FEM tables, bonded punch" in capsys.readouterr().out

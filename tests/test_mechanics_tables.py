@@ -142,11 +142,13 @@ def test_nu_out_of_range_raises(nu):
         beta_from_nu(nu)
 
 
-def test_beta_fem_table_not_built_yet():
-    with pytest.raises(NotImplementedError, match="not built yet"):
-        nu_from_beta(1.5, table="fem")
-    with pytest.raises(NotImplementedError, match="not built yet"):
+def test_beta_fem_table_needs_a_over_h():
+    # the FEM beta depends on a/h (tests/test_fem_beta_table.py checks its values)
+    with pytest.raises(ValueError, match="needs a_over_h"):
+        nu_from_beta(0.8, table="fem")
+    with pytest.raises(ValueError, match="needs a_over_h"):
         beta_from_nu(0.45, table="fem")
+    assert beta_from_nu(0.45, table="fem", a_over_h=1.5) > 0
     with pytest.raises(ValueError, match="table"):
         nu_from_beta(1.5, table="zhang")
 

@@ -15,7 +15,6 @@ from ..io import read_measurements
 from ..mechanics import (
     EFFECT_NAMES,
     IndentationFit,
-    beta_relation,
     check_fit_effects,
     fit_indentation,
 )
@@ -23,10 +22,12 @@ from ..mechanics import (
 _DESCRIPTION = """\
 Fit the paper's law P/w = c beta (w/h) + c (eq. 5) to a measurements table
 (one row per certified press: depth_mm, force_n, ...), then nu from the beta
-table and E from Hayes' kappa (eq. 4). h and a come from the options or from
+table and E from kappa (eq. 4). h and a come from the options or from
 session.toml next to the table ([sensor] gel_thickness_mm, [indenter] radius_mm).
-The beta table 'paper' (relation 7, a/h = 0.8) is the default until the FEM
-table of a later issue exists. Exit status 2 on bad input."""
+--beta-table fem (default): beta and kappa of our finite-strain Neo-Hookean
+and small-strain FEM (models/, bonded punch, at the exact a/h). --beta-table
+paper: the paper's relation (7) (a/h = 0.8) and Hayes' kappa, as in the paper.
+Exit status 2 on bad input."""
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -46,8 +47,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="gel thickness h in mm (default: session.toml [sensor] gel_thickness_mm)")
     p.add_argument("--radius-mm", type=float, metavar="A",
                    help="indenter radius a in mm (default: session.toml [indenter] radius_mm)")
-    p.add_argument("--beta-table", choices=("paper", "fem"), default="paper",
-                   help="source of nu(beta) (default: paper; fem is not built yet)")
+    p.add_argument("--beta-table", choices=("fem", "paper"), default="fem",
+                   help="source of nu(beta) and kappa: our FEM tables (default) or the "
+                        "paper's relation (7) with Hayes 1972")
     p.add_argument("--effects", default="large_deformation", metavar="E1,E2",
                    help="comma-separated effects; fit supports large_deformation (the base "
                         f"model); catalogue: {', '.join(EFFECT_NAMES)}")
@@ -93,8 +95,11 @@ def summary(fit: IndentationFit, path: Path) -> str:
             f"  Neo-Hookean (Abaqus): C10 = {fit.C10_mpa:.4f} MPa, "
             f"D1 = {fit.D1_per_mpa:.4f} 1/MPa",
         ]
-    lines.append(f"  beta table: {fit.beta_table} (the paper's relation (7) is the default "
-                 "until the FEM table of a later issue exists); kappa: Hayes 1972")
+    if fit.beta_table == "fem":
+        lines.append(f"  beta and kappa: FEM tables, {fit.contact} punch (models/beta_fem.npz, "
+                     "kappa_fem.npz)")
+    else:
+        lines.append("  beta: the paper's relation (7); kappa: Hayes 1972 (frictionless)")
     lines += [f"  note: {n}" for n in fit.notes if not n.startswith(("intervals:", "beta table"))]
     return "\n".join(lines)
 
@@ -133,10 +138,6 @@ def run(args: argparse.Namespace) -> int:
         is written then.
     """
     check_fit_effects([e.strip() for e in args.effects.split(",") if e.strip()])
-    try:
-        beta_relation(args.beta_table)
-    except NotImplementedError as exc:
-        raise InputError(f"--beta-table {args.beta_table}: {exc}") from None
     if args.a_over_h is not None and not math.isfinite(args.a_over_h):
         raise InputError(f"--a-over-h must be a finite number, got {args.a_over_h}")
     path = args.measurements

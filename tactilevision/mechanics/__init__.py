@@ -7,22 +7,39 @@ forces P, and the law eq. (5) ``P/w = c beta (w/h) + c``.
 
 Tables (every literature number lives in one table with its source):
 
-- :data:`HAYES_1972`, :func:`kappa` -- kappa(nu, a/h), Hayes et al. 1972.
-- :data:`PAPER_BETA_RELATION`, :func:`nu_from_beta`, :func:`beta_from_nu` --
-  the paper's relation (7) at a/h = 0.8.
+- :func:`kappa` -- kappa(nu, a/h): ``source='hayes'`` (:data:`HAYES_1972`,
+  Hayes et al. 1972) or ``'fem'`` (our small-strain FEM, ``models/kappa_fem.npz``,
+  frictionless or bonded punch).
+- :func:`beta` -- beta(nu, a/h): ``source='fem'`` (our finite-strain
+  Neo-Hookean FEM, ``models/beta_fem.npz``, bonded punch) or ``'paper'``
+  (:data:`PAPER_BETA_RELATION`, the paper's relation (7) at a/h = 0.8);
+  :func:`nu_from_beta`, :func:`beta_from_nu` and :func:`beta_relation` with
+  ``table='fem' | 'paper'``.
 
 Fit:
 
 - :func:`fit_indentation` -> :class:`IndentationFit`.
 - :func:`neo_hookean_constants` -- Abaqus C10, D1 from E, nu.
+
+Validation (the paper's FEA check):
+
+- :func:`validate_indentation` -> :class:`IndentationValidation`.
 """
 
-from ._beta import PAPER_BETA_RELATION, BetaRelation, beta_from_nu, beta_relation, nu_from_beta
+from ._beta import (
+    PAPER_BETA_RELATION,
+    BetaRelation,
+    beta,
+    beta_from_nu,
+    beta_relation,
+    nu_from_beta,
+)
 from ._effects import EFFECT_NAMES, FIT_EFFECTS, check_fit_effects
 from ._fit import MAX_W_OVER_H, fit_indentation
 from ._kappa import HAYES_1972, KappaTable, kappa
 from ._neohookean import neo_hookean_constants
 from ._result import IndentationFit
+from ._validate import IndentationValidation, validate_indentation
 
 __all__ = [
     "EFFECT_NAMES",
@@ -32,7 +49,9 @@ __all__ = [
     "PAPER_BETA_RELATION",
     "BetaRelation",
     "IndentationFit",
+    "IndentationValidation",
     "KappaTable",
+    "beta",
     "beta_from_nu",
     "beta_relation",
     "check_fit_effects",
@@ -40,4 +59,5 @@ __all__ = [
     "kappa",
     "neo_hookean_constants",
     "nu_from_beta",
+    "validate_indentation",
 ]

@@ -14,7 +14,8 @@ import numpy as np
 
 from .._checks import InputError
 
-__all__ = ["PAPER_BETA_RELATION", "BetaRelation", "beta_from_nu", "beta_relation", "nu_from_beta"]
+__all__ = ["PAPER_BETA_RELATION", "BetaRelation", "beta", "beta_from_nu", "beta_relation",
+           "nu_from_beta"]
 
 
 @dataclass(frozen=True)
@@ -57,6 +58,14 @@ class BetaRelation:
         """Slope of the relation, ``slope / beta``, 1 per unit beta."""
         return self.slope / beta
 
+    def nu(self, beta: float | np.ndarray) -> float | np.ndarray:
+        """``slope ln(beta) + intercept`` (no range check)."""
+        return _out(self.slope * np.log(np.asarray(beta, np.float64)) + self.intercept)
+
+    def beta(self, nu: float | np.ndarray) -> float | np.ndarray:
+        """``exp((nu - intercept) / slope)`` (no range check)."""
+        return _out(np.exp((np.asarray(nu, np.float64) - self.intercept) / self.slope))
+
     def range_text(self) -> str:
         """The range as one phrase, for messages."""
         return (f"beta in [{self.beta_min:.4f}, {self.beta_max:.4f}), "
@@ -82,18 +91,18 @@ PAPER_BETA_RELATION = BetaRelation(
     ),
 )
 
-_TABLES = {"paper": PAPER_BETA_RELATION}
-
-
-def _relation(table: str) -> BetaRelation:
+def _relation(table: str, a_over_h: float | None = None, contact: str = "bonded",
+              definition: str = "secant", w_over_h: tuple[float, ...] | None = None):
+    if table == "paper":
+        return PAPER_BETA_RELATION
     if table == "fem":
-        raise NotImplementedError(
-            "the FEM beta table is not built yet (models/kappa_fem*, a later issue); "
-            "use table='paper', the paper's relation (7)"
-        )
-    if table not in _TABLES:
-        raise ValueError(f"table must be 'paper' or 'fem', got {table!r}")
-    return _TABLES[table]
+        if a_over_h is None:
+            raise ValueError("table='fem' needs a_over_h (the FEM beta depends on it)")
+        from ._fem_tables import fem_beta_relation
+
+        return fem_beta_relation(float(a_over_h), contact=contact, definition=definition,
+                                 w_over_h=w_over_h)
+    raise ValueError(f"table must be 'paper' or 'fem', got {table!r}")
 
 
 def _out(x: np.ndarray | float) -> float | np.ndarray:
@@ -101,7 +110,9 @@ def _out(x: np.ndarray | float) -> float | np.ndarray:
     return float(arr) if arr.ndim == 0 else arr
 
 
-def nu_from_beta(beta: float | np.ndarray, *, table: str = "paper") -> float | np.ndarray:
+def nu_from_beta(beta: float | np.ndarray, *, table: str = "paper",
+                 a_over_h: float | None = None, contact: str = "bonded",
+                 definition: str = "secant") -> float | np.ndarray:
     """Poisson's ratio from the large-deformation factor beta.
 
     Parameters
@@ -110,7 +121,16 @@ def nu_from_beta(beta: float | np.ndarray, *, table: str = "paper") -> float | n
         Stiffening factor of eq. (2), the slope over the intercept of eq. (5).
     table : {'paper', 'fem'}, default 'paper'
         ``'paper'``: :data:`PAPER_BETA_RELATION`, eq. (7), built for
-        a/h = 0.8. ``'fem'``: the project's FEM table, not built yet.
+        a/h = 0.8. ``'fem'``: the project's FEM table ``models/beta_fem.npz``
+        at `a_over_h` (:func:`~tactilevision.mechanics._fem_tables.fem_beta_relation`).
+    a_over_h : float, optional
+        Needed for ``table='fem'``.
+    contact : str, default 'bonded'
+        FEM table only: the punch condition ('bonded', the only one the
+        finite-strain table holds).
+    definition : {'secant', 'tangent'}, default 'secant'
+        FEM table only: beta of eq. (5)'s straight line (the paper's
+        procedure) or of the tangent stiffness.
 
     Returns
     -------
@@ -123,10 +143,8 @@ def nu_from_beta(beta: float | np.ndarray, *, table: str = "paper") -> float | n
         (a ``ValueError``) when a `beta` is not finite or outside the
         relation's range (see :attr:`BetaRelation.range_text`); it is never
         clamped.
-    NotImplementedError
-        For ``table='fem'``: the FEM table is not built yet.
     ValueError
-        For an unknown `table`.
+        For an unknown `table`, or ``table='fem'`` without `a_over_h`.
 
     Notes
     -----
@@ -151,7 +169,7 @@ def nu_from_beta(beta: float | np.ndarray, *, table: str = "paper") -> float | n
     >>> round(nu_from_beta(5.2662 / 3.4943), 4)
     0.4797
     """
-    rel = _relation(table)
+    rel = _relation(table, a_over_h, contact, definition)
     b = np.asarray(beta, dtype=np.float64)
     bad = ~((b >= rel.beta_min) & (b < rel.beta_max))
     if np.any(bad):
@@ -159,17 +177,19 @@ def nu_from_beta(beta: float | np.ndarray, *, table: str = "paper") -> float | n
         raise InputError(
             f"beta = {v:g} is outside the range of the {table} beta table ({rel.range_text()})"
         )
-    return _out(rel.slope * np.log(b) + rel.intercept)
+    return rel.nu(b)
 
 
-def beta_from_nu(nu: float | np.ndarray, *, table: str = "paper") -> float | np.ndarray:
+def beta_from_nu(nu: float | np.ndarray, *, table: str = "paper",
+                 a_over_h: float | None = None, contact: str = "bonded",
+                 definition: str = "secant") -> float | np.ndarray:
     """Large-deformation factor beta from Poisson's ratio; inverse of :func:`nu_from_beta`.
 
     Parameters
     ----------
     nu : float or (...) array_like, dimensionless
         Poisson's ratio, within [0.30, 0.50) for ``table='paper'``.
-    table : {'paper', 'fem'}, default 'paper'
+    table, a_over_h, contact, definition
         As in :func:`nu_from_beta`.
 
     Returns
@@ -182,43 +202,97 @@ def beta_from_nu(nu: float | np.ndarray, *, table: str = "paper") -> float | np.
     ------
     InputError
         (a ``ValueError``) when a `nu` is not finite or outside the range.
-    NotImplementedError
-        For ``table='fem'``: the FEM table is not built yet.
     ValueError
-        For an unknown `table`.
+        For an unknown `table`, or ``table='fem'`` without `a_over_h`.
 
     References
     ----------
     .. [1] "In-situ Mechanical Calibration for Vision-based Tactile Sensors",
        eq. (7).
     """
-    rel = _relation(table)
+    rel = _relation(table, a_over_h, contact, definition)
     n = np.asarray(nu, dtype=np.float64)
-    bad = ~((n >= rel.nu_min) & (n < rel.nu_max))
+    lo = getattr(rel, "nu_forward_min", rel.nu_min)  # a FEM table: its whole nu range
+    hi = getattr(rel, "nu_forward_max", rel.nu_max)
+    bad = ~((n >= lo) & (n < hi))
     if np.any(bad):
         v = float(np.ravel(n)[np.argmax(np.ravel(bad))])
         raise InputError(
-            f"nu = {v:g} is outside the range of the {table} beta table ({rel.range_text()})"
+            f"nu = {v:g} is outside the range of the {table} beta table ("
+            + (f"nu in [{lo:.3f}, {float(np.nextafter(hi, 0.0)):.3f}]"
+               if hasattr(rel, "nu_forward_min") else rel.range_text()) + ")"
         )
-    return _out(np.exp((n - rel.intercept) / rel.slope))
+    return rel.beta(n)
 
 
-def beta_relation(table: str = "paper") -> BetaRelation:
-    """The beta relation named `table`.
+def beta_relation(table: str = "paper", *, a_over_h: float | None = None,
+                  contact: str = "bonded", definition: str = "secant",
+                  w_over_h: tuple[float, ...] | None = None):
+    """The beta relation named `table` (at `a_over_h` for the FEM table).
 
     Parameters
     ----------
     table : {'paper', 'fem'}, default 'paper'
+    a_over_h, contact, definition
+        As in :func:`nu_from_beta`.
+    w_over_h : tuple of float, optional
+        FEM table only: read the secant beta at these press depths (see
+        :func:`~tactilevision.mechanics._fem_tables.fem_beta_relation`).
 
     Returns
     -------
-    relation : BetaRelation
+    relation : BetaRelation or TabulatedBetaRelation
+        Both have ``nu(beta)``, ``beta(nu)``, ``dnu_dbeta``, ``beta_min``,
+        ``beta_max``, ``nu_min``, ``nu_max``, ``range_text()``, ``a_over_h``
+        and ``source``.
 
     Raises
     ------
-    NotImplementedError
-        For ``table='fem'``: the FEM table is not built yet.
+    InputError
+        For a missing FEM table or `a_over_h` outside it.
     ValueError
-        For an unknown `table`.
+        For an unknown `table`, or ``table='fem'`` without `a_over_h`.
     """
-    return _relation(table)
+    return _relation(table, a_over_h, contact, definition, w_over_h)
+
+
+def beta(nu: float | np.ndarray, a_over_h: float | np.ndarray, *, source: str = "fem",
+         contact: str = "bonded", definition: str = "secant") -> float | np.ndarray:
+    """Large-deformation factor beta(nu, a/h) of eq. (2), vectorised.
+
+    Parameters
+    ----------
+    nu : float or (...) array_like
+        Poisson's ratio, within the source's range.
+    a_over_h : float or (...) array_like
+        Indenter radius over thickness; broadcast against `nu`. The paper's
+        relation (7) was fitted at a/h = 0.8 and is accepted within 0.75 to
+        0.85 only (the paper's 2.5 / 3.0 = 0.833 included).
+    source : {'fem', 'paper'}, default 'fem'
+        The project's finite-strain FEM table or the paper's relation (7).
+    contact, definition
+        FEM only, as in :func:`nu_from_beta`.
+
+    Returns
+    -------
+    beta : float or (...) float64 ndarray
+
+    Raises
+    ------
+    InputError
+        (a ``ValueError``) outside the tabulated range of nu or a/h.
+    ValueError
+        For an unknown `source`.
+    """
+    if source not in ("fem", "paper"):
+        raise ValueError(f"source must be 'fem' or 'paper', got {source!r}")
+    n, r = np.broadcast_arrays(np.asarray(nu, np.float64), np.asarray(a_over_h, np.float64))
+    if source == "paper" and np.any(np.abs(r - PAPER_BETA_RELATION.a_over_h) > 0.05):
+        raise InputError("a_over_h must lie within 0.75 to 0.85 for the paper's relation (7), "
+                         f"fitted at a/h = 0.8; got {float(r.ravel()[0]):g}")
+    out = np.empty(n.shape)
+    for rv in np.unique(r):
+        sel = r == rv
+        out[sel] = beta_from_nu(n[sel], table=source, a_over_h=float(rv), contact=contact,
+                                definition=definition)
+    return float(out) if out.ndim == 0 else out

@@ -7,6 +7,7 @@ here with numpy alone, once per process.
 from __future__ import annotations
 
 import json
+from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
@@ -15,7 +16,7 @@ from .._assets import asset_dir
 from .._checks import InputError
 from ._kappa import KappaTable
 
-__all__ = ["fem_kappa_table", "fem_table_meta"]
+__all__ = ["TabulatedBetaRelation", "fem_beta_relation", "fem_kappa_table", "fem_table_meta"]
 
 
 @lru_cache(maxsize=4)
@@ -67,3 +68,208 @@ def fem_kappa_table(contact: str = "frictionless") -> KappaTable:
                 f"'{meta.get('command', '?')}')"),
         doi="",
     )
+
+
+@dataclass(frozen=True)
+class TabulatedBetaRelation:
+    """beta(nu) of the FEM table at one a/h and punch condition, and its inverse.
+
+    The same interface as :class:`BetaRelation` (the paper's relation), so the
+    fit uses either.
+
+    Attributes
+    ----------
+    a_over_h : float
+    contact : str
+    definition : {'secant', 'tangent'}
+    nu_grid, beta_grid : (N,) float64 ndarray
+        beta at the table's nu, interpolated in a/h (PCHIP per nu column).
+    source : str
+    kappa_line_grid : (N,) float64 ndarray or None
+        With press depths given: the intercept of the FEM's kappa_n line
+        fitted at them (see :meth:`kappa_line`).
+    """
+
+    a_over_h: float
+    contact: str
+    definition: str
+    nu_grid: np.ndarray
+    beta_grid: np.ndarray
+    source: str
+    kappa_line_grid: np.ndarray | None = None
+
+    def kappa_line(self, nu: float) -> float:
+        """Intercept of the FEM's kappa_n line at the given depths, at `nu` (PCHIP).
+
+        Only with ``w_over_h`` (:func:`fem_beta_relation`): eq. (4) then reads
+        c = 2 a E kappa_line / (1 - nu^2) with the same straight line as beta,
+        instead of the small-strain kappa (they differ by the curvature of
+        P/w, under 1%).
+        """
+        from scipy.interpolate import PchipInterpolator
+
+        return float(PchipInterpolator(self.nu_grid, self.kappa_line_grid)(nu))
+
+    def dkappa_line_dnu(self, nu: float) -> float:
+        """d kappa_line / d nu at `nu`."""
+        from scipy.interpolate import PchipInterpolator
+
+        return float(PchipInterpolator(self.nu_grid, self.kappa_line_grid).derivative()(nu))
+
+    @property
+    def branch(self) -> tuple[int, int]:
+        """First and last index of the branch on which nu is recovered from beta.
+
+        ``beta_grid[first:last + 1]`` increases strictly and ends at the
+        largest beta of the table. A bonded punch stiffens *less* as nu grows
+        at small a/h, and near a/h = 0.8 beta peaks below nu = 0.5: beta then
+        tells nu apart only on this rising branch; above its top nu is
+        ambiguous or unreachable.
+        """
+        last = int(np.argmax(self.beta_grid))
+        first = last
+        while first > 0 and self.beta_grid[first - 1] < self.beta_grid[first]:
+            first -= 1
+        return first, last
+
+    @property
+    def nu_forward_min(self) -> float:
+        """Smallest tabulated nu (the range of :meth:`beta`)."""
+        return float(self.nu_grid[0])
+
+    @property
+    def nu_forward_max(self) -> float:
+        """Just above the largest tabulated nu (the range of :meth:`beta`, closed)."""
+        return float(np.nextafter(self.nu_grid[-1], 1.0))
+
+    @property
+    def nu_min(self) -> float:
+        """Smallest nu of the invertible branch (the range of :meth:`nu`)."""
+        return float(self.nu_grid[self.branch[0]])
+
+    @property
+    def nu_max(self) -> float:
+        """Just above the largest nu of the branch (the range is closed, unlike eq. 7's)."""
+        return float(np.nextafter(self.nu_grid[self.branch[1]], 1.0))
+
+    @property
+    def beta_min(self) -> float:
+        """beta at :attr:`nu_min`."""
+        return float(self.beta_grid[self.branch[0]])
+
+    @property
+    def beta_max(self) -> float:
+        """Just above the largest beta of the branch (and of the table)."""
+        return float(np.nextafter(self.beta_grid[self.branch[1]], np.inf))
+
+    def _inverse(self):
+        from scipy.interpolate import PchipInterpolator
+
+        first, last = self.branch
+        if last == first:
+            raise InputError(
+                f"the FEM beta ({self.definition}, {self.contact} punch) does not rise with "
+                f"nu at a/h = {self.a_over_h:.4g}: nu cannot be recovered from beta there")
+        sel = slice(first, last + 1)
+        return PchipInterpolator(self.beta_grid[sel], self.nu_grid[sel])
+
+    def beta(self, nu: float | np.ndarray) -> float | np.ndarray:
+        """beta at `nu` (PCHIP in nu over the whole table; no range check)."""
+        from scipy.interpolate import PchipInterpolator
+
+        out = PchipInterpolator(self.nu_grid, self.beta_grid)(np.asarray(nu, np.float64))
+        return float(out) if out.ndim == 0 else out
+
+    def nu(self, beta: float | np.ndarray) -> float | np.ndarray:
+        """nu at `beta` (PCHIP of the inverse on the increasing branch; no range check)."""
+        out = self._inverse()(np.asarray(beta, np.float64))
+        return float(out) if out.ndim == 0 else out
+
+    def dnu_dbeta(self, beta: float) -> float:
+        """Slope d nu / d beta of the inverse at `beta`."""
+        return float(self._inverse().derivative()(beta))
+
+    def range_text(self) -> str:
+        """The invertible range as one phrase, for messages."""
+        first, last = self.branch
+        return (f"beta in [{self.beta_grid[first]:.4f}, {self.beta_grid[last]:.4f}], i.e. nu "
+                f"in [{self.nu_grid[first]:.3f}, {self.nu_grid[last]:.3f}] ({self.contact} punch, "
+                f"{self.definition} beta, a/h = {self.a_over_h:.4g})")
+
+
+@lru_cache(maxsize=64)
+def fem_beta_relation(a_over_h: float, *, contact: str = "bonded",
+                      definition: str = "secant",
+                      w_over_h: tuple[float, ...] | None = None) -> TabulatedBetaRelation:
+    """The FEM beta(nu) at one a/h, for the fit and for :func:`beta`.
+
+    Parameters
+    ----------
+    a_over_h : float
+        Within the table's a/h range.
+    contact : str, default 'bonded'
+        A punch condition of the table (it holds 'bonded' only).
+    definition : {'secant', 'tangent'}, default 'secant'
+        'secant': beta of the straight-line fit of P/w against w/h over
+        w/h = 0.02 ... 0.2, the paper's procedure (eq. 5); 'tangent': beta_t
+        of dP/dw = c_t (1 + 2 beta_t w/h).
+    w_over_h : tuple of float, optional
+        The depths of a set of presses (w/h, repeats included, each within
+        (0, w/h max of the table]). Given, the secant beta is the one eq. (5)
+        fitted at exactly these depths would give on the FEM's kappa_n(w/h)
+        (interpolated by PCHIP through kappa0 at w = 0 and the stored
+        depths), so a measurement and the table are read alike: P/w is not
+        exactly straight (up to 1.1% off its line), and at a/h = 1.2,
+        nu = 0.47 the secant beta over w/h 0.06 to 0.2 is 3% above the one
+        over 0.02 to 0.2. Secant definition only.
+
+    Returns
+    -------
+    relation : TabulatedBetaRelation
+
+    Raises
+    ------
+    InputError
+        For a missing table, an a/h outside it, an unknown contact or
+        definition, or a table with incomplete sweeps at this a/h.
+    """
+    from scipy.interpolate import PchipInterpolator
+
+    data = _load("beta_fem.npz")
+    contacts = [str(c) for c in data["contacts"]]
+    if contact not in contacts:
+        raise InputError(f"contact must be one of {contacts}, got {contact!r}")
+    if definition not in ("secant", "tangent"):
+        raise InputError(f"definition must be 'secant' or 'tangent', got {definition!r}")
+    ah = data["a_over_h"]
+    if not ah[0] <= a_over_h <= ah[-1]:
+        raise InputError(f"a_over_h = {a_over_h:g} is outside the FEM beta table range "
+                         f"[{ah[0]:g}, {ah[-1]:g}]")
+    c = contacts.index(contact)
+    values = data[f"beta_{definition}"][c]  # (A, N)
+    if not np.all(np.isfinite(values)):
+        raise InputError(f"the FEM beta table {data['path']} has incomplete sweeps for the "
+                         f"{contact} punch: rebuild it")
+    if w_over_h is None:
+        row = np.array([float(PchipInterpolator(ah, values[:, j])(a_over_h))
+                        for j in range(values.shape[1])])
+    else:
+        if definition != "secant":
+            raise InputError("w_over_h applies to the secant beta only")
+        x = np.asarray(w_over_h, np.float64)
+        wt = np.concatenate([[0.0], data["w_over_h"]])
+        if x.ndim != 1 or x.size < 2 or np.ptp(x) <= 0 or not np.all((x > 0) & (x <= wt[-1])):
+            raise InputError(f"w_over_h must hold two distinct depths or more within "
+                             f"(0, {wt[-1]:g}], got {w_over_h!r}")
+        kn = np.concatenate([data["kappa0"][c][..., None], data["kappa_n"][c]], axis=-1)
+        kn_ah = PchipInterpolator(ah, kn, axis=0)(a_over_h)          # (N, K + 1)
+        k_at = PchipInterpolator(wt, kn_ah, axis=1)(x)               # (N, n)
+        slope, icpt = np.polyfit(x, k_at.T, 1)
+        row = slope / icpt
+    line = None if w_over_h is None else np.asarray(icpt, np.float64)
+    meta = data["meta"]
+    return TabulatedBetaRelation(
+        a_over_h=float(a_over_h), contact=contact, definition=definition,
+        nu_grid=data["nu"].astype(np.float64), beta_grid=row, kappa_line_grid=line,
+        source=(f"tactilevision FEM, finite-strain Neo-Hookean, {contact} punch, {definition} "
+                f"beta (mesh {meta['mesh']}; built {meta.get('created', '?')})"))

@@ -9,9 +9,10 @@ import numpy as np
 from scipy import stats
 
 from .._checks import InputError, check_array
-from ._beta import beta_relation, nu_from_beta
+from ._beta import beta_relation
 from ._effects import FIT_EFFECTS
-from ._kappa import HAYES_1972, _dkappa_dnu, kappa
+from ._kappa import _dkappa_dnu, kappa
+from ._kappa import _table as _kappa_table
 from ._neohookean import neo_hookean_constants
 from ._result import IndentationFit
 
@@ -48,8 +49,8 @@ def _covariance(X: np.ndarray, resid: np.ndarray) -> tuple[np.ndarray, str | Non
 
 
 def fit_indentation(depth_mm: np.ndarray, force_n: np.ndarray, *, thickness_mm: float,
-                    radius_mm: float, beta_table: str = "paper",
-                    a_over_h: float | None = None,
+                    radius_mm: float, beta_table: str = "fem",
+                    a_over_h: float | None = None, contact: str = "bonded",
                     confidence: float = 0.95) -> IndentationFit:
     """Fit E and nu of a bonded gel layer to flat-punch presses (the paper's method).
 
@@ -64,13 +65,22 @@ def fit_indentation(depth_mm: np.ndarray, force_n: np.ndarray, *, thickness_mm: 
         Gel thickness h.
     radius_mm : float, mm
         Flat indenter radius a.
-    beta_table : {'paper', 'fem'}, default 'paper'
-        Source of nu(beta): the paper's relation (7) (a/h = 0.8), or the
-        project's FEM table (not built yet).
+    beta_table : {'fem', 'paper'}, default 'fem'
+        Source of nu(beta) and kappa. ``'fem'``: the project's finite-strain
+        FEM beta table (``models/beta_fem.npz``: the secant beta that eq. (5)
+        fitted at these very depths gives on the FEM's P/w, at the exact
+        a/h) and FEM kappa table (``models/kappa_fem.npz``), both for the
+        punch condition `contact`. ``'paper'``: the paper's relation (7)
+        (fitted at a/h = 0.8) and the Hayes 1972 kappa (frictionless), as in
+        the paper.
     a_over_h : float, optional
         a/h at which kappa is read. Default: the exact ``radius_mm /
         thickness_mm``. The paper rounds a = 2.5, h = 3.0 to a/h = 0.8; pass
         0.8 to reproduce it.
+    contact : {'bonded', 'frictionless'}, default 'bonded'
+        Punch condition of the FEM tables (``beta_table='fem'`` only). The
+        FEM beta table holds the bonded (no-slip) punch only: a frictionless
+        sharp-edged punch does not converge at finite strain.
     confidence : float, default 0.95
         Level of the intervals, in (0, 1).
 
@@ -85,10 +95,10 @@ def fit_indentation(depth_mm: np.ndarray, force_n: np.ndarray, *, thickness_mm: 
         their lengths differ.
     InputError
         When a depth is not positive, fewer than two depths are distinct,
-        `thickness_mm` or `radius_mm` is not positive, or a/h is outside the
-        Hayes table [0.2, 2.0].
-    NotImplementedError
-        For ``beta_table='fem'``: the FEM table is not built yet.
+        `thickness_mm` or `radius_mm` is not positive, a/h is outside the
+        kappa table [0.2, 2.0], the FEM table is missing, or it has no
+        `contact` punch, or its beta does not increase with nu at this a/h
+        (a bonded punch at a/h <~ 0.6: nu cannot be told from beta there).
     ValueError
         For an unknown `beta_table` or a `confidence` outside (0, 1).
 
@@ -102,9 +112,12 @@ def fit_indentation(depth_mm: np.ndarray, force_n: np.ndarray, *, thickness_mm: 
     -----
     Ordinary least squares of ``y = P/w`` on ``x = w/h``, eq. (5):
     ``P/w = c beta (w/h) + c``, so the intercept is c and ``beta = slope / c``.
-    Then nu = nu(beta) from the beta table (eq. 7 for ``'paper'``),
-    ``E = c (1 - nu^2) / (2 a kappa(nu, a/h))`` (eq. 4, kappa from Hayes
-    1972, :func:`kappa`), and the Neo-Hookean constants of
+    Then nu = nu(beta) from the beta table (the inverse of the FEM beta(nu)
+    at this a/h, or eq. 7 for ``'paper'``),
+    ``E = c (1 - nu^2) / (2 a kappa(nu, a/h))`` (eq. 4; kappa from Hayes
+    1972 for ``'paper'``; for ``'fem'`` the intercept of the FEM's kappa_n
+    line fitted at these depths, the same line that gives beta, which tends
+    to the small-strain FEM kappa as the depths go to 0), and the Neo-Hookean constants of
     :func:`neo_hookean_constants`. The beta table never enters the
     regression: residuals do not depend on it.
 
@@ -133,9 +146,16 @@ def fit_indentation(depth_mm: np.ndarray, force_n: np.ndarray, *, thickness_mm: 
     >>> from tactilevision.mechanics import fit_indentation
     >>> w = np.array([0.15, 0.30, 0.40, 0.50, 0.60])
     >>> P = w * (5.2662 * w / 3.0 + 3.4943)            # the paper's line (6)
-    >>> fit = fit_indentation(w, P, thickness_mm=3.0, radius_mm=2.5, a_over_h=0.8)
+    >>> fit = fit_indentation(w, P, thickness_mm=3.0, radius_mm=2.5, a_over_h=0.8,
+    ...                       beta_table="paper")
     >>> round(fit.nu, 4), round(fit.beta, 4)
     (0.4797, 1.5071)
+
+    The same line with the FEM tables: no Neo-Hookean layer at a/h = 0.83
+    stiffens that much (beta <= 0.80 for any nu, bonded punch).
+
+    >>> fit_indentation(w, P, thickness_mm=3.0, radius_mm=2.5).out_of_table
+    True
     """
     w = check_array(depth_mm, "depth_mm", [("N",)], dtype=np.number, finite=True)
     P = check_array(force_n, "force_n", [(w.shape[0],)], dtype=np.number, finite=True)
@@ -151,19 +171,32 @@ def fit_indentation(depth_mm: np.ndarray, force_n: np.ndarray, *, thickness_mm: 
     if depths.size < 2:
         raise InputError(f"depth_mm holds {depths.size} distinct depth(s); the fit of "
                          "eq. (5) needs presses at two depths or more")
-    rel = beta_relation(beta_table)  # raises for 'fem' before any work
+    if beta_table not in ("paper", "fem"):
+        raise ValueError(f"beta_table must be 'paper' or 'fem', got {beta_table!r}")
+    kappa_source = "fem" if beta_table == "fem" else "hayes"
+    if beta_table == "paper":
+        contact = "frictionless"  # relation (7) and Hayes: the paper's frictionless punch
     ah_exact = a / h
-    lo, hi = float(HAYES_1972.a_over_h[0]), float(HAYES_1972.a_over_h[-1])
+    ktab = _kappa_table(kappa_source, contact)
+    lo, hi = float(ktab.a_over_h[0]), float(ktab.a_over_h[-1])
+    kname = "FEM" if kappa_source == "fem" else "Hayes 1972"
     if a_over_h is None:
         ah = ah_exact
         if not lo <= ah <= hi:
-            raise InputError(f"radius_mm / thickness_mm = {ah:g} is outside the Hayes 1972 "
+            raise InputError(f"radius_mm / thickness_mm = {ah:g} is outside the {kname} "
                              f"kappa table range [{lo:g}, {hi:g}]")
     else:
         ah = float(a_over_h)
         if not lo <= ah <= hi:
-            raise InputError(f"a_over_h = {ah:g} is outside the Hayes 1972 kappa table "
+            raise InputError(f"a_over_h = {ah:g} is outside the {kname} kappa table "
                              f"range [{lo:g}, {hi:g}]")
+    if beta_table == "fem" and float(np.max(w / h)) > MAX_W_OVER_H + 1e-12:
+        raise InputError(f"a press reaches w/h = {float(np.max(w / h)):.3f}, beyond the FEM beta "
+                         f"table's w/h <= {MAX_W_OVER_H:g}: drop the deeper presses or use "
+                         "beta_table='paper'")
+    # the FEM beta read at these very depths (eq. 5 fitted to the FEM's P/w there)
+    rel = beta_relation(beta_table, a_over_h=ah, contact=contact,
+                        w_over_h=tuple(np.round(w / h, 12)) if beta_table == "fem" else None)
     notes: list[str] = []
 
     # eq. (5): y = c + (c beta) x, ordinary least squares
@@ -193,12 +226,18 @@ def fit_indentation(depth_mm: np.ndarray, force_n: np.ndarray, *, thickness_mm: 
                f"table (c > 0, {rel.range_text()}): E and nu not computed")
         notes.append(msg)
     else:
-        nu = float(nu_from_beta(beta, table=beta_table))  # eq. (7)
-        kap = float(kappa(nu, ah))
+        nu = float(rel.nu(beta))  # eq. (7) or the FEM table, inverted
+        line = getattr(rel, "kappa_line_grid", None) is not None
+        if line:  # the FEM line at these depths: its intercept, like its beta
+            kap, dkap = rel.kappa_line(nu), rel.dkappa_line_dnu(nu)
+        else:
+            kap = float(kappa(nu, ah, source=kappa_source, contact=contact))
+            dkap = _dkappa_dnu(nu, ah, source=kappa_source, contact=contact)
         E = c * (1 - nu**2) / (2 * a * kap)  # eq. (4)
         C10, D1 = neo_hookean_constants(E, nu)
         g_nu = rel.dnu_dbeta(beta) * np.array([-s / c**2, 1 / c])  # d nu / d(c, s)
-        dlnE_dnu = -2 * nu / (1 - nu**2) - _dkappa_dnu(nu, ah) / kap
+        dlnE_dnu = (-2 * nu / (1 - nu**2)
+                    - dkap / kap)
         nu_se, nu_ci = interval(nu, g_nu)
         E_se, E_ci = interval(E, E * (np.array([1 / c, 0.0]) + dlnE_dnu * g_nu))
         if np.all(np.isfinite(nu_ci)) and not (rel.nu_min <= nu_ci[0] and nu_ci[1] < rel.nu_max):
@@ -209,8 +248,8 @@ def fit_indentation(depth_mm: np.ndarray, force_n: np.ndarray, *, thickness_mm: 
     notes.append(f"intervals: {_CI_METHOD}; the kappa and beta tables are taken as exact")
     if cov_note:
         notes.append(cov_note)
-    notes.append(f"beta table '{beta_table}': {rel.source}; 'paper' is the default until "
-                 "the FEM table of a later issue exists")
+    notes.append(f"beta table '{beta_table}': {rel.source}; kappa: "
+                 f"{'FEM, ' + contact + ' punch' if kappa_source == 'fem' else 'Hayes 1972'}")
     if abs(ah - rel.a_over_h) > 1e-6:
         notes.append(f"relation (7) was built for a/h = {rel.a_over_h:g} and is used here at "
                      f"a/h = {ah:.4f}")
@@ -230,7 +269,8 @@ def fit_indentation(depth_mm: np.ndarray, force_n: np.ndarray, *, thickness_mm: 
         E_mpa=E, nu=nu, c_n_per_mm=c, beta=beta, E_ci95_mpa=E_ci, nu_ci95=nu_ci,
         rmse_n=rmse, n_presses=n, effects=FIT_EFFECTS, effect_params={"beta": beta},
         C10_mpa=C10, D1_per_mpa=D1, a_over_h=ah, a_over_h_exact=ah_exact,
-        thickness_mm=h, radius_mm=a, kappa=kap, beta_table=beta_table, slope_n_per_mm=s,
+        thickness_mm=h, radius_mm=a, kappa=kap, beta_table=beta_table,
+        kappa_source=kappa_source, contact=contact, slope_n_per_mm=s,
         c_se_n_per_mm=cs[0], slope_se_n_per_mm=cs[1],
         corr_c_slope=float(cov[0, 1] / (cs[0] * cs[1])) if cs[0] * cs[1] > 0 else math.nan,
         beta_se=beta_se, beta_ci95=beta_ci, nu_se=nu_se, E_se_mpa=E_se, r_squared=r2,

@@ -40,9 +40,14 @@ class IndentationFit:
     a_over_h, a_over_h_exact : float
         a/h used for kappa, and radius over thickness.
     thickness_mm, radius_mm, kappa : float
-        h, a, and kappa(nu, a_over_h) from Hayes 1972.
+        h, a, and kappa(nu, a_over_h) from `kappa_source` (``'fem'``: the
+        intercept of the FEM's finite-strain kappa_n line at the fitted depths).
     beta_table : str
-        The beta table used (``'paper'``).
+        The beta table used (``'fem'`` or ``'paper'``).
+    kappa_source : str
+        ``'fem'`` (with the FEM beta table) or ``'hayes'`` (with the paper's).
+    contact : str
+        Punch condition of the FEM tables (``'frictionless'``).
     slope_n_per_mm, c_se_n_per_mm, slope_se_n_per_mm, corr_c_slope : float
         Slope c*beta of eq. (5), the standard errors and correlation of
         intercept and slope.
@@ -78,6 +83,8 @@ class IndentationFit:
     radius_mm: float
     kappa: float
     beta_table: str
+    kappa_source: str
+    contact: str
     slope_n_per_mm: float
     c_se_n_per_mm: float
     slope_se_n_per_mm: float

@@ -1,5 +1,7 @@
-"""Figures: depth-map images (more plots arrive with the reports)."""
+"""Figures: depth-map images, force-depth validation (more with the reports)."""
 
 from ._depth import depth_figure, nice_scale_bar_mm, save_depth_image
+from ._validation import save_validation_figure, validation_figure
 
-__all__ = ["depth_figure", "nice_scale_bar_mm", "save_depth_image"]
+__all__ = ["depth_figure", "nice_scale_bar_mm", "save_depth_image", "save_validation_figure",
+           "validation_figure"]

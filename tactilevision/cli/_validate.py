@@ -1,0 +1,120 @@
+"""``tactilevision validate``: the paper's FEA check of a calibration (formats.md §3)."""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import sys
+import tomllib
+import warnings
+from pathlib import Path
+
+from .._checks import InputError
+from ._fit import _write_json
+
+__all__ = ["add_parser", "run"]
+
+_DESCRIPTION = """\
+Simulate every press of a measurements table with the finite-strain
+Neo-Hookean FEM at E and nu, and compare the simulated depth at the measured
+force with the measured depth (the paper's section V.A, Fig. 8). Without
+--E-mpa and --nu the table is fitted first ('tactilevision fit', default
+options) and its E and nu are simulated. h and a come from the options or the
+session.toml next to the table; the pad radius from its [sensor] gel_radius_mm
+(default 20 h). Exit status 2 on bad input."""
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    """Register the ``validate`` sub-command."""
+    p = sub.add_parser("validate", help="simulated against measured depths (FEM check)",
+                       description=_DESCRIPTION,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("measurements", metavar="MEASUREMENTS.csv", type=Path)
+    p.add_argument("--E-mpa", dest="E_mpa", type=float, metavar="E",
+                   help="Young's modulus to simulate, MPa (default: fitted)")
+    p.add_argument("--nu", type=float, metavar="NU",
+                   help="Poisson's ratio to simulate (default: fitted)")
+    p.add_argument("--thickness-mm", type=float, metavar="H")
+    p.add_argument("--radius-mm", type=float, metavar="A")
+    p.add_argument("--pad-radius-mm", type=float, metavar="R",
+                   help="gel pad radius, mm (default: session.toml, else 20 h)")
+    p.add_argument("--contact", choices=("bonded", "frictionless"), default="bonded",
+                   help="punch condition of the simulation (default bonded, as the FEM tables; "
+                        "a frictionless sharp punch often stops converging before w/h = 0.1)")
+    p.add_argument("--json", metavar="FILE", help="write the result as JSON ('-': stdout)")
+    p.add_argument("--report", metavar="DIR", type=Path,
+                   help="write validation.png (force against depth) and validation.csv")
+    p.set_defaults(func=run)
+
+
+def _pad_radius(path: Path) -> float | None:
+    side = path.parent / "session.toml"
+    if not side.is_file():
+        return None
+    try:
+        with side.open("rb") as fh:
+            value = tomllib.load(fh).get("sensor", {}).get("gel_radius_mm")
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(f"{side} is not valid TOML ({exc})") from None
+    if value is None:
+        return None
+    if not isinstance(value, int | float) or value <= 0:
+        raise InputError(f"{side}: [sensor] gel_radius_mm must be a positive number")
+    return float(value)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run ``validate``; returns 0 (2 through InputError on bad input)."""
+    from ..io import read_measurements
+    from ..mechanics import fit_indentation, validate_indentation
+    from ..viz import save_validation_figure
+
+    if (args.E_mpa is None) != (args.nu is None):
+        raise InputError("give both --E-mpa and --nu, or neither (to use the fitted values)")
+    path = args.measurements
+    table = read_measurements(path, thickness_mm=args.thickness_mm, radius_mm=args.radius_mm)
+    if args.E_mpa is None:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            fit = fit_indentation(table.depth_mm, table.force_n,
+                                  thickness_mm=table.thickness_mm, radius_mm=table.radius_mm)
+        if fit.out_of_table:
+            raise InputError(f"{path}: the fit gives no E and nu ({fit.out_of_table_message}); "
+                             "pass --E-mpa and --nu")
+        E, nu, source = fit.E_mpa, fit.nu, f"fit ({fit.beta_table} beta table)"
+    else:
+        E, nu, source = args.E_mpa, args.nu, "given"
+    pad = args.pad_radius_mm if args.pad_radius_mm is not None else _pad_radius(path)
+    try:
+        res = validate_indentation(table.depth_mm, table.force_n, E_mpa=E, nu=nu,
+                                   thickness_mm=table.thickness_mm, radius_mm=table.radius_mm,
+                                   pad_radius_mm=pad, contact=args.contact)
+    except InputError as exc:
+        raise InputError(f"{path}: {exc}") from None
+    obj = res.to_json_dict()
+    obj.update(measurements=str(path), E_nu_source=source)
+    if args.json is not None:
+        _write_json(obj, args.json)
+    if args.report is not None:
+        args.report.mkdir(parents=True, exist_ok=True)
+        save_validation_figure(args.report / "validation.png", res, title=str(path))
+        with (args.report / "validation.csv").open("w", newline="") as fh:
+            wr = csv.writer(fh)
+            wr.writerow(["depth_mm", "force_n", "simulated_depth_mm", "rel_error"])
+            for d, f, s, e in zip(res.depth_mm, res.force_n, res.simulated_depth_mm,
+                                  res.rel_error, strict=True):
+                wr.writerow([f"{d:.5f}", f"{f:.5f}", f"{s:.5f}", f"{e:.5f}"])
+    if args.json != "-":
+        out = sys.stdout
+        print(f"{path}: {len(res.depth_mm)} presses simulated at E = {E:.4f} MPa, "
+              f"nu = {nu:.4f} ({source}); {args.contact} punch, pad radius "
+              f"{res.pad_radius_mm:g} mm", file=out)
+        print("  depth_mm  force_n  simulated_mm  error", file=out)
+        for d, f, s, e in zip(res.depth_mm, res.force_n, res.simulated_depth_mm, res.rel_error,
+                              strict=True):
+            print(f"  {d:8.4f} {f:8.4f} {s:12.4f} {100 * e:+6.2f}%", file=out)
+        print(f"  max |error| {100 * res.max_abs_rel_error:.2f}%, mean "
+              f"{100 * res.mean_abs_rel_error:.2f}% (the paper: within 6%)", file=out)
+        for n in res.notes:
+            print(f"  note: {n}", file=out)
+    return 0
