@@ -132,3 +132,22 @@ def test_beta_access_errors():
         beta(0.45, 0.8, contact="frictionless")
     with pytest.raises(InputError, match="definition must be"):
         beta(0.45, 0.8, definition="chord")
+
+
+def test_kappa_n_access(table):
+    from tactilevision.mechanics import kappa_n
+
+    i, j = list(table["a_over_h"]).index(1.2), list(table["nu"]).index(0.47)
+    # exact at the nodes, kappa0 at w = 0, broadcast over arrays
+    np.testing.assert_allclose(kappa_n(0.47, 1.2, table["w_over_h"]), table["kappa_n"][0, i, j],
+                               rtol=1e-12)
+    assert kappa_n(0.47, 1.2, 0.0) == pytest.approx(table["kappa0"][0, i, j], rel=1e-12)
+    # eq. (2): kappa_n = kappa (1 + beta w/h) to the straightness of P/w (< 1.1%)
+    w = np.linspace(0.02, 0.2, 7)
+    approx = table["kappa0"][0, i, j] * (1 + beta(0.47, 1.2) * w)
+    np.testing.assert_allclose(kappa_n(0.47, 1.2, w), approx, rtol=0.011)
+    assert kappa_n([0.45, 0.47], 1.2, 0.1).shape == (2,)
+    with pytest.raises(InputError, match=r"w_over_h = 0\.3"):
+        kappa_n(0.47, 1.2, 0.3)
+    with pytest.raises(InputError, match=r"nu = 0\.5"):
+        kappa_n(0.5, 1.2, 0.1)

@@ -15,6 +15,7 @@ Tables (every literature number lives in one table with its source):
   (:data:`PAPER_BETA_RELATION`, the paper's relation (7) at a/h = 0.8);
   :func:`nu_from_beta`, :func:`beta_from_nu` and :func:`beta_relation` with
   ``table='fem' | 'paper'``.
+- :func:`kappa_n` -- kappa_n(nu, a/h, w/h) of the finite-strain FEM table.
 
 Fit:
 
@@ -35,6 +36,7 @@ from ._beta import (
     nu_from_beta,
 )
 from ._effects import EFFECT_NAMES, FIT_EFFECTS, check_fit_effects
+from ._fem_tables import kappa_n
 from ._fit import MAX_W_OVER_H, fit_indentation
 from ._kappa import HAYES_1972, KappaTable, kappa
 from ._neohookean import neo_hookean_constants
@@ -57,6 +59,7 @@ __all__ = [
     "check_fit_effects",
     "fit_indentation",
     "kappa",
+    "kappa_n",
     "neo_hookean_constants",
     "nu_from_beta",
     "validate_indentation",

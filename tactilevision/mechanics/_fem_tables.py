@@ -16,7 +16,8 @@ from .._assets import asset_dir
 from .._checks import InputError
 from ._kappa import KappaTable
 
-__all__ = ["TabulatedBetaRelation", "fem_beta_relation", "fem_kappa_table", "fem_table_meta"]
+__all__ = ["TabulatedBetaRelation", "fem_beta_relation", "fem_kappa_table", "fem_table_meta",
+           "kappa_n"]
 
 
 @lru_cache(maxsize=4)
@@ -273,3 +274,63 @@ def fem_beta_relation(a_over_h: float, *, contact: str = "bonded",
         nu_grid=data["nu"].astype(np.float64), beta_grid=row, kappa_line_grid=line,
         source=(f"tactilevision FEM, finite-strain Neo-Hookean, {contact} punch, {definition} "
                 f"beta (mesh {meta['mesh']}; built {meta.get('created', '?')})"))
+
+
+def kappa_n(nu: float | np.ndarray, a_over_h: float | np.ndarray,
+            w_over_h: float | np.ndarray, *, contact: str = "bonded") -> float | np.ndarray:
+    """Finite-strain layer factor kappa_n(nu, a/h, w/h) of eq. (1), from the FEM table.
+
+    Parameters
+    ----------
+    nu, a_over_h, w_over_h : float or (...) array_like
+        Broadcast together. nu and a/h within the table (0.30 to 0.499, 0.2
+        to 2.0); w/h within [0, 0.2] (0 gives the small-strain limit kappa0).
+    contact : str, default 'bonded'
+        A punch condition of the table (it holds 'bonded' only).
+
+    Returns
+    -------
+    kappa_n : float or (...) float64 ndarray
+        ``P (1 - nu^2) / (2 a E w)`` of the compressible Neo-Hookean layer,
+        so that ``P = 2 a E w kappa_n / (1 - nu^2)`` (N with E in MPa and
+        lengths in mm).
+
+    Raises
+    ------
+    InputError
+        (a ``ValueError``) outside the table, or for an unknown contact.
+
+    Notes
+    -----
+    PCHIP along w/h (through kappa0 at w = 0 and the ten stored depths), then
+    along nu, then along a/h: exact at the table's nodes.
+
+    References
+    ----------
+    .. [1] "In-situ Mechanical Calibration for Vision-based Tactile Sensors",
+       eq. (1)-(2); the table: ``models/beta_fem.npz`` (``tactilevision fem
+       tables --what beta``).
+    """
+    from scipy.interpolate import PchipInterpolator
+
+    data = _load("beta_fem.npz")
+    contacts = [str(c) for c in data["contacts"]]
+    if contact not in contacts:
+        raise InputError(f"contact must be one of {contacts}, got {contact!r}")
+    n, r, x = np.broadcast_arrays(*(np.asarray(v, np.float64) for v in (nu, a_over_h, w_over_h)))
+    wt = np.concatenate([[0.0], data["w_over_h"]])
+    for name, v, lo, hi in (("nu", n, data["nu"][0], data["nu"][-1]),
+                            ("a_over_h", r, data["a_over_h"][0], data["a_over_h"][-1]),
+                            ("w_over_h", x, 0.0, wt[-1])):
+        bad = ~((v >= lo) & (v <= hi))
+        if np.any(bad):
+            raise InputError(f"{name} = {float(v[bad].ravel()[0]):g} is outside the FEM "
+                             f"kappa_n table range [{lo:g}, {hi:g}]")
+    c = contacts.index(contact)
+    kn = np.concatenate([data["kappa0"][c][..., None], data["kappa_n"][c]], axis=-1)  # (A, N, K+1)
+    out = np.empty(n.shape)
+    for idx in np.ndindex(n.shape):
+        k_w = PchipInterpolator(wt, kn, axis=2)(x[idx])            # (A, N)
+        k_nu = PchipInterpolator(data["nu"], k_w, axis=1)(n[idx])  # (A,)
+        out[idx] = PchipInterpolator(data["a_over_h"], k_nu)(r[idx])
+    return float(out) if out.ndim == 0 else out
