@@ -88,6 +88,9 @@ def summary(fit: IndentationFit, path: Path) -> str:
     ]
     if fit.out_of_table:
         lines.append(f"  OUT OF TABLE: {fit.out_of_table_message}")
+        if fit.beta_table == "fem":
+            lines.append("  (a Neo-Hookean layer does not stiffen this much here; "
+                         "--beta-table paper reads the paper's relation (7) instead)")
     else:
         lines += [
             f"  E  = {fit.E_mpa:.4f} MPa  {pct} CI {_fmt_ci(fit.E_ci95_mpa, 4)} MPa",
@@ -100,7 +103,8 @@ def summary(fit: IndentationFit, path: Path) -> str:
                      "kappa_fem.npz)")
     else:
         lines.append("  beta: the paper's relation (7); kappa: Hayes 1972 (frictionless)")
-    lines += [f"  note: {n}" for n in fit.notes if not n.startswith(("intervals:", "beta table"))]
+    lines += [f"  note: {n}" for n in fit.notes
+              if not n.startswith(("intervals:", "beta table")) and n != fit.out_of_table_message]
     return "\n".join(lines)
 
 

@@ -283,13 +283,35 @@ def beta(nu: float | np.ndarray, a_over_h: float | np.ndarray, *, source: str = 
         (a ``ValueError``) outside the tabulated range of nu or a/h.
     ValueError
         For an unknown `source`.
+
+    Notes
+    -----
+    ``'fem'``: the secant beta of ``models/beta_fem.npz`` (the straight line
+    P/w = c (1 + beta w/h) fitted over w/h = 0.02 ... 0.2 of a finite-strain
+    compressible Neo-Hookean sweep, bonded punch), PCHIP in a/h then nu,
+    exact at the nodes; :func:`fit_indentation` reads it at the measured
+    depths instead. ``'paper'``: relation (7), nu = 0.0813 ln(beta) + 0.4464.
+
+    References
+    ----------
+    .. [1] "In-situ Mechanical Calibration for Vision-based Tactile Sensors",
+       eq. (2), (5), (7).
+
+    Examples
+    --------
+    >>> from tactilevision.mechanics import beta
+    >>> round(beta(0.45, 0.8, source="paper"), 4)
+    1.0453
+    >>> bool(beta(0.49, 1.2) > beta(0.45, 1.2) > beta(0.30, 1.2))
+    True
     """
     if source not in ("fem", "paper"):
         raise ValueError(f"source must be 'fem' or 'paper', got {source!r}")
     n, r = np.broadcast_arrays(np.asarray(nu, np.float64), np.asarray(a_over_h, np.float64))
     if source == "paper" and np.any(np.abs(r - PAPER_BETA_RELATION.a_over_h) > 0.05):
+        bad = float(r[np.abs(r - PAPER_BETA_RELATION.a_over_h) > 0.05].ravel()[0])
         raise InputError("a_over_h must lie within 0.75 to 0.85 for the paper's relation (7), "
-                         f"fitted at a/h = 0.8; got {float(r.ravel()[0]):g}")
+                         f"fitted at a/h = 0.8; got {bad:g}")
     out = np.empty(n.shape)
     for rv in np.unique(r):
         sel = r == rv
