@@ -98,6 +98,37 @@ def test_homogeneous_uniaxial_stretch_of_a_cylinder(stretch):
     assert solid.min_jacobian(x) == pytest.approx(lam**2 * stretch, rel=1e-10)
 
 
+@pytest.mark.parametrize("c20", [0.0, 0.3])
+def test_tangent_is_the_derivative_of_the_residual(c20):
+    # the consistent tangent (Neo-Hookean, and with Yeoh's C20) against central
+    # differences of the residual at a random deformed state (of a ring, R in
+    # [0.5, 1.5], so that u_r / R stays small)
+    mesh = MeshTri.init_tensor(np.linspace(0.5, 1.5, 3), np.linspace(0, 1, 3))
+    solid = AxisymmetricNeoHookean(mesh, 0.2, 5.0, c20=c20)
+    rng = np.random.default_rng(1)
+    x = 0.01 * rng.standard_normal(solid.n_dofs)
+    assert 0.5 < solid.min_jacobian(x) < 0.99
+    k = solid.tangent(x).toarray()
+    eps = 1e-6
+    for j in rng.choice(solid.n_dofs, 8, replace=False):
+        d = np.zeros(solid.n_dofs)
+        d[j] = eps
+        fd = (solid.residual(x + d) - solid.residual(x - d)) / (2 * eps)
+        np.testing.assert_allclose(k[:, j], fd, atol=1e-6)
+    np.testing.assert_allclose(k, k.T, atol=1e-12)
+
+
+def test_yeoh_stiffening_raises_beta_not_kappa0():
+    # C20 adds stiffening at finite strain only: kappa0 (small strain) is the
+    # Neo-Hookean one, beta grows with C20 (benchmarks/bench_material_law.py)
+    kw = {"contact": "bonded", "w_over_h_max": 0.1, "steps": 4, **COARSE}
+    nh = neo_hookean_indentation(0.8, 0.45, **kw)
+    ye = neo_hookean_indentation(0.8, 0.45, c20_over_c10=0.3, **kw)
+    assert ye.kappa0 == pytest.approx(nh.kappa0, rel=1e-9)
+    assert ye.beta_secant > nh.beta_secant + 0.2
+    assert np.all(ye.kappa_n > nh.kappa_n)
+
+
 # ---------------------------------------------------------- indentation
 
 
@@ -209,6 +240,7 @@ def test_failed_sweep_warns_and_returns_what_it_reached(monkeypatch):
     ({"pad_radius_over_h": 0.5}, "pad_radius_over_h"), ({"cell": 0.0}, "cell"),
     ({"edge_refinements": -1}, "edge_refinements"),
     ({"edge_radius_over_h": -0.01}, "edge_radius_over_h"), ({"penalty": 0.0}, "penalty"),
+    ({"c20_over_c10": -0.1}, "c20_over_c10"),
 ])
 def test_bad_arguments_raise_naming_them(kwargs, name):
     args = {"a_over_h": 0.8, "nu": 0.45} | kwargs

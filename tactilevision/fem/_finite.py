@@ -180,7 +180,8 @@ def neo_hookean_indentation(a_over_h: float, nu: float, *, contact: str = "frict
                             pad_radius_over_h: float = 20.0, cell: float = 0.25,
                             edge_refinements: int = 7, edge_radius_over_h: float = 0.0,
                             contact_search: bool = True,
-                            penalty: float = 1e3) -> FiniteIndentation:
+                            penalty: float = 1e3,
+                            c20_over_c10: float = 0.0) -> FiniteIndentation:
     """Finite-strain flat-punch indentation of a bonded compressible Neo-Hookean layer.
 
     Parameters
@@ -217,6 +218,12 @@ def neo_hookean_indentation(a_over_h: float, nu: float, *, contact: str = "frict
     penalty : float, default 1e3
         Contact penalty in units of E (per unit penetration and surface
         length; see :mod:`tactilevision.fem._finite_solver`).
+    c20_over_c10 : float, default 0.0
+        Strain stiffening, >= 0: Yeoh's second-order term C20 (I1bar - 3)^2
+        added to the isochoric energy, C20 in units of C10 (see
+        :mod:`tactilevision.fem._neohookean_forms`). 0 is the Neo-Hookean law;
+        an extension for asking whether the material law explains a measured
+        beta, not part of the tables.
 
     Returns
     -------
@@ -231,7 +238,7 @@ def neo_hookean_indentation(a_over_h: float, nu: float, *, contact: str = "frict
         [0, 0.5], unknown `contact`, `w_over_h_max` outside (0, 0.5], `steps`
         < 1, `pad_radius_over_h` <= `a_over_h`, `cell` outside (0, 1],
         `edge_refinements` < 0, `edge_radius_over_h` outside [0, a_over_h),
-        `penalty` <= 0.
+        `penalty` <= 0, `c20_over_c10` < 0.
 
     Warns
     -----
@@ -288,12 +295,15 @@ def neo_hookean_indentation(a_over_h: float, nu: float, *, contact: str = "frict
     """
     _check(a_over_h, nu, contact, w_over_h_max, steps, pad_radius_over_h, cell,
            edge_refinements, edge_radius_over_h, penalty)
+    if not (np.isfinite(c20_over_c10) and c20_over_c10 >= 0):
+        raise InputError(f"c20_over_c10 must be non-negative and finite, got {c20_over_c10!r}")
     t0 = time.perf_counter()
     a, rho = float(a_over_h), float(edge_radius_over_h)
     mesh = indentation_mesh(a, pad_radius_over_h=pad_radius_over_h, cell=cell,
                             edge_refinements=int(edge_refinements))
     bulk = np.inf if nu == 0.5 else 1.0 / (3.0 * (1.0 - 2.0 * nu))
-    solid = AxisymmetricNeoHookean(mesh, 1.0 / (4.0 * (1.0 + nu)), bulk)
+    c10 = 1.0 / (4.0 * (1.0 + nu))
+    solid = AxisymmetricNeoHookean(mesh, c10, bulk, c20=c20_over_c10 * c10)
     ub = solid.ubasis
     punch = RigidPunch(solid, a, rho, penalty=penalty)
     if contact == "bonded":

@@ -53,6 +53,15 @@ H[rr,zz] = F_tt, H[rz,zr] = -F_tt, H[rr,tt] = F_zz, H[zz,tt] = F_rr,
 H[rz,tt] = -F_zr, H[zr,tt] = -F_rz. At f = (1, 0, 0, 1, 1) the tangent reduces
 to the small-strain isotropic elasticity with shear modulus 2 C10 = mu.
 
+Strain stiffening (an extension, for testing the material law)
+-------------------------------------------------------------
+With ``c20 > 0`` the isochoric energy is Yeoh's [2]_ second-order
+W_iso = C10 (I1bar - 3) + C20 (I1bar - 3)^2, so that with W1 = dW/dI1bar =
+C10 + 2 C20 (I1bar - 3) and W11 = 2 C20 the stress and tangent become
+S = W1 dI1bar/df and A = W1 d^2 I1bar/df^2 + W11 (dI1bar/df)(dI1bar/df)^T
+(the Neo-Hookean expressions above with C10 = 1, scaled and completed).
+C20 = 0 is the Abaqus Neo-Hookean law exactly.
+
 The forms are evaluated with the B-matrix of each element (einsum over the
 quadrature points) and scattered once per Newton iteration; the 2 pi of the
 measure is left out here and put back into the reaction force.
@@ -61,6 +70,8 @@ References
 ----------
 .. [1] Abaqus Analysis User's Guide, section 22.5.1 "Hyperelastic behavior of
    rubberlike materials", Neo-Hookean form U = C10 (I1bar - 3) + (J - 1)^2 / D1.
+.. [2] O. H. Yeoh, "Some forms of the strain energy function for rubber",
+   Rubber Chem. Technol. 66(5):754-771, 1993. doi:10.5254/1.3538343
 """
 
 from __future__ import annotations
@@ -163,6 +174,9 @@ class AxisymmetricNeoHookean:
         K = 2 / D1 (``np.inf`` for an incompressible solid).
     intorder : int, default 4
         Quadrature order.
+    c20 : float, default 0.0
+        Yeoh's second coefficient (strain stiffening; see the module
+        docstring), units of stress, >= 0. 0: Neo-Hookean.
 
     Attributes
     ----------
@@ -172,8 +186,9 @@ class AxisymmetricNeoHookean:
         Displacement dofs; all dofs ``x = [u, p]``.
     """
 
-    def __init__(self, mesh: MeshTri, c10: float, bulk: float, *, intorder: int = 4) -> None:
-        self.c10, self.inv_bulk = float(c10), 1.0 / float(bulk)
+    def __init__(self, mesh: MeshTri, c10: float, bulk: float, *, intorder: int = 4,
+                 c20: float = 0.0) -> None:
+        self.c10, self.inv_bulk, self.c20 = float(c10), 1.0 / float(bulk), float(c20)
         self.ubasis = Basis(mesh, ElementVector(ElementTriP2()), intorder=intorder)
         self.pbasis = self.ubasis.with_element(ElementTriP1())
         ub, pb = self.ubasis, self.pbasis
@@ -199,6 +214,27 @@ class AxisymmetricNeoHookean:
         p = np.einsum("jen,je->en", self.Np, x[self.pdofs])
         return f, p
 
+    def _w1(self, f: np.ndarray) -> tuple[np.ndarray | float, np.ndarray | float]:
+        """W1 = dW_iso/dI1bar and W11 (Neo-Hookean: C10 and 0)."""
+        if self.c20 == 0.0:
+            return self.c10, 0.0
+        i1bar = jacobian(f)[0] ** (-2.0 / 3.0) * np.sum(f * f, axis=0)
+        return self.c10 + 2.0 * self.c20 * (i1bar - 3.0), 2.0 * self.c20
+
+    def iso_stress(self, f: np.ndarray) -> np.ndarray:
+        """S = dW_iso/df at the quadrature points, (5, E, Q)."""
+        w1, _ = self._w1(f)
+        return iso_stress(f, 1.0) * w1
+
+    def iso_tangent(self, f: np.ndarray) -> np.ndarray:
+        """A = d^2 W_iso/df^2 at the quadrature points, (5, 5, E, Q)."""
+        w1, w11 = self._w1(f)
+        out = iso_tangent(f, 1.0) * w1
+        if self.c20 != 0.0:
+            d = iso_stress(f, 1.0)
+            out = out + w11 * d[:, None] * d[None, :]
+        return out
+
     def min_jacobian(self, x: np.ndarray) -> float:
         """Smallest J = det F over all quadrature points."""
         return float(jacobian(self.fields(x)[0])[0].min())
@@ -207,7 +243,7 @@ class AxisymmetricNeoHookean:
         """[R_u, R_p] (n_dofs,), without the factor 2 pi."""
         f, p = self.fields(x)
         J, g, _ = jacobian(f)
-        stress = (iso_stress(f, self.c10) + p * g) * self.dv
+        stress = (self.iso_stress(f) + p * g) * self.dv
         ru = np.einsum("kien,ken->ie", self.B, stress)
         rp = np.einsum("jen,en->je", self.Np, (J - 1.0 - p * self.inv_bulk) * self.dv)
         out = np.zeros(self.n_dofs)
@@ -219,7 +255,7 @@ class AxisymmetricNeoHookean:
         """Consistent tangent [[K_uu, K_up], [K_pu, K_pp]] (n_dofs, n_dofs), symmetric."""
         f, p = self.fields(x)
         _, g, H = jacobian(f)
-        D = (iso_tangent(f, self.c10) + p * H) * self.dv
+        D = (self.iso_tangent(f) + p * H) * self.dv
         DB = np.einsum("klen,ljen->kjen", D, self.B)
         kuu = np.einsum("kien,kjen->ije", self.B, DB)                   # (12, 12, E)
         kup = np.einsum("kien,ken,jen->ije", self.B, g * self.dv, self.Np)  # (12, 3, E)
