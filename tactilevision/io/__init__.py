@@ -22,3 +22,8 @@ __all__ = ["BallPressSet", "find_reference", "list_frames", "read_ball_presses",
 from ._measurements import REQUIRED_COLUMNS, Measurements, read_measurements
 
 __all__ += ["REQUIRED_COLUMNS", "Measurements", "read_measurements"]
+
+# indentation session folders (calibrate): names appended below
+from ._session import Session, SessionConfig, read_session  # noqa: E402
+
+__all__ += ["Session", "SessionConfig", "read_session"]

@@ -1,0 +1,388 @@
+"""The indentation session folder of ``formats.md`` section 1: read and check it.
+
+A session is what ``tactilevision calibrate`` works on: ``session.toml``,
+``reference.png``, ``frames/`` with ``frames.csv`` (frame times), ``forces.csv``
+(the F/T log on its own clock) and an optional ``presses.csv``. Reading checks
+every part and raises :class:`~tactilevision.InputError` naming the file, line
+and column at fault; frames are listed and their sizes checked from the image
+headers, but their pixels are read only on demand (:meth:`Session.frame`).
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .._checks import InputError
+from ._frames import read_image
+
+__all__ = ["Session", "SessionConfig", "read_session"]
+
+_FORCE_COLUMNS = ("t_s", "fx_n", "fy_n", "fz_n")
+_TORQUE_COLUMNS = ("tx_nmm", "ty_nmm", "tz_nmm")
+_PRESS_COLUMNS = ("press", "indenter", "x_mm", "y_mm")
+
+
+@dataclass(frozen=True)
+class SessionConfig:
+    """The keys of ``session.toml`` (units in the names).
+
+    Attributes
+    ----------
+    sensor_name : str
+    mm_per_px, gel_thickness_mm, gel_radius_mm, indenter_radius_mm : float
+        Image scale on the gel, h, the pad's lateral half-size, a.
+    depths_mm : tuple of float
+        Gauge-block depth w0 of each indenter, in indenter order (indenter ids
+        are 0, 1, ...).
+    rate_hz : float
+        F/T sampling rate.
+    clock_offset_s : float or None
+        Forces' t_s minus frames' t_s when known; None to estimate it.
+    window_samples : int
+        F/T samples averaged per certified press.
+    calibration : Path or None
+        Photometric calibration (resolved against the session folder), or None
+        for the sensor's default.
+    """
+
+    sensor_name: str
+    mm_per_px: float
+    gel_thickness_mm: float
+    gel_radius_mm: float
+    indenter_radius_mm: float
+    depths_mm: tuple[float, ...]
+    rate_hz: float
+    clock_offset_s: float | None
+    window_samples: int
+    calibration: Path | None
+
+
+@dataclass(frozen=True)
+class Session:
+    """A checked session folder; frames are read on demand.
+
+    Attributes
+    ----------
+    path : Path
+    config : SessionConfig
+    reference : (H, W, 3) uint8 ndarray
+        The no-contact frame, BGR.
+    frame_paths : tuple of Path
+        Frames in the order of ``frames.csv``.
+    frame_times_s : (F,) float64 ndarray
+        Strictly increasing, camera clock.
+    force_times_s : (M,) float64 ndarray
+        Strictly increasing, F/T clock.
+    forces_n : (M, 3) float64 ndarray
+        (fx, fy, fz); fz positive pushing into the gel.
+    torques_nmm : (M, 3) float64 ndarray or None
+    presses : dict of str to ndarray, or None
+        ``presses.csv`` columns ``press``, ``indenter`` (int64), ``x_mm``,
+        ``y_mm`` (float64), each (P,).
+    notes : tuple of str
+        Things worth knowing that are not errors (frames on disk that
+        ``frames.csv`` does not list, an irregular F/T rate).
+    """
+
+    path: Path
+    config: SessionConfig
+    reference: np.ndarray
+    frame_paths: tuple[Path, ...]
+    frame_times_s: np.ndarray
+    force_times_s: np.ndarray
+    forces_n: np.ndarray
+    torques_nmm: np.ndarray | None
+    presses: dict[str, np.ndarray] | None
+    notes: tuple[str, ...] = field(default=())
+
+    @property
+    def n_frames(self) -> int:
+        """Number of frames listed."""
+        return len(self.frame_paths)
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """(H, W) of the reference and of every frame."""
+        return self.reference.shape[0], self.reference.shape[1]
+
+    def frame(self, i: int) -> np.ndarray:
+        """Frame `i` as (H, W, 3) uint8 BGR.
+
+        Raises
+        ------
+        InputError
+            If the file became unreadable or its size differs from the
+            reference.
+        """
+        img = read_image(self.frame_paths[i])
+        if img.shape != self.reference.shape:
+            raise InputError(f"frame {self.frame_paths[i]} is {img.shape[1]} x {img.shape[0]} px, "
+                             f"the reference {self.shape[1]} x {self.shape[0]} px")
+        return img
+
+
+# ------------------------------------------------------------------ config
+
+
+def _toml_number(doc: dict, toml: Path, table: str, key: str, *, positive: bool = True,
+                 default: float | None = None, required: bool = True) -> float | None:
+    section = doc.get(table, {})
+    if not isinstance(section, dict):
+        raise InputError(f"{toml}: [{table}] must be a table")
+    if key not in section:
+        if required and default is None:
+            raise InputError(f"{toml}: missing key [{table}] {key}")
+        return default
+    v = section[key]
+    if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v) or (
+            positive and v <= 0):
+        need = "a positive number" if positive else "a finite number"
+        raise InputError(f"{toml}: [{table}] {key} must be {need}, got {v!r}")
+    return float(v)
+
+
+def _read_config(folder: Path) -> SessionConfig:
+    toml = folder / "session.toml"
+    if not toml.is_file():
+        raise InputError(f"session folder {folder} has no session.toml")
+    try:
+        with toml.open("rb") as fh:
+            doc = tomllib.load(fh)
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise InputError(f"{toml} is not valid TOML: {exc}") from None
+    depths = doc.get("gauge_block", {}).get("depths_mm") if isinstance(
+        doc.get("gauge_block"), dict) else None
+    if depths is None:
+        raise InputError(f"{toml}: missing key [gauge_block] depths_mm")
+    if not isinstance(depths, list) or not depths or not all(
+            isinstance(d, int | float) and not isinstance(d, bool) and math.isfinite(d) and d > 0
+            for d in depths):
+        raise InputError(f"{toml}: [gauge_block] depths_mm must be a list of positive numbers, "
+                         f"got {depths!r}")
+    window = _toml_number(doc, toml, "force_sensor", "window_samples", default=200)
+    if window != int(window):
+        raise InputError(f"{toml}: [force_sensor] window_samples must be a whole number, "
+                         f"got {window!r}")
+    calibration = doc.get("optics", {}).get("calibration") if isinstance(
+        doc.get("optics"), dict) else None
+    cal_path = None
+    if calibration is not None:
+        if not isinstance(calibration, str) or not calibration:
+            raise InputError(f"{toml}: [optics] calibration must be a file path")
+        cal_path = Path(calibration)
+        cal_path = cal_path if cal_path.is_absolute() else folder / cal_path
+        if not cal_path.is_file():
+            raise InputError(f"{toml}: [optics] calibration {cal_path} does not exist")
+    name = doc.get("sensor", {}).get("name", "") if isinstance(doc.get("sensor"), dict) else ""
+    h = _toml_number(doc, toml, "sensor", "gel_thickness_mm")
+    return SessionConfig(
+        sensor_name=str(name),
+        mm_per_px=_toml_number(doc, toml, "sensor", "mm_per_px"),
+        gel_thickness_mm=h,
+        gel_radius_mm=_toml_number(doc, toml, "sensor", "gel_radius_mm", default=20.0 * h),
+        indenter_radius_mm=_toml_number(doc, toml, "indenter", "radius_mm"),
+        depths_mm=tuple(float(d) for d in depths),
+        rate_hz=_toml_number(doc, toml, "force_sensor", "rate_hz", default=1000.0),
+        clock_offset_s=_toml_number(doc, toml, "force_sensor", "clock_offset_s", positive=False,
+                                    required=False),
+        window_samples=int(window),
+        calibration=cal_path,
+    )
+
+
+# ------------------------------------------------------------------ tables
+
+
+def _read_csv(path: Path, required: tuple[str, ...]) -> tuple[list[str], list[list[str]],
+                                                              list[int]]:
+    """Header and rows of a CSV, every required column present, rows as long as the header."""
+    if not path.is_file():
+        raise InputError(f"session file {path} is missing")
+    try:
+        with path.open(newline="", encoding="utf-8-sig") as fh:
+            reader = csv.reader(fh)
+            header = [h.strip() for h in next(reader, [])]
+            rows, lines = [], []
+            for row in reader:
+                if not row or not any(c.strip() for c in row):
+                    continue
+                if len(row) != len(header):
+                    raise InputError(f"{path} line {reader.line_num} has {len(row)} cells, the "
+                                     f"header has {len(header)}")
+                rows.append(row)
+                lines.append(reader.line_num)
+    except (UnicodeDecodeError, csv.Error) as exc:
+        raise InputError(f"{path} is not a readable CSV text file ({exc})") from None
+    missing = [c for c in required if c not in header]
+    if missing:
+        raise InputError(f"{path} line 1: missing column(s) {', '.join(missing)} "
+                         f"(needs {','.join(required)})")
+    if not rows:
+        raise InputError(f"{path} has no rows")
+    return header, rows, lines
+
+
+def _numbers(path: Path, header: list[str], rows: list[list[str]], lines: list[int],
+             column: str, *, finite: bool = True) -> np.ndarray:
+    j = header.index(column)
+    out = np.empty(len(rows))
+    for i, row in enumerate(rows):
+        text = row[j].strip()
+        if not text:
+            raise InputError(f"{path} line {lines[i]}, column {column}: empty cell (every value "
+                             "must be a finite number)")
+        try:
+            v = float(text)
+        except ValueError:
+            raise InputError(f"{path} line {lines[i]}, column {column}: '{text}' is not a "
+                             "number") from None
+        if finite and not math.isfinite(v):
+            raise InputError(f"{path} line {lines[i]}, column {column}: {text} (every value "
+                             "must be a finite number)")
+        out[i] = v
+    return out
+
+
+def _increasing(path: Path, t: np.ndarray, lines: list[int], column: str = "t_s") -> None:
+    bad = np.flatnonzero(np.diff(t) <= 0)
+    if bad.size:
+        i = int(bad[0]) + 1
+        raise InputError(f"{path} line {lines[i]}, column {column}: {t[i]:g} does not increase "
+                         f"(previous {t[i - 1]:g}); times must be strictly increasing")
+
+
+def _read_frames(folder: Path, reference_shape: tuple[int, ...]
+                 ) -> tuple[tuple[Path, ...], np.ndarray, list[str]]:
+    from PIL import Image
+
+    table = folder / "frames.csv"
+    header, rows, lines = _read_csv(table, ("frame", "t_s"))
+    frames_dir = folder / "frames"
+    if not frames_dir.is_dir():
+        raise InputError(f"session folder {folder} has no frames/ folder")
+    times = _numbers(table, header, rows, lines, "t_s")
+    _increasing(table, times, lines)
+    j = header.index("frame")
+    names = [r[j].strip() for r in rows]
+    paths = []
+    for name, line in zip(names, lines, strict=True):
+        p = frames_dir / name
+        if not name or Path(name).name != name:
+            raise InputError(f"{table} line {line}, column frame: '{name}' must be a file name "
+                             "inside frames/")
+        if not p.is_file():
+            raise InputError(f"{table} line {line}: frame {name} is listed but {p} does not "
+                             "exist")
+        try:
+            with Image.open(p) as im:
+                w, h = im.size
+        except OSError:
+            raise InputError(f"frame {p} is not a readable image") from None
+        if (h, w) != tuple(reference_shape[:2]):
+            raise InputError(f"frame {p} is {w} x {h} px, the reference "
+                             f"{reference_shape[1]} x {reference_shape[0]} px")
+        paths.append(p)
+    dup = {n for n in names if names.count(n) > 1}
+    if dup:
+        raise InputError(f"{table}: frame {sorted(dup)[0]} is listed twice")
+    notes = []
+    listed = set(names)
+    extra = sorted(p.name for p in frames_dir.iterdir()
+                   if p.suffix.lower() in (".png", ".jpg", ".jpeg") and p.name not in listed)
+    if extra:
+        notes.append(f"{len(extra)} image(s) in {frames_dir} not listed in frames.csv are "
+                     f"ignored (first: {extra[0]})")
+    return tuple(paths), times, notes
+
+
+def _read_forces(folder: Path, rate_hz: float
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, list[str]]:
+    path = folder / "forces.csv"
+    header, rows, lines = _read_csv(path, _FORCE_COLUMNS)
+    t = _numbers(path, header, rows, lines, "t_s")
+    _increasing(path, t, lines)
+    f = np.stack([_numbers(path, header, rows, lines, c) for c in _FORCE_COLUMNS[1:]], axis=1)
+    torques = None
+    if all(c in header for c in _TORQUE_COLUMNS):
+        torques = np.stack([_numbers(path, header, rows, lines, c) for c in _TORQUE_COLUMNS],
+                           axis=1)
+    notes = []
+    if t.size > 2:
+        dt = float(np.median(np.diff(t)))
+        if abs(1.0 / dt - rate_hz) > 0.05 * rate_hz:
+            notes.append(f"{path}: median sample interval {dt * 1e3:.3g} ms, "
+                         f"{1 / dt:.4g} Hz against [force_sensor] rate_hz = {rate_hz:g}")
+    return t, f, torques, notes
+
+
+def _read_presses(folder: Path, n_indenters: int) -> dict[str, np.ndarray] | None:
+    path = folder / "presses.csv"
+    if not path.exists():
+        return None
+    header, rows, lines = _read_csv(path, _PRESS_COLUMNS)
+    out = {c: _numbers(path, header, rows, lines, c) for c in _PRESS_COLUMNS}
+    for c in ("press", "indenter"):
+        v = out[c]
+        bad = np.flatnonzero(v != np.round(v))
+        if bad.size:
+            raise InputError(f"{path} line {lines[bad[0]]}, column {c}: {v[bad[0]]:g} is not a "
+                             "whole number")
+        out[c] = v.astype(np.int64)
+    bad = np.flatnonzero((out["indenter"] < 0) | (out["indenter"] >= n_indenters))
+    if bad.size:
+        raise InputError(f"{path} line {lines[bad[0]]}, column indenter: "
+                         f"{out['indenter'][bad[0]]} is not an indenter of [gauge_block] "
+                         f"depths_mm (0 to {n_indenters - 1})")
+    return out
+
+
+def read_session(path: str | Path) -> Session:
+    """Read and check an indentation session folder (formats.md section 1).
+
+    Parameters
+    ----------
+    path : str or Path
+        The session folder.
+
+    Returns
+    -------
+    session : Session
+        Config, reference frame, frame list and times, F/T log, presses.
+
+    Raises
+    ------
+    InputError
+        Naming the file (and line, column or key) at fault: a missing part
+        (``session.toml``, ``reference.png``, ``frames/``, ``frames.csv``,
+        ``forces.csv``), a missing or malformed key, a frame listed but
+        absent, a frame whose size differs from the reference, times that do
+        not increase strictly, a non-number or NaN in the F/T log, an unknown
+        indenter in ``presses.csv``.
+
+    Examples
+    --------
+    >>> from tactilevision.io import read_session
+    >>> s = read_session("my_session")                    # doctest: +SKIP
+    >>> s.n_frames, s.shape, s.config.depths_mm           # doctest: +SKIP
+    (1800, (320, 427), (0.15, 0.3, 0.4, 0.5, 0.6))
+    """
+    folder = Path(path)
+    if not folder.is_dir():
+        raise InputError(f"session folder {folder} does not exist")
+    config = _read_config(folder)
+    ref_path = folder / "reference.png"
+    if not ref_path.is_file():
+        raise InputError(f"session folder {folder} has no reference.png")
+    reference = read_image(ref_path)
+    frame_paths, frame_times, notes = _read_frames(folder, reference.shape)
+    t, f, torques, force_notes = _read_forces(folder, config.rate_hz)
+    presses = _read_presses(folder, len(config.depths_mm))
+    return Session(path=folder, config=config, reference=reference, frame_paths=frame_paths,
+                   frame_times_s=frame_times, force_times_s=t, forces_n=f, torques_nmm=torques,
+                   presses=presses, notes=tuple(notes + force_notes))
