@@ -1,0 +1,8 @@
+"""Certification of presses: clock sync, contact, footprint, bevel, force windows.
+
+Pure functions on arrays (the session folder is read by :mod:`tactilevision.io`).
+"""
+
+from ._sync import ClockSync, contact_onsets, estimate_clock_offset, force_onsets
+
+__all__ = ["ClockSync", "contact_onsets", "estimate_clock_offset", "force_onsets"]

@@ -1,0 +1,91 @@
+"""Clock sync from press onsets: a simulated session with a known offset."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from tactilevision import InputError, ShapeError
+from tactilevision.contact import contact_onsets, estimate_clock_offset, force_onsets
+
+FPS, RATE, OFFSET = 90.0, 1000.0, 0.3712  # camera, F/T rate, t_force - t_frame
+
+
+def timeline(seed: int = 0, n_presses: int = 12):
+    """True press intervals (a common time base), frames and forces on their clocks."""
+    rng = np.random.default_rng(seed)
+    starts = np.cumsum(rng.uniform(2.0, 3.0, n_presses))      # s, waits between presses
+    ends = starts + rng.uniform(0.8, 1.2, n_presses)
+    t_frame = np.arange(0.0, ends[-1] + 1.0, 1 / FPS) + rng.uniform(0, 2e-3, 1)  # camera clock
+    t_frame = t_frame + rng.normal(0, 1e-4, t_frame.size)                      # jitter
+    t_frame.sort()
+    t_force = np.arange(-0.5, ends[-1] + OFFSET + 1.0, 1 / RATE)              # F/T clock
+
+    def depth_fraction(t):  # 0..1 ramp over 0.2 s, hold, ramp down
+        out = np.zeros_like(t)
+        for s, e in zip(starts, ends, strict=True):
+            out = np.maximum(out, np.clip(np.minimum(t - s, e - t) / 0.2, 0, 1))
+        return out
+
+    in_contact = depth_fraction(t_frame) > 0.02                  # colour change above noise
+    fz = 2.0 * depth_fraction(t_force - OFFSET) + 0.05 + rng.normal(0, 1 / 80, t_force.size)
+    return starts, t_frame, in_contact, t_force, fz
+
+
+def test_offset_recovered_within_a_frame_period():
+    starts, t_frame, contact, t_force, fz = timeline()
+    a = contact_onsets(t_frame, contact)
+    b = force_onsets(t_force, fz)
+    assert a.size == b.size == starts.size
+    sync = estimate_clock_offset(a, b)
+    assert sync.n_matched == starts.size
+    # both onset estimates lag the true start a little (ramp to threshold);
+    # the lags differ by < 5 ms, well inside a frame period of 11 ms
+    assert sync.offset_s == pytest.approx(OFFSET, abs=0.5 / FPS)
+    assert sync.spread_s < 1 / FPS
+
+
+def test_extra_and_missing_onsets_do_not_move_it():
+    _, t_frame, contact, t_force, fz = timeline(seed=3)
+    a = contact_onsets(t_frame, contact)[2:]                  # camera missed two presses
+    b = np.sort(np.append(force_onsets(t_force, fz), [0.7, 15.03]))  # two F/T bumps
+    sync = estimate_clock_offset(a, b)
+    assert sync.n_matched == a.size and sync.n_force_onsets == b.size
+    assert sync.offset_s == pytest.approx(OFFSET, abs=0.5 / FPS)
+
+
+def test_negative_offset_and_search_window():
+    a = np.array([1.0, 4.0, 6.5, 10.0])
+    sync = estimate_clock_offset(a, a - 2.25, max_offset_s=3.0)
+    assert sync.offset_s == pytest.approx(-2.25) and sync.n_matched == 4
+    with pytest.raises(InputError, match="no clock offset matches two presses"):
+        estimate_clock_offset(a, a - 2.25, max_offset_s=1.0)
+
+
+def test_contact_onsets_midpoints_and_flicker():
+    t = np.arange(10.0)
+    c = np.array([1, 1, 0, 0, 1, 0, 1, 1, 0, 0], bool)
+    np.testing.assert_allclose(contact_onsets(t, c), [0.0, 3.5, 5.5])
+    # the contact starting at 5.5 comes 1.0 s after the one ending at 4.5: a flicker
+    np.testing.assert_allclose(contact_onsets(t, c, min_gap_s=1.5), [0.0, 3.5])
+
+
+def test_force_onsets_threshold():
+    t = np.arange(0, 3, 1e-3)
+    fz = np.where((t > 1.0) & (t < 2.0), 1.0, 0.0)
+    np.testing.assert_allclose(force_onsets(t, fz), [1.0005], atol=1e-9)
+    np.testing.assert_allclose(force_onsets(t, fz, threshold_n=0.5), [1.0005], atol=1e-9)
+    assert force_onsets(t, fz, threshold_n=2.0).size == 0
+
+
+def test_bad_input():
+    with pytest.raises(InputError, match="two press onsets or more on each clock; found 1"):
+        estimate_clock_offset([1.0], [1.0, 2.0])
+    with pytest.raises(ShapeError, match="in_contact"):
+        contact_onsets([0.0, 1.0], [True])
+    with pytest.raises(InputError, match="increase strictly"):
+        contact_onsets([0.0, 0.0], [True, False])
+    with pytest.raises(ShapeError, match="fz_n must be finite"):
+        force_onsets([0.0, 1.0], [0.0, np.nan])
+    with pytest.raises(InputError, match="threshold_n must be positive"):
+        force_onsets([0.0, 1.0], [0.0, 1.0], threshold_n=0.0)
