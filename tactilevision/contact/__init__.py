@@ -3,6 +3,8 @@
 Pure functions on arrays (the session folder is read by :mod:`tactilevision.io`).
 """
 
+from ._force import ForceWindow, force_window
 from ._sync import ClockSync, contact_onsets, estimate_clock_offset, force_onsets
 
-__all__ = ["ClockSync", "contact_onsets", "estimate_clock_offset", "force_onsets"]
+__all__ = ["ClockSync", "ForceWindow", "contact_onsets", "estimate_clock_offset", "force_onsets",
+           "force_window"]
