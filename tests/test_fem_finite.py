@@ -247,3 +247,23 @@ def test_bad_arguments_raise_naming_them(kwargs, name):
     a, nu = args.pop("a_over_h"), args.pop("nu")
     with pytest.raises(ValueError, match=name):
         neo_hookean_indentation(a, nu, **args)
+
+
+def test_surface_profile_conserves_volume_when_incompressible():
+    # the deformed top surface: -w under the bonded face, ~0 far away, and at
+    # nu = 0.5 (J = 1) the volume under it is unchanged (the punch's volume
+    # pi a^2 w reappears as the bulge around it); at nu = 0.45 most of it is
+    # compressed away instead
+    lost = {}
+    for nu in (0.5, 0.45):
+        res = neo_hookean_indentation(0.8, nu, contact="bonded", w_over_h_max=0.1, steps=2,
+                                      **COARSE)
+        R, ur, uz = res.surface_r, res.surface_ur[-1], res.surface_uz[-1]
+        assert res.surface_uz.shape == (2, R.size) and np.all(np.diff(R) > 0)
+        np.testing.assert_allclose(uz[R <= 0.8], -0.1, atol=1e-12)
+        assert np.all(np.abs(uz[R > 10]) < 1e-3)
+        r = R + ur
+        dv = np.trapezoid((1 + uz) * 2 * np.pi * r, r) - np.trapezoid(2 * np.pi * R, R)
+        lost[nu] = -dv / (np.pi * 0.8**2 * 0.1)
+    assert abs(lost[0.5]) < 0.005
+    assert lost[0.45] > 0.3

@@ -98,6 +98,13 @@ class FiniteIndentation:
         Largest current radius of a node touching or tied to the punch.
     complete : bool
         False when Newton failed before `w_over_h_max`.
+    surface_r : (M,) float64 ndarray
+        Reference radii R of the top-surface nodes (P2 vertices and edge
+        midpoints), increasing, units of h.
+    surface_ur, surface_uz : (K, M) float64 ndarray
+        Their displacements at each depth, units of h (u_z < 0: into the
+        gel; u_z = -w under a bonded face). The deformed surface is
+        (R + u_r, 1 + u_z).
     """
 
     a_over_h: float
@@ -119,6 +126,9 @@ class FiniteIndentation:
     penetration: np.ndarray
     contact_radius: np.ndarray
     complete: bool
+    surface_r: np.ndarray | None = None
+    surface_ur: np.ndarray | None = None
+    surface_uz: np.ndarray | None = None
 
 
 def _line_fit(x: np.ndarray, y: np.ndarray) -> tuple[float, float, float]:
@@ -330,6 +340,8 @@ def neo_hookean_indentation(a_over_h: float, nu: float, *, contact: str = "frict
     x = np.zeros(prob.n_dofs)
     dxdw, dpdw0 = rate(x)
     rows: list[tuple[float, ...]] = []
+    surf_ur: list[np.ndarray] = []
+    surf_uz: list[np.ndarray] = []
     w_done, complete = 0.0, True
     for w_next in np.linspace(0.0, w_over_h_max, int(steps) + 1)[1:]:
         stack, its = [w_next], 0
@@ -357,6 +369,8 @@ def neo_hookean_indentation(a_over_h: float, nu: float, *, contact: str = "frict
                           f"(requested {w_over_h_max})", RuntimeWarning, stacklevel=2)
             break
         pen, radius = punch.diagnostics(x, w_done)
+        surf_ur.append(x[punch.ur].copy())
+        surf_uz.append(x[punch.uz].copy())
         rows.append((w_done, -2.0 * np.pi * float(e_z @ solid.residual(x)), rate(x)[1], its,
                      solid.min_jacobian(x), pen, radius))
     res = np.array(rows, dtype=np.float64).reshape(-1, 7)
@@ -370,4 +384,6 @@ def neo_hookean_indentation(a_over_h: float, nu: float, *, contact: str = "frict
         beta_tangent=ctb / (2.0 * ct), linearity_r2=r2,
         newton_iterations=res[:, 3].astype(int), min_jacobian=res[:, 4], n_dofs=prob.n_dofs,
         seconds=time.perf_counter() - t0, tangent_stiffness=dpdw, penetration=res[:, 5],
-        contact_radius=res[:, 6], complete=complete)
+        contact_radius=res[:, 6], complete=complete, surface_r=punch.R.copy(),
+        surface_ur=np.array(surf_ur).reshape(-1, punch.R.size),
+        surface_uz=np.array(surf_uz).reshape(-1, punch.R.size))
