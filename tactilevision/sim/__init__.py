@@ -2,5 +2,7 @@
 (and, later, frames rendered from them and F/T logs)."""
 
 from ._press import PressProfile, press_profile
+from ._schedule import PressSchedule, depth_trajectory, ft_log, press_schedule
 
-__all__ = ["PressProfile", "press_profile"]
+__all__ = ["PressProfile", "PressSchedule", "depth_trajectory", "ft_log", "press_profile",
+           "press_schedule"]
