@@ -19,9 +19,16 @@ __all__ = ["BallPressSet", "find_reference", "list_frames", "read_ball_presses",
            "read_reference", "taxim_datapack"]
 
 # measurements tables (mechanics): names appended below
-from ._measurements import REQUIRED_COLUMNS, Measurements, read_measurements
+from ._measurements import (
+    COLUMN_ORDER,
+    REQUIRED_COLUMNS,
+    Measurements,
+    read_measurements,
+    write_measurements,
+)
 
-__all__ += ["REQUIRED_COLUMNS", "Measurements", "read_measurements"]
+__all__ += ["COLUMN_ORDER", "REQUIRED_COLUMNS", "Measurements", "read_measurements",
+            "write_measurements"]
 
 # indentation session folders (calibrate): names appended below
 from ._session import Session, SessionConfig, read_session  # noqa: E402

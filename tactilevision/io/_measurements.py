@@ -12,7 +12,8 @@ import numpy as np
 
 from .._checks import InputError
 
-__all__ = ["REQUIRED_COLUMNS", "Measurements", "read_measurements"]
+__all__ = ["COLUMN_ORDER", "REQUIRED_COLUMNS", "Measurements", "read_measurements",
+           "write_measurements"]
 
 #: Columns every measurements table must have (formats.md §2).
 REQUIRED_COLUMNS = ("depth_mm", "force_n")
@@ -247,3 +248,91 @@ def read_measurements(path: str | Path, *, thickness_mm: float | None = None,
         thickness_mm=geo["thickness_mm"], radius_mm=geo["radius_mm"],
         thickness_source=src["thickness_mm"], radius_source=src["radius_mm"],
     )
+
+
+#: Column order of :func:`write_measurements` (formats.md section 2); other
+#: columns follow in the order given.
+COLUMN_ORDER = ("press", "indenter", "depth_mm", "force_n", "force_std_n", "fx_n", "fy_n",
+                "time_s", "hold_s", "wait_s", "x_mm", "y_mm", "day", "temperature_c")
+
+
+def write_measurements(path: str | Path, columns: dict[str, np.ndarray], *, thickness_mm: float,
+                       radius_mm: float, digits: int = 6) -> Path:
+    """Write a measurements table and its sidecar ``session.toml`` (formats.md section 2).
+
+    Parameters
+    ----------
+    path : str or Path
+        Destination ``.csv``; ``session.toml`` is written beside it with
+        ``[sensor] gel_thickness_mm`` and ``[indenter] radius_mm``, unless
+        one is there already with these values (a session's own).
+    columns : dict of str to (N,) array_like
+        Must hold ``depth_mm`` and ``force_n`` (finite); any other column of
+        formats.md or covariate. NaN is written as an empty cell; ``press`` and
+        ``indenter`` as integers.
+    thickness_mm, radius_mm : float
+        h and a, mm.
+    digits : int, default 6
+        Significant digits of the numbers.
+
+    Returns
+    -------
+    path : Path
+
+    Raises
+    ------
+    InputError
+        For a missing required column, columns of different lengths, a
+        non-finite required value, non-positive h or a, or a ``session.toml``
+        beside `path` with other values. Nothing is written then; the files
+        are replaced only once complete.
+    """
+    import os
+
+    path = Path(path)
+    for name in REQUIRED_COLUMNS:
+        if name not in columns:
+            raise InputError(f"write_measurements: column {name} is required")
+    arrays = {k: np.asarray(v, dtype=np.float64).ravel() for k, v in columns.items()}
+    n = arrays["depth_mm"].size
+    for k, v in arrays.items():
+        if v.size != n:
+            raise InputError(f"write_measurements: column {k} has {v.size} values, depth_mm {n}")
+    for name in REQUIRED_COLUMNS:
+        if not np.all(np.isfinite(arrays[name])):
+            raise InputError(f"write_measurements: column {name} must be finite in every row")
+    for name, v in (("thickness_mm", thickness_mm), ("radius_mm", radius_mm)):
+        if not (math.isfinite(v) and v > 0):
+            raise InputError(f"write_measurements: {name} must be positive, got {v!r}")
+    names = [c for c in COLUMN_ORDER if c in arrays] + [c for c in arrays if c not in COLUMN_ORDER]
+
+    def cell(name: str, x: float) -> str:
+        if not math.isfinite(x):
+            return ""
+        if name in ("press", "indenter"):
+            return str(round(x))
+        return f"{x:.{digits}g}"
+
+    lines = [",".join(names)] + [",".join(cell(c, arrays[c][i]) for c in names)
+                                 for i in range(n)]
+    toml = (f"[sensor]\ngel_thickness_mm = {float(thickness_mm)!r}\n\n"
+            f"[indenter]\nradius_mm = {float(radius_mm)!r}\n")
+    side = path.parent / "session.toml"
+    outputs = [(path, "\n".join(lines) + "\n")]
+    if side.is_file():  # keep an existing sidecar (a session's own) when it agrees
+        try:
+            values, _ = _geometry(path, {"thickness_mm": None, "radius_mm": None})
+        except InputError:
+            values = {}
+        if values != {"thickness_mm": float(thickness_mm), "radius_mm": float(radius_mm)}:
+            raise InputError(f"write_measurements: {side} exists and does not hold "
+                             f"gel_thickness_mm = {thickness_mm:g} and radius_mm = {radius_mm:g}; "
+                             "write the table to another folder")
+    else:
+        outputs.append((side, toml))
+    path.parent.mkdir(parents=True, exist_ok=True)
+    for target, text in outputs:
+        tmp = target.with_name(target.name + ".tmp")
+        tmp.write_text(text, encoding="utf-8")
+        os.replace(tmp, target)
+    return path
