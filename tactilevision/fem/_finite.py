@@ -356,7 +356,7 @@ def neo_hookean_indentation(a_over_h: float, nu: float, *, contact: str = "frict
             its += n_it
             if ok:
                 x, w_done = x_try, stack.pop()
-                dxdw = rate(x)[0]
+                dxdw, dpdw = rate(x)
             else:
                 punch.engaged = saved
                 if len(stack) > _MAX_BISECTIONS:
@@ -371,7 +371,7 @@ def neo_hookean_indentation(a_over_h: float, nu: float, *, contact: str = "frict
         pen, radius = punch.diagnostics(x, w_done)
         surf_ur.append(x[punch.ur].copy())
         surf_uz.append(x[punch.uz].copy())
-        rows.append((w_done, -2.0 * np.pi * float(e_z @ solid.residual(x)), rate(x)[1], its,
+        rows.append((w_done, -2.0 * np.pi * float(e_z @ solid.residual(x)), dpdw, its,
                      solid.min_jacobian(x), pen, radius))
     res = np.array(rows, dtype=np.float64).reshape(-1, 7)
     w, p, dpdw = res[:, 0], res[:, 1], res[:, 2]

@@ -91,7 +91,9 @@ def _number(text: str) -> float | None:
         return None
 
 
-def _read_table(path: Path) -> tuple[list[str], list[list[str]], list[int]]:
+def _read_table(path: Path, what: str = "measurements table"
+                ) -> tuple[list[str], list[list[str]], list[int]]:
+    """Header names, rows and their line numbers of a CSV; every row as long as the header."""
     try:
         with path.open(newline="", encoding="utf-8-sig") as fh:
             reader = csv.reader(fh)
@@ -106,9 +108,9 @@ def _read_table(path: Path) -> tuple[list[str], list[list[str]], list[int]]:
                 rows.append(row)
                 lines.append(reader.line_num)
     except FileNotFoundError:
-        raise InputError(f"measurements table {path} not found") from None
+        raise InputError(f"{what} {path} not found") from None
     except IsADirectoryError:
-        raise InputError(f"{path} is a folder, not a measurements table") from None
+        raise InputError(f"{path} is a folder, not a {what}") from None
     except OSError as exc:
         raise InputError(f"cannot read {path}: {exc.strerror}") from None
     except (UnicodeDecodeError, csv.Error) as exc:

@@ -10,7 +10,6 @@ headers, but their pixels are read only on demand (:meth:`Session.frame`).
 
 from __future__ import annotations
 
-import csv
 import math
 import tomllib
 from dataclasses import dataclass, field
@@ -20,6 +19,7 @@ import numpy as np
 
 from .._checks import InputError
 from ._frames import read_image
+from ._measurements import _read_table
 
 __all__ = ["Session", "SessionConfig", "read_session"]
 
@@ -201,24 +201,10 @@ def _read_config(folder: Path) -> SessionConfig:
 
 def _read_csv(path: Path, required: tuple[str, ...]) -> tuple[list[str], list[list[str]],
                                                               list[int]]:
-    """Header and rows of a CSV, every required column present, rows as long as the header."""
+    """Header and rows of a session CSV, every required column present, at least one row."""
     if not path.is_file():
         raise InputError(f"session file {path} is missing")
-    try:
-        with path.open(newline="", encoding="utf-8-sig") as fh:
-            reader = csv.reader(fh)
-            header = [h.strip() for h in next(reader, [])]
-            rows, lines = [], []
-            for row in reader:
-                if not row or not any(c.strip() for c in row):
-                    continue
-                if len(row) != len(header):
-                    raise InputError(f"{path} line {reader.line_num} has {len(row)} cells, the "
-                                     f"header has {len(header)}")
-                rows.append(row)
-                lines.append(reader.line_num)
-    except (UnicodeDecodeError, csv.Error) as exc:
-        raise InputError(f"{path} is not a readable CSV text file ({exc})") from None
+    header, rows, lines = _read_table(path, "session file")
     missing = [c for c in required if c not in header]
     if missing:
         raise InputError(f"{path} line 1: missing column(s) {', '.join(missing)} "

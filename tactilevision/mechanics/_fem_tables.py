@@ -328,9 +328,10 @@ def kappa_n(nu: float | np.ndarray, a_over_h: float | np.ndarray,
                              f"kappa_n table range [{lo:g}, {hi:g}]")
     c = contacts.index(contact)
     kn = np.concatenate([data["kappa0"][c][..., None], data["kappa_n"][c]], axis=-1)  # (A, N, K+1)
+    along_w = PchipInterpolator(wt, kn, axis=2)
     out = np.empty(n.shape)
     for idx in np.ndindex(n.shape):
-        k_w = PchipInterpolator(wt, kn, axis=2)(x[idx])            # (A, N)
+        k_w = along_w(x[idx])                                       # (A, N)
         k_nu = PchipInterpolator(data["nu"], k_w, axis=1)(n[idx])  # (A,)
         out[idx] = PchipInterpolator(data["a_over_h"], k_nu)(r[idx])
     return float(out) if out.ndim == 0 else out
