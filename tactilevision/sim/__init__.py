@@ -1,8 +1,13 @@
-"""Simulated sessions with known truth: gel height maps of presses from the FEM
-(and, later, frames rendered from them and F/T logs)."""
+"""Simulated sessions with known truth: gel height maps of gauge-block presses
+from the FEM, frames rendered from them through Taxim's fitted shading, F/T
+logs, and whole session folders with their ``truth.json``."""
 
+from ._block import GaugeBlock, press_surface
 from ._press import PressProfile, press_profile
+from ._render import ShadingTable, taxim_shading
 from ._schedule import PressSchedule, depth_trajectory, ft_log, press_schedule
+from ._session import SessionSpec, make_session
 
-__all__ = ["PressProfile", "PressSchedule", "depth_trajectory", "ft_log", "press_profile",
-           "press_schedule"]
+__all__ = ["GaugeBlock", "PressProfile", "PressSchedule", "SessionSpec", "ShadingTable",
+           "depth_trajectory", "ft_log", "make_session", "press_profile", "press_schedule",
+           "press_surface", "taxim_shading"]

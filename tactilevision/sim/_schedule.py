@@ -154,7 +154,8 @@ def depth_trajectory(schedule: PressSchedule, t_s: np.ndarray) -> tuple[np.ndarr
 def ft_log(schedule: PressSchedule, force_of_depth: Callable[[int, np.ndarray], np.ndarray], *,
            duration_s: float, rate_hz: float = 1000.0, clock_offset_s: float = 0.0,
            noise_n: tuple[float, float, float] = (1 / 40, 1 / 40, 1 / 80),
-           tangential_fraction: float = 0.01, bias_n: tuple[float, float, float] = (0, 0, 0),
+           tangential_fraction: float | np.ndarray = 0.01,
+           bias_n: tuple[float, float, float] = (0, 0, 0),
            seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
     """Sample the F/T log of a schedule on the sensor's own clock.
 
@@ -171,9 +172,10 @@ def ft_log(schedule: PressSchedule, force_of_depth: Callable[[int, np.ndarray], 
     noise_n : (3,) float
         Gaussian noise sd of fx, fy, fz, N (ATI Nano17 class: about 1/40,
         1/40, 1/80 N).
-    tangential_fraction : float, default 0.01
+    tangential_fraction : float or (P,) array_like of float, default 0.01
         Tangential force as a fraction of fz, in a random direction per
-        press (a well-aligned press); larger for a misaligned one.
+        press (a well-aligned press); larger for a misaligned one. One value
+        for all presses or one per press.
     bias_n : (3,) float
         Constant offset of each channel, N.
     seed : int, default 0
@@ -195,7 +197,8 @@ def ft_log(schedule: PressSchedule, force_of_depth: Callable[[int, np.ndarray], 
         sel = press == i
         fz[sel] = force_of_depth(int(i), depth[sel])
     ang = rng.uniform(0, 2 * np.pi, schedule.n_presses)
-    frac = np.where(press >= 0, tangential_fraction, 0.0)
+    tf = np.broadcast_to(np.asarray(tangential_fraction, np.float64), (schedule.n_presses,))
+    frac = np.where(press >= 0, tf[np.maximum(press, 0)], 0.0)
     fx = fz * frac * np.cos(ang[np.maximum(press, 0)])
     fy = fz * frac * np.sin(ang[np.maximum(press, 0)])
     forces = np.stack([fx, fy, fz], axis=1) + np.asarray(bias_n, np.float64)

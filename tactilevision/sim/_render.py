@@ -1,0 +1,201 @@
+"""Frames from height maps: the forward photometric model of Taxim.
+
+Taxim (Si and Yuan, "Taxim: An Example-based Simulation Model for GelSight
+Tactile Sensors", IEEE RA-L 7(2), 2022, Sec. III-B) renders the colour change
+of a pixel as a polynomial in its image position whose coefficients are looked
+up by the surface normal:
+
+``dI_c(x, y) = [x^2, y^2, x y, x, y, 1] . C_c(bin(theta), bin(phi))``
+
+with theta = arctan |grad z| in ``num_bins`` bins over [0, pi/2], phi the
+gradient direction in ``num_bins`` bins over [-pi, pi], and (x, y) the pixel
+position on the full-resolution grid. The table ``C`` of the GelSight sensor
+was fitted by the Taxim authors to real ball presses and ships with the
+``taxim`` package (``taxim/calib/gelsight/polycalib.npz``, MIT).
+
+This module is the *renderer* of the simulated sessions; it is deliberately a
+different model from the reconstructor of :mod:`tactilevision.optics` (an
+inverse colour -> gradient table fitted by us), so that the pipeline is never
+tested against its own inverse. What we take from Taxim is its published
+shading model and its fitted table; we render only the change relative to the
+flat gel, ``T(grad z) - T(0)`` (slope bin 0 of the same direction), on top of
+the real reference frame, and leave out Taxim's own gel-deformation
+approximation (our deformations come from the FEM) and its shadows.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .._checks import InputError
+
+__all__ = ["ShadingTable", "taxim_shading"]
+
+
+@dataclass(frozen=True)
+class ShadingTable:
+    """Taxim's polynomial shading table of one sensor.
+
+    Attributes
+    ----------
+    coeffs : (B, B, 6, 3) float64 ndarray
+        Polynomial coefficients per (slope bin, direction bin), for the
+        features ``[x^2, y^2, x y, x, y, 1]`` (x = column, y = row, px) and the
+        three channels in the order of the sensor's frames (BGR as
+        ``cv2.imread`` gives), in grey levels (0-255).
+    shape : (H, W)
+        Image size the positions refer to.
+    mm_per_px : float
+        Image scale on the gel, mm per pixel.
+    """
+
+    coeffs: np.ndarray
+    shape: tuple[int, int]
+    mm_per_px: float
+
+    @property
+    def num_bins(self) -> int:
+        """Number of bins along the slope angle and along the direction."""
+        return int(self.coeffs.shape[0])
+
+    def _features(self) -> np.ndarray:
+        h, w = self.shape
+        y, x = np.meshgrid(np.arange(h, dtype=np.float64), np.arange(w, dtype=np.float64),
+                           indexing="ij")
+        return np.stack([x * x, y * y, x * y, x, y, np.ones_like(x)], axis=-1)
+
+    def shading(self, height_mm: np.ndarray) -> np.ndarray:
+        """Colour change of the gel against its flat state.
+
+        Parameters
+        ----------
+        height_mm : (H, W) float ndarray
+            Depth of the gel surface into the gel, mm (positive into the gel,
+            the convention of :class:`~tactilevision.optics.DepthReconstructor`).
+
+        Returns
+        -------
+        change : (H, W, 3) float64 ndarray
+            Grey levels to add to the reference frame.
+
+        Raises
+        ------
+        InputError
+            If the height map is not (H, W) of the table or not finite.
+        """
+        z = np.asarray(height_mm, np.float64)
+        if z.shape != tuple(self.shape):
+            raise InputError(f"height map of shape {z.shape} does not match the shading "
+                             f"table's {tuple(self.shape)}")
+        if not np.all(np.isfinite(z)):
+            raise InputError("height map contains NaN or inf")
+        zp = z / self.mm_per_px
+        d_row, d_col = np.gradient(zp)
+        slope = np.arctan(np.hypot(d_row, d_col))
+        direction = np.arctan2(d_row, d_col)  # Taxim: atan2(d/drow, d/dcol)
+        b = self.num_bins
+        i_mag = np.clip(np.floor(slope / (0.5 * np.pi / (b - 1))).astype(np.int64), 0, b - 1)
+        i_dir = np.clip(np.floor((direction + np.pi) / (2 * np.pi / (b - 1))).astype(np.int64),
+                        0, b - 1)
+        feats = self._features()
+        lit = np.einsum("hwf,hwfc->hwc", feats, self.coeffs[i_mag, i_dir])
+        # the flat gel: slope bin 0 of the same direction (the table's bin-0 rows
+        # differ slightly between directions; subtracting the same direction's
+        # keeps a flat gel exactly at the reference, with no sector pattern)
+        flat = np.einsum("hwf,hwfc->hwc", feats, self.coeffs[np.zeros_like(i_mag), i_dir])
+        return lit - flat
+
+    def render(self, height_mm: np.ndarray, reference: np.ndarray, *, noise_dn: float = 0.0,
+               rng: np.random.Generator | None = None) -> np.ndarray:
+        """A tactile frame: reference + shading change + camera noise, as uint8.
+
+        Parameters
+        ----------
+        height_mm : (H, W) float ndarray
+            Gel surface depth, mm, positive into the gel.
+        reference : (H, W, 3) uint8 ndarray
+            The no-contact frame of the sensor (channel order of ``coeffs``).
+        noise_dn : float, default 0.0
+            Standard deviation of additive Gaussian camera noise, grey levels.
+        rng : numpy.random.Generator, optional
+            Source of the noise (required when ``noise_dn > 0``).
+
+        Returns
+        -------
+        frame : (H, W, 3) uint8 ndarray
+
+        Raises
+        ------
+        InputError
+            If the reference does not match the table's shape.
+        """
+        ref = np.asarray(reference)
+        if ref.shape != (*self.shape, 3):
+            raise InputError(f"reference of shape {ref.shape} does not match the shading "
+                             f"table's {(*self.shape, 3)}")
+        img = ref.astype(np.float64) + self.shading(height_mm)
+        if noise_dn > 0:
+            if rng is None:
+                raise InputError("rng is required when noise_dn > 0")
+            img += rng.normal(0.0, noise_dn, img.shape)
+        return np.clip(np.rint(img), 0, 255).astype(np.uint8)
+
+
+def _taxim_folder(sensor: str) -> Path:
+    try:
+        from importlib.resources import files
+
+        root = Path(str(files("taxim")))
+    except ModuleNotFoundError as exc:  # pragma: no cover - depends on the install
+        raise InputError("the Taxim shading table needs the 'taxim' package: "
+                         "pip install 'tactilevision[test]'") from exc
+    folder = root / "calib" / sensor
+    if not (folder / "polycalib.npz").is_file():
+        raise InputError(f"taxim ships no polynomial table for sensor {sensor!r} "
+                         f"(looked for {folder / 'polycalib.npz'})")
+    return folder
+
+
+def taxim_shading(sensor: str = "gelsight") -> tuple[ShadingTable, np.ndarray]:
+    """Taxim's fitted shading table and reference frame of a sensor.
+
+    Parameters
+    ----------
+    sensor : str, default 'gelsight'
+        Folder under ``taxim/calib`` (``'gelsight'``; ``'gelsight_mini'``
+        exists but its table does not reproduce its own frames, see
+        ``../shared/real/README.md``).
+
+    Returns
+    -------
+    table : ShadingTable
+        Coefficients in the channel order of the frames (BGR).
+    reference : (H, W, 3) uint8 ndarray
+        The sensor's real no-contact frame (``f0`` of ``dataPack.npz``, BGR).
+
+    Raises
+    ------
+    InputError
+        If ``taxim`` is not installed or has no table for `sensor`.
+
+    Notes
+    -----
+    The table's ``grad_r`` and ``grad_b`` arrays are swapped with respect to
+    their names (the Taxim sources say so); stacked as (grad_r, grad_g,
+    grad_b) they follow the BGR order of ``f0``. The test suite checks the
+    order against the real ball presses of the same package.
+    """
+    import json
+
+    folder = _taxim_folder(sensor)
+    with np.load(folder / "polycalib.npz") as d:
+        coeffs = np.stack([d["grad_r"], d["grad_g"], d["grad_b"]], axis=-1).astype(np.float64)
+    with np.load(folder / "dataPack.npz", allow_pickle=False) as d:
+        reference = np.asarray(d["f0"], np.uint8)
+    params = json.loads((folder / "params.json").read_text())["sensor"]
+    table = ShadingTable(coeffs=coeffs, shape=(int(params["h"]), int(params["w"])),
+                         mm_per_px=float(params["pixmm"]))
+    return table, reference

@@ -1,0 +1,282 @@
+"""Write a whole simulated calibration session folder, with its truth.
+
+A session as a real rig would record it (formats.md section 1): the gauge
+block pressed ``repeats`` times per indenter at shuffled gel positions, each
+press approaching at constant speed until the land meets the gel (the bevel
+shows), holding, and releasing; frames rendered from the FEM gel surface
+through Taxim's fitted shading on the sensor's real reference frame, with
+camera noise; an F/T log at ``rate_hz`` on its own clock with ATI-class
+noise. ``truth.json`` holds E, nu, the clock offset and every press's true
+depth and force. Deterministic for a seed.
+
+The camera keeps frames from ``lead_s`` before each press to its release
+(the recorder idles between presses), at ``fps``.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+import numpy as np
+
+from .._checks import InputError
+from ..contact._land import land_contact_depth
+from ._block import GaugeBlock, press_surface
+from ._press import PressProfile, press_profile
+from ._render import ShadingTable, taxim_shading
+from ._schedule import PressSchedule, depth_trajectory, ft_log, press_schedule
+
+__all__ = ["SessionSpec", "make_session"]
+
+
+@dataclass(frozen=True)
+class SessionSpec:
+    """Everything that defines a simulated session (units in the names).
+
+    Attributes
+    ----------
+    E_mpa, nu : float
+        The gel's true Young's modulus and Poisson's ratio.
+    thickness_mm : float
+        Layer thickness h.
+    block : GaugeBlock
+    repeats : int
+        Presses per indenter.
+    fps : float
+        Camera frame rate.
+    rate_hz : float
+        F/T sampling rate.
+    clock_offset_s : float
+        True t_force - t_frame.
+    config_clock_offset_s : float or None
+        What ``session.toml`` states (None: the key is left out, the offset
+        must be estimated; a wrong value tests the check).
+    window_samples : int
+    noise_dn : float
+        Camera noise, grey levels per channel.
+    force_noise_n : (3,) float
+        F/T noise sd (fx, fy, fz), N.
+    approach_s, hold_s, release_s, lead_s : float
+    wait_s : (float, float)
+        Range of the rest between presses.
+    overshoot_mm : (float, float)
+        The stage stops this far past the land contact (uniform).
+    x_range_mm, y_range_mm : (float, float)
+        Press centres, relative to the image centre (x along columns, y down
+        the rows).
+    misaligned : tuple of int
+        Presses (chronological index) pressed with a tilt: tangential force
+        ``misaligned_fraction`` of Fz.
+    edge_presses : tuple of int
+        Presses placed so the footprint is cut by the edge of the sensed area.
+    jpeg_quality : int
+    seed : int
+    """
+
+    E_mpa: float = 0.20
+    nu: float = 0.48
+    thickness_mm: float = 3.0
+    block: GaugeBlock = field(default_factory=GaugeBlock)
+    repeats: int = 10
+    fps: float = 10.0
+    rate_hz: float = 1000.0
+    clock_offset_s: float = 0.137
+    config_clock_offset_s: float | None = None
+    window_samples: int = 200
+    noise_dn: float = 2.0
+    force_noise_n: tuple[float, float, float] = (1 / 40, 1 / 40, 1 / 80)
+    approach_s: float = 0.5
+    hold_s: float = 0.5
+    release_s: float = 0.25
+    lead_s: float = 0.2
+    wait_s: tuple[float, float] = (1.5, 2.5)
+    overshoot_mm: tuple[float, float] = (0.0, 0.003)
+    x_range_mm: tuple[float, float] = (-5.0, 2.5)
+    y_range_mm: tuple[float, float] = (-3.0, 3.0)
+    misaligned: tuple[int, ...] = ()
+    misaligned_fraction: float = 0.3
+    edge_presses: tuple[int, ...] = ()
+    jpeg_quality: int = 75
+    seed: int = 0
+
+
+def _positions(spec: SessionSpec, n: int, rng: np.random.Generator, half_mm: np.ndarray
+               ) -> tuple[np.ndarray, np.ndarray]:
+    x = rng.uniform(*spec.x_range_mm, n)
+    y = rng.uniform(*spec.y_range_mm, n)
+    for i in spec.edge_presses:
+        if not 0 <= i < n:
+            raise InputError(f"edge press {i} is not a press (0 to {n - 1})")
+        x[i] = -(half_mm[0] - 0.6 * spec.block.radius_mm)   # footprint crosses the left edge
+    return x, y
+
+
+def make_session(folder: str | Path, spec: SessionSpec | None = None, *,
+                 shading: tuple[ShadingTable, np.ndarray] | None = None,
+                 profile: PressProfile | None = None, progress: bool = False) -> dict:
+    """Simulate a gauge-block calibration session and write it to `folder`.
+
+    Parameters
+    ----------
+    folder : str or Path
+        Created (must not exist, or be empty).
+    spec : SessionSpec, optional
+        Default: the sample session's settings.
+    shading : (ShadingTable, reference), optional
+        Renderer and real reference frame; default Taxim's GelSight table
+        (:func:`taxim_shading`, needs the ``taxim`` package).
+    profile : PressProfile, optional
+        FEM surface profiles at ``spec.nu`` (computed when not given, about
+        10 s).
+    progress : bool, default False
+        Show a progress bar while rendering.
+
+    Returns
+    -------
+    truth : dict
+        What ``truth.json`` holds.
+
+    Raises
+    ------
+    InputError
+        For a non-empty `folder` or inconsistent settings.
+    """
+    import cv2
+
+    spec = spec or SessionSpec()
+    out = Path(folder)
+    if out.exists() and any(out.iterdir()):
+        raise InputError(f"{out} is not empty: give a new folder for the session")
+    table, reference = shading if shading is not None else taxim_shading()
+    shape = table.shape
+    s = table.mm_per_px
+    h = spec.thickness_mm
+    a = spec.block.radius_mm
+    prof = profile if profile is not None else press_profile(
+        a / h, spec.nu, w_over_h_max=max(0.22, max(spec.block.depths_mm) / h * 1.05))
+    rng = np.random.default_rng(spec.seed)
+
+    depths = np.asarray(spec.block.depths_mm, np.float64)
+    w_c = np.array([land_contact_depth(w / h, prof) * h for w in depths])
+    sched = press_schedule(tuple(depths), repeats=spec.repeats, wait_s=spec.wait_s,
+                           approach_s=spec.approach_s, hold_s=spec.hold_s,
+                           release_s=spec.release_s, start_s=1.0, seed=spec.seed)
+    n = sched.n_presses
+    half = np.array([(shape[1] - 1) / 2 * s, (shape[0] - 1) / 2 * s])
+    x, y = _positions(spec, n, rng, half)
+    true_depth = w_c[sched.indenter] + rng.uniform(*spec.overshoot_mm, n)
+    sched = replace(sched, depth_mm=true_depth, x_mm=x, y_mm=y)
+    eh2 = spec.E_mpa * h * h
+
+    def force_of_depth(i: int, d: np.ndarray) -> np.ndarray:
+        from scipy.interpolate import PchipInterpolator
+
+        return eh2 * PchipInterpolator(prof.w_over_h, prof.force)(np.asarray(d) / h)
+
+    # frames: from lead_s before each press to its release
+    dt = 1.0 / spec.fps
+    grid = np.arange(0.0, float(sched.t_end_s[-1]) + 1.0, dt)
+    keep = np.zeros(grid.shape, bool)
+    for t0, t1 in zip(sched.t_start_s, sched.t_end_s, strict=True):
+        keep |= (grid >= t0 - spec.lead_s) & (grid <= t1 + dt)
+    t_frames = grid[keep]
+    d_frames, p_frames = depth_trajectory(sched, t_frames)
+
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "frames").mkdir()
+    cv2.imwrite(str(out / "reference.png"), reference)
+    names = []
+    it = range(t_frames.size)
+    if progress:
+        from tqdm import tqdm
+
+        it = tqdm(it, desc="rendering", unit="frame", mininterval=1.0)
+    for k in it:
+        i = int(p_frames[k])
+        if i < 0 or d_frames[k] <= 0:
+            z = np.zeros(shape, np.float32)
+        else:
+            c = (x[i] / s + (shape[1] - 1) / 2, y[i] / s + (shape[0] - 1) / 2)
+            z, _ = press_surface(prof, spec.block, indenter=int(sched.indenter[i]),
+                                 depth_mm=float(d_frames[k]), centre_px=c, shape=shape,
+                                 mm_per_px=s, thickness_mm=h)
+        img = table.render(z, reference, noise_dn=spec.noise_dn, rng=rng)
+        name = f"{k:05d}.jpg"
+        cv2.imwrite(str(out / "frames" / name), img,
+                    [cv2.IMWRITE_JPEG_QUALITY, int(spec.jpeg_quality)])
+        names.append(name)
+    with open(out / "frames.csv", "w") as f:
+        f.write("frame,t_s\n")
+        for name, t in zip(names, t_frames, strict=True):
+            f.write(f"{name},{t:.6f}\n")
+
+    tang = np.full(n, 0.01)
+    for i in spec.misaligned:
+        if not 0 <= i < n:
+            raise InputError(f"misaligned press {i} is not a press (0 to {n - 1})")
+        tang[i] = spec.misaligned_fraction
+    t_f, forces = ft_log(sched, force_of_depth, duration_s=float(sched.t_end_s[-1]) + 1.0,
+                         rate_hz=spec.rate_hz, clock_offset_s=spec.clock_offset_s,
+                         noise_n=spec.force_noise_n, tangential_fraction=tang,
+                         seed=spec.seed + 1)
+    with open(out / "forces.csv", "w") as f:
+        f.write("t_s,fx_n,fy_n,fz_n\n")
+        np.savetxt(f, np.column_stack([t_f, forces]), fmt=["%.4f", "%.4f", "%.4f", "%.4f"],
+                   delimiter=",")
+    with open(out / "presses.csv", "w") as f:
+        f.write("press,indenter,x_mm,y_mm\n")
+        for i in range(n):
+            f.write(f"{i},{int(sched.indenter[i])},{x[i]:.3f},{y[i]:.3f}\n")
+    _write_toml(out, spec, s, table.shape, half)
+    truth = _truth(spec, sched, w_c, force_of_depth, tang, s, prof)
+    (out / "truth.json").write_text(json.dumps(truth, indent=1) + "\n")
+    return truth
+
+
+def _write_toml(out: Path, spec: SessionSpec, s: float, shape: tuple[int, int],
+                half: np.ndarray) -> None:
+    b = spec.block
+    lines = [
+        "[sensor]", 'name = "gelsight"', f"mm_per_px = {s}",
+        f"gel_thickness_mm = {spec.thickness_mm}",
+        f"gel_radius_mm = {float(half.max()):.3f}", "",
+        "[indenter]", f"radius_mm = {b.radius_mm}", "",
+        "[gauge_block]", "depths_mm = [" + ", ".join(f"{d:g}" for d in b.depths_mm) + "]",
+        f"bevel_offset_mm = {b.bevel_offset_mm}", f"bevel_angle_deg = {b.bevel_angle_deg}",
+        f"bevel_length_mm = {b.bevel_length_mm}", "",
+        "[force_sensor]", f"rate_hz = {spec.rate_hz:g}", f"window_samples = {spec.window_samples}",
+    ]
+    if spec.config_clock_offset_s is not None:
+        lines.append(f"clock_offset_s = {spec.config_clock_offset_s}")
+    (out / "session.toml").write_text("\n".join(lines) + "\n")
+
+
+def _truth(spec: SessionSpec, sched: PressSchedule, w_c: np.ndarray, force_of_depth,
+           tang: np.ndarray, s: float, prof: PressProfile) -> dict:
+    n = sched.n_presses
+    presses = []
+    for i in range(n):
+        k = int(sched.indenter[i])
+        presses.append({
+            "press": i, "indenter": k, "w0_mm": spec.block.depths_mm[k],
+            "depth_mm": round(float(sched.depth_mm[i]), 7),
+            "force_n": round(float(force_of_depth(i, np.array([sched.depth_mm[i]]))[0]), 7),
+            "x_mm": round(float(sched.x_mm[i]), 4), "y_mm": round(float(sched.y_mm[i]), 4),
+            "t_start_s": round(float(sched.t_start_s[i]), 6),
+            "hold_from_s": round(float(sched.t_start_s[i] + sched.approach_s[i]), 6),
+            "wait_s": round(float(sched.wait_s[i]), 6),
+            "tangential_fraction": float(tang[i]),
+            "misaligned": i in spec.misaligned, "edge": i in spec.edge_presses,
+        })
+    return {
+        "E_mpa": spec.E_mpa, "nu": spec.nu, "thickness_mm": spec.thickness_mm,
+        "radius_mm": spec.block.radius_mm, "clock_offset_s": spec.clock_offset_s,
+        "mm_per_px": s, "seed": spec.seed,
+        "land_contact_depth_mm": [round(float(v), 7) for v in w_c],
+        "note": ("depth_mm is the true indentation while the force window is taken: the depth "
+                 "at which the bulging gel meets the block land, plus the stage's overshoot; "
+                 "force_n is the FEM force there (a bonded Neo-Hookean layer)"),
+        "presses": presses,
+    }
