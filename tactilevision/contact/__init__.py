@@ -1,13 +1,31 @@
 """Certification of presses: clock sync, contact, footprint, bevel, force windows.
 
-Pure functions on arrays (the session folder is read by :mod:`tactilevision.io`).
+Pure functions on arrays, plus :func:`certify_session`, which runs them over a
+session read by :mod:`tactilevision.io`.
 """
 
+from ._bevel import bevel_score, footprint_from_frame
+from ._certify import (
+    Certification,
+    CertifiedPress,
+    Rejection,
+    certified_depths,
+    certify_session,
+)
 from ._footprint import Footprint, fit_footprint, nearest_indenter
 from ._force import ForceWindow, force_window
+from ._land import bulge_height, land_contact_depth, land_contact_depths_mm
 from ._mask import contact_mask, noise_level
-from ._sync import ClockSync, contact_onsets, estimate_clock_offset, force_onsets
+from ._sync import (
+    ClockSync,
+    contact_onsets,
+    estimate_clock_offset,
+    force_onsets,
+    refine_clock_offset,
+)
 
-__all__ = ["ClockSync", "Footprint", "ForceWindow", "contact_mask", "contact_onsets",
-           "estimate_clock_offset", "fit_footprint", "force_onsets", "force_window",
-           "nearest_indenter", "noise_level"]
+__all__ = ["Certification", "CertifiedPress", "ClockSync", "Footprint", "ForceWindow",
+           "Rejection", "bevel_score", "bulge_height", "certified_depths", "certify_session",
+           "contact_mask", "contact_onsets", "estimate_clock_offset", "fit_footprint",
+           "footprint_from_frame", "force_onsets", "force_window", "land_contact_depth",
+           "land_contact_depths_mm", "nearest_indenter", "noise_level", "refine_clock_offset"]

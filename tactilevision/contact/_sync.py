@@ -15,7 +15,8 @@ import numpy as np
 
 from .._checks import InputError, check_array
 
-__all__ = ["ClockSync", "contact_onsets", "estimate_clock_offset", "force_onsets"]
+__all__ = ["ClockSync", "contact_onsets", "estimate_clock_offset", "force_onsets",
+           "refine_clock_offset"]
 
 
 @dataclass(frozen=True)
@@ -209,3 +210,73 @@ def estimate_clock_offset(frame_onsets_s: np.ndarray, force_onsets_s: np.ndarray
     return ClockSync(offset_s=off, n_matched=int(n), n_frame_onsets=int(a.size),
                      n_force_onsets=int(b.size),
                      spread_s=float(np.median(np.abs(matched - off))), tolerance_s=tolerance_s)
+
+
+def refine_clock_offset(frame_times_s: np.ndarray, contact_signal: np.ndarray,
+                        force_times_s: np.ndarray, fz_n: np.ndarray, offset_s: float, *,
+                        span_s: float = 0.2, step_s: float = 0.001) -> tuple[float, float]:
+    """Sharpen an onset-based clock offset by correlating whole press profiles.
+
+    Onsets are threshold crossings, biased by the time each signal needs to
+    cross its threshold (up to a frame period for the camera). Every frame of
+    every press carries timing information, though: the contact area rises,
+    holds and falls with the depth, as Fz does. The offset that maximises the
+    Pearson correlation between the frames' contact signal and Fz read at the
+    frame times plus the offset uses all of them.
+
+    Parameters
+    ----------
+    frame_times_s : (F,) array_like of float
+        Frame times, camera clock, strictly increasing.
+    contact_signal : (F,) array_like of float
+        Contact area (px) of each frame.
+    force_times_s, fz_n : (M,) array_like of float
+        The F/T log's times (its own clock) and Fz.
+    offset_s : float
+        Starting estimate of t_force - t_frame (:func:`estimate_clock_offset`).
+    span_s : float, default 0.2
+        Search ``offset_s +- span_s``.
+    step_s : float, default 0.001
+        Grid step (the F/T sample period is a natural choice).
+
+    Returns
+    -------
+    offset_s : float
+        The best offset on the grid.
+    correlation : float
+        The correlation there.
+
+    Raises
+    ------
+    ShapeError
+        For arrays of mismatched shape or with NaNs.
+    InputError
+        When the contact signal is constant (no press in the frames).
+
+    Notes
+    -----
+    On the simulated sample session (10 frames/s, true offset 0.137 s) the
+    onset estimate is 0.0375 s (a frame period early) and the refined one
+    0.137 s (tests/test_calibrate.py).
+    """
+    tf = check_array(frame_times_s, "frame_times_s", [("F",)], dtype=np.number,
+                     finite=True).astype(float)
+    a = check_array(contact_signal, "contact_signal", [tf.shape], dtype=np.number,
+                    finite=True).astype(float)
+    ft = check_array(force_times_s, "force_times_s", [("M",)], dtype=np.number,
+                     finite=True).astype(float)
+    fz = check_array(fz_n, "fz_n", [ft.shape], dtype=np.number, finite=True).astype(float)
+    if np.ptp(a) == 0:
+        raise InputError("the contact signal is constant: no press to synchronise on")
+    grid = offset_s + np.arange(-span_s, span_s + 0.5 * step_s, step_s)
+    a0 = (a - a.mean()) / a.std()
+    best = (-np.inf, float(offset_s))
+    for o in grid:
+        f = np.interp(tf + o, ft, fz)
+        sd = f.std()
+        if sd == 0:
+            continue
+        c = float(np.mean(a0 * (f - f.mean())) / sd)
+        if c > best[0]:
+            best = (c, float(o))
+    return best[1], best[0]

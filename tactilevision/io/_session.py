@@ -49,6 +49,10 @@ class SessionConfig:
     calibration : Path or None
         Photometric calibration (resolved against the session folder), or None
         for the sensor's default.
+    bevel_offset_mm, bevel_angle_deg, bevel_length_mm : float
+        Where the bevel edge lies beside each indenter (optional keys of
+        ``[gauge_block]``; defaults 4.5 mm, 0 degrees = +x along the image
+        columns, 2.4 mm long): the region the bevel onset is looked for in.
     """
 
     sensor_name: str
@@ -61,6 +65,9 @@ class SessionConfig:
     clock_offset_s: float | None
     window_samples: int
     calibration: Path | None
+    bevel_offset_mm: float = 4.5
+    bevel_angle_deg: float = 0.0
+    bevel_length_mm: float = 2.4
 
 
 @dataclass(frozen=True)
@@ -193,6 +200,10 @@ def _read_config(folder: Path) -> SessionConfig:
                                     required=False),
         window_samples=int(window),
         calibration=cal_path,
+        bevel_offset_mm=_toml_number(doc, toml, "gauge_block", "bevel_offset_mm", default=4.5),
+        bevel_angle_deg=_toml_number(doc, toml, "gauge_block", "bevel_angle_deg", positive=False,
+                                     default=0.0),
+        bevel_length_mm=_toml_number(doc, toml, "gauge_block", "bevel_length_mm", default=2.4),
     )
 
 
