@@ -5,6 +5,7 @@ Subpackages
 io         session folders, frame folders, F/T logs
 optics     photometric stereo: colour -> surface gradient -> height map
 contact    contact mask, indenter footprint, bevel onset, certified depth
+sim        simulated sessions with known truth (FEM surfaces, Taxim shading)
 mechanics  kappa and beta tables, the in-situ fit of E and nu
 fem        indentation FEM and inverse FEM
 viz        depth-map images, plots, reports
@@ -14,4 +15,13 @@ cli        the ``tactilevision`` command
 from ._checks import InputError, ShapeError
 
 __version__ = "0.1.0"
-__all__ = ["InputError", "ShapeError", "__version__"]
+__all__ = ["InputError", "SessionCalibration", "ShapeError", "__version__", "calibrate_session"]
+
+
+def __getattr__(name: str):
+    # the main job, imported on first use so that ``import tactilevision`` stays light
+    if name in ("calibrate_session", "SessionCalibration"):
+        from . import _calibrate
+
+        return getattr(_calibrate, name)
+    raise AttributeError(f"module 'tactilevision' has no attribute {name!r}")

@@ -46,7 +46,7 @@ def test_bevel_score_on_rendered_presses():
     prof = press_profile(2.5 / 3, 0.48, steps=8, cell=0.5, edge_refinements=5)
     rng = np.random.default_rng(0)
     scores = {}
-    for depth in (0.26, 0.2724):
+    for depth in (0.29, 0.3003):
         z, touching = press_surface(prof, GaugeBlock(), indenter=1, depth_mm=depth,
                                     centre_px=(300.4, 250.2), shape=table.shape,
                                     mm_per_px=table.mm_per_px, thickness_mm=3.0)

@@ -5,10 +5,19 @@ indenters of radius a protruding w0 = 0.15 ... 0.60 mm above the block land,
 each with a bevel incision beside it. Pressed to depth w, the gel surface
 follows the finite-strain FEM (:class:`~tactilevision.sim.PressProfile`):
 the flat footprint, the sink-in, and the bulge that rises around the
-indenter. The land lies ``w - w0`` into the gel; where the gel would rise
-above it, the land flattens it (a rigid clip: the land's own elastic spread
-and its force are neglected, which holds while the land is only just
-touching, as at certification).
+indenter. The land lies ``w - w0`` into the gel.
+
+Two land models (:attr:`GaugeBlock.land`):
+
+- ``'ideal'`` (default): the paper's premise, "the gel touches the block
+  land: depth = w0 exactly". The bevel shows when the indenter is w0 deep;
+  the land is taken as relieved around the indenter, out of the bulge's
+  reach.
+- ``'bulge'``: a flat land. Where the gel would rise above it, the land
+  flattens it (a rigid clip: its elastic spread and its force are neglected,
+  which holds while it is only just touching); it first touches the bulge
+  crest, at the depth w_c < w0 of :func:`~tactilevision.contact.land_contact_depth`
+  (7 to 13% short of w0 for nu = 0.45 to 0.49 at a/h = 0.83).
 
 What the camera shows when the land first touches is *drawn*: the bevel edge
 appears as a thin V-shaped line impression beside the indenter (depth
@@ -49,6 +58,8 @@ class GaugeBlock:
         along the columns; 90 = +y, down the rows).
     bevel_length_mm, bevel_width_mm, bevel_depth_mm : float
         Size of the drawn bevel-edge line.
+    land : {'ideal', 'bulge'}
+        When the land meets the gel (module docstring).
     """
 
     depths_mm: tuple[float, ...] = (0.15, 0.30, 0.40, 0.50, 0.60)
@@ -58,6 +69,7 @@ class GaugeBlock:
     bevel_length_mm: float = 2.4
     bevel_width_mm: float = 0.15
     bevel_depth_mm: float = 0.050
+    land: str = "ideal"
 
     def bevel_centre_mm(self) -> np.ndarray:
         """(x, y) of the bevel line's middle relative to the indenter axis, mm."""
@@ -104,14 +116,19 @@ def press_surface(profile: PressProfile, block: GaugeBlock, *, indenter: int, de
         return np.zeros(shape, np.float32), False
     z = profile.height_map(shape, mm_per_px, h, centre_px, depth_mm).astype(np.float64)
     land = depth_mm - block.depths_mm[indenter]          # land level, into the gel
-    crest = bulge_height(profile, depth_mm / h)[0] * h
-    touching = land >= -crest
+    if block.land == "bulge":
+        touching = land >= -bulge_height(profile, depth_mm / h)[0] * h
+    elif block.land == "ideal":
+        touching = land >= -1e-9
+    else:
+        raise InputError(f"land must be 'ideal' or 'bulge', got {block.land!r}")
     rows, cols = np.indices(shape, dtype=np.float64)
     dx = (cols - centre_px[0]) * mm_per_px
     dy = (rows - centre_px[1]) * mm_per_px
     outside = np.hypot(dx, dy) > block.radius_mm
     if touching:
-        z = np.where(outside, np.maximum(z, land), z)
+        if block.land == "bulge":
+            z = np.where(outside, np.maximum(z, land), z)
         t = np.deg2rad(block.bevel_angle_deg)
         u = dx * np.cos(t) + dy * np.sin(t) - block.bevel_offset_mm
         v = -dx * np.sin(t) + dy * np.cos(t)

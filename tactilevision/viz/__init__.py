@@ -1,7 +1,11 @@
 """Figures: depth-map images, force-depth validation (more with the reports)."""
 
+from ._calibration import (
+    calibration_figures,
+    write_calibration_report,
+)
 from ._depth import depth_figure, nice_scale_bar_mm, save_depth_image
 from ._validation import save_validation_figure, validation_figure
 
-__all__ = ["depth_figure", "nice_scale_bar_mm", "save_depth_image", "save_validation_figure",
-           "validation_figure"]
+__all__ = ["calibration_figures", "depth_figure", "nice_scale_bar_mm", "save_depth_image",
+           "save_validation_figure", "validation_figure", "write_calibration_report"]

@@ -1,0 +1,157 @@
+"""``tactilevision calibrate``: a session folder in, E and nu with a report out (formats.md §3)."""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import sys
+from pathlib import Path
+
+from .._checks import InputError
+from ._fit import _write_json, summary
+
+_DESCRIPTION = """\
+The main job. Reads a session folder (session.toml, reference.png, frames/,
+frames.csv, forces.csv, optional presses.csv; formats.md section 1), finds
+every press in the frames, synchronises the F/T clock, certifies each press
+(footprint circle of radius a, indenter, first frame where the bevel shows,
+window_samples F/T samples from that instant, |Fxy| << Fz), lists the
+rejected presses with their reasons, fits E and nu (eq. 5 with the FEM beta
+and kappa tables) and writes a report folder: measurements.csv, fit.json,
+rejected.csv, figures and report.html. Exit status 2 on bad input."""
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    """Register the ``calibrate`` sub-command.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+    """
+    p = sub.add_parser("calibrate", help="session of frames and forces -> certified presses, "
+                       "E, nu, report", description=_DESCRIPTION,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("session", metavar="SESSION_DIR", type=Path)
+    p.add_argument("--out", type=Path, metavar="DIR",
+                   help="report folder (default: SESSION_DIR/calibration)")
+    p.add_argument("--json", metavar="FILE",
+                   help="write the fit.json object to FILE too ('-' for standard output)")
+    p.add_argument("--depth-rule", choices=("nominal", "land"), default="nominal",
+                   help="certified depth: the paper's w = w0 (default), or where the bulging "
+                        "gel meets a flat block land (FEM at the fitted nu; ill-conditioned)")
+    p.add_argument("--beta-table", choices=("fem", "paper"), default="fem")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--no-report", action="store_true",
+                   help="write measurements.csv, fit.json and rejected.csv only")
+    p.set_defaults(func=run)
+
+
+def _reconstructor(session):
+    """Depth reconstructor of the session's sensor, or None when there is no calibration."""
+    from .._assets import KNOWN_SENSORS, default_calibration_path
+    from ..optics import DepthReconstructor, PhotometricCalibration
+
+    cfg = session.config
+    path = cfg.calibration
+    if path is None and cfg.sensor_name in KNOWN_SENSORS:
+        path = default_calibration_path(cfg.sensor_name)
+    if path is None:
+        return None
+    cal = PhotometricCalibration.load(path)
+    if cal.shape != session.shape:
+        return None
+    return DepthReconstructor(cal, reference=session.reference)
+
+
+def result_dict(cal) -> dict:
+    """The ``fit.json`` object: the ``fit --json`` keys, then the session's.
+
+    Parameters
+    ----------
+    cal : SessionCalibration
+
+    Returns
+    -------
+    obj : dict
+    """
+    obj = cal.fit.to_json_dict()
+    c = cal.certification
+    obj.update({
+        "session": str(cal.session.path),
+        "depth_rule": cal.depth_rule,
+        "nu_rounds": cal.nu_rounds,
+        "clock_offset_s": c.clock_offset_s,
+        "clock_source": c.clock_source,
+        "n_rejected": len(c.rejected),
+        "rejected": [{"press": r.press, "reason": r.reason, "detail": r.detail,
+                      "t_frame_s": r.t_frame_s} for r in c.rejected],
+        "warnings": list(cal.warnings),
+        "seconds": cal.seconds,
+    })
+    return obj
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run ``calibrate``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+
+    Returns
+    -------
+    status : int
+        0 on success.
+
+    Raises
+    ------
+    InputError
+        For a broken session or too few certified presses; nothing is written
+        then.
+    """
+    from .._calibrate import calibrate_session
+    from ..io import read_session, write_measurements
+
+    session = read_session(args.session)
+    out = args.out if args.out is not None else session.path / "calibration"
+    progress = None
+    if not args.no_progress:
+        from tqdm import tqdm
+
+        def progress(it):
+            return tqdm(it, desc="frames", unit="frame", file=sys.stderr, mininterval=1.0)
+    cal = calibrate_session(session, depth_rule=args.depth_rule, beta_table=args.beta_table,
+                            progress=progress)
+    obj = result_dict(cal)
+    cfg = session.config
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InputError(f"cannot create the report folder {out}: {exc.strerror}") from None
+    write_measurements(out / "measurements.csv", cal.measurements(),
+                       thickness_mm=cfg.gel_thickness_mm, radius_mm=cfg.indenter_radius_mm)
+    with open(out / "rejected.csv", "w", newline="") as fh:
+        wr = csv.writer(fh)
+        wr.writerow(["press", "reason", "detail", "t_frame_s"])
+        for r in cal.certification.rejected:
+            wr.writerow([r.press, r.reason, r.detail, f"{r.t_frame_s:.4f}"])
+    _write_json(obj, str(out / "fit.json"))
+    if not args.no_report:
+        from ..viz import calibration_figures, write_calibration_report
+
+        figs = calibration_figures(cal, out, reconstructor=_reconstructor(session))
+        write_calibration_report(cal, out, figs)
+    if args.json is not None:
+        _write_json(obj, args.json)
+    if args.json != "-":
+        c = cal.certification
+        print(summary(cal.fit, out / "measurements.csv"))
+        print(f"  {len(c.presses)} presses certified, {len(c.rejected)} rejected"
+              + "".join(f"\n    press {r.press}: {r.reason} ({r.detail})" for r in c.rejected))
+        print(f"  clock offset {c.clock_offset_s:.4f} s ({c.clock_source}); depth rule "
+              f"{cal.depth_rule}; {cal.seconds:.1f} s")
+        for w in cal.warnings:
+            print(f"  warning: {w}")
+        if not args.no_report:
+            print(f"  report: {out / 'report.html'}")
+    return 0

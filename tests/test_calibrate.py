@@ -1,0 +1,173 @@
+"""The main job end to end: ``tactilevision calibrate`` on simulated sessions with known truth.
+
+The bundled sample session (sample_frames/gelsight_session, rendered through
+Taxim's GelSight shading on the real reference frame; truth.json) is run once
+through the command line; smaller sessions rendered on the fly test a wrong
+clock offset in session.toml, a misaligned press and a press at the pad edge.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+
+from tactilevision import InputError, calibrate_session
+from tactilevision.cli import main
+from tactilevision.io import COLUMN_ORDER, read_measurements
+
+SAMPLE = Path(__file__).resolve().parents[1] / "sample_frames" / "gelsight_session"
+
+
+@pytest.fixture(scope="module")
+def sample_run(tmp_path_factory):
+    out = tmp_path_factory.mktemp("calibrate")
+    status = main(["calibrate", str(SAMPLE), "--out", str(out / "report"), "--json",
+                   str(out / "result.json"), "--no-progress"])
+    assert status == 0
+    truth = json.loads((SAMPLE / "truth.json").read_text())
+    return out, truth
+
+
+def test_sample_session_is_small_and_complete():
+    size = sum(p.stat().st_size for p in SAMPLE.rglob("*") if p.is_file())
+    assert size < 20e6
+    for name in ("session.toml", "reference.png", "frames.csv", "forces.csv", "presses.csv",
+                 "truth.json", "make_session.py", "README.md", "LICENSE"):
+        assert (SAMPLE / name).is_file(), name
+    truth = json.loads((SAMPLE / "truth.json").read_text())
+    assert len(truth["presses"]) == 50
+    assert {p["indenter"] for p in truth["presses"]} == {0, 1, 2, 3, 4}
+
+
+def test_report_folder(sample_run):
+    out, _ = sample_run
+    rep = out / "report"
+    for name in ("measurements.csv", "session.toml", "fit.json", "rejected.csv", "report.html",
+                 "force_depth.png", "stiffness_line.png", "residuals.png", "mosaic.png"):
+        assert (rep / name).is_file(), name
+    html = (rep / "report.html").read_text()
+    assert "E = " in html and "misaligned" in html and "mosaic.png" in html
+    assert json.loads((out / "result.json").read_text()) == json.loads(
+        (rep / "fit.json").read_text())
+
+
+def test_certified_depths_and_forces(sample_run):
+    """Every certified press: depth within 10 um of the truth, force within
+    0.01 N (the F/T window's own scatter is 1/80 N / sqrt(200) = 0.9 mN)."""
+    out, truth = sample_run
+    tp = {p["press"]: p for p in truth["presses"]}
+    with open(out / "report" / "measurements.csv") as fh:
+        rows = list(csv.DictReader(fh))
+    assert len(rows) >= 44
+    assert list(rows[0].keys()) == [c for c in COLUMN_ORDER if c in rows[0]]
+    for col in ("press", "indenter", "depth_mm", "force_n", "force_std_n", "fx_n", "fy_n",
+                "time_s", "hold_s", "wait_s", "x_mm", "y_mm"):
+        assert col in rows[0], col
+    for r in rows:
+        t = tp[int(r["press"])]
+        assert int(r["indenter"]) == t["indenter"]
+        assert abs(float(r["depth_mm"]) - t["depth_mm"]) < 0.010
+        assert abs(float(r["force_n"]) - t["force_n"]) < 0.01
+        assert abs(float(r["x_mm"]) - t["x_mm"]) < 0.05
+        assert abs(float(r["y_mm"]) - t["y_mm"]) < 0.05
+    table = read_measurements(out / "report" / "measurements.csv")
+    assert table.thickness_mm == 3.0 and table.radius_mm == 2.5
+
+
+def test_E_and_nu(sample_run):
+    out, truth = sample_run
+    res = json.loads((out / "result.json").read_text())
+    assert res["E_mpa"] == pytest.approx(truth["E_mpa"], rel=0.03)
+    assert res["nu"] == pytest.approx(truth["nu"], abs=0.01)
+    assert res["E_ci95_mpa"][0] < truth["E_mpa"] < res["E_ci95_mpa"][1] or \
+        abs(res["E_mpa"] / truth["E_mpa"] - 1) < 0.01
+    assert res["clock_offset_s"] == pytest.approx(truth["clock_offset_s"], abs=0.003)
+    assert res["clock_source"] == "estimated"
+    assert res["depth_rule"] == "nominal"
+
+
+def test_rejections_have_reasons(sample_run):
+    out, truth = sample_run
+    res = json.loads((out / "result.json").read_text())
+    reasons = {r["press"]: r["reason"] for r in res["rejected"]}
+    mis = [p["press"] for p in truth["presses"] if p["misaligned"]]
+    edge = [p["press"] for p in truth["presses"] if p["edge"]]
+    assert all(reasons.get(i) == "misaligned" for i in mis) and mis
+    assert all(reasons.get(i) == "footprint cut by the pad edge" for i in edge) and edge
+    with open(out / "report" / "measurements.csv") as fh:
+        certified = {int(r["press"]) for r in csv.DictReader(fh)}
+    assert certified | set(reasons) == set(range(len(truth["presses"])))
+    assert not certified & set(reasons)
+
+
+# ---------------------------------------------------------------- scenarios
+
+
+@pytest.fixture(scope="module")
+def scenario(tmp_path_factory):
+    """Ten presses (two per indenter): press 2 misaligned, press 5 at the pad
+    edge, and session.toml stating a clock offset 0.4 s off the truth."""
+    pytest.importorskip("taxim")
+    from tactilevision.sim import SessionSpec, make_session, press_profile
+
+    folder = tmp_path_factory.mktemp("scenario") / "session"
+    prof = press_profile(2.5 / 3, 0.47, w_over_h_max=0.22, steps=8, cell=0.5,
+                         edge_refinements=5)
+    spec = SessionSpec(E_mpa=0.15, nu=0.47, repeats=2, clock_offset_s=-0.21,
+                       config_clock_offset_s=0.19, misaligned=(2,), edge_presses=(5,), seed=7)
+    truth = make_session(folder, spec, profile=prof)
+    return folder, truth
+
+
+def test_scenario_session(scenario):
+    folder, truth = scenario
+    cal = calibrate_session(folder)
+    c = cal.certification
+    assert c.clock_source == "estimated"
+    assert c.clock_offset_s == pytest.approx(-0.21, abs=0.005)
+    assert any("clock_offset_s = 0.19" in w for w in cal.warnings)
+    reasons = {r.press: r.reason for r in c.rejected}
+    assert reasons.get(2) == "misaligned"
+    assert reasons.get(5) == "footprint cut by the pad edge"
+    tp = {p["press"]: p for p in truth["presses"]}
+    assert len(c.presses) >= 7
+    for p, d in zip(c.presses, cal.depth_mm, strict=True):
+        assert abs(d - tp[p.press]["depth_mm"]) < 0.010
+        assert abs(p.force_n - tp[p.press]["force_n"]) < 0.01
+
+
+def test_correct_clock_offset_is_kept(scenario, tmp_path):
+    folder, _ = scenario
+    copy = tmp_path / "s"
+    shutil.copytree(folder, copy)
+    toml = copy / "session.toml"
+    toml.write_text(toml.read_text().replace("clock_offset_s = 0.19", "clock_offset_s = -0.2105"))
+    from tactilevision.contact import certify_session
+    from tactilevision.io import read_session
+
+    c = certify_session(read_session(copy))
+    assert c.clock_source == "session.toml" and c.clock_offset_s == -0.2105
+    assert not c.warnings
+
+
+def test_bad_sessions(scenario, tmp_path, capsys):
+    folder, _ = scenario
+    broken = tmp_path / "broken"
+    shutil.copytree(folder, broken)
+    (broken / "forces.csv").unlink()
+    out = tmp_path / "out"
+    assert main(["calibrate", str(broken), "--out", str(out), "--no-progress"]) == 2
+    assert "forces.csv" in capsys.readouterr().err
+    assert not out.exists()
+    # frames without any press
+    empty = tmp_path / "empty"
+    shutil.copytree(folder, empty)
+    frames = sorted((empty / "frames").iterdir())
+    for f in frames:
+        shutil.copy(folder / "frames" / frames[0].name, f)
+    with pytest.raises(InputError, match="no press found"):
+        calibrate_session(empty)
