@@ -78,7 +78,7 @@ def footprint_from_frame(mask: np.ndarray, mm_per_px: float, *, indenter_radius_
 def bevel_score(frame: np.ndarray, reference: np.ndarray | None, centre_px: tuple[float, float],
                 mm_per_px: float, *,
                 offset_mm: float, angle_deg: float = 0.0, length_mm: float = 2.4,
-                search_mm: float = 0.6, blur_px: float = 5.0, at_mm: float = 0.1) -> float:
+                search_mm: float = 0.6, blur_mm: float = 0.15, at_mm: float = 0.1) -> float:
     """Strength of a thin straight line where the bevel edge lies.
 
     Parameters
@@ -95,10 +95,12 @@ def bevel_score(frame: np.ndarray, reference: np.ndarray | None, centre_px: tupl
         columns, 90 = +y down the rows), length; the line runs across that
         direction.
     search_mm : float, default 0.6
-        The background statistics are taken within this of `offset_mm`
-        along the direction.
-    blur_px : float, default 5.0
-        Scale of the high-pass that removes the smooth shading of the bulge.
+        The background statistics are taken within this (at least 15 px) of
+        `offset_mm` along the direction, leaving out the line's own
+        neighbourhood (0.25 mm or 3 px).
+    blur_mm : float, default 0.15
+        Scale of the high-pass that removes the smooth shading of the bulge
+        (at least 1.5 px).
     at_mm : float, default 0.1
         The line must peak within this of `offset_mm` (the footprint centre
         is known to a fraction of a pixel; a fixed place keeps the false-alarm
@@ -107,8 +109,8 @@ def bevel_score(frame: np.ndarray, reference: np.ndarray | None, centre_px: tupl
     Returns
     -------
     score : float
-        Peak of the line profile near `offset_mm` above the profile's median,
-        in robust standard deviations (about 0 to 4 without a line; NaN when
+        Peak of the line profile near `offset_mm` above the background's
+        median, in robust standard deviations (about 0 to 4 without a line; NaN when
         the region leaves the image).
 
     Notes
@@ -123,6 +125,10 @@ def bevel_score(frame: np.ndarray, reference: np.ndarray | None, centre_px: tupl
     h, w = f.shape[:2]
     t = np.deg2rad(angle_deg)
     s = float(mm_per_px)
+    blur_px = max(1.5, blur_mm / s)
+    at_mm = max(at_mm, 1.01 * s)
+    search_mm = max(search_mm, 15 * s)
+    guard_mm = max(0.25, 3 * s)          # the line's own width, kept out of the background
     cx, cy = float(centre_px[0]), float(centre_px[1])
     bx, by = cx + offset_mm / s * np.cos(t), cy + offset_mm / s * np.sin(t)
     half = int(np.ceil((search_mm + 0.5 * length_mm) / s + 3 * blur_px)) + 2
@@ -146,7 +152,8 @@ def bevel_score(frame: np.ndarray, reference: np.ndarray | None, centre_px: tupl
     ok = counts > 0
     prof = sums[ok] / counts[ok]
     centre = (np.arange(counts.size)[ok] + lo) * s
-    med = float(np.median(prof))
-    mad = 1.4826 * float(np.median(np.abs(prof - med)))
+    bg = prof[np.abs(centre) > guard_mm]
+    med = float(np.median(bg))
+    mad = 1.4826 * float(np.median(np.abs(bg - med)))
     near = np.abs(centre) <= at_mm
     return float((prof[near].max() - med) / max(mad, 1e-6))

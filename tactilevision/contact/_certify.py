@@ -44,7 +44,7 @@ __all__ = ["Certification", "CertifiedPress", "Rejection", "certified_depths", "
 
 #: Presses whose |(Fx, Fy)| / Fz exceeds this are misaligned (the paper: "much smaller").
 MAX_TANGENTIAL_RATIO = 0.1
-#: Fraction of clipped (0 or 255) pixels near the press that makes a frame saturated.
+#: Fraction of saturated pixels near the press (not in the reference) that rejects it.
 MAX_SATURATED_FRACTION = 0.005
 
 
@@ -163,15 +163,22 @@ def _runs(times: np.ndarray, on: np.ndarray, max_gap_s: float) -> list[np.ndarra
     return [r for r in np.split(idx, split) if r.size >= 2]
 
 
-def _saturated(frame: np.ndarray, fp: Footprint | None) -> float:
-    if fp is None:
-        sub = frame
-    else:
-        cx, cy = fp.center_px
-        r = int(2 * fp.radius_px)
-        sub = frame[max(0, int(cy) - r):int(cy) + r, max(0, int(cx) - r):int(cx) + r]
-    clipped = np.any((sub == 0) | (sub == 255), axis=-1)
-    return float(clipped.mean()) if clipped.size else 0.0
+def _saturated(frame: np.ndarray, reference: np.ndarray, fp: Footprint) -> float:
+    """Fraction of pixels near the press saturated in the frame but not in the reference.
+
+    Saturated: a channel at 255 (over-exposed) or every channel at 0 (black).
+    A single dark channel at 0 is not counted: dim references (GelSlim 3.0)
+    have channels that flicker to 0 with the noise alone.
+    """
+    cx, cy = fp.center_px
+    r = int(2 * fp.radius_px)
+    win = (slice(max(0, int(cy) - r), int(cy) + r), slice(max(0, int(cx) - r), int(cx) + r))
+
+    def clipped(img: np.ndarray) -> np.ndarray:
+        return np.any(img == 255, axis=-1) | np.all(img == 0, axis=-1)
+
+    new = clipped(frame[win]) & ~clipped(reference[win])
+    return float(new.mean()) if new.size else 0.0
 
 
 def certify_session(session, *, min_contact_px: int = 200, bevel_threshold: float = 5.5,
@@ -279,10 +286,10 @@ def certify_session(session, *, min_contact_px: int = 200, bevel_threshold: floa
                    f"{cfg.indenter_radius_mm:g} mm")
             continue
         x_mm, y_mm = (fp.center_px[0] - hw) * s, (fp.center_px[1] - hh) * s
-        sat = _saturated(frame, fp)
+        sat = _saturated(frame, ref, fp)
         if sat > MAX_SATURATED_FRACTION:
             reject("saturated frames", f"{100 * sat:.1f}% of the pixels near the press are "
-                   "clipped at 0 or 255")
+                   "saturated (a channel at 255 or all at 0) and are not in the reference")
             continue
         # indenter
         if commanded is not None:

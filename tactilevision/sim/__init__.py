@@ -4,10 +4,10 @@ logs, and whole session folders with their ``truth.json``."""
 
 from ._block import GaugeBlock, press_surface
 from ._press import PressProfile, press_profile
-from ._render import ShadingTable, taxim_shading
+from ._render import ShadingTable, fit_shading_table, taxim_shading
 from ._schedule import PressSchedule, depth_trajectory, ft_log, press_schedule
 from ._session import SessionSpec, make_session
 
 __all__ = ["GaugeBlock", "PressProfile", "PressSchedule", "SessionSpec", "ShadingTable",
-           "depth_trajectory", "ft_log", "make_session", "press_profile", "press_schedule",
-           "press_surface", "taxim_shading"]
+           "depth_trajectory", "fit_shading_table", "ft_log", "make_session", "press_profile",
+           "press_schedule", "press_surface", "taxim_shading"]

@@ -32,7 +32,7 @@ import numpy as np
 
 from .._checks import InputError
 
-__all__ = ["ShadingTable", "taxim_shading"]
+__all__ = ["ShadingTable", "fit_shading_table", "taxim_shading"]
 
 
 @dataclass(frozen=True)
@@ -199,3 +199,107 @@ def taxim_shading(sensor: str = "gelsight") -> tuple[ShadingTable, np.ndarray]:
     table = ShadingTable(coeffs=coeffs, shape=(int(params["h"]), int(params["w"])),
                          mm_per_px=float(params["pixmm"]))
     return table, reference
+
+
+def fit_shading_table(reference: np.ndarray, frames: np.ndarray, centres_px: np.ndarray,
+                      radii_px: np.ndarray, *, ball_radius_mm: float, mm_per_px: float,
+                      num_bins: int = 48, min_samples: int = 40) -> ShadingTable:
+    """Fit a shading table of Taxim's form to ball presses of a sensor.
+
+    For every (slope, direction) bin the colour change ``frame - reference``
+    of the pixels inside the contact circles whose ball normal falls in the
+    bin is fitted, per channel, by least squares in ``[x^2, y^2, x y, x, y,
+    1]`` (Taxim, Sec. III-B). A forward model (normal -> colour), unlike the
+    reconstructor's inverse one, and fitted to the real frames.
+
+    Parameters
+    ----------
+    reference : (H, W, 3) uint8 ndarray
+        No-contact frame.
+    frames : (N, H, W, 3) uint8 ndarray
+        Ball presses.
+    centres_px : (N, 2) float ndarray
+        Contact-circle centres (x = column, y = row), px.
+    radii_px : (N,) float ndarray
+        Contact-circle radii, px.
+    ball_radius_mm, mm_per_px : float
+    num_bins : int, default 48
+        Bins along the slope angle (over [0, pi/2]) and along the direction.
+    min_samples : int, default 40
+        Bins with fewer pixels copy the nearest fitted bin of the same
+        direction (steeper slopes than the ball shows) or direction.
+
+    Returns
+    -------
+    ShadingTable
+        Slope bin 0 is the flat gel (zero change).
+
+    Raises
+    ------
+    InputError
+        For mismatched shapes or no usable pixels.
+    """
+    from ..optics import ball_gradients
+
+    ref = np.asarray(reference, np.float64)
+    fr = np.asarray(frames)
+    if fr.ndim != 4 or fr.shape[1:] != ref.shape or ref.ndim != 3 or ref.shape[2] != 3:
+        raise InputError(f"frames {fr.shape} and reference {ref.shape} must be (N, H, W, 3) and "
+                         "(H, W, 3)")
+    c = np.asarray(centres_px, np.float64).reshape(-1, 2)
+    r = np.asarray(radii_px, np.float64).ravel()
+    if c.shape[0] != fr.shape[0] or r.shape[0] != fr.shape[0]:
+        raise InputError(f"{fr.shape[0]} frames but {c.shape[0]} centres and {r.shape[0]} radii")
+    h, w = ref.shape[:2]
+    b = int(num_bins)
+    ball_px = ball_radius_mm / mm_per_px
+    rows, cols = np.indices((h, w), dtype=np.float64)
+    keys, feats, targets = [], [], []
+    for k in range(fr.shape[0]):
+        gx, gy, inside = ball_gradients((h, w), tuple(c[k]), 0.95 * r[k], ball_px)
+        gx, gy = gx[inside].astype(np.float64), gy[inside].astype(np.float64)
+        slope = np.arctan(np.hypot(gx, gy))
+        direction = np.arctan2(gy, gx)
+        i_mag = np.clip(np.floor(slope / (0.5 * np.pi / (b - 1))).astype(np.int64), 0, b - 1)
+        i_dir = np.clip(np.floor((direction + np.pi) / (2 * np.pi / (b - 1))).astype(np.int64),
+                        0, b - 1)
+        x, y = cols[inside] / w, rows[inside] / h
+        keys.append(i_mag * b + i_dir)
+        feats.append(np.stack([x * x, y * y, x * y, x, y, np.ones_like(x)], axis=1))
+        targets.append(fr[k][inside].astype(np.float64) - ref[inside])
+    if not keys:
+        raise InputError("no ball press to fit the shading table to")
+    key = np.concatenate(keys)
+    a = np.concatenate(feats)
+    t = np.concatenate(targets)
+    coeffs = np.zeros((b, b, 6, 3))
+    fitted = np.zeros((b, b), bool)
+    order = np.argsort(key, kind="stable")
+    key, a, t = key[order], a[order], t[order]
+    bounds = np.flatnonzero(np.diff(key)) + 1
+    for lo, hi in zip(np.r_[0, bounds], np.r_[bounds, key.size], strict=True):
+        if hi - lo < min_samples:
+            continue
+        im, idr = divmod(int(key[lo]), b)
+        if im == 0:
+            continue
+        sol, *_ = np.linalg.lstsq(a[lo:hi], t[lo:hi], rcond=None)
+        coeffs[im, idr] = sol
+        fitted[im, idr] = True
+    if not fitted.any():
+        raise InputError("no (slope, direction) bin has enough pixels: more or larger presses")
+    for idr in range(b):                      # steeper than seen: the steepest fitted
+        col = np.flatnonzero(fitted[:, idr])
+        if col.size == 0:
+            continue
+        for im in range(1, b):
+            if not fitted[im, idr]:
+                near = col[np.argmin(np.abs(col - im))]
+                coeffs[im, idr] = coeffs[near, idr]
+    have = np.flatnonzero(fitted.any(axis=0))
+    for idr in range(b):                      # directions never seen: the nearest
+        if idr not in have:
+            d = np.abs((have - idr + b // 2) % b - b // 2)
+            coeffs[1:, idr] = coeffs[1:, have[np.argmin(d)]]
+    scale = np.array([w * w, h * h, w * h, w, h, 1.0])[:, None]
+    return ShadingTable(coeffs=coeffs / scale, shape=(h, w), mm_per_px=float(mm_per_px))

@@ -74,6 +74,9 @@ class SessionSpec:
     edge_presses : tuple of int
         Presses placed so the footprint is cut by the edge of the sensed area.
     jpeg_quality : int
+    sensor_name : str
+        ``[sensor] name`` of session.toml ('gelsight' picks the shipped
+        photometric calibration for the report's height maps).
     seed : int
     """
 
@@ -101,6 +104,7 @@ class SessionSpec:
     misaligned_fraction: float = 0.3
     edge_presses: tuple[int, ...] = ()
     jpeg_quality: int = 75
+    sensor_name: str = "gelsight"
     seed: int = 0
 
 
@@ -244,7 +248,7 @@ def _write_toml(out: Path, spec: SessionSpec, s: float, shape: tuple[int, int],
                 half: np.ndarray) -> None:
     b = spec.block
     lines = [
-        "[sensor]", 'name = "gelsight"', f"mm_per_px = {s}",
+        "[sensor]", f'name = "{spec.sensor_name}"', f"mm_per_px = {s}",
         f"gel_thickness_mm = {spec.thickness_mm}",
         f"gel_radius_mm = {float(half.max()):.3f}", "",
         "[indenter]", f"radius_mm = {b.radius_mm}", "",
