@@ -171,3 +171,33 @@ def test_bad_sessions(scenario, tmp_path, capsys):
         shutil.copy(folder / "frames" / frames[0].name, f)
     with pytest.raises(InputError, match="no press found"):
         calibrate_session(empty)
+
+
+def test_saturated_and_unseen_bevel_are_rejected(scenario, tmp_path):
+    """Over-exposed frames of one press, and a bevel looked for on the wrong side."""
+    import cv2
+
+    from tactilevision.contact import certify_session
+    from tactilevision.io import read_session
+
+    folder, truth = scenario
+    copy = tmp_path / "s"
+    shutil.copytree(folder, copy)
+    p = truth["presses"][0]
+    session = read_session(copy)
+    t0, t1 = p["t_start_s"], p["t_start_s"] + 1.25
+    cx = p["x_mm"] / session.config.mm_per_px + (session.shape[1] - 1) / 2
+    cy = p["y_mm"] / session.config.mm_per_px + (session.shape[0] - 1) / 2
+    for path, t in zip(session.frame_paths, session.frame_times_s, strict=True):
+        if t0 <= t <= t1:
+            img = cv2.imread(str(path))
+            img[int(cy) - 60:int(cy) + 60, int(cx) - 60:int(cx) + 60, 1] = 255
+            cv2.imwrite(str(path), img, [cv2.IMWRITE_JPEG_QUALITY, 100])
+    c = certify_session(read_session(copy))
+    assert {r.press: r.reason for r in c.rejected}.get(0) == "saturated frames"
+    toml = copy / "session.toml"
+    toml.write_text(toml.read_text().replace("bevel_angle_deg = 0.0", "bevel_angle_deg = 180.0"))
+    c = certify_session(read_session(copy))
+    reasons = {r.press: r.reason for r in c.rejected}
+    assert not c.presses
+    assert sum(r == "bevel never seen" for r in reasons.values()) >= 6

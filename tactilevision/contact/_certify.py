@@ -44,7 +44,7 @@ __all__ = ["Certification", "CertifiedPress", "Rejection", "certified_depths", "
 
 #: Presses whose |(Fx, Fy)| / Fz exceeds this are misaligned (the paper: "much smaller").
 MAX_TANGENTIAL_RATIO = 0.1
-#: Fraction of saturated pixels near the press (not in the reference) that rejects it.
+#: Fraction of saturated pixels around the contact (not in the reference) that rejects it.
 MAX_SATURATED_FRACTION = 0.005
 
 
@@ -163,16 +163,17 @@ def _runs(times: np.ndarray, on: np.ndarray, max_gap_s: float) -> list[np.ndarra
     return [r for r in np.split(idx, split) if r.size >= 2]
 
 
-def _saturated(frame: np.ndarray, reference: np.ndarray, fp: Footprint) -> float:
-    """Fraction of pixels near the press saturated in the frame but not in the reference.
+def _saturated(frame: np.ndarray, reference: np.ndarray, mask: np.ndarray) -> float:
+    """Fraction of the contact's bounding box saturated in the frame but not in the reference.
 
     Saturated: a channel at 255 (over-exposed) or every channel at 0 (black).
     A single dark channel at 0 is not counted: dim references (GelSlim 3.0)
     have channels that flicker to 0 with the noise alone.
     """
-    cx, cy = fp.center_px
-    r = int(2 * fp.radius_px)
-    win = (slice(max(0, int(cy) - r), int(cy) + r), slice(max(0, int(cx) - r), int(cx) + r))
+    rows, cols = np.nonzero(mask)
+    if rows.size == 0:
+        return 0.0
+    win = (slice(rows.min(), rows.max() + 1), slice(cols.min(), cols.max() + 1))
 
     def clipped(img: np.ndarray) -> np.ndarray:
         return np.any(img == 255, axis=-1) | np.all(img == 0, axis=-1)
@@ -266,12 +267,17 @@ def certify_session(session, *, min_contact_px: int = 200, bevel_threshold: floa
         peak = int(run[np.argmax(area[run])])
         frame = session.frame(peak)
         mask = contact_mask(frame, ref, sigma=sigma)
+        sat = _saturated(frame, ref, mask)
         fp = footprint_from_frame(mask, s, indenter_radius_mm=cfg.indenter_radius_mm)
 
         def reject(reason: str, detail: str, at: int = peak, k: int = k, t0: float = t0) -> None:
             rejected.append(Rejection(press=k, reason=reason, detail=detail, t_frame_s=t0,
                                       frame=at))
 
+        if sat > MAX_SATURATED_FRACTION:
+            reject("saturated frames", f"{100 * sat:.1f}% of the pixels of the contact are "
+                   "saturated (a channel at 255 or all at 0) and are not in the reference")
+            continue
         edge_touch = bool(mask[0].any() or mask[-1].any() or mask[:, 0].any()
                           or mask[:, -1].any())
         if fp is None or fp.cut_by_edge:
@@ -286,11 +292,6 @@ def certify_session(session, *, min_contact_px: int = 200, bevel_threshold: floa
                    f"{cfg.indenter_radius_mm:g} mm")
             continue
         x_mm, y_mm = (fp.center_px[0] - hw) * s, (fp.center_px[1] - hh) * s
-        sat = _saturated(frame, ref, fp)
-        if sat > MAX_SATURATED_FRACTION:
-            reject("saturated frames", f"{100 * sat:.1f}% of the pixels near the press are "
-                   "saturated (a channel at 255 or all at 0) and are not in the reference")
-            continue
         # indenter
         if commanded is not None:
             if len(commanded["press"]) == len(runs):
