@@ -201,3 +201,25 @@ def test_saturated_and_unseen_bevel_are_rejected(scenario, tmp_path):
     reasons = {r.press: r.reason for r in c.rejected}
     assert not c.presses
     assert sum(r == "bevel never seen" for r in reasons.values()) >= 6
+
+
+def test_make_session_is_deterministic(tmp_path):
+    pytest.importorskip("taxim")
+    from tactilevision.sim import GaugeBlock, SessionSpec, make_session, press_profile
+
+    prof = press_profile(2.5 / 3, 0.48, w_over_h_max=0.22, steps=8, cell=0.5,
+                         edge_refinements=5)
+    spec = SessionSpec(block=GaugeBlock(depths_mm=(0.3,)), repeats=2, seed=11)
+    a = make_session(tmp_path / "a", spec, profile=prof)
+    b = make_session(tmp_path / "b", spec, profile=prof)
+    assert a == b
+    for name in ("forces.csv", "frames.csv", "presses.csv", "session.toml"):
+        assert (tmp_path / "a" / name).read_bytes() == (tmp_path / "b" / name).read_bytes()
+    frames = sorted((tmp_path / "a" / "frames").iterdir())
+    assert frames and all(f.read_bytes() == (tmp_path / "b" / "frames" / f.name).read_bytes()
+                          for f in frames)
+    c = make_session(tmp_path / "c", SessionSpec(block=GaugeBlock(depths_mm=(0.3,)), repeats=2,
+                                                 seed=12), profile=prof)
+    assert c["presses"][0]["x_mm"] != a["presses"][0]["x_mm"]
+    with pytest.raises(InputError, match="not empty"):
+        make_session(tmp_path / "a", spec, profile=prof)

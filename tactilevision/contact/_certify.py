@@ -13,7 +13,9 @@ press at a time, on a :class:`~tactilevision.io.Session`:
    is replaced by the estimate, with a warning;
 3. per press: the footprint (a circle on the flat region enclosed by the
    contact ring; its radius must match a, the pad edge must not cut it), the
-   indenter (``presses.csv``, else the nearest commanded position), the first
+   indenter (from ``presses.csv``: row by row when it lists as many presses as
+   the frames show, else the nearest commanded position; without it the
+   press is rejected, as photometric depth cannot tell the indenters), the first
    frame where the bevel line shows (among the frames within 10% of the
    press's largest contact, seen in two consecutive frames or at twice the
    threshold), the F/T window of ``window_samples``
