@@ -39,20 +39,26 @@ from ._effects import EFFECT_NAMES, FIT_EFFECTS, check_fit_effects
 from ._fem_tables import kappa_n
 from ._fit import MAX_W_OVER_H, fit_indentation
 from ._kappa import HAYES_1972, KappaTable, kappa
+from ._model import EFFECTS, Effect, IndentationModel, ModelFit, Param, make_effect
 from ._neohookean import neo_hookean_constants
 from ._result import IndentationFit
 from ._validate import IndentationValidation, validate_indentation
 
 __all__ = [
+    "EFFECTS",
     "EFFECT_NAMES",
     "FIT_EFFECTS",
     "HAYES_1972",
     "MAX_W_OVER_H",
     "PAPER_BETA_RELATION",
     "BetaRelation",
+    "Effect",
     "IndentationFit",
+    "IndentationModel",
     "IndentationValidation",
     "KappaTable",
+    "ModelFit",
+    "Param",
     "beta",
     "beta_from_nu",
     "beta_relation",
@@ -60,6 +66,7 @@ __all__ = [
     "fit_indentation",
     "kappa",
     "kappa_n",
+    "make_effect",
     "neo_hookean_constants",
     "nu_from_beta",
     "validate_indentation",

@@ -1,0 +1,493 @@
+"""Indentation models made of named effects (formats.md §4), fitted by robust least squares.
+
+A model is the base indentation law plus a list of effects from the
+catalogue. The base is the paper's eq. (5), ``P = c w (1 + beta w / h)``
+(``base='paper'``: the layer with ``large_deformation``), or the small-strain
+layer ``P = c w`` (``base='layer'``, eq. 2). Each effect is one small class
+(in the manner of lmfit's composable models): its parameters with bounds and
+units, the columns it needs, and how it changes the depth the law sees or the
+force it predicts. Adding an effect to the catalogue is one new class in
+:data:`EFFECTS`.
+
+Effects act in a fixed order: depth effects first (``depth_offset``), then the
+law, then multiplicative stiffness effects, then additive force effects
+(``force_offset``, ``force_drift``).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from .._checks import InputError
+
+__all__ = ["EFFECTS", "Effect", "IndentationModel", "ModelFit", "Param", "make_effect"]
+
+
+@dataclass(frozen=True)
+class Param:
+    """One model parameter.
+
+    Attributes
+    ----------
+    name : str
+    value : float
+        Starting value.
+    lower, upper : float
+        Bounds.
+    unit : str
+    """
+
+    name: str
+    value: float
+    lower: float = -math.inf
+    upper: float = math.inf
+    unit: str = ""
+
+
+def _centred(x: np.ndarray) -> np.ndarray:
+    return x - np.nanmean(x)
+
+
+class Effect:
+    """Base class of a catalogue effect.
+
+    Subclasses set :attr:`name`, :attr:`params`, :attr:`columns` and
+    :attr:`kind` (``'depth'``, ``'stiffness'`` or ``'force'``) and implement
+    :meth:`apply`; the docstring gives the physics and its source.
+    """
+
+    name: str = ""
+    params: tuple[Param, ...] = ()
+    columns: tuple[str, ...] = ()
+    kind: str = "stiffness"
+
+    def apply(self, p: Mapping[str, float], data: Mapping[str, np.ndarray],
+              value: np.ndarray) -> np.ndarray:
+        """Return the changed depth (``kind='depth'``), stiffness factor
+        (``'stiffness'``, multiplies P) or force (``'force'``)."""
+        raise NotImplementedError
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}()"
+
+
+class LargeDeformation(Effect):
+    """Finite-strain stiffening, P/w = c (1 + beta w / h) (paper, eq. 5).
+
+    Part of the base model ``'paper'``; an effect of ``base='layer'``.
+    """
+
+    name = "large_deformation"
+    params = (Param("beta", 1.0, -5.0, 20.0, ""),)
+    columns = ("depth_mm",)
+
+    def apply(self, p, data, value):
+        return 1.0 + p["beta"] * data["depth_mm"] / data["_h"]
+
+
+class DepthOffset(Effect):
+    """A constant error in the certified depth, w_true = w + delta (bevel-onset
+    lag, block height error). Shows along depth: P/w curves at small w."""
+
+    name = "depth_offset"
+    params = (Param("delta_mm", 0.0, -0.05, 0.05, "mm"),)
+    columns = ("depth_mm",)
+    kind = "depth"
+
+    def apply(self, p, data, value):
+        return value + p["delta_mm"]
+
+
+class ForceOffset(Effect):
+    """A constant force-sensor bias (bad tare), P + b."""
+
+    name = "force_offset"
+    params = (Param("offset_n", 0.0, -1.0, 1.0, "N"),)
+    columns = ("depth_mm",)
+    kind = "force"
+
+    def apply(self, p, data, value):
+        return value + p["offset_n"]
+
+
+class ForceDrift(Effect):
+    """A force-sensor bias changing within a session, P + d (t - mean t)."""
+
+    name = "force_drift"
+    params = (Param("drift_n_per_s", 0.0, -1.0, 1.0, "N/s"),)
+    columns = ("time_s",)
+    kind = "force"
+
+    def apply(self, p, data, value):
+        return value + p["drift_n_per_s"] * _centred(data["time_s"])
+
+
+class ViscoelasticRelaxation(Effect):
+    """Force relaxing while the depth is held: a standard linear solid,
+    P (1 - g (1 - exp(-t_hold / tau))) (e.g. Lakes, Viscoelastic Materials, 2009, ch. 2)."""
+
+    name = "viscoelastic_relaxation"
+    params = (Param("g", 0.05, 0.0, 0.9, ""), Param("tau_s", 1.0, 1e-3, 1e3, "s"))
+    columns = ("hold_s",)
+
+    def apply(self, p, data, value):
+        return 1.0 - p["g"] * (1.0 - np.exp(-data["hold_s"] / p["tau_s"]))
+
+
+class IncompleteRecovery(Effect):
+    """The gel still recovering from the previous press: stiffer after a short
+    rest, P (1 + r exp(-t_wait / tau)) (method.md: too short a wait makes the
+    next press stiffer)."""
+
+    name = "incomplete_recovery"
+    params = (Param("r", 0.05, 0.0, 2.0, ""), Param("tau_s", 2.0, 1e-2, 1e4, "s"))
+    columns = ("wait_s",)
+
+    def apply(self, p, data, value):
+        w = np.nan_to_num(data["wait_s"], nan=np.inf)
+        return 1.0 + p["r"] * np.exp(-w / p["tau_s"])
+
+
+class Aging(Effect):
+    """Stiffness changing over calendar time, P (1 + k day) (silicone aging:
+    Ito, Hirai and Ohki, IEEE TDEI 27(3), 2020)."""
+
+    name = "aging"
+    params = (Param("k_per_day", 0.0, -0.1, 0.1, "1/day"),)
+    columns = ("day",)
+
+    def apply(self, p, data, value):
+        return 1.0 + p["k_per_day"] * data["day"]
+
+
+class SpatialNonuniformity(Effect):
+    """Stiffness varying over the gel surface, P (1 + gx x + gy y) (x, y from
+    the gel centre; the paper presses at different positions for this)."""
+
+    name = "spatial_nonuniformity"
+    params = (Param("gx_per_mm", 0.0, -0.2, 0.2, "1/mm"),
+              Param("gy_per_mm", 0.0, -0.2, 0.2, "1/mm"))
+    columns = ("x_mm", "y_mm")
+
+    def apply(self, p, data, value):
+        return 1.0 + p["gx_per_mm"] * data["x_mm"] + p["gy_per_mm"] * data["y_mm"]
+
+
+class StiffnessTrend(Effect):
+    """A generic stiffness change along any covariate column,
+    P (1 + k (x - mean x)): offered when residuals carry structure along a
+    column that no named effect explains."""
+
+    kind = "stiffness"
+
+    def __init__(self, column: str) -> None:
+        if not column:
+            raise InputError("stiffness_trend needs a column: stiffness_trend:<column>")
+        self.column = column
+        self.name = f"stiffness_trend:{column}"
+        self.params = (Param("k", 0.0, -10.0, 10.0, f"1/({column} unit)"),)
+        self.columns = (column,)
+
+    def apply(self, p, data, value):
+        return 1.0 + p["k"] * _centred(data[self.column])
+
+    def __repr__(self) -> str:
+        return f"StiffnessTrend({self.column!r})"
+
+
+#: The catalogue: name -> effect class (formats.md §4, names are the contract).
+EFFECTS: dict[str, type[Effect]] = {
+    c.name: c for c in (LargeDeformation, DepthOffset, ForceOffset, ForceDrift,
+                        ViscoelasticRelaxation, IncompleteRecovery, Aging,
+                        SpatialNonuniformity)
+}
+
+
+def make_effect(name: str) -> Effect:
+    """An effect of the catalogue by its name (``stiffness_trend:<column>`` too).
+
+    Raises
+    ------
+    InputError
+        For a name not in the catalogue (the message lists them).
+    """
+    if name.startswith("stiffness_trend:"):
+        return StiffnessTrend(name.partition(":")[2].strip())
+    if name not in EFFECTS:
+        raise InputError(f"unknown effect '{name}'; valid names: "
+                         f"{', '.join([*EFFECTS, 'stiffness_trend:<column>'])}")
+    return EFFECTS[name]()
+
+
+@dataclass(frozen=True)
+class ModelFit:
+    """Result of :meth:`IndentationModel.fit`.
+
+    Attributes
+    ----------
+    model : IndentationModel
+    params : dict of str to float
+        ``c_n_per_mm`` and every effect's parameters (``effect.param``).
+    stderr : dict of str to float
+        Standard errors from the Jacobian at the solution (NaN where a
+        parameter sits on a bound or is not identified).
+    correlation : (K, K) float64 ndarray
+        Parameter correlations, in the order of ``params``.
+    predicted_n, residuals_n : (N,) float64 ndarray
+    weights : (N,) float64 ndarray
+    rmse_n : float
+        Unweighted root-mean-square residual.
+    bic, aic : float
+        From the (weighted) residual sum of squares, Gaussian likelihood.
+    n_presses, n_params : int
+    loss : str
+    outliers : (N,) bool ndarray
+        Presses the robust loss weights below one half (for 'soft_l1':
+        |residual| > sqrt(3) times the loss scale).
+    success : bool
+    message : str
+    """
+
+    model: IndentationModel
+    params: dict[str, float]
+    stderr: dict[str, float]
+    correlation: np.ndarray
+    predicted_n: np.ndarray
+    residuals_n: np.ndarray
+    weights: np.ndarray
+    rmse_n: float
+    bic: float
+    aic: float
+    n_presses: int
+    n_params: int
+    loss: str
+    outliers: np.ndarray
+    success: bool
+    message: str
+
+    @property
+    def beta(self) -> float:
+        """The stiffening beta of eq. (5) (NaN without ``large_deformation``)."""
+        return self.params.get("large_deformation.beta", math.nan)
+
+
+@dataclass(frozen=True)
+class IndentationModel:
+    """The base indentation law plus catalogue effects.
+
+    Parameters
+    ----------
+    base : {'paper', 'layer'}, default 'paper'
+        ``'paper'``: eq. (5) (the layer with ``large_deformation``);
+        ``'layer'``: the small-strain law P = c w (eq. 2).
+    effects : tuple of str
+        Catalogue names added to the base.
+
+    Examples
+    --------
+    >>> m = IndentationModel().with_effect("incomplete_recovery")
+    >>> m.names
+    ('large_deformation', 'incomplete_recovery')
+    >>> m.columns
+    ('depth_mm', 'force_n', 'wait_s')
+    """
+
+    base: str = "paper"
+    effects: tuple[str, ...] = field(default=())
+
+    def __post_init__(self) -> None:
+        if self.base not in ("paper", "layer"):
+            raise InputError(f"base must be 'paper' or 'layer', got {self.base!r}")
+        for name in self.effects:
+            make_effect(name)
+        if len(set(self.names)) != len(self.names):
+            raise InputError(f"an effect appears twice in {self.names}")
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """Effect names including the base's ``large_deformation``."""
+        return (("large_deformation",) if self.base == "paper" else ()) + tuple(self.effects)
+
+    def _effects(self) -> list[Effect]:
+        return [make_effect(n) for n in self.names]
+
+    @property
+    def columns(self) -> tuple[str, ...]:
+        """Columns the model needs."""
+        cols = ["depth_mm", "force_n"]
+        for e in self._effects():
+            cols += [c for c in e.columns if c not in cols]
+        return tuple(cols)
+
+    def with_effect(self, name: str) -> IndentationModel:
+        """The model with one more effect.
+
+        Raises
+        ------
+        InputError
+            For an unknown effect or one already in the model.
+        """
+        return IndentationModel(self.base, (*self.effects, name))
+
+    def missing_columns(self, columns: Sequence[str]) -> tuple[str, ...]:
+        """Columns the model needs that `columns` lacks."""
+        return tuple(c for c in self.columns if c not in columns)
+
+    def param_names(self) -> tuple[str, ...]:
+        """``c_n_per_mm`` then ``<effect>.<param>`` of every effect."""
+        own = [f"{e.name}.{q.name}" for e in self._effects() for q in e.params]
+        return ("c_n_per_mm", *own)
+
+    def predict(self, params: Mapping[str, float], data: Mapping[str, np.ndarray],
+                thickness_mm: float) -> np.ndarray:
+        """Predicted force, N.
+
+        Parameters
+        ----------
+        params : mapping
+            As :meth:`param_names`.
+        data : mapping of str to (N,) ndarray
+            The model's columns.
+        thickness_mm : float
+            h.
+
+        Returns
+        -------
+        force_n : (N,) float64 ndarray
+        """
+        d = dict(data)
+        d["_h"] = float(thickness_mm)
+        effects = self._effects()
+
+        def own(e: Effect) -> dict[str, float]:
+            return {q.name: float(params[f"{e.name}.{q.name}"]) for q in e.params}
+
+        w = np.asarray(d["depth_mm"], np.float64)
+        for e in effects:
+            if e.kind == "depth":
+                w = e.apply(own(e), d, w)
+        d["depth_mm"] = w
+        force = float(params["c_n_per_mm"]) * w
+        for e in effects:
+            if e.kind == "stiffness":
+                force = force * e.apply(own(e), d, force)
+        for e in effects:
+            if e.kind == "force":
+                force = e.apply(own(e), d, force)
+        return force
+
+    def fit(self, data: Mapping[str, np.ndarray], *, thickness_mm: float,
+            weights: np.ndarray | None = None, loss: str = "soft_l1",
+            f_scale: float | None = None) -> ModelFit:
+        """Fit the model by (weighted, robust) least squares.
+
+        Parameters
+        ----------
+        data : mapping of str to (N,) array_like
+            At least the model's :attr:`columns` (a measurements table's
+            ``columns``).
+        thickness_mm : float
+            h.
+        weights : (N,) array_like, optional
+            Per-press weights (e.g. 1 / force_std_n^2); default equal.
+        loss : {'soft_l1', 'linear', 'huber', 'cauchy'}, default 'soft_l1'
+            Robust loss of :func:`scipy.optimize.least_squares`. 'soft_l1'
+            behaves as least squares for residuals below `f_scale` and grows
+            linearly beyond, so one or two outlier presses pull the fit by
+            their scale, not its square.
+        f_scale : float, optional
+            Residual scale of the robust loss. Default: 2.5 times the robust
+            (MAD) residual sd of a first least-squares fit.
+
+        Returns
+        -------
+        ModelFit
+
+        Raises
+        ------
+        InputError
+            For a missing column (named), NaN in a needed column, or fewer
+            presses than parameters + 1.
+        """
+        names = self.param_names()
+        missing = self.missing_columns(list(data))
+        if missing:
+            raise InputError(f"the model {self.names} needs the column(s) {', '.join(missing)}")
+        d = {c: np.asarray(data[c], np.float64) for c in self.columns}
+        n = d["depth_mm"].size
+        for c, v in d.items():
+            if v.shape != (n,):
+                raise InputError(f"column {c} has {v.size} values, depth_mm {n}")
+            if c != "wait_s" and not np.all(np.isfinite(v)):
+                row = int(np.argmax(~np.isfinite(v)))
+                raise InputError(f"column {c} holds NaN or inf (row {row})")
+        if n < len(names) + 1:
+            raise InputError(f"{n} presses are too few for {len(names)} parameters")
+        wts = np.ones(n) if weights is None else np.asarray(weights, np.float64)
+        if wts.shape != (n,) or not np.all(np.isfinite(wts) & (wts > 0)):
+            raise InputError("weights must be positive and finite, one per press")
+        sw = np.sqrt(wts / wts.mean())
+        effects = self._effects()
+        x0, lo, hi = [], [], []
+        c0 = float(np.median(d["force_n"] / d["depth_mm"]))
+        x0.append(c0)
+        lo.append(0.0)
+        hi.append(math.inf)
+        for e in effects:
+            for q in e.params:
+                x0.append(q.value)
+                lo.append(q.lower)
+                hi.append(q.upper)
+        x0 = np.clip(np.array(x0), np.array(lo) + 1e-12, np.array(hi) - 1e-12)
+        P = d["force_n"]
+
+        def resid(x: np.ndarray) -> np.ndarray:
+            return sw * (self.predict(dict(zip(names, x, strict=True)), d, thickness_mm) - P)
+
+        first = least_squares(resid, x0, bounds=(lo, hi), x_scale="jac", method="trf")
+        if loss == "linear":
+            sol = first
+            scale = math.nan
+        else:
+            r0 = first.fun
+            mad = 1.4826 * float(np.median(np.abs(r0 - np.median(r0))))
+            scale = f_scale if f_scale is not None else 2.5 * max(mad, 1e-12)
+            sol = least_squares(resid, first.x, bounds=(lo, hi), x_scale="jac", method="trf",
+                                loss=loss, f_scale=scale)
+        r = sol.fun
+        k = len(names)
+        J = sol.jac
+        # robust weights of the loss at the solution (1 for least squares)
+        if loss == "linear":
+            rho_w = np.ones(n)
+        else:
+            z = (r / scale) ** 2
+            rho_w = {"soft_l1": 1 / np.sqrt(1 + z), "huber": np.where(z <= 1, 1, 1 / np.sqrt(z)),
+                     "cauchy": 1 / (1 + z), "arctan": 1 / (1 + z ** 2)}[loss]
+        Jw = J * np.sqrt(rho_w)[:, None]
+        s2 = float(np.sum(rho_w * r ** 2)) / max(float(np.sum(rho_w)) - k, 1.0)
+        try:
+            cov = np.linalg.pinv(Jw.T @ Jw) * s2
+        except np.linalg.LinAlgError:  # pragma: no cover
+            cov = np.full((k, k), np.nan)
+        se = np.sqrt(np.clip(np.diag(cov), 0, None))
+        on_bound = sol.active_mask != 0
+        se[on_bound] = np.nan
+        with np.errstate(invalid="ignore", divide="ignore"):
+            corr = cov / np.outer(se, se)
+        params = dict(zip(names, map(float, sol.x), strict=True))
+        pred = self.predict(params, d, thickness_mm)
+        res = P - pred
+        rss = float(np.sum(sw ** 2 * res ** 2))
+        ll_term = n * math.log(max(rss / n, 1e-300))
+        return ModelFit(
+            model=self, params=params, stderr=dict(zip(names, map(float, se), strict=True)),
+            correlation=corr, predicted_n=pred, residuals_n=res, weights=wts,
+            rmse_n=float(np.sqrt(np.mean(res ** 2))), bic=ll_term + k * math.log(n),
+            aic=ll_term + 2 * k, n_presses=n, n_params=k, loss=loss,
+            outliers=rho_w < 0.5, success=bool(sol.success), message=str(sol.message))
