@@ -120,3 +120,7 @@ def test_model_api_and_errors():
         m.fit({"depth_mm": d["depth_mm"][:2], "force_n": d["force_n"][:2]}, thickness_mm=H)
     for name, cls in EFFECTS.items():
         assert cls.name == name and cls.__doc__ and cls.params
+    # the catalogue's names are the contract of formats.md section 4
+    from tactilevision.mechanics import EFFECT_NAMES
+
+    assert (*EFFECTS, "stiffness_trend:<column>") == EFFECT_NAMES

@@ -26,6 +26,7 @@ approximation (our deformations come from the FEM) and its shadows.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
@@ -61,7 +62,9 @@ class ShadingTable:
         """Number of bins along the slope angle and along the direction."""
         return int(self.coeffs.shape[0])
 
+    @cached_property
     def _features(self) -> np.ndarray:
+        """(H, W, 6) position features, built once per table (the renderer's hot path)."""
         h, w = self.shape
         y, x = np.meshgrid(np.arange(h, dtype=np.float64), np.arange(w, dtype=np.float64),
                            indexing="ij")
@@ -100,7 +103,7 @@ class ShadingTable:
         i_mag = np.clip(np.floor(slope / (0.5 * np.pi / (b - 1))).astype(np.int64), 0, b - 1)
         i_dir = np.clip(np.floor((direction + np.pi) / (2 * np.pi / (b - 1))).astype(np.int64),
                         0, b - 1)
-        feats = self._features()
+        feats = self._features
         lit = np.einsum("hwf,hwfc->hwc", feats, self.coeffs[i_mag, i_dir])
         # the flat gel: slope bin 0 of the same direction (the table's bin-0 rows
         # differ slightly between directions; subtracting the same direction's

@@ -20,6 +20,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
+from scipy.interpolate import PchipInterpolator
 
 from .._checks import InputError
 from ..contact._land import land_contact_depth
@@ -178,11 +179,10 @@ def make_session(folder: str | Path, spec: SessionSpec | None = None, *,
     true_depth = w_c[sched.indenter] + rng.uniform(*spec.overshoot_mm, n)
     sched = replace(sched, depth_mm=true_depth, x_mm=x, y_mm=y)
     eh2 = spec.E_mpa * h * h
+    p_of_w = PchipInterpolator(prof.w_over_h, prof.force)   # P / (E h^2) against w / h, built once
 
     def force_of_depth(i: int, d: np.ndarray) -> np.ndarray:
-        from scipy.interpolate import PchipInterpolator
-
-        return eh2 * PchipInterpolator(prof.w_over_h, prof.force)(np.asarray(d) / h)
+        return eh2 * p_of_w(np.asarray(d) / h)
 
     # frames: from lead_s before each press to its release
     dt = 1.0 / spec.fps

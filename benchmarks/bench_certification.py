@@ -1,0 +1,80 @@
+"""Figures behind the certification of a session (issue 4's note).
+
+    python benchmarks/bench_certification.py [--skip-bevel]
+
+1. The bulge: crest height (fraction of w) and radius of a bonded gel at
+   a/h = 2.5/3 for nu = 0.45, 0.48, 0.49, and the depth at which a flat land
+   meets it for the gauge block's w0.
+2. How exact the depths must be: eq. (5) with the FEM tables fitted to exact
+   FEM presses (E 0.20 MPa, nu 0.48, ten per indenter) whose certified depths
+   are short of the truth by d.
+3. Bevel score on the sample session: hold frames (bevel in view) against
+   approach frames (not yet), per press at its true position.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+from scipy.interpolate import PchipInterpolator
+
+from tactilevision.contact import bevel_score, bulge_height, land_contact_depth
+from tactilevision.io import read_session
+from tactilevision.mechanics import fit_indentation
+from tactilevision.sim import press_profile
+
+ROOT = Path(__file__).resolve().parents[1]
+H, A = 3.0, 2.5
+W0 = (0.15, 0.30, 0.40, 0.50, 0.60)
+
+
+def bulge() -> None:
+    print("1. bulge crest of a bonded layer, a/h = 0.8333 (finite-strain FEM)")
+    for nu in (0.45, 0.48, 0.49):
+        p = press_profile(A / H, nu)
+        crest = [bulge_height(p, w) for w in (0.05, 0.1, 0.2)]
+        wc = [land_contact_depth(w / H, p) * H for w in W0]
+        print(f"  nu {nu}: crest/w at w/h 0.05, 0.1, 0.2 = "
+              + ", ".join(f"{c / w:.4f} (r/h {r:.2f})" for (c, r), w in zip(crest, (0.05, 0.1, 0.2),
+                                                                           strict=True))
+              + "; land meets it at w = " + ", ".join(f"{v:.4f}" for v in wc) + " mm")
+
+
+def sensitivity() -> None:
+    print("2. E and nu when every certified depth is short of the truth by d")
+    p = press_profile(A / H, 0.48, w_over_h_max=0.22, steps=11)
+    w = np.repeat(W0, 10)
+    force = 0.20 * H * H * PchipInterpolator(p.w_over_h, p.force)(w / H)
+    for d in (0.0, 0.00025, 0.001):
+        f = fit_indentation(w - d, force, thickness_mm=H, radius_mm=A)
+        print(f"  d = {1e3 * d:.2f} um: E {100 * (f.E_mpa / 0.2 - 1):+.2f}%, "
+              f"nu {f.nu - 0.48:+.4f}, beta {f.beta:.4f}")
+
+
+def bevel(path: Path) -> None:
+    print(f"3. bevel score on {path.name}: hold frames vs approach frames")
+    s = read_session(path)
+    truth = json.loads((path / "truth.json").read_text())["presses"]
+    sc = s.config.mm_per_px
+    hw, hh = (s.shape[1] - 1) / 2, (s.shape[0] - 1) / 2
+    yes, no = [], []
+    for p in truth:
+        if p["edge"] or p["misaligned"]:
+            continue
+        c = (p["x_mm"] / sc + hw, p["y_mm"] / sc + hh)
+        k1 = int(np.searchsorted(s.frame_times_s, p["hold_from_s"] + 0.15))
+        k0 = int(np.searchsorted(s.frame_times_s, p["hold_from_s"] - 0.15))
+        yes.append(bevel_score(s.frame(k1), s.reference, c, sc, offset_mm=4.5))
+        no.append(bevel_score(s.frame(k0), s.reference, c, sc, offset_mm=4.5))
+    print(f"  {len(yes)} presses: bevel in view min {min(yes):.1f} (median {np.median(yes):.1f}), "
+          f"not yet max {max(no):.1f} (median {np.median(no):.1f}); threshold 5.5")
+
+
+if __name__ == "__main__":
+    bulge()
+    sensitivity()
+    if "--skip-bevel" not in sys.argv:
+        bevel(ROOT / "sample_frames" / "gelsight_session")
