@@ -205,9 +205,9 @@ def test_missing_radius_only(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("argv, expected", [
-    (["--effects", "aging"], ["'aging' is in the catalogue", "diagnose"]),
-    (["--effects", "large_deformation,force_drift"], ["'force_drift'", "diagnose"]),
-    (["--effects", "stiffness_trend:day"], ["stiffness_trend:day", "diagnose"]),
+    (["--effects", "aging"], ["needs the column(s) day"]),
+    (["--effects", "large_deformation,force_drift"], ["needs the column(s) time_s"]),
+    (["--effects", "stiffness_trend:day"], ["stiffness_trend:day", "day"]),
     (["--effects", "creep"], ["unknown effect 'creep'", "valid names", "large_deformation",
                               "viscoelastic_relaxation"]),
     (["--thickness-mm", "-3"], ["thickness_mm must be a positive number"]),
@@ -302,3 +302,32 @@ def test_default_fem_tables_recover_a_fem_layer(tmp_path, capsys):
     assert d["E_mpa"] == pytest.approx(E, rel=1e-6) and d["nu"] == pytest.approx(nu, abs=1e-6)
     assert main(["fit", str(csv)]) == 0
     assert "FEM tables, bonded punch" in capsys.readouterr().out
+
+
+def test_fit_with_an_effect_recovers_it(tmp_path, capsys):
+    """--effects adds catalogue effects; the JSON keeps its keys and holds their parameters."""
+    rng = np.random.default_rng(4)
+    w = np.repeat(DEPTHS, 8)
+    wait = rng.uniform(0.3, 20.0, w.size)
+    P = line6(w) * (1 + 0.08 * np.exp(-wait / 2.5)) + rng.normal(0, 0.002, w.size)
+    rows = "".join(f"{i},{a},{b:.6f},{c:.3f}\n"
+                   for i, (a, b, c) in enumerate(zip(w, P, wait, strict=True)))
+    csv = write_table(tmp_path, "press,depth_mm,force_n,wait_s\n" + rows)
+    plain = run_json(["fit", str(csv)], capsys)
+    d = run_json(["fit", str(csv), "--effects", "incomplete_recovery"], capsys)
+    for key in ("E_mpa", "nu", "c_n_per_mm", "beta", "E_ci95_mpa", "nu_ci95", "rmse_n",
+                "n_presses", "effects", "effect_params"):
+        assert key in d
+    assert d["effects"] == ["large_deformation", "incomplete_recovery"]
+    ep = d["effect_params"]
+    assert ep["incomplete_recovery.r"] == pytest.approx(0.08, abs=0.03)
+    assert ep["incomplete_recovery.tau_s"] == pytest.approx(2.5, rel=0.3)
+    assert d["rmse_n"] < 0.4 * plain["rmse_n"]
+    assert d["rmse_n"] == pytest.approx(0.002, rel=0.3)
+    ref = fit_indentation(np.array(DEPTHS), line6(np.array(DEPTHS)), thickness_mm=3.0,
+                          radius_mm=2.5, beta_table="paper")
+    assert d["E_mpa"] == pytest.approx(ref.E_mpa, rel=0.05)
+    assert abs(plain["E_mpa"] / ref.E_mpa - 1) > abs(d["E_mpa"] / ref.E_mpa - 1)
+    main(["fit", str(csv), "--effects", "incomplete_recovery", *PAPER])
+    out = capsys.readouterr().out
+    assert "incomplete_recovery.tau_s" in out and "large_deformation + incomplete_recovery" in out

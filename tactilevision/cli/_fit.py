@@ -17,6 +17,7 @@ from ..mechanics import (
     IndentationFit,
     check_fit_effects,
     fit_indentation,
+    fit_model,
 )
 
 _DESCRIPTION = """\
@@ -51,8 +52,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="source of nu(beta) and kappa: our FEM tables (default) or the "
                         "paper's relation (7) with Hayes 1972")
     p.add_argument("--effects", default="large_deformation", metavar="E1,E2",
-                   help="comma-separated effects; fit supports large_deformation (the base "
-                        f"model); catalogue: {', '.join(EFFECT_NAMES)}")
+                   help="comma-separated effects added to the base model (large_deformation); "
+                        "with any, the whole model is fitted by robust least squares "
+                        f"(catalogue: {', '.join(EFFECT_NAMES)})")
     p.add_argument("--a-over-h", type=float, metavar="X",
                    help="a/h at which kappa is read (default: the exact a/h; 0.8 reproduces "
                         "the paper)")
@@ -86,6 +88,10 @@ def summary(fit: IndentationFit, path: Path) -> str:
         f"beta = {fit.beta:.4f} {pct} CI {_fmt_ci(fit.beta_ci95, 4)}, "
         f"R^2 = {fit.r_squared:.5f}, rmse = {fit.rmse_n:.4g} N",
     ]
+    extra = {k: v for k, v in fit.effect_params.items() if k != "beta"}
+    if extra:
+        lines.append(f"  model: {' + '.join(fit.effects)}; "
+                     + ", ".join(f"{k} = {v:.4g}" for k, v in extra.items()))
     if fit.out_of_table:
         lines.append(f"  OUT OF TABLE: {fit.out_of_table_message}")
         if fit.beta_table == "fem":
@@ -141,7 +147,7 @@ def run(args: argparse.Namespace) -> int:
         For bad input (the command line turns it into exit status 2); nothing
         is written then.
     """
-    check_fit_effects([e.strip() for e in args.effects.split(",") if e.strip()])
+    effects = check_fit_effects([e.strip() for e in args.effects.split(",") if e.strip()])
     if args.a_over_h is not None and not math.isfinite(args.a_over_h):
         raise InputError(f"--a-over-h must be a finite number, got {args.a_over_h}")
     path = args.measurements
@@ -149,9 +155,15 @@ def run(args: argparse.Namespace) -> int:
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
-            fit = fit_indentation(table.depth_mm, table.force_n,
-                                  thickness_mm=table.thickness_mm, radius_mm=table.radius_mm,
-                                  beta_table=args.beta_table, a_over_h=args.a_over_h)
+            if effects == ("large_deformation",):
+                fit = fit_indentation(table.depth_mm, table.force_n,
+                                      thickness_mm=table.thickness_mm,
+                                      radius_mm=table.radius_mm,
+                                      beta_table=args.beta_table, a_over_h=args.a_over_h)
+            else:
+                fit, _ = fit_model(table.columns, ",".join(effects),
+                                   thickness_mm=table.thickness_mm, radius_mm=table.radius_mm,
+                                   beta_table=args.beta_table, a_over_h=args.a_over_h)
         except InputError as exc:
             raise InputError(f"{path}: {exc}") from None
     for w in caught:

@@ -20,6 +20,9 @@ Tables (every literature number lives in one table with its source):
 Fit:
 
 - :func:`fit_indentation` -> :class:`IndentationFit`.
+- Models of effects (formats.md §4): :class:`IndentationModel`, one
+  :class:`Effect` class per catalogue name (:data:`EFFECTS`), fitted robustly
+  (:class:`ModelFit`); :func:`fit_model` adds E and nu.
 - :func:`neo_hookean_constants` -- Abaqus C10, D1 from E, nu.
 
 Validation (the paper's FEA check):
@@ -38,6 +41,7 @@ from ._beta import (
 from ._effects import EFFECT_NAMES, FIT_EFFECTS, check_fit_effects
 from ._fem_tables import kappa_n
 from ._fit import MAX_W_OVER_H, fit_indentation
+from ._fit_model import fit_model
 from ._kappa import HAYES_1972, KappaTable, kappa
 from ._model import EFFECTS, Effect, IndentationModel, ModelFit, Param, make_effect
 from ._neohookean import neo_hookean_constants
@@ -64,6 +68,7 @@ __all__ = [
     "beta_relation",
     "check_fit_effects",
     "fit_indentation",
+    "fit_model",
     "kappa",
     "kappa_n",
     "make_effect",

@@ -1,8 +1,8 @@
 """Names of the effect catalogue (``formats.md`` §4) and what ``fit`` accepts.
 
-The effects themselves (classes with parameter hints, composed into models)
-arrive with ``diagnose`` in a later issue; until then only the names are
-known here so that ``fit --effects`` can say which it supports.
+The effects themselves (classes with parameters, composed into models) are
+in :mod:`tactilevision.mechanics._model`; the names live here so that the
+command line can check them without building a model.
 """
 
 from __future__ import annotations
@@ -27,8 +27,8 @@ EFFECT_NAMES = (
     "stiffness_trend:<column>",
 )
 
-#: Effects :func:`~tactilevision.mechanics.fit_indentation` fits: the base
-#: model of the paper, eq. (5), already holds ``large_deformation``.
+#: Effects of the paper's base model, eq. (5), which
+#: :func:`~tactilevision.mechanics.fit_indentation` fits.
 FIT_EFFECTS = ("large_deformation",)
 
 
@@ -39,34 +39,34 @@ def _in_catalogue(name: str) -> bool:
 
 
 def check_fit_effects(names: Sequence[str]) -> tuple[str, ...]:
-    """Check effect names requested of ``fit``; return the effects fitted.
+    """Check effect names requested of ``fit``; return the model's effect names.
 
     Parameters
     ----------
     names : sequence of str
-        Catalogue names (formats.md §4), e.g. ``["large_deformation"]``.
+        Catalogue names (formats.md §4), e.g. ``["incomplete_recovery"]``;
+        ``large_deformation`` (the paper's base) is always in the model.
 
     Returns
     -------
     effects : tuple of str
-        ``FIT_EFFECTS``: the base model, which all accepted requests reduce to.
+        ``large_deformation`` then the other names in the order given, each
+        once.
 
     Raises
     ------
     InputError
-        For a catalogue effect that ``fit`` does not fit yet (the catalogue
-        arrives with ``diagnose`` in a later issue), or for an unknown name
-        (the message lists the valid names).
+        For an unknown name (the message lists the valid names) or
+        ``stiffness_trend:`` without a column.
     """
+    out = list(FIT_EFFECTS)
     for name in names:
-        if name in FIT_EFFECTS:
-            continue
-        if _in_catalogue(name):
+        if not _in_catalogue(name):
+            if name.startswith("stiffness_trend:"):
+                raise InputError("stiffness_trend needs a column: stiffness_trend:<column>")
             raise InputError(
-                f"effect '{name}' is in the catalogue, but fitting it arrives with "
-                f"`diagnose` in a later issue; `fit` supports: {', '.join(FIT_EFFECTS)}"
+                f"unknown effect '{name}'; valid names: {', '.join(EFFECT_NAMES)}"
             )
-        raise InputError(
-            f"unknown effect '{name}'; valid names: {', '.join(EFFECT_NAMES)}"
-        )
-    return FIT_EFFECTS
+        if name not in out:
+            out.append(name)
+    return tuple(out)

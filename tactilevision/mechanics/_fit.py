@@ -171,6 +171,29 @@ def fit_indentation(depth_mm: np.ndarray, force_n: np.ndarray, *, thickness_mm: 
     if depths.size < 2:
         raise InputError(f"depth_mm holds {depths.size} distinct depth(s); the fit of "
                          "eq. (5) needs presses at two depths or more")
+    ah, kappa_source, contact = _geometry(w, h, a, beta_table, a_over_h, contact)
+
+    # eq. (5): y = c + (c beta) x, ordinary least squares
+    x, y = w / h, P / w  # (N,), (N,)
+    X = np.column_stack([np.ones_like(x), x])  # Nx2
+    coef, *_ = np.linalg.lstsq(X, y, rcond=None)
+    c, s = float(coef[0]), float(coef[1])
+    resid = y - X @ coef
+    tss = float(np.sum((y - y.mean()) ** 2))
+    r2 = 1.0 - float(resid @ resid) / tss if tss > 0 else 1.0
+    rmse = float(np.sqrt(np.mean((P - w * (X @ coef)) ** 2)))
+    cov, cov_note = _covariance(X, resid)
+    return material_fit(c, s, cov, depth_mm=w, thickness_mm=h, radius_mm=a, a_over_h=ah,
+                        beta_table=beta_table, contact=contact, kappa_source=kappa_source,
+                        confidence=confidence, dof=w.size - 2, rmse_n=rmse, r_squared=r2,
+                        effects=FIT_EFFECTS, effect_params=None,
+                        a_over_h_given=a_over_h is not None,
+                        extra_notes=(cov_note,) if cov_note else (), ci_method=_CI_METHOD)
+
+
+def _geometry(w: np.ndarray, h: float, a: float, beta_table: str, a_over_h: float | None,
+              contact: str) -> tuple[float, str, str]:
+    """Check a/h and the table's range; return (a/h used, kappa source, contact)."""
     if beta_table not in ("paper", "fem"):
         raise ValueError(f"beta_table must be 'paper' or 'fem', got {beta_table!r}")
     kappa_source = "fem" if beta_table == "fem" else "hayes"
@@ -194,23 +217,57 @@ def fit_indentation(depth_mm: np.ndarray, force_n: np.ndarray, *, thickness_mm: 
         raise InputError(f"a press reaches w/h = {float(np.max(w / h)):.3f}, beyond the FEM beta "
                          f"table's w/h <= {MAX_W_OVER_H:g}: drop the deeper presses or use "
                          "beta_table='paper'")
+    return ah, kappa_source, contact
+
+
+def material_fit(c: float, slope: float, cov: np.ndarray, *, depth_mm: np.ndarray,
+                 thickness_mm: float, radius_mm: float, a_over_h: float, beta_table: str,
+                 contact: str, kappa_source: str, confidence: float, dof: int, rmse_n: float,
+                 r_squared: float, effects: tuple[str, ...],
+                 effect_params: dict[str, float] | None, a_over_h_given: bool,
+                 extra_notes: tuple[str, ...] = (), ci_method: str = _CI_METHOD
+                 ) -> IndentationFit:
+    """E and nu from the intercept c and slope c beta of eq. (5), with intervals.
+
+    The second half of :func:`fit_indentation`, shared with models of
+    effects (:func:`fit_model`): nu from the beta table, E from eq. (4),
+    intervals by the delta method through `cov`.
+
+    Parameters
+    ----------
+    c, slope : float
+        Intercept c (N/mm) and slope c beta (N/mm) of P/w against w/h.
+    cov : (2, 2) float ndarray
+        Their covariance.
+    depth_mm : (N,) float ndarray
+        The depths (the FEM beta table is read at these w/h).
+    thickness_mm, radius_mm, a_over_h : float
+    beta_table, contact, kappa_source : str
+    confidence : float
+    dof : int
+        Residual degrees of freedom of the Student t quantile.
+    rmse_n, r_squared : float
+    effects : tuple of str
+    effect_params : dict or None
+        Default ``{'beta': beta}``.
+    a_over_h_given : bool
+        Whether the caller chose a/h (for the notes).
+    extra_notes : tuple of str
+    ci_method : str
+
+    Returns
+    -------
+    IndentationFit
+    """
+    w, h, a, ah = depth_mm, thickness_mm, radius_mm, a_over_h
+    ah_exact = a / h
+    s = slope
     # the FEM beta read at these very depths (eq. 5 fitted to the FEM's P/w there)
     rel = beta_relation(beta_table, a_over_h=ah, contact=contact,
                         w_over_h=tuple(np.round(w / h, 12)) if beta_table == "fem" else None)
     notes: list[str] = []
-
-    # eq. (5): y = c + (c beta) x, ordinary least squares
-    x, y = w / h, P / w  # (N,), (N,)
-    X = np.column_stack([np.ones_like(x), x])  # Nx2
-    coef, *_ = np.linalg.lstsq(X, y, rcond=None)
-    c, s = float(coef[0]), float(coef[1])
-    resid = y - X @ coef
-    tss = float(np.sum((y - y.mean()) ** 2))
-    r2 = 1.0 - float(resid @ resid) / tss if tss > 0 else 1.0
-    rmse = float(np.sqrt(np.mean((P - w * (X @ coef)) ** 2)))
-    cov, cov_note = _covariance(X, resid)
     n = w.size
-    tq = float(stats.t.ppf(0.5 + confidence / 2, n - 2)) if n > 2 else math.nan
+    tq = float(stats.t.ppf(0.5 + confidence / 2, dof)) if dof > 0 else math.nan
     beta = s / c if c != 0 else math.nan
 
     def interval(est: float, grad: np.ndarray) -> tuple[float, tuple[float, float]]:
@@ -245,15 +302,14 @@ def fit_indentation(depth_mm: np.ndarray, force_n: np.ndarray, *, thickness_mm: 
                          f"{nu_ci[1]:.4f}], reaches outside the beta table "
                          f"({rel.range_text()})")
 
-    notes.append(f"intervals: {_CI_METHOD}; the kappa and beta tables are taken as exact")
-    if cov_note:
-        notes.append(cov_note)
+    notes.append(f"intervals: {ci_method}; the kappa and beta tables are taken as exact")
+    notes.extend(extra_notes)
     notes.append(f"beta table '{beta_table}': {rel.source}; kappa: "
                  f"{'FEM, ' + contact + ' punch' if kappa_source == 'fem' else 'Hayes 1972'}")
     if abs(ah - rel.a_over_h) > 1e-6:
         notes.append(f"relation (7) was built for a/h = {rel.a_over_h:g} and is used here at "
                      f"a/h = {ah:.4f}")
-    if a_over_h is None:
+    if not a_over_h_given:
         notes.append(f"kappa read at the exact a/h = {a:g}/{h:g} = {ah:.4f}; the paper rounds "
                      "to 0.8 (a_over_h=0.8 reproduces it)")
     else:
@@ -267,13 +323,14 @@ def fit_indentation(depth_mm: np.ndarray, force_n: np.ndarray, *, thickness_mm: 
     cs = float(np.sqrt(cov[0, 0])), float(np.sqrt(cov[1, 1]))
     return IndentationFit(
         E_mpa=E, nu=nu, c_n_per_mm=c, beta=beta, E_ci95_mpa=E_ci, nu_ci95=nu_ci,
-        rmse_n=rmse, n_presses=n, effects=FIT_EFFECTS, effect_params={"beta": beta},
+        rmse_n=rmse_n, n_presses=n, effects=tuple(effects),
+        effect_params=dict(effect_params) if effect_params is not None else {"beta": beta},
         C10_mpa=C10, D1_per_mpa=D1, a_over_h=ah, a_over_h_exact=ah_exact,
         thickness_mm=h, radius_mm=a, kappa=kap, beta_table=beta_table,
         kappa_source=kappa_source, contact=contact, slope_n_per_mm=s,
         c_se_n_per_mm=cs[0], slope_se_n_per_mm=cs[1],
         corr_c_slope=float(cov[0, 1] / (cs[0] * cs[1])) if cs[0] * cs[1] > 0 else math.nan,
-        beta_se=beta_se, beta_ci95=beta_ci, nu_se=nu_se, E_se_mpa=E_se, r_squared=r2,
-        confidence=confidence, ci_method=_CI_METHOD, max_w_over_h=wh,
+        beta_se=beta_se, beta_ci95=beta_ci, nu_se=nu_se, E_se_mpa=E_se, r_squared=r_squared,
+        confidence=confidence, ci_method=ci_method, max_w_over_h=wh,
         out_of_table=msg is not None, out_of_table_message=msg, notes=tuple(notes),
     )

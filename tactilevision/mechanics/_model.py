@@ -236,8 +236,8 @@ class ModelFit:
     stderr : dict of str to float
         Standard errors from the Jacobian at the solution (NaN where a
         parameter sits on a bound or is not identified).
-    correlation : (K, K) float64 ndarray
-        Parameter correlations, in the order of ``params``.
+    correlation, covariance : (K, K) float64 ndarray
+        Parameter correlations and covariance, in the order of ``params``.
     predicted_n, residuals_n : (N,) float64 ndarray
     weights : (N,) float64 ndarray
     rmse_n : float
@@ -257,6 +257,7 @@ class ModelFit:
     params: dict[str, float]
     stderr: dict[str, float]
     correlation: np.ndarray
+    covariance: np.ndarray
     predicted_n: np.ndarray
     residuals_n: np.ndarray
     weights: np.ndarray
@@ -467,8 +468,14 @@ class IndentationModel:
             rho_w = np.ones(n)
         else:
             z = (r / scale) ** 2
-            rho_w = {"soft_l1": 1 / np.sqrt(1 + z), "huber": np.where(z <= 1, 1, 1 / np.sqrt(z)),
-                     "cauchy": 1 / (1 + z), "arctan": 1 / (1 + z ** 2)}[loss]
+            if loss == "huber":
+                rho_w = 1 / np.sqrt(np.maximum(z, 1.0))
+            elif loss == "cauchy":
+                rho_w = 1 / (1 + z)
+            elif loss == "arctan":
+                rho_w = 1 / (1 + z ** 2)
+            else:
+                rho_w = 1 / np.sqrt(1 + z)
         Jw = J * np.sqrt(rho_w)[:, None]
         s2 = float(np.sum(rho_w * r ** 2)) / max(float(np.sum(rho_w)) - k, 1.0)
         try:
@@ -487,7 +494,7 @@ class IndentationModel:
         ll_term = n * math.log(max(rss / n, 1e-300))
         return ModelFit(
             model=self, params=params, stderr=dict(zip(names, map(float, se), strict=True)),
-            correlation=corr, predicted_n=pred, residuals_n=res, weights=wts,
+            correlation=corr, covariance=cov, predicted_n=pred, residuals_n=res, weights=wts,
             rmse_n=float(np.sqrt(np.mean(res ** 2))), bic=ll_term + k * math.log(n),
             aic=ll_term + 2 * k, n_presses=n, n_params=k, loss=loss,
             outliers=rho_w < 0.5, success=bool(sol.success), message=str(sol.message))
