@@ -84,11 +84,13 @@ def test_robust_to_two_outliers():
     d, rng = _table(seed=5)
     d["force_n"] = C * d["depth_mm"] * (1 + BETA * d["depth_mm"] / H) + rng.normal(
         0, 0.002, d["depth_mm"].size)
+    clean = IndentationModel().fit(d, thickness_mm=H, loss="linear").beta
     d["force_n"][[3, 27]] += [0.15, -0.12]
     robust = IndentationModel().fit(d, thickness_mm=H)
     plain = IndentationModel().fit(d, thickness_mm=H, loss="linear")
-    assert abs(robust.beta / BETA - 1) < 0.01
-    assert abs(plain.beta / BETA - 1) > 2 * abs(robust.beta / BETA - 1)
+    # the outliers move the least-squares beta; the robust beta stays near the clean one
+    assert abs(robust.beta / clean - 1) < 0.03
+    assert abs(plain.beta / clean - 1) > 5 * abs(robust.beta / clean - 1)
     assert set(np.flatnonzero(robust.outliers)) == {3, 27}
 
 

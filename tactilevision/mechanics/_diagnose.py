@@ -1,0 +1,632 @@
+"""Model against measurement: where the model fails and which effect is missing.
+
+:func:`diagnose` fits a model (formats.md §4), tests its residuals for structure
+along every covariate column, fits the model plus each applicable catalogue
+effect, compares them by BIC and by cross-validated RMSE, and decides. The
+greedy steps form the error ladder. The replicate noise floor is the error no
+model of these columns can beat.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from scipy import stats
+
+from .._checks import InputError
+from ._fit_model import fit_model
+from ._model import EFFECTS, IndentationModel, ModelFit, make_effect
+
+__all__ = [
+    "Candidate",
+    "CovariateTest",
+    "Diagnosis",
+    "LadderStep",
+    "covariate_tests",
+    "cross_validated_rmse",
+    "diagnose",
+    "noise_floor",
+]
+
+#: Evidence a candidate effect must bring: BIC lower by more than this
+#: ("very strong" on the scale of Kass and Raftery, JASA 90:773, 1995).
+DELTA_BIC = 10.0
+#: Candidates whose BIC is within this of the best explain the data equally well.
+EQUIVALENT_BIC = 6.0
+#: Family-wise level of the covariate structure tests (Bonferroni over columns).
+ALPHA = 0.01
+#: Columns that are never covariates.
+_NOT_COVARIATES = ("force_n",)
+
+# the measurement that separates two effects that look alike on one table
+_SEPARATE = {
+    frozenset({"depth_offset", "force_offset"}):
+        "a tare check with nothing touching the gel (reads a force offset directly) or the "
+        "gauge block's step heights measured on a height gauge (a depth offset)",
+    frozenset({"force_drift", "aging"}):
+        "repeated presses within one session (drift) against sessions on other days (aging)",
+    frozenset({"force_drift", "force_offset"}):
+        "a tare check at the start and end of the session",
+}
+
+
+@dataclass(frozen=True)
+class CovariateTest:
+    """Residual structure along one covariate.
+
+    Attributes
+    ----------
+    name : str
+    p_value : float
+        F test of a smooth function of the column (or one-way ANOVA over its
+        values when it has few) against no structure.
+    explained_fraction : float
+        Fraction of the residual variance that function explains, in [0, 1].
+    significant : bool
+        ``p_value`` below the Bonferroni level ALPHA / number of covariates.
+    n : int
+        Presses with a value in this column.
+    """
+
+    name: str
+    p_value: float
+    explained_fraction: float
+    significant: bool
+    n: int
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """The model plus one catalogue effect.
+
+    Attributes
+    ----------
+    effect : str
+    delta_bic : float
+        BIC(model + effect) - BIC(model); negative is better.
+    cv_rmse_n : float
+        Cross-validated RMSE, N.
+    rmse_n : float
+    params : dict of str to float
+        The effect's fitted parameters (``<effect>.<param>``).
+    n_presses : int
+        Presses the comparison used (rows with the effect's columns).
+    """
+
+    effect: str
+    delta_bic: float
+    cv_rmse_n: float
+    rmse_n: float
+    params: dict[str, float] = field(hash=False)
+    n_presses: int = 0
+
+
+@dataclass(frozen=True)
+class LadderStep:
+    """One rung of the error ladder: a model, its errors and its E and nu."""
+
+    model: tuple[str, ...]
+    rmse_n: float
+    cv_rmse_n: float
+    bic: float
+    E_mpa: float
+    nu: float
+    added: str | None
+
+
+@dataclass(frozen=True)
+class Diagnosis:
+    """Result of :func:`diagnose`; :meth:`to_json_dict` is ``diagnose --json``.
+
+    Attributes
+    ----------
+    model : tuple of str
+        The model diagnosed: ``'layer'`` then its effects.
+    E_mpa, nu : float
+        Of that model (NaN without beta or out of the table).
+    rmse_n, cv_rmse_n : float
+    noise_floor_n : float
+        Pooled sd of the final model's residuals within groups of repeated
+        presses at one depth (NaN without repeats).
+    covariates : tuple of CovariateTest
+        Residual structure of the model diagnosed.
+    covariates_after : tuple of CovariateTest
+        The same after the effects the diagnosis added.
+    candidates : tuple of Candidate
+        The model plus each applicable effect, best first.
+    missing_effect : str or None
+    equivalent_effects : tuple of str
+    separating_measurement : str or None
+        What would tell `missing_effect` from `equivalent_effects`.
+    unexplained_covariate : str or None
+    offered_effect : str or None
+        ``stiffness_trend:<column>`` for the unexplained covariate.
+    ladder : tuple of LadderStep
+    untestable : dict of str to tuple of str
+        Catalogue effects not tried, and the columns that would make them
+        testable.
+    fits : tuple of ModelFit
+        The ladder's fits (for the figures).
+    columns : dict of str to ndarray
+        The data.
+    message : str
+        The story in a few sentences.
+    """
+
+    model: tuple[str, ...]
+    E_mpa: float
+    nu: float
+    rmse_n: float
+    cv_rmse_n: float
+    noise_floor_n: float
+    covariates: tuple[CovariateTest, ...]
+    covariates_after: tuple[CovariateTest, ...]
+    candidates: tuple[Candidate, ...]
+    missing_effect: str | None
+    equivalent_effects: tuple[str, ...]
+    separating_measurement: str | None
+    unexplained_covariate: str | None
+    offered_effect: str | None
+    ladder: tuple[LadderStep, ...]
+    untestable: dict[str, tuple[str, ...]] = field(hash=False)
+    fits: tuple[ModelFit, ...] = field(default=(), hash=False, repr=False)
+    columns: dict[str, np.ndarray] = field(default_factory=dict, hash=False, repr=False)
+    message: str = ""
+
+    def to_json_dict(self) -> dict[str, Any]:
+        """The ``diagnose --json`` object (formats.md §3), then extra keys.
+
+        Returns
+        -------
+        obj : dict
+            JSON-ready (NaN as None).
+        """
+        def num(v: float) -> float | None:
+            return float(v) if math.isfinite(v) else None
+
+        def cov(t: CovariateTest) -> dict:
+            return {"name": t.name, "p_value": num(t.p_value),
+                    "explained_fraction": num(t.explained_fraction),
+                    "significant": t.significant, "n": t.n}
+
+        return {
+            "model": list(self.model),
+            "params": {"E_mpa": num(self.E_mpa), "nu": num(self.nu)},
+            "rmse_n": num(self.rmse_n), "cv_rmse_n": num(self.cv_rmse_n),
+            "noise_floor_n": num(self.noise_floor_n),
+            "covariates": [cov(t) for t in self.covariates],
+            "candidates": [{"effect": c.effect, "delta_bic": num(c.delta_bic),
+                            "cv_rmse_n": num(c.cv_rmse_n),
+                            "params": {k: num(v) for k, v in c.params.items()}}
+                           for c in self.candidates],
+            "verdict": {"missing_effect": self.missing_effect,
+                        "equivalent_effects": list(self.equivalent_effects),
+                        "unexplained_covariate": self.unexplained_covariate,
+                        "offered_effect": self.offered_effect,
+                        "separating_measurement": self.separating_measurement},
+            "ladder": [{"model": list(s.model), "added": s.added, "rmse_n": num(s.rmse_n),
+                        "cv_rmse_n": num(s.cv_rmse_n), "bic": num(s.bic),
+                        "E_mpa": num(s.E_mpa), "nu": num(s.nu)} for s in self.ladder],
+            "covariates_after": [cov(t) for t in self.covariates_after],
+            "untestable": {k: list(v) for k, v in self.untestable.items()},
+            "message": self.message,
+        }
+
+
+# ----------------------------------------------------------------- pieces
+
+
+def _groups(columns: Mapping[str, np.ndarray]) -> np.ndarray:
+    """Replicate group of each press: same indenter (if given) and same depth."""
+    keys = [np.round(np.asarray(columns["depth_mm"], np.float64), 6)]
+    if "indenter" in columns:
+        ind = np.asarray(columns["indenter"], np.float64)
+        if np.all(np.isfinite(ind)):
+            keys.append(ind)
+    _, g = np.unique(np.column_stack(keys), axis=0, return_inverse=True)
+    return g.ravel()
+
+
+def noise_floor(residuals_n: np.ndarray, columns: Mapping[str, np.ndarray]) -> float:
+    """The replicate noise floor: pooled within-group sd of residuals, N.
+
+    Parameters
+    ----------
+    residuals_n : (N,) ndarray
+        Residuals of a model (so anything it explains is taken out).
+    columns : mapping
+        ``depth_mm`` and, if present, ``indenter`` define the groups of
+        repeated presses.
+
+    Returns
+    -------
+    sd : float
+        ``sqrt(sum (r - mean_group r)^2 / (N - G))``; NaN without repeats.
+    """
+    r = np.asarray(residuals_n, np.float64)
+    g = _groups(columns)
+    G = int(g.max()) + 1
+    if r.size - G < 2:
+        return math.nan
+    means = np.bincount(g, r, G) / np.bincount(g, minlength=G)
+    return float(np.sqrt(np.sum((r - means[g]) ** 2) / (r.size - G)))
+
+
+def _covariate_names(columns: Mapping[str, np.ndarray]) -> list[str]:
+    return [k for k in columns if k not in _NOT_COVARIATES]
+
+
+def covariate_tests(residuals_n: np.ndarray, predicted_n: np.ndarray,
+                    columns: Mapping[str, np.ndarray], *, n_depth_params: int = 2,
+                    alpha: float = ALPHA) -> tuple[CovariateTest, ...]:
+    """Does the residual carry structure along each covariate column?
+
+    Parameters
+    ----------
+    residuals_n, predicted_n : (N,) ndarray
+        A model's residuals and predictions.
+    columns : mapping of str to (N,) ndarray
+        Every column but ``force_n`` is a covariate; constant columns are
+        skipped.
+    n_depth_params : int, default 2
+        Parameters of the model that are functions of depth alone (c and
+        beta): the lack-of-fit test along ``depth_mm`` has that many fewer
+        degrees of freedom.
+    alpha : float, default ALPHA
+        Family-wise level; each test is significant below alpha / (number of
+        covariates tested).
+
+    Returns
+    -------
+    tests : tuple of CovariateTest
+
+    Notes
+    -----
+    A column with at most 8 distinct values is tested by one-way ANOVA of the
+    residuals over its values (along ``depth_mm``: the lack-of-fit test with
+    ``K - 1 - n_depth_params`` degrees of freedom). Other columns: an F test
+    of the regression of the residual on ``z, z^2, p z, p z^2`` (z the
+    standardised column, p the standardised prediction: additive and
+    multiplicative structure) against a constant.
+    """
+    r_all = np.asarray(residuals_n, np.float64)
+    p_all = np.asarray(predicted_n, np.float64)
+    out = []
+    names = []
+    for name in _covariate_names(columns):
+        x = np.asarray(columns[name], np.float64)
+        ok = np.isfinite(x) & np.isfinite(r_all)
+        if ok.sum() < 8 or np.ptp(x[ok]) == 0:
+            continue
+        names.append(name)
+    m = max(len(names), 1)
+    for name in names:
+        x = np.asarray(columns[name], np.float64)
+        ok = np.isfinite(x) & np.isfinite(r_all)
+        r, xs, p = r_all[ok], x[ok], p_all[ok]
+        n = r.size
+        values, g = np.unique(xs, return_inverse=True)
+        rss0 = float(np.sum((r - r.mean()) ** 2))
+        if values.size <= 8:
+            G = values.size
+            means = np.bincount(g, r, G) / np.bincount(g, minlength=G)
+            rss1 = float(np.sum((r - means[g]) ** 2))
+            df1 = G - 1 - (n_depth_params if name == "depth_mm" else 0)
+            df2 = n - G
+        else:
+            z = (xs - xs.mean()) / xs.std()
+            q = (p - p.mean()) / (p.std() or 1.0)
+            X = np.column_stack([np.ones(n), z, z**2, q * z, q * z**2])
+            coef, *_ = np.linalg.lstsq(X, r, rcond=None)
+            rss1 = float(np.sum((r - X @ coef) ** 2))
+            df1, df2 = X.shape[1] - 1, n - X.shape[1]
+        if df1 < 1 or df2 < 1 or rss0 <= 0:
+            pv, frac = 1.0, 0.0
+        else:
+            F = ((rss0 - rss1) / df1) / (rss1 / df2) if rss1 > 0 else math.inf
+            pv = float(stats.f.sf(F, df1, df2))
+            frac = float(max(0.0, 1 - rss1 / rss0))
+        out.append(CovariateTest(name, pv, frac, pv < alpha / m, n))
+    return tuple(out)
+
+
+def _folds(n: int, k: int, seed: int) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    return rng.permutation(np.arange(n) % k)
+
+
+def cross_validated_rmse(model: IndentationModel, columns: Mapping[str, np.ndarray], *,
+                         thickness_mm: float, k: int = 10, seed: int = 0) -> float:
+    """K-fold cross-validated RMSE of a model, N.
+
+    Each fold's presses are predicted by the model fitted (robustly) to the
+    others. Folds are a seeded random partition, the same for every model
+    given the same data and seed.
+
+    Parameters
+    ----------
+    model : IndentationModel
+    columns : mapping of str to (N,) ndarray
+    thickness_mm : float
+    k : int, default 10
+    seed : int, default 0
+
+    Returns
+    -------
+    rmse : float
+    """
+    d = {c: np.asarray(columns[c], np.float64) for c in model.columns}
+    n = d["depth_mm"].size
+    k = min(k, n)
+    fold = _folds(n, k, seed)
+    err = np.empty(n)
+    for f in range(k):
+        test = fold == f
+        train = {c: v[~test] for c, v in d.items()}
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            mf = model.fit(train, thickness_mm=thickness_mm)
+        td = {c: v[test] for c, v in d.items()}
+        err[test] = model.predict(mf.params, td, thickness_mm) - td["force_n"]
+    return float(np.sqrt(np.mean(err**2)))
+
+
+def _usable(name: str, columns: Mapping[str, np.ndarray]) -> str | None:
+    """Why an effect cannot be tried on these columns (None: it can)."""
+    e = make_effect(name)
+    for col in e.columns:
+        if col not in columns:
+            return "missing"
+        x = np.asarray(columns[col], np.float64)
+        fin = x[np.isfinite(x)]
+        if col != "wait_s" and fin.size < x.size:
+            return "missing"
+        if fin.size < 3 or np.ptp(fin) == 0:
+            return "constant"
+    return None
+
+
+# ----------------------------------------------------------------- diagnose
+
+
+def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_mm: float,
+             base: str = "paper", effects: Sequence[str] = (), beta_table: str = "fem",
+             max_steps: int = 3, cv_folds: int = 10, seed: int = 0,
+             progress: bool = False) -> Diagnosis:
+    """Compare a model with the measurements and find the missing effect.
+
+    Parameters
+    ----------
+    columns : mapping of str to (N,) array_like
+        A measurements table (formats.md §2): ``depth_mm``, ``force_n`` and
+        any covariates. Text columns must be left out.
+    thickness_mm, radius_mm : float
+        h and a, mm.
+    base : {'paper', 'layer'}, default 'paper'
+        The paper's eq. (5) or the small-strain layer alone.
+    effects : sequence of str
+        Effects already in the model diagnosed.
+    beta_table : {'fem', 'paper'}, default 'fem'
+        For E and nu at each step only: the residuals do not depend on it.
+    max_steps : int, default 3
+        Most effects added, greedily.
+    cv_folds : int, default 10
+    seed : int, default 0
+        Seeds the cross-validation folds.
+    progress : bool, default False
+        A progress bar over the candidate fits.
+
+    Returns
+    -------
+    Diagnosis
+
+    Raises
+    ------
+    InputError
+        For a missing column of the model, an unknown effect, or bad h, a.
+
+    Notes
+    -----
+    At each step every applicable catalogue effect not yet in the model is
+    added in turn and the extended model fitted (robust soft_l1 least
+    squares, :meth:`IndentationModel.fit`); so is ``stiffness_trend:<col>``
+    for each covariate that no named effect reads. The best candidate by BIC
+    is accepted when its BIC is lower by more than ``DELTA_BIC`` = 10 and its
+    10-fold cross-validated RMSE is lower too; other candidates within
+    ``EQUIVALENT_BIC`` = 6 of it that also pass are equivalent. A
+    ``stiffness_trend`` winner is not a named effect: its column is reported
+    as ``unexplained_covariate`` and the trend as ``offered_effect``. After
+    the last step, a covariate whose residual structure is still
+    significant (:func:`covariate_tests`) and explains more than 10 % of the
+    residual variance is reported as unexplained too. The noise floor is
+    :func:`noise_floor` of the final model's residuals.
+    """
+    cols = {k: np.asarray(v, np.float64) for k, v in columns.items()}
+    h, a = float(thickness_mm), float(radius_mm)
+    model = IndentationModel(base, tuple(e for e in effects
+                                         if not (base == "paper" and e == "large_deformation")))
+    missing = model.missing_columns(list(cols))
+    if missing:
+        raise InputError(f"the model {model.names} needs the column(s) {', '.join(missing)}")
+
+    def material(m: IndentationModel, d: Mapping[str, np.ndarray]) -> tuple[float, float]:
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                fit, _ = fit_model(d, m, thickness_mm=h, radius_mm=a, beta_table=beta_table)
+            return fit.E_mpa, fit.nu
+        except InputError:
+            return math.nan, math.nan
+
+    def rows_for(m: IndentationModel) -> np.ndarray:
+        ok = np.ones(cols["depth_mm"].size, bool)
+        for c in m.columns:
+            if c != "wait_s":
+                ok &= np.isfinite(cols[c])
+        return ok
+
+    def sub(ok: np.ndarray) -> dict[str, np.ndarray]:
+        return {k: v[ok] for k, v in cols.items()}
+
+    named = [n for n in EFFECTS if not (base == "paper" and n == "large_deformation")]
+    untestable: dict[str, tuple[str, ...]] = {}
+    for n in named:
+        why = _usable(n, cols)
+        if why is not None:
+            untestable[n] = tuple(make_effect(n).columns)
+    read_by_named = {c for n in EFFECTS for c in make_effect(n).columns}
+    trend_cols = [c for c in _covariate_names(cols)
+                  if c not in read_by_named and c not in ("press", "indenter", "force_std_n")
+                  and _usable(f"stiffness_trend:{c}", cols) is None]
+
+    ok0 = rows_for(model)
+    d0 = sub(ok0)
+    fit0 = model.fit(d0, thickness_mm=h)
+    cv0 = cross_validated_rmse(model, d0, thickness_mm=h, k=cv_folds, seed=seed)
+    E0, nu0 = material(model, d0)
+    n_depth = 2 if "large_deformation" in model.names else 1
+    cov0 = covariate_tests(fit0.residuals_n, fit0.predicted_n, d0, n_depth_params=n_depth)
+    ladder = [LadderStep(("layer", *model.names), fit0.rmse_n, cv0, fit0.bic, E0, nu0, None)]
+    fits = [fit0]
+
+    missing_effect: str | None = None
+    equivalent: tuple[str, ...] = ()
+    unexplained: str | None = None
+    offered: str | None = None
+    first_candidates: tuple[Candidate, ...] = ()
+    current, cur_fit, cur_cv = model, fit0, cv0
+    bar = None
+    if progress:
+        from tqdm import tqdm
+
+        bar = tqdm(desc="diagnose", unit="fit", mininterval=0.5)
+    for _step in range(max_steps):
+        tried = [n for n in named if n not in current.names and n not in untestable]
+        tried += [f"stiffness_trend:{c}" for c in trend_cols
+                  if f"stiffness_trend:{c}" not in current.names]
+        cands = []
+        for name in tried:
+            m = current.with_effect(name)
+            ok = rows_for(m)
+            d = sub(ok)
+            ref = cur_fit if ok.sum() == cur_fit.n_presses else current.fit(d, thickness_mm=h)
+            try:
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore")
+                    mf = m.fit(d, thickness_mm=h)
+                    cv = cross_validated_rmse(m, d, thickness_mm=h, k=cv_folds, seed=seed)
+            except InputError:
+                continue
+            if bar is not None:
+                bar.update(1)
+            own = {k: v for k, v in mf.params.items() if k.startswith(name + ".")}
+            cands.append(Candidate(name, mf.bic - ref.bic, cv, mf.rmse_n, own, int(ok.sum())))
+        cands.sort(key=lambda c: c.delta_bic)
+        if _step == 0:
+            first_candidates = tuple(cands)
+        passing = [c for c in cands if c.delta_bic < -DELTA_BIC and c.cv_rmse_n < cur_cv]
+        if not passing:
+            break
+        best = passing[0]
+        eq = tuple(c.effect for c in passing[1:]
+                   if c.delta_bic - best.delta_bic < EQUIVALENT_BIC
+                   and not c.effect.startswith("stiffness_trend:"))
+        if best.effect.startswith("stiffness_trend:"):
+            if unexplained is None:
+                unexplained = best.effect.partition(":")[2]
+                offered = best.effect
+        elif missing_effect is None:
+            missing_effect, equivalent = best.effect, eq
+        current = current.with_effect(best.effect)
+        d = sub(rows_for(current))
+        cur_fit = current.fit(d, thickness_mm=h)
+        cur_cv = best.cv_rmse_n
+        E, nu = material(current, d)
+        ladder.append(LadderStep(("layer", *current.names), cur_fit.rmse_n, cur_cv, cur_fit.bic,
+                                 E, nu, best.effect))
+        fits.append(cur_fit)
+    if bar is not None:
+        bar.close()
+
+    d_final = sub(rows_for(current))
+    n_depth = 2 if "large_deformation" in current.names else 1
+    cov_after = covariate_tests(cur_fit.residuals_n, cur_fit.predicted_n, d_final,
+                                n_depth_params=n_depth)
+    if unexplained is None:
+        # along depth_mm, eq. (5) itself is not the FEM's exact P(w): depth structure
+        # counts only through the named depth effects among the candidates
+        left = [t for t in cov_after if t.significant and t.explained_fraction > 0.1
+                and t.name not in ("press", "depth_mm", "indenter")]
+        if left:
+            worst = min(left, key=lambda t: t.p_value)
+            unexplained = worst.name
+            offered = f"stiffness_trend:{worst.name}"
+    floor = noise_floor(cur_fit.residuals_n, d_final)
+    separating = None
+    if missing_effect and equivalent:
+        separating = "; ".join(_separating(missing_effect, e, cols) for e in equivalent)
+    diag = Diagnosis(
+        model=("layer", *model.names), E_mpa=E0, nu=nu0, rmse_n=fit0.rmse_n, cv_rmse_n=cv0,
+        noise_floor_n=floor, covariates=cov0, covariates_after=cov_after,
+        candidates=first_candidates, missing_effect=missing_effect,
+        equivalent_effects=equivalent, separating_measurement=separating,
+        unexplained_covariate=unexplained, offered_effect=offered, ladder=tuple(ladder),
+        untestable=untestable, fits=tuple(fits), columns=cols)
+    return _with_message(diag)
+
+
+def _separating(a: str, b: str, cols: Mapping[str, np.ndarray]) -> str:
+    key = frozenset({a, b})
+    if key in _SEPARATE:
+        return f"{a} vs {b}: {_SEPARATE[key]}"
+    ca, cb = make_effect(a).columns, make_effect(b).columns
+    if ca != cb:
+        x, y = cols.get(ca[0]), cols.get(cb[0])
+        r = math.nan
+        if x is not None and y is not None:
+            ok = np.isfinite(x) & np.isfinite(y)
+            if ok.sum() > 2:
+                r = float(np.corrcoef(x[ok], y[ok])[0, 1])
+        return (f"{a} vs {b}: presses that vary {ca[0]} with {cb[0]} held fixed "
+                f"(correlation {r:.2f} in this table)")
+    return f"{a} vs {b}: presses at more depths and forces along {ca[0]}"
+
+
+def _with_message(d: Diagnosis) -> Diagnosis:
+    from dataclasses import replace
+
+    floor = d.noise_floor_n
+    base = d.ladder[0]
+    s = [f"The model {' + '.join(d.model)} leaves an RMSE of {base.rmse_n * 1e3:.2f} mN "
+         f"({base.cv_rmse_n * 1e3:.2f} mN cross-validated)"
+         + (f" against a replicate noise floor of {floor * 1e3:.2f} mN." if math.isfinite(floor)
+            else "; the table has no repeated depths for a noise floor.")]
+    sig = sorted((t for t in d.covariates if t.significant), key=lambda t: t.p_value)
+    if sig:
+        s.append("Its residuals carry structure along "
+                 + ", ".join(f"{t.name} (p = {t.p_value:.1g}, {t.explained_fraction:.0%} of "
+                             "the residual variance)" for t in sig[:3]) + ".")
+    else:
+        s.append("Its residuals carry no significant structure along any covariate.")
+    if d.missing_effect:
+        step = next(x for x in d.ladder if x.added == d.missing_effect)
+        s.append(f"Missing: {d.missing_effect}. Adding it brings the cross-validated RMSE to "
+                 f"{step.cv_rmse_n * 1e3:.2f} mN and gives E = {step.E_mpa:.4g} MPa, "
+                 f"nu = {step.nu:.4g} (before: E = {base.E_mpa:.4g} MPa, nu = {base.nu:.4g}).")
+        if d.equivalent_effects:
+            s.append(f"{', '.join(d.equivalent_effects)} explain the data equally well; "
+                     f"to tell them apart: {d.separating_measurement}.")
+    if d.unexplained_covariate:
+        s.append(f"Structure along {d.unexplained_covariate} is explained by no named effect; "
+                 f"{d.offered_effect} is offered.")
+    if not d.missing_effect and not d.unexplained_covariate:
+        s.append("Nothing is missing: the model explains the data to within its noise.")
+    if d.untestable:
+        s.append("Not testable on this table: " + "; ".join(
+            f"{k} (needs {', '.join(v)})" for k, v in d.untestable.items()) + ".")
+    return replace(d, message=" ".join(s))

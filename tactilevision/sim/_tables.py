@@ -1,0 +1,245 @@
+"""Measurement tables with one hidden physical effect, for testing ``diagnose``.
+
+Each table is a calibration campaign: a few sessions on different days, each
+pressing a gauge block's indenters in shuffled order with realistic timing,
+positions and room temperature, so every column of formats.md §2 is present
+whatever the effect. The force comes from the finite-strain FEM
+(:func:`~tactilevision.mechanics.kappa_n`, not eq. 5) and then one hidden
+effect changes it. The hidden effects' functional forms are deliberately not
+the catalogue's (:mod:`tactilevision.mechanics._model`):
+
+================================  ==============================================
+hidden                            form in the generator
+================================  ==============================================
+``depth_offset``                  constant bevel-lag plus a per-indenter
+                                  machining error (sd 0.5 um)
+``force_offset``                  a tare error per session, scattered 10 %
+                                  around a common bias
+``force_drift``                   thermal: ``D (1 - exp(-t / T))`` after each
+                                  tare plus a small random walk
+``viscoelastic_relaxation``       two-term Prony series (tau and 8 tau)
+``incomplete_recovery``           power-law recovery ``r (1 + t_wait / tau)^-1.5``
+``aging``                         post-cure hardening ``A (1 - exp(-day / D))``
+``spatial_nonuniformity``         a tilted pad: thickness ``h (1 + tx x + ty y)``,
+                                  stiffness ``(h / h(x, y))^1.3``
+``large_deformation``             the FEM's own finite-strain P(w) (for
+                                  ``diagnose --base layer``)
+``temperature`` (out of the       modulus ``exp(-k (T - 23 C))``: no named
+catalogue)                        effect; shows along ``temperature_c``
+``crosstalk`` (out of the         the F/T's Fz reads ``chi Fx``; shows along
+catalogue)                        ``fx_n``
+================================  ==============================================
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._checks import InputError
+
+__all__ = ["HIDDEN_EFFECTS", "HiddenTable", "make_measurement_table"]
+
+#: Hidden effects the generator knows: the catalogue's (formats.md §4) and two
+#: outside it. Value: the covariate column it shows along.
+HIDDEN_EFFECTS = {
+    "depth_offset": "depth_mm",
+    "force_offset": "depth_mm",
+    "force_drift": "time_s",
+    "viscoelastic_relaxation": "hold_s",
+    "incomplete_recovery": "wait_s",
+    "aging": "day",
+    "spatial_nonuniformity": "x_mm",
+    "large_deformation": "depth_mm",
+    "temperature": "temperature_c",
+    "crosstalk": "fx_n",
+}
+
+
+@dataclass(frozen=True)
+class HiddenTable:
+    """A generated measurements table and its truth.
+
+    Attributes
+    ----------
+    columns : dict of str to (N,) float64 ndarray
+        ``depth_mm``, ``force_n`` and every covariate of formats.md §2
+        (``wait_s`` is NaN for the first press of each session).
+    thickness_mm, radius_mm : float
+        h and a.
+    hidden : str or None
+        The hidden effect (None: a null table).
+    truth : dict
+        ``E_mpa``, ``nu``, ``noise_n`` (force noise sd, N), ``base``
+        (``'layer'`` for a ``large_deformation`` table, else ``'paper'``),
+        ``covariate`` (the column the effect shows along) and the effect's
+        own parameters.
+    """
+
+    columns: dict[str, np.ndarray]
+    thickness_mm: float
+    radius_mm: float
+    hidden: str | None
+    truth: dict
+
+
+def _fem_force(E: float, nu: float, a: float, h: float, w: np.ndarray) -> np.ndarray:
+    """P = 2 a E w kappa_n(nu, a/h, w/h) / (1 - nu^2), the FEM's finite-strain force, N."""
+    from ..mechanics import kappa_n
+
+    ws = np.unique(w)
+    kn = np.array([kappa_n(nu, a / h, x / h) for x in ws])
+    k = kn[np.searchsorted(ws, w)]
+    return 2 * a * E * w * k / (1 - nu**2)
+
+
+def make_measurement_table(hidden: str | None = None, seed: int = 0, *,
+                           strength: float = 1.0) -> HiddenTable:
+    """A calibration campaign's measurements table with one hidden effect.
+
+    Parameters
+    ----------
+    hidden : str or None
+        A key of :data:`HIDDEN_EFFECTS`, or None for a null table (the FEM law
+        and noise only).
+    seed : int
+        Everything (E, nu, h, a, depths, repeats, sessions, timing, noise,
+        the effect's size) is drawn from it.
+    strength : float, default 1.0
+        Scales the hidden effect's size (1: typically 4 to 12 times the
+        force noise in RMS).
+
+    Returns
+    -------
+    HiddenTable
+
+    Raises
+    ------
+    InputError
+        For an unknown `hidden`.
+
+    Notes
+    -----
+    Drawn: E 0.1 to 0.4 MPa, nu 0.40 to 0.475, h 2 to 4 mm, a/h 0.85 to 1.5,
+    4 to 6 depths evenly from 0.04 h to 0.19 h, 2 to 4 sessions on days
+    0 to 90 with 3 to 6 repeats of each depth per session in shuffled order,
+    hold 0.2 to 5 s, wait 0.3 to 30 s (log-uniform), press centres over a
+    16 x 12 mm pad, temperature 23 C +- 1.5 C per day plus a slow swing
+    within the session, tangential forces 2 % of P, force noise sd 0.5 to 2.5 mN
+    (+ 0.2 % of P).
+    """
+    if hidden is not None and hidden not in HIDDEN_EFFECTS:
+        raise InputError(f"unknown hidden effect {hidden!r}; known: {', '.join(HIDDEN_EFFECTS)}")
+    rng = np.random.default_rng(seed)
+    E = float(rng.uniform(0.1, 0.4))
+    nu = float(rng.uniform(0.40, 0.475))
+    h = float(rng.uniform(2.0, 4.0))
+    a = float(h * rng.uniform(0.85, 1.5))
+    n_depth = int(rng.integers(4, 7))
+    depths = np.round(np.linspace(0.04 * h, 0.19 * h, n_depth), 4)
+    n_sessions = int(rng.integers(2, 5))
+    days = np.concatenate([[0.0], np.sort(rng.uniform(1, 90, n_sessions - 1)).round()])
+    noise = float(rng.uniform(0.0005, 0.0025))
+
+    cols: dict[str, list] = {k: [] for k in (
+        "press", "indenter", "depth_mm", "time_s", "hold_s", "wait_s", "x_mm", "y_mm", "day",
+        "temperature_c", "session")}
+    press = 0
+    for s, day in enumerate(days):
+        reps = int(rng.integers(3, 7))
+        order = rng.permutation(np.repeat(np.arange(n_depth), reps))
+        t = 0.0
+        t_room = 23.0 + rng.normal(0, 1.5)
+        swing, period = rng.uniform(0.3, 1.2), rng.uniform(600, 2400)
+        phase = rng.uniform(0, 2 * math.pi)
+        for j, k in enumerate(order):
+            wait = math.exp(rng.uniform(math.log(0.3), math.log(30.0)))
+            hold = float(rng.uniform(0.2, 5.0))
+            if j:
+                t += wait
+            cols["press"].append(press)
+            cols["indenter"].append(int(k))
+            cols["depth_mm"].append(float(depths[k]))
+            cols["time_s"].append(t)
+            cols["hold_s"].append(hold)
+            cols["wait_s"].append(wait if j else math.nan)
+            cols["x_mm"].append(float(rng.uniform(-8, 8)))
+            cols["y_mm"].append(float(rng.uniform(-6, 6)))
+            cols["day"].append(float(day))
+            cols["temperature_c"].append(t_room + swing * math.sin(2 * math.pi * t / period
+                                                                   + phase)
+                                         + rng.normal(0, 0.05))
+            cols["session"].append(s)
+            t += 0.5 + hold + 0.25     # approach, hold, release
+            press += 1
+    c = {k: np.asarray(v, np.float64) for k, v in cols.items()}
+    w = c["depth_mm"]
+    n = w.size
+    session = c.pop("session").astype(int)
+    truth: dict = {"E_mpa": E, "nu": nu, "noise_n": noise, "base": "paper",
+                   "covariate": HIDDEN_EFFECTS.get(hidden) if hidden else None}
+
+    def u(lo: float, hi: float) -> float:
+        return float(rng.uniform(lo, hi)) * strength
+
+    w_true = w.copy()
+    if hidden == "depth_offset":
+        delta = u(0.008, 0.02) * rng.choice([-1, 1])
+        step_err = rng.normal(0, 0.0005, n_depth)
+        w_true = w + delta + step_err[c["indenter"].astype(int)]
+        truth["delta_mm"] = delta
+    P = _fem_force(E, nu, a, h, np.round(w_true, 9))
+    if hidden == "large_deformation":
+        truth["base"] = "layer"
+    elif hidden == "viscoelastic_relaxation":
+        g1, g2 = u(0.03, 0.06), u(0.02, 0.04)
+        tau = float(rng.uniform(0.3, 1.0))
+        t_h = c["hold_s"]
+        P = P * (1 - g1 * (1 - np.exp(-t_h / tau)) - g2 * (1 - np.exp(-t_h / (8 * tau))))
+        truth.update(g1=g1, g2=g2, tau_s=tau, tau2_s=8 * tau)
+    elif hidden == "incomplete_recovery":
+        r, tau = u(0.05, 0.12), float(rng.uniform(1.0, 4.0))
+        wait = np.nan_to_num(c["wait_s"], nan=np.inf)
+        P = P * (1 + r * (1 + wait / tau) ** -1.5)
+        truth.update(r=r, tau_s=tau)
+    elif hidden == "aging":
+        A, D = u(0.06, 0.15) * rng.choice([-1, 1]), float(rng.uniform(30, 90))
+        P = P * (1 + A * (1 - np.exp(-c["day"] / D)))
+        truth.update(A=A, D_days=D)
+    elif hidden == "spatial_nonuniformity":
+        tx, ty = u(0.004, 0.01) * rng.choice([-1, 1]), u(0.0, 0.008) * rng.choice([-1, 1])
+        P = P * (1 + tx * c["x_mm"] + ty * c["y_mm"]) ** -1.3
+        truth.update(tilt_x_per_mm=tx, tilt_y_per_mm=ty)
+    elif hidden == "temperature":
+        k = u(0.03, 0.06)
+        P = P * np.exp(-k * (c["temperature_c"] - 23.0))
+        truth.update(k_per_c=k)
+    fx = P * rng.normal(0, 0.02, n)
+    fy = P * rng.normal(0, 0.02, n)
+    if hidden == "force_offset":
+        b0 = u(0.01, 0.03) * rng.choice([-1, 1])
+        b = b0 * (1 + rng.normal(0, 0.1, n_sessions))
+        P = P + b[session]
+        truth.update(offset_n=b0)
+    elif hidden == "force_drift":
+        D = u(0.01, 0.03) * rng.choice([-1, 1])
+        T = float(rng.uniform(0.5, 2.0)) * float(np.max(c["time_s"]))
+        walk = np.cumsum(rng.normal(0, 0.05 * abs(D) / math.sqrt(n), n))
+        P = P + D * (1 - np.exp(-c["time_s"] / T)) + walk
+        truth.update(D_n=D, T_s=T)
+    elif hidden == "crosstalk":
+        chi = u(0.5, 1.0) * rng.choice([-1, 1])
+        fx = P * rng.normal(0, 0.05, n)
+        P = P + chi * fx
+        truth.update(chi=chi)
+    P = P + rng.normal(0, 1, n) * np.hypot(noise, 0.002 * P)
+    c["force_n"] = P
+    c["fx_n"] = fx + rng.normal(0, noise, n)
+    c["fy_n"] = fy + rng.normal(0, noise, n)
+    c["force_std_n"] = np.abs(rng.normal(noise * 10, noise, n))
+    order = ["press", "indenter", "depth_mm", "force_n", "force_std_n", "fx_n", "fy_n",
+             "time_s", "hold_s", "wait_s", "x_mm", "y_mm", "day", "temperature_c"]
+    return HiddenTable(columns={k: c[k] for k in order}, thickness_mm=h, radius_mm=a,
+                       hidden=hidden, truth=truth)
