@@ -22,7 +22,8 @@ Fit:
 - :func:`fit_indentation` -> :class:`IndentationFit`.
 - Models of effects (formats.md §4): :class:`IndentationModel`, one
   :class:`Effect` class per catalogue name (:data:`EFFECTS`), fitted robustly
-  (:class:`ModelFit`); :func:`fit_model` adds E and nu.
+  (:class:`ModelFit`); :func:`fit_model` adds E and nu; :func:`diagnose`
+  finds where a model fails and which effect is missing (:class:`Diagnosis`).
 - :func:`neo_hookean_constants` -- Abaqus C10, D1 from E, nu.
 
 Validation (the paper's FEA check):
@@ -38,6 +39,7 @@ from ._beta import (
     beta_relation,
     nu_from_beta,
 )
+from ._diagnose import Diagnosis, diagnose, noise_floor
 from ._effects import EFFECT_NAMES, FIT_EFFECTS, check_fit_effects
 from ._fem_tables import kappa_n
 from ._fit import MAX_W_OVER_H, fit_indentation
@@ -56,6 +58,7 @@ __all__ = [
     "MAX_W_OVER_H",
     "PAPER_BETA_RELATION",
     "BetaRelation",
+    "Diagnosis",
     "Effect",
     "IndentationFit",
     "IndentationModel",
@@ -67,12 +70,14 @@ __all__ = [
     "beta_from_nu",
     "beta_relation",
     "check_fit_effects",
+    "diagnose",
     "fit_indentation",
     "fit_model",
     "kappa",
     "kappa_n",
     "make_effect",
     "neo_hookean_constants",
+    "noise_floor",
     "nu_from_beta",
     "validate_indentation",
 ]

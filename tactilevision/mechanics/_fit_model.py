@@ -126,8 +126,86 @@ def fit_model(columns: Mapping[str, np.ndarray], model: IndentationModel | str =
                        rmse_n=mf.rmse_n, r_squared=r2, effects=model.names,
                        effect_params=effect_params, a_over_h_given=a_over_h is not None,
                        extra_notes=tuple(notes), ci_method=_CI_METHOD)
+    depth_effects = {"depth_offset", "force_offset", "law_curvature"} & set(model.names)
+    if depth_effects and beta_table == "fem" and "large_deformation.beta" in mf.params:
+        fit = _consistent_material(fit, model, mf, columns, h=h, a=a, contact=contact,
+                                   confidence=confidence)
     if "large_deformation.beta" not in mf.params:   # no beta: not "out of the table"
         fit = replace(fit, beta=math.nan, beta_ci95=(math.nan, math.nan), beta_se=math.nan,
                       out_of_table=False, out_of_table_message=None,
                       notes=tuple(n for n in fit.notes if n != fit.out_of_table_message))
     return fit, mf
+
+
+def _consistent_material(fit: IndentationFit, model: IndentationModel, mf: ModelFit,
+                         columns: Mapping[str, np.ndarray], *, h: float, a: float,
+                         contact: str, confidence: float, n_grid: int = 12) -> IndentationFit:
+    """E and nu read through the model itself, for models with a depth effect.
+
+    The FEM beta table holds the secant beta of eq. (5) alone fitted to the
+    FEM's P(w). A model with ``depth_offset`` or ``force_offset`` fits a
+    constant as well, which takes up part of the FEM curve's own curvature,
+    so its beta is not the table's. Here the same model is fitted (least
+    squares, the same weights) to the FEM's noise-free P(w) at these depths
+    for nu on a grid (E = 1), giving c(nu) and beta(nu) of this model;
+    nu = beta^-1(beta fitted), E = c fitted / c(nu).
+    """
+    from scipy import stats
+
+    from ._fem_tables import kappa_n
+
+    rel_lo, rel_hi = 0.33, 0.495
+    w = np.asarray(columns["depth_mm"], np.float64)
+    ws, inv = np.unique(w, return_inverse=True)
+    base = {k: np.asarray(columns[k], np.float64) for k in model.columns}
+    nus = np.linspace(rel_lo, rel_hi, n_grid)
+    cg, bg = [], []
+    for nu in nus:
+        kn = np.array([kappa_n(nu, a / h, x / h, contact=contact) for x in ws])
+        P1 = 2 * a * ws * kn / (1 - nu**2)
+        g = model.fit({**base, "force_n": P1[inv]}, thickness_mm=h, loss="linear")
+        cg.append(g.params["c_n_per_mm"])
+        bg.append(g.params["large_deformation.beta"])
+    cg, bg = np.array(cg), np.array(bg)
+    b = mf.params["large_deformation.beta"]
+    c = mf.params["c_n_per_mm"]
+    top = int(np.argmax(bg))  # the branch where beta rises with nu, up to its maximum
+    lo = top
+    while lo > 0 and bg[lo - 1] < bg[lo]:
+        lo -= 1
+    nus, cg, bg = nus[lo:top + 1], cg[lo:top + 1], bg[lo:top + 1]
+    rel_lo, rel_hi = float(nus[0]), float(nus[-1])
+    if not (nus.size >= 2 and bg[0] <= b <= bg[-1]):
+        msg = (f"beta = {b:.4g} of the model {', '.join(model.names)} is outside what the FEM "
+               f"gives this model at these depths (beta {bg.min():.4g} to {bg.max():.4g} for nu "
+               f"{rel_lo:.3f} to {rel_hi:.3f}): E and nu not computed")
+        return replace(fit, E_mpa=math.nan, nu=math.nan, E_ci95_mpa=(math.nan, math.nan),
+                       nu_ci95=(math.nan, math.nan), out_of_table=True,
+                       out_of_table_message=msg,
+                       notes=(msg, *(n for n in fit.notes if n != fit.out_of_table_message)))
+    nu = float(np.interp(b, bg, nus))
+    c1 = float(np.interp(nu, nus, cg))
+    E = c / c1
+    k = int(np.clip(np.searchsorted(nus, nu), 1, nus.size - 1))
+    dnu_db = (nus[k] - nus[k - 1]) / (bg[k] - bg[k - 1])
+    dlnc1_dnu = (np.log(cg[k]) - np.log(cg[k - 1])) / (nus[k] - nus[k - 1])
+    names = list(mf.params)
+    ib = names.index("large_deformation.beta")
+    cov = mf.covariance[np.ix_([0, ib], [0, ib])]
+    dof = max(mf.n_presses - mf.n_params, 1)
+    tq = float(stats.t.ppf(0.5 + confidence / 2, dof))
+    g_nu = np.array([0.0, dnu_db])
+    g_E = E * (np.array([1 / c, 0.0]) - dlnc1_dnu * g_nu)
+    nu_se = float(np.sqrt(g_nu @ cov @ g_nu))
+    E_se = float(np.sqrt(g_E @ cov @ g_E))
+    from ._neohookean import neo_hookean_constants
+
+    C10, D1 = neo_hookean_constants(E, nu)
+    kept = tuple(n for n in fit.notes if n != fit.out_of_table_message
+                 and "interval of nu" not in n)
+    note = ("E and nu read through this model: fitted by it to the FEM's P(w) at these depths "
+            "for nu on a grid, as the beta table is for eq. (5) alone")
+    return replace(fit, E_mpa=E, nu=nu, E_ci95_mpa=(E - tq * E_se, E + tq * E_se),
+                   nu_ci95=(nu - tq * nu_se, nu + tq * nu_se), nu_se=nu_se, E_se_mpa=E_se,
+                   C10_mpa=C10, D1_per_mpa=D1, kappa=c * (1 - nu**2) / (2 * a * E),
+                   out_of_table=False, out_of_table_message=None, notes=(*kept, note))

@@ -116,7 +116,9 @@ class ForceOffset(Effect):
 
 
 class ForceDrift(Effect):
-    """A force-sensor bias changing within a session, P + d (t - mean t)."""
+    """A force-sensor bias growing within a session from zero at the tare,
+    P + d t (t = time_s, the time since the session start, when the F/T
+    sensor is tared; thermal drift of strain-gauge sensors)."""
 
     name = "force_drift"
     params = (Param("drift_n_per_s", 0.0, -1.0, 1.0, "N/s"),)
@@ -124,7 +126,7 @@ class ForceDrift(Effect):
     kind = "force"
 
     def apply(self, p, data, value):
-        return value + p["drift_n_per_s"] * _centred(data["time_s"])
+        return value + p["drift_n_per_s"] * data["time_s"]
 
 
 class ViscoelasticRelaxation(Effect):
@@ -200,6 +202,26 @@ class StiffnessTrend(Effect):
         return f"StiffnessTrend({self.column!r})"
 
 
+class LawCurvature(Effect):
+    """Curvature of P/w against w/h beyond eq. (5): P (1 + gamma (w/h)^2).
+
+    Not a physical effect of the catalogue but the known limit of the base
+    law: the FEM's finite-strain P/w is not exactly linear in w/h (its
+    misfit to eq. 5 is about 0.1 % of the deepest press's force, which
+    repeatable presses resolve). :func:`~tactilevision.mechanics.diagnose`
+    uses it as the alternative a depth effect must beat, so that the law's
+    own curvature is not reported as a depth or force offset.
+    """
+
+    name = "law_curvature"
+    params = (Param("gamma", 0.0, -50.0, 50.0, ""),)
+    columns = ("depth_mm",)
+
+    def apply(self, p, data, value):
+        x = data["depth_mm"] / data["_h"]
+        return 1.0 + p["gamma"] * x * x
+
+
 #: The catalogue: name -> effect class (formats.md §4, names are the contract).
 EFFECTS: dict[str, type[Effect]] = {
     c.name: c for c in (LargeDeformation, DepthOffset, ForceOffset, ForceDrift,
@@ -218,6 +240,8 @@ def make_effect(name: str) -> Effect:
     """
     if name.startswith("stiffness_trend:"):
         return StiffnessTrend(name.partition(":")[2].strip())
+    if name == LawCurvature.name:
+        return LawCurvature()
     if name not in EFFECTS:
         raise InputError(f"unknown effect '{name}'; valid names: "
                          f"{', '.join([*EFFECTS, 'stiffness_trend:<column>'])}")

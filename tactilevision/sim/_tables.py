@@ -12,8 +12,8 @@ the catalogue's (:mod:`tactilevision.mechanics._model`):
 hidden                            form in the generator
 ================================  ==============================================
 ``depth_offset``                  constant bevel-lag plus a per-indenter
-                                  machining error (sd 0.5 um)
-``force_offset``                  a tare error per session, scattered 10 %
+                                  machining error (sd 0.2 um)
+``force_offset``                  a tare error per session, scattered 3 %
                                   around a common bias
 ``force_drift``                   thermal: ``D (1 - exp(-t / T))`` after each
                                   tare plus a small random walk
@@ -72,7 +72,8 @@ class HiddenTable:
     hidden : str or None
         The hidden effect (None: a null table).
     truth : dict
-        ``E_mpa``, ``nu``, ``noise_n`` (force noise sd, N), ``base``
+        ``E_mpa``, ``nu``, ``noise_n`` (F/T noise sd, N), ``depth_jitter_mm``
+        (sd of the stage's depth repeatability), ``base``
         (``'layer'`` for a ``large_deformation`` table, else ``'paper'``),
         ``covariate`` (the column the effect shows along) and the effect's
         own parameters.
@@ -108,8 +109,9 @@ def make_measurement_table(hidden: str | None = None, seed: int = 0, *,
         Everything (E, nu, h, a, depths, repeats, sessions, timing, noise,
         the effect's size) is drawn from it.
     strength : float, default 1.0
-        Scales the hidden effect's size (1: typically 4 to 12 times the
-        force noise in RMS).
+        Scales the hidden effect's size. At 1, additive effects (offset,
+        drift, cross-talk) are 4 to 15 times the press-to-press force scatter,
+        stiffness effects change P by 3 to 15 %.
 
     Returns
     -------
@@ -127,8 +129,9 @@ def make_measurement_table(hidden: str | None = None, seed: int = 0, *,
     0 to 90 with 3 to 6 repeats of each depth per session in shuffled order,
     hold 0.2 to 5 s, wait 0.3 to 30 s (log-uniform), press centres over a
     16 x 12 mm pad, temperature 23 C +- 1.5 C per day plus a slow swing
-    within the session, tangential forces 2 % of P, force noise sd 0.5 to 2.5 mN
-    (+ 0.2 % of P).
+    within the session, tangential forces 2 % of P, F/T noise sd 1 to 3 mN and
+    a depth repeatability of the stage of sd 0.5 to 1.5 um (times the local
+    stiffness dP/dw).
     """
     if hidden is not None and hidden not in HIDDEN_EFFECTS:
         raise InputError(f"unknown hidden effect {hidden!r}; known: {', '.join(HIDDEN_EFFECTS)}")
@@ -141,7 +144,8 @@ def make_measurement_table(hidden: str | None = None, seed: int = 0, *,
     depths = np.round(np.linspace(0.04 * h, 0.19 * h, n_depth), 4)
     n_sessions = int(rng.integers(2, 5))
     days = np.concatenate([[0.0], np.sort(rng.uniform(1, 90, n_sessions - 1)).round()])
-    noise = float(rng.uniform(0.0005, 0.0025))
+    noise = float(rng.uniform(0.001, 0.003))
+    jitter = float(rng.uniform(0.0005, 0.0015))
 
     cols: dict[str, list] = {k: [] for k in (
         "press", "indenter", "depth_mm", "time_s", "hold_s", "wait_s", "x_mm", "y_mm", "day",
@@ -178,7 +182,8 @@ def make_measurement_table(hidden: str | None = None, seed: int = 0, *,
     w = c["depth_mm"]
     n = w.size
     session = c.pop("session").astype(int)
-    truth: dict = {"E_mpa": E, "nu": nu, "noise_n": noise, "base": "paper",
+    truth: dict = {"E_mpa": E, "nu": nu, "noise_n": noise, "depth_jitter_mm": jitter,
+                   "base": "paper",
                    "covariate": HIDDEN_EFFECTS.get(hidden) if hidden else None}
 
     def u(lo: float, hi: float) -> float:
@@ -187,7 +192,7 @@ def make_measurement_table(hidden: str | None = None, seed: int = 0, *,
     w_true = w.copy()
     if hidden == "depth_offset":
         delta = u(0.008, 0.02) * rng.choice([-1, 1])
-        step_err = rng.normal(0, 0.0005, n_depth)
+        step_err = rng.normal(0, 0.0002, n_depth)
         w_true = w + delta + step_err[c["indenter"].astype(int)]
         truth["delta_mm"] = delta
     P = _fem_force(E, nu, a, h, np.round(w_true, 9))
@@ -218,23 +223,27 @@ def make_measurement_table(hidden: str | None = None, seed: int = 0, *,
         truth.update(k_per_c=k)
     fx = P * rng.normal(0, 0.02, n)
     fy = P * rng.normal(0, 0.02, n)
+    # additive effects are sized against the press-to-press scatter
+    sd = math.hypot(noise, jitter * float(np.mean(P / w_true)))
     if hidden == "force_offset":
-        b0 = u(0.01, 0.03) * rng.choice([-1, 1])
-        b = b0 * (1 + rng.normal(0, 0.1, n_sessions))
+        b0 = u(6, 15) * sd * rng.choice([-1, 1])
+        b = b0 * (1 + rng.normal(0, 0.03, n_sessions))
         P = P + b[session]
         truth.update(offset_n=b0)
     elif hidden == "force_drift":
-        D = u(0.01, 0.03) * rng.choice([-1, 1])
+        D = u(6, 15) * sd * rng.choice([-1, 1])
         T = float(rng.uniform(0.5, 2.0)) * float(np.max(c["time_s"]))
         walk = np.cumsum(rng.normal(0, 0.05 * abs(D) / math.sqrt(n), n))
         P = P + D * (1 - np.exp(-c["time_s"] / T)) + walk
         truth.update(D_n=D, T_s=T)
     elif hidden == "crosstalk":
-        chi = u(0.5, 1.0) * rng.choice([-1, 1])
         fx = P * rng.normal(0, 0.05, n)
+        chi = u(4, 8) * sd / float(np.std(fx)) * rng.choice([-1, 1])
         P = P + chi * fx
         truth.update(chi=chi)
-    P = P + rng.normal(0, 1, n) * np.hypot(noise, 0.002 * P)
+    # F/T noise plus the stage's depth repeatability (force = local stiffness x depth error)
+    P = P + rng.normal(0, noise, n) + rng.normal(0, jitter, n) * np.gradient(
+        _fem_force(E, nu, a, h, depths), depths)[c["indenter"].astype(int)]
     c["force_n"] = P
     c["fx_n"] = fx + rng.normal(0, noise, n)
     c["fy_n"] = fy + rng.normal(0, noise, n)

@@ -1,0 +1,107 @@
+"""``tactilevision diagnose``: model against measurement (formats.md §3, §4)."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from pathlib import Path
+
+from .._checks import InputError
+from ._fit import _write_json
+
+__all__ = ["add_parser", "run"]
+
+_DESCRIPTION = """\
+Compare the indentation model with a measurements table: residuals against
+every covariate column (a test with a p-value and the fraction of residual
+variance explained), the replicate noise floor, the model plus each
+applicable catalogue effect compared by BIC and cross-validated RMSE, the
+verdict (missing effect, equivalent effects, unexplained covariate) and the
+error ladder with E and nu at each step. --report DIR writes the figures and
+report.html. Exit status 2 on bad input."""
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    """Register the ``diagnose`` sub-command."""
+    p = sub.add_parser("diagnose", help="find where the model fails and which effect is missing",
+                       description=_DESCRIPTION,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("measurements", metavar="MEASUREMENTS.csv", type=Path)
+    p.add_argument("--effects", default="", metavar="E1,E2",
+                   help="effects already in the model diagnosed (catalogue names)")
+    p.add_argument("--base", choices=("paper", "layer"), default="paper",
+                   help="paper: eq. (5), the layer with large_deformation (default); "
+                        "layer: the small-strain layer alone")
+    p.add_argument("--thickness-mm", type=float, metavar="H")
+    p.add_argument("--radius-mm", type=float, metavar="A")
+    p.add_argument("--beta-table", choices=("fem", "paper"), default="fem",
+                   help="table for E and nu at each step (the diagnosis does not depend on it)")
+    p.add_argument("--json", metavar="FILE", help="write the result as JSON ('-': stdout)")
+    p.add_argument("--report", metavar="DIR", type=Path,
+                   help="write residuals_by_covariate.png, error_ladder.png, report.html")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=run)
+
+
+def _summary(diag, path: Path) -> str:
+    def mn(v: float) -> str:
+        return f"{v * 1e3:.3f} mN" if math.isfinite(v) else "-"
+
+    lines = [f"{path}: {diag.fits[0].n_presses} presses, model {' + '.join(diag.model)}"]
+    lines.append("  covariate          p-value   explained")
+    for t in diag.covariates:
+        flag = "  <- structure" if t.significant else ""
+        lines.append(f"  {t.name:16s} {t.p_value:9.2g}   {t.explained_fraction:6.1%}{flag}")
+    lines.append("  candidate                       delta BIC   CV RMSE")
+    for c in diag.candidates:
+        lines.append(f"  {c.effect:30s} {c.delta_bic:9.1f}   {mn(c.cv_rmse_n)}")
+    lines.append(f"  error ladder (noise floor {mn(diag.noise_floor_n)}):")
+    for s in diag.ladder:
+        e = (f"E = {s.E_mpa:.4f} MPa, nu = {s.nu:.4f}" if math.isfinite(s.E_mpa)
+             else "E, nu not derived")
+        lines.append(f"    {'base' if s.added is None else '+ ' + s.added:28s} "
+                     f"RMSE {mn(s.rmse_n)}, CV {mn(s.cv_rmse_n)}; {e}")
+    lines.append(f"  verdict: missing effect {diag.missing_effect}, equivalent "
+                 f"{list(diag.equivalent_effects)}, unexplained covariate "
+                 f"{diag.unexplained_covariate}")
+    lines.append(f"  {diag.message}")
+    return "\n".join(lines)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run ``diagnose``; returns 0 (2 through InputError on bad input)."""
+    from ..io import read_measurements
+    from ..mechanics import check_fit_effects
+    from ..mechanics._diagnose import diagnose
+
+    path = args.measurements
+    requested = [e.strip() for e in args.effects.split(",") if e.strip()]
+    check_fit_effects(requested)   # names checked before the table is read
+    effects = list(dict.fromkeys(e for e in requested
+                                 if not (args.base == "paper" and e == "large_deformation")))
+    table = read_measurements(path, thickness_mm=args.thickness_mm, radius_mm=args.radius_mm)
+    try:
+        diag = diagnose(table.columns, thickness_mm=table.thickness_mm,
+                        radius_mm=table.radius_mm, base=args.base, effects=effects,
+                        beta_table=args.beta_table,
+                        progress=not args.no_progress and args.json != "-")
+    except InputError as exc:
+        raise InputError(f"{path}: {exc}") from None
+    obj = diag.to_json_dict()
+    obj["measurements"] = str(path)
+    if args.json is not None:
+        _write_json(obj, args.json)
+    if args.report is not None:
+        from ..viz import diagnosis_figures, write_diagnosis_report
+
+        try:
+            args.report.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise InputError(f"cannot create the report folder {args.report}: "
+                             f"{exc.strerror}") from None
+        figs = diagnosis_figures(diag, args.report)
+        write_diagnosis_report(diag, args.report, figs, source=str(path))
+    if args.json != "-":
+        print(_summary(diag, path), file=sys.stdout)
+    return 0
