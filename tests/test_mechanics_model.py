@@ -128,47 +128,51 @@ def test_model_api_and_errors():
     assert (*EFFECTS, "stiffness_trend:<column>") == EFFECT_NAMES
 
 
-def test_fit_model_derives_E_and_nu_like_the_paper_fit():
-    """E and nu of a model come from its c and beta through the same tables."""
+def test_fit_model_derives_E_and_nu_through_the_FEM():
+    """E and nu of a model come from its c and beta read through the FEM."""
     from tactilevision.mechanics import fit_model
+    from tactilevision.sim._tables import _fem_force
 
     d, _ = _table()
     w = d["depth_mm"]
-    ref = fit_indentation(w, C * w * (1 + 0.75 * w / H), thickness_mm=H, radius_mm=2.5)
-    assert 0.40 < ref.nu < 0.48
-    # the same noise-free line plus a hidden recovery: fitted away, E and nu as without it
-    P = C * w * (1 + 0.75 * w / H) * (1 + 0.1 * np.exp(-d["wait_s"] / 3.0))
-    fit, _ = fit_model({**d, "force_n": P}, "incomplete_recovery", thickness_mm=H, radius_mm=2.5)
+    E, nu, a = 0.2, 0.46, 3.0
+    P0 = _fem_force(E, nu, a, H, w)          # the FEM's own P(w), not eq. (5)
+    base, _ = fit_model({**d, "force_n": P0}, "paper", thickness_mm=H, radius_mm=a)
+    assert base.E_mpa == pytest.approx(E, rel=2e-3) and base.nu == pytest.approx(nu, abs=5e-4)
+    # a hidden recovery is fitted away: E and nu as without it
+    P = P0 * (1 + 0.1 * np.exp(-d["wait_s"] / 3.0))
+    fit, mf = fit_model({**d, "force_n": P}, "incomplete_recovery", thickness_mm=H, radius_mm=a)
     assert fit.effects == ("large_deformation", "incomplete_recovery")
-    assert fit.E_mpa == pytest.approx(ref.E_mpa, rel=1e-6)
-    assert fit.nu == pytest.approx(ref.nu, abs=1e-6)
-    assert fit.effect_params["incomplete_recovery.r"] == pytest.approx(0.1, rel=1e-6)
+    assert fit.E_mpa == pytest.approx(E, rel=3e-3) and fit.nu == pytest.approx(nu, abs=1e-3)
+    assert mf.params["incomplete_recovery.r"] == pytest.approx(0.1, rel=5e-2)
     assert set(fit.effect_params) == {"beta", "incomplete_recovery.r", "incomplete_recovery.tau_s"}
     # without the effect, E is off by more than 5 %
-    plain = fit_indentation(w, P, thickness_mm=H, radius_mm=2.5)
-    assert plain.out_of_table or abs(plain.E_mpa / ref.E_mpa - 1) > 0.05
+    plain = fit_indentation(w, P, thickness_mm=H, radius_mm=a)
+    assert plain.out_of_table or abs(plain.E_mpa / E - 1) > 0.05
     # intervals: with noise they cover and are finite
     noisy = P + np.random.default_rng(3).normal(0, 0.003, P.size)
     fit, _ = fit_model({**d, "force_n": noisy}, "incomplete_recovery", thickness_mm=H,
-                       radius_mm=2.5)
+                       radius_mm=a)
     lo, hi = fit.E_ci95_mpa
-    assert lo < ref.E_mpa < hi and hi - lo < 0.5 * ref.E_mpa
+    assert lo < E < hi and hi - lo < 0.5 * E
     # no beta in a layer model: E and nu are not derived, and it says why
-    lay, _ = fit_model({**d, "force_n": P}, "layer", thickness_mm=H, radius_mm=2.5)
+    lay, _ = fit_model({**d, "force_n": P}, "layer", thickness_mm=H, radius_mm=a)
     assert np.isnan(lay.E_mpa) and not lay.out_of_table
     assert any("without beta" in n for n in lay.notes)
 
 
 def test_fit_model_depth_offset_corrects_the_depths():
     from tactilevision.mechanics import fit_model
+    from tactilevision.sim._tables import _fem_force
 
     d, _ = _table()
     w = d["depth_mm"]
-    ref = fit_indentation(w, C * w * (1 + 0.75 * w / H), thickness_mm=H, radius_mm=2.5)
+    E, nu, a = 0.2, 0.46, 3.0
     # the certified depth is 10 um short of the true w
-    fit, mf = fit_model({**d, "depth_mm": w - 0.01, "force_n": C * w * (1 + 0.75 * w / H)},
-                        "depth_offset", thickness_mm=H, radius_mm=2.5)
-    assert mf.params["depth_offset.delta_mm"] == pytest.approx(0.01, abs=1e-6)
-    assert fit.beta == pytest.approx(0.75, rel=1e-5)
-    assert fit.E_mpa == pytest.approx(ref.E_mpa, rel=1e-5)
-    assert fit.nu == pytest.approx(ref.nu, abs=1e-6)
+    fit, mf = fit_model({**d, "depth_mm": w - 0.01, "force_n": _fem_force(E, nu, a, H, w)},
+                        "depth_offset", thickness_mm=H, radius_mm=a)
+    # the offset also takes up part of the law's own curvature (a few um); E and nu do not
+    assert mf.params["depth_offset.delta_mm"] == pytest.approx(0.01, abs=0.005)
+    # noise-free: within 2 % (the lookup fits the FEM at the certified, not the true, depths)
+    assert fit.E_mpa == pytest.approx(E, rel=0.02)
+    assert fit.nu == pytest.approx(nu, abs=0.005)

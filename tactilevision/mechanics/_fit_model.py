@@ -28,8 +28,12 @@ def fit_model(columns: Mapping[str, np.ndarray], model: IndentationModel | str =
 
     The intercept c and stiffening beta of eq. (5) are fitted freely with the
     effects' parameters (:meth:`IndentationModel.fit`); nu then comes from
-    the beta table and E from eq. (4), as in :func:`fit_indentation`
-    (formats.md §4). The residuals never depend on the beta table.
+    the beta table and E from eq. (4) (formats.md §4). With the FEM tables
+    (the default) the lookup is made through the model itself: the same
+    model is fitted to the FEM's P(w) at these depths for nu on a grid, so
+    that the weighting and any depth effect (whose constant absorbs part of
+    the law's curvature) read the table they were fitted with. The residuals
+    never depend on the beta table.
 
     Parameters
     ----------
@@ -75,7 +79,7 @@ def fit_model(columns: Mapping[str, np.ndarray], model: IndentationModel | str =
     >>> round(mf.params["incomplete_recovery.r"], 3), round(fit.beta, 3)
     (0.1, 0.75)
     >>> round(fit.nu, 3), round(fit.E_mpa, 3)
-    (0.435, 0.223)
+    (0.402, 0.246)
     """
     if model in ("paper", "layer"):
         model = IndentationModel(model)
@@ -126,8 +130,7 @@ def fit_model(columns: Mapping[str, np.ndarray], model: IndentationModel | str =
                        rmse_n=mf.rmse_n, r_squared=r2, effects=model.names,
                        effect_params=effect_params, a_over_h_given=a_over_h is not None,
                        extra_notes=tuple(notes), ci_method=_CI_METHOD)
-    depth_effects = {"depth_offset", "force_offset", "law_curvature"} & set(model.names)
-    if depth_effects and beta_table == "fem" and "large_deformation.beta" in mf.params:
+    if beta_table == "fem" and "large_deformation.beta" in mf.params:
         fit = _consistent_material(fit, model, mf, columns, h=h, a=a, contact=contact,
                                    confidence=confidence)
     if "large_deformation.beta" not in mf.params:   # no beta: not "out of the table"
@@ -140,15 +143,16 @@ def fit_model(columns: Mapping[str, np.ndarray], model: IndentationModel | str =
 def _consistent_material(fit: IndentationFit, model: IndentationModel, mf: ModelFit,
                          columns: Mapping[str, np.ndarray], *, h: float, a: float,
                          contact: str, confidence: float, n_grid: int = 12) -> IndentationFit:
-    """E and nu read through the model itself, for models with a depth effect.
+    """E and nu read through the model itself.
 
     The FEM beta table holds the secant beta of eq. (5) alone fitted to the
-    FEM's P(w). A model with ``depth_offset`` or ``force_offset`` fits a
-    constant as well, which takes up part of the FEM curve's own curvature,
-    so its beta is not the table's. Here the same model is fitted (least
-    squares, the same weights) to the FEM's noise-free P(w) at these depths
-    for nu on a grid (E = 1), giving c(nu) and beta(nu) of this model;
-    nu = beta^-1(beta fitted), E = c fitted / c(nu).
+    FEM's P/w. A model fitted otherwise (least squares on P, or with a
+    ``depth_offset`` or ``force_offset``, whose constant takes up part of
+    the FEM curve's own curvature) has another beta for the same gel. Here
+    the same model is fitted (the same weights, least squares) to the FEM's
+    noise-free P(w) at these depths and covariates for nu on a grid (E = 1),
+    giving c(nu) and beta(nu) of this model; nu = beta^-1(beta fitted),
+    E = c fitted / c(nu) (the generalisation of the paper's table lookup).
     """
     from scipy import stats
 
@@ -163,7 +167,8 @@ def _consistent_material(fit: IndentationFit, model: IndentationModel, mf: Model
     for nu in nus:
         kn = np.array([kappa_n(nu, a / h, x / h, contact=contact) for x in ws])
         P1 = 2 * a * ws * kn / (1 - nu**2)
-        g = model.fit({**base, "force_n": P1[inv]}, thickness_mm=h, loss="linear")
+        g = model.fit({**base, "force_n": P1[inv]}, thickness_mm=h, loss="linear",
+                      weights=mf.weights)
         cg.append(g.params["c_n_per_mm"])
         bg.append(g.params["large_deformation.beta"])
     cg, bg = np.array(cg), np.array(bg)
@@ -183,12 +188,15 @@ def _consistent_material(fit: IndentationFit, model: IndentationModel, mf: Model
                        nu_ci95=(math.nan, math.nan), out_of_table=True,
                        out_of_table_message=msg,
                        notes=(msg, *(n for n in fit.notes if n != fit.out_of_table_message)))
-    nu = float(np.interp(b, bg, nus))
-    c1 = float(np.interp(nu, nus, cg))
+    from scipy.interpolate import PchipInterpolator
+
+    nu_of_b = PchipInterpolator(bg, nus)
+    c_of_nu = PchipInterpolator(nus, cg)
+    nu = float(nu_of_b(b))
+    c1 = float(c_of_nu(nu))
     E = c / c1
-    k = int(np.clip(np.searchsorted(nus, nu), 1, nus.size - 1))
-    dnu_db = (nus[k] - nus[k - 1]) / (bg[k] - bg[k - 1])
-    dlnc1_dnu = (np.log(cg[k]) - np.log(cg[k - 1])) / (nus[k] - nus[k - 1])
+    dnu_db = float(nu_of_b.derivative()(b))
+    dlnc1_dnu = float(c_of_nu.derivative()(nu)) / c1
     names = list(mf.params)
     ib = names.index("large_deformation.beta")
     cov = mf.covariance[np.ix_([0, ib], [0, ib])]

@@ -419,12 +419,10 @@ class IndentationModel:
         thickness_mm : float
             h.
         weights : (N,) array_like, optional
-            Per-press weights. Default ``1 / w^2``: least squares on P/w, the
-            way eq. (5) is fitted by the paper and by :func:`fit_indentation`,
-            and the way the FEM beta table's secant beta was fitted to the
-            FEM's P/w. The FEM's P(w) is not exactly eq. (5): weighting
-            presses otherwise moves beta, and so nu and E, off the table's
-            (by 0.018 in nu on a table at a/h = 0.86, nu = 0.42).
+            Per-press weights; default equal (least squares on P, efficient
+            for a force noise that does not grow with depth). E and nu read
+            through :func:`fit_model` do not depend on the weighting: it
+            fits the same model, with the same weights, to the FEM's P(w).
         loss : {'soft_l1', 'linear', 'huber', 'cauchy'}, default 'soft_l1'
             Robust loss of :func:`scipy.optimize.least_squares`. 'soft_l1'
             behaves as least squares for residuals below `f_scale` and grows
@@ -458,7 +456,7 @@ class IndentationModel:
                 raise InputError(f"column {c} holds NaN or inf (row {row})")
         if n < len(names) + 1:
             raise InputError(f"{n} presses are too few for {len(names)} parameters")
-        wts = d["depth_mm"] ** -2.0 if weights is None else np.asarray(weights, np.float64)
+        wts = np.ones(n) if weights is None else np.asarray(weights, np.float64)
         if wts.shape != (n,) or not np.all(np.isfinite(wts) & (wts > 0)):
             raise InputError("weights must be positive and finite, one per press")
         sw = np.sqrt(wts / wts.mean())
