@@ -1,13 +1,16 @@
 """Simulated sessions with known truth: gel height maps of gauge-block presses
 from the FEM, frames rendered from them through Taxim's fitted shading, F/T
-logs, and whole session folders with their ``truth.json``."""
+logs, and whole session folders with their ``truth.json``; measurements tables
+with one hidden physical effect (:func:`make_measurement_table`)."""
 
 from ._block import GaugeBlock, press_surface
 from ._press import PressProfile, press_profile
 from ._render import ShadingTable, fit_shading_table, taxim_shading
 from ._schedule import PressSchedule, depth_trajectory, ft_log, press_schedule
 from ._session import SessionSpec, make_session
+from ._tables import HIDDEN_EFFECTS, HiddenTable, make_measurement_table
 
-__all__ = ["GaugeBlock", "PressProfile", "PressSchedule", "SessionSpec", "ShadingTable",
-           "depth_trajectory", "fit_shading_table", "ft_log", "make_session", "press_profile",
-           "press_schedule", "press_surface", "taxim_shading"]
+__all__ = ["HIDDEN_EFFECTS", "GaugeBlock", "HiddenTable", "PressProfile", "PressSchedule",
+           "SessionSpec", "ShadingTable", "depth_trajectory", "fit_shading_table", "ft_log",
+           "make_measurement_table", "make_session", "press_profile", "press_schedule",
+           "press_surface", "taxim_shading"]

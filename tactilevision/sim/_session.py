@@ -74,6 +74,11 @@ class SessionSpec:
         ``misaligned_fraction`` of Fz.
     edge_presses : tuple of int
         Presses placed so the footprint is cut by the edge of the sensed area.
+    recovery_r, recovery_tau_s : float
+        A hidden incomplete recovery of the gel (default none): each press
+        is stiffer by the factor ``1 + r (1 + t_wait / tau)^-1.5`` (a power
+        law, deliberately not the catalogue's exponential), t_wait the rest
+        since the previous release; the first press is rested.
     jpeg_quality : int
     sensor_name : str
         ``[sensor] name`` of session.toml ('gelsight' picks the shipped
@@ -104,6 +109,8 @@ class SessionSpec:
     misaligned: tuple[int, ...] = ()
     misaligned_fraction: float = 0.3
     edge_presses: tuple[int, ...] = ()
+    recovery_r: float = 0.0
+    recovery_tau_s: float = 2.0
     jpeg_quality: int = 75
     sensor_name: str = "gelsight"
     seed: int = 0
@@ -181,8 +188,12 @@ def make_session(folder: str | Path, spec: SessionSpec | None = None, *,
     eh2 = spec.E_mpa * h * h
     p_of_w = PchipInterpolator(prof.w_over_h, prof.force)   # P / (E h^2) against w / h, built once
 
+    recovery = np.ones(n)
+    if spec.recovery_r:
+        recovery[1:] += spec.recovery_r * (1 + sched.wait_s[1:] / spec.recovery_tau_s) ** -1.5
+
     def force_of_depth(i: int, d: np.ndarray) -> np.ndarray:
-        return eh2 * p_of_w(np.asarray(d) / h)
+        return eh2 * p_of_w(np.asarray(d) / h) * recovery[i]
 
     # frames: from lead_s before each press to its release
     dt = 1.0 / spec.fps
@@ -283,6 +294,7 @@ def _truth(spec: SessionSpec, sched: PressSchedule, w_c: np.ndarray, force_of_de
         "E_mpa": spec.E_mpa, "nu": spec.nu, "thickness_mm": spec.thickness_mm,
         "radius_mm": spec.block.radius_mm, "clock_offset_s": spec.clock_offset_s,
         "mm_per_px": s, "seed": spec.seed,
+        "recovery_r": spec.recovery_r, "recovery_tau_s": spec.recovery_tau_s,
         "land_contact_depth_mm": [round(float(v), 7) for v in w_c],
         "land": spec.block.land,
         "note": ("depth_mm is the true indentation while the force window is taken: the depth "
