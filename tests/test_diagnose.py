@@ -192,3 +192,29 @@ def test_cli_bad_input(tmp_path, capsys, argv, expected):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and expected in err[0]
     assert (tmp_path / "out.json").read_text() == "{}"     # nothing already written is lost
+
+
+def test_sample_session_with_a_hidden_effect(tmp_path, capsys):
+    """The README's walk-through: calibrate the sample session, diagnose, add the effect."""
+    from pathlib import Path
+
+    session = Path(__file__).resolve().parent.parent / "sample_frames" / "gelsight_recovery"
+    truth = json.loads((session / "truth.json").read_text())
+    out = tmp_path / "recovery"
+    assert main(["calibrate", str(session), "--out", str(out), "--no-progress",
+                 "--no-report"]) == 0
+    capsys.readouterr()
+    csv = out / "measurements.csv"
+    assert main(["diagnose", str(csv), "--json", "-"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["verdict"]["missing_effect"] == "incomplete_recovery"
+    assert d["verdict"]["unexplained_covariate"] is None
+    assert d["covariates"][[c["name"] for c in d["covariates"]].index("wait_s")][
+        "explained_fraction"] > 0.8
+    base, added = d["ladder"][0], d["ladder"][1]
+    assert added["cv_rmse_n"] < 0.25 * base["cv_rmse_n"]
+    assert added["cv_rmse_n"] < 1.5 * d["noise_floor_n"]
+    assert main(["fit", str(csv), "--effects", "incomplete_recovery", "--json", "-"]) == 0
+    fit = json.loads(capsys.readouterr().out)
+    assert fit["E_ci95_mpa"][0] < truth["E_mpa"] < fit["E_ci95_mpa"][1]
+    assert abs(fit["E_mpa"] / truth["E_mpa"] - 1) < 0.08

@@ -100,7 +100,12 @@ def fit_model(columns: Mapping[str, np.ndarray], model: IndentationModel | str =
     if np.any(w <= 0):
         raise InputError("a depth corrected by depth_offset is not positive")
     names = list(mf.params)
-    c = mf.params["c_n_per_mm"]
+    # stiffness_trend is exp(k x): c is the stiffness at x = 0; E and nu are given at
+    # the table's mean of each such column
+    scale = math.exp(sum(v * float(np.nanmean(np.asarray(columns[k.split(":", 1)[1][:-2]],
+                                                        np.float64)))
+                         for k, v in mf.params.items() if k.startswith("stiffness_trend:")))
+    c = mf.params["c_n_per_mm"] * scale
     effect_params = {k: v for k, v in mf.params.items() if k != "c_n_per_mm"}
     notes = [f"model {', '.join(model.names) or 'layer'} fitted by {loss} least squares"]
     if "large_deformation.beta" in mf.params:
@@ -110,7 +115,7 @@ def fit_model(columns: Mapping[str, np.ndarray], model: IndentationModel | str =
         ib = names.index("large_deformation.beta")
         cov_cb = mf.covariance[np.ix_([0, ib], [0, ib])]
         J = np.array([[1.0, 0.0], [b, c]])   # (c, beta) -> (c, c beta)
-        cov = J @ cov_cb @ J.T
+        cov = J @ cov_cb @ J.T * scale**2
         slope = c * b
     else:
         slope, cov = 0.0, np.full((2, 2), math.nan)
@@ -132,7 +137,7 @@ def fit_model(columns: Mapping[str, np.ndarray], model: IndentationModel | str =
                        extra_notes=tuple(notes), ci_method=_CI_METHOD)
     if beta_table == "fem" and "large_deformation.beta" in mf.params:
         fit = _consistent_material(fit, model, mf, columns, h=h, a=a, contact=contact,
-                                   confidence=confidence)
+                                   confidence=confidence, scale=scale)
     if "large_deformation.beta" not in mf.params:   # no beta: not "out of the table"
         fit = replace(fit, beta=math.nan, beta_ci95=(math.nan, math.nan), beta_se=math.nan,
                       out_of_table=False, out_of_table_message=None,
@@ -142,7 +147,8 @@ def fit_model(columns: Mapping[str, np.ndarray], model: IndentationModel | str =
 
 def _consistent_material(fit: IndentationFit, model: IndentationModel, mf: ModelFit,
                          columns: Mapping[str, np.ndarray], *, h: float, a: float,
-                         contact: str, confidence: float, n_grid: int = 12) -> IndentationFit:
+                         contact: str, confidence: float, scale: float = 1.0,
+                         n_grid: int = 12) -> IndentationFit:
     """E and nu read through the model itself.
 
     The FEM beta table holds the secant beta of eq. (5) alone fitted to the
@@ -173,7 +179,7 @@ def _consistent_material(fit: IndentationFit, model: IndentationModel, mf: Model
         bg.append(g.params["large_deformation.beta"])
     cg, bg = np.array(cg), np.array(bg)
     b = mf.params["large_deformation.beta"]
-    c = mf.params["c_n_per_mm"]
+    c = mf.params["c_n_per_mm"] * scale
     top = int(np.argmax(bg))  # the branch where beta rises with nu, up to its maximum
     lo = top
     while lo > 0 and bg[lo - 1] < bg[lo]:
@@ -199,7 +205,7 @@ def _consistent_material(fit: IndentationFit, model: IndentationModel, mf: Model
     dlnc1_dnu = float(c_of_nu.derivative()(nu)) / c1
     names = list(mf.params)
     ib = names.index("large_deformation.beta")
-    cov = mf.covariance[np.ix_([0, ib], [0, ib])]
+    cov = mf.covariance[np.ix_([0, ib], [0, ib])] * np.outer([scale, 1.0], [scale, 1.0])
     dof = max(mf.n_presses - mf.n_params, 1)
     tq = float(stats.t.ppf(0.5 + confidence / 2, dof))
     g_nu = np.array([0.0, dnu_db])
