@@ -1,8 +1,8 @@
 """The large-deformation factor beta(nu) and its inverse nu(beta).
 
-eq. (2) of the paper: ``kappa_n = kappa (1 + beta w/h)``. The only beta table
-available so far is the paper's fitted relation (7) at a/h = 0.8; the
-project's own FEM table arrives in a later issue.
+eq. (2) of the paper: ``kappa_n = kappa (1 + beta w/h)``. Two tables: the
+paper's fitted relation (7) at a/h = 0.8 (``'paper'``) and the project's
+finite-strain FEM table (``'fem'``, :mod:`._fem_tables`).
 """
 
 from __future__ import annotations
