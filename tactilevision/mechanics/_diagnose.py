@@ -239,6 +239,16 @@ def _groups(columns: Mapping[str, np.ndarray]) -> np.ndarray:
     return g.ravel()
 
 
+def _group_means(v: np.ndarray, g: np.ndarray) -> np.ndarray:
+    """Mean of `v` (N,) or each column of `v` (N, K) over the groups `g`, per press."""
+    G = int(g.max()) + 1
+    counts = np.bincount(g, minlength=G)
+    if v.ndim == 1:
+        return (np.bincount(g, v, G) / counts)[g]
+    return (np.stack([np.bincount(g, v[:, j], G) for j in range(v.shape[1])], 1)
+            / counts[:, None])[g]
+
+
 def noise_floor(residuals_n: np.ndarray, columns: Mapping[str, np.ndarray]) -> float:
     """The replicate noise floor: pooled within-group sd of residuals, N.
 
@@ -260,8 +270,7 @@ def noise_floor(residuals_n: np.ndarray, columns: Mapping[str, np.ndarray]) -> f
     G = int(g.max()) + 1
     if r.size - G < 2:
         return math.nan
-    means = np.bincount(g, r, G) / np.bincount(g, minlength=G)
-    return float(np.sqrt(np.sum((r - means[g]) ** 2) / (r.size - G)))
+    return float(np.sqrt(np.sum((r - _group_means(r, g)) ** 2) / (r.size - G)))
 
 
 def _covariate_names(columns: Mapping[str, np.ndarray]) -> list[str]:
@@ -323,8 +332,7 @@ def covariate_tests(residuals_n: np.ndarray, predicted_n: np.ndarray,
         rss0 = float(np.sum((r - r.mean()) ** 2))
         if values.size <= 8:
             G = values.size
-            means = np.bincount(g, r, G) / np.bincount(g, minlength=G)
-            rss1 = float(np.sum((r - means[g]) ** 2))
+            rss1 = float(np.sum((r - _group_means(r, g)) ** 2))
             df1 = G - 1 - (n_depth_params if name == "depth_mm" else 0)
             df2 = n - G
         else:
@@ -332,13 +340,12 @@ def covariate_tests(residuals_n: np.ndarray, predicted_n: np.ndarray,
             grp = _groups({k: np.asarray(v)[ok] for k, v in columns.items()
                            if k in ("depth_mm", "indenter")})
             G = int(grp.max()) + 1
-            r = r - (np.bincount(grp, r, G) / np.bincount(grp, minlength=G))[grp]
+            r = r - _group_means(r, grp)
             rss0 = float(np.sum(r ** 2))
             z = (xs - xs.mean()) / xs.std()
             q = (p - p.mean()) / (p.std() or 1.0)
             X = np.column_stack([z, z**2, q * z, q * z**2])
-            X = X - (np.stack([np.bincount(grp, X[:, j], G) for j in range(X.shape[1])], 1)
-                     / np.bincount(grp, minlength=G)[:, None])[grp]
+            X = X - _group_means(X, grp)
             coef, *_ = np.linalg.lstsq(X, r, rcond=None)
             rss1 = float(np.sum((r - X @ coef) ** 2))
             df1 = int(np.linalg.matrix_rank(X))

@@ -102,10 +102,12 @@ def fit_model(columns: Mapping[str, np.ndarray], model: IndentationModel | str =
     names = list(mf.params)
     # stiffness_trend is exp(k x): c is the stiffness at x = 0; E and nu are given at
     # the table's mean of each such column
-    scale = math.exp(sum(v * float(np.nanmean(np.asarray(columns[k.split(":", 1)[1][:-2]],
-                                                        np.float64)))
-                         for k, v in mf.params.items() if k.startswith("stiffness_trend:")))
-    c = mf.params["c_n_per_mm"] * scale
+    scale = math.exp(sum(
+        v * float(np.nanmean(np.asarray(columns[k.split(":", 1)[1].rsplit(".", 1)[0]],
+                                        np.float64)))
+        for k, v in mf.params.items() if k.startswith("stiffness_trend:")))
+    c0 = mf.params["c_n_per_mm"]
+    c = c0 * scale
     effect_params = {k: v for k, v in mf.params.items() if k != "c_n_per_mm"}
     notes = [f"model {', '.join(model.names) or 'layer'} fitted by {loss} least squares"]
     if "large_deformation.beta" in mf.params:
@@ -114,8 +116,8 @@ def fit_model(columns: Mapping[str, np.ndarray], model: IndentationModel | str =
                                        if k != "large_deformation.beta"}}
         ib = names.index("large_deformation.beta")
         cov_cb = mf.covariance[np.ix_([0, ib], [0, ib])]
-        J = np.array([[1.0, 0.0], [b, c]])   # (c, beta) -> (c, c beta)
-        cov = J @ cov_cb @ J.T * scale**2
+        J = scale * np.array([[1.0, 0.0], [b, c0]])   # (c0, beta) -> (c, c beta)
+        cov = J @ cov_cb @ J.T
         slope = c * b
     else:
         slope, cov = 0.0, np.full((2, 2), math.nan)
@@ -127,8 +129,6 @@ def fit_model(columns: Mapping[str, np.ndarray], model: IndentationModel | str =
     P = np.asarray(columns["force_n"], np.float64)
     tss = float(np.sum((P / w - np.mean(P / w)) ** 2))
     r2 = 1 - float(np.sum((mf.residuals_n / w) ** 2)) / tss if tss > 0 else 1.0
-    if not np.isfinite(slope):
-        slope = 0.0
     fit = material_fit(c, slope, cov, depth_mm=w, thickness_mm=h, radius_mm=a, a_over_h=ah,
                        beta_table=beta_table, contact=contact, kappa_source=kappa_source,
                        confidence=confidence, dof=mf.n_presses - mf.n_params,

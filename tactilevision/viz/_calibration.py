@@ -19,6 +19,21 @@ def _plt():
     return plt
 
 
+def _html_head(title: str) -> str:
+    """Opening of a report page (escaped title, the shared style)."""
+    return (f'<!doctype html>\n<html><head><meta charset="utf-8"><title>{html.escape(title)}'
+            "</title>\n<style>body{font-family:sans-serif;max-width:1100px;margin:2em auto}\n"
+            ".big{font-size:1.3em} td,th{padding:2px 8px;text-align:left}\n"
+            "img{max-width:100%} figure{margin:1em 0}</style></head><body>\n")
+
+
+def _figures_html(figures: dict[str, Path]) -> str:
+    """The report's figures as <figure> elements (images beside the page)."""
+    e = html.escape
+    return "".join(f'<figure><img src="{e(p.name)}" alt="{e(k)}"></figure>'
+                   for k, p in figures.items())
+
+
 def _fit_line(fit, w: np.ndarray) -> np.ndarray:
     """P/w of eq. (5) at depths w."""
     return fit.c_n_per_mm * (1.0 + fit.beta * w / fit.thickness_mm)
@@ -190,13 +205,8 @@ def write_calibration_report(cal, out_dir: str | Path, figures: dict[str, Path])
                   f" nu = {fit.nu:.4f} ({fit.nu_ci95[0]:.4f} to {fit.nu_ci95[1]:.4f})</p>")
     else:
         result = f"<p class=big>E and nu not computed: {e(fit.out_of_table_message or '')}</p>"
-    figs = "".join(f'<figure><img src="{e(p.name)}" alt="{e(k)}"></figure>'
-                   for k, p in figures.items())
-    page = f"""<!doctype html>
-<html><head><meta charset="utf-8"><title>tactilevision calibrate: {e(str(cal.session.path))}</title>
-<style>body{{font-family:sans-serif;max-width:1100px;margin:2em auto}}
-.big{{font-size:1.3em}} td,th{{padding:2px 8px;text-align:left}}
-img{{max-width:100%}} figure{{margin:1em 0}}</style></head><body>
+    figs = _figures_html(figures)
+    page = _html_head(f"tactilevision calibrate: {cal.session.path}") + f"""\
 <h1>Elastomer calibration of {e(str(cal.session.path))}</h1>
 {result}
 <p>{len(c.presses)} presses certified, {len(c.rejected)} rejected. Fit of eq. (5)

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ._calibration import _plt
+from ._calibration import _figures_html, _html_head, _plt
 
 __all__ = ["diagnosis_figures", "write_diagnosis_report"]
 
@@ -157,14 +157,9 @@ def write_diagnosis_report(diag, out_dir: str | Path, figures: dict[str, Path], 
         f"<tr><td>{e(' + '.join(s.model))}</td><td>{s.rmse_n * 1e3:.3f}</td>"
         f"<td>{s.cv_rmse_n * 1e3:.3f}</td><td>{num(s.E_mpa, '.4f')}</td>"
         f"<td>{num(s.nu, '.4f')}</td></tr>" for s in diag.ladder)
-    figs = "".join(f'<figure><img src="{e(p.name)}" alt="{e(k)}"></figure>'
-                   for k, p in figures.items())
+    figs = _figures_html(figures)
     verdict = diag.missing_effect or "nothing missing"
-    page = f"""<!doctype html>
-<html><head><meta charset="utf-8"><title>tactilevision diagnose: {e(source)}</title>
-<style>body{{font-family:sans-serif;max-width:1100px;margin:2em auto}}
-.big{{font-size:1.3em}} td,th{{padding:2px 8px;text-align:left}}
-img{{max-width:100%}} figure{{margin:1em 0}}</style></head><body>
+    page = _html_head(f"tactilevision diagnose: {source}") + f"""\
 <h1>Model against measurement: {e(source)}</h1>
 <p class=big>Verdict: <b>{e(verdict)}</b>{
     f"; unexplained structure along <b>{e(diag.unexplained_covariate)}</b>"
