@@ -18,10 +18,14 @@ from tactilevision.sim import HIDDEN_EFFECTS, make_measurement_table
 
 SEEDS = range(4)
 CATALOGUE = [k for k in HIDDEN_EFFECTS if k not in ("temperature", "crosstalk")]
-#: effects whose constant trades off against beta: E is recovered only as well as
-#: the table pins nu (the verdict names the tare check that separates them)
+#: effects whose constant trades off against beta: a one-block table does not
+#: resolve E to 5 % with them in the model (its interval is wider in 97-100 % of
+#: generated tables, benchmarks/bench_diagnose.py); E must lie in the interval
+#: (the verdict names the tare check that separates them)
 OFFSETS = ("depth_offset", "force_offset")
-#: the instantaneous modulus is extrapolated to zero hold: E within 10 %
+#: the instantaneous modulus is extrapolated to zero hold through one exponential
+#: from a two-term Prony truth: within 5 % in 97 % of 30 benchmark tables, but two
+#: of these four seeds miss by 5.7 and 7.5 %: E within 10 % here
 RELAXATION = ("viscoelastic_relaxation",)
 
 
@@ -73,17 +77,21 @@ def test_each_catalogue_effect_is_identified(hidden):
         if hidden != d.missing_effect:    # its indistinguishable partner was named first
             E = fit_model(t.columns, hidden, thickness_mm=t.thickness_mm,
                           radius_mm=t.radius_mm)[0].E_mpa
-        tol = 0.10 if hidden in RELAXATION else 0.05
-        E_ok += abs(E / t.truth["E_mpa"] - 1) <= tol
+        if hidden in OFFSETS:
+            fit = fit_model(t.columns, hidden, thickness_mm=t.thickness_mm,
+                            radius_mm=t.radius_mm)[0]
+            lo, hi = fit.E_ci95_mpa
+            resolved = lo >= 0.95 * fit.E_mpa and hi <= 1.05 * fit.E_mpa
+            E_ok += (lo <= t.truth["E_mpa"] <= hi
+                     and (not resolved or abs(E / t.truth["E_mpa"] - 1) <= 0.05))
+        else:
+            E_ok += abs(E / t.truth["E_mpa"] - 1) <= (0.10 if hidden in RELAXATION else 0.05)
         # the error falls: the last rung beats the model diagnosed
         assert last.cv_rmse_n < d.ladder[0].cv_rmse_n
     n = len(SEEDS)
     assert ok >= n - 1, f"{hidden} identified in {ok} of {n} tables"
     assert cv_ok >= ok - 1
-    if hidden in OFFSETS:
-        assert E_ok >= ok // 2
-    else:
-        assert E_ok >= ok - 1
+    assert E_ok >= ok - 1
 
 
 def test_offsets_are_reported_as_equivalent_with_the_separating_measurement():

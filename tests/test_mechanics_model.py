@@ -7,7 +7,13 @@ import numpy as np
 import pytest
 
 from tactilevision import InputError
-from tactilevision.mechanics import EFFECTS, IndentationModel, fit_indentation, make_effect
+from tactilevision.mechanics import (
+    EFFECTS,
+    IndentationModel,
+    fit_indentation,
+    fit_model,
+    make_effect,
+)
 
 H = 3.0
 C, BETA = 3.7, 0.8
@@ -33,7 +39,7 @@ def _table(seed=0, n_rep=10):
 TRUTH = {
     "depth_offset": {"delta_mm": 0.012},
     "force_offset": {"offset_n": 0.05},
-    "force_drift": {"drift_n_per_s": 2e-4},
+    "force_drift": {"drift_n_per_s": 2e-4, "curvature_n_per_s2": -1.5e-7},
     "viscoelastic_relaxation": {"g": 0.08, "tau_s": 0.6},
     "incomplete_recovery": {"r": 0.10, "tau_s": 3.0},
     "aging": {"k_per_day": 0.002},
@@ -130,7 +136,6 @@ def test_model_api_and_errors():
 
 def test_fit_model_derives_E_and_nu_through_the_FEM():
     """E and nu of a model come from its c and beta read through the FEM."""
-    from tactilevision.mechanics import fit_model
     from tactilevision.sim._tables import _fem_force
 
     d, _ = _table()
@@ -176,3 +181,28 @@ def test_fit_model_depth_offset_corrects_the_depths():
     # noise-free: within 2 % (the lookup fits the FEM at the certified, not the true, depths)
     assert fit.E_mpa == pytest.approx(E, rel=0.02)
     assert fit.nu == pytest.approx(nu, abs=0.005)
+
+
+def test_unidentified_parameters_get_no_finite_interval():
+    # a relaxation far faster than the shortest hold: the presses measure c (1 - g) only
+    d, rng = _table(seed=7)
+    d["hold_s"] = rng.uniform(0.5, 5.0, d["depth_mm"].size)
+    model = IndentationModel().with_effect("viscoelastic_relaxation")
+    truth = {"c_n_per_mm": C, "large_deformation.beta": BETA,
+             "viscoelastic_relaxation.g": 0.2, "viscoelastic_relaxation.tau_s": 0.005}
+    d["force_n"] = model.predict(truth, d, H) + rng.normal(0, 0.002, d["depth_mm"].size)
+    f = model.fit(d, thickness_mm=H)
+    assert {"c_n_per_mm", "viscoelastic_relaxation.g"} <= set(f.unidentified)
+    assert f.stderr["c_n_per_mm"] == np.inf
+    assert "large_deformation.beta" not in f.unidentified
+    assert np.isfinite(f.stderr["large_deformation.beta"])
+    # what is measured, c (1 - g), is right
+    g = f.params["viscoelastic_relaxation.g"]
+    assert f.params["c_n_per_mm"] * (1 - g) == pytest.approx(C * 0.8, rel=5e-3)
+    fit, _ = fit_model(d, model, thickness_mm=H, radius_mm=2.5)
+    assert not np.all(np.isfinite(fit.E_ci95_mpa))
+    assert any("not identified" in n for n in fit.notes)
+    # identified when the holds resolve tau: no parameter flagged
+    d["hold_s"] = rng.uniform(0.001, 0.05, d["depth_mm"].size)
+    d["force_n"] = model.predict(truth, d, H) + rng.normal(0, 0.002, d["depth_mm"].size)
+    assert model.fit(d, thickness_mm=H).unidentified == ()

@@ -113,16 +113,23 @@ class ForceOffset(Effect):
 
 class ForceDrift(Effect):
     """A force-sensor bias growing within a session from zero at the tare,
-    P + d t (t = time_s, the time since the session start, when the F/T
-    sensor is tared; thermal drift of strain-gauge sensors)."""
+    P + d t + q t^2 (t = time_s, the time since the session start, when the
+    F/T sensor is tared). Thermal drift of strain-gauge sensors settles
+    roughly as D (1 - exp(-t / T)) (e.g. ATI, F/T Transducer Manual,
+    "temperature compensation"); d t + q t^2 is its second-order expansion,
+    which also covers a steady ramp (q = 0). The straight line alone left
+    residuals along time_s on generated thermal drifts and moved E by up to
+    12 % (``benchmarks/bench_diagnose.py``)."""
 
     name = "force_drift"
-    params = (Param("drift_n_per_s", 0.0, -1.0, 1.0, "N/s"),)
+    params = (Param("drift_n_per_s", 0.0, -1.0, 1.0, "N/s"),
+              Param("curvature_n_per_s2", 0.0, -1e-2, 1e-2, "N/s^2"))
     columns = ("time_s",)
     kind = "force"
 
     def apply(self, p, data, value):
-        return value + p["drift_n_per_s"] * data["time_s"]
+        t = data["time_s"]
+        return value + p["drift_n_per_s"] * t + p["curvature_n_per_s2"] * t * t
 
 
 class ViscoelasticRelaxation(Effect):
@@ -273,6 +280,13 @@ class ModelFit:
         |residual| > sqrt(3) times the loss scale).
     success : bool
     message : str
+    unidentified : tuple of str
+        Parameters the data cannot determine: they lie along a null direction
+        of the (column-normalised) Jacobian, e.g. ``c_n_per_mm`` and
+        ``viscoelastic_relaxation.g`` when the fitted tau is far below the
+        shortest hold, so that only c (1 - g) is measured. Their standard
+        errors are infinite and their covariance rows NaN (infinite on the
+        diagonal), so any interval derived from them is not finite.
     """
 
     model: IndentationModel
@@ -292,6 +306,7 @@ class ModelFit:
     outliers: np.ndarray
     success: bool
     message: str
+    unidentified: tuple[str, ...] = ()
 
     @property
     def beta(self) -> float:
@@ -505,11 +520,22 @@ class IndentationModel:
         s2 = float(np.sum(rho_w * r ** 2)) / max(float(np.sum(rho_w)) - k, 1.0)
         try:
             cov = np.linalg.pinv(Jw.T @ Jw) * s2
+            # null directions of the column-normalised Jacobian: the parameters in
+            # them are not identified (pinv alone would give them a finite,
+            # too small, error)
+            norm = np.linalg.norm(Jw, axis=0)
+            _, sv, vt = np.linalg.svd(Jw / np.where(norm > 0, norm, 1.0), full_matrices=False)
+            null = vt[sv < 1e-7 * sv[0]] if sv.size and sv[0] > 0 else vt
+            bad = (np.any(np.abs(null) > 1e-3, axis=0) if null.size else np.zeros(k, bool))
+            bad |= norm == 0
         except np.linalg.LinAlgError:  # pragma: no cover
-            cov = np.full((k, k), np.nan)
+            cov, bad = np.full((k, k), np.nan), np.ones(k, bool)
+        cov[bad, :] = np.nan
+        cov[:, bad] = np.nan
+        cov[bad, bad] = np.inf
         se = np.sqrt(np.clip(np.diag(cov), 0, None))
         on_bound = sol.active_mask != 0
-        se[on_bound] = np.nan
+        se[on_bound & ~bad] = np.nan
         with np.errstate(invalid="ignore", divide="ignore"):
             corr = cov / np.outer(se, se)
         params = dict(zip(names, map(float, sol.x), strict=True))
@@ -522,4 +548,5 @@ class IndentationModel:
             correlation=corr, covariance=cov, predicted_n=pred, residuals_n=res, weights=wts,
             rmse_n=float(np.sqrt(np.mean(res ** 2))), bic=ll_term + k * math.log(n),
             aic=ll_term + 2 * k, n_presses=n, n_params=k, loss=loss,
-            outliers=rho_w < 0.5, success=bool(sol.success), message=str(sol.message))
+            outliers=rho_w < 0.5, success=bool(sol.success), message=str(sol.message),
+            unidentified=tuple(q for q, b in zip(names, bad, strict=True) if b))
