@@ -13,11 +13,11 @@ import sys
 from collections.abc import Sequence
 
 from .._checks import InputError
-from . import _calibrate, _diagnose, _fem, _fit, _optics, _reconstruct, _validate
+from . import _calibrate, _diagnose, _fem, _fit, _forces, _optics, _reconstruct, _validate
 
 __all__ = ["build_parser", "main"]
 
-_COMMANDS = (_calibrate, _reconstruct, _optics, _fit, _diagnose, _validate, _fem)
+_COMMANDS = (_calibrate, _reconstruct, _optics, _fit, _diagnose, _validate, _fem, _forces)
 
 
 def build_parser() -> argparse.ArgumentParser:

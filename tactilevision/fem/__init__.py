@@ -16,3 +16,10 @@ __all__ += ["LinearIndentation", "LinearIndentationSolver", "linear_indentation"
 from ._finite import FiniteIndentation, neo_hookean_indentation  # noqa: E402
 
 __all__ += ["FiniteIndentation", "neo_hookean_indentation"]
+
+# contact force distribution: the spectral layer model and the inverse FEM
+from ._forces import ForceEstimator, ForceMap  # noqa: E402
+from ._layer import layer_normal_stiffness, layer_surface_stiffness, wavevectors  # noqa: E402
+
+__all__ += ["ForceEstimator", "ForceMap", "layer_normal_stiffness", "layer_surface_stiffness",
+            "wavevectors"]

@@ -6,8 +6,10 @@ from ._calibration import (
 )
 from ._depth import depth_figure, nice_scale_bar_mm, save_depth_image
 from ._diagnosis import diagnosis_figures, write_diagnosis_report
+from ._forces import force_figure, save_force_image
 from ._validation import save_validation_figure, validation_figure
 
-__all__ = ["calibration_figures", "depth_figure", "diagnosis_figures", "nice_scale_bar_mm",
-           "save_depth_image", "save_validation_figure", "validation_figure",
+__all__ = ["calibration_figures", "depth_figure", "diagnosis_figures", "force_figure",
+           "nice_scale_bar_mm",
+           "save_depth_image", "save_force_image", "save_validation_figure", "validation_figure",
            "write_calibration_report", "write_diagnosis_report"]

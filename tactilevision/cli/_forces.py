@@ -1,0 +1,201 @@
+"""``tactilevision forces``: frames -> height maps -> contact force maps and totals."""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from .._assets import KNOWN_SENSORS, default_calibration_path
+from .._checks import InputError
+
+__all__ = ["add_parser", "run"]
+
+_COLUMNS = ["frame", "t_s", "fx_n", "fy_n", "fz_n", "max_pressure_kpa", "contact_area_mm2",
+            "ft_fz_n"]
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    """Register the ``forces`` sub-command."""
+    p = sub.add_parser(
+        "forces",
+        help="contact force maps (images, kPa) and total forces per frame (forces.csv)",
+        description="Photometric stereo on every frame, then the contact force distribution "
+        "(tactilevision.fem.ForceEstimator): writes <frame>_force.png (pressure in kPa with a "
+        "colour bar, arrows for the tangential part) and forces.csv (frame, t_s, fx_n, fy_n, "
+        "fz_n, max_pressure_kpa, contact_area_mm2, and for a session ft_fz_n, the F/T "
+        "sensor's fz at the frame's time). E and nu come from --E-mpa/--nu, --fit FIT.json, "
+        "or a session's calibration/fit.json.",
+    )
+    p.add_argument("source", metavar="SESSION_DIR|FRAMES_DIR", type=Path,
+                   help="a session folder (session.toml) or a folder of frames")
+    p.add_argument("--out", metavar="DIR", type=Path, default=None,
+                   help="output folder (default: SOURCE/forces)")
+    src = p.add_mutually_exclusive_group()
+    src.add_argument("--calibration", metavar="OPTICS", type=Path,
+                     help="photometric calibration (.npz); a session's own by default")
+    src.add_argument("--sensor", metavar="NAME", choices=KNOWN_SENSORS,
+                     help=f"shipped calibration: {', '.join(KNOWN_SENSORS)}")
+    p.add_argument("--reference", metavar="REF", type=Path, default=None,
+                   help="no-contact frame of a frames folder (default: found beside it)")
+    p.add_argument("--fit", metavar="FIT.json", type=Path, default=None,
+                   help="E_mpa and nu from a fit/calibrate JSON")
+    p.add_argument("--E-mpa", type=float, default=None, help="Young's modulus, MPa")
+    p.add_argument("--nu", type=float, default=None, help="Poisson's ratio")
+    p.add_argument("--thickness-mm", type=float, default=None,
+                   help="gel thickness h, mm (a session's own by default)")
+    p.add_argument("--method", choices=("spectral", "fem"), default="spectral",
+                   help="spectral layer model at full resolution (default) or inverse FEM")
+    p.add_argument("--grid", metavar="NX,NY", default="40,30",
+                   help="FEM surface nodes along x and y (default 40,30)")
+    p.add_argument("--contact", choices=("field", "footprint"), default="footprint",
+                   help="trust the height map everywhere, or only where the colour change "
+                   "exceeds the noise (zero traction elsewhere; default)")
+    p.add_argument("--every", type=int, default=1, metavar="N", help="every N-th frame")
+    p.add_argument("--no-images", action="store_true", help="write forces.csv only")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=run)
+
+
+def _material(args: argparse.Namespace, session_dir: Path | None
+              ) -> tuple[float, float, str, dict]:
+    """E, nu, where they came from, and the fit JSON object (empty without one)."""
+    if args.E_mpa is not None or args.nu is not None:
+        if args.E_mpa is None or args.nu is None:
+            raise InputError("give both --E-mpa and --nu (or --fit FIT.json)")
+        return float(args.E_mpa), float(args.nu), "command line", {}
+    path = args.fit
+    if path is None and session_dir is not None:
+        path = session_dir / "calibration" / "fit.json"
+        if not path.is_file():
+            raise InputError(f"no E and nu: {path} does not exist (run 'tactilevision "
+                             "calibrate' first) and neither --E-mpa/--nu nor --fit was given")
+    if path is None:
+        raise InputError("no E and nu: give --E-mpa and --nu, or --fit FIT.json")
+    try:
+        obj = json.loads(Path(path).read_text())
+        E, nu = float(obj["E_mpa"]), float(obj["nu"])
+    except FileNotFoundError:
+        raise InputError(f"{path} does not exist") from None
+    except (json.JSONDecodeError, KeyError, TypeError, ValueError) as exc:
+        raise InputError(f"{path} has no numeric E_mpa and nu ({exc})") from None
+    if not (np.isfinite(E) and np.isfinite(nu)):
+        raise InputError(f"{path} has E_mpa = {E} and nu = {nu}: not a usable fit")
+    return E, nu, str(path), obj
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run ``forces``; returns 0, or 2 on bad input (nothing written then)."""
+    from ..fem import ForceEstimator
+    from ..io import find_reference, list_frames, read_image, read_reference, read_session
+    from ..optics import DepthReconstructor, PhotometricCalibration
+    from ..viz import save_force_image
+
+    source: Path = args.source
+    if not source.is_dir():
+        raise InputError(f"{source} is not a folder")
+    session = None
+    if (source / "session.toml").is_file():
+        session = read_session(source)
+        frames = list(session.frame_paths)
+        times = np.asarray(session.frame_times_s, np.float64)
+        cfg = session.config
+        h = args.thickness_mm if args.thickness_mm is not None else cfg.gel_thickness_mm
+        cal_path = args.calibration or (default_calibration_path(args.sensor) if args.sensor
+                                        else cfg.calibration)
+        if cal_path is None and cfg.sensor_name in KNOWN_SENSORS:
+            cal_path = default_calibration_path(cfg.sensor_name)
+        reference = session.reference
+        mm_per_px = cfg.mm_per_px
+    else:
+        frames = list_frames(source)
+        times = np.full(len(frames), np.nan)
+        cal_path = args.calibration or (default_calibration_path(args.sensor) if args.sensor
+                                        else None)
+        if args.thickness_mm is None:
+            raise InputError("a frames folder needs --thickness-mm (the gel thickness h)")
+        h = args.thickness_mm
+        reference = None
+        mm_per_px = None
+    if cal_path is None:
+        raise InputError("no photometric calibration: give --calibration OPTICS or --sensor")
+    cal = PhotometricCalibration.load(cal_path)
+    if session is None:
+        ref_path = args.reference or find_reference(source)
+        if args.reference is not None and not args.reference.is_file():
+            raise InputError(f"reference {args.reference} does not exist")
+        reference = read_reference(ref_path, cal.shape) if ref_path else None
+        mm_per_px = cal.mm_per_px
+    if not frames:
+        raise InputError(f"{source} holds no frames")
+    if args.every < 1:
+        raise InputError(f"--every must be >= 1, got {args.every}")
+    E, nu, material_source, fit_obj = _material(args, source if session else None)
+    try:
+        grid = tuple(int(v) for v in args.grid.split(","))
+    except ValueError:
+        raise InputError(f"--grid must be NX,NY, got {args.grid!r}") from None
+    recon = DepthReconstructor(cal, reference=reference)
+    est = ForceEstimator(cal.shape, mm_per_px, thickness_mm=h, E_mpa=E, nu=nu, grid=grid,
+                         method=args.method, contact=args.contact)
+    out = args.out if args.out is not None else source / "forces"
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InputError(f"cannot create the output folder {out}: {exc.strerror}") from None
+    ft = None
+    if session is not None and session.forces_n.size:
+        # the clock offset: the session's, else the one calibrate estimated
+        offset = session.config.clock_offset_s
+        if offset is None:
+            offset = fit_obj.get("clock_offset_s")
+        ft = (session.force_times_s - float(offset or 0.0), session.forces_n[:, 2])
+    credit = cal.provenance.get("credit")
+    picks = list(range(0, len(frames), args.every))
+    it = picks
+    if not args.no_progress:
+        from tqdm.auto import tqdm
+
+        it = tqdm(picks, desc="forces", unit="frame", file=sys.stderr, mininterval=1.0)
+    rows, skipped = [], []
+    for i in it:
+        path = frames[i]
+        try:
+            frame = read_image(path)
+            if frame.shape[:2] != cal.shape:
+                raise InputError(f"frame {path} is {frame.shape[1]} x {frame.shape[0]} px but "
+                                 f"the calibration expects {cal.shape[1]} x {cal.shape[0]} px")
+        except InputError as exc:
+            skipped.append(str(exc))
+            continue
+        height = recon(frame).astype(np.float64)
+        mask = recon.contact_mask(frame) if args.contact == "footprint" else None
+        fm = est(height, contact_mask=mask)
+        t = float(times[i])
+        row = {"frame": path.name, "t_s": "" if not np.isfinite(t) else f"{t:.4f}",
+               "fx_n": f"{fm.total_n[0]:.5f}", "fy_n": f"{fm.total_n[1]:.5f}",
+               "fz_n": f"{fm.total_n[2]:.5f}",
+               "max_pressure_kpa": f"{float(fm.pressure_kpa.max()):.3f}",
+               "contact_area_mm2": "" if fm.contact is None else
+               f"{float(fm.contact.sum()) * float(np.mean(est._op.node_area_mm2)):.3f}",
+               "ft_fz_n": ""}
+        if ft is not None and np.isfinite(t):
+            row["ft_fz_n"] = f"{float(np.interp(t, ft[0], ft[1])):.5f}"
+        rows.append(row)
+        if not args.no_images:
+            save_force_image(out / f"{path.stem}_force.png", fm, mm_per_px=mm_per_px,
+                             frame=frame, title=path.name, credit=credit)
+    with (out / "forces.csv").open("w", newline="") as fh:
+        writer = csv.DictWriter(fh, fieldnames=_COLUMNS)
+        writer.writeheader()
+        writer.writerows(rows)
+    print(f"force maps of {len(rows)} frame(s) from {source} ({args.method}, "
+          f"{args.contact}; E {E:.4g} MPa, nu {nu:.4g} from {material_source}; h {h:g} mm) "
+          f"into {out}")
+    for msg in skipped:
+        print(f"tactilevision forces: error: {msg}", file=sys.stderr)
+    return 2 if skipped else 0

@@ -1,0 +1,466 @@
+r"""Contact force distribution from a height map: the layer's spectral Green's
+function at full image resolution, or the inverse FEM on a coarser grid.
+
+Two ways of turning the measured top-surface displacement of the gel into the
+traction the object applies (Ma, Donlon, Dong, Rodriguez, "Dense Tactile Force
+Estimation using GelSlim and Inverse FEM", ICRA 2019, do the second):
+
+``'spectral'``
+    The pad is a layer of uniform thickness h bonded to a rigid prism, so away
+    from its edges its surface stiffness is translation-invariant: the traction
+    is a convolution of the displacement, ``t = IFFT(K(k) FFT(u))`` with
+    ``K(k)`` the layer's 3 x 3 Fourier surface stiffness
+    (:func:`~tactilevision.fem.layer_surface_stiffness`). The image is
+    zero-padded by `pad_mm` on every side before the FFT: the displacement
+    outside the sensed area is taken as zero and the periodic images of the
+    field are kept `2 pad_mm` apart.
+``'fem'``
+    The condensed top-surface stiffness of a 3D finite-element model of the
+    sensed area (:func:`~tactilevision.fem.pad_surface_stiffness`; sides
+    traction-free, bottom bonded) on a grid of surface nodes; the height map
+    is averaged over each node's tributary pixels.
+
+Displacement modes: ``'normal'`` (photometric stereo gives the normal
+displacement only): the tangential traction is taken as zero and the
+tangential displacement is whatever the layer does, so the pressure is the
+normal stiffness with tangential traction zero times u_z (the Schur
+complement of K). ``'full'``: the lateral displacement is known too (marker
+tracking), and all three traction components follow from K.
+
+Contact outside the footprint (``contact``): ``'field'`` trusts the height
+map everywhere in the image (the gel's sink-in and bulge around the contact
+included); ``'footprint'`` trusts it only where the height exceeds
+`threshold_mm` (the contact) and takes the traction as zero elsewhere, solving
+the mixed problem ``C t = u`` on the footprint (C = K^-1 the compliance) by
+conjugate gradients preconditioned with K, then dropping tensile nodes until
+the pressure is non-negative (a simple form of Polonsky and Keer, Wear 231,
+1999).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.fft as sfft
+
+from .._checks import InputError
+
+__all__ = ["ForceEstimator", "ForceMap"]
+
+
+@dataclass(frozen=True)
+class ForceMap:
+    """Contact force distribution of one frame or a batch.
+
+    Attributes
+    ----------
+    forces_n : (rows, cols, 3) or (N, rows, cols, 3) float64 ndarray
+        Nodal (per pixel for ``'spectral'``) forces (Fx, Fy, Fz) the object
+        applies to the gel, N; Fz positive pressing into the gel.
+    pressure_kpa : (rows, cols) or (N, rows, cols) float64 ndarray
+        Normal traction, kPa, compressive positive (Fz over the node's area).
+    total_n : (3,) or (N, 3) float64 ndarray
+        (Fx, Fy, Fz) summed over the sensed area, N.
+    x_mm, y_mm : (cols,), (rows,) float64 ndarray
+        Node coordinates from the centre of the image's top-left pixel, mm
+        (x along columns, y along rows).
+    contact : (rows, cols) or (N, rows, cols) bool ndarray or None
+        The footprint used with ``contact='footprint'``.
+    """
+
+    forces_n: np.ndarray
+    pressure_kpa: np.ndarray
+    total_n: np.ndarray
+    x_mm: np.ndarray
+    y_mm: np.ndarray
+    contact: np.ndarray | None = None
+
+
+def _positive(v: float, name: str) -> float:
+    try:
+        x = float(v)
+    except (TypeError, ValueError):
+        raise InputError(f"{name} must be a number, got {v!r}") from None
+    if not (math.isfinite(x) and x > 0):
+        raise InputError(f"{name} must be positive and finite, got {v!r}")
+    return x
+
+
+@dataclass
+class ForceEstimator:
+    """Height map to contact force distribution, built once per sensor.
+
+    Parameters
+    ----------
+    shape_px : (H, W)
+        Height-map shape, rows and columns.
+    mm_per_px : float
+        Pixel size, mm.
+    thickness_mm, E_mpa, nu : float
+        Gel thickness h (mm), Young's modulus (MPa) and Poisson's ratio, e.g.
+        from :func:`~tactilevision.mechanics.fit_indentation`.
+    grid : (nx, ny), default (40, 30)
+        Surface nodes along x and y for ``method='fem'`` (ignored by
+        ``'spectral'``, which works on the full (H, W) grid).
+    method : {'spectral', 'fem'}, default 'spectral'
+    mode : {'normal', 'full'}, default 'normal'
+        Normal displacement only (zero tangential traction), or the full 3D
+        displacement (pass `lateral_mm` to the call).
+    contact : {'field', 'footprint'}, default 'field'
+        Trust the height map everywhere, or only where it exceeds
+        `threshold_mm` (zero traction elsewhere, non-negative pressure).
+    threshold_mm : float, default 0.01
+        Footprint threshold on the height, mm (above the height map's noise).
+    pad_mm : float, optional
+        Zero padding on each side for ``'spectral'``, mm; default 2 h.
+    element : {'bbar', 'hex2', 'hex1'}, default 'bbar'
+        Element of the FEM model (:func:`~tactilevision.fem.pad_surface_stiffness`).
+    layers : int, optional
+        FEM elements through the thickness.
+    cache_dir : str, optional
+        Where the FEM's condensed stiffness is cached.
+
+    Raises
+    ------
+    InputError
+        For a non-positive size, nu outside [0, 0.5), an unknown method, mode
+        or contact, or a grid with fewer than 2 nodes along an axis.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> est = ForceEstimator((64, 64), 0.1, thickness_mm=3.0, E_mpa=0.2, nu=0.45)
+    >>> u = np.full((64, 64), 0.05)           # the whole sensed area 0.05 mm down
+    >>> float(est(u).total_n[2]) > 0
+    True
+    """
+
+    shape_px: tuple[int, int]
+    mm_per_px: float
+    thickness_mm: float
+    E_mpa: float
+    nu: float
+    grid: tuple[int, int] = (40, 30)
+    method: str = "spectral"
+    mode: str = "normal"
+    contact: str = "field"
+    threshold_mm: float = 0.01
+    pad_mm: float | None = None
+    element: str = "bbar"
+    layers: int | None = None
+    cache_dir: str | None = None
+    _op: object = field(init=False, repr=False, default=None)
+
+    def __post_init__(self) -> None:
+        try:
+            H, W = (int(s) for s in self.shape_px)
+        except (TypeError, ValueError):
+            raise InputError(f"shape_px must be (H, W), got {self.shape_px!r}") from None
+        if H < 2 or W < 2:
+            raise InputError(f"shape_px must be at least (2, 2), got {self.shape_px!r}")
+        self.shape_px = (H, W)
+        self.mm_per_px = _positive(self.mm_per_px, "mm_per_px")
+        self.thickness_mm = _positive(self.thickness_mm, "thickness_mm")
+        self.E_mpa = _positive(self.E_mpa, "E_mpa")
+        try:
+            nu = float(self.nu)
+        except (TypeError, ValueError):
+            nu = math.nan
+        if not 0.0 <= nu < 0.5:
+            raise InputError(f"nu must be in [0, 0.5), got {self.nu!r}")
+        self.nu = nu
+        for name, ok in (("method", ("spectral", "fem")), ("mode", ("normal", "full")),
+                         ("contact", ("field", "footprint"))):
+            if getattr(self, name) not in ok:
+                raise InputError(f"{name} must be one of {', '.join(map(repr, ok))}, got "
+                                 f"{getattr(self, name)!r}")
+        self.threshold_mm = _positive(self.threshold_mm, "threshold_mm")
+        if self.method == "spectral":
+            pad = 2.0 * self.thickness_mm if self.pad_mm is None else float(self.pad_mm)
+            if not (math.isfinite(pad) and pad >= 0):
+                raise InputError(f"pad_mm must be >= 0, got {self.pad_mm!r}")
+            self._op = _Spectral(self.shape_px, self.mm_per_px, self.thickness_mm, self.E_mpa,
+                                 self.nu, self.mode, pad)
+        else:
+            self._op = _Fem(self.shape_px, self.mm_per_px, self.thickness_mm, self.E_mpa,
+                            self.nu, self.mode, tuple(self.grid), self.element, self.layers,
+                            self.cache_dir)
+
+    @property
+    def x_mm(self) -> np.ndarray:
+        """(cols,) node x coordinates, mm, from the top-left pixel's centre."""
+        return self._op.x_mm
+
+    @property
+    def y_mm(self) -> np.ndarray:
+        """(rows,) node y coordinates, mm."""
+        return self._op.y_mm
+
+    def __call__(self, height_mm: np.ndarray, lateral_mm: np.ndarray | None = None, *,
+                 contact_mask: np.ndarray | None = None) -> ForceMap:
+        """The force map of a height map (or a batch).
+
+        Parameters
+        ----------
+        height_mm : (H, W) or (N, H, W) array_like
+            Normal displacement, mm, positive into the gel (the height maps
+            of :class:`~tactilevision.optics.DepthReconstructor`). NaN is
+            not allowed: fill masked pixels first.
+        lateral_mm : (H, W, 2) or (N, H, W, 2) array_like, optional
+            Lateral displacement (ux, uy), mm, along columns and rows; needed
+            with ``mode='full'``.
+        contact_mask : (H, W) or (N, H, W) bool array_like, optional
+            The footprint for ``contact='footprint'`` (e.g.
+            :meth:`~tactilevision.optics.DepthReconstructor.contact_mask`,
+            the pixels whose colour change exceeds the noise); default
+            ``height_mm > threshold_mm``.
+
+        Returns
+        -------
+        ForceMap
+
+        Raises
+        ------
+        InputError
+            For a shape other than (H, W) / (N, H, W), non-finite values, or
+            a missing or misshapen `lateral_mm` in ``'full'`` mode.
+        """
+        u = np.asarray(height_mm, np.float64)
+        H, W = self.shape_px
+        single = u.ndim == 2
+        if u.ndim not in (2, 3) or u.shape[-2:] != (H, W):
+            raise InputError(f"height_mm must have shape ({H}, {W}) or (N, {H}, {W}), got "
+                             f"{u.shape}")
+        if not np.all(np.isfinite(u)):
+            raise InputError("height_mm holds NaN or inf: fill masked pixels first")
+        u = u[None] if single else u
+        if self.mode == "full":
+            if lateral_mm is None:
+                raise InputError("mode='full' needs lateral_mm, the (ux, uy) displacement")
+            lat = np.asarray(lateral_mm, np.float64)
+            lat = lat[None] if lat.ndim == 3 else lat
+            if lat.shape != (*u.shape, 2):
+                raise InputError(f"lateral_mm must have shape {(*u.shape[1:], 2)} "
+                                 f"(or batched), got {np.shape(lateral_mm)}")
+            if not np.all(np.isfinite(lat)):
+                raise InputError("lateral_mm holds NaN or inf")
+            disp = np.concatenate([lat, u[..., None]], axis=-1)
+        else:
+            disp = u[..., None]
+        if self.contact == "footprint":
+            if contact_mask is None:
+                mask = u > self.threshold_mm
+            else:
+                mask = np.asarray(contact_mask, bool)
+                mask = mask[None] if mask.ndim == 2 else mask
+                if mask.shape != u.shape:
+                    raise InputError(f"contact_mask must have the height map's shape "
+                                     f"{u.shape[1:]}, got {np.shape(contact_mask)}")
+            forces, mask = self._op.footprint(disp, mask)
+        else:
+            forces, mask = self._op.field(disp), None
+        area = self._op.node_area_mm2
+        pressure = forces[..., 2] / area * 1e3
+        total = forces.sum(axis=(1, 2))
+        if single:
+            forces, pressure, total = forces[0], pressure[0], total[0]
+            mask = None if mask is None else mask[0]
+        return ForceMap(forces_n=forces, pressure_kpa=pressure, total_n=total,
+                        x_mm=self.x_mm, y_mm=self.y_mm, contact=mask)
+
+
+class _Spectral:
+    """The layer's Fourier surface stiffness on the zero-padded image grid."""
+
+    def __init__(self, shape: tuple[int, int], dx: float, h: float, E: float, nu: float,
+                 mode: str, pad_mm: float) -> None:
+        from ._layer import layer_normal_stiffness, layer_surface_stiffness
+
+        H, W = shape
+        p = math.ceil(pad_mm / dx)
+        self.shape = shape
+        self.fshape = (sfft.next_fast_len(H + 2 * p, real=True),
+                       sfft.next_fast_len(W + 2 * p, real=True))
+        Hf, Wf = self.fshape
+        ky = 2 * np.pi * np.fft.fftfreq(Hf, d=dx)[:, None]
+        kx = 2 * np.pi * np.fft.rfftfreq(Wf, d=dx)[None, :]
+        self.full = mode == "full"
+        if self.full:
+            K = layer_surface_stiffness(kx, ky, thickness_mm=h, E_mpa=E, nu=nu)
+            self.K = K.astype(np.complex128)
+            self.C = np.linalg.inv(K)
+        else:
+            kn = layer_normal_stiffness(np.hypot(kx, ky), thickness_mm=h, E_mpa=E, nu=nu)
+            self.K = kn[..., None, None].astype(np.complex128)
+            self.C = 1.0 / self.K
+        self.node_area_mm2 = dx * dx
+        self.x_mm = np.arange(W) * dx
+        self.y_mm = np.arange(H) * dx
+
+    def _apply(self, M: np.ndarray, t: np.ndarray) -> np.ndarray:
+        """(N, Hf, Wf, c) real field -> (N, Hf, Wf, c): IFFT(M FFT(t)) per component."""
+        f = sfft.rfft2(t, s=self.fshape, axes=(1, 2), workers=1)
+        g = np.einsum("yxij,nyxj->nyxi", M, f) if M.shape[-1] > 1 else M[..., 0] * f
+        return sfft.irfft2(g, s=self.fshape, axes=(1, 2), workers=1)
+
+    def field(self, disp: np.ndarray) -> np.ndarray:
+        H, W = self.shape
+        t = self._apply(self.K, disp)[:, :H, :W]
+        return self._forces(t)
+
+    def _forces(self, t: np.ndarray) -> np.ndarray:
+        out = np.zeros((*t.shape[:3], 3))
+        if t.shape[-1] == 3:
+            out[:] = t
+        else:
+            out[..., 2] = t[..., 0]
+        return out * self.node_area_mm2
+
+    def footprint(self, disp: np.ndarray, contact: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray]:
+        H, W = self.shape
+        Hf, Wf = self.fshape
+        out, masks = [], []
+        for d, m in zip(disp, contact, strict=True):
+            mask = np.zeros((Hf, Wf), bool)
+            mask[:H, :W] = m
+            u = np.zeros((Hf, Wf, d.shape[-1]))
+            u[:H, :W] = d
+            t = _mixed_solve(lambda x: self._apply(self.C, x[None])[0],
+                             lambda x: self._apply(self.K, x[None])[0], u, mask)
+            out.append(self._forces(t[None, :H, :W])[0])
+            masks.append(mask[:H, :W] & (t[:H, :W, -1] > 0))
+        return np.stack(out), np.stack(masks)
+
+
+def _mixed_solve(compliance, stiffness, u: np.ndarray, mask: np.ndarray, *,
+                 tol: float = 1e-8, max_iter: int = 500, max_sweeps: int = 8) -> np.ndarray:
+    """Traction t, zero outside `mask`, with (C t) = u on `mask`; pressure >= 0.
+
+    Preconditioned conjugate gradients on the masked compliance operator,
+    the stiffness (its inverse on the whole plane) restricted to the mask as
+    the preconditioner; then nodes with tensile pressure leave the mask and
+    the solve repeats (at most `max_sweeps` times).
+    """
+    mask = mask.copy()
+    t = np.zeros_like(u)
+    for _ in range(max_sweeps):
+        if not mask.any():
+            return np.zeros_like(u)
+        m = mask[..., None]
+        b = np.where(m, u, 0.0)
+        t = np.where(m, t, 0.0)
+        r = b - np.where(m, compliance(t), 0.0)
+        z = np.where(m, stiffness(r), 0.0)
+        p = z.copy()
+        rz = float(np.vdot(r, z))
+        bn = float(np.linalg.norm(b)) or 1.0
+        for _ in range(max_iter):
+            Ap = np.where(m, compliance(p), 0.0)
+            alpha = rz / float(np.vdot(p, Ap))
+            t = t + alpha * p
+            r = r - alpha * Ap
+            if float(np.linalg.norm(r)) < tol * bn:
+                break
+            z = np.where(m, stiffness(r), 0.0)
+            rz_new = float(np.vdot(r, z))
+            p = z + (rz_new / rz) * p
+            rz = rz_new
+        tensile = mask & (t[..., -1] < 0)
+        if not tensile.any():
+            break
+        mask &= ~tensile
+    return t
+
+
+class _Fem:
+    """The condensed surface stiffness of the 3D pad on a node grid over the image."""
+
+    def __init__(self, shape: tuple[int, int], dx: float, h: float, E: float, nu: float,
+                 mode: str, grid: tuple[int, int], element: str, layers: int | None,
+                 cache_dir: str | None) -> None:
+        from ._pad import pad_surface_stiffness
+
+        H, W = shape
+        if len(grid) != 2 or min(int(g) for g in grid) < 2:
+            raise InputError(f"grid must be (nx, ny) with at least 2 nodes each, got {grid!r}")
+        nx, ny = int(grid[0]), int(grid[1])
+        size = ((W - 1) * dx, (H - 1) * dx)
+        st = pad_surface_stiffness((nx, ny), size, h, nu, layers=layers, element=element,
+                                   cache_dir=cache_dir)
+        self.stiffness = st
+        self.full = mode == "full"
+        self.K = E * (st.K if self.full else st.K_normal)
+        self.nx, self.ny = nx, ny
+        self.x_mm = st.x_mm - st.x_mm[0]
+        self.y_mm = st.y_mm - st.y_mm[0]
+        sx, sy = self.x_mm[1] - self.x_mm[0], self.y_mm[1] - self.y_mm[0]
+        wx = np.full(nx, sx)
+        wx[[0, -1]] /= 2
+        wy = np.full(ny, sy)
+        wy[[0, -1]] /= 2
+        self.node_area_mm2 = wy[:, None] * wx[None, :]
+        # each pixel to its nearest node: the node value is its tributary pixels' mean
+        cols = np.clip(np.rint(np.arange(W) * dx / sx), 0, nx - 1).astype(int)
+        rows = np.clip(np.rint(np.arange(H) * dx / sy), 0, ny - 1).astype(int)
+        node = (rows[:, None] * nx + cols[None, :]).ravel()
+        import scipy.sparse as sp
+
+        count = np.bincount(node, minlength=nx * ny).astype(np.float64)
+        if np.any(count == 0):
+            raise InputError(f"grid {grid} is finer than the image {shape}: some nodes "
+                             "have no pixel")
+        self.sample = sp.csr_matrix((1.0 / count[node], (node, np.arange(H * W))),
+                                    shape=(nx * ny, H * W))
+
+    def _nodes(self, disp: np.ndarray) -> np.ndarray:
+        """(N, H, W, c) -> (N, n * c) node displacements, dof-major per node."""
+        N, H, W, c = disp.shape
+        flat = disp.reshape(N, H * W, c)
+        nodes = np.stack([(self.sample @ flat[..., j].T).T for j in range(c)], axis=-1)
+        return nodes.reshape(N, -1)
+
+    def _shape(self, f: np.ndarray, c: int) -> np.ndarray:
+        N = f.shape[0]
+        out = np.zeros((N, self.ny, self.nx, 3))
+        f = f.reshape(N, self.ny, self.nx, c)
+        if c == 3:
+            out[:] = f
+        else:
+            out[..., 2] = f[..., 0]
+        return out
+
+    def field(self, disp: np.ndarray) -> np.ndarray:
+        c = disp.shape[-1]
+        f = self._nodes(disp) @ self.K.T
+        return self._shape(f, c)
+
+    def footprint(self, disp: np.ndarray, contact: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray]:
+        c = disp.shape[-1]
+        U = self._nodes(disp)
+        frac = np.stack([self.sample @ m.ravel().astype(np.float64) for m in contact])
+        out, masks = [], []
+        for u, fr in zip(U, frac, strict=True):
+            on = fr >= 0.5
+            for _ in range(8):
+                dof = np.repeat(on, c)
+                f = np.zeros_like(u)
+                if dof.any():
+                    Kmm = self.K[np.ix_(dof, dof)]
+                    Kmo = self.K[np.ix_(dof, ~dof)]
+                    Koo = self.K[np.ix_(~dof, ~dof)]
+                    um = u[dof]
+                    # free nodes carry no force: u_o = -Koo^-1 Kom u_m
+                    uo = -np.linalg.solve(Koo, Kmo.T @ um) if (~dof).any() else um[:0]
+                    f[dof] = Kmm @ um + Kmo @ uo
+                fz = f.reshape(-1, c)[:, -1]
+                tensile = on & (fz < 0)
+                if not tensile.any():
+                    break
+                on &= ~tensile
+            out.append(f)
+            masks.append(on.reshape(self.ny, self.nx))
+        return self._shape(np.stack(out), c), np.stack(masks)

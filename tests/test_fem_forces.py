@@ -1,0 +1,155 @@
+"""Contact force maps (``ForceEstimator``) against models other than their own:
+the axisymmetric P2/P1 FEM flat punch (total force, force profile, its surface
+field), Hertz on a thick pad, and the spectral and FEM methods against each
+other; the footprint assumption's effect; batches, modes and bad input."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from tactilevision import InputError
+from tactilevision.fem import ForceEstimator, LinearIndentationSolver
+
+A, H, NU, E, W = 2.5, 3.0, 0.45, 0.2, 0.05     # mm, mm, -, MPa, mm
+
+
+@pytest.fixture(scope="module")
+def punch():
+    """The axisymmetric FEM's frictionless punch (a = 2.5, h = 3): force, reactions, surface."""
+    s = LinearIndentationSolver(A / H, contact="frictionless")
+    x, res = s.solve(NU)
+    dofs_p = s.ubasis.get_dofs("punch").all("u^2")
+    dofs_f = s.ubasis.get_dofs("free").all("u^2")
+    r_p = s.ubasis.doflocs[0, dofs_p] * H
+    f_p = -res[dofs_p] * E * H * W                 # N, the punch's nodal reactions
+    dofs = np.concatenate([dofs_p, dofs_f])
+    r = s.ubasis.doflocs[0, dofs] * H
+    order = np.argsort(r)
+    depth = -x[dofs][order] * W                    # mm, positive into the gel
+    return {"P": float(f_p.sum()), "r_p": r_p, "f_p": f_p, "r": r[order], "depth": depth}
+
+
+def _disc(shape, dx, centre, radius):
+    yy, xx = np.indices(shape, dtype=np.float64)
+    return np.hypot((xx - centre[0]) * dx, (yy - centre[1]) * dx)
+
+
+def test_flat_punch_total_force_and_profile_against_the_axisymmetric_fem(punch):
+    dx, n = 0.05, 360                               # a = 50 px, 18 mm square
+    r = _disc((n, n), dx, ((n - 1) / 2, (n - 1) / 2), A)
+    u = np.where(r <= A, W, 0.0)
+    est = ForceEstimator((n, n), dx, thickness_mm=H, E_mpa=E, nu=NU, contact="footprint",
+                         threshold_mm=W / 2)
+    fm = est(u)
+    P = punch["P"]
+    assert fm.total_n[2] == pytest.approx(P, rel=0.02)
+    assert abs(fm.total_n[0]) < 1e-9 and abs(fm.total_n[1]) < 1e-9
+    # force profile: the fraction of P inside radius rho, against the FEM's reactions
+    fz = fm.forces_n[..., 2]
+    for rho in (0.5, 0.8, 0.9):
+        ours = fz[r <= rho * A].sum() / fz.sum()
+        fem = punch["f_p"][punch["r_p"] <= rho * A].sum() / P
+        assert ours == pytest.approx(fem, abs=0.02), rho
+    assert fm.pressure_kpa.min() >= 0.0
+    assert np.all(fz[r > A + dx] == 0)              # zero traction off the footprint
+
+
+def test_flat_punch_from_its_whole_surface_field(punch):
+    """'field' mode fed the FEM's own surface (footprint, sink-in, outside)."""
+    dx, n = 0.06, 480                               # 28.8 mm square: the field has decayed
+    r = _disc((n, n), dx, ((n - 1) / 2, (n - 1) / 2), A)
+    u = np.interp(r, punch["r"], punch["depth"])
+    fm = ForceEstimator((n, n), dx, thickness_mm=H, E_mpa=E, nu=NU)(u)
+    assert fm.total_n[2] == pytest.approx(punch["P"], rel=0.03)
+    # the pressure off the footprint is small against the mean contact pressure
+    p_mean = punch["P"] / (np.pi * A**2) * 1e3
+    outside = fm.pressure_kpa[r > A + 0.5]
+    assert np.abs(outside).max() < 0.1 * p_mean
+
+
+def test_hertz_sphere_on_a_thick_pad():
+    R, delta, h, nu = 5.0, 0.08, 10.0, 0.45
+    a = np.sqrt(R * delta)                          # 0.632 mm, a/h = 0.063
+    Es = E / (1 - nu**2)
+    P = 4 / 3 * Es * np.sqrt(R) * delta**1.5
+    p0 = 3 * P / (2 * np.pi * a**2)
+    dx, n = 0.04, 64
+    r = _disc((n, n), dx, ((n - 1) / 2, (n - 1) / 2), a)
+    u = np.maximum(delta - r**2 / (2 * R), 0.0)
+    est = ForceEstimator((n, n), dx, thickness_mm=h, E_mpa=E, nu=nu, contact="footprint",
+                         threshold_mm=1e-6, pad_mm=h)
+    fm = est(u)
+    # the bonded layer is stiffer than Hertz's half-space: by 7.8 % here (2.8 % at
+    # h = 40 mm and 1.3 % at 100 mm, converging on Hertz; dx = 0.02 mm gives the same)
+    ratio = fm.total_n[2] / P
+    assert 1.0 < ratio < 1.10
+    inside = r < 0.9 * a
+    p_hertz = p0 * np.sqrt(1 - (r[inside] / a) ** 2) * 1e3
+    # the shape of the pressure: Hertz's ellipse within 4 % of p0 (rms, r < 0.9 a)
+    err = fm.pressure_kpa[inside] - ratio * p_hertz
+    assert np.sqrt(np.mean(err**2)) < 0.04 * p0 * 1e3
+    assert np.all(fm.pressure_kpa >= 0) and np.all(fm.forces_n[r > a + 2 * dx] == 0)
+
+
+def test_batches_equal_single_frames_and_modes_agree():
+    dx, n = 0.1, 96
+    r = _disc((n, n), dx, (40.0, 50.0), 1.0)
+    u1 = 0.03 * np.exp(-(r / 1.5) ** 2)
+    u2 = 0.5 * u1
+    est = ForceEstimator((n, n), dx, thickness_mm=H, E_mpa=E, nu=NU)
+    b = est(np.stack([u1, u2]))
+    assert b.forces_n.shape == (2, n, n, 3) and b.total_n.shape == (2, 3)
+    np.testing.assert_allclose(b.forces_n[0], est(u1).forces_n, atol=1e-15)
+    np.testing.assert_allclose(b.total_n[1], 0.5 * b.total_n[0], rtol=1e-10)
+    # full mode with the lateral displacement the layer takes under zero tangential
+    # traction gives the same normal force and zero tangential traction
+    from tactilevision.fem import layer_surface_stiffness
+
+    ky = 2 * np.pi * np.fft.fftfreq(n, dx)[:, None]
+    kx = 2 * np.pi * np.fft.fftfreq(n, dx)[None, :]
+    K = layer_surface_stiffness(kx, ky, thickness_mm=H, E_mpa=E, nu=NU)
+    uz = np.fft.fft2(u1)
+    ut = -np.linalg.solve(K[..., :2, :2], (K[..., :2, 2] * uz[..., None])[..., None])[..., 0]
+    lat = np.real(np.fft.ifft2(ut, axes=(0, 1)))
+    full = ForceEstimator((n, n), dx, thickness_mm=H, E_mpa=E, nu=NU, mode="full",
+                          pad_mm=0.0)
+    normal = ForceEstimator((n, n), dx, thickness_mm=H, E_mpa=E, nu=NU, pad_mm=0.0)
+    f_full, f_norm = full(u1, lat), normal(u1)
+    # (to 1e-4: the lateral field's Nyquist terms are not real on an even grid)
+    np.testing.assert_allclose(f_full.forces_n[..., 2], f_norm.forces_n[..., 2],
+                               atol=1e-4 * np.abs(f_norm.forces_n).max())
+    assert np.abs(f_full.forces_n[..., :2]).max() < 1e-4 * np.abs(f_norm.forces_n).max()
+
+
+def test_full_mode_shear_gives_tangential_force():
+    dx, n = 0.1, 96
+    r = _disc((n, n), dx, (48.0, 48.0), 1.0)
+    bump = np.exp(-(r / 1.5) ** 2)
+    lat = np.stack([0.02 * bump, np.zeros_like(bump)], axis=-1)   # pulled along +x
+    # periodic (no padding): the sum over the image is the k = 0 term, mu / h times the
+    # displaced area (the bump's integral), exactly
+    est = ForceEstimator((n, n), dx, thickness_mm=H, E_mpa=E, nu=NU, mode="full", pad_mm=0.0)
+    fm = est(np.zeros((n, n)), lat)
+    assert fm.total_n[0] > 0 and abs(fm.total_n[1]) < 1e-9 * fm.total_n[0]
+    mu = E / (2 * (1 + NU))
+    assert fm.total_n[0] == pytest.approx(mu / H * 0.02 * bump.sum() * dx * dx, rel=1e-9)
+
+
+def test_bad_input():
+    with pytest.raises(InputError, match="nu"):
+        ForceEstimator((10, 10), 0.1, thickness_mm=3, E_mpa=0.2, nu=0.5)
+    with pytest.raises(InputError, match="method"):
+        ForceEstimator((10, 10), 0.1, thickness_mm=3, E_mpa=0.2, nu=0.4, method="bem")
+    with pytest.raises(InputError, match="thickness_mm"):
+        ForceEstimator((10, 10), 0.1, thickness_mm=0, E_mpa=0.2, nu=0.4)
+    est = ForceEstimator((10, 12), 0.1, thickness_mm=3, E_mpa=0.2, nu=0.4)
+    with pytest.raises(InputError, match=r"\(10, 12\)"):
+        est(np.zeros((12, 10)))
+    bad = np.zeros((10, 12))
+    bad[3, 3] = np.nan
+    with pytest.raises(InputError, match="NaN"):
+        est(bad)
+    full = ForceEstimator((10, 12), 0.1, thickness_mm=3, E_mpa=0.2, nu=0.4, mode="full")
+    with pytest.raises(InputError, match="lateral_mm"):
+        full(np.zeros((10, 12)))
