@@ -52,9 +52,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="spectral layer model at full resolution (default) or inverse FEM")
     p.add_argument("--grid", metavar="NX,NY", default="40,30",
                    help="FEM surface nodes along x and y (default 40,30)")
-    p.add_argument("--contact", choices=("field", "footprint"), default="footprint",
-                   help="trust the height map everywhere, or only where the colour change "
-                   "exceeds the noise (zero traction elsewhere; default)")
+    p.add_argument("--contact", choices=("field", "footprint"), default="field",
+                   help="trust the height map everywhere (default), or only where the colour "
+                   "change exceeds the noise, with zero traction elsewhere (suits curved "
+                   "indenters: a flat face changes no colour inside its footprint)")
     p.add_argument("--every", type=int, default=1, metavar="N", help="every N-th frame")
     p.add_argument("--no-images", action="store_true", help="write forces.csv only")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")

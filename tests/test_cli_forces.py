@@ -1,0 +1,63 @@
+"""``tactilevision forces`` on a folder of real GelSight ball presses (MIT frames in
+sample_frames/gelsight_ball): images and forces.csv written, totals positive and
+linear in E; bad input names what is wrong and writes nothing."""
+
+from __future__ import annotations
+
+import csv
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tactilevision.cli import main
+
+FRAMES = Path(__file__).resolve().parents[1] / "sample_frames" / "gelsight_ball" / "frames"
+
+
+def test_forces_on_a_frames_folder(tmp_path):
+    out = tmp_path / "forces"
+    rc = main(["forces", str(FRAMES), "--sensor", "gelsight", "--thickness-mm", "3.0",
+               "--E-mpa", "0.2", "--nu", "0.48", "--out", str(out), "--no-progress"])
+    assert rc == 0
+    rows = list(csv.DictReader((out / "forces.csv").open()))
+    assert len(rows) == 4
+    assert list(rows[0]) == ["frame", "t_s", "fx_n", "fy_n", "fz_n", "max_pressure_kpa",
+                             "contact_area_mm2", "ft_fz_n"]
+    fz = np.array([float(r["fz_n"]) for r in rows])
+    # pressed in: positive. (The magnitude is not asserted: with 'field' the height
+    # map's low-frequency error dominates the total, see the README's forces section.)
+    assert np.all(fz > 0)
+    assert all((out / f"{Path(r['frame']).stem}_force.png").stat().st_size > 10_000
+               for r in rows)
+    # the force scales with E
+    out2 = tmp_path / "forces2"
+    main(["forces", str(FRAMES), "--sensor", "gelsight", "--thickness-mm", "3.0",
+          "--E-mpa", "0.4", "--nu", "0.48", "--out", str(out2), "--no-progress", "--no-images"])
+    fz2 = np.array([float(r["fz_n"]) for r in csv.DictReader((out2 / "forces.csv").open())])
+    np.testing.assert_allclose(fz2, 2 * fz, rtol=1e-3)
+
+
+@pytest.mark.parametrize(("extra", "message"), [
+    ([], "--thickness-mm"),
+    (["--thickness-mm", "3"], "E-mpa"),
+    (["--thickness-mm", "3", "--E-mpa", "0.2"], "both --E-mpa and --nu"),
+    (["--thickness-mm", "3", "--fit", "missing.json"], "missing.json does not exist"),
+    (["--thickness-mm", "3", "--E-mpa", "0.2", "--nu", "0.5"], "nu must be in"),
+])
+def test_forces_bad_input(tmp_path, capsys, extra, message):
+    out = tmp_path / "out"
+    rc = main(["forces", str(FRAMES), "--sensor", "gelsight", "--out", str(out),
+               "--no-progress", *extra])
+    assert rc == 2
+    assert message in capsys.readouterr().err
+    assert not (out / "forces.csv").exists()
+
+
+def test_forces_reads_E_and_nu_from_a_fit_json(tmp_path):
+    fit = tmp_path / "fit.json"
+    fit.write_text(json.dumps({"E_mpa": "x", "nu": 0.4}))
+    rc = main(["forces", str(FRAMES), "--sensor", "gelsight", "--thickness-mm", "3",
+               "--fit", str(fit), "--out", str(tmp_path / "o"), "--no-progress"])
+    assert rc == 2
