@@ -153,3 +153,23 @@ def test_bad_input():
     full = ForceEstimator((10, 12), 0.1, thickness_mm=3, E_mpa=0.2, nu=0.4, mode="full")
     with pytest.raises(InputError, match="lateral_mm"):
         full(np.zeros((10, 12)))
+
+
+def test_fem_and_spectral_agree_on_a_sphere_press(tmp_path):
+    """Two different models of the pad (40 x 30 B-bar hexahedra with free sides; the
+    infinite layer's Green's function at 0.2 mm pixels) on one press."""
+    Hpx, Wpx, dx, h = 150, 200, 0.2, 4.0
+    r = _disc((Hpx, Wpx), dx, ((Wpx - 1) / 2, (Hpx - 1) / 2), 0)
+    u = np.maximum(0.3 - r**2 / 20.0, 0.0)          # R = 10 mm, 0.3 mm deep: a = 2.45 mm
+    kw = dict(thickness_mm=h, E_mpa=0.2, nu=0.49, contact="footprint", threshold_mm=1e-6)
+    sp = ForceEstimator((Hpx, Wpx), dx, **kw)(u)
+    fe = ForceEstimator((Hpx, Wpx), dx, method="fem", grid=(40, 30),
+                        cache_dir=str(tmp_path), **kw)(u)
+    assert fe.forces_n.shape == (30, 40, 3) and fe.pressure_kpa.shape == (30, 40)
+    # 6.8 % apart: the FEM's 1 mm nodes resolve the 2.45 mm contact coarsely
+    assert fe.total_n[2] == pytest.approx(sp.total_n[2], rel=0.10)
+    assert fe.pressure_kpa.min() >= 0
+    # its peak is at the centre node
+    iy, ix = np.unravel_index(np.argmax(fe.pressure_kpa), fe.pressure_kpa.shape)
+    assert abs(fe.x_mm[ix] - (Wpx - 1) / 2 * dx) < 1.1
+    assert abs(fe.y_mm[iy] - (Hpx - 1) / 2 * dx) < 1.1

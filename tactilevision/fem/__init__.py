@@ -1,6 +1,7 @@
 """Finite elements of the gel pad: axisymmetric indentation (linear and
-Neo-Hookean) for the kappa and beta tables, and (later) the 3D pad and inverse
-FEM. Assembled with scikit-fem; lengths in units of the layer thickness h.
+Neo-Hookean) for the kappa and beta tables; the 3D pad's condensed surface
+stiffness (inverse FEM) and the layer's spectral Green's function for contact
+force maps. Assembled with scikit-fem (the axisymmetric models in units of h).
 """
 
 from ._mesh import indentation_mesh
@@ -20,6 +21,7 @@ __all__ += ["FiniteIndentation", "neo_hookean_indentation"]
 # contact force distribution: the spectral layer model and the inverse FEM
 from ._forces import ForceEstimator, ForceMap  # noqa: E402
 from ._layer import layer_normal_stiffness, layer_surface_stiffness, wavevectors  # noqa: E402
+from ._pad import PadStiffness, pad_surface_stiffness  # noqa: E402
 
-__all__ += ["ForceEstimator", "ForceMap", "layer_normal_stiffness", "layer_surface_stiffness",
-            "wavevectors"]
+__all__ += ["ForceEstimator", "ForceMap", "PadStiffness", "layer_normal_stiffness",
+            "layer_surface_stiffness", "pad_surface_stiffness", "wavevectors"]
