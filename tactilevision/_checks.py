@@ -9,11 +9,12 @@ prints before exiting with status 2.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
 
-__all__ = ["InputError", "ShapeError", "check_array"]
+__all__ = ["InputError", "ShapeError", "check_array", "check_poisson", "check_positive"]
 
 
 class InputError(ValueError):
@@ -47,6 +48,45 @@ def _dtype_name(d: object) -> str:
     if isinstance(d, type) and issubclass(d, np.generic) and d.__name__ in _ABSTRACT:
         return _ABSTRACT[d.__name__]
     return np.dtype(d).name  # type: ignore[arg-type]
+
+
+def _real_scalar(value: object, name: str, what: str) -> float:
+    """`value` as a float when it is a real scalar (not bool, str or complex)."""
+    if isinstance(value, bool | str | bytes | complex | np.complexfloating) or np.ndim(value):
+        raise InputError(f"{name} must be {what}, got {value!r}")
+    try:
+        return float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        raise InputError(f"{name} must be {what}, got {value!r}") from None
+
+
+def check_positive(value: object, name: str) -> float:
+    """A positive, finite real scalar as a float.
+
+    Raises
+    ------
+    InputError
+        Naming `name`, for anything else (bool, string, complex, array,
+        zero, negative, NaN, inf).
+    """
+    v = _real_scalar(value, name, "a positive number")
+    if not (math.isfinite(v) and v > 0):
+        raise InputError(f"{name} must be positive and finite, got {value!r}")
+    return v
+
+
+def check_poisson(value: object, name: str = "nu") -> float:
+    """Poisson's ratio within [0, 0.5) as a float (compressible linear elasticity).
+
+    Raises
+    ------
+    InputError
+        Naming `name`, for a non-real value or one outside [0, 0.5).
+    """
+    v = _real_scalar(value, name, "a number within [0, 0.5)")
+    if not 0.0 <= v < 0.5:
+        raise InputError(f"{name} must be within [0, 0.5), got {value!r}")
+    return v
 
 
 _ABSTRACT = {"floating": "float", "integer": "integer", "number": "numeric",

@@ -1,4 +1,4 @@
-"""``_checks.check_array``: named dimensions, dtype and finiteness messages."""
+"""``_checks``: check_array (dimensions, dtype, finiteness), check_positive, check_poisson."""
 
 from __future__ import annotations
 
@@ -104,3 +104,17 @@ def test_asset_dir_kind_checked():
     with pytest.raises(ValueError, match="kind"):
         asset_dir("weights")
     assert asset_dir("calibration").is_dir()
+
+
+def test_check_positive_and_check_poisson():
+    from tactilevision._checks import check_poisson, check_positive
+
+    assert check_positive(np.float32(2.5), "h") == 2.5
+    assert check_positive(3, "h") == 3.0
+    for bad in (0, -1.0, float("nan"), float("inf"), True, "3", 1j, np.ones(2), None):
+        with pytest.raises(InputError, match="thickness_mm"):
+            check_positive(bad, "thickness_mm")
+    assert check_poisson(0.0) == 0.0 and check_poisson(np.float64(0.49)) == 0.49
+    for bad in (0.5, -0.1, float("nan"), "0.3", False):
+        with pytest.raises(InputError, match=r"nu must be"):
+            check_poisson(bad)

@@ -92,7 +92,7 @@ def _material(args: argparse.Namespace, session_dir: Path | None
 def run(args: argparse.Namespace) -> int:
     """Run ``forces``; returns 0, or 2 on bad input (nothing written then)."""
     from ..fem import ForceEstimator
-    from ..io import find_reference, list_frames, read_image, read_reference, read_session
+    from ..io import find_reference, list_frames, read_frame, read_reference, read_session
     from ..optics import DepthReconstructor, PhotometricCalibration
     from ..viz import save_force_image
 
@@ -166,10 +166,7 @@ def run(args: argparse.Namespace) -> int:
     for i in it:
         path = frames[i]
         try:
-            frame = read_image(path)
-            if frame.shape[:2] != cal.shape:
-                raise InputError(f"frame {path} is {frame.shape[1]} x {frame.shape[0]} px but "
-                                 f"the calibration expects {cal.shape[1]} x {cal.shape[0]} px")
+            frame = read_frame(path, cal.shape)
         except InputError as exc:
             skipped.append(str(exc))
             continue

@@ -43,7 +43,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run ``reconstruct``; returns 2 if any frame was skipped."""
-    from ..io import find_reference, list_frames, read_image, read_reference
+    from ..io import find_reference, list_frames, read_frame, read_reference
     from ..optics import DepthReconstructor, PhotometricCalibration
     from ..viz import save_depth_image
 
@@ -61,10 +61,7 @@ def run(args: argparse.Namespace) -> int:
     rows, skipped = [], []
     for path in tqdm(frames, desc="reconstruct", unit="frame", file=sys.stderr):
         try:
-            frame = read_image(path)
-            if frame.shape[:2] != cal.shape:
-                raise InputError(f"frame {path} is {frame.shape[1]} x {frame.shape[0]} px but "
-                                 f"the calibration expects {cal.shape[1]} x {cal.shape[0]} px")
+            frame = read_frame(path, cal.shape)
         except InputError as exc:
             skipped.append(str(exc))
             continue

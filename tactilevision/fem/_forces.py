@@ -45,7 +45,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.fft as sfft
 
-from .._checks import InputError
+from .._checks import InputError, check_poisson, check_positive
 
 __all__ = ["ForceEstimator", "ForceMap"]
 
@@ -77,16 +77,6 @@ class ForceMap:
     x_mm: np.ndarray
     y_mm: np.ndarray
     contact: np.ndarray | None = None
-
-
-def _positive(v: float, name: str) -> float:
-    try:
-        x = float(v)
-    except (TypeError, ValueError):
-        raise InputError(f"{name} must be a number, got {v!r}") from None
-    if not (math.isfinite(x) and x > 0):
-        raise InputError(f"{name} must be positive and finite, got {v!r}")
-    return x
 
 
 @dataclass
@@ -162,22 +152,16 @@ class ForceEstimator:
         if H < 2 or W < 2:
             raise InputError(f"shape_px must be at least (2, 2), got {self.shape_px!r}")
         self.shape_px = (H, W)
-        self.mm_per_px = _positive(self.mm_per_px, "mm_per_px")
-        self.thickness_mm = _positive(self.thickness_mm, "thickness_mm")
-        self.E_mpa = _positive(self.E_mpa, "E_mpa")
-        try:
-            nu = float(self.nu)
-        except (TypeError, ValueError):
-            nu = math.nan
-        if not 0.0 <= nu < 0.5:
-            raise InputError(f"nu must be in [0, 0.5), got {self.nu!r}")
-        self.nu = nu
+        self.mm_per_px = check_positive(self.mm_per_px, "mm_per_px")
+        self.thickness_mm = check_positive(self.thickness_mm, "thickness_mm")
+        self.E_mpa = check_positive(self.E_mpa, "E_mpa")
+        self.nu = check_poisson(self.nu)
         for name, ok in (("method", ("spectral", "fem")), ("mode", ("normal", "full")),
                          ("contact", ("field", "footprint"))):
             if getattr(self, name) not in ok:
                 raise InputError(f"{name} must be one of {', '.join(map(repr, ok))}, got "
                                  f"{getattr(self, name)!r}")
-        self.threshold_mm = _positive(self.threshold_mm, "threshold_mm")
+        self.threshold_mm = check_positive(self.threshold_mm, "threshold_mm")
         if self.method == "spectral":
             pad = 2.0 * self.thickness_mm if self.pad_mm is None else float(self.pad_mm)
             if not (math.isfinite(pad) and pad >= 0):

@@ -94,7 +94,7 @@ import math
 
 import numpy as np
 
-from .._checks import InputError
+from .._checks import InputError, check_poisson, check_positive
 
 __all__ = ["layer_normal_stiffness", "layer_surface_stiffness", "wavevectors"]
 
@@ -112,23 +112,8 @@ _X_HALF_SPACE = 40.0
 
 def _check_material(thickness_mm: float, E_mpa: float, nu: float) -> tuple[float, float, float]:
     """Validate the layer's scalars; return them as floats."""
-    values = []
-    for name, value in (("thickness_mm", thickness_mm), ("E_mpa", E_mpa), ("nu", nu)):
-        try:
-            v = float(value)  # type: ignore[arg-type]
-        except (TypeError, ValueError):
-            raise InputError(f"{name} must be a real scalar, got {value!r}") from None
-        if np.ndim(value) != 0 or isinstance(value, str | bytes | complex | np.complexfloating):
-            raise InputError(f"{name} must be a real scalar, got {value!r}")
-        values.append(v)
-    h, e, n = values
-    if not (math.isfinite(h) and h > 0):
-        raise InputError(f"thickness_mm must be positive and finite, got {thickness_mm!r}")
-    if not (math.isfinite(e) and e > 0):
-        raise InputError(f"E_mpa must be positive and finite, got {E_mpa!r}")
-    if not (math.isfinite(n) and 0.0 <= n < 0.5):
-        raise InputError(f"nu must be within [0, 0.5), got {nu!r}")
-    return h, e, n
+    return (check_positive(thickness_mm, "thickness_mm"), check_positive(E_mpa, "E_mpa"),
+            check_poisson(nu))
 
 
 def _check_k(k: object, name: str) -> np.ndarray:
@@ -431,12 +416,7 @@ def wavevectors(shape: tuple[int, int], mm_per_px: float) -> tuple[np.ndarray, n
         ok = False
     if not ok:
         raise InputError(f"shape must be two positive integers (H, W), got {shape!r}")
-    try:
-        pitch = float(mm_per_px)
-    except (TypeError, ValueError):
-        raise InputError(f"mm_per_px must be a positive number, got {mm_per_px!r}") from None
-    if not (math.isfinite(pitch) and pitch > 0):
-        raise InputError(f"mm_per_px must be positive and finite, got {mm_per_px!r}")
+    pitch = check_positive(mm_per_px, "mm_per_px")
     height, width = int(dims[0]), int(dims[1])
     kx = 2.0 * np.pi * np.fft.fftfreq(width, d=pitch)
     ky = 2.0 * np.pi * np.fft.fftfreq(height, d=pitch)

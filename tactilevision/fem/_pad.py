@@ -19,8 +19,6 @@ Mesh and elements are described in :mod:`._pad_mesh`, the cache in
 
 from __future__ import annotations
 
-import math
-import numbers
 import os
 import time
 import warnings
@@ -29,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg as sla
 
-from .._checks import InputError
+from .._checks import InputError, check_poisson, check_positive
 from ._pad_cache import (
     CacheError,
     cache_directory,
@@ -107,19 +105,6 @@ def _check_int(value: object, name: str, minimum: int) -> int:
     if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < minimum:
         raise InputError(f"{name} must be an integer >= {minimum}, got {value!r}")
     return int(value)
-
-
-def _check_real(value: object, name: str, what: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, numbers.Real):
-        raise InputError(f"{name} must be {what}, got {value!r}")
-    return float(value)
-
-
-def _check_positive(value: object, name: str) -> float:
-    v = _check_real(value, name, "a positive number")
-    if not (math.isfinite(v) and v > 0):
-        raise InputError(f"{name} must be positive and finite, got {value!r}")
-    return v
 
 
 def _check_pair(value: object, name: str) -> tuple[object, object]:
@@ -260,11 +245,9 @@ def pad_surface_stiffness(grid: tuple[int, int] = (40, 30),
     gx, gy = _check_pair(grid, "grid")
     nx, ny = _check_int(gx, "grid", 2), _check_int(gy, "grid", 2)
     sx, sy = _check_pair(size_mm, "size_mm")
-    lx, ly = _check_positive(sx, "size_mm"), _check_positive(sy, "size_mm")
-    h = _check_positive(thickness_mm, "thickness_mm")
-    nu_f = _check_real(nu, "nu", "a number within [0, 0.5)")
-    if not (0.0 <= nu_f < 0.5):
-        raise InputError(f"nu must be within [0, 0.5), got {nu!r}")
+    lx, ly = check_positive(sx, "size_mm"), check_positive(sy, "size_mm")
+    h = check_positive(thickness_mm, "thickness_mm")
+    nu_f = check_poisson(nu)
     if layers is None:
         n_layers = default_layers((nx, ny), (lx, ly), h)
     else:

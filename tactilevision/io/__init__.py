@@ -10,13 +10,14 @@ from ._frames import (
     find_reference,
     list_frames,
     read_ball_presses,
+    read_frame,
     read_image,
     read_reference,
     taxim_datapack,
 )
 
-__all__ = ["BallPressSet", "find_reference", "list_frames", "read_ball_presses", "read_image",
-           "read_reference", "taxim_datapack"]
+__all__ = ["BallPressSet", "find_reference", "list_frames", "read_ball_presses", "read_frame",
+           "read_image", "read_reference", "taxim_datapack"]
 
 # measurements tables (mechanics): names appended below
 from ._measurements import (

@@ -12,8 +12,8 @@ import numpy as np
 
 from .._checks import InputError
 
-__all__ = ["BallPressSet", "find_reference", "list_frames", "read_ball_presses", "read_image",
-           "read_reference", "taxim_datapack"]
+__all__ = ["BallPressSet", "find_reference", "list_frames", "read_ball_presses", "read_frame",
+           "read_image", "read_reference", "taxim_datapack"]
 
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg")
 REFERENCE_NAMES = ("reference.png", "reference.jpg", "ref.png", "ref.jpg")
@@ -119,11 +119,36 @@ def read_reference(path: str | Path, shape: tuple[int, int] | None = None) -> np
     InputError
         If unreadable or of the wrong size.
     """
-    ref = read_image(path)
-    if shape is not None and ref.shape[:2] != tuple(shape):
-        raise InputError(f"reference {path} is {ref.shape[1]} x {ref.shape[0]} px but the "
+    return read_frame(path, shape, what="reference")
+
+
+def read_frame(path: str | Path, shape: tuple[int, int] | None = None, *,
+               what: str = "frame") -> np.ndarray:
+    """Read a tactile frame and check its size against the calibration's.
+
+    Parameters
+    ----------
+    path : str or Path
+    shape : tuple of int, optional
+        Required (H, W).
+    what : str, default 'frame'
+        How the error message names the image.
+
+    Returns
+    -------
+    frame : (H, W, 3) uint8 ndarray
+        BGR.
+
+    Raises
+    ------
+    InputError
+        If unreadable or of the wrong size.
+    """
+    img = read_image(path)
+    if shape is not None and img.shape[:2] != tuple(shape):
+        raise InputError(f"{what} {path} is {img.shape[1]} x {img.shape[0]} px but the "
                          f"calibration expects {shape[1]} x {shape[0]} px")
-    return ref
+    return img
 
 
 @dataclass
