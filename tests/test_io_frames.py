@@ -14,6 +14,7 @@ from tactilevision.io import (
     find_reference,
     list_frames,
     read_ball_presses,
+    read_frame,
     read_image,
     read_reference,
     taxim_datapack,
@@ -264,3 +265,13 @@ def test_npz_missing_or_unreadable(tmp_path):
 def test_taxim_datapack_unknown_sensor():
     with pytest.raises(InputError, match="no-such-sensor"):
         taxim_datapack("no-such-sensor")
+
+
+def test_read_frame_checks_the_calibration_size(tmp_path):
+    p = write(tmp_path / "f.png", np.zeros((*SHAPE, 3), np.uint8))
+    assert read_frame(p, SHAPE).shape == (*SHAPE, 3)
+    with pytest.raises(InputError, match=r"frame .*f\.png is 64 x 48 px but the calibration "
+                                         r"expects 32 x 24 px"):
+        read_frame(p, (24, 32))
+    with pytest.raises(InputError, match=r"^reference .*f\.png is 64 x 48 px"):
+        read_reference(p, (24, 32))
