@@ -170,7 +170,7 @@ def run(args: argparse.Namespace) -> int:
         except InputError as exc:
             skipped.append(str(exc))
             continue
-        height = recon(frame).astype(np.float64)
+        height = recon(frame)     # float32: the estimator's single-precision path
         mask = recon.contact_mask(frame) if args.contact == "footprint" else None
         fm = est(height, contact_mask=mask)
         t = float(times[i])

@@ -43,6 +43,33 @@ def _scale_bar(ax, shape: tuple[int, int], mm_per_px: float, colour: str) -> Non
             fontsize=9)
 
 
+def _frame_panel(ax, frame: np.ndarray, shape: tuple[int, int], mm_per_px: float) -> None:
+    """The tactile frame (BGR) with a scale bar, no ticks."""
+    ax.imshow(frame[..., ::-1])
+    ax.set_title("tactile frame")
+    _scale_bar(ax, shape, mm_per_px, "white")
+    ax.set_xticks([])
+    ax.set_yticks([])
+
+
+def _title_and_credit(fig, title: str | None, credit: str | None) -> None:
+    if title:
+        fig.suptitle(title)
+    if credit:
+        fig.text(0.5, 0.005, credit, ha="center", va="bottom", fontsize=7, color="0.35")
+
+
+def _save(fig, path: str | Path, dpi: int) -> Path:
+    """Write `fig` to `path` (folders created), close it, return the path."""
+    import matplotlib.pyplot as plt
+
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=dpi)
+    plt.close(fig)
+    return path
+
+
 def depth_figure(height_mm: np.ndarray, *, mm_per_px: float, frame: np.ndarray | None = None,
                  title: str | None = None, vmax_mm: float | None = None,
                  credit: str | None = None):
@@ -79,9 +106,7 @@ def depth_figure(height_mm: np.ndarray, *, mm_per_px: float, frame: np.ndarray |
     axes = axes[0]
     if frame is not None:
         frame = check_array(frame, "frame", [(*height_mm.shape, 3)], dtype=np.uint8)
-        axes[0].imshow(frame[..., ::-1])
-        axes[0].set_title("tactile frame")
-        _scale_bar(axes[0], height_mm.shape, mm_per_px, "white")
+        _frame_panel(axes[0], frame, height_mm.shape, mm_per_px)
     ax = axes[-1]
     vmax = float(np.percentile(height_mm, 99.9)) if vmax_mm is None else vmax_mm
     vmin = min(0.0, float(np.percentile(height_mm, 0.1)))
@@ -91,13 +116,9 @@ def depth_figure(height_mm: np.ndarray, *, mm_per_px: float, frame: np.ndarray |
     _scale_bar(ax, height_mm.shape, mm_per_px, "white")
     cb = fig.colorbar(im, ax=ax, shrink=0.85)
     cb.set_label("depth (mm)")
-    for a in axes:
-        a.set_xticks([])
-        a.set_yticks([])
-    if title:
-        fig.suptitle(title)
-    if credit:
-        fig.text(0.5, 0.005, credit, ha="center", va="bottom", fontsize=7, color="0.35")
+    ax.set_xticks([])
+    ax.set_yticks([])
+    _title_and_credit(fig, title, credit)
     return fig
 
 
@@ -119,12 +140,6 @@ def save_depth_image(path: str | Path, height_mm: np.ndarray, *, mm_per_px: floa
     -------
     path : Path
     """
-    import matplotlib.pyplot as plt
-
     fig = depth_figure(height_mm, mm_per_px=mm_per_px, frame=frame, title=title,
                        vmax_mm=vmax_mm, credit=credit)
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=dpi)
-    plt.close(fig)
-    return path
+    return _save(fig, path, dpi)

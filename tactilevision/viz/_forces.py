@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from .._checks import check_array
-from ._depth import _scale_bar
+from ._depth import _frame_panel, _save, _title_and_credit
 
 __all__ = ["force_figure", "save_force_image"]
 
@@ -55,11 +55,7 @@ def force_figure(force_map, *, mm_per_px: float, frame: np.ndarray | None = None
     axes = axes[0]
     if frame is not None:
         frame = check_array(frame, "frame", [(None, None, 3)], dtype=np.uint8)
-        axes[0].imshow(frame[..., ::-1])
-        axes[0].set_title("tactile frame")
-        _scale_bar(axes[0], frame.shape[:2], mm_per_px, "white")
-        axes[0].set_xticks([])
-        axes[0].set_yticks([])
+        _frame_panel(axes[0], frame, frame.shape[:2], mm_per_px)
     ax = axes[-1]
     vmax = float(np.percentile(p, 99.9)) if vmax_kpa is None else float(vmax_kpa)
     vmin = min(0.0, float(np.percentile(p, 0.1)))
@@ -90,10 +86,7 @@ def force_figure(force_map, *, mm_per_px: float, frame: np.ndarray | None = None
                           width=0.004)
             ax.quiverkey(q, 0.80, 1.02, float(mag.max()), f"{mag.max() * 1e3:.1f} mN",
                          labelpos="E", fontproperties={"size": 8})
-    if title:
-        fig.suptitle(title)
-    if credit:
-        fig.text(0.5, 0.005, credit, ha="center", va="bottom", fontsize=7, color="0.35")
+    _title_and_credit(fig, title, credit)
     return fig
 
 
@@ -102,12 +95,6 @@ def save_force_image(path: str | Path, force_map, *, mm_per_px: float,
                      vmax_kpa: float | None = None, credit: str | None = None,
                      dpi: int = 100) -> Path:
     """Write :func:`force_figure` to a PNG; returns the path."""
-    import matplotlib.pyplot as plt
-
     fig = force_figure(force_map, mm_per_px=mm_per_px, frame=frame, title=title,
                        vmax_kpa=vmax_kpa, credit=credit)
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=dpi)
-    plt.close(fig)
-    return path
+    return _save(fig, path, dpi)
