@@ -112,6 +112,15 @@ class ForceEstimator:
         FEM elements through the thickness.
     cache_dir : str, optional
         Where the FEM's condensed stiffness is cached.
+    beta : float, default 0.0
+        Finite-strain stiffening of the calibrated law (``fit.json``'s
+        ``beta``; ``../shared/method.md`` eq. (2), the paper's
+        ``kappa_n = kappa (1 + beta w / h)``): forces and pressures are
+        scaled by ``1 + beta w / h``, w the depth of the contact (the
+        99th percentile of the height over the footprint, or over the
+        pixels above `threshold_mm` with ``'field'``). 0: linear
+        elasticity, which under-reads a press w/h = 0.17 deep by 12 % (the
+        sample session's bonded gauge block, beta = 0.82).
 
     Raises
     ------
@@ -142,6 +151,7 @@ class ForceEstimator:
     element: str = "bbar"
     layers: int | None = None
     cache_dir: str | None = None
+    beta: float = 0.0
     _op: object = field(init=False, repr=False, default=None)
 
     def __post_init__(self) -> None:
@@ -162,6 +172,9 @@ class ForceEstimator:
                 raise InputError(f"{name} must be one of {', '.join(map(repr, ok))}, got "
                                  f"{getattr(self, name)!r}")
         self.threshold_mm = check_positive(self.threshold_mm, "threshold_mm")
+        if not (math.isfinite(float(self.beta)) and float(self.beta) >= 0):
+            raise InputError(f"beta must be finite and >= 0, got {self.beta!r}")
+        self.beta = float(self.beta)
         if self.method == "spectral":
             pad = 2.0 * self.thickness_mm if self.pad_mm is None else float(self.pad_mm)
             if not (math.isfinite(pad) and pad >= 0):
@@ -250,6 +263,8 @@ class ForceEstimator:
             forces, mask = self._op.footprint(disp, mask)
         else:
             forces, mask = self._op.field(disp), None
+        if self.beta > 0:
+            forces = forces * self._stiffening(u, mask)[:, None, None, None].astype(forces.dtype)
         area = self._op.node_area_mm2
         pressure = forces[..., 2] * (1e3 / area)
         total = forces.sum(axis=(1, 2), dtype=np.float64)
@@ -258,6 +273,18 @@ class ForceEstimator:
             mask = None if mask is None else mask[0]
         return ForceMap(forces_n=forces, pressure_kpa=pressure, total_n=total,
                         x_mm=self.x_mm, y_mm=self.y_mm, contact=mask)
+
+
+    def _stiffening(self, u: np.ndarray, mask: np.ndarray | None) -> np.ndarray:
+        """(N,) factors 1 + beta w / h, w the contact's depth (99th percentile)."""
+        if mask is not None and mask.shape != u.shape:   # FEM nodes: footprint on its grid
+            mask = None
+        out = np.ones(len(u))
+        for i, ui in enumerate(u):
+            m = (ui > self.threshold_mm) if mask is None else mask[i]
+            if m.any():
+                out[i] += self.beta * float(np.percentile(ui[m], 99)) / self.thickness_mm
+        return out
 
 
 class _Spectral:

@@ -18,7 +18,7 @@ from ._features import colour_change, frame_gain, reference_inverse
 from ._lut import ColourLUT, fit_colour_lut
 from ._markers import fill_masked, marker_mask
 from ._mlp import MLPGradientModel, mlp_inputs, train_mlp
-from ._poisson import PoissonSolver, divergence, integrate_poisson
+from ._poisson import PoissonSolver, divergence, integrate_poisson, integrate_poisson_masked
 from ._reconstructor import DepthReconstructor
 
 __all__ = [
@@ -43,6 +43,7 @@ __all__ = [
     "frame_gain",
     "gradients_from_normals",
     "integrate_poisson",
+    "integrate_poisson_masked",
     "marker_mask",
     "mlp_inputs",
     "normals_from_gradients",

@@ -17,7 +17,7 @@ from scipy import fft as sfft
 
 from .._checks import check_array
 
-__all__ = ["PoissonSolver", "divergence", "integrate_poisson"]
+__all__ = ["PoissonSolver", "divergence", "integrate_poisson", "integrate_poisson_masked"]
 
 Boundary = Literal["neumann", "dirichlet"]
 
@@ -192,3 +192,91 @@ def integrate_poisson(gx: np.ndarray, gy: np.ndarray, *, boundary: Boundary = "n
     """
     gx = check_array(gx, "gx", [("H", "W"), ("N", "H", "W")], dtype=np.floating)
     return PoissonSolver(gx.shape[-2:], boundary=boundary)(gx, gy, zero_mask=zero_mask)
+
+
+def integrate_poisson_masked(gx: np.ndarray, gy: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    """Height map that is zero outside `mask`: Poisson integration on the mask only.
+
+    The 5-point Poisson equation of :class:`PoissonSolver` is solved on the
+    pixels of `mask` with ``z = 0`` on the pixels outside it (Dirichlet) and
+    zero normal derivative at the image border (Neumann). For a tactile
+    frame with `mask` the contact region (colour change above noise, holes
+    filled), the untouched gel is pinned at zero, so the slowly varying
+    error that a whole-image integration spreads over the frame (gradient
+    bias from illumination drift, about 0.05 to 0.1 mm over a GelSight frame)
+    cannot enter the height map.
+
+    Parameters
+    ----------
+    gx, gy : ([N, ]H, W) float ndarray
+        Gradients along columns (x) and rows (y), height units per pixel.
+    mask : ([N, ]H, W) bool ndarray
+        Pixels whose height is solved for; zero height elsewhere. A mask
+        covering the whole image has no pinned pixel: the whole-image
+        (Neumann, median zero) solution is returned for it.
+
+    Returns
+    -------
+    z : ([N, ]H, W) float32 ndarray
+        Height in the units of ``gx`` times pixels; exactly 0 outside `mask`.
+
+    Raises
+    ------
+    ShapeError
+        If the arrays differ in shape or are not 2-D / 3-D (float gradients,
+        bool mask).
+
+    Notes
+    -----
+    A sparse direct solve (SuperLU through :func:`scipy.sparse.linalg.spsolve`)
+    of one unknown per masked pixel: about 0.2 s for a 40 mm^2 contact
+    (46 000 px) at 640 x 480 on one core, against 2 ms for the whole-image
+    transform. Use it where the height must be right, not at camera rate.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> y, x = np.mgrid[0:64, 0:80].astype(np.float32)
+    >>> z = 3.0 * np.exp(-((x - 40) ** 2 + (y - 32) ** 2) / 50.0)
+    >>> gy, gx = np.gradient(z)
+    >>> zr = integrate_poisson_masked(gx, gy, z > 1e-3)
+    >>> bool(np.abs(zr - z).max() < 0.05)
+    True
+    """
+    gx = check_array(gx, "gx", [("H", "W"), ("N", "H", "W")], dtype=np.floating)
+    gy = check_array(gy, "gy", [gx.shape], dtype=np.floating)
+    mask = check_array(mask, "mask", [gx.shape], dtype=np.bool_)
+    if gx.ndim == 3:
+        return np.stack([integrate_poisson_masked(a, b, m)
+                         for a, b, m in zip(gx, gy, mask, strict=True)])
+    if mask.all():
+        return integrate_poisson(gx, gy).astype(np.float32)
+    out = np.zeros(gx.shape, np.float32)
+    n = int(np.count_nonzero(mask))
+    if n == 0:
+        return out
+    from scipy import sparse
+    from scipy.sparse.linalg import spsolve
+
+    H, W = mask.shape
+    f = divergence(gx.astype(np.float64), gy.astype(np.float64), scale=0.5)
+    idx = np.full(mask.shape, -1, np.int64)
+    idx[mask] = np.arange(n)
+    r, c = np.nonzero(mask)
+    eq = np.arange(n)
+    diag = np.full(n, -4.0)
+    rows, cols, vals = [eq], [eq], [diag]
+    for dr, dc in ((0, 1), (0, -1), (1, 0), (-1, 0)):
+        rr, cc = r + dr, c + dc
+        inside = (rr >= 0) & (rr < H) & (cc >= 0) & (cc < W)
+        diag[~inside] += 1.0                       # mirrored ghost: Neumann border
+        j = np.full(n, -1, np.int64)
+        j[inside] = idx[rr[inside], cc[inside]]
+        nb = j >= 0                                # masked neighbour; else z = 0 there
+        rows.append(eq[nb])
+        cols.append(j[nb])
+        vals.append(np.ones(int(nb.sum())))
+    A = sparse.csc_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                          shape=(n, n))
+    out[mask] = spsolve(A, f[mask])
+    return out

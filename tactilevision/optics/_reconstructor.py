@@ -19,12 +19,13 @@ from ._calibration import PhotometricCalibration
 from ._features import blur_frames, colour_change, reference_inverse
 from ._markers import fill_masked, marker_mask
 from ._mlp import MLPGradientModel, mlp_inputs
-from ._poisson import Boundary, PoissonSolver
+from ._poisson import PoissonSolver, integrate_poisson_masked
 from ._table import table_from_lut, tabulate_mlp
 
 __all__ = ["DepthReconstructor"]
 
 Engine = Literal["table", "onnx"]
+Boundary = Literal["neumann", "dirichlet", "contact"]
 
 
 class DepthReconstructor:
@@ -44,8 +45,17 @@ class DepthReconstructor:
         cells at construction, 2 to 3 s at 640 x 480 on 2 cores). 'onnx':
         the MLP evaluated per pixel by onnxruntime (exact, about 40 times
         slower).
-    boundary : {'neumann', 'dirichlet'}, default 'neumann'
-        Poisson boundary condition (:class:`PoissonSolver`).
+    boundary : {'neumann', 'dirichlet', 'contact'}, default 'neumann'
+        Poisson boundary condition. 'neumann' and 'dirichlet': the
+        whole-image transform (:class:`PoissonSolver`), camera rate.
+        'contact': zero height outside the frame's contact region
+        (:meth:`contact_mask` with ``threshold='frame'`` and
+        ``fill_holes=True``), integrated on that region only
+        (:func:`integrate_poisson_masked`, about 0.2 s per 640 x 480 frame):
+        removes the slowly varying error of the whole-image integration
+        (on the sample session's flat-punch frames the area above 0.02 mm
+        falls from 111-125 mm^2 to 23-34 mm^2, the punch face being
+        20 mm^2).
     table_bins : int, default 32
         Colour cells per channel when tabulating an MLP.
     threads : int, default 1
@@ -71,13 +81,18 @@ class DepthReconstructor:
                  threads: int = 1) -> None:
         if engine not in ("table", "onnx"):
             raise ValueError(f"engine must be 'table' or 'onnx', got {engine!r}")
+        if boundary not in ("neumann", "dirichlet", "contact"):
+            raise ValueError("boundary must be 'neumann', 'dirichlet' or 'contact', got "
+                             f"{boundary!r}")
+        self.boundary = boundary
         self.calibration = calibration
         self.shape = calibration.shape
         ref = calibration.reference if reference is None else reference
         ref = check_array(ref, "reference", [(*self.shape, 3)], dtype=np.uint8)
         ref_mask = marker_mask(ref) if calibration.markers else None
         self._ref_inv = reference_inverse(ref, marker_mask=ref_mask)
-        self._solver = PoissonSolver(self.shape, boundary=boundary)
+        self._solver = PoissonSolver(self.shape,
+                                     boundary="dirichlet" if boundary == "dirichlet" else "neumann")
         self._mm = np.float32(calibration.mm_per_px)
         self._mlp = None
         self._table = None
@@ -124,8 +139,12 @@ class DepthReconstructor:
             gy = fill_masked(gy, markers)
         return gx, gy
 
-    def _integrate(self, gx: np.ndarray, gy: np.ndarray) -> np.ndarray:
-        z = self._solver(gx, gy)
+    def _integrate(self, gx: np.ndarray, gy: np.ndarray, frame: np.ndarray) -> np.ndarray:
+        if self.boundary == "contact":
+            z = integrate_poisson_masked(gx, gy, self.contact_mask(frame, threshold="frame",
+                                                                   fill_holes=True))
+        else:
+            z = self._solver(gx, gy)
         z *= self._mm
         return z
 
@@ -171,7 +190,8 @@ class DepthReconstructor:
         -------
         height : ([N, ]H, W) float32 ndarray
             Depth into the gel, mm (positive where pressed in); zero median
-            over the frame.
+            over the frame ('neumann'), zero at the border ('dirichlet') or
+            zero outside the contact region ('contact').
 
         Raises
         ------
@@ -180,33 +200,72 @@ class DepthReconstructor:
         """
         frames = self._check(frames)
         if frames.ndim == 3:
-            return self._integrate(*self._one(frames))
-        return np.stack([self._integrate(*self._one(f)) for f in frames])
+            return self._integrate(*self._one(frames), frames)
+        return np.stack([self._integrate(*self._one(f), f) for f in frames])
 
-    def contact_mask(self, frames: np.ndarray) -> np.ndarray:
-        """Pixels whose colour change exceeds the calibration's noise level.
+    def contact_mask(self, frames: np.ndarray, *,
+                     threshold: float | Literal["calibration", "frame"] = "calibration",
+                     fill_holes: bool = False) -> np.ndarray:
+        """Pixels whose colour change exceeds the noise level.
 
         Parameters
         ----------
         frames : (H, W, 3) or (N, H, W, 3) uint8 ndarray
             Tactile frames, BGR.
+        threshold : float or {'calibration', 'frame'}, default 'calibration'
+            Colour-change level (max over channels, relative to the
+            reference). 'calibration': the calibration's
+            ``contact_threshold`` (99.9th percentile of its frames'
+            no-contact change). 'frame': from the frame itself, its median
+            change plus 8 robust standard deviations (1.4826 x the median
+            absolute deviation), after a 1.5 px blur; right while the
+            contact covers under half of the frame, and the better choice
+            when today's frames are cleaner or noisier than the
+            calibration's.
+        fill_holes : bool, default False
+            Also take in regions enclosed by the mask: a flat indenter's
+            face has no slope and so no colour change, but is ringed by its
+            edge (:func:`scipy.ndimage.binary_fill_holes`).
 
         Returns
         -------
         mask : ([N, ]H, W) bool ndarray
-            Colour change (max over channels) above the calibration's
-            ``contact_threshold``, opened (5 px) against specks and grown by
-            6 px; marker pixels excluded.
+            Colour change above the threshold, opened (5 px) against specks
+            and grown by 6 px; marker pixels excluded.
+
+        Raises
+        ------
+        ShapeError
+            If the frame is not uint8 BGR of the calibration's size.
+        ValueError
+            For an unknown `threshold` string or a non-positive number.
         """
+        from scipy import ndimage as ndi
+
+        if isinstance(threshold, str):
+            if threshold not in ("calibration", "frame"):
+                raise ValueError("threshold must be 'calibration', 'frame' or a number, got "
+                                 f"{threshold!r}")
+        elif not float(threshold) > 0:
+            raise ValueError(f"threshold must be positive, got {threshold}")
         frames = self._check(frames)
         cal = self.calibration
         one = frames[None] if frames.ndim == 3 else frames
         masks = []
         for f in one:
-            change = colour_change(f, self._ref_inv, blur_sigma=cal.blur_sigma)
-            m = (np.abs(change).max(axis=-1) > cal.contact_threshold).astype(np.uint8)
+            if threshold == "frame":
+                mag = np.abs(colour_change(f, self._ref_inv, blur_sigma=max(cal.blur_sigma, 1.5))
+                             ).max(axis=-1)
+                med = float(np.median(mag))
+                thr = med + 8.0 * 1.4826 * float(np.median(np.abs(mag - med)))
+            else:
+                mag = np.abs(colour_change(f, self._ref_inv, blur_sigma=cal.blur_sigma)
+                             ).max(axis=-1)
+                thr = cal.contact_threshold if threshold == "calibration" else float(threshold)
+            m = (mag > thr).astype(np.uint8)
             if cal.markers:
                 m[marker_mask(f)] = 0
             m = cv2.morphologyEx(m, cv2.MORPH_OPEN, self._open)
-            masks.append(cv2.dilate(m, self._dilate).astype(bool))
+            m = cv2.dilate(m, self._dilate).astype(bool)
+            masks.append(ndi.binary_fill_holes(m) if fill_holes else m)
         return masks[0] if frames.ndim == 3 else np.stack(masks)

@@ -3,6 +3,7 @@ from the FEM, frames rendered from them through Taxim's fitted shading, F/T
 logs, and whole session folders with their ``truth.json``; measurements tables
 with one hidden physical effect (:func:`make_measurement_table`)."""
 
+from ._balls import render_ball_presses
 from ._block import GaugeBlock, press_surface
 from ._press import PressProfile, press_profile
 from ._render import ShadingTable, fit_shading_table, taxim_shading
@@ -13,4 +14,4 @@ from ._tables import HIDDEN_EFFECTS, HiddenTable, make_measurement_table
 __all__ = ["HIDDEN_EFFECTS", "GaugeBlock", "HiddenTable", "PressProfile", "PressSchedule",
            "SessionSpec", "ShadingTable", "depth_trajectory", "fit_shading_table", "ft_log",
            "make_measurement_table", "make_session", "press_profile", "press_schedule",
-           "press_surface", "taxim_shading"]
+           "press_surface", "render_ball_presses", "taxim_shading"]
