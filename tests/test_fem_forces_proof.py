@@ -1,0 +1,412 @@
+"""ForceEstimator without inverse crimes, and the footprint assumption's effect.
+
+Inverse FEM (``method='fem'``): the height map is the top surface of a finer
+3D pad (B-bar hexahedra, twice as fine in plane and through the thickness, a
+non-nested grid) loaded by a known Hertz pressure, assembled here with
+scikit-fem and solved for that load (never the estimator's own condensed
+40 x 30 stiffness, nor its mesh). Footprint assumption (``contact``): a baseline error
+outside the contact, a footprint larger than the contact, and the pad's side
+conditions as nu -> 0.5.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+from scipy.interpolate import RegularGridInterpolator
+from skfem import (
+    Basis,
+    BilinearForm,
+    ElementHex1,
+    ElementVector,
+    FacetBasis,
+    LinearForm,
+    MeshHex,
+)
+from skfem.helpers import ddot, div, sym_grad
+
+from tactilevision.fem import ForceEstimator, pad_surface_stiffness
+from tactilevision.fem._forces import _mixed_solve
+from tactilevision.fem._pad_mesh import (
+    BlockTridiagonalCholesky,
+    assemble_translated,
+    single_blas_thread,
+)
+
+# the sensed area of benchmarks/bench_forces_accuracy.py: 39.8 x 29.8 mm, a 4 mm pad
+HPX, WPX, DX, H, E = 150, 200, 0.2, 4.0, 0.2          # px, px, mm, mm, MPa
+LX, LY = (WPX - 1) * DX, (HPX - 1) * DX
+XC = np.arange(WPX) * DX - LX / 2                       # pixel x from the image centre, mm
+YC = np.arange(HPX) * DX - LY / 2
+RPX = np.hypot(XC[None, :], YC[:, None])               # pixel distance from the centre
+
+
+@pytest.fixture(scope="module")
+def cache(tmp_path_factory):
+    """One FEM cache folder for this module (the 40 x 30 stiffness is built once per nu)."""
+    return str(tmp_path_factory.mktemp("fem-cache"))
+
+
+def _hertz(p0, a):
+    return lambda x, y: p0 * np.sqrt(np.clip(1.0 - (x**2 + y**2) / a**2, 0.0, None))
+
+
+# -- the finer forward model ---------------------------------------------------------------
+
+@BilinearForm
+def _elasticity(u, v, w):
+    return 2.0 * w.mu * ddot(sym_grad(u), sym_grad(v)) + w.lam * div(u) * div(v)
+
+
+def _pad_forward(pressure, nu, cells=(40, 30), layers=8):
+    """Top-surface uz (mm, into the gel) of the pad under a normal pressure (MPa).
+
+    A quarter of the LX x LY x H pad (the load is symmetric about both centre
+    lines: ux = 0 on x = 0, uy = 0 on y = 0), bottom bonded, outer sides
+    free; `cells` B-bar hexahedra in plane (80 x 60 over the whole pad) and
+    `layers` through H. The load vector is the pressure's consistent nodal
+    forces (12-point Gauss per facet). Returns (x, y, uz[iy, ix]) on the
+    quarter's top vertices and the total load of the whole pad, N.
+    """
+    xs = np.linspace(0.0, LX / 2, cells[0] + 1)
+    ys = np.linspace(0.0, LY / 2, cells[1] + 1)
+    mesh = MeshHex.init_tensor(xs, ys, np.linspace(0.0, H, layers + 1))
+    mu, lam = E / (2 * (1 + nu)), E * nu / ((1 + nu) * (1 - 2 * nu))
+    full = Basis(mesh, ElementVector(ElementHex1()), intorder=3)          # 2 x 2 x 2
+    centre = Basis(mesh, full.elem, quadrature=(np.full((3, 1), 0.5), np.ones(1)))
+    A = sp.csr_matrix(assemble_translated(_elasticity, full, mu=mu, lam=0.0)
+                      + assemble_translated(_elasticity, centre, mu=0.0, lam=lam))
+
+    @LinearForm
+    def load(v, w):
+        return -pressure(w.x[0], w.x[1]) * v[2]         # the mesh's z points out of the gel
+
+    top = mesh.facets_satisfying(lambda x: np.abs(x[2] - H) < 1e-9)
+    f = load.assemble(FacetBasis(mesh, full.elem, facets=top, intorder=12))
+    fixed = np.concatenate([full.get_dofs(lambda x: np.abs(x[2]) < 1e-9).all(),
+                            full.get_dofs(lambda x: np.abs(x[0]) < 1e-9).all("u^1"),
+                            full.get_dofs(lambda x: np.abs(x[1]) < 1e-9).all("u^2")])
+    free = np.setdiff1d(np.arange(full.N), fixed)
+    # block tridiagonal in the vertex planes across x: a dense block Cholesky, one thread
+    planes = np.rint(full.doflocs[0, free] / (xs[1] - xs[0])).astype(np.int64)
+    x = np.zeros(full.N)
+    with single_blas_thread():
+        x[free] = BlockTridiagonalCholesky(A[free][:, free], planes).solve(f[free])
+    assert np.linalg.norm(A[free] @ x - f[free]) < 1e-10 * np.linalg.norm(f)
+    uz = -x[full.nodal_dofs[2]]
+    loc = mesh.p
+    top_nodes = np.abs(loc[2] - H) < 1e-9
+    ix = np.rint(loc[0, top_nodes] / (xs[1] - xs[0])).astype(int)
+    iy = np.rint(loc[1, top_nodes] / (ys[1] - ys[0])).astype(int)
+    grid = np.full((len(ys), len(xs)), np.nan)
+    grid[iy, ix] = uz[top_nodes]
+    return xs, ys, grid, -4.0 * float(f.sum())
+
+
+def _on_image(xs, ys, grid):
+    """The quarter's top surface, mirrored, at the image's pixel centres (bilinear: exact)."""
+    interp = RegularGridInterpolator((ys, xs), grid)
+    yy, xx = np.meshgrid(np.minimum(np.abs(YC), ys[-1]), np.minimum(np.abs(XC), xs[-1]),
+                         indexing="ij")
+    return interp(np.stack([yy, xx], axis=-1))
+
+
+def _hat_loads(x, y, pressure, sub=10):
+    """Exact nodal forces int p N_k dA of `pressure` on the bilinear node grid (x, y), N.
+
+    Midpoint rule on cells `sub` times finer than the image's pixels (0.02 mm:
+    the Hertz edge's square root costs < 1e-4 of the total).
+    """
+    step = DX / sub
+    xq = np.arange(-LX / 2 - DX / 2 + step / 2, LX / 2 + DX / 2, step)
+    yq = np.arange(-LY / 2 - DX / 2 + step / 2, LY / 2 + DX / 2, step)
+
+    def hats(nodes, q):
+        return np.maximum(0.0, 1.0 - np.abs(q[None, :] - nodes[:, None]) / (nodes[1] - nodes[0]))
+
+    p = pressure(xq[None, :], yq[:, None])
+    return hats(y, yq) @ p @ hats(x, xq).T * step * step
+
+
+def _centred_means(nodes, npx):
+    """(n, npx) weights: each node's mean over [x_k - s/2, x_k + s/2] of the pixel field,
+    pixels weighted by their overlap (the node's tributary strip, centred on it)."""
+    x = np.arange(npx) * DX
+    s = nodes[1] - nodes[0]
+    lo = np.maximum(x[None, :] - DX / 2, nodes[:, None] - s / 2)
+    hi = np.minimum(x[None, :] + DX / 2, nodes[:, None] + s / 2)
+    w = np.clip(hi - lo, 0.0, None)
+    return w / w.sum(axis=1, keepdims=True)
+
+
+# -- 1. the inverse FEM against a finer pad ------------------------------------------------
+
+A_HZ, P_HZ = 3.0, 0.5        # Hertz pressure on a disc: radius (mm), total force (N)
+
+
+@pytest.mark.parametrize(("nu", "field_excess"), [(0.45, 0.10), (0.49, 0.16)])
+def test_fem_recovers_the_hertz_load_of_a_finer_pad(nu, field_excess, cache):
+    """The estimator's 40 x 30 x 4 B-bar pad (1.02 mm nodes) fed the top surface of an
+    80 x 60 x 8 B-bar pad (0.50 mm, non-nested) under a Hertz pressure, a = 3 mm.
+
+    Measured (nu 0.45 / 0.49), totals against the load, pressure errors against the
+    applied pressure's hat-weighted nodal average, in % of its peak p0:
+
+    - the condensed stiffness alone, node values centred tributary means: total
+      +0.55 / +1.29 %, pressure rms (r < a) 3.5 / 3.6 %, largest 5.6 / 5.7 %,
+      |force| on nodes off the loaded disc 1.1 / 1.6 % of the load;
+    - the estimator, 'field': total +7.5 / +12.9 %, of which +2.7 / +7.1 % lies on nodes
+      off the disc (spurious); pressure rms 3.8 / 3.8 %, largest 6.2 / 6.5 %. The excess
+      over the stiffness alone is the estimator's sampling: a node's tributary pixels
+      (5 or 6 per 5.1 px spacing) are off-centre by up to half a pixel, which on the
+      contact's flanks shifts node values by up to 2.4 % of the peak, and the pad's
+      k -> 0 stiffness, (lambda + 2 mu) / h, amplifies it as nu -> 0.5;
+    - 'footprint' with the default threshold (0.01 mm, the sink-in included, tensile
+      nodes dropped): +3.9 / +2.3 %; with the loaded disc as the mask: -0.7 / -0.9 %;
+      no force off the footprint; pressure errors as above.
+    """
+    pressure = _hertz(3 * P_HZ / (2 * np.pi * A_HZ**2), A_HZ)
+    xs, ys, grid, load = _pad_forward(pressure, nu)
+    assert load == pytest.approx(P_HZ, rel=1e-4)       # consistent loads: 6.8e-5
+    u = _on_image(xs, ys, grid)
+
+    kw = dict(thickness_mm=H, E_mpa=E, nu=nu, method="fem", grid=(40, 30), cache_dir=cache)
+    field = ForceEstimator((HPX, WPX), DX, **kw)
+    x, y = field.x_mm, field.y_mm
+    sx, sy = x[1] - x[0], y[1] - y[0]
+    exact = _hat_loads(x - LX / 2, y - LY / 2, pressure)      # N per node
+    assert exact.sum() == pytest.approx(load, rel=1e-4)
+    p_exact = exact / (sx * sy) * 1e3                           # kPa, at the interior nodes
+    p0 = p_exact.max()
+    xr, yr = np.abs(x - LX / 2)[None, :], np.abs(y - LY / 2)[:, None]
+    inside = np.hypot(xr, yr) < A_HZ
+    # the nodes whose hat support meets the loaded disc: no force anywhere else
+    touch = np.hypot(np.maximum(xr - sx, 0), np.maximum(yr - sy, 0)) < A_HZ
+    assert np.all(exact[~touch] == 0) and inside.sum() == 32 and touch.sum() == 60
+
+    def errors(fz, pressure_kpa):
+        err = pressure_kpa - p_exact
+        return (fz.sum() / load - 1, np.sqrt(np.mean(err[inside] ** 2)) / p0,
+                np.abs(err[touch]).max() / p0, np.abs(fz[~touch]).sum() / load)
+
+    # the condensed stiffness (the estimator's, from the cache) on centred node means
+    pad = pad_surface_stiffness((40, 30), (LX, LY), H, nu, cache_dir=cache)
+    assert pad.cached
+    un = _centred_means(y, HPX) @ u @ _centred_means(x, WPX).T
+    fk = (E * pad.K_normal @ un.ravel()).reshape(pad.shape)
+    total, rms, largest, off = errors(fk, fk / (sx * sy) * 1e3)
+    assert abs(total) < 0.025 and rms < 0.05 and largest < 0.08 and off < 0.03
+
+    fm = field(u)
+    fz = fm.forces_n[..., 2]
+    total, rms, largest, off = errors(fz, fm.pressure_kpa)
+    assert 0 < total < field_excess
+    assert rms < 0.05 and largest < 0.08
+    assert abs(fz[touch].sum() / load - 1) < 0.07               # +4.7 / +5.8 %
+    assert 0 < off < field_excess and fz[~touch].sum() > 0       # spurious, compressive
+
+    fp = ForceEstimator((HPX, WPX), DX, contact="footprint", **kw)
+    for mask, tol in ((None, 0.06), (RPX <= A_HZ, 0.03)):
+        fm = fp(u, contact_mask=mask)
+        total, rms, largest, off = errors(fm.forces_n[..., 2], fm.pressure_kpa)
+        assert abs(total) < tol and rms < 0.05 and largest < 0.08 and off == 0
+        assert fm.pressure_kpa.min() >= 0 and np.all(fm.contact[inside])
+        assert np.all(fm.forces_n[~fm.contact] == 0)
+
+
+def test_fem_footprint_mask_drops_the_rim_nodes_of_the_contact(cache):
+    """'footprint' with method='fem' keeps a node when half its tributary pixels are in
+    the mask, and gives every other node zero force. A node just outside the contact
+    still carries load (its hat reaches into it), so with the contact itself as the
+    mask the total falls short by about that share. Hertz load a = 2.5 mm, nu = 0.45
+    (measured): the 16 nodes inside are kept, the load's exact share on the others is
+    12.6 %, the total -14.3 %; the mask grown by one node spacing +3.1 %, the default
+    threshold (the sink-in) +4.2 %. (On a 1.16 mm grid, a = 2.7 to 3.3 mm: -14 to -15 %.)
+    """
+    nu, a = 0.45, 2.5
+    pressure = _hertz(3 * P_HZ / (2 * np.pi * a**2), a)
+    xs, ys, grid, load = _pad_forward(pressure, nu)
+    u = _on_image(xs, ys, grid)
+    est = ForceEstimator((HPX, WPX), DX, thickness_mm=H, E_mpa=E, nu=nu, method="fem",
+                         contact="footprint", cache_dir=cache)
+    exact = _hat_loads(est.x_mm - LX / 2, est.y_mm - LY / 2, pressure)
+    tight = est(u, contact_mask=RPX <= a)
+    share = exact[~tight.contact].sum() / load
+    assert tight.contact.sum() == 16 and 0.10 < share < 0.15             # 12.6 %
+    assert -0.20 < tight.total_n[2] / load - 1 < -0.10                   # -14.3 %
+    assert abs(tight.total_n[2] / load - 1 + share) < 0.03
+    grown = est(u, contact_mask=RPX <= a + est.x_mm[1])
+    assert exact[~grown.contact].sum() < 1e-3 * load
+    assert abs(grown.total_n[2] / load - 1) < 0.05                       # +3.1 %
+    assert abs(est(u).total_n[2] / load - 1) < 0.05                      # +4.2 %
+
+
+# -- 2. the footprint assumption ------------------------------------------------------------
+
+def _compliance(k, h, nu):
+    """S(k) = uz_hat / p_hat of a layer bonded to a rigid base, frictionless top (the
+    closed form, typed independently of the package; the half-space beyond kh = 20)."""
+    x = np.minimum(k * h, 20.0)
+    kappa = 3.0 - 4.0 * nu
+    with np.errstate(divide="ignore", invalid="ignore"):
+        s = (2 * (1 - nu**2) / (E * k) * (kappa * np.sinh(2 * x) - 2 * x)
+             / (kappa * np.cosh(2 * x) + 2 * x**2 + 5 - 12 * nu + 8 * nu**2))
+    return np.where(k == 0, h * (1 + nu) * (1 - 2 * nu) / (E * (1 - nu)), s)
+
+
+def _layer_forward(pressure, nu, n=1024):
+    """The infinite layer's surface uz under `pressure` (pixel-sampled), by FFT on an
+    n x n periodic grid of the image's pixels (205 mm: the images do not interact),
+    cropped to the image; and the load's total, N."""
+    c = (np.arange(n) - n // 2 + 0.5) * DX
+    p = pressure(c[None, :], c[:, None])
+    k = 2 * np.pi * np.fft.fftfreq(n, DX)
+    u = np.fft.ifft2(_compliance(np.hypot(k[None, :], k[:, None]), H, nu) * np.fft.fft2(p)).real
+    i, j = n // 2 - HPX // 2, n // 2 - WPX // 2
+    return u[i:i + HPX, j:j + WPX], float(p.sum()) * DX * DX
+
+
+def test_baseline_offset_moves_field_by_the_k0_stiffness_not_footprint(hayes_table):
+    """A 0.01 mm baseline error over the whole image (a height map's low-frequency error).
+
+    Known field: a Hertz pressure (a = 2.4 mm, 1 N) on the infinite layer (h = 4 mm,
+    nu = 0.45). 'field' trusts the offset everywhere: its total grows by about the
+    layer's k = 0 stiffness (lambda + 2 mu) / h times offset times image area, 2.28 N
+    (measured 1.97 N, 0.864 of it: the image's edges are a displacement step against the
+    zero padding, whose edge traction falls partly in the padding; with no padding,
+    pad_mm = 0, the k = 0 term is all of it, exactly; at nu = 0.49, 0.575). 'footprint'
+    (the loaded disc) feels the offset only as a flat punch of radius a: 2 a E kappa /
+    (1 - nu^2) times the offset, kappa = 2.031 (Hayes 1972, a/h = 0.6, nu = 0.45):
+    0.0244 N (measured 0.0238, 0.974 of it, the disc is 12 pixels in radius), +2.4 % of
+    the load.
+    """
+    nu, a, offset = 0.45, 2.4, 0.01
+    u, load = _layer_forward(_hertz(3.0 / (2 * np.pi * a**2), a), nu)
+    assert load == pytest.approx(1.0, rel=1e-3)
+    area = HPX * WPX * DX * DX                                   # 1200 mm^2
+    k0 = E * (1 - nu) / ((1 + nu) * (1 - 2 * nu)) / H            # (lambda + 2 mu) / h
+    ah, nus, rows = hayes_table
+    kappa = rows[ah.index(0.6)][nus.index(0.45)]
+    punch = 2 * a * E * kappa / (1 - nu**2)                      # N/mm
+
+    kw = dict(thickness_mm=H, E_mpa=E, nu=nu)
+    field = ForceEstimator((HPX, WPX), DX, **kw)
+    f0, f1 = field(u).total_n[2], field(u + offset).total_n[2]
+    assert f0 == pytest.approx(load, rel=0.015)                 # +0.86 %: the cropped tail
+    assert 0.80 < (f1 - f0) / (k0 * offset * area) < 0.95       # 0.864
+    periodic = ForceEstimator((HPX, WPX), DX, pad_mm=0.0, **kw)
+    assert periodic(np.full((HPX, WPX), offset)).total_n[2] == pytest.approx(
+        k0 * offset * area, rel=1e-9)
+    # nearer incompressibility the layer's traction reaches further past the image's
+    # edges: at nu = 0.49 the same offset gives 0.575 of its k = 0 bound
+    k49 = E * 0.51 / (1.49 * 0.02) / H
+    f49 = ForceEstimator((HPX, WPX), DX, thickness_mm=H, E_mpa=E, nu=0.49)(
+        np.full((HPX, WPX), offset)).total_n[2]
+    assert 0.50 < f49 / (k49 * offset * area) < 0.65
+    assert (f1 - f0) / load > 1.5                                # 197 % of the load
+
+    disc = RPX <= a
+    footprint = ForceEstimator((HPX, WPX), DX, contact="footprint", **kw)
+    g0 = footprint(u, contact_mask=disc).total_n[2]
+    g1 = footprint(u + offset, contact_mask=disc).total_n[2]
+    assert g0 == pytest.approx(load, rel=0.005)                 # 1e-5
+    assert 0.95 < (g1 - g0) / (punch * offset) < 1.02            # 0.974
+    assert (g1 - g0) / load < 0.03                               # +2.4 %
+
+
+def test_oversized_footprint_shrinks_to_the_contact_by_dropping_tensile_nodes():
+    """A rigid sphere (R = 5 mm, 0.08 mm deep) on a thick layer (h = 10 mm, a / h = 0.063):
+    Hertz's contact radius a = 0.632 mm. The height map is the sphere's profile, imposed
+    on a footprint 1.3 a in radius: there the surface is held below where it would lie,
+    which takes tension; the tensile pixels leave the footprint and the solve repeats.
+
+    Measured (0.04 mm pixels): the footprint of radius a gives 1.0762 P_Hertz (the layer
+    is stiffer than the half-space; 1.018 at h = 40 mm); the one of 1.3 a gives 1.0777
+    and its contact shrinks to an equivalent radius of 1.034 a (1.029 a at 0.02 mm pixels,
+    1.017 a at h = 40 mm: the layer's contact is a little wider than Hertz's). Without
+    dropping the tensile pixels the 1.3 a footprint would total 0.940 P_Hertz.
+    """
+    R, delta, h, nu, dx, n = 5.0, 0.08, 10.0, 0.45, 0.04, 64
+    a = np.sqrt(R * delta)
+    P = 4 / 3 * E / (1 - nu**2) * np.sqrt(R) * delta**1.5
+    yy, xx = np.indices((n, n)) - (n - 1) / 2
+    r = np.hypot(xx, yy) * dx
+    u = np.maximum(delta - r**2 / (2 * R), 0.0)             # positive out to sqrt(2) a
+    est = ForceEstimator((n, n), dx, thickness_mm=h, E_mpa=E, nu=nu, contact="footprint",
+                         pad_mm=h)
+    exact = est(u, contact_mask=r <= a)
+    big = est(u, contact_mask=r <= 1.3 * a)
+    assert exact.total_n[2] / P == pytest.approx(1.076, abs=0.02)
+    assert big.total_n[2] == pytest.approx(exact.total_n[2], rel=0.01)   # +0.14 %
+    assert np.all(exact.contact == (r <= a))                # nothing was tensile
+    shrunk = np.sqrt(big.contact.sum() * dx * dx / np.pi)
+    assert 1.0 < shrunk / a < 1.06                           # 1.034, from 1.3
+    assert np.all(big.contact <= (r <= 1.3 * a)) and big.pressure_kpa.min() >= 0
+    assert np.all(big.forces_n[~big.contact] == 0)
+    ring = (r > 1.05 * a) & (r <= 1.3 * a)
+    assert not big.contact[ring].any()
+    # what the non-negativity did: the first solve on the 1.3 a footprint, tension kept
+    # (the estimator's own mixed solver, one sweep), pulls the ring up with -0.36 P and
+    # totals 0.940 P, 13 % short
+    op = est._op
+    padded = np.zeros((*op.fshape, 1))
+    padded[:n, :n, 0] = u
+    held = np.zeros(op.fshape, bool)
+    held[:n, :n] = r <= 1.3 * a
+    t = _mixed_solve(lambda v: op._apply(op.C, v[None])[0],
+                     lambda v: op._apply(op.K, v[None])[0], padded, held, max_sweeps=1)
+    assert t.min() < 0 and t[t < 0].sum() * dx * dx / P == pytest.approx(-0.36, abs=0.05)
+    assert t.sum() * dx * dx / big.total_n[2] == pytest.approx(0.872, abs=0.02)
+
+
+def test_field_total_depends_on_the_pads_sides_as_nu_nears_half(cache):
+    """The same height maps through the FEM pad (40 x 30 B-bar nodes, free sides) and the
+    spectral infinite layer (zero displacement outside the image, 2 h padding), as in
+    benchmarks/bench_forces_accuracy.py.
+
+    A 3 mm Gaussian bump, 'field': FEM / spectral 0.865 at nu 0.45 and 0.480 at 0.49.
+    Holding the bump with its surroundings flat takes traction that reaches far past
+    the bump as nu -> 0.5 (the layer's stiffness falls from (lambda + 2 mu) / h at
+    k = 0 to a fraction of it within k h ~ 0.2: 0.64 at k = 0.05 rad/mm, nu 0.49): the
+    spectral total over the image is 0.888 / 0.622 of (lambda + 2 mu) / h times the
+    bump's volume with the default padding and 0.878 / 0.513 with 32 mm of it, while
+    the free sides let the FEM pad bulge instead. A sphere press (R 10 mm, 0.3 mm deep,
+    a = 2.45 mm), 'footprint': FEM / spectral 0.938 / 0.932, the FEM's 1 mm nodes
+    resolving the contact coarsely, and nearly independent of nu. Its mask grown to
+    1.3 a: the FEM's tensile nodes are dropped (without that: -6.3 %, -1.8 kPa).
+    """
+    bump = 0.1 * np.exp(-(RPX / 3.0) ** 2 / 2)
+    sphere = np.maximum(0.3 - RPX**2 / 20.0, 0.0)
+    chord = np.sqrt(6.0)                                        # where the profile ends
+    volume = bump.sum() * DX * DX
+    nodes = np.hypot(*np.meshgrid(np.linspace(-LX / 2, LX / 2, 40),
+                                  np.linspace(-LY / 2, LY / 2, 30)))
+    held = np.count_nonzero(nodes < 1.3 * chord)   # 32 nodes, the next ones 0.43 mm out
+    ratio = {}
+    for nu in (0.45, 0.49):
+        kw = dict(thickness_mm=H, E_mpa=E, nu=nu, threshold_mm=1e-6)
+        fem = dict(method="fem", grid=(40, 30), cache_dir=cache)
+        k0 = E * (1 - nu) / ((1 + nu) * (1 - 2 * nu)) / H
+        spec = ForceEstimator((HPX, WPX), DX, **kw)(bump).total_n[2]
+        far = ForceEstimator((HPX, WPX), DX, pad_mm=32.0, **kw)(bump).total_n[2]
+        fe = ForceEstimator((HPX, WPX), DX, **fem, **kw)(bump).total_n[2]
+        ratio[nu] = fe / spec
+        # the infinite layer's 'field' total: below its k = 0 bound, and it keeps falling
+        # as the padding grows (the tail of the traction), far more at nu = 0.49
+        assert far < spec < k0 * volume
+        assert spec / (k0 * volume) == pytest.approx({0.45: 0.888, 0.49: 0.622}[nu], abs=0.02)
+        assert far / spec == pytest.approx({0.45: 0.989, 0.49: 0.826}[nu], abs=0.02)
+        spec = ForceEstimator((HPX, WPX), DX, contact="footprint", **kw)(sphere).total_n[2]
+        est = ForceEstimator((HPX, WPX), DX, contact="footprint", **fem, **kw)
+        fe = est(sphere)
+        assert fe.total_n[2] / spec == pytest.approx(0.935, abs=0.02)   # 0.938 / 0.932
+        assert abs(fe.total_n[2] / spec - 1) < 0.075
+        # a mask 1.3 times the sphere's chord radius holds the profile's zero beyond it:
+        # tension, and the tensile nodes are dropped; the total comes back (1.000 / 1.009)
+        big = est(sphere, contact_mask=RPX <= 1.3 * chord)
+        assert big.total_n[2] == pytest.approx(fe.total_n[2], rel=0.015)
+        assert big.pressure_kpa.min() >= 0 and big.contact.sum() < held  # 16 / 24
+    assert 0.80 < ratio[0.45] < 0.92                           # 0.865
+    assert 0.42 < ratio[0.49] < 0.54                           # 0.480
+    assert ratio[0.49] < 0.6 * ratio[0.45]
