@@ -274,7 +274,6 @@ class ForceEstimator:
         return ForceMap(forces_n=forces, pressure_kpa=pressure, total_n=total,
                         x_mm=self.x_mm, y_mm=self.y_mm, contact=mask)
 
-
     def _stiffening(self, u: np.ndarray, mask: np.ndarray | None) -> np.ndarray:
         """(N,) factors 1 + beta w / h, w the contact's depth (99th percentile)."""
         if mask is not None and mask.shape != u.shape:   # FEM nodes: footprint on its grid
