@@ -16,6 +16,7 @@ from ._circles import detect_contact_circle, detect_contact_circles, fit_circle
 from ._evaluate import BallPressReport, evaluate_ball_presses
 from ._features import colour_change, frame_gain, reference_inverse
 from ._lut import ColourLUT, fit_colour_lut
+from ._marker_flow import MarkerFlow, lateral_displacement, marker_centres, track_markers
 from ._markers import fill_masked, marker_mask
 from ._mlp import MLPGradientModel, mlp_inputs, train_mlp
 from ._poisson import PoissonSolver, divergence, integrate_poisson, integrate_poisson_masked
@@ -27,6 +28,7 @@ __all__ = [
     "ColourLUT",
     "DepthReconstructor",
     "MLPGradientModel",
+    "MarkerFlow",
     "PhotometricCalibration",
     "PoissonSolver",
     "ball_gradients",
@@ -44,9 +46,12 @@ __all__ = [
     "gradients_from_normals",
     "integrate_poisson",
     "integrate_poisson_masked",
+    "lateral_displacement",
+    "marker_centres",
     "marker_mask",
     "mlp_inputs",
     "normals_from_gradients",
     "reference_inverse",
+    "track_markers",
     "train_mlp",
 ]
