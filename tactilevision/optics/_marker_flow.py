@@ -3,7 +3,7 @@
 Gels with a grid of dark markers show the lateral (in-plane) motion of the gel
 surface that photometric stereo cannot see. Three steps, each a pure function:
 
-1. :func:`marker_centres`: the dots of a frame (:func:`marker_mask`, connected
+1. :func:`marker_centres`: the dots of a frame (the mask of :func:`marker_mask`, connected
    components of plausible area, darkness-weighted centroids);
 2. :func:`track_markers`: each reference dot followed into a frame by pyramidal
    Lucas-Kanade optical flow (OpenCV), checked by tracking back;
@@ -25,7 +25,7 @@ import numpy as np
 from scipy.interpolate import LinearNDInterpolator, NearestNDInterpolator, RBFInterpolator
 
 from .._checks import InputError, check_array, check_positive
-from ._markers import marker_mask
+from ._markers import _mask_from, grey_and_background
 
 __all__ = ["MarkerFlow", "lateral_displacement", "marker_centres", "track_markers"]
 
@@ -58,9 +58,7 @@ class MarkerFlow:
 
 def _contrast_image(frame: np.ndarray, size_px: int) -> np.ndarray:
     """(H, W) uint8: grey over its closing (the local background without dots), x 255."""
-    grey = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY).astype(np.float32)
-    kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (size_px, size_px))
-    background = cv2.morphologyEx(grey, cv2.MORPH_CLOSE, kernel)
+    grey, background = grey_and_background(frame, size_px)
     ratio = grey * (255.0 / np.maximum(background, 1.0))
     return np.clip(ratio, 0, 255).astype(np.uint8)
 
@@ -117,14 +115,13 @@ def marker_centres(frame: np.ndarray, *, size_px: int = 11, contrast: float = 0.
     if not (0 < min_area_px <= max_area):
         raise InputError(f"need 0 < min_area_px <= max_area_px, got {min_area_px!r} and "
                          f"{max_area!r}")
-    mask = marker_mask(frame, size_px=size_px, contrast=contrast, dilate_px=1)
+    grey, background = grey_and_background(frame, size_px)
+    mask = _mask_from(grey, background, contrast, 1)
     n, labels, stats, _ = cv2.connectedComponentsWithStats(mask.astype(np.uint8),
                                                            connectivity=8)
     if n < 2:
         return np.zeros((0, 2), np.float32)
-    grey = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY).astype(np.float32)
-    kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (size_px, size_px))
-    dark = np.maximum(cv2.morphologyEx(grey, cv2.MORPH_CLOSE, kernel) - grey, 0.0)
+    dark = np.maximum(background - grey, 0.0)
     dark = np.where(mask, dark, 0.0).ravel().astype(np.float64) + 1e-9 * mask.ravel()
     h, w = mask.shape
     rows, cols = np.indices((h, w))

@@ -37,9 +37,19 @@ def marker_mask(frame: np.ndarray, *, size_px: int = 11, contrast: float = 0.25,
         True on markers.
     """
     frame = check_array(frame, "frame", [("H", "W", 3)], dtype=np.uint8)
+    grey, background = grey_and_background(frame, size_px)
+    return _mask_from(grey, background, contrast, dilate_px)
+
+
+def grey_and_background(frame: np.ndarray, size_px: int) -> tuple[np.ndarray, np.ndarray]:
+    """(H, W) float32 grey image and its closing (the local background without dots)."""
     grey = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY).astype(np.float32)
     kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (size_px, size_px))
-    background = cv2.morphologyEx(grey, cv2.MORPH_CLOSE, kernel)
+    return grey, cv2.morphologyEx(grey, cv2.MORPH_CLOSE, kernel)
+
+
+def _mask_from(grey: np.ndarray, background: np.ndarray, contrast: float,
+               dilate_px: int) -> np.ndarray:
     mask = (grey < (1.0 - contrast) * background).astype(np.uint8)
     if dilate_px > 0:
         k = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * dilate_px + 1, 2 * dilate_px + 1))
