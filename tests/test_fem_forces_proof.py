@@ -145,7 +145,7 @@ def _centred_means(nodes, npx):
 A_HZ, P_HZ = 3.0, 0.5        # Hertz pressure on a disc: radius (mm), total force (N)
 
 
-@pytest.mark.parametrize(("nu", "field_excess"), [(0.45, 0.10), (0.49, 0.16)])
+@pytest.mark.parametrize(("nu", "field_excess"), [(0.45, 0.010), (0.49, 0.020)])
 def test_fem_recovers_the_hertz_load_of_a_finer_pad(nu, field_excess, cache):
     """The estimator's 40 x 30 x 4 B-bar pad (1.02 mm nodes) fed the top surface of an
     80 x 60 x 8 B-bar pad (0.50 mm, non-nested) under a Hertz pressure, a = 3 mm.
@@ -156,15 +156,15 @@ def test_fem_recovers_the_hertz_load_of_a_finer_pad(nu, field_excess, cache):
     - the condensed stiffness alone, node values centred tributary means: total
       +0.55 / +1.29 %, pressure rms (r < a) 3.5 / 3.6 %, largest 5.6 / 5.7 %,
       |force| on nodes off the loaded disc 1.1 / 1.6 % of the load;
-    - the estimator, 'field': total +7.5 / +12.9 %, of which +2.7 / +7.1 % lies on nodes
-      off the disc (spurious); pressure rms 3.8 / 3.8 %, largest 6.2 / 6.5 %. The excess
-      over the stiffness alone is the estimator's sampling: a node's tributary pixels
-      (5 or 6 per 5.1 px spacing) are off-centre by up to half a pixel, which on the
-      contact's flanks shifts node values by up to 2.4 % of the peak, and the pad's
-      k -> 0 stiffness, (lambda + 2 mu) / h, amplifies it as nu -> 0.5;
-    - 'footprint' with the default threshold (0.01 mm, the sink-in included, tensile
-      nodes dropped): +3.9 / +2.3 %; with the loaded disc as the mask: -0.7 / -0.9 %;
-      no force off the footprint; pressure errors as above.
+    - the estimator, 'field' (it samples the same centred tributary means): the same
+      figures. (Its earlier nearest-node means, pixels up to half a pixel off-centre,
+      read +7.5 / +12.9 %: the pad's k -> 0 stiffness, (lambda + 2 mu) / h, amplifies
+      that shift on the contact's flanks as nu -> 0.5.)
+    - 'footprint', every node whose hat reaches into the mask kept until it pulls: the
+      default threshold (0.01 mm, the sink-in included) +0.08 / +0.06 %, the loaded disc
+      as the mask -0.13 / -0.06 %; no force off the footprint; pressure errors as above.
+      (Keeping only nodes with half their tributary pixels in the mask read +3.9 / +2.3
+      and -0.7 / -0.9 %.)
     """
     pressure = _hertz(3 * P_HZ / (2 * np.pi * A_HZ**2), A_HZ)
     xs, ys, grid, load = _pad_forward(pressure, nu)
@@ -196,33 +196,32 @@ def test_fem_recovers_the_hertz_load_of_a_finer_pad(nu, field_excess, cache):
     un = _centred_means(y, HPX) @ u @ _centred_means(x, WPX).T
     fk = (E * pad.K_normal @ un.ravel()).reshape(pad.shape)
     total, rms, largest, off = errors(fk, fk / (sx * sy) * 1e3)
-    assert abs(total) < 0.025 and rms < 0.05 and largest < 0.08 and off < 0.03
+    assert 0 < total < field_excess and rms < 0.05 and largest < 0.08 and off < 0.03
 
     fm = field(u)
     fz = fm.forces_n[..., 2]
-    total, rms, largest, off = errors(fz, fm.pressure_kpa)
-    assert 0 < total < field_excess
-    assert rms < 0.05 and largest < 0.08
-    assert abs(fz[touch].sum() / load - 1) < 0.07               # +4.7 / +5.8 %
-    assert 0 < off < field_excess and fz[~touch].sum() > 0       # spurious, compressive
+    assert fz == pytest.approx(fk, abs=1e-12 * load)           # the same node values
+    interior = (slice(1, -1), slice(1, -1))                     # full-area nodes
+    assert fm.pressure_kpa[interior] == pytest.approx(fk[interior] / (sx * sy) * 1e3,
+                                                      rel=1e-9)
 
     fp = ForceEstimator((HPX, WPX), DX, contact="footprint", **kw)
-    for mask, tol in ((None, 0.06), (RPX <= A_HZ, 0.03)):
+    for mask in (None, RPX <= A_HZ):
         fm = fp(u, contact_mask=mask)
         total, rms, largest, off = errors(fm.forces_n[..., 2], fm.pressure_kpa)
-        assert abs(total) < tol and rms < 0.05 and largest < 0.08 and off == 0
+        assert abs(total) < 0.005 and rms < 0.05 and largest < 0.08 and off < 0.003
         assert fm.pressure_kpa.min() >= 0 and np.all(fm.contact[inside])
         assert np.all(fm.forces_n[~fm.contact] == 0)
 
 
-def test_fem_footprint_mask_drops_the_rim_nodes_of_the_contact(cache):
-    """'footprint' with method='fem' keeps a node when half its tributary pixels are in
-    the mask, and gives every other node zero force. A node just outside the contact
-    still carries load (its hat reaches into it), so with the contact itself as the
-    mask the total falls short by about that share. Hertz load a = 2.5 mm, nu = 0.45
-    (measured): the 16 nodes inside are kept, the load's exact share on the others is
-    12.6 %, the total -14.3 %; the mask grown by one node spacing +3.1 %, the default
-    threshold (the sink-in) +4.2 %. (On a 1.16 mm grid, a = 2.7 to 3.3 mm: -14 to -15 %.)
+def test_fem_footprint_keeps_the_rim_nodes_of_the_contact(cache):
+    """'footprint' with method='fem' keeps every node whose hat function reaches a mask
+    pixel (then drops those that pull): a node just outside the contact still carries
+    load, its hat reaches into the contact. Hertz load a = 2.5 mm, nu = 0.45
+    (measured): with the contact itself as the mask 36 nodes are kept and carry all of
+    the load's exact nodal forces, total -1.0 %; the mask grown by one node spacing or
+    the default threshold (the sink-in) -0.1 %. Keeping only the nodes with half their
+    tributary pixels in the mask kept 16, missed 12.6 % of the load, total -14.3 %.
     """
     nu, a = 0.45, 2.5
     pressure = _hertz(3 * P_HZ / (2 * np.pi * a**2), a)
@@ -232,14 +231,12 @@ def test_fem_footprint_mask_drops_the_rim_nodes_of_the_contact(cache):
                          contact="footprint", cache_dir=cache)
     exact = _hat_loads(est.x_mm - LX / 2, est.y_mm - LY / 2, pressure)
     tight = est(u, contact_mask=RPX <= a)
-    share = exact[~tight.contact].sum() / load
-    assert tight.contact.sum() == 16 and 0.10 < share < 0.15             # 12.6 %
-    assert -0.20 < tight.total_n[2] / load - 1 < -0.10                   # -14.3 %
-    assert abs(tight.total_n[2] / load - 1 + share) < 0.03
+    assert tight.contact.sum() > 16
+    assert exact[~tight.contact].sum() < 1e-3 * load                    # 0
+    assert abs(tight.total_n[2] / load - 1) < 0.02                      # -1.0 %
     grown = est(u, contact_mask=RPX <= a + est.x_mm[1])
-    assert exact[~grown.contact].sum() < 1e-3 * load
-    assert abs(grown.total_n[2] / load - 1) < 0.05                       # +3.1 %
-    assert abs(est(u).total_n[2] / load - 1) < 0.05                      # +4.2 %
+    assert abs(grown.total_n[2] / load - 1) < 0.01                      # -0.1 %
+    assert abs(est(u).total_n[2] / load - 1) < 0.01                     # -0.1 %
 
 
 # -- 2. the footprint assumption ------------------------------------------------------------
@@ -382,7 +379,12 @@ def test_field_total_depends_on_the_pads_sides_as_nu_nears_half(cache):
     volume = bump.sum() * DX * DX
     nodes = np.hypot(*np.meshgrid(np.linspace(-LX / 2, LX / 2, 40),
                                   np.linspace(-LY / 2, LY / 2, 30)))
-    held = np.count_nonzero(nodes < 1.3 * chord)   # 32 nodes, the next ones 0.43 mm out
+    # the nodes whose hat reaches a pixel of the 1.3 a mask (52): candidates for contact
+    sx, sy, wide = LX / 39, LY / 29, RPX <= 1.3 * chord
+    held = sum(bool(wide[np.abs(YC - yn) < sy][:, np.abs(XC - xn) < sx].any())
+               for yn in np.linspace(-LY / 2, LY / 2, 30)
+               for xn in np.linspace(-LX / 2, LX / 2, 40))
+    assert held == 52 and np.count_nonzero(nodes < 1.3 * chord) == 32
     ratio = {}
     for nu in (0.45, 0.49):
         kw = dict(thickness_mm=H, E_mpa=E, nu=nu, threshold_mm=1e-6)
@@ -400,13 +402,12 @@ def test_field_total_depends_on_the_pads_sides_as_nu_nears_half(cache):
         spec = ForceEstimator((HPX, WPX), DX, contact="footprint", **kw)(sphere).total_n[2]
         est = ForceEstimator((HPX, WPX), DX, contact="footprint", **fem, **kw)
         fe = est(sphere)
-        assert fe.total_n[2] / spec == pytest.approx(0.935, abs=0.02)   # 0.938 / 0.932
-        assert abs(fe.total_n[2] / spec - 1) < 0.075
+        assert fe.total_n[2] / spec == pytest.approx(0.90, abs=0.02)    # 0.901 / 0.899
         # a mask 1.3 times the sphere's chord radius holds the profile's zero beyond it:
-        # tension, and the tensile nodes are dropped; the total comes back (1.000 / 1.009)
+        # tension, and the tensile nodes are dropped; the total comes back (1.006 / 1.030)
         big = est(sphere, contact_mask=RPX <= 1.3 * chord)
-        assert big.total_n[2] == pytest.approx(fe.total_n[2], rel=0.015)
-        assert big.pressure_kpa.min() >= 0 and big.contact.sum() < held  # 16 / 24
+        assert big.total_n[2] == pytest.approx(fe.total_n[2], rel=0.04)
+        assert big.pressure_kpa.min() >= 0 and big.contact.sum() < held  # 24 / 36 of 52
     assert 0.80 < ratio[0.45] < 0.92                           # 0.865
     assert 0.42 < ratio[0.49] < 0.54                           # 0.480
     assert ratio[0.49] < 0.6 * ratio[0.45]
