@@ -326,3 +326,17 @@ def test_gelslim_detected_radii_physical(name):
     ball_px = GELSLIM_BALL_RADIUS_MM / GELSLIM_MM_PER_PX
     ok = (radii > ball_px / 4) & (radii < ball_px + 3.0)
     assert ok.mean() > 0.9
+
+
+def test_fill_masked_fields_matches_fill_masked_per_field():
+    from tactilevision.optics._markers import fill_masked_fields
+
+    mask, _ = holes(3.0)
+    a = (0.5 * X - 0.3 * Y + 7).astype(np.float32)
+    b = np.sin(X / 9.0).astype(np.float32) * np.cos(Y / 7.0).astype(np.float32)
+    before = a.copy()
+    fa, fb = fill_masked_fields([a, b], mask)
+    np.testing.assert_array_equal(a, before)                   # inputs untouched
+    np.testing.assert_allclose(fa, fill_masked(a, mask), atol=1e-6)
+    np.testing.assert_allclose(fb, fill_masked(b, mask), atol=1e-6)
+    assert fa.flags.c_contiguous and fb.dtype == np.float32

@@ -447,7 +447,7 @@ class _Fem:
 
     def _nodes(self, disp: np.ndarray) -> np.ndarray:
         """(N, H, W, c) -> (N, n * c) node displacements, dof-major per node."""
-        N, H, W, c = disp.shape
+        N, c = disp.shape[0], disp.shape[-1]
         nodes = np.empty((N, self.ny, self.nx, c))
         for n in range(N):
             for j in range(c):

@@ -17,7 +17,7 @@ from .._checks import check_array
 from ._ball import gradients_from_normals
 from ._calibration import PhotometricCalibration
 from ._features import blur_frames, colour_change, reference_inverse
-from ._markers import fill_masked, marker_mask
+from ._markers import fill_masked_fields, marker_mask
 from ._mlp import MLPGradientModel, mlp_inputs
 from ._poisson import PoissonSolver, integrate_poisson_masked
 from ._table import table_from_lut, tabulate_mlp
@@ -134,9 +134,7 @@ class DepthReconstructor:
             gx, gy = gradients_from_normals(nxy[:, 0], nxy[:, 1])
             gx, gy = gx.reshape(self.shape), gy.reshape(self.shape)
         if cal.markers:
-            markers = marker_mask(frame)
-            gx = fill_masked(gx, markers)
-            gy = fill_masked(gy, markers)
+            gx, gy = fill_masked_fields([gx, gy], marker_mask(frame))
         return gx, gy
 
     def _integrate(self, gx: np.ndarray, gy: np.ndarray, frame: np.ndarray) -> np.ndarray:
