@@ -175,3 +175,28 @@ def test_fem_and_spectral_agree_on_a_sphere_press(tmp_path):
     iy, ix = np.unravel_index(np.argmax(fe.pressure_kpa), fe.pressure_kpa.shape)
     assert abs(fe.x_mm[ix] - (Wpx - 1) / 2 * dx) < 1.1
     assert abs(fe.y_mm[iy] - (Hpx - 1) / 2 * dx) < 1.1
+
+
+def test_single_precision_path_matches_double():
+    """float32 height maps take OpenCV's real DFT with the stiffness as a packed
+    spectrum; it must give the float64 scipy.fft answer to single precision, single
+    frames and batches alike, and the same totals with the periodic k = 0 check."""
+    n, dx = 96, 0.1
+    r = _disc((n, n + 4), dx, ((n + 3) / 2, (n - 1) / 2), 0)
+    u = np.maximum(0.2 - r**2 / 8.0, 0.0)                  # R = 4 mm, 0.2 mm deep
+    est = ForceEstimator((n, n + 4), dx, thickness_mm=H, E_mpa=E, nu=NU)
+    ref = est(u)
+    one = est(u.astype(np.float32))
+    assert one.forces_n.dtype == np.float32 and one.total_n.dtype == np.float64
+    scale = np.abs(ref.forces_n).max()
+    assert np.abs(one.forces_n - ref.forces_n).max() < 1e-5 * scale
+    assert one.total_n == pytest.approx(ref.total_n, rel=1e-5, abs=1e-9)
+    batch = est(np.stack([u, u[::-1]]).astype(np.float32))
+    np.testing.assert_array_equal(batch.forces_n[0], one.forces_n)
+    assert batch.total_n[1] == pytest.approx(ref.total_n, rel=1e-5, abs=1e-9)
+    # no padding (96 x 100: fast FFT lengths, so no zeros are added): a uniform
+    # 0.01 mm everywhere is the k = 0 stiffness times the area
+    periodic = ForceEstimator((n, n + 4), dx, thickness_mm=H, E_mpa=E, nu=NU, pad_mm=0.0)
+    k0 = E * (1 - NU) / ((1 + NU) * (1 - 2 * NU)) / H
+    flat = periodic(np.full((n, n + 4), 0.01, np.float32)).total_n[2]
+    assert flat == pytest.approx(k0 * 0.01 * n * (n + 4) * dx * dx, rel=1e-5)

@@ -267,7 +267,12 @@ class ForceEstimator:
             forces = forces * self._stiffening(u, mask)[:, None, None, None].astype(forces.dtype)
         area = self._op.node_area_mm2
         pressure = forces[..., 2] * (1e3 / area)
-        total = forces.sum(axis=(1, 2), dtype=np.float64)
+        if forces.dtype == np.float32:
+            # per component (a float64 reduction over both image axes with a cast
+            # took half the camera-rate path's time: 2.1 of 4.5 ms at 427 x 320)
+            total = np.array([[float(fn[..., c].sum()) for c in range(3)] for fn in forces])
+        else:
+            total = forces.sum(axis=(1, 2))
         if single:
             forces, pressure, total = forces[0], pressure[0], total[0]
             mask = None if mask is None else mask[0]
@@ -310,8 +315,16 @@ class _Spectral:
             kn = layer_normal_stiffness(np.hypot(kx, ky), thickness_mm=h, E_mpa=E, nu=nu)
             self.K = kn[..., None, None].astype(np.complex128)
             self.C = 1.0 / self.K
-        # the single-precision normal stiffness, real (the camera-rate path)
-        self.kn32 = None if self.full else self.K[..., 0, 0].real.astype(np.float32)
+        # the camera-rate path (float32, 'normal'): OpenCV's real DFT, twice as fast
+        # as scipy.fft's at these sizes (0.45 against 0.72 ms forward at 480 x 600,
+        # one core), with the stiffness times the pixel area as the packed (CCS)
+        # spectrum of its real, even kernel
+        self.kccs = None
+        if not self.full:
+            import cv2
+
+            kernel = np.fft.irfft2(kn * (dx * dx), s=self.fshape)
+            self.kccs = cv2.dft(kernel.astype(np.float32))
         self.node_area_mm2 = dx * dx
         self.x_mm = np.arange(W) * dx
         self.y_mm = np.arange(H) * dx
@@ -324,12 +337,16 @@ class _Spectral:
 
     def field(self, disp: np.ndarray) -> np.ndarray:
         H, W = self.shape
-        if disp.dtype == np.float32 and self.kn32 is not None:
-            f = sfft.rfft2(disp[..., 0], s=self.fshape, axes=(1, 2), workers=1)
-            f *= self.kn32
-            t = sfft.irfft2(f, s=self.fshape, axes=(1, 2), workers=1)[:, :H, :W]
-            out = np.zeros((*t.shape, 3), np.float32)
-            np.multiply(t, self.node_area_mm2, out=out[..., 2])
+        if disp.dtype == np.float32 and self.kccs is not None:
+            import cv2
+
+            Hf, Wf = self.fshape
+            out = np.zeros((*disp.shape[:3], 3), np.float32)
+            for n, d in enumerate(disp[..., 0]):
+                u = cv2.copyMakeBorder(d, 0, Hf - H, 0, Wf - W, cv2.BORDER_CONSTANT, value=0)
+                f = cv2.dft(u)
+                f = cv2.mulSpectrums(f, self.kccs, 0)
+                out[n, :, :, 2] = cv2.idft(f, flags=cv2.DFT_REAL_OUTPUT | cv2.DFT_SCALE)[:H, :W]
             return out
         t = self._apply(self.K, disp)[:, :H, :W]
         return self._forces(t)
