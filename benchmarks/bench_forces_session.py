@@ -1,7 +1,8 @@
 """Frames -> height maps -> total force against the F/T log, per press, on the sample session.
 
     python benchmarks/bench_forces_session.py [--fit FIT.json] [--presses N]
-        [--frames-per-press K] [--naive]
+        [--frames-per-press K] [--naive] [--optics lut|lut-colour|mlp|CAL.npz]
+        [--ball-presses N] [--save-optics CAL.npz] [--true-surface]
 
 Issue 6's end-to-end check. For every press of ``sample_frames/gelsight_session``
 the frames of its hold (times from ``truth.json``, used only to group frames)
@@ -9,10 +10,11 @@ go through
 
 1. photometric stereo calibrated for the session's sensor: the session's frames
    are rendered through Taxim's shading table, so its optics are calibrated as
-   a rig's are, on ball presses of that sensor (24 presses of a 4 mm ball
-   rendered through the same table, :func:`tactilevision.sim.render_ball_presses`,
-   a colour LUT), with the height pinned to zero outside the contact
-   (``DepthReconstructor(boundary='contact')``);
+   a rig's are, on ball presses of that sensor (128 presses of a 2 mm ball up
+   to 1.4 mm deep rendered through the same table,
+   :func:`tactilevision.sim.render_ball_presses` with ``partial=True``, and a
+   LUT per cell of an 8 x 6 grid, ``lut_cells=(8, 6)``), with the height
+   pinned to zero outside the contact (``DepthReconstructor(boundary='contact')``);
 2. ``ForceEstimator`` (spectral, normal displacement, 'footprint' contact:
    height above 0.02 mm, non-negative pressure) with E, nu and beta of the
    session's calibration (``out/calibration/fit.json``, written by the
@@ -22,7 +24,12 @@ and the mean total Fz over the hold is compared with the F/T log's mean at
 the same frames (the fit's clock offset). Prints one row per press, then the
 median and range of the ratio by indenter depth. ``--naive`` adds the earlier
 pipeline's totals (the shipped GelSight calibration, whole-image
-integration, beta = 0) for comparison.
+integration, beta = 0) for comparison. ``--true-surface`` adds the force of
+the press's true gel surface (the session's own Neo-Hookean FEM profile,
+``truth.json``'s positions and depths) through the same estimator: what
+the force model alone gives, so that the optics' share of the error shows.
+``--optics`` picks the photometric model (a position-aware network needs
+torch; ``--save-optics`` keeps it for the next run).
 """
 
 from __future__ import annotations
@@ -43,14 +50,28 @@ ROOT = Path(__file__).resolve().parents[1]
 SESSION = ROOT / "sample_frames" / "gelsight_session"
 
 
-def session_optics(session) -> PhotometricCalibration:
-    """LUT calibration from 24 ball presses rendered through the session's shading table."""
+def session_optics(session, optics: str = "lut", presses: int = 128) -> PhotometricCalibration:
+    """Calibration from ball presses rendered through the session's shading table.
+
+    ``optics``: 'lut' (one colour table per cell of an 8 x 6 grid over the
+    image, presses of a 2 mm ball up to 1.4 mm deep whose contacts may run
+    off the image's edges: slopes to 3, as the punch walls have, at every
+    position), 'lut-colour' (one colour-only table, a 4 mm ball up to 2 mm
+    deep, contacts inside the image: the first version), 'mlp' (a
+    position-aware network on the 'lut-colour' presses, needs torch) or the
+    path of a saved calibration (``.npz``).
+    """
+    if optics not in ("lut", "lut-colour", "mlp"):
+        return PhotometricCalibration.load(optics)
     table, _ = taxim_shading()
-    balls = render_ball_presses(table, session.reference, n=24, radius_mm=4.0,
-                                depth_mm=(0.2, 2.0), seed=5)
+    cells = optics == "lut"
+    radius, deepest = (2.0, 1.4) if cells else (4.0, 2.0)
+    balls = render_ball_presses(table, session.reference, n=presses if cells else 24,
+                                radius_mm=radius, depth_mm=(0.2, deepest), partial=cells, seed=5)
     return PhotometricCalibration.from_ball_presses(
-        balls.reference, balls.frames, balls.centers_px, balls.radii_px, ball_radius_mm=4.0,
-        mm_per_px=session.config.mm_per_px, model="lut", use_position=False)
+        balls.reference, balls.frames, balls.centers_px, balls.radii_px, ball_radius_mm=radius,
+        mm_per_px=session.config.mm_per_px, model="mlp" if optics == "mlp" else "lut",
+        lut_cells=(8, 6) if cells else (1, 1), use_position=optics == "mlp")
 
 
 def main() -> None:
@@ -60,6 +81,15 @@ def main() -> None:
     ap.add_argument("--frames-per-press", type=int, default=None,
                     help="the middle K frames of each hold only (default all, 4)")
     ap.add_argument("--naive", action="store_true", help="also the earlier pipeline")
+    ap.add_argument("--optics", default="lut",
+                    help="'lut' (position cells), 'lut-colour', 'mlp' (needs torch) or a saved "
+                         "calibration .npz")
+    ap.add_argument("--ball-presses", type=int, default=128,
+                    help="rendered ball presses to calibrate the 'lut' optics on")
+    ap.add_argument("--save-optics", type=Path, default=None,
+                    help="write the optics calibration here (reuse it with --optics PATH)")
+    ap.add_argument("--true-surface", action="store_true",
+                    help="also the estimator fed the true gel surface (the force model alone)")
     args = ap.parse_args()
     s = read_session(SESSION)
     truth = json.loads((SESSION / "truth.json").read_text())
@@ -73,7 +103,10 @@ def main() -> None:
     h, mm = truth["thickness_mm"], s.config.mm_per_px
     print(f"E {E:.4f} MPa, nu {nu:.4f}, beta {beta:.3f}, clock offset {off:.4f} s from {src}")
     t0 = time.perf_counter()
-    rec = DepthReconstructor(session_optics(s), reference=s.reference, boundary="contact")
+    cal = session_optics(s, args.optics, args.ball_presses)
+    if args.save_optics:
+        cal.save(args.save_optics)
+    rec = DepthReconstructor(cal, reference=s.reference, boundary="contact")
     est = ForceEstimator(s.shape, mm, thickness_mm=h, E_mpa=E, nu=nu, contact="footprint",
                          threshold_mm=0.02, beta=beta)
     naive = None
@@ -82,11 +115,24 @@ def main() -> None:
 
         naive = (_reconstructor(s), ForceEstimator(s.shape, mm, thickness_mm=h, E_mpa=E, nu=nu,
                                                    contact="footprint", threshold_mm=0.02))
-    print(f"set-up (ball presses, LUT, estimator): {time.perf_counter() - t0:.1f} s")
+    surface = None
+    if args.true_surface:
+        from tactilevision.sim import SessionSpec, press_profile
+        from tactilevision.sim._block import press_surface
+
+        prof = press_profile(SessionSpec().block.radius_mm / h, truth["nu"], w_over_h_max=0.22)
+
+        def surface(p):
+            c = (p["x_mm"] / mm + (s.shape[1] - 1) / 2, p["y_mm"] / mm + (s.shape[0] - 1) / 2)
+            return press_surface(prof, SessionSpec().block, indenter=p["indenter"],
+                                 depth_mm=p["depth_mm"], centre_px=c, shape=s.shape,
+                                 mm_per_px=mm, thickness_mm=h)[0]
+    print(f"set-up (ball presses, optics, estimator): {time.perf_counter() - t0:.1f} s")
     ft_t = s.force_times_s - off
     head = (f"{'press':>5s} {'w0 mm':>6s} {'frames':>6s} {'F/T N':>7s} {'frames N':>8s} "
             f"{'ratio':>6s} {'face mm':>7s}")
-    print(head + (f" {'naive N':>8s}" if naive else ""))
+    print(head + (f" {'naive N':>8s}" if naive else "")
+          + (f" {'true surface N':>14s}" if surface else ""))
     rows = []
     t_frames = 0.0
     n_frames = 0
@@ -113,22 +159,36 @@ def main() -> None:
             if naive:
                 nv.append(float(naive[1](naive[0](s.frame(i))).total_n[2]))
         r = np.mean(fz) / np.mean(ft)
-        rows.append((p["w0_mm"], r, np.mean(nv) / np.mean(ft) if naive else np.nan))
+        ts = float(est(surface(p)).total_n[2]) if surface else np.nan
+        rows.append((p["w0_mm"], r, np.mean(nv) / np.mean(ft) if naive else np.nan,
+                     ts / np.mean(ft), p["x_mm"], p["y_mm"]))
         print(f"{p['press']:5d} {p['w0_mm']:6.2f} {hold.size:6d} {np.mean(ft):7.3f} "
               f"{np.mean(fz):8.3f} {r:6.3f} {np.mean(face):7.3f}"
-              + (f" {np.mean(nv):8.3f}" if naive else ""), flush=True)
+              + (f" {np.mean(nv):8.3f}" if naive else "")
+              + (f" {ts:14.3f}" if surface else ""), flush=True)
     a = np.array(rows)
     print(f"\n{n_frames} frames, {1e3 * t_frames / max(n_frames, 1):.0f} ms per frame "
           "(masked Poisson + footprint solve)")
     print(f"{'w0 mm':>6s} {'presses':>7s} {'median ratio':>12s} {'range':>15s} "
-          f"{'within 5 %':>10s}" + (f" {'naive median':>12s}" if naive else ""))
+          f"{'within 5 %':>10s}" + (f" {'naive median':>12s}" if naive else "")
+          + (f" {'true surface: median, range':>30s}" if surface else ""))
     for w0 in np.unique(a[:, 0]):
         r = a[a[:, 0] == w0, 1]
         line = (f"{w0:6.2f} {r.size:7d} {np.median(r):12.3f} {r.min():7.3f} to {r.max():5.3f} "
                 f"{np.mean(np.abs(r - 1) <= 0.05):10.0%}")
         if naive:
             line += f" {np.median(a[a[:, 0] == w0, 2]):12.3f}"
+        if surface:
+            q = a[a[:, 0] == w0, 3]
+            line += f" {np.median(q):14.3f}, {q.min():.3f} to {q.max():.3f}"
         print(line)
+    if len(a) > 4:
+        # where the per-press error comes from: a linear trend over the pad and depth
+        X = np.column_stack([np.ones(len(a)), a[:, 4], a[:, 5], a[:, 0]])
+        coef, *_ = np.linalg.lstsq(X, a[:, 1], rcond=None)
+        print(f"ratio ~ {coef[0]:.3f} {coef[1]:+.4f} x_mm {coef[2]:+.4f} y_mm "
+              f"{coef[3]:+.3f} w0_mm; sd {a[:, 1].std():.3f} -> {np.std(a[:, 1] - X @ coef):.3f} "
+              "after it (position: the optics' colour-only model; depth: steep walls)")
 
 
 if __name__ == "__main__":

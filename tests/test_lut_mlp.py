@@ -33,6 +33,7 @@ from tactilevision.optics import (
     PhotometricCalibration,
     detect_contact_circles,
     evaluate_ball_presses,
+    fit_cell_luts,
     fit_colour_lut,
     mlp_inputs,
     train_mlp,
@@ -160,6 +161,90 @@ def test_fit_lut_rejects_bad_input():
         fit_colour_lut(bad, np.zeros((100, 2), np.float32))
     with pytest.raises(ValueError, match="at least 32"):
         fit_colour_lut(c[:10], np.zeros((10, 2), np.float32), bins=32)
+
+
+def test_cell_luts_learn_a_position_dependent_shading(train, held_out):
+    """Left half of the image: the linear light model; right half: its lights
+    mirrored, so a colour there means the opposite in-plane normal (the extreme of a
+    pad lit unevenly). One colour-only table averages the halves to nothing; one
+    table per cell (2 x 1, no overlap) meets the cell bound on both, and a 2 x 2 grid
+    has equal tables above and below (the shading does not change along y)."""
+    change, nxy = train
+    m = len(change)
+    rng = np.random.default_rng(3)
+    x = rng.uniform(0, 200, m)
+    y = rng.uniform(0, 100, m)
+    sign = np.where(x >= 100, -1.0, 1.0)[:, None]
+    labels = (sign * nxy).astype(np.float32)
+    lo, hi = np.percentile(change, 0.1, axis=0), np.percentile(change, 99.9, axis=0)
+    tables, fell_back = fit_cell_luts(x, y, change, labels, (100, 200), (2, 1), lo=lo, hi=hi,
+                                      grow=0.0)
+    assert tables.shape == (1, 2, 32, 32, 32, 2) and not fell_back.any()
+    one = fit_colour_lut(change, labels, lo=lo, hi=hi)
+    hc, hn = held_out
+    ok = in_range(one, hc)
+    for side, s in ((0, 1.0), (1, -1.0)):
+        lut = ColourLUT(tables[0, side], one.lo, one.hi, one.counts)
+        err = np.linalg.norm(lut.normals(hc[ok]) - s * hn[ok], axis=1)
+        assert err.max() < lut_bound(lut)
+        err_one = np.linalg.norm(one.normals(hc[ok]) - s * hn[ok], axis=1)
+        assert np.median(err_one) > 10 * np.median(err)
+    four, _ = fit_cell_luts(x, y, change, labels, (100, 200), (2, 2), lo=lo, hi=hi, grow=0.0)
+    filled = one.counts > 0
+    for side in (0, 1):
+        assert np.abs(four[0, side][filled] - four[1, side][filled]).max() < lut_bound(one)
+
+
+def test_cell_luts_sparse_cells_and_bad_input(train):
+    change, nxy = train
+    x = np.zeros(len(change))                    # every pixel in the first column of cells
+    y = np.linspace(0, 99, len(change))
+    fallback = fit_colour_lut(change, nxy)
+    tables, fell_back = fit_cell_luts(x, y, change, nxy, (100, 200), (4, 1),
+                                      lo=fallback.lo, hi=fallback.hi, fallback=fallback,
+                                      grow=0.0)
+    np.testing.assert_array_equal(fell_back, [[False, True, True, True]])
+    np.testing.assert_array_equal(tables[0, 3], fallback.table)
+    with pytest.raises(ValueError, match=r"position cell \(1, 0\)"):
+        fit_cell_luts(x, y, change, nxy, (100, 200), (4, 1), lo=fallback.lo,
+                      hi=fallback.hi, grow=0.0)
+    with pytest.raises(ValueError, match="at least"):
+        fit_cell_luts(x, y, change, nxy, (100, 200), (0, 1), lo=fallback.lo, hi=fallback.hi)
+
+
+def test_cell_lut_calibration_round_trip_and_reconstruction(tmp_path):
+    """lut_cells=(2, 2) on synthetic presses: saved and loaded unchanged, and the
+    reconstructor looks each pixel up in its own cell's table (a uniform shading
+    makes all four tables nearly the colour-only one: same heights within 5 %)."""
+    ref, frames, centres, radii = synthetic_presses(8, seed=4)
+    kw = dict(ball_radius_mm=40.0, mm_per_px=1.0, model="lut")
+    cells = PhotometricCalibration.from_ball_presses(ref, frames, centres, radii,
+                                                     lut_cells=(2, 2), **kw)
+    plain = PhotometricCalibration.from_ball_presses(ref, frames, centres, radii, **kw)
+    assert cells.cell_luts.shape == (2, 2, 32, 32, 32, 2) and plain.cell_luts is None
+    assert cells.provenance["lut_cells"] == [2, 2]
+    back = PhotometricCalibration.load(cells.save(tmp_path / "cells.npz"))
+    np.testing.assert_array_equal(back.cell_luts, cells.cell_luts)
+    h_cells = DepthReconstructor(back)(frames[0])
+    h_plain = DepthReconstructor(plain)(frames[0])
+    peak = float(h_plain.max())
+    assert abs(float(h_cells.max()) - peak) < 0.05 * peak
+    # a cell table that is all zeros (flat) in the top-left cell only: that
+    # quarter of the gradients vanishes, the rest is untouched
+    flat = back.cell_luts.copy()
+    flat[0, 0] = 0.0
+    back.cell_luts = flat
+    gx, gy = DepthReconstructor(back).gradients(frames[0])
+    gx0, gy0 = DepthReconstructor(cells).gradients(frames[0])
+    assert not gx[:60, :80].any() and not gy[:60, :80].any()
+    np.testing.assert_array_equal(gx[60:], gx0[60:])
+    np.testing.assert_array_equal(gy[:, 80:], gy0[:, 80:])
+    # a file whose cell tables do not match its LUT
+    bad = dict(np.load(tmp_path / "cells.npz"))
+    bad["lut_cells"] = bad["lut_cells"][..., :16, :, :, :]
+    np.savez(tmp_path / "bad.npz", **bad)
+    with pytest.raises(InputError, match="lut_cells"):
+        PhotometricCalibration.load(tmp_path / "bad.npz")
 
 
 # ------------------------------------------------------------------ MLP

@@ -15,7 +15,7 @@ from ._calibration import PhotometricCalibration
 from ._circles import detect_contact_circle, detect_contact_circles, fit_circle
 from ._evaluate import BallPressReport, evaluate_ball_presses
 from ._features import colour_change, frame_gain, reference_inverse
-from ._lut import ColourLUT, fit_colour_lut
+from ._lut import ColourLUT, fit_cell_luts, fit_colour_lut
 from ._marker_flow import MarkerFlow, lateral_displacement, marker_centres, track_markers
 from ._markers import fill_masked, marker_mask
 from ._mlp import MLPGradientModel, mlp_inputs, train_mlp
@@ -40,6 +40,7 @@ __all__ = [
     "evaluate_ball_presses",
     "fill_masked",
     "fit_ball_centre",
+    "fit_cell_luts",
     "fit_circle",
     "fit_colour_lut",
     "frame_gain",

@@ -16,7 +16,7 @@ from scipy.ndimage import distance_transform_edt, gaussian_filter
 
 from .._checks import check_array
 
-__all__ = ["ColourLUT", "fit_colour_lut"]
+__all__ = ["ColourLUT", "fit_cell_luts", "fit_colour_lut"]
 
 
 @dataclass(frozen=True)
@@ -128,3 +128,76 @@ def fit_colour_lut(change: np.ndarray, nxy: np.ndarray, *, bins: int = 32,
         table = np.stack([gaussian_filter(table[..., k], smooth_sigma, mode="nearest")
                           for k in range(2)], axis=-1)
     return ColourLUT(table.astype(np.float32), lut.lo, lut.hi, counts.reshape((bins,) * 3))
+
+
+def fit_cell_luts(x_px: np.ndarray, y_px: np.ndarray, change: np.ndarray, nxy: np.ndarray,
+                  shape: tuple[int, int], cells: tuple[int, int], *, lo: np.ndarray,
+                  hi: np.ndarray, bins: int = 32, grow: float = 0.5,
+                  min_pixels: int = 2000, fallback: ColourLUT | None = None
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """One colour table per position cell: a LUT that knows where it is.
+
+    A sensor lit from its edges shades the same normal differently across
+    the pad, so a single colour table mixes positions. Here the image is cut
+    into ``nx x ny`` cells and each gets its own table, fitted
+    (:func:`fit_colour_lut`) on the labelled pixels inside the cell grown by
+    `grow` cells on every side (neighbouring cells share data, so tables
+    change smoothly and sparse cells still fill), all on one colour range.
+
+    Parameters
+    ----------
+    x_px, y_px : (M,) ndarray
+        Column and row of the labelled pixels.
+    change : (M, 3) float32 ndarray
+        Their colour change.
+    nxy : (M, 2) float32 ndarray
+        Their true in-plane normal components.
+    shape : (H, W)
+        Image size.
+    cells : (nx, ny)
+        Cells along x (columns) and y (rows).
+    lo, hi : (3,) float ndarray
+        Colour range of every table (the whole calibration's).
+    bins : int, default 32
+        Colour cells per channel.
+    grow : float, default 0.5
+        Training window: the cell grown by this many cell sizes per side.
+    min_pixels : int, default 2000
+        A cell whose window holds fewer labelled pixels takes `fallback`.
+    fallback : ColourLUT, optional
+        The table of such cells (the colour-only LUT); without one they
+        raise.
+
+    Returns
+    -------
+    tables : (ny, nx, B, B, B, 2) float32 ndarray
+        Mean (n_x, n_y) per position cell and colour cell.
+    fell_back : (ny, nx) bool ndarray
+        Cells that took `fallback`.
+
+    Raises
+    ------
+    ValueError
+        For fewer than one cell along an axis, or a sparse cell without a
+        fallback.
+    """
+    nx, ny = (int(c) for c in cells)
+    if nx < 1 or ny < 1:
+        raise ValueError(f"cells must be at least (1, 1), got {cells!r}")
+    h, w = shape
+    cw, ch = w / nx, h / ny
+    tables = np.empty((ny, nx) + (bins,) * 3 + (2,), np.float32)
+    fell_back = np.zeros((ny, nx), bool)
+    for j in range(ny):
+        in_y = (y_px >= (j - grow) * ch) & (y_px < (j + 1 + grow) * ch)
+        for i in range(nx):
+            sel = in_y & (x_px >= (i - grow) * cw) & (x_px < (i + 1 + grow) * cw)
+            if np.count_nonzero(sel) < max(min_pixels, bins):
+                if fallback is None:
+                    raise ValueError(f"position cell ({i}, {j}) has {np.count_nonzero(sel)} "
+                                     f"labelled pixels, fewer than {min_pixels}")
+                tables[j, i] = fallback.table
+                fell_back[j, i] = True
+                continue
+            tables[j, i] = fit_colour_lut(change[sel], nxy[sel], bins=bins, lo=lo, hi=hi).table
+    return tables, fell_back

@@ -20,7 +20,7 @@ from ._features import blur_frames, colour_change, reference_inverse
 from ._markers import fill_masked_fields, marker_mask
 from ._mlp import MLPGradientModel, mlp_inputs
 from ._poisson import PoissonSolver, integrate_poisson_masked
-from ._table import table_from_lut, tabulate_mlp
+from ._table import table_from_cell_luts, table_from_lut, tabulate_mlp
 
 __all__ = ["DepthReconstructor"]
 
@@ -101,7 +101,11 @@ class DepthReconstructor:
                 raise ValueError("LUT calibration without a table")
             if engine != "table":
                 raise ValueError("a LUT calibration runs only with engine='table'")
-            self._table = table_from_lut(calibration.lut, self._ref_inv)
+            if calibration.cell_luts is not None:
+                self._table = table_from_cell_luts(calibration.cell_luts, self._ref_inv,
+                                                   lo=calibration.lut.lo, hi=calibration.lut.hi)
+            else:
+                self._table = table_from_lut(calibration.lut, self._ref_inv)
         else:
             if calibration.onnx_bytes is None:
                 raise ValueError("MLP calibration without a network")

@@ -22,7 +22,7 @@ from ._ball import gradients_from_normals
 from ._lut import ColourLUT
 from ._mlp import MLPGradientModel, mlp_inputs
 
-__all__ = ["GradientTable", "table_from_lut", "tabulate_mlp"]
+__all__ = ["GradientTable", "table_from_cell_luts", "table_from_lut", "tabulate_mlp"]
 
 
 @dataclass
@@ -125,6 +125,35 @@ def table_from_lut(lut: ColourLUT, ref_inv: np.ndarray) -> GradientTable:
     gx, gy = gradients_from_normals(nxy[:, 0], nxy[:, 1])
     return GradientTable(gx, gy, np.zeros(ref_inv.shape[:2], np.int32), lut.bins, lut.lo, lut.hi,
                          ref_inv)
+
+
+def table_from_cell_luts(tables: np.ndarray, ref_inv: np.ndarray, *, lo: np.ndarray,
+                         hi: np.ndarray) -> GradientTable:
+    """Gradient table of per-position-cell LUTs (:func:`fit_cell_luts`).
+
+    Parameters
+    ----------
+    tables : (ny, nx, B, B, B, 2) float ndarray
+        (n_x, n_y) per position cell and colour cell; cell (i, j) covers
+        columns ``[i W / nx, (i + 1) W / nx)`` and rows likewise.
+    ref_inv : (H, W, 3) float32 ndarray
+    lo, hi : (3,) float ndarray
+        The tables' colour range.
+
+    Returns
+    -------
+    table : GradientTable
+        float32, ``nx ny B^3`` entries per component.
+    """
+    ny, nx, b = tables.shape[0], tables.shape[1], tables.shape[2]
+    nxy = np.asarray(tables, np.float32).reshape(-1, 2)
+    gx, gy = gradients_from_normals(nxy[:, 0], nxy[:, 1])
+    h, w = ref_inv.shape[:2]
+    rows = np.minimum((np.arange(h) * ny) // h, ny - 1)
+    cols = np.minimum((np.arange(w) * nx) // w, nx - 1)
+    cell = (rows[:, None] * nx + cols[None, :]).astype(np.int32) * np.int32(b**3)
+    return GradientTable(gx.astype(np.float32), gy.astype(np.float32), cell, b,
+                         np.asarray(lo, np.float32), np.asarray(hi, np.float32), ref_inv)
 
 
 def tabulate_mlp(model: MLPGradientModel, ref_inv: np.ndarray, *, lo: np.ndarray,

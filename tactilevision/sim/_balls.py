@@ -19,7 +19,7 @@ __all__ = ["render_ball_presses"]
 def render_ball_presses(table: ShadingTable, reference: np.ndarray, *, n: int = 24,
                         radius_mm: float = 4.0, depth_mm: tuple[float, float] = (0.2, 2.0),
                         noise_dn: float = 2.0, jpeg_quality: int | None = 75,
-                        seed: int = 0) -> BallPressSet:
+                        partial: bool = False, seed: int = 0) -> BallPressSet:
     """Render `n` ball presses at random depths and positions.
 
     The gel takes the ball's spherical cap inside the contact circle of
@@ -45,6 +45,13 @@ def render_ball_presses(table: ShadingTable, reference: np.ndarray, *, n: int = 
         Camera noise, grey levels.
     jpeg_quality : int or None, default 75
         Re-encode each frame as JPEG at this quality (as recorded); None: raw.
+    partial : bool, default False
+        False: every contact circle lies inside the image (5 px margin).
+        True: only the centres do (5 px margin), so contacts run off the
+        image's edges as presses near a real pad's border do, and a
+        position-aware model (``lut_cells`` or ``model='mlp'`` in
+        :meth:`~tactilevision.optics.PhotometricCalibration.from_ball_presses`)
+        sees steep slopes facing the borders too.
     seed : int, default 0
 
     Returns
@@ -86,8 +93,9 @@ def render_ball_presses(table: ShadingTable, reference: np.ndarray, *, n: int = 
         d = rng.uniform(lo, hi)
         a = np.sqrt(2 * radius_mm * d - d * d)
         a_px = a / mm
-        cx = rng.uniform(a_px + 5, W - a_px - 5)
-        cy = rng.uniform(a_px + 5, H - a_px - 5)
+        margin = 5.0 if partial else a_px + 5
+        cx = rng.uniform(margin, W - margin)
+        cy = rng.uniform(margin, H - margin)
         r2 = ((cols - cx) ** 2 + (rows - cy) ** 2) * mm * mm
         z = np.where(r2 < a * a, np.sqrt(np.maximum(radius_mm ** 2 - r2, 0.0))
                      - (radius_mm - d), 0.0).astype(np.float32)
