@@ -182,13 +182,15 @@ def main() -> None:
             q = a[a[:, 0] == w0, 3]
             line += f" {np.median(q):14.3f}, {q.min():.3f} to {q.max():.3f}"
         print(line)
-    if len(a) > 4:
+    deep = a[a[:, 0] >= 0.3]
+    if len(deep) > 4:
         # where the per-press error comes from: a linear trend over the pad and depth
-        X = np.column_stack([np.ones(len(a)), a[:, 4], a[:, 5], a[:, 0]])
-        coef, *_ = np.linalg.lstsq(X, a[:, 1], rcond=None)
-        print(f"ratio ~ {coef[0]:.3f} {coef[1]:+.4f} x_mm {coef[2]:+.4f} y_mm "
-              f"{coef[3]:+.3f} w0_mm; sd {a[:, 1].std():.3f} -> {np.std(a[:, 1] - X @ coef):.3f} "
-              "after it (position: the optics' colour-only model; depth: steep walls)")
+        # (a colour-only table leaves one along the pad; steep walls one along depth)
+        X = np.column_stack([np.ones(len(deep)), deep[:, 4], deep[:, 5], deep[:, 0]])
+        coef, *_ = np.linalg.lstsq(X, deep[:, 1], rcond=None)
+        print(f"presses >= 0.3 mm: ratio ~ {coef[0]:.3f} {coef[1]:+.4f} x_mm {coef[2]:+.4f} "
+              f"y_mm {coef[3]:+.3f} w0_mm; sd {deep[:, 1].std():.3f} -> "
+              f"{np.std(deep[:, 1] - X @ coef):.3f} after it")
 
 
 if __name__ == "__main__":

@@ -116,6 +116,29 @@ def test_calibrate_bad_presses(presses_npz, tmp_path, capsys, sel):
     assert not out.exists()
 
 
+def test_calibrate_lut_cells(presses_npz, tmp_path, capsys):
+    out = tmp_path / "cells.npz"
+    assert main(["optics", "calibrate", str(presses_npz), "--ball-radius-mm", "2",
+                 "--mm-per-px", str(MM), "--model", "lut", "--lut-cells", "2,3",
+                 "--out", str(out)]) == 0
+    cal = PhotometricCalibration.load(out)
+    assert cal.cell_luts.shape == (3, 2, 32, 32, 32, 2)
+    assert cal.provenance["lut_cells"] == [2, 3]
+
+
+@pytest.mark.parametrize(("cells", "model", "words"), [
+    ("8", "lut", "two positive integers"), ("8,x", "lut", "two positive integers"),
+    ("0,2", "lut", "two positive integers"), ("2,2", "mlp", "needs --model lut")])
+def test_calibrate_bad_lut_cells(presses_npz, tmp_path, capsys, cells, model, words):
+    out = tmp_path / "never.npz"
+    assert main(["optics", "calibrate", str(presses_npz), "--ball-radius-mm", "2",
+                 "--mm-per-px", str(MM), "--model", model, "--lut-cells", cells,
+                 "--out", str(out)]) == 2
+    err = errors(capsys.readouterr().err)
+    assert len(err) == 1 and "--lut-cells" in err[0] and words in err[0]
+    assert not out.exists()
+
+
 def test_calibrate_missing_presses_file(tmp_path, capsys):
     missing = tmp_path / "absent.npz"
     assert main(["optics", "calibrate", str(missing), "--ball-radius-mm", "2", "--mm-per-px",

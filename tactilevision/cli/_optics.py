@@ -79,6 +79,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     c.add_argument("--hidden", type=int, default=128,
                    help="MLP units per hidden layer (default 128)")
     c.add_argument("--bins", type=int, default=32, help="LUT cells per channel (default 32)")
+    c.add_argument("--lut-cells", metavar="NX,NY", default="1,1",
+                   help="LUT: position cells along x and y, one colour table each, for a pad "
+                   "lit unevenly (default 1,1: colour only; e.g. 8,6 with presses that reach "
+                   "the image's edges)")
     c.add_argument("--detect-circles", action="store_true",
                    help="ignore given circles and detect them")
     c.add_argument("--seed", type=int, default=0)
@@ -98,13 +102,23 @@ def run_calibrate(args: argparse.Namespace) -> int:
     src = str(args.ball_presses)
     ps = read_ball_presses(taxim_datapack(src.split(":", 1)[1]) if src.startswith("taxim:")
                            else args.ball_presses)
+    try:
+        cells = tuple(int(v) for v in args.lut_cells.split(","))
+    except ValueError:
+        cells = ()
+    if len(cells) != 2 or min(cells) < 1:
+        raise InputError(f"--lut-cells '{args.lut_cells}' must be two positive integers NX,NY "
+                         "(e.g. 8,6)")
+    if cells != (1, 1) and args.model != "lut":
+        raise InputError("--lut-cells needs --model lut (the network takes the position "
+                         "itself)")
     idx = parse_presses(args.presses, len(ps.frames))
     given = ps.centers_px is not None and ps.radii_px is not None and not args.detect_circles
     cal = PhotometricCalibration.from_ball_presses(
         ps.reference, ps.frames[idx],
         ps.centers_px[idx] if given else None, ps.radii_px[idx] if given else None,
         ball_radius_mm=args.ball_radius_mm, mm_per_px=args.mm_per_px, model=args.model,
-        bins=args.bins, epochs=args.epochs, hidden=args.hidden, seed=args.seed,
+        bins=args.bins, lut_cells=cells, epochs=args.epochs, hidden=args.hidden, seed=args.seed,
         source=str(args.ball_presses),
         progress=True,
     )
