@@ -534,4 +534,3 @@ def _hat_support(nodes_mm: np.ndarray, npx: int, dx: float) -> np.ndarray:
     x = np.arange(npx) * dx
     s = nodes_mm[1] - nodes_mm[0]
     return (np.abs(x[None, :] - nodes_mm[:, None]) < s * (1 - 1e-9)).astype(np.float64)
-

@@ -158,8 +158,9 @@ class PhotometricCalibration:
             2000 such pixels take the colour-only table. (1, 1): the classic
             colour-only LUT. For a pad lit unevenly (Taxim's GelSight shading
             has position terms) (8, 6) with presses that reach the image's
-            edges took the sample session's forces from 0.89-1.04 to
-            0.96-1.04 of the F/T log (``benchmarks/bench_forces_session.py``).
+            edges took the sample session's forces at presses >= 0.3 mm from
+            0.89-1.04 of the F/T log (60-78 % within 5 %) to 0.96-1.05 (all
+            within 5 %) (``benchmarks/bench_forces_session.py``).
         epochs : int, default 30
             MLP training epochs.
         hidden : int, default 128
