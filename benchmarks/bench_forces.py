@@ -8,7 +8,8 @@ Prints set-up time and frames/s of ``ForceEstimator``: the spectral method at
 and batches of 16; the 'footprint' contact (conjugate gradients) on one press;
 the FEM method at 40 x 30 surface nodes (normal mode: one (1200 x 1200)
 matrix-vector product); and frame -> height map -> force map with the shipped
-GelSight calibration at 640 x 480. Issue 6's targets: spectral at 427 x 320
+GelSight calibration at 640 x 480; the memory each estimator holds and its
+peak allocation per frame (tracemalloc). Issue 6's targets: spectral at 427 x 320
 >= 200 frames/s, FEM 40 x 30 >= 1000 frames/s, frame to force >= 90 frames/s.
 """
 
@@ -19,7 +20,9 @@ import os
 for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ[_v] = "1"
 
+import resource  # noqa: E402
 import time  # noqa: E402
+import tracemalloc  # noqa: E402
 
 import numpy as np  # noqa: E402
 
@@ -30,6 +33,27 @@ def rate(fn, n: int) -> float:
     for _ in range(n):
         fn()
     return n / (time.perf_counter() - t0)
+
+
+def held_mib(est) -> float:
+    """MiB of arrays the estimator keeps (stiffness and compliance spectra, FEM matrices)."""
+    total = 0
+    for v in vars(est._op).values():
+        if isinstance(v, np.ndarray):
+            total += v.nbytes
+        elif hasattr(v, "data") and hasattr(v, "indices"):        # scipy.sparse
+            total += v.data.nbytes + v.indices.nbytes + v.indptr.nbytes
+    return total / 2**20
+
+
+def peak_mib(fn) -> float:
+    """Peak MiB allocated (traced by tracemalloc, numpy included) during one call."""
+    fn()
+    tracemalloc.start()
+    fn()
+    peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    return peak / 2**20
 
 
 def press(shape, dx, radius_mm=2.0, depth_mm=0.3):
@@ -57,7 +81,8 @@ def main() -> None:
             print(f"spectral {name} {W} x {H} {np.dtype(dtype).name} (FFT grid "
                   f"{est._op.fshape[1]} x {est._op.fshape[0]}, pad 2 h): set-up "
                   f"{setup * 1e3:.0f} ms, {f1:.0f} frames/s single, {fb:.0f} frames/s in "
-                  "batches of 16")
+                  f"batches of 16; memory held {held_mib(est):.1f} MiB, peak per frame "
+                  f"{peak_mib(lambda est=est, u=u: est(u)):.1f} MiB")
     H, W, dx = 320, 427, 0.10577
     est = ForceEstimator((H, W), dx, thickness_mm=4.0, E_mpa=0.2, nu=0.48, contact="footprint",
                          threshold_mm=0.005)
@@ -73,7 +98,8 @@ def main() -> None:
               f", build {st.build_s:.1f} s, stored {st.nbytes / 2**20:.1f} MiB): "
               f"{rate(lambda: fem(u), 200):.0f} frames/s single, "
               f"{16 * rate(lambda: fem(np.repeat(u[None], 16, 0)), 20):.0f} frames/s in "
-              "batches of 16")
+              f"batches of 16; memory held {held_mib(fem):.1f} MiB, peak per frame "
+              f"{peak_mib(lambda: fem(u)):.1f} MiB")
     except ImportError as exc:  # pragma: no cover
         print(f"fem: not available ({exc})")
     from tactilevision._assets import default_calibration_path
@@ -89,6 +115,8 @@ def main() -> None:
     both = rate(lambda: est(recon(frame)), 10)
     print(f"frame -> height map ({cal.shape[1]} x {cal.shape[0]}, shipped GelSight "
           f"calibration): {h_rate:.0f} frames/s; frame -> height -> force: {both:.0f} frames/s")
+    print(f"process peak resident memory: "
+          f"{resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024:.0f} MiB")
 
 
 if __name__ == "__main__":

@@ -13,6 +13,7 @@ calibrating on the even-numbered presses and evaluating on the odd ones:
 
 Models: the baseline of the issue (binned colour-difference LUT, no
 reference normalisation, Dirichlet DST Poisson), our colour-only LUT, the
+LUT with 4 x 3 position cells (``lut_cells``), the
 MLP without position inputs (ablation), the position-aware MLP run through
 onnxruntime, and the same MLP tabulated over colour and position cells.
 
@@ -126,6 +127,7 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sensors", default="gelsight,gelslim")
     ap.add_argument("--json", type=Path, default=None, help="also write the rows as JSON")
+    ap.add_argument("--skip-mlp", action="store_true", help="the LUT rows only (no torch)")
     args = ap.parse_args(argv)
     rows = []
     for ds in datasets(args.sensors.split(",")):
@@ -139,10 +141,13 @@ def main(argv: list[str] | None = None) -> int:
         rows.append(dict(sensor=ds["name"], model="baseline LUT (diff, DST)", ms=ms, **res,
                          scale=scale, units=ds["units"]))
         configs = [("LUT (ours, colour only)", "lut", {}, "table"),
+                   ("LUT, 4 x 3 position cells", "lut", {"lut_cells": (4, 3)}, "table"),
                    ("MLP, no position (onnx)", "mlp", {"use_position": False}, "onnx"),
                    ("MLP, position-aware (onnx)", "mlp", {}, "onnx"),
                    ("MLP, position-aware (table)", "mlp", {}, "table")]
         cals = {}
+        if args.skip_mlp:
+            configs = [c for c in configs if c[1] == "lut"]
         for label, model, kw, engine in configs:
             key = (model, tuple(kw.items()))
             if key not in cals:
