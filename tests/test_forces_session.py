@@ -189,7 +189,7 @@ DEEP = [1, 2, 6, 8, 9, 12, 15, 16, 19]
 def test_session_forces_within_5_percent_with_position_cells(session, cell_recon, estimator):
     """Frames -> heights (a LUT per cell of 8 x 6) -> force (spectral, footprint,
     beta) against the F/T log, one hold frame per press: all within 5 %. Measured
-    0.961 to 1.043 over all 39 presses >= 0.3 mm (``python
+    0.961 to 1.048 over all 39 presses >= 0.3 mm, two frames each (``python
     benchmarks/bench_forces_session.py``); the force model fed the true surfaces
     0.970 to 0.985, so the optics add at most a few %."""
     s, truth = session
