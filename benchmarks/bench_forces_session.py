@@ -120,11 +120,12 @@ def main() -> None:
         from tactilevision.sim import SessionSpec, press_profile
         from tactilevision.sim._block import press_surface
 
-        prof = press_profile(SessionSpec().block.radius_mm / h, truth["nu"], w_over_h_max=0.22)
+        block = SessionSpec().block
+        prof = press_profile(block.radius_mm / h, truth["nu"], w_over_h_max=0.22)
 
         def surface(p):
             c = (p["x_mm"] / mm + (s.shape[1] - 1) / 2, p["y_mm"] / mm + (s.shape[0] - 1) / 2)
-            return press_surface(prof, SessionSpec().block, indenter=p["indenter"],
+            return press_surface(prof, block, indenter=p["indenter"],
                                  depth_mm=p["depth_mm"], centre_px=c, shape=s.shape,
                                  mm_per_px=mm, thickness_mm=h)[0]
     print(f"set-up (ball presses, optics, estimator): {time.perf_counter() - t0:.1f} s")

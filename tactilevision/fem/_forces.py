@@ -42,6 +42,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+import cv2
 import numpy as np
 import scipy.fft as sfft
 
@@ -322,8 +323,6 @@ class _Spectral:
         # spectrum of its real, even kernel
         self.kccs = None
         if not self.full:
-            import cv2
-
             kernel = np.fft.irfft2(kn * (dx * dx), s=self.fshape)
             self.kccs = cv2.dft(kernel.astype(np.float32))
         self.node_area_mm2 = dx * dx
@@ -339,8 +338,6 @@ class _Spectral:
     def field(self, disp: np.ndarray) -> np.ndarray:
         H, W = self.shape
         if disp.dtype == np.float32 and self.kccs is not None:
-            import cv2
-
             Hf, Wf = self.fshape
             out = np.zeros((*disp.shape[:3], 3), np.float32)
             for n, d in enumerate(disp[..., 0]):
@@ -460,8 +457,8 @@ class _Fem:
         self.sample_xt = sp.csc_matrix(_overlap(self.x_mm, W, dx).T)
         # nodes whose hat function reaches a pixel: a mask pixel there makes the
         # node a contact node (the tensile sweep then drops those that pull)
-        self.reach = sp.csr_matrix(sp.kron(_hat_support(self.y_mm, H, dx),
-                                           _hat_support(self.x_mm, W, dx)))
+        self.reach_y = sp.csr_matrix(_hat_support(self.y_mm, H, dx))
+        self.reach_xt = sp.csc_matrix(_hat_support(self.x_mm, W, dx).T)
 
     def _nodes(self, disp: np.ndarray) -> np.ndarray:
         """(N, H, W, c) -> (N, n * c) node displacements, dof-major per node."""
@@ -491,10 +488,9 @@ class _Fem:
                   ) -> tuple[np.ndarray, np.ndarray]:
         c = disp.shape[-1]
         U = self._nodes(disp)
-        reach = np.stack([self.reach @ m.ravel().astype(np.float64) for m in contact])
         out, masks = [], []
-        for u, fr in zip(U, reach, strict=True):
-            on = fr > 0
+        for u, m in zip(U, contact, strict=True):
+            on = ((self.reach_y @ m.astype(np.float64)) @ self.reach_xt).ravel() > 0
             for _ in range(8):
                 dof = np.repeat(on, c)
                 f = np.zeros_like(u)

@@ -234,6 +234,7 @@ class PhotometricCalibration:
         cal = cls(model=model, reference=reference.copy(), mm_per_px=float(mm_per_px),
                   use_position=use_position, markers=markers, blur_sigma=blur_sigma)
         rounds = 2 if refine_centers else 1
+        fell_back = np.zeros((0, 0), bool)         # position cells on the colour-only table
         for rnd in range(rounds):
             x_all, y_all, f_all, n_all, bg_mag = _training_samples(
                 changes, valid, background, centers, label_fraction * radii, ball_px)
@@ -269,8 +270,7 @@ class PhotometricCalibration:
             "centers_refined": bool(refine_centers),
             "label_fraction": float(label_fraction),
             "lut_cells": [int(c) for c in lut_cells] if model == "lut" else None,
-            "lut_cells_fell_back": (int(np.count_nonzero(fell_back))
-                                    if cal.cell_luts is not None else 0),
+            "lut_cells_fell_back": int(np.count_nonzero(fell_back)),
             "centers_px": centers.round(2).tolist(),
             "radii_px": radii.round(2).tolist(),
             "tactilevision": _version(),
