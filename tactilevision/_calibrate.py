@@ -2,20 +2,25 @@
 
 :func:`calibrate_session` chains :func:`tactilevision.io.read_session`,
 :func:`tactilevision.contact.certify_session` and
-:func:`tactilevision.mechanics.fit_indentation`. With the ``'land'`` depth
-rule (default) the certified depth of a press is the depth at which the
-bulging gel meets the block land, which depends on nu: certification and fit
-are iterated towards a fixed point in nu.
+:func:`tactilevision.mechanics.fit_indentation`.
 
-Notes
------
-The ``'land'`` rule is ill-conditioned: a smaller nu means a smaller bulge,
-larger certified depths, a smaller fitted beta and a smaller nu again
-(d nu_fit / d nu is about 1.1 on the sample session), so any bias in beta is
-amplified about tenfold in the fixed point. A 1.5 um mean stage overshoot
-moved the fitted nu from 0.480 to 0.445 and the iteration out of the table.
-The default is therefore the paper's rule, w = w0, exact when the land does
-not meet the bulge first (the sample session's 'ideal' land).
+The certified depth of a press (``depth_rule``):
+
+- ``'vernier'`` (the default for a machined bevel, ``bevel_angle_deg > 0``):
+  ``w = w0 + closure - b(w)``, the closure read from the band of contact on
+  the bevel over the force window's frames, b the bulge of the gel's
+  surface at the bevel (:func:`tactilevision.contact.bulge_at`, FEM, needs
+  nu; ``bulge_correction = false`` in session.toml leaves it out).
+  Certification and fit are iterated towards a fixed point in nu; with the
+  bevel 2.5 h or more from the axis the bulge is a few % of w and the
+  iteration is well conditioned (d nu_fit / d nu is reported).
+- ``'nominal'`` (the default for a bevel mark, ``bevel_angle_deg = 0``):
+  the paper's rule, w = w0, with the uncertainty of the onset frame.
+- ``'land'``: the depth at which the bulging gel meets a flat land, which
+  depends on nu. Ill-conditioned: a smaller nu means a smaller bulge, larger
+  certified depths, a smaller fitted beta and a smaller nu again (d nu_fit /
+  d nu is about 1.1 on the legacy sample session), so any bias in beta is
+  amplified about tenfold in the fixed point: a diagnostic only.
 """
 
 from __future__ import annotations
@@ -29,7 +34,7 @@ from pathlib import Path
 import numpy as np
 
 from ._checks import InputError
-from .contact import Certification, certified_depths, certify_session
+from .contact import Certification, bulge_at, certified_depths, certify_session
 from .io import Session, read_session
 from .mechanics import IndentationFit, fit_indentation
 
@@ -45,27 +50,39 @@ class SessionCalibration:
     session : Session
     certification : Certification
     depth_rule : str
-        ``'land'`` or ``'nominal'``.
+        ``'vernier'``, ``'nominal'`` or ``'land'``.
     depth_mm : (N,) float64 ndarray
         Certified depth of each certified press (order of
-        ``certification.presses``).
+        ``certification.presses``), mm.
+    depth_std_mm : (N,) float64 ndarray
+        Its standard uncertainty, mm (the vernier reading's, or the onset
+        frame's for ``'nominal'``; 0 for ``'land'``).
+    bulge_mm : (N,) float64 ndarray
+        The bulge subtracted from each vernier depth, mm (0 otherwise).
     fit : IndentationFit
     nu_rounds : list of float
-        nu after each certification-fit round (``'land'`` rule).
+        nu after each certification-fit round (``'vernier'`` with the bulge
+        correction, ``'land'``).
     seconds : float
         Wall time of certification and fit.
     warnings : list of str
         Certification's warnings and the fit's.
+    failure : str or None
+        Why nothing was fitted (too few certified presses), else None; then
+        ``fit`` is None and the certification is still there to report.
     """
 
     session: Session
     certification: Certification
     depth_rule: str
     depth_mm: np.ndarray
-    fit: IndentationFit
+    fit: IndentationFit | None
     nu_rounds: list[float]
     seconds: float
     warnings: list[str] = field(default_factory=list)
+    depth_std_mm: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    bulge_mm: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    failure: str | None = None
 
     def measurements(self) -> dict[str, np.ndarray]:
         """Columns of ``measurements.csv`` (formats.md section 2), one row per certified press.
@@ -73,13 +90,18 @@ class SessionCalibration:
         Returns
         -------
         columns : dict of str to (N,) ndarray
-            ``press, indenter, depth_mm, force_n, force_std_n, fx_n, fy_n,
-            time_s, hold_s, wait_s, x_mm, y_mm``.
+            ``press, indenter, depth_mm, depth_std_mm, overshoot_mm, force_n,
+            force_std_n, fx_n, fy_n, time_s, hold_s, wait_s, x_mm, y_mm``
+            (``overshoot_mm``: certified depth minus the indenter's w0).
         """
         ps = self.certification.presses
         col = {
             "press": [p.press for p in ps], "indenter": [p.indenter for p in ps],
-            "depth_mm": list(self.depth_mm), "force_n": [p.force_n for p in ps],
+            "depth_mm": list(self.depth_mm),
+            "depth_std_mm": list(self.depth_std_mm) if len(self.depth_std_mm) == len(ps)
+            else [float("nan")] * len(ps),
+            "overshoot_mm": [d - p.w0_mm for d, p in zip(self.depth_mm, ps, strict=True)],
+            "force_n": [p.force_n for p in ps],
             "force_std_n": [p.force_std_n for p in ps], "fx_n": [p.fx_n for p in ps],
             "fy_n": [p.fy_n for p in ps], "time_s": [p.time_s for p in ps],
             "hold_s": [p.hold_s for p in ps], "wait_s": [p.wait_s for p in ps],
@@ -89,30 +111,33 @@ class SessionCalibration:
                 for k, v in col.items()}
 
 
-def calibrate_session(session: Session | str | Path, *, depth_rule: str = "nominal",
+def calibrate_session(session: Session | str | Path, *, depth_rule: str = "auto",
                       beta_table: str = "fem", nu_start: float = 0.48, max_rounds: int = 8,
-                      nu_tol: float = 2e-4, progress: Callable | None = None
-                      ) -> SessionCalibration:
+                      nu_tol: float = 2e-4, progress: Callable | None = None,
+                      allow_failure: bool = False) -> SessionCalibration:
     """Certify every press of a session and fit E and nu.
 
     Parameters
     ----------
     session : Session or path
         A session read by :func:`~tactilevision.io.read_session`, or its folder.
-    depth_rule : {'nominal', 'land'}, default 'nominal'
-        Certified depth: the paper's w = w0, or where the bulging gel meets a
-        flat land (FEM, needs nu; iterated with the fit). The 'land' joint
-        estimate is ill-conditioned (module notes): use it to see the size of
-        the bulge effect, not for nu.
+    depth_rule : {'auto', 'vernier', 'nominal', 'land'}, default 'auto'
+        Certified depth (module docstring). ``'auto'``: ``'vernier'`` for a
+        machined bevel (``bevel_angle_deg > 0``), ``'nominal'`` for a mark.
     beta_table : {'fem', 'paper'}, default 'fem'
         Passed to :func:`~tactilevision.mechanics.fit_indentation`.
     nu_start : float, default 0.48
-        nu of the first certification round (``'land'``).
+        nu of the first round of the bulge correction (``'vernier'``) or of
+        the land contact (``'land'``).
     max_rounds : int, default 8
     nu_tol : float, default 2e-4
         Stop when nu moves less than this between rounds.
     progress : callable, optional
         Wraps the frame iterator (e.g. ``tqdm``).
+    allow_failure : bool, default False
+        With fewer than two certified presses at distinct depths, return the
+        certification with ``fit = None`` and ``failure`` saying why (so that
+        a report can still be written) instead of raising.
 
     Returns
     -------
@@ -122,8 +147,9 @@ def calibrate_session(session: Session | str | Path, *, depth_rule: str = "nomin
     ------
     InputError
         For a broken session (see :func:`~tactilevision.io.read_session`), no
-        press found, fewer than two certified presses at distinct depths, or
-        a fit that fails.
+        press found, a fit that fails, or (unless `allow_failure`) fewer than
+        two certified presses at distinct depths; for ``'vernier'`` on a
+        session whose bevel has no vernier.
     """
     t0 = time.perf_counter()
     if not isinstance(session, Session):
@@ -131,35 +157,86 @@ def calibrate_session(session: Session | str | Path, *, depth_rule: str = "nomin
     cfg = session.config
     cert = certify_session(session, progress=progress)
     notes = list(cert.warnings)
-    if len(cert.presses) < 2:
+    if depth_rule == "auto":
+        depth_rule = "vernier" if cfg.bevel_angle_deg > 0 else "nominal"
+    if depth_rule not in ("vernier", "nominal", "land"):
+        raise InputError(f"depth rule must be 'auto', 'vernier', 'nominal' or 'land', got "
+                         f"{depth_rule!r}")
+    if depth_rule == "vernier" and cfg.bevel_angle_deg <= 0:
+        raise InputError(f"{session.path}: the 'vernier' depth rule needs a machined bevel "
+                         "([gauge_block] bevel_angle_deg > 0)")
+    presses = cert.presses
+    n_depths = np.unique([p.w0_mm for p in presses]).size
+    if len(presses) < 2 or n_depths < 2:
         reasons = "; ".join(f"press {r.press}: {r.reason}" for r in cert.rejected[:5])
-        raise InputError(f"{session.path}: only {len(cert.presses)} of "
-                         f"{len(cert.presses) + len(cert.rejected)} presses passed "
-                         f"certification, too few to fit ({reasons})")
-    w0 = np.array([p.w0_mm for p in cert.presses])
-    force = np.array([p.force_n for p in cert.presses])
+        msg = (f"{session.path}: only {len(presses)} of {len(presses) + len(cert.rejected)} "
+               f"presses passed certification ({n_depths} distinct depths), too few to fit"
+               + (f" ({reasons})" if reasons else ""))
+        if not allow_failure:
+            raise InputError(msg)
+        z = np.array([p.w0_mm for p in presses], np.float64)
+        return SessionCalibration(session=session, certification=cert, depth_rule=depth_rule,
+                                  depth_mm=z, fit=None, nu_rounds=[],
+                                  seconds=time.perf_counter() - t0, warnings=notes,
+                                  depth_std_mm=np.zeros_like(z), bulge_mm=np.zeros_like(z),
+                                  failure=msg)
+    w0 = np.array([p.w0_mm for p in presses])
+    force = np.array([p.force_n for p in presses])
+    closure = np.array([p.closure_mm for p in presses])
+    closure_std = np.array([p.closure_std_mm for p in presses])
     h, a = cfg.gel_thickness_mm, cfg.indenter_radius_mm
     kw = dict(thickness_mm=h, radius_mm=a, beta_table=beta_table)
 
-    def fit_at(depth: np.ndarray) -> IndentationFit:
+    caught_by_fit: dict[int, list[str]] = {}
+
+    def fit_at(depth: np.ndarray, std: np.ndarray | None) -> IndentationFit:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
-            f = fit_indentation(depth, force, **kw)
-        for w in caught:
-            msg = str(w.message)
-            if msg not in notes:
-                notes.append(msg)
+            f = fit_indentation(depth, force, depth_std_mm=std, **kw)
+        caught_by_fit[id(f)] = [str(w.message) for w in caught]
         return f
 
     rounds: list[float] = []
-    if depth_rule == "nominal":
+    bulge = np.zeros_like(w0)
+    std = closure_std.copy()
+    if depth_rule == "vernier":
+        if any(p.rule != "vernier" for p in presses):
+            raise InputError("the 'vernier' depth rule needs every press read by the vernier")
+        depth = w0 + closure
+        if cfg.bulge_correction:
+            nu = float(nu_start)
+            for _ in range(max_rounds):
+                depth, bulge = _vernier_depths(w0, closure, cfg, nu)
+                fit = fit_at(depth, std)
+                if fit.out_of_table or not np.isfinite(fit.nu):
+                    notes.append("the fit left the beta table, so the bulge at the bevel stays at "
+                                 f"nu = {nu:.4f}: {fit.out_of_table_message}")
+                    break
+                rounds.append(float(fit.nu))
+                if abs(fit.nu - nu) < nu_tol:
+                    break
+                nu = float(np.clip(fit.nu, 0.30, 0.499))
+            else:
+                notes.append(f"nu did not settle in {max_rounds} rounds of the bulge correction "
+                             f"(last {rounds[-2:]})")
+            notes.append(_bulge_note(bulge, depth, cfg, rounds, w0, closure, fit_at, std))
+        else:
+            fit = fit_at(depth, std)
+            notes.append("no bulge correction ([gauge_block] bulge_correction = false): the "
+                         "certified depth is w0 plus the vernier's reading")
+    elif depth_rule == "nominal":
         depth = certified_depths(w0, rule="nominal", thickness_mm=h, radius_mm=a)
-        fit = fit_at(depth)
-    elif depth_rule == "land":
+        if all(p.rule == "vernier" for p in presses):
+            std = np.zeros_like(w0)
+            notes.append("depth rule 'nominal' on a vernier session: the overshoot the bevel "
+                         "reads is ignored")
+        fit = fit_at(depth, std if np.any(std > 0) else None)
+    else:
+        std = np.zeros_like(w0)
         nu = float(nu_start)
         for _ in range(max_rounds):
             depth = certified_depths(w0, rule="land", thickness_mm=h, radius_mm=a, nu=nu)
-            fit = fit_at(depth)
+            fit = fit_at(depth, None)
             if fit.out_of_table or not np.isfinite(fit.nu):
                 notes.append("the fit left the beta table, so the land-contact depths stay at "
                              f"nu = {nu:.4f}: {fit.out_of_table_message}")
@@ -171,8 +248,44 @@ def calibrate_session(session: Session | str | Path, *, depth_rule: str = "nomin
         else:
             notes.append(f"nu did not settle in {max_rounds} certification-fit rounds "
                          f"(last {rounds[-2:]})")
-    else:
-        raise InputError(f"depth rule must be 'land' or 'nominal', got {depth_rule!r}")
+    for msg in caught_by_fit.get(id(fit), []):      # the warnings of the fit reported
+        if msg not in notes:
+            notes.append(msg)
     return SessionCalibration(session=session, certification=cert, depth_rule=depth_rule,
                               depth_mm=depth, fit=fit, nu_rounds=rounds,
-                              seconds=time.perf_counter() - t0, warnings=notes)
+                              seconds=time.perf_counter() - t0, warnings=notes,
+                              depth_std_mm=std, bulge_mm=bulge)
+
+
+def _vernier_depths(w0: np.ndarray, closure: np.ndarray, cfg, nu: float
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """Solve ``w + b(w) = w0 + closure`` for every press (b: the bulge at the bevel)."""
+    depth = w0 + closure
+    bulge = np.zeros_like(depth)
+    for _ in range(6):          # b is a few % of w: a contraction
+        bulge = bulge_at(cfg.bevel_offset_mm, depth, thickness_mm=cfg.gel_thickness_mm,
+                         radius_mm=cfg.indenter_radius_mm, nu=nu)
+        new = w0 + closure - bulge
+        if np.max(np.abs(new - depth)) < 1e-8:
+            depth = new
+            break
+        depth = new
+    return depth, bulge
+
+
+def _bulge_note(bulge: np.ndarray, depth: np.ndarray, cfg, rounds: list[float], w0, closure,
+                fit_at, std) -> str:
+    """One sentence on the bulge correction: its size and how it feeds back into nu."""
+    frac = float(np.median(bulge / depth))
+    text = (f"bulge correction: the gel rises {100 * frac:.2f}% of w at the bevel "
+            f"({cfg.bevel_offset_mm:g} mm = {cfg.bevel_offset_mm / cfg.gel_thickness_mm:.2f} h "
+            "from the axis; FEM, bonded Neo-Hookean layer)")
+    if rounds:
+        nu = rounds[-1]
+        d2, _ = _vernier_depths(w0, closure, cfg, min(nu + 0.01, 0.499))
+        f2 = fit_at(d2, std)
+        if np.isfinite(f2.nu):
+            gain = (f2.nu - nu) / (min(nu + 0.01, 0.499) - nu)
+            text += (f", settled at nu = {nu:.4f} in {len(rounds)} round(s); d nu_fit / d nu = "
+                     f"{gain:.2f}")
+    return text

@@ -7,6 +7,8 @@ import csv
 import sys
 from pathlib import Path
 
+import numpy as np
+
 from .._checks import InputError
 from ._fit import _write_json, summary
 
@@ -36,9 +38,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="report folder (default: SESSION_DIR/calibration)")
     p.add_argument("--json", metavar="FILE",
                    help="write the fit.json object to FILE too ('-' for standard output)")
-    p.add_argument("--depth-rule", choices=("nominal", "land"), default="nominal",
-                   help="certified depth: the paper's w = w0 (default), or where the bulging "
-                        "gel meets a flat block land (FEM at the fitted nu; ill-conditioned)")
+    p.add_argument("--depth-rule", choices=("auto", "vernier", "nominal", "land"),
+                   default="auto",
+                   help="certified depth: 'vernier' (w0 plus the overshoot read on a machined "
+                        "bevel, less the gel's bulge there; the default when [gauge_block] "
+                        "bevel_angle_deg > 0), 'nominal' (the paper's w = w0; the default for a "
+                        "bevel mark), or 'land' (where the bulging gel meets a flat block land; "
+                        "FEM at the fitted nu; ill-conditioned)")
     p.add_argument("--beta-table", choices=("fem", "paper"), default="fem")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--no-report", action="store_true",
@@ -63,6 +69,16 @@ def _reconstructor(session):
     return DepthReconstructor(cal, reference=session.reference)
 
 
+def _write_rejected(path: Path, rejected) -> None:
+    """``rejected.csv``: each rejected press, its reason, detail, time and best bevel SNR."""
+    with open(path, "w", newline="") as fh:
+        wr = csv.writer(fh)
+        wr.writerow(["press", "reason", "detail", "t_frame_s", "bevel_snr"])
+        for r in rejected:
+            wr.writerow([r.press, r.reason, r.detail, f"{r.t_frame_s:.4f}",
+                         f"{r.bevel_score:.2f}" if np.isfinite(r.bevel_score) else ""])
+
+
 def result_dict(cal) -> dict:
     """The ``fit.json`` object: the ``fit --json`` keys, then the session's.
 
@@ -76,15 +92,20 @@ def result_dict(cal) -> dict:
     """
     obj = cal.fit.to_json_dict()
     c = cal.certification
+    std = cal.depth_std_mm
     obj.update({
         "session": str(cal.session.path),
         "depth_rule": cal.depth_rule,
         "nu_rounds": cal.nu_rounds,
+        "depth_std_median_mm": float(np.median(std)) if len(std) else None,
+        "bevel_optics": c.bevel_optics,
         "clock_offset_s": c.clock_offset_s,
         "clock_source": c.clock_source,
         "n_rejected": len(c.rejected),
         "rejected": [{"press": r.press, "reason": r.reason, "detail": r.detail,
-                      "t_frame_s": r.t_frame_s} for r in c.rejected],
+                      "t_frame_s": r.t_frame_s,
+                      "bevel_snr": r.bevel_score if np.isfinite(r.bevel_score) else None}
+                     for r in c.rejected],
         "warnings": list(cal.warnings),
         "seconds": cal.seconds,
     })
@@ -106,8 +127,9 @@ def run(args: argparse.Namespace) -> int:
     Raises
     ------
     InputError
-        For a broken session or too few certified presses; nothing is written
-        then.
+        For a broken session (nothing is written) or too few certified presses
+        (rejected.csv, the certified presses' measurements.csv, the figures
+        and report.html are written first, saying why).
     """
     from .._calibrate import calibrate_session
     from ..io import read_session, write_measurements
@@ -121,20 +143,30 @@ def run(args: argparse.Namespace) -> int:
         def progress(it):
             return tqdm(it, desc="frames", unit="frame", file=sys.stderr, mininterval=1.0)
     cal = calibrate_session(session, depth_rule=args.depth_rule, beta_table=args.beta_table,
-                            progress=progress)
-    obj = result_dict(cal)
+                            progress=progress, allow_failure=True)
     cfg = session.config
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise InputError(f"cannot create the report folder {out}: {exc.strerror}") from None
+    _write_rejected(out / "rejected.csv", cal.certification.rejected)
+    if cal.fit is None:
+        # nothing to fit: keep what certification found, and say why
+        if cal.certification.presses:
+            write_measurements(out / "measurements.csv", cal.measurements(),
+                               thickness_mm=cfg.gel_thickness_mm,
+                               radius_mm=cfg.indenter_radius_mm)
+        if not args.no_report:
+            from ..viz import calibration_figures, write_calibration_report
+
+            figs = calibration_figures(cal, out, reconstructor=_reconstructor(session))
+            write_calibration_report(cal, out, figs)
+        raise InputError(f"{cal.failure}; rejected.csv"
+                         + ("" if args.no_report else ", the bevel panels and report.html")
+                         + f" in {out} say why")
+    obj = result_dict(cal)
     write_measurements(out / "measurements.csv", cal.measurements(),
                        thickness_mm=cfg.gel_thickness_mm, radius_mm=cfg.indenter_radius_mm)
-    with open(out / "rejected.csv", "w", newline="") as fh:
-        wr = csv.writer(fh)
-        wr.writerow(["press", "reason", "detail", "t_frame_s"])
-        for r in cal.certification.rejected:
-            wr.writerow([r.press, r.reason, r.detail, f"{r.t_frame_s:.4f}"])
     _write_json(obj, str(out / "fit.json"))
     if not args.no_report:
         from ..viz import calibration_figures, write_calibration_report
@@ -150,6 +182,11 @@ def run(args: argparse.Namespace) -> int:
               + "".join(f"\n    press {r.press}: {r.reason} ({r.detail})" for r in c.rejected))
         print(f"  clock offset {c.clock_offset_s:.4f} s ({c.clock_source}); depth rule "
               f"{cal.depth_rule}; {cal.seconds:.1f} s")
+        if len(cal.depth_std_mm) and cal.depth_rule != "land":
+            over = cal.depth_mm - np.array([q.w0_mm for q in c.presses])
+            print(f"  certified depths: overshoot past w0 {1e3 * over.min():.1f} to "
+                  f"{1e3 * over.max():.1f} um, standard uncertainty median "
+                  f"{1e3 * float(np.median(cal.depth_std_mm)):.2f} um")
         for w in cal.warnings:
             print(f"  warning: {w}")
         if not args.no_report:

@@ -10,8 +10,10 @@ import sys
 import warnings
 from pathlib import Path
 
+import numpy as np
+
 from .._checks import InputError
-from ..io import read_measurements
+from ..io import Measurements, read_measurements
 from ..mechanics import (
     EFFECT_NAMES,
     IndentationFit,
@@ -28,6 +30,10 @@ session.toml next to the table ([sensor] gel_thickness_mm, [indenter] radius_mm)
 --beta-table fem (default): beta and kappa of our finite-strain Neo-Hookean
 and small-strain FEM (models/, bonded punch, at the exact a/h). --beta-table
 paper: the paper's relation (7) (a/h = 0.8) and Hayes' kappa, as in the paper.
+A depth_std_mm column (standard uncertainty of each certified depth, mm) with a
+value in every row is carried into the fit of eq. (5) (errors in both
+variables, effective variance); if any of its cells is empty, the fit goes on
+without it and says so on stderr. --ignore-depth-std fits without it.
 Exit status 2 on bad input."""
 
 
@@ -58,6 +64,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--a-over-h", type=float, metavar="X",
                    help="a/h at which kappa is read (default: the exact a/h; 0.8 reproduces "
                         "the paper)")
+    p.add_argument("--ignore-depth-std", action="store_true",
+                   help="fit without the table's depth_std_mm column (depths taken as exact)")
     p.add_argument("--json", metavar="FILE",
                    help="write the result as JSON to FILE ('-' for standard output)")
     p.set_defaults(func=run)
@@ -88,6 +96,11 @@ def summary(fit: IndentationFit, path: Path) -> str:
         f"beta = {fit.beta:.4f} {pct} CI {_fmt_ci(fit.beta_ci95, 4)}, "
         f"R^2 = {fit.r_squared:.5f}, rmse = {fit.rmse_n:.4g} N",
     ]
+    if fit.depth_std_used:
+        lines.append(f"  depth uncertainty: depth_std_mm used (median "
+                     f"{fit.depth_std_median_mm * 1e3:.3g} um), errors in both variables "
+                     f"(effective variance); extra force scatter sigma0 = "
+                     f"{fit.sigma0_n * 1e3:.3g} mN")
     extra = {k: v for k, v in fit.effect_params.items() if k != "beta"}
     if extra:
         lines.append(f"  model: {' + '.join(fit.effects)}; "
@@ -110,8 +123,45 @@ def summary(fit: IndentationFit, path: Path) -> str:
     else:
         lines.append("  beta: the paper's relation (7); kappa: Hayes 1972 (frictionless)")
     lines += [f"  note: {n}" for n in fit.notes
-              if not n.startswith(("intervals:", "beta table")) and n != fit.out_of_table_message]
+              if not n.startswith(("intervals:", "beta table", "errors in both variables"))
+              and n != fit.out_of_table_message]
     return "\n".join(lines)
+
+
+def depth_uncertainty(table: Measurements, *, ignore: bool, effects: tuple[str, ...]
+                      ) -> tuple[np.ndarray | None, str | None]:
+    """The depth uncertainties the fit uses, and why it uses none when the table has them.
+
+    Parameters
+    ----------
+    table : Measurements
+    ignore : bool
+        ``--ignore-depth-std``.
+    effects : tuple of str
+        The model's effects (only the base eq. 5 fit takes depth uncertainties).
+
+    Returns
+    -------
+    depth_std_mm : (N,) float64 ndarray, mm, or None
+        The table's ``depth_std_mm`` when it has a value in every row, the
+        option is off and the model is eq. (5) alone; else None.
+    message : str or None
+        One sentence for stderr when the column is there but not used for
+        another reason than the option.
+    """
+    u = table.columns.get("depth_std_mm")
+    if u is None or ignore:
+        return None, None
+    empty = np.isnan(u)
+    if np.any(empty):
+        i = int(np.argmax(empty))
+        return None, (f"depth_std_mm is empty in {int(empty.sum())} of {u.size} rows (first at "
+                      f"line {int(table.line_numbers[i])}): fitted without the depth "
+                      "uncertainties")
+    if effects != ("large_deformation",):
+        return None, ("depth_std_mm is used by the fit of eq. (5) alone: the model with "
+                      "effects is fitted without the depth uncertainties")
+    return u, None
 
 
 def _write_json(obj: dict, dest: str) -> None:
@@ -152,6 +202,8 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"--a-over-h must be a finite number, got {args.a_over_h}")
     path = args.measurements
     table = read_measurements(path, thickness_mm=args.thickness_mm, radius_mm=args.radius_mm)
+    depth_std, std_message = depth_uncertainty(table, ignore=args.ignore_depth_std,
+                                               effects=effects)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
@@ -159,13 +211,16 @@ def run(args: argparse.Namespace) -> int:
                 fit = fit_indentation(table.depth_mm, table.force_n,
                                       thickness_mm=table.thickness_mm,
                                       radius_mm=table.radius_mm,
-                                      beta_table=args.beta_table, a_over_h=args.a_over_h)
+                                      beta_table=args.beta_table, a_over_h=args.a_over_h,
+                                      depth_std_mm=depth_std)
             else:
                 fit, _ = fit_model(table.columns, ",".join(effects),
                                    thickness_mm=table.thickness_mm, radius_mm=table.radius_mm,
                                    beta_table=args.beta_table, a_over_h=args.a_over_h)
         except InputError as exc:
             raise InputError(f"{path}: {exc}") from None
+    if std_message is not None:
+        print(f"tactilevision fit: warning: {path}: {std_message}", file=sys.stderr)
     for w in caught:
         print(f"tactilevision fit: warning: {path}: {w.message}", file=sys.stderr)
     obj = fit.to_json_dict()

@@ -14,7 +14,7 @@ from ._certify import (
 )
 from ._footprint import Footprint, fit_footprint, nearest_indenter
 from ._force import ForceWindow, force_window
-from ._land import bulge_height, land_contact_depth, land_contact_depths_mm
+from ._land import bulge_at, bulge_height, land_contact_depth, land_contact_depths_mm
 from ._mask import contact_mask, noise_level
 from ._sync import (
     ClockSync,
@@ -23,9 +23,12 @@ from ._sync import (
     force_onsets,
     refine_clock_offset,
 )
+from ._vernier import BevelGeometry, BevelProfile, BevelReading, bevel_profile, read_bevel
 
-__all__ = ["Certification", "CertifiedPress", "ClockSync", "Footprint", "ForceWindow",
-           "Rejection", "bevel_score", "bulge_height", "certified_depths", "certify_session",
+__all__ = ["BevelGeometry", "BevelProfile", "BevelReading", "Certification", "CertifiedPress",
+           "ClockSync", "Footprint", "ForceWindow", "Rejection", "bevel_profile", "bevel_score",
+           "bulge_at", "bulge_height", "certified_depths", "certify_session",
            "contact_mask", "contact_onsets", "estimate_clock_offset", "fit_footprint",
            "footprint_from_frame", "force_onsets", "force_window", "land_contact_depth",
-           "land_contact_depths_mm", "nearest_indenter", "noise_level", "refine_clock_offset"]
+           "land_contact_depths_mm", "nearest_indenter", "noise_level", "read_bevel",
+           "refine_clock_offset"]

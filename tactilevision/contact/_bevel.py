@@ -6,9 +6,10 @@ least reliable exactly there (the slopes exceed what the ball calibration
 saw), so the footprint is found in the colour change itself: the enclosed
 hole of the contact ring, a circle fitted to its boundary.
 
-The bevel beside the indenter shows as a thin line once the gel reaches the
-block land; :func:`bevel_score` measures a thin straight feature at the place
-the block's geometry puts it.
+A bevel mark with no vernier (``bevel_angle_deg = 0``) shows as a thin line
+once the gel reaches the block land; :func:`bevel_score` measures a thin
+straight feature at the place the block's geometry puts it. A machined bevel
+ridge is read by :mod:`tactilevision.contact._vernier` instead.
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import ndimage
 
-from .._checks import InputError, check_array
+from .._checks import check_array
 from ._footprint import Footprint, _fit_circle
 
 __all__ = ["bevel_score", "footprint_from_frame"]
@@ -76,84 +77,88 @@ def footprint_from_frame(mask: np.ndarray, mm_per_px: float, *, indenter_radius_
 
 
 def bevel_score(frame: np.ndarray, reference: np.ndarray | None, centre_px: tuple[float, float],
-                mm_per_px: float, *,
-                offset_mm: float, angle_deg: float = 0.0, length_mm: float = 2.4,
-                search_mm: float = 0.6, blur_mm: float = 0.15, at_mm: float = 0.1) -> float:
-    """Strength of a thin straight line where the bevel edge lies.
+                mm_per_px: float, *, offset_mm: float, direction_deg: float = 0.0,
+                length_mm: float = 2.4, search_mm: float = 0.3, reach_mm: float = 0.8) -> float:
+    """Signal-to-noise ratio of a thin straight mark where the bevel's edge lies.
+
+    A matched filter over widths and offsets: the colour change is averaged
+    along the mark's line into a profile across it
+    (:func:`~tactilevision.contact.bevel_profile`, clipped to the image), and
+    the profile is fitted with a smooth background (a quadratic: the press's
+    own shading) plus a Gaussian line and its derivative (a dip, a bump or a
+    light-dark pair of any colours) of sd 0.8, 1.5 or 3 px centred anywhere
+    within `search_mm` of the nominal line.
 
     Parameters
     ----------
     frame : (H, W, 3) array_like of uint8
     reference : (H, W, 3) array_like of uint8, optional
-        The no-contact frame: its static texture (dust, scratches, edges of
-        the gel) is removed before the line is looked for.
+        The no-contact frame (static texture removed); None compares with a
+        flat grey frame.
     centre_px : (x, y)
         Indenter axis (footprint centre), px.
     mm_per_px : float
-    offset_mm, angle_deg, length_mm : float
-        Bevel edge: distance from the axis, direction (0 = +x along the
-        columns, 90 = +y down the rows), length; the line runs across that
-        direction.
-    search_mm : float, default 0.6
-        The background statistics are taken within this (at least 15 px) of
-        `offset_mm` along the direction, leaving out the line's own
-        neighbourhood (0.25 mm or 3 px).
-    blur_mm : float, default 0.15
-        Scale of the high-pass that removes the smooth shading of the bulge
-        (at least 1.5 px).
-    at_mm : float, default 0.1
-        The line must peak within this of `offset_mm` (the footprint centre
-        is known to a fraction of a pixel; a fixed place keeps the false-alarm
-        rate of a peak search away).
+    offset_mm, direction_deg, length_mm : float
+        The mark: distance from the axis, direction (0 = +x along the
+        columns, 90 = +y down the rows), length along the line.
+    search_mm : float, default 0.3
+        How far off the nominal line the mark may lie.
+    reach_mm : float, default 0.8
+        Half-length of the profile across the line: the background is what
+        lies beyond the mark within it.
 
     Returns
     -------
     score : float
-        Peak of the line profile near `offset_mm` above the background's
-        median, in robust standard deviations (about 0 to 4 without a line; NaN when
-        the region leaves the image).
+        ``sqrt(drop in residual sum of squares / residual variance)``, the
+        residual variance corrected for its correlation along the profile:
+        about 3 to 8 with no mark (the best of many widths and offsets over
+        noise), far above with one. 0.0 when the line is not in the image.
 
-    Notes
-    -----
-    The colour change (frame - reference) is high-passed (minus its Gaussian blur, summed
-    absolute over channels), averaged along the line direction in 1 px bins
-    across it, and the peak bin is compared with the spread of the bins.
+    Raises
+    ------
+    ShapeError
+        For frames that are not (H, W, 3) or differ in shape.
     """
-    f = check_array(frame, "frame", [("H", "W", 3)]).astype(np.float32)
-    if reference is not None:
-        f = f - check_array(reference, "reference", [f.shape]).astype(np.float32)
-    h, w = f.shape[:2]
-    t = np.deg2rad(angle_deg)
+    from ._vernier import BevelGeometry, bevel_profile
+
+    f = check_array(frame, "frame", [("H", "W", 3)])
+    ref = np.zeros_like(f) if reference is None else check_array(reference, "reference",
+                                                                 [f.shape])
     s = float(mm_per_px)
-    blur_px = max(1.5, blur_mm / s)
-    at_mm = max(at_mm, 1.01 * s)
-    search_mm = max(search_mm, 15 * s)
-    guard_mm = max(0.25, 3 * s)          # the line's own width, kept out of the background
-    cx, cy = float(centre_px[0]), float(centre_px[1])
-    bx, by = cx + offset_mm / s * np.cos(t), cy + offset_mm / s * np.sin(t)
-    half = int(np.ceil((search_mm + 0.5 * length_mm) / s + 3 * blur_px)) + 2
-    r0, r1 = int(np.floor(by - half)), int(np.ceil(by + half)) + 1
-    c0, c1 = int(np.floor(bx - half)), int(np.ceil(bx + half)) + 1
-    if r0 < 0 or c0 < 0 or r1 > h or c1 > w:
-        return float("nan")
-    roi = f[r0:r1, c0:c1]
-    hp = np.abs(roi - ndimage.gaussian_filter(roi, (blur_px, blur_px, 0))).sum(axis=2)
-    rows, cols = np.mgrid[r0:r1, c0:c1]
-    dx, dy = (cols - cx) * s, (rows - cy) * s
-    u = dx * np.cos(t) + dy * np.sin(t) - offset_mm
-    v = -dx * np.sin(t) + dy * np.cos(t)
-    sel = (np.abs(u) <= search_mm) & (np.abs(v) <= 0.4 * length_mm)
-    if not sel.any():
-        raise InputError("the bevel search region is empty: check bevel_length_mm and the scale")
-    bins = np.round(u[sel] / s).astype(np.int64)
-    lo = int(bins.min())
-    sums = np.bincount(bins - lo, hp[sel])
-    counts = np.bincount(bins - lo)
-    ok = counts > 0
-    prof = sums[ok] / counts[ok]
-    centre = (np.arange(counts.size)[ok] + lo) * s
-    bg = prof[np.abs(centre) > guard_mm]
-    med = float(np.median(bg))
-    mad = 1.4826 * float(np.median(np.abs(bg - med)))
-    near = np.abs(centre) <= at_mm
-    return float((prof[near].max() - med) / max(mad, 1e-6))
+    geom = BevelGeometry(offset_mm=offset_mm, direction_deg=direction_deg, length_mm=length_mm)
+    prof = bevel_profile(f, ref, centre_px, s, geom, reach_px=max(reach_mm / s, 12.0))
+    if prof.coverage < 0.3:
+        return 0.0
+    return _line_snr(prof.u_px, prof.colour, max(search_mm / s, 2.0))
+
+
+def _line_snr(u: np.ndarray, R: np.ndarray, search_px: float) -> float:
+    """Best matched-filter SNR of a line (and its derivative) over widths and offsets."""
+    scale = max(float(np.abs(u).max()), 1.0)
+    B0 = np.stack([np.ones_like(u), u / scale, (u / scale) ** 2], axis=1)
+    c0, *_ = np.linalg.lstsq(B0, R, rcond=None)
+    rss0 = float(np.sum((R - B0 @ c0) ** 2))
+    best = (np.inf, None)
+    step = float(u[1] - u[0])
+    for sd in (0.8, 1.5, 3.0):
+        for m in np.arange(-search_px, search_px + 1e-9, max(step, 0.25 * sd)):
+            g = np.exp(-0.5 * ((u - m) / sd) ** 2)
+            B = np.column_stack([B0, g, g * (u - m) / sd])
+            coef, *_ = np.linalg.lstsq(B, R, rcond=None)
+            r = R - B @ coef
+            rss = float(np.sum(r * r))
+            if rss < best[0]:
+                best = (rss, r)
+    rss1, resid = best
+    dof = max(R.size - 5 * R.shape[1], 1)
+    sigma2 = rss1 / dof
+    rho = 0.0
+    for lag in range(1, round(3.0 / step) + 1):
+        a, b = resid[:-lag], resid[lag:]
+        den = float(np.sqrt(np.sum(a * a) * np.sum(b * b)))
+        r_lag = float(np.sum(a * b)) / den if den > 0 else 0.0
+        if r_lag <= 0:
+            break
+        rho += r_lag
+    return float(np.sqrt(max(rss0 - rss1, 0.0) / max(sigma2 * (1.0 + 2.0 * rho), 1e-12)))

@@ -30,8 +30,10 @@ needs nu.
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -41,6 +43,7 @@ from ._footprint import Footprint
 from ._force import force_window
 from ._mask import contact_mask, noise_level
 from ._sync import ClockSync, estimate_clock_offset, force_onsets, refine_clock_offset
+from ._vernier import BevelGeometry, BevelReading, bevel_profile, read_bevel
 
 __all__ = ["Certification", "CertifiedPress", "Rejection", "certified_depths", "certify_session"]
 
@@ -48,6 +51,13 @@ __all__ = ["Certification", "CertifiedPress", "Rejection", "certified_depths", "
 MAX_TANGENTIAL_RATIO = 0.1
 #: Fraction of saturated pixels around the contact (not in the reference) that rejects it.
 MAX_SATURATED_FRACTION = 0.005
+#: Vernier: the band of contact on the bevel is seen above this signal-to-noise ratio
+#: (:func:`read_bevel`; benchmarks/bench_vernier.py prints the no-contact frames' largest).
+VERNIER_SNR = 20.0
+#: Vernier: largest crest penetration looked for, mm.
+MAX_CLOSURE_MM = 0.1
+#: Vernier: least fraction of the bevel's band inside the image.
+MIN_BEVEL_COVERAGE = 0.6
 
 
 @dataclass(frozen=True)
@@ -77,6 +87,21 @@ class CertifiedPress:
         certification; rest since the previous press ended (NaN for the
         first).
     bevel_score : float
+        Signal-to-noise ratio of the bevel at certification (:func:`read_bevel`
+        or :func:`bevel_score`).
+    rule : {'vernier', 'onset'}
+        How the press was certified: the band of contact on a machined bevel
+        read over the force window's frames, or the first frame showing a
+        bevel mark (``bevel_angle_deg = 0``).
+    closure_mm, closure_std_mm : float
+        ``'vernier'``: how far the bevel's crest is pressed into the gel's
+        surface (overshoot past w0 plus the bulge there) and its standard
+        uncertainty, mm. ``'onset'``: 0 and the uncertainty of the onset (the
+        depth the stage covers in one frame period, / sqrt(12)).
+    reading : BevelReading or None
+        The vernier reading of the window's frames (None for ``'onset'``).
+    window_frames : tuple of int
+        Frames read for the vernier (inside the force window).
     """
 
     press: int
@@ -96,6 +121,11 @@ class CertifiedPress:
     hold_s: float
     wait_s: float
     bevel_score: float
+    rule: str = "onset"
+    closure_mm: float = 0.0
+    closure_std_mm: float = 0.0
+    reading: BevelReading | None = None
+    window_frames: tuple[int, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -107,8 +137,8 @@ class Rejection:
     press : int
     reason : str
         ``'misaligned'``, ``'footprint cut by the pad edge'``, ``'bevel never
-        seen'``, ``'bevel seen too late'``, ``'saturated frames'``, ``'no footprint'``,
-        ``'footprint radius'``,
+        seen'``, ``'bevel seen too late'``, ``'bevel out of view'``,
+        ``'saturated frames'``, ``'no footprint'``, ``'footprint radius'``,
         ``'unknown indenter'``, ``'force window outside the log'``.
     detail : str
         The numbers behind it, one sentence.
@@ -116,6 +146,11 @@ class Rejection:
         First frame of the press, camera clock.
     frame : int
         A frame that shows it (for the report).
+    bevel_score : float
+        Best bevel signal-to-noise ratio seen in the press (NaN when the
+        bevel was not looked at).
+    centre_px : (x, y) or None
+        Footprint centre, when one was found (for the report's bevel panel).
     """
 
     press: int
@@ -123,6 +158,8 @@ class Rejection:
     detail: str
     t_frame_s: float
     frame: int
+    bevel_score: float = float("nan")
+    centre_px: tuple[float, float] | None = None
 
 
 @dataclass(frozen=True)
@@ -145,6 +182,11 @@ class Certification:
     contact_area_px : (F,) int64 ndarray
         Contact pixels in each frame.
     warnings : list of str
+    bevel_optics : dict or None
+        For a vernier session: the edge blur (``blur_px``) chosen on the
+        session's long bands, how many bands chose it (``n_bands``), the band
+        model's lines (``lines``) and whether the short bands leaned on the
+        session's flank colours (``prior``).
     """
 
     presses: list[CertifiedPress]
@@ -155,6 +197,20 @@ class Certification:
     noise_sigma: float
     contact_area_px: np.ndarray
     warnings: list[str] = field(default_factory=list)
+    bevel_optics: dict | None = None
+
+
+class _Sized:
+    """An iterator with a length, so that a progress bar knows its total."""
+
+    def __init__(self, it, n: int) -> None:
+        self._it, self._n = it, n
+
+    def __iter__(self):
+        return iter(self._it)
+
+    def __len__(self) -> int:
+        return self._n
 
 
 def _runs(times: np.ndarray, on: np.ndarray, max_gap_s: float) -> list[np.ndarray]:
@@ -184,7 +240,7 @@ def _saturated(frame: np.ndarray, reference: np.ndarray, mask: np.ndarray) -> fl
     return float(new.mean()) if new.size else 0.0
 
 
-def certify_session(session, *, min_contact_px: int = 200, bevel_threshold: float = 5.5,
+def certify_session(session, *, min_contact_px: int = 200, bevel_threshold: float = 12.0,
                     progress: Callable | None = None) -> Certification:
     """Find and certify every press of a session.
 
@@ -193,9 +249,12 @@ def certify_session(session, *, min_contact_px: int = 200, bevel_threshold: floa
     session : tactilevision.io.Session
     min_contact_px : int, default 200
         A frame is in contact when its contact mask holds this many pixels.
-    bevel_threshold : float, default 5.5
-        :func:`bevel_score` above which the bevel line is seen (at most 3.2
-        without the line, at least 7.5 with it, over 36 rendered presses).
+    bevel_threshold : float, default 12.0
+        For a bevel mark with no vernier (``bevel_angle_deg = 0``): the
+        :func:`bevel_score` above which it is seen (at most 9.0 on approach
+        frames before the mark, at least 16.6 with it, over the 48 good
+        presses of the legacy sample session; ``benchmarks/bench_certification.py``).
+        A machined bevel is seen above :data:`VERNIER_SNR`.
     progress : callable, optional
         Wraps the frame iterator (e.g. ``tqdm``).
 
@@ -217,9 +276,15 @@ def certify_session(session, *, min_contact_px: int = 200, bevel_threshold: floa
     first = session.frame(0)
     sigma = noise_level(first, ref)
     area = np.zeros(nf, np.int64)
-    it = range(nf) if progress is None else progress(range(nf))
-    for i in it:
-        area[i] = int(contact_mask(session.frame(i), ref, sigma=sigma).sum())
+
+    def contact_px(i: int) -> int:
+        return int(np.count_nonzero(contact_mask(session.frame(i), ref, sigma=sigma)))
+
+    # OpenCV decodes and filters outside the GIL: threads use every core
+    with ThreadPoolExecutor(max_workers=max(1, min(4, os.cpu_count() or 1))) as pool:
+        it = pool.map(contact_px, range(nf))
+        for i, n_px in enumerate(it if progress is None else progress(_Sized(it, nf))):
+            area[i] = n_px
     period = float(np.median(np.diff(times))) if nf > 1 else 1.0
     runs = _runs(times, area >= min_contact_px, max_gap_s=2.5 * period)
     if not runs:
@@ -261,6 +326,12 @@ def certify_session(session, *, min_contact_px: int = 200, bevel_threshold: floa
 
     certified: list[CertifiedPress] = []
     rejected: list[Rejection] = []
+    geom = BevelGeometry(offset_mm=cfg.bevel_offset_mm, direction_deg=cfg.bevel_direction_deg,
+                         angle_deg=cfg.bevel_angle_deg, length_mm=cfg.bevel_length_mm)
+    vernier = geom.tan_theta > 0
+    reach = (min(MAX_CLOSURE_MM / geom.tan_theta / s, 120.0) + 8.0) if vernier else 0.0
+    half = cfg.window_samples / (2.0 * cfg.rate_hz)
+    pending: list[dict] = []          # vernier presses waiting for the session's flank colours
     prev_end = float("nan")
     for k, run in enumerate(runs):
         t0 = float(times[run[0]])
@@ -271,10 +342,12 @@ def certify_session(session, *, min_contact_px: int = 200, bevel_threshold: floa
         mask = contact_mask(frame, ref, sigma=sigma)
         sat = _saturated(frame, ref, mask)
         fp = footprint_from_frame(mask, s, indenter_radius_mm=cfg.indenter_radius_mm)
+        centre = None if fp is None else (float(fp.center_px[0]), float(fp.center_px[1]))
 
-        def reject(reason: str, detail: str, at: int = peak, k: int = k, t0: float = t0) -> None:
+        def reject(reason: str, detail: str, at: int = peak, k: int = k, t0: float = t0,
+                   score: float = float("nan"), centre=centre) -> None:
             rejected.append(Rejection(press=k, reason=reason, detail=detail, t_frame_s=t0,
-                                      frame=at))
+                                      frame=at, bevel_score=score, centre_px=centre))
 
         if sat > MAX_SATURATED_FRACTION:
             reject("saturated frames", f"{100 * sat:.1f}% of the pixels of the contact are "
@@ -306,54 +379,196 @@ def certify_session(session, *, min_contact_px: int = 200, bevel_threshold: floa
         if indenter < 0:
             reject("unknown indenter", "no presses.csv tells which indenter was pressed")
             continue
-        # bevel onset: the land meets the gel at the deepest point of the press, so
-        # the bevel is looked for in the frames near full contact; it must stay
-        # visible in the next frame too (or be twice the threshold)
+        # the bevel is looked for in the frames near full contact (the land meets the
+        # gel at the deepest part of the press)
         full = run[area[run] >= 0.9 * area[peak]]
         start = int(np.searchsorted(run, full[0]))
         cand = run[max(0, start - 1):int(np.searchsorted(run, full[-1])) + 1]
-        scores = np.array([bevel_score(session.frame(int(i)), ref, tuple(fp.center_px), s,
-                                       offset_mm=cfg.bevel_offset_mm,
-                                       angle_deg=cfg.bevel_angle_deg,
-                                       length_mm=cfg.bevel_length_mm) for i in cand])
-        seen = np.isfinite(scores) & (scores > bevel_threshold)
-        strong = np.isfinite(scores) & (scores > 2 * bevel_threshold)
-        firm = seen & (np.append(seen[1:], False) | strong)
-        onset = int(cand[np.argmax(firm)]) if firm.any() else None
-        score = float(scores[np.argmax(firm)]) if firm.any() else float("nan")
-        if onset is None:
-            reject("bevel never seen", f"no frame of the press shows a line "
-                   f"{cfg.bevel_offset_mm:g} mm from the indenter at {cfg.bevel_angle_deg:g} deg "
-                   f"(best score {np.nanmax(scores) if np.isfinite(scores).any() else 0:.1f}, "
-                   f"threshold {bevel_threshold:g})")
-            continue
-        t_cert = float(times[onset])
-        half = cfg.window_samples / (2.0 * cfg.rate_hz)
         t_hold_end = float(times[full[-1]])
+        if vernier:
+            got = _vernier_onset(session, geom, centre, s, cand, reach, period, half)
+            if isinstance(got, Rejection):
+                reject(got.reason, got.detail, at=got.frame, score=got.bevel_score)
+                continue
+            onset, window, profiles, best, quick = got
+            score = best
+        else:
+            # a mark: the first frame where it shows, and shows in the next frame too
+            # (or at twice the threshold)
+            scores = np.array([bevel_score(session.frame(int(i)), ref, centre, s,
+                                           offset_mm=cfg.bevel_offset_mm,
+                                           direction_deg=cfg.bevel_direction_deg,
+                                           length_mm=cfg.bevel_length_mm) for i in cand])
+            seen = scores > bevel_threshold
+            strong = scores > 2 * bevel_threshold
+            firm = seen & (np.append(seen[1:], False) | strong)
+            if not firm.any():
+                reject("bevel never seen", f"no frame of the press shows a mark "
+                       f"{cfg.bevel_offset_mm:g} mm from the indenter at "
+                       f"{cfg.bevel_direction_deg:g} deg (best signal-to-noise ratio "
+                       f"{scores.max():.1f}, threshold {bevel_threshold:g})",
+                       score=float(scores.max()))
+                continue
+            onset = int(cand[np.argmax(firm)])
+            score = float(scores[np.argmax(firm)])
+        t_cert = float(times[onset])
         if t_cert + 2 * half > t_hold_end + period:
             reject("bevel seen too late", f"the bevel shows at {t_cert:.3f} s, the "
                    f"{cfg.window_samples}-sample force window would run past the hold "
-                   f"(last full-contact frame {t_hold_end:.3f} s)", at=onset)
+                   f"(last full-contact frame {t_hold_end:.3f} s)", at=onset, score=score)
             continue
         try:
             fw = force_window(session.force_times_s, session.forces_n, t_cert + offset + half,
                               cfg.window_samples)
         except InputError as exc:
-            reject("force window outside the log", str(exc), at=onset)
+            reject("force window outside the log", str(exc), at=onset, score=score)
             continue
         if fw.tangential_ratio > MAX_TANGENTIAL_RATIO:
             reject("misaligned", f"|Fxy| / Fz = {fw.tangential_ratio:.3f} > "
-                   f"{MAX_TANGENTIAL_RATIO:g}", at=onset)
+                   f"{MAX_TANGENTIAL_RATIO:g}", at=onset, score=score)
             continue
-        certified.append(CertifiedPress(
+        press = CertifiedPress(
             press=k, indenter=indenter, w0_mm=float(cfg.depths_mm[indenter]), frame=onset,
             t_frame_s=t_cert, footprint=fp, x_mm=float(x_mm), y_mm=float(y_mm),
             force_n=fw.fz_n, force_std_n=fw.fz_std_n, fx_n=fw.fx_n, fy_n=fw.fy_n,
             tangential_ratio=fw.tangential_ratio, time_s=t_cert - float(times[0]), hold_s=half,
-            wait_s=wait, bevel_score=score))
+            wait_s=wait, bevel_score=score)
+        if vernier:
+            pending.append({"press": press, "profiles": profiles, "window": window,
+                            "quick": quick})
+        else:
+            certified.append(replace(press, rule="onset", closure_mm=0.0,
+                                     closure_std_mm=_onset_std(area, run, onset, times, period,
+                                                               float(cfg.depths_mm[indenter]))))
+    optics = None
+    if pending:
+        read, optics = _read_vernier_presses(pending, geom, s)
+        certified.extend(read)
+        certified.sort(key=lambda p: p.press)
     return Certification(presses=certified, rejected=rejected, clock=clock,
                          clock_offset_s=offset, clock_source=source, noise_sigma=sigma,
-                         contact_area_px=area, warnings=warnings)
+                         contact_area_px=area, warnings=warnings, bevel_optics=optics)
+
+
+def _onset_std(area: np.ndarray, run: np.ndarray, onset: int, times: np.ndarray, period: float,
+               w0: float) -> float:
+    """Uncertainty of a depth certified by the onset of a mark: one frame's travel / sqrt(12).
+
+    The stage speed is read from the approach: the indenter first touches the
+    gel at the run's first frame and the mark shows w0 deeper at `onset`.
+    """
+    travel = float(times[onset] - times[run[0]])
+    speed = w0 / travel if travel > 0 else w0 / period
+    return speed * period / np.sqrt(12.0)
+
+
+def _vernier_onset(session, geom: BevelGeometry, centre: tuple[float, float], s: float,
+                   cand: np.ndarray, reach: float, period: float, half: float):
+    """Hold of a press by its vernier: first frame of the band's plateau and the window's frames.
+
+    Returns ``(onset, window_frames, window_profiles, best_snr)`` or a
+    :class:`Rejection` (its press, time and centre filled in by the caller).
+    """
+    ref = session.reference
+    profiles = {int(i): bevel_profile(session.frame(int(i)), ref, centre, s, geom, reach_px=reach)
+                for i in cand}
+    cover = min(p.coverage for p in profiles.values())
+    if cover < MIN_BEVEL_COVERAGE:
+        return Rejection(press=-1, reason="bevel out of view",
+                         detail=f"only {100 * cover:.0f}% of the bevel's band "
+                                f"({geom.offset_mm:g} mm from the indenter at "
+                                f"{geom.direction_deg:g} deg) lies inside the image",
+                         t_frame_s=float("nan"), frame=int(cand[-1]))
+    reads = {i: read_bevel(p, geom, s, max_closure_mm=MAX_CLOSURE_MM, coarse=True)
+             for i, p in profiles.items()}
+    snr = np.array([reads[int(i)].snr for i in cand])
+    best = float(snr.max())
+    seen = snr >= VERNIER_SNR
+    if not seen.any():
+        return Rejection(press=-1, reason="bevel never seen",
+                         detail=f"no frame of the press shows the band of contact on the bevel "
+                                f"{geom.offset_mm:g} mm from the indenter at "
+                                f"{geom.direction_deg:g} deg (best signal-to-noise ratio "
+                                f"{best:.1f}, threshold {VERNIER_SNR:g})",
+                         t_frame_s=float("nan"), frame=int(cand[int(np.argmax(snr))]),
+                         bevel_score=best)
+    half_w = np.array([reads[int(i)].half_width_px for i in cand])
+    spread = np.array([reads[int(i)].half_width_std_px for i in cand])
+    # the hold: the longest stretch of consecutive frames that see the band at one width
+    # (to within 2.5 sd or 1.5 px: the quick look's grid is 1 px); frames of the approach
+    # and the release each show another width
+    runs: list[list[int]] = []
+    for j in np.flatnonzero(seen):
+        if runs and runs[-1][-1] == j - 1:
+            ref_w = float(np.median(half_w[runs[-1]]))
+            if abs(half_w[j] - ref_w) <= max(2.5 * spread[j], 1.5):
+                runs[-1].append(int(j))
+                continue
+        runs.append([int(j)])
+    hold_run = max(runs, key=lambda r: (len(r), float(snr[r].sum())))
+    first = hold_run[0]
+    onset = int(cand[first])
+    t0 = float(session.frame_times_s[onset])
+    times = session.frame_times_s[cand]
+    in_window = np.zeros(cand.size, bool)
+    in_window[hold_run] = True
+    in_window &= times <= t0 + 2 * half + 1e-9
+    window = tuple(int(i) for i in cand[in_window])
+    return onset, window, [profiles[i] for i in window], best, reads[onset]
+
+
+def _read_vernier_presses(pending: list[dict], geom: BevelGeometry, s: float
+                          ) -> tuple[list[CertifiedPress], dict]:
+    """Read every press's band over its window, with the session's own optics.
+
+    1. The session's edge blur and whether its bands carry lines at their
+       edges (renderers and real optics differ) are chosen on its longest,
+       clearest bands (:func:`_session_optics`).
+    2. Every press is read with them, its flank colours free.
+    3. Short bands (their shape hidden by the blur) are read again with the
+       flank colours of the long ones as a prior (their median).
+    """
+    optics = _session_optics(pending, geom, s)
+    kw = dict(max_closure_mm=MAX_CLOSURE_MM, lines=optics["lines"], blur_px=optics["blur_px"])
+    first = [read_bevel(d["profiles"], geom, s, **kw) for d in pending]
+    good = [r.flank_colours for r in first
+            if r.resolved and r.half_width_px >= 5 and r.snr >= 2 * VERNIER_SNR]
+    prior = np.median(np.stack(good), axis=0) if len(good) >= 3 else None
+    out = []
+    for d, r in zip(pending, first, strict=True):
+        if prior is not None and not r.resolved:
+            r = read_bevel(d["profiles"], geom, s, flank_colours=prior, **kw)
+        out.append(replace(d["press"], rule="vernier", closure_mm=r.closure_mm,
+                           closure_std_mm=r.closure_std_mm, reading=r, bevel_score=r.snr,
+                           window_frames=d["window"]))
+    optics["prior"] = prior is not None and any(not r.resolved for r in first)
+    return out, optics
+
+
+#: Edge blurs (sd, px) tried on the session's long bands.
+_BLURS = (0.6, 0.8, 1.0, 1.25, 1.5, 1.75, 2.0, 2.5, 3.0)
+
+
+def _session_optics(pending: list[dict], geom: BevelGeometry, s: float, *, n_max: int = 8
+                    ) -> dict:
+    """The edge blur that explains the session's long bands best.
+
+    On up to `n_max` bands at least 8 px long (the clearest), each blur of
+    :data:`_BLURS`; the one with the least summed residual. The blur is not
+    free per press: on a short band it trades off against L. Default 1.0 px
+    when fewer than two bands are long enough.
+    """
+    long = sorted((d for d in pending if d["quick"].half_width_px >= 8),
+                  key=lambda d: -d["quick"].snr)[:n_max]
+    if len(long) < 2:
+        return {"blur_px": 1.0, "lines": "none", "n_bands": len(long)}
+    totals = []
+    for blur in _BLURS:
+        rs = [read_bevel(d["profiles"], geom, s, max_closure_mm=MAX_CLOSURE_MM, lines="none",
+                         blur_px=blur) for d in long]
+        totals.append((sum(r.noise ** 2 * r.model.size for r in rs), blur))
+    _, blur = min(totals)
+    return {"blur_px": blur, "lines": "none", "n_bands": len(long)}
 
 
 def certified_depths(w0_mm: np.ndarray, *, rule: str, thickness_mm: float, radius_mm: float,

@@ -22,9 +22,12 @@ REQUIRED_COLUMNS = ("depth_mm", "force_n")
 # ``indenter`` is an id and may be text; unknown columns are covariates when
 # every cell is a number, else kept as labels.
 _NUMERIC_COLUMNS = frozenset({
-    "press", "force_std_n", "fx_n", "fy_n", "time_s", "hold_s", "wait_s",
-    "x_mm", "y_mm", "day", "temperature_c",
+    "press", "depth_std_mm", "overshoot_mm", "force_std_n", "fx_n", "fy_n", "time_s",
+    "hold_s", "wait_s", "x_mm", "y_mm", "day", "temperature_c",
 })
+
+# Optional columns that are uncertainties of another column, not covariates.
+_UNCERTAINTY_COLUMNS = ("depth_std_mm",)
 
 # (table, key, argument name) of the sidecar values.
 _SIDECAR = {"thickness_mm": ("sensor", "gel_thickness_mm"),
@@ -73,8 +76,9 @@ class Measurements:
 
     @property
     def covariates(self) -> tuple[str, ...]:
-        """Names of the numeric columns other than ``depth_mm`` and ``force_n``."""
-        return tuple(k for k in self.columns if k not in REQUIRED_COLUMNS)
+        """Names of the numeric columns but ``depth_mm``, ``force_n`` and ``depth_std_mm``."""
+        return tuple(k for k in self.columns
+                     if k not in REQUIRED_COLUMNS and k not in _UNCERTAINTY_COLUMNS)
 
     def __len__(self) -> int:
         return int(self.depth_mm.shape[0])
@@ -151,6 +155,21 @@ def _parse_columns(path: Path, names: list[str], rows: list[list[str]], lines: l
     return columns, labels
 
 
+def _check_uncertainties(path: Path, names: list[str], rows: list[list[str]], lines: list[int],
+                         columns: dict[str, np.ndarray]) -> None:
+    """A standard uncertainty column holds numbers >= 0 and finite, or empty cells."""
+    for name in _UNCERTAINTY_COLUMNS:
+        if name not in columns:
+            continue
+        v = columns[name]
+        bad = np.isinf(v) | (v < 0)  # NaN (empty) is a missing value
+        if np.any(bad):
+            i = int(np.argmax(bad))
+            cell = rows[i][names.index(name)].strip()
+            raise InputError(f"{path} line {lines[i]}, column {name}: '{cell}' is not a "
+                             "standard uncertainty (a finite number >= 0, or empty)")
+
+
 def _geometry(path: Path, given: dict[str, float | None]) -> tuple[dict[str, float],
                                                                   dict[str, str]]:
     values: dict[str, float] = {}
@@ -222,10 +241,15 @@ def read_measurements(path: str | Path, *, thickness_mm: float | None = None,
         length, a non-numeric cell in a numeric column (the bad text is
         quoted), an empty required cell, a depth not positive, no data rows,
         ``session.toml`` absent, malformed or missing a key when the value was
-        not given, or a geometry value that is not a positive number.
+        not given, a geometry value that is not a positive number, or a
+        negative or infinite ``depth_std_mm``.
 
     Notes
     -----
+    ``depth_std_mm`` (standard uncertainty of ``depth_mm``, mm, >= 0) and
+    ``overshoot_mm`` (certified depth minus the gauge block's nominal depth,
+    mm) are optional numeric columns; ``depth_std_mm`` is not a covariate.
+
     Presses deeper than w/h = 0.2 are not refused here;
     :func:`tactilevision.mechanics.fit_indentation` warns about them.
     """
@@ -243,6 +267,7 @@ def read_measurements(path: str | Path, *, thickness_mm: float | None = None,
         i = int(np.argmax(depth <= 0))
         raise InputError(f"{path} line {lines[i]}, column depth_mm: depth {depth[i]:g} mm "
                          "must be positive")
+    _check_uncertainties(path, names, rows, lines, columns)
     geo, src = _geometry(path, {"thickness_mm": thickness_mm, "radius_mm": radius_mm})
     return Measurements(
         path=path, columns=columns, labels=labels,
@@ -254,8 +279,9 @@ def read_measurements(path: str | Path, *, thickness_mm: float | None = None,
 
 #: Column order of :func:`write_measurements` (formats.md section 2); other
 #: columns follow in the order given.
-COLUMN_ORDER = ("press", "indenter", "depth_mm", "force_n", "force_std_n", "fx_n", "fy_n",
-                "time_s", "hold_s", "wait_s", "x_mm", "y_mm", "day", "temperature_c")
+COLUMN_ORDER = ("press", "indenter", "depth_mm", "depth_std_mm", "overshoot_mm", "force_n",
+                "force_std_n", "fx_n", "fy_n", "time_s", "hold_s", "wait_s", "x_mm", "y_mm",
+                "day", "temperature_c")
 
 
 def write_measurements(path: str | Path, columns: dict[str, np.ndarray], *, thickness_mm: float,

@@ -49,10 +49,20 @@ class SessionConfig:
     calibration : Path or None
         Photometric calibration (resolved against the session folder), or None
         for the sensor's default.
-    bevel_offset_mm, bevel_angle_deg, bevel_length_mm : float
-        Where the bevel edge lies beside each indenter (optional keys of
-        ``[gauge_block]``; defaults 4.5 mm, 0 degrees = +x along the image
-        columns, 2.4 mm long): the region the bevel onset is looked for in.
+    bevel_offset_mm : float
+        Distance from the indenter axis to the bevel's crest line (optional
+        key of ``[gauge_block]``, default 4.5 mm).
+    bevel_direction_deg : float
+        Direction from the indenter axis to the bevel in the image (default
+        0 = +x along the columns; 90 = +y down the rows).
+    bevel_angle_deg : float
+        Flank angle theta of the bevel ridge, degrees in [0, 45) (default 0:
+        a mark with no vernier, certified by its onset).
+    bevel_length_mm : float
+        Length of the bevel's crest line (default 2.4 mm).
+    bulge_correction : bool
+        Whether certified depths are corrected for the gel's bulge at the
+        bevel (default true; only with a vernier).
     """
 
     sensor_name: str
@@ -68,6 +78,8 @@ class SessionConfig:
     bevel_offset_mm: float = 4.5
     bevel_angle_deg: float = 0.0
     bevel_length_mm: float = 2.4
+    bevel_direction_deg: float = 0.0
+    bulge_correction: bool = True
 
 
 @dataclass(frozen=True)
@@ -201,10 +213,31 @@ def _read_config(folder: Path) -> SessionConfig:
         window_samples=int(window),
         calibration=cal_path,
         bevel_offset_mm=_toml_number(doc, toml, "gauge_block", "bevel_offset_mm", default=4.5),
-        bevel_angle_deg=_toml_number(doc, toml, "gauge_block", "bevel_angle_deg", positive=False,
-                                     default=0.0),
+        bevel_angle_deg=_bevel_angle(doc, toml),
         bevel_length_mm=_toml_number(doc, toml, "gauge_block", "bevel_length_mm", default=2.4),
+        bevel_direction_deg=_toml_number(doc, toml, "gauge_block", "bevel_direction_deg",
+                                         positive=False, default=0.0),
+        bulge_correction=_toml_bool(doc, toml, "gauge_block", "bulge_correction", default=True),
     )
+
+
+def _bevel_angle(doc: dict, toml: Path) -> float:
+    theta = _toml_number(doc, toml, "gauge_block", "bevel_angle_deg", positive=False, default=0.0)
+    if not 0.0 <= theta < 45.0:
+        raise InputError(f"{toml}: [gauge_block] bevel_angle_deg is the flank angle of the bevel "
+                         f"ridge, in [0, 45) degrees (0: no vernier), got {theta:g}; the bevel's "
+                         "direction in the image is bevel_direction_deg")
+    return theta
+
+
+def _toml_bool(doc: dict, toml: Path, table: str, key: str, *, default: bool) -> bool:
+    section = doc.get(table, {})
+    if not isinstance(section, dict) or key not in section:
+        return default
+    v = section[key]
+    if not isinstance(v, bool):
+        raise InputError(f"{toml}: [{table}] {key} must be true or false, got {v!r}")
+    return v
 
 
 # ------------------------------------------------------------------ tables

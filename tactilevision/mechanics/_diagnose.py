@@ -42,8 +42,8 @@ EQUIVALENT_BIC = 6.0
 CURVATURE_BIC = 6.0
 #: Family-wise level of the covariate structure tests (Bonferroni over columns).
 ALPHA = 0.01
-#: Columns that are never covariates.
-_NOT_COVARIATES = ("force_n",)
+#: Columns that are never covariates (``depth_std_mm``: the depth's uncertainty, not physics).
+_NOT_COVARIATES = ("force_n", "depth_std_mm")
 
 # the measurement that separates two effects that look alike on one table
 _SEPARATE = {

@@ -16,8 +16,13 @@ from .._assets import asset_dir
 from .._checks import InputError
 from ._kappa import KappaTable
 
-__all__ = ["TabulatedBetaRelation", "fem_beta_relation", "fem_kappa_table", "fem_table_meta",
-           "kappa_n"]
+__all__ = ["TABLE_EXTRAPOLATION", "TabulatedBetaRelation", "fem_beta_relation",
+           "fem_kappa_table", "fem_table_meta", "kappa_n"]
+
+#: The FEM's kappa_n(w/h) is read (PCHIP) up to this factor beyond the table's deepest w/h
+#: (0.2): a press pushed past the gauge block's w0 = 0.2 h by a stage overshoot (a vernier
+#: session reaches about 0.22 h). kappa_n is smooth and nearly linear in w/h there.
+TABLE_EXTRAPOLATION = 1.1
 
 
 @lru_cache(maxsize=4)
@@ -259,9 +264,10 @@ def fem_beta_relation(a_over_h: float, *, contact: str = "bonded",
             raise InputError("w_over_h applies to the secant beta only")
         x = np.asarray(w_over_h, np.float64)
         wt = np.concatenate([[0.0], data["w_over_h"]])
-        if x.ndim != 1 or x.size < 2 or np.ptp(x) <= 0 or not np.all((x > 0) & (x <= wt[-1])):
+        top = TABLE_EXTRAPOLATION * wt[-1]
+        if x.ndim != 1 or x.size < 2 or np.ptp(x) <= 0 or not np.all((x > 0) & (x <= top + 1e-12)):
             raise InputError(f"w_over_h must hold two distinct depths or more within "
-                             f"(0, {wt[-1]:g}], got {w_over_h!r}")
+                             f"(0, {top:g}], got {w_over_h!r}")
         kn = np.concatenate([data["kappa0"][c][..., None], data["kappa_n"][c]], axis=-1)
         kn_ah = PchipInterpolator(ah, kn, axis=0)(a_over_h)          # (N, K + 1)
         k_at = PchipInterpolator(wt, kn_ah, axis=1)(x)               # (N, n)

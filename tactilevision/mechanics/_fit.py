@@ -2,15 +2,17 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import warnings
 
 import numpy as np
-from scipy import stats
+from scipy import optimize, stats
 
 from .._checks import InputError, check_array
 from ._beta import beta_relation
 from ._effects import FIT_EFFECTS
+from ._fem_tables import TABLE_EXTRAPOLATION
 from ._kappa import _dkappa_dnu, kappa
 from ._kappa import _table as _kappa_table
 from ._neohookean import neo_hookean_constants
@@ -24,6 +26,12 @@ MAX_W_OVER_H = 0.2
 _NAN2 = (math.nan, math.nan)
 _CI_METHOD = ("delta method through the HC3 (heteroscedasticity-consistent) covariance of "
               "slope and intercept, Student t with n - 2 degrees of freedom")
+_EV_CI_METHOD = ("delta method through the effective-variance covariance (X^T W X)^-1 of "
+                 "intercept and slope (errors in both variables: force scatter and certified "
+                 "depth uncertainty, Orear 1982), Student t with n - 2 degrees of freedom")
+#: Iterations and relative tolerance of the effective-variance fixed point.
+_EV_MAX_ITER = 100
+_EV_RTOL = 1e-10
 
 
 def _positive(x: float, name: str) -> float:
@@ -51,7 +59,8 @@ def _covariance(X: np.ndarray, resid: np.ndarray) -> tuple[np.ndarray, str | Non
 def fit_indentation(depth_mm: np.ndarray, force_n: np.ndarray, *, thickness_mm: float,
                     radius_mm: float, beta_table: str = "fem",
                     a_over_h: float | None = None, contact: str = "bonded",
-                    confidence: float = 0.95) -> IndentationFit:
+                    confidence: float = 0.95,
+                    depth_std_mm: np.ndarray | None = None) -> IndentationFit:
     """Fit E and nu of a bonded gel layer to flat-punch presses (the paper's method).
 
     Parameters
@@ -83,6 +92,11 @@ def fit_indentation(depth_mm: np.ndarray, force_n: np.ndarray, *, thickness_mm: 
         sharp-edged punch does not converge at finite strain.
     confidence : float, default 0.95
         Level of the intervals, in (0, 1).
+    depth_std_mm : (N,) array_like of float, mm, optional
+        Standard uncertainty (1 sigma) of each certified depth, >= 0. Given
+        and not all zero: eq. (5) is fitted with errors in both variables
+        (effective variance, see Notes). None (default), or zero for every
+        press: the depths are taken as exact (ordinary least squares below).
 
     Returns
     -------
@@ -91,14 +105,15 @@ def fit_indentation(depth_mm: np.ndarray, force_n: np.ndarray, *, thickness_mm: 
     Raises
     ------
     ShapeError
-        When `depth_mm` or `force_n` is not 1-D, not numeric, not finite, or
-        their lengths differ.
+        When `depth_mm`, `force_n` or `depth_std_mm` is not 1-D, not numeric,
+        not finite, or their lengths differ.
     InputError
-        When a depth is not positive, fewer than two depths are distinct,
-        `thickness_mm` or `radius_mm` is not positive, a/h is outside the
-        kappa table [0.2, 2.0], the FEM table is missing, or it has no
-        `contact` punch, or its beta does not increase with nu at this a/h
-        (a bonded punch at a/h <~ 0.6: nu cannot be told from beta there).
+        When a depth is not positive, a depth uncertainty is negative,
+        fewer than two depths are distinct, `thickness_mm` or `radius_mm` is
+        not positive, a/h is outside the kappa table [0.2, 2.0], the FEM
+        table is missing, or it has no `contact` punch, or its beta does not
+        increase with nu at this a/h (a bonded punch at a/h <~ 0.6: nu
+        cannot be told from beta there).
     ValueError
         For an unknown `beta_table` or a `confidence` outside (0, 1).
 
@@ -130,6 +145,25 @@ def fit_indentation(depth_mm: np.ndarray, force_n: np.ndarray, *, thickness_mm: 
     95% (tests/test_mechanics_fit.py measures the coverage). The kappa and
     beta tables are taken as exact: the intervals hold only the press scatter.
 
+    With `depth_std_mm` (u_i), errors in both variables, by the effective
+    variance method [4]_ (the first-order equivalent of orthogonal distance
+    regression): eq. (5) times w is ``P(w) = c w + s w^2 / h`` with
+    ``s = c beta``, linear in (c, s) with design columns ``w`` and
+    ``w^2 / h``; each press gets the variance
+    ``var_i = sigma0^2 + (dP/dw(w_i))^2 u_i^2``, ``dP/dw = c + 2 s w / h`` at
+    the current estimate, and weighted least squares in P is iterated to the
+    fixed point. sigma0^2 >= 0 is the force scatter that the depth
+    uncertainties do not explain, a random-effects extra variance chosen as
+    the smallest value with reduced chi-square ``chi2 / (n - 2) <= 1`` (the
+    Paule-Mandel rule [5]_; 0 when the depth uncertainties alone already give
+    ``chi2 / (n - 2) <= 1``). The covariance of (c, s) is ``(X^T W X)^-1`` at
+    the fixed point, so it never falls below what the stated depth
+    uncertainties imply; nu, E and the intervals then follow as above (delta
+    method, Student t on ``n - 2`` degrees of freedom). `rmse_n` and
+    `r_squared` are computed as in the ordinary fit (unweighted residuals of
+    P, and of P/w against w/h), so they stay comparable. `depth_std_used`,
+    `depth_std_median_mm` and `sigma0_n` of the result report it.
+
     References
     ----------
     .. [1] "In-situ Mechanical Calibration for Vision-based Tactile Sensors",
@@ -139,6 +173,10 @@ def fit_indentation(depth_mm: np.ndarray, force_n: np.ndarray, *, thickness_mm: 
     .. [3] J. G. MacKinnon, H. White, "Some heteroskedasticity-consistent
        covariance matrix estimators with improved finite sample properties",
        J. Econometrics 29:305-325, 1985. doi:10.1016/0304-4076(85)90158-7
+    .. [4] J. Orear, "Least squares when both variables have uncertainties",
+       Am. J. Phys. 50:912-916, 1982. doi:10.1119/1.12972
+    .. [5] R. C. Paule, J. Mandel, "Consensus values and weighting factors",
+       J. Res. Natl. Bur. Stand. 87:377-385, 1982. doi:10.6028/jres.087.022
 
     Examples
     --------
@@ -171,7 +209,15 @@ def fit_indentation(depth_mm: np.ndarray, force_n: np.ndarray, *, thickness_mm: 
     if depths.size < 2:
         raise InputError(f"depth_mm holds {depths.size} distinct depth(s); the fit of "
                          "eq. (5) needs presses at two depths or more")
+    u = None if depth_std_mm is None else _depth_std(depth_std_mm, w.size)
     ah, kappa_source, contact = _geometry(w, h, a, beta_table, a_over_h, contact)
+    if u is not None and np.any(u > 0):
+        return _fit_with_depth_std(w, P, u, h=h, a=a, ah=ah, beta_table=beta_table,
+                                       contact=contact, kappa_source=kappa_source,
+                                       confidence=confidence,
+                                       a_over_h_given=a_over_h is not None)
+    zero_note = (("depth_std_mm is 0 for every press: the depths are taken as exact "
+                  "(ordinary fit)",) if u is not None else ())
 
     # eq. (5): y = c + (c beta) x, ordinary least squares
     x, y = w / h, P / w  # (N,), (N,)
@@ -188,7 +234,145 @@ def fit_indentation(depth_mm: np.ndarray, force_n: np.ndarray, *, thickness_mm: 
                         confidence=confidence, dof=w.size - 2, rmse_n=rmse, r_squared=r2,
                         effects=FIT_EFFECTS, effect_params=None,
                         a_over_h_given=a_over_h is not None,
-                        extra_notes=(cov_note,) if cov_note else (), ci_method=_CI_METHOD)
+                        extra_notes=((cov_note,) if cov_note else ()) + zero_note,
+                        ci_method=_CI_METHOD)
+
+
+def _depth_std(depth_std_mm: object, n: int) -> np.ndarray:
+    """`depth_std_mm` checked: (n,) float64, finite, >= 0.
+
+    Raises
+    ------
+    ShapeError
+        For a wrong shape or dtype, NaN or inf.
+    InputError
+        For a negative value.
+    """
+    u = check_array(depth_std_mm, "depth_std_mm", [(n,)], dtype=np.number, finite=True)
+    u = u.astype(np.float64)
+    if np.any(u < 0):
+        i = int(np.argmax(u < 0))
+        raise InputError(f"depth_std_mm[{i}] = {u[i]:g} mm: depth uncertainties must be >= 0")
+    return u
+
+
+def _wls(X: np.ndarray, P: np.ndarray, var: np.ndarray
+         ) -> tuple[np.ndarray, np.ndarray, float]:
+    """Weighted least squares of `P` (N,) on `X` (N, 2) with variances `var` (N,) > 0.
+
+    Returns
+    -------
+    coef : (2,) ndarray
+    cov : (2, 2) ndarray
+        ``(X^T W X)^-1`` with ``W = diag(1 / var)``.
+    chi2 : float
+        ``sum((P - X coef)^2 / var)``.
+    """
+    sw = 1.0 / np.sqrt(var)  # (N,)
+    A, b = X * sw[:, None], P * sw
+    coef, *_ = np.linalg.lstsq(A, b, rcond=None)
+    r = b - A @ coef
+    return coef, np.linalg.inv(A.T @ A), float(r @ r)
+
+
+def _extra_variance(X: np.ndarray, P: np.ndarray, v: np.ndarray, dof: int, upper: float,
+                    floor: float) -> float:
+    """Smallest t >= 0 with ``chi2(t) / dof <= 1`` (Paule and Mandel 1982).
+
+    ``chi2(t)`` is the minimum over the coefficients of
+    ``sum((P - X b)^2 / (t + v))``, decreasing in t. `upper` >= 0 must give
+    ``chi2(upper) <= dof`` (the unweighted residual variance does, since
+    v >= 0); variances are floored at `floor` > 0 so that a press with v = 0
+    keeps a finite weight at t = 0.
+    """
+    def excess(t: float) -> float:
+        return _wls(X, P, np.maximum(t + v, floor))[2] / dof - 1.0
+
+    if upper <= 0 or excess(0.0) <= 0:
+        return 0.0
+    return float(optimize.brentq(excess, 0.0, upper, xtol=1e-14 * upper, rtol=1e-12))
+
+
+def _effective_variance_fit(depth_mm: np.ndarray, force_n: np.ndarray,
+                            depth_std_mm: np.ndarray, thickness_mm: float
+                            ) -> tuple[np.ndarray, np.ndarray, float, bool]:
+    """Eq. (5) with errors in both variables: (c, c beta), covariance, sigma0.
+
+    Parameters
+    ----------
+    depth_mm, force_n, depth_std_mm : (N,) float ndarray
+        Depths w (mm, > 0, two distinct at least), forces P (N) and depth
+        standard uncertainties u (mm, >= 0).
+    thickness_mm : float
+        h, mm.
+
+    Returns
+    -------
+    coef : (2,) ndarray
+        Intercept c and slope s = c beta of eq. (5), N/mm.
+    cov : (2, 2) ndarray
+        ``(X^T W X)^-1`` at the fixed point, (N/mm)^2.
+    sigma0_n : float
+        Extra force scatter, N (0 when N = 2: no degrees of freedom).
+    converged : bool
+        Whether (c, s) moved by less than 1e-10 relative in the last of at
+        most 100 iterations.
+
+    Notes
+    -----
+    Effective variance (Orear 1982): ``P = c w + s w^2 / h``, variances
+    ``sigma0^2 + (c + 2 s w / h)^2 u^2`` at the current (c, s), weighted least
+    squares iterated from the unweighted fit; at each iteration sigma0^2 is
+    the smallest value >= 0 with ``chi2 / (N - 2) <= 1`` (Paule and Mandel
+    1982). Variances are floored at ``(1e-12 max|P|)^2`` so that a press with
+    u = 0 keeps a finite weight when sigma0 = 0.
+    """
+    w, P, u, h = depth_mm, force_n, depth_std_mm, thickness_mm
+    X = np.column_stack([w, w * w / h])  # (N, 2): P = c w + s w^2 / h
+    dof = w.size - 2
+    coef, *_ = np.linalg.lstsq(X, P, rcond=None)
+    rss = float(np.sum((P - X @ coef) ** 2))
+    upper = rss / dof if dof > 0 else 0.0
+    floor = max((1e-12 * float(np.max(np.abs(P)))) ** 2, np.finfo(float).tiny)
+    t, cov, converged = 0.0, np.full((2, 2), np.nan), False
+    for _ in range(_EV_MAX_ITER):
+        v = ((coef[0] + 2 * coef[1] * w / h) * u) ** 2  # (dP/dw)^2 u^2, (N,)
+        t = _extra_variance(X, P, v, dof, upper, floor) if dof > 0 else 0.0
+        new, cov, _chi2 = _wls(X, P, np.maximum(t + v, floor))
+        converged = bool(np.all(np.abs(new - coef) <= _EV_RTOL * np.abs(new)))
+        coef = new
+        if converged:
+            break
+    return coef, cov, math.sqrt(t), converged
+
+
+def _fit_with_depth_std(w: np.ndarray, P: np.ndarray, u: np.ndarray, *, h: float, a: float,
+                            ah: float, beta_table: str, contact: str, kappa_source: str,
+                            confidence: float, a_over_h_given: bool) -> IndentationFit:
+    """:func:`fit_indentation` with depth uncertainties: effective variance, then E and nu."""
+    coef, cov, sigma0, converged = _effective_variance_fit(w, P, u, h)
+    c, s = float(coef[0]), float(coef[1])
+    x, y = w / h, P / w  # the ordinary fit's basis for R^2 and rmse
+    resid = y - (c + s * x)
+    tss = float(np.sum((y - y.mean()) ** 2))
+    r2 = 1.0 - float(resid @ resid) / tss if tss > 0 else 1.0
+    rmse = float(np.sqrt(np.mean((P - w * (c + s * x)) ** 2)))
+    med = float(np.median(u))
+    notes = [f"errors in both variables: effective variance (Orear 1982) with the certified "
+             f"depth uncertainties (median {med * 1e3:.3g} um); extra force scatter sigma0 = "
+             f"{sigma0 * 1e3:.3g} mN"
+             + (" (the depth uncertainties explain the scatter)" if sigma0 == 0 and w.size > 2
+                else "")]
+    if not converged:
+        notes.append(f"the effective-variance iteration did not converge in {_EV_MAX_ITER} "
+                     "steps: the last estimate is reported")
+    fit = material_fit(c, s, cov, depth_mm=w, thickness_mm=h, radius_mm=a, a_over_h=ah,
+                       beta_table=beta_table, contact=contact, kappa_source=kappa_source,
+                       confidence=confidence, dof=w.size - 2, rmse_n=rmse, r_squared=r2,
+                       effects=FIT_EFFECTS, effect_params=None, a_over_h_given=a_over_h_given,
+                       extra_notes=tuple(notes), ci_method=_EV_CI_METHOD)
+    return dataclasses.replace(fit, depth_std_used=True, depth_std_median_mm=med,
+                               sigma0_n=sigma0)
 
 
 def _geometry(w: np.ndarray, h: float, a: float, beta_table: str, a_over_h: float | None,
@@ -213,10 +397,12 @@ def _geometry(w: np.ndarray, h: float, a: float, beta_table: str, a_over_h: floa
         if not lo <= ah <= hi:
             raise InputError(f"a_over_h = {ah:g} is outside the {kname} kappa table "
                              f"range [{lo:g}, {hi:g}]")
-    if beta_table == "fem" and float(np.max(w / h)) > MAX_W_OVER_H + 1e-12:
+    top = MAX_W_OVER_H * TABLE_EXTRAPOLATION
+    if beta_table == "fem" and float(np.max(w / h)) > top + 1e-12:
         raise InputError(f"a press reaches w/h = {float(np.max(w / h)):.3f}, beyond the FEM beta "
-                         f"table's w/h <= {MAX_W_OVER_H:g}: drop the deeper presses or use "
-                         "beta_table='paper'")
+                         f"table's w/h <= {top:g} (computed to {MAX_W_OVER_H:g}, read "
+                         f"{100 * (TABLE_EXTRAPOLATION - 1):.0f}% beyond): drop the deeper "
+                         "presses or use beta_table='paper'")
     return ah, kappa_source, contact
 
 
@@ -278,7 +464,15 @@ def material_fit(c: float, slope: float, cov: np.ndarray, *, depth_mm: np.ndarra
     E = nu = C10 = D1 = kap = nu_se = E_se = math.nan
     E_ci = nu_ci = _NAN2
     msg = None
-    if not (c > 0 and rel.beta_min <= beta < rel.beta_max):
+    top = _table_top(rel, c, beta, beta_se, tq)
+    if top is not None:
+        # beta above the table's peak but within its interval: nu at the peak, bounded below
+        nu, nu_ci, E, E_ci, kap, top_note = _at_table_top(rel, top, c, cov, tq, a, ah,
+                                                          kappa_source, contact, confidence)
+        C10, D1 = neo_hookean_constants(E, nu)
+        nu_se, E_se = (nu_ci[1] - nu_ci[0]) / (2 * tq), (E_ci[1] - E_ci[0]) / (2 * tq)
+        notes.append(top_note)
+    elif not (c > 0 and rel.beta_min <= beta < rel.beta_max):
         msg = (f"c = {c:.4g} N/mm and beta = {beta:.4g} are outside the {beta_table} beta "
                f"table (c > 0, {rel.range_text()}): E and nu not computed")
         notes.append(msg)
@@ -334,3 +528,53 @@ def material_fit(c: float, slope: float, cov: np.ndarray, *, depth_mm: np.ndarra
         confidence=confidence, ci_method=ci_method, max_w_over_h=wh,
         out_of_table=msg is not None, out_of_table_message=msg, notes=tuple(notes),
     )
+
+
+def _table_top(rel, c: float, beta: float, beta_se: float, tq: float) -> float | None:
+    """The lower end of beta's interval when beta lies above a tabulated relation's peak
+    but its interval reaches back into the table; else None."""
+    grid = getattr(rel, "beta_grid", None)
+    if grid is None or not (c > 0 and np.isfinite(beta_se) and np.isfinite(tq)):
+        return None
+    lo = beta - tq * beta_se
+    if beta >= rel.beta_max and lo < rel.beta_max:
+        return float(lo)
+    return None
+
+
+def _at_table_top(rel, beta_lo: float, c: float, cov: np.ndarray, tq: float, a: float,
+                  ah: float, kappa_source: str, contact: str, confidence: float):
+    """nu, its interval, E, its interval and kappa for beta at the top of the FEM table.
+
+    Near its peak the FEM's beta(nu) is flat (a bonded punch at a/h ~ 0.8
+    peaks near nu = 0.485 and falls beyond): a beta a little above the peak
+    is the peak within the scatter. nu is put at the peak; its interval runs
+    from the nu of beta's lower bound on the rising branch to the largest
+    tabulated nu whose beta still reaches that bound (on the falling branch);
+    E at the peak, its interval E over that range of nu with c at its own
+    bounds.
+    """
+    first, last = rel.branch
+    nu_peak = float(rel.nu_grid[last])
+    fine = np.linspace(float(rel.nu_grid[first]), float(rel.nu_grid[-1]), 2001)
+    b = np.asarray(rel.beta(fine))
+    ok = b >= beta_lo
+    nu_lo = float(fine[np.argmax(ok)]) if ok.any() else nu_peak
+    nu_hi = float(fine[len(ok) - 1 - np.argmax(ok[::-1])]) if ok.any() else nu_peak
+
+    def modulus(cc: float, nu: float) -> tuple[float, float]:
+        if getattr(rel, "kappa_line_grid", None) is not None:
+            k = rel.kappa_line(nu)
+        else:
+            k = float(kappa(nu, ah, source=kappa_source, contact=contact))
+        return cc * (1 - nu ** 2) / (2 * a * k), k
+
+    E, kap = modulus(c, nu_peak)
+    c_se = float(np.sqrt(cov[0, 0]))
+    Es = [modulus(cc, nn)[0] for cc in (c - tq * c_se, c + tq * c_se) for nn in (nu_lo, nu_hi)]
+    note = (f"beta lies above the largest beta of the table ({rel.beta_max:.4f}, at nu = "
+            f"{nu_peak:.3f}) but within its {confidence:.0%} interval (lower bound "
+            f"{beta_lo:.4f}): nu is put at the table's top, {nu_peak:.3f}, with the interval "
+            f"[{nu_lo:.4f}, {nu_hi:.4f}] of the nu whose beta reaches that bound; E at "
+            f"nu = {nu_peak:.3f}, its interval over that range")
+    return nu_peak, (nu_lo, nu_hi), E, (float(min(Es)), float(max(Es))), kap, note

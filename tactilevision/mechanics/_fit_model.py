@@ -9,6 +9,7 @@ from dataclasses import replace
 import numpy as np
 
 from .._checks import InputError
+from ._fem_tables import TABLE_EXTRAPOLATION
 from ._fit import MAX_W_OVER_H, _geometry, _positive, material_fit
 from ._model import IndentationModel, ModelFit, make_effect
 from ._result import IndentationFit
@@ -91,9 +92,10 @@ def fit_model(columns: Mapping[str, np.ndarray], model: IndentationModel | str =
     if not 0 < confidence < 1:
         raise ValueError(f"confidence must be in (0, 1), got {confidence!r}")
     w0 = np.asarray(columns.get("depth_mm", []), np.float64)
-    if beta_table == "fem" and w0.size and float(np.max(w0 / h)) > MAX_W_OVER_H + 1e-12:
+    top = MAX_W_OVER_H * TABLE_EXTRAPOLATION
+    if beta_table == "fem" and w0.size and float(np.max(w0 / h)) > top + 1e-12:
         raise InputError(f"a press reaches w/h = {float(np.max(w0 / h)):.3f}, beyond the FEM "
-                         f"beta table's w/h <= {MAX_W_OVER_H:g}: drop the deeper presses or use "
+                         f"beta table's w/h <= {top:g}: drop the deeper presses or use "
                          "beta_table='paper'")
     mf = model.fit(columns, thickness_mm=h, loss=loss)
     w = np.asarray(columns["depth_mm"], np.float64) + mf.params.get("depth_offset.delta_mm", 0.0)
@@ -128,7 +130,7 @@ def fit_model(columns: Mapping[str, np.ndarray], model: IndentationModel | str =
         notes.append("no large_deformation in the model: without beta, nu and E are not derived")
     if beta_table == "fem":
         # the table is read at the corrected depths, up to its last w/h
-        w = np.minimum(w, MAX_W_OVER_H * h)
+        w = np.minimum(w, MAX_W_OVER_H * TABLE_EXTRAPOLATION * h)
     ah, kappa_source, contact = _geometry(w, h, a, beta_table, a_over_h, contact)
     P = np.asarray(columns["force_n"], np.float64)
     tss = float(np.sum((P / w - np.mean(P / w)) ** 2))

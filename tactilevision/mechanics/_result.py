@@ -63,6 +63,14 @@ class IndentationFit:
     out_of_table_message : str or None
     notes : tuple of str
         Decisions and warnings in plain sentences.
+    depth_std_used : bool
+        Whether the certified depth uncertainties entered the fit (errors in
+        both variables, effective variance); False by default.
+    depth_std_median_mm : float
+        Median depth uncertainty of the presses, mm; NaN when not used.
+    sigma0_n : float
+        Force scatter not explained by the depth uncertainties (the extra
+        variance of the effective-variance fit), N; NaN when not used.
     """
 
     E_mpa: float
@@ -100,6 +108,9 @@ class IndentationFit:
     out_of_table: bool
     out_of_table_message: str | None
     notes: tuple[str, ...]
+    depth_std_used: bool = False
+    depth_std_median_mm: float = math.nan
+    sigma0_n: float = math.nan
 
     def to_json_dict(self) -> dict[str, Any]:
         """The ``fit --json`` object: the contract's keys first, then extras.

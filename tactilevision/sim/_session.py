@@ -63,9 +63,11 @@ class SessionSpec:
     wait_s : (float, float)
         Range of the rest between presses.
     overshoot_mm : (float, float)
-        The stage stops this far past the land contact (uniform; default 0:
-        an exact stage). Keep it tiny: a mean depth bias of 0.25 um at the
-        shallowest indenter already moves the fitted nu by about 0.008.
+        The stage stops this far past w0 (uniform; default 0: an exact
+        stage). With the machined bevel (``block.bevel_angle_deg > 0``)
+        certification measures it; with the legacy drawn mark it is an
+        unseen depth error (0.25 um at every press already moves the fitted
+        nu by about 0.01).
     x_range_mm, y_range_mm : (float, float)
         Press centres, relative to the image centre (x along columns, y down
         the rows).
@@ -104,8 +106,8 @@ class SessionSpec:
     lead_s: float = 0.2
     wait_s: tuple[float, float] = (1.5, 2.5)
     overshoot_mm: tuple[float, float] = (0.0, 0.0)
-    x_range_mm: tuple[float, float] = (-5.0, 2.5)
-    y_range_mm: tuple[float, float] = (-3.0, 3.0)
+    x_range_mm: tuple[float, float] = (-6.5, -1.3)
+    y_range_mm: tuple[float, float] = (-4.0, 4.0)
     misaligned: tuple[int, ...] = ()
     misaligned_fraction: float = 0.3
     edge_presses: tuple[int, ...] = ()
@@ -169,11 +171,12 @@ def make_session(folder: str | Path, spec: SessionSpec | None = None, *,
     h = spec.thickness_mm
     a = spec.block.radius_mm
     prof = profile if profile is not None else press_profile(
-        a / h, spec.nu, w_over_h_max=max(0.22, max(spec.block.depths_mm) / h * 1.05))
+        a / h, spec.nu,
+        w_over_h_max=max(0.22, (max(spec.block.depths_mm) + spec.overshoot_mm[1]) / h * 1.05))
     rng = np.random.default_rng(spec.seed)
 
     depths = np.asarray(spec.block.depths_mm, np.float64)
-    if spec.block.land == "bulge":
+    if spec.block.land == "bulge" and not spec.block.vernier:
         w_c = np.array([land_contact_depth(w / h, prof) * h for w in depths])
     else:
         w_c = depths.copy()
@@ -264,7 +267,9 @@ def _write_toml(out: Path, spec: SessionSpec, s: float, shape: tuple[int, int],
         f"gel_radius_mm = {float(half.max()):.3f}", "",
         "[indenter]", f"radius_mm = {b.radius_mm}", "",
         "[gauge_block]", "depths_mm = [" + ", ".join(f"{d:g}" for d in b.depths_mm) + "]",
-        f"bevel_offset_mm = {b.bevel_offset_mm}", f"bevel_angle_deg = {b.bevel_angle_deg}",
+        f"bevel_offset_mm = {b.bevel_offset_mm}",
+        f"bevel_direction_deg = {b.bevel_direction_deg}",
+        f"bevel_angle_deg = {b.bevel_angle_deg}",
         f"bevel_length_mm = {b.bevel_length_mm}", "",
         "[force_sensor]", f"rate_hz = {spec.rate_hz:g}", f"window_samples = {spec.window_samples}",
     ]
@@ -282,6 +287,9 @@ def _truth(spec: SessionSpec, sched: PressSchedule, w_c: np.ndarray, force_of_de
         presses.append({
             "press": i, "indenter": k, "w0_mm": spec.block.depths_mm[k],
             "depth_mm": round(float(sched.depth_mm[i]), 7),
+            "overshoot_mm": round(float(sched.depth_mm[i] - spec.block.depths_mm[k]), 7),
+            "bevel_reach_mm": [round(v, 7) for v in _bevel_reach(spec, prof, float(
+                sched.depth_mm[i] - spec.block.depths_mm[k]), float(sched.depth_mm[i]))],
             "force_n": round(float(force_of_depth(i, np.array([sched.depth_mm[i]]))[0]), 7),
             "x_mm": round(float(sched.x_mm[i]), 4), "y_mm": round(float(sched.y_mm[i]), 4),
             "t_start_s": round(float(sched.t_start_s[i]), 6),
@@ -297,9 +305,42 @@ def _truth(spec: SessionSpec, sched: PressSchedule, w_c: np.ndarray, force_of_de
         "recovery_r": spec.recovery_r, "recovery_tau_s": spec.recovery_tau_s,
         "land_contact_depth_mm": [round(float(v), 7) for v in w_c],
         "land": spec.block.land,
+        "bevel": {"offset_mm": spec.block.bevel_offset_mm,
+                  "direction_deg": spec.block.bevel_direction_deg,
+                  "angle_deg": spec.block.bevel_angle_deg,
+                  "length_mm": spec.block.bevel_length_mm},
         "note": ("depth_mm is the true indentation while the force window is taken: the depth "
                  "at which the land meets the gel (w0 for the 'ideal' land, less for 'bulge'), "
                  "plus the stage's overshoot; force_n is the FEM force there (a bonded "
-                 "Neo-Hookean layer)"),
+                 "Neo-Hookean layer); overshoot_mm = depth_mm - w0; bevel_reach_mm: how far the "
+                 "gel meets the bevel's flanks from the crest, towards and away from the indenter "
+                 "(on the crest's middle; 0 when it does not touch)"),
         "presses": presses,
     }
+
+
+def _bevel_reach(spec: SessionSpec, prof: PressProfile, overshoot_mm: float,
+                 depth_mm: float) -> tuple[float, float]:
+    """How far the gel meets the ridge's flanks from the crest, inwards and outwards, mm.
+
+    On the crest's middle line: the flank ``overshoot - |u| tan(theta)`` meets
+    the FEM surface ``z(r_b + u)`` (positive into the gel) where they cross;
+    0 when the crest does not reach the gel or the block has no ridge.
+    """
+    b = spec.block
+    if not b.vernier:
+        return 0.0, 0.0
+    h = spec.thickness_mm
+    tan = np.tan(np.deg2rad(b.bevel_angle_deg))
+    out = []
+    for sign in (-1.0, 1.0):
+        u = np.linspace(0.0, (overshoot_mm + 0.2 * depth_mm) / tan + 0.05, 4001)
+        gap = overshoot_mm - u * tan - prof.depth_at(depth_mm / h, (b.bevel_offset_mm + sign * u)
+                                                     / h) * h
+        if gap[0] <= 0:
+            out.append(0.0)
+            continue
+        k = int(np.argmax(gap <= 0))
+        out.append(float(np.interp(0.0, [gap[k], gap[k - 1]], [u[k], u[k - 1]])) if k else
+                   float(u[-1]))
+    return out[0], out[1]

@@ -1,6 +1,7 @@
 """Figures: depth-map images, force-depth validation (more with the reports)."""
 
 from ._calibration import (
+    bevel_panels,
     calibration_figures,
     write_calibration_report,
 )
@@ -9,7 +10,8 @@ from ._diagnosis import diagnosis_figures, write_diagnosis_report
 from ._forces import force_figure, save_force_image
 from ._validation import save_validation_figure, validation_figure
 
-__all__ = ["calibration_figures", "depth_figure", "diagnosis_figures", "force_figure",
+__all__ = ["bevel_panels", "calibration_figures", "depth_figure", "diagnosis_figures",
+           "force_figure",
            "nice_scale_bar_mm",
            "save_depth_image", "save_force_image", "save_validation_figure", "validation_figure",
            "write_calibration_report", "write_diagnosis_report"]

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["calibration_figures", "write_calibration_report"]
+__all__ = ["bevel_panels", "calibration_figures", "write_calibration_report"]
 
 
 def _plt():
@@ -63,11 +63,19 @@ def calibration_figures(cal, out_dir: str | Path, *, reconstructor=None, dpi: in
     Returns
     -------
     paths : dict of str to Path
-        ``force_depth``, ``stiffness_line``, ``residuals``, ``mosaic``.
+        ``force_depth``, ``stiffness_line``, ``residuals`` (with a fit),
+        ``mosaic`` (with a certified press), ``bevel`` (the bevel of every
+        press, certified or rejected).
     """
     plt = _plt()
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
+    paths: dict[str, Path] = {}
+    if cal.fit is None:
+        if cal.certification.presses:
+            paths["mosaic"] = _mosaic(cal, out / "mosaic.png", reconstructor, dpi)
+        paths["bevel"] = bevel_panels(cal, out / "bevel.png", dpi=dpi)
+        return paths
     fit = cal.fit
     ps = cal.certification.presses
     w = cal.depth_mm
@@ -76,17 +84,18 @@ def calibration_figures(cal, out_dir: str | Path, *, reconstructor=None, dpi: in
     h = fit.thickness_mm
     ok = np.isfinite(fit.c_n_per_mm) and np.isfinite(fit.beta)
     ww = np.linspace(0, w.max() * 1.08, 200)
-    paths = {}
 
     fig, ax = plt.subplots(figsize=(5.5, 4), layout="constrained")
+    sd = cal.depth_std_mm if len(cal.depth_std_mm) == len(ps) else np.zeros(len(ps))
     for k in np.unique(ind):
         s = ind == k
         w0 = ps[np.flatnonzero(s)[0]].w0_mm
-        ax.plot(w[s], p[s], "o", ms=4, label=f"indenter {k} (w0 = {w0:g} mm)")
+        ax.errorbar(w[s], p[s], xerr=2 * sd[s], fmt="o", ms=4, elinewidth=0.8,
+                    label=f"indenter {k} (w0 = {w0:g} mm)")
     if ok:
         ax.plot(ww, ww * _fit_line(fit, ww), "-", color="0.3",
                 label=f"eq. (5): c = {fit.c_n_per_mm:.3f} N/mm, beta = {fit.beta:.3f}")
-    ax.set_xlabel("certified depth w (mm)")
+    ax.set_xlabel("certified depth w (mm; bars: 2 sd)")
     ax.set_ylabel("force P (N)")
     ax.legend(fontsize=7)
     ax.set_title("force against depth")
@@ -135,6 +144,7 @@ def calibration_figures(cal, out_dir: str | Path, *, reconstructor=None, dpi: in
     plt.close(fig)
 
     paths["mosaic"] = _mosaic(cal, out / "mosaic.png", reconstructor, dpi)
+    paths["bevel"] = bevel_panels(cal, out / "bevel.png", dpi=dpi)
     return paths
 
 
@@ -160,21 +170,113 @@ def _mosaic(cal, path: Path, reconstructor, dpi: int) -> Path:
             ax.imshow(d, cmap="magma")
         cx, cy = q.footprint.center_px
         ax.add_patch(Circle((cx, cy), q.footprint.radius_px, fill=False, ec="w", lw=1.2))
-        t = np.deg2rad(cfg.bevel_angle_deg)
+        t = np.deg2rad(cfg.bevel_direction_deg)
         bx = cx + cfg.bevel_offset_mm / s * np.cos(t)
         by = cy + cfg.bevel_offset_mm / s * np.sin(t)
         L = 0.5 * cfg.bevel_length_mm / s
         ax.plot([bx + L * np.sin(t), bx - L * np.sin(t)], [by - L * np.cos(t), by + L * np.cos(t)],
                 "-", color="r", lw=1.5)
         ax.set_title(f"indenter {k}, press {q.press}\nw = "
-                     f"{cal.depth_mm[ps.index(q)]:.3f} mm, bevel score {q.bevel_score:.1f}",
+                     f"{cal.depth_mm[ps.index(q)]:.4f} mm, bevel SNR {q.bevel_score:.0f}",
                      fontsize=8)
         ax.set_xticks([])
         ax.set_yticks([])
-    fig.suptitle("certification frames: footprint (white) and bevel contact (red)", fontsize=9)
+    fig.suptitle("certification frames: footprint (white) and the bevel's crest (red)",
+                 fontsize=9)
     fig.savefig(path, dpi=dpi)
     plt.close(fig)
     return path
+
+
+def bevel_panels(cal, path: str | Path, *, dpi: int = 100, columns: int = 10) -> Path:
+    """One small panel per press: its bevel, seen across the crest, and what was read.
+
+    Each panel is the colour change (frame - reference, the three channels
+    stretched to the press's own range) in the bevel's frame: across the
+    crest horizontally (the indenter to the left), along the crest
+    vertically, at the frame certification used (its window's first frame)
+    or, for a rejected press, the frame its rejection names. For a vernier
+    (``bevel_angle_deg > 0``) the dashed lines mark the crest and the
+    band's edges read (crest +- L); the title gives the press, w0, the
+    overshoot past w0 with its standard uncertainty and the signal-to-noise
+    ratio, or the rejection's reason.
+
+    Parameters
+    ----------
+    cal : SessionCalibration
+    path : str or Path
+        PNG to write.
+    dpi : int, default 100
+    columns : int, default 10
+
+    Returns
+    -------
+    path : Path
+    """
+    import cv2
+
+    plt = _plt()
+    cert = cal.certification
+    cfg = cal.session.config
+    s = cfg.mm_per_px
+    tan = float(np.tan(np.deg2rad(cfg.bevel_angle_deg)))
+    reach_mm = max(0.6, min(0.1 / tan, 3.0) + 0.25) if tan > 0 else 0.8
+    items = [("ok", q) for q in cert.presses] + [("rej", r) for r in cert.rejected]
+    items.sort(key=lambda it: it[1].press)
+    n = max(len(items), 1)
+    cols = min(columns, n)
+    rows = -(-n // cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(1.6 * cols, 1.9 * rows), squeeze=False,
+                             layout="constrained")
+    depth = {q.press: (d, sd) for q, d, sd in zip(
+        cert.presses, cal.depth_mm,
+        cal.depth_std_mm if len(cal.depth_std_mm) == len(cert.presses)
+        else np.zeros(len(cert.presses)), strict=True)}
+    t = np.deg2rad(cfg.bevel_direction_deg)
+    for ax in axes.ravel():
+        ax.set_axis_off()
+    for ax, (kind, q) in zip(axes.ravel(), items, strict=False):
+        centre = (tuple(q.footprint.center_px) if kind == "ok" else q.centre_px)
+        if centre is None:
+            ax.text(0.5, 0.5, f"press {q.press}\n{q.reason}", ha="center", va="center",
+                    fontsize=6, transform=ax.transAxes, color="C3")
+            continue
+        bx = centre[0] + cfg.bevel_offset_mm / s * np.cos(t)
+        by = centre[1] + cfg.bevel_offset_mm / s * np.sin(t)
+        u = np.arange(-reach_mm, reach_mm + 1e-9, s) / s
+        v = np.arange(-0.6 * cfg.bevel_length_mm, 0.6 * cfg.bevel_length_mm + 1e-9, s) / s
+        uu, vv = np.meshgrid(u, v)
+        x = (bx + uu * np.cos(t) - vv * np.sin(t)).astype(np.float32)
+        y = (by + uu * np.sin(t) + vv * np.cos(t)).astype(np.float32)
+        frame = cal.session.frame(q.frame).astype(np.float32)
+        d = frame - cal.session.reference.astype(np.float32)
+        crop = cv2.remap(d, x, y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT,
+                         borderValue=(0, 0, 0))
+        lim = max(float(np.percentile(np.abs(crop), 99)), 1.0)
+        rgb = np.clip(0.5 + 0.5 * crop[..., ::-1] / lim, 0, 1)
+        ax.imshow(rgb, extent=(u[0] * s, u[-1] * s, v[-1] * s, v[0] * s), aspect="auto")
+        if kind == "ok":
+            r = q.reading
+            dd, sd = depth[q.press]
+            if r is not None:
+                for e in (r.crest_px - r.half_width_px, r.crest_px, r.crest_px + r.half_width_px):
+                    ax.axvline(e * s, color="w" if e != r.crest_px else "y", lw=0.7, ls="--")
+                title = (f"press {q.press} (w0 {q.w0_mm:g})\n+{1e3 * (dd - q.w0_mm):.1f} "
+                         f"± {1e3 * sd:.1f} um, SNR {q.bevel_score:.0f}")
+            else:
+                title = f"press {q.press} (w0 {q.w0_mm:g})\nmark SNR {q.bevel_score:.0f}"
+            ax.set_title(title, fontsize=6)
+        else:
+            snr = "" if not np.isfinite(q.bevel_score) else f", SNR {q.bevel_score:.0f}"
+            ax.set_title(f"press {q.press}: rejected\n{q.reason}{snr}", fontsize=6, color="C3")
+    mode = ("vernier: dashed lines at the crest (yellow) and the band's edges read; "
+            "titles: overshoot past w0 ± 1 sd" if tan > 0 else "bevel mark at its onset")
+    fig.suptitle(f"the bevel of every press, across the crest (mm; indenter to the left); "
+                 f"{mode}", fontsize=8)
+    out = Path(path)
+    fig.savefig(out, dpi=dpi)
+    plt.close(fig)
+    return out
 
 
 def write_calibration_report(cal, out_dir: str | Path, figures: dict[str, Path]) -> Path:
@@ -199,29 +301,67 @@ def write_calibration_report(cal, out_dir: str | Path, figures: dict[str, Path])
         f"<tr><td>{r.press}</td><td>{e(r.reason)}</td><td>{e(r.detail)}</td>"
         f"<td>{r.t_frame_s:.2f}</td></tr>" for r in c.rejected)
     warn = "".join(f"<li>{e(w)}</li>" for w in cal.warnings) or "<li>none</li>"
-    if np.isfinite(fit.E_mpa):
-        result = (f"<p class=big>E = {fit.E_mpa:.4f} MPa "
-                  f"({fit.confidence:.0%} CI {fit.E_ci95_mpa[0]:.4f} to {fit.E_ci95_mpa[1]:.4f}),"
-                  f" nu = {fit.nu:.4f} ({fit.nu_ci95[0]:.4f} to {fit.nu_ci95[1]:.4f})</p>")
+    if fit is None:
+        result = (f"<p class=big>Nothing was fitted: {e(cal.failure or '')}</p>"
+                  "<p>The bevel panels below show what each press looked like and why it was "
+                  "rejected.</p>")
+        fit_text = ""
     else:
-        result = f"<p class=big>E and nu not computed: {e(fit.out_of_table_message or '')}</p>"
+        if np.isfinite(fit.E_mpa):
+            result = (f"<p class=big>E = {fit.E_mpa:.4f} MPa ({fit.confidence:.0%} CI "
+                      f"{fit.E_ci95_mpa[0]:.4f} to {fit.E_ci95_mpa[1]:.4f}), nu = {fit.nu:.4f} "
+                      f"({fit.nu_ci95[0]:.4f} to {fit.nu_ci95[1]:.4f})</p>")
+        else:
+            result = (f"<p class=big>E and nu not computed: "
+                      f"{e(fit.out_of_table_message or '')}</p>")
+        fit_text = (f"Fit of eq. (5) P/w = c (1 + beta w/h): c = {fit.c_n_per_mm:.4f} N/mm, "
+                    f"beta = {fit.beta:.4f}, rmse {fit.rmse_n:.4f} N, R<sup>2</sup> = "
+                    f"{fit.r_squared:.5f}; beta and kappa from the {e(fit.beta_table)} tables "
+                    f"({e(fit.contact)} punch), h = {fit.thickness_mm:g} mm, "
+                    f"a = {fit.radius_mm:g} mm. Intervals: {e(fit.ci_method)}.")
+        notes = [n for n in fit.notes if n not in cal.warnings]
+        warn += "".join(f"<li>{e(n)}</li>" for n in notes if "interval" in n or "table" in n)
+    rule_text = {
+        "land": "the depth at which the bulging gel meets the block land, from the FEM at the "
+                "fitted nu",
+        "nominal": "the paper's w = w0, the indenter's height over the land, at the first frame "
+                   "showing the bevel mark",
+        "vernier": "w0 plus the overshoot read on the bevel: the band of contact on its flanks, "
+                   "half-width L, closes the gap by L tan(theta); less the gel's bulge there "
+                   "(FEM) when bulge_correction is on",
+    }[cal.depth_rule]
+    optics = c.bevel_optics
+    optics_text = ("" if not optics else
+                   f" Bevel read with an edge blur of {optics['blur_px']:g} px (chosen on "
+                   f"{optics['n_bands']} long bands)"
+                   + ("; short bands leaned on the session's flank colours" if optics.get("prior")
+                      else "") + ".")
+    table = ""
+    if c.presses:
+        sd = (cal.depth_std_mm if len(cal.depth_std_mm) == len(c.presses)
+              else np.zeros(len(c.presses)))
+        bulge = cal.bulge_mm if len(cal.bulge_mm) == len(c.presses) else np.zeros(len(c.presses))
+        trs = "".join(
+            f"<tr><td>{q.press}</td><td>{q.indenter}</td><td>{q.w0_mm:g}</td>"
+            f"<td>{d:.5f}</td><td>{1e3 * u:.2f}</td><td>{1e3 * (d - q.w0_mm):+.2f}</td>"
+            f"<td>{1e3 * b:.2f}</td><td>{q.force_n:.4f}</td><td>{q.bevel_score:.0f}</td></tr>"
+            for q, d, u, b in zip(c.presses, cal.depth_mm, sd, bulge, strict=True))
+        table = ("<h2>Certified presses</h2><table><tr><th>press</th><th>indenter</th>"
+                 "<th>w0 (mm)</th><th>depth (mm)</th><th>sd (um)</th><th>overshoot (um)</th>"
+                 "<th>bulge (um)</th><th>force (N)</th><th>bevel SNR</th></tr>"
+                 f"{trs}</table>")
     figs = _figures_html(figures)
     page = _html_head(f"tactilevision calibrate: {cal.session.path}") + f"""\
 <h1>Elastomer calibration of {e(str(cal.session.path))}</h1>
 {result}
-<p>{len(c.presses)} presses certified, {len(c.rejected)} rejected. Fit of eq. (5)
-P/w = c (1 + beta w/h): c = {fit.c_n_per_mm:.4f} N/mm, beta = {fit.beta:.4f},
-rmse {fit.rmse_n:.4f} N, R<sup>2</sup> = {fit.r_squared:.5f}; beta and kappa from
-the {e(fit.beta_table)} tables ({e(fit.contact)} punch), h = {fit.thickness_mm:g} mm,
-a = {fit.radius_mm:g} mm.</p>
-<p>Certified depth rule: <b>{e(cal.depth_rule)}</b>
-{"(the depth at which the bulging gel meets the block land, from the FEM at the fitted nu)"
- if cal.depth_rule == "land" else "(the paper's w = w0, the indenter's height over the land)"}.
+<p>{len(c.presses)} presses certified, {len(c.rejected)} rejected. {fit_text}</p>
+<p>Certified depth rule: <b>{e(cal.depth_rule)}</b> ({rule_text}).{optics_text}
 Clock offset t_force - t_frame = {c.clock_offset_s:.4f} s ({e(c.clock_source)}).
 Camera noise {c.noise_sigma:.2f} grey levels. Took {cal.seconds:.1f} s.</p>
-<h2>Warnings</h2><ul>{warn}</ul>
+<h2>Warnings and notes</h2><ul>{warn}</ul>
 <h2>Rejected presses</h2>
 <table><tr><th>press</th><th>reason</th><th>detail</th><th>t (s)</th></tr>{rows}</table>
+{table}
 <h2>Figures</h2>{figs}
 <p>Files: measurements.csv (one row per certified press), fit.json, rejected.csv.</p>
 </body></html>

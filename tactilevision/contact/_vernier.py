@@ -1,0 +1,408 @@
+"""The bevel as a vernier: how far past w0 a press went, read from the bevel's contact.
+
+The gauge block's bevel is a V-shaped ridge beside each indenter (see
+:class:`BevelGeometry`): its straight crest lies in the block's reference
+plane, w0 behind the indenter face, and its flanks fall away from the gel at
+the angle theta. Pressed to the depth w = w0 + delta, the crest lies delta
+into the gel, and the gel meets the flanks over a band of half-width
+
+``L = (delta + b) / tan(theta)``
+
+across the crest (b: how far the gel's own surface rises at the crest, the
+bulge; :func:`bulge_at`). Measuring L to a fraction of a pixel measures
+delta to a fraction of ``tan(theta)`` pixels: 0.1 px at 0.0295 mm/px and
+theta = 5 deg is 0.26 um. That is the vernier.
+
+What the camera sees of the band depends on the sensor: the flanks tilt the
+gel by theta, so each flank has a uniform colour change (its own colour, as
+the flanks face opposite ways), bounded by the band's edges; renderers and
+real optics add lines or shadows along those edges. :func:`bevel_profile`
+averages the colour change along the crest into a profile across it, and
+:func:`read_bevel` fits that profile with the band's model: two flank
+plateaus of free colour meeting at the crest, a line of free colour at each
+edge and at the crest, over a linear background, all blurred by about a
+pixel; the band's half-width L and the crest's position are found by a grid
+search refined to 0.05 px (variable projection: for each (crest, L) the
+colours follow by linear least squares).
+
+Short bands (a few pixels) do not show their shape: their flanks' colours
+are then taken from the session's long bands (``flank_colours``, a prior),
+and the band's strength gives L.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.special import erf
+
+from .._checks import InputError, check_array
+
+__all__ = ["BevelGeometry", "BevelProfile", "BevelReading", "bevel_profile", "read_bevel"]
+
+_EDGE_BLUR_PX = 1.0      # sd of the Gaussian blur of the band's edges (optics, JPEG)
+_LINE_SD_PX = 1.2        # sd of the lines at the edges and the crest
+#: Standard uncertainty of the band model itself, px, added in quadrature to the noise's:
+#: the flanks meet a sloping, bulging gel surface (the two edges lie at different distances
+#: from the crest) and the edge shape is only approximately a blurred step. Measured on the
+#: 50 presses of a simulated session: errors of 0.25 px sd where the noise alone gave 0.11 px
+#: (benchmarks/bench_vernier.py prints the z-scores).
+MODEL_FLOOR_PX = 0.25
+
+
+@dataclass(frozen=True)
+class BevelGeometry:
+    """Where and how the bevel ridge sits beside each indenter (session.toml ``[gauge_block]``).
+
+    Attributes
+    ----------
+    offset_mm : float
+        Distance in the gel plane from the indenter axis to the crest line, mm
+        (``bevel_offset_mm``).
+    direction_deg : float
+        Direction from the indenter axis to the bevel in the image, degrees:
+        0 = +x (along the columns), 90 = +y (down the rows)
+        (``bevel_direction_deg``).
+    angle_deg : float
+        Flank angle theta of the ridge to the block's reference plane,
+        degrees (``bevel_angle_deg``); 0: a mark with no vernier.
+    length_mm : float
+        Length of the crest line, mm (``bevel_length_mm``).
+    """
+
+    offset_mm: float
+    direction_deg: float = 0.0
+    angle_deg: float = 0.0
+    length_mm: float = 2.4
+
+    @property
+    def tan_theta(self) -> float:
+        """tan(theta) of the flanks (0 without a vernier)."""
+        return math.tan(math.radians(self.angle_deg))
+
+    def crest_px(self, centre_px: tuple[float, float], mm_per_px: float) -> tuple[float, float]:
+        """(x, y) of the crest's middle in the image for an indenter axis at `centre_px`, px."""
+        t = math.radians(self.direction_deg)
+        return (centre_px[0] + self.offset_mm / mm_per_px * math.cos(t),
+                centre_px[1] + self.offset_mm / mm_per_px * math.sin(t))
+
+
+@dataclass(frozen=True)
+class BevelProfile:
+    """The colour change across the bevel's crest, averaged along it.
+
+    Attributes
+    ----------
+    u_px : (K,) float64 ndarray
+        Position across the crest, px, from the nominal crest line, positive
+        away from the indenter.
+    colour : (K, 3) float64 ndarray
+        Mean colour change (frame - reference) over the sampled part of the
+        crest, grey levels, in the frames' channel order.
+    coverage : float
+        Fraction of the sampled band (crest length x profile range) inside
+        the image.
+    """
+
+    u_px: np.ndarray
+    colour: np.ndarray
+    coverage: float
+
+
+@dataclass(frozen=True)
+class BevelReading:
+    """The band of contact on the bevel, read from one or more profiles.
+
+    Attributes
+    ----------
+    half_width_px, half_width_std_px : float
+        L, the band's half-width across the crest, and its standard
+        uncertainty, px.
+    crest_px : float
+        The crest's position found, px from the nominal line (positive away
+        from the indenter).
+    snr : float
+        Detection strength: the square root of the drop in the residual sum
+        of squares from the background alone to the band's model, in units of
+        the residual noise variance (a signal-to-noise ratio; about 4 to 7
+        with no band in view, ``read_bevel`` notes).
+    closure_mm, closure_std_mm : float
+        ``L tan(theta) * mm_per_px``: how far the crest is pressed into the
+        gel's surface (overshoot plus bulge), and its uncertainty, mm.
+    resolved : bool
+        Whether L exceeds the edge blur enough for the band's shape to show
+        (L >= 2.5 px); unresolved bands lean on the flank colours' prior.
+    flank_colours : (2, 3) float64 ndarray
+        Fitted colour of the inner (towards the indenter) and outer flank.
+    noise : float
+        Residual noise of the profile, grey levels.
+    model : (K, 3) float64 ndarray
+        The fitted profile (for plots).
+    """
+
+    half_width_px: float
+    half_width_std_px: float
+    crest_px: float
+    snr: float
+    closure_mm: float
+    closure_std_mm: float
+    resolved: bool
+    flank_colours: np.ndarray
+    noise: float
+    model: np.ndarray
+
+
+def bevel_profile(frame: np.ndarray, reference: np.ndarray, centre_px: tuple[float, float],
+                  mm_per_px: float, bevel: BevelGeometry, *, reach_px: float,
+                  step_px: float = 0.5, crest_fraction: float = 0.8) -> BevelProfile:
+    """Sample the colour change across the bevel's crest, averaged along it.
+
+    Parameters
+    ----------
+    frame, reference : (H, W, 3) array_like of uint8
+        The frame and the no-contact frame of the sensor.
+    centre_px : (x, y)
+        Indenter axis in the image (footprint centre), px.
+    mm_per_px : float
+    bevel : BevelGeometry
+    reach_px : float
+        The profile runs over ``|u| <= reach_px`` across the crest.
+    step_px : float, default 0.5
+        Sampling step across the crest (bilinear interpolation), px.
+    crest_fraction : float, default 0.8
+        Central part of the crest that is averaged (its ends are left out).
+
+    Returns
+    -------
+    BevelProfile
+        Samples outside the image are left out of the averages; a position
+        with none inside keeps the average of its neighbours' background
+        (zero) and lowers ``coverage``. Never NaN.
+
+    Raises
+    ------
+    ShapeError
+        For frames that are not (H, W, 3) or differ in shape.
+    """
+    import cv2
+
+    f = check_array(frame, "frame", [("H", "W", 3)])
+    r = check_array(reference, "reference", [f.shape])
+    s = float(mm_per_px)
+    t = math.radians(bevel.direction_deg)
+    cu, su = math.cos(t), math.sin(t)
+    bx, by = bevel.crest_px(centre_px, s)
+    u = np.arange(-reach_px, reach_px + 1e-9, step_px)
+    half_v = 0.5 * crest_fraction * bevel.length_mm / s
+    v = np.arange(-half_v, half_v + 1e-9, 0.5)
+    uu, vv = np.meshgrid(u, v)                        # (V, K)
+    x = (bx + uu * cu - vv * su).astype(np.float32)
+    y = (by + uu * su + vv * cu).astype(np.float32)
+    h, w = f.shape[:2]
+    inside = (x >= 0) & (x <= w - 1) & (y >= 0) & (y <= h - 1)
+    if not inside.any():
+        return BevelProfile(u_px=u, colour=np.zeros((u.size, 3)), coverage=0.0)
+    # sample only the bounding box of the band: a cheap subtraction
+    x0, x1 = max(int(np.floor(x[inside].min())), 0), min(int(np.ceil(x[inside].max())) + 1, w)
+    y0, y1 = max(int(np.floor(y[inside].min())), 0), min(int(np.ceil(y[inside].max())) + 1, h)
+    d = f[y0:y1, x0:x1].astype(np.float32) - r[y0:y1, x0:x1].astype(np.float32)
+    samp = cv2.remap(d, x - x0, y - y0, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    wgt = inside.astype(np.float64)                   # (V, K)
+    n = wgt.sum(axis=0)                               # (K,)
+    colour = np.einsum("vk,vkc->kc", wgt, samp.astype(np.float64)) / np.maximum(n, 1)[:, None]
+    return BevelProfile(u_px=u, colour=colour, coverage=float(inside.mean()))
+
+
+def _box(u: np.ndarray, a: np.ndarray, b: np.ndarray, blur: float = _EDGE_BLUR_PX) -> np.ndarray:
+    """Blurred indicator of [a, b] (broadcast), edges of sd `blur` px."""
+    k = 1.0 / (math.sqrt(2.0) * blur)
+    return 0.5 * (erf((u - a) * k) - erf((u - b) * k))
+
+
+def _line(u: np.ndarray, m: np.ndarray) -> np.ndarray:
+    return np.exp(-0.5 * ((u - m) / _LINE_SD_PX) ** 2)
+
+
+def _basis(u: np.ndarray, crest: np.ndarray, half: np.ndarray, lines: str = "all",
+           blur: float = _EDGE_BLUR_PX) -> np.ndarray:
+    """(G, K, p) design: background (3), inner and outer flank, then the lines (edges, crest)."""
+    uk = u[None, :]
+    c, L = crest[:, None], half[:, None]
+    ones = np.ones_like(uk * c)
+    x = ones * uk / max(float(np.abs(u).max()), 1.0)
+    cols = [ones, x, x * x, _box(uk, c - L, c, blur), _box(uk, c, c + L, blur)]
+    if lines in ("all", "edges"):
+        cols += [_line(uk, c - L), _line(uk, c + L)]
+    if lines in ("all", "crest"):
+        cols += [_line(uk, c)]
+    return np.stack(cols, axis=-1)
+
+
+#: Columns of the design holding the inner and outer flank colours.
+_FLANKS = (3, 4)
+
+
+def _solve(B: np.ndarray, R: np.ndarray, prior: np.ndarray | None, weight: float
+           ) -> tuple[np.ndarray, np.ndarray]:
+    """Least squares for every candidate: coefficients (G, p, 3) and residual SS (G,)."""
+    Bt = B.transpose(0, 2, 1)
+    BtB = Bt @ B
+    BtR = Bt @ R
+    A, Y = BtB.copy(), BtR.copy()
+    if prior is not None:                 # pseudo-observations pulling the flank colours
+        for j, col in enumerate(_FLANKS):
+            A[:, col, col] += weight
+            Y[:, col, :] += weight * prior[j][None, :]
+    A += 1e-9 * np.trace(A, axis1=1, axis2=2)[:, None, None] * np.eye(B.shape[2])
+    coef = np.linalg.solve(A, Y)
+    # ||R - B coef||^2 = ||R||^2 - 2 <BtR, coef> + <coef, BtB coef>
+    rss = (float(np.sum(R * R)) - 2.0 * np.einsum("gpc,gpc->g", BtR, coef)
+           + np.einsum("gpc,gpc->g", coef, BtB @ coef))
+    if prior is not None:
+        for j, col in enumerate(_FLANKS):
+            rss = rss + weight * np.sum((coef[:, col, :] - prior[j][None, :]) ** 2, axis=1)
+    return coef, rss
+
+
+def read_bevel(profiles: list[BevelProfile] | BevelProfile, bevel: BevelGeometry,
+               mm_per_px: float, *, max_closure_mm: float = 0.1, crest_range_px: float = 6.0,
+               flank_colours: np.ndarray | None = None, colour_sd: float = 0.3,
+               coarse: bool = False, lines: str = "all", blur_px: float = _EDGE_BLUR_PX
+               ) -> BevelReading:
+    """Read the band of contact on the bevel from profiles across its crest.
+
+    Parameters
+    ----------
+    profiles : BevelProfile or list of BevelProfile
+        Profiles of frames at the same depth (the frames of a force window);
+        they are averaged.
+    bevel : BevelGeometry
+        Needs ``angle_deg > 0``.
+    mm_per_px : float
+    max_closure_mm : float, default 0.1
+        Largest crest penetration looked for: L runs up to
+        ``max_closure_mm / tan(theta)`` (and the profile's reach less 6 px).
+    crest_range_px : float, default 6.0
+        The crest is looked for within this of its nominal line (the
+        footprint centre and the scale place it to a few pixels).
+    flank_colours : (2, 3) array_like, optional
+        Prior colours of the inner and outer flank (the session's long
+        bands); they decide L when the band is too short to show its shape.
+    colour_sd : float, default 0.3
+        Relative standard deviation of that prior (the flanks' colours vary
+        over the sensor with its lighting).
+    coarse : bool, default False
+        Stop at the 1 px grid (a quick look: L and the crest to +-0.5 px).
+
+    Returns
+    -------
+    BevelReading
+
+    Raises
+    ------
+    InputError
+        For a bevel without a vernier (``angle_deg`` 0) or profiles of
+        different samplings.
+
+    Notes
+    -----
+    Model, for u across the crest (px) with the crest at c:
+    ``R(u) = a + b u + q u^2 + k_in B(c - L, c) + k_out B(c, c + L)
+    + e_in G(c - L) + e_out G(c + L) + e_c G(c)``, B a box with edges
+    blurred by a Gaussian of sd 1 px, G a Gaussian line of sd 1.2 px, the
+    coefficients (3-vectors, one per colour channel) free; the quadratic
+    background takes up the press's own shading (the bulge's slopes). (c, L) on a grid
+    of 1 px, then 0.25 px and 0.05 px around the best. The uncertainty of L comes from
+    the curvature of the residual sum of squares against L (profile
+    likelihood), with the residual variance and its correlation along the
+    profile (interpolated, JPEG-compressed frames) counted, plus the model's
+    own :data:`MODEL_FLOOR_PX` in quadrature.
+    """
+    if isinstance(profiles, BevelProfile):
+        profiles = [profiles]
+    if not profiles:
+        raise InputError("read_bevel needs at least one profile")
+    tan = bevel.tan_theta
+    if tan <= 0:
+        raise InputError("the bevel has no vernier (bevel_angle_deg = 0): nothing to read")
+    u = profiles[0].u_px
+    for p in profiles[1:]:
+        if p.u_px.shape != u.shape or not np.allclose(p.u_px, u):
+            raise InputError("read_bevel: the profiles are sampled differently")
+    R = np.mean([p.colour for p in profiles], axis=0)     # (K, 3)
+    s = float(mm_per_px)
+    step = float(u[1] - u[0])
+    reach = float(u[-1])
+    l_max = max(1.0, min(max_closure_mm / (tan * s), reach - 6.0))
+    prior = None if flank_colours is None else np.asarray(flank_colours, np.float64)
+
+    # background alone
+    x = u / max(reach, 1.0)
+    B0 = np.stack([np.ones_like(u), x, x * x], axis=1)
+    c0, *_ = np.linalg.lstsq(B0, R, rcond=None)
+    rss0 = float(np.sum((R - B0 @ c0) ** 2))
+
+    def search(crests: np.ndarray, halves: np.ndarray, weight: float):
+        cc, hh = np.meshgrid(crests, halves, indexing="ij")
+        B = _basis(u, cc.ravel(), hh.ravel(), lines, blur_px)
+        coef, rss = _solve(B, R, prior, weight)
+        return cc.ravel(), hh.ravel(), coef, rss, B
+
+    # coarse grid (1 px; the noise level for the prior's weight comes from a first pass
+    # without the prior), then 0.25 px and 0.05 px around the best
+    crests = np.arange(-crest_range_px, crest_range_px + 1e-9, 1.0)
+    halves = np.arange(0.5, l_max + 1e-9, 1.0)
+    cc, hh, coef, rss, _ = search(crests, halves, 0.0)
+    k = int(np.argmin(rss))
+    weight = 0.0
+    if prior is not None:
+        sigma2 = float(rss[k]) / max(R.size - 24, 1)
+        scale = float(np.mean(np.sum(prior ** 2, axis=1)))
+        weight = sigma2 / max((colour_sd ** 2) * scale, 1e-12)
+        cc, hh, coef, rss, _ = search(crests, halves, weight)
+        k = int(np.argmin(rss))
+    refinements = () if coarse else ((1.0, 0.25, 0.25), (0.25, 0.05, 0.05))
+    if coarse:
+        cc, hh, coef, rss, B = search(np.array([cc[k]]), hh[np.isclose(cc, cc[k])], weight)
+        k = int(np.argmin(rss))
+    for span, step_c, step_h in refinements:
+        cc, hh, coef, rss, B = search(cc[k] + np.arange(-span, span + 1e-9, step_c),
+                                      np.clip(hh[k] + np.arange(-span, span + 1e-9, step_h),
+                                              0.05, None), weight)
+        k = int(np.argmin(rss))
+    crest, half = float(cc[k]), float(hh[k])
+    resid = R - B[k] @ coef[k]
+    dof = max(R.size - 24, 1)
+    sigma2 = float(np.sum(resid ** 2)) / dof
+    # correlation of the residuals along u over 8 px (interpolation, JPEG blocks)
+    rho = 0.0
+    for lag in range(1, round(8.0 / step) + 1):
+        a, b = resid[:-lag], resid[lag:]
+        den = float(np.sqrt(np.sum(a * a) * np.sum(b * b)))
+        r_lag = float(np.sum(a * b)) / den if den > 0 else 0.0
+        if r_lag <= 0:
+            break
+        rho += r_lag
+    inflate = 1.0 + 2.0 * rho
+    # curvature of rss(L) at the best crest
+    row = np.isclose(cc, crest)
+    hs, rs = hh[row], rss[row]
+    order = np.argsort(hs)
+    hs, rs = hs[order], rs[order]
+    j = int(np.argmin(rs))
+    lo, hi = max(j - 3, 0), min(j + 4, hs.size)
+    if hi - lo >= 3:
+        curv = 2.0 * float(np.polyfit(hs[lo:hi] - hs[j], rs[lo:hi], 2)[0])
+    else:
+        curv = 0.0
+    half_std = math.sqrt(2.0 * sigma2 * inflate / curv) if curv > 0 else float(half)
+    half_std = math.hypot(half_std, MODEL_FLOOR_PX)
+    snr = math.sqrt(max(rss0 - float(rss[k]), 0.0) / (sigma2 * inflate))
+    model = B[k] @ coef[k]
+    return BevelReading(
+        half_width_px=half, half_width_std_px=half_std, crest_px=crest, snr=snr,
+        closure_mm=half * tan * s, closure_std_mm=half_std * tan * s,
+        resolved=half >= 2.5, flank_colours=coef[k][list(_FLANKS)].copy(),
+        noise=math.sqrt(sigma2), model=model)

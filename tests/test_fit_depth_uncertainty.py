@@ -1,0 +1,289 @@
+"""fit_indentation with certified depth uncertainties (errors in both variables).
+
+The effective-variance fit (Orear 1982) of eq. (5) in P: known answers in its
+limits, its own defining equations at the fixed point, interval coverage on
+presses whose certified depths carry a known Gaussian error, bad input, and
+the ``depth_std_mm`` / ``overshoot_mm`` columns of measurements.csv through
+``tactilevision fit``, the reader/writer and ``diagnose``'s covariates.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy import stats
+
+from tactilevision import InputError, ShapeError
+from tactilevision.cli import main
+from tactilevision.io import read_measurements, write_measurements
+from tactilevision.mechanics import fit_indentation
+from tactilevision.mechanics._diagnose import covariate_tests
+
+# The synthetic law of the brief: P = c w (1 + beta w / h), paper's geometry.
+C0, BETA0, H, A = 3.5, 0.8, 3.0, 2.5
+NU0 = 0.0813 * math.log(BETA0) + 0.4464  # relation (7): beta_table='paper' below
+W_TRUE = np.linspace(0.15, 0.60, 10)  # mm
+SESSION = "[sensor]\ngel_thickness_mm = 3.0\n\n[indenter]\nradius_mm = 2.5\n"
+
+
+def law(w):
+    """Exact force of the synthetic law at depth w, N."""
+    return C0 * w * (1 + BETA0 * w / H)
+
+
+def fit(w, P, **kw):
+    """The paper's tables (beta = 0.8 is inside relation 7); w/h > 0.2 warnings muted."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return fit_indentation(w, P, thickness_mm=H, radius_mm=A, beta_table="paper", **kw)
+
+
+def noisy_session(seed, sd_depth=0.002, sd_force=0.001):
+    """Certified depths (true + N(0, sd_depth)) and forces (exact + N(0, sd_force))."""
+    rng = np.random.default_rng(seed)
+    P = law(W_TRUE) + sd_force * rng.standard_normal(W_TRUE.size)
+    return W_TRUE + sd_depth * rng.standard_normal(W_TRUE.size), P
+
+
+def design(w):
+    """(N, 2) design of P = c w + s w^2 / h."""
+    return np.column_stack([w, w * w / H])
+
+
+def beta_se_from_depths_alone(w, u, c, s):
+    """Standard error of beta that the depth uncertainties alone imply (sigma0 = 0)."""
+    X = design(w)
+    v = ((c + 2 * s * w / H) * u) ** 2
+    cov = np.linalg.inv(X.T @ (X / v[:, None]))
+    g = np.array([-s / c**2, 1 / c])
+    return float(np.sqrt(g @ cov @ g))
+
+
+# ------------------------------------------------------------- no change without
+
+
+def test_none_is_the_ordinary_fit_exactly():
+    w, P = noisy_session(3)
+    for table in ("paper", "fem"):
+        a = fit_indentation(w, P, thickness_mm=H, radius_mm=A, beta_table=table)
+        b = fit_indentation(w, P, thickness_mm=H, radius_mm=A, beta_table=table,
+                            depth_std_mm=None)
+        assert json.dumps(a.to_json_dict()) == json.dumps(b.to_json_dict())
+        assert not a.depth_std_used
+        assert math.isnan(a.sigma0_n) and math.isnan(a.depth_std_median_mm)
+        assert a.ci_method.startswith("delta method through the HC3")
+
+
+def test_zero_uncertainties_are_the_ordinary_fit():
+    w, P = noisy_session(4)
+    a, b = fit(w, P), fit(w, P, depth_std_mm=np.zeros(w.size))
+    assert (b.c_n_per_mm, b.beta, b.nu, b.E_mpa, b.beta_ci95, b.nu_ci95) == (
+        a.c_n_per_mm, a.beta, a.nu, a.E_mpa, a.beta_ci95, a.nu_ci95)
+    assert not b.depth_std_used
+    assert any("0 for every press" in n for n in b.notes)
+
+
+# ------------------------------------------------------------------ known answers
+
+
+def test_tiny_uncertainties_give_the_unweighted_fit_in_force():
+    # u -> 0: every press has the variance sigma0^2, so the fit is ordinary least
+    # squares of P on (w, w^2/h), sigma0^2 = RSS / (n - 2) and the covariance the
+    # classical one.
+    w, P = noisy_session(5)
+    f = fit(w, P, depth_std_mm=np.full(w.size, 1e-9))
+    X = design(w)
+    coef, *_ = np.linalg.lstsq(X, P, rcond=None)
+    rss = float(np.sum((P - X @ coef) ** 2))
+    cov = rss / (w.size - 2) * np.linalg.inv(X.T @ X)
+    assert f.depth_std_used
+    assert f.c_n_per_mm == pytest.approx(coef[0], rel=1e-6)
+    assert f.slope_n_per_mm == pytest.approx(coef[1], rel=1e-6)
+    assert f.sigma0_n == pytest.approx(math.sqrt(rss / (w.size - 2)), rel=1e-6)
+    assert f.c_se_n_per_mm == pytest.approx(math.sqrt(cov[0, 0]), rel=1e-6)
+    assert f.slope_se_n_per_mm == pytest.approx(math.sqrt(cov[1, 1]), rel=1e-6)
+    # rmse on the ordinary fit's basis: unweighted force residuals
+    assert f.rmse_n == pytest.approx(math.sqrt(rss / w.size), rel=1e-6)
+
+
+def test_exact_forces_interval_is_what_the_depths_imply():
+    # Forces exactly on the law at the certified depths: no scatter, so the
+    # ordinary (HC3) interval of beta collapses, while the stated 2 um depth
+    # uncertainty alone gives beta +- t(0.975, 8) * se_depths.
+    w = W_TRUE
+    u = np.full(w.size, 0.002)
+    f0, f = fit(w, law(w)), fit(w, law(w), depth_std_mm=u)
+    se = beta_se_from_depths_alone(w, u, C0, C0 * BETA0)
+    half = stats.t.ppf(0.975, w.size - 2) * se
+    assert f.c_n_per_mm == pytest.approx(C0, rel=1e-12)
+    assert f.beta == pytest.approx(BETA0, rel=1e-12)
+    assert f.sigma0_n == 0.0
+    assert f.beta_se == pytest.approx(se, rel=1e-9)
+    assert f.beta_ci95 == pytest.approx((BETA0 - half, BETA0 + half), rel=1e-9)
+    assert f0.beta_ci95[1] - f0.beta_ci95[0] < 1e-6 < f.beta_ci95[1] - f.beta_ci95[0]
+    assert any("errors in both variables" in n and "median 2 um" in n and "0 mN" in n
+               for n in f.notes)
+    assert "Orear 1982" in f.ci_method
+
+
+@pytest.mark.parametrize("sd_depth, sd_force", [(0.002, 0.001), (0.0002, 0.003)])
+def test_fixed_point_satisfies_its_defining_equations(sd_depth, sd_force):
+    # At convergence: weighted normal equations with var_i = sigma0^2 +
+    # (c + 2 s w_i / h)^2 u_i^2 at the reported (c, s), and chi2 / (n - 2) = 1
+    # when sigma0 > 0 (<= 1 when sigma0 = 0); covariance (X^T W X)^-1.
+    for seed in range(6):
+        w, P = noisy_session(seed, sd_depth, sd_force)
+        u = np.full(w.size, sd_depth) * (1 + 0.5 * (np.arange(w.size) % 2))  # unequal u
+        f = fit(w, P, depth_std_mm=u)
+        c, s = f.c_n_per_mm, f.slope_n_per_mm
+        X = design(w)
+        var = f.sigma0_n**2 + ((c + 2 * s * w / H) * u) ** 2
+        r = P - X @ np.array([c, s])
+        grad = X.T @ (r / var)
+        assert np.all(np.abs(grad) <= 1e-7 * (np.abs(X).T @ np.abs(P / var)))
+        chi2 = float(np.sum(r**2 / var)) / (w.size - 2)
+        assert chi2 == pytest.approx(1.0, rel=1e-6) if f.sigma0_n > 0 else chi2 <= 1 + 1e-9
+        cov = np.linalg.inv(X.T @ (X / var[:, None]))
+        assert f.c_se_n_per_mm == pytest.approx(math.sqrt(cov[0, 0]), rel=1e-6)
+        assert f.slope_se_n_per_mm == pytest.approx(math.sqrt(cov[1, 1]), rel=1e-6)
+
+
+# ------------------------------------------------------------------------ coverage
+
+
+def test_interval_coverage_with_depth_errors():
+    # 400 seeds of the brief's session: 10 presses at 0.15..0.60 mm, 1 mN force
+    # noise, certified depths off by N(0, 2 um) (dP/dw ~ 4.6 N/mm: ~9 mN, the
+    # depth errors dominate). Measured (this test's data, t quantile on 8 dof):
+    #   with depth_std_mm:    beta 0.9875, nu 0.9900, c 0.9850; median beta CI
+    #                         width 0.258, sd of beta over seeds 0.055
+    #   without (HC3, P/w):   beta 0.9600, nu 0.9575, c 0.9325; median beta CI
+    #                         width 0.310, sd of beta over seeds 0.071
+    # With the depth uncertainties the interval is conservative (sigma0 = 0 in
+    # 56% of the seeds: the covariance is then known, yet the t(8) quantile is
+    # kept), and narrower on average than without: weighting the presses by
+    # their real variance in P is more efficient than least squares of P/w.
+    tq = stats.t.ppf(0.975, W_TRUE.size - 2)
+    u = np.full(W_TRUE.size, 0.002)
+    hit_beta = hit_c = 0
+    beta_with, beta_without = [], []
+    for seed in range(400):
+        w, P = noisy_session(seed)
+        f = fit(w, P, depth_std_mm=u)
+        hit_beta += f.beta_ci95[0] <= BETA0 <= f.beta_ci95[1]
+        hit_c += abs(f.c_n_per_mm - C0) <= tq * f.c_se_n_per_mm
+        # never below what the stated depth uncertainties imply
+        floor = beta_se_from_depths_alone(w, u, f.c_n_per_mm, f.slope_n_per_mm)
+        assert f.beta_se >= floor * (1 - 1e-9)
+        beta_with.append(f.beta)
+        beta_without.append(fit(w, P).beta)
+    assert 0.90 <= hit_beta / 400 <= 0.99
+    assert 0.90 <= hit_c / 400 <= 0.99
+    assert np.std(beta_with) < 0.85 * np.std(beta_without)  # 0.055 against 0.071
+    assert abs(np.mean(beta_with) - BETA0) < 0.01
+
+
+# ----------------------------------------------------------------------- bad input
+
+
+@pytest.mark.parametrize("u, err, text", [
+    (np.full(9, 0.002), ShapeError, "depth_std_mm must have shape (10), got (9,)"),
+    (np.full((10, 1), 0.002), ShapeError, "depth_std_mm must have shape"),
+    (np.r_[np.full(9, 0.002), np.nan], ShapeError, "depth_std_mm must be finite"),
+    (np.r_[np.full(9, 0.002), np.inf], ShapeError, "depth_std_mm must be finite"),
+    (np.r_[np.full(9, 0.002), -1e-3], InputError, "depth_std_mm[9] = -0.001 mm"),
+    (np.array(["a"] * 10), ShapeError, "depth_std_mm must have dtype"),
+])
+def test_bad_depth_std(u, err, text):
+    with pytest.raises(err) as info:
+        fit(W_TRUE, law(W_TRUE), depth_std_mm=u)
+    assert text in str(info.value)
+
+
+# ------------------------------------------------------------- table and command
+
+
+def write_table(folder: Path, std: list[str] | None, name: str = "measurements.csv") -> Path:
+    """measurements.csv of seed 13 (w/h <= 0.2), with depth_std_mm when `std` is given."""
+    folder.mkdir(exist_ok=True)
+    w, P = noisy_session(13)
+    head = "press,depth_mm," + ("depth_std_mm," if std is not None else "") + "force_n\n"
+    rows = "".join(f"{i},{w[i]:.6f}," + (f"{std[i]}," if std is not None else "")
+                   + f"{P[i]:.6f}\n" for i in range(w.size))
+    (folder / name).write_text(head + rows)
+    (folder / "session.toml").write_text(SESSION)
+    return folder / name
+
+
+def run_json(argv, capsys) -> tuple[dict, str]:
+    assert main(["fit", *argv, "--beta-table", "paper", "--json", "-"]) == 0
+    cap = capsys.readouterr()
+    d = json.loads(cap.out)
+    for k in ("measurements", "thickness_source", "radius_source"):
+        d.pop(k)
+    return d, cap.err
+
+
+def test_cli_uses_the_column_and_says_so(tmp_path, capsys):
+    csv = write_table(tmp_path, ["0.002"] * 10)
+    assert main(["fit", str(csv), "--beta-table", "paper"]) == 0
+    out = capsys.readouterr().out
+    assert "depth_std_mm used (median 2 um), errors in both variables" in out
+    d, err = run_json([str(csv)], capsys)
+    assert err == ""
+    assert d["depth_std_used"] is True and d["depth_std_median_mm"] == 0.002
+    w, P = noisy_session(13)
+    f = fit(np.round(w, 6), np.round(P, 6), depth_std_mm=np.full(10, 0.002))
+    assert d["beta"] == pytest.approx(f.beta, rel=1e-12)
+    assert d["nu_ci95"] == pytest.approx(list(f.nu_ci95), rel=1e-12)
+
+
+def test_cli_ignore_option_and_empty_cells_fit_without(tmp_path, capsys):
+    plain, _ = run_json([str(write_table(tmp_path / "plain", None))], capsys)
+    full = write_table(tmp_path / "full", ["0.002"] * 10)
+    ignored, err = run_json([str(full), "--ignore-depth-std"], capsys)
+    assert err == "" and ignored == plain and ignored["depth_std_used"] is False
+    holes = write_table(tmp_path / "holes", ["0.002"] * 3 + [""] + ["0.002"] * 6)
+    partial, err = run_json([str(holes)], capsys)
+    assert partial == plain
+    assert err.strip().splitlines() == [
+        f"tactilevision fit: warning: {holes}: depth_std_mm is empty in 1 of 10 rows (first "
+        "at line 5): fitted without the depth uncertainties"]
+
+
+@pytest.mark.parametrize("cell, text", [
+    ("-0.001", "'-0.001' is not a standard uncertainty"),
+    ("inf", "'inf' is not a standard uncertainty"),
+    ("abc", "'abc' is not a number"),
+])
+def test_cli_bad_depth_std_is_exit_2(tmp_path, capsys, cell, text):
+    csv = write_table(tmp_path, ["0.002"] * 2 + [cell] + ["0.002"] * 7)
+    assert main(["fit", str(csv), "--ignore-depth-std"]) == 2  # bad input even when ignored
+    cap = capsys.readouterr()
+    assert cap.out == ""
+    assert cap.err.strip().splitlines() == [
+        f"tactilevision fit: error: {csv} line 4, column depth_std_mm: {text}"
+        + (" (a finite number >= 0, or empty)" if "standard" in text else "")]
+
+
+def test_columns_round_trip_and_covariates(tmp_path):
+    n = 12
+    rng = np.random.default_rng(0)
+    w = np.repeat([0.2, 0.4, 0.6], 4)
+    cols = {"force_n": law(w), "overshoot_mm": rng.uniform(0, 0.003, n), "depth_mm": w,
+            "depth_std_mm": np.r_[np.full(n - 1, 0.0015), np.nan]}
+    path = write_measurements(tmp_path / "m.csv", cols, thickness_mm=H, radius_mm=A)
+    assert path.read_text().splitlines()[0] == "depth_mm,depth_std_mm,overshoot_mm,force_n"
+    t = read_measurements(path)
+    np.testing.assert_allclose(t.columns["overshoot_mm"], cols["overshoot_mm"], rtol=1e-5)
+    np.testing.assert_array_equal(t.columns["depth_std_mm"], cols["depth_std_mm"])
+    assert t.covariates == ("overshoot_mm",)
+    # diagnose: overshoot_mm is a covariate, depth_std_mm is not
+    cols["depth_std_mm"] = rng.uniform(0.001, 0.002, n)
+    tests = covariate_tests(rng.standard_normal(n) * 1e-3, law(w), cols)
+    assert {x.name for x in tests} == {"depth_mm", "overshoot_mm"}
