@@ -21,7 +21,7 @@ if __name__ == "__main__":
             p.rmdir()
     tmp = HERE / "_new"
     spec = SessionSpec(E_mpa=0.20, nu=0.48, clock_offset_s=0.137, misaligned=(3,),
-                       edge_presses=(7,), seed=0)
+                       edge_presses=(7,), overshoot_mm=(0.0, 0.05), seed=0)
     make_session(tmp, spec, progress=True)
     for p in tmp.iterdir():
         p.rename(HERE / p.name)

@@ -43,17 +43,23 @@ from ._footprint import Footprint
 from ._force import force_window
 from ._mask import contact_mask, noise_level
 from ._sync import ClockSync, estimate_clock_offset, force_onsets, refine_clock_offset
-from ._vernier import BevelGeometry, BevelReading, bevel_profile, read_bevel
+from ._vernier import RESOLVED_PX, BevelGeometry, BevelReading, bevel_profile, read_bevel
 
-__all__ = ["Certification", "CertifiedPress", "Rejection", "certified_depths", "certify_session"]
+__all__ = ["Certification", "CertifiedPress", "Rejection", "certified_depths", "certify_session",
+           "hold_start"]
 
 #: Presses whose |(Fx, Fy)| / Fz exceeds this are misaligned (the paper: "much smaller").
 MAX_TANGENTIAL_RATIO = 0.1
 #: Fraction of saturated pixels around the contact (not in the reference) that rejects it.
 MAX_SATURATED_FRACTION = 0.005
-#: Vernier: the band of contact on the bevel is seen above this signal-to-noise ratio
-#: (:func:`read_bevel`; benchmarks/bench_vernier.py prints the no-contact frames' largest).
-VERNIER_SNR = 20.0
+#: Vernier: the band of contact on the bevel is seen when the frames of the hold, read
+#: together, reach this signal-to-noise ratio (:func:`read_bevel`) and agree on its width
+#: (benchmarks/bench_vernier.py prints the ratio on frames with no contact).
+VERNIER_SNR = 8.0
+#: Vernier, when the F/T log shows no hold: frames taken as seeing the band.
+FRAME_SNR = 12.0
+#: Vernier: degree of the smooth background under the band (the press's own shading).
+BACKGROUND_DEGREE = 4
 #: Vernier: largest crest penetration looked for, mm.
 MAX_CLOSURE_MM = 0.1
 #: Vernier: least fraction of the bevel's band inside the image.
@@ -386,12 +392,11 @@ def certify_session(session, *, min_contact_px: int = 200, bevel_threshold: floa
         cand = run[max(0, start - 1):int(np.searchsorted(run, full[-1])) + 1]
         t_hold_end = float(times[full[-1]])
         if vernier:
-            got = _vernier_onset(session, geom, centre, s, cand, reach, period, half)
+            got = _vernier_onset(session, geom, centre, s, cand, reach, period, half, offset)
             if isinstance(got, Rejection):
                 reject(got.reason, got.detail, at=got.frame, score=got.bevel_score)
                 continue
-            onset, window, profiles, best, quick = got
-            score = best
+            t_cert, onset, window, profiles, score, quick = got
         else:
             # a mark: the first frame where it shows, and shows in the next frame too
             # (or at twice the threshold)
@@ -411,7 +416,7 @@ def certify_session(session, *, min_contact_px: int = 200, bevel_threshold: floa
                 continue
             onset = int(cand[np.argmax(firm)])
             score = float(scores[np.argmax(firm)])
-        t_cert = float(times[onset])
+            t_cert = float(times[onset])
         if t_cert + 2 * half > t_hold_end + period:
             reject("bevel seen too late", f"the bevel shows at {t_cert:.3f} s, the "
                    f"{cfg.window_samples}-sample force window would run past the hold "
@@ -462,14 +467,88 @@ def _onset_std(area: np.ndarray, run: np.ndarray, onset: int, times: np.ndarray,
     return speed * period / np.sqrt(12.0)
 
 
-def _vernier_onset(session, geom: BevelGeometry, centre: tuple[float, float], s: float,
-                   cand: np.ndarray, reach: float, period: float, half: float):
-    """Hold of a press by its vernier: first frame of the band's plateau and the window's frames.
+def hold_start(force_times_s: np.ndarray, fz_n: np.ndarray, t0_s: float, t1_s: float, *,
+               smooth_s: float = 0.05, span_s: float = 0.15) -> float | None:
+    """When a press stops going deeper, from its force: the start of its hold, F/T clock, s.
 
-    Returns ``(onset, window_frames, window_profiles, best_snr)`` or a
-    :class:`Rejection` (its press, time and centre filled in by the caller).
+    Parameters
+    ----------
+    force_times_s : (M,) float64 ndarray
+    fz_n : (M,) float64 ndarray
+        The F/T log's normal force.
+    t0_s, t1_s : float
+        The press, F/T clock (its first frame in contact to its last).
+    smooth_s : float, default 0.05
+        Length of the moving average and half-span of the central difference
+        that locate the end of the rise roughly.
+    span_s : float, default 0.15
+        Half-width of the window of the exact fit around it.
+
+    Returns
+    -------
+    t_hold : float or None
+        None when the log holds too few samples or no rising approach.
+
+    Notes
+    -----
+    A press approaches at about constant speed (Fz rising by P / approach
+    time: several N/s), then holds: the rise stops at once, where a gel's
+    relaxation bends Fz only slowly. The steepest rise of the smoothed force
+    and the first point after it rising at under a fifth of that place the
+    stop roughly; then two straight lines meeting at t_hold (rise, hold) are
+    fitted by least squares to the samples within `span_s`, t_hold on a
+    grid of the sampling interval. Single 1 kHz samples of an ATI-class
+    sensor (1/80 N) are too noisy to differentiate: the smoothing is needed.
+    """
+    sel = (force_times_s >= t0_s) & (force_times_s <= t1_s)
+    t, f = force_times_s[sel], fz_n[sel]
+    if t.size < 20:
+        return None
+    dt = float(np.median(np.diff(t)))
+    k = max(1, round(smooth_s / dt))
+    if t.size < 4 * k:
+        return None
+    fs = np.convolve(f, np.ones(k) / k, mode="same")
+    d = np.full(t.size, 0.0)
+    d[k:-k] = (fs[2 * k:] - fs[:-2 * k]) / (t[2 * k:] - t[:-2 * k])
+    d[: 2 * k] = 0.0
+    d[-2 * k:] = 0.0
+    peak = int(np.argmax(d))
+    if d[peak] <= 0:
+        return None
+    after = np.flatnonzero(d[peak:] < 0.2 * d[peak])
+    if not after.size:
+        return None
+    guess = float(t[peak + after[0]])
+    win = (t >= guess - span_s) & (t <= guess + span_s)
+    tw, fw = t[win], f[win]
+    best, t_best = np.inf, guess
+    for tb in tw[2:-2]:
+        X = np.column_stack([np.ones_like(tw), np.minimum(tw - tb, 0.0),
+                             np.maximum(tw - tb, 0.0)])
+        coef, *_ = np.linalg.lstsq(X, fw, rcond=None)
+        rss = float(np.sum((fw - X @ coef) ** 2))
+        if rss < best:
+            best, t_best = rss, float(tb)
+    return t_best
+
+
+def _vernier_onset(session, geom: BevelGeometry, centre: tuple[float, float], s: float,
+                   cand: np.ndarray, reach: float, period: float, half: float, offset: float):
+    """Hold of a press and the vernier's frames: the force's hold, the band read over it.
+
+    The hold starts where the F/T log stops rising (:func:`hold_start`), else
+    at the first of the longest run of frames that show the band at one
+    width. The window's frames (the force window's span from there) must
+    show the band together (signal-to-noise ratio :data:`VERNIER_SNR`, not
+    filling the whole profile) and each at the same width (to 2.5 sd or 1.5
+    px): a structure that is not a band wanders from frame to frame.
+
+    Returns ``(t_cert, onset, window_frames, window_profiles, snr, reading)``
+    or a :class:`Rejection` (its press, time and centre filled in by the caller).
     """
     ref = session.reference
+    times = session.frame_times_s
     profiles = {int(i): bevel_profile(session.frame(int(i)), ref, centre, s, geom, reach_px=reach)
                 for i in cand}
     cover = min(p.coverage for p in profiles.values())
@@ -479,69 +558,102 @@ def _vernier_onset(session, geom: BevelGeometry, centre: tuple[float, float], s:
                                 f"({geom.offset_mm:g} mm from the indenter at "
                                 f"{geom.direction_deg:g} deg) lies inside the image",
                          t_frame_s=float("nan"), frame=int(cand[-1]))
-    reads = {i: read_bevel(p, geom, s, max_closure_mm=MAX_CLOSURE_MM, coarse=True)
-             for i, p in profiles.items()}
-    snr = np.array([reads[int(i)].snr for i in cand])
-    best = float(snr.max())
-    seen = snr >= VERNIER_SNR
-    if not seen.any():
-        return Rejection(press=-1, reason="bevel never seen",
-                         detail=f"no frame of the press shows the band of contact on the bevel "
-                                f"{geom.offset_mm:g} mm from the indenter at "
-                                f"{geom.direction_deg:g} deg (best signal-to-noise ratio "
-                                f"{best:.1f}, threshold {VERNIER_SNR:g})",
-                         t_frame_s=float("nan"), frame=int(cand[int(np.argmax(snr))]),
-                         bevel_score=best)
-    half_w = np.array([reads[int(i)].half_width_px for i in cand])
-    spread = np.array([reads[int(i)].half_width_std_px for i in cand])
-    # the hold: the longest stretch of consecutive frames that see the band at one width
-    # (to within 2.5 sd or 1.5 px: the quick look's grid is 1 px); frames of the approach
-    # and the release each show another width
-    runs: list[list[int]] = []
-    for j in np.flatnonzero(seen):
-        if runs and runs[-1][-1] == j - 1:
-            ref_w = float(np.median(half_w[runs[-1]]))
-            if abs(half_w[j] - ref_w) <= max(2.5 * spread[j], 1.5):
+    kw = dict(max_closure_mm=MAX_CLOSURE_MM, coarse=True, background_degree=BACKGROUND_DEGREE)
+    fz = session.forces_n[:, 2]
+    t_hold = hold_start(session.force_times_s, fz, float(times[cand[0]]) + offset - period,
+                        float(times[cand[-1]]) + offset + period)
+    if t_hold is not None:
+        t_cert = t_hold - offset
+        in_window = (times[cand] >= t_cert - 1e-9) & (times[cand] <= t_cert + 2 * half + 1e-9)
+        if not in_window.any():         # a window shorter than a frame period
+            later = np.flatnonzero(times[cand] >= t_cert - 1e-9)
+            if later.size:
+                in_window[later[0]] = True
+        window = [int(i) for i in cand[in_window]]
+    else:
+        window = []
+    if not window:
+        # no hold in the force: the longest run of frames seeing the band at one width
+        reads = {i: read_bevel(p, geom, s, **kw) for i, p in profiles.items()}
+        snr = np.array([reads[int(i)].snr for i in cand])
+        half_w = np.array([reads[int(i)].half_width_px for i in cand])
+        runs: list[list[int]] = []
+        for j in np.flatnonzero(snr >= FRAME_SNR):
+            if runs and runs[-1][-1] == j - 1 and abs(
+                    half_w[j] - float(np.median(half_w[runs[-1]]))) <= 1.5:
                 runs[-1].append(int(j))
                 continue
-        runs.append([int(j)])
-    hold_run = max(runs, key=lambda r: (len(r), float(snr[r].sum())))
-    first = hold_run[0]
-    onset = int(cand[first])
-    t0 = float(session.frame_times_s[onset])
-    times = session.frame_times_s[cand]
-    in_window = np.zeros(cand.size, bool)
-    in_window[hold_run] = True
-    in_window &= times <= t0 + 2 * half + 1e-9
-    window = tuple(int(i) for i in cand[in_window])
-    return onset, window, [profiles[i] for i in window], best, reads[onset]
+            runs.append([int(j)])
+        if not runs:
+            return _never_seen(geom, float(snr.max()), int(cand[int(np.argmax(snr))]))
+        run = max(runs, key=lambda r: (len(r), float(snr[r].sum())))
+        t_cert = float(times[cand[run[0]]])
+        window = [int(cand[j]) for j in run if times[cand[j]] <= t_cert + 2 * half + 1e-9]
+    onset = window[0]
+    joint = read_bevel([profiles[i] for i in window], geom, s, **kw)
+    per = [read_bevel(profiles[i], geom, s, **kw) for i in window] if len(window) > 1 else [joint]
+    consistent = all(abs(r.half_width_px - joint.half_width_px)
+                     <= max(2.5 * r.half_width_std_px, 1.5) for r in per)
+    if joint.snr < VERNIER_SNR or not consistent:
+        why = "" if consistent else "; the frames of the hold disagree on its width"
+        return _never_seen(geom, joint.snr, onset, why)
+    return t_cert, onset, tuple(window), [profiles[i] for i in window], joint.snr, joint
+
+
+def _never_seen(geom: BevelGeometry, best: float, frame: int, why: str = "") -> Rejection:
+    return Rejection(press=-1, reason="bevel never seen",
+                     detail=f"the frames of the hold show no band of contact on the bevel "
+                            f"{geom.offset_mm:g} mm from the indenter at {geom.direction_deg:g} "
+                            f"deg (signal-to-noise ratio {best:.1f}, threshold "
+                            f"{VERNIER_SNR:g}{why})",
+                     t_frame_s=float("nan"), frame=frame, bevel_score=best)
 
 
 def _read_vernier_presses(pending: list[dict], geom: BevelGeometry, s: float
                           ) -> tuple[list[CertifiedPress], dict]:
     """Read every press's band over its window, with the session's own optics.
 
-    1. The session's edge blur and whether its bands carry lines at their
-       edges (renderers and real optics differ) are chosen on its longest,
-       clearest bands (:func:`_session_optics`).
-    2. Every press is read with them, its flank colours free.
-    3. Short bands (their shape hidden by the blur) are read again with the
-       flank colours of the long ones as a prior (their median).
+    1. The session's edge blur is chosen on its longest, clearest bands
+       (:func:`_session_optics`).
+    2. Every press is read with it, its flank colours free.
+    3. The flank colours of the long bands (half-width >= ``RESOLVED_PX``)
+       are fitted as a plane over the bevel's position in the image (the
+       sensor's lighting varies across it: 6% of the colours left against 19%
+       for one colour, on the simulated sample session); short bands, whose
+       shape the blur hides, are read again with that plane's colours at
+       their position as a prior, weighted by its residual spread.
     """
     optics = _session_optics(pending, geom, s)
     kw = dict(max_closure_mm=MAX_CLOSURE_MM, lines=optics["lines"], blur_px=optics["blur_px"])
     first = [read_bevel(d["profiles"], geom, s, **kw) for d in pending]
-    good = [r.flank_colours for r in first
-            if r.resolved and r.half_width_px >= 5 and r.snr >= 2 * VERNIER_SNR]
-    prior = np.median(np.stack(good), axis=0) if len(good) >= 3 else None
+    long = np.array([r.resolved and r.snr >= 2 * VERNIER_SNR for r in first])
+    X = np.array([[1.0, d["press"].x_mm, d["press"].y_mm] for d in pending])
+    C = np.array([r.flank_colours.ravel() for r in first])            # (N, 6)
+    plane = None
+    if long.sum() >= 6:
+        coef, *_ = np.linalg.lstsq(X[long], C[long], rcond=None)
+        res = C[long] - X[long] @ coef
+        spread = float(np.sqrt(np.mean(res ** 2) / max(np.mean(C[long] ** 2), 1e-12)))
+        plane = (coef, max(spread, 0.03))
+    elif long.sum() >= 2:
+        mean = C[long].mean(axis=0)
+        spread = float(np.sqrt(np.mean((C[long] - mean) ** 2) / max(np.mean(mean ** 2), 1e-12)))
+        plane = (np.vstack([mean, np.zeros((2, 6))]), max(spread, 0.1))
+    if plane is not None and plane[1] > 0.5:
+        plane = None       # the long bands' colours scatter too much to inform the short ones
     out = []
-    for d, r in zip(pending, first, strict=True):
-        if prior is not None and not r.resolved:
-            r = read_bevel(d["profiles"], geom, s, flank_colours=prior, **kw)
+    for k, (d, r) in enumerate(zip(pending, first, strict=True)):
+        if plane is not None and not r.resolved:
+            # a short band: lines at its edges would trade off against L; its colours
+            # come from the long bands at its position
+            prior = (X[k] @ plane[0]).reshape(2, 3)
+            r = read_bevel(d["profiles"], geom, s, flank_colours=prior, colour_sd=plane[1],
+                           **{**kw, "lines": "none"})
         out.append(replace(d["press"], rule="vernier", closure_mm=r.closure_mm,
                            closure_std_mm=r.closure_std_mm, reading=r, bevel_score=r.snr,
                            window_frames=d["window"]))
-    optics["prior"] = prior is not None and any(not r.resolved for r in first)
+    optics["prior"] = plane is not None and any(not r.resolved for r in first)
+    optics["colour_spread"] = None if plane is None else round(plane[1], 4)
     return out, optics
 
 
@@ -551,14 +663,18 @@ _BLURS = (0.6, 0.8, 1.0, 1.25, 1.5, 1.75, 2.0, 2.5, 3.0)
 
 def _session_optics(pending: list[dict], geom: BevelGeometry, s: float, *, n_max: int = 8
                     ) -> dict:
-    """The edge blur that explains the session's long bands best.
+    """The edge blur and band model that explain the session's long bands best.
 
-    On up to `n_max` bands at least 8 px long (the clearest), each blur of
-    :data:`_BLURS`; the one with the least summed residual. The blur is not
-    free per press: on a short band it trades off against L. Default 1.0 px
-    when fewer than two bands are long enough.
+    On up to `n_max` bands at least ``RESOLVED_PX`` long (the clearest):
+    the blur of :data:`_BLURS` with the least summed residual; then whether
+    the bands carry lines along their edges (renderers' and real optics'
+    shadows): if reading them with lines moves L by more than 1 px (median
+    over the bands), the session is read with lines, else without (a line
+    at an edge trades off against the edge's position, so it costs
+    precision where it is not needed). Defaults (1.0 px, no lines) when
+    fewer than two bands are long enough.
     """
-    long = sorted((d for d in pending if d["quick"].half_width_px >= 8),
+    long = sorted((d for d in pending if d["quick"].half_width_px >= RESOLVED_PX),
                   key=lambda d: -d["quick"].snr)[:n_max]
     if len(long) < 2:
         return {"blur_px": 1.0, "lines": "none", "n_bands": len(long)}
@@ -566,9 +682,14 @@ def _session_optics(pending: list[dict], geom: BevelGeometry, s: float, *, n_max
     for blur in _BLURS:
         rs = [read_bevel(d["profiles"], geom, s, max_closure_mm=MAX_CLOSURE_MM, lines="none",
                          blur_px=blur) for d in long]
-        totals.append((sum(r.noise ** 2 * r.model.size for r in rs), blur))
-    _, blur = min(totals)
-    return {"blur_px": blur, "lines": "none", "n_bands": len(long)}
+        totals.append((sum(r.noise ** 2 * r.model.size for r in rs), blur, rs))
+    _, blur, plain = min(totals, key=lambda t: t[0])
+    lined = [read_bevel(d["profiles"], geom, s, max_closure_mm=MAX_CLOSURE_MM, lines="all",
+                        blur_px=blur) for d in long]
+    shift = float(np.median([abs(a.half_width_px - b.half_width_px)
+                             for a, b in zip(plain, lined, strict=True)]))
+    return {"blur_px": blur, "lines": "all" if shift > 1.0 else "none", "n_bands": len(long),
+            "line_shift_px": round(shift, 3)}
 
 
 def certified_depths(w0_mm: np.ndarray, *, rule: str, thickness_mm: float, radius_mm: float,

@@ -50,6 +50,9 @@ _LINE_SD_PX = 1.2        # sd of the lines at the edges and the crest
 #: 50 presses of a simulated session: errors of 0.25 px sd where the noise alone gave 0.11 px
 #: (benchmarks/bench_vernier.py prints the z-scores).
 MODEL_FLOOR_PX = 0.25
+#: Bands at least this long (half-width, px) show their flanks' colours free of the edge
+#: blur; shorter ones are read with the session's colours as a prior.
+RESOLVED_PX = 10.0
 
 
 @dataclass(frozen=True)
@@ -126,14 +129,17 @@ class BevelReading:
     snr : float
         Detection strength: the square root of the drop in the residual sum
         of squares from the background alone to the band's model, in units of
-        the residual noise variance (a signal-to-noise ratio; about 4 to 7
-        with no band in view, ``read_bevel`` notes).
+        the residual noise variance (a signal-to-noise ratio); 0 when the
+        best band reaches the end of the search range (smooth shading
+        across the whole profile, not a band).
     closure_mm, closure_std_mm : float
         ``L tan(theta) * mm_per_px``: how far the crest is pressed into the
         gel's surface (overshoot plus bulge), and its uncertainty, mm.
     resolved : bool
-        Whether L exceeds the edge blur enough for the band's shape to show
-        (L >= 2.5 px); unresolved bands lean on the flank colours' prior.
+        Whether the band is long enough (L >= :data:`RESOLVED_PX`) for its
+        flanks' colours to be measured on it; shorter bands trade their
+        colours against L through the edge blur and lean on a prior
+        (``flank_colours``).
     flank_colours : (2, 3) float64 ndarray
         Fitted colour of the inner (towards the indenter) and outer flank.
     noise : float
@@ -225,14 +231,23 @@ def _line(u: np.ndarray, m: np.ndarray) -> np.ndarray:
     return np.exp(-0.5 * ((u - m) / _LINE_SD_PX) ** 2)
 
 
+def _background(u: np.ndarray, degree: int) -> np.ndarray:
+    """(K, degree + 1) Legendre polynomials over the profile: its smooth shading."""
+    x = u / max(float(np.abs(u).max()), 1.0)
+    return np.polynomial.legendre.legvander(x, degree)
+
+
 def _basis(u: np.ndarray, crest: np.ndarray, half: np.ndarray, lines: str = "all",
-           blur: float = _EDGE_BLUR_PX) -> np.ndarray:
-    """(G, K, p) design: background (3), inner and outer flank, then the lines (edges, crest)."""
+           blur: float = _EDGE_BLUR_PX, degree: int = 2) -> np.ndarray:
+    """(G, K, p) design: background (degree + 1), inner and outer flank, then the lines."""
     uk = u[None, :]
     c, L = crest[:, None], half[:, None]
-    ones = np.ones_like(uk * c)
-    x = ones * uk / max(float(np.abs(u).max()), 1.0)
-    cols = [ones, x, x * x, _box(uk, c - L, c, blur), _box(uk, c, c + L, blur)]
+    bg = np.broadcast_to(_background(u, degree)[None], (c.shape[0], u.size, degree + 1))
+    b_in, b_out = _box(uk, c - L, c, blur), _box(uk, c, c + L, blur)
+    cols = [bg[..., j] for j in range(degree + 1)] + [b_in, b_out]
+    if lines == "tilt":        # each flank's colour may drift linearly across it
+        cols += [b_in * (uk - c + 0.5 * L) / np.maximum(L, 1.0),
+                 b_out * (uk - c - 0.5 * L) / np.maximum(L, 1.0)]
     if lines in ("all", "edges"):
         cols += [_line(uk, c - L), _line(uk, c + L)]
     if lines in ("all", "crest"):
@@ -240,19 +255,20 @@ def _basis(u: np.ndarray, crest: np.ndarray, half: np.ndarray, lines: str = "all
     return np.stack(cols, axis=-1)
 
 
-#: Columns of the design holding the inner and outer flank colours.
-_FLANKS = (3, 4)
+def _flanks(degree: int) -> tuple[int, int]:
+    """Columns of the design holding the inner and outer flank colours."""
+    return degree + 1, degree + 2
 
 
-def _solve(B: np.ndarray, R: np.ndarray, prior: np.ndarray | None, weight: float
-           ) -> tuple[np.ndarray, np.ndarray]:
+def _solve(B: np.ndarray, R: np.ndarray, prior: np.ndarray | None, weight: float,
+           flanks: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
     """Least squares for every candidate: coefficients (G, p, 3) and residual SS (G,)."""
     Bt = B.transpose(0, 2, 1)
     BtB = Bt @ B
     BtR = Bt @ R
     A, Y = BtB.copy(), BtR.copy()
     if prior is not None:                 # pseudo-observations pulling the flank colours
-        for j, col in enumerate(_FLANKS):
+        for j, col in enumerate(flanks):
             A[:, col, col] += weight
             Y[:, col, :] += weight * prior[j][None, :]
     A += 1e-9 * np.trace(A, axis1=1, axis2=2)[:, None, None] * np.eye(B.shape[2])
@@ -261,7 +277,7 @@ def _solve(B: np.ndarray, R: np.ndarray, prior: np.ndarray | None, weight: float
     rss = (float(np.sum(R * R)) - 2.0 * np.einsum("gpc,gpc->g", BtR, coef)
            + np.einsum("gpc,gpc->g", coef, BtB @ coef))
     if prior is not None:
-        for j, col in enumerate(_FLANKS):
+        for j, col in enumerate(flanks):
             rss = rss + weight * np.sum((coef[:, col, :] - prior[j][None, :]) ** 2, axis=1)
     return coef, rss
 
@@ -269,8 +285,8 @@ def _solve(B: np.ndarray, R: np.ndarray, prior: np.ndarray | None, weight: float
 def read_bevel(profiles: list[BevelProfile] | BevelProfile, bevel: BevelGeometry,
                mm_per_px: float, *, max_closure_mm: float = 0.1, crest_range_px: float = 6.0,
                flank_colours: np.ndarray | None = None, colour_sd: float = 0.3,
-               coarse: bool = False, lines: str = "all", blur_px: float = _EDGE_BLUR_PX
-               ) -> BevelReading:
+               coarse: bool = False, lines: str = "all", blur_px: float = _EDGE_BLUR_PX,
+               background_degree: int = 4) -> BevelReading:
     """Read the band of contact on the bevel from profiles across its crest.
 
     Parameters
@@ -295,6 +311,15 @@ def read_bevel(profiles: list[BevelProfile] | BevelProfile, bevel: BevelGeometry
         over the sensor with its lighting).
     coarse : bool, default False
         Stop at the 1 px grid (a quick look: L and the crest to +-0.5 px).
+    lines : {'all', 'none', 'edges', 'crest', 'tilt'}, default 'all'
+        Which lines the band model carries: at both edges and the crest
+        (renderers and optics that draw shadows along the edges), none, the
+        edges or the crest only; 'tilt' lets each flank's colour drift
+        linearly across it instead.
+    blur_px : float, default 1.0
+        sd of the Gaussian blur of the band's edges, px.
+    background_degree : int, default 4
+        Degree of the smooth background.
 
     Returns
     -------
@@ -309,11 +334,12 @@ def read_bevel(profiles: list[BevelProfile] | BevelProfile, bevel: BevelGeometry
     Notes
     -----
     Model, for u across the crest (px) with the crest at c:
-    ``R(u) = a + b u + q u^2 + k_in B(c - L, c) + k_out B(c, c + L)
+    ``R(u) = P(u) + k_in B(c - L, c) + k_out B(c, c + L)
     + e_in G(c - L) + e_out G(c + L) + e_c G(c)``, B a box with edges
     blurred by a Gaussian of sd 1 px, G a Gaussian line of sd 1.2 px, the
-    coefficients (3-vectors, one per colour channel) free; the quadratic
-    background takes up the press's own shading (the bulge's slopes). (c, L) on a grid
+    coefficients (3-vectors, one per colour channel) free; P, a polynomial
+    of `background_degree` (Legendre, over the profile), takes up the
+    press's own shading (the bulge's slopes, a renderer's broad changes). (c, L) on a grid
     of 1 px, then 0.25 px and 0.05 px around the best. The uncertainty of L comes from
     the curvature of the residual sum of squares against L (profile
     likelihood), with the residual variance and its correlation along the
@@ -339,15 +365,16 @@ def read_bevel(profiles: list[BevelProfile] | BevelProfile, bevel: BevelGeometry
     prior = None if flank_colours is None else np.asarray(flank_colours, np.float64)
 
     # background alone
-    x = u / max(reach, 1.0)
-    B0 = np.stack([np.ones_like(u), x, x * x], axis=1)
+    deg = int(background_degree)
+    flanks = _flanks(deg)
+    B0 = _background(u, deg)
     c0, *_ = np.linalg.lstsq(B0, R, rcond=None)
     rss0 = float(np.sum((R - B0 @ c0) ** 2))
 
     def search(crests: np.ndarray, halves: np.ndarray, weight: float):
         cc, hh = np.meshgrid(crests, halves, indexing="ij")
-        B = _basis(u, cc.ravel(), hh.ravel(), lines, blur_px)
-        coef, rss = _solve(B, R, prior, weight)
+        B = _basis(u, cc.ravel(), hh.ravel(), lines, blur_px, deg)
+        coef, rss = _solve(B, R, prior, weight, flanks)
         return cc.ravel(), hh.ravel(), coef, rss, B
 
     # coarse grid (1 px; the noise level for the prior's weight comes from a first pass
@@ -358,7 +385,7 @@ def read_bevel(profiles: list[BevelProfile] | BevelProfile, bevel: BevelGeometry
     k = int(np.argmin(rss))
     weight = 0.0
     if prior is not None:
-        sigma2 = float(rss[k]) / max(R.size - 24, 1)
+        sigma2 = float(rss[k]) / max(R.size - 3 * (deg + 8), 1)
         scale = float(np.mean(np.sum(prior ** 2, axis=1)))
         weight = sigma2 / max((colour_sd ** 2) * scale, 1e-12)
         cc, hh, coef, rss, _ = search(crests, halves, weight)
@@ -374,7 +401,7 @@ def read_bevel(profiles: list[BevelProfile] | BevelProfile, bevel: BevelGeometry
         k = int(np.argmin(rss))
     crest, half = float(cc[k]), float(hh[k])
     resid = R - B[k] @ coef[k]
-    dof = max(R.size - 24, 1)
+    dof = max(R.size - 3 * (deg + 8), 1)
     sigma2 = float(np.sum(resid ** 2)) / dof
     # correlation of the residuals along u over 8 px (interpolation, JPEG blocks)
     rho = 0.0
@@ -382,9 +409,7 @@ def read_bevel(profiles: list[BevelProfile] | BevelProfile, bevel: BevelGeometry
         a, b = resid[:-lag], resid[lag:]
         den = float(np.sqrt(np.sum(a * a) * np.sum(b * b)))
         r_lag = float(np.sum(a * b)) / den if den > 0 else 0.0
-        if r_lag <= 0:
-            break
-        rho += r_lag
+        rho += abs(r_lag)
     inflate = 1.0 + 2.0 * rho
     # curvature of rss(L) at the best crest
     row = np.isclose(cc, crest)
@@ -399,10 +424,12 @@ def read_bevel(profiles: list[BevelProfile] | BevelProfile, bevel: BevelGeometry
         curv = 0.0
     half_std = math.sqrt(2.0 * sigma2 * inflate / curv) if curv > 0 else float(half)
     half_std = math.hypot(half_std, MODEL_FLOOR_PX)
-    snr = math.sqrt(max(rss0 - float(rss[k]), 0.0) / (sigma2 * inflate))
+    snr = math.sqrt(max(rss0 - float(rss[k]), 0.0) / max(sigma2 * inflate, 1e-12))
+    if half >= l_max - 1.0:
+        snr = 0.0        # the "band" fills the search range: smooth shading, not a band
     model = B[k] @ coef[k]
     return BevelReading(
         half_width_px=half, half_width_std_px=half_std, crest_px=crest, snr=snr,
         closure_mm=half * tan * s, closure_std_mm=half_std * tan * s,
-        resolved=half >= 2.5, flank_colours=coef[k][list(_FLANKS)].copy(),
+        resolved=half >= RESOLVED_PX, flank_colours=coef[k][list(flanks)].copy(),
         noise=math.sqrt(sigma2), model=model)
