@@ -227,8 +227,8 @@ def _box(u: np.ndarray, a: np.ndarray, b: np.ndarray, blur: float = _EDGE_BLUR_P
     return 0.5 * (erf((u - a) * k) - erf((u - b) * k))
 
 
-def _line(u: np.ndarray, m: np.ndarray) -> np.ndarray:
-    return np.exp(-0.5 * ((u - m) / _LINE_SD_PX) ** 2)
+def _line(u: np.ndarray, m: np.ndarray, sd: float = _LINE_SD_PX) -> np.ndarray:
+    return np.exp(-0.5 * ((u - m) / sd) ** 2)
 
 
 def _background(u: np.ndarray, degree: int) -> np.ndarray:
@@ -238,7 +238,8 @@ def _background(u: np.ndarray, degree: int) -> np.ndarray:
 
 
 def _basis(u: np.ndarray, crest: np.ndarray, half: np.ndarray, lines: str = "all",
-           blur: float = _EDGE_BLUR_PX, degree: int = 2) -> np.ndarray:
+           blur: float = _EDGE_BLUR_PX, degree: int = 2, line_sd: float = _LINE_SD_PX
+           ) -> np.ndarray:
     """(G, K, p) design: background (degree + 1), inner and outer flank, then the lines."""
     uk = u[None, :]
     c, L = crest[:, None], half[:, None]
@@ -249,9 +250,9 @@ def _basis(u: np.ndarray, crest: np.ndarray, half: np.ndarray, lines: str = "all
         cols += [b_in * (uk - c + 0.5 * L) / np.maximum(L, 1.0),
                  b_out * (uk - c - 0.5 * L) / np.maximum(L, 1.0)]
     if lines in ("all", "edges"):
-        cols += [_line(uk, c - L), _line(uk, c + L)]
+        cols += [_line(uk, c - L, line_sd), _line(uk, c + L, line_sd)]
     if lines in ("all", "crest"):
-        cols += [_line(uk, c)]
+        cols += [_line(uk, c, line_sd)]
     return np.stack(cols, axis=-1)
 
 
@@ -285,8 +286,8 @@ def _solve(B: np.ndarray, R: np.ndarray, prior: np.ndarray | None, weight: float
 def read_bevel(profiles: list[BevelProfile] | BevelProfile, bevel: BevelGeometry,
                mm_per_px: float, *, max_closure_mm: float = 0.1, crest_range_px: float = 6.0,
                flank_colours: np.ndarray | None = None, colour_sd: float = 0.3,
-               coarse: bool = False, lines: str = "all", blur_px: float = _EDGE_BLUR_PX,
-               background_degree: int = 4) -> BevelReading:
+               coarse: bool = False, lines: str = "none", blur_px: float = _EDGE_BLUR_PX,
+               background_degree: int = 4, line_px: float = _LINE_SD_PX) -> BevelReading:
     """Read the band of contact on the bevel from profiles across its crest.
 
     Parameters
@@ -311,15 +312,18 @@ def read_bevel(profiles: list[BevelProfile] | BevelProfile, bevel: BevelGeometry
         over the sensor with its lighting).
     coarse : bool, default False
         Stop at the 1 px grid (a quick look: L and the crest to +-0.5 px).
-    lines : {'all', 'none', 'edges', 'crest', 'tilt'}, default 'all'
-        Which lines the band model carries: at both edges and the crest
-        (renderers and optics that draw shadows along the edges), none, the
+    lines : {'none', 'all', 'edges', 'crest', 'tilt'}, default 'none'
+        Which lines the band model carries: none, or at both edges and the
+        crest (renderers and optics that draw shadows along the edges), the
         edges or the crest only; 'tilt' lets each flank's colour drift
-        linearly across it instead.
+        linearly across it instead. A line at an edge trades off against the
+        edge's position: use lines only where the images have them.
     blur_px : float, default 1.0
         sd of the Gaussian blur of the band's edges, px.
     background_degree : int, default 4
         Degree of the smooth background.
+    line_px : float, default 1.2
+        sd of the Gaussian lines, px.
 
     Returns
     -------
@@ -335,7 +339,7 @@ def read_bevel(profiles: list[BevelProfile] | BevelProfile, bevel: BevelGeometry
     -----
     Model, for u across the crest (px) with the crest at c:
     ``R(u) = P(u) + k_in B(c - L, c) + k_out B(c, c + L)
-    + e_in G(c - L) + e_out G(c + L) + e_c G(c)``, B a box with edges
+    [+ e_in G(c - L) + e_out G(c + L) + e_c G(c)]``, B a box with edges
     blurred by a Gaussian of sd 1 px, G a Gaussian line of sd 1.2 px, the
     coefficients (3-vectors, one per colour channel) free; P, a polynomial
     of `background_degree` (Legendre, over the profile), takes up the
@@ -373,7 +377,7 @@ def read_bevel(profiles: list[BevelProfile] | BevelProfile, bevel: BevelGeometry
 
     def search(crests: np.ndarray, halves: np.ndarray, weight: float):
         cc, hh = np.meshgrid(crests, halves, indexing="ij")
-        B = _basis(u, cc.ravel(), hh.ravel(), lines, blur_px, deg)
+        B = _basis(u, cc.ravel(), hh.ravel(), lines, blur_px, deg, line_px)
         coef, rss = _solve(B, R, prior, weight, flanks)
         return cc.ravel(), hh.ravel(), coef, rss, B
 

@@ -491,7 +491,21 @@ def material_fit(c: float, slope: float, cov: np.ndarray, *, depth_mm: np.ndarra
                     - dkap / kap)
         nu_se, nu_ci = interval(nu, g_nu)
         E_se, E_ci = interval(E, E * (np.array([1 / c, 0.0]) + dlnE_dnu * g_nu))
-        if np.all(np.isfinite(nu_ci)) and not (rel.nu_min <= nu_ci[0] and nu_ci[1] < rel.nu_max):
+        if (getattr(rel, "beta_grid", None) is not None and np.isfinite(beta_se)
+                and beta + tq * beta_se >= rel.beta_max):
+            # beta's interval reaches the table's peak, where d nu / d beta -> infinity and
+            # the delta method fails: invert beta's interval through the table instead
+            _, nu_ci, _, E_ci, _, _ = _at_table_top(rel, beta - tq * beta_se, c, cov, tq, a, ah,
+                                                    kappa_source, contact, confidence)
+            nu_ci = (nu_ci[0], max(nu_ci[1], nu))
+            E_ci = (min(E_ci[0], E), max(E_ci[1], E))
+            nu_se, E_se = (nu_ci[1] - nu_ci[0]) / (2 * tq), (E_ci[1] - E_ci[0]) / (2 * tq)
+            notes.append(f"the {confidence:.0%} interval of beta reaches the top of the table "
+                         f"({rel.beta_max:.4f}, where beta peaks over nu): the intervals of nu "
+                         "and E are beta's interval inverted through the table, not the delta "
+                         "method")
+        elif np.all(np.isfinite(nu_ci)) and not (rel.nu_min <= nu_ci[0]
+                                                  and nu_ci[1] < rel.nu_max):
             notes.append(f"the {confidence:.0%} interval of nu, [{nu_ci[0]:.4f}, "
                          f"{nu_ci[1]:.4f}], reaches outside the beta table "
                          f"({rel.range_text()})")
