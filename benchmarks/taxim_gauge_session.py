@@ -335,6 +335,8 @@ _TOML_COMMENTS = {
     "bevel_length_mm": "length of the crest line",
     "bulge_correction": "Taxim's gel does not bulge "
                         "(volume is not conserved in its deformation model)",
+    "bevel_force_correction": "forces.csv holds the indenter's force alone "
+                              "(eq. 5), not the bevel band's",
 }
 
 
@@ -344,7 +346,7 @@ def _session_toml(offset_mm, direction_deg, theta_deg, length_mm) -> str:
              ("bevel_direction_deg", repr(float(direction_deg))),
              ("bevel_angle_deg", repr(float(theta_deg))),
              ("bevel_length_mm", repr(float(length_mm))),
-             ("bulge_correction", "false")]
+             ("bulge_correction", "false"), ("bevel_force_correction", "false")]
     lines = ["[sensor]", 'name = "taxim-gelsight"', f"mm_per_px = {MM_PER_PX}",
              f"gel_thickness_mm = {GEL_THICKNESS_MM}", f"gel_radius_mm = {GEL_RADIUS_MM}", "",
              "[indenter]", f"radius_mm = {INDENTER_RADIUS_MM}", "",

@@ -34,7 +34,14 @@ from pathlib import Path
 import numpy as np
 
 from ._checks import InputError
-from .contact import Certification, bulge_at, certified_depths, certify_session
+from .contact import (
+    BevelGeometry,
+    Certification,
+    bevel_force,
+    bulge_at,
+    certified_depths,
+    certify_session,
+)
 from .io import Session, read_session
 from .mechanics import IndentationFit, fit_indentation
 
@@ -59,6 +66,9 @@ class SessionCalibration:
         frame's for ``'nominal'``; 0 for ``'land'``).
     bulge_mm : (N,) float64 ndarray
         The bulge subtracted from each vernier depth, mm (0 otherwise).
+    bevel_force_n : (N,) float64 ndarray
+        The force of the bevel's band taken off each press's F/T force, N (0
+        otherwise): ``force_n`` of the measurements is the indenter's alone.
     fit : IndentationFit
     nu_rounds : list of float
         nu after each certification-fit round (``'vernier'`` with the bulge
@@ -82,7 +92,12 @@ class SessionCalibration:
     warnings: list[str] = field(default_factory=list)
     depth_std_mm: np.ndarray = field(default_factory=lambda: np.zeros(0))
     bulge_mm: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    bevel_force_n: np.ndarray = field(default_factory=lambda: np.zeros(0))
     failure: str | None = None
+
+    def _bevel(self) -> np.ndarray:
+        n = len(self.certification.presses)
+        return self.bevel_force_n if len(self.bevel_force_n) == n else np.zeros(n)
 
     def measurements(self) -> dict[str, np.ndarray]:
         """Columns of ``measurements.csv`` (formats.md section 2), one row per certified press.
@@ -91,8 +106,10 @@ class SessionCalibration:
         -------
         columns : dict of str to (N,) ndarray
             ``press, indenter, depth_mm, depth_std_mm, overshoot_mm, force_n,
-            force_std_n, fx_n, fy_n, time_s, hold_s, wait_s, x_mm, y_mm``
-            (``overshoot_mm``: certified depth minus the indenter's w0).
+            bevel_force_n, force_std_n, fx_n, fy_n, time_s, hold_s, wait_s, x_mm,
+            y_mm`` (``overshoot_mm``: certified depth minus the indenter's w0;
+            ``force_n``: the F/T window's mean less ``bevel_force_n``, the
+            bevel's own band).
         """
         ps = self.certification.presses
         col = {
@@ -101,7 +118,8 @@ class SessionCalibration:
             "depth_std_mm": list(self.depth_std_mm) if len(self.depth_std_mm) == len(ps)
             else [float("nan")] * len(ps),
             "overshoot_mm": [d - p.w0_mm for d, p in zip(self.depth_mm, ps, strict=True)],
-            "force_n": [p.force_n for p in ps],
+            "force_n": [p.force_n - b for p, b in zip(ps, self._bevel(), strict=True)],
+            "bevel_force_n": list(self._bevel()),
             "force_std_n": [p.force_std_n for p in ps], "fx_n": [p.fx_n for p in ps],
             "fy_n": [p.fy_n for p in ps], "time_s": [p.time_s for p in ps],
             "hold_s": [p.hold_s for p in ps], "wait_s": [p.wait_s for p in ps],
@@ -189,27 +207,80 @@ def calibrate_session(session: Session | str | Path, *, depth_rule: str = "auto"
 
     caught_by_fit: dict[int, list[str]] = {}
 
-    def fit_at(depth: np.ndarray, std: np.ndarray | None) -> IndentationFit:
+    def fit_at(depth: np.ndarray, std: np.ndarray | None,
+               f_n: np.ndarray | None = None) -> IndentationFit:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
-            f = fit_indentation(depth, force, depth_std_mm=std, **kw)
+            f = fit_indentation(depth, force if f_n is None else f_n, depth_std_mm=std, **kw)
         caught_by_fit[id(f)] = [str(w.message) for w in caught]
         return f
 
     rounds: list[float] = []
     bulge = np.zeros_like(w0)
+    bevel_n = np.zeros_like(w0)
     std = closure_std.copy()
-    if depth_rule == "vernier":
-        if any(p.rule != "vernier" for p in presses):
-            raise InputError("the 'vernier' depth rule needs every press read by the vernier")
-        depth = w0 + closure
-        if cfg.bulge_correction:
+    try:
+        if depth_rule == "vernier":
+            if any(p.rule != "vernier" for p in presses):
+                raise InputError("the 'vernier' depth rule needs every press read by the vernier")
+            geom = BevelGeometry(offset_mm=cfg.bevel_offset_mm,
+                                 direction_deg=cfg.bevel_direction_deg,
+                                 angle_deg=cfg.bevel_angle_deg, length_mm=cfg.bevel_length_mm)
+            depth = w0 + closure
+            if cfg.bulge_correction:
+                depth, bulge = _vernier_depths(w0, closure, cfg, float(nu_start))
+            fit = fit_at(depth, std)
+            nu, E = float(nu_start), None
+            if np.isfinite(fit.E_mpa) and np.isfinite(fit.nu):
+                nu, E = float(np.clip(fit.nu, 0.30, 0.499)), float(fit.E_mpa)
+            corrections = cfg.bulge_correction or cfg.bevel_force_correction
+            for _ in range(max_rounds if corrections else 0):
+                if cfg.bulge_correction:
+                    depth, bulge = _vernier_depths(w0, closure, cfg, nu)
+                if cfg.bevel_force_correction and E is not None:
+                    bevel_n = bevel_force(closure, geom, thickness_mm=h, E_mpa=E, nu=nu)
+                fit = fit_at(depth, std, force - bevel_n)
+                if fit.out_of_table or not np.isfinite(fit.nu):
+                    notes.append("the fit left the beta table, so the corrections stay at "
+                                 f"nu = {nu:.4f}: {fit.out_of_table_message}")
+                    break
+                rounds.append(float(fit.nu))
+                settled = abs(fit.nu - nu) < nu_tol and (
+                    E is not None and abs(fit.E_mpa / E - 1) < 1e-3)
+                nu, E = float(np.clip(fit.nu, 0.30, 0.499)), float(fit.E_mpa)
+                if settled:
+                    break
+            else:
+                if corrections:
+                    notes.append(f"nu did not settle in {max_rounds} rounds of the corrections "
+                                 f"(last {rounds[-2:]})")
+            if cfg.bulge_correction:
+                notes.append(_bulge_note(bulge, depth, cfg, rounds, w0, closure, fit_at, std,
+                                         force - bevel_n))
+            else:
+                notes.append("no bulge correction ([gauge_block] bulge_correction = false): the "
+                             "certified depth is w0 plus the vernier's reading")
+            if cfg.bevel_force_correction:
+                frac = bevel_n / np.maximum(force, 1e-12)
+                notes.append(f"the bevel's own band of contact pressed "
+                             f"{1e3 * bevel_n.min():.1f} to {1e3 * bevel_n.max():.1f} mN "
+                             f"({100 * frac.max():.1f}% of the F/T force at most; layer model at "
+                             "the fitted E, nu), taken off the forces")
+        elif depth_rule == "nominal":
+            depth = certified_depths(w0, rule="nominal", thickness_mm=h, radius_mm=a)
+            if all(p.rule == "vernier" for p in presses):
+                std = np.zeros_like(w0)
+                notes.append("depth rule 'nominal' on a vernier session: the overshoot the bevel "
+                             "reads is ignored")
+            fit = fit_at(depth, std if np.any(std > 0) else None)
+        else:
+            std = np.zeros_like(w0)
             nu = float(nu_start)
             for _ in range(max_rounds):
-                depth, bulge = _vernier_depths(w0, closure, cfg, nu)
-                fit = fit_at(depth, std)
+                depth = certified_depths(w0, rule="land", thickness_mm=h, radius_mm=a, nu=nu)
+                fit = fit_at(depth, None)
                 if fit.out_of_table or not np.isfinite(fit.nu):
-                    notes.append("the fit left the beta table, so the bulge at the bevel stays at "
+                    notes.append("the fit left the beta table, so the land-contact depths stay at "
                                  f"nu = {nu:.4f}: {fit.out_of_table_message}")
                     break
                 rounds.append(float(fit.nu))
@@ -217,44 +288,24 @@ def calibrate_session(session: Session | str | Path, *, depth_rule: str = "auto"
                     break
                 nu = float(np.clip(fit.nu, 0.30, 0.499))
             else:
-                notes.append(f"nu did not settle in {max_rounds} rounds of the bulge correction "
+                notes.append(f"nu did not settle in {max_rounds} certification-fit rounds "
                              f"(last {rounds[-2:]})")
-            notes.append(_bulge_note(bulge, depth, cfg, rounds, w0, closure, fit_at, std))
-        else:
-            fit = fit_at(depth, std)
-            notes.append("no bulge correction ([gauge_block] bulge_correction = false): the "
-                         "certified depth is w0 plus the vernier's reading")
-    elif depth_rule == "nominal":
-        depth = certified_depths(w0, rule="nominal", thickness_mm=h, radius_mm=a)
-        if all(p.rule == "vernier" for p in presses):
-            std = np.zeros_like(w0)
-            notes.append("depth rule 'nominal' on a vernier session: the overshoot the bevel "
-                         "reads is ignored")
-        fit = fit_at(depth, std if np.any(std > 0) else None)
-    else:
-        std = np.zeros_like(w0)
-        nu = float(nu_start)
-        for _ in range(max_rounds):
-            depth = certified_depths(w0, rule="land", thickness_mm=h, radius_mm=a, nu=nu)
-            fit = fit_at(depth, None)
-            if fit.out_of_table or not np.isfinite(fit.nu):
-                notes.append("the fit left the beta table, so the land-contact depths stay at "
-                             f"nu = {nu:.4f}: {fit.out_of_table_message}")
-                break
-            rounds.append(float(fit.nu))
-            if abs(fit.nu - nu) < nu_tol:
-                break
-            nu = float(np.clip(fit.nu, 0.30, 0.499))
-        else:
-            notes.append(f"nu did not settle in {max_rounds} certification-fit rounds "
-                         f"(last {rounds[-2:]})")
+    except InputError as exc:
+        if not allow_failure:
+            raise
+        msg = f"{session.path}: the fit failed: {exc}"
+        return SessionCalibration(session=session, certification=cert, depth_rule=depth_rule,
+                                  depth_mm=w0 + closure, fit=None, nu_rounds=rounds,
+                                  seconds=time.perf_counter() - t0, warnings=notes,
+                                  depth_std_mm=std, bulge_mm=bulge, bevel_force_n=bevel_n,
+                                  failure=msg)
     for msg in caught_by_fit.get(id(fit), []):      # the warnings of the fit reported
         if msg not in notes:
             notes.append(msg)
     return SessionCalibration(session=session, certification=cert, depth_rule=depth_rule,
                               depth_mm=depth, fit=fit, nu_rounds=rounds,
                               seconds=time.perf_counter() - t0, warnings=notes,
-                              depth_std_mm=std, bulge_mm=bulge)
+                              depth_std_mm=std, bulge_mm=bulge, bevel_force_n=bevel_n)
 
 
 def _vernier_depths(w0: np.ndarray, closure: np.ndarray, cfg, nu: float
@@ -274,7 +325,7 @@ def _vernier_depths(w0: np.ndarray, closure: np.ndarray, cfg, nu: float
 
 
 def _bulge_note(bulge: np.ndarray, depth: np.ndarray, cfg, rounds: list[float], w0, closure,
-                fit_at, std) -> str:
+                fit_at, std, force) -> str:
     """One sentence on the bulge correction: its size and how it feeds back into nu."""
     frac = float(np.median(bulge / depth))
     text = (f"bulge correction: the gel rises {100 * frac:.2f}% of w at the bevel "
@@ -283,7 +334,7 @@ def _bulge_note(bulge: np.ndarray, depth: np.ndarray, cfg, rounds: list[float], 
     if rounds:
         nu = rounds[-1]
         d2, _ = _vernier_depths(w0, closure, cfg, min(nu + 0.01, 0.499))
-        f2 = fit_at(d2, std)
+        f2 = fit_at(d2, std, force)
         if np.isfinite(f2.nu):
             gain = (f2.nu - nu) / (min(nu + 0.01, 0.499) - nu)
             text += (f", settled at nu = {nu:.4f} in {len(rounds)} round(s); d nu_fit / d nu = "

@@ -47,33 +47,48 @@ def test_report_folder(sample_run):
     out, _ = sample_run
     rep = out / "report"
     for name in ("measurements.csv", "session.toml", "fit.json", "rejected.csv", "report.html",
-                 "force_depth.png", "stiffness_line.png", "residuals.png", "mosaic.png"):
+                 "force_depth.png", "stiffness_line.png", "residuals.png", "mosaic.png",
+                 "bevel.png"):
         assert (rep / name).is_file(), name
     html = (rep / "report.html").read_text()
     assert "E = " in html and "misaligned" in html and "mosaic.png" in html
+    assert "bevel.png" in html and "Certified presses" in html and "vernier" in html
     assert json.loads((out / "result.json").read_text()) == json.loads(
         (rep / "fit.json").read_text())
 
 
 def test_certified_depths_and_forces(sample_run):
-    """Every certified press: depth within 10 um of the truth, force within
-    0.01 N (the F/T window's own scatter is 1/80 N / sqrt(200) = 0.9 mN)."""
+    """The vernier's certified depths against the truth (a stage overshoot of 0 to 50 um
+    past w0): at least 95% of the presses in view certified, every depth within 10 um, mean
+    error within 2 um and sd under 3 um (the issue's targets), the stated uncertainties
+    honest to a factor of two; forces within 0.01 N (the F/T window's own scatter is
+    1/80 N / sqrt(200) = 0.9 mN)."""
+    import numpy as np
+
     out, truth = sample_run
     tp = {p["press"]: p for p in truth["presses"]}
     with open(out / "report" / "measurements.csv") as fh:
         rows = list(csv.DictReader(fh))
-    assert len(rows) >= 44
+    good = [p for p in truth["presses"] if not p["misaligned"] and not p["edge"]]
+    assert len(rows) >= 0.95 * len(good)
     assert list(rows[0].keys()) == [c for c in COLUMN_ORDER if c in rows[0]]
-    for col in ("press", "indenter", "depth_mm", "force_n", "force_std_n", "fx_n", "fy_n",
-                "time_s", "hold_s", "wait_s", "x_mm", "y_mm"):
+    for col in ("press", "indenter", "depth_mm", "depth_std_mm", "overshoot_mm", "force_n",
+                "force_std_n", "fx_n", "fy_n", "time_s", "hold_s", "wait_s", "x_mm", "y_mm"):
         assert col in rows[0], col
+    err, z = [], []
     for r in rows:
         t = tp[int(r["press"])]
         assert int(r["indenter"]) == t["indenter"]
         assert abs(float(r["depth_mm"]) - t["depth_mm"]) < 0.010
+        assert float(r["overshoot_mm"]) == pytest.approx(float(r["depth_mm"]) - t["w0_mm"],
+                                                         abs=1e-6)
         assert abs(float(r["force_n"]) - t["force_n"]) < 0.01
         assert abs(float(r["x_mm"]) - t["x_mm"]) < 0.05
         assert abs(float(r["y_mm"]) - t["y_mm"]) < 0.05
+        err.append(float(r["depth_mm"]) - t["depth_mm"])
+        z.append(err[-1] / float(r["depth_std_mm"]))
+    assert abs(np.mean(err)) < 0.002 and np.std(err) < 0.003
+    assert 0.5 < np.std(z) < 2.0
     table = read_measurements(out / "report" / "measurements.csv")
     assert table.thickness_mm == 3.0 and table.radius_mm == 2.5
 
@@ -87,7 +102,9 @@ def test_E_and_nu(sample_run):
         abs(res["E_mpa"] / truth["E_mpa"] - 1) < 0.01
     assert res["clock_offset_s"] == pytest.approx(truth["clock_offset_s"], abs=0.003)
     assert res["clock_source"] == "estimated"
-    assert res["depth_rule"] == "nominal"
+    assert res["depth_rule"] == "vernier"
+    assert res["nu_ci95"][0] < truth["nu"] < res["nu_ci95"][1]
+    assert res["depth_std_used"] is True
 
 
 def test_rejections_have_reasons(sample_run):
@@ -98,6 +115,8 @@ def test_rejections_have_reasons(sample_run):
     edge = [p["press"] for p in truth["presses"] if p["edge"]]
     assert all(reasons.get(i) == "misaligned" for i in mis) and mis
     assert all(reasons.get(i) == "footprint cut by the pad edge" for i in edge) and edge
+    with open(out / "report" / "rejected.csv") as fh:
+        assert next(csv.reader(fh)) == ["press", "reason", "detail", "t_frame_s", "bevel_snr"]
     with open(out / "report" / "measurements.csv") as fh:
         certified = {int(r["press"]) for r in csv.DictReader(fh)}
     assert certified | set(reasons) == set(range(len(truth["presses"])))
@@ -118,7 +137,8 @@ def scenario(tmp_path_factory):
     prof = press_profile(2.5 / 3, 0.47, w_over_h_max=0.22, steps=8, cell=0.5,
                          edge_refinements=5)
     spec = SessionSpec(E_mpa=0.15, nu=0.47, repeats=2, clock_offset_s=-0.21,
-                       config_clock_offset_s=0.19, misaligned=(2,), edge_presses=(5,), seed=7)
+                       config_clock_offset_s=0.19, misaligned=(2,), edge_presses=(5,), seed=7,
+                       overshoot_mm=(0.005, 0.045))
     truth = make_session(folder, spec, profile=prof)
     return folder, truth
 
@@ -196,11 +216,66 @@ def test_saturated_and_unseen_bevel_are_rejected(scenario, tmp_path):
     c = certify_session(read_session(copy))
     assert {r.press: r.reason for r in c.rejected}.get(0) == "saturated frames"
     toml = copy / "session.toml"
-    toml.write_text(toml.read_text().replace("bevel_angle_deg = 0.0", "bevel_angle_deg = 180.0"))
+    toml.write_text(toml.read_text().replace("bevel_direction_deg = 0.0",
+                                             "bevel_direction_deg = 90.0"))
     c = certify_session(read_session(copy))
     reasons = {r.press: r.reason for r in c.rejected}
     assert not c.presses
-    assert sum(r == "bevel never seen" for r in reasons.values()) >= 6
+    assert sum(r in ("bevel never seen", "bevel out of view") for r in reasons.values()) >= 6
+    assert all(r.bevel_score == r.bevel_score for r in c.rejected
+               if r.reason == "bevel never seen")          # never NaN
+
+
+def test_nothing_is_lost_when_every_press_is_rejected(scenario, tmp_path, capsys):
+    """Every press rejected (the bevel looked for on the wrong side): exit 2 with one
+    sentence, and rejected.csv (each press, its reason and best bevel SNR), the bevel
+    panels and report.html saying why are written; no fit.json."""
+    folder, truth = scenario
+    copy = tmp_path / "s"
+    shutil.copytree(folder, copy)
+    toml = copy / "session.toml"
+    toml.write_text(toml.read_text().replace("bevel_direction_deg = 0.0",
+                                             "bevel_direction_deg = 180.0"))
+    out = tmp_path / "out"
+    assert main(["calibrate", str(copy), "--out", str(out), "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert "too few to fit" in err and "rejected.csv" in err and str(out) in err
+    assert err.count("\n") == 1
+    with open(out / "rejected.csv") as fh:
+        rows = list(csv.DictReader(fh))
+    assert {int(r["press"]) for r in rows} == set(range(len(truth["presses"])))
+    assert any(r["reason"] in ("bevel out of view", "bevel never seen") for r in rows)
+    html = (out / "report.html").read_text()
+    assert "Nothing was fitted" in html and "bevel.png" in html
+    assert (out / "bevel.png").is_file() and not (out / "fit.json").exists()
+
+
+def test_onset_rule_without_a_vernier(tmp_path):
+    """A bevel mark with no vernier (bevel_angle_deg = 0, the stage stopping at w0): the
+    onset rule, w = w0, with the uncertainty of one frame's travel / sqrt(12)."""
+    pytest.importorskip("taxim")
+    import numpy as np
+
+    from tactilevision.sim import GaugeBlock, SessionSpec, make_session, press_profile
+
+    prof = press_profile(2.5 / 3, 0.48, w_over_h_max=0.22, steps=8, cell=0.5,
+                         edge_refinements=5)
+    block = GaugeBlock(depths_mm=(0.15, 0.3, 0.5), bevel_angle_deg=0.0, bevel_offset_mm=4.5,
+                       bevel_length_mm=2.4)
+    spec = SessionSpec(block=block, repeats=2, x_range_mm=(-5.0, 2.5), y_range_mm=(-3.0, 3.0),
+                       seed=4)
+    truth = make_session(tmp_path / "s", spec, profile=prof)
+    cal = calibrate_session(tmp_path / "s")
+    assert cal.depth_rule == "nominal"
+    assert len(cal.certification.presses) >= 5
+    tp = {p["press"]: p for p in truth["presses"]}
+    for p, d, sd in zip(cal.certification.presses, cal.depth_mm, cal.depth_std_mm, strict=True):
+        assert p.rule == "onset" and d == p.w0_mm == tp[p.press]["depth_mm"]
+        # the stage covers w0 in the 0.5 s approach; one 0.1 s frame / sqrt(12)
+        speed = p.w0_mm / 0.5
+        assert sd == pytest.approx(speed * 0.1 / np.sqrt(12), rel=0.35)
+    with pytest.raises(InputError, match="needs a machined bevel"):
+        calibrate_session(tmp_path / "s", depth_rule="vernier")
 
 
 def test_make_session_is_deterministic(tmp_path):

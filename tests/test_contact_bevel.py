@@ -35,8 +35,9 @@ def test_footprint_radius_check_and_open_ring():
 
 
 def test_bevel_score_on_rendered_presses():
-    """Taxim-rendered press before and after the land touches: the line is seen
-    only after (JPEG-compressed as in the sample session)."""
+    """A bevel mark (no vernier: the legacy drawn line) before and after the land touches,
+    rendered through Taxim's shading and JPEG-compressed as in the sample sessions: the
+    line is seen only after; a mark out of the image scores 0, never NaN."""
     pytest.importorskip("taxim")
     import cv2
 
@@ -45,16 +46,50 @@ def test_bevel_score_on_rendered_presses():
     table, ref = taxim_shading()
     prof = press_profile(2.5 / 3, 0.48, steps=8, cell=0.5, edge_refinements=5)
     rng = np.random.default_rng(0)
+    block = GaugeBlock(bevel_angle_deg=0.0, bevel_offset_mm=4.5, bevel_length_mm=2.4)
     scores = {}
     for depth in (0.29, 0.3003):
-        z, touching = press_surface(prof, GaugeBlock(), indenter=1, depth_mm=depth,
+        z, touching = press_surface(prof, block, indenter=1, depth_mm=depth,
                                     centre_px=(300.4, 250.2), shape=table.shape,
                                     mm_per_px=table.mm_per_px, thickness_mm=3.0)
         img = table.render(z, ref, noise_dn=2.0, rng=rng)
         img = cv2.imdecode(cv2.imencode(".jpg", img, [cv2.IMWRITE_JPEG_QUALITY, 75])[1], 1)
         scores[touching] = bevel_score(img, ref, (300.4, 250.2), table.mm_per_px, offset_mm=4.5)
-    assert scores[False] < 4.0 < 8.0 < scores[True]
-    assert np.isnan(bevel_score(img, ref, (620.0, 250.0), table.mm_per_px, offset_mm=4.5))
+    assert scores[False] < 9.0 < 12.0 < scores[True]
+    assert bevel_score(img, ref, (800.0, 250.0), table.mm_per_px, offset_mm=4.5) == 0.0
+
+
+def test_machined_bevel_meets_the_bulging_gel():
+    """The simulator's ridge on the FEM surface: the band's reach on each side is where the
+    flank meets the surface (checked on the drawn height map against the truth helper)."""
+    pytest.importorskip("taxim")
+    from tactilevision.sim import GaugeBlock, press_profile, press_surface
+
+    prof = press_profile(2.5 / 3, 0.48, steps=8, cell=0.5, edge_refinements=5)
+    block = GaugeBlock()                        # 5 deg flanks, crest 9 mm out
+    s, shape, c = 0.0295, (480, 640), (100.3, 240.0)
+    z_free, touching_free = press_surface(prof, GaugeBlock(bevel_angle_deg=0.0, land="ideal"),
+                                          indenter=4, depth_mm=0.55, centre_px=c, shape=shape,
+                                          mm_per_px=s, thickness_mm=3.0)
+    assert not touching_free                   # 0.55 < w0 = 0.6: no mark
+    z, touching = press_surface(prof, block, indenter=4, depth_mm=0.63, centre_px=c,
+                                shape=shape, mm_per_px=s, thickness_mm=3.0)
+    assert touching
+    row = z[240].astype(np.float64)
+    crest = c[0] + 9.0 / s
+    tan = np.tan(np.deg2rad(5.0))
+    overshoot = 0.03
+    bulge = -prof.depth_at(0.63 / 3, np.array([3.0]))[0] * 3.0
+    assert 0.01 < bulge / 0.63 < 0.03
+    # on the crest the gel is pushed to the crest's depth, the overshoot
+    assert row[int(round(crest))] == pytest.approx(overshoot - abs(round(crest) - crest) * s * tan,
+                                                   abs=2e-5)
+    # the band: where the gel follows the flank; its half-width ~ (overshoot + bulge) / tan
+    cols = np.arange(shape[1])
+    flank = overshoot - np.abs(cols - crest) * s * tan
+    on = np.isclose(row, flank, atol=1e-6) & (np.abs(cols - crest) < 40)
+    half = 0.5 * (cols[on].max() - cols[on].min()) * s
+    assert half == pytest.approx((overshoot + bulge) / tan, abs=2 * s)
 
 
 def test_refine_clock_offset():

@@ -24,7 +24,7 @@ if __name__ == "__main__":
             p.rmdir()
     tmp = HERE / "_new"
     spec = SessionSpec(E_mpa=0.20, nu=0.48, repeats=8, wait_s=(0.3, 10.0), recovery_r=0.08,
-                       recovery_tau_s=2.0, rate_hz=250.0, window_samples=50, jpeg_quality=70,
+                       recovery_tau_s=2.0, rate_hz=250.0, window_samples=50, jpeg_quality=90,
                        overshoot_mm=(0.0, 0.05), seed=1)
     make_session(tmp, spec, progress=True)
     for p in tmp.iterdir():

@@ -24,10 +24,18 @@ from ._sync import (
     force_onsets,
     refine_clock_offset,
 )
-from ._vernier import BevelGeometry, BevelProfile, BevelReading, bevel_profile, read_bevel
+from ._vernier import (
+    BevelGeometry,
+    BevelProfile,
+    BevelReading,
+    bevel_force,
+    bevel_profile,
+    read_bevel,
+)
 
 __all__ = ["BevelGeometry", "BevelProfile", "BevelReading", "Certification", "CertifiedPress",
-           "ClockSync", "Footprint", "ForceWindow", "Rejection", "bevel_profile", "bevel_score",
+           "ClockSync", "Footprint", "ForceWindow", "Rejection", "bevel_force", "bevel_profile",
+           "bevel_score",
            "bulge_at", "bulge_height", "certified_depths", "certify_session",
            "contact_mask", "contact_onsets", "estimate_clock_offset", "fit_footprint",
            "footprint_from_frame", "force_onsets", "force_window", "hold_start",

@@ -280,6 +280,7 @@ def read_measurements(path: str | Path, *, thickness_mm: float | None = None,
 #: Column order of :func:`write_measurements` (formats.md section 2); other
 #: columns follow in the order given.
 COLUMN_ORDER = ("press", "indenter", "depth_mm", "depth_std_mm", "overshoot_mm", "force_n",
+                "bevel_force_n",
                 "force_std_n", "fx_n", "fy_n", "time_s", "hold_s", "wait_s", "x_mm", "y_mm",
                 "day", "temperature_c")
 

@@ -63,6 +63,9 @@ class SessionConfig:
     bulge_correction : bool
         Whether certified depths are corrected for the gel's bulge at the
         bevel (default true; only with a vernier).
+    bevel_force_correction : bool
+        Whether the force of the bevel's own band of contact is taken off the
+        F/T force (default true; only with a vernier).
     """
 
     sensor_name: str
@@ -80,6 +83,7 @@ class SessionConfig:
     bevel_length_mm: float = 2.4
     bevel_direction_deg: float = 0.0
     bulge_correction: bool = True
+    bevel_force_correction: bool = True
 
 
 @dataclass(frozen=True)
@@ -218,6 +222,8 @@ def _read_config(folder: Path) -> SessionConfig:
         bevel_direction_deg=_toml_number(doc, toml, "gauge_block", "bevel_direction_deg",
                                          positive=False, default=0.0),
         bulge_correction=_toml_bool(doc, toml, "gauge_block", "bulge_correction", default=True),
+        bevel_force_correction=_toml_bool(doc, toml, "gauge_block", "bevel_force_correction",
+                                          default=True),
     )
 
 

@@ -43,7 +43,7 @@ CURVATURE_BIC = 6.0
 #: Family-wise level of the covariate structure tests (Bonferroni over columns).
 ALPHA = 0.01
 #: Columns that are never covariates (``depth_std_mm``: the depth's uncertainty, not physics).
-_NOT_COVARIATES = ("force_n", "depth_std_mm")
+_NOT_COVARIATES = ("force_n", "depth_std_mm", "bevel_force_n")
 
 # the measurement that separates two effects that look alike on one table
 _SEPARATE = {
@@ -229,8 +229,16 @@ class Diagnosis:
 
 
 def _groups(columns: Mapping[str, np.ndarray]) -> np.ndarray:
-    """Replicate group of each press: same indenter (if given) and same depth."""
-    keys = [np.round(np.asarray(columns["depth_mm"], np.float64), 6)]
+    """Replicate group of each press: same indenter (if given) and same nominal depth.
+
+    The nominal depth is ``depth_mm`` itself, or, for depths measured by a
+    vernier (an ``overshoot_mm`` column), the gauge block's w0 = depth -
+    overshoot: the presses of one indenter, each a few microns deeper.
+    """
+    depth = np.asarray(columns["depth_mm"], np.float64)
+    over = np.asarray(columns.get("overshoot_mm", np.full(depth.shape, np.nan)), np.float64)
+    nominal = depth - over if np.all(np.isfinite(over)) else depth
+    keys = [np.round(nominal, 6)]
     if "indenter" in columns:
         ind = np.asarray(columns["indenter"], np.float64)
         if np.all(np.isfinite(ind)):
@@ -338,7 +346,7 @@ def covariate_tests(residuals_n: np.ndarray, predicted_n: np.ndarray,
         else:
             # within replicate groups: structure along depth (the law's own) is taken out
             grp = _groups({k: np.asarray(v)[ok] for k, v in columns.items()
-                           if k in ("depth_mm", "indenter")})
+                           if k in ("depth_mm", "indenter", "overshoot_mm")})
             G = int(grp.max()) + 1
             r = r - _group_means(r, grp)
             rss0 = float(np.sum(r ** 2))

@@ -21,8 +21,9 @@ __all__ = ["TABLE_EXTRAPOLATION", "TabulatedBetaRelation", "fem_beta_relation",
 
 #: The FEM's kappa_n(w/h) is read (PCHIP) up to this factor beyond the table's deepest w/h
 #: (0.2): a press pushed past the gauge block's w0 = 0.2 h by a stage overshoot (a vernier
-#: session reaches about 0.22 h). kappa_n is smooth and nearly linear in w/h there.
-TABLE_EXTRAPOLATION = 1.1
+#: session with 50 um past 0.6 mm on a 3 mm gel reaches 0.217 h). kappa_n is smooth and
+#: nearly linear in w/h there.
+TABLE_EXTRAPOLATION = 1.15
 
 
 @lru_cache(maxsize=4)
@@ -327,7 +328,7 @@ def kappa_n(nu: float | np.ndarray, a_over_h: float | np.ndarray,
     wt = np.concatenate([[0.0], data["w_over_h"]])
     for name, v, lo, hi in (("nu", n, data["nu"][0], data["nu"][-1]),
                             ("a_over_h", r, data["a_over_h"][0], data["a_over_h"][-1]),
-                            ("w_over_h", x, 0.0, wt[-1])):
+                            ("w_over_h", x, 0.0, TABLE_EXTRAPOLATION * wt[-1])):
         bad = ~((v >= lo) & (v <= hi))
         if np.any(bad):
             raise InputError(f"{name} = {float(v[bad].ravel()[0]):g} is outside the FEM "

@@ -66,6 +66,24 @@ class PressProfile:
         hi = np.interp(r, self.r[k + 1], self.depth[k + 1])
         return (1.0 - t) * lo + t * hi
 
+    def depth_at_many(self, w_over_h: np.ndarray, r_over_h: float) -> np.ndarray:
+        """Surface depth (units of h) at one radius for many depths (0 where w <= 0).
+
+        Parameters
+        ----------
+        w_over_h : (N,) array_like of float
+        r_over_h : float
+
+        Returns
+        -------
+        depth : (N,) float64 ndarray
+            Linear between the sweep's depths and between its nodes.
+        """
+        w = np.clip(np.asarray(w_over_h, np.float64), 0.0, self.w_over_h[-1])
+        at = np.array([np.interp(r_over_h, self.r[k], self.depth[k])
+                       for k in range(len(self.w_over_h))])
+        return np.interp(w, self.w_over_h, at)
+
     def force_at(self, w_over_h: float) -> float:
         """P / (E h^2) at `w_over_h` (PCHIP through the sweep's forces)."""
         from scipy.interpolate import PchipInterpolator

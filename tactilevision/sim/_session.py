@@ -24,6 +24,7 @@ from scipy.interpolate import PchipInterpolator
 
 from .._checks import InputError
 from ..contact._land import land_contact_depth
+from ..contact._vernier import BevelGeometry, bevel_force
 from ._block import GaugeBlock, press_surface
 from ._press import PressProfile, press_profile
 from ._render import ShadingTable, taxim_shading
@@ -196,7 +197,24 @@ def make_session(folder: str | Path, spec: SessionSpec | None = None, *,
         recovery[1:] += spec.recovery_r * (1 + sched.wait_s[1:] / spec.recovery_tau_s) ** -1.5
 
     def force_of_depth(i: int, d: np.ndarray) -> np.ndarray:
+        """The indenter's force at depth d (what the fit is after)."""
         return eh2 * p_of_w(np.asarray(d) / h) * recovery[i]
+
+    def bevel_force_of_depth(i: int, d: np.ndarray) -> np.ndarray:
+        """What the bevel's band presses at depth d (the F/T sensor reads it too)."""
+        b = spec.block
+        d = np.asarray(d, np.float64)
+        if not b.vernier:
+            return np.zeros_like(d)
+        bulge = -prof.depth_at_many(d / h, b.bevel_offset_mm / h) * h
+        closure = d - b.depths_mm[int(sched.indenter[i])] + bulge
+        geom = BevelGeometry(offset_mm=b.bevel_offset_mm, direction_deg=b.bevel_direction_deg,
+                             angle_deg=b.bevel_angle_deg, length_mm=b.bevel_length_mm)
+        return bevel_force(np.where(d > 0, closure, 0.0), geom, thickness_mm=h,
+                           E_mpa=spec.E_mpa, nu=spec.nu)
+
+    def ft_force_of_depth(i: int, d: np.ndarray) -> np.ndarray:
+        return force_of_depth(i, d) + bevel_force_of_depth(i, d)
 
     # frames: from lead_s before each press to its release
     dt = 1.0 / spec.fps
@@ -240,7 +258,7 @@ def make_session(folder: str | Path, spec: SessionSpec | None = None, *,
         if not 0 <= i < n:
             raise InputError(f"misaligned press {i} is not a press (0 to {n - 1})")
         tang[i] = spec.misaligned_fraction
-    t_f, forces = ft_log(sched, force_of_depth, duration_s=float(sched.t_end_s[-1]) + 1.0,
+    t_f, forces = ft_log(sched, ft_force_of_depth, duration_s=float(sched.t_end_s[-1]) + 1.0,
                          rate_hz=spec.rate_hz, clock_offset_s=spec.clock_offset_s,
                          noise_n=spec.force_noise_n, tangential_fraction=tang,
                          seed=spec.seed + 1)
@@ -253,7 +271,7 @@ def make_session(folder: str | Path, spec: SessionSpec | None = None, *,
         for i in range(n):
             f.write(f"{i},{int(sched.indenter[i])},{x[i]:.3f},{y[i]:.3f}\n")
     _write_toml(out, spec, s, table.shape, half)
-    truth = _truth(spec, sched, w_c, force_of_depth, tang, s, prof)
+    truth = _truth(spec, sched, w_c, force_of_depth, tang, s, prof, bevel_force_of_depth)
     (out / "truth.json").write_text(json.dumps(truth, indent=1) + "\n")
     return truth
 
@@ -279,7 +297,7 @@ def _write_toml(out: Path, spec: SessionSpec, s: float, shape: tuple[int, int],
 
 
 def _truth(spec: SessionSpec, sched: PressSchedule, w_c: np.ndarray, force_of_depth,
-           tang: np.ndarray, s: float, prof: PressProfile) -> dict:
+           tang: np.ndarray, s: float, prof: PressProfile, bevel_force_of_depth) -> dict:
     n = sched.n_presses
     presses = []
     for i in range(n):
@@ -291,6 +309,8 @@ def _truth(spec: SessionSpec, sched: PressSchedule, w_c: np.ndarray, force_of_de
             "bevel_reach_mm": [round(v, 7) for v in _bevel_reach(spec, prof, float(
                 sched.depth_mm[i] - spec.block.depths_mm[k]), float(sched.depth_mm[i]))],
             "force_n": round(float(force_of_depth(i, np.array([sched.depth_mm[i]]))[0]), 7),
+            "bevel_force_n": round(float(bevel_force_of_depth(
+                i, np.array([sched.depth_mm[i]]))[0]), 7),
             "x_mm": round(float(sched.x_mm[i]), 4), "y_mm": round(float(sched.y_mm[i]), 4),
             "t_start_s": round(float(sched.t_start_s[i]), 6),
             "hold_from_s": round(float(sched.t_start_s[i] + sched.approach_s[i]), 6),
@@ -312,7 +332,9 @@ def _truth(spec: SessionSpec, sched: PressSchedule, w_c: np.ndarray, force_of_de
         "note": ("depth_mm is the true indentation while the force window is taken: the depth "
                  "at which the land meets the gel (w0 for the 'ideal' land, less for 'bulge'), "
                  "plus the stage's overshoot; force_n is the FEM force there (a bonded "
-                 "Neo-Hookean layer); overshoot_mm = depth_mm - w0; bevel_reach_mm: how far the "
+                 "Neo-Hookean layer), the indenter's alone; the F/T log adds bevel_force_n, what "
+                 "the bevel's band presses (tactilevision.contact.bevel_force); "
+                 "overshoot_mm = depth_mm - w0; bevel_reach_mm: how far the "
                  "gel meets the bevel's flanks from the crest, towards and away from the indenter "
                  "(on the crest's middle; 0 when it does not touch)"),
         "presses": presses,

@@ -1,0 +1,100 @@
+"""Depth certification on frames no project code drew: Taxim's own renderer.
+
+``sample_frames/taxim_gauge`` is a gauge-block session whose every frame is a
+render of ``taxim.Taxim(backend="jax").render(height_map, press_depth=w)``
+(benchmarks/taxim_gauge_session.py: its gel deformation, its default shadows;
+the generator imports nothing of tactilevision). Its truth is geometric: the
+indenter pressed to w0 + overshoot. ``calibrate`` must certify it to the
+issue's targets. A second test renders a bevel live with Taxim (needs jax,
+part of the test extra) and reads it.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tactilevision import calibrate_session
+from tactilevision.mechanics import fit_indentation
+
+TAXIM_SESSION = Path(__file__).resolve().parents[1] / "sample_frames" / "taxim_gauge"
+
+
+@pytest.fixture(scope="module")
+def taxim_run():
+    if not (TAXIM_SESSION / "session.toml").is_file():
+        pytest.skip(f"{TAXIM_SESSION} is missing")
+    truth = json.loads((TAXIM_SESSION / "truth.json").read_text())
+    return calibrate_session(TAXIM_SESSION), truth
+
+
+def test_taxim_session_is_certified_to_the_targets(taxim_run):
+    """At least 95% of the presses certified; depth error mean within 2 um and sd under 3 um;
+    each within its 3.5 sd."""
+    cal, truth = taxim_run
+    tp = {p["press"]: p for p in truth["presses"]}
+    ps = cal.certification.presses
+    assert len(ps) >= math.ceil(0.95 * len(truth["presses"]))
+    assert cal.depth_rule == "vernier"
+    assert any("no bulge correction" in w for w in cal.warnings)
+    err = np.array([d - tp[p.press]["depth_mm"] for p, d in zip(ps, cal.depth_mm, strict=True)])
+    assert abs(err.mean()) < 0.002 and err.std() < 0.003
+    assert np.all(np.abs(err) < 3.5 * cal.depth_std_mm + 0.001)
+
+
+def test_taxim_session_fit_matches_the_true_depths(taxim_run):
+    """c within 2% and beta within 0.05 of the fit the true (w, P) give (the same forces)."""
+    cal, truth = taxim_run
+    tp = {p["press"]: p for p in truth["presses"]}
+    ps = cal.certification.presses
+    w_true = np.array([tp[p.press]["depth_mm"] for p in ps])
+    force = np.array([p.force_n for p in ps])
+    with pytest.warns(UserWarning, match="w/h"):
+        ref = fit_indentation(w_true, force, thickness_mm=3.0, radius_mm=2.5)
+    assert cal.fit.c_n_per_mm == pytest.approx(ref.c_n_per_mm, rel=0.02)
+    assert abs(cal.fit.beta - ref.beta) < 0.05
+
+
+def test_taxim_live_render_reads_the_overshoot():
+    """A gauge-block press rendered now by Taxim (flat gel, contact_scale 0, default
+    shadows): the vernier reads the overshoot to within 1.5 um."""
+    taxim = pytest.importorskip("taxim")
+    pytest.importorskip("jax")
+    import shutil
+    import tempfile
+
+    import cv2
+
+    from tactilevision.contact import BevelGeometry, bevel_profile, read_bevel
+
+    src = Path(taxim.__file__).parent / "calib" / "gelsight"
+    s, h, w = 0.0295, 480, 640
+    geom = BevelGeometry(offset_mm=7.5, direction_deg=0.0, angle_deg=5.0, length_mm=3.0)
+    with tempfile.TemporaryDirectory() as tmp:
+        flat = Path(tmp) / "gelsight"
+        shutil.copytree(src, flat)
+        g = np.load(flat / "gelmap.npy")
+        np.save(flat / "gelmap.npy", np.full_like(g, g.max()))
+        sim = taxim.Taxim(calib_folder=flat, backend="jax",
+                          params={"simulator": {"contact_scale": 0.0}})
+        centre = (150.37, 233.81)
+        rows, cols = np.indices((h, w), dtype=np.float64)
+        dx, dy = (cols - centre[0]) * s, (rows - centre[1]) * s
+        w0, overshoot = 0.3, 0.037
+        hm = np.full((h, w), w0 + 1.0)
+        hm[np.hypot(dx, dy) <= 2.5] = 0.0
+        u, v = dx - geom.offset_mm, dy
+        on = np.abs(v) <= 1.5
+        hm[on] = np.minimum(hm[on], w0 + np.abs(u[on]) * geom.tan_theta)
+        ref = sim.render(np.full((h, w), 5.0), press_depth=None)
+        img = sim.render(hm, press_depth=w0 + overshoot)
+    to8 = lambda x: cv2.cvtColor((np.clip(x, 0, 1) * 255).round().astype(np.uint8),  # noqa: E731
+                                 cv2.COLOR_RGB2BGR)
+    frame, reference = to8(img), to8(ref)
+    prof = bevel_profile(frame, reference, centre, s, geom, reach_px=46.0)
+    r = read_bevel(prof, geom, s, lines="all", line_px=3.0, blur_px=1.3)
+    assert r.closure_mm == pytest.approx(overshoot, abs=0.0015)
