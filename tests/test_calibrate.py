@@ -155,9 +155,10 @@ def test_scenario_session(scenario):
     assert reasons.get(5) == "footprint cut by the pad edge"
     tp = {p["press"]: p for p in truth["presses"]}
     assert len(c.presses) >= 7
-    for p, d in zip(c.presses, cal.depth_mm, strict=True):
+    m = cal.measurements()             # force_n: the F/T's less the bevel band's own
+    for p, d, f in zip(c.presses, cal.depth_mm, m["force_n"], strict=True):
         assert abs(d - tp[p.press]["depth_mm"]) < 0.010
-        assert abs(p.force_n - tp[p.press]["force_n"]) < 0.01
+        assert abs(f - tp[p.press]["force_n"]) < 0.01
 
 
 def test_correct_clock_offset_is_kept(scenario, tmp_path):
@@ -260,14 +261,14 @@ def test_onset_rule_without_a_vernier(tmp_path):
 
     prof = press_profile(2.5 / 3, 0.48, w_over_h_max=0.22, steps=8, cell=0.5,
                          edge_refinements=5)
-    block = GaugeBlock(depths_mm=(0.15, 0.3, 0.5), bevel_angle_deg=0.0, bevel_offset_mm=4.5,
+    block = GaugeBlock(depths_mm=(0.15, 0.5), bevel_angle_deg=0.0, bevel_offset_mm=4.5,
                        bevel_length_mm=2.4)
     spec = SessionSpec(block=block, repeats=2, x_range_mm=(-5.0, 2.5), y_range_mm=(-3.0, 3.0),
                        seed=4)
     truth = make_session(tmp_path / "s", spec, profile=prof)
     cal = calibrate_session(tmp_path / "s")
     assert cal.depth_rule == "nominal"
-    assert len(cal.certification.presses) >= 5
+    assert len(cal.certification.presses) >= 3
     tp = {p["press"]: p for p in truth["presses"]}
     for p, d, sd in zip(cal.certification.presses, cal.depth_mm, cal.depth_std_mm, strict=True):
         assert p.rule == "onset" and d == p.w0_mm == tp[p.press]["depth_mm"]

@@ -68,7 +68,7 @@ def test_machined_bevel_meets_the_bulging_gel():
     prof = press_profile(2.5 / 3, 0.48, steps=8, cell=0.5, edge_refinements=5)
     block = GaugeBlock()                        # 5 deg flanks, crest 9 mm out
     s, shape, c = 0.0295, (480, 640), (100.3, 240.0)
-    z_free, touching_free = press_surface(prof, GaugeBlock(bevel_angle_deg=0.0, land="ideal"),
+    _, touching_free = press_surface(prof, GaugeBlock(bevel_angle_deg=0.0, land="ideal"),
                                           indenter=4, depth_mm=0.55, centre_px=c, shape=shape,
                                           mm_per_px=s, thickness_mm=3.0)
     assert not touching_free                   # 0.55 < w0 = 0.6: no mark
@@ -82,7 +82,7 @@ def test_machined_bevel_meets_the_bulging_gel():
     bulge = -prof.depth_at(0.63 / 3, np.array([3.0]))[0] * 3.0
     assert 0.01 < bulge / 0.63 < 0.03
     # on the crest the gel is pushed to the crest's depth, the overshoot
-    assert row[int(round(crest))] == pytest.approx(overshoot - abs(round(crest) - crest) * s * tan,
+    assert row[round(crest)] == pytest.approx(overshoot - abs(round(crest) - crest) * s * tan,
                                                    abs=2e-5)
     # the band: where the gel follows the flank; its half-width ~ (overshoot + bulge) / tan
     cols = np.arange(shape[1])
