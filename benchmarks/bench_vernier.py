@@ -15,7 +15,9 @@ Sessions (each with its truth; stage overshoot past w0 uniform in the range give
 
 For each it prints what the issue asks: the share of presses (bevel in view) certified,
 the certified depth's error (mean, sd, largest) and the z-scores against the stated
-uncertainty, c and beta against the fit of the true (w, P), E and nu against the truth
+uncertainty, c and beta against the fit of the true depths with the same forces (the
+F/T's less the bevel band's own: the comparison isolates the depths), E and nu against
+the truth
 (ours: the FEM gel; Taxim: the forces follow eq. (5) with c and beta given, so E and nu
 are not defined), and the wall time of ``calibrate_session`` beside the time to decode the
 session's frames once (a reference measured in the same run).
@@ -99,7 +101,7 @@ def evaluate(folder: Path, name: str) -> dict:
             print(f"    overshoot {1e3 * lo:.0f}-{1e3 * hi:.0f} um: {m.sum()} presses, mean "
                   f"{1e3 * err[m].mean():+.2f} um, sd {1e3 * err[m].std():.2f} um")
     w_true = np.array([tp[p.press]["depth_mm"] for p in ps])
-    force = np.array([p.force_n for p in ps])
+    force = cal.measurements()["force_n"]          # the F/T's, less the bevel band's own
     import warnings
 
     with warnings.catch_warnings():

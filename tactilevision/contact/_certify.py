@@ -392,7 +392,8 @@ def certify_session(session, *, min_contact_px: int = 200, bevel_threshold: floa
         cand = run[max(0, start - 1):int(np.searchsorted(run, full[-1])) + 1]
         t_hold_end = float(times[full[-1]])
         if vernier:
-            got = _vernier_onset(session, geom, centre, s, cand, reach, period, half, offset)
+            got = _vernier_onset(session, geom, centre, s, cand, reach, period, half, offset,
+                                 float(times[run[0]]))
             if isinstance(got, Rejection):
                 reject(got.reason, got.detail, at=got.frame, score=got.bevel_score)
                 continue
@@ -547,7 +548,8 @@ def hold_start(force_times_s: np.ndarray, fz_n: np.ndarray, t0_s: float, t1_s: f
 
 
 def _vernier_onset(session, geom: BevelGeometry, centre: tuple[float, float], s: float,
-                   cand: np.ndarray, reach: float, period: float, half: float, offset: float):
+                   cand: np.ndarray, reach: float, period: float, half: float, offset: float,
+                   t_first: float):
     """Hold of a press and the vernier's frames: the force's hold, the band read over it.
 
     The hold starts where the F/T log stops rising (:func:`hold_start`), else
@@ -555,8 +557,8 @@ def _vernier_onset(session, geom: BevelGeometry, centre: tuple[float, float], s:
     width. The window's frames (the force window's span from there) must
     show the band together (signal-to-noise ratio :data:`VERNIER_SNR`, not
     filling the whole profile) and three in four of them at the same width
-    (to 2.5 sd or 1.5 px): a structure that is not a band wanders from frame
-    to frame.
+    (to 2.5 sd or 2.5 px, the quick looks being on a 1 px grid): a structure
+    that is not a band wanders from frame to frame.
 
     Returns ``(t_cert, onset, window_frames, window_profiles, snr, reading)``
     or a :class:`Rejection` (its press, time and centre filled in by the caller).
@@ -574,7 +576,8 @@ def _vernier_onset(session, geom: BevelGeometry, centre: tuple[float, float], s:
                          t_frame_s=float("nan"), frame=int(cand[-1]))
     kw = dict(max_closure_mm=MAX_CLOSURE_MM, coarse=True, background_degree=BACKGROUND_DEGREE)
     fz = session.forces_n[:, 2]
-    t_hold = hold_start(session.force_times_s, fz, float(times[cand[0]]) + offset - period,
+    # from the press's first contact: the whole rise must be in view
+    t_hold = hold_start(session.force_times_s, fz, t_first + offset - period,
                         float(times[cand[-1]]) + offset + period)
     if t_hold is not None:
         t_cert = t_hold - offset
@@ -613,7 +616,8 @@ def _vernier_onset(session, geom: BevelGeometry, centre: tuple[float, float], s:
     # the frames must agree on the width (without lines: a line at an edge trades off
     # against its position, frame by frame)
     per = [read_bevel(profiles[i], geom, s, **kw) for i in window] if len(window) > 1 else [plain]
-    agree = [abs(r.half_width_px - plain.half_width_px) <= max(2.5 * r.half_width_std_px, 1.5)
+    # (quick looks on a 1 px grid: each may land a grid step either side)
+    agree = [abs(r.half_width_px - plain.half_width_px) <= max(2.5 * r.half_width_std_px, 2.5)
              for r in per]
     consistent = float(np.mean(agree)) >= 0.75       # one noisy frame of 18 (90 fps) may stray
     if joint.snr < VERNIER_SNR or not consistent:
