@@ -12,10 +12,12 @@ viz        depth-map images, plots, reports
 cli        the ``tactilevision`` command
 """
 
+from ._assets import KNOWN_SENSORS
 from ._checks import InputError, ShapeError
 
 __version__ = "0.1.0"
-__all__ = ["InputError", "SessionCalibration", "ShapeError", "__version__", "calibrate_session"]
+__all__ = ["KNOWN_SENSORS", "InputError", "SessionCalibration", "ShapeError", "__version__",
+           "calibrate_session"]
 
 
 def __getattr__(name: str):

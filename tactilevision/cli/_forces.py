@@ -140,7 +140,7 @@ def run(args: argparse.Namespace) -> int:
         grid = tuple(int(v) for v in args.grid.split(","))
     except ValueError:
         raise InputError(f"--grid must be NX,NY, got {args.grid!r}") from None
-    recon = DepthReconstructor(cal, reference=reference)
+    recon = DepthReconstructor(cal, reference="calibration" if reference is None else reference)
     est = ForceEstimator(cal.shape, mm_per_px, thickness_mm=h, E_mpa=E, nu=nu, grid=grid,
                          method=args.method, contact=args.contact)
     out = args.out if args.out is not None else source / "forces"

@@ -54,7 +54,7 @@ def run(args: argparse.Namespace) -> int:
     if args.reference is not None and not args.reference.is_file():
         raise InputError(f"reference {args.reference} does not exist")
     reference = read_reference(ref_path, cal.shape) if ref_path else None
-    recon = DepthReconstructor(cal, reference=reference)
+    recon = DepthReconstructor(cal, reference="calibration" if reference is None else reference)
     out = args.out
     out.mkdir(parents=True, exist_ok=True)
     credit = cal.provenance.get("credit")

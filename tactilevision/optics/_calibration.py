@@ -326,7 +326,9 @@ class PhotometricCalibration:
         Parameters
         ----------
         path : str or Path
-            The ``.npz`` file.
+            The ``.npz`` file, or the name of a calibration shipped with the
+            package (``'gelsight'``: :data:`tactilevision.KNOWN_SENSORS`),
+            which works from any folder after ``pip install``.
 
         Returns
         -------
@@ -336,12 +338,26 @@ class PhotometricCalibration:
         ------
         InputError
             If the file is missing, unreadable or not a calibration (names
-            the file and the missing key). Optional metadata missing from
-            an older file takes the defaults of this class.
+            the file and the missing key), or the name is not a shipped
+            calibration. Optional metadata missing from an older file takes
+            the defaults of this class.
+
+        Examples
+        --------
+        >>> cal = PhotometricCalibration.load("gelsight")   # the shipped GelSight model
+        >>> cal.shape
+        (480, 640)
         """
+        from .._assets import KNOWN_SENSORS, default_calibration_path
+
+        name = str(path)
         path = Path(path)
+        if not path.is_file() and name in KNOWN_SENSORS:
+            path = default_calibration_path(name)
         if not path.is_file():
-            raise InputError(f"calibration file {path} does not exist")
+            shipped = ", ".join(repr(s) for s in KNOWN_SENSORS)
+            raise InputError(f"calibration file {path} does not exist (calibrations shipped "
+                             f"with tactilevision, loadable by name: {shipped})")
         try:
             with np.load(path, allow_pickle=False) as z:
                 data = {k: z[k] for k in z.files}

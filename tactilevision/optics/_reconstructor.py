@@ -13,7 +13,7 @@ from typing import Literal
 import cv2
 import numpy as np
 
-from .._checks import check_array
+from .._checks import InputError, check_array
 from ._ball import gradients_from_normals
 from ._calibration import PhotometricCalibration
 from ._features import blur_frames, colour_change, reference_inverse
@@ -35,9 +35,11 @@ class DepthReconstructor:
     ----------
     calibration : PhotometricCalibration
         The sensor's colour-to-normal model.
-    reference : (H, W, 3) uint8 ndarray, optional
-        Today's no-contact frame (BGR); default the calibration's. A fresh
-        reference absorbs slow changes of the lights and the gel.
+    reference : (H, W, 3) uint8 ndarray or 'calibration', default 'calibration'
+        Today's no-contact frame (BGR), of the calibration's size; by default
+        (``'calibration'``) the calibration's own. A fresh reference absorbs
+        slow changes of the lights and the gel. ``None`` is refused, never
+        replaced: it is what ``cv2.imread`` returns for a missing file.
     engine : {'table', 'onnx'}, default 'table'
         How the colour-to-gradient model runs per frame. 'table': one
         lookup per pixel in a gradient table (a LUT calibration's own
@@ -76,7 +78,7 @@ class DepthReconstructor:
     """
 
     def __init__(self, calibration: PhotometricCalibration, *,
-                 reference: np.ndarray | None = None, engine: Engine = "table",
+                 reference: np.ndarray | str = "calibration", engine: Engine = "table",
                  boundary: Boundary = "neumann", table_bins: int = 32,
                  threads: int = 1) -> None:
         if engine not in ("table", "onnx"):
@@ -87,8 +89,16 @@ class DepthReconstructor:
         self.boundary = boundary
         self.calibration = calibration
         self.shape = calibration.shape
-        ref = calibration.reference if reference is None else reference
-        ref = check_array(ref, "reference", [(*self.shape, 3)], dtype=np.uint8)
+        if reference is None:
+            raise InputError("reference is None (cv2.imread returns None for a missing or "
+                             "unreadable file); pass the no-contact frame as an (H, W, 3) uint8 "
+                             "array, or reference='calibration' for the calibration's own")
+        if isinstance(reference, str):
+            if reference != "calibration":
+                raise InputError(f"reference must be an (H, W, 3) uint8 array or "
+                                 f"'calibration', got the string {reference!r}")
+            reference = calibration.reference
+        ref = check_array(reference, "reference", [(*self.shape, 3)], dtype=np.uint8)
         ref_mask = marker_mask(ref) if calibration.markers else None
         self._ref_inv = reference_inverse(ref, marker_mask=ref_mask)
         self._solver = PoissonSolver(self.shape,
