@@ -31,6 +31,13 @@ def test_forces_on_a_frames_folder(tmp_path):
     assert np.all(fz > 0)
     assert all((out / f"{Path(r['frame']).stem}_force.png").stat().st_size > 10_000
                for r in rows)
+    # the contact's area in the default mode too: the annotated contact disc (radius a)
+    # lies inside it; the region of visible colour change reaches past the disc, where the
+    # gel bends down to the ball, but not to twice its radius
+    circles = {r["frame"]: r for r in csv.DictReader((FRAMES / "circles.csv").open())}
+    for r in rows:
+        disc = np.pi * (float(circles[r["frame"]]["radius_px"]) * 0.0295) ** 2
+        assert disc < float(r["contact_area_mm2"]) < 4 * disc, (r, disc)
     # the force scales with E
     out2 = tmp_path / "forces2"
     main(["forces", str(FRAMES), "--sensor", "gelsight", "--thickness-mm", "3.0",

@@ -171,15 +171,16 @@ def run(args: argparse.Namespace) -> int:
             skipped.append(str(exc))
             continue
         height = recon(frame)     # float32: the estimator's single-precision path
-        mask = recon.contact_mask(frame) if args.contact == "footprint" else None
-        fm = est(height, contact_mask=mask)
+        # the contact: colour change above the calibration's noise level (the footprint with
+        # --contact footprint; its area is reported in every mode, as by reconstruct)
+        mask = recon.contact_mask(frame)
+        fm = est(height, contact_mask=mask if args.contact == "footprint" else None)
         t = float(times[i])
         row = {"frame": path.name, "t_s": "" if not np.isfinite(t) else f"{t:.4f}",
                "fx_n": f"{fm.total_n[0]:.5f}", "fy_n": f"{fm.total_n[1]:.5f}",
                "fz_n": f"{fm.total_n[2]:.5f}",
                "max_pressure_kpa": f"{float(fm.pressure_kpa.max()):.3f}",
-               "contact_area_mm2": "" if fm.contact is None else
-               f"{float(fm.contact.sum()) * float(np.mean(est._op.node_area_mm2)):.3f}",
+               "contact_area_mm2": f"{float(mask.sum()) * mm_per_px ** 2:.3f}",
                "ft_fz_n": ""}
         if ft is not None and np.isfinite(t):
             row["ft_fz_n"] = f"{float(np.interp(t, ft[0], ft[1])):.5f}"
