@@ -641,7 +641,11 @@ def _read_vernier_presses(pending: list[dict], geom: BevelGeometry, s: float
 
     1. The session's edge blur is chosen on its longest, clearest bands
        (:func:`_session_optics`).
-    2. Every press is read with it, its flank colours free.
+    2. Every press is read with it, its flank colours free. In a session
+       whose bands carry lines along their edges, each press is also read
+       with shadows cast outward from the edges (``lines='shadows'`` of
+       :func:`read_bevel`; Taxim's renderer paints such blocks beside bands
+       under about 10 px) and keeps the model with the smaller residual.
     3. The flank colours of the long bands (half-width >= ``RESOLVED_PX``)
        are fitted as a plane over the bevel's position in the image (the
        sensor's lighting varies across it: 6% of the colours left against 19%
@@ -653,6 +657,14 @@ def _read_vernier_presses(pending: list[dict], geom: BevelGeometry, s: float
     kw = dict(max_closure_mm=MAX_CLOSURE_MM, lines=optics["lines"], blur_px=optics["blur_px"],
               line_px=optics.get("line_px", 2.0))
     first = [read_bevel(d["profiles"], geom, s, **kw) for d in pending]
+    n_shadows = 0
+    if optics["lines"] == "all":
+        # a session whose bands carry lines may also cast long shadows beside its narrow
+        # bands (Taxim's renderer): each press keeps the model that leaves less residual
+        for k, (d, r) in enumerate(zip(pending, first, strict=True)):
+            sh = read_bevel(d["profiles"], geom, s, **{**kw, "lines": "shadows"})
+            if sh.noise < r.noise:
+                first[k], n_shadows = sh, n_shadows + 1
     long = np.array([r.resolved and r.snr >= 2 * VERNIER_SNR for r in first])
     X = np.array([[1.0, d["press"].x_mm, d["press"].y_mm] for d in pending])
     C = np.array([r.flank_colours.ravel() for r in first])            # (N, 6)
@@ -668,6 +680,8 @@ def _read_vernier_presses(pending: list[dict], geom: BevelGeometry, s: float
         plane = (np.vstack([mean, np.zeros((2, 6))]), max(spread, 0.1))
     if plane is not None and plane[1] > 0.5:
         plane = None       # the long bands' colours scatter too much to inform the short ones
+    if optics["lines"] != "none":
+        plane = None       # lines or shadows at the edges: the model reads short bands itself
     out = []
     for k, (d, r) in enumerate(zip(pending, first, strict=True)):
         if plane is not None and not r.resolved:
@@ -679,6 +693,7 @@ def _read_vernier_presses(pending: list[dict], geom: BevelGeometry, s: float
         out.append(replace(d["press"], rule="vernier", closure_mm=r.closure_mm,
                            closure_std_mm=r.closure_std_mm, reading=r, bevel_score=r.snr,
                            window_frames=d["window"]))
+    optics["shadows"] = n_shadows
     optics["prior"] = plane is not None and any(not r.resolved for r in first)
     optics["colour_spread"] = None if plane is None else round(plane[1], 4)
     return out, optics

@@ -53,6 +53,10 @@ _LINE_SD_PX = 1.2        # sd of the lines at the edges and the crest
 #: where the noise alone gave 0.1 to 0.3 px (benchmarks/bench_vernier.py prints the
 #: z-scores); 0.45 px errs on the side of honesty.
 MODEL_FLOOR_PX = 0.45
+#: The same for the band read with shadows cast from its edges (``lines='shadows'``): the
+#: tails' shapes only approximate a renderer's shadows. Measured on a 20-press session of
+#: Taxim's renderer (overshoot 0 to 50 um): errors of 1.0 px sd on the bands read so.
+SHADOW_FLOOR_PX = 1.0
 #: Bands at least this long (half-width, px) show their flanks' colours free of the edge
 #: blur; shorter ones are read with the session's colours as a prior.
 RESOLVED_PX = 10.0
@@ -256,7 +260,28 @@ def _basis(u: np.ndarray, crest: np.ndarray, half: np.ndarray, lines: str = "all
         cols += [_line(uk, c - L, line_sd), _line(uk, c + L, line_sd)]
     if lines in ("all", "crest"):
         cols += [_line(uk, c, line_sd)]
+    if lines == "shadows":
+        # a renderer's cast shadows: a thin line at each edge and tails running outward
+        cols += [_line(uk, c - L, _SHADOW_LINE_SD_PX), _line(uk, c + L, _SHADOW_LINE_SD_PX)]
+        for ell in _SHADOW_PX:
+            cols += [_tail(c - L - uk, blur, ell), _tail(uk - c - L, blur, ell)]
     return np.stack(cols, axis=-1)
+
+
+#: Lengths (px) of the one-sided shadow tails of ``lines='shadows'``, and the sd of its
+#: edge lines. Taxim's renderer (its shadow table, looked up in 0.1 mm bins of the
+#: contact's height) paints blocks 10 to 25 px long beside bands of a few microns of
+#: relief; two tail lengths explain them (benchmarks/bench_vernier.py).
+_SHADOW_PX = (4.0, 12.0)
+_SHADOW_LINE_SD_PX = 1.0
+
+
+def _tail(x: np.ndarray, blur: float, ell: float) -> np.ndarray:
+    """A shadow cast from an edge (x = 0) outward (x > 0), peaking `ell` px out:
+    ``(x / ell) exp(1 - x / ell)``, its start blurred like the band's edges."""
+    xp = np.maximum(x, 0.0)
+    k = 1.0 / (math.sqrt(2.0) * blur)
+    return 0.5 * (1.0 + erf(x * k)) * (xp / ell) * np.exp(1.0 - xp / ell)
 
 
 def _flanks(degree: int) -> tuple[int, int]:
@@ -315,12 +340,15 @@ def read_bevel(profiles: list[BevelProfile] | BevelProfile, bevel: BevelGeometry
         over the sensor with its lighting).
     coarse : bool, default False
         Stop at the 1 px grid (a quick look: L and the crest to +-0.5 px).
-    lines : {'none', 'all', 'edges', 'crest', 'tilt'}, default 'none'
+    lines : {'none', 'all', 'edges', 'crest', 'tilt', 'shadows'}, default 'none'
         Which lines the band model carries: none, or at both edges and the
         crest (renderers and optics that draw shadows along the edges), the
         edges or the crest only; 'tilt' lets each flank's colour drift
-        linearly across it instead. A line at an edge trades off against the
-        edge's position: use lines only where the images have them.
+        linearly across it instead; 'shadows': thin lines at the edges and
+        shadows cast outward from them (one-sided tails peaking 4 and 12 px
+        out, free colours), for renderers that paint long shadows beside
+        narrow bands. A line at an edge trades off against the edge's
+        position: use lines only where the images have them.
     blur_px : float, default 1.0
         sd of the Gaussian blur of the band's edges, px.
     background_degree : int, default 4
@@ -388,6 +416,9 @@ def read_bevel(profiles: list[BevelProfile] | BevelProfile, bevel: BevelGeometry
     # without the prior), then 0.25 px and 0.05 px around the best
     crests = np.arange(-crest_range_px, crest_range_px + 1e-9, 1.0)
     halves = np.arange(0.5, l_max + 1e-9, 1.0)
+    if lines not in ("none", "all", "edges", "crest", "tilt", "shadows"):
+        raise InputError(f"lines must be 'none', 'all', 'edges', 'crest', 'tilt' or 'shadows', "
+                         f"got {lines!r}")
     cc, hh, coef, rss, _ = search(crests, halves, 0.0)
     k = int(np.argmin(rss))
     weight = 0.0
@@ -430,7 +461,7 @@ def read_bevel(profiles: list[BevelProfile] | BevelProfile, bevel: BevelGeometry
     else:
         curv = 0.0
     half_std = math.sqrt(2.0 * sigma2 * inflate / curv) if curv > 0 else float(half)
-    half_std = math.hypot(half_std, MODEL_FLOOR_PX)
+    half_std = math.hypot(half_std, SHADOW_FLOOR_PX if lines == "shadows" else MODEL_FLOOR_PX)
     snr = math.sqrt(max(rss0 - float(rss[k]), 0.0) / max(sigma2 * inflate, 1e-12))
     if half >= l_max - 1.0:
         snr = 0.0        # the "band" fills the search range: smooth shading, not a band
