@@ -3,6 +3,12 @@
 The public names live in small private modules and are re-exported here.
 """
 
+from ._absolute import (
+    AbsoluteDepthMetrics,
+    BallCapFit,
+    absolute_depth_metrics,
+    fit_ball_cap,
+)
 from ._ball import (
     BallPressMetrics,
     ball_gradients,
@@ -23,6 +29,8 @@ from ._poisson import PoissonSolver, divergence, integrate_poisson, integrate_po
 from ._reconstructor import DepthReconstructor
 
 __all__ = [
+    "AbsoluteDepthMetrics",
+    "BallCapFit",
     "BallPressMetrics",
     "BallPressReport",
     "ColourLUT",
@@ -31,6 +39,7 @@ __all__ = [
     "MarkerFlow",
     "PhotometricCalibration",
     "PoissonSolver",
+    "absolute_depth_metrics",
     "ball_gradients",
     "ball_press_metrics",
     "colour_change",
@@ -39,6 +48,7 @@ __all__ = [
     "divergence",
     "evaluate_ball_presses",
     "fill_masked",
+    "fit_ball_cap",
     "fit_ball_centre",
     "fit_cell_luts",
     "fit_circle",
