@@ -647,6 +647,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--flat-reference", action="store_true",
                     help="DepthReconstructor(flat_reference=True): the model's gradient on the "
                          "reference subtracted")
+    ap.add_argument("--level", choices=("median", "far_field"), default="median",
+                    help="DepthReconstructor's zero level (default median)")
+    ap.add_argument("--level-degree", type=int, default=4,
+                    help="degree of the far-field surface (default 4)")
     ap.add_argument("--json", type=Path, default=None, help="also write the result as JSON")
     ap.add_argument("--taxim-no-shadow", action="store_true", help="Taxim with_shadow=False")
     ap.add_argument("--fem-presses", type=int, default=10)
@@ -659,6 +663,8 @@ def main(argv: list[str] | None = None) -> int:
     kwargs: dict = {"boundary": a.boundary}
     if a.flat_reference:
         kwargs["flat_reference"] = True
+    if a.level != "median":
+        kwargs.update(level=a.level, level_degree=a.level_degree)
 
     def make(cal: PhotometricCalibration, ref: np.ndarray) -> DepthReconstructor:
         return DepthReconstructor(cal, reference=ref, **kwargs)

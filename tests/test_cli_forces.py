@@ -68,3 +68,21 @@ def test_forces_reads_E_and_nu_from_a_fit_json(tmp_path):
     rc = main(["forces", str(FRAMES), "--sensor", "gelsight", "--thickness-mm", "3",
                "--fit", str(fit), "--out", str(tmp_path / "o"), "--no-progress"])
     assert rc == 2
+
+
+def test_forces_on_a_no_contact_frame_read_near_zero(tmp_path, capsys):
+    """The sample session's first frame has no contact (F/T -4 mN): levelled at the far
+    field (the default) it reads tens of mN, not the 1.1 N of the frame's median zero."""
+    session = FRAMES.parents[1] / "gelsight_session"
+    fz = {}
+    for level in ("far_field", "median"):
+        out = tmp_path / level
+        rc = main(["forces", str(session), "--E-mpa", "0.2", "--nu", "0.48", "--every", "1000",
+                   "--level", level, "--out", str(out), "--no-progress", "--no-images"])
+        assert rc == 0
+        rows = list(csv.DictReader((out / "forces.csv").open()))
+        assert [r["frame"] for r in rows] == ["00000.jpg"]
+        fz[level] = float(rows[0]["fz_n"])
+    assert "levelled at the far field" in capsys.readouterr().out
+    assert abs(fz["far_field"]) < 0.05
+    assert fz["median"] > 0.5

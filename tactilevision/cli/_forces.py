@@ -52,6 +52,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="spectral layer model at full resolution (default) or inverse FEM")
     p.add_argument("--grid", metavar="NX,NY", default="40,30",
                    help="FEM surface nodes along x and y (default 40,30)")
+    p.add_argument("--level", choices=("far_field", "median"), default="far_field",
+                   help="the height's zero: a surface fitted to the gel outside the contact "
+                   "(default; a no-contact frame of the sample session reads 30 mN instead of "
+                   "1.1 N) or the frame's median (DepthReconstructor's default, faster)")
+    p.add_argument("--flat-reference", action="store_true",
+                   help="subtract the optics model's gradient on the reference (right for "
+                   "simulated frames; on real GelSight frames it adds background)")
     p.add_argument("--contact", choices=("field", "footprint"), default="field",
                    help="trust the height map everywhere (default), or only where the colour "
                    "change exceeds the noise, with zero traction elsewhere (suits curved "
@@ -140,7 +147,8 @@ def run(args: argparse.Namespace) -> int:
         grid = tuple(int(v) for v in args.grid.split(","))
     except ValueError:
         raise InputError(f"--grid must be NX,NY, got {args.grid!r}") from None
-    recon = DepthReconstructor(cal, reference="calibration" if reference is None else reference)
+    recon = DepthReconstructor(cal, reference="calibration" if reference is None else reference,
+                               level=args.level, flat_reference=args.flat_reference)
     est = ForceEstimator(cal.shape, mm_per_px, thickness_mm=h, E_mpa=E, nu=nu, grid=grid,
                          method=args.method, contact=args.contact)
     out = args.out if args.out is not None else source / "forces"
@@ -193,8 +201,9 @@ def run(args: argparse.Namespace) -> int:
         writer.writeheader()
         writer.writerows(rows)
     print(f"force maps of {len(rows)} frame(s) from {source} ({args.method}, "
-          f"{args.contact}; E {E:.4g} MPa, nu {nu:.4g} from {material_source}; h {h:g} mm) "
-          f"into {out}")
+          f"{args.contact}; heights levelled at the {args.level.replace('_', ' ')}"
+          f"{', flat reference' if args.flat_reference else ''}; E {E:.4g} MPa, nu {nu:.4g} "
+          f"from {material_source}; h {h:g} mm) into {out}")
     for msg in skipped:
         print(f"tactilevision forces: error: {msg}", file=sys.stderr)
     return 2 if skipped else 0
