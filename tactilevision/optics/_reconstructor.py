@@ -65,11 +65,14 @@ class DepthReconstructor:
     level : {'median', 'far_field'}, default 'median'
         Neumann only: how the height's zero is set. 'median': the frame's
         median is zero (the contact covering under half of it).
-        'far_field': a polynomial surface of degree `level_degree` in x
-        and y, fitted to the heights outside the frame's contact region
-        (:meth:`contact_mask`, ``threshold='frame'``, holes filled), is
-        subtracted: the undeformed gel is zero there, tilts and bowls of the
-        integration removed (about 3 ms per 640 x 480 frame on top).
+        'far_field': a Legendre surface of degree `level_degree` in x and
+        y, fitted by least squares to the heights outside the frame's
+        contact region (colour change above the frame's median plus 8
+        robust sd, on a quarter-resolution copy, grown 12 px, holes filled),
+        is subtracted: the undeformed gel is zero where it is seen, the
+        integration's tilts and bowls removed (5 ms per 640 x 480 frame on
+        one core on top of 12 ms; ``docs/absolute_depth.md``). When the
+        contact covers over three quarters of the frame the median is kept.
     level_degree : int, default 4
         Degree of that surface.
     flat_reference : bool, default False
@@ -127,7 +130,9 @@ class DepthReconstructor:
         ref = check_array(reference, "reference", [(*self.shape, 3)], dtype=np.uint8)
         ref_mask = marker_mask(ref) if calibration.markers else None
         self._ref_inv = reference_inverse(ref, marker_mask=ref_mask)
-        small = cv2.resize(ref, None, fx=0.25, fy=0.25, interpolation=cv2.INTER_AREA)
+        # a quarter-resolution copy for level='far_field', on the grid of z[::4, ::4]
+        self._small_size = ((self.shape[1] + 3) // 4, (self.shape[0] + 3) // 4)   # (w, h)
+        small = cv2.resize(ref, self._small_size, interpolation=cv2.INTER_AREA)
         self._ref_inv_small = 1.0 / np.maximum(small.astype(np.float32), 1.0)
         self._solver = PoissonSolver(self.shape,
                                      boundary="dirichlet" if boundary == "dirichlet" else "neumann")
@@ -204,12 +209,12 @@ class DepthReconstructor:
         # the contact region on every 4th pixel (the full-resolution contact_mask costs 10
         # times the Poisson solve): colour change above the frame's median + 8 robust sd,
         # grown by 3 samples (12 px), holes filled (a flat face changes no colour)
-        small = cv2.resize(frame, None, fx=1 / step, fy=1 / step, interpolation=cv2.INTER_AREA)
+        small = cv2.resize(frame, self._small_size, interpolation=cv2.INTER_AREA)
         mag = np.abs(small.astype(np.float32) * self._ref_inv_small - 1.0).max(axis=-1)
         med = float(np.median(mag))
         thr = med + 8.0 * 1.4826 * float(np.median(np.abs(mag - med))) + 1e-3
         inside = ndi.binary_fill_holes(ndi.binary_dilation(mag > thr, iterations=3))
-        free = ~inside[:z[::step, ::step].shape[0], :z[::step, ::step].shape[1]]
+        free = ~inside
         d = self.level_degree
         if free.mean() < 0.25:                 # the contact covers the frame: keep the median
             return z
