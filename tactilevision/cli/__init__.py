@@ -3,7 +3,7 @@
 Each sub-command lives in its own module with ``add_parser(subparsers)`` and
 ``run(args) -> int``. Bad input raises :class:`tactilevision.InputError`; the
 command prints its one-sentence message on standard error and exits with
-status 2, deleting nothing already written (``../shared/formats.md`` §3).
+status 2, deleting nothing already written (``docs/formats.md``).
 """
 
 from __future__ import annotations

@@ -115,7 +115,7 @@ class ForceEstimator:
         Where the FEM's condensed stiffness is cached.
     beta : float, default 0.0
         Finite-strain stiffening of the calibrated law (``fit.json``'s
-        ``beta``; ``../shared/method.md`` eq. (2), the paper's
+        ``beta``; the paper's eq. (2),
         ``kappa_n = kappa (1 + beta w / h)``): forces and pressures are
         scaled by ``1 + beta w / h``, w the depth of the contact (the
         99th percentile of the height over the footprint, or over the
