@@ -83,6 +83,31 @@ def test_forces_on_a_no_contact_frame_read_near_zero(tmp_path, capsys):
         rows = list(csv.DictReader((out / "forces.csv").open()))
         assert [r["frame"] for r in rows] == ["00000.jpg"]
         fz[level] = float(rows[0]["fz_n"])
-    assert "levelled at the far field" in capsys.readouterr().out
+    printed = capsys.readouterr().out
+    assert "levelled at the far field" in printed
+    # the sample session gives no clock offset and no fit.json is at hand: no F/T column
+    # rather than a misaligned one
+    assert "ft_fz_n left empty" in printed
+    assert rows[0]["ft_fz_n"] == ""
     assert abs(fz["far_field"]) < 0.05
     assert fz["median"] > 0.5
+
+
+def test_forces_takes_the_clock_offset_from_fit_json(tmp_path):
+    """With calibrate's fit.json (its clock_offset_s) the F/T column is filled: at the
+    sample session's frame 40, in the hold of its first press, it reads the log's force
+    at the frame's time on the log's clock (0.137 s later; truth.json)."""
+    session = FRAMES.parents[1] / "gelsight_session"
+    truth = json.loads((session / "truth.json").read_text())
+    fit = tmp_path / "fit.json"
+    fit.write_text(json.dumps({"E_mpa": 0.2, "nu": 0.48,
+                               "clock_offset_s": truth["clock_offset_s"]}))
+    out = tmp_path / "o"
+    assert main(["forces", str(session), "--fit", str(fit), "--every", "40", "--out", str(out),
+                 "--no-progress", "--no-images"]) == 0
+    rows = {r["frame"]: r for r in csv.DictReader((out / "forces.csv").open())}
+    t = float(rows["00040.jpg"]["t_s"])
+    log = np.loadtxt(session / "forces.csv", delimiter=",", skiprows=1, usecols=(0, 3))
+    expected = np.interp(t + truth["clock_offset_s"], log[:, 0], log[:, 1])
+    assert float(rows["00040.jpg"]["ft_fz_n"]) == pytest.approx(expected, abs=1e-4)
+    assert expected > 1.0

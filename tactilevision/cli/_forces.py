@@ -157,12 +157,18 @@ def run(args: argparse.Namespace) -> int:
     except OSError as exc:
         raise InputError(f"cannot create the output folder {out}: {exc.strerror}") from None
     ft = None
+    ft_note = ""
     if session is not None and session.forces_n.size:
-        # the clock offset: the session's, else the one calibrate estimated
+        # the clock offset: the session's, else the one calibrate estimated; unknown, the F/T
+        # column stays empty rather than misaligned
         offset = session.config.clock_offset_s
         if offset is None:
             offset = fit_obj.get("clock_offset_s")
-        ft = (session.force_times_s - float(offset or 0.0), session.forces_n[:, 2])
+        if offset is None:
+            ft_note = ("; ft_fz_n left empty: the clock offset between frames and F/T log is "
+                       "unknown (no [force_sensor] clock_offset_s, no fit.json from calibrate)")
+        else:
+            ft = (session.force_times_s - float(offset), session.forces_n[:, 2])
     credit = cal.provenance.get("credit")
     picks = list(range(0, len(frames), args.every))
     it = picks
@@ -203,7 +209,7 @@ def run(args: argparse.Namespace) -> int:
     print(f"force maps of {len(rows)} frame(s) from {source} ({args.method}, "
           f"{args.contact}; heights levelled at the {args.level.replace('_', ' ')}"
           f"{', flat reference' if args.flat_reference else ''}; E {E:.4g} MPa, nu {nu:.4g} "
-          f"from {material_source}; h {h:g} mm) into {out}")
+          f"from {material_source}; h {h:g} mm) into {out}{ft_note}")
     for msg in skipped:
         print(f"tactilevision forces: error: {msg}", file=sys.stderr)
     return 2 if skipped else 0
