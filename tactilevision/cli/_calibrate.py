@@ -11,6 +11,7 @@ import numpy as np
 
 from .._checks import InputError
 from ._fit import _write_json, summary
+from ._out import check_output_folder, output_folder
 
 _DESCRIPTION = """\
 The main job. Reads a session folder (session.toml, reference.png, frames/,
@@ -136,6 +137,7 @@ def run(args: argparse.Namespace) -> int:
 
     session = read_session(args.session)
     out = args.out if args.out is not None else session.path / "calibration"
+    check_output_folder(out)               # before the minute of work, not after
     progress = None
     if not args.no_progress:
         from tqdm import tqdm
@@ -145,10 +147,7 @@ def run(args: argparse.Namespace) -> int:
     cal = calibrate_session(session, depth_rule=args.depth_rule, beta_table=args.beta_table,
                             progress=progress, allow_failure=True)
     cfg = session.config
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise InputError(f"cannot create the report folder {out}: {exc.strerror}") from None
+    output_folder(out)
     _write_rejected(out / "rejected.csv", cal.certification.rejected)
     if cal.fit is None:
         # nothing to fit: keep what certification found, and say why

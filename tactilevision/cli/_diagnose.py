@@ -9,6 +9,7 @@ from pathlib import Path
 
 from .._checks import InputError
 from ._fit import _write_json
+from ._out import check_output_folder, output_folder
 
 __all__ = ["add_parser", "run"]
 
@@ -75,6 +76,8 @@ def run(args: argparse.Namespace) -> int:
     from ..mechanics import check_fit_effects
     from ..mechanics._diagnose import diagnose
 
+    if args.report is not None:
+        check_output_folder(args.report, "report folder")
     path = args.measurements
     requested = [e.strip() for e in args.effects.split(",") if e.strip()]
     check_fit_effects(requested)   # names checked before the table is read
@@ -95,11 +98,7 @@ def run(args: argparse.Namespace) -> int:
     if args.report is not None:
         from ..viz import diagnosis_figures, write_diagnosis_report
 
-        try:
-            args.report.mkdir(parents=True, exist_ok=True)
-        except OSError as exc:
-            raise InputError(f"cannot create the report folder {args.report}: "
-                             f"{exc.strerror}") from None
+        output_folder(args.report, "report folder")
         figs = diagnosis_figures(diag, args.report)
         write_diagnosis_report(diag, args.report, figs, source=str(path))
     if args.json != "-":

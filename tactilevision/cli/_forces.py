@@ -12,6 +12,7 @@ import numpy as np
 
 from .._assets import KNOWN_SENSORS, default_calibration_path
 from .._checks import InputError
+from ._out import check_output_folder, output_folder
 
 __all__ = ["add_parser", "run"]
 
@@ -106,6 +107,7 @@ def run(args: argparse.Namespace) -> int:
     source: Path = args.source
     if not source.is_dir():
         raise InputError(f"{source} is not a folder")
+    check_output_folder(args.out if args.out is not None else source / "forces")
     session = None
     if (source / "session.toml").is_file():
         session = read_session(source)
@@ -152,10 +154,7 @@ def run(args: argparse.Namespace) -> int:
     est = ForceEstimator(cal.shape, mm_per_px, thickness_mm=h, E_mpa=E, nu=nu, grid=grid,
                          method=args.method, contact=args.contact)
     out = args.out if args.out is not None else source / "forces"
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise InputError(f"cannot create the output folder {out}: {exc.strerror}") from None
+    output_folder(out)
     ft = None
     ft_note = ""
     if session is not None and session.forces_n.size:

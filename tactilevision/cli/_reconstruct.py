@@ -12,6 +12,7 @@ from tqdm.auto import tqdm
 
 from .._assets import KNOWN_SENSORS, default_calibration_path
 from .._checks import InputError
+from ._out import output_folder
 
 __all__ = ["add_parser", "run"]
 
@@ -53,6 +54,7 @@ def run(args: argparse.Namespace) -> int:
     from ..optics import DepthReconstructor, PhotometricCalibration
     from ..viz import save_depth_image
 
+    out = output_folder(args.out)          # before any work: a bad --out fails at once
     cal_path = args.calibration or default_calibration_path(args.sensor)
     cal = PhotometricCalibration.load(cal_path)
     frames = list_frames(args.frames_dir)
@@ -62,8 +64,6 @@ def run(args: argparse.Namespace) -> int:
     reference = read_reference(ref_path, cal.shape) if ref_path else None
     recon = DepthReconstructor(cal, reference="calibration" if reference is None else reference,
                                level=args.level, flat_reference=args.flat_reference)
-    out = args.out
-    out.mkdir(parents=True, exist_ok=True)
     credit = cal.provenance.get("credit")
     rows, skipped = [], []
     for path in tqdm(frames, desc="reconstruct", unit="frame", file=sys.stderr):

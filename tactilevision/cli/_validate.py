@@ -11,6 +11,7 @@ from pathlib import Path
 
 from .._checks import InputError
 from ._fit import _write_json
+from ._out import check_output_folder, output_folder
 
 __all__ = ["add_parser", "run"]
 
@@ -71,6 +72,8 @@ def run(args: argparse.Namespace) -> int:
 
     if (args.E_mpa is None) != (args.nu is None):
         raise InputError("give both --E-mpa and --nu, or neither (to use the fitted values)")
+    if args.report is not None:
+        check_output_folder(args.report, "report folder")
     path = args.measurements
     table = read_measurements(path, thickness_mm=args.thickness_mm, radius_mm=args.radius_mm)
     if args.E_mpa is None:
@@ -96,7 +99,7 @@ def run(args: argparse.Namespace) -> int:
     if args.json is not None:
         _write_json(obj, args.json)
     if args.report is not None:
-        args.report.mkdir(parents=True, exist_ok=True)
+        output_folder(args.report, "report folder")
         save_validation_figure(args.report / "validation.png", res, title=str(path))
         with (args.report / "validation.csv").open("w", newline="") as fh:
             wr = csv.writer(fh)
