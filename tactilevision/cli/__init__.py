@@ -52,7 +52,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     Returns
     -------
     status : int
-        0 on success, 2 on bad input (message on standard error).
+        0 on success, 2 on bad input (message on standard error), 130 when
+        interrupted (Ctrl-C: one line, no traceback).
     """
     parser = build_parser()
     argv = list(sys.argv[1:] if argv is None else argv)
@@ -63,6 +64,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except InputError as exc:
         print(f"tactilevision {args.command}: error: {exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        print(f"\ntactilevision {args.command}: interrupted", file=sys.stderr)
+        return 130
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -18,6 +18,11 @@ __all__ = ["COLUMN_ORDER", "REQUIRED_COLUMNS", "Measurements", "read_measurement
 #: Columns every measurements table must have (formats.md §2).
 REQUIRED_COLUMNS = ("depth_mm", "force_n")
 
+#: Plausibility bounds of a measurements row: a tactile gel a few mm thick pressed by
+#: a stage (values beyond are unit errors or corrupt cells, and overflow the fits).
+MAX_DEPTH_MM = 100.0
+MAX_FORCE_N = 1.0e4
+
 # Optional columns of formats.md §2 that must be numeric when present.
 # ``indenter`` is an id and may be text; unknown columns are covariates when
 # every cell is a number, else kept as labels.
@@ -267,6 +272,19 @@ def read_measurements(path: str | Path, *, thickness_mm: float | None = None,
         i = int(np.argmax(depth <= 0))
         raise InputError(f"{path} line {lines[i]}, column depth_mm: depth {depth[i]:g} mm "
                          "must be positive")
+    force = columns["force_n"]
+    if np.any(force <= 0):
+        i = int(np.argmax(force <= 0))
+        raise InputError(f"{path} line {lines[i]}, column force_n: force {force[i]:g} N must be "
+                         "positive (the indenter presses into the gel; a sign-flipped F/T axis "
+                         "gives negative forces)")
+    for name, limit, unit in (("depth_mm", MAX_DEPTH_MM, "mm"), ("force_n", MAX_FORCE_N, "N")):
+        big = columns[name] > limit
+        if np.any(big):
+            i = int(np.argmax(big))
+            raise InputError(f"{path} line {lines[i]}, column {name}: {columns[name][i]:g} {unit} "
+                             f"is beyond any elastomer press (at most {limit:g} {unit}); check "
+                             "the column's units")
     _check_uncertainties(path, names, rows, lines, columns)
     geo, src = _geometry(path, {"thickness_mm": thickness_mm, "radius_mm": radius_mm})
     return Measurements(

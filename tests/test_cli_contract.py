@@ -1,5 +1,7 @@
-"""A bad output folder is refused at once, by every sub-command, in one sentence, with
-nothing written: an existing file, or a path through one."""
+"""The command line's error contract: exit 2 and one sentence naming the fault, no
+traceback, nothing written. A bad output folder is refused at once by every
+sub-command (an existing file, or a path through one); implausible measurements rows are
+named; Ctrl-C ends with one line and status 130."""
 
 from __future__ import annotations
 
@@ -57,3 +59,33 @@ def test_output_folder_helpers(tmp_path):
         check_output_folder(tmp_path / "f" / "g")
     with pytest.raises(InputError, match="cannot create"):
         output_folder(tmp_path / "f" / "g")
+
+
+@pytest.mark.parametrize(("row", "message"), [
+    ("0.2,1e300", "1e+300 N is beyond any elastomer press"),
+    ("0.2,-2", "force -2 N must be positive"),
+    ("0.2,0", "force 0 N must be positive"),
+    ("1e300,2", "1e+300 mm is beyond any elastomer press"),
+])
+@pytest.mark.parametrize("command", ["fit", "diagnose", "validate"])
+def test_implausible_measurements_rows_are_named(tmp_path, capsys, row, message, command):
+    table = tmp_path / "measurements.csv"
+    table.write_text(f"depth_mm,force_n\n0.1,1.0\n{row}\n0.3,3.0\n0.4,4.2\n")
+    rc = main([command, str(table), "--thickness-mm", "3", "--radius-mm", "2.5"])
+    err = capsys.readouterr().err
+    assert rc == 2
+    assert f"{table} line 3" in err and message in err
+    assert "Traceback" not in err
+
+
+def test_ctrl_c_ends_with_one_line_and_130(monkeypatch, capsys):
+    import tactilevision.cli._fit as fit_cli
+
+    def interrupted(args):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(fit_cli, "run", interrupted)
+    rc = main(["fit", TABLE])
+    err = capsys.readouterr().err
+    assert rc == 130
+    assert err.strip() == "tactilevision fit: interrupted"
