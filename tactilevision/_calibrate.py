@@ -174,7 +174,7 @@ def calibrate_session(session: Session | str | Path, *, depth_rule: str = "auto"
         session = read_session(session)
     cfg = session.config
     cert = certify_session(session, progress=progress)
-    notes = list(cert.warnings)
+    notes = list(session.notes) + list(cert.warnings)     # the reader's notes first
     if depth_rule == "auto":
         depth_rule = "vernier" if cfg.bevel_angle_deg > 0 else "nominal"
     if depth_rule not in ("vernier", "nominal", "land"):

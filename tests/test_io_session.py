@@ -82,6 +82,19 @@ def test_defaults_and_notes(tmp_path):
     assert len(s.notes) == 1 and "stray.png" in s.notes[0] and "not listed" in s.notes[0]
 
 
+def test_unknown_keys_are_noted_with_the_near_known_one(tmp_path):
+    folder = make_session(tmp_path / "s")
+    toml = TOML.replace("clock_offset_s = 0.25", "clock_ofset_s = 0.25")
+    (folder / "session.toml").write_text(toml + "\n[forcesensr]\nrate = 1\n[lab]\nroom = 3\n")
+    s = read_session(folder)
+    assert s.config.clock_offset_s is None                 # the typo sets nothing
+    notes = "\n".join(s.notes)
+    assert "[force_sensor] clock_ofset_s is not a key" in notes
+    assert "did you mean clock_offset_s?" in notes
+    assert "table [forcesensr] is not read by tactilevision (did you mean [force_sensor]?)" in notes
+    assert "table [lab] is not read by tactilevision" in notes and "[lab]?" not in notes
+
+
 def _edit(path: Path, old: str, new: str) -> None:
     text = path.read_text()
     assert old in text, old

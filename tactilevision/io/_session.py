@@ -170,6 +170,42 @@ def _toml_number(doc: dict, toml: Path, table: str, key: str, *, positive: bool 
     return float(v)
 
 
+#: The keys of session.toml this version reads, per table (formats.md section 1).
+KNOWN_KEYS: dict[str, tuple[str, ...]] = {
+    "sensor": ("name", "mm_per_px", "gel_thickness_mm", "gel_radius_mm"),
+    "indenter": ("radius_mm",),
+    "gauge_block": ("depths_mm", "bevel_offset_mm", "bevel_direction_deg", "bevel_angle_deg",
+                    "bevel_length_mm", "bulge_correction", "bevel_force_correction"),
+    "force_sensor": ("rate_hz", "clock_offset_s", "window_samples"),
+    "optics": ("calibration",),
+}
+
+
+def _unknown_keys(folder: Path) -> list[str]:
+    """Notes on tables and keys of session.toml this version does not read (a typo in an
+    optional key would otherwise fall back to its default without a word)."""
+    import difflib
+
+    toml = folder / "session.toml"
+    with toml.open("rb") as fh:
+        doc = tomllib.load(fh)
+    notes = []
+    for table, section in doc.items():
+        if table not in KNOWN_KEYS:
+            near = difflib.get_close_matches(table, list(KNOWN_KEYS), n=1, cutoff=0.75)
+            hint = f" (did you mean [{near[0]}]?)" if near else ""
+            notes.append(f"{toml}: table [{table}] is not read by tactilevision{hint}")
+            continue
+        if not isinstance(section, dict):
+            continue
+        for key in section:
+            if key not in KNOWN_KEYS[table]:
+                near = difflib.get_close_matches(key, list(KNOWN_KEYS[table]), n=1, cutoff=0.75)
+                hint = f" (did you mean {near[0]}? it stays unset)" if near else ""
+                notes.append(f"{toml}: [{table}] {key} is not a key tactilevision reads{hint}")
+    return notes
+
+
 def _read_config(folder: Path) -> SessionConfig:
     toml = folder / "session.toml"
     if not toml.is_file():
@@ -421,4 +457,4 @@ def read_session(path: str | Path) -> Session:
     presses = _read_presses(folder, len(config.depths_mm))
     return Session(path=folder, config=config, reference=reference, frame_paths=frame_paths,
                    frame_times_s=frame_times, force_times_s=t, forces_n=f, torques_nmm=torques,
-                   presses=presses, notes=tuple(notes + force_notes))
+                   presses=presses, notes=tuple(_unknown_keys(folder) + notes + force_notes))
