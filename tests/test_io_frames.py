@@ -275,3 +275,29 @@ def test_read_frame_checks_the_calibration_size(tmp_path):
         read_frame(p, (24, 32))
     with pytest.raises(InputError, match=r"^reference .*f\.png is 64 x 48 px"):
         read_reference(p, (24, 32))
+
+
+def test_truncated_images_are_named(tmp_path):
+    img = frame(30)
+    for suffix in (".jpg", ".png"):
+        path = write(tmp_path / f"whole{suffix}", img)
+        data = path.read_bytes()
+        cut = tmp_path / f"cut{suffix}"
+        cut.write_bytes(data[: int(0.7 * len(data))])
+        with pytest.raises(InputError, match=rf"cut\{suffix} is a truncated"):
+            read_image(cut)
+        assert read_image(path).shape == (*SHAPE, 3)      # the whole file still reads
+
+
+def test_grey_16_bit_and_alpha_frames(tmp_path):
+    grey = write(tmp_path / "grey.png", np.full(SHAPE, 77, np.uint8))
+    with pytest.raises(InputError, match=r"grey\.png is grey-level"):
+        read_frame(grey)
+    deep = tmp_path / "deep.png"
+    cv2.imwrite(str(deep), np.full((*SHAPE, 3), 40000, np.uint16))
+    with pytest.raises(InputError, match=r"deep\.png has 16-bit values"):
+        read_image(deep)
+    alpha = tmp_path / "alpha.png"
+    img = frame(30)
+    cv2.imwrite(str(alpha), np.dstack([img, np.full(SHAPE, 255, np.uint8)]))
+    np.testing.assert_array_equal(read_frame(alpha), img)

@@ -23,13 +23,17 @@ def _natural_key(p: Path) -> list:
     return [int(t) if t.isdigit() else t.lower() for t in re.split(r"(\d+)", p.name)]
 
 
-def read_image(path: str | Path) -> np.ndarray:
+def read_image(path: str | Path, *, colour_only: bool = False) -> np.ndarray:
     """Read a colour image as BGR uint8 (as ``cv2.imread`` gives).
 
     Parameters
     ----------
     path : str or Path
         A .png or .jpg file.
+    colour_only : bool, default False
+        Refuse a grey-level file instead of repeating its one channel three
+        times (session frames and references: a grey frame among colour
+        ones is a fault, not a frame).
 
     Returns
     -------
@@ -39,15 +43,46 @@ def read_image(path: str | Path) -> np.ndarray:
     Raises
     ------
     InputError
-        If the file is missing or not a readable colour image.
+        If the file is missing, truncated (a JPEG without its end-of-image
+        marker, a PNG without its IEND chunk: libjpeg would fill the rest
+        with grey and only print a warning naming no file), not a readable
+        image, deeper than 8 bits, or grey-level with `colour_only`. A
+        fourth (alpha) channel is dropped.
     """
     path = Path(path)
     if not path.is_file():
         raise InputError(f"image {path} does not exist")
-    img = cv2.imread(str(path), cv2.IMREAD_COLOR)
+    try:
+        data = path.read_bytes()
+    except OSError as exc:
+        raise InputError(f"image {path} cannot be read: {exc.strerror}") from None
+    _check_complete(path, data)
+    img = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED)
     if img is None:
         raise InputError(f"image {path} is not a readable image")
+    if img.dtype != np.uint8:
+        raise InputError(f"image {path} has {8 * img.dtype.itemsize}-bit values; tactile frames "
+                         "and references are 8-bit colour images")
+    if img.ndim == 2 or img.shape[2] == 1:
+        if colour_only:
+            raise InputError(f"image {path} is grey-level (one channel); tactile frames and "
+                             "references are colour (BGR) images")
+        img = cv2.cvtColor(img.reshape(img.shape[:2]), cv2.COLOR_GRAY2BGR)
+    if img.shape[2] == 4:
+        img = np.ascontiguousarray(img[:, :, :3])
     return img
+
+
+def _check_complete(path: Path, data: bytes) -> None:
+    """Refuse a JPEG or PNG file cut short (a partial copy or write)."""
+    if data[:2] == b"\xff\xd8":
+        if b"\xff\xd9" not in data[-64:].rstrip(b"\x00\r\n "):
+            raise InputError(f"image {path} is a truncated JPEG (no end-of-image marker): "
+                             "a partial copy or write?")
+    elif data[:8] == b"\x89PNG\r\n\x1a\n":
+        if b"IEND" not in data[-16:]:
+            raise InputError(f"image {path} is a truncated PNG (no IEND chunk): a partial copy "
+                             "or write?")
 
 
 def list_frames(folder: str | Path) -> list[Path]:
@@ -144,7 +179,7 @@ def read_frame(path: str | Path, shape: tuple[int, int] | None = None, *,
     InputError
         If unreadable or of the wrong size.
     """
-    img = read_image(path)
+    img = read_image(path, colour_only=True)
     if shape is not None and img.shape[:2] != tuple(shape):
         raise InputError(f"{what} {path} is {img.shape[1]} x {img.shape[0]} px but the "
                          f"calibration expects {shape[1]} x {shape[0]} px")

@@ -143,7 +143,7 @@ class Session:
             If the file became unreadable or its size differs from the
             reference.
         """
-        img = read_image(self.frame_paths[i])
+        img = read_image(self.frame_paths[i], colour_only=True)
         if img.shape != self.reference.shape:
             raise InputError(f"frame {self.frame_paths[i]} is {img.shape[1]} x {img.shape[0]} px, "
                              f"the reference {self.shape[1]} x {self.shape[0]} px")
@@ -451,7 +451,7 @@ def read_session(path: str | Path) -> Session:
     ref_path = folder / "reference.png"
     if not ref_path.is_file():
         raise InputError(f"session folder {folder} has no reference.png")
-    reference = read_image(ref_path)
+    reference = read_image(ref_path, colour_only=True)
     frame_paths, frame_times, notes = _read_frames(folder, reference.shape)
     t, f, torques, force_notes = _read_forces(folder, config.rate_hz)
     presses = _read_presses(folder, len(config.depths_mm))
