@@ -146,6 +146,12 @@ BROKEN = {
                         "0 to 4"]),
     "press whole": (lambda f: _edit(f / "presses.csv", "0,2,1.5", "0.5,2,1.5"),
                     ["presses.csv line 2, column press: 0.5 is not a whole number"]),
+    "rate huge": (lambda f: _edit(f / "session.toml", "rate_hz = 1000", "rate_hz = 1e9"),
+                  ["[force_sensor] rate_hz = 1e+09 is beyond any F/T sensor"]),
+    "times in ms": (lambda f: (f / "forces.csv").write_text(
+        "t_s,fx_n,fy_n,fz_n\n" + "".join(f"{250 + i},0,0,0.1\n" for i in range(100))),
+        ["the samples are 1 s apart", "rate_hz = 1000 (times in milliseconds? t_s must be "
+         "seconds)"]),
 }
 
 

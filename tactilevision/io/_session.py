@@ -247,7 +247,7 @@ def _read_config(folder: Path) -> SessionConfig:
         gel_radius_mm=_toml_number(doc, toml, "sensor", "gel_radius_mm", default=20.0 * h),
         indenter_radius_mm=_toml_number(doc, toml, "indenter", "radius_mm"),
         depths_mm=tuple(float(d) for d in depths),
-        rate_hz=_toml_number(doc, toml, "force_sensor", "rate_hz", default=1000.0),
+        rate_hz=_rate(doc, toml),
         clock_offset_s=_toml_number(doc, toml, "force_sensor", "clock_offset_s", positive=False,
                                     required=False),
         window_samples=int(window),
@@ -261,6 +261,19 @@ def _read_config(folder: Path) -> SessionConfig:
         bevel_force_correction=_toml_bool(doc, toml, "gauge_block", "bevel_force_correction",
                                           default=True),
     )
+
+
+#: The fastest F/T log read (commercial six-axis sensors stream at up to about 7 kHz); the
+#: clock refinement's grid steps by one sample, so a mistyped rate would exhaust memory.
+MAX_RATE_HZ = 100_000.0
+
+
+def _rate(doc: dict, toml: Path) -> float:
+    rate = _toml_number(doc, toml, "force_sensor", "rate_hz", default=1000.0)
+    if rate > MAX_RATE_HZ:
+        raise InputError(f"{toml}: [force_sensor] rate_hz = {rate:g} is beyond any F/T sensor "
+                         f"(at most {MAX_RATE_HZ:g} Hz read)")
+    return rate
 
 
 def _bevel_angle(doc: dict, toml: Path) -> float:
@@ -387,6 +400,13 @@ def _read_forces(folder: Path, rate_hz: float
     notes = []
     if t.size > 2:
         dt = float(np.median(np.diff(t)))
+        ratio = dt * rate_hz               # 1 when the log's times match rate_hz
+        if ratio > 30 or ratio < 1 / 30:
+            unit = (" (times in milliseconds? t_s must be seconds)" if 300 < ratio < 3000 else
+                    "")
+            raise InputError(f"{path}: the samples are {dt:.4g} s apart, {1 / dt:.4g} Hz, but "
+                             f"[force_sensor] rate_hz = {rate_hz:g}{unit}; the clock cannot be "
+                             "synchronised with the frames")
         if abs(1.0 / dt - rate_hz) > 0.05 * rate_hz:
             notes.append(f"{path}: median sample interval {dt * 1e3:.3g} ms, "
                          f"{1 / dt:.4g} Hz against [force_sensor] rate_hz = {rate_hz:g}")
