@@ -89,3 +89,12 @@ def test_ctrl_c_ends_with_one_line_and_130(monkeypatch, capsys):
     err = capsys.readouterr().err
     assert rc == 130
     assert err.strip() == "tactilevision fit: interrupted"
+
+
+def test_diagnose_refuses_a_single_depth_table_as_fit_does(tmp_path, capsys):
+    table = tmp_path / "measurements.csv"
+    table.write_text("depth_mm,force_n\n0.2,1.0\n0.2,1.1\n0.2,0.9\n0.2,1.05\n")
+    for command in ("fit", "diagnose"):
+        rc = main([command, str(table), "--thickness-mm", "3", "--radius-mm", "2.5"])
+        assert rc == 2
+        assert "1 distinct depth(s)" in capsys.readouterr().err

@@ -461,7 +461,8 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
     Raises
     ------
     InputError
-        For a missing column of the model, an unknown effect, or bad h, a.
+        For a missing column of the model, an unknown effect, bad h, a, or
+        fewer than two distinct depths.
 
     Notes
     -----
@@ -492,6 +493,11 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
     missing = model.missing_columns(list(cols))
     if missing:
         raise InputError(f"the model {model.names} needs the column(s) {', '.join(missing)}")
+    n_depths = np.unique(cols["depth_mm"]).size if "depth_mm" in cols else 0
+    if n_depths < 2:
+        # as fit_indentation: one depth fixes no line, so no verdict can be drawn
+        raise InputError(f"depth_mm holds {n_depths} distinct depth(s); comparing eq. (5) with "
+                         "the measurements needs presses at two depths or more")
 
     def material(m: IndentationModel, d: Mapping[str, np.ndarray]) -> tuple[float, float]:
         try:
