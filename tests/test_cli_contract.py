@@ -98,3 +98,38 @@ def test_diagnose_refuses_a_single_depth_table_as_fit_does(tmp_path, capsys):
         rc = main([command, str(table), "--thickness-mm", "3", "--radius-mm", "2.5"])
         assert rc == 2
         assert "1 distinct depth(s)" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(("extra", "message"), [
+    (["--bins", "0"], "--bins must be at least 2"),
+    (["--model", "mlp", "--epochs", "-1"], "--epochs must be at least 1"),
+    (["--model", "mlp", "--hidden", "0"], "--hidden must be at least 1"),
+])
+def test_optics_calibrate_bad_numbers(tmp_path, capsys, extra, message):
+    out = tmp_path / "o.npz"
+    rc = main(["optics", "calibrate", BALLS.rsplit("/", 1)[0], "--ball-radius-mm", "2",
+               "--mm-per-px", "0.0295", "--out", str(out), *extra])
+    assert rc == 2 and message in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_optics_calibrate_out_is_a_folder(tmp_path, capsys):
+    folder = tmp_path / "x.npz"
+    folder.mkdir()
+    rc = main(["optics", "calibrate", BALLS.rsplit("/", 1)[0], "--ball-radius-mm", "2",
+               "--mm-per-px", "0.0295", "--out", str(folder)])
+    assert rc == 2 and "is a folder" in capsys.readouterr().err
+
+
+def test_negative_circle_radius_is_named(tmp_path, capsys):
+    import shutil
+
+    presses = tmp_path / "presses"
+    shutil.copytree(SAMPLES / "gelsight_ball", presses)
+    circles = presses / "frames" / "circles.csv"
+    circles.write_text(circles.read_text().replace("press_09.png,250,168,59",
+                                                   "press_09.png,250,168,-59"))
+    rc = main(["optics", "calibrate", str(presses / "frames"), "--ball-radius-mm", "2",
+               "--mm-per-px", "0.0295", "--out", str(tmp_path / "o.npz")])
+    err = capsys.readouterr().err
+    assert rc == 2 and "circles.csv line 3" in err and "positive radius" in err

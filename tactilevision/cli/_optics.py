@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from .._checks import InputError
+from ._out import check_output_folder
 
 __all__ = ["add_parser", "parse_presses", "run_calibrate"]
 
@@ -99,6 +100,14 @@ def run_calibrate(args: argparse.Namespace) -> int:
 
     if args.ball_radius_mm <= 0 or args.mm_per_px <= 0:
         raise InputError("--ball-radius-mm and --mm-per-px must be positive")
+    for name, value, low in (("--bins", args.bins, 2), ("--epochs", args.epochs, 1),
+                             ("--hidden", args.hidden, 1)):
+        if value < low:
+            raise InputError(f"{name} must be at least {low}, got {value}")
+    out = Path(args.out)
+    if out.is_dir():
+        raise InputError(f"--out {out} is a folder; give the calibration file to write (.npz)")
+    check_output_folder(out.parent, "folder of the calibration file")
     src = str(args.ball_presses)
     ps = read_ball_presses(taxim_datapack(src.split(":", 1)[1]) if src.startswith("taxim:")
                            else args.ball_presses)

@@ -272,6 +272,10 @@ def _read_circles(path: Path, names: list[str]) -> tuple[np.ndarray, np.ndarray]
                 raise InputError(f"{path} line {line}: non-numeric circle "
                                  f"({row.get('x_px')}, {row.get('y_px')}, "
                                  f"{row.get('radius_px')})") from None
+            x, y, r = rows[row["frame"]]
+            if not (np.isfinite(x) and np.isfinite(y) and np.isfinite(r) and r > 0):
+                raise InputError(f"{path} line {line}: circle ({x:g}, {y:g}, radius {r:g}) "
+                                 "needs a finite centre and a positive radius")
     missing = [n for n in names if n not in rows]
     if missing:
         raise InputError(f"{path} has no circle for frame {missing[0]}")
