@@ -133,3 +133,31 @@ def test_negative_circle_radius_is_named(tmp_path, capsys):
                "--mm-per-px", "0.0295", "--out", str(tmp_path / "o.npz")])
     err = capsys.readouterr().err
     assert rc == 2 and "circles.csv line 3" in err and "positive radius" in err
+
+
+def test_a_failed_json_write_leaves_nothing_behind(tmp_path, capsys):
+    target = tmp_path / "fit.json"
+    target.mkdir()                               # os.replace cannot put a file there
+    rc = main(["fit", TABLE, "--json", str(target)])
+    assert rc == 2 and "cannot write the JSON result" in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["fit.json"]
+
+
+def test_a_flipped_fz_axis_is_named(tmp_path, capsys):
+    """forces.csv with fz_n negative while pressing (the F/T's z axis the other way) is
+    refused naming the file, not blamed on the clock; nothing is written."""
+    import shutil
+
+    import numpy as np
+
+    session = tmp_path / "s"
+    shutil.copytree(SAMPLES / "taxim_gauge", session)
+    log = np.genfromtxt(session / "forces.csv", delimiter=",", names=True)
+    log["fz_n"] *= -1
+    np.savetxt(session / "forces.csv", np.column_stack([log[n] for n in log.dtype.names]),
+               delimiter=",", header=",".join(log.dtype.names), comments="", fmt="%.6g")
+    out = tmp_path / "out"
+    rc = main(["calibrate", str(session), "--out", str(out), "--no-progress"])
+    err = capsys.readouterr().err
+    assert rc == 2 and "forces.csv: fz_n departs from its rest level downwards" in err
+    assert not out.exists()

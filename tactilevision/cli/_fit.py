@@ -175,6 +175,7 @@ def _write_json(obj: dict, dest: str) -> None:
         tmp.write_text(text, encoding="utf-8")
         os.replace(tmp, target)  # the old file stays whole until the new one is complete
     except OSError as exc:
+        tmp.unlink(missing_ok=True)      # a failed write leaves nothing of its own behind
         raise InputError(f"cannot write the JSON result to {dest}: {exc.strerror}") from None
 
 

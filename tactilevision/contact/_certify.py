@@ -301,6 +301,7 @@ def certify_session(session, *, min_contact_px: int = 200, bevel_threshold: floa
     # clock
     frame_on = np.array([times[r[0]] for r in runs])
     fz = session.forces_n[:, 2]
+    _check_fz_sign(session, fz)
     force_on = force_onsets(session.force_times_s, fz)
     tol = max(0.05, 2.5 * period)
     clock = None
@@ -545,6 +546,20 @@ def hold_start(force_times_s: np.ndarray, fz_n: np.ndarray, t0_s: float, t1_s: f
         if rss < best:
             best, t_best = rss, float(tb)
     return t_best
+
+
+def _check_fz_sign(session, fz: np.ndarray) -> None:
+    """Refuse an F/T log whose presses read negative (formats.md: fz_n > 0 pushing in):
+    a flipped z axis would otherwise show as a clock that cannot be synchronised."""
+    if fz.size < 10:
+        return
+    lo, hi = (float(v) for v in np.percentile(fz, [0.5, 99.5]))
+    base = float(np.median(fz))
+    if base - lo > 3.0 * max(hi - base, 1e-9) and base - lo > 0.05:
+        raise InputError(f"{session.path / 'forces.csv'}: fz_n departs from its rest level "
+                         f"downwards (to {lo:.3g} N, rest {base:.3g} N, up to {hi:.3g} N) while "
+                         "the frames show presses: the F/T sensor's z axis points the other way? "
+                         "fz_n must be positive when the indenter pushes into the gel")
 
 
 def _vernier_onset(session, geom: BevelGeometry, centre: tuple[float, float], s: float,
