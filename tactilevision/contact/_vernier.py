@@ -363,8 +363,8 @@ def read_bevel(profiles: list[BevelProfile] | BevelProfile, bevel: BevelGeometry
     Raises
     ------
     InputError
-        For a bevel without a vernier (``angle_deg`` 0) or profiles of
-        different samplings.
+        For a bevel without a vernier (``angle_deg`` 0), profiles of
+        different samplings, or an unknown `lines`.
 
     Notes
     -----
