@@ -12,6 +12,8 @@ from __future__ import annotations
 import numpy as np
 from skfem import MeshTri
 
+from .._checks import InputError
+
 __all__ = ["indentation_mesh"]
 
 
@@ -63,7 +65,7 @@ def indentation_mesh(a_over_h: float, *, pad_radius_over_h: float = 20.0, cell: 
     a = float(a_over_h)
     big_r = float(pad_radius_over_h)
     if not (a > 0 and big_r > a):
-        raise ValueError(f"need 0 < a_over_h < pad_radius_over_h, got {a}, {big_r}")
+        raise InputError(f"need 0 < a_over_h < pad_radius_over_h, got {a}, {big_r}")
     n_in = max(2, int(np.ceil(a / cell)))
     r_in = np.linspace(0.0, a, n_in + 1)
     r_out = _graded(a, big_r, a / n_in, 1.25)

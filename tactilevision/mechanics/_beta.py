@@ -97,12 +97,12 @@ def _relation(table: str, a_over_h: float | None = None, contact: str = "bonded"
         return PAPER_BETA_RELATION
     if table == "fem":
         if a_over_h is None:
-            raise ValueError("table='fem' needs a_over_h (the FEM beta depends on it)")
+            raise InputError("table='fem' needs a_over_h (the FEM beta depends on it)")
         from ._fem_tables import fem_beta_relation
 
         return fem_beta_relation(float(a_over_h), contact=contact, definition=definition,
                                  w_over_h=w_over_h)
-    raise ValueError(f"table must be 'paper' or 'fem', got {table!r}")
+    raise InputError(f"table must be 'paper' or 'fem', got {table!r}")
 
 
 def _out(x: np.ndarray | float) -> float | np.ndarray:
@@ -306,7 +306,7 @@ def beta(nu: float | np.ndarray, a_over_h: float | np.ndarray, *, source: str = 
     True
     """
     if source not in ("fem", "paper"):
-        raise ValueError(f"source must be 'fem' or 'paper', got {source!r}")
+        raise InputError(f"source must be 'fem' or 'paper', got {source!r}")
     n, r = np.broadcast_arrays(np.asarray(nu, np.float64), np.asarray(a_over_h, np.float64))
     if source == "paper" and np.any(np.abs(r - PAPER_BETA_RELATION.a_over_h) > 0.05):
         bad = float(r[np.abs(r - PAPER_BETA_RELATION.a_over_h) > 0.05].ravel()[0])

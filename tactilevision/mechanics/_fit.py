@@ -201,7 +201,7 @@ def fit_indentation(depth_mm: np.ndarray, force_n: np.ndarray, *, thickness_mm: 
     h = _positive(thickness_mm, "thickness_mm")
     a = _positive(radius_mm, "radius_mm")
     if not 0 < confidence < 1:
-        raise ValueError(f"confidence must be in (0, 1), got {confidence!r}")
+        raise InputError(f"confidence must be in (0, 1), got {confidence!r}")
     if np.any(w <= 0):
         i = int(np.argmax(w <= 0))
         raise InputError(f"depth_mm[{i}] = {w[i]:g} mm: depths must be positive")
@@ -379,7 +379,7 @@ def _geometry(w: np.ndarray, h: float, a: float, beta_table: str, a_over_h: floa
               contact: str) -> tuple[float, str, str]:
     """Check a/h and the table's range; return (a/h used, kappa source, contact)."""
     if beta_table not in ("paper", "fem"):
-        raise ValueError(f"beta_table must be 'paper' or 'fem', got {beta_table!r}")
+        raise InputError(f"beta_table must be 'paper' or 'fem', got {beta_table!r}")
     kappa_source = "fem" if beta_table == "fem" else "hayes"
     if beta_table == "paper":
         contact = "frictionless"  # relation (7) and Hayes: the paper's frictionless punch

@@ -90,7 +90,7 @@ def fit_model(columns: Mapping[str, np.ndarray], model: IndentationModel | str =
     h = _positive(thickness_mm, "thickness_mm")
     a = _positive(radius_mm, "radius_mm")
     if not 0 < confidence < 1:
-        raise ValueError(f"confidence must be in (0, 1), got {confidence!r}")
+        raise InputError(f"confidence must be in (0, 1), got {confidence!r}")
     w0 = np.asarray(columns.get("depth_mm", []), np.float64)
     top = MAX_W_OVER_H * TABLE_EXTRAPOLATION
     if beta_table == "fem" and w0.size and float(np.max(w0 / h)) > top + 1e-12:

@@ -166,13 +166,13 @@ def kappa(nu: float | np.ndarray, a_over_h: float | np.ndarray, *,
 def _table(source: str, contact: str) -> KappaTable:
     if source == "hayes":
         if contact != "frictionless":
-            raise ValueError("the Hayes 1972 table is for a frictionless punch only")
+            raise InputError("the Hayes 1972 table is for a frictionless punch only")
         return HAYES_1972
     if source == "fem":
         from ._fem_tables import fem_kappa_table
 
         return fem_kappa_table(contact)
-    raise ValueError(f"source must be 'hayes' or 'fem', got {source!r}")
+    raise InputError(f"source must be 'hayes' or 'fem', got {source!r}")
 
 
 def _interpolate(t: KappaTable, n: np.ndarray, r: np.ndarray) -> np.ndarray:

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._checks import InputError
+
 __all__ = ["neo_hookean_constants"]
 
 
@@ -58,9 +60,9 @@ def neo_hookean_constants(E_mpa: float | np.ndarray,
     E = np.asarray(E_mpa, dtype=np.float64)
     n = np.asarray(nu, dtype=np.float64)
     if not np.all(np.isfinite(E) & (E > 0)):
-        raise ValueError(f"E_mpa must be positive and finite, got {E_mpa!r}")
+        raise InputError(f"E_mpa must be positive and finite, got {E_mpa!r}")
     if not np.all((n > -1) & (n <= 0.5)):
-        raise ValueError(f"nu must be in (-1, 0.5], got {nu!r}")
+        raise InputError(f"nu must be in (-1, 0.5], got {nu!r}")
     C10 = E / (4.0 * (1.0 + n))
     D1 = 6.0 * (1.0 - 2.0 * n) / E
     if C10.ndim == 0:

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
-from .._checks import check_array
+from .._checks import InputError, check_array
 
 __all__ = [
     "BallPressMetrics",
@@ -58,7 +58,7 @@ def ball_gradients(shape: tuple[int, int], centre_px: tuple[float, float],
         If the contact radius is not smaller than the ball radius.
     """
     if not 0 < contact_radius_px < ball_radius_px:
-        raise ValueError(f"contact radius {contact_radius_px:.3g} px must lie in "
+        raise InputError(f"contact radius {contact_radius_px:.3g} px must lie in "
                          f"(0, ball radius {ball_radius_px:.3g} px)")
     h, w = shape
     dx = np.arange(w, dtype=np.float32)[None, :] - np.float32(centre_px[0])

@@ -13,7 +13,7 @@ import cv2
 import numpy as np
 from scipy.ndimage import map_coordinates
 
-from .._checks import check_array
+from .._checks import InputError, check_array
 
 __all__ = ["detect_contact_circle", "detect_contact_circles", "fit_circle"]
 
@@ -95,21 +95,21 @@ def detect_contact_circle(frame: np.ndarray, reference: np.ndarray, *,
     peak = float(np.percentile(mag, 99.9))
     noise = 1.4826 * float(np.median(np.abs(mag - np.median(mag))))
     if peak < max(min_change, 4.0 * noise):
-        raise ValueError(f"no contact found in frame (largest colour change {peak:.1f} is "
+        raise InputError(f"no contact found in frame (largest colour change {peak:.1f} is "
                          f"below {max(min_change, 4.0 * noise):.1f})")
     bw = (mag > max(blob_fraction * peak, 6.0 * noise)).astype(np.uint8)
     k = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (9, 9))
     bw = cv2.morphologyEx(bw, cv2.MORPH_CLOSE, k)
     n, labels, stats, _ = cv2.connectedComponentsWithStats(bw)
     if n < 2 or peak <= 0:
-        raise ValueError("no contact found in frame (no colour change against the reference)")
+        raise InputError("no contact found in frame (no colour change against the reference)")
     k = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
     blob = _fill_holes((labels == k).astype(np.uint8))
     ys, xs = np.nonzero(blob)
     cx, cy = float(xs.mean()), float(ys.mean())
     r0 = float(np.sqrt(blob.sum() / np.pi))
     if r0 < 3:
-        raise ValueError("no contact found in frame (colour change smaller than 3 px)")
+        raise InputError("no contact found in frame (colour change smaller than 3 px)")
     if iterations == 0:
         return np.array([cx, cy]), r0
     # the rim: where the colour change falls fastest going outwards (inner
@@ -162,5 +162,5 @@ def detect_contact_circles(frames: np.ndarray, reference: np.ndarray
         try:
             centres[i], radii[i] = detect_contact_circle(f, reference)
         except ValueError as exc:
-            raise ValueError(f"frames[{i}]: {exc}") from None
+            raise InputError(f"frames[{i}]: {exc}") from None
     return centres, radii

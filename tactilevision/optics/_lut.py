@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.ndimage import distance_transform_edt, gaussian_filter
 
-from .._checks import check_array
+from .._checks import InputError, check_array
 
 __all__ = ["ColourLUT", "fit_cell_luts", "fit_colour_lut"]
 
@@ -108,7 +108,7 @@ def fit_colour_lut(change: np.ndarray, nxy: np.ndarray, *, bins: int = 32,
     change = check_array(change, "change", [("M", 3)], dtype=np.floating, finite=True)
     nxy = check_array(nxy, "nxy", [(change.shape[0], 2)], dtype=np.floating, finite=True)
     if change.shape[0] < bins:
-        raise ValueError(f"need at least {bins} labelled pixels, got {change.shape[0]}")
+        raise InputError(f"need at least {bins} labelled pixels, got {change.shape[0]}")
     lo = np.percentile(change, 0.1, axis=0) if lo is None else np.asarray(lo)
     hi = np.percentile(change, 99.9, axis=0) if hi is None else np.asarray(hi)
     hi = np.maximum(hi, lo + 1e-3)
@@ -183,7 +183,7 @@ def fit_cell_luts(x_px: np.ndarray, y_px: np.ndarray, change: np.ndarray, nxy: n
     """
     nx, ny = (int(c) for c in cells)
     if nx < 1 or ny < 1:
-        raise ValueError(f"cells must be at least (1, 1), got {cells!r}")
+        raise InputError(f"cells must be at least (1, 1), got {cells!r}")
     h, w = shape
     cw, ch = w / nx, h / ny
     tables = np.empty((ny, nx) + (bins,) * 3 + (2,), np.float32)
@@ -194,7 +194,7 @@ def fit_cell_luts(x_px: np.ndarray, y_px: np.ndarray, change: np.ndarray, nxy: n
             sel = in_y & (x_px >= (i - grow) * cw) & (x_px < (i + 1 + grow) * cw)
             if np.count_nonzero(sel) < max(min_pixels, bins):
                 if fallback is None:
-                    raise ValueError(f"position cell ({i}, {j}) has {np.count_nonzero(sel)} "
+                    raise InputError(f"position cell ({i}, {j}) has {np.count_nonzero(sel)} "
                                      f"labelled pixels, fewer than {min_pixels}")
                 tables[j, i] = fallback.table
                 fell_back[j, i] = True

@@ -15,7 +15,7 @@ from typing import Literal
 import numpy as np
 from scipy import fft as sfft
 
-from .._checks import check_array
+from .._checks import InputError, check_array
 
 __all__ = ["PoissonSolver", "divergence", "integrate_poisson", "integrate_poisson_masked"]
 
@@ -89,10 +89,10 @@ class PoissonSolver:
     def __init__(self, shape: tuple[int, int], *, boundary: Boundary = "neumann",
                  dtype: type = np.float32) -> None:
         if boundary not in ("neumann", "dirichlet"):
-            raise ValueError(f"boundary must be 'neumann' or 'dirichlet', got {boundary!r}")
+            raise InputError(f"boundary must be 'neumann' or 'dirichlet', got {boundary!r}")
         h, w = (int(s) for s in shape)
         if h < 2 or w < 2:
-            raise ValueError(f"shape must be at least (2, 2), got {shape}")
+            raise InputError(f"shape must be at least (2, 2), got {shape}")
         self.shape = (h, w)
         self.boundary = boundary
         shift = 0 if boundary == "neumann" else 1

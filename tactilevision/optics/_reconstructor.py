@@ -104,15 +104,15 @@ class DepthReconstructor:
                  level: Literal["median", "far_field"] = "median",
                  level_degree: int = 4) -> None:
         if engine not in ("table", "onnx"):
-            raise ValueError(f"engine must be 'table' or 'onnx', got {engine!r}")
+            raise InputError(f"engine must be 'table' or 'onnx', got {engine!r}")
         if boundary not in ("neumann", "dirichlet", "contact"):
-            raise ValueError("boundary must be 'neumann', 'dirichlet' or 'contact', got "
+            raise InputError("boundary must be 'neumann', 'dirichlet' or 'contact', got "
                              f"{boundary!r}")
         self.boundary = boundary
         if level not in ("median", "far_field"):
-            raise ValueError(f"level must be 'median' or 'far_field', got {level!r}")
+            raise InputError(f"level must be 'median' or 'far_field', got {level!r}")
         if not 0 <= int(level_degree) <= 8:
-            raise ValueError(f"level_degree must be 0 to 8, got {level_degree!r}")
+            raise InputError(f"level_degree must be 0 to 8, got {level_degree!r}")
         self.level, self.level_degree = level, int(level_degree)
         self._ref_inv_small: np.ndarray | None = None
         self._level_basis: tuple | None = None
@@ -141,9 +141,9 @@ class DepthReconstructor:
         self._table = None
         if calibration.model == "lut":
             if calibration.lut is None:
-                raise ValueError("LUT calibration without a table")
+                raise InputError("LUT calibration without a table")
             if engine != "table":
-                raise ValueError("a LUT calibration runs only with engine='table'")
+                raise InputError("a LUT calibration runs only with engine='table'")
             if calibration.cell_luts is not None:
                 self._table = table_from_cell_luts(calibration.cell_luts, self._ref_inv,
                                                    lo=calibration.lut.lo, hi=calibration.lut.hi)
@@ -151,7 +151,7 @@ class DepthReconstructor:
                 self._table = table_from_lut(calibration.lut, self._ref_inv)
         else:
             if calibration.onnx_bytes is None:
-                raise ValueError("MLP calibration without a network")
+                raise InputError("MLP calibration without a network")
             self._mlp = MLPGradientModel(calibration.onnx_bytes, threads=threads)
             if engine == "table":  # tabulated once on all cores
                 self._table = tabulate_mlp(MLPGradientModel(calibration.onnx_bytes, threads=0),
@@ -332,10 +332,10 @@ class DepthReconstructor:
 
         if isinstance(threshold, str):
             if threshold not in ("calibration", "frame"):
-                raise ValueError("threshold must be 'calibration', 'frame' or a number, got "
+                raise InputError("threshold must be 'calibration', 'frame' or a number, got "
                                  f"{threshold!r}")
         elif not float(threshold) > 0:
-            raise ValueError(f"threshold must be positive, got {threshold}")
+            raise InputError(f"threshold must be positive, got {threshold}")
         frames = self._check(frames)
         cal = self.calibration
         one = frames[None] if frames.ndim == 3 else frames
