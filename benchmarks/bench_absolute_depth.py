@@ -52,7 +52,7 @@ Data kinds (each skipped, with the reason printed, when its data is missing):
     radius a (depth ``d = R - sqrt(R^2 - a^2)`` at its centre, the contact's
     rim at the gel level), 0 beyond 1.5 a.
 ``gelslim``
-    Real GelSlim 3.0 ball presses (``../shared/real/gelslim3``, R = 3.8 mm,
+    Real GelSlim 3.0 ball presses (``$TACTILEVISION_GELSLIM``, R = 3.8 mm,
     0.0806 mm/px, circles detected, contact radius 0.85 x the detected
     one): a LUT calibration (``model="lut"``) on the even-numbered presses,
     tested on the odd ones; the same geometric truth.
@@ -100,7 +100,8 @@ from tactilevision.optics import (  # noqa: E402
 __all__ = ["DATASETS", "format_report", "main", "run"]
 
 ROOT = Path(__file__).resolve().parents[1]
-GELSLIM = ROOT.parent / "shared" / "real" / "gelslim3"
+GELSLIM = Path(os.environ.get("TACTILEVISION_GELSLIM",
+                              ROOT.parent / "shared" / "real" / "gelslim3"))
 FEM_SESSION = ROOT / "sample_frames" / "gelsight_session"
 DATASETS = ("taxim", "fem", "gelsight", "gelslim")
 

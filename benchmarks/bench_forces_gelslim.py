@@ -3,7 +3,7 @@
     python benchmarks/bench_forces_gelslim.py [--presses N] [--figure docs/gelslim_forces.png]
 
 (a) A LUT photometric calibration from the even-numbered ball presses of
-``../shared/real/gelslim3/set_2020_09`` (contact circles detected, marker dots
+``$TACTILEVISION_GELSLIM/set_2020_09`` (contact circles detected, marker dots
 masked and filled in), the same recipe as ``benchmarks/bench_optics_real.py``.
 (b) For each odd-numbered (held-out) press: the height map, the marker
 tracks and their dense lateral field (:func:`tactilevision.optics.track_markers`,
@@ -28,7 +28,7 @@ while other processes share the machine). ``--presses 0`` prints the times
 only (10 s). About 2.5 minutes in all on this 2-core machine.
 
 Assumptions (stated, not measured): gel thickness h = 3.0 mm (the GelSlim 3.0
-session example of ``../shared/formats.md``), E = 0.2 MPa and nu = 0.48 (the
+session example of ``docs/formats.md``), E = 0.2 MPa and nu = 0.48 (the
 fit example there and the README's GelSlim figures); the Ma et al. ICRA 2019
 and Taylor et al. 2022 values could not be retrieved here. The scale is the
 uncertain one of ``tests/_data.py``: 0.0806 mm/px, because the release's
@@ -71,7 +71,8 @@ from tactilevision.optics import (  # noqa: E402
     track_markers,
 )
 
-SET = Path(__file__).resolve().parents[1].parent / "shared" / "real" / "gelslim3" / "set_2020_09"
+SET = Path(os.environ.get("TACTILEVISION_GELSLIM", Path(__file__).resolve().parents[1].parent
+                          / "shared" / "real" / "gelslim3")) / "set_2020_09"
 CREDIT = "GelSlim 3.0 frames: Taylor, Dong, Rodriguez (MCube Lab), CC BY-NC 4.0"
 BALL_MM = 3.8
 

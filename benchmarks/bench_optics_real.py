@@ -1,7 +1,7 @@
 """Photometric stereo on real sensor frames: accuracy and frame rate.
 
 Prints, for the GelSight ball presses of ``taxim`` (annotated circles) and the
-GelSlim 3.0 ball presses of ``../shared/real/gelslim3`` (circles detected),
+GelSlim 3.0 ball presses of ``$TACTILEVISION_GELSLIM`` (circles detected),
 calibrating on the even-numbered presses and evaluating on the odd ones:
 
 - mean angle between reconstructed and true normals inside the contact disc,
@@ -50,7 +50,9 @@ from tactilevision.optics import (
 )
 
 cv2.setNumThreads(1)
-GELSLIM = Path(__file__).resolve().parents[1].parent / "shared" / "real" / "gelslim3"
+GELSLIM = Path(os.environ.get("TACTILEVISION_GELSLIM",
+                              Path(__file__).resolve().parents[1].parent / "shared" / "real"
+                              / "gelslim3"))
 
 # GelSlim 3.0: the release's calibration script names a 7.6 mm ball and two
 # scales, 0.10577 mm/px and "0.0806 x 1.5". Only 0.0806 mm/px makes the ball

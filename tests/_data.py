@@ -18,21 +18,26 @@ the gel) ``sqrt(R^2 - r^2) - sqrt(R^2 - a^2)`` inside the contact and 0
 outside; its slope stays below ``a / sqrt(R^2 - a^2)`` so with ``a <= 0.6 R``
 every light sees every surface element (n . l_k > 0): no shadows.
 
-Real frames: ``GELSLIM`` is ``../shared/real/gelslim3`` next to the repository
-(see ``shared/real/README.md``); tests using it skip when it is absent.
+Real frames: ``GELSLIM`` is the folder of the GelSlim 3.0 release frames
+(``set_2020_09``, ``set_2020_11``; CC BY-NC, never committed), given by the
+environment variable ``TACTILEVISION_GELSLIM`` (CI sets none and finds them at
+its default place beside the repository); tests using it skip when it is absent.
 """
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-GELSLIM = ROOT.parent / "shared" / "real" / "gelslim3"
-GELSLIM_REASON = f"GelSlim 3.0 frames not found at {GELSLIM}"
+GELSLIM = Path(os.environ.get("TACTILEVISION_GELSLIM",
+                              ROOT.parent / "shared" / "real" / "gelslim3"))
+GELSLIM_REASON = (f"GelSlim 3.0 frames not found at {GELSLIM} (set TACTILEVISION_GELSLIM to "
+                  "their folder)")
 #: GelSlim release's ball (7.6 mm diameter). Its calibration script names two
-#: scales, 0.10577 mm/px and "0.0806 x 1.5" (shared/real/README.md: uncertain).
+#: scales, 0.10577 mm/px and "0.0806 x 1.5" (the release's README: uncertain).
 #: The frames rule out 0.10577: the ball would be 35.9 px in radius, yet the
 #: visible contact circles reach 40 to 47 px (set_2020_09) and a contact
 #: circle is a section of the ball. 0.0806 mm/px (ball 47.1 px) is the only
@@ -40,7 +45,7 @@ GELSLIM_REASON = f"GelSlim 3.0 frames not found at {GELSLIM}"
 #: uses the same.
 GELSLIM_BALL_RADIUS_MM = 3.8
 GELSLIM_MM_PER_PX = 0.0806
-#: taxim GelSight data pack (shared/real/README.md).
+#: taxim GelSight data pack (its documented ball and scale).
 TAXIM_BALL_RADIUS_MM = 2.0
 TAXIM_MM_PER_PX = 0.0295
 

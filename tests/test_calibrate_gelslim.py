@@ -1,6 +1,6 @@
 """A GelSlim 3.0 session rendered on the fly from the real GelSlim frames (CC BY-NC,
-never committed): the shading table is fitted to the real ball presses of
-../shared/real/gelslim3/set_2020_11 (a forward model, unlike the reconstructor),
+never committed): the shading table is fitted to the real ball presses of the
+release's set_2020_11 ($TACTILEVISION_GELSLIM; a forward model, unlike the reconstructor),
 the session runs at the sensor's 90 frames/s on its 427 x 320 reference."""
 
 from __future__ import annotations

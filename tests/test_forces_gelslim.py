@@ -5,7 +5,7 @@ A LUT calibration from the even-numbered presses (circles detected, markers
 masked), then for three odd-numbered (held-out) presses: height map, marker
 tracks and their lateral field, and ``ForceEstimator(mode='full',
 contact='footprint')`` with gel thickness 3 mm, E 0.2 MPa, nu 0.48 (assumed:
-the GelSlim example of ``../shared/formats.md``) at the scale of
+the GelSlim example of ``docs/formats.md``) at the scale of
 ``tests/_data.py``. Two footprints: the detected contact circle (the outer edge
 of the colour change), and a generous disc of 1.5 circle radii in which the
 solver's non-negativity sweep decides the contact. Figures from

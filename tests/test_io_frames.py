@@ -221,7 +221,7 @@ def test_read_ball_presses_taxim_layout(tmp_path):
 
 
 def test_read_real_taxim_datapack(taxim_presses):
-    # the file documented in shared/real/README.md: 48 presses, 480 x 640 BGR
+    # the data pack as taxim documents it: 48 presses, 480 x 640 BGR
     assert taxim_datapack().name == "dataPack.npz"
     ps = taxim_presses
     assert ps.reference.shape == (480, 640, 3) and ps.reference.dtype == np.uint8

@@ -36,7 +36,7 @@ def test_unknown_name_names_the_shipped_ones():
 
 def test_reference_is_never_silently_replaced():
     cal = PhotometricCalibration.load("gelsight")
-    with pytest.raises(InputError, match="cv2.imread returns None"):
+    with pytest.raises(InputError, match=r"cv2\.imread returns None"):
         DepthReconstructor(cal, reference=None)
     with pytest.raises(ShapeError, match=r"\(480, 640, 3\)"):
         DepthReconstructor(cal, reference=np.zeros((320, 427, 3), np.uint8))

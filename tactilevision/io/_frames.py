@@ -318,7 +318,7 @@ def taxim_datapack(sensor: str = "gelsight") -> Path:
     ----------
     sensor : {'gelsight', 'gelsight_mini'}
         Which data pack. Only 'gelsight' has a documented ball radius
-        (2.0 mm at 0.0295 mm/px); see ``shared/real/README.md``.
+        (2.0 mm at 0.0295 mm/px, in the taxim package's documentation).
 
     Returns
     -------

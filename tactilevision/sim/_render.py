@@ -169,8 +169,7 @@ def taxim_shading(sensor: str = "gelsight") -> tuple[ShadingTable, np.ndarray]:
     ----------
     sensor : str, default 'gelsight'
         Folder under ``taxim/calib`` (``'gelsight'``; ``'gelsight_mini'``
-        exists but its table does not reproduce its own frames, see
-        ``../shared/real/README.md``).
+        exists but its table does not reproduce its own frames).
 
     Returns
     -------
