@@ -37,7 +37,9 @@ def asset_dir(kind: str) -> Path:
         If neither exists (a broken install).
     """
     if kind not in ("calibration", "models"):
-        raise ValueError(f"kind must be 'calibration' or 'models', got {kind!r}")
+        from ._checks import InputError
+
+        raise InputError(f"kind must be 'calibration' or 'models', got {kind!r}")
     for cand in (_PKG / "_assets" / kind, _PKG.parent / kind):
         if cand.is_dir():
             return cand

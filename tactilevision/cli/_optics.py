@@ -34,17 +34,17 @@ def parse_presses(text: str | None, n: int) -> np.ndarray:
     """
     if text is None:
         return np.arange(n)
+    bad = InputError(f"--presses '{text}' is neither a slice like 0::2 nor a list like 0,3,5")
+    if text.count(":") > 2:
+        raise bad
     try:
         if ":" in text:
             parts = [int(p) if p.strip() else None for p in text.split(":")]
-            if len(parts) > 3:
-                raise ValueError
             idx = np.arange(n)[slice(*parts)]
         else:
             idx = np.array([int(p) for p in text.split(",")])
     except ValueError:
-        raise InputError(f"--presses '{text}' is neither a slice like 0::2 nor a list like "
-                         "0,3,5") from None
+        raise bad from None
     if idx.size == 0 or idx.min() < -n or idx.max() >= n:
         raise InputError(f"--presses '{text}' selects no press or one outside 0..{n - 1}")
     return idx % n

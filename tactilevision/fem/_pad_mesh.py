@@ -68,6 +68,8 @@ from skfem import (
 )
 from skfem.helpers import ddot, div, sym_grad
 
+from .._checks import InputError
+
 __all__ = ["ELEMENTS", "BlockTridiagonalCholesky", "PadModel", "assemble_translated",
            "default_layers", "lame", "single_blas_thread"]
 
@@ -224,7 +226,7 @@ class BlockTridiagonalCholesky:
         block = np.asarray(block, dtype=np.int64)
         coo = a.tocoo()
         if coo.nnz and np.abs(block[coo.row] - block[coo.col]).max() > 1:
-            raise ValueError("the matrix couples blocks that are not neighbours")
+            raise InputError("the matrix couples blocks that are not neighbours")
         #: Unknowns by block: block k is ``perm[bounds[k]:bounds[k + 1]]``.
         self.perm = np.argsort(block, kind="stable")
         self.blocks, counts = np.unique(block, return_counts=True)
@@ -253,7 +255,7 @@ class BlockTridiagonalCholesky:
         with the solution and returned.
         """
         if not (w.dtype == np.float64 and w.flags.c_contiguous and w.ndim == 2):
-            raise ValueError("w must be a C-ordered 2D float64 array")
+            raise InputError("w must be a C-ordered 2D float64 array")
         nb = len(self.lower)
         rows = [slice(self.bounds[k], self.bounds[k + 1]) for k in range(nb)]
         # A C-ordered row block r is the Fortran-ordered r.T: solve r.T op(L) = r.T in place
