@@ -84,6 +84,8 @@ def run(args: argparse.Namespace) -> int:
     effects = list(dict.fromkeys(e for e in requested
                                  if not (args.base == "paper" and e == "large_deformation")))
     table = read_measurements(path, thickness_mm=args.thickness_mm, radius_mm=args.radius_mm)
+    for note in table.notes:
+        print(f"tactilevision diagnose: warning: {note}", file=sys.stderr)
     try:
         diag = diagnose(table.columns, thickness_mm=table.thickness_mm,
                         radius_mm=table.radius_mm, base=args.base, effects=effects,

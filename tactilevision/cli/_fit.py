@@ -220,6 +220,8 @@ def run(args: argparse.Namespace) -> int:
                                    beta_table=args.beta_table, a_over_h=args.a_over_h)
         except InputError as exc:
             raise InputError(f"{path}: {exc}") from None
+    for note in table.notes:
+        print(f"tactilevision fit: warning: {note}", file=sys.stderr)
     if std_message is not None:
         print(f"tactilevision fit: warning: {path}: {std_message}", file=sys.stderr)
     for w in caught:

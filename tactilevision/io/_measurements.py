@@ -58,6 +58,9 @@ class Measurements:
         Gel thickness h and indenter radius a.
     thickness_source, radius_source : str
         ``'argument'`` or ``'<session.toml path> [table] key'``.
+    notes : tuple of str
+        Warnings on the values read (non-positive forces), each naming the
+        file, line and column.
     """
 
     path: Path
@@ -68,6 +71,7 @@ class Measurements:
     radius_mm: float
     thickness_source: str
     radius_source: str
+    notes: tuple[str, ...] = ()
 
     @property
     def depth_mm(self) -> np.ndarray:
@@ -273,13 +277,16 @@ def read_measurements(path: str | Path, *, thickness_mm: float | None = None,
         raise InputError(f"{path} line {lines[i]}, column depth_mm: depth {depth[i]:g} mm "
                          "must be positive")
     force = columns["force_n"]
+    notes = []
     if np.any(force <= 0):
+        # a warning, not a refusal: a bad tare (the catalogue's force_offset) can put the
+        # shallowest presses below zero, and diagnose must see them
         i = int(np.argmax(force <= 0))
-        raise InputError(f"{path} line {lines[i]}, column force_n: force {force[i]:g} N must be "
-                         "positive (the indenter presses into the gel; a sign-flipped F/T axis "
-                         "gives negative forces)")
+        notes.append(f"{path} line {lines[i]}, column force_n: force {force[i]:g} N is not "
+                     f"positive ({int(np.sum(force <= 0))} row(s)): a press pushes into the gel; "
+                     "a sign-flipped F/T axis or a bad tare gives such forces")
     for name, limit, unit in (("depth_mm", MAX_DEPTH_MM, "mm"), ("force_n", MAX_FORCE_N, "N")):
-        big = columns[name] > limit
+        big = np.abs(columns[name]) > limit
         if np.any(big):
             i = int(np.argmax(big))
             raise InputError(f"{path} line {lines[i]}, column {name}: {columns[name][i]:g} {unit} "
@@ -292,6 +299,7 @@ def read_measurements(path: str | Path, *, thickness_mm: float | None = None,
         line_numbers=np.array(lines, dtype=np.int64),
         thickness_mm=geo["thickness_mm"], radius_mm=geo["radius_mm"],
         thickness_source=src["thickness_mm"], radius_source=src["radius_mm"],
+        notes=tuple(notes),
     )
 
 
