@@ -29,9 +29,7 @@ def output_folder(path: Path, what: str = "output folder") -> Path:
     InputError
         If `path` is an existing file, cannot be created, or is not writable.
     """
-    path = Path(path)
-    if path.exists() and not path.is_dir():
-        raise InputError(f"the {what} {path} is an existing file, not a folder")
+    path = check_output_folder(path, what)
     try:
         path.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
