@@ -208,6 +208,11 @@ def main() -> None:
                                     f"{1e3 * lo:.0f}-{1e3 * hi:.0f} um, seed {seed}"))
             if lo == 0.026:
                 null_snr(f)
+        wide = [r for r in rows if r["name"].startswith("Taxim") and "0-50 um" in r["name"]]
+        if len(wide) > 1:
+            n, k = sum(r["in_view"] for r in wide), sum(r["certified"] for r in wide)
+            print(f"\nTaxim 0-50 um, {len(wide)} seeds pooled: {k} of {n} presses with the "
+                  f"bevel in view certified ({100 * k / max(n, 1):.1f}%)")
     print("\nsummary (issue targets: >= 95% certified, mean within +-2 um, sd <= 3 um, c within "
           "2%, beta within 0.05; sample session: E within 3%, nu within 0.01)")
     for r in rows:

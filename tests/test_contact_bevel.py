@@ -24,6 +24,26 @@ def test_footprint_from_ring():
     assert fp.radius_ok and not fp.cut_by_edge
 
 
+def test_footprint_ignores_a_blob_reaching_into_it():
+    """A blob of colour change reaching into the footprint from its rim (Taxim draws one
+    beside the flat punch, 20 px by 8 px) must not pull the circle in: the plain
+    algebraic fit gives a radius 5% short, the trimmed one the true radius."""
+    from tactilevision.contact._footprint import _fit_circle
+
+    mask = _ring((240, 320), (150.3, 120.6), 50.0, 70.0)
+    rows, cols = np.indices(mask.shape)
+    mask |= (np.abs(rows - 118) <= 4) & (cols >= 178) & (cols <= 202)
+    fp = footprint_from_frame(mask, 0.05, indenter_radius_mm=2.5)
+    np.testing.assert_allclose(fp.center_px, (150.3, 120.6), atol=0.4)
+    assert fp.radius_px == pytest.approx(50.0, abs=0.7)
+    from scipy import ndimage
+
+    hole = ndimage.binary_fill_holes(mask) & ~mask
+    ys, xs = np.nonzero(hole & ~ndimage.binary_erosion(hole))
+    plain = _fit_circle(np.column_stack([xs, ys]).astype(float))[2] + 0.5
+    assert plain < 0.97 * 50.0
+
+
 def test_footprint_radius_check_and_open_ring():
     mask = _ring((240, 320), (150, 120), 30.0, 45.0)
     fp = footprint_from_frame(mask, 0.05, indenter_radius_mm=2.5)

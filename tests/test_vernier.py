@@ -25,6 +25,7 @@ from tactilevision.contact import (
     hold_start,
     read_bevel,
 )
+from tactilevision.contact._certify import MIN_BAND_CONTRAST
 
 S = 0.0295
 GEOM = BevelGeometry(offset_mm=9.0, direction_deg=0.0, angle_deg=5.0, length_mm=3.0)
@@ -80,6 +81,25 @@ def test_no_band_reads_weak():
         snrs.append(read_bevel(BevelProfile(u, R, 1.0), GEOM, S).snr)
     strong = read_bevel(_band_profile(6.0), GEOM, S).snr
     assert max(snrs) < 8.0 < strong
+
+
+def test_band_contrast_is_the_flank_colours():
+    """The contrast is the band's own colour change (the flanks' -6 and +4 grey levels in the
+    first channel: 10 peak to peak), whatever its length once it is a few blurs wide (a
+    3 px band blurred by 1 px keeps 0.87 of it, less what the background takes); smooth
+    shading with no band (a derivative of a broad Gaussian, 1 grey level peak to peak, as
+    Taxim renders a press stopped 0.9 um past w0) stays under the certification's
+    threshold, 0.15 of the bands', however it is read."""
+    for L in (8.0, 20.0):
+        assert read_bevel(_band_profile(L, noise=0.1), GEOM, S).contrast == pytest.approx(
+            10.0, rel=0.03)
+    assert 6.0 < read_bevel(_band_profile(3.0, noise=0.1), GEOM, S).contrast < 9.0
+    u = np.arange(-47.0, 47.0 + 1e-9, 0.5)
+    shade = -0.5 * (u / 10.0) * np.exp(0.5 - 0.5 * (u / 10.0) ** 2)
+    R = np.stack([shade, 0.2 * shade, -0.1 * shade], axis=1) + 0.5
+    rng = np.random.default_rng(1)
+    faint = read_bevel(BevelProfile(u, R + rng.normal(0, 0.1, R.shape), 1.0), GEOM, S)
+    assert faint.contrast < MIN_BAND_CONTRAST * 10.0
 
 
 def test_read_bevel_bad_input():

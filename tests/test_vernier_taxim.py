@@ -128,3 +128,26 @@ def test_taxim_shadows_beside_narrow_bands(taxim_bevel, w0, overshoot):
     assert abs(shadow.closure_mm - overshoot) < 2 * shadow.closure_std_mm
     with pytest.raises(InputError, match="lines"):
         read_bevel(prof, geom, 0.0295, lines="shadow")
+
+
+def test_taxim_faint_shading_is_not_a_band(taxim_bevel):
+    """A press stopped 0.9 um past w0 (band 0.36 px): Taxim's gel smoothing leaves only a
+    broad shading of a few grey levels at the bevel, which the band model reads as a long
+    band. Its contrast is a few per cent of a real band's, under the certification's
+    threshold (measured: 2.5 grey levels against 47 for the 16 px band, 0.05 of it); the
+    1.2 px band (3 um) shows more than the long one (65: its shadow block is read with
+    it)."""
+    from tactilevision.contact import bevel_profile, read_bevel
+    from tactilevision.contact._certify import MIN_BAND_CONTRAST
+
+    def best(overshoot: float):
+        frame, reference, centre, geom = taxim_bevel(0.4, overshoot)
+        prof = bevel_profile(frame, reference, centre, 0.0295, geom, reach_px=46.0)
+        reads = [read_bevel(prof, geom, 0.0295, lines=lines, line_px=3.0, blur_px=1.6)
+                 for lines in ("all", "shadows")]
+        return min(reads, key=lambda r: r.noise)
+
+    long, short, faint = best(0.042), best(0.003), best(0.0009)
+    assert long.closure_mm == pytest.approx(0.042, abs=0.002)
+    assert short.contrast > 0.4 * long.contrast
+    assert faint.contrast < MIN_BAND_CONTRAST * long.contrast

@@ -64,6 +64,15 @@ BACKGROUND_DEGREE = 4
 MAX_CLOSURE_MM = 0.1
 #: Vernier: least fraction of the bevel's band inside the image.
 MIN_BEVEL_COVERAGE = 0.6
+#: Vernier: least colour contrast of a band (:attr:`BevelReading.contrast`), as a fraction
+#: of the median over the session's long, clear bands. The flanks tilt the gel by theta
+#: whatever the band's length, so real bands keep most of it: 0.41 or more of the median
+#: (median 0.98 to 1.27) on eight simulated and Taxim-rendered sessions (241 bands, 1.2 to
+#: 25 px half-width), where a press stopped 0.9 um past w0 on Taxim's renderer showed
+#: smooth shading at 0.05 of it, read as a 22 px band (benchmarks/bench_vernier.py). A
+#: band narrower than the blur keeps less (a 1 px half-width band blurred by 1 px: 0.2),
+#: hence the margin.
+MIN_BAND_CONTRAST = 0.15
 
 
 @dataclass(frozen=True)
@@ -442,7 +451,7 @@ def certify_session(session, *, min_contact_px: int = 200, bevel_threshold: floa
             wait_s=wait, bevel_score=score)
         if vernier:
             pending.append({"press": press, "profiles": profiles, "window": window,
-                            "quick": quick})
+                            "quick": quick, "t0": t0, "centre": centre})
         else:
             certified.append(replace(press, rule="onset", closure_mm=0.0,
                                      closure_std_mm=_onset_std(session, run, onset, offset,
@@ -450,8 +459,10 @@ def certify_session(session, *, min_contact_px: int = 200, bevel_threshold: floa
                                                                float(cfg.depths_mm[indenter]))))
     optics = None
     if pending:
-        read, optics = _read_vernier_presses(pending, geom, s)
+        read, faint, optics = _read_vernier_presses(pending, geom, s)
         certified.extend(read)
+        rejected.extend(faint)
+        rejected.sort(key=lambda r: r.press)
         certified.sort(key=lambda p: p.press)
     return Certification(presses=certified, rejected=rejected, clock=clock,
                          clock_offset_s=offset, clock_source=source, noise_sigma=sigma,
@@ -651,7 +662,7 @@ def _never_seen(geom: BevelGeometry, best: float, frame: int, why: str = "") -> 
 
 
 def _read_vernier_presses(pending: list[dict], geom: BevelGeometry, s: float
-                          ) -> tuple[list[CertifiedPress], dict]:
+                          ) -> tuple[list[CertifiedPress], list[Rejection], dict]:
     """Read every press's band over its window, with the session's own optics.
 
     1. The session's edge blur is chosen on its longest, clearest bands
@@ -667,6 +678,11 @@ def _read_vernier_presses(pending: list[dict], geom: BevelGeometry, s: float
        for one colour, on the simulated sample session); short bands, whose
        shape the blur hides, are read again with that plane's colours at
        their position as a prior, weighted by its residual spread.
+    4. A band whose colour contrast is under :data:`MIN_BAND_CONTRAST` of the
+       long bands' (median, when two or more are long) is shading, not a
+       band: the press is rejected as ``'bevel never seen'``.
+
+    Returns the certified presses, those rejected in step 4 and the optics.
     """
     optics = _session_optics(pending, geom, s)
     kw = dict(max_closure_mm=MAX_CLOSURE_MM, lines=optics["lines"], blur_px=optics["blur_px"],
@@ -697,8 +713,22 @@ def _read_vernier_presses(pending: list[dict], geom: BevelGeometry, s: float
         plane = None       # the long bands' colours scatter too much to inform the short ones
     if optics["lines"] != "none":
         plane = None       # lines or shadows at the edges: the model reads short bands itself
-    out = []
+    out: list[CertifiedPress] = []
+    faint: list[Rejection] = []
+    contrast_long = (float(np.median([r.contrast for r, ok in zip(first, long, strict=True)
+                                      if ok])) if long.sum() >= 2 else float("nan"))
     for k, (d, r) in enumerate(zip(pending, first, strict=True)):
+        if r.contrast < MIN_BAND_CONTRAST * contrast_long:      # False when NaN
+            p = d["press"]
+            faint.append(Rejection(
+                press=p.press, reason="bevel never seen",
+                detail=f"the best band on the bevel ({r.half_width_px:.1f} px half-width) has "
+                       f"a colour contrast of {r.contrast:.1f} grey levels, "
+                       f"{100 * r.contrast / contrast_long:.0f}% of the session's long bands' "
+                       f"{contrast_long:.1f} (threshold {100 * MIN_BAND_CONTRAST:.0f}%): "
+                       "shading, not a band of contact",
+                t_frame_s=d["t0"], frame=p.frame, bevel_score=r.snr, centre_px=d["centre"]))
+            continue
         if plane is not None and not r.resolved:
             # a short band: lines at its edges would trade off against L; its colours
             # come from the long bands at its position
@@ -711,7 +741,8 @@ def _read_vernier_presses(pending: list[dict], geom: BevelGeometry, s: float
     optics["shadows"] = n_shadows
     optics["prior"] = plane is not None and any(not r.resolved for r in first)
     optics["colour_spread"] = None if plane is None else round(plane[1], 4)
-    return out, optics
+    optics["contrast_long"] = None if np.isnan(contrast_long) else round(contrast_long, 2)
+    return out, faint, optics
 
 
 #: The blur that fits the long bands best, times this, reads the short bands without bias.

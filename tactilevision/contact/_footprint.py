@@ -60,6 +60,30 @@ def _fit_circle(pts: np.ndarray) -> tuple[float, float, float]:
     return float(params[0]), float(params[1]), float(params[2])
 
 
+def _fit_circle_trimmed(pts: np.ndarray, *, floor_px: float = 1.5,
+                        rounds: int = 3) -> tuple[float, float, float, np.ndarray]:
+    """(xc, yc, r, kept) by :func:`_fit_circle`, refitted without outlying edge points.
+
+    A blob of colour change reaching into the footprint (a renderer's shadow,
+    a speck of dust) makes a notch whose boundary pixels sit far inside the
+    circle and pull the algebraic fit in. Points farther from the circle than
+    ``max(floor_px, 3 x 1.4826 MAD)`` of the residuals are dropped and the
+    circle refitted, up to `rounds` times (while at least 8 points remain).
+    """
+    keep = np.ones(len(pts), bool)
+    xc, yc, r = _fit_circle(pts)
+    for _ in range(rounds):
+        res = np.hypot(pts[:, 0] - xc, pts[:, 1] - yc) - r
+        med = float(np.median(res[keep]))
+        tol = max(floor_px, 3.0 * 1.4826 * float(np.median(np.abs(res[keep] - med))))
+        new = np.abs(res) <= tol
+        if new.sum() < 8 or np.array_equal(new, keep):
+            break
+        keep = new
+        xc, yc, r = _fit_circle(pts[keep])
+    return xc, yc, r, keep
+
+
 def fit_footprint(height_mm: np.ndarray, mm_per_px: float, *, indenter_radius_mm: float,
                   plateau_fraction: float = 0.9, radius_tol: float = 0.1) -> Footprint:
     """Fit a circle to the footprint of a flat-ended cylinder in a height map.

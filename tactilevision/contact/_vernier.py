@@ -153,6 +153,13 @@ class BevelReading:
         Residual noise of the profile, grey levels.
     model : (K, 3) float64 ndarray
         The fitted profile (for plots).
+    contrast : float
+        The band's colour contrast: the largest peak-to-peak, over the
+        channels, of the fitted band alone (flanks, lines and shadows, the
+        background left out), grey levels. The flanks tilt the gel by theta
+        whatever L is, so every band of a session shows about the same
+        contrast once it is a blur wide; shading with no band behind it
+        shows a fraction of it.
     """
 
     half_width_px: float
@@ -165,6 +172,7 @@ class BevelReading:
     flank_colours: np.ndarray
     noise: float
     model: np.ndarray
+    contrast: float = float("nan")
 
 
 def bevel_profile(frame: np.ndarray, reference: np.ndarray, centre_px: tuple[float, float],
@@ -466,11 +474,13 @@ def read_bevel(profiles: list[BevelProfile] | BevelProfile, bevel: BevelGeometry
     if half >= l_max - 1.0:
         snr = 0.0        # the "band" fills the search range: smooth shading, not a band
     model = B[k] @ coef[k]
+    band = B[k][:, deg + 1:] @ coef[k][deg + 1:]
+    contrast = float(np.max(np.ptp(band, axis=0)))
     return BevelReading(
         half_width_px=half, half_width_std_px=half_std, crest_px=crest, snr=snr,
         closure_mm=half * tan * s, closure_std_mm=half_std * tan * s,
         resolved=half >= RESOLVED_PX, flank_colours=coef[k][list(flanks)].copy(),
-        noise=math.sqrt(sigma2), model=model)
+        noise=math.sqrt(sigma2), model=model, contrast=contrast)
 
 
 #: Crest penetrations (mm) at which :func:`bevel_force` is solved; between them it is
