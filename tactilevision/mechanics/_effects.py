@@ -13,8 +13,9 @@ from .._checks import InputError
 
 __all__ = ["EFFECT_NAMES", "FIT_EFFECTS", "check_fit_effects"]
 
-#: Catalogue names, part of the public contract (formats.md §4);
-#: ``stiffness_trend:<column>`` takes any covariate column after the colon.
+#: Catalogue names, part of the public contract (docs/formats.md §5);
+#: ``stiffness_trend:<column>``, ``stiffness_step:<column>`` and ``force_trend:<column>``
+#: take any covariate column after the colon.
 EFFECT_NAMES = (
     "large_deformation",
     "depth_offset",
@@ -25,7 +26,12 @@ EFFECT_NAMES = (
     "aging",
     "spatial_nonuniformity",
     "stiffness_trend:<column>",
+    "stiffness_step:<column>",
+    "force_trend:<column>",
 )
+
+#: The catalogue's effects that take a column: ``<kind>:<column>``.
+COLUMN_KINDS = ("stiffness_trend", "stiffness_step", "force_trend")
 
 #: Effects of the paper's base model, eq. (5), which
 #: :func:`~tactilevision.mechanics.fit_indentation` fits.
@@ -33,8 +39,9 @@ FIT_EFFECTS = ("large_deformation",)
 
 
 def _in_catalogue(name: str) -> bool:
-    if name.startswith("stiffness_trend:"):
-        return bool(name.partition(":")[2].strip())
+    kind, colon, column = name.partition(":")
+    if colon and kind in COLUMN_KINDS:
+        return bool(column.strip())
     return name in EFFECT_NAMES
 
 
@@ -57,13 +64,14 @@ def check_fit_effects(names: Sequence[str]) -> tuple[str, ...]:
     ------
     InputError
         For an unknown name (the message lists the valid names) or
-        ``stiffness_trend:`` without a column.
+        ``stiffness_trend:`` (or another column effect) without a column.
     """
     out = list(FIT_EFFECTS)
     for name in names:
         if not _in_catalogue(name):
-            if name.startswith("stiffness_trend:"):
-                raise InputError("stiffness_trend needs a column: stiffness_trend:<column>")
+            kind = name.partition(":")[0]
+            if name.endswith(":") and kind in COLUMN_KINDS:
+                raise InputError(f"{kind} needs a column: {kind}:<column>")
             raise InputError(
                 f"unknown effect '{name}'; valid names: {', '.join(EFFECT_NAMES)}"
             )

@@ -144,11 +144,30 @@ def fit_model(columns: Mapping[str, np.ndarray], model: IndentationModel | str =
     if beta_table == "fem" and "large_deformation.beta" in mf.params:
         fit = _consistent_material(fit, model, mf, columns, h=h, a=a, contact=contact,
                                    confidence=confidence, scale=scale)
+    fit = replace(fit, notes=(*fit.notes, *_modulus_notes(mf.params, fit.E_mpa)))
     if "large_deformation.beta" not in mf.params:   # no beta: not "out of the table"
         fit = replace(fit, beta=math.nan, beta_ci95=(math.nan, math.nan), beta_se=math.nan,
                       out_of_table=False, out_of_table_message=None,
                       notes=tuple(n for n in fit.notes if n != fit.out_of_table_message))
     return fit, mf
+
+
+def _modulus_notes(params: Mapping[str, float], E: float) -> list[str]:
+    """Which modulus E is, for effects that change the stiffness with a covariate."""
+    out: list[str] = []
+    if not math.isfinite(E):
+        return out
+    for k, v in params.items():
+        eff, _, q = k.rpartition(".")
+        if eff.startswith("stiffness_step:") and q == "s":
+            col, at = eff.partition(":")[2], params[f"{eff}.at"]
+            out.append(f"{eff}: E = {E:.4g} MPa is the gel's up to {col} = {at:g}; after it "
+                       f"the stiffness is {1 + v:.4g} times that (E = {E * (1 + v):.4g} MPa)")
+        if eff == "viscoelastic_relaxation" and q == "g":
+            out.append(f"viscoelastic_relaxation: E = E_0 = {E:.4g} MPa is the instantaneous "
+                       f"modulus (hold -> 0); the relaxed modulus (hold -> infinity) is "
+                       f"E_inf = (1 - g) E_0 = {E * (1 - v):.4g} MPa")
+    return out
 
 
 def _consistent_material(fit: IndentationFit, model: IndentationModel, mf: ModelFit,

@@ -68,6 +68,16 @@ class Effect:
         (``'stiffness'``, multiplies P) or force (``'force'``)."""
         raise NotImplementedError
 
+    def profile(self, data: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
+        """Parameters found by search rather than by gradient, and their candidate values.
+
+        :meth:`IndentationModel.fit` fits the model at every candidate value
+        (the other parameters free) and keeps the best: for parameters on
+        which the force does not depend smoothly (a change point). Default:
+        none.
+        """
+        return {}
+
     def __repr__(self) -> str:
         return f"{type(self).__name__}()"
 
@@ -207,6 +217,80 @@ class StiffnessTrend(Effect):
         return f"StiffnessTrend({self.column!r})"
 
 
+class StiffnessStep(Effect):
+    """A sudden change of stiffness at an unknown value of a column, P (1 + s [x > x0]).
+
+    A change point: the gel damaged or re-seated after some press
+    (``stiffness_step:press``), between sessions (``stiffness_step:day``) or
+    at some time (``stiffness_step:time_s``). It scales P(w), so its force
+    change grows with depth, where a force-sensor bias (``force_drift``,
+    ``force_offset``) adds the same force at every depth: that is what tells
+    them apart. ``s`` is the relative change (-0.1: 10 % softer after);
+    ``at`` (x0), in the column's unit, is found by search over the midpoints
+    between the column's sorted values that leave at least
+    :attr:`min_side` presses on each side (at most :attr:`max_candidates`,
+    evenly spaced, then every midpoint next to the best); its standard
+    error is not given. c is the stiffness before the step.
+    """
+
+    kind = "stiffness"
+    #: Fewest presses on each side of the change point.
+    min_side = 3
+    #: Most change points tried in the first pass.
+    max_candidates = 24
+
+    def __init__(self, column: str) -> None:
+        if not column:
+            raise InputError("stiffness_step needs a column: stiffness_step:<column>")
+        self.column = column
+        self.name = f"stiffness_step:{column}"
+        self.params = (Param("s", 0.0, -0.9, 3.0, ""),
+                       Param("at", 0.0, -math.inf, math.inf, f"{column} unit"))
+        self.columns = (column,)
+
+    def apply(self, p, data, value):
+        return 1.0 + p["s"] * (data[self.column] > p["at"])
+
+    def profile(self, data):
+        x = np.sort(np.asarray(data[self.column], np.float64))
+        n = x.size
+        k = self.min_side
+        if n < 2 * k:
+            return {"at": np.array([])}
+        # change points between x[i - 1] and x[i] with i presses at or below
+        i = np.arange(k, n - k + 1)
+        i = i[x[i - 1] < x[i]]
+        return {"at": 0.5 * (x[i - 1] + x[i])}
+
+    def __repr__(self) -> str:
+        return f"StiffnessStep({self.column!r})"
+
+
+class ForceTrend(Effect):
+    """A force-sensor bias along any covariate column, P + k x (zero where x is 0).
+
+    The additive counterpart of :class:`StiffnessTrend`: offered when a
+    column's residual structure is a force added at every depth rather than
+    a stiffness change (one that grows with depth).
+    """
+
+    kind = "force"
+
+    def __init__(self, column: str) -> None:
+        if not column:
+            raise InputError("force_trend needs a column: force_trend:<column>")
+        self.column = column
+        self.name = f"force_trend:{column}"
+        self.params = (Param("k_n", 0.0, -100.0, 100.0, f"N/({column} unit)"),)
+        self.columns = (column,)
+
+    def apply(self, p, data, value):
+        return value + p["k_n"] * data[self.column]
+
+    def __repr__(self) -> str:
+        return f"ForceTrend({self.column!r})"
+
+
 class LawCurvature(Effect):
     """Curvature of P/w against w/h beyond eq. (5): P (1 + gamma (w/h)^2).
 
@@ -235,6 +319,14 @@ EFFECTS: dict[str, type[Effect]] = {
 }
 
 
+#: Effects that take a column after a colon: ``<kind>:<column>``.
+COLUMN_EFFECTS: dict[str, type[Effect]] = {
+    "stiffness_trend": StiffnessTrend,
+    "stiffness_step": StiffnessStep,
+    "force_trend": ForceTrend,
+}
+
+
 def make_effect(name: str) -> Effect:
     """An effect of the catalogue by its name (``stiffness_trend:<column>`` too).
 
@@ -243,13 +335,14 @@ def make_effect(name: str) -> Effect:
     InputError
         For a name not in the catalogue (the message lists them).
     """
-    if name.startswith("stiffness_trend:"):
-        return StiffnessTrend(name.partition(":")[2].strip())
+    kind, colon, column = name.partition(":")
+    if colon and kind in COLUMN_EFFECTS:
+        return COLUMN_EFFECTS[kind](column.strip())
     if name == LawCurvature.name:
         return LawCurvature()
     if name not in EFFECTS:
         raise InputError(f"unknown effect '{name}'; valid names: "
-                         f"{', '.join([*EFFECTS, 'stiffness_trend:<column>'])}")
+                         f"{', '.join([*EFFECTS, *(k + ':<column>' for k in COLUMN_EFFECTS)])}")
     return EFFECTS[name]()
 
 
@@ -419,6 +512,32 @@ class IndentationModel:
                 force = e.apply(own(e), d, force)
         return force
 
+    @staticmethod
+    def _search(resid, fixed: np.ndarray, searched: dict[int, np.ndarray], x0: np.ndarray,
+                bounds: tuple[np.ndarray, np.ndarray], max_first: int = 24) -> None:
+        """Set the searched parameters in `fixed` (in place: `resid` reads it), one at a
+        time, the others at their best: least squares at up to `max_first` evenly spaced
+        candidates, then at every candidate next to the best."""
+        for i, vals in searched.items():
+            cost: dict[int, float] = {}
+
+            def at(j: int, i: int = i, vals: np.ndarray = vals,
+                   cost: dict[int, float] = cost) -> float:
+                if j not in cost:
+                    fixed[i] = vals[j]
+                    cost[j] = float(least_squares(resid, x0, bounds=bounds, x_scale="jac",
+                                                  method="trf").cost)
+                return cost[j]
+
+            first = np.unique(np.linspace(0, vals.size - 1, min(max_first, vals.size)
+                                          ).round().astype(int))
+            best = min(first, key=at)
+            pos = int(np.searchsorted(first, best))
+            lo_j = first[pos - 1] if pos > 0 else 0
+            hi_j = first[pos + 1] if pos + 1 < first.size else vals.size - 1
+            best = min(range(lo_j, hi_j + 1), key=at)
+            fixed[i] = vals[best]
+
     def fit(self, data: Mapping[str, np.ndarray], *, thickness_mm: float,
             weights: np.ndarray | None = None, loss: str = "soft_l1",
             f_scale: float | None = None) -> ModelFit:
@@ -484,13 +603,30 @@ class IndentationModel:
                 x0.append(q.value)
                 lo.append(q.lower)
                 hi.append(q.upper)
-        x0 = np.clip(np.array(x0), np.array(lo) + 1e-12, np.array(hi) - 1e-12)
         P = d["force_n"]
+        # parameters found by search (change points): fixed in each least-squares fit
+        dh = {**d, "_h": float(thickness_mm)}
+        searched: dict[int, np.ndarray] = {}
+        for e in effects:
+            for q, vals in e.profile(dh).items():
+                vals = np.asarray(vals, np.float64)
+                if vals.size == 0:
+                    raise InputError(f"{e.name}: too few presses with distinct {e.columns[0]} "
+                                     "to place the change point")
+                searched[names.index(f"{e.name}.{q}")] = vals
+        free = np.array([i for i in range(len(names)) if i not in searched], int)
+        lo_f, hi_f = np.array(lo)[free], np.array(hi)[free]
+        x0_f = np.clip(np.array(x0)[free], lo_f + 1e-12, hi_f - 1e-12)
+        fixed = np.array(x0, np.float64)
 
         def resid(x: np.ndarray) -> np.ndarray:
-            return sw * (self.predict(dict(zip(names, x, strict=True)), d, thickness_mm) - P)
+            full = fixed.copy()
+            full[free] = x
+            return sw * (self.predict(dict(zip(names, full, strict=True)), d, thickness_mm) - P)
 
-        first = least_squares(resid, x0, bounds=(lo, hi), x_scale="jac", method="trf")
+        if searched:
+            self._search(resid, fixed, searched, x0_f, (lo_f, hi_f))
+        first = least_squares(resid, x0_f, bounds=(lo_f, hi_f), x_scale="jac", method="trf")
         if loss == "linear":
             sol = first
             scale = math.nan
@@ -498,11 +634,16 @@ class IndentationModel:
             r0 = first.fun
             mad = 1.4826 * float(np.median(np.abs(r0 - np.median(r0))))
             scale = f_scale if f_scale is not None else 2.5 * max(mad, 1e-12)
-            sol = least_squares(resid, first.x, bounds=(lo, hi), x_scale="jac", method="trf",
-                                loss=loss, f_scale=scale)
+            sol = least_squares(resid, first.x, bounds=(lo_f, hi_f), x_scale="jac",
+                                method="trf", loss=loss, f_scale=scale)
         r = sol.fun
         k = len(names)
-        J = sol.jac
+        J = np.zeros((n, k))
+        J[:, free] = sol.jac
+        x_full = fixed.copy()
+        x_full[free] = sol.x
+        active = np.zeros(k, int)
+        active[free] = sol.active_mask
         # robust weights of the loss at the solution (1 for least squares)
         if loss == "linear":
             rho_w = np.ones(n)
@@ -530,15 +671,20 @@ class IndentationModel:
             bad |= norm == 0
         except np.linalg.LinAlgError:  # pragma: no cover
             cov, bad = np.full((k, k), np.nan), np.ones(k, bool)
+        srch = np.zeros(k, bool)
+        srch[list(searched)] = True
+        bad &= ~srch                # found by search: no standard error, but identified
         cov[bad, :] = np.nan
         cov[:, bad] = np.nan
         cov[bad, bad] = np.inf
+        cov[srch, :] = np.nan
+        cov[:, srch] = np.nan
         se = np.sqrt(np.clip(np.diag(cov), 0, None))
-        on_bound = sol.active_mask != 0
+        on_bound = active != 0
         se[on_bound & ~bad] = np.nan
         with np.errstate(invalid="ignore", divide="ignore"):
             corr = cov / np.outer(se, se)
-        params = dict(zip(names, map(float, sol.x), strict=True))
+        params = dict(zip(names, map(float, x_full), strict=True))
         pred = self.predict(params, d, thickness_mm)
         res = P - pred
         rss = float(np.sum(sw ** 2 * res ** 2))
