@@ -30,7 +30,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("measurements", metavar="MEASUREMENTS.csv", type=Path)
     p.add_argument("--effects", default="", metavar="E1,E2",
-                   help="effects already in the model diagnosed (catalogue names)")
+                   help="effects already in the model diagnosed: catalogue names, or an "
+                        "Effect subclass of your own as package.module:ClassName or "
+                        "path/to/file.py:ClassName (a module not on the Python path is looked "
+                        "for in the working directory; docs/custom_effects.md)")
     p.add_argument("--base", choices=("paper", "layer"), default="paper",
                    help="paper: eq. (5), the layer with large_deformation (default); "
                         "layer: the small-strain layer alone")
@@ -73,16 +76,16 @@ def _summary(diag, path: Path) -> str:
 def run(args: argparse.Namespace) -> int:
     """Run ``diagnose``; returns 0 (2 through InputError on bad input)."""
     from ..io import read_measurements
-    from ..mechanics import check_fit_effects
     from ..mechanics._diagnose import diagnose
+    from ..mechanics._effects import effect_names
 
     if args.report is not None:
         check_output_folder(args.report, "report folder")
     path = args.measurements
     requested = [e.strip() for e in args.effects.split(",") if e.strip()]
-    check_fit_effects(requested)   # names checked before the table is read
-    effects = list(dict.fromkeys(e for e in requested
-                                 if not (args.base == "paper" and e == "large_deformation")))
+    # names checked (and effects of the user's own imported) before the table is read
+    effects = [e for e in effect_names(requested)
+               if not (args.base == "paper" and e == "large_deformation")]
     table = read_measurements(path, thickness_mm=args.thickness_mm, radius_mm=args.radius_mm)
     for note in table.notes:
         print(f"tactilevision diagnose: warning: {note}", file=sys.stderr)

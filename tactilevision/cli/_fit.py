@@ -60,7 +60,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--effects", default="large_deformation", metavar="E1,E2",
                    help="comma-separated effects added to the base model (large_deformation); "
                         "with any, the whole model is fitted by robust least squares "
-                        f"(catalogue: {', '.join(EFFECT_NAMES)})")
+                        f"(catalogue: {', '.join(EFFECT_NAMES)}; or an Effect subclass of "
+                        "your own as package.module:ClassName or path/to/file.py:ClassName, "
+                        "a module not on the Python path looked for in the working "
+                        "directory: docs/custom_effects.md)")
     p.add_argument("--a-over-h", type=float, metavar="X",
                    help="a/h at which kappa is read (default: the exact a/h; 0.8 reproduces "
                         "the paper)")

@@ -24,6 +24,11 @@ Fit:
   :class:`Effect` class per catalogue name (:data:`EFFECTS`), fitted robustly
   (:class:`ModelFit`); :func:`fit_model` adds E and nu; :func:`diagnose`
   finds where a model fails and which effect is missing (:class:`Diagnosis`).
+- Effects of your own: subclass :class:`Effect` (parameters as :class:`Param`
+  with bounds and units, the columns read, the physics in ``apply``) and pass
+  the class to :class:`IndentationModel`, :func:`fit_model`, :func:`diagnose`
+  or ``--effects package.module:ClassName``; :func:`register_effect` checks
+  it and gives its name (``docs/custom_effects.md``).
 - :func:`neo_hookean_constants` -- Abaqus C10, D1 from E, nu.
 
 Validation (the paper's FEA check):
@@ -45,7 +50,15 @@ from ._fem_tables import kappa_n
 from ._fit import MAX_W_OVER_H, fit_indentation
 from ._fit_model import fit_model
 from ._kappa import HAYES_1972, KappaTable, kappa
-from ._model import EFFECTS, Effect, IndentationModel, ModelFit, Param, make_effect
+from ._model import (
+    EFFECTS,
+    Effect,
+    IndentationModel,
+    ModelFit,
+    Param,
+    make_effect,
+    register_effect,
+)
 from ._neohookean import neo_hookean_constants
 from ._result import IndentationFit
 from ._validate import IndentationValidation, validate_indentation
@@ -79,5 +92,6 @@ __all__ = [
     "neo_hookean_constants",
     "noise_floor",
     "nu_from_beta",
+    "register_effect",
     "validate_indentation",
 ]

@@ -2,7 +2,10 @@
 
 The effects themselves (classes with parameters, composed into models) are
 in :mod:`tactilevision.mechanics._model`; the names live here so that the
-command line can check them without building a model.
+command line can check them without building a model. Effects of your own
+(:func:`~tactilevision.mechanics.register_effect`) are given as
+``package.module:ClassName``: :func:`effect_names` imports and checks them
+before any table is read.
 """
 
 from __future__ import annotations
@@ -11,7 +14,7 @@ from collections.abc import Sequence
 
 from .._checks import InputError
 
-__all__ = ["EFFECT_NAMES", "FIT_EFFECTS", "check_fit_effects"]
+__all__ = ["EFFECT_NAMES", "FIT_EFFECTS", "check_fit_effects", "effect_names"]
 
 #: Catalogue names, part of the public contract (docs/formats.md §5);
 #: ``stiffness_trend:<column>``, ``stiffness_step:<column>`` and ``force_trend:<column>``
@@ -45,36 +48,81 @@ def _in_catalogue(name: str) -> bool:
     return name in EFFECT_NAMES
 
 
+def effect_names(specs: Sequence[str]) -> tuple[str, ...]:
+    """Check effect names and import specs; return the model's names, each once.
+
+    Parameters
+    ----------
+    specs : sequence of str
+        Catalogue names (formats.md §4), ``<kind>:<column>``, names registered
+        by :func:`~tactilevision.mechanics.register_effect`, or import specs
+        of effects of your own, ``package.module:ClassName`` or
+        ``path/to/file.py:ClassName`` (imported and registered here, so a
+        bad one is reported before any table is read).
+
+    Returns
+    -------
+    names : tuple of str
+        In the order given, each once: import specs replaced by their
+        effects' names, ``<kind>: <column>`` written without the spaces.
+
+    Raises
+    ------
+    InputError
+        For an unknown name (the message lists the valid names),
+        ``stiffness_trend:`` (or another column effect) without a column, or
+        an import spec whose module or class is not found, whose class is
+        not an ``Effect`` subclass or is invalid (bounds, name taken by the
+        catalogue, ...): the message names the spec.
+    """
+    from ._model import effect_name, is_registered
+
+    out: list[str] = []
+    for spec in specs:
+        kind, colon, column = spec.partition(":")
+        if colon and kind in COLUMN_KINDS and not column.strip():
+            raise InputError(f"{kind} needs a column: {kind}:<column>")
+        if _in_catalogue(spec):
+            name = f"{kind}:{column.strip()}" if colon else spec
+        elif colon or is_registered(spec):
+            name = effect_name(spec)
+        else:
+            raise InputError(
+                f"unknown effect '{spec}'; valid names: {', '.join(EFFECT_NAMES)}, or "
+                "package.module:ClassName for an Effect subclass of your own"
+            )
+        if name not in out:
+            out.append(name)
+    return tuple(out)
+
+
 def check_fit_effects(names: Sequence[str]) -> tuple[str, ...]:
     """Check effect names requested of ``fit``; return the model's effect names.
 
     Parameters
     ----------
     names : sequence of str
-        Catalogue names (formats.md §4), e.g. ``["incomplete_recovery"]``;
+        Catalogue names (formats.md §4), e.g. ``["incomplete_recovery"]``,
+        names of registered effects, or import specs of effects of your own
+        (``"my_effects:TemperatureStiffening"``, see :func:`effect_names`);
         ``large_deformation`` (the paper's base) is always in the model.
 
     Returns
     -------
     effects : tuple of str
         ``large_deformation`` then the other names in the order given, each
-        once.
+        once (import specs replaced by their registered names).
 
     Raises
     ------
     InputError
-        For an unknown name (the message lists the valid names) or
-        ``stiffness_trend:`` (or another column effect) without a column.
+        For an unknown name (the message lists the valid names),
+        ``stiffness_trend:`` (or another column effect) without a column, or
+        an import spec that cannot be imported or names no valid effect (the
+        message names the spec and what is wrong).
     """
     out = list(FIT_EFFECTS)
-    for name in names:
-        if not _in_catalogue(name):
-            kind = name.partition(":")[0]
-            if name.endswith(":") and kind in COLUMN_KINDS:
-                raise InputError(f"{kind} needs a column: {kind}:<column>")
-            raise InputError(
-                f"unknown effect '{name}'; valid names: {', '.join(EFFECT_NAMES)}"
-            )
+    for name in effect_names(names):
         if name not in out:
             out.append(name)
     return tuple(out)

@@ -327,23 +327,341 @@ COLUMN_EFFECTS: dict[str, type[Effect]] = {
 }
 
 
-def make_effect(name: str) -> Effect:
-    """An effect of the catalogue by its name (``stiffness_trend:<column>`` too).
+def make_effect(name: str | Effect | type[Effect]) -> Effect:
+    """An effect by its name: the catalogue's, a column effect's or a user effect's.
+
+    Parameters
+    ----------
+    name : str, Effect or Effect subclass
+        A catalogue name (:data:`EFFECTS`, ``law_curvature``),
+        ``<kind>:<column>`` of :data:`COLUMN_EFFECTS`
+        (``stiffness_trend:temperature_c``), the name of an effect registered
+        by :func:`register_effect`, or an import spec of a user effect,
+        ``'package.module:ClassName'`` or ``'path/to/file.py:ClassName'``
+        (imported, registered, then made; a module not found on
+        :data:`sys.path` is looked for in the current working directory). An
+        :class:`Effect` subclass or instance is registered and returned.
+
+    Returns
+    -------
+    effect : Effect
 
     Raises
     ------
     InputError
-        For a name not in the catalogue (the message lists them).
+        For a name neither in the catalogue nor registered (the message lists
+        the valid names), a column effect without its column, or an import
+        spec that cannot be imported or names no valid effect (the message
+        names the spec and what is wrong).
+
+    Examples
+    --------
+    >>> make_effect("aging").params
+    (Param(name='k_per_day', value=0.0, lower=-0.1, upper=0.1, unit='1/day'),)
+    >>> make_effect("stiffness_trend:temperature_c").columns
+    ('temperature_c',)
     """
+    if not isinstance(name, str):
+        return _USER_EFFECTS[register_effect(name)]
     kind, colon, column = name.partition(":")
     if colon and kind in COLUMN_EFFECTS:
         return COLUMN_EFFECTS[kind](column.strip())
     if name == LawCurvature.name:
         return LawCurvature()
-    if name not in EFFECTS:
-        raise InputError(f"unknown effect '{name}'; valid names: "
-                         f"{', '.join([*EFFECTS, *(k + ':<column>' for k in COLUMN_EFFECTS)])}")
-    return EFFECTS[name]()
+    if name in EFFECTS:
+        return EFFECTS[name]()
+    if name in _USER_EFFECTS:
+        return _USER_EFFECTS[name]
+    if colon:
+        return _USER_EFFECTS[register_effect(_import_effect(name))]
+    valid = [*EFFECTS, *(k + ":<column>" for k in COLUMN_EFFECTS), *_USER_EFFECTS]
+    raise InputError(f"unknown effect '{name}'; valid names: {', '.join(valid)}, or "
+                     "package.module:ClassName for an Effect subclass of your own")
+
+
+# ----------------------------------------------------------------- user effects
+
+#: Effects registered by :func:`register_effect` (process-wide): name -> the effect.
+_USER_EFFECTS: dict[str, Effect] = {}
+
+#: Kinds of effect, in the order they act (:meth:`IndentationModel.predict`).
+_KINDS = ("depth", "stiffness", "force")
+
+#: Modules loaded from a file path (``path/to/file.py:ClassName``): resolved path -> name.
+_FILE_MODULES: dict[str, str] = {}
+
+
+def _bad_token(text: str) -> str | None:
+    """What makes `text` unfit for an effect or parameter name (None: nothing)."""
+    if not text:
+        return "is empty"
+    for ch, what in ((",", "a comma"), (":", "a colon"), (".", "a dot")):
+        if ch in text:
+            return f"holds {what}"
+    if any(ch.isspace() for ch in text):
+        return "holds white space"
+    return None
+
+
+def _check_effect(effect: Effect, label: str) -> str:
+    """Validate a user effect; return its name. `label` names it in the messages."""
+    name = getattr(effect, "name", None)
+    if not isinstance(name, str):
+        raise InputError(f"{label}: its name must be a str, got {name!r}")
+    bad = _bad_token(name)
+    if bad is not None:
+        raise InputError(f"{label}: its name {name!r} {bad} (names are written in "
+                         "comma-separated lists, parameters as <effect>.<param>)")
+    if name in EFFECTS or name in COLUMN_EFFECTS or name == LawCurvature.name:
+        raise InputError(f"{label}: its name '{name}' is taken by the catalogue; give it "
+                         "another name")
+    params = getattr(effect, "params", None)
+    if not isinstance(params, tuple | list) or not all(isinstance(q, Param) for q in params):
+        raise InputError(f"{label}: params must be a tuple of "
+                         f"tactilevision.mechanics.Param, got {params!r}")
+    seen: set[str] = set()
+    for q in params:
+        bad = _bad_token(q.name) if isinstance(q.name, str) else "is not a str"
+        if bad is not None:
+            raise InputError(f"{label}: parameter name {q.name!r} {bad}")
+        if q.name in seen:
+            raise InputError(f"{label}: parameter {q.name} appears twice")
+        seen.add(q.name)
+        try:
+            lo, hi, v = float(q.lower), float(q.upper), float(q.value)
+        except (TypeError, ValueError):
+            raise InputError(f"{label}: parameter {q.name} has a value or bound that is not "
+                             f"a number ({q.value!r}, {q.lower!r}, {q.upper!r})") from None
+        if not lo < hi:
+            raise InputError(f"{label}: parameter {q.name} needs lower < upper, got bounds "
+                             f"[{lo:g}, {hi:g}]")
+        if not (math.isfinite(v) and lo <= v <= hi):
+            raise InputError(f"{label}: the start value {v:g} of parameter {q.name} is not "
+                             f"a finite number within its bounds [{lo:g}, {hi:g}]")
+    columns = getattr(effect, "columns", None)
+    if (not isinstance(columns, tuple | list) or not columns
+            or not all(isinstance(c, str) and c for c in columns)):
+        raise InputError(f"{label}: columns must be a non-empty tuple of column names (str), "
+                         f"got {columns!r}")
+    for c in columns:
+        if c == "force_n" or c.startswith("_"):
+            raise InputError(f"{label}: it cannot read the column {c!r} (the force is what "
+                             "the model predicts; names starting with '_' are internal: "
+                             "data['_h'] is given to apply anyway)")
+    if getattr(effect, "kind", None) not in _KINDS:
+        raise InputError(f"{label}: kind must be one of {', '.join(_KINDS)}, got "
+                         f"{getattr(effect, 'kind', None)!r}")
+    if type(effect).apply is Effect.apply:
+        raise InputError(f"{label}: it does not implement apply(p, data, value)")
+    return name
+
+
+def _same_class(a: type, b: type) -> bool:
+    """`a` and `b` are one class, or one class defined again (a notebook cell run twice)."""
+    return a is b or (a.__module__, a.__qualname__) == (b.__module__, b.__qualname__)
+
+
+def register_effect(effect: type[Effect] | Effect) -> str:
+    """Register an effect of your own so that models, ``fit`` and ``diagnose`` take its name.
+
+    An effect is a subclass of :class:`Effect` with a :attr:`~Effect.name`,
+    its :attr:`~Effect.params` (:class:`Param`: start value, bounds, unit),
+    the :attr:`~Effect.columns` of the measurements table it reads, its
+    :attr:`~Effect.kind` and the physics in :meth:`~Effect.apply`. Models
+    (:class:`IndentationModel`), :func:`fit_model` and :func:`diagnose` take
+    the class, an instance, the registered name or an import spec
+    ``'package.module:ClassName'`` (registered on first use); so does the
+    command line's ``--effects``. The registry lasts as long as the process.
+
+    Parameters
+    ----------
+    effect : Effect subclass or Effect instance
+        A class is made without arguments; an instance (e.g. one configured by
+        its constructor) is used as it is.
+
+    Returns
+    -------
+    name : str
+        The effect's name, the model's currency: parameters are reported as
+        ``<name>.<param>``.
+
+    Raises
+    ------
+    InputError
+        For something not an :class:`Effect` subclass or instance; a class
+        that cannot be made without arguments; a name that is empty, holds a
+        comma, colon, dot or white space, or is taken by the catalogue
+        (:data:`EFFECTS`, the column effects, ``law_curvature``) or by another
+        registered class; params not a tuple of :class:`Param`, a parameter
+        with lower >= upper or a start value outside its bounds; no columns
+        (or ``force_n``); a kind not ``'depth'``, ``'stiffness'`` or
+        ``'force'``; :meth:`~Effect.apply` not implemented. Registering the
+        same class (or the same class defined again) under its name again
+        replaces the earlier registration.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> class Humidity(Effect):
+    ...     '''Stiffness falling with relative humidity, P (1 - s (RH - 40 %)).'''
+    ...     name = "humidity"
+    ...     params = (Param("s_per_pct", 0.0, -0.05, 0.05, "1/%"),)
+    ...     columns = ("humidity_pct",)
+    ...     kind = "stiffness"
+    ...     def apply(self, p, data, value):
+    ...         return 1.0 - p["s_per_pct"] * (data["humidity_pct"] - 40.0)
+    >>> register_effect(Humidity)
+    'humidity'
+    >>> IndentationModel(effects=(Humidity,)).param_names()
+    ('c_n_per_mm', 'large_deformation.beta', 'humidity.s_per_pct')
+    """
+    if isinstance(effect, type):
+        label = f"effect class {effect.__module__}.{effect.__qualname__}"
+        if not issubclass(effect, Effect):
+            raise InputError(f"{label} is not a subclass of tactilevision.mechanics.Effect")
+        try:
+            inst = effect()
+        except Exception as exc:
+            raise InputError(f"{label} cannot be made without arguments ({type(exc).__name__}: "
+                             f"{exc}); register an instance instead") from None
+    elif isinstance(effect, Effect):
+        inst = effect
+        label = f"effect {type(effect).__module__}.{type(effect).__qualname__}"
+    else:
+        raise InputError(f"{effect!r} is not an Effect: a subclass of "
+                         "tactilevision.mechanics.Effect (or an instance of one) is needed")
+    name = _check_effect(inst, label)
+    old = _USER_EFFECTS.get(name)
+    if old is not None and not _same_class(type(old), type(inst)):
+        raise InputError(f"{label}: the effect name '{name}' is taken by "
+                         f"{type(old).__module__}.{type(old).__qualname__}; give it another "
+                         "name")
+    _USER_EFFECTS[name] = inst
+    return name
+
+
+def is_registered(name: str) -> bool:
+    """Whether `name` is the name of an effect registered by :func:`register_effect`.
+
+    Parameters
+    ----------
+    name : str
+
+    Returns
+    -------
+    bool
+    """
+    return name in _USER_EFFECTS
+
+
+def _import_module(modname: str, spec: str) -> object:
+    """Import `modname` (then from the working directory); InputError naming `spec`."""
+    import importlib
+    import os
+    import sys
+
+    if modname.endswith(".py") or "/" in modname or os.sep in modname:
+        import hashlib
+        import importlib.util
+        from pathlib import Path
+
+        path = Path(modname).expanduser().resolve()
+        if not path.is_file():
+            raise InputError(f"effect '{spec}': no such file {path}")
+        key = str(path)
+        if key in _FILE_MODULES and _FILE_MODULES[key] in sys.modules:
+            return sys.modules[_FILE_MODULES[key]]
+        stem = "".join(ch if ch.isalnum() else "_" for ch in path.stem)
+        name = f"tactilevision_user_{stem}_{hashlib.sha1(key.encode()).hexdigest()[:8]}"
+        mspec = importlib.util.spec_from_file_location(name, path)
+        if mspec is None or mspec.loader is None:
+            raise InputError(f"effect '{spec}': {path} cannot be imported as a Python module")
+        module = importlib.util.module_from_spec(mspec)
+        sys.modules[name] = module
+        try:
+            mspec.loader.exec_module(module)
+        except Exception as exc:
+            del sys.modules[name]
+            raise InputError(f"effect '{spec}': importing {path} failed: "
+                             f"{type(exc).__name__}: {exc}") from None
+        _FILE_MODULES[key] = name
+        return module
+    if not all(part.isidentifier() for part in modname.split(".")):
+        raise InputError(f"effect '{spec}': {modname!r} is not a module name; an effect of "
+                         "your own is given as package.module:ClassName or "
+                         "path/to/file.py:ClassName")
+
+    def attempt():
+        try:
+            return importlib.import_module(modname)
+        except ModuleNotFoundError as exc:
+            if exc.name is not None and (modname == exc.name
+                                         or modname.startswith(exc.name + ".")):
+                return None       # the module itself (not one it imports) is not there
+            raise InputError(f"effect '{spec}': importing {modname} failed: "
+                             f"{type(exc).__name__}: {exc}") from None
+        except Exception as exc:
+            raise InputError(f"effect '{spec}': importing {modname} failed: "
+                             f"{type(exc).__name__}: {exc}") from None
+
+    module = attempt()
+    if module is None:
+        cwd = os.getcwd()
+        importlib.invalidate_caches()
+        sys.path.insert(0, cwd)
+        try:
+            module = attempt()
+        finally:
+            sys.path.remove(cwd)
+    if module is None:
+        raise InputError(f"effect '{spec}': no module named {modname} on the Python path or "
+                         f"in the working directory {cwd}")
+    return module
+
+
+def _import_effect(spec: str) -> type[Effect] | Effect:
+    """The effect an import spec ``'package.module:ClassName'`` names (not yet registered)."""
+    modname, _, attr = spec.strip().rpartition(":")
+    modname, attr = modname.strip(), attr.strip()
+    if not modname or not attr:
+        raise InputError(f"effect '{spec}': an effect of your own is given as "
+                         "package.module:ClassName or path/to/file.py:ClassName")
+    module = _import_module(modname, spec)
+    obj = module
+    for part in attr.split("."):
+        if not hasattr(obj, part):
+            raise InputError(f"effect '{spec}': {modname} has no attribute {attr}")
+        obj = getattr(obj, part)
+    if isinstance(obj, type):
+        if not issubclass(obj, Effect):
+            raise InputError(f"effect '{spec}': {attr} is not a subclass of "
+                             "tactilevision.mechanics.Effect")
+    elif not isinstance(obj, Effect):
+        raise InputError(f"effect '{spec}': {attr} is a {type(obj).__name__}, not an Effect "
+                         "subclass (tactilevision.mechanics.Effect)")
+    return obj
+
+
+def effect_name(effect: str | Effect | type[Effect]) -> str:
+    """The name a model holds for `effect`, checked (user effects and specs registered).
+
+    Parameters
+    ----------
+    effect : str, Effect or Effect subclass
+        As :func:`make_effect`.
+
+    Returns
+    -------
+    name : str
+        ``stiffness_trend:<column>`` without spaces around the column; the
+        registered name of a user effect or import spec.
+
+    Raises
+    ------
+    InputError
+        As :func:`make_effect`.
+    """
+    return make_effect(effect).name
 
 
 @dataclass(frozen=True)
@@ -409,15 +727,27 @@ class ModelFit:
 
 @dataclass(frozen=True)
 class IndentationModel:
-    """The base indentation law plus catalogue effects.
+    """The base indentation law plus catalogue effects and effects of your own.
 
     Parameters
     ----------
     base : {'paper', 'layer'}, default 'paper'
         ``'paper'``: eq. (5) (the layer with ``large_deformation``);
         ``'layer'``: the small-strain law P = c w (eq. 2).
-    effects : tuple of str
-        Catalogue names added to the base.
+    effects : tuple of (str, Effect subclass or Effect instance)
+        Effects added to the base: catalogue names, ``<kind>:<column>``
+        column effects, names registered by :func:`register_effect`, import
+        specs ``'package.module:ClassName'`` or ``'path/to/file.py:ClassName'``,
+        or :class:`Effect` subclasses or instances. Stored as names: user
+        effects are registered and replaced by their names (one str or
+        effect alone is taken as a tuple of one).
+
+    Raises
+    ------
+    InputError
+        For a base not 'paper' or 'layer', an unknown effect, an invalid
+        user effect or import spec (:func:`register_effect`,
+        :func:`make_effect`), or an effect given twice.
 
     Examples
     --------
@@ -434,8 +764,11 @@ class IndentationModel:
     def __post_init__(self) -> None:
         if self.base not in ("paper", "layer"):
             raise InputError(f"base must be 'paper' or 'layer', got {self.base!r}")
-        for name in self.effects:
-            make_effect(name)
+        effects = self.effects
+        if isinstance(effects, str | Effect | type):
+            effects = (effects,)
+        # names are the model's currency: user effects and import specs are registered
+        object.__setattr__(self, "effects", tuple(effect_name(e) for e in effects))
         if len(set(self.names)) != len(self.names):
             raise InputError(f"an effect appears twice in {self.names}")
 
@@ -455,13 +788,23 @@ class IndentationModel:
             cols += [c for c in e.columns if c not in cols]
         return tuple(cols)
 
-    def with_effect(self, name: str) -> IndentationModel:
+    def with_effect(self, name: str | Effect | type[Effect]) -> IndentationModel:
         """The model with one more effect.
+
+        Parameters
+        ----------
+        name : str, Effect subclass or Effect instance
+            As an item of `effects` (a name, an import spec
+            ``'package.module:ClassName'``, or a user effect).
+
+        Returns
+        -------
+        IndentationModel
 
         Raises
         ------
         InputError
-            For an unknown effect or one already in the model.
+            For an unknown or invalid effect or one already in the model.
         """
         return IndentationModel(self.base, (*self.effects, name))
 
