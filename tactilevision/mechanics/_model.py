@@ -362,7 +362,7 @@ def make_effect(name: str | Effect | type[Effect]) -> Effect:
     ('temperature_c',)
     """
     if not isinstance(name, str):
-        return _USER_EFFECTS[register_effect(name)]
+        return _USER_EFFECTS[_register(name)]
     kind, colon, column = name.partition(":")
     if colon and kind in COLUMN_EFFECTS:
         return COLUMN_EFFECTS[kind](column.strip())
@@ -373,7 +373,7 @@ def make_effect(name: str | Effect | type[Effect]) -> Effect:
     if name in _USER_EFFECTS:
         return _USER_EFFECTS[name]
     if colon:
-        return _USER_EFFECTS[register_effect(_import_effect(name))]
+        return _USER_EFFECTS[_register(_import_effect(name), f"effect '{name}'")]
     valid = [*EFFECTS, *(k + ":<column>" for k in COLUMN_EFFECTS), *_USER_EFFECTS]
     raise InputError(f"unknown effect '{name}'; valid names: {', '.join(valid)}, or "
                      "package.module:ClassName for an Effect subclass of your own")
@@ -515,8 +515,13 @@ def register_effect(effect: type[Effect] | Effect) -> str:
     >>> IndentationModel(effects=(Humidity,)).param_names()
     ('c_n_per_mm', 'large_deformation.beta', 'humidity.s_per_pct')
     """
+    return _register(effect)
+
+
+def _register(effect: type[Effect] | Effect, label: str | None = None) -> str:
+    """:func:`register_effect`; `label` names the effect in the messages (default: its class)."""
     if isinstance(effect, type):
-        label = f"effect class {effect.__module__}.{effect.__qualname__}"
+        label = label or f"effect class {effect.__module__}.{effect.__qualname__}"
         if not issubclass(effect, Effect):
             raise InputError(f"{label} is not a subclass of tactilevision.mechanics.Effect")
         try:
@@ -526,7 +531,7 @@ def register_effect(effect: type[Effect] | Effect) -> str:
                              f"{exc}); register an instance instead") from None
     elif isinstance(effect, Effect):
         inst = effect
-        label = f"effect {type(effect).__module__}.{type(effect).__qualname__}"
+        label = label or f"effect {type(effect).__module__}.{type(effect).__qualname__}"
     else:
         raise InputError(f"{effect!r} is not an Effect: a subclass of "
                          "tactilevision.mechanics.Effect (or an instance of one) is needed")
@@ -637,8 +642,8 @@ def _import_effect(spec: str) -> type[Effect] | Effect:
             raise InputError(f"effect '{spec}': {attr} is not a subclass of "
                              "tactilevision.mechanics.Effect")
     elif not isinstance(obj, Effect):
-        raise InputError(f"effect '{spec}': {attr} is a {type(obj).__name__}, not an Effect "
-                         "subclass (tactilevision.mechanics.Effect)")
+        raise InputError(f"effect '{spec}': {attr} is not an Effect subclass "
+                         f"(tactilevision.mechanics.Effect) but of type {type(obj).__name__}")
     return obj
 
 
