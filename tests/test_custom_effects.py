@@ -13,6 +13,7 @@ import json
 import sys
 import textwrap
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -27,8 +28,10 @@ from tactilevision.mechanics import (
     _model,
     check_fit_effects,
     diagnose,
+    fit_indentation,
     fit_model,
     make_effect,
+    noise_floor,
     register_effect,
 )
 from tactilevision.sim import make_measurement_table
@@ -252,9 +255,10 @@ def test_temperature_effect_brings_E_back(seed):
     assert mf.params["temperature_stiffening.k_per_c"] == pytest.approx(t.truth["k_per_c"],
                                                                        rel=0.03)
     assert fit.effects == ("large_deformation", "temperature_stiffening")
-    # the error falls to the replicate noise (within 1.5 times; 1.1 and 1.3 measured)
-    assert mf0.rmse_n > 10 * t.truth["replicate_sd_n"]
-    assert mf.rmse_n < 1.5 * t.truth["replicate_sd_n"]
+    # the error falls to the replicate noise floor (1.21 and 1.14 times it, measured)
+    floor = noise_floor(mf.residuals_n, t.columns)
+    assert mf0.rmse_n > 10 * floor
+    assert mf.rmse_n < 1.5 * floor
 
 
 def test_diagnose_takes_the_user_effect():
@@ -382,3 +386,24 @@ def test_cli_help_mentions_the_spec(capsys):
         with pytest.raises(SystemExit):
             main([command, "--help"])
         assert "package.module:ClassName" in " ".join(capsys.readouterr().out.split())
+
+
+def test_walk_through_module_and_numbers(tmp_path, monkeypatch):
+    """docs/custom_effects.md: its my_effects.py works and gives the numbers it quotes."""
+    doc = Path(__file__).resolve().parent.parent / "docs" / "custom_effects.md"
+    if not doc.is_file():
+        pytest.skip("docs/ not shipped")
+    blocks = doc.read_text().split("```python\n")[1:]
+    code = next(b.split("```")[0] for b in blocks if "class TemperatureStiffening" in b)
+    (tmp_path / "tv_ce_doc.py").write_text(code)
+    monkeypatch.chdir(tmp_path)
+    t = make_measurement_table("temperature", 11)
+    kw = {"thickness_mm": t.thickness_mm, "radius_mm": t.radius_mm}
+    fit, mf = fit_model(t.columns, "tv_ce_doc:TemperatureStiffening", **kw)
+    # the doc's table: E 0.1380 MPa (0.1326 to 0.1435), k 0.0416 1/C, RMSE 2.37 mN
+    assert f"{fit.E_mpa:.4f}" == "0.1380"
+    assert [f"{x:.4f}" for x in fit.E_ci95_mpa] == ["0.1326", "0.1435"]
+    assert f"{mf.params['temperature_stiffening.k_per_c']:.4f}" == "0.0416"
+    assert f"{mf.rmse_n * 1e3:.2f}" == "2.37"
+    base = fit_indentation(t.columns["depth_mm"], t.columns["force_n"], **kw)
+    assert f"{base.E_mpa:.4f}" == "0.1495" and f"{base.rmse_n * 1e3:.2f}" == "57.64"
