@@ -68,14 +68,17 @@ def test_each_catalogue_effect_is_identified(hidden):
         t = make_measurement_table(hidden, seed)
         d = _diag(t)
         named = (d.missing_effect, *d.equivalent_effects)
-        if hidden not in named:
+        # the generator's stiffness step is after one press: any stiffness_step:<column>
+        effect = next((n for n in named if n == hidden or (
+            hidden == "stiffness_step" and n and n.startswith("stiffness_step:"))), None)
+        if effect is None:
             continue
         ok += 1
         last = d.ladder[-1]
         cv_ok += last.cv_rmse_n <= 1.3 * d.noise_floor_n
         E = last.E_mpa
-        if hidden != d.missing_effect:    # its indistinguishable partner was named first
-            E = fit_model(t.columns, hidden, thickness_mm=t.thickness_mm,
+        if effect != d.missing_effect:    # its indistinguishable partner was named first
+            E = fit_model(t.columns, effect, thickness_mm=t.thickness_mm,
                           radius_mm=t.radius_mm)[0].E_mpa
         if hidden in OFFSETS:
             fit = fit_model(t.columns, hidden, thickness_mm=t.thickness_mm,

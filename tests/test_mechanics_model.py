@@ -131,7 +131,8 @@ def test_model_api_and_errors():
     # the catalogue's names are the contract of formats.md section 4
     from tactilevision.mechanics import EFFECT_NAMES
 
-    assert (*EFFECTS, "stiffness_trend:<column>") == EFFECT_NAMES
+    assert (*EFFECTS, "stiffness_trend:<column>", "stiffness_step:<column>",
+            "force_trend:<column>") == EFFECT_NAMES
 
 
 def test_fit_model_derives_E_and_nu_through_the_FEM():

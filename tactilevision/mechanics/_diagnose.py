@@ -38,10 +38,23 @@ __all__ = [
 DELTA_BIC = 10.0
 #: Candidates whose BIC is within this of the best explain the data equally well.
 EQUIVALENT_BIC = 6.0
-#: A depth effect must beat the base law's own curvature (LawCurvature) by this much BIC.
+#: ... as do candidates whose RMSE is within this fraction of the best's (whatever their
+#: number of parameters).
+EQUIVALENT_RMSE = 0.01
+#: How eq. (5)'s own misfit to the finite-strain law is kept from being read as an effect
+#: (:func:`diagnose`'s ``curvature``): 'gate' or 'nuisance'.
+CURVATURE = "gate"
+#: 'nuisance': the law's curvature enters the model first when it lowers the BIC by this.
+NUISANCE_BIC = 2.0
+#: 'gate': a depth effect must beat the base law's own curvature (LawCurvature) by this
+#: much BIC.
 CURVATURE_BIC = 6.0
 #: Family-wise level of the covariate structure tests (Bonferroni over columns).
 ALPHA = 0.01
+#: Columns along which a change point in stiffness (``stiffness_step:<column>``) is tried.
+STEP_COLUMNS = ("press", "day", "time_s")
+#: Generic effects: a winner is reported as an unexplained covariate, not a verdict.
+_GENERIC = ("stiffness_trend:", "force_trend:")
 #: Columns that are never covariates (``depth_std_mm``: the depth's uncertainty, not physics).
 _NOT_COVARIATES = ("force_n", "depth_std_mm", "bevel_force_n")
 
@@ -93,7 +106,8 @@ class Candidate:
         BIC(model + effect) - BIC(model); negative is better.
     cv_rmse_n : float
         Cross-validated RMSE, N (NaN, ``null`` in JSON, where the BIC does
-        not fall: no evidence, not worth the folds).
+        not fall by more than ``DELTA_BIC``: not enough evidence to pass, not
+        worth the folds).
     rmse_n : float
     params : dict of str to float
         The effect's fitted parameters (``<effect>.<param>``).
@@ -153,6 +167,10 @@ class Diagnosis:
     untestable : dict of str to tuple of str
         Catalogue effects not tried, and the columns that would make them
         testable.
+    untestable_reasons : dict of str to str
+        Why each was not tried: a column missing, with empty cells, or
+        constant (the same value in every row: an effect along it cannot
+        show).
     fits : tuple of ModelFit
         The ladder's fits (for the figures).
     fit_rows : tuple of (N,) bool ndarray
@@ -180,6 +198,7 @@ class Diagnosis:
     offered_effect: str | None
     ladder: tuple[LadderStep, ...]
     untestable: dict[str, tuple[str, ...]] = field(hash=False)
+    untestable_reasons: dict[str, str] = field(default_factory=dict, hash=False)
     fits: tuple[ModelFit, ...] = field(default=(), hash=False, repr=False)
     fit_rows: tuple[np.ndarray, ...] = field(default=(), hash=False, repr=False)
     columns: dict[str, np.ndarray] = field(default_factory=dict, hash=False, repr=False)
@@ -221,6 +240,7 @@ class Diagnosis:
                         "E_mpa": num(s.E_mpa), "nu": num(s.nu)} for s in self.ladder],
             "covariates_after": [cov(t) for t in self.covariates_after],
             "untestable": {k: list(v) for k, v in self.untestable.items()},
+            "untestable_reasons": dict(self.untestable_reasons),
             "message": self.message,
         }
 
@@ -424,13 +444,32 @@ def _usable(name: str, columns: Mapping[str, np.ndarray]) -> str | None:
     return None
 
 
+def _why(needed: Sequence[str], columns: Mapping[str, np.ndarray]) -> str:
+    """Why columns cannot carry an effect, in words: missing, empty cells, or constant."""
+    out = []
+    for col in needed:
+        if col not in columns:
+            out.append(f"needs {col}")
+            continue
+        x = np.asarray(columns[col], np.float64)
+        fin = x[np.isfinite(x)]
+        if col != "wait_s" and fin.size < x.size:
+            out.append(f"{col} has {x.size - fin.size} empty cells")
+        elif fin.size < 3:
+            out.append(f"{col} has {fin.size} values")
+        elif np.ptp(fin) == 0:
+            out.append(f"{col} is constant ({fin[0]:g} in every row): an effect along it "
+                       "cannot show")
+    return "; ".join(out)
+
+
 # ----------------------------------------------------------------- diagnose
 
 
 def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_mm: float,
              base: str = "paper", effects: Sequence[str] = (), beta_table: str = "fem",
              max_steps: int = 3, cv_folds: int = 10, seed: int = 0,
-             progress: bool = False) -> Diagnosis:
+             progress: bool = False, curvature: str = CURVATURE) -> Diagnosis:
     """Compare a model with the measurements and find the missing effect.
 
     Parameters
@@ -453,6 +492,16 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
         Seeds the cross-validation folds.
     progress : bool, default False
         A progress bar over the candidate fits.
+    curvature : {'gate', 'nuisance'}, default :data:`CURVATURE`
+        How eq. (5)'s own misfit to the finite-strain law (a ``(w/h)^2``
+        curvature of P/w, :class:`LawCurvature`) is kept from being read as
+        an effect. 'gate': the curvature is a candidate like the effects (a
+        rung of the ladder, never a verdict) and a depth effect
+        (``depth_offset``, ``force_offset``) must beat it by
+        ``CURVATURE_BIC``. 'nuisance': the curvature enters the model before
+        any effect is tried when it lowers the BIC by more than
+        ``NUISANCE_BIC`` (with 4 or more distinct depths), and every effect
+        is then judged against that model alike.
 
     Returns
     -------
@@ -468,17 +517,30 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
     -----
     At each step every applicable catalogue effect not yet in the model is
     added in turn and the extended model fitted (robust soft_l1 least
-    squares, :meth:`IndentationModel.fit`); so is ``stiffness_trend:<col>``
-    for each covariate that no named effect reads. The best candidate by BIC
+    squares, :meth:`IndentationModel.fit`); so are ``stiffness_step:<col>``
+    (a change point in stiffness) along ``press``, ``day`` and ``time_s``
+    (:data:`STEP_COLUMNS`), ``stiffness_trend:<col>`` for each covariate
+    that no named effect reads, and, for each named effect along a column,
+    its counterpart of the other kind along the same column
+    (``stiffness_trend:time_s`` for ``force_drift``, ``force_trend:day``
+    for ``aging``, ...): a stiffness change scales P(w), so its force
+    grows with depth, where a force effect adds the same force at every
+    depth, and the two compete on the same footing. The best candidate by BIC
     is accepted when its BIC is lower by more than ``DELTA_BIC`` = 10 and its
     10-fold cross-validated RMSE is lower too; an effect seen along depth
     alone (``depth_offset``, ``force_offset``) must also beat, by
     ``CURVATURE_BIC`` = 6, the base law's own curvature (a ``(w/h)^2`` term,
     :class:`LawCurvature`: the FEM's P(w) is not exactly eq. 5, and
-    repeatable presses resolve the difference). Other candidates within
-    ``EQUIVALENT_BIC`` = 6 of it that also pass are equivalent. A
-    ``stiffness_trend`` winner is not a named effect: its column is reported
-    as ``unexplained_covariate`` and the trend as ``offered_effect``. After
+    repeatable presses resolve the difference; see `curvature`). Other
+    candidates that also pass and come within ``EQUIVALENT_BIC`` = 6 of it,
+    or leave an RMSE within ``EQUIVALENT_RMSE`` = 1 % of its, are
+    equivalent. A generic trend (``stiffness_trend``, ``force_trend``)
+    wins a step only by beating every named effect that passes by
+    ``EQUIVALENT_BIC``; else the named effect is taken and the trend is
+    listed as its equivalent. A
+    ``stiffness_trend`` or ``force_trend`` winner is not a named effect: its
+    column is reported as ``unexplained_covariate`` and the trend as
+    ``offered_effect``. After
     the last step, a covariate whose residual structure is still
     significant (:func:`covariate_tests`) and explains more than 10 % of the
     residual variance is reported as unexplained too. When the base law's
@@ -500,6 +562,9 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
                          "the measurements needs presses at two depths or more")
 
     def material(m: IndentationModel, d: Mapping[str, np.ndarray]) -> tuple[float, float]:
+        # the law's own curvature is a nuisance of the comparison: E and nu are read
+        # through the model without it (with it, beta trades against its gamma)
+        m = IndentationModel(m.base, tuple(e for e in m.effects if e != "law_curvature"))
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
@@ -520,15 +585,36 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
 
     named = [n for n in EFFECTS if not (base == "paper" and n == "large_deformation")]
     untestable: dict[str, tuple[str, ...]] = {}
+    why_untestable: dict[str, str] = {}
     for n in named:
         why = _usable(n, cols)
         if why is not None:
             untestable[n] = tuple(make_effect(n).columns)
+            why_untestable[n] = _why(make_effect(n).columns, cols)
     read_by_named = {c for n in EFFECTS for c in make_effect(n).columns}
     trend_cols = [c for c in _covariate_names(cols)
                   if c not in read_by_named and c not in ("press", "indenter", "force_std_n")
                   and _usable(f"stiffness_trend:{c}", cols) is None]
+    # each named effect's counterpart of the other kind along the same column: a stiffness
+    # change (grows with depth) against a force added at every depth
+    generic = [f"stiffness_trend:{c}" for c in trend_cols]
+    for n in named:
+        if n in untestable:
+            continue
+        e = make_effect(n)
+        if e.kind not in ("stiffness", "force") or e.columns == ("depth_mm",):
+            continue
+        other = "force_trend" if e.kind == "stiffness" else "stiffness_trend"
+        for c in e.columns:
+            g = f"{other}:{c}"
+            if g not in generic and _usable(g, cols) is None and c != "wait_s":
+                generic.append(g)
+    steps = [f"stiffness_step:{c}" for c in STEP_COLUMNS if c in cols
+             and _usable(f"stiffness_step:{c}", cols) is None
+             and np.unique(cols[c][np.isfinite(cols[c])]).size > 1]
 
+    if curvature not in ("gate", "nuisance"):
+        raise InputError(f"curvature must be 'gate' or 'nuisance', got {curvature!r}")
     ok0 = rows_for(model)
     d0 = sub(ok0)
     fit0 = model.fit(d0, thickness_mm=h)
@@ -538,13 +624,29 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
     cov0 = covariate_tests(fit0.residuals_n, fit0.predicted_n, d0, n_depth_params=n_depth)
     ladder = [LadderStep(("layer", *model.names), fit0.rmse_n, cv0, fit0.bic, E0, nu0, None)]
     fits, fit_rows = [fit0], [ok0]
+    start = model
+    if (curvature == "nuisance" and "large_deformation" in model.names
+            and "law_curvature" not in model.names
+            and np.unique(d0["depth_mm"]).size >= 4):
+        # the law's own curvature as a nuisance term, in the model before any effect is
+        # tried, when the data show it (BIC lower by more than NUISANCE_BIC)
+        mc = model.with_effect("law_curvature")
+        fc = mc.fit(d0, thickness_mm=h)
+        if fc.bic < fit0.bic - NUISANCE_BIC:
+            cvc = cross_validated_rmse(mc, d0, thickness_mm=h, k=cv_folds, seed=seed)
+            Ec, nuc = material(mc, d0)
+            ladder.append(LadderStep(("layer", *mc.names), fc.rmse_n, cvc, fc.bic, Ec, nuc,
+                                     "law_curvature"))
+            fits.append(fc)
+            fit_rows.append(ok0)
+            start = mc
 
     missing_effect: str | None = None
     equivalent: tuple[str, ...] = ()
     unexplained: str | None = None
     offered: str | None = None
     first_candidates: tuple[Candidate, ...] = ()
-    current, cur_fit, cur_cv = model, fit0, cv0
+    current, cur_fit, cur_cv = start, fits[-1], ladder[-1].cv_rmse_n
     bar = None
     if progress:
         from tqdm import tqdm
@@ -552,9 +654,9 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
         bar = tqdm(desc="diagnose", unit="fit", mininterval=0.5)
     for _step in range(max_steps):
         tried = [n for n in named if n not in current.names and n not in untestable]
-        tried += [f"stiffness_trend:{c}" for c in trend_cols
-                  if f"stiffness_trend:{c}" not in current.names]
-        if "law_curvature" not in current.names and "large_deformation" in current.names:
+        tried += [g for g in (*steps, *generic) if g not in current.names]
+        if ("law_curvature" not in current.names and "large_deformation" in current.names
+                and curvature == "gate"):
             tried.append("law_curvature")
         cands = []
         for name in tried:
@@ -566,8 +668,9 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
                 with warnings.catch_warnings():
                     warnings.simplefilter("ignore")
                     mf = m.fit(d, thickness_mm=h)
+                    # only a candidate that can pass needs its folds
                     cv = (cross_validated_rmse(m, d, thickness_mm=h, k=cv_folds, seed=seed)
-                          if mf.bic < ref.bic else math.nan)
+                          if mf.bic < ref.bic - DELTA_BIC else math.nan)
             except InputError:
                 continue
             if bar is not None:
@@ -582,16 +685,30 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
             first_candidates = tuple(c for c in cands if c.effect != "law_curvature")
         passing = [c for c in cands if c.delta_bic < -DELTA_BIC and c.cv_rmse_n < cur_cv
                    and (make_effect(c.effect).columns != ("depth_mm",)
+                        or c.effect == "law_curvature" or curvature == "nuisance"
                         or c.delta_bic < curv_bic - CURVATURE_BIC)]
         if not passing:
             break
         best = passing[0]
-        eq = tuple(c.effect for c in passing[1:]
-                   if c.delta_bic - best.delta_bic < EQUIVALENT_BIC
-                   and not c.effect.startswith(("stiffness_trend:", "law_curvature")))
+        generic_first = None
+        if best.effect.startswith(_GENERIC):
+            # a generic trend must beat every named effect that passes by EQUIVALENT_BIC;
+            # else the named one (the catalogue's physics) is taken, the trend its equivalent
+            named_ok = [c for c in passing if not c.effect.startswith((*_GENERIC,
+                                                                       "law_curvature"))]
+            if named_ok and named_ok[0].delta_bic - best.delta_bic < EQUIVALENT_BIC:
+                generic_first, best = best, named_ok[0]
+        # equivalent: as good by BIC, or leaving the same residual (a change point between
+        # two sessions is aging over their days; the BIC then differs by the step's place)
+        eq = tuple(c.effect for c in passing
+                   if c is not best and (c.delta_bic - best.delta_bic < EQUIVALENT_BIC
+                                         or c.rmse_n <= (1 + EQUIVALENT_RMSE) * best.rmse_n)
+                   and not c.effect.startswith((*_GENERIC, "law_curvature")))
+        if generic_first is not None:
+            eq = (*eq, generic_first.effect)
         if best.effect == "law_curvature":
             pass   # the base law's own limit: a rung of the ladder, not a verdict
-        elif best.effect.startswith("stiffness_trend:"):
+        elif best.effect.startswith(_GENERIC):
             if unexplained is None:
                 unexplained = best.effect.partition(":")[2]
                 offered = best.effect
@@ -632,7 +749,8 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
         candidates=first_candidates, missing_effect=missing_effect,
         equivalent_effects=equivalent, separating_measurement=separating,
         unexplained_covariate=unexplained, offered_effect=offered, ladder=tuple(ladder),
-        untestable=untestable, fits=tuple(fits), fit_rows=tuple(fit_rows), columns=cols)
+        untestable=untestable, untestable_reasons=why_untestable, fits=tuple(fits),
+        fit_rows=tuple(fit_rows), columns=cols)
     return _with_message(diag)
 
 
@@ -684,5 +802,6 @@ def _with_message(d: Diagnosis) -> Diagnosis:
         s.append("Nothing is missing: the model explains the data to within its noise.")
     if d.untestable:
         s.append("Not testable on this table: " + "; ".join(
-            f"{k} (needs {', '.join(v)})" for k, v in d.untestable.items()) + ".")
+            f"{k} ({d.untestable_reasons.get(k) or 'needs ' + ', '.join(v)})"
+            for k, v in d.untestable.items()) + ".")
     return replace(d, message=" ".join(s))

@@ -22,6 +22,9 @@ hidden                            form in the generator
 ``aging``                         post-cure hardening ``A (1 - exp(-day / D))``
 ``spatial_nonuniformity``         a tilted pad: thickness ``h (1 + tx x + ty y)``,
                                   stiffness ``(h / h(x, y))^1.3``
+``stiffness_step``                the gel damaged after one press: E falls by
+                                  8 to 12 %, then softens by a further tenth of
+                                  that, linearly, over the presses left
 ``large_deformation``             the FEM's own finite-strain P(w) (for
                                   ``diagnose --base layer``)
 ``temperature`` (out of the       modulus ``exp(-k (T - 23 C))``: no named
@@ -29,6 +32,11 @@ catalogue)                        effect; shows along ``temperature_c``
 ``crosstalk`` (out of the         the F/T's Fz reads ``chi Fx``; shows along
 catalogue)                        ``fx_n``
 ================================  ==============================================
+
+Two effects at once: ``hidden="incomplete_recovery+force_drift"``. The size
+of an effect can be set as a signal-to-noise ratio (``snr``): the RMS over
+the presses of the part of its force change that the base law cannot take
+up, in units of the replicate noise.
 """
 
 from __future__ import annotations
@@ -52,6 +60,7 @@ HIDDEN_EFFECTS = {
     "incomplete_recovery": "wait_s",
     "aging": "day",
     "spatial_nonuniformity": "x_mm",
+    "stiffness_step": "press",
     "large_deformation": "depth_mm",
     "temperature": "temperature_c",
     "crosstalk": "fx_n",
@@ -96,22 +105,45 @@ def _fem_force(E: float, nu: float, a: float, h: float, w: np.ndarray) -> np.nda
     return 2 * a * E * w * k / (1 - nu**2)
 
 
+def _hidden_names(hidden: str | None) -> tuple[str, ...]:
+    if hidden is None:
+        return ()
+    names = tuple(n.strip() for n in hidden.split("+"))
+    for n in names:
+        if n not in HIDDEN_EFFECTS:
+            raise InputError(f"unknown hidden effect {n!r}; known: {', '.join(HIDDEN_EFFECTS)} "
+                             "(two at once: 'a+b')")
+    if len(set(names)) != len(names):
+        raise InputError(f"hidden effect {hidden!r} names an effect twice")
+    if "large_deformation" in names and len(names) > 1:
+        raise InputError("large_deformation (the base law itself) cannot be paired")
+    return names
+
+
 def make_measurement_table(hidden: str | None = None, seed: int = 0, *,
-                           strength: float = 1.0) -> HiddenTable:
-    """A calibration campaign's measurements table with one hidden effect.
+                           strength: float = 1.0, snr: float | None = None) -> HiddenTable:
+    """A calibration campaign's measurements table with hidden effects.
 
     Parameters
     ----------
     hidden : str or None
-        A key of :data:`HIDDEN_EFFECTS`, or None for a null table (the FEM law
-        and noise only).
+        A key of :data:`HIDDEN_EFFECTS`, two joined by ``+`` (both hidden),
+        or None for a null table (the FEM law and noise only).
     seed : int
         Everything (E, nu, h, a, depths, repeats, sessions, timing, noise,
         the effect's size) is drawn from it.
     strength : float, default 1.0
-        Scales the hidden effect's size. At 1, additive effects (offset,
+        Scales the hidden effects' sizes. At 1, additive effects (offset,
         drift, cross-talk) are 4 to 15 times the press-to-press force scatter,
         stiffness effects change P by 3 to 15 %.
+    snr : float, optional
+        Instead of `strength`: the size of the (single) hidden effect as a
+        signal-to-noise ratio, ``truth["snr"]``: the RMS over the presses of
+        its force change less the best fit of the base law to that change
+        (``c w + c beta w^2 / h``; ``c w`` for ``large_deformation``), over
+        the replicate noise ``truth["replicate_sd_n"]`` (the F/T noise and
+        the stage's depth repeatability). Found by scaling the strength (the
+        random draws do not depend on it), to 1 %.
 
     Returns
     -------
@@ -120,7 +152,8 @@ def make_measurement_table(hidden: str | None = None, seed: int = 0, *,
     Raises
     ------
     InputError
-        For an unknown `hidden`.
+        For an unknown `hidden`, a pair with ``large_deformation``, or `snr`
+        with two effects or none.
 
     Notes
     -----
@@ -133,8 +166,9 @@ def make_measurement_table(hidden: str | None = None, seed: int = 0, *,
     a depth repeatability of the stage of sd 0.5 to 1.5 um (times the local
     stiffness dP/dw).
     """
-    if hidden is not None and hidden not in HIDDEN_EFFECTS:
-        raise InputError(f"unknown hidden effect {hidden!r}; known: {', '.join(HIDDEN_EFFECTS)}")
+    names = _hidden_names(hidden)
+    if snr is not None:
+        return _at_snr(hidden, seed, float(snr))
     rng = np.random.default_rng(seed)
     E = float(rng.uniform(0.1, 0.4))
     nu = float(rng.uniform(0.40, 0.475))
@@ -184,59 +218,68 @@ def make_measurement_table(hidden: str | None = None, seed: int = 0, *,
     session = c.pop("session").astype(int)
     truth: dict = {"E_mpa": E, "nu": nu, "noise_n": noise, "depth_jitter_mm": jitter,
                    "base": "paper",
-                   "covariate": HIDDEN_EFFECTS.get(hidden) if hidden else None}
+                   "covariate": HIDDEN_EFFECTS.get(hidden) if len(names) == 1 else None,
+                   "covariates": [HIDDEN_EFFECTS[k] for k in names], "strength": strength}
 
     def u(lo: float, hi: float) -> float:
         return float(rng.uniform(lo, hi)) * strength
 
     w_true = w.copy()
-    if hidden == "depth_offset":
+    if "depth_offset" in names:
         delta = u(0.008, 0.02) * rng.choice([-1, 1])
         step_err = rng.normal(0, 0.0002, n_depth)
         w_true = w + delta + step_err[c["indenter"].astype(int)]
         truth["delta_mm"] = delta
     P = _fem_force(E, nu, a, h, np.round(w_true, 9))
-    if hidden == "large_deformation":
+    if "large_deformation" in names:
         truth["base"] = "layer"
-    elif hidden == "viscoelastic_relaxation":
+    if "viscoelastic_relaxation" in names:
         g1, g2 = u(0.03, 0.06), u(0.02, 0.04)
         tau = float(rng.uniform(0.3, 1.0))
         t_h = c["hold_s"]
         P = P * (1 - g1 * (1 - np.exp(-t_h / tau)) - g2 * (1 - np.exp(-t_h / (8 * tau))))
         truth.update(g1=g1, g2=g2, tau_s=tau, tau2_s=8 * tau)
-    elif hidden == "incomplete_recovery":
+    if "incomplete_recovery" in names:
         r, tau = u(0.05, 0.12), float(rng.uniform(1.0, 4.0))
         wait = np.nan_to_num(c["wait_s"], nan=np.inf)
         P = P * (1 + r * (1 + wait / tau) ** -1.5)
         truth.update(r=r, tau_s=tau)
-    elif hidden == "aging":
+    if "aging" in names:
         A, D = u(0.06, 0.15) * rng.choice([-1, 1]), float(rng.uniform(30, 90))
         P = P * (1 + A * (1 - np.exp(-c["day"] / D)))
         truth.update(A=A, D_days=D)
-    elif hidden == "spatial_nonuniformity":
+    if "spatial_nonuniformity" in names:
         tx, ty = u(0.004, 0.01) * rng.choice([-1, 1]), u(0.0, 0.008) * rng.choice([-1, 1])
         P = P * (1 + tx * c["x_mm"] + ty * c["y_mm"]) ** -1.3
         truth.update(tilt_x_per_mm=tx, tilt_y_per_mm=ty)
-    elif hidden == "temperature":
+    if "temperature" in names:
         k = u(0.03, 0.06)
         P = P * np.exp(-k * (c["temperature_c"] - 23.0))
         truth.update(k_per_c=k)
+    if "stiffness_step" in names:
+        d_step = u(0.08, 0.12)
+        k_step = int(rng.integers(n // 4, 3 * n // 4))
+        after = c["press"] > k_step
+        later = np.where(after, (c["press"] - k_step) / max(n - 1 - k_step, 1), 0.0)
+        P = P * (1 - d_step * after - 0.1 * d_step * later)
+        truth.update(step=-d_step, after_press=k_step)
     fx = P * rng.normal(0, 0.02, n)
     fy = P * rng.normal(0, 0.02, n)
     # additive effects are sized against the press-to-press scatter
     sd = math.hypot(noise, jitter * float(np.mean(P / w_true)))
-    if hidden == "force_offset":
+    truth["replicate_sd_n"] = sd
+    if "force_offset" in names:
         b0 = u(6, 15) * sd * rng.choice([-1, 1])
         b = b0 * (1 + rng.normal(0, 0.03, n_sessions))
         P = P + b[session]
         truth.update(offset_n=b0)
-    elif hidden == "force_drift":
+    if "force_drift" in names:
         D = u(6, 15) * sd * rng.choice([-1, 1])
         T = float(rng.uniform(0.5, 2.0)) * float(np.max(c["time_s"]))
         walk = np.cumsum(rng.normal(0, 0.05 * abs(D) / math.sqrt(n), n))
         P = P + D * (1 - np.exp(-c["time_s"] / T)) + walk
         truth.update(D_n=D, T_s=T)
-    elif hidden == "crosstalk":
+    if "crosstalk" in names:
         fx = P * rng.normal(0, 0.05, n)
         chi = u(4, 8) * sd / float(np.std(fx)) * rng.choice([-1, 1])
         P = P + chi * fx
@@ -252,3 +295,37 @@ def make_measurement_table(hidden: str | None = None, seed: int = 0, *,
              "time_s", "hold_s", "wait_s", "x_mm", "y_mm", "day", "temperature_c"]
     return HiddenTable(columns={k: c[k] for k in order}, thickness_mm=h, radius_mm=a,
                        hidden=hidden, truth=truth)
+
+
+def _signal_rms(hidden: str, seed: int, strength: float) -> tuple[float, HiddenTable]:
+    """RMS of the hidden effect's force change the base law cannot take up, and the table."""
+    t = make_measurement_table(hidden, seed, strength=strength)
+    t0 = make_measurement_table(hidden, seed, strength=0.0)
+    # the same draws (the strength scales sizes only), so the noise cancels
+    delta = t.columns["force_n"] - t0.columns["force_n"]
+    w = t.columns["depth_mm"]
+    X = np.column_stack([w] if hidden == "large_deformation" else [w, w * w])
+    if hidden == "large_deformation":
+        delta = t.columns["force_n"] - 0.0   # the law's own curvature against c w
+        X = np.column_stack([w])
+    coef, *_ = np.linalg.lstsq(X, delta, rcond=None)
+    return float(np.sqrt(np.mean((delta - X @ coef) ** 2))), t
+
+
+def _at_snr(hidden: str | None, seed: int, snr: float) -> HiddenTable:
+    names = _hidden_names(hidden)
+    if len(names) != 1:
+        raise InputError("snr sizes one hidden effect; give strength for pairs and null tables")
+    if not (math.isfinite(snr) and snr > 0):
+        raise InputError(f"snr must be positive, got {snr!r}")
+    if names[0] == "large_deformation":
+        raise InputError("large_deformation is the law itself: its size is not a parameter")
+    strength = 1.0
+    for _ in range(6):
+        rms, t = _signal_rms(names[0], seed, strength)
+        got = rms / t.truth["replicate_sd_n"]
+        if abs(got / snr - 1) < 0.01:
+            break
+        strength *= snr / max(got, 1e-12)
+    t.truth["snr"] = got
+    return t
