@@ -1,7 +1,8 @@
 """Power curves of ``diagnose``: identification against effect size, false alarms, pairs.
 
     python benchmarks/bench_diagnose_power.py [--tables N] [--nulls N] [--snr S ...]
-        [--kinds K ...] [--pairs] [--jobs J] [--json PATH] [--figure PATH]
+        [--kinds K ...] [--pairs] [--curvature gate|nuisance ...] [--jobs J] [--json PATH]
+        [--figure PATH] [--from-json PATH]
 
 Tables come from :func:`tactilevision.sim.make_measurement_table` (forces from the
 finite-strain FEM, not eq. 5; every formats.md column; the hidden effects' forms differ
@@ -145,7 +146,19 @@ def main() -> None:
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--json", type=Path)
     ap.add_argument("--figure", type=Path, help="power curves of the first --curvature")
+    ap.add_argument("--from-json", type=Path, help="report and draw a saved --json run")
     a = ap.parse_args()
+    if a.from_json:
+        saved = json.loads(a.from_json.read_text())
+        res_all, wall = saved["rows"], saved["wall_s"]
+        a.curvature = list(dict.fromkeys(r["curvature"] for r in res_all))
+        a.pairs = any(r["hidden"] and "+" in r["hidden"] for r in res_all)
+        print(f"{len(res_all)} tables (saved run: {wall:.0f} s on {saved['jobs']} processes)")
+        for cm in a.curvature:
+            _report([r for r in res_all if r["curvature"] == cm], a, cm)
+        if a.figure:
+            _figure(res_all, a)
+        return
     work: list[tuple[str | None, int, float | None, str]] = []
     for cm in a.curvature:
         for k in a.kinds:
@@ -166,31 +179,38 @@ def main() -> None:
         a.json.write_text(json.dumps({"wall_s": wall, "jobs": a.jobs, "rows": res_all},
                                      indent=1))
     if a.figure:
-        import matplotlib
+        _figure(res_all, a)
 
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
 
-        res = [r for r in res_all if r["curvature"] == a.curvature[0]]
-        nulls = [x for x in res if x["hidden"] is None]
-        alarms = [x for x in nulls if x["alarm"]]
-        fig, ax = plt.subplots(figsize=(7, 4.5))
-        for k in a.kinds:
-            y = [np.mean([x["ok"] for x in res if x["hidden"] == k and x["snr"] == s])
-                 for s in a.snr]
-            ax.plot(a.snr, y, "o-", label=k)
-        ax.axhline(0.95, color="k", lw=0.8, ls=":")
-        ax.set_xscale("log")
-        ax.set_xticks(a.snr, [f"{s:g}" for s in a.snr])
-        ax.set_xlabel("effect size: RMS of what the law cannot take up / replicate noise")
-        ax.set_ylabel("identified")
-        ax.set_ylim(-0.02, 1.02)
-        ax.set_title(f"diagnose (curvature {a.curvature[0]!r}): {a.tables} generated tables "
-                     f"per point; false alarms {len(alarms)}/{len(nulls)} null tables",
-                     fontsize=9)
-        ax.legend(fontsize=7, loc="lower right")
-        fig.tight_layout()
-        fig.savefig(a.figure, dpi=110)
+def _figure(res_all: list[dict], a: argparse.Namespace) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.ticker import NullFormatter
+
+    res = [r for r in res_all if r["curvature"] == a.curvature[0]]
+    nulls = [x for x in res if x["hidden"] is None]
+    alarms = [x for x in nulls if x["alarm"]]
+    n_tables = len([x for x in res if x["hidden"] == a.kinds[0] and x["snr"] == a.snr[0]])
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    for k in a.kinds:
+        y = [np.mean([x["ok"] for x in res if x["hidden"] == k and x["snr"] == s])
+             for s in a.snr]
+        ax.plot(a.snr, y, "o-", label=k)
+    ax.axhline(0.95, color="k", lw=0.8, ls=":")
+    ax.set_xscale("log")
+    ax.set_xticks(a.snr, [f"{s:g}" for s in a.snr])
+    ax.xaxis.set_minor_formatter(NullFormatter())
+    ax.set_xlabel("effect size: RMS of what the law cannot take up / replicate noise")
+    ax.set_ylabel("identified")
+    ax.set_ylim(-0.02, 1.02)
+    ax.set_title(f"diagnose (curvature {a.curvature[0]!r}): {n_tables} generated tables "
+                 f"per point; false alarms {len(alarms)}/{len(nulls)} null tables",
+                 fontsize=9)
+    ax.legend(fontsize=7, loc="lower right")
+    fig.tight_layout()
+    fig.savefig(a.figure, dpi=110)
 
 
 if __name__ == "__main__":

@@ -330,4 +330,5 @@ def test_fit_with_an_effect_recovers_it(tmp_path, capsys):
     assert abs(plain["E_mpa"] / ref.E_mpa - 1) > abs(d["E_mpa"] / ref.E_mpa - 1)
     main(["fit", str(csv), "--effects", "incomplete_recovery", *PAPER])
     out = capsys.readouterr().out
-    assert "incomplete_recovery.tau_s" in out and "large_deformation + incomplete_recovery" in out
+    assert "incomplete_recovery.tau_s" in out
+    assert "eq. (5) [layer + large_deformation] + incomplete_recovery" in out

@@ -300,15 +300,16 @@ def test_cli_round_trip_with_a_module_in_the_working_directory(tmp_path, monkeyp
     assert d["E_mpa"] == pytest.approx(t.truth["E_mpa"], rel=0.03)
     assert main(["fit", "table.csv", "--effects", spec]) == 0
     out = capsys.readouterr().out
-    assert "model: large_deformation + temperature_stiffening; temperature_stiffening.k_per_c" \
-        in out
+    assert ("model: eq. (5) [layer + large_deformation] + temperature_stiffening; "
+            "temperature_stiffening.k_per_c") in out
     assert main(["diagnose", "table.csv", "--effects", spec, "--json", "-"]) == 0
     d = json.loads(capsys.readouterr().out)
     assert d["model"] == ["layer", "large_deformation", "temperature_stiffening"]
     assert d["verdict"]["unexplained_covariate"] is None
     assert d["params"]["E_mpa"] == pytest.approx(t.truth["E_mpa"], rel=0.03)
     assert main(["diagnose", "table.csv", "--effects", spec, "--no-progress"]) == 0
-    assert "model layer + large_deformation + temperature_stiffening" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "model eq. (5) [layer + large_deformation] + temperature_stiffening" in out
 
 
 def test_cli_file_path_spec(tmp_path, monkeypatch, capsys):

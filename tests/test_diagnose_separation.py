@@ -59,14 +59,17 @@ def test_stiffness_step_needs_presses_on_both_sides():
 def test_a_stiffness_step_is_not_a_force_drift(seed):
     """The gel damaged after one press within a session (E 9 to 12 % lower after it, as in
     the issue's four tables that diagnose called force_drift): a change point in
-    stiffness along press, placed within a press of the truth."""
+    stiffness along press, placed within a press of the truth, its size that of the
+    settled drop to 0.01."""
     t = make_measurement_table("stiffness_step", seed)
     d = _diag(t)
     assert "stiffness_step:press" in (d.missing_effect, *d.equivalent_effects), d.message
     assert d.missing_effect != "force_drift"
     step = next(f for f in d.fits if "stiffness_step:press" in f.model.names)
     assert abs(step.params["stiffness_step:press.at"] - t.truth["after_press"] - 0.5) <= 1
-    assert step.params["stiffness_step:press.s"] == pytest.approx(t.truth["step"], abs=0.01)
+    # the drop once settled (the generator's gel softens a tenth more over three presses)
+    assert step.params["stiffness_step:press.s"] == pytest.approx(t.truth["step_settled"],
+                                                                  abs=0.01)
 
 
 def test_a_step_between_two_sessions_is_also_aging():
@@ -151,3 +154,32 @@ def test_relaxation_reports_both_moduli():
     g = mf.params["viscoelastic_relaxation.g"]
     note = next(n for n in fit.notes if n.startswith("viscoelastic_relaxation: E = E_0"))
     assert f"E_inf = (1 - g) E_0 = {fit.E_mpa * (1 - g):.4g} MPa" in note
+
+
+def test_fit_and_diagnose_give_one_base_model(tmp_path, capsys):
+    """The same table, the same base: `fit` and `diagnose` report the same E and nu (the
+    paper's fit, with the depth uncertainties in both variables where the table has
+    them), and label the model alike. They differed (0.2156 / 0.4670 against 0.2216 /
+    0.4608 on a recovery session) when diagnose read its base through the robust model
+    fit."""
+    import json
+
+    from tactilevision.cli import main
+    from tactilevision.io import write_measurements
+
+    t = make_measurement_table(None, 2)
+    cols = dict(t.columns)
+    cols["depth_std_mm"] = np.full(cols["depth_mm"].size, 0.0012)
+    csv = write_measurements(tmp_path / "m.csv", cols, thickness_mm=t.thickness_mm,
+                             radius_mm=t.radius_mm)
+    assert main(["fit", str(csv), "--json", str(tmp_path / "fit.json")]) == 0
+    out = capsys.readouterr().out
+    fit = json.loads((tmp_path / "fit.json").read_text())
+    assert main(["diagnose", str(csv), "--json", str(tmp_path / "d.json"),
+                 "--no-progress"]) == 0
+    out += capsys.readouterr().out
+    d = json.loads((tmp_path / "d.json").read_text())
+    assert d["params"]["E_mpa"] == pytest.approx(fit["E_mpa"], rel=1e-9)
+    assert d["params"]["nu"] == pytest.approx(fit["nu"], rel=1e-9)
+    assert d["ladder"][0]["E_mpa"] == pytest.approx(fit["E_mpa"], rel=1e-9)
+    assert out.count("eq. (5) [layer + large_deformation]") >= 2

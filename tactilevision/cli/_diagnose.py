@@ -52,7 +52,9 @@ def _summary(diag, path: Path) -> str:
     def mn(v: float) -> str:
         return f"{v * 1e3:.3f} mN" if math.isfinite(v) else "-"
 
-    lines = [f"{path}: {diag.fits[0].n_presses} presses, model {' + '.join(diag.model)}"]
+    from ..mechanics import model_label
+
+    lines = [f"{path}: {diag.fits[0].n_presses} presses, model {model_label(diag.model)}"]
     lines.append("  covariate          p-value   explained")
     for t in diag.covariates:
         flag = "  <- structure" if t.significant else ""

@@ -20,6 +20,7 @@ from ..mechanics import (
     check_fit_effects,
     fit_indentation,
     fit_model,
+    model_label,
 )
 
 _DESCRIPTION = """\
@@ -105,9 +106,9 @@ def summary(fit: IndentationFit, path: Path) -> str:
                      f"(effective variance); extra force scatter sigma0 = "
                      f"{fit.sigma0_n * 1e3:.3g} mN")
     extra = {k: v for k, v in fit.effect_params.items() if k != "beta"}
-    if extra:
-        lines.append(f"  model: {' + '.join(fit.effects)}; "
-                     + ", ".join(f"{k} = {v:.4g}" for k, v in extra.items()))
+    lines.append(f"  model: {model_label(fit.effects)}"
+                 + ("; " + ", ".join(f"{k} = {v:.4g}" for k, v in extra.items())
+                    if extra else ""))
     if fit.out_of_table:
         lines.append(f"  OUT OF TABLE: {fit.out_of_table_message}")
         if fit.beta_table == "fem":

@@ -45,7 +45,7 @@ from ._beta import (
     nu_from_beta,
 )
 from ._diagnose import Diagnosis, diagnose, noise_floor
-from ._effects import EFFECT_NAMES, FIT_EFFECTS, check_fit_effects
+from ._effects import EFFECT_NAMES, FIT_EFFECTS, check_fit_effects, model_label
 from ._fem_tables import kappa_n
 from ._fit import MAX_W_OVER_H, fit_indentation
 from ._fit_model import fit_model
@@ -89,6 +89,7 @@ __all__ = [
     "kappa",
     "kappa_n",
     "make_effect",
+    "model_label",
     "neo_hookean_constants",
     "noise_floor",
     "nu_from_beta",

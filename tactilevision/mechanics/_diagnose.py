@@ -19,6 +19,8 @@ import numpy as np
 from scipy import stats
 
 from .._checks import InputError
+from ._effects import model_label
+from ._fit import fit_indentation
 from ._fit_model import fit_model
 from ._model import EFFECTS, IndentationModel, ModelFit, make_effect
 
@@ -444,6 +446,32 @@ def _usable(name: str, columns: Mapping[str, np.ndarray]) -> str | None:
     return None
 
 
+def _trend_passes(model: IndentationModel, column: str, d: Mapping[str, np.ndarray],
+                  bic: float, h: float) -> bool:
+    """Whether an effect along `column` lowers the model's BIC by more than DELTA_BIC:
+    the evidence a verdict needs, asked of a covariate left over too. The effect is the
+    named one that reads the column (``spatial_nonuniformity`` for ``y_mm``), as on the
+    ladder, else a stiffness or force trend along it."""
+    if column not in d or not np.all(np.isfinite(d[column])):
+        return False
+    tries = [n for n in EFFECTS if column in make_effect(n).columns and n not in model.names
+             and make_effect(n).columns != ("depth_mm",)]
+    if not tries:
+        tries = [f"{kind}:{column}" for kind in ("stiffness_trend", "force_trend")]
+    for name in tries:
+        if name in model.names or any(c not in d for c in make_effect(name).columns):
+            continue
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                f = model.with_effect(name).fit(d, thickness_mm=h)
+        except InputError:
+            continue
+        if f.bic < bic - DELTA_BIC:
+            return True
+    return False
+
+
 def _why(needed: Sequence[str], columns: Mapping[str, np.ndarray]) -> str:
     """Why columns cannot carry an effect, in words: missing, empty cells, or constant."""
     out = []
@@ -542,8 +570,12 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
     column is reported as ``unexplained_covariate`` and the trend as
     ``offered_effect``. After
     the last step, a covariate whose residual structure is still
-    significant (:func:`covariate_tests`) and explains more than 10 % of the
-    residual variance is reported as unexplained too. When the base law's
+    significant (:func:`covariate_tests`), explains more than 10 % of the
+    residual variance and along which an effect (the named one that reads
+    the column, else a stiffness or force trend) lowers the BIC by more
+    than ``DELTA_BIC`` is reported as unexplained too. A
+    counterpart competes only when its named effect passes: alone, it
+    raises no alarm. When the base law's
     own curvature wins a step it is added to the ladder as ``law_curvature``
     (eq. 5's limit, not a missing physical effect; no verdict). The noise
     floor is :func:`noise_floor` of the final model's residuals.
@@ -565,6 +597,19 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
         # the law's own curvature is a nuisance of the comparison: E and nu are read
         # through the model without it (with it, beta trades against its gamma)
         m = IndentationModel(m.base, tuple(e for e in m.effects if e != "law_curvature"))
+        if m.names == ("large_deformation",):
+            # eq. (5) alone: the fit `fit` makes (the paper's, errors in both variables
+            # where the table gives depth_std_mm in every row), so both report one E, nu
+            u = d.get("depth_std_mm")
+            u = u if u is not None and np.all(np.isfinite(u)) else None
+            try:
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore")
+                    f = fit_indentation(d["depth_mm"], d["force_n"], thickness_mm=h,
+                                        radius_mm=a, beta_table=beta_table, depth_std_mm=u)
+                return f.E_mpa, f.nu
+            except InputError:
+                return math.nan, math.nan
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
@@ -598,6 +643,7 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
     # each named effect's counterpart of the other kind along the same column: a stiffness
     # change (grows with depth) against a force added at every depth
     generic = [f"stiffness_trend:{c}" for c in trend_cols]
+    partner: dict[str, str] = {}     # counterpart -> the named effect it challenges
     for n in named:
         if n in untestable:
             continue
@@ -609,6 +655,7 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
             g = f"{other}:{c}"
             if g not in generic and _usable(g, cols) is None and c != "wait_s":
                 generic.append(g)
+                partner[g] = n
     steps = [f"stiffness_step:{c}" for c in STEP_COLUMNS if c in cols
              and _usable(f"stiffness_step:{c}", cols) is None
              and np.unique(cols[c][np.isfinite(cols[c])]).size > 1]
@@ -687,6 +734,11 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
                    and (make_effect(c.effect).columns != ("depth_mm",)
                         or c.effect == "law_curvature" or curvature == "nuisance"
                         or c.delta_bic < curv_bic - CURVATURE_BIC)]
+        # a counterpart competes only with its named effect: it does not raise an alarm
+        # of its own (so many more candidates would, by chance, on null tables)
+        names_passing = {c.effect for c in passing}
+        passing = [c for c in passing
+                   if c.effect not in partner or partner[c.effect] in names_passing]
         if not passing:
             break
         best = passing[0]
@@ -734,7 +786,8 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
         # along depth_mm, eq. (5) itself is not the FEM's exact P(w): depth structure
         # counts only through the named depth effects among the candidates
         left = [t for t in cov_after if t.significant and t.explained_fraction > 0.1
-                and t.name not in ("press", "depth_mm", "indenter")]
+                and t.name not in ("press", "depth_mm", "indenter")
+                and _trend_passes(current, t.name, d_final, cur_fit.bic, h)]
         if left:
             worst = min(left, key=lambda t: t.p_value)
             unexplained = worst.name
@@ -776,7 +829,7 @@ def _with_message(d: Diagnosis) -> Diagnosis:
 
     floor = d.noise_floor_n
     base = d.ladder[0]
-    s = [f"The model {' + '.join(d.model)} leaves an RMSE of {base.rmse_n * 1e3:.2f} mN "
+    s = [f"The model {model_label(d.model)} leaves an RMSE of {base.rmse_n * 1e3:.2f} mN "
          f"({base.cv_rmse_n * 1e3:.2f} mN cross-validated)"
          + (f" against a replicate noise floor of {floor * 1e3:.2f} mN." if math.isfinite(floor)
             else "; the table has no repeated depths for a noise floor.")]
@@ -792,6 +845,18 @@ def _with_message(d: Diagnosis) -> Diagnosis:
         s.append(f"Missing: {d.missing_effect}. Adding it brings the cross-validated RMSE to "
                  f"{step.cv_rmse_n * 1e3:.2f} mN and gives E = {step.E_mpa:.4g} MPa, "
                  f"nu = {step.nu:.4g} (before: E = {base.E_mpa:.4g} MPa, nu = {base.nu:.4g}).")
+        fit = d.fits[d.ladder.index(step)] if len(d.fits) == len(d.ladder) else None
+        g = fit.params.get("viscoelastic_relaxation.g") if fit is not None else None
+        if d.missing_effect == "viscoelastic_relaxation" and g is not None:
+            s.append(f"That E is the instantaneous modulus E_0 (hold -> 0); the relaxed "
+                     f"modulus (hold -> infinity) is E_inf = (1 - g) E_0 = "
+                     f"{step.E_mpa * (1 - g):.4g} MPa (g = {g:.3g}).")
+        at = fit.params.get(f"{d.missing_effect}.at") if fit is not None else None
+        if d.missing_effect.startswith("stiffness_step:") and at is not None:
+            sv = fit.params[f"{d.missing_effect}.s"]
+            s.append(f"That E is the gel's up to {d.missing_effect.partition(':')[2]} = "
+                     f"{at:g}; after it the stiffness is {1 + sv:.4g} times that "
+                     f"(E = {step.E_mpa * (1 + sv):.4g} MPa).")
         if d.equivalent_effects:
             s.append(f"{', '.join(d.equivalent_effects)} explain the data equally well; "
                      f"to tell them apart: {d.separating_measurement}.")

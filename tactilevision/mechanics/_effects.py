@@ -14,7 +14,7 @@ from collections.abc import Sequence
 
 from .._checks import InputError
 
-__all__ = ["EFFECT_NAMES", "FIT_EFFECTS", "check_fit_effects", "effect_names"]
+__all__ = ["EFFECT_NAMES", "FIT_EFFECTS", "check_fit_effects", "effect_names", "model_label"]
 
 #: Catalogue names, part of the public contract (docs/formats.md §5);
 #: ``stiffness_trend:<column>``, ``stiffness_step:<column>`` and ``force_trend:<column>``
@@ -126,3 +126,32 @@ def check_fit_effects(names: Sequence[str]) -> tuple[str, ...]:
         if name not in out:
             out.append(name)
     return tuple(out)
+
+
+def model_label(names: Sequence[str]) -> str:
+    """How ``fit`` and ``diagnose`` name a model: the base law, then its effects.
+
+    Parameters
+    ----------
+    names : sequence of str
+        The model's effect names (``IndentationModel.names``), optionally
+        preceded by ``'layer'`` (as ``Diagnosis.model``).
+
+    Returns
+    -------
+    label : str
+        ``'eq. (5) [layer + large_deformation]'`` for the paper's base, then
+        ``' + <effect>'`` for each further effect; ``'layer'`` (eq. 2) for
+        the small-strain base.
+
+    Examples
+    --------
+    >>> model_label(("large_deformation", "incomplete_recovery"))
+    'eq. (5) [layer + large_deformation] + incomplete_recovery'
+    >>> model_label(("layer", "force_offset"))
+    'layer + force_offset'
+    """
+    rest = [n for n in names if n != "layer"]
+    if rest[:1] == ["large_deformation"]:
+        return " + ".join(["eq. (5) [layer + large_deformation]", *rest[1:]])
+    return " + ".join(["layer", *rest])

@@ -23,8 +23,9 @@ hidden                            form in the generator
 ``spatial_nonuniformity``         a tilted pad: thickness ``h (1 + tx x + ty y)``,
                                   stiffness ``(h / h(x, y))^1.3``
 ``stiffness_step``                the gel damaged after one press: E falls by
-                                  8 to 12 %, then softens by a further tenth of
-                                  that, linearly, over the presses left
+                                  8 to 12 %, then by a further tenth of that
+                                  over the next few presses (settling as
+                                  ``1 - exp(-presses / 3)``)
 ``large_deformation``             the FEM's own finite-strain P(w) (for
                                   ``diagnose --base layer``)
 ``temperature`` (out of the       modulus ``exp(-k (T - 23 C))``: no named
@@ -260,9 +261,9 @@ def make_measurement_table(hidden: str | None = None, seed: int = 0, *,
         d_step = u(0.08, 0.12)
         k_step = int(rng.integers(n // 4, 3 * n // 4))
         after = c["press"] > k_step
-        later = np.where(after, (c["press"] - k_step) / max(n - 1 - k_step, 1), 0.0)
+        later = np.where(after, 1 - np.exp(-(c["press"] - k_step) / 3.0), 0.0)
         P = P * (1 - d_step * after - 0.1 * d_step * later)
-        truth.update(step=-d_step, after_press=k_step)
+        truth.update(step=-d_step, step_settled=-1.1 * d_step, after_press=k_step)
     fx = P * rng.normal(0, 0.02, n)
     fy = P * rng.normal(0, 0.02, n)
     # additive effects are sized against the press-to-press scatter
