@@ -86,7 +86,9 @@ def one(job: tuple[str | None, int, float | None, str]) -> dict:
         ok = _hit(hidden, d, t.truth)
     last = d.ladder[-1]
     base = t.truth["base"]
-    effects = [n for n in last.model[1:] if not (base == "paper" and n == "large_deformation")]
+    # E as diagnose reads it: the law's curvature is a nuisance of the comparison, not of E
+    effects = [n for n in last.model[1:] if not (base == "paper" and n == "large_deformation")
+               and n != "law_curvature"]
     if ok and hidden and "+" not in hidden and hidden in (d.missing_effect,
                                                           *d.equivalent_effects):
         effects = [hidden if n == d.missing_effect else n for n in effects]
