@@ -193,7 +193,31 @@ class SpatialNonuniformity(Effect):
         return 1.0 + p["gx_per_mm"] * data["x_mm"] + p["gy_per_mm"] * data["y_mm"]
 
 
-class StiffnessTrend(Effect):
+class _ColumnEffect(Effect):
+    """An effect along a column named after a colon: ``<kind>:<column>``.
+
+    Subclasses set :attr:`prefix` and implement :meth:`_params` (the
+    parameters, whose units may name the column).
+    """
+
+    prefix = ""
+
+    def __init__(self, column: str) -> None:
+        if not column:
+            raise InputError(f"{self.prefix} needs a column: {self.prefix}:<column>")
+        self.column = column
+        self.name = f"{self.prefix}:{column}"
+        self.params = self._params(column)
+        self.columns = (column,)
+
+    def _params(self, column: str) -> tuple[Param, ...]:
+        raise NotImplementedError
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({self.column!r})"
+
+
+class StiffnessTrend(_ColumnEffect):
     """A generic stiffness change along any covariate column, P exp(k x)
     (1 + k x for small k; the reference value of x is absorbed by c, so no
     data-dependent centring is needed and cross-validation folds predict
@@ -201,23 +225,16 @@ class StiffnessTrend(Effect):
     that no named effect explains."""
 
     kind = "stiffness"
+    prefix = "stiffness_trend"
 
-    def __init__(self, column: str) -> None:
-        if not column:
-            raise InputError("stiffness_trend needs a column: stiffness_trend:<column>")
-        self.column = column
-        self.name = f"stiffness_trend:{column}"
-        self.params = (Param("k", 0.0, -10.0, 10.0, f"1/({column} unit)"),)
-        self.columns = (column,)
+    def _params(self, column: str) -> tuple[Param, ...]:
+        return (Param("k", 0.0, -10.0, 10.0, f"1/({column} unit)"),)
 
     def apply(self, p, data, value):
         return np.exp(p["k"] * data[self.column])
 
-    def __repr__(self) -> str:
-        return f"StiffnessTrend({self.column!r})"
 
-
-class StiffnessStep(Effect):
+class StiffnessStep(_ColumnEffect):
     """A sudden change of stiffness at an unknown value of a column, P (1 + s [x > x0]).
 
     A change point: the gel damaged or re-seated after some press
@@ -236,17 +253,13 @@ class StiffnessStep(Effect):
     """
 
     kind = "stiffness"
+    prefix = "stiffness_step"
     #: Fewest presses on each side of the change point.
     min_side = 3
 
-    def __init__(self, column: str) -> None:
-        if not column:
-            raise InputError("stiffness_step needs a column: stiffness_step:<column>")
-        self.column = column
-        self.name = f"stiffness_step:{column}"
-        self.params = (Param("s", 0.0, -0.9, 3.0, ""),
-                       Param("at", 0.0, -math.inf, math.inf, f"{column} unit"))
-        self.columns = (column,)
+    def _params(self, column: str) -> tuple[Param, ...]:
+        return (Param("s", 0.0, -0.9, 3.0, ""),
+                Param("at", 0.0, -math.inf, math.inf, f"{column} unit"))
 
     def apply(self, p, data, value):
         # a press exactly at the change point (a held-out press in cross-validation, the
@@ -265,11 +278,8 @@ class StiffnessStep(Effect):
         i = i[x[i - 1] < x[i]]
         return {"at": 0.5 * (x[i - 1] + x[i])}
 
-    def __repr__(self) -> str:
-        return f"StiffnessStep({self.column!r})"
 
-
-class ForceTrend(Effect):
+class ForceTrend(_ColumnEffect):
     """A force-sensor bias along any covariate column, P + k x (zero where x is 0).
 
     The additive counterpart of :class:`StiffnessTrend`: offered when a
@@ -278,20 +288,13 @@ class ForceTrend(Effect):
     """
 
     kind = "force"
+    prefix = "force_trend"
 
-    def __init__(self, column: str) -> None:
-        if not column:
-            raise InputError("force_trend needs a column: force_trend:<column>")
-        self.column = column
-        self.name = f"force_trend:{column}"
-        self.params = (Param("k_n", 0.0, -100.0, 100.0, f"N/({column} unit)"),)
-        self.columns = (column,)
+    def _params(self, column: str) -> tuple[Param, ...]:
+        return (Param("k_n", 0.0, -100.0, 100.0, f"N/({column} unit)"),)
 
     def apply(self, p, data, value):
         return value + p["k_n"] * data[self.column]
-
-    def __repr__(self) -> str:
-        return f"ForceTrend({self.column!r})"
 
 
 class LawCurvature(Effect):

@@ -141,7 +141,7 @@ def make_measurement_table(hidden: str | None = None, seed: int = 0, *,
         Instead of `strength`: the size of the (single) hidden effect as a
         signal-to-noise ratio, ``truth["snr"]``: the RMS over the presses of
         its force change less the best fit of the base law to that change
-        (``c w + c beta w^2 / h``; ``c w`` for ``large_deformation``), over
+        (``c w + c beta w^2 / h``), over
         the replicate noise ``truth["replicate_sd_n"]`` (the F/T noise and
         the stage's depth repeatability). Found by scaling the strength (the
         random draws do not depend on it), to 1 %.
@@ -305,10 +305,7 @@ def _signal_rms(hidden: str, seed: int, strength: float) -> tuple[float, HiddenT
     # the same draws (the strength scales sizes only), so the noise cancels
     delta = t.columns["force_n"] - t0.columns["force_n"]
     w = t.columns["depth_mm"]
-    X = np.column_stack([w] if hidden == "large_deformation" else [w, w * w])
-    if hidden == "large_deformation":
-        delta = t.columns["force_n"] - 0.0   # the law's own curvature against c w
-        X = np.column_stack([w])
+    X = np.column_stack([w, w * w])          # eq. (5): c w + c beta w^2 / h
     coef, *_ = np.linalg.lstsq(X, delta, rcond=None)
     return float(np.sqrt(np.mean((delta - X @ coef) ** 2))), t
 
