@@ -396,7 +396,8 @@ def _folds(n: int, k: int, seed: int) -> np.ndarray:
 
 
 def cross_validated_rmse(model: IndentationModel, columns: Mapping[str, np.ndarray], *,
-                         thickness_mm: float, k: int = 10, seed: int = 0) -> float:
+                         thickness_mm: float, k: int = 10, seed: int = 0,
+                         start: Mapping[str, float] | None = None) -> float:
     """K-fold cross-validated RMSE of a model, N.
 
     Each fold's presses are predicted by the model fitted (robustly) to the
@@ -410,6 +411,10 @@ def cross_validated_rmse(model: IndentationModel, columns: Mapping[str, np.ndarr
     thickness_mm : float
     k : int, default 10
     seed : int, default 0
+    start : mapping of str to float, optional
+        The model's fit to all presses (``ModelFit.params``): each fold's
+        fit starts there, and a change point is searched by descent from its
+        place in it (:meth:`IndentationModel.fit`), not over every candidate.
 
     Returns
     -------
@@ -425,7 +430,7 @@ def cross_validated_rmse(model: IndentationModel, columns: Mapping[str, np.ndarr
         train = {c: v[~test] for c, v in d.items()}
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            mf = model.fit(train, thickness_mm=thickness_mm)
+            mf = model.fit(train, thickness_mm=thickness_mm, start=start)
         td = {c: v[test] for c, v in d.items()}
         err[test] = model.predict(mf.params, td, thickness_mm) - td["force_n"]
     return float(np.sqrt(np.mean(err**2)))
@@ -665,7 +670,8 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
     ok0 = rows_for(model)
     d0 = sub(ok0)
     fit0 = model.fit(d0, thickness_mm=h)
-    cv0 = cross_validated_rmse(model, d0, thickness_mm=h, k=cv_folds, seed=seed)
+    cv0 = cross_validated_rmse(model, d0, thickness_mm=h, k=cv_folds, seed=seed,
+                               start=fit0.params)
     E0, nu0 = material(model, d0)
     n_depth = 2 if "large_deformation" in model.names else 1
     cov0 = covariate_tests(fit0.residuals_n, fit0.predicted_n, d0, n_depth_params=n_depth)
@@ -680,7 +686,8 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
         mc = model.with_effect("law_curvature")
         fc = mc.fit(d0, thickness_mm=h)
         if fc.bic < fit0.bic - NUISANCE_BIC:
-            cvc = cross_validated_rmse(mc, d0, thickness_mm=h, k=cv_folds, seed=seed)
+            cvc = cross_validated_rmse(mc, d0, thickness_mm=h, k=cv_folds, seed=seed,
+                                       start=fc.params)
             Ec, nuc = material(mc, d0)
             ladder.append(LadderStep(("layer", *mc.names), fc.rmse_n, cvc, fc.bic, Ec, nuc,
                                      "law_curvature"))
@@ -710,13 +717,16 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
             m = current.with_effect(name)
             ok = rows_for(m)
             d = sub(ok)
-            ref = cur_fit if ok.sum() == cur_fit.n_presses else current.fit(d, thickness_mm=h)
+            # the current model's change points are searched near their place in its fit
+            ref = (cur_fit if ok.sum() == cur_fit.n_presses
+                   else current.fit(d, thickness_mm=h, start=cur_fit.params))
             try:
                 with warnings.catch_warnings():
                     warnings.simplefilter("ignore")
-                    mf = m.fit(d, thickness_mm=h)
+                    mf = m.fit(d, thickness_mm=h, start=cur_fit.params)
                     # only a candidate that can pass needs its folds
-                    cv = (cross_validated_rmse(m, d, thickness_mm=h, k=cv_folds, seed=seed)
+                    cv = (cross_validated_rmse(m, d, thickness_mm=h, k=cv_folds, seed=seed,
+                                               start=mf.params)
                           if mf.bic < ref.bic - DELTA_BIC else math.nan)
             except InputError:
                 continue
@@ -768,7 +778,7 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
             missing_effect, equivalent = best.effect, eq
         current = current.with_effect(best.effect)
         d = sub(rows_for(current))
-        cur_fit = current.fit(d, thickness_mm=h)
+        cur_fit = current.fit(d, thickness_mm=h, start={**cur_fit.params, **best.params})
         cur_cv = best.cv_rmse_n
         E, nu = material(current, d)
         ladder.append(LadderStep(("layer", *current.names), cur_fit.rmse_n, cur_cv, cur_fit.bic,

@@ -849,9 +849,13 @@ class IndentationModel:
         -------
         force_n : (N,) float64 ndarray
         """
+        return self._predict(self._effects(), params, data, thickness_mm)
+
+    @staticmethod
+    def _predict(effects: Sequence[Effect], params: Mapping[str, float],
+                 data: Mapping[str, np.ndarray], thickness_mm: float) -> np.ndarray:
         d = dict(data)
         d["_h"] = float(thickness_mm)
-        effects = self._effects()
 
         def own(e: Effect) -> dict[str, float]:
             return {q.name: float(params[f"{e.name}.{q.name}"]) for q in e.params}
@@ -872,12 +876,17 @@ class IndentationModel:
 
     @staticmethod
     def _search(resid, fixed: np.ndarray, searched: dict[int, np.ndarray], x0: np.ndarray,
-                bounds: tuple[np.ndarray, np.ndarray], max_first: int = 16) -> None:
+                bounds: tuple[np.ndarray, np.ndarray], max_first: int = 16,
+                near: Mapping[int, float] | None = None) -> None:
         """Set the searched parameters in `fixed` (in place: `resid` reads it), one at a
         time, the others at their best: least squares at up to `max_first` evenly spaced
         candidates, then at every candidate next to the best (each solve starting from
-        the last one's solution)."""
+        the last one's solution). A parameter with a value in `near` (a fit of the same
+        model to the same or nearly the same presses) is found by descent instead: from
+        the candidate nearest that value, step to a neighbour while it lowers the cost
+        (3 to 5 solves instead of about 20)."""
         start = [np.asarray(x0, np.float64)]
+        near = near or {}
         for i, vals in searched.items():
             cost: dict[int, float] = {}
 
@@ -891,6 +900,16 @@ class IndentationModel:
                     cost[j] = float(sol.cost)
                 return cost[j]
 
+            if i in near and np.isfinite(near[i]):
+                best = int(np.argmin(np.abs(vals - near[i])))
+                while True:
+                    nb = [j for j in (best - 1, best + 1) if 0 <= j < vals.size]
+                    j = min(nb, key=at, default=best)
+                    if at(j) >= at(best):
+                        break
+                    best = j
+                fixed[i] = vals[best]
+                continue
             first = np.unique(np.linspace(0, vals.size - 1, min(max_first, vals.size)
                                           ).round().astype(int))
             best = min(first, key=at)
@@ -902,7 +921,8 @@ class IndentationModel:
 
     def fit(self, data: Mapping[str, np.ndarray], *, thickness_mm: float,
             weights: np.ndarray | None = None, loss: str = "soft_l1",
-            f_scale: float | None = None) -> ModelFit:
+            f_scale: float | None = None,
+            start: Mapping[str, float] | None = None) -> ModelFit:
         """Fit the model by (weighted, robust) least squares.
 
         Parameters
@@ -925,6 +945,14 @@ class IndentationModel:
         f_scale : float, optional
             Residual scale of the robust loss. Default: 2.5 times the robust
             (MAD) residual sd of a first least-squares fit.
+        start : mapping of str to float, optional
+            Parameter values to start from (e.g. ``ModelFit.params`` of this
+            model, or of one effect fewer, on the same or nearly the same
+            presses); names the model lacks are ignored. A change point given
+            here is searched by descent from it, not over all its candidates:
+            faster, and the same answer unless the cost has another minimum
+            farther off. Default: every parameter's catalogue start and a full
+            search.
 
         Returns
         -------
@@ -984,10 +1012,16 @@ class IndentationModel:
         def resid(x: np.ndarray) -> np.ndarray:
             full = fixed.copy()
             full[free] = x
-            return sw * (self.predict(dict(zip(names, full, strict=True)), d, thickness_mm) - P)
+            return sw * (self._predict(effects, dict(zip(names, full, strict=True)), d,
+                                       thickness_mm) - P)
 
+        near: dict[int, float] = {}
+        if start is not None:
+            for i, q in enumerate(names):
+                if q in start and i in searched:
+                    near[i] = float(start[q])
         if searched:
-            self._search(resid, fixed, searched, x0_f, (lo_f, hi_f))
+            self._search(resid, fixed, searched, x0_f, (lo_f, hi_f), near=near)
         first = least_squares(resid, x0_f, bounds=(lo_f, hi_f), x_scale="jac", method="trf")
         if loss == "linear":
             sol = first
