@@ -34,6 +34,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                         "Effect subclass of your own as package.module:ClassName or "
                         "path/to/file.py:ClassName (a module not on the Python path is looked "
                         "for in the working directory; docs/custom_effects.md)")
+    p.add_argument("--candidates", default="", metavar="E1,E2",
+                   help="effects of your own tried beside the catalogue's, as candidates for "
+                        "the missing effect (package.module:ClassName or "
+                        "path/to/file.py:ClassName; docs/custom_effects.md)")
     p.add_argument("--base", choices=("paper", "layer"), default="paper",
                    help="paper: eq. (5), the layer with large_deformation (default); "
                         "layer: the small-strain layer alone")
@@ -88,13 +92,14 @@ def run(args: argparse.Namespace) -> int:
     # names checked (and effects of the user's own imported) before the table is read
     effects = [e for e in effect_names(requested)
                if not (args.base == "paper" and e == "large_deformation")]
+    candidates = effect_names([e.strip() for e in args.candidates.split(",") if e.strip()])
     table = read_measurements(path, thickness_mm=args.thickness_mm, radius_mm=args.radius_mm)
     for note in table.notes:
         print(f"tactilevision diagnose: warning: {note}", file=sys.stderr)
     try:
         diag = diagnose(table.columns, thickness_mm=table.thickness_mm,
                         radius_mm=table.radius_mm, base=args.base, effects=effects,
-                        beta_table=args.beta_table,
+                        candidates=candidates, beta_table=args.beta_table,
                         progress=not args.no_progress and args.json != "-")
     except InputError as exc:
         raise InputError(f"{path}: {exc}") from None

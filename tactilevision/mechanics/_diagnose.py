@@ -22,7 +22,7 @@ from .._checks import InputError
 from ._effects import model_label
 from ._fit import fit_indentation
 from ._fit_model import fit_model
-from ._model import EFFECTS, IndentationModel, ModelFit, make_effect
+from ._model import EFFECTS, Effect, IndentationModel, ModelFit, effect_name, make_effect
 
 __all__ = [
     "Candidate",
@@ -502,7 +502,8 @@ def _why(needed: Sequence[str], columns: Mapping[str, np.ndarray]) -> str:
 def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_mm: float,
              base: str = "paper", effects: Sequence[str] = (), beta_table: str = "fem",
              max_steps: int = 3, cv_folds: int = 10, seed: int = 0,
-             progress: bool = False, curvature: str = CURVATURE) -> Diagnosis:
+             progress: bool = False, curvature: str = CURVATURE,
+             candidates: Sequence = ()) -> Diagnosis:
     """Compare a model with the measurements and find the missing effect.
 
     Parameters
@@ -525,6 +526,14 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
         Seeds the cross-validation folds.
     progress : bool, default False
         A progress bar over the candidate fits.
+    candidates : sequence of str, Effect subclass or Effect instance
+        Effects of your own tried at every step beside the catalogue's, as
+        named physics: each can be the verdict, is tested
+        against its counterpart of the other kind along its columns, and is
+        reported untestable when its columns are missing or constant. Specs
+        as for :class:`IndentationModel` (``'package.module:ClassName'``,
+        ``'path/to/file.py:ClassName'``, a registered name, a class or an
+        instance; docs/custom_effects.md).
     curvature : {'gate', 'nuisance'}, default :data:`CURVATURE`
         How eq. (5)'s own misfit to the finite-strain law (a ``(w/h)^2``
         curvature of P/w, :class:`LawCurvature`) is kept from being read as
@@ -634,6 +643,11 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
         return {k: v[ok] for k, v in cols.items()}
 
     named = [n for n in EFFECTS if not (base == "paper" and n == "large_deformation")]
+    # the user's own candidates: registered (import specs, classes) and tried as named physics
+    if isinstance(candidates, str | Effect | type):
+        candidates = (candidates,)
+    own = [effect_name(c) for c in candidates]
+    named += [n for n in dict.fromkeys(own) if n not in named and n not in model.names]
     untestable: dict[str, tuple[str, ...]] = {}
     why_untestable: dict[str, str] = {}
     for n in named:
@@ -641,7 +655,7 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
         if why is not None:
             untestable[n] = tuple(make_effect(n).columns)
             why_untestable[n] = _why(make_effect(n).columns, cols)
-    read_by_named = {c for n in EFFECTS for c in make_effect(n).columns}
+    read_by_named = {c for n in (*EFFECTS, *named) for c in make_effect(n).columns}
     trend_cols = [c for c in _covariate_names(cols)
                   if c not in read_by_named and c not in ("press", "indenter", "force_std_n")
                   and _usable(f"stiffness_trend:{c}", cols) is None]
