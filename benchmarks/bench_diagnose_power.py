@@ -1,7 +1,7 @@
 """Power curves of ``diagnose``: identification against effect size, false alarms, pairs.
 
     python benchmarks/bench_diagnose_power.py [--tables N] [--nulls N] [--snr S ...]
-        [--kinds K ...] [--pairs] [--curvature gate|nuisance ...] [--jobs J] [--json PATH]
+        [--kinds K ...] [--pairs] [--curvature gate|nuisance|fem ...] [--jobs J] [--json PATH]
         [--figure PATH] [--from-json PATH]
 
 Tables come from :func:`tactilevision.sim.make_measurement_table` (forces from the
@@ -69,8 +69,11 @@ def one(job: tuple[str | None, int, float | None, str]) -> dict:
     t = (make_measurement_table(hidden, seed, snr=snr) if snr is not None
          else make_measurement_table(hidden, seed))
     t0 = time.perf_counter()
+    # mode 'fem': the FEM's finite-strain law as the base (no curvature gate needed)
+    fem = curvature == "fem" and t.truth["base"] == "paper"
     d = diagnose(t.columns, thickness_mm=t.thickness_mm, radius_mm=t.radius_mm,
-                 base=t.truth["base"], curvature=curvature)
+                 base="fem" if fem else t.truth["base"],
+                 curvature="gate" if curvature == "fem" else curvature)
     dt = time.perf_counter() - t0
     alarm = d.missing_effect is not None or d.unexplained_covariate is not None
     if hidden is None:
@@ -93,9 +96,17 @@ def one(job: tuple[str | None, int, float | None, str]) -> dict:
                                                           *d.equivalent_effects):
         effects = [hidden if n == d.missing_effect else n for n in effects]
     try:
-        fit, _ = fit_model(t.columns, IndentationModel(base, tuple(effects)),
-                           thickness_mm=t.thickness_mm, radius_mm=t.radius_mm)
-        e_err = fit.E_mpa / t.truth["E_mpa"] - 1
+        if fem:
+            # E and nu are the FEM law's own parameters (diagnose's last rung)
+            e_err = last.E_mpa / t.truth["E_mpa"] - 1
+            if ok and hidden and "+" not in hidden and hidden in d.equivalent_effects:
+                d2 = diagnose(t.columns, thickness_mm=t.thickness_mm, radius_mm=t.radius_mm,
+                              base="fem", effects=[hidden], max_steps=0)
+                e_err = d2.E_mpa / t.truth["E_mpa"] - 1
+        else:
+            fit, _ = fit_model(t.columns, IndentationModel(base, tuple(effects)),
+                               thickness_mm=t.thickness_mm, radius_mm=t.radius_mm)
+            e_err = fit.E_mpa / t.truth["E_mpa"] - 1
     except Exception:
         e_err = math.nan
     return {"hidden": hidden, "seed": seed, "snr": snr, "curvature": curvature, "ok": bool(ok),
@@ -143,8 +154,10 @@ def main() -> None:
     ap.add_argument("--snr", type=float, nargs="+", default=list(SNRS))
     ap.add_argument("--kinds", nargs="+", default=list(KINDS))
     ap.add_argument("--pairs", action="store_true", help="also two effects at once")
-    ap.add_argument("--curvature", nargs="+", default=["gate"], choices=("gate", "nuisance"),
-                    help="diagnose's treatment of eq. 5's own curvature; several: each")
+    ap.add_argument("--curvature", nargs="+", default=["gate"],
+                    choices=("gate", "nuisance", "fem"),
+                    help="diagnose's treatment of eq. 5's own curvature (gate, nuisance) or "
+                         "'fem': the FEM law as the base instead of eq. 5; several: each")
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--json", type=Path)
     ap.add_argument("--figure", type=Path, help="power curves of the first --curvature")

@@ -38,9 +38,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="effects of your own tried beside the catalogue's, as candidates for "
                         "the missing effect (package.module:ClassName or "
                         "path/to/file.py:ClassName; docs/custom_effects.md)")
-    p.add_argument("--base", choices=("paper", "layer"), default="paper",
+    p.add_argument("--base", choices=("paper", "layer", "fem"), default="paper",
                    help="paper: eq. (5), the layer with large_deformation (default); "
-                        "layer: the small-strain layer alone")
+                        "layer: the small-strain layer alone; fem: the FEM's finite-strain "
+                        "law (E and nu its own parameters; docs/diagnose_power.md)")
     p.add_argument("--thickness-mm", type=float, metavar="H")
     p.add_argument("--radius-mm", type=float, metavar="A")
     p.add_argument("--beta-table", choices=("fem", "paper"), default="fem",

@@ -53,6 +53,7 @@ from ._kappa import HAYES_1972, KappaTable, kappa
 from ._model import (
     EFFECTS,
     Effect,
+    FemLaw,
     IndentationModel,
     ModelFit,
     Param,
@@ -73,6 +74,7 @@ __all__ = [
     "BetaRelation",
     "Diagnosis",
     "Effect",
+    "FemLaw",
     "IndentationFit",
     "IndentationModel",
     "IndentationValidation",

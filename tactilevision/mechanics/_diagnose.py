@@ -20,6 +20,7 @@ from scipy import stats
 
 from .._checks import InputError
 from ._effects import model_label
+from ._fem_tables import kappa_n
 from ._fit import fit_indentation
 from ._fit_model import fit_model
 from ._model import EFFECTS, Effect, IndentationModel, ModelFit, effect_name, make_effect
@@ -513,8 +514,14 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
         any covariates. Text columns must be left out.
     thickness_mm, radius_mm : float
         h and a, mm.
-    base : {'paper', 'layer'}, default 'paper'
-        The paper's eq. (5) or the small-strain layer alone.
+    base : {'paper', 'layer', 'fem'}, default 'paper'
+        The paper's eq. (5), the small-strain layer alone, or the FEM's
+        finite-strain law (:class:`~tactilevision.mechanics.FemLaw`, read at
+        a/h; E and nu are its c and nu). With 'fem' the law's curvature is
+        the FEM's, so depth effects need not beat eq. (5)'s misfit (no gate;
+        ``law_curvature`` stays a candidate rung for a gel that departs from
+        the FEM's law). See docs/diagnose_power.md for what it gains and
+        costs.
     effects : sequence of str
         Effects already in the model diagnosed.
     beta_table : {'fem', 'paper'}, default 'fem'
@@ -596,8 +603,12 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
     """
     cols = {k: np.asarray(v, np.float64) for k, v in columns.items()}
     h, a = float(thickness_mm), float(radius_mm)
+    if base == "fem" and not (0.2 <= a / h <= 2.0):
+        raise InputError(f"base 'fem' reads the FEM table at a/h = {a / h:.3g}, outside its "
+                         "0.2 to 2.0")
     model = IndentationModel(base, tuple(e for e in effects
-                                         if not (base == "paper" and e == "large_deformation")))
+                                         if not (base == "paper" and e == "large_deformation")),
+                             a / h if base == "fem" else None)
     missing = model.missing_columns(list(cols))
     if missing:
         raise InputError(f"the model {model.names} needs the column(s) {', '.join(missing)}")
@@ -610,7 +621,20 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
     def material(m: IndentationModel, d: Mapping[str, np.ndarray]) -> tuple[float, float]:
         # the law's own curvature is a nuisance of the comparison: E and nu are read
         # through the model without it (with it, beta trades against its gamma)
-        m = IndentationModel(m.base, tuple(e for e in m.effects if e != "law_curvature"))
+        m = IndentationModel(m.base, tuple(e for e in m.effects if e != "law_curvature"),
+                             m.a_over_h)
+        if m.base == "fem":
+            # the FEM law's own parameters: nu is its shape's, E from c = 2 a E kappa_0 /
+            # (1 - nu^2) (eq. 1-2)
+            try:
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore")
+                    f = m.fit(d, thickness_mm=h)
+            except InputError:
+                return math.nan, math.nan
+            nu_f = f.params["fem_law.nu"]
+            k0 = float(kappa_n(nu_f, a / h, 0.0))
+            return f.params["c_n_per_mm"] * (1 - nu_f ** 2) / (2 * a * k0), nu_f
         if m.names == ("large_deformation",):
             # eq. (5) alone: the fit `fit` makes (the paper's, errors in both variables
             # where the table gives depth_std_mm in every row), so both report one E, nu
@@ -687,7 +711,7 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
     cv0 = cross_validated_rmse(model, d0, thickness_mm=h, k=cv_folds, seed=seed,
                                start=fit0.params)
     E0, nu0 = material(model, d0)
-    n_depth = 2 if "large_deformation" in model.names else 1
+    n_depth = 2 if {"large_deformation", "fem_law"} & set(model.names) else 1
     cov0 = covariate_tests(fit0.residuals_n, fit0.predicted_n, d0, n_depth_params=n_depth)
     ladder = [LadderStep(("layer", *model.names), fit0.rmse_n, cv0, fit0.bic, E0, nu0, None)]
     fits, fit_rows = [fit0], [ok0]
@@ -723,8 +747,8 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
     for _step in range(max_steps):
         tried = [n for n in named if n not in current.names and n not in untestable]
         tried += [g for g in (*steps, *generic) if g not in current.names]
-        if ("law_curvature" not in current.names and "large_deformation" in current.names
-                and curvature == "gate"):
+        if ("law_curvature" not in current.names and curvature == "gate"
+                and {"large_deformation", "fem_law"} & set(current.names)):
             tried.append("law_curvature")
         cands = []
         for name in tried:
@@ -757,6 +781,7 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
         passing = [c for c in cands if c.delta_bic < -DELTA_BIC and c.cv_rmse_n < cur_cv
                    and (make_effect(c.effect).columns != ("depth_mm",)
                         or c.effect == "law_curvature" or curvature == "nuisance"
+                        or model.base == "fem"
                         or c.delta_bic < curv_bic - CURVATURE_BIC)]
         # a counterpart competes only with its named effect: it does not raise an alarm
         # of its own (so many more candidates would, by chance, on null tables)
@@ -803,7 +828,7 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
         bar.close()
 
     d_final = sub(rows_for(current))
-    n_depth = 2 if "large_deformation" in current.names else 1
+    n_depth = 2 if {"large_deformation", "fem_law"} & set(current.names) else 1
     cov_after = covariate_tests(cur_fit.residuals_n, cur_fit.predicted_n, d_final,
                                 n_depth_params=n_depth)
     if unexplained is None:

@@ -142,7 +142,8 @@ def model_label(names: Sequence[str]) -> str:
     label : str
         ``'eq. (5) [layer + large_deformation]'`` for the paper's base, then
         ``' + <effect>'`` for each further effect; ``'layer'`` (eq. 2) for
-        the small-strain base.
+        the small-strain base; ``'FEM law [layer + fem_law]'`` for the FEM's
+        finite-strain base (``IndentationModel(base='fem')``).
 
     Examples
     --------
@@ -154,4 +155,6 @@ def model_label(names: Sequence[str]) -> str:
     rest = [n for n in names if n != "layer"]
     if rest[:1] == ["large_deformation"]:
         return " + ".join(["eq. (5) [layer + large_deformation]", *rest[1:]])
+    if rest[:1] == ["fem_law"]:
+        return " + ".join(["FEM law [layer + fem_law]", *rest[1:]])
     return " + ".join(["layer", *rest])

@@ -17,7 +17,7 @@ from .._checks import InputError
 from ._kappa import KappaTable
 
 __all__ = ["TABLE_EXTRAPOLATION", "TabulatedBetaRelation", "fem_beta_relation",
-           "fem_kappa_table", "fem_table_meta", "kappa_n"]
+           "fem_kappa_table", "fem_table_meta", "kappa_n", "kappa_n_grid"]
 
 #: The FEM's kappa_n(w/h) is read (PCHIP) up to this factor beyond the table's deepest w/h
 #: (0.2): a press pushed past the gauge block's w0 = 0.2 h by a stage overshoot (a vernier
@@ -342,3 +342,45 @@ def kappa_n(nu: float | np.ndarray, a_over_h: float | np.ndarray,
         k_nu = PchipInterpolator(data["nu"], k_w, axis=1)(n[idx])  # (A,)
         out[idx] = PchipInterpolator(data["a_over_h"], k_nu)(r[idx])
     return float(out) if out.ndim == 0 else out
+
+
+def kappa_n_grid(nu: np.ndarray, a_over_h: float, w_over_h: np.ndarray, *,
+                 contact: str = "bonded") -> np.ndarray:
+    """:func:`kappa_n` on a grid of nu x w/h at one a/h, at once.
+
+    The same interpolation as :func:`kappa_n` (PCHIP along w/h, then nu, then
+    a/h), each step done for the whole grid: three interpolants instead of
+    three per point.
+
+    Parameters
+    ----------
+    nu : (M,) array_like
+    a_over_h : float
+    w_over_h : (K,) array_like
+        Within the ranges of :func:`kappa_n`.
+    contact : str, default 'bonded'
+
+    Returns
+    -------
+    kappa_n : (M, K) float64 ndarray
+
+    Raises
+    ------
+    InputError
+        As :func:`kappa_n`.
+    """
+    from scipy.interpolate import PchipInterpolator
+
+    nu = np.atleast_1d(np.asarray(nu, np.float64))
+    x = np.atleast_1d(np.asarray(w_over_h, np.float64))
+    # the range checks of kappa_n, on the grid's extremes
+    kappa_n(np.array([nu.min(), nu.max()]), a_over_h, np.array([x.min(), x.max()]),
+            contact=contact)
+    data = _load("beta_fem.npz")
+    c = [str(v) for v in data["contacts"]].index(contact)
+    wt = np.concatenate([[0.0], data["w_over_h"]])
+    kn = np.concatenate([data["kappa0"][c][..., None], data["kappa_n"][c]], axis=-1)  # (A, N, K+1)
+    k_w = PchipInterpolator(wt, kn, axis=2)(x)                                # (A, N, K)
+    k_nu = PchipInterpolator(data["nu"], k_w, axis=1)(nu)                     # (A, M, K)
+    return np.asarray(PchipInterpolator(data["a_over_h"], k_nu, axis=0)(float(a_over_h)),
+                      np.float64)

@@ -19,6 +19,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from functools import lru_cache
 
 import numpy as np
 from scipy.optimize import least_squares
@@ -317,6 +318,53 @@ class LawCurvature(Effect):
         return 1.0 + p["gamma"] * x * x
 
 
+#: nu and w/h grids of :class:`FemLaw`'s table of kappa_n ratios (the FEM table's nu
+#: range; w/h to its reach, 0.2 x ``TABLE_EXTRAPOLATION``).
+_FEM_NU = np.linspace(0.30, 0.499, 61)
+_FEM_X = np.linspace(0.0, 0.229, 93)
+
+
+@lru_cache(maxsize=64)
+def _fem_ratio_table(a_over_h: float) -> np.ndarray:
+    """kappa_n(nu, a/h, w/h) / kappa_n(nu, a/h, 0) on ``_FEM_NU`` x ``_FEM_X``."""
+    from ._fem_tables import kappa_n_grid
+
+    k = kappa_n_grid(_FEM_NU, a_over_h, _FEM_X)
+    return k / k[:, :1]
+
+
+class FemLaw(Effect):
+    """The FEM's finite-strain stiffening: P = c w kappa_n(nu, a/h, w/h) / kappa_0.
+
+    The base law of ``IndentationModel(base='fem')``: the compressible
+    Neo-Hookean layer's P(w) from the project's FEM table
+    (:func:`~tactilevision.mechanics.kappa_n`, ``models/beta_fem.npz``)
+    instead of eq. (5)'s straight line in P/w, with c = 2 a E kappa_0 /
+    (1 - nu^2) (eq. 1-2) and nu the shape's parameter (0.30 to 0.499, the
+    table's range). Its curvature is the FEM's, so eq. (5)'s own misfit
+    (:class:`LawCurvature`) is not in the comparison. Needs a/h (the model's
+    ``a_over_h``) and w/h within the table (up to 0.23).
+    """
+
+    name = "fem_law"
+    params = (Param("nu", 0.45, float(_FEM_NU[0]), float(_FEM_NU[-1]), ""),)
+    columns = ("depth_mm",)
+
+    def apply(self, p, data, value):
+        # a depth effect may push a shallow press below zero: the law starts at w = 0
+        x = np.maximum(np.asarray(data["depth_mm"], np.float64) / data["_h"], 0.0)
+        if np.any(x > _FEM_X[-1]):
+            raise InputError(f"fem_law: w/h reaches {float(x.max()):.3f}, beyond the FEM "
+                             f"table's {_FEM_X[-1]:.2f}")
+        table = _fem_ratio_table(round(float(data["_a_over_h"]), 9))
+        # bilinear between nodes 0.0033 apart in nu and 0.0025 in w/h (the ratio is smooth)
+        nu = float(np.clip(p["nu"], _FEM_NU[0], _FEM_NU[-1]))
+        j = int(np.clip(np.searchsorted(_FEM_NU, nu) - 1, 0, _FEM_NU.size - 2))
+        t = (nu - _FEM_NU[j]) / (_FEM_NU[j + 1] - _FEM_NU[j])
+        row = (1 - t) * table[j] + t * table[j + 1]
+        return np.interp(x, _FEM_X, row)
+
+
 #: The catalogue: name -> effect class (formats.md §4, names are the contract).
 EFFECTS: dict[str, type[Effect]] = {
     c.name: c for c in (LargeDeformation, DepthOffset, ForceOffset, ForceDrift,
@@ -374,6 +422,8 @@ def make_effect(name: str | Effect | type[Effect]) -> Effect:
         return COLUMN_EFFECTS[kind](column.strip())
     if name == LawCurvature.name:
         return LawCurvature()
+    if name == FemLaw.name:
+        return FemLaw()
     if name in EFFECTS:
         return EFFECTS[name]()
     if name in _USER_EFFECTS:
@@ -746,9 +796,11 @@ class IndentationModel:
 
     Parameters
     ----------
-    base : {'paper', 'layer'}, default 'paper'
+    base : {'paper', 'layer', 'fem'}, default 'paper'
         ``'paper'``: eq. (5) (the layer with ``large_deformation``);
-        ``'layer'``: the small-strain law P = c w (eq. 2).
+        ``'layer'``: the small-strain law P = c w (eq. 2); ``'fem'``: the
+        FEM's finite-strain law (:class:`FemLaw`: c and nu), which needs
+        `a_over_h`.
     effects : tuple of (str, Effect subclass or Effect instance)
         Effects added to the base: catalogue names, ``<kind>:<column>``
         column effects, names registered by :func:`register_effect`, import
@@ -756,6 +808,9 @@ class IndentationModel:
         or :class:`Effect` subclasses or instances. Stored as names: user
         effects are registered and replaced by their names (one str or
         effect alone is taken as a tuple of one).
+    a_over_h : float, optional
+        Indenter radius over layer thickness; needed by ``base='fem'``
+        (0.2 to 2.0, the FEM table's range), unused otherwise.
 
     Raises
     ------
@@ -775,10 +830,16 @@ class IndentationModel:
 
     base: str = "paper"
     effects: tuple[str, ...] = field(default=())
+    a_over_h: float | None = None
 
     def __post_init__(self) -> None:
-        if self.base not in ("paper", "layer"):
-            raise InputError(f"base must be 'paper' or 'layer', got {self.base!r}")
+        if self.base not in ("paper", "layer", "fem"):
+            raise InputError(f"base must be 'paper', 'layer' or 'fem', got {self.base!r}")
+        if self.base == "fem":
+            r = self.a_over_h
+            if r is None or not (isinstance(r, int | float) and 0.2 <= r <= 2.0):
+                raise InputError("base 'fem' needs a_over_h (indenter radius / layer "
+                                 f"thickness) within the FEM table's 0.2 to 2.0, got {r!r}")
         effects = self.effects
         if isinstance(effects, str | Effect | type):
             effects = (effects,)
@@ -790,7 +851,8 @@ class IndentationModel:
     @property
     def names(self) -> tuple[str, ...]:
         """Effect names including the base's ``large_deformation``."""
-        return (("large_deformation",) if self.base == "paper" else ()) + tuple(self.effects)
+        law = {"paper": ("large_deformation",), "fem": ("fem_law",)}.get(self.base, ())
+        return law + tuple(self.effects)
 
     def _effects(self) -> list[Effect]:
         return [make_effect(n) for n in self.names]
@@ -821,7 +883,7 @@ class IndentationModel:
         InputError
             For an unknown or invalid effect or one already in the model.
         """
-        return IndentationModel(self.base, (*self.effects, name))
+        return IndentationModel(self.base, (*self.effects, name), self.a_over_h)
 
     def missing_columns(self, columns: Sequence[str]) -> tuple[str, ...]:
         """Columns the model needs that `columns` lacks."""
@@ -849,13 +911,15 @@ class IndentationModel:
         -------
         force_n : (N,) float64 ndarray
         """
-        return self._predict(self._effects(), params, data, thickness_mm)
+        return self._predict(self._effects(), params, data, thickness_mm, self.a_over_h)
 
     @staticmethod
     def _predict(effects: Sequence[Effect], params: Mapping[str, float],
-                 data: Mapping[str, np.ndarray], thickness_mm: float) -> np.ndarray:
+                 data: Mapping[str, np.ndarray], thickness_mm: float,
+                 a_over_h: float | None = None) -> np.ndarray:
         d = dict(data)
         d["_h"] = float(thickness_mm)
+        d["_a_over_h"] = a_over_h
 
         def own(e: Effect) -> dict[str, float]:
             return {q.name: float(params[f"{e.name}.{q.name}"]) for q in e.params}
@@ -995,7 +1059,7 @@ class IndentationModel:
                 hi.append(q.upper)
         P = d["force_n"]
         # parameters found by search (change points): fixed in each least-squares fit
-        dh = {**d, "_h": float(thickness_mm)}
+        dh = {**d, "_h": float(thickness_mm), "_a_over_h": self.a_over_h}
         searched: dict[int, np.ndarray] = {}
         for e in effects:
             for q, vals in e.profile(dh).items():
@@ -1013,7 +1077,7 @@ class IndentationModel:
             full = fixed.copy()
             full[free] = x
             return sw * (self._predict(effects, dict(zip(names, full, strict=True)), d,
-                                       thickness_mm) - P)
+                                       thickness_mm, self.a_over_h) - P)
 
         near: dict[int, float] = {}
         if start is not None:
