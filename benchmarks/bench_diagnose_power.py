@@ -1,8 +1,8 @@
 """Power curves of ``diagnose``: identification against effect size, false alarms, pairs.
 
     python benchmarks/bench_diagnose_power.py [--tables N] [--nulls N] [--snr S ...]
-        [--kinds K ...] [--pairs] [--curvature gate|nuisance|fem ...] [--jobs J] [--json PATH]
-        [--figure PATH] [--from-json PATH]
+        [--kinds K ...] [--pairs] [--curvature gate|nuisance|fem ...] [--law fem|eq5]
+        [--jobs J] [--json PATH] [--figure PATH] [--from-json PATH]
 
 Tables come from :func:`tactilevision.sim.make_measurement_table` (forces from the
 finite-strain FEM, not eq. 5; every formats.md column; the hidden effects' forms differ
@@ -63,11 +63,35 @@ def _hit(hidden: str, d, truth: dict) -> bool:
     return hidden in named
 
 
+#: The law of the tables' forces ('fem': the generator's; 'eq5': set by --law).
+LAW = "fem"
+
+
+def _to_eq5(t) -> None:
+    """Scale the table's forces from the FEM's finite-strain law to eq. (5) with the paper's
+    beta relation (eq. 7) and Hayes' kappa (frictionless, eq. 1-2), in place: P x
+    P_eq5(w) / P_fem(w) at the nominal depths, so every hidden effect and the noise ride
+    along (additive ones scaled by that ratio, within 10 %). No code of ours draws this
+    law: a closed form, a literature table and the paper's fit."""
+    from tactilevision.mechanics import beta_from_nu, kappa
+    from tactilevision.sim._tables import _fem_force
+
+    E, nu = t.truth["E_mpa"], t.truth["nu"]
+    a, h = t.radius_mm, t.thickness_mm
+    w = t.columns["depth_mm"]
+    p_eq5 = (2 * a * E * kappa(nu, a / h, source="hayes") / (1 - nu**2) * w
+             * (1 + beta_from_nu(nu) * w / h))
+    t.columns["force_n"] = t.columns["force_n"] * p_eq5 / _fem_force(E, nu, a, h, w)
+    t.truth["law"] = "eq5"
+
+
 def one(job: tuple[str | None, int, float | None, str]) -> dict:
     hidden, seed, snr, curvature = job
     warnings.simplefilter("ignore")
     t = (make_measurement_table(hidden, seed, snr=snr) if snr is not None
          else make_measurement_table(hidden, seed))
+    if LAW == "eq5":
+        _to_eq5(t)
     t0 = time.perf_counter()
     # mode 'fem': the FEM's finite-strain law as the base (no curvature gate needed)
     fem = curvature == "fem" and t.truth["base"] == "paper"
@@ -158,6 +182,9 @@ def main() -> None:
                     choices=("gate", "nuisance", "fem"),
                     help="diagnose's treatment of eq. 5's own curvature (gate, nuisance) or "
                          "'fem': the FEM law as the base instead of eq. 5; several: each")
+    ap.add_argument("--law", choices=("fem", "eq5"), default="fem",
+                    help="the tables' force law: the generator's finite-strain FEM "
+                         "(default), or eq. (5) with the paper's beta and Hayes' kappa")
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--json", type=Path)
     ap.add_argument("--figure", type=Path, help="power curves of the first --curvature")
@@ -182,6 +209,11 @@ def main() -> None:
         work += [(None, 1000 + s, None, cm) for s in range(a.nulls)]
         if a.pairs:
             work += [(p, 1000 + s, None, cm) for p in PAIRS for s in range(a.tables)]
+    global LAW
+    LAW = a.law      # before the pool: its processes are forked with it
+    if a.law != "fem":
+        print(f"forces: {a.law} (E errors are against the generator's E, read through "
+              "another law: not comparable)")
     t0 = time.perf_counter()
     with Pool(a.jobs) as pool:
         res_all = pool.map(one, work, chunksize=2)

@@ -19,7 +19,7 @@ import pytest
 from tactilevision import InputError
 from tactilevision.cli import main
 from tactilevision.io import write_measurements
-from tactilevision.mechanics import FemLaw, IndentationModel, diagnose, kappa_n
+from tactilevision.mechanics import FemLaw, IndentationModel, diagnose, fit_model, kappa_n
 from tactilevision.mechanics._fem_tables import kappa_n_grid
 from tactilevision.sim import make_measurement_table
 
@@ -63,6 +63,9 @@ def test_fem_base_needs_a_over_h():
         IndentationModel("eq5")
     m = IndentationModel("fem", a_over_h=0.9).with_effect("force_offset")
     assert m.names == ("fem_law", "force_offset") and m.a_over_h == 0.9
+    t0 = make_measurement_table(None, 5)
+    with pytest.raises(InputError, match="base 'fem'"):
+        fit_model(t0.columns, m, thickness_mm=t0.thickness_mm, radius_mm=t0.radius_mm)
     t = make_measurement_table(None, 5)
     with pytest.raises(InputError, match="a/h"):
         diagnose(t.columns, thickness_mm=t.thickness_mm, radius_mm=10 * t.thickness_mm,

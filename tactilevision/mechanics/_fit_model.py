@@ -87,6 +87,10 @@ def fit_model(columns: Mapping[str, np.ndarray], model: IndentationModel | str =
     elif isinstance(model, str):
         names = tuple(n.strip() for n in model.split(",") if n.strip())
         model = IndentationModel("paper", tuple(n for n in names if n != "large_deformation"))
+    if model.base == "fem":
+        raise InputError("fit_model reads E and nu through eq. (5) or the layer; a model on "
+                         "the FEM law (base 'fem') carries them as its own parameters: "
+                         "diagnose(..., base='fem') reports them")
     h = _positive(thickness_mm, "thickness_mm")
     a = _positive(radius_mm, "radius_mm")
     if not 0 < confidence < 1:
