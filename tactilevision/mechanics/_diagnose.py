@@ -517,10 +517,11 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
     base : {'paper', 'layer', 'fem'}, default 'paper'
         The paper's eq. (5), the small-strain layer alone, or the FEM's
         finite-strain law (:class:`~tactilevision.mechanics.FemLaw`, read at
-        a/h; E and nu are its c and nu). With 'fem' the law's curvature is
-        the FEM's, so depth effects need not beat eq. (5)'s misfit (no gate;
-        ``law_curvature`` stays a candidate rung for a gel that departs from
-        the FEM's law). See docs/diagnose_power.md for what it gains and
+        a/h; E and nu are its c and nu). With 'fem' the law's departures, a
+        ``(w/h)^2`` curvature and eq. (5)'s own ``large_deformation`` (a gel
+        that follows eq. 5 rather than the FEM), are rungs of the ladder,
+        never verdicts, and depth effects must beat the better of them
+        (`curvature`). See docs/diagnose_power.md for what it gains and
         costs.
     effects : sequence of str
         Effects already in the model diagnosed.
@@ -621,7 +622,7 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
     def material(m: IndentationModel, d: Mapping[str, np.ndarray]) -> tuple[float, float]:
         # the law's own curvature is a nuisance of the comparison: E and nu are read
         # through the model without it (with it, beta trades against its gamma)
-        m = IndentationModel(m.base, tuple(e for e in m.effects if e != "law_curvature"),
+        m = IndentationModel(m.base, tuple(e for e in m.effects if e not in law_rungs),
                              m.a_over_h)
         if m.base == "fem":
             # the FEM law's own parameters: nu is its shape's, E from c = 2 a E kappa_0 /
@@ -666,7 +667,10 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
     def sub(ok: np.ndarray) -> dict[str, np.ndarray]:
         return {k: v[ok] for k, v in cols.items()}
 
-    named = [n for n in EFFECTS if not (base == "paper" and n == "large_deformation")]
+    named = [n for n in EFFECTS if n != "large_deformation" or base == "layer"]
+    # the base law's own limits: rungs of the ladder, never verdicts, left out of E and nu
+    # (on the FEM law, eq. (5)'s beta term is the departure of a gel that follows eq. 5)
+    law_rungs = ("law_curvature",) + (("large_deformation",) if base == "fem" else ())
     # the user's own candidates: registered (import specs, classes) and tried as named physics
     if isinstance(candidates, str | Effect | type):
         candidates = (candidates,)
@@ -747,9 +751,8 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
     for _step in range(max_steps):
         tried = [n for n in named if n not in current.names and n not in untestable]
         tried += [g for g in (*steps, *generic) if g not in current.names]
-        if ("law_curvature" not in current.names and curvature == "gate"
-                and {"large_deformation", "fem_law"} & set(current.names)):
-            tried.append("law_curvature")
+        if curvature == "gate" and {"large_deformation", "fem_law"} & set(current.names):
+            tried += [r for r in law_rungs if r not in current.names]
         cands = []
         for name in tried:
             m = current.with_effect(name)
@@ -774,14 +777,13 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
             cands.append(Candidate(name, mf.bic - ref.bic, cv, mf.rmse_n, own, int(ok.sum())))
         cands.sort(key=lambda c: c.delta_bic)
         # the law's own curvature: the alternative every depth effect must beat
-        curv = [c for c in cands if c.effect == "law_curvature"]
+        curv = [c for c in cands if c.effect in law_rungs]
         curv_bic = curv[0].delta_bic if curv else math.inf
         if _step == 0:
-            first_candidates = tuple(c for c in cands if c.effect != "law_curvature")
+            first_candidates = tuple(c for c in cands if c.effect not in law_rungs)
         passing = [c for c in cands if c.delta_bic < -DELTA_BIC and c.cv_rmse_n < cur_cv
                    and (make_effect(c.effect).columns != ("depth_mm",)
-                        or c.effect == "law_curvature" or curvature == "nuisance"
-                        or model.base == "fem"
+                        or c.effect in law_rungs or curvature == "nuisance"
                         or c.delta_bic < curv_bic - CURVATURE_BIC)]
         # a counterpart competes only with its named effect: it does not raise an alarm
         # of its own (so many more candidates would, by chance, on null tables)
@@ -796,7 +798,7 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
             # a generic trend must beat every named effect that passes by EQUIVALENT_BIC;
             # else the named one (the catalogue's physics) is taken, the trend its equivalent
             named_ok = [c for c in passing if not c.effect.startswith((*_GENERIC,
-                                                                       "law_curvature"))]
+                                                                       *law_rungs))]
             if named_ok and named_ok[0].delta_bic - best.delta_bic < EQUIVALENT_BIC:
                 generic_first, best = best, named_ok[0]
         # equivalent: as good by BIC, or leaving the same residual (a change point between
@@ -804,10 +806,10 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
         eq = tuple(c.effect for c in passing
                    if c is not best and (c.delta_bic - best.delta_bic < EQUIVALENT_BIC
                                          or c.rmse_n <= (1 + EQUIVALENT_RMSE) * best.rmse_n)
-                   and not c.effect.startswith((*_GENERIC, "law_curvature")))
+                   and not c.effect.startswith((*_GENERIC, *law_rungs)))
         if generic_first is not None:
             eq = (*eq, generic_first.effect)
-        if best.effect == "law_curvature":
+        if best.effect in law_rungs:
             pass   # the base law's own limit: a rung of the ladder, not a verdict
         elif best.effect.startswith(_GENERIC):
             if unexplained is None:
