@@ -332,3 +332,30 @@ def test_fit_with_an_effect_recovers_it(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "incomplete_recovery.tau_s" in out
     assert "eq. (5) [layer + large_deformation] + incomplete_recovery" in out
+
+
+def test_unidentified_fit_says_so(tmp_path, capsys):
+    """issue 23: viscoelastic_relaxation on a constant hold_s cannot separate c, g and
+    tau. The fit is printed and written, but the headline says so, the JSON has
+    ``identified: false`` with the parameters named, and the exit status is 3; the
+    same table without the effect is identified (exit 0)."""
+    from tactilevision.io import write_measurements
+    from tactilevision.sim import make_measurement_table
+
+    t = make_measurement_table(None, 3)
+    cols = dict(t.columns)
+    cols["hold_s"] = np.full(cols["depth_mm"].size, 0.5)
+    csv = tmp_path / "m.csv"
+    write_measurements(csv, cols, thickness_mm=t.thickness_mm, radius_mm=t.radius_mm)
+    out = tmp_path / "fit.json"
+    assert main(["fit", str(csv), "--effects", "viscoelastic_relaxation",
+                 "--json", str(out)]) == 3
+    cap = capsys.readouterr()
+    assert "NOT IDENTIFIED by this table" in cap.out
+    assert "not identified by these data" in cap.err and "exit status 3" in cap.err
+    obj = json.loads(out.read_text())
+    assert obj["identified"] is False
+    assert "viscoelastic_relaxation.g" in obj["unidentified"]
+    assert main(["fit", str(csv), "--json", str(out)]) == 0
+    assert json.loads(out.read_text())["identified"] is True
+    assert "NOT IDENTIFIED" not in capsys.readouterr().out

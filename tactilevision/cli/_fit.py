@@ -35,7 +35,9 @@ A depth_std_mm column (standard uncertainty of each certified depth, mm) with a
 value in every row is carried into the fit of eq. (5) (errors in both
 variables, effective variance); if any of its cells is empty, the fit goes on
 without it and says so on stderr. --ignore-depth-std fits without it.
-Exit status 2 on bad input."""
+Exit status 2 on bad input; 3 when the model's parameters are not all identified
+by the table (e.g. viscoelastic_relaxation on a constant hold_s): the fit is
+printed and written, with "identified": false in the JSON."""
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -100,6 +102,9 @@ def summary(fit: IndentationFit, path: Path) -> str:
         f"beta = {fit.beta:.4f} {pct} CI {_fmt_ci(fit.beta_ci95, 4)}, "
         f"R^2 = {fit.r_squared:.5f}, rmse = {fit.rmse_n:.4g} N",
     ]
+    if not fit.identified:
+        lines.insert(1, f"  NOT IDENTIFIED by this table: {', '.join(fit.unidentified)}; "
+                        "E and nu below are not determined by the data")
     if fit.depth_std_used:
         lines.append(f"  depth uncertainty: depth_std_mm used (median "
                      f"{fit.depth_std_median_mm * 1e3:.3g} um), errors in both variables "
@@ -194,7 +199,8 @@ def run(args: argparse.Namespace) -> int:
     Returns
     -------
     status : int
-        0 on success.
+        0 on success; 3 when the fit ran but some of the model's parameters are
+        not identified by the table (``"identified": false`` in the JSON).
 
     Raises
     ------
@@ -238,4 +244,10 @@ def run(args: argparse.Namespace) -> int:
         _write_json(obj, args.json)  # first: a failed write prints nothing else
     if args.json != "-":
         print(summary(fit, path))
+    if not fit.identified:
+        # the numbers are printed and written, but a script must not take them as a fit
+        print(f"tactilevision fit: error: {path}: the model's parameters "
+              f"{', '.join(fit.unidentified)} are not identified by these data; E and nu "
+              "through them are not determined (exit status 3)", file=sys.stderr)
+        return 3
     return 0

@@ -148,7 +148,8 @@ def fit_model(columns: Mapping[str, np.ndarray], model: IndentationModel | str =
     if beta_table == "fem" and "large_deformation.beta" in mf.params:
         fit = _consistent_material(fit, model, mf, columns, h=h, a=a, contact=contact,
                                    confidence=confidence, scale=scale)
-    fit = replace(fit, notes=(*fit.notes, *_modulus_notes(mf.params, fit.E_mpa)))
+    fit = replace(fit, notes=(*fit.notes, *_modulus_notes(mf.params, fit.E_mpa)),
+                  unidentified=tuple(mf.unidentified))
     if "large_deformation.beta" not in mf.params:   # no beta: not "out of the table"
         fit = replace(fit, beta=math.nan, beta_ci95=(math.nan, math.nan), beta_se=math.nan,
                       out_of_table=False, out_of_table_message=None,

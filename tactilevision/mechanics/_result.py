@@ -71,6 +71,12 @@ class IndentationFit:
     sigma0_n : float
         Force scatter not explained by the depth uncertainties (the extra
         variance of the effective-variance fit), N; NaN when not used.
+    unidentified : tuple of str
+        Model parameters the data cannot determine (``ModelFit.unidentified``:
+        along a null direction of the Jacobian, e.g. a relaxation's g and tau
+        on a table whose hold_s is constant); empty when every parameter is
+        identified. ``identified`` (a property, and a key of the JSON) is
+        True when it is empty.
     """
 
     E_mpa: float
@@ -111,6 +117,12 @@ class IndentationFit:
     depth_std_used: bool = False
     depth_std_median_mm: float = math.nan
     sigma0_n: float = math.nan
+    unidentified: tuple[str, ...] = ()
+
+    @property
+    def identified(self) -> bool:
+        """Whether the data determine every parameter of the model fitted."""
+        return not self.unidentified
 
     def to_json_dict(self) -> dict[str, Any]:
         """The ``fit --json`` object: the contract's keys first, then extras.
@@ -129,4 +141,6 @@ class IndentationFit:
                 return {k: clean(x) for k, x in v.items()}
             return v
 
-        return {name: clean(getattr(self, name)) for name in self.__dataclass_fields__}
+        obj = {name: clean(getattr(self, name)) for name in self.__dataclass_fields__}
+        obj["identified"] = self.identified
+        return obj
