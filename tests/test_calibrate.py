@@ -225,6 +225,10 @@ def test_saturated_and_unseen_bevel_are_rejected(scenario, tmp_path):
     assert sum(r in ("bevel never seen", "bevel out of view") for r in reasons.values()) >= 6
     assert all(r.bevel_score == r.bevel_score for r in c.rejected
                if r.reason == "bevel never seen")          # never NaN
+    # the message states the rule applied, not a bare threshold
+    assert all("the rule: two consecutive frames above 12, or one above 24" in r.detail
+               or "threshold" in r.detail for r in c.rejected if r.reason == "bevel never seen")
+    assert any("the rule: two consecutive frames above" in r.detail for r in c.rejected)
 
 
 def test_nothing_is_lost_when_every_press_is_rejected(scenario, tmp_path, capsys):

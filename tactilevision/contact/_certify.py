@@ -422,7 +422,8 @@ def certify_session(session, *, min_contact_px: int = 200, bevel_threshold: floa
                 reject("bevel never seen", f"no frame of the press shows a mark "
                        f"{cfg.bevel_offset_mm:g} mm from the indenter at "
                        f"{cfg.bevel_direction_deg:g} deg (best signal-to-noise ratio "
-                       f"{scores.max():.1f}, threshold {bevel_threshold:g})",
+                       f"{scores.max():.1f}; the rule: two consecutive frames above "
+                       f"{bevel_threshold:g}, or one above {2 * bevel_threshold:g})",
                        score=float(scores.max()))
                 continue
             onset = int(cand[np.argmax(firm)])

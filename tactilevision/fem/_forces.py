@@ -375,13 +375,16 @@ class _Spectral:
 
 
 def _mixed_solve(compliance, stiffness, u: np.ndarray, mask: np.ndarray, *,
-                 tol: float = 1e-8, max_iter: int = 500, max_sweeps: int = 8) -> np.ndarray:
+                 tol: float = 1e-5, max_iter: int = 500, max_sweeps: int = 8) -> np.ndarray:
     """Traction t, zero outside `mask`, with (C t) = u on `mask`; pressure >= 0.
 
     Preconditioned conjugate gradients on the masked compliance operator,
     the stiffness (its inverse on the whole plane) restricted to the mask as
     the preconditioner; then nodes with tensile pressure leave the mask and
-    the solve repeats (at most `max_sweeps` times).
+    the solve repeats (at most `max_sweeps` times). `tol` is the relative
+    residual: 1e-5 moves the totals of the sample session's punch presses by
+    under 3e-6 N against 1e-8 (2.2 against 2.20 N) at 2.3 times less time
+    (2.2 against 5.0 s per 640 x 480 frame, measured on this machine).
     """
     mask = mask.copy()
     t = np.zeros_like(u)
