@@ -320,21 +320,8 @@ def kappa_n(nu: float | np.ndarray, a_over_h: float | np.ndarray,
     """
     from scipy.interpolate import PchipInterpolator
 
-    data = _load("beta_fem.npz")
-    contacts = [str(c) for c in data["contacts"]]
-    if contact not in contacts:
-        raise InputError(f"contact must be one of {contacts}, got {contact!r}")
     n, r, x = np.broadcast_arrays(*(np.asarray(v, np.float64) for v in (nu, a_over_h, w_over_h)))
-    wt = np.concatenate([[0.0], data["w_over_h"]])
-    for name, v, lo, hi in (("nu", n, data["nu"][0], data["nu"][-1]),
-                            ("a_over_h", r, data["a_over_h"][0], data["a_over_h"][-1]),
-                            ("w_over_h", x, 0.0, TABLE_EXTRAPOLATION * wt[-1])):
-        bad = ~((v >= lo) & (v <= hi))
-        if np.any(bad):
-            raise InputError(f"{name} = {float(v[bad].ravel()[0]):g} is outside the FEM "
-                             f"kappa_n table range [{lo:g}, {hi:g}]")
-    c = contacts.index(contact)
-    kn = np.concatenate([data["kappa0"][c][..., None], data["kappa_n"][c]], axis=-1)  # (A, N, K+1)
+    data, wt, kn = _kappa_n_nodes(n, r, x, contact)
     along_w = PchipInterpolator(wt, kn, axis=2)
     out = np.empty(n.shape)
     for idx in np.ndindex(n.shape):
@@ -373,14 +360,29 @@ def kappa_n_grid(nu: np.ndarray, a_over_h: float, w_over_h: np.ndarray, *,
 
     nu = np.atleast_1d(np.asarray(nu, np.float64))
     x = np.atleast_1d(np.asarray(w_over_h, np.float64))
-    # the range checks of kappa_n, on the grid's extremes
-    kappa_n(np.array([nu.min(), nu.max()]), a_over_h, np.array([x.min(), x.max()]),
-            contact=contact)
-    data = _load("beta_fem.npz")
-    c = [str(v) for v in data["contacts"]].index(contact)
-    wt = np.concatenate([[0.0], data["w_over_h"]])
-    kn = np.concatenate([data["kappa0"][c][..., None], data["kappa_n"][c]], axis=-1)  # (A, N, K+1)
+    data, wt, kn = _kappa_n_nodes(nu, np.asarray(float(a_over_h)), x, contact)
     k_w = PchipInterpolator(wt, kn, axis=2)(x)                                # (A, N, K)
     k_nu = PchipInterpolator(data["nu"], k_w, axis=1)(nu)                     # (A, M, K)
     return np.asarray(PchipInterpolator(data["a_over_h"], k_nu, axis=0)(float(a_over_h)),
                       np.float64)
+
+
+def _kappa_n_nodes(nu: np.ndarray, a_over_h: np.ndarray, w_over_h: np.ndarray, contact: str
+                   ) -> tuple[dict, np.ndarray, np.ndarray]:
+    """Check a query of :func:`kappa_n` against the table's ranges; return the table, its
+    w/h nodes (0 first) and kappa_n at them, shape (A, N, K+1), kappa0 first."""
+    data = _load("beta_fem.npz")
+    contacts = [str(c) for c in data["contacts"]]
+    if contact not in contacts:
+        raise InputError(f"contact must be one of {contacts}, got {contact!r}")
+    wt = np.concatenate([[0.0], data["w_over_h"]])
+    for name, v, lo, hi in (("nu", nu, data["nu"][0], data["nu"][-1]),
+                            ("a_over_h", a_over_h, data["a_over_h"][0], data["a_over_h"][-1]),
+                            ("w_over_h", w_over_h, 0.0, TABLE_EXTRAPOLATION * wt[-1])):
+        bad = ~((v >= lo) & (v <= hi))
+        if np.any(bad):
+            raise InputError(f"{name} = {float(np.asarray(v)[bad].ravel()[0]):g} is outside "
+                             f"the FEM kappa_n table range [{lo:g}, {hi:g}]")
+    c = contacts.index(contact)
+    kn = np.concatenate([data["kappa0"][c][..., None], data["kappa_n"][c]], axis=-1)
+    return data, wt, kn
