@@ -619,20 +619,24 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
         raise InputError(f"depth_mm holds {n_depths} distinct depth(s); comparing eq. (5) with "
                          "the measurements needs presses at two depths or more")
 
-    def material(m: IndentationModel, d: Mapping[str, np.ndarray]) -> tuple[float, float]:
+    def material(m: IndentationModel, d: Mapping[str, np.ndarray],
+                 fit: ModelFit | None = None) -> tuple[float, float]:
         # the law's own curvature is a nuisance of the comparison: E and nu are read
         # through the model without it (with it, beta trades against its gamma)
+        full = m
         m = IndentationModel(m.base, tuple(e for e in m.effects if e not in law_rungs),
                              m.a_over_h)
         if m.base == "fem":
             # the FEM law's own parameters: nu is its shape's, E from c = 2 a E kappa_0 /
             # (1 - nu^2) (eq. 1-2)
-            try:
-                with warnings.catch_warnings():
-                    warnings.simplefilter("ignore")
-                    f = m.fit(d, thickness_mm=h)
-            except InputError:
-                return math.nan, math.nan
+            f = fit if fit is not None and m == full else None   # that fit is this one
+            if f is None:
+                try:
+                    with warnings.catch_warnings():
+                        warnings.simplefilter("ignore")
+                        f = m.fit(d, thickness_mm=h)
+                except InputError:
+                    return math.nan, math.nan
             nu_f = f.params["fem_law.nu"]
             k0 = float(kappa_n(nu_f, a / h, 0.0))
             return f.params["c_n_per_mm"] * (1 - nu_f ** 2) / (2 * a * k0), nu_f
@@ -714,7 +718,7 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
     fit0 = model.fit(d0, thickness_mm=h)
     cv0 = cross_validated_rmse(model, d0, thickness_mm=h, k=cv_folds, seed=seed,
                                start=fit0.params)
-    E0, nu0 = material(model, d0)
+    E0, nu0 = material(model, d0, fit0)
     n_depth = 2 if {"large_deformation", "fem_law"} & set(model.names) else 1
     cov0 = covariate_tests(fit0.residuals_n, fit0.predicted_n, d0, n_depth_params=n_depth)
     ladder = [LadderStep(("layer", *model.names), fit0.rmse_n, cv0, fit0.bic, E0, nu0, None)]
@@ -730,7 +734,7 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
         if fc.bic < fit0.bic - NUISANCE_BIC:
             cvc = cross_validated_rmse(mc, d0, thickness_mm=h, k=cv_folds, seed=seed,
                                        start=fc.params)
-            Ec, nuc = material(mc, d0)
+            Ec, nuc = material(mc, d0, fc)
             ladder.append(LadderStep(("layer", *mc.names), fc.rmse_n, cvc, fc.bic, Ec, nuc,
                                      "law_curvature"))
             fits.append(fc)
@@ -821,7 +825,7 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
         d = sub(rows_for(current))
         cur_fit = current.fit(d, thickness_mm=h, start={**cur_fit.params, **best.params})
         cur_cv = best.cv_rmse_n
-        E, nu = material(current, d)
+        E, nu = material(current, d, cur_fit)
         ladder.append(LadderStep(("layer", *current.names), cur_fit.rmse_n, cur_cv, cur_fit.bic,
                                  E, nu, best.effect))
         fits.append(cur_fit)
