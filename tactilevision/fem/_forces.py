@@ -384,7 +384,8 @@ def _mixed_solve(compliance, stiffness, u: np.ndarray, mask: np.ndarray, *,
     the solve repeats (at most `max_sweeps` times). `tol` is the relative
     residual: 1e-5 moves the totals of the sample session's punch presses by
     under 3e-6 N against 1e-8 (2.2 against 2.20 N) at 2.3 times less time
-    (2.2 against 5.0 s per 640 x 480 frame, measured on this machine).
+    (2.2 against 5.0 s per 640 x 480 frame, both timed in one run on this 2-core
+    machine).
     """
     mask = mask.copy()
     t = np.zeros_like(u)
