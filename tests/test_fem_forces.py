@@ -200,3 +200,18 @@ def test_single_precision_path_matches_double():
     k0 = E * (1 - NU) / ((1 + NU) * (1 - 2 * NU)) / H
     flat = periodic(np.full((n, n + 4), 0.01, np.float32)).total_n[2]
     assert flat == pytest.approx(k0 * 0.01 * n * (n + 4) * dx * dx, rel=1e-5)
+
+
+@pytest.mark.parametrize("method", ["spectral", "fem"])
+def test_footprint_of_a_flat_gel_carries_no_force(method):
+    # a contact mask (from the colour change) over a gel that did not move: zero traction,
+    # not a division by zero in the conjugate gradients (a no-contact frame in `forces`)
+    est = ForceEstimator((48, 64), 0.1, thickness_mm=3, E_mpa=0.2, nu=0.48,
+                         contact="footprint", method=method, grid=(16, 12))
+    mask = np.zeros((48, 64), bool)
+    mask[20:25, 30:35] = True
+    fm = est(np.zeros((48, 64), np.float32), contact_mask=mask)
+    np.testing.assert_array_equal(fm.total_n, 0.0)
+    # and a real press inside the same mask still pushes
+    u = np.where(mask, 0.05, 0.0).astype(np.float32)
+    assert est(u, contact_mask=mask).total_n[2] > 0

@@ -401,6 +401,8 @@ def _mixed_solve(compliance, stiffness, u: np.ndarray, mask: np.ndarray, *,
         rz = float(np.vdot(r, z))
         bn = float(np.linalg.norm(b)) or 1.0
         for _ in range(max_iter):
+            if float(np.linalg.norm(r)) < tol * bn:
+                break       # converged, or nothing to solve (zero displacement on the mask)
             Ap = np.where(m, compliance(p), 0.0)
             alpha = rz / float(np.vdot(p, Ap))
             t = t + alpha * p
