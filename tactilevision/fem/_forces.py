@@ -317,6 +317,8 @@ class _Spectral:
             kn = layer_normal_stiffness(np.hypot(kx, ky), thickness_mm=h, E_mpa=E, nu=nu)
             self.K = kn[..., None, None].astype(np.complex128)
             self.C = 1.0 / self.K
+            self.K32 = kn.astype(np.complex64)
+            self.C32 = (1.0 / kn).astype(np.complex64)
         # the camera-rate path (float32, 'normal'): OpenCV's real DFT, twice as fast
         # as scipy.fft's at these sizes (0.45 against 0.72 ms forward at 480 x 600,
         # one core), with the stiffness times the pixel area as the packed (CCS)
@@ -334,6 +336,11 @@ class _Spectral:
         f = sfft.rfft2(t, s=self.fshape, axes=(1, 2), workers=1)
         g = np.einsum("yxij,nyxj->nyxi", M, f) if M.shape[-1] > 1 else M[..., 0] * f
         return sfft.irfft2(g, s=self.fshape, axes=(1, 2), workers=1)
+
+    def _apply32(self, M: np.ndarray, t: np.ndarray) -> np.ndarray:
+        """(Hf, Wf, 1) float32 -> (Hf, Wf, 1) float32: IFFT(M FFT(t)), M scalar per k."""
+        f = sfft.rfft2(t[..., 0], s=self.fshape, workers=1)
+        return sfft.irfft2(M * f, s=self.fshape, workers=1)[..., None]
 
     def field(self, disp: np.ndarray) -> np.ndarray:
         H, W = self.shape
@@ -365,10 +372,19 @@ class _Spectral:
         for d, m in zip(disp, contact, strict=True):
             mask = np.zeros((Hf, Wf), bool)
             mask[:H, :W] = m
-            u = np.zeros((Hf, Wf, d.shape[-1]))
-            u[:H, :W] = d
-            t = _mixed_solve(lambda x: self._apply(self.C, x[None])[0],
-                             lambda x: self._apply(self.K, x[None])[0], u, mask)
+            if self.full:
+                u = np.zeros((Hf, Wf, d.shape[-1]))
+                u[:H, :W] = d
+                t = _mixed_solve(lambda x: self._apply(self.C, x[None])[0],
+                                 lambda x: self._apply(self.K, x[None])[0], u, mask)
+            else:
+                # normal contact: scalar operators in single precision, 2.9 times faster
+                # than in double at 640 x 480 with the same total to 1e-6 relative (a
+                # 0.3 mm punch: 1.1706174 against 1.1706187 N, timed in one run)
+                u = np.zeros((Hf, Wf, 1), np.float32)
+                u[:H, :W] = d
+                t = _mixed_solve(lambda x: self._apply32(self.C32, x),
+                                 lambda x: self._apply32(self.K32, x), u, mask)
             out.append(self._forces(t[None, :H, :W])[0])
             masks.append(mask[:H, :W] & (t[:H, :W, -1] > 0))
         return np.stack(out), np.stack(masks)
