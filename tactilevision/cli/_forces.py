@@ -53,17 +53,23 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="spectral layer model at full resolution (default) or inverse FEM")
     p.add_argument("--grid", metavar="NX,NY", default="40,30",
                    help="FEM surface nodes along x and y (default 40,30)")
-    p.add_argument("--level", choices=("far_field", "median"), default="far_field",
-                   help="the height's zero: a surface fitted to the gel outside the contact "
-                   "(default; a no-contact frame of the sample session reads 30 mN instead of "
-                   "1.1 N) or the frame's median (DepthReconstructor's default, faster)")
+    p.add_argument("--level", choices=("contact", "far_field", "median"), default="contact",
+                   help="the height's zero: pinned outside the contact region, heights "
+                   "integrated over the contact only (default; DepthReconstructor(boundary="
+                   "'contact')), a surface fitted to the gel outside the contact, or the "
+                   "frame's median (DepthReconstructor's default)")
     p.add_argument("--flat-reference", action="store_true",
                    help="subtract the optics model's gradient on the reference (right for "
                    "simulated frames; on real GelSight frames it adds background)")
-    p.add_argument("--contact", choices=("field", "footprint"), default="field",
-                   help="trust the height map everywhere (default), or only where the colour "
-                   "change exceeds the noise, with zero traction elsewhere (suits curved "
-                   "indenters: a flat face changes no colour inside its footprint)")
+    p.add_argument("--contact", choices=("footprint", "field"), default="footprint",
+                   help="traction only on the footprint, the pixels whose height exceeds "
+                   "--threshold-mm, zero elsewhere (default), or the height map trusted "
+                   "everywhere (every error beyond the contact then pushes or pulls)")
+    p.add_argument("--threshold-mm", type=float, default=0.02,
+                   help="footprint: height above which a pixel is in contact (default 0.02)")
+    p.add_argument("--beta", type=float, default=None,
+                   help="large-deformation stiffening of eq. (5), forces x (1 + beta w/h); "
+                   "default: the fit JSON's beta, else 0")
     p.add_argument("--every", type=int, default=1, metavar="N", help="every N-th frame")
     p.add_argument("--no-images", action="store_true", help="write forces.csv only")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -97,6 +103,25 @@ def _material(args: argparse.Namespace, session_dir: Path | None
     return E, nu, str(path), obj
 
 
+def _beta(args: argparse.Namespace, fit_obj: dict, material_source: str
+          ) -> tuple[float, str]:
+    """Eq. (5)'s beta and where it came from: --beta, the fit JSON's, else 0."""
+    if args.beta is not None:
+        if not (np.isfinite(args.beta) and args.beta >= 0):
+            raise InputError(f"--beta must be finite and >= 0, got {args.beta}")
+        return float(args.beta), "command line"
+    value = fit_obj.get("beta")
+    if value is None:
+        return 0.0, "default (no fit JSON with a beta: linear layer)"
+    try:
+        beta = float(value)
+    except (TypeError, ValueError):
+        raise InputError(f"{material_source} has a beta of {value!r}, not a number") from None
+    if not (np.isfinite(beta) and beta >= 0):
+        raise InputError(f"{material_source} has beta = {beta}: give --beta")
+    return beta, material_source
+
+
 def run(args: argparse.Namespace) -> int:
     """Run ``forces``; returns 0, or 2 on bad input (nothing written then)."""
     from ..fem import ForceEstimator
@@ -117,8 +142,12 @@ def run(args: argparse.Namespace) -> int:
         h = args.thickness_mm if args.thickness_mm is not None else cfg.gel_thickness_mm
         cal_path = args.calibration or (default_calibration_path(args.sensor) if args.sensor
                                         else cfg.calibration)
+        optics_note = ("--calibration" if args.calibration else
+                       f"shipped '{args.sensor}'" if args.sensor else "the session's own")
         if cal_path is None and cfg.sensor_name in KNOWN_SENSORS:
             cal_path = default_calibration_path(cfg.sensor_name)
+            optics_note = (f"shipped '{cfg.sensor_name}' (the session names no [optics] "
+                           "calibration of its own)")
         reference = session.reference
         mm_per_px = cfg.mm_per_px
     else:
@@ -126,6 +155,7 @@ def run(args: argparse.Namespace) -> int:
         times = np.full(len(frames), np.nan)
         cal_path = args.calibration or (default_calibration_path(args.sensor) if args.sensor
                                         else None)
+        optics_note = "--calibration" if args.calibration else f"shipped '{args.sensor}'"
         if args.thickness_mm is None:
             raise InputError("a frames folder needs --thickness-mm (the gel thickness h)")
         h = args.thickness_mm
@@ -145,14 +175,21 @@ def run(args: argparse.Namespace) -> int:
     if args.every < 1:
         raise InputError(f"--every must be >= 1, got {args.every}")
     E, nu, material_source, fit_obj = _material(args, source if session else None)
+    beta, beta_source = _beta(args, fit_obj, material_source)
+    if not args.threshold_mm > 0:
+        raise InputError(f"--threshold-mm must be > 0, got {args.threshold_mm}")
     try:
         grid = tuple(int(v) for v in args.grid.split(","))
     except ValueError:
         raise InputError(f"--grid must be NX,NY, got {args.grid!r}") from None
-    recon = DepthReconstructor(cal, reference="calibration" if reference is None else reference,
-                               level=args.level, flat_reference=args.flat_reference)
+    recon = DepthReconstructor(
+        cal, reference="calibration" if reference is None else reference,
+        boundary="contact" if args.level == "contact" else "neumann",
+        level="median" if args.level == "contact" else args.level,
+        flat_reference=args.flat_reference)
     est = ForceEstimator(cal.shape, mm_per_px, thickness_mm=h, E_mpa=E, nu=nu, grid=grid,
-                         method=args.method, contact=args.contact)
+                         method=args.method, contact=args.contact,
+                         threshold_mm=args.threshold_mm, beta=beta)
     out = args.out if args.out is not None else source / "forces"
     output_folder(out)
     ft = None
@@ -184,10 +221,10 @@ def run(args: argparse.Namespace) -> int:
             skipped.append(str(exc))
             continue
         height = recon(frame)     # float32: the estimator's single-precision path
-        # the contact: colour change above the calibration's noise level (the footprint with
-        # --contact footprint; its area is reported in every mode, as by reconstruct)
-        mask = recon.contact_mask(frame)
-        fm = est(height, contact_mask=mask if args.contact == "footprint" else None)
+        fm = est(height)
+        # the contact area: the footprint the traction acts on (pixels above --threshold-mm
+        # with non-negative pressure); with 'field', the colour change above the noise level
+        mask = recon.contact_mask(frame) if fm.contact is None else fm.contact
         t = float(times[i])
         row = {"frame": path.name, "t_s": "" if not np.isfinite(t) else f"{t:.4f}",
                "fx_n": f"{fm.total_n[0]:.5f}", "fy_n": f"{fm.total_n[1]:.5f}",
@@ -205,10 +242,16 @@ def run(args: argparse.Namespace) -> int:
         writer = csv.DictWriter(fh, fieldnames=_COLUMNS)
         writer.writeheader()
         writer.writerows(rows)
-    print(f"force maps of {len(rows)} frame(s) from {source} ({args.method}, "
-          f"{args.contact}; heights levelled at the {args.level.replace('_', ' ')}"
-          f"{', flat reference' if args.flat_reference else ''}; E {E:.4g} MPa, nu {nu:.4g} "
-          f"from {material_source}; h {h:g} mm) into {out}{ft_note}")
+    level = {"contact": "zero outside the contact region",
+             "far_field": "levelled at the far field", "median": "the frame's median at zero"}
+    contact = (f"footprint above {args.threshold_mm:g} mm" if args.contact == "footprint"
+               else "field")
+    print(f"force maps of {len(rows)} frame(s) from {source} into {out}{ft_note}\n"
+          f"  optics: {cal_path} ({optics_note})\n"
+          f"  heights: {level[args.level]}"
+          f"{', flat reference' if args.flat_reference else ''}\n"
+          f"  forces: {args.method}, {contact}; E {E:.4g} MPa, nu {nu:.4g} from "
+          f"{material_source}; beta {beta:.3g} from {beta_source}; h {h:g} mm")
     for msg in skipped:
         print(f"tactilevision forces: error: {msg}", file=sys.stderr)
     return 2 if skipped else 0

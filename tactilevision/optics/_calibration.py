@@ -310,7 +310,9 @@ class PhotometricCalibration:
             arrays.update(lut_table=self.lut.table, lut_lo=self.lut.lo, lut_hi=self.lut.hi,
                           lut_counts=self.lut.counts.astype(np.int32))
         if self.cell_luts is not None:
-            arrays["lut_cells"] = np.asarray(self.cell_luts, np.float32)
+            # normals in [-1, 1]: float16 keeps them to 5e-4 and halves the file (an 8 x 6
+            # grid of 32^3 tables: 4.9 MB compressed instead of 11.0 MB)
+            arrays["lut_cells"] = np.asarray(self.cell_luts, np.float16)
         if self.onnx_bytes is not None:
             arrays["onnx"] = np.frombuffer(self.onnx_bytes, np.uint8)
         buf = io.BytesIO()
@@ -394,6 +396,8 @@ class PhotometricCalibration:
         lo = meta.get("colour_lo", lut.lo if lut is not None else defaults.colour_lo)
         hi = meta.get("colour_hi", lut.hi if lut is not None else defaults.colour_hi)
         cell_luts = data.get("lut_cells") if model == "lut" else None
+        if cell_luts is not None:
+            cell_luts = cell_luts.astype(np.float32)
         if cell_luts is not None and (cell_luts.ndim != 6 or lut is None
                                       or cell_luts.shape[2:] != lut.table.shape):
             raise InputError(f"calibration file {path}: 'lut_cells' has shape "
