@@ -589,7 +589,8 @@ def run(make_reconstructor: Maker = default_reconstructor,
 
 
 TITLES = {"taxim": "(a) Taxim renders (its own renderer), shipped GelSight calibration",
-          "fem": "(b) FEM-surface session sample_frames/gelsight_session, shipped calibration",
+          "fem": "(b) FEM-surface session sample_frames/gelsight_session, its own optics "
+                 "(optics.npz, session.toml [optics])",
           "gelsight": "(c) Real GelSight ball presses (taxim data pack), shipped calibration",
           "gelslim": "(c) Real GelSlim 3.0 ball presses, LUT calibrated on the even presses"}
 
