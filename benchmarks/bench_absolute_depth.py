@@ -117,6 +117,8 @@ DETECTED_FRACTION = 0.85           # contact radius / detected colour-edge radiu
 DISC = 0.9                         # contact evaluated within this fraction of its radius
 FAR = 1.5                          # background beyond this many contact radii
 FAR_OUT = 3.0                      # far-field level: median height from FAR to FAR_OUT radii
+CAL_BALL_MM = 3.0                  # --taxim-optics N: the calibration ball (not the test's)
+OWN_LUT_CELLS = (4, 3)
 
 Maker = Callable[[PhotometricCalibration, np.ndarray], DepthReconstructor]
 
@@ -212,7 +214,8 @@ def machine() -> dict:
 
 
 def render_taxim(depths_mm: Sequence[float] = TAXIM_DEPTHS_MM, *, shadow: bool = True,
-                 seed: int = 0) -> tuple[np.ndarray, list[dict]]:
+                 seed: int = 0, calibration_presses: int = 0
+                 ) -> tuple[np.ndarray, list[dict]] | tuple[np.ndarray, list[dict], dict]:
     """Ball and flat-punch presses at the pad's centre drawn by Taxim (BGR uint8).
 
     Returns the no-contact frame and, per press, ``kind``, ``depth_mm``, ``frame``,
@@ -221,6 +224,12 @@ def render_taxim(depths_mm: Sequence[float] = TAXIM_DEPTHS_MM, *, shadow: bool =
     map is the distance from the gel's undeformed surface (smaller = closer to the
     camera): the ball's lowest point and the punch's face at 0; ``press_depth`` pushes
     that point d into the gel.
+
+    With ``calibration_presses`` N > 0 it also renders, with the same renderer, N
+    presses of a ball of radius ``CAL_BALL_MM`` (another ball than the test's) at
+    random positions (contacts may leave the image) and depths 0.2 to 1.2 mm, and
+    returns a third item: ``frames`` (N, H, W, 3), ``centers_px`` (N, 2), ``radii_px``
+    (N,), the contact circles, for ``PhotometricCalibration.from_ball_presses``.
     """
     import jax  # Taxim's jax backend; jit for its deformed gel
     import taxim
@@ -270,15 +279,42 @@ def render_taxim(depths_mm: Sequence[float] = TAXIM_DEPTHS_MM, *, shadow: bool =
                         tgel = None
                 out.append(dict(kind=kind, depth_mm=float(d), frame=frame, contact_radius_mm=a,
                                 taxim_gel_mm=tgel))
-    return ref, out
+        if calibration_presses <= 0:
+            return ref, out
+        crng = np.random.default_rng(seed + 1)
+        frames, centres, radii = [], [], []
+        xx, yy = np.meshgrid(np.arange(w, dtype=np.float64), np.arange(h, dtype=np.float64))
+        for _ in range(calibration_presses):
+            c = (crng.uniform(0, w - 1), crng.uniform(0, h - 1))
+            d = float(crng.uniform(0.2, 1.2))
+            rr = np.hypot(xx - c[0], yy - c[1]) * MM_PER_PX
+            ball = np.where(rr < CAL_BALL_MM,
+                            CAL_BALL_MM - np.sqrt(np.maximum(CAL_BALL_MM**2 - rr * rr, 0.0)),
+                            CAL_BALL_MM + 1.0).astype(np.float32)
+            frames.append(bgr(sim.render(ball, with_shadow=shadow, press_depth=d),
+                              CAMERA_NOISE_GREY))
+            centres.append(c)
+            radii.append(math.sqrt(2 * CAL_BALL_MM * d - d * d) / MM_PER_PX)
+    return ref, out, dict(frames=np.stack(frames), centers_px=np.array(centres),
+                          radii_px=np.array(radii))
 
 
-def _bench_taxim(make: Maker, *, shadow: bool, log) -> dict:
+def _bench_taxim(make: Maker, *, shadow: bool, log, own_optics: int = 0) -> dict:
     t0 = time.perf_counter()
-    ref, presses = render_taxim(shadow=shadow)
+    if own_optics:
+        ref, presses, balls = render_taxim(shadow=shadow, calibration_presses=own_optics)
+    else:
+        ref, presses = render_taxim(shadow=shadow)
     t_render = time.perf_counter() - t0
-    log(f"[taxim] {len(presses) + 1} Taxim renders in {t_render:.1f} s")
-    cal = PhotometricCalibration.load("gelsight")
+    log(f"[taxim] {len(presses) + 1 + own_optics} Taxim renders in {t_render:.1f} s")
+    if own_optics:
+        # the renderer's own optics, made as a rig makes them: ball presses of its sensor
+        cal = PhotometricCalibration.from_ball_presses(
+            ref, balls["frames"], balls["centers_px"], balls["radii_px"],
+            ball_radius_mm=CAL_BALL_MM, mm_per_px=MM_PER_PX, model="lut",
+            lut_cells=OWN_LUT_CELLS)
+    else:
+        cal = PhotometricCalibration.load("gelsight")
     recon = make(cal, ref)
     centre = ((SHAPE[1] - 1) / 2, (SHAPE[0] - 1) / 2)
     r_px = _grid_r_px(SHAPE, centre)
@@ -307,13 +343,18 @@ def _bench_taxim(make: Maker, *, shadow: bool, log) -> dict:
              f"{CAMERA_NOISE_GREY:g} grey levels of camera noise; reference: Taxim's "
              "no-contact render; truth 0 beyond "
              f"{FAR:g} a, contact evaluated within {DISC:g} a."]
+    if own_optics:
+        notes.append(f"Optics: LUT with {OWN_LUT_CELLS[0]} x {OWN_LUT_CELLS[1]} position cells "
+                     f"calibrated on {own_optics} Taxim presses of a {CAL_BALL_MM:g} mm ball "
+                     "(random positions, 0.2 to 1.2 mm deep), not the shipped calibration.")
     if gel_far:
         worst = max(gel_far, key=lambda t: t[2])
         notes.append("Taxim's own deformed gel beyond 1.5 a (its Gaussian-pyramid skirt): "
                      f"rms {1000 * min(t[1] for t in gel_far):.1f} to "
                      f"{1000 * max(t[1] for t in gel_far):.1f} um, largest "
                      f"{1000 * worst[2]:.0f} um ({worst[0]}).")
-    return dict(rows=rows, notes=notes, render_s=t_render)
+    return dict(rows=rows, notes=notes, render_s=t_render,
+                optics=f"own ({own_optics} presses)" if own_optics else "shipped")
 
 
 # ------------------------------------------------------------------ (b) FEM session
@@ -528,7 +569,8 @@ class ColourGated(DepthReconstructor):
 
 def run(make_reconstructor: Maker = default_reconstructor,
         datasets: Sequence[str] = DATASETS, *, taxim_shadow: bool = True,
-        fem_presses: int = 10, log: Callable[[str], None] | None = None) -> dict:
+        fem_presses: int = 10, taxim_optics: int = 0,
+        log: Callable[[str], None] | None = None) -> dict:
     """Run the benchmark with the reconstructor ``make_reconstructor(calibration, reference)``.
 
     Parameters
@@ -543,6 +585,9 @@ def run(make_reconstructor: Maker = default_reconstructor,
         Taxim's ``with_shadow``.
     fem_presses : int, default 10
         Presses of the FEM session.
+    taxim_optics : int, default 0
+        0: read Taxim's frames with the shipped GelSight calibration; N > 0: with a
+        position-cell LUT calibrated on N Taxim presses of another ball.
     log : callable, optional
         Progress lines (default: to stderr).
 
@@ -571,7 +616,8 @@ def run(make_reconstructor: Maker = default_reconstructor,
             except ImportError as exc:
                 res = dict(skipped=f"taxim or jax not installed ({exc})")
             else:
-                res = _bench_taxim(make_reconstructor, shadow=taxim_shadow, log=log)
+                res = _bench_taxim(make_reconstructor, shadow=taxim_shadow, log=log,
+                                   own_optics=taxim_optics)
         elif name == "fem":
             res = _bench_fem(make_reconstructor, n_presses=fem_presses, log=log)
         elif name == "gelsight":
@@ -618,7 +664,11 @@ def format_report(result: dict) -> str:
             "cap R (mm) | cap rim (um) | normal angle (deg) | shape rms (um) |")
     for name, res in result["datasets"].items():
         wall = res.get("wall_s", math.nan)
-        lines.append(f"### {TITLES.get(name, name)}")
+        title = TITLES.get(name, name)
+        if name == "taxim" and str(res.get("optics", "shipped")).startswith("own"):
+            title = title.replace("shipped GelSight calibration",
+                                  f"its own optics, {res['optics']}")
+        lines.append(f"### {title}")
         lines.append("")
         if "skipped" in res:
             lines += [f"Skipped: {res['skipped']}", ""]
@@ -695,6 +745,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--json", type=Path, default=None, help="also write the result as JSON")
     ap.add_argument("--taxim-no-shadow", action="store_true", help="Taxim with_shadow=False")
     ap.add_argument("--fem-presses", type=int, default=10)
+    ap.add_argument("--taxim-optics", type=int, default=0, metavar="N",
+                    help="read Taxim's frames with a LUT (4 x 3 cells) calibrated on N Taxim "
+                         "presses of a 3 mm ball instead of the shipped calibration")
     a = ap.parse_args(argv)
     names = [d.strip() for d in a.datasets.split(",") if d.strip()]
     bad = [d for d in names if d not in DATASETS]
@@ -712,7 +765,8 @@ def main(argv: list[str] | None = None) -> int:
             return ColourGated(cal, reference=ref, k_sigma=a.colour_gate, **kwargs)
         return DepthReconstructor(cal, reference=ref, **kwargs)
 
-    res = run(make, names, taxim_shadow=not a.taxim_no_shadow, fem_presses=a.fem_presses)
+    res = run(make, names, taxim_shadow=not a.taxim_no_shadow, fem_presses=a.fem_presses,
+              taxim_optics=a.taxim_optics)
     res["command"] = " ".join(["python benchmarks/bench_absolute_depth.py",
                                *(sys.argv[1:] if argv is None else argv)])
     res["boundary"] = a.boundary

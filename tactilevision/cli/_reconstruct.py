@@ -39,10 +39,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--out", metavar="DIR", type=Path, default=Path("out/reconstruct"),
                    help="output folder (default: out/reconstruct)")
     p.add_argument("--no-images", action="store_true", help="write only the .npy height maps")
-    p.add_argument("--level", choices=("median", "far_field"), default="median",
-                   help="the height's zero: the frame's median (default, camera rate) or a "
-                   "surface fitted to the gel outside the contact (absolute heights; "
-                   "docs/absolute_depth.md)")
+    p.add_argument("--level", choices=("median", "far_field", "contact"), default="median",
+                   help="the height's zero: the frame's median (default, camera rate), a "
+                   "surface fitted to the gel outside the contact, or zero outside the "
+                   "contact region with the heights integrated over it (what 'forces' uses; "
+                   "absolute heights: docs/absolute_depth.md)")
     p.add_argument("--flat-reference", action="store_true",
                    help="subtract the optics model's gradient on the reference")
     p.set_defaults(func=run)
@@ -63,7 +64,9 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"reference {args.reference} does not exist")
     reference = read_reference(ref_path, cal.shape) if ref_path else None
     recon = DepthReconstructor(cal, reference="calibration" if reference is None else reference,
-                               level=args.level, flat_reference=args.flat_reference)
+                               boundary="contact" if args.level == "contact" else "neumann",
+                               level="median" if args.level == "contact" else args.level,
+                               flat_reference=args.flat_reference)
     credit = cal.provenance.get("credit")
     rows, skipped = [], []
     for path in tqdm(frames, desc="reconstruct", unit="frame", file=sys.stderr):
