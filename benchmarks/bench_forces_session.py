@@ -10,7 +10,7 @@ go through
 
 1. photometric stereo calibrated for the session's sensor: the session's frames
    are rendered through Taxim's shading table, so its optics are calibrated as
-   a rig's are, on ball presses of that sensor (128 presses of a 2 mm ball up
+   a rig's are, on ball presses of that sensor (256 presses of a 2 mm ball up
    to 1.4 mm deep rendered through the same table,
    :func:`tactilevision.sim.render_ball_presses` with ``partial=True``, and a
    LUT per cell of an 8 x 6 grid, ``lut_cells=(8, 6)``), with the height
@@ -50,7 +50,7 @@ ROOT = Path(__file__).resolve().parents[1]
 SESSION = ROOT / "sample_frames" / "gelsight_session"
 
 
-def session_optics(session, optics: str = "lut", presses: int = 128) -> PhotometricCalibration:
+def session_optics(session, optics: str = "lut", presses: int = 256) -> PhotometricCalibration:
     """Calibration from ball presses rendered through the session's shading table.
 
     ``optics``: 'lut' (one colour table per cell of an 8 x 6 grid over the
@@ -84,7 +84,7 @@ def main() -> None:
     ap.add_argument("--optics", default="lut",
                     help="'lut' (position cells), 'lut-colour', 'mlp' (needs torch) or a saved "
                          "calibration .npz")
-    ap.add_argument("--ball-presses", type=int, default=128,
+    ap.add_argument("--ball-presses", type=int, default=256,
                     help="rendered ball presses to calibrate the 'lut' optics on")
     ap.add_argument("--save-optics", type=Path, default=None,
                     help="write the optics calibration here (reuse it with --optics PATH)")

@@ -7,7 +7,7 @@ the same library versions (JPEG encoding by OpenCV).
 
 The session's own photometric calibration, ``optics.npz`` (named in
 ``session.toml``'s ``[optics]`` table), is made as a rig makes one: from ball
-presses of the session's sensor, here 128 presses of a 2 mm ball up to 1.4 mm
+presses of the session's sensor, here 256 presses of a 2 mm ball up to 1.4 mm
 deep, their contacts reaching the image's edges, rendered through the same
 shading table as the session's frames, then a colour table per cell of an
 8 x 6 grid over the image. ``--optics-only`` remakes only that file.
@@ -27,12 +27,12 @@ OPTICS_TOML = '\n[optics]\ncalibration = "optics.npz"\n'
 def make_optics(folder: Path) -> Path:
     """Write ``folder/optics.npz``: position-cell LUT from rendered ball presses."""
     table, reference = taxim_shading()
-    balls = render_ball_presses(table, reference, n=128, radius_mm=2.0, depth_mm=(0.2, 1.4),
+    balls = render_ball_presses(table, reference, n=256, radius_mm=2.0, depth_mm=(0.2, 1.4),
                                 partial=True, seed=5)
     cal = PhotometricCalibration.from_ball_presses(
         balls.reference, balls.frames, balls.centers_px, balls.radii_px, ball_radius_mm=2.0,
         mm_per_px=0.0295, model="lut", lut_cells=(8, 6))
-    cal.provenance["source"] = ("128 presses of a 2 mm ball, 0.2 to 1.4 mm deep, rendered "
+    cal.provenance["source"] = ("256 presses of a 2 mm ball, 0.2 to 1.4 mm deep, rendered "
                                 "through Taxim's GelSight shading table on the session's "
                                 "reference (sample_frames/gelsight_session/make_session.py)")
     return cal.save(folder / "optics.npz")
