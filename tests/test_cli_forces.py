@@ -206,3 +206,19 @@ def test_reconstruct_level_contact_reads_absolute_depth(tmp_path):
     face = float(np.median(h[r < 0.9 * 2.5]))
     assert face == pytest.approx(p["depth_mm"], rel=0.10)
     assert np.sqrt(np.mean(h[r > 1.5 * 2.5] ** 2)) < 0.01
+
+
+def test_forces_contact_area_on_the_fem_grid(tmp_path):
+    """With --method fem the footprint lives on the FEM's node grid (40 x 30 nodes of
+    0.47 mm here): its area is the pushing nodes' tributary areas, near the annotated
+    contact disc (1.46 times it: a node counts when its hat function reaches the
+    footprint), not the node count times a pixel's area."""
+    out = tmp_path / "fem"
+    assert main(["forces", str(FRAMES), "--sensor", "gelsight", "--thickness-mm", "3.0",
+                 "--E-mpa", "0.2", "--nu", "0.48", "--method", "fem", "--every", "4",
+                 "--out", str(out), "--no-progress", "--no-images"]) == 0
+    (row,) = list(csv.DictReader((out / "forces.csv").open()))
+    circles = {r["frame"]: r for r in csv.DictReader((FRAMES / "circles.csv").open())}
+    disc = np.pi * (float(circles[row["frame"]]["radius_px"]) * 0.0295) ** 2
+    assert disc < float(row["contact_area_mm2"]) < 2 * disc
+    assert float(row["fz_n"]) > 0

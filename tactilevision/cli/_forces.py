@@ -222,15 +222,20 @@ def run(args: argparse.Namespace) -> int:
             continue
         height = recon(frame)     # float32: the estimator's single-precision path
         fm = est(height)
-        # the contact area: the footprint the traction acts on (pixels above --threshold-mm
-        # with non-negative pressure); with 'field', the colour change above the noise level
-        mask = recon.contact_mask(frame) if fm.contact is None else fm.contact
+        # the contact area: the footprint the traction acts on (pixels, or FEM nodes, above
+        # --threshold-mm that push: each node's area is its force over its pressure); with
+        # 'field', the colour change above the noise level
+        if fm.contact is None:
+            area = float(recon.contact_mask(frame).sum()) * mm_per_px ** 2
+        else:
+            c = fm.contact
+            area = float(np.sum(fm.forces_n[..., 2][c] / fm.pressure_kpa[c])) * 1e3
         t = float(times[i])
         row = {"frame": path.name, "t_s": "" if not np.isfinite(t) else f"{t:.4f}",
                "fx_n": f"{fm.total_n[0]:.5f}", "fy_n": f"{fm.total_n[1]:.5f}",
                "fz_n": f"{fm.total_n[2]:.5f}",
                "max_pressure_kpa": f"{float(fm.pressure_kpa.max()):.3f}",
-               "contact_area_mm2": f"{float(mask.sum()) * mm_per_px ** 2:.3f}",
+               "contact_area_mm2": f"{area:.3f}",
                "ft_fz_n": ""}
         if ft is not None and np.isfinite(t):
             row["ft_fz_n"] = f"{float(np.interp(t, ft[0], ft[1])):.5f}"
