@@ -212,7 +212,7 @@ def run(args: argparse.Namespace) -> int:
         from tqdm.auto import tqdm
 
         it = tqdm(picks, desc="forces", unit="frame", file=sys.stderr, mininterval=1.0)
-    rows, skipped = [], []
+    rows, skipped, at_edge = [], [], []
     for i in it:
         path = frames[i]
         try:
@@ -230,6 +230,8 @@ def run(args: argparse.Namespace) -> int:
         else:
             c = fm.contact
             area = float(np.sum(fm.forces_n[..., 2][c] / fm.pressure_kpa[c])) * 1e3
+            if c[0].any() or c[-1].any() or c[:, 0].any() or c[:, -1].any():
+                at_edge.append(path.name)     # the force beyond the image is not seen
         t = float(times[i])
         row = {"frame": path.name, "t_s": "" if not np.isfinite(t) else f"{t:.4f}",
                "fx_n": f"{fm.total_n[0]:.5f}", "fy_n": f"{fm.total_n[1]:.5f}",
@@ -257,6 +259,13 @@ def run(args: argparse.Namespace) -> int:
           f"{', flat reference' if args.flat_reference else ''}\n"
           f"  forces: {args.method}, {contact}; E {E:.4g} MPa, nu {nu:.4g} from "
           f"{material_source}; beta {beta:.3g} from {beta_source}; h {h:g} mm")
+    if at_edge:
+        shown = ", ".join(at_edge[:5]) + (f" and {len(at_edge) - 5} more" if len(at_edge) > 5
+                                          else "")
+        print(f"tactilevision forces: warning: the footprint reaches the image's edge in "
+              f"{len(at_edge)} frame(s) ({shown}): what lies beyond is not measured, and "
+              "their totals may be low",
+              file=sys.stderr)
     for msg in skipped:
         print(f"tactilevision forces: error: {msg}", file=sys.stderr)
     return 2 if skipped else 0
