@@ -106,7 +106,7 @@ class SessionCalibration:
         -------
         columns : dict of str to (N,) ndarray
             ``press, indenter, depth_mm, depth_std_mm, overshoot_mm, force_n,
-            bevel_force_n, force_std_n, fx_n, fy_n, time_s, hold_s, wait_s, x_mm,
+            bevel_force_n, force_std_n, force_sem_n, fx_n, fy_n, time_s, hold_s, wait_s, x_mm,
             y_mm`` (``overshoot_mm``: certified depth minus the indenter's w0;
             ``force_n``: the F/T window's mean less ``bevel_force_n``, the
             bevel's own band).
@@ -120,7 +120,8 @@ class SessionCalibration:
             "overshoot_mm": [d - p.w0_mm for d, p in zip(self.depth_mm, ps, strict=True)],
             "force_n": [p.force_n - b for p, b in zip(ps, self._bevel(), strict=True)],
             "bevel_force_n": list(self._bevel()),
-            "force_std_n": [p.force_std_n for p in ps], "fx_n": [p.fx_n for p in ps],
+            "force_std_n": [p.force_std_n for p in ps],
+            "force_sem_n": [p.force_sem_n for p in ps], "fx_n": [p.fx_n for p in ps],
             "fy_n": [p.fy_n for p in ps], "time_s": [p.time_s for p in ps],
             "hold_s": [p.hold_s for p in ps], "wait_s": [p.wait_s for p in ps],
             "x_mm": [p.x_mm for p in ps], "y_mm": [p.y_mm for p in ps],

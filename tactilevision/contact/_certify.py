@@ -117,6 +117,9 @@ class CertifiedPress:
         The vernier reading of the window's frames (None for ``'onset'``).
     window_frames : tuple of int
         Frames read for the vernier (inside the force window).
+    force_sem_n : float
+        Standard error of the F/T window's mean fz, its autocorrelation
+        included (``force_std_n`` is the window's sd), N.
     """
 
     press: int
@@ -141,6 +144,7 @@ class CertifiedPress:
     closure_std_mm: float = 0.0
     reading: BevelReading | None = None
     window_frames: tuple[int, ...] = ()
+    force_sem_n: float = float("nan")
 
 
 @dataclass(frozen=True)
@@ -447,7 +451,8 @@ def certify_session(session, *, min_contact_px: int = 200, bevel_threshold: floa
         press = CertifiedPress(
             press=k, indenter=indenter, w0_mm=float(cfg.depths_mm[indenter]), frame=onset,
             t_frame_s=t_cert, footprint=fp, x_mm=float(x_mm), y_mm=float(y_mm),
-            force_n=fw.fz_n, force_std_n=fw.fz_std_n, fx_n=fw.fx_n, fy_n=fw.fy_n,
+            force_n=fw.fz_n, force_std_n=fw.fz_std_n, force_sem_n=fw.fz_sem_n,
+            fx_n=fw.fx_n, fy_n=fw.fy_n,
             tangential_ratio=fw.tangential_ratio, time_s=t_cert - float(times[0]), hold_s=half,
             wait_s=wait, bevel_score=score)
         if vernier:

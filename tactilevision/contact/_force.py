@@ -7,6 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._checks import InputError, check_array
+from ..mechanics._budget import window_standard_error
 
 __all__ = ["ForceWindow", "force_window"]
 
@@ -25,6 +26,9 @@ class ForceWindow:
         Mean force components, N (fz positive into the gel).
     fz_std_n : float
         Standard deviation of fz over the window (ddof = 1), N.
+    fz_sem_n : float
+        Standard error of the window's mean fz, the samples' autocorrelation
+        included (:func:`tactilevision.mechanics.window_standard_error`), N.
     tangential_ratio : float
         |(fx, fy)| / fz of the means: the press is aligned when small.
     """
@@ -37,6 +41,7 @@ class ForceWindow:
     fz_n: float
     fz_std_n: float
     tangential_ratio: float
+    fz_sem_n: float = float("nan")
 
 
 def force_window(times_s: np.ndarray, forces_n: np.ndarray, t_center_s: float,
@@ -94,4 +99,5 @@ def force_window(times_s: np.ndarray, forces_n: np.ndarray, t_center_s: float,
     ratio = float(np.hypot(mean[0], mean[1]) / mean[2]) if mean[2] > 0 else float("inf")
     return ForceWindow(t_center_s=float(t_center_s), start=start, stop=stop,
                        fx_n=float(mean[0]), fy_n=float(mean[1]), fz_n=float(mean[2]),
-                       fz_std_n=float(w[:, 2].std(ddof=1)), tangential_ratio=ratio)
+                       fz_std_n=float(w[:, 2].std(ddof=1)), tangential_ratio=ratio,
+                       fz_sem_n=window_standard_error(w[:, 2]))

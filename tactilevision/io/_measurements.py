@@ -27,12 +27,12 @@ MAX_FORCE_N = 1.0e4
 # ``indenter`` is an id and may be text; unknown columns are covariates when
 # every cell is a number, else kept as labels.
 _NUMERIC_COLUMNS = frozenset({
-    "press", "depth_std_mm", "overshoot_mm", "force_std_n", "fx_n", "fy_n", "time_s",
-    "hold_s", "wait_s", "x_mm", "y_mm", "day", "temperature_c",
+    "press", "depth_std_mm", "overshoot_mm", "force_std_n", "force_sem_n", "fx_n", "fy_n",
+    "time_s", "hold_s", "wait_s", "x_mm", "y_mm", "day", "temperature_c",
 })
 
 # Optional columns that are uncertainties of another column, not covariates.
-_UNCERTAINTY_COLUMNS = ("depth_std_mm",)
+_UNCERTAINTY_COLUMNS = ("depth_std_mm", "force_sem_n")
 
 # (table, key, argument name) of the sidecar values.
 _SIDECAR = {"thickness_mm": ("sensor", "gel_thickness_mm"),
@@ -306,9 +306,8 @@ def read_measurements(path: str | Path, *, thickness_mm: float | None = None,
 #: Column order of :func:`write_measurements` (formats.md section 2); other
 #: columns follow in the order given.
 COLUMN_ORDER = ("press", "indenter", "depth_mm", "depth_std_mm", "overshoot_mm", "force_n",
-                "bevel_force_n",
-                "force_std_n", "fx_n", "fy_n", "time_s", "hold_s", "wait_s", "x_mm", "y_mm",
-                "day", "temperature_c")
+                "bevel_force_n", "force_std_n", "force_sem_n", "fx_n", "fy_n", "time_s", "hold_s",
+                "wait_s", "x_mm", "y_mm", "day", "temperature_c")
 
 
 def write_measurements(path: str | Path, columns: dict[str, np.ndarray], *, thickness_mm: float,

@@ -44,6 +44,7 @@ from ._beta import (
     beta_relation,
     nu_from_beta,
 )
+from ._budget import NoiseBudget, noise_budget, window_standard_error
 from ._diagnose import Diagnosis, diagnose, noise_floor
 from ._effects import EFFECT_NAMES, FIT_EFFECTS, check_fit_effects, model_label
 from ._fem_tables import kappa_n
@@ -80,6 +81,7 @@ __all__ = [
     "IndentationValidation",
     "KappaTable",
     "ModelFit",
+    "NoiseBudget",
     "Param",
     "beta",
     "beta_from_nu",
@@ -93,8 +95,10 @@ __all__ = [
     "make_effect",
     "model_label",
     "neo_hookean_constants",
+    "noise_budget",
     "noise_floor",
     "nu_from_beta",
     "register_effect",
     "validate_indentation",
+    "window_standard_error",
 ]

@@ -19,6 +19,7 @@ import numpy as np
 from scipy import stats
 
 from .._checks import InputError
+from ._budget import NoiseBudget, noise_budget
 from ._effects import model_label
 from ._fem_tables import kappa_n
 from ._fit import fit_indentation
@@ -59,7 +60,7 @@ STEP_COLUMNS = ("press", "day", "time_s")
 #: Generic effects: a winner is reported as an unexplained covariate, not a verdict.
 _GENERIC = ("stiffness_trend:", "force_trend:")
 #: Columns that are never covariates (``depth_std_mm``: the depth's uncertainty, not physics).
-_NOT_COVARIATES = ("force_n", "depth_std_mm", "bevel_force_n")
+_NOT_COVARIATES = ("force_n", "depth_std_mm", "force_sem_n", "bevel_force_n")
 
 # the measurement that separates two effects that look alike on one table
 _SEPARATE = {
@@ -206,6 +207,8 @@ class Diagnosis:
     fit_rows: tuple[np.ndarray, ...] = field(default=(), hash=False, repr=False)
     columns: dict[str, np.ndarray] = field(default_factory=dict, hash=False, repr=False)
     message: str = ""
+    noise_budget: NoiseBudget | None = None
+    noise_budget_missing: str = ""
 
     def to_json_dict(self) -> dict[str, Any]:
         """The ``diagnose --json`` object (formats.md §3), then extra keys.
@@ -245,6 +248,9 @@ class Diagnosis:
             "untestable": {k: list(v) for k, v in self.untestable.items()},
             "untestable_reasons": dict(self.untestable_reasons),
             "message": self.message,
+            "noise_budget": (None if self.noise_budget is None
+                             else self.noise_budget.to_json_dict()),
+            "noise_budget_missing": self.noise_budget_missing or None,
         }
 
 
@@ -848,6 +854,8 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
             unexplained = worst.name
             offered = f"stiffness_trend:{worst.name}"
     floor = noise_floor(cur_fit.residuals_n, d_final)
+    budget, budget_missing = noise_budget(cur_fit.residuals_n, cur_fit.predicted_n, d_final,
+                                          _groups(d_final))
     separating = None
     if missing_effect and equivalent:
         separating = "; ".join(_separating(missing_effect, e, cols) for e in equivalent)
@@ -858,7 +866,8 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
         equivalent_effects=equivalent, separating_measurement=separating,
         unexplained_covariate=unexplained, offered_effect=offered, ladder=tuple(ladder),
         untestable=untestable, untestable_reasons=why_untestable, fits=tuple(fits),
-        fit_rows=tuple(fit_rows), columns=cols)
+        fit_rows=tuple(fit_rows), columns=cols, noise_budget=budget,
+        noise_budget_missing=budget_missing)
     return _with_message(diag)
 
 
@@ -918,8 +927,24 @@ def _with_message(d: Diagnosis) -> Diagnosis:
     if d.unexplained_covariate:
         s.append(f"Structure along {d.unexplained_covariate} is explained by no named effect; "
                  f"{d.offered_effect} is offered.")
+    b = d.noise_budget
+    chain = (f"the replicate scatter ({b.floor_n * 1e3:.2f} mN) is {b.ratio:.1f} times what "
+             f"the instruments explain ({b.budget_n * 1e3:.2f} mN: F/T window "
+             f"{b.force_window_n * 1e3:.2f} mN, certified depth x dP/dw "
+             f"{b.depth_n * 1e3:.2f} mN; p = {b.p_value:.1g}): the measurement chain adds "
+             "noise the table does not record. Check the depth certification (a lag or "
+             "scatter of the certified depth), the clock offset and the force window."
+             ) if b is not None and b.exceeds else ""
     if not d.missing_effect and not d.unexplained_covariate:
-        s.append("Nothing is missing: the model explains the data to within its noise.")
+        if chain:
+            s.append("No effect of the gel's model is missing, but " + chain)
+        else:
+            s.append("Nothing is missing: the model explains the data to within its noise.")
+    elif chain:
+        s.append("Also, " + chain)
+    if b is not None and not b.exceeds:
+        s.append(f"The replicate scatter ({b.floor_n * 1e3:.2f} mN) is consistent with what "
+                 f"the instruments explain ({b.budget_n * 1e3:.2f} mN; p = {b.p_value:.2g}).")
     if d.untestable:
         s.append("Not testable on this table: " + "; ".join(
             f"{k} ({d.untestable_reasons.get(k) or 'needs ' + ', '.join(v)})"

@@ -1,0 +1,182 @@
+"""The noise budget: the scatter the instruments explain against the replicate scatter.
+
+A press's force has two instrument errors: the F/T window's mean (its
+standard error, autocorrelation included: ``force_sem_n``) and the certified
+depth's uncertainty (``depth_std_mm``) times the local stiffness dP/dw. Their
+sum in quadrature is the press's budget. Repeated presses at one depth scatter
+about their mean by the budget when nothing else is at work; when they scatter
+more, the measurement chain adds noise the table does not record (a depth
+certification that lags or wanders, the clock, the force window), whatever
+the gel's model. (issue 23, part 1.)
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import stats
+
+__all__ = ["NoiseBudget", "noise_budget", "window_standard_error"]
+
+#: Significance of the budget test (chi-square on the within-group scatter).
+BUDGET_ALPHA = 1e-3
+#: And by how much the scatter must exceed the budget to be reported (ratio of sds).
+BUDGET_RATIO = 1.5
+
+
+@dataclass(frozen=True)
+class NoiseBudget:
+    """The replicate scatter against what the instruments explain.
+
+    Attributes
+    ----------
+    floor_n : float
+        Replicate scatter: pooled within-group sd of the residuals, N.
+    budget_n : float
+        What the instruments explain, pooled over the same presses, N.
+    force_window_n, depth_n : float
+        Its parts (rms over presses): the F/T window's standard error, and
+        the depth uncertainty times dP/dw, N.
+    ratio : float
+        ``floor_n / budget_n``.
+    chi2, dof, p_value : float, int, float
+        The test: sum over presses of (residual - its group's mean)^2 over
+        the press's budget variance, against chi-square with N - G degrees
+        of freedom (G groups of repeated presses).
+    exceeds : bool
+        ``p_value < BUDGET_ALPHA`` and ``ratio > BUDGET_RATIO``.
+    note : str
+        What the budget was made of (a missing ``depth_std_mm`` counts as 0).
+    """
+
+    floor_n: float
+    budget_n: float
+    force_window_n: float
+    depth_n: float
+    ratio: float
+    chi2: float
+    dof: int
+    p_value: float
+    exceeds: bool
+    note: str
+
+    def to_json_dict(self) -> dict:
+        """JSON-ready dict (NaN as None)."""
+        def num(v: float) -> float | None:
+            return float(v) if math.isfinite(v) else None
+
+        return {"floor_n": num(self.floor_n), "budget_n": num(self.budget_n),
+                "force_window_n": num(self.force_window_n), "depth_n": num(self.depth_n),
+                "ratio": num(self.ratio), "chi2": num(self.chi2), "dof": self.dof,
+                "p_value": num(self.p_value), "exceeds": self.exceeds, "note": self.note}
+
+
+def window_standard_error(x: np.ndarray) -> float:
+    """Standard error of a window's mean, with the samples' autocorrelation.
+
+    ``sd / sqrt(n_eff)``, ``n_eff = n / (1 + 2 sum_k rho_k)``, the sum of the
+    sample autocorrelations up to the first lag where it turns negative
+    (the integrated autocorrelation time with Geyer's initial positive
+    sequence cut-off, simplified: Geyer 1992, Statistical Science 7, 473).
+
+    Parameters
+    ----------
+    x : (n,) float ndarray
+        The window's samples (at least 3).
+
+    Returns
+    -------
+    sem : float
+        Same unit as `x`; NaN for fewer than 3 samples.
+    """
+    x = np.asarray(x, np.float64)
+    n = x.size
+    if n < 3:
+        return math.nan
+    d = x - x.mean()
+    var = float(d @ d) / n
+    if var == 0:
+        return 0.0
+    acf = np.correlate(d, d, mode="full")[n - 1:] / (n * var)
+    tau = 1.0
+    for k in range(1, n // 2):
+        if acf[k] <= 0:
+            break
+        tau += 2 * float(acf[k])
+    return float(np.std(x, ddof=1) * math.sqrt(min(tau, n) / n))
+
+
+def noise_budget(residuals_n: np.ndarray, predicted_n: np.ndarray,
+                 columns: Mapping[str, np.ndarray], groups: np.ndarray
+                 ) -> tuple[NoiseBudget | None, str]:
+    """Test the replicate scatter against the instruments' budget.
+
+    Parameters
+    ----------
+    residuals_n, predicted_n : (N,) float ndarray
+        A model's residuals and predictions, N.
+    columns : mapping
+        ``depth_mm`` and ``force_sem_n`` (standard error of each press's F/T
+        window mean, N; ``tactilevision calibrate`` writes it), optionally
+        ``depth_std_mm``.
+    groups : (N,) int ndarray
+        Groups of repeated presses (0 .. G-1).
+
+    Returns
+    -------
+    budget : NoiseBudget or None
+        None when the table cannot say (no ``force_sem_n``, or no repeats).
+    why : str
+        Empty, or why there is no budget.
+    """
+    sem = columns.get("force_sem_n")
+    if sem is None:
+        why = ("needs force_sem_n, the standard error of each press's F/T window mean "
+               "(tactilevision calibrate writes it)")
+        if "force_std_n" in columns:
+            why += "; force_std_n, the window's sd, does not say how many independent samples"
+        return None, why
+    r = np.asarray(residuals_n, np.float64)
+    w = np.asarray(columns["depth_mm"], np.float64)
+    sem = np.asarray(sem, np.float64)
+    u = columns.get("depth_std_mm")
+    ok = np.isfinite(r) & np.isfinite(sem) & (sem >= 0)
+    note = "F/T window standard errors (force_sem_n)"
+    if u is not None:
+        u = np.asarray(u, np.float64)
+        ok &= np.isfinite(u)
+        note += " and certified depth uncertainty (depth_std_mm) x dP/dw"
+    else:
+        u = np.zeros_like(w)
+        note += "; no depth_std_mm: the depth's share counted as 0"
+    g = np.asarray(groups)[ok]
+    r, w, sem, u = r[ok], w[ok], sem[ok], u[ok]
+    _, g = np.unique(g, return_inverse=True)
+    G = int(g.max()) + 1 if g.size else 0
+    dof = int(r.size - G)
+    if dof < 2:
+        return None, "needs repeated presses at a depth"
+    # local stiffness from the model's own P(w): a quadratic through its predictions
+    p = np.asarray(predicted_n, np.float64)[ok]
+    c2, c1, _ = np.polyfit(w, p, 2) if np.unique(w).size >= 3 else (0.0, *np.polyfit(w, p, 1))
+    dpdw = 2 * c2 * w + c1
+    var_f, var_w = sem ** 2, (dpdw * u) ** 2
+    var = np.maximum(var_f + var_w, 1e-30)
+    means = np.bincount(g, weights=r) / np.bincount(g)
+    dev = r - means[g]
+    # a group of n shares one mean: n - 1 of its n deviations are free
+    chi2 = float(np.sum(dev ** 2 / var))
+    floor = float(np.sqrt(np.sum(dev ** 2) / dof))
+    n_g = np.bincount(g)[g]
+    budget = float(np.sqrt(np.sum(var * (n_g - 1) / n_g) / dof))
+    p_value = float(stats.chi2.sf(chi2, dof))
+    ratio = floor / budget if budget > 0 else math.inf
+    return NoiseBudget(floor_n=floor, budget_n=budget,
+                       force_window_n=float(np.sqrt(np.mean(var_f))),
+                       depth_n=float(np.sqrt(np.mean(var_w))), ratio=ratio, chi2=chi2,
+                       dof=dof, p_value=p_value,
+                       exceeds=bool(p_value < BUDGET_ALPHA and ratio > BUDGET_RATIO),
+                       note=note), ""
