@@ -99,6 +99,52 @@ class SessionCalibration:
         n = len(self.certification.presses)
         return self.bevel_force_n if len(self.bevel_force_n) == n else np.zeros(n)
 
+    def holds(self, max_points: int = 1000) -> dict[str, np.ndarray]:
+        """Each certified press's force over its hold: the columns of ``holds.csv``.
+
+        The hold runs from the press's arrival at depth (the end of the force's
+        rise, :func:`~tactilevision.contact.hold_start`, which also starts the
+        force window) to the start of its release
+        (:func:`~tactilevision.contact.hold_end`). A press whose release is not
+        found in the log is left out.
+
+        Parameters
+        ----------
+        max_points : int, default 1000
+            Samples per press at most: longer holds are averaged in blocks.
+
+        Returns
+        -------
+        columns : dict of str to (K,) ndarray
+            ``press`` (int64), ``t_s`` (time since the hold's start, s, at the
+            block's centre) and ``fz_n`` (the F/T log's fz, N, with the
+            bevel's own force not taken off).
+        """
+        from .contact import hold_end
+
+        s = self.session
+        t, fz = np.asarray(s.force_times_s, np.float64), np.asarray(s.forces_n[:, 2])
+        off = self.certification.clock_offset_s
+        press, ts, fs = [], [], []
+        for p in self.certification.presses:
+            t0 = p.t_frame_s + off
+            t1 = hold_end(t, fz, t0)
+            if t1 is None:
+                continue
+            sel = np.flatnonzero((t >= t0) & (t <= t1))
+            k = max(1, -(-sel.size // max_points))
+            m = sel.size // k
+            if m == 0:
+                continue
+            blocks = sel[: m * k].reshape(m, k)
+            ts.append(t[blocks].mean(axis=1) - t0)
+            fs.append(fz[blocks].mean(axis=1))
+            press.append(np.full(m, p.press))
+        if not press:
+            return {"press": np.zeros(0, np.int64), "t_s": np.zeros(0), "fz_n": np.zeros(0)}
+        return {"press": np.concatenate(press).astype(np.int64), "t_s": np.concatenate(ts),
+                "fz_n": np.concatenate(fs)}
+
     def measurements(self) -> dict[str, np.ndarray]:
         """Columns of ``measurements.csv`` (formats.md section 2), one row per certified press.
 

@@ -22,6 +22,7 @@ from tactilevision.contact import (
     BevelProfile,
     bevel_profile,
     bulge_at,
+    hold_end,
     hold_start,
     read_bevel,
 )
@@ -168,7 +169,26 @@ def test_hold_start_finds_the_stop():
     f += rng.normal(0, 1 / 80, t.size)
     assert hold_start(t, f, 0.0, 2.0) == pytest.approx(t_stop, abs=0.004)
     assert hold_start(t[:10], f[:10], 0.0, 2.0) is None
-    assert hold_start(t, -f, 0.0, 2.0) is None or True      # falling force: no approach
+    assert hold_start(t, -f, 0.0, 2.0) is None          # falling force: no approach
+    assert hold_start(t, rng.normal(0, 1 / 80, t.size), 0.0, 2.0) is None   # noise alone
+
+
+def test_hold_end_finds_the_release_not_the_relaxation():
+    """Approach 0.5 s, a 3 s hold that relaxes by a fifth (tau 0.7 s), release in 0.25 s,
+    1/80 N of noise at 1 kHz: the hold runs from the stop to the start of the release
+    (within 5 ms each), the relaxation is not taken for it; no release, no end."""
+    rng = np.random.default_rng(1)
+    t = np.arange(0.0, 5.0, 0.001)
+    t_stop, t_rel = 0.8, 3.8
+    ramp = np.clip((t - 0.3) / 0.5, 0, 1)
+    relax = 1 - 0.2 * (1 - np.exp(-np.clip(t - t_stop, 0, None) / 0.7))
+    down = 1 - np.clip((t - t_rel) / 0.25, 0, 1)
+    f = 2.0 * ramp * relax * down + rng.normal(0, 1 / 80, t.size)
+    t0 = hold_start(t, f, 0.0, 5.0)
+    assert t0 == pytest.approx(t_stop, abs=0.005)
+    assert hold_end(t, f, t0) == pytest.approx(t_rel, abs=0.005)
+    held = t < 3.5
+    assert hold_end(t[held], f[held], t0) is None
 
 
 def test_bulge_grows_with_nu_and_decays_with_distance():

@@ -70,6 +70,15 @@ def _reconstructor(session):
     return DepthReconstructor(cal, reference=session.reference)
 
 
+def _write_holds(path: Path, holds: dict) -> None:
+    """``holds.csv``: press, t_s (since the hold's start), fz_n over each press's hold."""
+    with path.open("w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["press", "t_s", "fz_n"])
+        for p, t, f in zip(holds["press"], holds["t_s"], holds["fz_n"], strict=True):
+            w.writerow([int(p), f"{t:.4f}", f"{f:.5f}"])
+
+
 def _write_rejected(path: Path, rejected) -> None:
     """``rejected.csv``: each rejected press, its reason, detail, time and best bevel SNR."""
     with open(path, "w", newline="") as fh:
@@ -166,6 +175,8 @@ def run(args: argparse.Namespace) -> int:
     obj = result_dict(cal)
     write_measurements(out / "measurements.csv", cal.measurements(),
                        thickness_mm=cfg.gel_thickness_mm, radius_mm=cfg.indenter_radius_mm)
+    holds = cal.holds()
+    _write_holds(out / "holds.csv", holds)
     _write_json(obj, str(out / "fit.json"))
     if not args.no_report:
         from ..viz import calibration_figures, write_calibration_report
@@ -188,6 +199,10 @@ def run(args: argparse.Namespace) -> int:
                   f"{1e3 * float(np.median(cal.depth_std_mm)):.2f} um")
         for w in cal.warnings:
             print(f"  warning: {w}")
+        n_held = len(np.unique(holds["press"]))
+        print(f"  holds.csv: the force over the hold of {n_held} of {len(c.presses)} presses"
+              + ("" if n_held == len(c.presses) else " (no release found in the log for the "
+                 "others)"))
         if not args.no_report:
             print(f"  report: {out / 'report.html'}")
     return 0

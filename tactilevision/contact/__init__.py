@@ -11,6 +11,7 @@ from ._certify import (
     Rejection,
     certified_depths,
     certify_session,
+    hold_end,
     hold_start,
 )
 from ._footprint import Footprint, fit_footprint, nearest_indenter
@@ -38,7 +39,7 @@ __all__ = ["BevelGeometry", "BevelProfile", "BevelReading", "Certification", "Ce
            "bevel_score",
            "bulge_at", "bulge_height", "certified_depths", "certify_session",
            "contact_mask", "contact_onsets", "estimate_clock_offset", "fit_footprint",
-           "footprint_from_frame", "force_onsets", "force_window", "hold_start",
+           "footprint_from_frame", "force_onsets", "force_window", "hold_end", "hold_start",
            "land_contact_depth",
            "land_contact_depths_mm", "nearest_indenter", "noise_level", "read_bevel",
            "refine_clock_offset"]

@@ -551,6 +551,13 @@ def hold_start(force_times_s: np.ndarray, fz_n: np.ndarray, t0_s: float, t1_s: f
     after = np.flatnonzero(d[peak:] < 0.2 * d[peak])
     if not after.size:
         return None
+    # an approach is a rise that stands out of the samples' noise (robust sd of the first
+    # differences, which a trend does not move): ten times it, from the lowest force before
+    # the steepest rise to the stop; a falling force or noise alone has none
+    df = np.diff(f)
+    noise = 1.4826 * float(np.median(np.abs(df - np.median(df)))) / np.sqrt(2.0)
+    if fs[peak + after[0]] - float(np.min(fs[k:peak + 1])) <= 10 * noise:
+        return None
     guess = float(t[peak + after[0]])
     win = (t >= guess - span_s) & (t <= guess + span_s)
     tw, fw = t[win], f[win]
@@ -563,6 +570,55 @@ def hold_start(force_times_s: np.ndarray, fz_n: np.ndarray, t0_s: float, t1_s: f
         if rss < best:
             best, t_best = rss, float(tb)
     return t_best
+
+
+def hold_end(force_times_s: np.ndarray, fz_n: np.ndarray, t_hold_s: float, *,
+             max_hold_s: float = 600.0) -> float | None:
+    """When a press's hold ends (the release begins), from its force, F/T clock, s.
+
+    Parameters
+    ----------
+    force_times_s : (M,) float64 ndarray
+    fz_n : (M,) float64 ndarray
+        The F/T log's normal force.
+    t_hold_s : float
+        The hold's start (:func:`hold_start`), F/T clock.
+    max_hold_s : float, default 600
+        Longest hold searched.
+
+    Returns
+    -------
+    t_release : float or None
+        None when the force never falls below half its value at the hold's
+        start within `max_hold_s`, or the log is too short.
+
+    Notes
+    -----
+    The release is the mirror image of the approach: the force falls at
+    about constant speed from the held level. The first sample after the
+    hold's start below half the force held over its first 50 ms brackets
+    it; :func:`hold_start` on the time-reversed log, between that sample
+    (plus 50 ms) and the hold's start, finds where the fall begins. A
+    relaxing gel loses force slowly during the hold (a fifth of it, say):
+    that is not a release.
+    """
+    t = np.asarray(force_times_s, np.float64)
+    f = np.asarray(fz_n, np.float64)
+    start = (t >= t_hold_s) & (t <= t_hold_s + 0.05)
+    if start.sum() < 3:
+        return None
+    held = float(np.mean(f[start]))
+    if held <= 0:
+        return None
+    later = np.flatnonzero((t > t_hold_s + 0.05) & (t <= t_hold_s + max_hold_s)
+                           & (f < 0.5 * held))
+    if not later.size:
+        return None
+    t_half = float(t[later[0]])
+    sel = (t >= t_hold_s) & (t <= t_half + 0.05)
+    tr, fr = -t[sel][::-1], f[sel][::-1]
+    back = hold_start(tr, fr, -(t_half + 0.05), -t_hold_s)
+    return None if back is None else min(-back, t_half)
 
 
 def _check_fz_sign(session, fz: np.ndarray) -> None:
