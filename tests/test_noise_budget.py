@@ -84,3 +84,28 @@ def test_without_window_standard_errors_there_is_no_budget_and_it_says_why():
     assert "force_sem_n" in d.noise_budget_missing
     assert "force_std_n" in d.noise_budget_missing      # present, but not enough
     assert d.to_json_dict()["noise_budget"] is None
+
+
+def test_noise_budget_on_known_scatter():
+    """Residuals of known sd against a stated budget: equal sds pass, three times fail;
+    one depth gives no dP/dw and no budget."""
+    from tactilevision.mechanics import noise_budget
+
+    rng = np.random.default_rng(0)
+    w = np.repeat([0.2, 0.4, 0.6], 20)
+    groups = np.repeat([0, 1, 2], 20)
+    cols = {"depth_mm": w, "force_sem_n": np.full(60, 0.01)}
+    ok, _ = noise_budget(rng.normal(0, 0.01, 60), 5 * w, cols, groups)
+    assert not ok.exceeds and 0.7 < ok.ratio < 1.3
+    assert ok.budget_n == pytest.approx(0.01, rel=0.05)   # no depth_std_mm: F/T only
+    assert "no depth_std_mm" in ok.note
+    bad, _ = noise_budget(rng.normal(0, 0.03, 60), 5 * w, cols, groups)
+    assert bad.exceeds and bad.ratio > 2.4
+    # with depth uncertainty (2 um at dP/dw = 5 N/mm: 10 mN) the same scatter fits
+    cols2 = dict(cols, depth_std_mm=np.full(60, 0.002))
+    fine, _ = noise_budget(rng.normal(0, np.hypot(0.01, 0.01), 60), 5 * w, cols2, groups)
+    assert not fine.exceeds and fine.depth_n == pytest.approx(0.01, rel=1e-6)
+    none, why = noise_budget(rng.normal(0, 0.01, 20), np.ones(20),
+                             {"depth_mm": np.full(20, 0.2), "force_sem_n": np.full(20, 0.01)},
+                             np.zeros(20, int))
+    assert none is None and "two depths" in why

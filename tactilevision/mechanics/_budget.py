@@ -161,7 +161,13 @@ def noise_budget(residuals_n: np.ndarray, predicted_n: np.ndarray,
         return None, "needs repeated presses at a depth"
     # local stiffness from the model's own P(w): a quadratic through its predictions
     p = np.asarray(predicted_n, np.float64)[ok]
-    c2, c1, _ = np.polyfit(w, p, 2) if np.unique(w).size >= 3 else (0.0, *np.polyfit(w, p, 1))
+    n_depths = np.unique(w).size
+    if n_depths >= 3:
+        c2, c1, _ = np.polyfit(w, p, 2)
+    elif n_depths == 2:
+        c2, (c1, _) = 0.0, np.polyfit(w, p, 1)
+    else:
+        return None, "needs presses at two depths or more (for dP/dw)"
     dpdw = 2 * c2 * w + c1
     var_f, var_w = sem ** 2, (dpdw * u) ** 2
     var = np.maximum(var_f + var_w, 1e-30)
