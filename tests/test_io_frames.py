@@ -64,6 +64,26 @@ def test_read_image_unreadable(tmp_path):
         read_image(path)
 
 
+@pytest.mark.parametrize("ext", [".png", ".jpg"])
+def test_read_image_refuses_huge_frames_from_the_header(tmp_path, ext):
+    """An 8000 x 6000 frame (48 megapixels) is refused naming the file and its size, from
+    the header, before it is decoded; the sensors' own sizes pass, and the header reader
+    gives the decoder's width and height."""
+    from tactilevision.io import MAX_IMAGE_PIXELS
+    from tactilevision.io._frames import _header_size
+
+    big = tmp_path / f"huge{ext}"
+    cv2.imwrite(str(big), np.zeros((6000, 8000, 3), np.uint8))
+    with pytest.raises(InputError, match=r"huge.* is 8000 x 6000 px \(48.0 megapixels\)"):
+        read_image(big)
+    assert 8000 * 6000 > MAX_IMAGE_PIXELS >= 3280 * 2464          # GelSight Mini passes
+    for h, w in ((480, 640), (320, 427), (2464, 3280)):
+        ok = tmp_path / f"ok{ext}"
+        cv2.imwrite(str(ok), np.full((h, w, 3), 90, np.uint8))
+        assert _header_size(ok.read_bytes()) == (w, h)
+        assert read_image(ok).shape == (h, w, 3)
+
+
 def test_read_reference_size_checked(tmp_path):
     path = write(tmp_path / "reference.png", frame(10))
     assert read_reference(path, SHAPE).shape == (*SHAPE, 3)

@@ -6,6 +6,7 @@ modules under ``optics``, ``mechanics`` and ``fem`` work on arrays.
 
 # frames and ball presses (optics)
 from ._frames import (
+    MAX_IMAGE_PIXELS,
     BallPressSet,
     find_reference,
     list_frames,
@@ -16,8 +17,8 @@ from ._frames import (
     taxim_datapack,
 )
 
-__all__ = ["BallPressSet", "find_reference", "list_frames", "read_ball_presses", "read_frame",
-           "read_image", "read_reference", "taxim_datapack"]
+__all__ = ["MAX_IMAGE_PIXELS", "BallPressSet", "find_reference", "list_frames",
+           "read_ball_presses", "read_frame", "read_image", "read_reference", "taxim_datapack"]
 
 # measurements tables (mechanics): names appended below
 from ._measurements import (

@@ -12,10 +12,14 @@ import numpy as np
 
 from .._checks import InputError
 
-__all__ = ["BallPressSet", "find_reference", "list_frames", "read_ball_presses", "read_frame",
-           "read_image", "read_reference", "taxim_datapack"]
+__all__ = ["MAX_IMAGE_PIXELS", "BallPressSet", "find_reference", "list_frames",
+           "read_ball_presses", "read_frame", "read_image", "read_reference", "taxim_datapack"]
 
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg")
+#: Largest image read, in pixels (4096 x 4096): tactile cameras stay far below it
+#: (GelSight Mini 3280 x 2464, GelSlim 3.0 427 x 320 after cropping), and an 8000 x 6000
+#: frame took minutes and gigabytes per session before anything said why.
+MAX_IMAGE_PIXELS = 4096 * 4096
 REFERENCE_NAMES = ("reference.png", "reference.jpg", "ref.png", "ref.jpg")
 
 
@@ -57,6 +61,12 @@ def read_image(path: str | Path, *, colour_only: bool = False) -> np.ndarray:
     except OSError as exc:
         raise InputError(f"image {path} cannot be read: {exc.strerror}") from None
     _check_complete(path, data)
+    size = _header_size(data)
+    if size is not None and size[0] * size[1] > MAX_IMAGE_PIXELS:
+        raise InputError(f"image {path} is {size[0]} x {size[1]} px "
+                         f"({size[0] * size[1] / 1e6:.1f} megapixels), above the "
+                         f"{MAX_IMAGE_PIXELS / 1e6:.1f} megapixel bound for tactile frames "
+                         "(tactilevision.io.MAX_IMAGE_PIXELS): crop or downscale it first")
     img = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED)
     if img is None:
         raise InputError(f"image {path} is not a readable image")
@@ -71,6 +81,34 @@ def read_image(path: str | Path, *, colour_only: bool = False) -> np.ndarray:
     if img.shape[2] == 4:
         img = np.ascontiguousarray(img[:, :, :3])
     return img
+
+
+def _header_size(data: bytes) -> tuple[int, int] | None:
+    """(width, height) from a PNG's IHDR or a JPEG's start-of-frame, without decoding;
+    None when the header cannot be read (the decoder then decides)."""
+    if data[:8] == b"\x89PNG\r\n\x1a\n" and data[12:16] == b"IHDR" and len(data) >= 24:
+        return int.from_bytes(data[16:20], "big"), int.from_bytes(data[20:24], "big")
+    if data[:2] != b"\xff\xd8":
+        return None
+    i = 2
+    while i + 4 <= len(data):
+        if data[i] != 0xFF:
+            return None
+        marker = data[i + 1]
+        if marker == 0xFF:                       # fill byte
+            i += 1
+            continue
+        if marker in (0x01, *range(0xD0, 0xD8)):  # stand-alone markers: no length
+            i += 2
+            continue
+        length = int.from_bytes(data[i + 2:i + 4], "big")
+        if 0xC0 <= marker <= 0xCF and marker not in (0xC4, 0xC8, 0xCC) and i + 9 <= len(data):
+            return (int.from_bytes(data[i + 7:i + 9], "big"),
+                    int.from_bytes(data[i + 5:i + 7], "big"))
+        if marker == 0xDA or length < 2:         # scan data before any frame header
+            return None
+        i += 2 + length
+    return None
 
 
 def _check_complete(path: Path, data: bytes) -> None:
