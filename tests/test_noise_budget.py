@@ -6,7 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tactilevision.mechanics import diagnose, window_standard_error
+from tactilevision.contact import window_standard_error
+from tactilevision.mechanics import diagnose
 from tactilevision.sim import make_measurement_table
 
 

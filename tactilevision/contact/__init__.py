@@ -15,7 +15,7 @@ from ._certify import (
     hold_start,
 )
 from ._footprint import Footprint, fit_footprint, nearest_indenter
-from ._force import ForceWindow, force_window
+from ._force import ForceWindow, force_window, window_standard_error
 from ._land import bulge_at, bulge_height, land_contact_depth, land_contact_depths_mm
 from ._mask import contact_mask, noise_level
 from ._sync import (
@@ -42,4 +42,4 @@ __all__ = ["BevelGeometry", "BevelProfile", "BevelReading", "Certification", "Ce
            "footprint_from_frame", "force_onsets", "force_window", "hold_end", "hold_start",
            "land_contact_depth",
            "land_contact_depths_mm", "nearest_indenter", "noise_level", "read_bevel",
-           "refine_clock_offset"]
+           "refine_clock_offset", "window_standard_error"]

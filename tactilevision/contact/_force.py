@@ -2,14 +2,14 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from .._checks import InputError, check_array
-from ..mechanics._budget import window_standard_error
 
-__all__ = ["ForceWindow", "force_window"]
+__all__ = ["ForceWindow", "force_window", "window_standard_error"]
 
 
 @dataclass(frozen=True)
@@ -28,7 +28,7 @@ class ForceWindow:
         Standard deviation of fz over the window (ddof = 1), N.
     fz_sem_n : float
         Standard error of the window's mean fz, the samples' autocorrelation
-        included (:func:`tactilevision.mechanics.window_standard_error`), N.
+        included (:func:`window_standard_error`), N.
     tangential_ratio : float
         |(fx, fy)| / fz of the means: the press is aligned when small.
     """
@@ -101,3 +101,38 @@ def force_window(times_s: np.ndarray, forces_n: np.ndarray, t_center_s: float,
                        fx_n=float(mean[0]), fy_n=float(mean[1]), fz_n=float(mean[2]),
                        fz_std_n=float(w[:, 2].std(ddof=1)), tangential_ratio=ratio,
                        fz_sem_n=window_standard_error(w[:, 2]))
+
+
+def window_standard_error(x: np.ndarray) -> float:
+    """Standard error of a window's mean, with the samples' autocorrelation.
+
+    ``sd / sqrt(n_eff)``, ``n_eff = n / (1 + 2 sum_k rho_k)``, the sum of the
+    sample autocorrelations up to the first lag where it turns negative
+    (the integrated autocorrelation time with Geyer's initial positive
+    sequence cut-off, simplified: Geyer 1992, Statistical Science 7, 473).
+
+    Parameters
+    ----------
+    x : (n,) float ndarray
+        The window's samples (at least 3).
+
+    Returns
+    -------
+    sem : float
+        Same unit as `x`; NaN for fewer than 3 samples.
+    """
+    x = np.asarray(x, np.float64)
+    n = x.size
+    if n < 3:
+        return math.nan
+    d = x - x.mean()
+    var = float(d @ d) / n
+    if var == 0:
+        return 0.0
+    tau = 1.0
+    for k in range(1, n // 2):      # lag by lag: white noise stops at the first (O(n k))
+        rho = float(d[:-k] @ d[k:]) / (n * var)
+        if rho <= 0:
+            break
+        tau += 2 * rho
+    return float(np.std(x, ddof=1) * math.sqrt(min(tau, n) / n))

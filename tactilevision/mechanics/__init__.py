@@ -44,7 +44,7 @@ from ._beta import (
     beta_relation,
     nu_from_beta,
 )
-from ._budget import NoiseBudget, noise_budget, window_standard_error
+from ._budget import NoiseBudget, noise_budget
 from ._diagnose import Diagnosis, diagnose, noise_floor
 from ._effects import EFFECT_NAMES, FIT_EFFECTS, check_fit_effects, model_label
 from ._fem_tables import kappa_n
@@ -100,5 +100,4 @@ __all__ = [
     "nu_from_beta",
     "register_effect",
     "validate_indentation",
-    "window_standard_error",
 ]

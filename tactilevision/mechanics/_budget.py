@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats
 
-__all__ = ["NoiseBudget", "noise_budget", "window_standard_error"]
+__all__ = ["NoiseBudget", "noise_budget"]
 
 #: Significance of the budget test (chi-square on the within-group scatter).
 BUDGET_ALPHA = 1e-3
@@ -74,41 +74,6 @@ class NoiseBudget:
                 "p_value": num(self.p_value), "exceeds": self.exceeds, "note": self.note}
 
 
-def window_standard_error(x: np.ndarray) -> float:
-    """Standard error of a window's mean, with the samples' autocorrelation.
-
-    ``sd / sqrt(n_eff)``, ``n_eff = n / (1 + 2 sum_k rho_k)``, the sum of the
-    sample autocorrelations up to the first lag where it turns negative
-    (the integrated autocorrelation time with Geyer's initial positive
-    sequence cut-off, simplified: Geyer 1992, Statistical Science 7, 473).
-
-    Parameters
-    ----------
-    x : (n,) float ndarray
-        The window's samples (at least 3).
-
-    Returns
-    -------
-    sem : float
-        Same unit as `x`; NaN for fewer than 3 samples.
-    """
-    x = np.asarray(x, np.float64)
-    n = x.size
-    if n < 3:
-        return math.nan
-    d = x - x.mean()
-    var = float(d @ d) / n
-    if var == 0:
-        return 0.0
-    acf = np.correlate(d, d, mode="full")[n - 1:] / (n * var)
-    tau = 1.0
-    for k in range(1, n // 2):
-        if acf[k] <= 0:
-            break
-        tau += 2 * float(acf[k])
-    return float(np.std(x, ddof=1) * math.sqrt(min(tau, n) / n))
-
-
 def noise_budget(residuals_n: np.ndarray, predicted_n: np.ndarray,
                  columns: Mapping[str, np.ndarray], groups: np.ndarray
                  ) -> tuple[NoiseBudget | None, str]:
@@ -120,7 +85,8 @@ def noise_budget(residuals_n: np.ndarray, predicted_n: np.ndarray,
         A model's residuals and predictions, N.
     columns : mapping
         ``depth_mm`` and ``force_sem_n`` (standard error of each press's F/T
-        window mean, N; ``tactilevision calibrate`` writes it), optionally
+        window mean, N: :func:`tactilevision.contact.window_standard_error`,
+        which ``tactilevision calibrate`` writes), optionally
         ``depth_std_mm``.
     groups : (N,) int ndarray
         Groups of repeated presses (0 .. G-1).
