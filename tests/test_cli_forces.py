@@ -60,6 +60,10 @@ def test_forces_on_a_frames_folder(tmp_path):
     (["--thickness-mm", "3", "--E-mpa", "0.2"], "both --E-mpa and --nu"),
     (["--thickness-mm", "3", "--fit", "missing.json"], "missing.json does not exist"),
     (["--thickness-mm", "3", "--E-mpa", "0.2", "--nu", "0.5"], "nu must be within"),
+    (["--thickness-mm", "3", "--E-mpa", "0.2", "--nu", "0.48", "--threshold-mm", "0"],
+     "threshold_mm must be positive"),
+    (["--thickness-mm", "3", "--E-mpa", "0.2", "--nu", "0.48", "--beta", "-1"],
+     "--beta must be finite and >= 0"),
 ])
 def test_forces_bad_input(tmp_path, capsys, extra, message):
     out = tmp_path / "out"

@@ -176,8 +176,6 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"--every must be >= 1, got {args.every}")
     E, nu, material_source, fit_obj = _material(args, source if session else None)
     beta, beta_source = _beta(args, fit_obj, material_source)
-    if not args.threshold_mm > 0:
-        raise InputError(f"--threshold-mm must be > 0, got {args.threshold_mm}")
     try:
         grid = tuple(int(v) for v in args.grid.split(","))
     except ValueError:
