@@ -184,6 +184,12 @@ class Diagnosis:
         The data.
     message : str
         The story in a few sentences.
+    noise_budget : NoiseBudget or None
+        The final model's replicate scatter against what the instruments
+        explain (:func:`~tactilevision.mechanics.noise_budget`); None when
+        the table cannot say.
+    noise_budget_missing : str
+        Why there is no budget (empty when there is one).
     """
 
     model: tuple[str, ...]
