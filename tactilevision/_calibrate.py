@@ -43,7 +43,14 @@ from .contact import (
     certify_session,
 )
 from .io import Session, read_session
-from .mechanics import IndentationFit, fit_indentation
+from .mechanics import (
+    IndentationFit,
+    RelaxationFit,
+    elastic_force,
+    fit_indentation,
+    fit_relaxation,
+    relaxed_moduli,
+)
 
 __all__ = ["SessionCalibration", "calibrate_session"]
 
@@ -80,6 +87,18 @@ class SessionCalibration:
     failure : str or None
         Why nothing was fitted (too few certified presses), else None; then
         ``fit`` is None and the certification is still there to report.
+    relaxation : RelaxationFit or None
+        The standard linear solid fitted to the holds (None when not tested).
+        When it is ``resolved``, ``fit`` is on the forces taken back to the
+        instant of loading: its E is E_0.
+    moduli : dict or None
+        ``E0_mpa``, ``E_inf_mpa`` and their intervals
+        (:func:`~tactilevision.mechanics.relaxed_moduli`) for a relaxing gel.
+    force0_n : (N,) float64 ndarray
+        For a relaxing gel, each press's force at the instant of loading, N:
+        the F/T window's mean of the elastic force behind the log
+        (:func:`~tactilevision.mechanics.elastic_force`), the bevel's band
+        not yet taken off; empty otherwise. The fit uses it.
     """
 
     session: Session
@@ -94,6 +113,9 @@ class SessionCalibration:
     bulge_mm: np.ndarray = field(default_factory=lambda: np.zeros(0))
     bevel_force_n: np.ndarray = field(default_factory=lambda: np.zeros(0))
     failure: str | None = None
+    relaxation: RelaxationFit | None = None
+    moduli: dict | None = None
+    force0_n: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     def _bevel(self) -> np.ndarray:
         n = len(self.certification.presses)
@@ -117,33 +139,13 @@ class SessionCalibration:
         -------
         columns : dict of str to (K,) ndarray
             ``press`` (int64), ``t_s`` (time since the hold's start, s, at the
-            block's centre) and ``fz_n`` (the F/T log's fz, N, with the
-            bevel's own force not taken off).
+            block's centre), ``fz_n`` (the F/T log's fz, N, with the
+            bevel's own force not taken off) and ``ramp_s`` (the press's
+            loading time, from the force's rise
+            (:func:`~tactilevision.contact.approach_start`) to the hold's
+            start, s, the same on each of its rows; NaN when not found).
         """
-        from .contact import hold_end
-
-        s = self.session
-        t, fz = np.asarray(s.force_times_s, np.float64), np.asarray(s.forces_n[:, 2])
-        off = self.certification.clock_offset_s
-        press, ts, fs = [], [], []
-        for p in self.certification.presses:
-            t0 = p.t_frame_s + off
-            t1 = hold_end(t, fz, t0)
-            if t1 is None:
-                continue
-            sel = np.flatnonzero((t >= t0) & (t <= t1))
-            k = max(1, -(-sel.size // max_points))
-            m = sel.size // k
-            if m == 0:
-                continue
-            blocks = sel[: m * k].reshape(m, k)
-            ts.append(t[blocks].mean(axis=1) - t0)
-            fs.append(fz[blocks].mean(axis=1))
-            press.append(np.full(m, p.press))
-        if not press:
-            return {"press": np.zeros(0, np.int64), "t_s": np.zeros(0), "fz_n": np.zeros(0)}
-        return {"press": np.concatenate(press).astype(np.int64), "t_s": np.concatenate(ts),
-                "fz_n": np.concatenate(fs)}
+        return _hold_curves(self.session, self.certification, max_points)
 
     def measurements(self) -> dict[str, np.ndarray]:
         """Columns of ``measurements.csv`` (formats.md section 2), one row per certified press.
@@ -155,7 +157,8 @@ class SessionCalibration:
             bevel_force_n, force_std_n, force_sem_n, fx_n, fy_n, time_s, hold_s, wait_s, x_mm,
             y_mm`` (``overshoot_mm``: certified depth minus the indenter's w0;
             ``force_n``: the F/T window's mean less ``bevel_force_n``, the
-            bevel's own band).
+            bevel's own band); for a relaxing gel also ``force0_n``, the
+            force at the instant of loading, less the bevel's.
         """
         ps = self.certification.presses
         col = {
@@ -172,14 +175,87 @@ class SessionCalibration:
             "hold_s": [p.hold_s for p in ps], "wait_s": [p.wait_s for p in ps],
             "x_mm": [p.x_mm for p in ps], "y_mm": [p.y_mm for p in ps],
         }
+        if len(self.force0_n) == len(ps):
+            col["force0_n"] = list(self.force0_n - self._bevel())
         return {k: np.asarray(v, np.float64 if k not in ("press", "indenter") else np.int64)
                 for k, v in col.items()}
+
+
+def _hold_curves(session: Session, certification: Certification, max_points: int = 1000
+                 ) -> dict[str, np.ndarray]:
+    """The columns of ``holds.csv`` (:meth:`SessionCalibration.holds`)."""
+    from .contact import approach_start, hold_end
+
+    t, fz = np.asarray(session.force_times_s, np.float64), np.asarray(session.forces_n[:, 2])
+    off = certification.clock_offset_s
+    press, ts, fs, ramps = [], [], [], []
+    for p in certification.presses:
+        t0 = p.t_frame_s + off
+        t1 = hold_end(t, fz, t0)
+        if t1 is None:
+            continue
+        ta = approach_start(t, fz, t0)
+        ramp = np.nan if ta is None else t0 - ta
+        sel = np.flatnonzero((t >= t0) & (t <= t1))
+        k = max(1, -(-sel.size // max_points))
+        m = sel.size // k
+        if m == 0:
+            continue
+        blocks = sel[: m * k].reshape(m, k)
+        ts.append(t[blocks].mean(axis=1) - t0)
+        fs.append(fz[blocks].mean(axis=1))
+        press.append(np.full(m, p.press))
+        ramps.append(np.full(m, ramp))
+    if not press:
+        return {"press": np.zeros(0, np.int64), "t_s": np.zeros(0), "fz_n": np.zeros(0),
+                "ramp_s": np.zeros(0)}
+    return {"press": np.concatenate(press).astype(np.int64), "t_s": np.concatenate(ts),
+            "fz_n": np.concatenate(fs), "ramp_s": np.concatenate(ramps)}
+
+
+def _relaxation(session: Session, cert: Certification, progress: Callable | None
+                ) -> tuple[Certification, RelaxationFit | None, list[str], np.ndarray | None]:
+    """Fit the holds; for a relaxing gel, certify again with the clock on the elastic force.
+
+    Returns the certification, the fit (None when not tested), notes, and each certified
+    press's force at the instant of loading (the F/T window's mean of the elastic force
+    behind the log; None unless the gel relaxes)."""
+
+    from .contact import force_window
+
+    holds = _hold_curves(session, cert)
+    if np.unique(holds["press"]).size < 3:
+        return cert, None, ["relaxation: fewer than 3 holds found in the F/T log, not tested"], None
+    try:
+        relax = fit_relaxation(holds["press"], holds["t_s"], holds["fz_n"], holds["ramp_s"])
+    except InputError as exc:
+        return cert, None, [f"relaxation: not tested ({exc})"], None
+    if not relax.resolved:
+        return cert, relax, [], None
+    elastic = elastic_force(session.force_times_s, session.forces_n, relax.g, relax.tau_s)
+    again = certify_session(session, progress=progress, sync_fz_n=elastic[:, 2],
+                            contact_area_px=cert.contact_area_px)
+    # the hold curves of the presses as certified now
+    holds = _hold_curves(session, again)
+    if np.unique(holds["press"]).size >= 3:
+        relax = fit_relaxation(holds["press"], holds["t_s"], holds["fz_n"], holds["ramp_s"])
+    off, n = again.clock_offset_s, session.config.window_samples
+    force0 = np.array([force_window(session.force_times_s, elastic, p.t_frame_s + off + p.hold_s,
+                                    n).fz_n for p in again.presses])
+    note = (f"the gel relaxes while held (g = {relax.g:.3f}, tau = {relax.tau_s:.3g} s from "
+            f"{relax.n_presses} holds): the clock was synchronised on the elastic force "
+            f"behind the F/T log ({cert.clock_offset_s:.4f} s on the measured force, "
+            f"{again.clock_offset_s:.4f} s on the elastic one), and the fit takes each "
+            "press's force from it (force0_n, the force at the instant of loading): E is "
+            "E_0, the instantaneous modulus")
+    return again, relax, [note], force0
 
 
 def calibrate_session(session: Session | str | Path, *, depth_rule: str = "auto",
                       beta_table: str = "fem", nu_start: float = 0.48, max_rounds: int = 8,
                       nu_tol: float = 2e-4, progress: Callable | None = None,
-                      allow_failure: bool = False) -> SessionCalibration:
+                      allow_failure: bool = False, relaxation: str = "auto"
+                      ) -> SessionCalibration:
     """Certify every press of a session and fit E and nu.
 
     Parameters
@@ -203,6 +279,18 @@ def calibrate_session(session: Session | str | Path, *, depth_rule: str = "auto"
         With fewer than two certified presses at distinct depths, return the
         certification with ``fit = None`` and ``failure`` saying why (so that
         a report can still be written) instead of raising.
+    relaxation : {'auto', 'off'}, default 'auto'
+        'auto': fit a standard linear solid to the force over each press's
+        hold (:func:`~tactilevision.mechanics.fit_relaxation`); when the gel
+        is seen to relax, filter the F/T log back to the elastic force behind
+        it (:func:`~tactilevision.mechanics.elastic_force`), certify again
+        with the clock synchronised on that, and fit its window means (the
+        forces at the instant of loading, ``force0_n``, free of each press's
+        memory of the one before), so that E is the instantaneous modulus
+        E_0; the relaxed E_inf = (1 - g) E_0 is reported beside it
+        (``relaxation`` and ``moduli``). ``measurements.csv`` keeps the
+        measured ``force_n`` and adds ``force0_n``, which ``fit --holds``
+        uses. 'off': none of it.
 
     Returns
     -------
@@ -220,8 +308,13 @@ def calibrate_session(session: Session | str | Path, *, depth_rule: str = "auto"
     if not isinstance(session, Session):
         session = read_session(session)
     cfg = session.config
+    if relaxation not in ("auto", "off"):
+        raise InputError(f"relaxation must be 'auto' or 'off', got {relaxation!r}")
     cert = certify_session(session, progress=progress)
-    notes = list(session.notes) + list(cert.warnings)     # the reader's notes first
+    relax, relax_notes, force0 = None, [], None
+    if relaxation == "auto" and cert.presses:
+        cert, relax, relax_notes, force0 = _relaxation(session, cert, progress)
+    notes = list(session.notes) + list(cert.warnings) + relax_notes  # the reader's notes first
     if depth_rule == "auto":
         depth_rule = "vernier" if cfg.bevel_angle_deg > 0 else "nominal"
     if depth_rule not in ("vernier", "nominal", "land"):
@@ -247,6 +340,8 @@ def calibrate_session(session: Session | str | Path, *, depth_rule: str = "auto"
                                   failure=msg)
     w0 = np.array([p.w0_mm for p in presses])
     force = np.array([p.force_n for p in presses])
+    if force0 is not None:
+        force = force0
     closure = np.array([p.closure_mm for p in presses])
     closure_std = np.array([p.closure_std_mm for p in presses])
     h, a = cfg.gel_thickness_mm, cfg.indenter_radius_mm
@@ -349,10 +444,17 @@ def calibrate_session(session: Session | str | Path, *, depth_rule: str = "auto"
     for msg in caught_by_fit.get(id(fit), []):      # the warnings of the fit reported
         if msg not in notes:
             notes.append(msg)
+    moduli = None
+    if relax is not None and relax.resolved and np.isfinite(fit.E_mpa):
+        moduli = relaxed_moduli(fit.E_mpa, fit.E_ci95_mpa, relax,
+                                np.array([p.hold_s for p in presses]),
+                                np.array([p.press for p in presses]))
     return SessionCalibration(session=session, certification=cert, depth_rule=depth_rule,
                               depth_mm=depth, fit=fit, nu_rounds=rounds,
                               seconds=time.perf_counter() - t0, warnings=notes,
-                              depth_std_mm=std, bulge_mm=bulge, bevel_force_n=bevel_n)
+                              depth_std_mm=std, bulge_mm=bulge, bevel_force_n=bevel_n,
+                              relaxation=relax, moduli=moduli,
+                              force0_n=force0 if force0 is not None else np.zeros(0))
 
 
 def _vernier_depths(w0: np.ndarray, closure: np.ndarray, cfg, nu: float

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from .._checks import InputError
-from ._fit import _write_json, summary
+from ._fit import _write_json, relaxation_lines, summary
 from ._out import check_output_folder, output_folder
 
 _DESCRIPTION = """\
@@ -47,6 +47,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                         "bevel mark), or 'land' (where the bulging gel meets a flat block land; "
                         "FEM at the fitted nu; ill-conditioned)")
     p.add_argument("--beta-table", choices=("fem", "paper"), default="fem")
+    p.add_argument("--relaxation", choices=("auto", "off"), default="auto",
+                   help="auto (default): fit a standard linear solid to the force over each "
+                        "hold; for a gel seen to relax, synchronise the clock on the elastic "
+                        "force and report E as the instantaneous E_0 with the relaxed E_inf "
+                        "beside it. off: the forces as measured")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--no-report", action="store_true",
                    help="write measurements.csv, fit.json and rejected.csv only")
@@ -71,12 +76,14 @@ def _reconstructor(session):
 
 
 def _write_holds(path: Path, holds: dict) -> None:
-    """``holds.csv``: press, t_s (since the hold's start), fz_n over each press's hold."""
+    """``holds.csv``: press, t_s (since the hold's start), fz_n over each press's hold, and
+    the press's loading time ramp_s (empty when not found)."""
     with path.open("w", newline="") as fh:
         w = csv.writer(fh)
-        w.writerow(["press", "t_s", "fz_n"])
-        for p, t, f in zip(holds["press"], holds["t_s"], holds["fz_n"], strict=True):
-            w.writerow([int(p), f"{t:.4f}", f"{f:.5f}"])
+        w.writerow(["press", "t_s", "fz_n", "ramp_s"])
+        for p, t, f, r in zip(holds["press"], holds["t_s"], holds["fz_n"], holds["ramp_s"],
+                              strict=True):
+            w.writerow([int(p), f"{t:.4f}", f"{f:.5f}", "" if np.isnan(r) else f"{r:.4f}"])
 
 
 def _write_rejected(path: Path, rejected) -> None:
@@ -119,6 +126,13 @@ def result_dict(cal) -> dict:
         "warnings": list(cal.warnings),
         "seconds": cal.seconds,
     })
+    if cal.relaxation is not None:
+        r = cal.relaxation.to_json_dict()
+        r["holds"] = "holds.csv"
+        if cal.moduli is not None:
+            r.update({k: list(v) if isinstance(v, tuple) else v for k, v in cal.moduli.items()})
+            r["headline_E"] = "E_mpa is E0_mpa, the instantaneous modulus"
+        obj["relaxation"] = r
     return obj
 
 
@@ -154,7 +168,8 @@ def run(args: argparse.Namespace) -> int:
         def progress(it):
             return tqdm(it, desc="frames", unit="frame", file=sys.stderr, mininterval=1.0)
     cal = calibrate_session(session, depth_rule=args.depth_rule, beta_table=args.beta_table,
-                            progress=progress, allow_failure=True)
+                            progress=progress, allow_failure=True,
+                            relaxation=getattr(args, "relaxation", "auto"))
     cfg = session.config
     output_folder(out)
     _write_rejected(out / "rejected.csv", cal.certification.rejected)
@@ -188,6 +203,9 @@ def run(args: argparse.Namespace) -> int:
     if args.json != "-":
         c = cal.certification
         print(summary(cal.fit, out / "measurements.csv"))
+        if cal.relaxation is not None and cal.relaxation.resolved:
+            print("\n".join(relaxation_lines(cal.relaxation, cal.moduli, out / "holds.csv",
+                                              e_finite=bool(np.isfinite(cal.fit.E_mpa)))))
         print(f"  {len(c.presses)} presses certified, {len(c.rejected)} rejected"
               + "".join(f"\n    press {r.press}: {r.reason} ({r.detail})" for r in c.rejected))
         print(f"  clock offset {c.clock_offset_s:.4f} s ({c.clock_source}); depth rule "

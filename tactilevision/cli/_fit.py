@@ -13,14 +13,18 @@ from pathlib import Path
 import numpy as np
 
 from .._checks import InputError
-from ..io import Measurements, read_measurements
+from ..io import Measurements, read_holds, read_measurements
 from ..mechanics import (
     EFFECT_NAMES,
     IndentationFit,
+    RelaxationFit,
     check_fit_effects,
     fit_indentation,
     fit_model,
+    fit_relaxation,
+    instantaneous_forces,
     model_label,
+    relaxed_moduli,
 )
 
 _DESCRIPTION = """\
@@ -72,6 +76,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                         "the paper)")
     p.add_argument("--ignore-depth-std", action="store_true",
                    help="fit without the table's depth_std_mm column (depths taken as exact)")
+    p.add_argument("--holds", metavar="HOLDS.csv", type=Path,
+                   help="the force over each press's hold (calibrate's holds.csv): fit a "
+                        "standard linear solid to it, take each row's force back to the "
+                        "instant of loading (the table's force0_n where calibrate wrote it, "
+                        "else force_n over what is left of it at hold_s), and report E as the "
+                        "instantaneous E_0 with the relaxed E_inf = (1 - g) E_0 beside it "
+                        "(needs the table's hold_s; press matches rows to holds)")
     p.add_argument("--json", metavar="FILE",
                    help="write the result as JSON to FILE ('-' for standard output)")
     p.set_defaults(func=run)
@@ -135,6 +146,73 @@ def summary(fit: IndentationFit, path: Path) -> str:
               if not n.startswith(("intervals:", "beta table", "errors in both variables"))
               and n != fit.out_of_table_message]
     return "\n".join(lines)
+
+
+def relaxation_lines(relax: RelaxationFit, moduli: dict | None, holds: Path, *,
+                     e_finite: bool = True) -> list[str]:
+    """The summary's lines on the relaxation fitted to ``holds.csv``.
+
+    Parameters
+    ----------
+    relax : RelaxationFit
+    moduli : dict or None
+        :func:`~tactilevision.mechanics.relaxed_moduli`'s result; None when
+        no relaxation was resolved (the forces were left as they are) or E
+        was not computed.
+    holds : Path
+        The holds file.
+    e_finite : bool, default True
+        Whether the fit gave an E (not out of the beta table).
+
+    Returns
+    -------
+    lines : list of str
+    """
+    pct = f"{relax.confidence:.0%}"
+    lines = [f"  relaxation ({holds}, {relax.n_presses} presses, standard linear solid after a "
+             f"linear ramp): g = {relax.g:.4f} {pct} CI {_fmt_ci(relax.g_ci, 4)}, tau = "
+             f"{relax.tau_s:.4g} s {pct} CI {_fmt_ci(relax.tau_ci_s, 3)} s, rmse = "
+             f"{relax.rmse_n * 1e3:.3g} mN"]
+    if not relax.resolved:
+        lines.append("  no relaxation resolved in the holds: the forces are used as they are")
+    elif moduli is None:
+        lines.append("  the forces were taken back to the instant of loading"
+                     + ("" if e_finite else ", but E was not computed: no E_0 or E_inf"))
+    else:
+        lines.append(f"  E above is E_0, the instantaneous modulus (each force taken back to "
+                     f"the instant of loading); relaxed E_inf = (1 - g) E_0 = "
+                     f"{moduli['E_inf_mpa']:.4f} MPa {pct} CI "
+                     f"{_fmt_ci(moduli['E_inf_ci_mpa'], 4)} MPa (E_0 with g's and tau's "
+                     f"uncertainty: {_fmt_ci(moduli['E0_ci_mpa'], 4)} MPa)")
+    lines += [f"  note: {n}" for n in relax.notes]
+    return lines
+
+
+def _relax_table(table: Measurements, holds_path: Path, effects: tuple[str, ...]
+                 ) -> tuple[Measurements, RelaxationFit, bool]:
+    """Fit the holds; the table with its forces taken to the instant of loading."""
+    from dataclasses import replace
+
+    if "viscoelastic_relaxation" in effects:
+        raise InputError("--holds and --effects viscoelastic_relaxation both model the "
+                         "relaxation: give one")
+    hold = table.columns.get("hold_s")
+    if hold is None or not np.all(np.isfinite(hold)):
+        raise InputError(f"{table.path}: --holds needs a hold_s in every row (the time from "
+                         "reaching depth to the middle of the force window)")
+    holds = read_holds(holds_path)
+    try:
+        relax = fit_relaxation(holds["press"], holds["t_s"], holds["fz_n"], holds["ramp_s"])
+    except InputError as exc:
+        raise InputError(f"{holds_path}: {exc}") from None
+    if not relax.resolved:
+        return table, relax, False
+    given = table.columns.get("force0_n")
+    if given is not None and np.all(np.isfinite(given)) and np.all(given > 0):
+        f0 = given                  # calibrate's: from the elastic force behind the log
+    else:
+        f0 = instantaneous_forces(table.force_n, hold, relax, table.columns.get("press"))
+    return replace(table, columns={**table.columns, "force_n": f0}), relax, True
 
 
 def depth_uncertainty(table: Measurements, *, ignore: bool, effects: tuple[str, ...]
@@ -213,6 +291,9 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"--a-over-h must be a finite number, got {args.a_over_h}")
     path = args.measurements
     table = read_measurements(path, thickness_mm=args.thickness_mm, radius_mm=args.radius_mm)
+    relax, corrected = None, False
+    if getattr(args, "holds", None) is not None:
+        table, relax, corrected = _relax_table(table, args.holds, effects)
     depth_std, std_message = depth_uncertainty(table, ignore=args.ignore_depth_std,
                                                effects=effects)
     with warnings.catch_warnings(record=True) as caught:
@@ -237,6 +318,16 @@ def run(args: argparse.Namespace) -> int:
     for w in caught:
         print(f"tactilevision fit: warning: {path}: {w.message}", file=sys.stderr)
     obj = fit.to_json_dict()
+    moduli = None
+    if relax is not None:
+        obj["relaxation"] = relax.to_json_dict()
+        obj["relaxation"]["holds"] = str(args.holds)
+        if corrected and math.isfinite(fit.E_mpa):
+            moduli = relaxed_moduli(fit.E_mpa, fit.E_ci95_mpa, relax,
+                                    table.columns["hold_s"], table.columns.get("press"))
+            obj["relaxation"].update({k: list(v) if isinstance(v, tuple) else v
+                                      for k, v in moduli.items()})
+            obj["relaxation"]["headline_E"] = "E_mpa is E0_mpa, the instantaneous modulus"
     obj["measurements"] = str(path)
     obj["thickness_source"] = table.thickness_source
     obj["radius_source"] = table.radius_source
@@ -244,6 +335,9 @@ def run(args: argparse.Namespace) -> int:
         _write_json(obj, args.json)  # first: a failed write prints nothing else
     if args.json != "-":
         print(summary(fit, path))
+        if relax is not None:
+            print("\n".join(relaxation_lines(relax, moduli, args.holds,
+                                              e_finite=math.isfinite(fit.E_mpa))))
     if not fit.identified:
         # the numbers are printed and written, but a script must not take them as a fit
         print(f"tactilevision fit: error: {path}: the model's parameters "

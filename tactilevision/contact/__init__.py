@@ -9,6 +9,7 @@ from ._certify import (
     Certification,
     CertifiedPress,
     Rejection,
+    approach_start,
     certified_depths,
     certify_session,
     hold_end,
@@ -35,8 +36,8 @@ from ._vernier import (
 )
 
 __all__ = ["BevelGeometry", "BevelProfile", "BevelReading", "Certification", "CertifiedPress",
-           "ClockSync", "Footprint", "ForceWindow", "Rejection", "bevel_force", "bevel_profile",
-           "bevel_score",
+           "ClockSync", "Footprint", "ForceWindow", "Rejection", "approach_start", "bevel_force",
+           "bevel_profile", "bevel_score",
            "bulge_at", "bulge_height", "certified_depths", "certify_session",
            "contact_mask", "contact_onsets", "estimate_clock_offset", "fit_footprint",
            "footprint_from_frame", "force_onsets", "force_window", "hold_end", "hold_start",

@@ -45,8 +45,15 @@ from ._mask import contact_mask, noise_level
 from ._sync import ClockSync, estimate_clock_offset, force_onsets, refine_clock_offset
 from ._vernier import RESOLVED_PX, BevelGeometry, BevelReading, bevel_profile, read_bevel
 
-__all__ = ["Certification", "CertifiedPress", "Rejection", "certified_depths", "certify_session",
-           "hold_start"]
+__all__ = [
+    "Certification",
+    "CertifiedPress",
+    "Rejection",
+    "approach_start",
+    "certified_depths",
+    "certify_session",
+    "hold_start",
+]
 
 #: Presses whose |(Fx, Fy)| / Fz exceeds this are misaligned (the paper: "much smaller").
 MAX_TANGENTIAL_RATIO = 0.1
@@ -260,7 +267,8 @@ def _saturated(frame: np.ndarray, reference: np.ndarray, mask: np.ndarray) -> fl
 
 
 def certify_session(session, *, min_contact_px: int = 200, bevel_threshold: float = 12.0,
-                    progress: Callable | None = None) -> Certification:
+                    progress: Callable | None = None, sync_fz_n: np.ndarray | None = None,
+                    contact_area_px: np.ndarray | None = None) -> Certification:
     """Find and certify every press of a session.
 
     Parameters
@@ -276,6 +284,18 @@ def certify_session(session, *, min_contact_px: int = 200, bevel_threshold: floa
         A machined bevel is seen above :data:`VERNIER_SNR`.
     progress : callable, optional
         Wraps the frame iterator (e.g. ``tqdm``).
+    sync_fz_n : (M,) float64 ndarray, optional
+        The normal force the clock is synchronised on, in place of the F/T
+        log's fz (its times): for a viscoelastic gel, the elastic force
+        (:func:`~tactilevision.mechanics.elastic_force`), which follows the
+        depth, and so the frames' contact area, where the measured force
+        relaxes during each hold and would pull the profile correlation off
+        (42 ms on a gel with g 0.25, tau 0.7 s). Force windows, holds and
+        forces still come from the log.
+    contact_area_px : (F,) int64 ndarray, optional
+        The frames' contact areas of an earlier certification of this
+        session (:attr:`Certification.contact_area_px`), to skip reading the
+        frames again.
 
     Returns
     -------
@@ -285,7 +305,8 @@ def certify_session(session, *, min_contact_px: int = 200, bevel_threshold: floa
     ------
     InputError
         When no press is found in the frames, or the F/T log and the frames
-        share no press onsets (the clock cannot be synchronised).
+        share no press onsets (the clock cannot be synchronised); for a
+        `sync_fz_n` or `contact_area_px` of the wrong length.
     """
     cfg = session.config
     ref = session.reference
@@ -299,11 +320,17 @@ def certify_session(session, *, min_contact_px: int = 200, bevel_threshold: floa
     def contact_px(i: int) -> int:
         return int(np.count_nonzero(contact_mask(session.frame(i), ref, sigma=sigma)))
 
-    # OpenCV decodes and filters outside the GIL: threads use every core
-    with ThreadPoolExecutor(max_workers=max(1, min(4, os.cpu_count() or 1))) as pool:
-        it = pool.map(contact_px, range(nf))
-        for i, n_px in enumerate(it if progress is None else progress(_Sized(it, nf))):
-            area[i] = n_px
+    if contact_area_px is not None:
+        if np.shape(contact_area_px) != (nf,):
+            raise InputError(f"contact_area_px has {np.size(contact_area_px)} values for {nf} "
+                             "frames")
+        area[:] = contact_area_px
+    else:
+        # OpenCV decodes and filters outside the GIL: threads use every core
+        with ThreadPoolExecutor(max_workers=max(1, min(4, os.cpu_count() or 1))) as pool:
+            it = pool.map(contact_px, range(nf))
+            for i, n_px in enumerate(it if progress is None else progress(_Sized(it, nf))):
+                area[i] = n_px
     period = float(np.median(np.diff(times))) if nf > 1 else 1.0
     runs = _runs(times, area >= min_contact_px, max_gap_s=2.5 * period)
     if not runs:
@@ -321,7 +348,11 @@ def certify_session(session, *, min_contact_px: int = 200, bevel_threshold: floa
     refined = None
     if len(runs) >= 2 and force_on.size >= 2:
         clock = estimate_clock_offset(frame_on, force_on, tolerance_s=tol)
-        refined, _ = refine_clock_offset(times, area, session.force_times_s, fz, clock.offset_s,
+        if sync_fz_n is not None and np.shape(sync_fz_n) != fz.shape:
+            raise InputError(f"sync_fz_n has {np.size(sync_fz_n)} values for {fz.size} F/T "
+                             "samples")
+        refined, _ = refine_clock_offset(times, area, session.force_times_s,
+                                         fz if sync_fz_n is None else sync_fz_n, clock.offset_s,
                                          span_s=max(0.2, 3 * period),
                                          step_s=1.0 / cfg.rate_hz)
     if cfg.clock_offset_s is not None:
@@ -619,6 +650,72 @@ def hold_end(force_times_s: np.ndarray, fz_n: np.ndarray, t_hold_s: float, *,
     tr, fr = -t[sel][::-1], f[sel][::-1]
     back = hold_start(tr, fr, -(t_half + 0.05), -t_hold_s)
     return None if back is None else min(-back, t_half)
+
+
+def approach_start(force_times_s: np.ndarray, fz_n: np.ndarray, t_hold_s: float, *,
+                   max_ramp_s: float = 10.0, smooth_s: float = 0.01) -> float | None:
+    """When a press's force began to rise: the start of its approach, F/T clock, s.
+
+    Parameters
+    ----------
+    force_times_s : (M,) float64 ndarray
+    fz_n : (M,) float64 ndarray
+        The F/T log's normal force.
+    t_hold_s : float
+        The hold's start (:func:`hold_start`), F/T clock.
+    max_ramp_s : float, default 10
+        Longest approach searched.
+    smooth_s : float, default 0.01
+        The log is averaged in blocks of this length first.
+
+    Returns
+    -------
+    t_start : float or None
+        The knee of a flat-then-rising line fitted by least squares to the
+        force before `t_hold_s`, over three times the time the force took to
+        rise from half its held value; None when the log holds too few
+        samples there or the force never rose.
+
+    Notes
+    -----
+    ``t_hold_s - t_start`` is the loading time of the press, which a
+    viscoelastic gel's hold curve depends on
+    (:func:`~tactilevision.mechanics.fit_relaxation`). A threshold on the
+    force would be thrown by the rest level's own wanderings (a relaxing
+    gel's force undershoots after each release and recovers over tau); the
+    two lines fit the level just before the rise, whatever it is.
+    """
+    t = np.asarray(force_times_s, np.float64)
+    f = np.asarray(fz_n, np.float64)
+    sel = np.flatnonzero((t >= t_hold_s - max_ramp_s) & (t <= t_hold_s))
+    if sel.size < 20:
+        return None
+    tt, ff = t[sel], f[sel]
+    dt = float(np.median(np.diff(tt)))
+    k = max(1, round(smooth_s / dt))
+    m = tt.size // k
+    if m < 10:
+        return None
+    cut = tt.size - m * k                      # keep the samples next to the hold
+    ts = tt[cut:].reshape(m, k).mean(1)
+    fs = ff[cut:].reshape(m, k).mean(1)
+    top = float(fs[-1])
+    below = np.flatnonzero(fs < top - 0.5 * (top - float(fs.min())))
+    if not below.size or top - float(fs.min()) <= 0:
+        return None
+    span = 3.0 * (t_hold_s - float(ts[below[-1]]))
+    w = ts >= t_hold_s - span
+    tw, fw = ts[w], fs[w]
+    if tw.size < 6:
+        return None
+    best, t_best = np.inf, None
+    for tk in tw[1:-2]:
+        X = np.column_stack([np.ones_like(tw), np.maximum(tw - tk, 0.0)])
+        coef, *_ = np.linalg.lstsq(X, fw, rcond=None)
+        rss = float(np.sum((fw - X @ coef) ** 2))
+        if coef[1] > 0 and rss < best:
+            best, t_best = rss, float(tk)
+    return t_best
 
 
 def _check_fz_sign(session, fz: np.ndarray) -> None:

@@ -25,12 +25,13 @@ from ._measurements import (
     COLUMN_ORDER,
     REQUIRED_COLUMNS,
     Measurements,
+    read_holds,
     read_measurements,
     write_measurements,
 )
 
-__all__ += ["COLUMN_ORDER", "REQUIRED_COLUMNS", "Measurements", "read_measurements",
-            "write_measurements"]
+__all__ += ["COLUMN_ORDER", "REQUIRED_COLUMNS", "Measurements", "read_holds",
+            "read_measurements", "write_measurements"]
 
 # indentation session folders (calibrate): names appended below
 from ._session import Session, SessionConfig, read_session  # noqa: E402

@@ -12,8 +12,8 @@ import numpy as np
 
 from .._checks import InputError
 
-__all__ = ["COLUMN_ORDER", "REQUIRED_COLUMNS", "Measurements", "read_measurements",
-           "write_measurements"]
+__all__ = ["COLUMN_ORDER", "REQUIRED_COLUMNS", "Measurements", "read_holds",
+           "read_measurements", "write_measurements"]
 
 #: Columns every measurements table must have (formats.md §2).
 REQUIRED_COLUMNS = ("depth_mm", "force_n")
@@ -27,12 +27,14 @@ MAX_FORCE_N = 1.0e4
 # ``indenter`` is an id and may be text; unknown columns are covariates when
 # every cell is a number, else kept as labels.
 _NUMERIC_COLUMNS = frozenset({
-    "press", "depth_std_mm", "overshoot_mm", "force_std_n", "force_sem_n", "fx_n", "fy_n",
+    "press", "depth_std_mm", "overshoot_mm", "force0_n", "force_std_n", "force_sem_n", "fx_n",
+    "fy_n",
     "time_s", "hold_s", "wait_s", "x_mm", "y_mm", "day", "temperature_c",
 })
 
-# Optional columns that are uncertainties of another column, not covariates.
-_UNCERTAINTY_COLUMNS = ("depth_std_mm", "force_sem_n")
+# Optional columns that are uncertainties of another column, or another reading of the
+# force, not covariates.
+_UNCERTAINTY_COLUMNS = ("depth_std_mm", "force_sem_n", "force0_n")
 
 # (table, key, argument name) of the sidecar values.
 _SIDECAR = {"thickness_mm": ("sensor", "gel_thickness_mm"),
@@ -306,8 +308,8 @@ def read_measurements(path: str | Path, *, thickness_mm: float | None = None,
 #: Column order of :func:`write_measurements` (formats.md section 2); other
 #: columns follow in the order given.
 COLUMN_ORDER = ("press", "indenter", "depth_mm", "depth_std_mm", "overshoot_mm", "force_n",
-                "bevel_force_n", "force_std_n", "force_sem_n", "fx_n", "fy_n", "time_s", "hold_s",
-                "wait_s", "x_mm", "y_mm", "day", "temperature_c")
+                "force0_n", "bevel_force_n", "force_std_n", "force_sem_n", "fx_n", "fy_n",
+                "time_s", "hold_s", "wait_s", "x_mm", "y_mm", "day", "temperature_c")
 
 
 def write_measurements(path: str | Path, columns: dict[str, np.ndarray], *, thickness_mm: float,
@@ -390,3 +392,59 @@ def write_measurements(path: str | Path, columns: dict[str, np.ndarray], *, thic
         tmp.write_text(text, encoding="utf-8")
         os.replace(tmp, target)
     return path
+
+
+def read_holds(path: str | Path) -> dict[str, np.ndarray]:
+    """Read ``holds.csv``: each press's force over its hold (``formats.md`` §2).
+
+    Parameters
+    ----------
+    path : str or Path
+        The file ``calibrate`` writes: columns ``press``, ``t_s`` (since the
+        hold's start, s), ``fz_n`` (N) and, optionally, ``ramp_s`` (the
+        press's loading time, s; an empty cell where it was not found).
+
+    Returns
+    -------
+    columns : dict of str to (K,) ndarray
+        ``press`` (int64), ``t_s``, ``fz_n`` and ``ramp_s`` (float64; NaN
+        where empty or absent).
+
+    Raises
+    ------
+    InputError
+        Naming the file, line and column: a missing file or column, a cell
+        that is not a number, an empty or non-finite ``press``, ``t_s`` or
+        ``fz_n``, a negative ``t_s`` or ``ramp_s``, a ``press`` that is not a
+        whole number, or no rows.
+    """
+    p = Path(path)
+    names, rows, lines = _read_table(p, "holds table")
+    for need in ("press", "t_s", "fz_n"):
+        if need not in names:
+            raise InputError(f"{p}: no '{need}' column (holds.csv has press, t_s, fz_n and "
+                             f"ramp_s; found {', '.join(names)})")
+    if not rows:
+        raise InputError(f"{p} has a header but no rows")
+    out: dict[str, np.ndarray] = {}
+    for name in ("press", "t_s", "fz_n", "ramp_s"):
+        if name not in names:
+            out[name] = np.full(len(rows), np.nan)
+            continue
+        j = names.index(name)
+        vals = np.empty(len(rows))
+        for i, row in enumerate(rows):
+            v = _number(row[j])
+            if v is None or (name != "ramp_s" and not math.isfinite(v)):
+                what = "empty" if v is not None and not row[j].strip() else f"'{row[j].strip()}'"
+                raise InputError(f"{p} line {lines[i]}, column {name}: {what} is not a finite "
+                                 "number")
+            if name in ("t_s", "ramp_s") and v < 0:
+                raise InputError(f"{p} line {lines[i]}, column {name}: {v:g} is negative")
+            if name == "press" and v != int(v):
+                raise InputError(f"{p} line {lines[i]}, column press: {v:g} is not a whole "
+                                 "number")
+            vals[i] = v
+        out[name] = vals
+    out["press"] = out["press"].astype(np.int64)
+    return out

@@ -30,6 +30,9 @@ Fit:
   or ``--effects package.module:ClassName``; :func:`register_effect` checks
   it and gives its name (``docs/custom_effects.md``).
 - :func:`neo_hookean_constants` -- Abaqus C10, D1 from E, nu.
+- :func:`fit_relaxation` -- a standard linear solid fitted to the force over
+  each press's hold (``holds.csv``) -> :class:`RelaxationFit`: g and tau,
+  hence E_0 and the relaxed E_inf = (1 - g) E_0.
 
 Validation (the paper's FEA check):
 
@@ -62,6 +65,14 @@ from ._model import (
     register_effect,
 )
 from ._neohookean import neo_hookean_constants
+from ._relaxation import (
+    RelaxationFit,
+    elastic_force,
+    fit_relaxation,
+    instantaneous_forces,
+    ramp_factor,
+    relaxed_moduli,
+)
 from ._result import IndentationFit
 from ._validate import IndentationValidation, validate_indentation
 
@@ -83,13 +94,17 @@ __all__ = [
     "ModelFit",
     "NoiseBudget",
     "Param",
+    "RelaxationFit",
     "beta",
     "beta_from_nu",
     "beta_relation",
     "check_fit_effects",
     "diagnose",
+    "elastic_force",
     "fit_indentation",
     "fit_model",
+    "fit_relaxation",
+    "instantaneous_forces",
     "kappa",
     "kappa_n",
     "make_effect",
@@ -98,6 +113,8 @@ __all__ = [
     "noise_budget",
     "noise_floor",
     "nu_from_beta",
+    "ramp_factor",
     "register_effect",
+    "relaxed_moduli",
     "validate_indentation",
 ]

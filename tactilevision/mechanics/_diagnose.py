@@ -60,7 +60,7 @@ STEP_COLUMNS = ("press", "day", "time_s")
 #: Generic effects: a winner is reported as an unexplained covariate, not a verdict.
 _GENERIC = ("stiffness_trend:", "force_trend:")
 #: Columns that are never covariates (``depth_std_mm``: the depth's uncertainty, not physics).
-_NOT_COVARIATES = ("force_n", "depth_std_mm", "force_sem_n", "bevel_force_n")
+_NOT_COVARIATES = ("force_n", "depth_std_mm", "force_sem_n", "bevel_force_n", "force0_n")
 
 # the measurement that separates two effects that look alike on one table
 _SEPARATE = {

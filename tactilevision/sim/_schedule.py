@@ -156,6 +156,7 @@ def ft_log(schedule: PressSchedule, force_of_depth: Callable[[int, np.ndarray], 
            noise_n: tuple[float, float, float] = (1 / 40, 1 / 40, 1 / 80),
            tangential_fraction: float | np.ndarray = 0.01,
            bias_n: tuple[float, float, float] = (0, 0, 0),
+           relaxation: tuple[float, float] = (0.0, 1.0),
            seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
     """Sample the F/T log of a schedule on the sensor's own clock.
 
@@ -178,6 +179,13 @@ def ft_log(schedule: PressSchedule, force_of_depth: Callable[[int, np.ndarray], 
         for all presses or one per press.
     bias_n : (3,) float
         Constant offset of each channel, N.
+    relaxation : (g, tau_s), default (0, 1)
+        A viscoelastic gel: the force is the elastic force's history through
+        the relaxation function G(t) / G(0) = 1 - g (1 - exp(-t / tau_s)) (a
+        standard linear solid, one Prony term), by Boltzmann superposition:
+        ``F(t) = (1 - g) P(t) + g int exp(-(t - s) / tau) dP(s)``, P the
+        elastic force of `force_of_depth` (quasi-linear viscoelasticity, Fung
+        1993, *Biomechanics*, ch. 7). g = 0: elastic.
     seed : int, default 0
 
     Returns
@@ -189,6 +197,10 @@ def ft_log(schedule: PressSchedule, force_of_depth: Callable[[int, np.ndarray], 
     """
     if not (np.isfinite(rate_hz) and rate_hz > 0):
         raise InputError(f"rate_hz must be positive, got {rate_hz!r}")
+    g, tau = (float(v) for v in relaxation)
+    if not (0.0 <= g < 1.0 and np.isfinite(tau) and tau > 0):
+        raise InputError(f"relaxation must be (g, tau_s) with 0 <= g < 1 and tau_s > 0, got "
+                         f"{relaxation!r}")
     rng = np.random.default_rng(seed)
     t_cam = np.arange(0.0, duration_s, 1.0 / rate_hz)
     depth, press = depth_trajectory(schedule, t_cam)
@@ -196,6 +208,13 @@ def ft_log(schedule: PressSchedule, force_of_depth: Callable[[int, np.ndarray], 
     for i in np.unique(press[press >= 0]):
         sel = press == i
         fz[sel] = force_of_depth(int(i), depth[sel])
+    if g > 0:
+        from scipy.signal import lfilter
+
+        # q_n = a q_(n-1) + (P_n - P_(n-1)): the Prony term's memory, exact for a step per sample
+        a = np.exp(-1.0 / (rate_hz * tau))
+        q = lfilter([1.0], [1.0, -a], np.diff(fz, prepend=0.0))
+        fz = (1.0 - g) * fz + g * q
     ang = rng.uniform(0, 2 * np.pi, schedule.n_presses)
     tf = np.broadcast_to(np.asarray(tangential_fraction, np.float64), (schedule.n_presses,))
     frac = np.where(press >= 0, tf[np.maximum(press, 0)], 0.0)

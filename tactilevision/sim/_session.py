@@ -82,6 +82,12 @@ class SessionSpec:
         is stiffer by the factor ``1 + r (1 + t_wait / tau)^-1.5`` (a power
         law, deliberately not the catalogue's exponential), t_wait the rest
         since the previous release; the first press is rested.
+    relaxation_g, relaxation_tau_s : float
+        A hidden viscoelastic gel (default none, g = 0): the F/T log reads
+        the elastic force's history through G(t) / G(0) = 1 - g (1 -
+        exp(-t / tau)) (:func:`~tactilevision.sim.ft_log`). E_mpa is then
+        the instantaneous modulus E_0; the relaxed one is (1 - g) E_0.
+        Give long holds (`hold_s`) to see it relax.
     jpeg_quality : int
     sensor_name : str
         ``[sensor] name`` of session.toml ('gelsight' picks the shipped
@@ -114,6 +120,8 @@ class SessionSpec:
     edge_presses: tuple[int, ...] = ()
     recovery_r: float = 0.0
     recovery_tau_s: float = 2.0
+    relaxation_g: float = 0.0
+    relaxation_tau_s: float = 1.0
     jpeg_quality: int = 75
     sensor_name: str = "gelsight"
     seed: int = 0
@@ -261,6 +269,7 @@ def make_session(folder: str | Path, spec: SessionSpec | None = None, *,
     t_f, forces = ft_log(sched, ft_force_of_depth, duration_s=float(sched.t_end_s[-1]) + 1.0,
                          rate_hz=spec.rate_hz, clock_offset_s=spec.clock_offset_s,
                          noise_n=spec.force_noise_n, tangential_fraction=tang,
+                         relaxation=(spec.relaxation_g, spec.relaxation_tau_s),
                          seed=spec.seed + 1)
     with open(out / "forces.csv", "w") as f:
         f.write("t_s,fx_n,fy_n,fz_n\n")
@@ -323,6 +332,7 @@ def _truth(spec: SessionSpec, sched: PressSchedule, w_c: np.ndarray, force_of_de
         "radius_mm": spec.block.radius_mm, "clock_offset_s": spec.clock_offset_s,
         "mm_per_px": s, "seed": spec.seed,
         "recovery_r": spec.recovery_r, "recovery_tau_s": spec.recovery_tau_s,
+        "relaxation_g": spec.relaxation_g, "relaxation_tau_s": spec.relaxation_tau_s,
         "land_contact_depth_mm": [round(float(v), 7) for v in w_c],
         "land": spec.block.land,
         "bevel": {"offset_mm": spec.block.bevel_offset_mm,
