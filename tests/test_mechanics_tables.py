@@ -185,8 +185,8 @@ def test_effect_catalogue_names():
     assert EFFECT_NAMES == (
         "large_deformation", "depth_offset", "force_offset", "force_drift",
         "viscoelastic_relaxation", "incomplete_recovery", "aging",
-        "spatial_nonuniformity", "stiffness_trend:<column>", "stiffness_step:<column>",
-        "force_trend:<column>",
+        "spatial_nonuniformity", "force_crosstalk", "stiffness_trend:<column>",
+        "stiffness_step:<column>", "force_trend:<column>",
     )
     assert check_fit_effects([]) == ("large_deformation",)
     assert check_fit_effects(["large_deformation"]) == ("large_deformation",)

@@ -38,6 +38,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="effects of your own tried beside the catalogue's, as candidates for "
                         "the missing effect (package.module:ClassName or "
                         "path/to/file.py:ClassName; docs/custom_effects.md)")
+    p.add_argument("--scan", default="", metavar="COL1,COL2",
+                   help="response columns (fx_n, fy_n, force_std_n: they follow the force) to "
+                        "scan as covariates all the same; by default they are not, and the "
+                        "output names the columns scanned")
     p.add_argument("--base", choices=("paper", "layer", "fem"), default="paper",
                    help="paper: eq. (5), the layer with large_deformation (default); "
                         "layer: the small-strain layer alone; fem: the FEM's finite-strain "
@@ -101,6 +105,7 @@ def run(args: argparse.Namespace) -> int:
         diag = diagnose(table.columns, thickness_mm=table.thickness_mm,
                         radius_mm=table.radius_mm, base=args.base, effects=effects,
                         candidates=candidates, beta_table=args.beta_table,
+                        scan=[c.strip() for c in args.scan.split(",") if c.strip()],
                         progress=not args.no_progress and args.json != "-")
     except InputError as exc:
         raise InputError(f"{path}: {exc}") from None

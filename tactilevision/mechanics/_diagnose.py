@@ -61,6 +61,11 @@ STEP_COLUMNS = ("press", "day", "time_s")
 _GENERIC = ("stiffness_trend:", "force_trend:")
 #: Columns that are never covariates (``depth_std_mm``: the depth's uncertainty, not physics).
 _NOT_COVARIATES = ("force_n", "depth_std_mm", "force_sem_n", "bevel_force_n", "force0_n")
+#: Columns that respond to the press rather than set its conditions: a press's tangential
+#: forces and its F/T window's scatter grow with its normal force, so structure along them
+#: is the force itself. Not scanned as covariates unless asked (``scan``); ``fx_n`` and
+#: ``fy_n`` are read by ``force_crosstalk``, the F/T sensor's physics.
+RESPONSE_COLUMNS = ("fx_n", "fy_n", "force_std_n")
 
 # the measurement that separates two effects that look alike on one table
 _SEPARATE = {
@@ -190,6 +195,12 @@ class Diagnosis:
         the table cannot say.
     noise_budget_missing : str
         Why there is no budget (empty when there is one).
+    scanned_columns : tuple of str
+        The covariate columns tested for structure (present and not
+        constant).
+    responses_not_scanned : tuple of str
+        Response columns of the table left out of the scan
+        (:data:`RESPONSE_COLUMNS`; ``scan`` adds them).
     """
 
     model: tuple[str, ...]
@@ -215,6 +226,8 @@ class Diagnosis:
     message: str = ""
     noise_budget: NoiseBudget | None = None
     noise_budget_missing: str = ""
+    scanned_columns: tuple[str, ...] = ()
+    responses_not_scanned: tuple[str, ...] = ()
 
     def to_json_dict(self) -> dict[str, Any]:
         """The ``diagnose --json`` object (formats.md §3), then extra keys.
@@ -257,6 +270,8 @@ class Diagnosis:
             "noise_budget": (None if self.noise_budget is None
                              else self.noise_budget.to_json_dict()),
             "noise_budget_missing": self.noise_budget_missing or None,
+            "scanned_columns": list(self.scanned_columns),
+            "responses_not_scanned": list(self.responses_not_scanned),
         }
 
 
@@ -316,13 +331,16 @@ def noise_floor(residuals_n: np.ndarray, columns: Mapping[str, np.ndarray]) -> f
     return float(np.sqrt(np.sum((r - _group_means(r, g)) ** 2) / (r.size - G)))
 
 
-def _covariate_names(columns: Mapping[str, np.ndarray]) -> list[str]:
-    return [k for k in columns if k not in _NOT_COVARIATES]
+def _covariate_names(columns: Mapping[str, np.ndarray], scan: Sequence[str] = ()
+                     ) -> list[str]:
+    return [k for k in columns if k not in _NOT_COVARIATES
+            and (k not in RESPONSE_COLUMNS or k in scan)]
 
 
 def covariate_tests(residuals_n: np.ndarray, predicted_n: np.ndarray,
                     columns: Mapping[str, np.ndarray], *, n_depth_params: int = 2,
-                    alpha: float = ALPHA) -> tuple[CovariateTest, ...]:
+                    alpha: float = ALPHA, scan: Sequence[str] = ()
+                    ) -> tuple[CovariateTest, ...]:
     """Does the residual carry structure along each covariate column?
 
     Parameters
@@ -330,7 +348,8 @@ def covariate_tests(residuals_n: np.ndarray, predicted_n: np.ndarray,
     residuals_n, predicted_n : (N,) ndarray
         A model's residuals and predictions.
     columns : mapping of str to (N,) ndarray
-        Every column but ``force_n`` is a covariate; constant columns are
+        Every column but ``force_n``, the uncertainties and the responses
+        (:data:`RESPONSE_COLUMNS`) is a covariate; constant columns are
         skipped.
     n_depth_params : int, default 2
         Parameters of the model that are functions of depth alone (c and
@@ -339,6 +358,8 @@ def covariate_tests(residuals_n: np.ndarray, predicted_n: np.ndarray,
     alpha : float, default ALPHA
         Family-wise level; each test is significant below alpha / (number of
         covariates tested).
+    scan : sequence of str, default ()
+        Response columns to test all the same.
 
     Returns
     -------
@@ -359,7 +380,7 @@ def covariate_tests(residuals_n: np.ndarray, predicted_n: np.ndarray,
     p_all = np.asarray(predicted_n, np.float64)
     out = []
     names = []
-    for name in _covariate_names(columns):
+    for name in _covariate_names(columns, scan):
         x = np.asarray(columns[name], np.float64)
         ok = np.isfinite(x) & np.isfinite(r_all)
         if ok.sum() < 8 or np.ptp(x[ok]) == 0:
@@ -516,7 +537,7 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
              base: str = "paper", effects: Sequence[str] = (), beta_table: str = "fem",
              max_steps: int = 3, cv_folds: int = 10, seed: int = 0,
              progress: bool = False, curvature: str = CURVATURE,
-             candidates: Sequence = ()) -> Diagnosis:
+             candidates: Sequence = (), scan: Sequence[str] = ()) -> Diagnosis:
     """Compare a model with the measurements and find the missing effect.
 
     Parameters
@@ -554,6 +575,13 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
         as for :class:`IndentationModel` (``'package.module:ClassName'``,
         ``'path/to/file.py:ClassName'``, a registered name, a class or an
         instance; docs/custom_effects.md).
+    scan : sequence of str, default ()
+        Response columns (:data:`RESPONSE_COLUMNS`: ``fx_n``, ``fy_n``,
+        ``force_std_n``) to scan as covariates all the same. By default they
+        are not: they follow the force, so a trend along them is the force
+        itself (a stiffness trend along ``fx_n`` is the normal force's).
+        ``fx_n`` and ``fy_n`` are still read by ``force_crosstalk``. The
+        columns scanned are in :attr:`Diagnosis.scanned_columns`.
     curvature : {'gate', 'nuisance'}, default :data:`CURVATURE`
         How eq. (5)'s own misfit to the finite-strain law (a ``(w/h)^2``
         curvature of P/w, :class:`LawCurvature`) is kept from being read as
@@ -700,7 +728,11 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
             untestable[n] = tuple(make_effect(n).columns)
             why_untestable[n] = _why(make_effect(n).columns, cols)
     read_by_named = {c for n in (*EFFECTS, *named) for c in make_effect(n).columns}
-    trend_cols = [c for c in _covariate_names(cols)
+    scan = tuple(scan)
+    bad = [c for c in scan if c not in cols]
+    if bad:
+        raise InputError(f"scan names columns the table does not have: {', '.join(bad)}")
+    trend_cols = [c for c in _covariate_names(cols, scan)
                   if c not in read_by_named and c not in ("press", "indenter", "force_std_n")
                   and _usable(f"stiffness_trend:{c}", cols) is None]
     # each named effect's counterpart of the other kind along the same column: a stiffness
@@ -716,6 +748,8 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
         other = "force_trend" if e.kind == "stiffness" else "stiffness_trend"
         for c in e.columns:
             g = f"{other}:{c}"
+            if c in RESPONSE_COLUMNS and c not in scan:
+                continue            # a stiffness trend along a response is the force itself
             if g not in generic and _usable(g, cols) is None and c != "wait_s":
                 generic.append(g)
                 partner[g] = n
@@ -732,7 +766,8 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
                                start=fit0.params)
     E0, nu0 = material(model, d0, fit0)
     n_depth = 2 if {"large_deformation", "fem_law"} & set(model.names) else 1
-    cov0 = covariate_tests(fit0.residuals_n, fit0.predicted_n, d0, n_depth_params=n_depth)
+    cov0 = covariate_tests(fit0.residuals_n, fit0.predicted_n, d0, n_depth_params=n_depth,
+                           scan=scan)
     ladder = [LadderStep(("layer", *model.names), fit0.rmse_n, cv0, fit0.bic, E0, nu0, None)]
     fits, fit_rows = [fit0], [ok0]
     start = model
@@ -848,7 +883,7 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
     d_final = sub(rows_for(current))
     n_depth = 2 if {"large_deformation", "fem_law"} & set(current.names) else 1
     cov_after = covariate_tests(cur_fit.residuals_n, cur_fit.predicted_n, d_final,
-                                n_depth_params=n_depth)
+                                n_depth_params=n_depth, scan=scan)
     if unexplained is None:
         # along depth_mm, eq. (5) itself is not the FEM's exact P(w): depth structure
         # counts only through the named depth effects among the candidates
@@ -873,7 +908,9 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
         unexplained_covariate=unexplained, offered_effect=offered, ladder=tuple(ladder),
         untestable=untestable, untestable_reasons=why_untestable, fits=tuple(fits),
         fit_rows=tuple(fit_rows), columns=cols, noise_budget=budget,
-        noise_budget_missing=budget_missing)
+        noise_budget_missing=budget_missing,
+        scanned_columns=tuple(t.name for t in cov0),
+        responses_not_scanned=tuple(c for c in RESPONSE_COLUMNS if c in cols and c not in scan))
     return _with_message(diag)
 
 
@@ -910,6 +947,11 @@ def _with_message(d: Diagnosis) -> Diagnosis:
                              "the residual variance)" for t in sig[:3]) + ".")
     else:
         s.append("Its residuals carry no significant structure along any covariate.")
+    if d.scanned_columns or d.responses_not_scanned:
+        s.append(f"Scanned: {', '.join(d.scanned_columns) or 'nothing'}"
+                 + (f"; {', '.join(d.responses_not_scanned)} follow the force and are not "
+                    "scanned (scan them with --scan; fx_n and fy_n are read by "
+                    "force_crosstalk)" if d.responses_not_scanned else "") + ".")
     if d.missing_effect:
         step = next(x for x in d.ladder if x.added == d.missing_effect)
         s.append(f"Missing: {d.missing_effect}. Adding it brings the cross-validated RMSE to "

@@ -28,6 +28,7 @@ EFFECT_NAMES = (
     "incomplete_recovery",
     "aging",
     "spatial_nonuniformity",
+    "force_crosstalk",
     "stiffness_trend:<column>",
     "stiffness_step:<column>",
     "force_trend:<column>",

@@ -143,6 +143,23 @@ class ForceDrift(Effect):
         return value + p["drift_n_per_s"] * t + p["curvature_n_per_s2"] * t * t
 
 
+class ForceCrosstalk(Effect):
+    """F/T cross-talk: the sensor's fz reads part of the tangential forces,
+    P + kx fx + ky fy. A six-axis sensor turns its gauges' strains into forces
+    through a calibration matrix; an error in it, or a sensor mounted askew,
+    couples fx and fy into fz. fx_n and fy_n are read here as the sensor's
+    conditions, not scanned as covariates (they are responses: a press's
+    tangential force grows with its normal force)."""
+
+    name = "force_crosstalk"
+    params = (Param("kx", 0.0, -1.0, 1.0, ""), Param("ky", 0.0, -1.0, 1.0, ""))
+    columns = ("fx_n", "fy_n")
+    kind = "force"
+
+    def apply(self, p, data, value):
+        return value + p["kx"] * data["fx_n"] + p["ky"] * data["fy_n"]
+
+
 class ViscoelasticRelaxation(Effect):
     """Force relaxing while the depth is held: a standard linear solid,
     P (1 - g (1 - exp(-t_hold / tau))) (e.g. Lakes, Viscoelastic Materials, 2009, ch. 2)."""
@@ -369,7 +386,7 @@ class FemLaw(Effect):
 EFFECTS: dict[str, type[Effect]] = {
     c.name: c for c in (LargeDeformation, DepthOffset, ForceOffset, ForceDrift,
                         ViscoelasticRelaxation, IncompleteRecovery, Aging,
-                        SpatialNonuniformity)
+                        SpatialNonuniformity, ForceCrosstalk)
 }
 
 

@@ -30,8 +30,8 @@ hidden                            form in the generator
                                   ``diagnose --base layer``)
 ``temperature`` (out of the       modulus ``exp(-k (T - 23 C))``: no named
 catalogue)                        effect; shows along ``temperature_c``
-``crosstalk`` (out of the         the F/T's Fz reads ``chi Fx``; shows along
-catalogue)                        ``fx_n``
+``crosstalk``                     the F/T's Fz reads ``chi Fx``; shows along
+                                  ``fx_n`` (the catalogue's ``force_crosstalk``)
 ================================  ==============================================
 
 Two effects at once: ``hidden="incomplete_recovery+force_drift"``. The size
@@ -51,8 +51,9 @@ from .._checks import InputError
 
 __all__ = ["HIDDEN_EFFECTS", "HiddenTable", "make_measurement_table"]
 
-#: Hidden effects the generator knows: the catalogue's (formats.md §4) and two
-#: outside it. Value: the covariate column it shows along.
+#: Hidden effects the generator knows: the catalogue's (formats.md §4; ``crosstalk`` is
+#: its ``force_crosstalk``) and one outside it (``temperature``). Value: the covariate
+#: column it shows along.
 HIDDEN_EFFECTS = {
     "depth_offset": "depth_mm",
     "force_offset": "depth_mm",
