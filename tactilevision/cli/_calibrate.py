@@ -11,7 +11,13 @@ import numpy as np
 
 from .._checks import InputError
 from ._fit import _write_json, relaxation_lines, summary
-from ._out import check_output_folder, output_folder
+from ._out import StagedOutput, check_output_folder, check_overwrite
+
+#: The files ``calibrate`` writes into its output folder (figures and report unless
+#: --no-report).
+CALIBRATE_FILES = ("rejected.csv", "measurements.csv", "session.toml", "holds.csv", "fit.json",
+                   "report.html", "force_depth.png", "stiffness_line.png", "residuals.png",
+                   "mosaic.png", "bevel.png")
 
 _DESCRIPTION = """\
 The main job. Reads a session folder (session.toml, reference.png, frames/,
@@ -47,6 +53,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                         "bevel mark), or 'land' (where the bulging gel meets a flat block land; "
                         "FEM at the fitted nu; ill-conditioned)")
     p.add_argument("--beta-table", choices=("fem", "paper"), default="fem")
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace files in the output folder that tactilevision did not write "
+                        "(without it such files stop the run before any work)")
     p.add_argument("--relaxation", choices=("auto", "off"), default="auto",
                    help="auto (default): fit a standard linear solid to the force over each "
                         "hold; for a gel seen to relax, synchronise the clock on the elastic "
@@ -161,6 +170,8 @@ def run(args: argparse.Namespace) -> int:
     session = read_session(args.session)
     out = args.out if args.out is not None else session.path / "calibration"
     check_output_folder(out)               # before the minute of work, not after
+    overwrite = getattr(args, "overwrite", False)
+    check_overwrite(out, CALIBRATE_FILES, overwrite=overwrite)
     progress = None
     if not args.no_progress:
         from tqdm import tqdm
@@ -171,33 +182,37 @@ def run(args: argparse.Namespace) -> int:
                             progress=progress, allow_failure=True,
                             relaxation=getattr(args, "relaxation", "auto"))
     cfg = session.config
-    output_folder(out)
-    _write_rejected(out / "rejected.csv", cal.certification.rejected)
-    if cal.fit is None:
-        # nothing to fit: keep what certification found, and say why
-        if cal.certification.presses:
-            write_measurements(out / "measurements.csv", cal.measurements(),
-                               thickness_mm=cfg.gel_thickness_mm,
-                               radius_mm=cfg.indenter_radius_mm)
+    # written whole into a hidden folder in out, moved into place at the end (or dropped)
+    with StagedOutput(out, overwrite=overwrite) as stage:
+        tmp = stage.path
+        _write_rejected(tmp / "rejected.csv", cal.certification.rejected)
+        if cal.fit is None:
+            # nothing to fit: keep what certification found, and say why
+            if cal.certification.presses:
+                write_measurements(tmp / "measurements.csv", cal.measurements(),
+                                   thickness_mm=cfg.gel_thickness_mm,
+                                   radius_mm=cfg.indenter_radius_mm)
+            if not args.no_report:
+                from ..viz import calibration_figures, write_calibration_report
+
+                figs = calibration_figures(cal, tmp, reconstructor=_reconstructor(session))
+                write_calibration_report(cal, tmp, figs)
+            stage.commit()
+            raise InputError(f"{cal.failure}; rejected.csv"
+                             + ("" if args.no_report else ", the bevel panels and report.html")
+                             + f" in {out} say why")
+        obj = result_dict(cal)
+        write_measurements(tmp / "measurements.csv", cal.measurements(),
+                           thickness_mm=cfg.gel_thickness_mm, radius_mm=cfg.indenter_radius_mm)
+        holds = cal.holds()
+        _write_holds(tmp / "holds.csv", holds)
+        _write_json(obj, str(tmp / "fit.json"))
         if not args.no_report:
             from ..viz import calibration_figures, write_calibration_report
 
-            figs = calibration_figures(cal, out, reconstructor=_reconstructor(session))
-            write_calibration_report(cal, out, figs)
-        raise InputError(f"{cal.failure}; rejected.csv"
-                         + ("" if args.no_report else ", the bevel panels and report.html")
-                         + f" in {out} say why")
-    obj = result_dict(cal)
-    write_measurements(out / "measurements.csv", cal.measurements(),
-                       thickness_mm=cfg.gel_thickness_mm, radius_mm=cfg.indenter_radius_mm)
-    holds = cal.holds()
-    _write_holds(out / "holds.csv", holds)
-    _write_json(obj, str(out / "fit.json"))
-    if not args.no_report:
-        from ..viz import calibration_figures, write_calibration_report
-
-        figs = calibration_figures(cal, out, reconstructor=_reconstructor(session))
-        write_calibration_report(cal, out, figs)
+            figs = calibration_figures(cal, tmp, reconstructor=_reconstructor(session))
+            write_calibration_report(cal, tmp, figs)
+        stage.commit()
     if args.json is not None:
         _write_json(obj, args.json)
     if args.json != "-":

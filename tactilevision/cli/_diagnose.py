@@ -9,7 +9,7 @@ from pathlib import Path
 
 from .._checks import InputError
 from ._fit import _write_json
-from ._out import check_output_folder, output_folder
+from ._out import StagedOutput, check_output_folder, check_overwrite
 
 __all__ = ["add_parser", "run"]
 
@@ -54,6 +54,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--report", metavar="DIR", type=Path,
                    help="write residuals_by_covariate.png, error_ladder.png, report.html")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace files in the report folder that tactilevision did not write")
     p.set_defaults(func=run)
 
 
@@ -90,8 +92,11 @@ def run(args: argparse.Namespace) -> int:
     from ..mechanics._diagnose import diagnose
     from ..mechanics._effects import effect_names
 
+    overwrite = getattr(args, "overwrite", False)
     if args.report is not None:
         check_output_folder(args.report, "report folder")
+        check_overwrite(args.report, ("residuals_by_covariate.png", "error_ladder.png",
+                                      "report.html"), overwrite=overwrite)
     path = args.measurements
     requested = [e.strip() for e in args.effects.split(",") if e.strip()]
     # names checked (and effects of the user's own imported) before the table is read
@@ -116,9 +121,10 @@ def run(args: argparse.Namespace) -> int:
     if args.report is not None:
         from ..viz import diagnosis_figures, write_diagnosis_report
 
-        output_folder(args.report, "report folder")
-        figs = diagnosis_figures(diag, args.report)
-        write_diagnosis_report(diag, args.report, figs, source=str(path))
+        with StagedOutput(args.report, overwrite=overwrite, what="report folder") as stage:
+            figs = diagnosis_figures(diag, stage.path)
+            write_diagnosis_report(diag, stage.path, figs, source=str(path))
+            stage.commit()
     if args.json != "-":
         print(_summary(diag, path), file=sys.stdout)
     return 0

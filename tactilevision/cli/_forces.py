@@ -12,7 +12,7 @@ import numpy as np
 
 from .._assets import KNOWN_SENSORS, default_calibration_path
 from .._checks import InputError
-from ._out import check_output_folder, output_folder
+from ._out import StagedOutput, check_output_folder, check_overwrite
 
 __all__ = ["add_parser", "run"]
 
@@ -73,6 +73,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--every", type=int, default=1, metavar="N", help="every N-th frame")
     p.add_argument("--no-images", action="store_true", help="write forces.csv only")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace files in the output folder that tactilevision did not write")
     p.set_defaults(func=run)
 
 
@@ -133,6 +135,7 @@ def run(args: argparse.Namespace) -> int:
     if not source.is_dir():
         raise InputError(f"{source} is not a folder")
     check_output_folder(args.out if args.out is not None else source / "forces")
+    overwrite = getattr(args, "overwrite", False)
     session = None
     if (source / "session.toml").is_file():
         session = read_session(source)
@@ -174,6 +177,11 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"{source} holds no frames")
     if args.every < 1:
         raise InputError(f"--every must be >= 1, got {args.every}")
+    names = ["forces.csv"] + ([] if args.no_images else
+                              [f"{frames[i].stem}_force.png"
+                               for i in range(0, len(frames), args.every)])
+    check_overwrite(args.out if args.out is not None else source / "forces", names,
+                    overwrite=overwrite)
     E, nu, material_source, fit_obj = _material(args, source if session else None)
     beta, beta_source = _beta(args, fit_obj, material_source)
     try:
@@ -189,7 +197,6 @@ def run(args: argparse.Namespace) -> int:
                          method=args.method, contact=args.contact,
                          threshold_mm=args.threshold_mm, beta=beta)
     out = args.out if args.out is not None else source / "forces"
-    output_folder(out)
     ft = None
     ft_note = ""
     if session is not None and session.forces_n.size:
@@ -203,50 +210,55 @@ def run(args: argparse.Namespace) -> int:
                        "unknown (no [force_sensor] clock_offset_s, no fit.json from calibrate)")
         else:
             ft = (session.force_times_s - float(offset), session.forces_n[:, 2])
-    credit = cal.provenance.get("credit")
-    picks = list(range(0, len(frames), args.every))
-    it = picks
-    if not args.no_progress:
-        from tqdm.auto import tqdm
+    # written whole into a hidden folder in out, moved into place at the end (Ctrl-C:
+    # nothing)
+    with StagedOutput(out, overwrite=overwrite) as stage:
+        tmp = stage.path
+        credit = cal.provenance.get("credit")
+        picks = list(range(0, len(frames), args.every))
+        it = picks
+        if not args.no_progress:
+            from tqdm.auto import tqdm
 
-        it = tqdm(picks, desc="forces", unit="frame", file=sys.stderr, mininterval=1.0)
-    rows, skipped, at_edge = [], [], []
-    for i in it:
-        path = frames[i]
-        try:
-            frame = read_frame(path, cal.shape)
-        except InputError as exc:
-            skipped.append(str(exc))
-            continue
-        height = recon(frame)     # float32: the estimator's single-precision path
-        fm = est(height)
-        # the contact area: the footprint the traction acts on (pixels, or FEM nodes, above
-        # --threshold-mm that push: each node's area is its force over its pressure); with
-        # 'field', the colour change above the noise level
-        if fm.contact is None:
-            area = float(recon.contact_mask(frame).sum()) * mm_per_px ** 2
-        else:
-            c = fm.contact
-            area = float(np.sum(fm.forces_n[..., 2][c] / fm.pressure_kpa[c])) * 1e3
-            if c[0].any() or c[-1].any() or c[:, 0].any() or c[:, -1].any():
-                at_edge.append(path.name)     # the force beyond the image is not seen
-        t = float(times[i])
-        row = {"frame": path.name, "t_s": "" if not np.isfinite(t) else f"{t:.4f}",
-               "fx_n": f"{fm.total_n[0]:.5f}", "fy_n": f"{fm.total_n[1]:.5f}",
-               "fz_n": f"{fm.total_n[2]:.5f}",
-               "max_pressure_kpa": f"{float(fm.pressure_kpa.max()):.3f}",
-               "contact_area_mm2": f"{area:.3f}",
-               "ft_fz_n": ""}
-        if ft is not None and np.isfinite(t):
-            row["ft_fz_n"] = f"{float(np.interp(t, ft[0], ft[1])):.5f}"
-        rows.append(row)
-        if not args.no_images:
-            save_force_image(out / f"{path.stem}_force.png", fm, mm_per_px=mm_per_px,
-                             frame=frame, title=path.name, credit=credit)
-    with (out / "forces.csv").open("w", newline="") as fh:
-        writer = csv.DictWriter(fh, fieldnames=_COLUMNS)
-        writer.writeheader()
-        writer.writerows(rows)
+            it = tqdm(picks, desc="forces", unit="frame", file=sys.stderr, mininterval=1.0)
+        rows, skipped, at_edge = [], [], []
+        for i in it:
+            path = frames[i]
+            try:
+                frame = read_frame(path, cal.shape)
+            except InputError as exc:
+                skipped.append(str(exc))
+                continue
+            height = recon(frame)     # float32: the estimator's single-precision path
+            fm = est(height)
+            # the contact area: the footprint the traction acts on (pixels, or FEM nodes, above
+            # --threshold-mm that push: each node's area is its force over its pressure); with
+            # 'field', the colour change above the noise level
+            if fm.contact is None:
+                area = float(recon.contact_mask(frame).sum()) * mm_per_px ** 2
+            else:
+                c = fm.contact
+                area = float(np.sum(fm.forces_n[..., 2][c] / fm.pressure_kpa[c])) * 1e3
+                if c[0].any() or c[-1].any() or c[:, 0].any() or c[:, -1].any():
+                    at_edge.append(path.name)     # the force beyond the image is not seen
+            t = float(times[i])
+            row = {"frame": path.name, "t_s": "" if not np.isfinite(t) else f"{t:.4f}",
+                   "fx_n": f"{fm.total_n[0]:.5f}", "fy_n": f"{fm.total_n[1]:.5f}",
+                   "fz_n": f"{fm.total_n[2]:.5f}",
+                   "max_pressure_kpa": f"{float(fm.pressure_kpa.max()):.3f}",
+                   "contact_area_mm2": f"{area:.3f}",
+                   "ft_fz_n": ""}
+            if ft is not None and np.isfinite(t):
+                row["ft_fz_n"] = f"{float(np.interp(t, ft[0], ft[1])):.5f}"
+            rows.append(row)
+            if not args.no_images:
+                save_force_image(tmp / f"{path.stem}_force.png", fm, mm_per_px=mm_per_px,
+                                 frame=frame, title=path.name, credit=credit)
+        with (tmp / "forces.csv").open("w", newline="") as fh:
+            writer = csv.DictWriter(fh, fieldnames=_COLUMNS)
+            writer.writeheader()
+            writer.writerows(rows)
+        stage.commit()
     level = {"contact": "zero outside the contact region",
              "far_field": "levelled at the far field", "median": "the frame's median at zero"}
     contact = (f"footprint above {args.threshold_mm:g} mm" if args.contact == "footprint"

@@ -12,7 +12,7 @@ from tqdm.auto import tqdm
 
 from .._assets import KNOWN_SENSORS, default_calibration_path
 from .._checks import InputError
-from ._out import output_folder
+from ._out import StagedOutput, check_output_folder, check_overwrite
 
 __all__ = ["add_parser", "run"]
 
@@ -46,6 +46,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    "absolute heights: docs/absolute_depth.md)")
     p.add_argument("--flat-reference", action="store_true",
                    help="subtract the optics model's gradient on the reference")
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace files in the output folder that tactilevision did not write")
     p.set_defaults(func=run)
 
 
@@ -55,10 +57,15 @@ def run(args: argparse.Namespace) -> int:
     from ..optics import DepthReconstructor, PhotometricCalibration
     from ..viz import save_depth_image
 
-    out = output_folder(args.out)          # before any work: a bad --out fails at once
+    out = check_output_folder(args.out)    # before any work: a bad --out fails at once
+    overwrite = getattr(args, "overwrite", False)
     cal_path = args.calibration or default_calibration_path(args.sensor)
     cal = PhotometricCalibration.load(cal_path)
     frames = list_frames(args.frames_dir)
+    names = ["heights.csv"] + [f"{p.stem}_height.npy" for p in frames]
+    if not args.no_images:
+        names += [f"{p.stem}_depth.png" for p in frames]
+    check_overwrite(out, names, overwrite=overwrite)
     ref_path = args.reference or find_reference(args.frames_dir)
     if args.reference is not None and not args.reference.is_file():
         raise InputError(f"reference {args.reference} does not exist")
@@ -69,24 +76,30 @@ def run(args: argparse.Namespace) -> int:
                                flat_reference=args.flat_reference)
     credit = cal.provenance.get("credit")
     rows, skipped = [], []
-    for path in tqdm(frames, desc="reconstruct", unit="frame", file=sys.stderr):
-        try:
-            frame = read_frame(path, cal.shape)
-        except InputError as exc:
-            skipped.append(str(exc))
-            continue
-        height = recon(frame)
-        np.save(out / f"{path.stem}_height.npy", height)
-        if not args.no_images:
-            save_depth_image(out / f"{path.stem}_depth.png", height, mm_per_px=cal.mm_per_px,
-                             frame=frame, title=path.name, credit=credit)
-        contact = recon.contact_mask(frame)
-        rows.append({"frame": path.name, "max_depth_mm": f"{float(height.max()):.4f}",
-                     "contact_area_mm2": f"{contact.sum() * cal.mm_per_px ** 2:.3f}"})
-    with (out / "heights.csv").open("w", newline="") as fh:
-        writer = csv.DictWriter(fh, fieldnames=["frame", "max_depth_mm", "contact_area_mm2"])
-        writer.writeheader()
-        writer.writerows(rows)
+    # written whole into a hidden folder in out, moved into place at the end (Ctrl-C: nothing)
+    with StagedOutput(out, overwrite=overwrite) as stage:
+        tmp = stage.path
+        for path in tqdm(frames, desc="reconstruct", unit="frame", file=sys.stderr):
+            try:
+                frame = read_frame(path, cal.shape)
+            except InputError as exc:
+                skipped.append(str(exc))
+                continue
+            height = recon(frame)
+            np.save(tmp / f"{path.stem}_height.npy", height)
+            if not args.no_images:
+                save_depth_image(tmp / f"{path.stem}_depth.png", height,
+                                 mm_per_px=cal.mm_per_px, frame=frame, title=path.name,
+                                 credit=credit)
+            contact = recon.contact_mask(frame)
+            rows.append({"frame": path.name, "max_depth_mm": f"{float(height.max()):.4f}",
+                         "contact_area_mm2": f"{contact.sum() * cal.mm_per_px ** 2:.3f}"})
+        with (tmp / "heights.csv").open("w", newline="") as fh:
+            writer = csv.DictWriter(fh, fieldnames=["frame", "max_depth_mm",
+                                                    "contact_area_mm2"])
+            writer.writeheader()
+            writer.writerows(rows)
+        stage.commit()
     ref_note = str(ref_path) if ref_path else "the calibration's reference"
     print(f"reconstructed {len(rows)} frame(s) from {args.frames_dir} with {cal_path} "
           f"(reference: {ref_note}) into {out}")

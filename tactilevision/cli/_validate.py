@@ -11,7 +11,7 @@ from pathlib import Path
 
 from .._checks import InputError
 from ._fit import _write_json
-from ._out import check_output_folder, output_folder
+from ._out import StagedOutput, check_output_folder, check_overwrite
 
 __all__ = ["add_parser", "run"]
 
@@ -45,6 +45,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--json", metavar="FILE", help="write the result as JSON ('-': stdout)")
     p.add_argument("--report", metavar="DIR", type=Path,
                    help="write validation.png (force against depth) and validation.csv")
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace files in the report folder that tactilevision did not write")
     p.set_defaults(func=run)
 
 
@@ -72,8 +74,10 @@ def run(args: argparse.Namespace) -> int:
 
     if (args.E_mpa is None) != (args.nu is None):
         raise InputError("give both --E-mpa and --nu, or neither (to use the fitted values)")
+    overwrite = getattr(args, "overwrite", False)
     if args.report is not None:
         check_output_folder(args.report, "report folder")
+        check_overwrite(args.report, ("validation.png", "validation.csv"), overwrite=overwrite)
     path = args.measurements
     table = read_measurements(path, thickness_mm=args.thickness_mm, radius_mm=args.radius_mm)
     if args.E_mpa is None:
@@ -99,14 +103,15 @@ def run(args: argparse.Namespace) -> int:
     if args.json is not None:
         _write_json(obj, args.json)
     if args.report is not None:
-        output_folder(args.report, "report folder")
-        save_validation_figure(args.report / "validation.png", res, title=str(path))
-        with (args.report / "validation.csv").open("w", newline="") as fh:
-            wr = csv.writer(fh)
-            wr.writerow(["depth_mm", "force_n", "simulated_depth_mm", "rel_error"])
-            for d, f, s, e in zip(res.depth_mm, res.force_n, res.simulated_depth_mm,
-                                  res.rel_error, strict=True):
-                wr.writerow([f"{d:.5f}", f"{f:.5f}", f"{s:.5f}", f"{e:.5f}"])
+        with StagedOutput(args.report, overwrite=overwrite, what="report folder") as stage:
+            save_validation_figure(stage.path / "validation.png", res, title=str(path))
+            with (stage.path / "validation.csv").open("w", newline="") as fh:
+                wr = csv.writer(fh)
+                wr.writerow(["depth_mm", "force_n", "simulated_depth_mm", "rel_error"])
+                for d, f, s, e in zip(res.depth_mm, res.force_n, res.simulated_depth_mm,
+                                      res.rel_error, strict=True):
+                    wr.writerow([f"{d:.5f}", f"{f:.5f}", f"{s:.5f}", f"{e:.5f}"])
+            stage.commit()
     if args.json != "-":
         out = sys.stdout
         print(f"{path}: {len(res.depth_mm)} presses simulated at E = {E:.4f} MPa, "
