@@ -88,8 +88,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
-def _fmt_ci(ci: tuple[float, float], digits: int) -> str:
-    return f"[{ci[0]:.{digits}f}, {ci[1]:.{digits}f}]"
+def _fmt_ci(ci: tuple[float | None, float | None], digits: int) -> str:
+    lo, hi = (float("nan") if v is None else v for v in ci)
+    return f"[{lo:.{digits}f}, {hi:.{digits}f}]"
 
 
 def summary(fit: IndentationFit, path: Path) -> str:

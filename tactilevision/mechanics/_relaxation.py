@@ -434,7 +434,9 @@ def relaxed_moduli(E0_mpa: float, E0_ci_mpa: tuple[float, float], relax: Relaxat
     Returns
     -------
     moduli : dict
-        ``E0_mpa``, ``E0_ci_mpa``, ``E_inf_mpa``, ``E_inf_ci_mpa``.
+        ``E0_mpa``, ``E0_ci_mpa``, ``E_inf_mpa``, ``E_inf_ci_mpa`` (an
+        interval's end that cannot be computed, e.g. from a fit without an
+        interval of E, is None).
 
     Notes
     -----
@@ -464,6 +466,8 @@ def relaxed_moduli(E0_mpa: float, E0_ci_mpa: tuple[float, float], relax: Relaxat
         return (point - float(np.hypot(point - lo_d, lo_f)),
                 point + float(np.hypot(hi_d - point, hi_f)))
 
-    e0_point = E0_mpa
-    return {"E0_mpa": e0_point, "E0_ci_mpa": combine(e0_point, e0_b),
-            "E_inf_mpa": e_inf, "E_inf_ci_mpa": combine(e_inf, einf_b)}
+    def clean(v: tuple[float, float]) -> tuple[float | None, float | None]:
+        return tuple(float(x) if np.isfinite(x) else None for x in v)
+
+    return {"E0_mpa": E0_mpa, "E0_ci_mpa": clean(combine(E0_mpa, e0_b)),
+            "E_inf_mpa": e_inf, "E_inf_ci_mpa": clean(combine(e_inf, einf_b))}
