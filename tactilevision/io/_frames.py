@@ -60,6 +60,8 @@ def read_image(path: str | Path, *, colour_only: bool = False) -> np.ndarray:
         data = path.read_bytes()
     except OSError as exc:
         raise InputError(f"image {path} cannot be read: {exc.strerror}") from None
+    if not data:
+        raise InputError(f"image {path} is empty (0 bytes)")
     _check_complete(path, data)
     size = _header_size(data)
     if size is not None and size[0] * size[1] > MAX_IMAGE_PIXELS:
@@ -67,7 +69,10 @@ def read_image(path: str | Path, *, colour_only: bool = False) -> np.ndarray:
                          f"({size[0] * size[1] / 1e6:.1f} megapixels), above the "
                          f"{MAX_IMAGE_PIXELS / 1e6:.1f} megapixel bound for tactile frames "
                          "(tactilevision.io.MAX_IMAGE_PIXELS): crop or downscale it first")
-    img = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED)
+    try:
+        img = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED)
+    except cv2.error:                       # the decoder's own assertion on broken data
+        img = None
     if img is None:
         raise InputError(f"image {path} is not a readable image")
     if img.dtype != np.uint8:
