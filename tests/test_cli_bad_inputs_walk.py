@@ -30,6 +30,7 @@ def _setup(tmp: Path) -> None:
     (tmp / "out").mkdir()
     (tmp / "out" / "fit.json").write_text('{"the user": "keeps this"}')
     (tmp / "noframes").mkdir()
+    (tmp / "theirs.npz").write_bytes(b"someone else's calibration")
 
 
 CASES = [
@@ -57,6 +58,10 @@ CASES = [
       "--out", "{t}/o.npz"], "nowhere"),
     (["optics", "calibrate", str(BALL), "--ball-radius-mm", "2", "--mm-per-px", "0.0295",
       "--model", "lut", "--bins", "0", "--out", "{t}/o.npz"], "bins"),
+    (["optics", "calibrate", str(BALL), "--ball-radius-mm", "2", "--mm-per-px", "0.0295",
+      "--model", "lut", "--out", "{t}/theirs.npz"], "--overwrite"),
+    (["optics", "calibrate", str(BALL), "--ball-radius-mm", "2", "--mm-per-px", "0.0295",
+      "--model", "lut", "--out", "{t}/theirs"], "--overwrite"),
 ]
 
 

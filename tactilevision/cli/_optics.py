@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from .._checks import InputError
-from ._out import check_output_folder
+from ._out import StagedOutput, check_output_folder, check_overwrite
 
 __all__ = ["add_parser", "parse_presses", "run_calibrate"]
 
@@ -87,6 +87,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     c.add_argument("--detect-circles", action="store_true",
                    help="ignore given circles and detect them")
     c.add_argument("--seed", type=int, default=0)
+    c.add_argument("--overwrite", action="store_true",
+                   help="replace an existing calibration file that tactilevision did not write")
     c.add_argument("--credit", default=None,
                    help="attribution of the frames, stored with the calibration and printed on "
                    "depth images")
@@ -108,6 +110,8 @@ def run_calibrate(args: argparse.Namespace) -> int:
     if out.is_dir():
         raise InputError(f"--out {out} is a folder; give the calibration file to write (.npz)")
     check_output_folder(out.parent, "folder of the calibration file")
+    name = out.name if out.suffix == ".npz" else out.name + ".npz"
+    check_overwrite(out.parent, [name], overwrite=args.overwrite)
     src = str(args.ball_presses)
     ps = read_ball_presses(taxim_datapack(src.split(":", 1)[1]) if src.startswith("taxim:")
                            else args.ball_presses)
@@ -135,7 +139,12 @@ def run_calibrate(args: argparse.Namespace) -> int:
     cal.provenance["command"] = "tactilevision " + " ".join(args.argv)
     if args.credit:
         cal.provenance["credit"] = args.credit
-    path = cal.save(args.out)
+    # into place only when complete; the folder's manifest records it (a rerun may replace it)
+    with StagedOutput(out.parent, overwrite=args.overwrite,
+                      what="folder of the calibration file") as stage:
+        cal.save(stage.path / name)
+        stage.commit()
+    path = out.parent / name
     print(f"wrote {args.model} calibration from {len(idx)} presses to {path}")
     rest = np.setdiff1d(np.arange(len(ps.frames)), idx)
     if rest.size and given:

@@ -12,6 +12,7 @@ from __future__ import annotations
 import datetime as _dt
 import io
 import json
+import os
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
@@ -289,7 +290,8 @@ class PhotometricCalibration:
         Returns
         -------
         path : Path
-            The file written.
+            The file written (whole: through a temporary file and an atomic
+            rename, so an existing file is replaced only by a complete one).
         """
         path = Path(path)
         if path.suffix != ".npz":
@@ -318,7 +320,14 @@ class PhotometricCalibration:
         buf = io.BytesIO()
         np.savez_compressed(buf, **arrays)
         path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_bytes(buf.getvalue())
+        # through a temporary file and an atomic rename: an older file stays whole until
+        # the new one is complete
+        tmp = path.with_name(f".{path.name}.tmp")
+        try:
+            tmp.write_bytes(buf.getvalue())
+            os.replace(tmp, path)
+        finally:
+            tmp.unlink(missing_ok=True)
         return path
 
     @classmethod
