@@ -592,15 +592,32 @@ def hold_start(force_times_s: np.ndarray, fz_n: np.ndarray, t0_s: float, t1_s: f
     guess = float(t[peak + after[0]])
     win = (t >= guess - span_s) & (t <= guess + span_s)
     tw, fw = t[win], f[win]
-    best, t_best = np.inf, guess
-    for tb in tw[2:-2]:
-        X = np.column_stack([np.ones_like(tw), np.minimum(tw - tb, 0.0),
-                             np.maximum(tw - tb, 0.0)])
-        coef, *_ = np.linalg.lstsq(X, fw, rcond=None)
-        rss = float(np.sum((fw - X @ coef) ** 2))
-        if rss < best:
-            best, t_best = rss, float(tb)
-    return t_best
+    if tw.size < 5:
+        return guess
+    rss, _ = _knee_fits(tw, fw, tw[2:-2], slope_before=True)
+    return float(tw[2:-2][int(np.argmin(rss))])
+
+
+def _knee_fits(t: np.ndarray, f: np.ndarray, knees: np.ndarray, *, slope_before: bool
+               ) -> tuple[np.ndarray, np.ndarray]:
+    """Two straight lines meeting at each candidate knee, fitted by least squares at once.
+
+    The design at knee k is ``[1, min(t - k, 0), max(t - k, 0)]`` (a line on each side,
+    `slope_before`) or ``[1, max(t - k, 0)]`` (flat, then a line). Returns the residual
+    sum of squares (K,) and the coefficients (K, p) of every knee, from the normal
+    equations of all knees solved together (each knee strictly inside `t`, so every
+    design has full rank).
+    """
+    d = t[None, :] - knees[:, None]                                      # (K, n)
+    cols = [np.ones_like(d)]
+    if slope_before:
+        cols.append(np.minimum(d, 0.0))
+    cols.append(np.maximum(d, 0.0))
+    X = np.stack(cols, axis=-1)                                          # (K, n, p)
+    coef = np.linalg.solve(np.einsum("kni,knj->kij", X, X),
+                           np.einsum("kni,n->ki", X, f)[..., None])[..., 0]      # (K, p)
+    rss = np.sum((f[None, :] - np.einsum("kni,ki->kn", X, coef)) ** 2, axis=1)
+    return rss, coef
 
 
 def hold_end(force_times_s: np.ndarray, fz_n: np.ndarray, t_hold_s: float, *,
@@ -708,14 +725,10 @@ def approach_start(force_times_s: np.ndarray, fz_n: np.ndarray, t_hold_s: float,
     tw, fw = ts[w], fs[w]
     if tw.size < 6:
         return None
-    best, t_best = np.inf, None
-    for tk in tw[1:-2]:
-        X = np.column_stack([np.ones_like(tw), np.maximum(tw - tk, 0.0)])
-        coef, *_ = np.linalg.lstsq(X, fw, rcond=None)
-        rss = float(np.sum((fw - X @ coef) ** 2))
-        if coef[1] > 0 and rss < best:
-            best, t_best = rss, float(tk)
-    return t_best
+    knees = tw[1:-2]
+    rss, coef = _knee_fits(tw, fw, knees, slope_before=False)
+    rss = np.where(coef[:, 1] > 0, rss, np.inf)          # the force must rise after it
+    return float(knees[int(np.argmin(rss))]) if np.isfinite(rss).any() else None
 
 
 def _check_fz_sign(session, fz: np.ndarray) -> None:
