@@ -11,7 +11,7 @@ import numpy as np
 
 from .._checks import InputError
 from ._fit import _write_json, relaxation_lines, summary
-from ._out import StagedOutput, check_output_folder, check_overwrite
+from ._out import StagedOutput, add_overwrite_argument, check_output_folder, check_overwrite
 
 #: The files ``calibrate`` writes into its output folder (figures and report unless
 #: --no-report).
@@ -53,9 +53,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                         "bevel mark), or 'land' (where the bulging gel meets a flat block land; "
                         "FEM at the fitted nu; ill-conditioned)")
     p.add_argument("--beta-table", choices=("fem", "paper"), default="fem")
-    p.add_argument("--overwrite", action="store_true",
-                   help="replace files in the output folder that tactilevision did not write "
-                        "(without it such files stop the run before any work)")
+    add_overwrite_argument(p)
     p.add_argument("--relaxation", choices=("auto", "off"), default="auto",
                    help="auto (default): fit a standard linear solid to the force over each "
                         "hold; for a gel seen to relax, synchronise the clock on the elastic "
@@ -170,7 +168,7 @@ def run(args: argparse.Namespace) -> int:
     session = read_session(args.session)
     out = args.out if args.out is not None else session.path / "calibration"
     check_output_folder(out)               # before the minute of work, not after
-    overwrite = getattr(args, "overwrite", False)
+    overwrite = args.overwrite
     check_overwrite(out, CALIBRATE_FILES, overwrite=overwrite)
     progress = None
     if not args.no_progress:
@@ -180,7 +178,7 @@ def run(args: argparse.Namespace) -> int:
             return tqdm(it, desc="frames", unit="frame", file=sys.stderr, mininterval=1.0)
     cal = calibrate_session(session, depth_rule=args.depth_rule, beta_table=args.beta_table,
                             progress=progress, allow_failure=True,
-                            relaxation=getattr(args, "relaxation", "auto"))
+                            relaxation=args.relaxation)
     cfg = session.config
     # written whole into a hidden folder in out, moved into place at the end (or dropped)
     with StagedOutput(out, overwrite=overwrite) as stage:

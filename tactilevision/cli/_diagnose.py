@@ -9,7 +9,7 @@ from pathlib import Path
 
 from .._checks import InputError
 from ._fit import _write_json
-from ._out import StagedOutput, check_output_folder, check_overwrite
+from ._out import StagedOutput, add_overwrite_argument, check_output_folder, check_overwrite
 
 __all__ = ["add_parser", "run"]
 
@@ -54,8 +54,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--report", metavar="DIR", type=Path,
                    help="write residuals_by_covariate.png, error_ladder.png, report.html")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
-    p.add_argument("--overwrite", action="store_true",
-                   help="replace files in the report folder that tactilevision did not write")
+    add_overwrite_argument(p, "report folder")
     p.set_defaults(func=run)
 
 
@@ -92,7 +91,7 @@ def run(args: argparse.Namespace) -> int:
     from ..mechanics._diagnose import diagnose
     from ..mechanics._effects import effect_names
 
-    overwrite = getattr(args, "overwrite", False)
+    overwrite = args.overwrite
     if args.report is not None:
         check_output_folder(args.report, "report folder")
         check_overwrite(args.report, ("residuals_by_covariate.png", "error_ladder.png",

@@ -293,7 +293,7 @@ def run(args: argparse.Namespace) -> int:
     path = args.measurements
     table = read_measurements(path, thickness_mm=args.thickness_mm, radius_mm=args.radius_mm)
     relax, corrected = None, False
-    if getattr(args, "holds", None) is not None:
+    if args.holds is not None:
         table, relax, corrected = _relax_table(table, args.holds, effects)
     depth_std, std_message = depth_uncertainty(table, ignore=args.ignore_depth_std,
                                                effects=effects)

@@ -12,7 +12,7 @@ import numpy as np
 
 from .._assets import KNOWN_SENSORS, default_calibration_path
 from .._checks import InputError
-from ._out import StagedOutput, check_output_folder, check_overwrite
+from ._out import StagedOutput, add_overwrite_argument, check_output_folder, check_overwrite
 
 __all__ = ["add_parser", "run"]
 
@@ -73,8 +73,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--every", type=int, default=1, metavar="N", help="every N-th frame")
     p.add_argument("--no-images", action="store_true", help="write forces.csv only")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
-    p.add_argument("--overwrite", action="store_true",
-                   help="replace files in the output folder that tactilevision did not write")
+    add_overwrite_argument(p)
     p.set_defaults(func=run)
 
 
@@ -135,7 +134,7 @@ def run(args: argparse.Namespace) -> int:
     if not source.is_dir():
         raise InputError(f"{source} is not a folder")
     check_output_folder(args.out if args.out is not None else source / "forces")
-    overwrite = getattr(args, "overwrite", False)
+    overwrite = args.overwrite
     session = None
     if (source / "session.toml").is_file():
         session = read_session(source)

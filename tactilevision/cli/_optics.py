@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from .._checks import InputError
-from ._out import StagedOutput, check_output_folder, check_overwrite
+from ._out import StagedOutput, add_overwrite_argument, check_output_folder, check_overwrite
 
 __all__ = ["add_parser", "parse_presses", "run_calibrate"]
 
@@ -87,8 +87,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     c.add_argument("--detect-circles", action="store_true",
                    help="ignore given circles and detect them")
     c.add_argument("--seed", type=int, default=0)
-    c.add_argument("--overwrite", action="store_true",
-                   help="replace an existing calibration file that tactilevision did not write")
+    add_overwrite_argument(c, "folder of the calibration file")
     c.add_argument("--credit", default=None,
                    help="attribution of the frames, stored with the calibration and printed on "
                    "depth images")

@@ -9,7 +9,15 @@ from pathlib import Path
 
 from .._checks import InputError
 
-__all__ = ["MANIFEST", "StagedOutput", "check_output_folder", "check_overwrite", "output_folder"]
+__all__ = ["MANIFEST", "StagedOutput", "add_overwrite_argument", "check_output_folder",
+           "check_overwrite", "output_folder"]
+
+
+def add_overwrite_argument(parser, what: str = "output folder") -> None:
+    """Give a sub-command its ``--overwrite`` flag (:func:`check_overwrite`)."""
+    parser.add_argument("--overwrite", action="store_true",
+                        help=f"replace files in the {what} that tactilevision did not write "
+                             "(without it such files stop the run before any work)")
 
 
 def output_folder(path: Path, what: str = "output folder") -> Path:

@@ -12,7 +12,7 @@ from tqdm.auto import tqdm
 
 from .._assets import KNOWN_SENSORS, default_calibration_path
 from .._checks import InputError
-from ._out import StagedOutput, check_output_folder, check_overwrite
+from ._out import StagedOutput, add_overwrite_argument, check_output_folder, check_overwrite
 
 __all__ = ["add_parser", "run"]
 
@@ -46,8 +46,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    "absolute heights: docs/absolute_depth.md)")
     p.add_argument("--flat-reference", action="store_true",
                    help="subtract the optics model's gradient on the reference")
-    p.add_argument("--overwrite", action="store_true",
-                   help="replace files in the output folder that tactilevision did not write")
+    add_overwrite_argument(p)
     p.set_defaults(func=run)
 
 
@@ -58,7 +57,7 @@ def run(args: argparse.Namespace) -> int:
     from ..viz import save_depth_image
 
     out = check_output_folder(args.out)    # before any work: a bad --out fails at once
-    overwrite = getattr(args, "overwrite", False)
+    overwrite = args.overwrite
     cal_path = args.calibration or default_calibration_path(args.sensor)
     cal = PhotometricCalibration.load(cal_path)
     frames = list_frames(args.frames_dir)

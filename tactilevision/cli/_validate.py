@@ -11,7 +11,7 @@ from pathlib import Path
 
 from .._checks import InputError
 from ._fit import _write_json
-from ._out import StagedOutput, check_output_folder, check_overwrite
+from ._out import StagedOutput, add_overwrite_argument, check_output_folder, check_overwrite
 
 __all__ = ["add_parser", "run"]
 
@@ -45,8 +45,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--json", metavar="FILE", help="write the result as JSON ('-': stdout)")
     p.add_argument("--report", metavar="DIR", type=Path,
                    help="write validation.png (force against depth) and validation.csv")
-    p.add_argument("--overwrite", action="store_true",
-                   help="replace files in the report folder that tactilevision did not write")
+    add_overwrite_argument(p, "report folder")
     p.set_defaults(func=run)
 
 
@@ -74,7 +73,7 @@ def run(args: argparse.Namespace) -> int:
 
     if (args.E_mpa is None) != (args.nu is None):
         raise InputError("give both --E-mpa and --nu, or neither (to use the fitted values)")
-    overwrite = getattr(args, "overwrite", False)
+    overwrite = args.overwrite
     if args.report is not None:
         check_output_folder(args.report, "report folder")
         check_overwrite(args.report, ("validation.png", "validation.csv"), overwrite=overwrite)
