@@ -235,10 +235,16 @@ def _relaxation(session: Session, cert: Certification, progress: Callable | None
     elastic = elastic_force(session.force_times_s, session.forces_n, relax.g, relax.tau_s)
     again = certify_session(session, progress=progress, sync_fz_n=elastic[:, 2],
                             contact_area_px=cert.contact_area_px)
-    # the hold curves of the presses as certified now
-    holds = _hold_curves(session, again)
-    if np.unique(holds["press"]).size >= 3:
-        relax = fit_relaxation(holds["press"], holds["t_s"], holds["fz_n"], holds["ramp_s"])
+    # the holds are fitted again only if they moved: on the vernier's path a hold starts
+    # where the force stops rising, whatever the clock; on a frame-timed one it follows it
+    def starts(c: Certification) -> list[tuple[int, float]]:
+        return [(p.press, round(p.t_frame_s + c.clock_offset_s, 3)) for p in c.presses]
+
+    if starts(again) != starts(cert):
+        holds = _hold_curves(session, again)
+        if np.unique(holds["press"]).size >= 3:
+            relax = fit_relaxation(holds["press"], holds["t_s"], holds["fz_n"],
+                                   holds["ramp_s"])
     off, n = again.clock_offset_s, session.config.window_samples
     force0 = np.array([force_window(session.force_times_s, elastic, p.t_frame_s + off + p.hold_s,
                                     n).fz_n for p in again.presses])
