@@ -387,3 +387,53 @@ def test_calibrate_relaxation_bad_value(relaxing_session):
     folder, _ = relaxing_session
     with pytest.raises(InputError, match="relaxation must be"):
         calibrate_session(folder, relaxation="on")
+
+
+def test_press_schedule_holds_of_different_lengths():
+    """hold_s=(lo, hi) draws each press's hold in the range; the presses follow one another
+    without overlap (each starts after the last one's release plus its wait); a fixed hold
+    leaves the other draws as they were."""
+    fixed = press_schedule((0.3, 0.6), repeats=4, hold_s=1.0, seed=5)
+    ranged = press_schedule((0.3, 0.6), repeats=4, hold_s=(0.5, 3.0), seed=5)
+    assert np.all((ranged.hold_s >= 0.5) & (ranged.hold_s <= 3.0))
+    assert np.ptp(ranged.hold_s) > 1.0
+    gaps = ranged.t_start_s[1:] - ranged.t_end_s[:-1]
+    np.testing.assert_allclose(gaps, ranged.wait_s[1:], atol=1e-12)
+    np.testing.assert_array_equal(fixed.indenter, ranged.indenter)
+    np.testing.assert_array_equal(fixed.wait_s, ranged.wait_s)
+    np.testing.assert_allclose(fixed.t_start_s[1:] - fixed.t_end_s[:-1], fixed.wait_s[1:],
+                               atol=1e-12)
+    for bad in ((0.0, 1.0), (2.0, 1.0), (1.0,)):
+        with pytest.raises(InputError, match="hold_s"):
+            press_schedule((0.3,), hold_s=bad)
+
+
+def test_window_at_end_places_the_window_before_the_release(relaxing_session, tmp_path):
+    """[force_sensor] window_at = "end": each press's force window ends where its hold ends
+    (truth.json's hold_to_s), so hold_s is the hold's length less half the window, and
+    force_n is the relaxed force there: force0_n times the standard linear solid's factor
+    (1 - g) + g phi(ramp / tau) exp(-hold_s / tau), to 1 %. A bad value is refused naming
+    the key."""
+    from tactilevision import calibrate_session
+    from tactilevision.io import read_session
+
+    folder, truth = relaxing_session
+    moved = tmp_path / "session"
+    moved.mkdir()
+    for item in folder.iterdir():
+        if item.name != "session.toml":
+            (moved / item.name).symlink_to(item)
+    toml = (folder / "session.toml").read_text()
+    (moved / "session.toml").write_text(toml + 'window_at = "end"\n')
+    assert read_session(moved).config.window_at == "end"
+    cols = calibrate_session(moved).measurements()
+    tp = {p["press"]: p for p in truth["presses"]}
+    half = 200 / 2 / 1000.0                 # the generator's window: 200 samples at 1 kHz
+    held = np.array([tp[int(k)]["hold_to_s"] - tp[int(k)]["hold_from_s"] for k in cols["press"]])
+    np.testing.assert_allclose(cols["hold_s"], held - half, atol=0.01)
+    g, tau = truth["relaxation_g"], truth["relaxation_tau_s"]
+    factor = (1 - g) + g * ramp_factor(0.5, tau) * np.exp(-cols["hold_s"] / tau)
+    np.testing.assert_allclose(cols["force_n"], cols["force0_n"] * factor, rtol=0.01)
+    (moved / "session.toml").write_text(toml + 'window_at = "middle"\n')
+    with pytest.raises(InputError, match=r"window_at must be one of 'start', 'end'"):
+        read_session(moved)

@@ -19,7 +19,9 @@ press at a time, on a :class:`~tactilevision.io.Session`:
    frame where the bevel line shows (among the frames within 10% of the
    press's largest contact, seen in two consecutive frames or at twice the
    threshold), the F/T window of ``window_samples``
-   samples from that instant (mean, std), and the check |Fxy| << Fz;
+   samples from that instant (mean, std), or ending where the hold ends
+   (``[force_sensor] window_at = "end"``: :func:`hold_end`), and the check
+   |Fxy| << Fz;
 4. every press that fails a check is listed with its reason, none is dropped
    silently.
 
@@ -106,8 +108,9 @@ class CertifiedPress:
         The F/T window.
     time_s, hold_s, wait_s : float
         Certification time since the first frame; window middle after the
-        certification; rest since the previous press ended (NaN for the
-        first).
+        hold's start (half the window, or the hold's length less half the
+        window with ``window_at = "end"``); rest since the previous press
+        ended (NaN for the first).
     bevel_score : float
         Signal-to-noise ratio of the bevel at certification (:func:`read_bevel`
         or :func:`bevel_score`).
@@ -464,14 +467,30 @@ def certify_session(session, *, min_contact_px: int = 200, bevel_threshold: floa
             onset = int(cand[np.argmax(firm)])
             score = float(scores[np.argmax(firm)])
             t_cert = float(times[onset])
-        if t_cert + 2 * half > t_hold_end + period:
-            reject("bevel seen too late", f"the bevel shows at {t_cert:.3f} s, the "
-                   f"{cfg.window_samples}-sample force window would run past the hold "
-                   f"(last full-contact frame {t_hold_end:.3f} s)", at=onset, score=score)
-            continue
+        if cfg.window_at == "end":
+            # the window ends where the release begins (the settled force): F/T clock
+            t_release = hold_end(session.force_times_s, session.forces_n[:, 2], t_cert + offset)
+            if t_release is None:
+                reject("hold end not found", "window_at = 'end', but the F/T log shows no "
+                       f"release after the hold that starts at {t_cert:.3f} s (frames' clock)",
+                       at=onset, score=score)
+                continue
+            hold_mid = t_release - half - (t_cert + offset)
+            if hold_mid < half - 1e-9:
+                reject("hold too short", f"the hold lasts {t_release - t_cert - offset:.3f} s, "
+                       f"less than the {cfg.window_samples}-sample force window", at=onset,
+                       score=score)
+                continue
+        else:
+            hold_mid = half
+            if t_cert + 2 * half > t_hold_end + period:
+                reject("bevel seen too late", f"the bevel shows at {t_cert:.3f} s, the "
+                       f"{cfg.window_samples}-sample force window would run past the hold "
+                       f"(last full-contact frame {t_hold_end:.3f} s)", at=onset, score=score)
+                continue
         try:
-            fw = force_window(session.force_times_s, session.forces_n, t_cert + offset + half,
-                              cfg.window_samples)
+            fw = force_window(session.force_times_s, session.forces_n,
+                              t_cert + offset + hold_mid, cfg.window_samples)
         except InputError as exc:
             reject("force window outside the log", str(exc), at=onset, score=score)
             continue
@@ -484,7 +503,8 @@ def certify_session(session, *, min_contact_px: int = 200, bevel_threshold: floa
             t_frame_s=t_cert, footprint=fp, x_mm=float(x_mm), y_mm=float(y_mm),
             force_n=fw.fz_n, force_std_n=fw.fz_std_n, force_sem_n=fw.fz_sem_n,
             fx_n=fw.fx_n, fy_n=fw.fy_n,
-            tangential_ratio=fw.tangential_ratio, time_s=t_cert - float(times[0]), hold_s=half,
+            tangential_ratio=fw.tangential_ratio, time_s=t_cert - float(times[0]),
+            hold_s=hold_mid,
             wait_s=wait, bevel_score=score)
         if vernier:
             pending.append({"press": press, "profiles": profiles, "window": window,

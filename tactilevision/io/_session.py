@@ -46,6 +46,12 @@ class SessionConfig:
         Forces' t_s minus frames' t_s when known; None to estimate it.
     window_samples : int
         F/T samples averaged per certified press.
+    window_at : {'start', 'end'}
+        Where in each hold the force window lies (optional key of
+        ``[force_sensor]``, default 'start'): from the hold's start, or
+        ending where the release begins (the settled force; with holds of
+        different lengths the windows then fall at different times of their
+        holds, and a relaxing gel shows in the table's ``hold_s``).
     calibration : Path or None
         Photometric calibration (resolved against the session folder), or None
         for the sensor's default.
@@ -84,6 +90,11 @@ class SessionConfig:
     bevel_direction_deg: float = 0.0
     bulge_correction: bool = True
     bevel_force_correction: bool = True
+    window_at: str = "start"
+
+
+#: The places of the force window in a hold (``[force_sensor] window_at``).
+WINDOW_AT = ("start", "end")
 
 
 @dataclass(frozen=True)
@@ -176,7 +187,7 @@ KNOWN_KEYS: dict[str, tuple[str, ...]] = {
     "indenter": ("radius_mm",),
     "gauge_block": ("depths_mm", "bevel_offset_mm", "bevel_direction_deg", "bevel_angle_deg",
                     "bevel_length_mm", "bulge_correction", "bevel_force_correction"),
-    "force_sensor": ("rate_hz", "clock_offset_s", "window_samples"),
+    "force_sensor": ("rate_hz", "clock_offset_s", "window_samples", "window_at"),
     "optics": ("calibration",),
 }
 
@@ -228,6 +239,11 @@ def _read_config(folder: Path) -> SessionConfig:
     if window != int(window):
         raise InputError(f"{toml}: [force_sensor] window_samples must be a whole number, "
                          f"got {window!r}")
+    window_at = doc.get("force_sensor", {}).get("window_at", "start") if isinstance(
+        doc.get("force_sensor"), dict) else "start"
+    if window_at not in WINDOW_AT:
+        raise InputError(f"{toml}: [force_sensor] window_at must be one of "
+                         f"{', '.join(repr(w) for w in WINDOW_AT)}, got {window_at!r}")
     calibration = doc.get("optics", {}).get("calibration") if isinstance(
         doc.get("optics"), dict) else None
     cal_path = None
@@ -251,6 +267,7 @@ def _read_config(folder: Path) -> SessionConfig:
         clock_offset_s=_toml_number(doc, toml, "force_sensor", "clock_offset_s", positive=False,
                                     required=False),
         window_samples=int(window),
+        window_at=str(window_at),
         calibration=cal_path,
         bevel_offset_mm=_toml_number(doc, toml, "gauge_block", "bevel_offset_mm", default=4.5),
         bevel_angle_deg=_bevel_angle(doc, toml),

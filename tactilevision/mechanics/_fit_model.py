@@ -171,7 +171,9 @@ def _modulus_notes(params: Mapping[str, float], E: float) -> list[str]:
         if eff == "viscoelastic_relaxation" and q == "g":
             out.append(f"viscoelastic_relaxation: E = E_0 = {E:.4g} MPa is the instantaneous "
                        f"modulus (hold -> 0); the relaxed modulus (hold -> infinity) is "
-                       f"E_inf = (1 - g) E_0 = {E * (1 - v):.4g} MPa")
+                       f"E_inf = (1 - g) E_0 = {E * (1 - v):.4g} MPa (hold_s counts from the "
+                       "end of the loading: E_0 is the gel's then, below an instant load's by "
+                       "what relaxed during the ramp; fit --holds gives the latter)")
     return out
 
 
@@ -221,10 +223,19 @@ def _consistent_material(fit: IndentationFit, model: IndentationModel, mf: Model
     cg, bg = np.array(cg), np.array(bg)
     b = mf.params["large_deformation.beta"]
     c = mf.params["c_n_per_mm"] * scale
+    names = list(mf.params)
+    ib = names.index("large_deformation.beta")
+    cov = mf.covariance[np.ix_([0, ib], [0, ib])] * np.outer([scale, 1.0], [scale, 1.0])
+    dof = max(mf.n_presses - mf.n_params, 1)
+    tq = float(stats.t.ppf(0.5 + confidence / 2, dof))
     top = int(np.argmax(bg))  # the branch where beta rises with nu, up to its maximum
     lo = top
     while lo > 0 and bg[lo - 1] < bg[lo]:
         lo -= 1
+    b_lo = b - tq * math.sqrt(cov[1, 1]) if np.isfinite(cov[1, 1]) else math.nan
+    if top > lo and b > bg[top] and b_lo <= bg[top]:
+        return _model_table_top(fit, model, nus, cg, bg, lo, top, b, b_lo, c, cov, tq,
+                                confidence, a)
     nus, cg, bg = nus[lo:top + 1], cg[lo:top + 1], bg[lo:top + 1]
     rel_lo, rel_hi = float(nus[0]), float(nus[-1])
     if not (nus.size >= 2 and bg[0] <= b <= bg[-1]):
@@ -244,11 +255,6 @@ def _consistent_material(fit: IndentationFit, model: IndentationModel, mf: Model
     E = c / c1
     dnu_db = float(nu_of_b.derivative()(b))
     dlnc1_dnu = float(c_of_nu.derivative()(nu)) / c1
-    names = list(mf.params)
-    ib = names.index("large_deformation.beta")
-    cov = mf.covariance[np.ix_([0, ib], [0, ib])] * np.outer([scale, 1.0], [scale, 1.0])
-    dof = max(mf.n_presses - mf.n_params, 1)
-    tq = float(stats.t.ppf(0.5 + confidence / 2, dof))
     g_nu = np.array([0.0, dnu_db])
     g_E = E * (np.array([1 / c, 0.0]) - dlnc1_dnu * g_nu)
     with np.errstate(invalid="ignore"):   # NaN covariance of unidentified parameters
@@ -257,11 +263,56 @@ def _consistent_material(fit: IndentationFit, model: IndentationModel, mf: Model
     from ._neohookean import neo_hookean_constants
 
     C10, D1 = neo_hookean_constants(E, nu)
-    kept = tuple(n for n in fit.notes if n != fit.out_of_table_message
-                 and "interval of nu" not in n)
+    kept = _kept_notes(fit)
     note = ("E and nu read through this model: fitted by it to the FEM's P(w) at these depths "
             "for nu on a grid, as the beta table is for eq. (5) alone")
     return replace(fit, E_mpa=E, nu=nu, E_ci95_mpa=(E - tq * E_se, E + tq * E_se),
                    nu_ci95=(nu - tq * nu_se, nu + tq * nu_se), nu_se=nu_se, E_se_mpa=E_se,
                    C10_mpa=C10, D1_per_mpa=D1, kappa=c * (1 - nu**2) / (2 * a * E),
                    out_of_table=False, out_of_table_message=None, notes=(*kept, note))
+
+
+def _kept_notes(fit: IndentationFit) -> tuple[str, ...]:
+    """The notes of eq. (5)'s fit that still hold once E and nu are read through a model."""
+    return tuple(n for n in fit.notes if n != fit.out_of_table_message
+                 and "interval of nu" not in n and not n.startswith("beta lies above"))
+
+
+def _model_table_top(fit: IndentationFit, model: IndentationModel, nus: np.ndarray,
+                     cg: np.ndarray, bg: np.ndarray, lo: int, top: int, b: float, b_lo: float,
+                     c: float, cov: np.ndarray, tq: float, confidence: float, a: float
+                     ) -> IndentationFit:
+    """E and nu for a model's beta above the largest the FEM gives it, within its interval.
+
+    The same rule as eq. (5)'s own fit at the table's top (:func:`~tactilevision.mechanics.
+    fit_indentation`): beta(nu) is flat near its peak, so a beta a little above it is the peak
+    within the scatter. nu is put at the peak; its interval runs from the nu whose beta is
+    beta's lower bound (rising branch) to the largest grid nu whose beta still reaches it
+    (falling branch); E = c / c(nu) at the peak, its interval E over that range of nu with c
+    at its own bounds.
+    """
+    from scipy.interpolate import PchipInterpolator
+
+    from ._neohookean import neo_hookean_constants
+
+    nu_peak = float(nus[top])
+    rising = PchipInterpolator(bg[lo:top + 1], nus[lo:top + 1])
+    nu_lo = float(rising(max(b_lo, float(bg[lo])))) if b_lo > bg[lo] else float(nus[lo])
+    reach = np.flatnonzero(bg >= b_lo)
+    nu_hi = float(nus[reach[-1]]) if reach.size else nu_peak
+    c_of_nu = PchipInterpolator(nus, cg)
+    c_se = math.sqrt(cov[0, 0]) if np.isfinite(cov[0, 0]) else math.nan
+    E = c / float(c_of_nu(nu_peak))
+    Es = [cc / float(c_of_nu(nn)) for cc in (c - tq * c_se, c + tq * c_se)
+          for nn in (nu_lo, nu_peak, nu_hi)]
+    C10, D1 = neo_hookean_constants(E, nu_peak)
+    note = (f"beta = {b:.4g} of the model {', '.join(model.names)} lies above the largest "
+            f"beta the FEM gives this model at these depths ({bg[top]:.4g}, at nu = "
+            f"{nu_peak:.3f}) but within its {confidence:.0%} interval (lower bound "
+            f"{b_lo:.4g}): nu is put at the top, {nu_peak:.3f}, with the interval "
+            f"[{nu_lo:.4f}, {nu_hi:.4f}] of the nu whose beta reaches that bound; E at "
+            f"nu = {nu_peak:.3f}, its interval over that range")
+    return replace(fit, E_mpa=E, nu=nu_peak, E_ci95_mpa=(float(min(Es)), float(max(Es))),
+                   nu_ci95=(nu_lo, nu_hi), nu_se=math.nan, E_se_mpa=math.nan, C10_mpa=C10,
+                   D1_per_mpa=D1, kappa=c * (1 - nu_peak**2) / (2 * a * E), out_of_table=False,
+                   out_of_table_message=None, notes=(*_kept_notes(fit), note))

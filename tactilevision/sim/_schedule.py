@@ -62,8 +62,8 @@ class PressSchedule:
 
 def press_schedule(depths_mm: tuple[float, ...], *, repeats: int = 10,
                    position_radius_mm: float = 5.0, wait_s: tuple[float, float] = (3.0, 5.0),
-                   approach_s: float = 0.5, hold_s: float = 1.5, release_s: float = 0.5,
-                   start_s: float = 1.0, seed: int = 0) -> PressSchedule:
+                   approach_s: float = 0.5, hold_s: float | tuple[float, float] = 1.5,
+                   release_s: float = 0.5, start_s: float = 1.0, seed: int = 0) -> PressSchedule:
     """A shuffled schedule: `repeats` presses per indenter at random gel positions.
 
     Parameters
@@ -76,8 +76,11 @@ def press_schedule(depths_mm: tuple[float, ...], *, repeats: int = 10,
         centre.
     wait_s : (float, float), default (3.0, 5.0)
         Range of the uniform rest between presses, s.
-    approach_s, hold_s, release_s : float
-        Durations of each press, s.
+    approach_s, release_s : float
+        Durations of each press's loading and unloading, s.
+    hold_s : float or (float, float)
+        Duration of each press's hold, s, or the range of a uniform draw per
+        press (holds of different lengths).
     start_s : float, default 1.0
         Time of the first contact, s.
     seed : int, default 0
@@ -98,8 +101,12 @@ def press_schedule(depths_mm: tuple[float, ...], *, repeats: int = 10,
         raise InputError(f"depths_mm must be positive numbers, got {depths_mm!r}")
     if isinstance(repeats, bool) or int(repeats) != repeats or repeats < 1:
         raise InputError(f"repeats must be a positive integer, got {repeats!r}")
-    for name, v in (("approach_s", approach_s), ("hold_s", hold_s), ("release_s", release_s),
-                    ("position_radius_mm", position_radius_mm)):
+    hold_range = isinstance(hold_s, tuple | list)
+    if hold_range and (len(hold_s) != 2 or not 0 < hold_s[0] <= hold_s[1]):
+        raise InputError(f"hold_s must be a positive number or (low, high) with "
+                         f"0 < low <= high, got {hold_s!r}")
+    for name, v in (("approach_s", approach_s), ("hold_s", hold_s[0] if hold_range else hold_s),
+                    ("release_s", release_s), ("position_radius_mm", position_radius_mm)):
         if not (np.isfinite(v) and v > 0):
             raise InputError(f"{name} must be positive, got {v!r}")
     if not (0 <= wait_s[0] <= wait_s[1]):
@@ -111,12 +118,14 @@ def press_schedule(depths_mm: tuple[float, ...], *, repeats: int = 10,
     ang = rng.uniform(0, 2 * np.pi, n)
     waits = rng.uniform(wait_s[0], wait_s[1], n)
     waits[0] = start_s
-    dur = approach_s + hold_s + release_s
-    t_start = np.cumsum(waits) + np.arange(n) * dur
     full = np.full(n, 1.0)
+    # drawn last, so that a fixed hold leaves the other draws as they were
+    holds = rng.uniform(hold_s[0], hold_s[1], n) if hold_range else hold_s * full
+    dur = approach_s + holds + release_s
+    t_start = np.cumsum(waits) + np.concatenate([[0.0], np.cumsum(dur)[:-1]])
     return PressSchedule(indenter=indenter.astype(np.int64), depth_mm=d[indenter],
                          x_mm=rad * np.cos(ang), y_mm=rad * np.sin(ang), t_start_s=t_start,
-                         approach_s=approach_s * full, hold_s=hold_s * full,
+                         approach_s=approach_s * full, hold_s=holds,
                          release_s=release_s * full, wait_s=waits)
 
 

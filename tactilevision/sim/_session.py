@@ -60,7 +60,9 @@ class SessionSpec:
         Camera noise, grey levels per channel.
     force_noise_n : (3,) float
         F/T noise sd (fx, fy, fz), N.
-    approach_s, hold_s, release_s, lead_s : float
+    approach_s, release_s, lead_s : float
+    hold_s : float or (float, float)
+        Each press's hold, s, or the range of a uniform draw per press.
     wait_s : (float, float)
         Range of the rest between presses.
     overshoot_mm : (float, float)
@@ -93,6 +95,9 @@ class SessionSpec:
         ``[sensor] name`` of session.toml ('gelsight' picks the shipped
         photometric calibration for the report's height maps).
     seed : int
+    window_at : {'start', 'end'}
+        ``[force_sensor] window_at`` of session.toml: the force window from
+        the hold's start (default) or ending at its end.
     """
 
     E_mpa: float = 0.20
@@ -108,7 +113,7 @@ class SessionSpec:
     noise_dn: float = 2.0
     force_noise_n: tuple[float, float, float] = (1 / 40, 1 / 40, 1 / 80)
     approach_s: float = 0.5
-    hold_s: float = 0.5
+    hold_s: float | tuple[float, float] = 0.5
     release_s: float = 0.25
     lead_s: float = 0.2
     wait_s: tuple[float, float] = (1.5, 2.5)
@@ -125,6 +130,7 @@ class SessionSpec:
     jpeg_quality: int = 75
     sensor_name: str = "gelsight"
     seed: int = 0
+    window_at: str = "start"
 
 
 def _positions(spec: SessionSpec, n: int, rng: np.random.Generator, half_mm: np.ndarray
@@ -300,6 +306,8 @@ def _write_toml(out: Path, spec: SessionSpec, s: float, shape: tuple[int, int],
         f"bevel_length_mm = {b.bevel_length_mm}", "",
         "[force_sensor]", f"rate_hz = {spec.rate_hz:g}", f"window_samples = {spec.window_samples}",
     ]
+    if spec.window_at != "start":
+        lines.append(f'window_at = "{spec.window_at}"')
     if spec.config_clock_offset_s is not None:
         lines.append(f"clock_offset_s = {spec.config_clock_offset_s}")
     (out / "session.toml").write_text("\n".join(lines) + "\n")
@@ -323,6 +331,8 @@ def _truth(spec: SessionSpec, sched: PressSchedule, w_c: np.ndarray, force_of_de
             "x_mm": round(float(sched.x_mm[i]), 4), "y_mm": round(float(sched.y_mm[i]), 4),
             "t_start_s": round(float(sched.t_start_s[i]), 6),
             "hold_from_s": round(float(sched.t_start_s[i] + sched.approach_s[i]), 6),
+            "hold_to_s": round(float(sched.t_start_s[i] + sched.approach_s[i]
+                                     + sched.hold_s[i]), 6),
             "wait_s": round(float(sched.wait_s[i]), 6),
             "tangential_fraction": float(tang[i]),
             "misaligned": i in spec.misaligned, "edge": i in spec.edge_presses,

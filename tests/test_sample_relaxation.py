@@ -1,0 +1,66 @@
+"""The sample session of a relaxing gel (sample_frames/gelsight_relaxation): holds of 0.5
+to 2.8 s, the force window at each hold's end, so that relaxation is seen twice, from the
+hold curves (calibrate) and from the measurements table alone (diagnose). Truth from the
+session's truth.json (the generator's g, tau, E_0 and nu)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tactilevision.cli import main
+from tactilevision.mechanics import ramp_factor
+
+SESSION = Path(__file__).resolve().parent.parent / "sample_frames" / "gelsight_relaxation"
+
+
+@pytest.fixture(scope="module")
+def calibrated(tmp_path_factory):
+    out = tmp_path_factory.mktemp("relaxation") / "cal"
+    assert main(["calibrate", str(SESSION), "--out", str(out), "--no-progress",
+                 "--no-report"]) == 0
+    return out, json.loads((SESSION / "truth.json").read_text())
+
+
+def test_calibrate_reads_E0_and_E_inf_from_the_holds(calibrated):
+    """From the hold curves: g and tau within 5 %, E_0 and E_inf within 5 % of the truth
+    and inside their 95 % intervals, every press certified, the windows at the holds' ends
+    (hold_s spread over more than 1.5 s: the table can show the relaxation too)."""
+    out, truth = calibrated
+    fit = json.loads((out / "fit.json").read_text())
+    r = fit["relaxation"]
+    g, tau, E0 = truth["relaxation_g"], truth["relaxation_tau_s"], truth["E_mpa"]
+    assert r["resolved"]
+    assert r["g"] == pytest.approx(g, rel=0.05) and r["tau_s"] == pytest.approx(tau, rel=0.05)
+    assert fit["n_presses"] == len(truth["presses"])
+    assert fit["E_mpa"] == pytest.approx(E0, rel=0.05)
+    assert fit["E_ci95_mpa"][0] < E0 < fit["E_ci95_mpa"][1]
+    assert r["E_inf_mpa"] == pytest.approx((1 - g) * E0, rel=0.05)
+    assert r["E_inf_ci_mpa"][0] < (1 - g) * E0 < r["E_inf_ci_mpa"][1]
+    rows = np.genfromtxt(out / "measurements.csv", delimiter=",", names=True)
+    assert np.ptp(rows["hold_s"]) > 1.5
+
+
+def test_diagnose_names_relaxation_from_the_table_alone(calibrated, capsys):
+    """The table's force_n, taken at different times of the holds, relax: diagnose names
+    viscoelastic_relaxation (no other effect, no unexplained covariate), and fitting it gives
+    E_inf within 3 % of the truth. The catalogue's form counts the hold from the end of the
+    loading ramp (T = 0.5 s), so its E_0 is the gel's at that instant: the true E_0 times
+    (1 - g) + g phi(T / tau) (docs/relaxation.md), to 3 %."""
+    out, truth = calibrated
+    csv = out / "measurements.csv"
+    assert main(["diagnose", str(csv), "--json", "-", "--no-progress"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["verdict"]["missing_effect"] == "viscoelastic_relaxation"
+    assert d["verdict"]["unexplained_covariate"] is None
+    assert d["ladder"][1]["cv_rmse_n"] < 1.5 * d["noise_floor_n"]
+    assert main(["fit", str(csv), "--effects", "viscoelastic_relaxation", "--json", "-"]) in (0, 3)
+    fit = json.loads(capsys.readouterr().out)
+    g, tau, E0 = truth["relaxation_g"], truth["relaxation_tau_s"], truth["E_mpa"]
+    g_fit = fit["effect_params"]["viscoelastic_relaxation.g"]
+    assert fit["E_mpa"] * (1 - g_fit) == pytest.approx((1 - g) * E0, rel=0.03)
+    at_ramp_end = E0 * ((1 - g) + g * float(ramp_factor(0.5, tau)))
+    assert fit["E_mpa"] == pytest.approx(at_ramp_end, rel=0.03)
