@@ -1,6 +1,7 @@
 """The whole loop on frames no project code drew: session -> calibrate -> diagnose -> fit.
 
     python benchmarks/bench_loop.py SESSION_DIR [--out DIR] [--kinds K1 K2 ...] [--seed S]
+        [--json FILE] [--from-json FILE] [--reuse]
 
 Issue 23's loop. SESSION_DIR is a gauge-block session rendered by Taxim's own
 renderer (``benchmarks/taxim_gauge_session.py``; its holds long enough for the
@@ -107,41 +108,84 @@ def write_forces(session: Path, dest: Path, kind: str, seed: int) -> dict:
     return {"E_named": e_named, "c": c, "beta": beta, "relaxation": relax}
 
 
-def one(session: Path, out: Path, kind: str, seed: int) -> dict:
+def one(session: Path, out: Path, kind: str, seed: int, reuse: bool = False) -> dict:
     folder = out / kind
-    tr = write_forces(session, folder / "session", kind, seed)
+    done = reuse and all((folder / f).is_file() for f in ("calibrate.json", "diagnose.json"))
+    tr = (json.loads((folder / "truth.json").read_text()) if done and (
+        folder / "truth.json").is_file() else write_forces(session, folder / "session", kind, seed))
+    (folder / "truth.json").write_text(json.dumps(tr) + "\n")
     cal = folder / "calibration"
-    if cal.exists():
-        shutil.rmtree(cal)
-    t0 = time.perf_counter()
-    cli(["calibrate", str(folder / "session"), "--out", str(cal), "--no-report",
-         "--no-progress", "--beta-table", "paper", "--json", str(folder / "calibrate.json")])
-    t_cal = time.perf_counter() - t0
-    c = json.loads((folder / "calibrate.json").read_text())
     meas = cal / "measurements.csv"
-    cli(["diagnose", str(meas), "--beta-table", "paper", "--no-progress",
-         "--json", str(folder / "diagnose.json")])
+    t_cal = float("nan")
+    if not done:
+        if cal.exists():
+            shutil.rmtree(cal)
+        t0 = time.perf_counter()
+        cli(["calibrate", str(folder / "session"), "--out", str(cal), "--no-report",
+             "--no-progress", "--beta-table", "paper", "--json", str(folder / "calibrate.json")])
+        t_cal = time.perf_counter() - t0
+        cli(["diagnose", str(meas), "--beta-table", "paper", "--no-progress",
+             "--json", str(folder / "diagnose.json")])
+    c = json.loads((folder / "calibrate.json").read_text())
     d = json.loads((folder / "diagnose.json").read_text())
     v = d["verdict"]
     named = v["missing_effect"]
-    e_after = None
+    e_after, e_ci = None, None
     fitted = named or v["offered_effect"]      # an unexplained covariate: the trend offered
     if fitted:
-        cli(["fit", str(meas), "--effects", fitted, "--beta-table", "paper",
-             "--json", str(folder / "fit.json")])
-        e_after = json.loads((folder / "fit.json").read_text()).get("E_mpa")
+        if not (done and (folder / "fit.json").is_file()):
+            cli(["fit", str(meas), "--effects", fitted, "--beta-table", "paper",
+                 "--json", str(folder / "fit.json")])
+        got = json.loads((folder / "fit.json").read_text())
+        e_after, e_ci = got.get("E_mpa"), got.get("E_ci95_mpa")
     relax = c.get("relaxation") or {}
+    budget = d.get("noise_budget") or {}
     return {"kind": kind, "n_rejected": c["n_rejected"], "clock_s": c["clock_offset_s"],
             "E_calibrate": c["E_mpa"], "nu_calibrate": c["nu"],
             "relaxation_resolved": relax.get("resolved"), "g": relax.get("g"),
             "E_inf": relax.get("E_inf_mpa"), "verdict": named, "fitted": fitted,
             "equivalent": v["equivalent_effects"], "unexplained": v["unexplained_covariate"],
-            "E_after": e_after, "E_named_truth": tr["E_named"], "calibrate_s": t_cal,
-            "message": d["message"]}
+            "E_after": e_after, "E_after_ci": e_ci, "E_named_truth": tr["E_named"],
+            "budget_ratio": budget.get("ratio"), "budget_exceeds": budget.get("exceeds"),
+            "calibrate_s": t_cal, "message": d["message"]}
 
 
 def _pct(x, truth) -> str:
     return "-" if x is None or not math.isfinite(x) else f"{100 * (x / truth - 1):+.1f} %"
+
+
+def _fmt(x, spec: str = ".4f") -> str:
+    return "-" if x is None or not math.isfinite(x) else format(x, spec)
+
+
+def print_rows(rows: list[dict], session: Path | str) -> None:
+    """The markdown table of docs/loop.md."""
+    print(f"session {session} (Taxim's renderer), E = {E_TRUE} MPa, nu = {NU_TRUE}; "
+          "forces: eq. (5), the paper's beta, Hayes' kappa")
+    print("| hidden | rejected | clock (s) | calibrate: E (error) | verdict (equivalent) | "
+          "scatter / noise budget | E after it (error against the effect's E) [95 % CI, "
+          "covers] | relaxation |")
+    print("|---|---|---|---|---|---|---|---|")
+    for r in rows:
+        verdict = (r["verdict"] or (f"unexplained {r['unexplained']} (offered "
+                                    f"{r['fitted']})" if r["unexplained"]
+                                    else "nothing missing"))
+        if r["equivalent"]:
+            verdict += f" ({', '.join(r['equivalent'])})"
+        ratio = r.get("budget_ratio")
+        budget = ("-" if ratio is None else
+                  f"{ratio:.1f}{' (measurement chain flagged)' if r.get('budget_exceeds') else ''}")
+        e_cal = r["E_calibrate"]
+        relax = ("-" if not r["relaxation_resolved"] else
+                 f"g {_fmt(r['g'], '.3f')}, E_0 {_fmt(e_cal)} ({_pct(e_cal, E_TRUE)}), E_inf "
+                 f"{_fmt(r['E_inf'])} ({_pct(r['E_inf'], 0.75 * E_TRUE)})")
+        e_after, ci = r["E_after"], r.get("E_after_ci")
+        truth = r["E_named_truth"]
+        cover = ("" if not ci or None in ci else
+                 f" [{ci[0]:.4f}, {ci[1]:.4f}, {'yes' if ci[0] <= truth <= ci[1] else 'no'}]")
+        print(f"| {r['kind']} | {r['n_rejected']} | {r['clock_s']:.4f} | "
+              f"{_fmt(e_cal)} ({_pct(e_cal, E_TRUE)}) | {verdict} | {budget} | "
+              f"{_fmt(e_after)} ({_pct(e_after, truth)}){cover} | {relax} |", flush=True)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -151,30 +195,17 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--kinds", nargs="+", default=list(KINDS), choices=KINDS)
     ap.add_argument("--seed", type=int, default=1000)
     ap.add_argument("--json", type=Path)
+    ap.add_argument("--from-json", type=Path, help="print the table of an earlier --json")
+    ap.add_argument("--reuse", action="store_true",
+                    help="keep the calibrate, diagnose and fit outputs already in --out")
     a = ap.parse_args(argv)
-    rows = [one(a.session, a.out, k, a.seed) for k in a.kinds]
-    print(f"session {a.session} (Taxim's renderer), E = {E_TRUE} MPa, nu = {NU_TRUE}; "
-          "forces: eq. (5), the paper's beta, Hayes' kappa")
-    print("| hidden | rejected | clock (s) | calibrate: E (error) | verdict (equivalent) | "
-          "E after it (error against the effect's E) | relaxation |")
-    print("|---|---|---|---|---|---|---|")
-    for r in rows:
-        verdict = (r["verdict"] or (f"unexplained {r['unexplained']} (offered "
-                                    f"{r['fitted']})" if r["unexplained"]
-                                    else "nothing missing"))
-        if r["equivalent"]:
-            verdict += f" ({', '.join(r['equivalent'])})"
-        e_cal = r["E_calibrate"]
-        relax = ("-" if not r["relaxation_resolved"] else
-                 f"g {r['g']:.3f}, E_0 {e_cal:.4f} ({_pct(e_cal, E_TRUE)}), E_inf "
-                 f"{r['E_inf']:.4f} ({_pct(r['E_inf'], 0.75 * E_TRUE)})")
-        e_after = r["E_after"]
-        print(f"| {r['kind']} | {r['n_rejected']} | {r['clock_s']:.4f} | "
-              f"{'-' if e_cal is None else f'{e_cal:.4f}'} ({_pct(e_cal, E_TRUE)}) | {verdict} | "
-              f"{'-' if e_after is None else f'{e_after:.4f}'} "
-              f"({_pct(e_after, r['E_named_truth'])}) | {relax} |", flush=True)
+    if a.from_json:
+        print_rows(json.loads(a.from_json.read_text()), a.session)
+        return 0
+    rows = [one(a.session, a.out, k, a.seed, a.reuse) for k in a.kinds]
     if a.json:
         a.json.write_text(json.dumps(rows, indent=1) + "\n")
+    print_rows(rows, a.session)
     return 0
 
 

@@ -25,6 +25,7 @@ The certified depth of a press (``depth_rule``):
 
 from __future__ import annotations
 
+import math
 import time
 import warnings
 from collections.abc import Callable
@@ -213,7 +214,8 @@ def _hold_curves(session: Session, certification: Certification, max_points: int
             "fz_n": np.concatenate(fs), "ramp_s": np.concatenate(ramps)}
 
 
-def _relaxation(session: Session, cert: Certification, progress: Callable | None
+def _relaxation(session: Session, cert: Certification, progress: Callable | None,
+                bevel_threshold: float = 12.0
                 ) -> tuple[Certification, RelaxationFit | None, list[str], np.ndarray | None]:
     """Fit the holds; for a relaxing gel, certify again with the clock on the elastic force.
 
@@ -234,7 +236,7 @@ def _relaxation(session: Session, cert: Certification, progress: Callable | None
         return cert, relax, [], None
     elastic = elastic_force(session.force_times_s, session.forces_n, relax.g, relax.tau_s)
     again = certify_session(session, progress=progress, sync_fz_n=elastic[:, 2],
-                            contact_area_px=cert.contact_area_px)
+                            contact_area_px=cert.contact_area_px, bevel_threshold=bevel_threshold)
     # the holds are fitted again only if they moved: on the vernier's path a hold starts
     # where the force stops rising, whatever the clock; on a frame-timed one it follows it
     def starts(c: Certification) -> list[tuple[int, float]]:
@@ -260,8 +262,8 @@ def _relaxation(session: Session, cert: Certification, progress: Callable | None
 def calibrate_session(session: Session | str | Path, *, depth_rule: str = "auto",
                       beta_table: str = "fem", nu_start: float = 0.48, max_rounds: int = 8,
                       nu_tol: float = 2e-4, progress: Callable | None = None,
-                      allow_failure: bool = False, relaxation: str = "auto"
-                      ) -> SessionCalibration:
+                      allow_failure: bool = False, relaxation: str = "auto",
+                      bevel_threshold: float = 12.0) -> SessionCalibration:
     """Certify every press of a session and fit E and nu.
 
     Parameters
@@ -297,6 +299,12 @@ def calibrate_session(session: Session | str | Path, *, depth_rule: str = "auto"
         (``relaxation`` and ``moduli``). ``measurements.csv`` keeps the
         measured ``force_n`` and adds ``force0_n``, which ``fit --holds``
         uses. 'off': none of it.
+    bevel_threshold : float, default 12.0
+        For a bevel mark (``bevel_angle_deg = 0``): the signal-to-noise ratio
+        above which the mark is seen (:func:`~tactilevision.contact.
+        certify_session`; two consecutive frames above it, or one above
+        twice it). Lower it for a sensor whose mark is faint, at the risk of
+        certifying a press before its mark shows.
 
     Returns
     -------
@@ -311,15 +319,19 @@ def calibrate_session(session: Session | str | Path, *, depth_rule: str = "auto"
         session whose bevel has no vernier.
     """
     t0 = time.perf_counter()
+    if isinstance(bevel_threshold, bool) or not (
+            isinstance(bevel_threshold, int | float) and math.isfinite(bevel_threshold)
+            and bevel_threshold > 0):
+        raise InputError(f"bevel_threshold must be a positive number, got {bevel_threshold!r}")
     if not isinstance(session, Session):
         session = read_session(session)
     cfg = session.config
     if relaxation not in ("auto", "off"):
         raise InputError(f"relaxation must be 'auto' or 'off', got {relaxation!r}")
-    cert = certify_session(session, progress=progress)
+    cert = certify_session(session, progress=progress, bevel_threshold=bevel_threshold)
     relax, relax_notes, force0 = None, [], None
     if relaxation == "auto" and cert.presses:
-        cert, relax, relax_notes, force0 = _relaxation(session, cert, progress)
+        cert, relax, relax_notes, force0 = _relaxation(session, cert, progress, bevel_threshold)
     notes = list(session.notes) + list(cert.warnings) + relax_notes  # the reader's notes first
     if depth_rule == "auto":
         depth_rule = "vernier" if cfg.bevel_angle_deg > 0 else "nominal"

@@ -320,6 +320,20 @@ def test_onset_rule_without_a_vernier(tmp_path):
         assert sd == pytest.approx(speed * 0.1 / np.sqrt(12), rel=0.35)
     with pytest.raises(InputError, match="needs a machined bevel"):
         calibrate_session(tmp_path / "s", depth_rule="vernier")
+    # the mark's threshold is the caller's: one no frame reaches certifies nothing, and the
+    # rejections state it; a threshold that is no positive number is refused before any work
+    high = calibrate_session(tmp_path / "s", bevel_threshold=1e4, allow_failure=True)
+    assert high.fit is None and high.certification.rejected
+    assert all(r.reason == "bevel never seen" and "two consecutive frames above 10000" in r.detail
+               for r in high.certification.rejected)
+    for bad in (0, -1.0, float("nan"), True):
+        with pytest.raises(InputError, match="bevel_threshold must be a positive number"):
+            calibrate_session(tmp_path / "s", bevel_threshold=bad)
+    from tactilevision.cli import main
+
+    assert main(["calibrate", str(tmp_path / "s"), "--bevel-threshold", "0", "--no-report",
+                 "--out", str(tmp_path / "o")]) == 2
+    assert not (tmp_path / "o" / "measurements.csv").exists()
     # the mark looked for on the wrong side: rejected, the message stating the rule applied
     from tactilevision.contact import certify_session
     from tactilevision.io import read_session

@@ -77,6 +77,33 @@ def test_a_wandering_depth_certification_is_a_finding(seed):
     assert obj["exceeds"] is True and obj["p_value"] < 1e-3
 
 
+@pytest.mark.parametrize("seed", [311, 312])
+def test_a_coarse_but_honest_depth_link_is_said(seed):
+    """A mark's onset certifies w0 while the stage goes on 0 to 50 um (uniform), and
+    depth_std_mm says so (50 / sqrt(12) = 14 um): each press's force is that of its true
+    depth (the table's own P(w) slope times the overshoot). The scatter is within the
+    budget (the instruments explain it), but that budget is the depth link's and hides gel
+    effects: diagnose says so, not 'Nothing is missing' (depth_link_coarse in the JSON).
+    The same table with the generator's few-um stage jitter keeps 'Nothing is missing'."""
+    t = make_measurement_table(None, seed=seed)
+    c = {k: np.asarray(v, np.float64) for k, v in t.columns.items()}
+    n = c["depth_mm"].size
+    rng = np.random.default_rng(seed + 2000)
+    c["force_sem_n"] = np.full(n, t.truth["noise_n"])
+    honest = dict(c, depth_std_mm=np.full(n, t.truth["depth_jitter_mm"]))
+    fine = diagnose(honest, thickness_mm=t.thickness_mm, radius_mm=t.radius_mm)
+    assert not fine.depth_link_coarse and "Nothing is missing" in fine.message
+    slope = np.polyval(np.polyder(np.polyfit(c["depth_mm"], c["force_n"], 2)), c["depth_mm"])
+    c["force_n"] = c["force_n"] + slope * rng.uniform(0.0, 0.05, n)
+    c["depth_std_mm"] = np.full(n, 0.05 / np.sqrt(12))
+    d = diagnose(c, thickness_mm=t.thickness_mm, radius_mm=t.radius_mm)
+    assert d.noise_budget is not None and not d.noise_budget.exceeds
+    assert d.noise_budget.depth_n > 2 * d.noise_budget.force_window_n
+    assert d.depth_link_coarse and d.to_json_dict()["depth_link_coarse"] is True
+    assert "Nothing is missing" not in d.message
+    assert "certified depths' own uncertainty" in d.message and "vernier" in d.message
+
+
 def test_without_window_standard_errors_there_is_no_budget_and_it_says_why():
     c, t = _table(311)
     del c["force_sem_n"]

@@ -59,6 +59,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                         "hold; for a gel seen to relax, synchronise the clock on the elastic "
                         "force and report E as the instantaneous E_0 with the relaxed E_inf "
                         "beside it. off: the forces as measured")
+    p.add_argument("--bevel-threshold", type=float, default=12.0, metavar="SNR",
+                   help="for a bevel mark (bevel_angle_deg = 0): the signal-to-noise ratio "
+                        "above which the mark is seen, in two consecutive frames or once above "
+                        "twice it (default 12; rejected.csv gives each press's best)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--no-report", action="store_true",
                    help="write measurements.csv, fit.json and rejected.csv only")
@@ -178,7 +182,7 @@ def run(args: argparse.Namespace) -> int:
             return tqdm(it, desc="frames", unit="frame", file=sys.stderr, mininterval=1.0)
     cal = calibrate_session(session, depth_rule=args.depth_rule, beta_table=args.beta_table,
                             progress=progress, allow_failure=True,
-                            relaxation=args.relaxation)
+                            relaxation=args.relaxation, bevel_threshold=args.bevel_threshold)
     cfg = session.config
     # written whole into a hidden folder in out, moved into place at the end (or dropped)
     with StagedOutput(out, overwrite=overwrite) as stage:

@@ -229,6 +229,14 @@ class Diagnosis:
     scanned_columns: tuple[str, ...] = ()
     responses_not_scanned: tuple[str, ...] = ()
 
+    @property
+    def depth_link_coarse(self) -> bool:
+        """Whether the certified depths' own uncertainty dominates a noise level that hides
+        gel effects (at least :data:`DEPTH_LINK_DOMINANCE` times the F/T window's part of the
+        budget, the replicate scatter at least :data:`DEPTH_LINK_SHARE` of the median force);
+        the message then says so instead of "nothing is missing"."""
+        return bool(_coarse_depth_link(self))
+
     def to_json_dict(self) -> dict[str, Any]:
         """The ``diagnose --json`` object (formats.md §3), then extra keys.
 
@@ -270,12 +278,43 @@ class Diagnosis:
             "noise_budget": (None if self.noise_budget is None
                              else self.noise_budget.to_json_dict()),
             "noise_budget_missing": self.noise_budget_missing or None,
+            "depth_link_coarse": self.depth_link_coarse,
             "scanned_columns": list(self.scanned_columns),
             "responses_not_scanned": list(self.responses_not_scanned),
         }
 
 
 # ----------------------------------------------------------------- pieces
+
+
+#: A noise budget whose certified-depth term is at least this many times the F/T window's,
+#: with a replicate scatter of at least this share of the median force, is the depth link's:
+#: the message says so instead of "nothing is missing" (a mark's onset certifies to one
+#: frame's travel, tens of um; the vernier to a few um: 0.7 % of the force).
+DEPTH_LINK_DOMINANCE, DEPTH_LINK_SHARE = 2.0, 0.03
+
+
+def _coarse_depth_link(d: Diagnosis) -> str:
+    """A sentence when the depth certification's own uncertainty sets a noise level that
+    hides gel effects (the budget consistent, but coarse), else ''."""
+    b = d.noise_budget
+    if b is None or b.exceeds or not np.isfinite(b.depth_n) or not np.isfinite(
+            b.force_window_n) or b.depth_n < DEPTH_LINK_DOMINANCE * b.force_window_n:
+        return ""
+    force = np.abs(np.asarray(d.columns.get("force_n", []), np.float64))
+    std = np.asarray(d.columns.get("depth_std_mm", []), np.float64)
+    if not force.size or not std.size or b.floor_n < DEPTH_LINK_SHARE * float(np.median(force)):
+        return ""
+    return (f"the noise is large: {b.floor_n * 1e3:.3g} mN per press, "
+            f"{100 * b.floor_n / float(np.median(force)):.0f} % of the median force, and "
+            f"most of it is the certified depths' own uncertainty (depth_std_mm median "
+            f"{1e3 * float(np.nanmedian(std)):.3g} um; certified depth x dP/dw "
+            f"{b.depth_n * 1e3:.3g} mN of the {b.budget_n * 1e3:.3g} mN the instruments "
+            "explain). Effects of the gel smaller than that cannot show here, and a depth "
+            "lag shared by every press (the stage still moving when the depth is certified) "
+            "cannot show at all: the law's curvature takes it up. A finer depth link (the "
+            "bevel's vernier, bevel_angle_deg > 0; for a mark's onset, a faster camera or a "
+            "slower approach) would show them.")
 
 
 def _groups(columns: Mapping[str, np.ndarray]) -> np.ndarray:
@@ -962,7 +1001,10 @@ def _with_message(d: Diagnosis) -> Diagnosis:
         if d.missing_effect == "viscoelastic_relaxation" and g is not None:
             s.append(f"That E is the instantaneous modulus E_0 (hold -> 0); the relaxed "
                      f"modulus (hold -> infinity) is E_inf = (1 - g) E_0 = "
-                     f"{step.E_mpa * (1 - g):.4g} MPa (g = {g:.3g}).")
+                     f"{step.E_mpa * (1 - g):.4g} MPa (g = {g:.3g}). hold_s counts from "
+                     "the end of the loading, which took time: E_0 here is the gel's at that "
+                     "instant, below that of an instant load by what relaxed during the ramp; "
+                     "the hold curves (calibrate's holds.csv, fit --holds) give the latter.")
         at = fit.params.get(f"{d.missing_effect}.at") if fit is not None else None
         if d.missing_effect.startswith("stiffness_step:") and at is not None:
             sv = fit.params[f"{d.missing_effect}.s"]
@@ -983,11 +1025,16 @@ def _with_message(d: Diagnosis) -> Diagnosis:
              "noise the table does not record. Check the depth certification (a lag or "
              "scatter of the certified depth), the clock offset and the force window."
              ) if b is not None and b.exceeds else ""
+    coarse = _coarse_depth_link(d)
     if not d.missing_effect and not d.unexplained_covariate:
         if chain:
             s.append("No effect of the gel's model is missing, but " + chain)
+        elif coarse:
+            s.append("Nothing shows above the noise, but " + coarse)
         else:
             s.append("Nothing is missing: the model explains the data to within its noise.")
+    elif coarse:
+        s.append("Also, " + coarse)
     elif chain:
         s.append("Also, " + chain)
     if b is not None and not b.exceeds:
