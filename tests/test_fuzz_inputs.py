@@ -101,6 +101,60 @@ def _mutations(text: str):
     )
 
 
+def _one_edit(word: str):
+    """A deletion, a doubled letter, a swap of neighbours or a letter replaced."""
+    letters = st.sampled_from("abcdefghijklmnopqrstuvwxyz_")
+    i = st.integers(0, len(word) - 1)
+    return st.one_of(
+        i.map(lambda k: word[:k] + word[k + 1:]),
+        i.map(lambda k: word[:k] + word[k] + word[k:]),
+        st.integers(0, len(word) - 2).map(lambda k: word[:k] + word[k + 1] + word[k]
+                                          + word[k + 2:]),
+        st.tuples(i, letters).map(lambda p: word[:p[0]] + p[1] + word[p[0] + 1:]),
+    ).filter(lambda w: w != word and w.strip("_") == w and w)
+
+
+_KEYS = [(t, k) for t, keys in {"sensor": ("name", "mm_per_px", "gel_thickness_mm",
+                                           "gel_radius_mm"),
+                                "indenter": ("radius_mm",),
+                                "gauge_block": ("depths_mm", "bevel_offset_mm",
+                                                "bevel_direction_deg", "bevel_angle_deg",
+                                                "bevel_length_mm"),
+                                "force_sensor": ("rate_hz", "window_samples")}.items()
+         for k in keys]
+_REQUIRED = {"mm_per_px", "gel_thickness_mm", "radius_mm", "depths_mm"}
+
+
+@SETTINGS
+@given(data=st.sampled_from(_KEYS).flatmap(
+    lambda tk: st.tuples(st.just(tk), _one_edit(tk[1]))))
+def test_a_typo_in_a_key_is_refused_or_named(tiny_session, tmp_path_factory, data):
+    """One edit in a key of session.toml (formats.md section 1): a required key is then
+    missing, and the refusal names it; an optional one falls back to its default, and the
+    notes name the typo, with the known key when it is one edit away."""
+    from tactilevision.io._session import KNOWN_KEYS
+
+    (table, key), typo = data
+    text = SESSION_TOML.replace(f"\n{key} =", f"\n{typo} =", 1)
+    folder = _damaged_copy(tiny_session, tmp_path_factory.mktemp("typo") / "s",
+                           "session.toml", text.encode())
+    if typo in KNOWN_KEYS[table]:           # the edit made another known key: a duplicate
+        return
+    try:
+        s = read_session(folder)
+    except InputError as exc:
+        _check(exc, "session.toml")
+        assert key in _REQUIRED or key in str(exc), str(exc)
+        return
+    assert key not in _REQUIRED
+    notes = "\n".join(s.notes)
+    assert f"[{table}] {typo} is not a key tactilevision reads" in notes
+    import difflib
+
+    if difflib.get_close_matches(typo, list(KNOWN_KEYS[table]), n=1, cutoff=0.75) == [key]:
+        assert f"did you mean {key}?" in notes
+
+
 @pytest.mark.parametrize("name", FILES)
 def test_session_readers_survive_any_damage(tiny_session, tmp_path, name):
     text = (tiny_session / name).read_text()

@@ -27,7 +27,7 @@ depths_mm = [0.15, 0.30, 0.40, 0.50, 0.60]
 [force_sensor]
 rate_hz = 1000
 clock_offset_s = 0.25
-window_samples = 200
+window_samples = 50
 """
 H, W = 30, 40
 
@@ -57,7 +57,7 @@ def test_reads_a_valid_session(tmp_path):
     assert (c.sensor_name, c.mm_per_px, c.gel_thickness_mm, c.gel_radius_mm) == ("test", 0.05,
                                                                                 3.0, 15.0)
     assert c.indenter_radius_mm == 2.5 and c.depths_mm == (0.15, 0.30, 0.40, 0.50, 0.60)
-    assert (c.rate_hz, c.clock_offset_s, c.window_samples, c.calibration) == (1000.0, 0.25, 200,
+    assert (c.rate_hz, c.clock_offset_s, c.window_samples, c.calibration) == (1000.0, 0.25, 50,
                                                                              None)
     assert s.n_frames == 5 and s.shape == (H, W) and s.reference.dtype == np.uint8
     np.testing.assert_allclose(s.frame_times_s, [0.0, 0.1, 0.2, 0.3, 0.4])
@@ -84,7 +84,8 @@ def test_defaults_and_notes(tmp_path):
 
 def test_unknown_keys_are_noted_with_the_near_known_one(tmp_path):
     folder = make_session(tmp_path / "s")
-    toml = TOML.replace("clock_offset_s = 0.25", "clock_ofset_s = 0.25")
+    toml = TOML.replace("clock_offset_s = 0.25", "clock_ofset_s = 0.25").replace(
+        "window_samples = 50", "window_samples = 200")
     (folder / "session.toml").write_text(toml + "\n[forcesensr]\nrate = 1\n[lab]\nroom = 3\n")
     s = read_session(folder)
     assert s.config.clock_offset_s is None                 # the typo sets nothing
@@ -93,6 +94,9 @@ def test_unknown_keys_are_noted_with_the_near_known_one(tmp_path):
     assert "did you mean clock_offset_s?" in notes
     assert "table [forcesensr] is not read by tactilevision (did you mean [force_sensor]?)" in notes
     assert "table [lab] is not read by tactilevision" in notes and "[lab]?" not in notes
+    # the fixture's window (200 samples) is longer than its 100-sample log: said, not hidden
+    assert "window_samples = 200 is more than the 100 samples" in notes
+    assert "no press can be certified" in notes
 
 
 def _edit(path: Path, old: str, new: str) -> None:
@@ -109,8 +113,11 @@ BROKEN = {
                    ["[indenter] radius_mm must be a positive number"]),
     "bad depths": (lambda f: _edit(f / "session.toml", "[0.15,", "['a',"),
                    ["[gauge_block] depths_mm must be a list of positive numbers"]),
-    "window": (lambda f: _edit(f / "session.toml", "window_samples = 200", "window_samples = 2.5"),
+    "window": (lambda f: _edit(f / "session.toml", "window_samples = 50", "window_samples = 2.5"),
                ["window_samples must be a whole number"]),
+    "window of 1": (lambda f: _edit(f / "session.toml", "window_samples = 50",
+                                    "window_samples = 1"), ["of at least 2, got 1"]),
+
     "calibration": (lambda f: (f / "session.toml").write_text(
         TOML + '[optics]\ncalibration = "nowhere.npz"\n'), ["[optics] calibration", "nowhere.npz",
                                                            "does not exist"]),

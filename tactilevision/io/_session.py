@@ -236,9 +236,9 @@ def _read_config(folder: Path) -> SessionConfig:
         raise InputError(f"{toml}: [gauge_block] depths_mm must be a list of positive numbers, "
                          f"got {depths!r}")
     window = _toml_number(doc, toml, "force_sensor", "window_samples", default=200)
-    if window != int(window):
-        raise InputError(f"{toml}: [force_sensor] window_samples must be a whole number, "
-                         f"got {window!r}")
+    if window != int(window) or window < 2:
+        raise InputError(f"{toml}: [force_sensor] window_samples must be a whole number of at "
+                         f"least 2, got {window!r}")
     window_at = doc.get("force_sensor", {}).get("window_at", "start") if isinstance(
         doc.get("force_sensor"), dict) else "start"
     if window_at not in WINDOW_AT:
@@ -491,6 +491,10 @@ def read_session(path: str | Path) -> Session:
     reference = read_image(ref_path, colour_only=True)
     frame_paths, frame_times, notes = _read_frames(folder, reference.shape)
     t, f, torques, force_notes = _read_forces(folder, config.rate_hz)
+    if config.window_samples > t.size:
+        force_notes = [*force_notes, f"{folder / 'session.toml'}: [force_sensor] "
+                       f"window_samples = {config.window_samples} is more than the {t.size} "
+                       f"samples of {folder / 'forces.csv'}: no press can be certified"]
     presses = _read_presses(folder, len(config.depths_mm))
     return Session(path=folder, config=config, reference=reference, frame_paths=frame_paths,
                    frame_times_s=frame_times, force_times_s=t, forces_n=f, torques_nmm=torques,
