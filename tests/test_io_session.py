@@ -99,6 +99,21 @@ def test_unknown_keys_are_noted_with_the_near_known_one(tmp_path):
     assert "no press can be certified" in notes
 
 
+def test_a_force_log_slower_than_the_frames_is_said(tmp_path):
+    """An F/T log at 8 Hz beside frames at 10 frames/s (rate_hz saying so: no unit
+    mistake) is read, with a warning naming both files and both rates."""
+    folder = make_session(tmp_path / "s")
+    t = 0.25 + np.arange(20) / 8.0
+    rows = "".join(f"{x:.4f},0.01,-0.02,{0.5 * x:.5f}\n" for x in t)
+    (folder / "forces.csv").write_text("t_s,fx_n,fy_n,fz_n\n" + rows)
+    _edit(folder / "session.toml", "rate_hz = 1000", "rate_hz = 8")
+    _edit(folder / "session.toml", "window_samples = 50", "window_samples = 4")
+    notes = "\n".join(read_session(folder).notes)
+    assert "forces.csv samples at 8 Hz, less than twice the 10 frames/s of" in notes
+    assert "frames.csv" in notes
+    assert "frames/s" not in "\n".join(read_session(make_session(tmp_path / "ok")).notes)
+
+
 def _edit(path: Path, old: str, new: str) -> None:
     text = path.read_text()
     assert old in text, old

@@ -491,6 +491,15 @@ def read_session(path: str | Path) -> Session:
     reference = read_image(ref_path, colour_only=True)
     frame_paths, frame_times, notes = _read_frames(folder, reference.shape)
     t, f, torques, force_notes = _read_forces(folder, config.rate_hz)
+    if frame_times.size > 1 and t.size > 1:
+        fps = 1.0 / float(np.median(np.diff(frame_times)))
+        ft_hz = 1.0 / float(np.median(np.diff(t)))
+        if ft_hz < 2.0 * fps:
+            force_notes = [*force_notes, f"{folder / 'forces.csv'} samples at {ft_hz:.3g} Hz, "
+                           f"less than twice the {fps:.3g} frames/s of "
+                           f"{folder / 'frames.csv'}: the force cannot follow a press as "
+                           "closely as the frames do (an F/T sensor logs at hundreds of Hz "
+                           "or more)"]
     if config.window_samples > t.size:
         force_notes = [*force_notes, f"{folder / 'session.toml'}: [force_sensor] "
                        f"window_samples = {config.window_samples} is more than the {t.size} "
