@@ -2,7 +2,7 @@
 
     python benchmarks/bench_diagnose_power.py [--tables N] [--nulls N] [--snr S ...]
         [--kinds K ...] [--pairs] [--curvature gate|nuisance|fem ...] [--law fem|eq5]
-        [--jobs J] [--json PATH] [--figure PATH] [--from-json PATH]
+        [--jobs J] [--delta-bic B] [--json PATH] [--figure PATH] [--from-json PATH]
 
 Tables come from :func:`tactilevision.sim.make_measurement_table` (forces from the
 finite-strain FEM, not eq. 5; every formats.md column; the hidden effects' forms differ
@@ -188,6 +188,9 @@ def main() -> None:
                     help="the tables' force law: the generator's finite-strain FEM "
                          "(default), or eq. (5) with the paper's beta and Hayes' kappa")
     ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--delta-bic", type=float, default=None,
+                    help="an experiment: diagnose's evidence threshold (DELTA_BIC, default "
+                         "10) set to this in the worker processes")
     ap.add_argument("--json", type=Path)
     ap.add_argument("--figure", type=Path, help="power curves of the first --curvature")
     ap.add_argument("--from-json", type=Path, help="report and draw a saved --json run")
@@ -213,6 +216,11 @@ def main() -> None:
             work += [(p, 1000 + s, None, cm) for p in PAIRS for s in range(a.tables)]
     global LAW
     LAW = a.law      # before the pool: its processes are forked with it
+    if a.delta_bic is not None:
+        from tactilevision.mechanics import _diagnose
+
+        _diagnose.DELTA_BIC = a.delta_bic
+        print(f"DELTA_BIC = {a.delta_bic:g} (diagnose's default: 10)")
     if a.law != "fem":
         print(f"forces: {a.law} (E errors are against the generator's E, read through "
               "another law: not comparable)")
