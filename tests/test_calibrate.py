@@ -57,6 +57,25 @@ def test_report_folder(sample_run):
         (rep / "fit.json").read_text())
 
 
+def test_readme_prints_what_calibrate_prints(sample_run):
+    """The README's set-up shows calibrate's result on the sample session: the same
+    presses certified and rejected, and E and nu with their intervals to the printed
+    digits."""
+    import re
+
+    out, _ = sample_run
+    fit = json.loads((out / "report" / "fit.json").read_text())
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    n_cert, n_rej = (int(x) for x in re.search(
+        r"(\d+) presses certified, (\d+) rejected", readme).groups())
+    assert (n_cert, n_rej) == (fit["n_presses"], fit["n_rejected"])
+    for name, key, ci in (("E ", "E_mpa", "E_ci95_mpa"), ("nu", "nu", "nu_ci95")):
+        v, lo, hi = (float(x) for x in re.search(
+            rf"^{name} = ([\d.]+) .*95% CI \[([\d.]+), ([\d.]+)\]", readme, re.M).groups())
+        assert f"{fit[key]:.4f}" == f"{v:.4f}", name
+        assert [f"{x:.4f}" for x in fit[ci]] == [f"{lo:.4f}", f"{hi:.4f}"], name
+
+
 def test_certified_depths_and_forces(sample_run):
     """The vernier's certified depths against the truth (a stage overshoot of 0 to 50 um
     past w0): at least 95% of the presses in view certified, every depth within 10 um, mean

@@ -321,3 +321,23 @@ def test_grey_16_bit_and_alpha_frames(tmp_path):
     img = frame(30)
     cv2.imwrite(str(alpha), np.dstack([img, np.full(SHAPE, 255, np.uint8)]))
     np.testing.assert_array_equal(read_frame(alpha), img)
+
+
+def test_list_frames_of_a_session_folder_reads_its_frames_subfolder(tmp_path):
+    """A session folder (reference.png beside frames/) gives the frames of frames/, and the
+    reference beside them is found: `reconstruct SESSION` works as `reconstruct SESSION/frames`.
+    A folder with frames of its own keeps them, whatever subfolders it has."""
+    from tactilevision.io import find_reference
+
+    write(tmp_path / "reference.png", frame(1))
+    (tmp_path / "frames").mkdir()
+    for name in ("b_2.png", "b_10.png"):
+        write(tmp_path / "frames" / name, frame(5))
+    assert [p.name for p in list_frames(tmp_path)] == ["b_2.png", "b_10.png"]
+    assert find_reference(tmp_path) == tmp_path / "reference.png"
+    write(tmp_path / "own.png", frame(3))
+    assert [p.name for p in list_frames(tmp_path)] == ["own.png"]
+    empty = tmp_path / "empty"
+    (empty / "frames").mkdir(parents=True)
+    with pytest.raises(InputError, match=r"frames.*holds no .png or .jpg frames"):
+        list_frames(empty)

@@ -135,7 +135,9 @@ def list_frames(folder: str | Path) -> list[Path]:
     ----------
     folder : str or Path
         Folder of .png / .jpg frames; reference frames (``reference.*``,
-        ``ref.*``) are left out.
+        ``ref.*``) are left out. A folder with no frames of its own but a
+        ``frames/`` subfolder (a session folder, formats.md section 1) gives
+        the frames of that subfolder.
 
     Returns
     -------
@@ -151,6 +153,8 @@ def list_frames(folder: str | Path) -> list[Path]:
         raise InputError(f"frames folder {folder} does not exist")
     paths = [p for p in folder.iterdir()
              if p.suffix.lower() in IMAGE_SUFFIXES and p.name.lower() not in REFERENCE_NAMES]
+    if not paths and (folder / "frames").is_dir():
+        return list_frames(folder / "frames")
     if not paths:
         raise InputError(f"frames folder {folder} holds no .png or .jpg frames")
     return sorted(paths, key=_natural_key)

@@ -22,7 +22,7 @@ surface is the FEM's, bulge included, so ``L tan(theta) = delta + b`` with
 b the bulge height at the crest (:func:`tactilevision.contact.bulge_at`).
 The gel is taken to conform to the rigid flanks where they reach it (the
 clip ``max(gel, block)``): the elastic sink-in beside the band and the
-band's own force are neglected (README, "The bevel as a vernier").
+band's own force are neglected (docs/guide/calibrate.md, "The bevel as a vernier").
 
 The legacy drawn mark (``bevel_angle_deg = 0``, the sample session of
 earlier versions): no vernier; a thin V-shaped line impression (depth
