@@ -286,8 +286,15 @@ def test_reconstruct_bad_reference(calibration, presses, tmp_path, capsys):
     assert len(err) == 1 and str(small) in err[0] and "10 x 10" in err[0]
 
 
-@pytest.mark.skipif(GELSIGHT_CAL.is_file(), reason="calibration/gelsight.npz is shipped")
-def test_reconstruct_sensor_without_shipped_calibration(presses, tmp_path, capsys):
+def test_reconstruct_sensor_without_shipped_calibration(presses, tmp_path, capsys,
+                                                       monkeypatch):
+    """An install whose shipped calibration is missing (the asset folder empty) is
+    refused naming the sensor."""
+    import tactilevision._assets as assets
+
+    empty = tmp_path / "assets"
+    empty.mkdir()
+    monkeypatch.setattr(assets, "asset_dir", lambda kind: empty)
     src = frames_dir(tmp_path / "frames", presses, idx=(1,))
     assert main(["reconstruct", str(src), "--sensor", "gelsight",
                  "--out", str(tmp_path / "o")]) == 2

@@ -17,10 +17,7 @@ from tactilevision.fem._neohookean_forms import (
     iso_tangent,
 )
 
-try:
-    from tactilevision.fem import linear_indentation
-except ImportError:  # the linear solver is written in parallel
-    linear_indentation = None
+from tactilevision.fem import linear_indentation
 
 COARSE = {"cell": 0.25, "edge_refinements": 3}
 NU_C10_D1 = [(nu, 1 / (4 * (1 + nu)), 6 * (1 - 2 * nu)) for nu in (0.3, 0.45, 0.499)]
@@ -149,7 +146,6 @@ def test_result_fields_and_force_balance():
     assert res.n_dofs > 0 and res.seconds > 0
 
 
-@pytest.mark.skipif(linear_indentation is None, reason="tactilevision.fem._linear not there yet")
 @pytest.mark.parametrize(("nu", "contact"), [(0.3, "frictionless"), (0.45, "bonded"),
                                              (0.499, "frictionless")])
 def test_small_strain_limit_is_the_linear_solver(nu, contact):
@@ -177,9 +173,8 @@ def test_incompressible_limit_does_not_lock():
         assert res.complete and np.all(np.isfinite(res.kappa_n))
     assert k[0.499, 4].kappa0 == pytest.approx(k[0.5, 4].kappa0, rel=0.01)
     assert k[0.499, 2].kappa0 == pytest.approx(k[0.499, 4].kappa0, rel=0.01)
-    if linear_indentation is not None:
-        lin = linear_indentation(0.8, 0.5, contact="bonded", cell=0.25, edge_refinements=4)
-        assert k[0.5, 4].kappa0 == pytest.approx(lin.kappa, rel=5e-3)
+    lin = linear_indentation(0.8, 0.5, contact="bonded", cell=0.25, edge_refinements=4)
+    assert k[0.5, 4].kappa0 == pytest.approx(lin.kappa, rel=5e-3)
 
 
 @pytest.fixture(scope="module")

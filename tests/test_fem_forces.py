@@ -215,3 +215,32 @@ def test_footprint_of_a_flat_gel_carries_no_force(method):
     # and a real press inside the same mask still pushes
     u = np.where(mask, 0.05, 0.0).astype(np.float32)
     assert est(u, contact_mask=mask).total_n[2] > 0
+
+
+def test_a_changed_setting_takes_effect_and_a_bad_one_changes_nothing():
+    """ForceEstimator's settings are live: E doubled doubles the force (linear elasticity,
+    the operator rebuilt), the same as an estimator built with it; h changed matches a new
+    estimator too; a bad value is refused naming it and leaves the estimator as it was."""
+    from tactilevision._checks import InputError
+    from tactilevision.fem import ForceEstimator
+
+    u = np.zeros((48, 64))
+    yy, xx = np.mgrid[:48, :64]
+    u[np.hypot(xx - 32, yy - 24) < 10] = 0.05
+    est = ForceEstimator((48, 64), 0.1, thickness_mm=3.0, E_mpa=0.2, nu=0.45)
+    f0 = float(est(u).total_n[2])
+    est.E_mpa = 0.4
+    assert est.E_mpa == 0.4
+    assert float(est(u).total_n[2]) == pytest.approx(2 * f0, rel=1e-9)
+    est.thickness_mm = 4.0
+    fresh = ForceEstimator((48, 64), 0.1, thickness_mm=4.0, E_mpa=0.4, nu=0.45)
+    assert float(est(u).total_n[2]) == pytest.approx(float(fresh(u).total_n[2]), rel=1e-12)
+    before = float(est(u).total_n[2])
+    with pytest.raises(InputError, match="nu"):
+        est.nu = 0.7
+    with pytest.raises(InputError, match="E_mpa"):
+        est.E_mpa = -1.0
+    assert (est.nu, est.E_mpa) == (0.45, 0.4)
+    assert float(est(u).total_n[2]) == pytest.approx(before, rel=1e-12)
+    est.beta = 0.8                         # not the operator's: checked, not rebuilt
+    assert est.beta == 0.8

@@ -19,7 +19,7 @@ from tactilevision.mechanics import fit_indentation as _fit_indentation
 
 # The paper's method (relation 7, Hayes kappa) on the paper's numbers and on
 # presses made with it; the FEM tables (the default) are tested in
-# tests/test_fit_fem.py.
+# tests/test_fit_depth_uncertainty.py and tests/test_validate.py.
 fit_indentation = functools.partial(_fit_indentation, beta_table="paper")
 
 H, A = 3.0, 2.5  # the paper's gel thickness and indenter radius, mm

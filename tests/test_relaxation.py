@@ -331,8 +331,7 @@ def relaxing_session(tmp_path_factory):
     """A small simulated session of a relaxing gel (g 0.25, tau 0.7 s): 6 presses at two
     depths held 1.5 s, the stage overshooting w0 by 0 to 50 um so that the vernier reads
     (about 25 s to render)."""
-    from tactilevision.sim import GaugeBlock, SessionSpec, make_session
-    from tactilevision.sim._press import press_profile
+    from tactilevision.sim import GaugeBlock, SessionSpec, make_session, press_profile
 
     folder = tmp_path_factory.mktemp("relax") / "session"
     prof = press_profile(2.5 / 3, 0.48, w_over_h_max=0.22, steps=8, cell=0.5,

@@ -95,7 +95,7 @@ def land_contact_depth(w0_over_h: float, profile: _Profile) -> float:
 
 @lru_cache(maxsize=16)
 def _cached_profile(a_over_h: float, nu: float, w_over_h_max: float):
-    from ..sim import press_profile
+    from ..fem import press_profile
 
     return press_profile(a_over_h, nu, w_over_h_max=w_over_h_max, steps=8, cell=0.5,
                          edge_refinements=5)

@@ -25,3 +25,9 @@ from ._pad import PadStiffness, pad_surface_stiffness  # noqa: E402
 
 __all__ += ["ForceEstimator", "ForceMap", "PadStiffness", "layer_normal_stiffness",
             "layer_surface_stiffness", "pad_surface_stiffness", "wavevectors"]
+
+# the gel's surface under a flat-punch press, from the finite-strain sweep (tactilevision.sim
+# draws sessions with it, tactilevision.contact reads the bulge at the bevel from it)
+from ._press import PressProfile, press_profile  # noqa: E402
+
+__all__ += ["PressProfile", "press_profile"]

@@ -80,6 +80,11 @@ class ForceMap:
     contact: np.ndarray | None = None
 
 
+#: The settings the operator is built from: changing one rebuilds it.
+_OPERATOR_FIELDS = frozenset({"shape_px", "mm_per_px", "thickness_mm", "E_mpa", "nu", "method",
+                              "mode", "pad_mm", "grid", "element", "layers", "cache_dir"})
+
+
 @dataclass
 class ForceEstimator:
     """Height map to contact force distribution, built once per sensor.
@@ -127,7 +132,15 @@ class ForceEstimator:
     ------
     InputError
         For a non-positive size, nu outside [0, 0.5), an unknown method, mode
-        or contact, or a grid with fewer than 2 nodes along an axis.
+        or contact, or a grid with fewer than 2 nodes along an axis; also when
+        such a value is assigned later (the estimator then keeps its old one).
+
+    Notes
+    -----
+    A setting changed after construction (``est.E_mpa = 0.4``) takes effect at
+    once: it is checked, and the operator is rebuilt when it depends on it
+    (size, scale, h, E, nu, method, mode, padding, grid; the FEM's from its
+    disk cache).
 
     Examples
     --------
@@ -156,6 +169,30 @@ class ForceEstimator:
     _op: object = field(init=False, repr=False, default=None)
 
     def __post_init__(self) -> None:
+        self._validate()
+        self._build()
+        object.__setattr__(self, "_ready", True)
+
+    def __setattr__(self, name: str, value: object) -> None:
+        # a changed setting takes effect at once: checked, and the operator rebuilt when it
+        # depends on it; a bad value is refused and the estimator stays as it was
+        if name.startswith("_") or not self.__dict__.get("_ready", False):
+            object.__setattr__(self, name, value)
+            return
+        saved = dict(self.__dict__)
+        object.__setattr__(self, "_ready", False)
+        try:
+            object.__setattr__(self, name, value)
+            self._validate()
+            if name in _OPERATOR_FIELDS:
+                self._build()
+        except BaseException:
+            self.__dict__.clear()
+            self.__dict__.update(saved)
+            raise
+        object.__setattr__(self, "_ready", True)
+
+    def _validate(self) -> None:
         try:
             H, W = (int(s) for s in self.shape_px)
         except (TypeError, ValueError):
@@ -176,6 +213,8 @@ class ForceEstimator:
         if not (math.isfinite(float(self.beta)) and float(self.beta) >= 0):
             raise InputError(f"beta must be finite and >= 0, got {self.beta!r}")
         self.beta = float(self.beta)
+
+    def _build(self) -> None:
         if self.method == "spectral":
             pad = 2.0 * self.thickness_mm if self.pad_mm is None else float(self.pad_mm)
             if not (math.isfinite(pad) and pad >= 0):

@@ -3,9 +3,9 @@ from the FEM, frames rendered from them through Taxim's fitted shading, F/T
 logs, and whole session folders with their ``truth.json``; measurements tables
 with one hidden physical effect (:func:`make_measurement_table`)."""
 
+from ..fem import PressProfile, press_profile
 from ._balls import render_ball_presses
 from ._block import GaugeBlock, press_surface
-from ._press import PressProfile, press_profile
 from ._render import ShadingTable, fit_shading_table, taxim_shading
 from ._schedule import PressSchedule, depth_trajectory, ft_log, press_schedule
 from ._session import SessionSpec, make_session

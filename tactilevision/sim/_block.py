@@ -44,7 +44,7 @@ import numpy as np
 
 from .._checks import InputError
 from ..contact._land import bulge_height
-from ._press import PressProfile
+from ..fem import PressProfile
 
 __all__ = ["GaugeBlock", "press_surface"]
 

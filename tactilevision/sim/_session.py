@@ -25,8 +25,8 @@ from scipy.interpolate import PchipInterpolator
 from .._checks import InputError
 from ..contact._land import land_contact_depth
 from ..contact._vernier import BevelGeometry, bevel_force
+from ..fem import PressProfile, press_profile
 from ._block import GaugeBlock, press_surface
-from ._press import PressProfile, press_profile
 from ._render import ShadingTable, taxim_shading
 from ._schedule import PressSchedule, depth_trajectory, ft_log, press_schedule
 

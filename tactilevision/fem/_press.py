@@ -144,7 +144,7 @@ def press_profile(a_over_h: float, nu: float, *, w_over_h_max: float = 0.22, ste
         For bad arguments (see :func:`~tactilevision.fem.neo_hookean_indentation`)
         or a sweep that stops before `w_over_h_max`.
     """
-    from ..fem import neo_hookean_indentation
+    from . import neo_hookean_indentation
 
     res = neo_hookean_indentation(a_over_h, nu, contact=contact, w_over_h_max=w_over_h_max,
                                   steps=steps, pad_radius_over_h=pad_radius_over_h, **mesh)
