@@ -56,7 +56,7 @@ def test_gelslim_session(gelslim_table, tmp_path):
     block = GaugeBlock(bevel_angle_deg=3.0, bevel_length_mm=4.0)
     spec = SessionSpec(E_mpa=0.25, nu=0.47, repeats=2, fps=90.0, clock_offset_s=0.05,
                        block=block, sensor_name="gelslim3", misaligned=(4,), seed=3,
-                       overshoot_mm=(0.01, 0.05))
+                       overshoot_mm=(0.01, 0.05), wait_s=(0.4, 0.8))   # short rests: fewer frames
     truth = make_session(tmp_path / "s", spec, shading=(table, ps.reference), profile=prof)
     cal = calibrate_session(tmp_path / "s")
     c = cal.certification

@@ -7,7 +7,7 @@ import pytest
 from scipy.optimize import brentq
 from skfem import MeshTri
 
-from tactilevision.fem import FiniteIndentation, neo_hookean_indentation
+from tactilevision.fem import FiniteIndentation, linear_indentation, neo_hookean_indentation
 from tactilevision.fem._finite_solver import ConstrainedNewton
 from tactilevision.fem._neohookean_forms import (
     AxisymmetricNeoHookean,
@@ -16,8 +16,6 @@ from tactilevision.fem._neohookean_forms import (
     iso_stress,
     iso_tangent,
 )
-
-from tactilevision.fem import linear_indentation
 
 COARSE = {"cell": 0.25, "edge_refinements": 3}
 NU_C10_D1 = [(nu, 1 / (4 * (1 + nu)), 6 * (1 - 2 * nu)) for nu in (0.3, 0.45, 0.499)]

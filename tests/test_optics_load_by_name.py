@@ -48,3 +48,21 @@ def test_reference_is_never_silently_replaced():
     other = DepthReconstructor(cal, reference=frame)(frame)
     np.testing.assert_array_equal(own, DepthReconstructor(cal)(frame))
     assert np.abs(own - other).max() > 1e-3
+
+
+def test_a_second_reconstructor_reuses_the_tabulated_network():
+    """The MLP's gradient table is built once per network, reference and bins and kept for
+    the next reconstructor of the same sensor (read only); another reference gets its own
+    table; the heights are the same from the reused table as from the one built."""
+    from tactilevision.optics import _reconstructor
+
+    cal = PhotometricCalibration.load("gelsight")
+    frame = np.clip(cal.reference.astype(np.int16) + 12, 0, 255).astype(np.uint8)
+    _reconstructor._TABLES.clear()
+    first = DepthReconstructor(cal)
+    again = DepthReconstructor(cal)
+    assert again._table is first._table
+    assert not first._table.gx_table.flags.writeable
+    np.testing.assert_array_equal(first(frame), again(frame))
+    other = DepthReconstructor(cal, reference=frame)
+    assert other._table is not first._table

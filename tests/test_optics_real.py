@@ -48,9 +48,12 @@ def test_shipped_gelsight_calibration_table_engine(shipped, taxim_presses):
 
 
 def test_shipped_gelsight_calibration_onnx_engine(shipped, taxim_presses):
-    # the network itself, per pixel: benchmark 4.25 deg, 53.4 um, 1.997 +- 0.042 mm
-    rep = evaluate_ball_presses(DepthReconstructor(shipped, engine="onnx"),
-                                *_held_out(taxim_presses), BALL_PX)
+    # the network itself, per pixel: benchmark 4.25 deg, 53.4 um, 1.997 +- 0.042 mm on the
+    # 24 held-out presses; here every third of them (8; per-pixel inference is slow:
+    # 4.29 deg, 50.7 um, 1.992 mm measured), the bounds those of the 24
+    frames, centres, radii = (x[::3] for x in _held_out(taxim_presses))
+    rep = evaluate_ball_presses(DepthReconstructor(shipped, engine="onnx"), frames, centres,
+                                radii, BALL_PX)
     assert rep.normal_angle_deg < 4.8
     assert rep.shape_rms_px * MM * 1000 < 62.0
     assert rep.fitted_radius_px * MM == pytest.approx(2.0, rel=0.03)

@@ -8,6 +8,8 @@ does only per-frame work.
 
 from __future__ import annotations
 
+import hashlib
+from collections import OrderedDict
 from typing import Literal
 
 import cv2
@@ -153,11 +155,8 @@ class DepthReconstructor:
             if calibration.onnx_bytes is None:
                 raise InputError("MLP calibration without a network")
             self._mlp = MLPGradientModel(calibration.onnx_bytes, threads=threads)
-            if engine == "table":  # tabulated once on all cores
-                self._table = tabulate_mlp(MLPGradientModel(calibration.onnx_bytes, threads=0),
-                                           self._ref_inv, lo=calibration.colour_lo,
-                                           hi=calibration.colour_hi, bins=table_bins,
-                                           use_position=calibration.use_position)
+            if engine == "table":  # tabulated once on all cores, and kept for the next
+                self._table = _tabulated(calibration, self._ref_inv, table_bins)
         self.engine = engine
         if engine == "onnx":
             h, w = self.shape
@@ -357,3 +356,30 @@ class DepthReconstructor:
             m = cv2.dilate(m, self._dilate).astype(bool)
             masks.append(ndi.binary_fill_holes(m) if fill_holes else m)
         return masks[0] if frames.ndim == 3 else np.stack(masks)
+
+
+#: The last few MLP tabulations (about 25 MB each at 640 x 480), by network, reference and
+#: bins: a second reconstructor of the same sensor (a pipeline's, a CLI command's after
+#: another) reuses the table instead of evaluating the network again (2 to 3 s).
+_TABLES: OrderedDict[tuple, object] = OrderedDict()
+_TABLES_KEPT = 2
+
+
+def _tabulated(calibration, ref_inv: np.ndarray, bins: int):
+    key = (hashlib.blake2b(calibration.onnx_bytes, digest_size=16).digest(),
+           hashlib.blake2b(np.ascontiguousarray(ref_inv).tobytes(), digest_size=16).digest(),
+           ref_inv.shape, tuple(np.asarray(calibration.colour_lo, np.float32).tolist()),
+           tuple(np.asarray(calibration.colour_hi, np.float32).tolist()), int(bins),
+           bool(calibration.use_position))
+    if key in _TABLES:
+        _TABLES.move_to_end(key)
+        return _TABLES[key]
+    table = tabulate_mlp(MLPGradientModel(calibration.onnx_bytes, threads=0), ref_inv,
+                         lo=calibration.colour_lo, hi=calibration.colour_hi, bins=bins,
+                         use_position=calibration.use_position)
+    for arr in (table.gx_table, table.gy_table, table.cell_offset):
+        arr.setflags(write=False)             # shared between reconstructors: read only
+    _TABLES[key] = table
+    while len(_TABLES) > _TABLES_KEPT:
+        _TABLES.popitem(last=False)
+    return table

@@ -95,6 +95,8 @@ class ShadingTable:
                              f"table's {tuple(self.shape)}")
         if not np.all(np.isfinite(z)):
             raise InputError("height map contains NaN or inf")
+        if not z.any():                 # the flat gel: no change at all
+            return np.zeros((*z.shape, 3))
         zp = z / self.mm_per_px
         d_row, d_col = np.gradient(zp)
         slope = np.arctan(np.hypot(d_row, d_col))
@@ -103,13 +105,20 @@ class ShadingTable:
         i_mag = np.clip(np.floor(slope / (0.5 * np.pi / (b - 1))).astype(np.int64), 0, b - 1)
         i_dir = np.clip(np.floor((direction + np.pi) / (2 * np.pi / (b - 1))).astype(np.int64),
                         0, b - 1)
-        feats = self._features
-        lit = np.einsum("hwf,hwfc->hwc", feats, self.coeffs[i_mag, i_dir])
         # the flat gel: slope bin 0 of the same direction (the table's bin-0 rows
         # differ slightly between directions; subtracting the same direction's
-        # keeps a flat gel exactly at the reference, with no sector pattern)
-        flat = np.einsum("hwf,hwfc->hwc", feats, self.coeffs[np.zeros_like(i_mag), i_dir])
-        return lit - flat
+        # keeps a flat gel exactly at the reference, with no sector pattern). A pixel in
+        # bin 0 changes by exactly nothing, so only the tilted pixels are evaluated: a
+        # no-contact frame costs nothing, a press its contact's neighbourhood
+        out = np.zeros((*z.shape, 3))
+        tilted = np.nonzero(i_mag)
+        if tilted[0].size:
+            feats = self._features[tilted]                                  # (n, 6)
+            d = i_dir[tilted]
+            lit = np.einsum("nf,nfc->nc", feats, self.coeffs[i_mag[tilted], d])
+            flat = np.einsum("nf,nfc->nc", feats, self.coeffs[0, d])
+            out[tilted] = lit - flat
+        return out
 
     def render(self, height_mm: np.ndarray, reference: np.ndarray, *, noise_dn: float = 0.0,
                rng: np.random.Generator | None = None) -> np.ndarray:
