@@ -411,8 +411,8 @@ def test_window_at_end_places_the_window_before_the_release(relaxing_session, tm
     """[force_sensor] window_at = "end": each press's force window ends where its hold ends
     (truth.json's hold_to_s), so hold_s is the hold's length less half the window, and
     force_n is the relaxed force there: force0_n times the standard linear solid's factor
-    (1 - g) + g phi(ramp / tau) exp(-hold_s / tau), to 1 %. A bad value is refused naming
-    the key."""
+    (1 - g) + g phi(ramp / tau) exp(-hold_s / tau), to 1 %. A window longer than the hold
+    is refused per press ('hold too short'); a bad value of the key is refused naming it."""
     from tactilevision import calibrate_session
     from tactilevision.io import read_session
 
@@ -433,6 +433,15 @@ def test_window_at_end_places_the_window_before_the_release(relaxing_session, tm
     g, tau = truth["relaxation_g"], truth["relaxation_tau_s"]
     factor = (1 - g) + g * ramp_factor(0.5, tau) * np.exp(-cols["hold_s"] / tau)
     np.testing.assert_allclose(cols["force_n"], cols["force0_n"] * factor, rtol=0.01)
+    # a window longer than the hold cannot end where it ends: every press refused, saying so
+    from tactilevision.contact import certify_session
+
+    (moved / "session.toml").write_text(
+        toml.replace("window_samples = 200", "window_samples = 2000") + 'window_at = "end"\n')
+    c = certify_session(read_session(moved))
+    assert not c.presses and c.rejected
+    assert all(r.reason == "hold too short" and "less than the 2000-sample force window"
+               in r.detail for r in c.rejected)
     (moved / "session.toml").write_text(toml + 'window_at = "middle"\n')
     with pytest.raises(InputError, match=r"window_at must be one of 'start', 'end'"):
         read_session(moved)
