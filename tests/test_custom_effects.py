@@ -25,7 +25,7 @@ from tactilevision.mechanics import (
     Effect,
     IndentationModel,
     Param,
-    _model,
+    _catalogue,
     check_fit_effects,
     diagnose,
     fit_indentation,
@@ -66,8 +66,8 @@ MODULE_PREFIXES = ("tv_ce_", "tactilevision_user_")
 @pytest.fixture(autouse=True)
 def _fresh_registry(monkeypatch):
     """Each test starts with an empty registry and leaves no module of its own behind."""
-    monkeypatch.setattr(_model, "_USER_EFFECTS", {})
-    monkeypatch.setattr(_model, "_FILE_MODULES", {})
+    monkeypatch.setattr(_catalogue, "_USER_EFFECTS", {})
+    monkeypatch.setattr(_catalogue, "_FILE_MODULES", {})
     path = list(sys.path)
     yield
     for name in [m for m in sys.modules if m.startswith(MODULE_PREFIXES)]:
@@ -211,7 +211,7 @@ def _cls(**attrs):
 def test_register_effect_refuses_bad_effects(effect, expected):
     with pytest.raises(InputError, match=expected):
         register_effect(effect)
-    assert _model._USER_EFFECTS == {}
+    assert _catalogue._USER_EFFECTS == {}
 
 
 def test_a_name_taken_by_another_class_is_refused():

@@ -48,22 +48,14 @@ from ._beta import (
     nu_from_beta,
 )
 from ._budget import NoiseBudget, noise_budget
+from ._catalogue import EFFECTS, Effect, FemLaw, Param, make_effect, register_effect
 from ._diagnose import Diagnosis, diagnose, noise_floor
 from ._effects import EFFECT_NAMES, FIT_EFFECTS, check_fit_effects, model_label
 from ._fem_tables import kappa_n
 from ._fit import MAX_W_OVER_H, fit_indentation
 from ._fit_model import fit_model
 from ._kappa import HAYES_1972, KappaTable, kappa
-from ._model import (
-    EFFECTS,
-    Effect,
-    FemLaw,
-    IndentationModel,
-    ModelFit,
-    Param,
-    make_effect,
-    register_effect,
-)
+from ._model import IndentationModel, ModelFit
 from ._neohookean import neo_hookean_constants
 from ._relaxation import (
     RelaxationFit,

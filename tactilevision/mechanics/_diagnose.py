@@ -20,11 +20,12 @@ from scipy import stats
 
 from .._checks import InputError
 from ._budget import NoiseBudget, noise_budget
+from ._catalogue import EFFECTS, Effect, effect_name, make_effect
 from ._effects import model_label
 from ._fem_tables import kappa_n
 from ._fit import fit_indentation
 from ._fit_model import fit_model
-from ._model import EFFECTS, Effect, IndentationModel, ModelFit, effect_name, make_effect
+from ._model import IndentationModel, ModelFit
 
 __all__ = [
     "Candidate",

@@ -1,7 +1,7 @@
 """Names of the effect catalogue (``formats.md`` §4) and what ``fit`` accepts.
 
 The effects themselves (classes with parameters, composed into models) are
-in :mod:`tactilevision.mechanics._model`; the names live here so that the
+in :mod:`tactilevision.mechanics._catalogue`; the names live here so that the
 command line can check them without building a model. Effects of your own
 (:func:`~tactilevision.mechanics.register_effect`) are given as
 ``package.module:ClassName``: :func:`effect_names` imports and checks them
@@ -76,7 +76,7 @@ def effect_names(specs: Sequence[str]) -> tuple[str, ...]:
         not an ``Effect`` subclass or is invalid (bounds, name taken by the
         catalogue, ...): the message names the spec.
     """
-    from ._model import effect_name, is_registered
+    from ._catalogue import effect_name, is_registered
 
     out: list[str] = []
     for spec in specs:

@@ -9,9 +9,10 @@ from dataclasses import replace
 import numpy as np
 
 from .._checks import InputError
+from ._catalogue import make_effect
 from ._fem_tables import TABLE_EXTRAPOLATION
 from ._fit import MAX_W_OVER_H, _geometry, _positive, material_fit
-from ._model import IndentationModel, ModelFit, make_effect
+from ._model import IndentationModel, ModelFit
 from ._result import IndentationFit
 
 __all__ = ["fit_model"]

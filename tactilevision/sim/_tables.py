@@ -6,7 +6,7 @@ positions and room temperature, so every column of formats.md §2 is present
 whatever the effect. The force comes from the finite-strain FEM
 (:func:`~tactilevision.mechanics.kappa_n`, not eq. 5) and then one hidden
 effect changes it. The hidden effects' functional forms are deliberately not
-the catalogue's (:mod:`tactilevision.mechanics._model`):
+the catalogue's (:mod:`tactilevision.mechanics._catalogue`):
 
 ================================  ==============================================
 hidden                            form in the generator
