@@ -12,7 +12,7 @@ import argparse
 import sys
 from collections.abc import Sequence
 
-from .._checks import InputError
+from .. import InputError
 from . import _calibrate, _diagnose, _fem, _fit, _forces, _optics, _reconstruct, _validate
 
 __all__ = ["build_parser", "main"]

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._checks import InputError
+from .. import InputError
 from ._fit import _write_json, relaxation_lines, summary
 from ._out import StagedOutput, add_overwrite_argument, check_output_folder, check_overwrite
 
@@ -166,7 +166,7 @@ def run(args: argparse.Namespace) -> int:
         (rejected.csv, the certified presses' measurements.csv, the figures
         and report.html are written first, saying why).
     """
-    from .._calibrate import calibrate_session
+    from .. import calibrate_session
     from ..io import read_session, write_measurements
 
     session = read_session(args.session)

@@ -7,7 +7,7 @@ import math
 import sys
 from pathlib import Path
 
-from .._checks import InputError
+from .. import InputError
 from ._fit import _write_json
 from ._out import StagedOutput, add_overwrite_argument, check_output_folder, check_overwrite
 
@@ -88,7 +88,7 @@ def _summary(diag, path: Path) -> str:
 def run(args: argparse.Namespace) -> int:
     """Run ``diagnose``; returns 0 (2 through InputError on bad input)."""
     from ..io import read_measurements
-    from ..mechanics._diagnose import diagnose
+    from ..mechanics import diagnose
     from ..mechanics._effects import effect_names
 
     overwrite = args.overwrite

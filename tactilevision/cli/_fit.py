@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._checks import InputError
+from .. import InputError
 from ..io import Measurements, read_holds, read_measurements
 from ..mechanics import (
     EFFECT_NAMES,

@@ -10,8 +10,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import InputError
 from .._assets import KNOWN_SENSORS, default_calibration_path
-from .._checks import InputError
 from ._out import StagedOutput, add_overwrite_argument, check_output_folder, check_overwrite
 
 __all__ = ["add_parser", "run"]

@@ -7,7 +7,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from .._checks import InputError
+from .. import InputError
 
 __all__ = ["MANIFEST", "StagedOutput", "add_overwrite_argument", "check_output_folder",
            "check_overwrite", "output_folder"]

@@ -9,7 +9,7 @@ import tomllib
 import warnings
 from pathlib import Path
 
-from .._checks import InputError
+from .. import InputError
 from ._fit import _write_json
 from ._out import StagedOutput, add_overwrite_argument, check_output_folder, check_overwrite
 

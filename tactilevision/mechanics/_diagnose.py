@@ -4,7 +4,8 @@
 along every covariate column, fits the model plus each applicable catalogue
 effect, compares them by BIC and by cross-validated RMSE, and decides. The
 greedy steps form the error ladder. The replicate noise floor is the error no
-model of these columns can beat.
+model of these columns can beat. The statistical tests themselves are in
+:mod:`tactilevision.mechanics._diagnose_stats`.
 """
 
 from __future__ import annotations
@@ -16,11 +17,23 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy import stats
 
 from .._checks import InputError
 from ._budget import NoiseBudget, noise_budget
 from ._catalogue import EFFECTS, Effect, effect_name, make_effect
+from ._diagnose_stats import (  # noqa: F401  (the statistics' names, also read from here)
+    _NOT_COVARIATES,
+    ALPHA,
+    RESPONSE_COLUMNS,
+    CovariateTest,
+    _covariate_names,
+    _folds,
+    _group_means,
+    _groups,
+    covariate_tests,
+    cross_validated_rmse,
+    noise_floor,
+)
 from ._effects import model_label
 from ._fem_tables import kappa_n
 from ._fit import fit_indentation
@@ -54,19 +67,10 @@ NUISANCE_BIC = 2.0
 #: 'gate': a depth effect must beat the base law's own curvature (LawCurvature) by this
 #: much BIC.
 CURVATURE_BIC = 6.0
-#: Family-wise level of the covariate structure tests (Bonferroni over columns).
-ALPHA = 0.01
 #: Columns along which a change point in stiffness (``stiffness_step:<column>``) is tried.
 STEP_COLUMNS = ("press", "day", "time_s")
 #: Generic effects: a winner is reported as an unexplained covariate, not a verdict.
 _GENERIC = ("stiffness_trend:", "force_trend:")
-#: Columns that are never covariates (``depth_std_mm``: the depth's uncertainty, not physics).
-_NOT_COVARIATES = ("force_n", "depth_std_mm", "force_sem_n", "bevel_force_n", "force0_n")
-#: Columns that respond to the press rather than set its conditions: a press's tangential
-#: forces and its F/T window's scatter grow with its normal force, so structure along them
-#: is the force itself. Not scanned as covariates unless asked (``scan``); ``fx_n`` and
-#: ``fy_n`` are read by ``force_crosstalk``, the F/T sensor's physics.
-RESPONSE_COLUMNS = ("fx_n", "fy_n", "force_std_n")
 
 # the measurement that separates two effects that look alike on one table
 _SEPARATE = {
@@ -78,31 +82,6 @@ _SEPARATE = {
     frozenset({"force_drift", "force_offset"}):
         "a tare check at the start and end of the session",
 }
-
-
-@dataclass(frozen=True)
-class CovariateTest:
-    """Residual structure along one covariate.
-
-    Attributes
-    ----------
-    name : str
-    p_value : float
-        F test of a smooth function of the column (or one-way ANOVA over its
-        values when it has few) against no structure.
-    explained_fraction : float
-        Fraction of the residual variance that function explains, in [0, 1].
-    significant : bool
-        ``p_value`` below the Bonferroni level ALPHA / number of covariates.
-    n : int
-        Presses with a value in this column.
-    """
-
-    name: str
-    p_value: float
-    explained_fraction: float
-    significant: bool
-    n: int
 
 
 @dataclass(frozen=True)
@@ -316,198 +295,6 @@ def _coarse_depth_link(d: Diagnosis) -> str:
             "cannot show at all: the law's curvature takes it up. A finer depth link (the "
             "bevel's vernier, bevel_angle_deg > 0; for a mark's onset, a faster camera or a "
             "slower approach) would show them.")
-
-
-def _groups(columns: Mapping[str, np.ndarray]) -> np.ndarray:
-    """Replicate group of each press: same indenter (if given) and same nominal depth.
-
-    The nominal depth is ``depth_mm`` itself, or, for depths measured by a
-    vernier (an ``overshoot_mm`` column), the gauge block's w0 = depth -
-    overshoot: the presses of one indenter, each a few microns deeper.
-    """
-    depth = np.asarray(columns["depth_mm"], np.float64)
-    over = np.asarray(columns.get("overshoot_mm", np.full(depth.shape, np.nan)), np.float64)
-    nominal = depth - over if np.all(np.isfinite(over)) else depth
-    keys = [np.round(nominal, 6)]
-    if "indenter" in columns:
-        ind = np.asarray(columns["indenter"], np.float64)
-        if np.all(np.isfinite(ind)):
-            keys.append(ind)
-    _, g = np.unique(np.column_stack(keys), axis=0, return_inverse=True)
-    return g.ravel()
-
-
-def _group_means(v: np.ndarray, g: np.ndarray) -> np.ndarray:
-    """Mean of `v` (N,) or each column of `v` (N, K) over the groups `g`, per press."""
-    G = int(g.max()) + 1
-    counts = np.bincount(g, minlength=G)
-    if v.ndim == 1:
-        return (np.bincount(g, v, G) / counts)[g]
-    return (np.stack([np.bincount(g, v[:, j], G) for j in range(v.shape[1])], 1)
-            / counts[:, None])[g]
-
-
-def noise_floor(residuals_n: np.ndarray, columns: Mapping[str, np.ndarray]) -> float:
-    """The replicate noise floor: pooled within-group sd of residuals, N.
-
-    Parameters
-    ----------
-    residuals_n : (N,) ndarray
-        Residuals of a model (so anything it explains is taken out).
-    columns : mapping
-        ``depth_mm`` and, if present, ``indenter`` define the groups of
-        repeated presses.
-
-    Returns
-    -------
-    sd : float
-        ``sqrt(sum (r - mean_group r)^2 / (N - G))``; NaN without repeats.
-    """
-    r = np.asarray(residuals_n, np.float64)
-    g = _groups(columns)
-    G = int(g.max()) + 1
-    if r.size - G < 2:
-        return math.nan
-    return float(np.sqrt(np.sum((r - _group_means(r, g)) ** 2) / (r.size - G)))
-
-
-def _covariate_names(columns: Mapping[str, np.ndarray], scan: Sequence[str] = ()
-                     ) -> list[str]:
-    return [k for k in columns if k not in _NOT_COVARIATES
-            and (k not in RESPONSE_COLUMNS or k in scan)]
-
-
-def covariate_tests(residuals_n: np.ndarray, predicted_n: np.ndarray,
-                    columns: Mapping[str, np.ndarray], *, n_depth_params: int = 2,
-                    alpha: float = ALPHA, scan: Sequence[str] = ()
-                    ) -> tuple[CovariateTest, ...]:
-    """Does the residual carry structure along each covariate column?
-
-    Parameters
-    ----------
-    residuals_n, predicted_n : (N,) ndarray
-        A model's residuals and predictions.
-    columns : mapping of str to (N,) ndarray
-        Every column but ``force_n``, the uncertainties and the responses
-        (:data:`RESPONSE_COLUMNS`) is a covariate; constant columns are
-        skipped.
-    n_depth_params : int, default 2
-        Parameters of the model that are functions of depth alone (c and
-        beta): the lack-of-fit test along ``depth_mm`` has that many fewer
-        degrees of freedom.
-    alpha : float, default ALPHA
-        Family-wise level; each test is significant below alpha / (number of
-        covariates tested).
-    scan : sequence of str, default ()
-        Response columns to test all the same.
-
-    Returns
-    -------
-    tests : tuple of CovariateTest
-
-    Notes
-    -----
-    A column with at most 8 distinct values is tested by one-way ANOVA of the
-    residuals over its values (along ``depth_mm``: the lack-of-fit test with
-    ``K - 1 - n_depth_params`` degrees of freedom). Other columns: an F test
-    of the regression of the residual on ``z, z^2, p z, p z^2`` (z the
-    standardised column, p the standardised prediction: additive and
-    multiplicative structure) within the groups of repeated presses (group
-    means taken out of both sides), so that the law's own misfit along
-    depth does not show along a column correlated with depth.
-    """
-    r_all = np.asarray(residuals_n, np.float64)
-    p_all = np.asarray(predicted_n, np.float64)
-    out = []
-    names = []
-    for name in _covariate_names(columns, scan):
-        x = np.asarray(columns[name], np.float64)
-        ok = np.isfinite(x) & np.isfinite(r_all)
-        if ok.sum() < 8 or np.ptp(x[ok]) == 0:
-            continue
-        names.append(name)
-    m = max(len(names), 1)
-    for name in names:
-        x = np.asarray(columns[name], np.float64)
-        ok = np.isfinite(x) & np.isfinite(r_all)
-        r, xs, p = r_all[ok], x[ok], p_all[ok]
-        n = r.size
-        values, g = np.unique(xs, return_inverse=True)
-        rss0 = float(np.sum((r - r.mean()) ** 2))
-        if values.size <= 8:
-            G = values.size
-            rss1 = float(np.sum((r - _group_means(r, g)) ** 2))
-            df1 = G - 1 - (n_depth_params if name == "depth_mm" else 0)
-            df2 = n - G
-        else:
-            # within replicate groups: structure along depth (the law's own) is taken out
-            grp = _groups({k: np.asarray(v)[ok] for k, v in columns.items()
-                           if k in ("depth_mm", "indenter", "overshoot_mm")})
-            G = int(grp.max()) + 1
-            r = r - _group_means(r, grp)
-            rss0 = float(np.sum(r ** 2))
-            z = (xs - xs.mean()) / xs.std()
-            q = (p - p.mean()) / (p.std() or 1.0)
-            X = np.column_stack([z, z**2, q * z, q * z**2])
-            X = X - _group_means(X, grp)
-            coef, *_ = np.linalg.lstsq(X, r, rcond=None)
-            rss1 = float(np.sum((r - X @ coef) ** 2))
-            df1 = int(np.linalg.matrix_rank(X))
-            df2 = n - G - df1
-        if df1 < 1 or df2 < 1 or rss0 <= 0:
-            pv, frac = 1.0, 0.0
-        else:
-            F = ((rss0 - rss1) / df1) / (rss1 / df2) if rss1 > 0 else math.inf
-            pv = float(stats.f.sf(F, df1, df2))
-            frac = float(max(0.0, 1 - rss1 / rss0))
-        out.append(CovariateTest(name, pv, frac, pv < alpha / m, n))
-    return tuple(out)
-
-
-def _folds(n: int, k: int, seed: int) -> np.ndarray:
-    rng = np.random.default_rng(seed)
-    return rng.permutation(np.arange(n) % k)
-
-
-def cross_validated_rmse(model: IndentationModel, columns: Mapping[str, np.ndarray], *,
-                         thickness_mm: float, k: int = 10, seed: int = 0,
-                         start: Mapping[str, float] | None = None) -> float:
-    """K-fold cross-validated RMSE of a model, N.
-
-    Each fold's presses are predicted by the model fitted (robustly) to the
-    others. Folds are a seeded random partition, the same for every model
-    given the same data and seed.
-
-    Parameters
-    ----------
-    model : IndentationModel
-    columns : mapping of str to (N,) ndarray
-    thickness_mm : float
-    k : int, default 10
-    seed : int, default 0
-    start : mapping of str to float, optional
-        The model's fit to all presses (``ModelFit.params``): each fold's
-        fit starts there, and a change point is searched by descent from its
-        place in it (:meth:`IndentationModel.fit`), not over every candidate.
-
-    Returns
-    -------
-    rmse : float
-    """
-    d = {c: np.asarray(columns[c], np.float64) for c in model.columns}
-    n = d["depth_mm"].size
-    k = min(k, n)
-    fold = _folds(n, k, seed)
-    err = np.empty(n)
-    for f in range(k):
-        test = fold == f
-        train = {c: v[~test] for c, v in d.items()}
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            mf = model.fit(train, thickness_mm=thickness_mm, start=start)
-        td = {c: v[test] for c, v in d.items()}
-        err[test] = model.predict(mf.params, td, thickness_mm) - td["force_n"]
-    return float(np.sqrt(np.mean(err**2)))
 
 
 def _usable(name: str, columns: Mapping[str, np.ndarray]) -> str | None:
