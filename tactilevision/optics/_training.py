@@ -1,0 +1,161 @@
+"""Training a photometric calibration from ball presses (the work behind
+:meth:`PhotometricCalibration.from_ball_presses`).
+
+Pressing a ball of known radius R into the gel gives, inside each contact
+circle, pixels whose surface normal is known exactly (:mod:`._ball`). Those
+pixels, plus flat background pixels far from the contact, train a model from
+colour change (and, for the MLP, reference colour and pixel position) to the
+in-plane normal (n_x, n_y): a binned colour table (LUT, per position cell if
+asked) or a small network exported to ONNX. With detected circles the centres
+are refitted to the first model's gradients and the model is trained again.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+
+import numpy as np
+from tqdm.auto import tqdm
+
+from .._checks import InputError, check_array
+from ._ball import ball_gradients, fit_ball_centre, normals_from_gradients
+from ._circles import detect_contact_circles
+from ._features import colour_change, reference_inverse
+from ._lut import fit_cell_luts, fit_colour_lut
+from ._markers import marker_mask
+from ._mlp import mlp_inputs, train_mlp
+
+__all__ = ["fit_from_ball_presses"]
+
+
+def fit_from_ball_presses(cls, reference: np.ndarray, frames: np.ndarray,
+                          centers_px: np.ndarray | None = None,
+                          radii_px: np.ndarray | None = None, *, ball_radius_mm: float,
+                          mm_per_px: float, model: str = "mlp", use_position: bool = True,
+                          markers: bool | None = None, label_fraction: float | None = None,
+                          refine_centers: bool | None = None, bins: int = 32,
+                          lut_cells: tuple[int, int] = (1, 1), epochs: int = 30,
+                          hidden: int = 128, blur_sigma: float = 0.0, seed: int = 0,
+                          source: str = "", progress: bool = False):
+    """Train a photometric calibration of class `cls` from ball presses.
+
+    The parameters, return value and errors are those of
+    :meth:`~tactilevision.optics.PhotometricCalibration.from_ball_presses`, which
+    calls this with its own class.
+    """
+    from ._calibration import _version
+
+    reference = check_array(reference, "reference", [("H", "W", 3)], dtype=np.uint8)
+    frames = check_array(frames, "frames", [("N", *reference.shape)], dtype=np.uint8)
+    if model not in ("lut", "mlp"):
+        raise InputError(f"model must be 'lut' or 'mlp', got {model!r}")
+    if len(frames) < 2:
+        raise InputError(f"need at least 2 ball presses, got {len(frames)}")
+    if not (ball_radius_mm > 0 and mm_per_px > 0):
+        raise InputError("ball_radius_mm and mm_per_px must be positive")
+    detected = centers_px is None and radii_px is None
+    if detected:
+        centers_px, radii_px = detect_contact_circles(frames, reference)
+    elif centers_px is None or radii_px is None:
+        raise InputError("give both centers_px and radii_px, or neither (to detect them)")
+    centers = check_array(centers_px, "centers_px", [(len(frames), 2)], finite=True)
+    radii = check_array(radii_px, "radii_px", [(len(frames),)], finite=True)
+    centers = centers.astype(np.float64).copy()
+    radii = radii.astype(np.float64)
+    ball_px = ball_radius_mm / mm_per_px
+    if label_fraction is None:
+        label_fraction = 0.85 if detected else 1.0
+    if refine_centers is None:
+        refine_centers = detected
+    bad = np.nonzero(radii * label_fraction >= ball_px)[0]
+    if bad.size:
+        raise InputError(f"press {bad[0]}: contact radius {radii[bad[0]]:.1f} px (x label "
+                         f"fraction {label_fraction:g}) is not smaller than the ball radius "
+                         f"{ball_px:.1f} px: check ball_radius_mm and mm_per_px")
+    ref_mask = marker_mask(reference)
+    if markers is None:
+        markers = bool(ref_mask.mean() > 0.02)
+    ref_inv = reference_inverse(reference, marker_mask=ref_mask if markers else None)
+    ref_colour = 1.0 / ref_inv
+    h, w = reference.shape[:2]
+    rng = np.random.default_rng(seed)
+    changes = [colour_change(f, ref_inv, blur_sigma=blur_sigma) for f in
+               tqdm(frames, desc="colour change", disable=not progress)]
+    valid = [~marker_mask(f) if markers else np.ones((h, w), bool) for f in frames]
+    background = [(rng.random((h, w)) < 0.03) & v for v in valid]
+
+    cal = cls(model=model, reference=reference.copy(), mm_per_px=float(mm_per_px),
+              use_position=use_position, markers=markers, blur_sigma=blur_sigma)
+    rounds = 2 if refine_centers else 1
+    fell_back = np.zeros((0, 0), bool)         # position cells on the colour-only table
+    for rnd in range(rounds):
+        x_all, y_all, f_all, n_all, bg_mag = _training_samples(
+            changes, valid, background, centers, label_fraction * radii, ball_px)
+        cal.contact_threshold = float(np.percentile(bg_mag, 99.9))
+        cal.colour_lo = np.percentile(f_all, 0.1, axis=0).astype(np.float32)
+        cal.colour_hi = np.percentile(f_all, 99.9, axis=0).astype(np.float32)
+        if model == "lut":
+            cal.lut = fit_colour_lut(f_all, n_all, bins=bins, lo=cal.colour_lo,
+                                     hi=cal.colour_hi)
+            if tuple(lut_cells) != (1, 1):
+                cal.cell_luts, fell_back = fit_cell_luts(
+                    x_all, y_all, f_all, n_all, (h, w), lut_cells, lo=cal.colour_lo,
+                    hi=cal.colour_hi, bins=bins, fallback=cal.lut)
+        else:
+            inputs = mlp_inputs(f_all, ref_colour[y_all, x_all], x_all, y_all, (h, w),
+                                use_position=use_position)
+            cal.onnx_bytes = train_mlp(inputs, n_all, hidden=hidden, epochs=epochs,
+                                       seed=seed, progress=progress)
+        if rnd + 1 < rounds:
+            from ._reconstructor import DepthReconstructor
+
+            recon = DepthReconstructor(cal)
+            for i, f in enumerate(frames):
+                gx, gy = recon.gradients(f)
+                centers[i] = fit_ball_centre(gx, gy, centers[i], label_fraction * radii[i],
+                                             ball_px)
+    cal.provenance = {
+        "source": source,
+        "created": _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds"),
+        "n_presses": len(frames),
+        "ball_radius_mm": float(ball_radius_mm),
+        "circles": "detected" if detected else "given",
+        "centers_refined": bool(refine_centers),
+        "label_fraction": float(label_fraction),
+        "lut_cells": [int(c) for c in lut_cells] if model == "lut" else None,
+        "lut_cells_fell_back": int(np.count_nonzero(fell_back)),
+        "centers_px": centers.round(2).tolist(),
+        "radii_px": radii.round(2).tolist(),
+        "tactilevision": _version(),
+    }
+    return cal
+
+
+def _training_samples(changes: list[np.ndarray], valid: list[np.ndarray],
+                      background: list[np.ndarray], centers: np.ndarray,
+                      label_radii: np.ndarray, ball_px: float
+                      ) -> tuple[np.ndarray, ...]:
+    """Labelled pixels of all presses: inside each label disc the ball's normal,
+    beyond twice the contact radius (sampled) the flat normal; the ring
+    between, where the gel leaves the ball in an unknown shape, is left out.
+
+    Returns x (M,), y (M,), colour change (M, 3), in-plane normal (M, 2) and
+    the background colour-change magnitudes (for the contact threshold).
+    """
+    h, w = changes[0].shape[:2]
+    xs, ys, feats, labels, bg_mag = [], [], [], [], []
+    for change, ok, bg, centre, rad in zip(changes, valid, background, centers, label_radii,
+                                           strict=True):
+        gx, gy, inside = ball_gradients((h, w), centre, rad, ball_px)
+        dx = np.arange(w)[None, :] - centre[0]
+        dy = np.arange(h)[:, None] - centre[1]
+        far = (dx * dx + dy * dy) > (2.0 * rad) ** 2
+        sel = (inside & ok) | (far & bg)
+        yy, xx = np.nonzero(sel)
+        xs.append(xx)
+        ys.append(yy)
+        feats.append(change[sel])
+        labels.append(normals_from_gradients(gx[sel], gy[sel])[:, :2])
+        bg_mag.append(np.abs(change[far & bg]).max(axis=-1))
+    return (np.concatenate(xs), np.concatenate(ys), np.concatenate(feats),
+            np.concatenate(labels), np.concatenate(bg_mag))
