@@ -342,35 +342,9 @@ def certify_session(session, *, min_contact_px: int = 200, bevel_threshold: floa
     warnings: list[str] = []
 
     # clock
-    frame_on = np.array([times[r[0]] for r in runs])
-    fz = session.forces_n[:, 2]
-    _check_fz_sign(session, fz)
-    force_on = force_onsets(session.force_times_s, fz)
-    tol = max(0.05, 2.5 * period)
-    clock = None
-    refined = None
-    if len(runs) >= 2 and force_on.size >= 2:
-        clock = estimate_clock_offset(frame_on, force_on, tolerance_s=tol)
-        if sync_fz_n is not None and np.shape(sync_fz_n) != fz.shape:
-            raise InputError(f"sync_fz_n has {np.size(sync_fz_n)} values for {fz.size} F/T "
-                             "samples")
-        refined, _ = refine_clock_offset(times, area, session.force_times_s,
-                                         fz if sync_fz_n is None else sync_fz_n, clock.offset_s,
-                                         span_s=max(0.2, 3 * period),
-                                         step_s=1.0 / cfg.rate_hz)
-    if cfg.clock_offset_s is not None:
-        offset, source = float(cfg.clock_offset_s), "session.toml"
-        if refined is not None and abs(refined - offset) > max(0.5 * period, 0.02):
-            warnings.append(
-                f"session.toml gives clock_offset_s = {offset:g} s but the presses say "
-                f"{refined:.3f} s ({clock.n_matched} onsets matched, refined on the press "
-                "profiles): the estimate is used")
-            offset, source = refined, "estimated"
-    elif refined is not None:
-        offset, source = refined, "estimated"
-    else:
-        raise InputError(f"{session.path}: session.toml has no [force_sensor] clock_offset_s and "
-                         "the frames and the F/T log share too few press onsets to estimate it")
+    offset, source, clock, clock_notes = _sync_clock(session, times, area, runs, period,
+                                                     sync_fz_n)
+    warnings.extend(clock_notes)
 
     commanded = session.presses
     if commanded is not None and len(commanded["press"]) != len(runs):
@@ -467,27 +441,10 @@ def certify_session(session, *, min_contact_px: int = 200, bevel_threshold: floa
             onset = int(cand[np.argmax(firm)])
             score = float(scores[np.argmax(firm)])
             t_cert = float(times[onset])
-        if cfg.window_at == "end":
-            # the window ends where the release begins (the settled force): F/T clock
-            t_release = hold_end(session.force_times_s, session.forces_n[:, 2], t_cert + offset)
-            if t_release is None:
-                reject("hold end not found", "window_at = 'end', but the F/T log shows no "
-                       f"release after the hold that starts at {t_cert:.3f} s (frames' clock)",
-                       at=onset, score=score)
-                continue
-            hold_mid = t_release - half - (t_cert + offset)
-            if hold_mid < half - 1e-9:
-                reject("hold too short", f"the hold lasts {t_release - t_cert - offset:.3f} s, "
-                       f"less than the {cfg.window_samples}-sample force window", at=onset,
-                       score=score)
-                continue
-        else:
-            hold_mid = half
-            if t_cert + 2 * half > t_hold_end + period:
-                reject("bevel seen too late", f"the bevel shows at {t_cert:.3f} s, the "
-                       f"{cfg.window_samples}-sample force window would run past the hold "
-                       f"(last full-contact frame {t_hold_end:.3f} s)", at=onset, score=score)
-                continue
+        hold_mid = _window_middle(session, t_cert, offset, half, t_hold_end, period)
+        if isinstance(hold_mid, tuple):
+            reject(*hold_mid, at=onset, score=score)
+            continue
         try:
             fw = force_window(session.force_times_s, session.forces_n,
                               t_cert + offset + hold_mid, cfg.window_samples)
@@ -749,6 +706,76 @@ def approach_start(force_times_s: np.ndarray, fz_n: np.ndarray, t_hold_s: float,
     rss, coef = _knee_fits(tw, fw, knees, slope_before=False)
     rss = np.where(coef[:, 1] > 0, rss, np.inf)          # the force must rise after it
     return float(knees[int(np.argmin(rss))]) if np.isfinite(rss).any() else None
+
+
+def _window_middle(session, t_cert: float, offset: float, half: float, t_hold_end: float,
+                   period: float) -> float | tuple[str, str]:
+    """Where a press's force window lies: its middle after the hold's start, s, or the
+    rejection ``(reason, detail)`` when it cannot lie there.
+
+    ``window_at = "start"``: half the window after the hold's start, which the window
+    must not run past (the last full-contact frame). ``"end"``: ending where the release
+    begins (:func:`hold_end` on the F/T log), which must leave room for the window.
+    """
+    cfg = session.config
+    if cfg.window_at == "end":
+        t_release = hold_end(session.force_times_s, session.forces_n[:, 2], t_cert + offset)
+        if t_release is None:
+            return ("hold end not found", "window_at = 'end', but the F/T log shows no "
+                    f"release after the hold that starts at {t_cert:.3f} s (frames' clock)")
+        middle = t_release - half - (t_cert + offset)
+        if middle < half - 1e-9:
+            return ("hold too short", f"the hold lasts {t_release - t_cert - offset:.3f} s, "
+                    f"less than the {cfg.window_samples}-sample force window")
+        return middle
+    if t_cert + 2 * half > t_hold_end + period:
+        return ("bevel seen too late", f"the bevel shows at {t_cert:.3f} s, the "
+                f"{cfg.window_samples}-sample force window would run past the hold "
+                f"(last full-contact frame {t_hold_end:.3f} s)")
+    return half
+
+
+def _sync_clock(session, times: np.ndarray, area: np.ndarray, runs: list[np.ndarray],
+                period: float, sync_fz_n: np.ndarray | None
+                ) -> tuple[float, str, ClockSync | None, list[str]]:
+    """The clock offset between frames and F/T log (step 2 of the module docstring).
+
+    Returns ``(offset_s, source, clock, warnings)``: the offset used, 'session.toml' or
+    'estimated', the onset match (None when too few onsets), and the warning when a stated
+    offset is contradicted by the presses.
+    """
+    cfg = session.config
+    warnings: list[str] = []
+    frame_on = np.array([times[r[0]] for r in runs])
+    fz = session.forces_n[:, 2]
+    _check_fz_sign(session, fz)
+    force_on = force_onsets(session.force_times_s, fz)
+    tol = max(0.05, 2.5 * period)
+    clock = None
+    refined = None
+    if len(runs) >= 2 and force_on.size >= 2:
+        clock = estimate_clock_offset(frame_on, force_on, tolerance_s=tol)
+        if sync_fz_n is not None and np.shape(sync_fz_n) != fz.shape:
+            raise InputError(f"sync_fz_n has {np.size(sync_fz_n)} values for {fz.size} F/T "
+                             "samples")
+        refined, _ = refine_clock_offset(times, area, session.force_times_s,
+                                         fz if sync_fz_n is None else sync_fz_n, clock.offset_s,
+                                         span_s=max(0.2, 3 * period),
+                                         step_s=1.0 / cfg.rate_hz)
+    if cfg.clock_offset_s is not None:
+        offset, source = float(cfg.clock_offset_s), "session.toml"
+        if refined is not None and abs(refined - offset) > max(0.5 * period, 0.02):
+            warnings.append(
+                f"session.toml gives clock_offset_s = {offset:g} s but the presses say "
+                f"{refined:.3f} s ({clock.n_matched} onsets matched, refined on the press "
+                "profiles): the estimate is used")
+            offset, source = refined, "estimated"
+    elif refined is not None:
+        offset, source = refined, "estimated"
+    else:
+        raise InputError(f"{session.path}: session.toml has no [force_sensor] clock_offset_s and "
+                         "the frames and the F/T log share too few press onsets to estimate it")
+    return offset, source, clock, warnings
 
 
 def _check_fz_sign(session, fz: np.ndarray) -> None:
