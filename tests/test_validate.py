@@ -78,8 +78,8 @@ def test_validation_sees_a_wrong_modulus(presses):
     # 20% too stiff: every simulated depth falls short, by about 1 / 1.2
     w, p = presses
     val = validate_indentation(w, p, E_mpa=1.2 * E_TRUE, nu=NU_TRUE, thickness_mm=H,
-                               radius_mm=A)
-    assert np.all(val.rel_error < -0.1)
+                               radius_mm=A, mesh={"cell": 0.5, "edge_refinements": 5})
+    assert np.all(val.rel_error < -0.1)       # (a coarser mesh: a 15 % effect, not 1 %)
     assert np.median(val.rel_error) == pytest.approx(-0.15, abs=0.04)
 
 
