@@ -575,6 +575,7 @@ def register_effect(effect: type[Effect] | Effect) -> str:
     Examples
     --------
     >>> import numpy as np
+    >>> from tactilevision.mechanics import Effect, IndentationModel, Param, register_effect
     >>> class Humidity(Effect):
     ...     '''Stiffness falling with relative humidity, P (1 - s (RH - 40 %)).'''
     ...     name = "humidity"
