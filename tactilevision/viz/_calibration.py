@@ -7,6 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ._depth import _scale_bar
+
 __all__ = ["bevel_panels", "calibration_figures", "write_calibration_report"]
 
 
@@ -181,6 +183,7 @@ def _mosaic(cal, path: Path, reconstructor, dpi: int) -> Path:
                      fontsize=8)
         ax.set_xticks([])
         ax.set_yticks([])
+        _scale_bar(ax, frame.shape[:2], s, "w")      # the panels' spatial scale, mm
     fig.suptitle("certification frames: footprint (white) and the bevel's crest (red)",
                  fontsize=9)
     fig.savefig(path, dpi=dpi)
