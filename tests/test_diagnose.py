@@ -10,11 +10,10 @@ import warnings
 import numpy as np
 import pytest
 
-from tactilevision._checks import InputError
+from tactilevision import InputError
 from tactilevision.cli import main
 from tactilevision.io import write_measurements
-from tactilevision.mechanics import diagnose, fit_model, noise_floor
-from tactilevision.mechanics._diagnose import covariate_tests
+from tactilevision.mechanics import covariate_tests, diagnose, fit_model, noise_floor
 from tactilevision.sim import HIDDEN_EFFECTS, make_measurement_table
 
 SEEDS = range(4)

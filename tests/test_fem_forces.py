@@ -221,7 +221,7 @@ def test_a_changed_setting_takes_effect_and_a_bad_one_changes_nothing():
     """ForceEstimator's settings are live: E doubled doubles the force (linear elasticity,
     the operator rebuilt), the same as an estimator built with it; h changed matches a new
     estimator too; a bad value is refused naming it and leaves the estimator as it was."""
-    from tactilevision._checks import InputError
+    from tactilevision import InputError
     from tactilevision.fem import ForceEstimator
 
     u = np.zeros((48, 64))

@@ -16,8 +16,8 @@ import pytest
 import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
-from tactilevision._checks import InputError
-from tactilevision.fem._layer import layer_normal_stiffness, layer_surface_stiffness, wavevectors
+from tactilevision import InputError
+from tactilevision.fem import layer_normal_stiffness, layer_surface_stiffness, wavevectors
 
 NUS = (0.0, 0.3, 0.45, 0.49, 0.499)
 

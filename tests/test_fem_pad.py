@@ -22,8 +22,8 @@ import numpy as np
 import pytest
 import scipy.linalg as sla
 
-from tactilevision._checks import InputError
-from tactilevision.fem._pad import pad_surface_stiffness
+from tactilevision import InputError
+from tactilevision.fem import pad_surface_stiffness
 from tactilevision.fem._pad_mesh import (
     ELEMENTS,
     PadModel,

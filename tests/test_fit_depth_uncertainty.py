@@ -21,8 +21,7 @@ from scipy import stats
 from tactilevision import InputError, ShapeError
 from tactilevision.cli import main
 from tactilevision.io import read_measurements, write_measurements
-from tactilevision.mechanics import fit_indentation
-from tactilevision.mechanics._diagnose import covariate_tests
+from tactilevision.mechanics import covariate_tests, fit_indentation
 
 # The synthetic law of the brief: P = c w (1 + beta w / h), paper's geometry.
 C0, BETA0, H, A = 3.5, 0.8, 3.0, 2.5

@@ -15,7 +15,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from tactilevision._checks import InputError
+from tactilevision import InputError
 from tactilevision.io import read_frame, read_holds, read_measurements, read_session
 
 SESSION_TOML = """[sensor]

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 from _data import GELSLIM, GELSLIM_MM_PER_PX, GELSLIM_REASON
 
-from tactilevision._checks import InputError
+from tactilevision import InputError
 from tactilevision.fem import ForceEstimator
 from tactilevision.optics import (
     MarkerFlow,

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tactilevision._checks import InputError
+from tactilevision import InputError
 from tactilevision.cli import main
 from tactilevision.cli._out import MANIFEST, StagedOutput, check_overwrite
 

@@ -10,7 +10,7 @@ import math
 import numpy as np
 import pytest
 
-from tactilevision._checks import InputError
+from tactilevision import InputError
 from tactilevision.contact import approach_start, hold_start
 from tactilevision.io import read_holds
 from tactilevision.mechanics import (
@@ -19,8 +19,7 @@ from tactilevision.mechanics import (
     instantaneous_forces,
     ramp_factor,
 )
-from tactilevision.sim import press_schedule
-from tactilevision.sim._schedule import ft_log
+from tactilevision.sim import ft_log, press_schedule
 
 
 def _closed_form(t, p0, g, tau, ramp):

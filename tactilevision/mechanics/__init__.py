@@ -50,6 +50,7 @@ from ._beta import (
 from ._budget import NoiseBudget, noise_budget
 from ._catalogue import EFFECTS, Effect, FemLaw, Param, make_effect, register_effect
 from ._diagnose import Diagnosis, diagnose, noise_floor
+from ._diagnose_stats import CovariateTest, covariate_tests, cross_validated_rmse
 from ._effects import EFFECT_NAMES, FIT_EFFECTS, check_fit_effects, model_label
 from ._fem_tables import kappa_n
 from ._fit import MAX_W_OVER_H, fit_indentation
@@ -76,6 +77,7 @@ __all__ = [
     "MAX_W_OVER_H",
     "PAPER_BETA_RELATION",
     "BetaRelation",
+    "CovariateTest",
     "Diagnosis",
     "Effect",
     "FemLaw",
@@ -91,6 +93,8 @@ __all__ = [
     "beta_from_nu",
     "beta_relation",
     "check_fit_effects",
+    "covariate_tests",
+    "cross_validated_rmse",
     "diagnose",
     "elastic_force",
     "fit_indentation",
