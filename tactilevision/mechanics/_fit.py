@@ -556,6 +556,18 @@ def _table_top(rel, c: float, beta: float, beta_se: float, tq: float) -> float |
     return None
 
 
+def nu_range_reaching(beta_of_nu, nu_first: float, nu_last: float, nu_peak: float,
+                      beta_lo: float) -> tuple[float, float]:
+    """The nu whose beta reaches `beta_lo`, between `nu_first` and `nu_last`: from the
+    first on the rising branch to the last on the falling one (`nu_peak` when none does),
+    on a grid of 2001."""
+    fine = np.linspace(nu_first, nu_last, 2001)
+    ok = np.asarray(beta_of_nu(fine)) >= beta_lo
+    if not ok.any():
+        return nu_peak, nu_peak
+    return float(fine[np.argmax(ok)]), float(fine[len(ok) - 1 - np.argmax(ok[::-1])])
+
+
 def _at_table_top(rel, beta_lo: float, c: float, cov: np.ndarray, tq: float, a: float,
                   ah: float, kappa_source: str, contact: str, confidence: float):
     """nu, its interval, E, its interval and kappa for beta at the top of the FEM table.
@@ -570,11 +582,8 @@ def _at_table_top(rel, beta_lo: float, c: float, cov: np.ndarray, tq: float, a: 
     """
     first, last = rel.branch
     nu_peak = float(rel.nu_grid[last])
-    fine = np.linspace(float(rel.nu_grid[first]), float(rel.nu_grid[-1]), 2001)
-    b = np.asarray(rel.beta(fine))
-    ok = b >= beta_lo
-    nu_lo = float(fine[np.argmax(ok)]) if ok.any() else nu_peak
-    nu_hi = float(fine[len(ok) - 1 - np.argmax(ok[::-1])]) if ok.any() else nu_peak
+    nu_lo, nu_hi = nu_range_reaching(rel.beta, float(rel.nu_grid[first]),
+                                     float(rel.nu_grid[-1]), nu_peak, beta_lo)
 
     def modulus(cc: float, nu: float) -> tuple[float, float]:
         if getattr(rel, "kappa_line_grid", None) is not None:

@@ -11,7 +11,7 @@ import numpy as np
 from .._checks import InputError
 from ._catalogue import make_effect
 from ._fem_tables import TABLE_EXTRAPOLATION
-from ._fit import MAX_W_OVER_H, _geometry, _positive, material_fit
+from ._fit import MAX_W_OVER_H, _geometry, _positive, material_fit, nu_range_reaching
 from ._model import IndentationModel, ModelFit
 from ._result import IndentationFit
 
@@ -288,7 +288,7 @@ def _model_table_top(fit: IndentationFit, model: IndentationModel, nus: np.ndarr
     The same rule as eq. (5)'s own fit at the table's top (:func:`~tactilevision.mechanics.
     fit_indentation`): beta(nu) is flat near its peak, so a beta a little above it is the peak
     within the scatter. nu is put at the peak; its interval runs from the nu whose beta is
-    beta's lower bound (rising branch) to the largest grid nu whose beta still reaches it
+    beta's lower bound (rising branch) to the largest nu whose beta still reaches it
     (falling branch); E = c / c(nu) at the peak, its interval E over that range of nu with c
     at its own bounds.
     """
@@ -297,10 +297,8 @@ def _model_table_top(fit: IndentationFit, model: IndentationModel, nus: np.ndarr
     from ._neohookean import neo_hookean_constants
 
     nu_peak = float(nus[top])
-    rising = PchipInterpolator(bg[lo:top + 1], nus[lo:top + 1])
-    nu_lo = float(rising(max(b_lo, float(bg[lo])))) if b_lo > bg[lo] else float(nus[lo])
-    reach = np.flatnonzero(bg >= b_lo)
-    nu_hi = float(nus[reach[-1]]) if reach.size else nu_peak
+    nu_lo, nu_hi = nu_range_reaching(PchipInterpolator(nus, bg), float(nus[lo]),
+                                     float(nus[-1]), nu_peak, b_lo)
     c_of_nu = PchipInterpolator(nus, cg)
     c_se = math.sqrt(cov[0, 0]) if np.isfinite(cov[0, 0]) else math.nan
     E = c / float(c_of_nu(nu_peak))
