@@ -23,9 +23,9 @@ eq. (5) with the paper's beta relation (7) and Hayes' kappa at the exact a/h
 Then, for each: ``tactilevision calibrate --beta-table paper`` (its relaxation
 fit on), ``tactilevision diagnose --beta-table paper`` on its measurements.csv,
 and ``tactilevision fit --effects <the named effect> --beta-table paper``.
-Printed per kind: the verdict, E from calibrate, E after the named effect (or
-after the trend offered for an unexplained covariate), and the truth that
-effect's E stands for (the catalogue's parametrisation: at x =
+Printed per kind: the certified depths against truth.json, the verdict, E from
+calibrate, E after the named effect (or after the trend offered for an unexplained
+covariate), and the truth that effect's E stands for (the catalogue's parametrisation: at x =
 0 for spatial_nonuniformity, before the step for stiffness_step, at the
 table's mean of the column for stiffness_trend, at time 0 for force_drift's
 counterpart; E_0 for the relaxation).
@@ -140,6 +140,11 @@ def one(session: Path, out: Path, kind: str, seed: int, reuse: bool = False) -> 
         e_after, e_ci = got.get("E_mpa"), got.get("E_ci95_mpa")
     relax = c.get("relaxation") or {}
     budget = d.get("noise_budget") or {}
+    # the certified depths against the renderer's truth (um)
+    true_depth = {p["press"]: p["depth_mm"]
+                  for p in json.loads((session / "truth.json").read_text())["presses"]}
+    rows = np.genfromtxt(meas, delimiter=",", names=True)
+    err_um = 1e3 * (rows["depth_mm"] - [true_depth[int(k)] for k in rows["press"]])
     return {"kind": kind, "n_rejected": c["n_rejected"], "clock_s": c["clock_offset_s"],
             "E_calibrate": c["E_mpa"], "nu_calibrate": c["nu"],
             "relaxation_resolved": relax.get("resolved"), "g": relax.get("g"),
@@ -147,6 +152,8 @@ def one(session: Path, out: Path, kind: str, seed: int, reuse: bool = False) -> 
             "equivalent": v["equivalent_effects"], "unexplained": v["unexplained_covariate"],
             "E_after": e_after, "E_after_ci": e_ci, "E_named_truth": tr["E_named"],
             "budget_ratio": budget.get("ratio"), "budget_exceeds": budget.get("exceeds"),
+            "depth_error_um": [float(err_um.mean()), float(err_um.std()),
+                               float(np.abs(err_um).max())],
             "calibrate_s": t_cal, "message": d["message"]}
 
 
@@ -162,10 +169,10 @@ def print_rows(rows: list[dict], session: Path | str) -> None:
     """The markdown table of docs/loop.md."""
     print(f"session {session} (Taxim's renderer), E = {E_TRUE} MPa, nu = {NU_TRUE}; "
           "forces: eq. (5), the paper's beta, Hayes' kappa")
-    print("| hidden | rejected | clock (s) | calibrate: E (error) | verdict (equivalent) | "
-          "scatter / noise budget | E after it (error against the effect's E) [95 % CI, "
-          "covers] | relaxation |")
-    print("|---|---|---|---|---|---|---|---|")
+    print("| hidden | rejected | clock (s) | depth error (um): mean, sd, max | calibrate: E "
+          "(error) | verdict (equivalent) | scatter / noise budget | E after it (error against "
+          "the effect's E) [95 % CI, covers] | relaxation |")
+    print("|---|---|---|---|---|---|---|---|---|")
     for r in rows:
         verdict = (r["verdict"] or (f"unexplained {r['unexplained']} (offered "
                                     f"{r['fitted']})" if r["unexplained"]
@@ -183,7 +190,9 @@ def print_rows(rows: list[dict], session: Path | str) -> None:
         truth = r["E_named_truth"]
         cover = ("" if not ci or None in ci else
                  f" [{ci[0]:.4f}, {ci[1]:.4f}, {'yes' if ci[0] <= truth <= ci[1] else 'no'}]")
-        print(f"| {r['kind']} | {r['n_rejected']} | {r['clock_s']:.4f} | "
+        de = r.get("depth_error_um")
+        depth = "-" if not de else f"{de[0]:+.1f}, {de[1]:.1f}, {de[2]:.1f}"
+        print(f"| {r['kind']} | {r['n_rejected']} | {r['clock_s']:.4f} | {depth} | "
               f"{_fmt(e_cal)} ({_pct(e_cal, E_TRUE)}) | {verdict} | {budget} | "
               f"{_fmt(e_after)} ({_pct(e_after, truth)}){cover} | {relax} |", flush=True)
 
