@@ -1,7 +1,8 @@
 """Mechanics of the gel pad: kappa and beta tables, the in-situ fit of E and nu.
 
-The method is the paper's, "In-situ Mechanical Calibration for Vision-based
-Tactile Sensors": presses of a flat cylindrical indenter of radius a to
+The method is C. Zhao, J. Ren, H. Yu and D. Ma's, "In-situ Mechanical
+Calibration for Vision-based Tactile Sensors" (IEEE ICRA 2023,
+doi:10.1109/ICRA48891.2023.10161153): presses of a flat cylindrical indenter of radius a to
 certified depths w into a gel layer of thickness h bonded to a rigid base,
 forces P, and the law eq. (5) ``P/w = c beta (w/h) + c``.
 

@@ -156,7 +156,8 @@ def nu_from_beta(beta: float | np.ndarray, *, table: str = "paper",
 
     References
     ----------
-    .. [1] "In-situ Mechanical Calibration for Vision-based Tactile Sensors",
+    .. [1] C. Zhao, J. Ren, H. Yu, D. Ma, "In-situ Mechanical Calibration for
+       Vision-based Tactile Sensors", IEEE ICRA 2023,
        eq. (7).
     .. [2] M. Zhang, Y. P. Zheng, A. F. T. Mak, "Estimating the effective
        Young's modulus of soft tissues from indentation tests - nonlinear finite
@@ -207,7 +208,8 @@ def beta_from_nu(nu: float | np.ndarray, *, table: str = "paper",
 
     References
     ----------
-    .. [1] "In-situ Mechanical Calibration for Vision-based Tactile Sensors",
+    .. [1] C. Zhao, J. Ren, H. Yu, D. Ma, "In-situ Mechanical Calibration for
+       Vision-based Tactile Sensors", IEEE ICRA 2023,
        eq. (7).
     """
     rel = _relation(table, a_over_h, contact, definition)
@@ -294,7 +296,8 @@ def beta(nu: float | np.ndarray, a_over_h: float | np.ndarray, *, source: str = 
 
     References
     ----------
-    .. [1] "In-situ Mechanical Calibration for Vision-based Tactile Sensors",
+    .. [1] C. Zhao, J. Ren, H. Yu, D. Ma, "In-situ Mechanical Calibration for
+       Vision-based Tactile Sensors", IEEE ICRA 2023,
        eq. (2), (5), (7).
 
     Examples

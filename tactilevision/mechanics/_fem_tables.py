@@ -314,7 +314,8 @@ def kappa_n(nu: float | np.ndarray, a_over_h: float | np.ndarray,
 
     References
     ----------
-    .. [1] "In-situ Mechanical Calibration for Vision-based Tactile Sensors",
+    .. [1] C. Zhao, J. Ren, H. Yu, D. Ma, "In-situ Mechanical Calibration for
+       Vision-based Tactile Sensors", IEEE ICRA 2023,
        eq. (1)-(2); the table: ``models/beta_fem.npz`` (``tactilevision fem
        tables --what beta``).
     """

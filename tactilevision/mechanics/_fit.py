@@ -166,7 +166,8 @@ def fit_indentation(depth_mm: np.ndarray, force_n: np.ndarray, *, thickness_mm: 
 
     References
     ----------
-    .. [1] "In-situ Mechanical Calibration for Vision-based Tactile Sensors",
+    .. [1] C. Zhao, J. Ren, H. Yu, D. Ma, "In-situ Mechanical Calibration for
+       Vision-based Tactile Sensors", IEEE ICRA 2023,
        eq. (4)-(7) and section IV.
     .. [2] W. C. Hayes et al., J. Biomech. 5:541-551, 1972.
        doi:10.1016/0021-9290(72)90010-3

@@ -142,7 +142,8 @@ def kappa(nu: float | np.ndarray, a_over_h: float | np.ndarray, *,
 
     References
     ----------
-    .. [1] "In-situ Mechanical Calibration for Vision-based Tactile Sensors",
+    .. [1] C. Zhao, J. Ren, H. Yu, D. Ma, "In-situ Mechanical Calibration for
+       Vision-based Tactile Sensors", IEEE ICRA 2023,
        eq. (1)-(5).
     .. [2] W. C. Hayes, L. M. Keer, G. Herrmann, L. F. Mockros, "A mathematical
        analysis for indentation tests of articular cartilage", J. Biomech.

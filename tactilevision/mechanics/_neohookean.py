@@ -45,7 +45,8 @@ def neo_hookean_constants(E_mpa: float | np.ndarray,
 
     References
     ----------
-    .. [1] "In-situ Mechanical Calibration for Vision-based Tactile Sensors",
+    .. [1] C. Zhao, J. Ren, H. Yu, D. Ma, "In-situ Mechanical Calibration for
+       Vision-based Tactile Sensors", IEEE ICRA 2023,
        section V.A.
     .. [2] Abaqus Analysis User's Guide, "Hyperelastic behavior of rubberlike
        materials", Neo-Hookean form.

@@ -144,7 +144,8 @@ def validate_indentation(depth_mm: np.ndarray, force_n: np.ndarray, *, E_mpa: fl
 
     References
     ----------
-    .. [1] "In-situ Mechanical Calibration for Vision-based Tactile Sensors",
+    .. [1] C. Zhao, J. Ren, H. Yu, D. Ma, "In-situ Mechanical Calibration for
+       Vision-based Tactile Sensors", IEEE ICRA 2023,
        section V.A and Fig. 8.
     """
     from ..fem import neo_hookean_indentation
