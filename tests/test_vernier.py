@@ -204,6 +204,26 @@ def test_bulge_grows_with_nu_and_decays_with_distance():
     assert 0.01 < frac.mean() < 0.04          # 2 to 3% of w at 3 h for a bonded 0.49 layer
     with pytest.raises(InputError, match="inside the indenter"):
         bulge_at(2.0, w, thickness_mm=3.0, radius_mm=2.5, nu=0.48)
+    with pytest.raises(InputError, match="must lie in"):
+        bulge_at(9.0, w, thickness_mm=3.0, radius_mm=2.5, nu=0.6)
+
+
+def test_bulge_between_the_nu_nodes_matches_a_sweep_at_that_nu():
+    """Between the FEM sweeps at nu 0.48 and 0.49, the interpolated bulge and land contact
+    depth stay within 0.03% of w of a sweep run at nu 0.485 itself."""
+    from tactilevision.contact import land_contact_depth, land_contact_depths_mm
+    from tactilevision.fem import press_profile
+
+    w = np.array([0.15, 0.3, 0.6])
+    prof = press_profile(2.5 / 3.0, 0.485, w_over_h_max=0.22, steps=8, cell=0.5,
+                         edge_refinements=5)
+    direct = np.array([-float(prof.depth_at(v / 3.0, np.array([2.5]))[0]) * 3.0 for v in w])
+    b = bulge_at(7.5, w, thickness_mm=3.0, radius_mm=2.5, nu=0.485)
+    assert np.all(np.abs(b - direct) < 3e-4 * w)
+    assert np.all(np.abs(b - direct) > 0)        # interpolated, not the same sweep
+    wc = land_contact_depths_mm(w, thickness_mm=3.0, radius_mm=2.5, nu=0.485)
+    wd = np.array([land_contact_depth(v / 3.0, prof) * 3.0 for v in w])
+    assert np.all(np.abs(wc - wd) < 3e-4 * w)
 
 
 def test_session_keys(tmp_path):

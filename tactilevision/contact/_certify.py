@@ -313,167 +313,44 @@ def certify_session(session, *, min_contact_px: int = 200, bevel_threshold: floa
     """
     cfg = session.config
     ref = session.reference
-    s = cfg.mm_per_px
     times = session.frame_times_s
     nf = session.n_frames
-    first = session.frame(0)
-    sigma = noise_level(first, ref)
-    area = np.zeros(nf, np.int64)
-
-    def contact_px(i: int) -> int:
-        return int(np.count_nonzero(contact_mask(session.frame(i), ref, sigma=sigma)))
-
-    if contact_area_px is not None:
-        if np.shape(contact_area_px) != (nf,):
-            raise InputError(f"contact_area_px has {np.size(contact_area_px)} values for {nf} "
-                             "frames")
-        area[:] = contact_area_px
-    else:
-        # OpenCV decodes and filters outside the GIL: threads use every core
-        with ThreadPoolExecutor(max_workers=max(1, min(4, os.cpu_count() or 1))) as pool:
-            it = pool.map(contact_px, range(nf))
-            for i, n_px in enumerate(it if progress is None else progress(_Sized(it, nf))):
-                area[i] = n_px
+    sigma = noise_level(session.frame(0), ref)
+    area = _contact_areas(session, sigma, min_contact_px, progress, contact_area_px)
     period = float(np.median(np.diff(times))) if nf > 1 else 1.0
     runs = _runs(times, area >= min_contact_px, max_gap_s=2.5 * period)
     if not runs:
         raise InputError(f"no press found in the {nf} frames of {session.path} (no frame has "
                          f"{min_contact_px} px of colour change above the noise)")
     warnings: list[str] = []
-
-    # clock
     offset, source, clock, clock_notes = _sync_clock(session, times, area, runs, period,
                                                      sync_fz_n)
     warnings.extend(clock_notes)
-
     commanded = session.presses
     if commanded is not None and len(commanded["press"]) != len(runs):
         warnings.append(f"presses.csv lists {len(commanded['press'])} presses, the frames show "
                         f"{len(runs)}: presses are matched to the nearest commanded position")
-    hw, hh = (session.shape[1] - 1) / 2, (session.shape[0] - 1) / 2
+    geom = BevelGeometry(offset_mm=cfg.bevel_offset_mm, direction_deg=cfg.bevel_direction_deg,
+                         angle_deg=cfg.bevel_angle_deg, length_mm=cfg.bevel_length_mm)
+    ctx = _PressContext(session=session, sigma=sigma, area=area, period=period, offset=offset,
+                        geom=geom, n_runs=len(runs), bevel_threshold=bevel_threshold)
 
     certified: list[CertifiedPress] = []
     rejected: list[Rejection] = []
-    geom = BevelGeometry(offset_mm=cfg.bevel_offset_mm, direction_deg=cfg.bevel_direction_deg,
-                         angle_deg=cfg.bevel_angle_deg, length_mm=cfg.bevel_length_mm)
-    vernier = geom.tan_theta > 0
-    reach = (min(MAX_CLOSURE_MM / geom.tan_theta / s, 120.0) + 8.0) if vernier else 0.0
-    half = cfg.window_samples / (2.0 * cfg.rate_hz)
     pending: list[dict] = []          # vernier presses waiting for the session's flank colours
     prev_end = float("nan")
     for k, run in enumerate(runs):
-        t0 = float(times[run[0]])
-        wait = t0 - prev_end
+        got = _certify_press(ctx, k, run, wait_s=float(times[run[0]]) - prev_end)
         prev_end = float(times[run[-1]])
-        peak = int(run[np.argmax(area[run])])
-        frame = session.frame(peak)
-        mask = contact_mask(frame, ref, sigma=sigma)
-        sat = _saturated(frame, ref, mask)
-        fp = footprint_from_frame(mask, s, indenter_radius_mm=cfg.indenter_radius_mm)
-        centre = None if fp is None else (float(fp.center_px[0]), float(fp.center_px[1]))
-
-        def reject(reason: str, detail: str, at: int = peak, k: int = k, t0: float = t0,
-                   score: float = float("nan"), centre=centre) -> None:
-            rejected.append(Rejection(press=k, reason=reason, detail=detail, t_frame_s=t0,
-                                      frame=at, bevel_score=score, centre_px=centre))
-
-        if sat > MAX_SATURATED_FRACTION:
-            reject("saturated frames", f"{100 * sat:.1f}% of the pixels of the contact are "
-                   "saturated (a channel at 255 or all at 0) and are not in the reference")
-            continue
-        edge_touch = bool(mask[0].any() or mask[-1].any() or mask[:, 0].any()
-                          or mask[:, -1].any())
-        if fp is None or fp.cut_by_edge:
-            if edge_touch or (fp is not None and fp.cut_by_edge):
-                reject("footprint cut by the pad edge",
-                       "the contact reaches the edge of the sensed area")
-            else:
-                reject("no footprint", "the contact encloses no flat region")
-            continue
-        if not fp.radius_ok:
-            reject("footprint radius", f"fitted radius {fp.radius_mm:.3f} mm, indenter "
-                   f"{cfg.indenter_radius_mm:g} mm")
-            continue
-        x_mm, y_mm = (fp.center_px[0] - hw) * s, (fp.center_px[1] - hh) * s
-        # indenter
-        if commanded is not None:
-            if len(commanded["press"]) == len(runs):
-                j = k
-            else:
-                j = int(np.argmin(np.hypot(commanded["x_mm"] - x_mm, commanded["y_mm"] - y_mm)))
-            indenter = int(commanded["indenter"][j])
+        if isinstance(got, Rejection):
+            rejected.append(got)
+        elif isinstance(got, dict):
+            pending.append(got)
         else:
-            indenter = -1
-        if indenter < 0:
-            reject("unknown indenter", "no presses.csv tells which indenter was pressed")
-            continue
-        # the bevel is looked for in the frames near full contact (the land meets the
-        # gel at the deepest part of the press)
-        full = run[area[run] >= 0.9 * area[peak]]
-        start = int(np.searchsorted(run, full[0]))
-        cand = run[max(0, start - 1):int(np.searchsorted(run, full[-1])) + 1]
-        t_hold_end = float(times[full[-1]])
-        if vernier:
-            got = _vernier_onset(session, geom, centre, s, cand, reach, period, half, offset,
-                                 float(times[run[0]]))
-            if isinstance(got, Rejection):
-                reject(got.reason, got.detail, at=got.frame, score=got.bevel_score)
-                continue
-            t_cert, onset, window, profiles, score, quick = got
-        else:
-            # a mark: the first frame where it shows, and shows in the next frame too
-            # (or at twice the threshold)
-            scores = np.array([bevel_score(session.frame(int(i)), ref, centre, s,
-                                           offset_mm=cfg.bevel_offset_mm,
-                                           direction_deg=cfg.bevel_direction_deg,
-                                           length_mm=cfg.bevel_length_mm) for i in cand])
-            seen = scores > bevel_threshold
-            strong = scores > 2 * bevel_threshold
-            firm = seen & (np.append(seen[1:], False) | strong)
-            if not firm.any():
-                reject("bevel never seen", f"no frame of the press shows a mark "
-                       f"{cfg.bevel_offset_mm:g} mm from the indenter at "
-                       f"{cfg.bevel_direction_deg:g} deg (best signal-to-noise ratio "
-                       f"{scores.max():.1f}; the rule: two consecutive frames above "
-                       f"{bevel_threshold:g}, or one above {2 * bevel_threshold:g})",
-                       score=float(scores.max()))
-                continue
-            onset = int(cand[np.argmax(firm)])
-            score = float(scores[np.argmax(firm)])
-            t_cert = float(times[onset])
-        hold_mid = _window_middle(session, t_cert, offset, half, t_hold_end, period)
-        if isinstance(hold_mid, tuple):
-            reject(*hold_mid, at=onset, score=score)
-            continue
-        try:
-            fw = force_window(session.force_times_s, session.forces_n,
-                              t_cert + offset + hold_mid, cfg.window_samples)
-        except InputError as exc:
-            reject("force window outside the log", str(exc), at=onset, score=score)
-            continue
-        if fw.tangential_ratio > MAX_TANGENTIAL_RATIO:
-            reject("misaligned", f"|Fxy| / Fz = {fw.tangential_ratio:.3f} > "
-                   f"{MAX_TANGENTIAL_RATIO:g}", at=onset, score=score)
-            continue
-        press = CertifiedPress(
-            press=k, indenter=indenter, w0_mm=float(cfg.depths_mm[indenter]), frame=onset,
-            t_frame_s=t_cert, footprint=fp, x_mm=float(x_mm), y_mm=float(y_mm),
-            force_n=fw.fz_n, force_std_n=fw.fz_std_n, force_sem_n=fw.fz_sem_n,
-            fx_n=fw.fx_n, fy_n=fw.fy_n,
-            tangential_ratio=fw.tangential_ratio, time_s=t_cert - float(times[0]),
-            hold_s=hold_mid,
-            wait_s=wait, bevel_score=score)
-        if vernier:
-            pending.append({"press": press, "profiles": profiles, "window": window,
-                            "quick": quick, "t0": t0, "centre": centre})
-        else:
-            certified.append(replace(press, rule="onset", closure_mm=0.0,
-                                     closure_std_mm=_onset_std(session, run, onset, offset,
-                                                               period,
-                                                               float(cfg.depths_mm[indenter]))))
+            certified.append(got)
     optics = None
     if pending:
-        read, faint, optics = _read_vernier_presses(pending, geom, s)
+        read, faint, optics = _read_vernier_presses(pending, geom, cfg.mm_per_px)
         certified.extend(read)
         rejected.extend(faint)
         rejected.sort(key=lambda r: r.press)
@@ -481,6 +358,215 @@ def certify_session(session, *, min_contact_px: int = 200, bevel_threshold: floa
     return Certification(presses=certified, rejected=rejected, clock=clock,
                          clock_offset_s=offset, clock_source=source, noise_sigma=sigma,
                          contact_area_px=area, warnings=warnings, bevel_optics=optics)
+
+
+def _contact_areas(session, sigma: float, min_contact_px: int, progress: Callable | None,
+                   contact_area_px: np.ndarray | None) -> np.ndarray:
+    """Step 1: the contact area of every frame, px, (F,) int64 (or the given one, checked)."""
+    nf = session.n_frames
+    area = np.zeros(nf, np.int64)
+    if contact_area_px is not None:
+        if np.shape(contact_area_px) != (nf,):
+            raise InputError(f"contact_area_px has {np.size(contact_area_px)} values for {nf} "
+                             "frames")
+        area[:] = contact_area_px
+        return area
+    ref = session.reference
+
+    def contact_px(i: int) -> int:
+        return int(np.count_nonzero(contact_mask(session.frame(i), ref, sigma=sigma)))
+
+    # OpenCV decodes and filters outside the GIL: threads use every core
+    with ThreadPoolExecutor(max_workers=max(1, min(4, os.cpu_count() or 1))) as pool:
+        it = pool.map(contact_px, range(nf))
+        for i, n_px in enumerate(it if progress is None else progress(_Sized(it, nf))):
+            area[i] = n_px
+    return area
+
+
+@dataclass(frozen=True)
+class _PressContext:
+    """What every press of a session shares (step 3 of the module docstring)."""
+
+    session: object
+    sigma: float
+    area: np.ndarray
+    period: float
+    offset: float
+    geom: BevelGeometry
+    n_runs: int
+    bevel_threshold: float
+
+    @property
+    def vernier(self) -> bool:
+        return self.geom.tan_theta > 0
+
+    @property
+    def reach(self) -> float:
+        """Vernier: how far from the footprint's edge the bevel's band is looked for, px."""
+        if not self.vernier:
+            return 0.0
+        s = self.session.config.mm_per_px
+        return min(MAX_CLOSURE_MM / self.geom.tan_theta / s, 120.0) + 8.0
+
+    @property
+    def half(self) -> float:
+        """Half the force window, s."""
+        cfg = self.session.config
+        return cfg.window_samples / (2.0 * cfg.rate_hz)
+
+
+class _Reject(Exception):
+    """A check of one press failed: ``(reason, detail)``, the frame and score it was seen at."""
+
+    def __init__(self, reason: str, detail: str, at: int | None = None,
+                 score: float = float("nan"), centre: tuple[float, float] | None = None
+                 ) -> None:
+        super().__init__(reason)
+        self.reason, self.detail, self.at, self.score = reason, detail, at, score
+        self.centre = centre
+
+
+def _centre(fp: Footprint | None) -> tuple[float, float] | None:
+    return None if fp is None else (float(fp.center_px[0]), float(fp.center_px[1]))
+
+
+def _certify_press(ctx: _PressContext, k: int, run: np.ndarray, wait_s: float
+                   ) -> CertifiedPress | dict | Rejection:
+    """Step 3 for one press (the run of frames `run`): a certified press, a vernier press
+    waiting for the session's flank colours (a dict), or its rejection."""
+    session = ctx.session
+    times = session.frame_times_s
+    t0 = float(times[run[0]])
+    peak = int(run[np.argmax(ctx.area[run])])
+    fp = None
+    try:
+        fp = _press_footprint(ctx, peak)
+        return _press_reading(ctx, k, run, peak, fp, wait_s)
+    except _Reject as r:
+        return Rejection(press=k, reason=r.reason, detail=r.detail, t_frame_s=t0,
+                         frame=peak if r.at is None else r.at, bevel_score=r.score,
+                         centre_px=_centre(fp) if r.centre is None else r.centre)
+
+
+def _press_footprint(ctx: _PressContext, peak: int) -> Footprint:
+    """The footprint at the press's deepest frame; raises :class:`_Reject` for saturation,
+    a cut or missing footprint, a wrong radius."""
+    session = ctx.session
+    cfg = session.config
+    frame = session.frame(peak)
+    mask = contact_mask(frame, session.reference, sigma=ctx.sigma)
+    sat = _saturated(frame, session.reference, mask)
+    fp = footprint_from_frame(mask, cfg.mm_per_px, indenter_radius_mm=cfg.indenter_radius_mm)
+
+    def fail(reason: str, detail: str) -> _Reject:
+        return _Reject(reason, detail, centre=_centre(fp))
+
+    if sat > MAX_SATURATED_FRACTION:
+        raise fail("saturated frames", f"{100 * sat:.1f}% of the pixels of the contact are "
+                   "saturated (a channel at 255 or all at 0) and are not in the reference")
+    edge_touch = bool(mask[0].any() or mask[-1].any() or mask[:, 0].any() or mask[:, -1].any())
+    if fp is None or fp.cut_by_edge:
+        if edge_touch or (fp is not None and fp.cut_by_edge):
+            raise fail("footprint cut by the pad edge",
+                       "the contact reaches the edge of the sensed area")
+        raise fail("no footprint", "the contact encloses no flat region")
+    if not fp.radius_ok:
+        raise fail("footprint radius", f"fitted radius {fp.radius_mm:.3f} mm, indenter "
+                   f"{cfg.indenter_radius_mm:g} mm")
+    return fp
+
+
+def _press_indenter(ctx: _PressContext, k: int, x_mm: float, y_mm: float) -> int:
+    """Which indenter made press `k`, from ``presses.csv``: row by row when it lists as many
+    presses as the frames show, else the nearest commanded position."""
+    commanded = ctx.session.presses
+    if commanded is None:
+        raise _Reject("unknown indenter", "no presses.csv tells which indenter was pressed")
+    if len(commanded["press"]) == ctx.n_runs:
+        j = k
+    else:
+        j = int(np.argmin(np.hypot(commanded["x_mm"] - x_mm, commanded["y_mm"] - y_mm)))
+    indenter = int(commanded["indenter"][j])
+    if indenter < 0:
+        raise _Reject("unknown indenter", "no presses.csv tells which indenter was pressed")
+    return indenter
+
+
+def _mark_onset(ctx: _PressContext, centre: tuple[float, float], cand: np.ndarray
+                ) -> tuple[int, float]:
+    """A bevel mark with no vernier: the first frame of `cand` where it shows and shows in
+    the next frame too (or at twice the threshold), ``(frame, score)``."""
+    session = ctx.session
+    cfg = session.config
+    thr = ctx.bevel_threshold
+    scores = np.array([bevel_score(session.frame(int(i)), session.reference, centre,
+                                   cfg.mm_per_px, offset_mm=cfg.bevel_offset_mm,
+                                   direction_deg=cfg.bevel_direction_deg,
+                                   length_mm=cfg.bevel_length_mm) for i in cand])
+    seen = scores > thr
+    firm = seen & (np.append(seen[1:], False) | (scores > 2 * thr))
+    if not firm.any():
+        raise _Reject("bevel never seen", f"no frame of the press shows a mark "
+                      f"{cfg.bevel_offset_mm:g} mm from the indenter at "
+                      f"{cfg.bevel_direction_deg:g} deg (best signal-to-noise ratio "
+                      f"{scores.max():.1f}; the rule: two consecutive frames above "
+                      f"{thr:g}, or one above {2 * thr:g})", score=float(scores.max()))
+    return int(cand[np.argmax(firm)]), float(scores[np.argmax(firm)])
+
+
+def _press_reading(ctx: _PressContext, k: int, run: np.ndarray, peak: int, fp: Footprint,
+                   wait_s: float) -> CertifiedPress | dict:
+    """The indenter, the bevel's onset and the force window of a press with a good
+    footprint; raises :class:`_Reject` at the first check that fails."""
+    session = ctx.session
+    cfg = session.config
+    s = cfg.mm_per_px
+    times = session.frame_times_s
+    hw, hh = (session.shape[1] - 1) / 2, (session.shape[0] - 1) / 2
+    centre = _centre(fp)
+    x_mm, y_mm = (fp.center_px[0] - hw) * s, (fp.center_px[1] - hh) * s
+    indenter = _press_indenter(ctx, k, x_mm, y_mm)
+    # the bevel is looked for in the frames near full contact (the land meets the gel at
+    # the deepest part of the press)
+    area = ctx.area
+    full = run[area[run] >= 0.9 * area[peak]]
+    start = int(np.searchsorted(run, full[0]))
+    cand = run[max(0, start - 1):int(np.searchsorted(run, full[-1])) + 1]
+    t_hold_end = float(times[full[-1]])
+    if ctx.vernier:
+        got = _vernier_onset(session, ctx.geom, centre, s, cand, ctx.reach, ctx.period,
+                             ctx.half, ctx.offset, float(times[run[0]]))
+        if isinstance(got, Rejection):
+            raise _Reject(got.reason, got.detail, at=got.frame, score=got.bevel_score)
+        t_cert, onset, window, profiles, score, quick = got
+    else:
+        onset, score = _mark_onset(ctx, centre, cand)
+        t_cert = float(times[onset])
+    hold_mid = _window_middle(session, t_cert, ctx.offset, ctx.half, t_hold_end, ctx.period)
+    if isinstance(hold_mid, tuple):
+        raise _Reject(*hold_mid, at=onset, score=score)
+    try:
+        fw = force_window(session.force_times_s, session.forces_n,
+                          t_cert + ctx.offset + hold_mid, cfg.window_samples)
+    except InputError as exc:
+        raise _Reject("force window outside the log", str(exc), at=onset, score=score) from None
+    if fw.tangential_ratio > MAX_TANGENTIAL_RATIO:
+        raise _Reject("misaligned", f"|Fxy| / Fz = {fw.tangential_ratio:.3f} > "
+                      f"{MAX_TANGENTIAL_RATIO:g}", at=onset, score=score)
+    w0 = float(cfg.depths_mm[indenter])
+    press = CertifiedPress(
+        press=k, indenter=indenter, w0_mm=w0, frame=onset,
+        t_frame_s=t_cert, footprint=fp, x_mm=float(x_mm), y_mm=float(y_mm),
+        force_n=fw.fz_n, force_std_n=fw.fz_std_n, force_sem_n=fw.fz_sem_n,
+        fx_n=fw.fx_n, fy_n=fw.fy_n,
+        tangential_ratio=fw.tangential_ratio, time_s=t_cert - float(times[0]),
+        hold_s=hold_mid, wait_s=wait_s, bevel_score=score)
+    if ctx.vernier:
+        return {"press": press, "profiles": profiles, "window": window, "quick": quick,
+                "t0": float(times[run[0]]), "centre": centre}
+    return replace(press, rule="onset", closure_mm=0.0,
+                   closure_std_mm=_onset_std(session, run, onset, ctx.offset, ctx.period, w0))
 
 
 def _onset_std(session, run: np.ndarray, onset: int, offset: float, period: float,
