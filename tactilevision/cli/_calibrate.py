@@ -110,6 +110,10 @@ def _write_rejected(path: Path, rejected) -> None:
 def result_dict(cal) -> dict:
     """The ``fit.json`` object: the ``fit --json`` keys, then the session's.
 
+    The session's keys include ``sensor_name`` (``[sensor] name``) and
+    ``session_date`` (``[session] date`` as an ISO string, or None), which
+    ``tactilevision history`` reads.
+
     Parameters
     ----------
     cal : SessionCalibration
@@ -123,6 +127,9 @@ def result_dict(cal) -> dict:
     std = cal.depth_std_mm
     obj.update({
         "session": str(cal.session.path),
+        "sensor_name": cal.session.config.sensor_name,
+        "session_date": (cal.session.config.date.isoformat()
+                         if cal.session.config.date is not None else None),
         "depth_rule": cal.depth_rule,
         "nu_rounds": cal.nu_rounds,
         "depth_std_median_mm": float(np.median(std)) if len(std) else None,

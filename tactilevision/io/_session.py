@@ -10,6 +10,7 @@ headers, but their pixels are read only on demand (:meth:`Session.frame`).
 
 from __future__ import annotations
 
+import datetime
 import math
 import tomllib
 from dataclasses import dataclass, field
@@ -46,6 +47,11 @@ class SessionConfig:
         Forces' t_s minus frames' t_s when known; None to estimate it.
     window_samples : int
         F/T samples averaged per certified press.
+    date : datetime.date or None
+        The day of the session (optional key ``[session] date``, a TOML date
+        such as ``2026-11-02``); None when not given. ``calibrate`` copies it
+        into ``fit.json`` (``session_date``) and ``history`` orders a gel's
+        calibrations by it.
     window_at : {'start', 'end'}
         Where in each hold the force window lies (optional key of
         ``[force_sensor]``, default 'start'): from the hold's start, or
@@ -91,6 +97,7 @@ class SessionConfig:
     bulge_correction: bool = True
     bevel_force_correction: bool = True
     window_at: str = "start"
+    date: datetime.date | None = None
 
 
 #: The places of the force window in a hold (``[force_sensor] window_at``).
@@ -189,6 +196,7 @@ KNOWN_KEYS: dict[str, tuple[str, ...]] = {
                     "bevel_length_mm", "bulge_correction", "bevel_force_correction"),
     "force_sensor": ("rate_hz", "clock_offset_s", "window_samples", "window_at"),
     "optics": ("calibration",),
+    "session": ("date",),
 }
 
 
@@ -277,7 +285,31 @@ def _read_config(folder: Path) -> SessionConfig:
         bulge_correction=_toml_bool(doc, toml, "gauge_block", "bulge_correction", default=True),
         bevel_force_correction=_toml_bool(doc, toml, "gauge_block", "bevel_force_correction",
                                           default=True),
+        date=_session_date(doc, toml),
     )
+
+
+def _session_date(doc: dict, toml: Path) -> datetime.date | None:
+    """``[session] date``: a TOML date (``2026-11-02``), or an ISO date string; None if absent.
+
+    A TOML date-time keeps its day. Anything else is refused naming the key.
+    """
+    section = doc.get("session", {})
+    if not isinstance(section, dict):
+        raise InputError(f"{toml}: [session] must be a table")
+    if "date" not in section:
+        return None
+    v = section["date"]
+    if isinstance(v, datetime.datetime):
+        return v.date()
+    if isinstance(v, datetime.date):
+        return v
+    if isinstance(v, str):
+        try:
+            return datetime.date.fromisoformat(v.strip())
+        except ValueError:
+            pass
+    raise InputError(f"{toml}: [session] date must be a date such as 2026-11-02, got {v!r}")
 
 
 #: The fastest F/T log read (commercial six-axis sensors stream at up to about 7 kHz); the
