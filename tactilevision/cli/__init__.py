@@ -13,11 +13,22 @@ import sys
 from collections.abc import Sequence
 
 from .. import InputError
-from . import _calibrate, _diagnose, _fem, _fit, _forces, _optics, _reconstruct, _validate
+from . import (
+    _calibrate,
+    _diagnose,
+    _fem,
+    _fit,
+    _forces,
+    _history,
+    _optics,
+    _reconstruct,
+    _validate,
+)
 
 __all__ = ["build_parser", "main"]
 
-_COMMANDS = (_calibrate, _reconstruct, _optics, _fit, _diagnose, _validate, _fem, _forces)
+_COMMANDS = (_calibrate, _reconstruct, _optics, _fit, _diagnose, _validate, _fem, _forces,
+             _history)
 
 
 def build_parser() -> argparse.ArgumentParser:
