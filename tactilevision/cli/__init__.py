@@ -14,6 +14,7 @@ from collections.abc import Sequence
 
 from .. import InputError
 from . import (
+    _batch,
     _calibrate,
     _diagnose,
     _fem,
@@ -28,7 +29,7 @@ from . import (
 __all__ = ["build_parser", "main"]
 
 _COMMANDS = (_calibrate, _reconstruct, _optics, _fit, _diagnose, _validate, _fem, _forces,
-             _history)
+             _history, _batch)
 
 
 def build_parser() -> argparse.ArgumentParser:

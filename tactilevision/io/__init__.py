@@ -37,3 +37,8 @@ __all__ += ["COLUMN_ORDER", "REQUIRED_COLUMNS", "Measurements", "read_holds",
 from ._session import Session, SessionConfig, read_session  # noqa: E402
 
 __all__ += ["Session", "SessionConfig", "read_session"]
+
+# video files (batch, reconstruct): names appended below
+from ._video import VIDEO_SUFFIXES, VideoFrames, is_video  # noqa: E402
+
+__all__ += ["VIDEO_SUFFIXES", "VideoFrames", "is_video"]

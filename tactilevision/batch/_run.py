@@ -1,0 +1,321 @@
+"""Run a batch on Dask: many inputs, each cut into chunks of frames, on many workers."""
+
+from __future__ import annotations
+
+import os
+import sys
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from .._checks import InputError
+from ._sources import FrameSource, open_source
+from ._store import InputStore, write_json_atomic
+from ._tasks import BatchSettings, calibrate_task, process_chunk
+
+__all__ = ["BatchReport", "InputOutcome", "run_batch"]
+
+
+@dataclass
+class InputOutcome:
+    """What became of one input of a batch.
+
+    Attributes
+    ----------
+    input : str
+    name : str
+        Its outputs' stem in the output folder.
+    status : {'done', 'already complete', 'failed'}
+    error : str
+        Why it failed ('' otherwise).
+    n_frames : int
+    chunks_run, chunks_skipped : int
+        Tasks computed now, and tasks an earlier run had completed.
+    """
+
+    input: str
+    name: str
+    status: str = "pending"
+    error: str = ""
+    n_frames: int = 0
+    chunks_run: int = 0
+    chunks_skipped: int = 0
+
+
+@dataclass
+class BatchReport:
+    """The outcome of :func:`run_batch` (also written as ``OUT/batch.json``).
+
+    Attributes
+    ----------
+    kind : str
+    out : Path
+    inputs : list of InputOutcome
+    workers : int
+        Worker processes of the cluster.
+    seconds : float
+    receipts : list of dict
+        Every task's receipt (:func:`process_chunk`): start, stop, seconds,
+        pid, built.
+    """
+
+    kind: str
+    out: Path
+    inputs: list[InputOutcome]
+    workers: int
+    seconds: float = 0.0
+    receipts: list[dict] = field(default_factory=list)
+
+    @property
+    def failed(self) -> list[InputOutcome]:
+        return [o for o in self.inputs if o.status == "failed"]
+
+    @property
+    def frames_run(self) -> int:
+        return sum(r["stop"] - r["start"] for r in self.receipts if "stop" in r)
+
+    def to_json_dict(self) -> dict:
+        return {"kind": self.kind, "out": str(self.out), "workers": self.workers,
+                "seconds": round(self.seconds, 3), "frames_run": self.frames_run,
+                "inputs": [vars(o) for o in self.inputs]}
+
+
+def _names(paths: Sequence[Path]) -> list[str]:
+    """Unique output stems: the file or folder stem, with its parent's name if needed."""
+    stems = [p.stem if p.is_file() else p.name for p in paths]
+    out = []
+    for p, s in zip(paths, stems, strict=True):
+        name = s if stems.count(s) == 1 else f"{p.resolve().parent.name}_{s}"
+        while name in out:
+            name += "_"
+        out.append(name)
+    return out
+
+
+def _client(scheduler: str | None, n_workers: int | None):
+    """A client of the given scheduler, or of a local cluster of processes (one per core)."""
+    try:
+        from distributed import Client, LocalCluster
+    except ModuleNotFoundError as exc:  # pragma: no cover - depends on the install
+        raise InputError("batch needs Dask: pip install 'tactilevision[dask]'") from exc
+    if scheduler:
+        try:
+            return Client(scheduler, timeout="10s"), None
+        except OSError as exc:
+            raise InputError(f"no Dask scheduler answers at {scheduler} ({exc})") from None
+    import logging
+
+    n = n_workers or os.cpu_count() or 1
+    cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
+                           dashboard_address=None, silence_logs=logging.ERROR)
+    return Client(cluster), cluster
+
+
+def run_batch(kind: str, inputs: Sequence[str | Path], out: str | Path, *,
+              settings: BatchSettings | None = None, scheduler: str | None = None,
+              client=None, n_workers: int | None = None, overwrite: bool = False,
+              progress: bool = True, on_receipt: Callable[[dict], None] | None = None
+              ) -> BatchReport:
+    """Process many frame folders, videos or sessions on a Dask cluster.
+
+    Parameters
+    ----------
+    kind : {'reconstruct', 'forces', 'calibrate'}
+        ``reconstruct``: height maps; ``forces``: height and force maps (both:
+        inputs are frame folders or videos, cut into chunks of
+        ``settings.chunk_frames``); ``calibrate``: each input a session
+        folder, calibrated into ``OUT/NAME/`` as ``tactilevision calibrate``.
+    inputs : sequence of str or Path
+    out : str or Path
+        Output folder (created): ``NAME.zarr`` and ``NAME.parquet`` per input
+        (``tactilevision.batch._store`` gives the layout), ``batch.json``.
+    settings : BatchSettings
+        Required for ``reconstruct`` and ``forces``.
+    scheduler : str, optional
+        Address of a running ``dask.distributed`` scheduler
+        (``tcp://host:8786``); default: a local cluster of worker processes.
+    client : distributed.Client, optional
+        An existing client (the caller keeps it open).
+    n_workers : int, optional
+        Workers of the local cluster (default: one per core).
+    overwrite : bool, default False
+        Start inputs again that an earlier run wrote with other settings.
+    progress : bool, default True
+        A progress bar on standard error (frames, or sessions).
+    on_receipt : callable, optional
+        Called with each task's receipt as it arrives.
+
+    Returns
+    -------
+    BatchReport
+        A broken input is listed there with its error (status 'failed'); the
+        others go on. A rerun skips the inputs and chunks already complete.
+
+    Raises
+    ------
+    InputError
+        For an unknown `kind`, missing settings, an output folder that is a
+        file, or a scheduler that does not answer.
+    KeyboardInterrupt
+        On Ctrl-C: the chunks already written stay, and a rerun resumes.
+    """
+    if kind not in ("reconstruct", "forces", "calibrate"):
+        raise InputError(f"unknown batch kind {kind!r}: reconstruct, forces or calibrate")
+    if kind != "calibrate" and (settings is None or settings.kind != kind):
+        raise InputError(f"batch {kind} needs BatchSettings(kind={kind!r}, ...)")
+    if settings is not None and settings.chunk_frames < 1:
+        raise InputError(f"chunk_frames must be >= 1, got {settings.chunk_frames}")
+    out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise InputError(f"--out {out} is a file, not a folder")
+    out.mkdir(parents=True, exist_ok=True)
+    paths = [Path(p) for p in inputs]
+    if not paths:
+        raise InputError("no inputs given")
+    outcomes = [InputOutcome(str(p), n) for p, n in zip(paths, _names(paths), strict=True)]
+    t0 = time.perf_counter()
+    own_cluster = None
+    if client is None:
+        client, own_cluster = _client(scheduler, n_workers)
+    report = BatchReport(kind=kind, out=out, inputs=outcomes,
+                         workers=len(client.scheduler_info().get("workers", {})))
+    try:
+        if kind == "calibrate":
+            _run_sessions(client, paths, out, outcomes, report, progress, on_receipt)
+        else:
+            _run_frames(client, paths, out, settings, outcomes, report, overwrite, progress,
+                        on_receipt)
+    finally:
+        report.seconds = time.perf_counter() - t0
+        write_json_atomic(out / "batch.json", report.to_json_dict())
+        if own_cluster is not None:
+            client.close()
+            own_cluster.close()
+    return report
+
+
+def _bar(progress: bool, total: int, unit: str, desc: str):
+    if not progress:
+        return None
+    from tqdm.auto import tqdm
+
+    return tqdm(total=total, unit=unit, desc=desc, file=sys.stderr, mininterval=0.5)
+
+
+def _run_frames(client, paths, out, settings, outcomes, report, overwrite, progress,
+                on_receipt) -> None:
+    from distributed import as_completed
+
+    futures = {}
+    stores: dict[str, tuple[InputStore, FrameSource]] = {}
+    total = 0
+    for p, o in zip(paths, outcomes, strict=True):
+        try:
+            src = open_source(p)
+            ref = settings.reference or (str(src.reference) if src.reference else None)
+            store = InputStore(out, o.name)
+            shape = _force_shape(settings, src) if settings.kind == "forces" else None
+            attrs = {"settings": settings.to_json(), "source": str(p),
+                     "reference": ref or "the calibration's", "units": {"height_mm": "mm",
+                     "force_n": "N (Fx, Fy, Fz on the gel)", "pressure_kpa": "kPa"}}
+            o.n_frames = src.n_frames
+            if store.prepare(n_frames=src.n_frames, shape=src.shape,
+                             chunk_frames=settings.chunk_frames, force_shape=shape,
+                             attrs=attrs, overwrite=overwrite):
+                o.status = "already complete"
+                continue
+        except InputError as exc:
+            o.status, o.error = "failed", str(exc)
+            continue
+        stores[o.name] = (store, src)
+        done = store.done_chunks()
+        for start in range(0, src.n_frames, settings.chunk_frames):
+            if start in done:
+                o.chunks_skipped += 1
+                continue
+            stop = min(start + settings.chunk_frames, src.n_frames)
+            fut = client.submit(process_chunk, settings, src, ref, store, start, stop,
+                                retries=1, pure=False)
+            futures[fut] = o
+            total += stop - start
+    bar = _bar(progress, total, "frame", f"batch {settings.kind}")
+    try:
+        for fut in as_completed(list(futures)):
+            o = futures.pop(fut)
+            if o.status == "failed":
+                continue
+            try:
+                receipt = fut.result()
+            except InputError as exc:
+                o.status, o.error = "failed", str(exc)
+                continue
+            except Exception as exc:           # a worker's own failure: listed, go on
+                o.status, o.error = "failed", f"{type(exc).__name__}: {exc}"
+                continue
+            receipt["input"] = o.name
+            report.receipts.append(receipt)
+            o.chunks_run += 1
+            if bar is not None:
+                bar.update(receipt["stop"] - receipt["start"])
+            if on_receipt is not None:
+                on_receipt(receipt)
+    except KeyboardInterrupt:
+        client.cancel(list(futures))
+        raise
+    finally:
+        if bar is not None:
+            bar.close()
+    for o in outcomes:
+        if o.name in stores and o.status == "pending":
+            store, src = stores[o.name]
+            try:
+                store.finish(src.n_frames)
+                o.status = "done"
+            except InputError as exc:
+                o.status, o.error = "failed", str(exc)
+
+
+def _force_shape(settings: BatchSettings, src: FrameSource) -> tuple[int, int]:
+    """Rows and columns of the force map: the image's, or the FEM grid's (ny, nx)."""
+    if settings.method == "spectral":
+        return src.shape
+    nx, ny = settings.grid
+    return (int(ny), int(nx))
+
+
+def _run_sessions(client, paths, out, outcomes, report, progress, on_receipt) -> None:
+    from distributed import as_completed
+
+    futures = {}
+    for p, o in zip(paths, outcomes, strict=True):
+        dst = out / o.name
+        if (dst / "fit.json").is_file():       # calibrate writes its folder whole, or not
+            o.status = "already complete"
+            continue
+        if not (p / "session.toml").is_file():
+            o.status, o.error = "failed", f"{p} is not a session folder (no session.toml)"
+            continue
+        futures[client.submit(calibrate_task, str(p), str(dst), retries=1, pure=False)] = o
+    bar = _bar(progress, len(futures), "session", "batch calibrate")
+    try:
+        for fut in as_completed(list(futures)):
+            o = futures.pop(fut)
+            try:
+                summary = fut.result()
+            except Exception as exc:
+                o.status, o.error = "failed", str(exc)
+            else:
+                o.status = "done"
+                o.chunks_run = 1
+                report.receipts.append({"input": o.name, **summary})
+                if on_receipt is not None:
+                    on_receipt(summary)
+            if bar is not None:
+                bar.update(1)
+    except KeyboardInterrupt:
+        client.cancel(list(futures))
+        raise
+    finally:
+        if bar is not None:
+            bar.close()

@@ -1,0 +1,148 @@
+"""Where a batch writes: one Zarr group and one Parquet table per input, resumable.
+
+Layout for an input named ``NAME`` in the output folder ``OUT``::
+
+    OUT/NAME.zarr/            height_mm (N, H, W) float32 [, force_n (N, rows, cols, 3),
+                              pressure_kpa (N, rows, cols)], one Zarr chunk per task
+    OUT/NAME.parts/part-SSSSSSSS.parquet   a task's rows, written last (the task's receipt)
+    OUT/NAME.parquet          every frame's row, assembled when all parts are in
+
+A task writes its Zarr chunk, then its part (to a temporary name, renamed into
+place): a part on disk means its frames are complete; a Zarr chunk without its
+part is written again on resume. ``NAME.parquet`` and the group's
+``complete`` attribute are written last of all.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+from pathlib import Path
+
+import numpy as np
+
+from .._checks import InputError
+
+__all__ = ["InputStore"]
+
+
+def _atomic_write_parquet(table, path: Path) -> None:
+    import pyarrow.parquet as pq
+
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    pq.write_table(table, tmp)
+    os.replace(tmp, path)
+
+
+class InputStore:
+    """The Zarr group and Parquet parts of one batch input.
+
+    Parameters
+    ----------
+    out : Path
+        The batch's output folder.
+    name : str
+        The input's name (its file or folder stem, made unique).
+    """
+
+    def __init__(self, out: str | Path, name: str) -> None:
+        self.out = Path(out)
+        self.name = name
+        self.zarr_path = self.out / f"{name}.zarr"
+        self.parts = self.out / f"{name}.parts"
+        self.table_path = self.out / f"{name}.parquet"
+
+    # ------------------------------------------------------------------ client side
+    def prepare(self, *, n_frames: int, shape: tuple[int, int], chunk_frames: int,
+                force_shape: tuple[int, int] | None, attrs: dict, overwrite: bool) -> bool:
+        """Create the group, or check one from an earlier run; True when already complete.
+
+        Raises
+        ------
+        InputError
+            If an earlier run wrote this input with other settings or another
+            frame count (and `overwrite` is False).
+        """
+        import zarr
+
+        if self.zarr_path.exists() and not overwrite:
+            g = zarr.open_group(str(self.zarr_path), mode="r")
+            old = dict(g.attrs)
+            if old.get("settings") != attrs["settings"] or old.get("n_frames") != n_frames:
+                raise InputError(f"{self.zarr_path} was written by a batch with other settings "
+                                 "or frames: give --overwrite, or another --out")
+            if old.get("complete") and self.table_path.is_file():
+                return True
+            self.parts.mkdir(parents=True, exist_ok=True)
+            return False
+        for p in (self.zarr_path, self.parts):
+            if p.exists():
+                shutil.rmtree(p)
+        self.table_path.unlink(missing_ok=True)
+        g = zarr.open_group(str(self.zarr_path), mode="w")
+        h, w = shape
+        g.create_array("height_mm", shape=(n_frames, h, w), chunks=(chunk_frames, h, w),
+                       dtype="float32", fill_value=np.nan)
+        if force_shape is not None:
+            r, c = force_shape
+            g.create_array("force_n", shape=(n_frames, r, c, 3), chunks=(chunk_frames, r, c, 3),
+                           dtype="float32", fill_value=np.nan)
+            g.create_array("pressure_kpa", shape=(n_frames, r, c),
+                           chunks=(chunk_frames, r, c), dtype="float32", fill_value=np.nan)
+        g.attrs.update({**attrs, "n_frames": n_frames, "complete": False})
+        self.parts.mkdir(parents=True, exist_ok=True)
+        return False
+
+    def done_chunks(self) -> set[int]:
+        """First frames of the tasks whose part is on disk (their frames are complete)."""
+        if not self.parts.is_dir():
+            return set()
+        return {int(p.stem.split("-")[1]) for p in self.parts.glob("part-*.parquet")}
+
+    def finish(self, n_frames: int) -> int:
+        """Assemble the parts into ``NAME.parquet`` and mark the group complete.
+
+        Returns
+        -------
+        n_rows : int
+
+        Raises
+        ------
+        InputError
+            If the parts do not hold every frame exactly once.
+        """
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+        import zarr
+
+        parts = sorted(self.parts.glob("part-*.parquet"))
+        table = pa.concat_tables([pq.read_table(p) for p in parts]).sort_by("frame")
+        frames = table.column("frame").to_numpy()
+        if frames.size != n_frames or not np.array_equal(frames, np.arange(n_frames)):
+            raise InputError(f"{self.parts}: the parts hold {frames.size} rows for "
+                             f"{n_frames} frames (a frame lost or written twice)")
+        _atomic_write_parquet(table, self.table_path)
+        g = zarr.open_group(str(self.zarr_path), mode="r+")
+        g.attrs["complete"] = True
+        shutil.rmtree(self.parts)
+        return int(frames.size)
+
+    # ------------------------------------------------------------------ worker side
+    def write_chunk(self, start: int, arrays: dict[str, np.ndarray], rows: dict[str, list]
+                    ) -> None:
+        """Write a task's frames into the group, then its part (the task's receipt)."""
+        import pyarrow as pa
+        import zarr
+
+        g = zarr.open_group(str(self.zarr_path), mode="r+")
+        for key, value in arrays.items():
+            g[key][start:start + value.shape[0]] = value
+        _atomic_write_parquet(pa.table(rows), self.parts / f"part-{start:08d}.parquet")
+
+
+def write_json_atomic(path: Path, obj: dict) -> None:
+    """Write a JSON file through a temporary name (a reader never sees half of it)."""
+    tmp = path.with_name(f".{path.name}.tmp")
+    tmp.write_text(json.dumps(obj, indent=2, default=str))
+    os.replace(tmp, path)

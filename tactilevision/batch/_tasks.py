@@ -1,0 +1,209 @@
+"""The work of one batch task, run in a Dask worker: a chunk of frames, or a session.
+
+A worker process builds its reconstructor and force estimator once
+(:func:`worker_tools`, cached per process) and keeps them for every chunk it
+is given; each chunk's results go straight to disk (:class:`InputStore`), so
+only a few numbers travel back to the client.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import json
+import os
+import time
+from dataclasses import asdict, dataclass
+from functools import lru_cache
+from pathlib import Path
+
+import numpy as np
+
+from .._checks import InputError
+from ._sources import FrameSource
+from ._store import InputStore
+
+__all__ = ["BatchSettings", "calibrate_task", "process_chunk", "worker_tools"]
+
+
+@dataclass(frozen=True)
+class BatchSettings:
+    """What every chunk of a ``reconstruct`` or ``forces`` batch is processed with.
+
+    Attributes
+    ----------
+    kind : {'reconstruct', 'forces'}
+    calibration : str
+        Photometric calibration file (.npz).
+    reference : str or None
+        One no-contact frame for every input; None: each input's own
+        (:attr:`FrameSource.reference`), else the calibration's.
+    level : {'median', 'far_field', 'contact'}
+        The height's zero, as ``tactilevision reconstruct --level``.
+    flat_reference : bool
+    engine : {'table', 'onnx'}
+        The reconstructor's engine (:class:`~tactilevision.optics.DepthReconstructor`):
+        'table' tabulates an MLP calibration once per worker (seconds to tens of
+        seconds), then runs fastest; 'onnx' starts at once.
+    chunk_frames : int
+        Frames per task and per Zarr chunk.
+    E_mpa, nu, thickness_mm : float or None
+        Forces: the gel (MPa, -, mm); None for ``reconstruct``.
+    beta : float
+        Forces: eq. (5)'s stiffening.
+    method : {'spectral', 'fem'}
+    grid : (int, int)
+    contact : {'footprint', 'field'}
+    threshold_mm : float
+    """
+
+    kind: str
+    calibration: str
+    reference: str | None = None
+    level: str = "median"
+    flat_reference: bool = False
+    engine: str = "table"
+    chunk_frames: int = 32
+    # None, not NaN, when unused: the settings key each worker's cache (NaN != NaN)
+    E_mpa: float | None = None
+    nu: float | None = None
+    thickness_mm: float | None = None
+    beta: float = 0.0
+    method: str = "spectral"
+    grid: tuple[int, int] = (40, 30)
+    contact: str = "footprint"
+    threshold_mm: float = 0.02
+
+    def to_json(self) -> str:
+        """The settings as canonical JSON (stored with the outputs, compared on resume)."""
+        return json.dumps(asdict(self), sort_keys=True)
+
+
+@lru_cache(maxsize=4)
+def worker_tools(settings: BatchSettings, reference: str | None):
+    """The reconstructor and force estimator of a worker process, built on first use.
+
+    Returns
+    -------
+    calibration : PhotometricCalibration
+    reconstructor : DepthReconstructor
+    estimator : ForceEstimator or None
+        None for ``kind='reconstruct'``.
+    """
+    import cv2
+
+    from ..fem import ForceEstimator
+    from ..io import read_reference
+    from ..optics import DepthReconstructor, PhotometricCalibration
+
+    cv2.setNumThreads(1)                # one task per core: the cores are the workers'
+    cal = PhotometricCalibration.load(settings.calibration)
+    ref = read_reference(reference, cal.shape) if reference else "calibration"
+    recon = DepthReconstructor(
+        cal, reference=ref, boundary="contact" if settings.level == "contact" else "neumann",
+        level="median" if settings.level == "contact" else settings.level,
+        flat_reference=settings.flat_reference, engine=settings.engine)
+    est = None
+    if settings.kind == "forces":
+        est = ForceEstimator(cal.shape, cal.mm_per_px, thickness_mm=settings.thickness_mm,
+                             E_mpa=settings.E_mpa, nu=settings.nu, grid=tuple(settings.grid),
+                             method=settings.method, contact=settings.contact,
+                             threshold_mm=settings.threshold_mm, beta=settings.beta)
+    return cal, recon, est
+
+
+def process_chunk(settings: BatchSettings, source: FrameSource, reference: str | None,
+                  store: InputStore, start: int, stop: int) -> dict:
+    """Height maps (and force maps) of frames ``start`` to ``stop - 1``, written to disk.
+
+    Parameters
+    ----------
+    settings : BatchSettings
+    source : FrameSource
+    reference : str or None
+        The no-contact frame for this input.
+    store : InputStore
+    start, stop : int
+
+    Returns
+    -------
+    receipt : dict
+        ``start``, ``stop``, ``seconds``, ``pid`` (the worker process) and
+        ``built`` (whether this task built the worker's tools).
+
+    Raises
+    ------
+    InputError
+        For a frame that cannot be read (named).
+    """
+    t0 = time.perf_counter()
+    misses = worker_tools.cache_info().misses
+    cal, recon, est = worker_tools(settings, reference)
+    built = worker_tools.cache_info().misses > misses
+    n = stop - start
+    px_mm2 = cal.mm_per_px ** 2
+    heights = np.empty((n, *source.shape), np.float32)
+    rows: dict[str, list] = {"frame": [], "source_frame": [], "t_s": [], "max_depth_mm": [],
+                             "contact_area_mm2": []}
+    forces = pressure = None
+    if est is not None:
+        rows.update({"fx_n": [], "fy_n": [], "fz_n": [], "max_pressure_kpa": []})
+    for k, frame in enumerate(source.iter(start, stop)):
+        i = start + k
+        h = recon(frame)
+        heights[k] = h
+        rows["frame"].append(i)
+        rows["source_frame"].append(source.frame_name(i))
+        rows["t_s"].append(i / source.fps if np.isfinite(source.fps) else float("nan"))
+        rows["max_depth_mm"].append(float(h.max()))
+        if est is None:
+            rows["contact_area_mm2"].append(float(recon.contact_mask(frame).sum()) * px_mm2)
+            continue
+        fm = est(h)
+        if forces is None:
+            forces = np.empty((n, *fm.forces_n.shape), np.float32)
+            pressure = np.empty((n, *fm.pressure_kpa.shape), np.float32)
+        forces[k] = fm.forces_n
+        pressure[k] = fm.pressure_kpa
+        if fm.contact is None:       # 'field': the colour change above the noise level
+            area = float(recon.contact_mask(frame).sum()) * px_mm2
+        else:                        # the footprint the traction acts on (as `forces`)
+            c = fm.contact
+            area = float(np.sum(fm.forces_n[..., 2][c] / fm.pressure_kpa[c])) * 1e3
+        rows["contact_area_mm2"].append(area)
+        for j, key in enumerate(("fx_n", "fy_n", "fz_n")):
+            rows[key].append(float(fm.total_n[j]))
+        rows["max_pressure_kpa"].append(float(fm.pressure_kpa.max()))
+    arrays = {"height_mm": heights}
+    if forces is not None:
+        arrays.update({"force_n": forces, "pressure_kpa": pressure})
+    store.write_chunk(start, arrays, rows)
+    return {"start": start, "stop": stop, "seconds": time.perf_counter() - t0,
+            "pid": os.getpid(), "built": built}
+
+
+def calibrate_task(session: str, out: str) -> dict:
+    """``tactilevision calibrate SESSION --out OUT`` in a worker.
+
+    Returns
+    -------
+    summary : dict
+        ``E_mpa``, ``nu`` and ``n_presses`` from the written ``fit.json``.
+
+    Raises
+    ------
+    InputError
+        With calibrate's own error message when it refuses the session.
+    """
+    from ..cli import main
+
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+        status = main(["calibrate", session, "--out", out, "--no-progress"])
+    if status != 0:
+        lines = [ln for ln in err.getvalue().splitlines() if "error:" in ln]
+        raise InputError(lines[-1].split("error: ", 1)[1] if lines
+                         else f"calibrate exited with status {status}")
+    fit = json.loads((Path(out) / "fit.json").read_text())
+    return {"E_mpa": fit.get("E_mpa"), "nu": fit.get("nu"),
+            "n_presses": fit.get("n_presses", fit.get("n"))}

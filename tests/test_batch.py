@@ -1,0 +1,310 @@
+"""Batch processing on a real local Dask cluster (worker processes): the results equal
+the single-process ones frame for frame, a broken input is listed and the rest goes on,
+a killed worker loses and duplicates no frame, and an interrupted batch resumes."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tactilevision import InputError
+from tactilevision.cli import main
+
+pytest.importorskip("distributed")
+pytest.importorskip("zarr")
+pytest.importorskip("pyarrow")
+
+import cv2
+import pyarrow.parquet as pq
+import zarr
+from distributed import Client, LocalCluster
+
+from tactilevision.batch import BatchSettings, open_source, run_batch
+from tactilevision.io import VideoFrames, read_reference
+from tactilevision.optics import DepthReconstructor, PhotometricCalibration
+
+BALL = Path(__file__).resolve().parents[1] / "sample_frames" / "gelsight_ball"
+N_VIDEO = 24
+#: frames a quarter of GelSight's size (160 x 120), so that a test's frames cost little
+SIZE = (160, 120)
+
+
+def _small(img: np.ndarray) -> np.ndarray:
+    return cv2.resize(img, SIZE, interpolation=cv2.INTER_AREA)
+
+
+def _write_video(path: Path, frames: list[np.ndarray], fourcc: str, fps: float = 90.0) -> None:
+    h, w = frames[0].shape[:2]
+    vw = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*fourcc), fps, (w, h))
+    for f in frames:
+        vw.write(f)
+    vw.release()
+
+
+def _decoded(path: Path) -> np.ndarray:
+    """Every frame of a video, read sequentially (no seeking)."""
+    cap = cv2.VideoCapture(str(path))
+    out = []
+    while True:
+        ok, f = cap.read()
+        if not ok:
+            break
+        out.append(f)
+    cap.release()
+    return np.stack(out)
+
+
+@pytest.fixture(scope="module")
+def small(tmp_path_factory) -> Path:
+    """The real GelSight presses at a quarter size: a frame folder (its reference in the
+    parent) and a LUT calibration fitted to them (cheap to build in every worker)."""
+    root = tmp_path_factory.mktemp("small")
+    (root / "frames").mkdir()
+    ref = _small(cv2.imread(str(BALL / "reference.png")))
+    cv2.imwrite(str(root / "reference.png"), ref)
+    presses = []
+    for p in sorted((BALL / "frames").glob("press_*.png")):
+        presses.append(_small(cv2.imread(str(p))))
+        cv2.imwrite(str(root / "frames" / p.name), presses[-1])
+    cal = PhotometricCalibration.from_ball_presses(ref, np.stack(presses), ball_radius_mm=2.0,
+                                                   mm_per_px=4 * 0.0295, model="lut")
+    cal.save(root / "optics.npz")
+    return root
+
+
+@pytest.fixture(scope="module")
+def clip(small) -> Path:
+    """A 24-frame MJPG video of the presses, shifted a pixel each frame, with its reference
+    beside it (``clip_reference.png``)."""
+    ref = cv2.imread(str(small / "reference.png"))
+    presses = [cv2.imread(str(p)) for p in sorted((small / "frames").glob("press_*.png"))]
+    frames = [ref] + [np.roll(presses[i % 4], i, axis=1) for i in range(1, N_VIDEO)]
+    path = small / "clip.avi"
+    _write_video(path, frames, "MJPG")
+    cv2.imwrite(str(small / "clip_reference.png"), ref)
+    return path
+
+
+@pytest.fixture(scope="module")
+def client():
+    cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                           dashboard_address=None)
+    c = Client(cluster)
+    yield c
+    c.close()
+    cluster.close()
+
+
+def _settings(clip: Path, **kw) -> BatchSettings:
+    return BatchSettings(kind=kw.pop("kind", "reconstruct"),
+                         calibration=str(clip.parent / "optics.npz"),
+                         chunk_frames=kw.pop("chunk_frames", 4), **kw)
+
+
+def _single_process(clip: Path, frames: np.ndarray, reference: np.ndarray) -> np.ndarray:
+    recon = DepthReconstructor(PhotometricCalibration.load(clip.parent / "optics.npz"),
+                               reference=reference)
+    return np.stack([recon(f) for f in frames]).astype(np.float32)
+
+
+def _expected(clip: Path) -> np.ndarray:
+    return _single_process(clip, _decoded(clip),
+                           cv2.imread(str(clip.with_name("clip_reference.png"))))
+
+
+# ---------------------------------------------------------------- video reading
+
+
+@pytest.mark.parametrize(("suffix", "fourcc"), [(".avi", "MJPG"), (".mp4", "mp4v")])
+def test_video_chunks_equal_the_sequential_pass(tmp_path, suffix, fourcc):
+    rng = np.random.default_rng(0)
+    frames = [rng.integers(0, 255, (48, 64, 3), dtype=np.uint8) for _ in range(40)]
+    path = tmp_path / f"v{suffix}"
+    _write_video(path, frames, fourcc)
+    v = VideoFrames(path)
+    assert v.n_frames == 40 and v.shape == (48, 64) and v.fps == pytest.approx(90.0)
+    seq = _decoded(path)
+    for start, stop in ((0, 7), (13, 29), (33, 40)):
+        np.testing.assert_array_equal(v.read(start, stop), seq[start:stop])
+    with pytest.raises(InputError, match="lie outside"):
+        v.read(35, 41)
+
+
+def test_bad_videos_are_named(tmp_path):
+    junk = tmp_path / "junk.mp4"
+    junk.write_bytes(b"not a video at all")
+    with pytest.raises(InputError, match=r"junk\.mp4"):
+        VideoFrames(junk)
+    with pytest.raises(InputError, match="no such video"):
+        VideoFrames(tmp_path / "missing.avi")
+    (tmp_path / "notes.txt").write_text("x")
+    with pytest.raises(InputError, match="not a video file"):
+        open_source(tmp_path / "notes.txt")
+
+
+# ---------------------------------------------------------------- the cluster
+
+
+def test_batch_equals_the_single_process_run_frame_for_frame(client, clip, tmp_path):
+    out = tmp_path / "out"
+    broken = tmp_path / "broken.mp4"
+    broken.write_bytes(b"\x00" * 100)
+    rep = run_batch("reconstruct", [clip.parent / "frames", clip, broken], out,
+                    settings=_settings(clip), client=client, progress=False)
+    status = {Path(o.input).name: o for o in rep.inputs}
+    assert status["broken.mp4"].status == "failed" and "broken.mp4" in status["broken.mp4"].error
+    assert status["frames"].status == "done" and status["clip.avi"].status == "done"
+    # the video: every frame, against a sequential decode reconstructed in this process
+    expected = _expected(clip)
+    got = zarr.open_group(str(out / "clip.zarr"), mode="r")["height_mm"][:]
+    assert got.shape == (N_VIDEO, SIZE[1], SIZE[0]) and got.dtype == np.float32
+    np.testing.assert_allclose(got, expected, atol=1e-6)
+    table = pq.read_table(out / "clip.parquet").to_pydict()
+    assert table["frame"] == list(range(N_VIDEO))
+    np.testing.assert_allclose(table["max_depth_mm"], expected.max(axis=(1, 2)), atol=1e-6)
+    np.testing.assert_allclose(table["t_s"], np.arange(N_VIDEO) / 90.0)
+    # frame 0 is the reference itself (JPEG-compressed in the video): shallower than any press
+    assert table["max_depth_mm"][0] < 0.5 * min(table["max_depth_mm"][1:])
+    # the folder: its reference found in the parent, frame names kept
+    ref = read_reference(clip.parent / "reference.png")
+    frames = np.stack([cv2.imread(str(p)) for p in
+                       sorted((clip.parent / "frames").glob("*.png"))])
+    np.testing.assert_allclose(
+        zarr.open_group(str(out / "frames.zarr"), mode="r")["height_mm"][:],
+        _single_process(clip, frames, ref), atol=1e-6)
+    assert pq.read_table(out / "frames.parquet").column("source_frame").to_pylist() == [
+        "press_01.png", "press_09.png", "press_25.png", "press_41.png"]
+    # each worker process built its reconstructor once per input (reference), whatever the
+    # number of chunks
+    built = [(r["pid"], r["input"]) for r in rep.receipts if r["built"]]
+    assert len(built) == len(set(built)) <= 4 and len(rep.receipts) == 1 + N_VIDEO // 4
+    saved = json.loads((out / "batch.json").read_text())
+    assert [i["status"] for i in saved["inputs"]] == ["done", "done", "failed"]
+
+
+def test_interrupted_batch_resumes_without_redoing_done_chunks(client, clip, tmp_path):
+    out = tmp_path / "out"
+    seen = []
+
+    def stop_after_two(receipt):
+        seen.append(receipt)
+        if len(seen) == 2:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        run_batch("reconstruct", [clip], out, settings=_settings(clip), client=client,
+                  progress=False, on_receipt=stop_after_two)
+    assert not (out / "clip.parquet").exists()          # not taken as done
+    parts = sorted((out / "clip.parts").glob("part-*.parquet"))
+    assert len(parts) >= 2
+    (out / "clip.parts" / ".part-00000020.parquet.99.tmp").write_bytes(b"half")  # a torn write
+    rep = run_batch("reconstruct", [clip], out, settings=_settings(clip), client=client,
+                    progress=False)
+    o = rep.inputs[0]
+    assert o.status == "done" and o.chunks_skipped >= 2
+    assert o.chunks_skipped + o.chunks_run == N_VIDEO // 4
+    expected = _expected(clip)
+    np.testing.assert_allclose(zarr.open_group(str(out / "clip.zarr"), mode="r")
+                               ["height_mm"][:], expected, atol=1e-6)
+    assert pq.read_table(out / "clip.parquet").column("frame").to_pylist() == list(
+        range(N_VIDEO))
+    # a third run has nothing left to do; other settings are refused, not mixed in
+    again = run_batch("reconstruct", [clip], out, settings=_settings(clip), client=client,
+                      progress=False)
+    assert again.inputs[0].status == "already complete" and not again.receipts
+    other = run_batch("reconstruct", [clip], out, settings=_settings(clip, level="far_field"),
+                      client=client, progress=False)
+    assert other.inputs[0].status == "failed" and "other settings" in other.inputs[0].error
+
+
+def test_a_killed_worker_loses_and_duplicates_no_frame(client, clip, tmp_path):
+    out = tmp_path / "out"
+    pids = client.run(os.getpid)
+    victim = {"pid": None}
+
+    def kill_one(receipt):
+        if victim["pid"] is None:
+            victim["pid"] = next(p for p in pids.values() if p != receipt["pid"])
+            os.kill(victim["pid"], signal.SIGKILL)
+
+    rep = run_batch("reconstruct", [clip], out, settings=_settings(clip, chunk_frames=2),
+                    client=client, progress=False, on_receipt=kill_one)
+    assert victim["pid"] is not None
+    assert rep.inputs[0].status == "done", rep.inputs[0].error
+    starts = sorted(r["start"] for r in rep.receipts)
+    assert starts == list(range(0, N_VIDEO, 2))           # each chunk once
+    frames = pq.read_table(out / "clip.parquet").column("frame").to_pylist()
+    assert frames == list(range(N_VIDEO))
+    expected = _expected(clip)
+    np.testing.assert_allclose(zarr.open_group(str(out / "clip.zarr"), mode="r")
+                               ["height_mm"][:], expected, atol=1e-6)
+    client.wait_for_workers(2, timeout=60)                # the nanny restarts it
+
+
+def test_cli_batch_forces_on_a_running_scheduler(client, clip, tmp_path, capsys):
+    from tactilevision.fem import ForceEstimator
+
+    out = tmp_path / "forces"
+    optics = clip.parent / "optics.npz"
+    argv = ["batch", "forces", str(clip), "--out", str(out), "--calibration", str(optics),
+            "--E-mpa", "0.2", "--nu", "0.48", "--thickness-mm", "3", "--chunk-frames", "8",
+            "--scheduler", client.scheduler.address, "--no-progress",
+            "--json", "-"]
+    assert main(argv) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["inputs"][0]["status"] == "done" and d["frames_run"] == N_VIDEO
+    g = zarr.open_group(str(out / "clip.zarr"), mode="r")
+    assert g["force_n"].shape == (N_VIDEO, SIZE[1], SIZE[0], 3)
+    # frame 5 against the estimator in this process (forces' defaults: level 'contact',
+    # traction on the footprint above 0.02 mm, beta 0)
+    cal = PhotometricCalibration.load(optics)
+    ref = cv2.imread(str(clip.with_name("clip_reference.png")))
+    recon = DepthReconstructor(cal, reference=ref, boundary="contact", level="median")
+    est = ForceEstimator(cal.shape, cal.mm_per_px, thickness_mm=3.0, E_mpa=0.2, nu=0.48,
+                         contact="footprint", threshold_mm=0.02, beta=0.0)
+    frame = _decoded(clip)[5]
+    fm = est(recon(frame))
+    table = pq.read_table(out / "clip.parquet").to_pydict()
+    assert table["fz_n"][5] == pytest.approx(float(fm.total_n[2]), rel=1e-5)
+    np.testing.assert_allclose(g["pressure_kpa"][5], fm.pressure_kpa, rtol=1e-5, atol=1e-6)
+    assert table["fz_n"][5] > 0.05 and abs(table["fz_n"][0]) < 0.2 * table["fz_n"][5]
+
+
+def test_cli_batch_bad_options(tmp_path, capsys, clip):
+    assert main(["batch", "forces", str(clip), "--out", str(tmp_path / "o"), "--calibration",
+                 str(clip.parent / "optics.npz"), "--E-mpa", "0.2", "--nu", "0.48"]) == 2
+    assert "--thickness-mm" in capsys.readouterr().err
+    assert main(["batch", "reconstruct", str(clip), "--out", str(tmp_path / "o")]) == 2
+    assert "--calibration OPTICS or --sensor" in capsys.readouterr().err
+    (tmp_path / "file").write_text("x")
+    assert main(["batch", "reconstruct", str(clip), "--out", str(tmp_path / "file"),
+                 "--sensor", "gelsight"]) == 2
+    assert "not a folder" in capsys.readouterr().err
+
+
+def test_batch_calibrate_lists_a_broken_session_and_calibrates_the_others(client, tmp_path):
+    from tactilevision.sim import SessionSpec, make_session, press_profile
+
+    pytest.importorskip("taxim")
+    prof = press_profile(2.5 / 3, 0.47, w_over_h_max=0.22, steps=8, cell=0.5,
+                         edge_refinements=5)
+    good = tmp_path / "day1"
+    spec = SessionSpec(E_mpa=0.15, nu=0.47, repeats=2, clock_offset_s=0.05, seed=11,
+                       wait_s=(0.5, 0.8))              # short rests: fewer frames
+    truth = make_session(good, spec, profile=prof)
+    broken = tmp_path / "day2"
+    broken.mkdir()
+    out = tmp_path / "cal"
+    rep = run_batch("calibrate", [good, broken], out, client=client, progress=False)
+    st = {Path(o.input).name: o for o in rep.inputs}
+    assert st["day2"].status == "failed" and "session.toml" in st["day2"].error
+    assert st["day1"].status == "done"
+    fit = json.loads((out / "day1" / "fit.json").read_text())
+    assert abs(fit["E_mpa"] / truth["E_mpa"] - 1) < 0.15
+    again = run_batch("calibrate", [good], out, client=client, progress=False)
+    assert again.inputs[0].status == "already complete"
