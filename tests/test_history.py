@@ -94,6 +94,37 @@ def test_sample_aging_detected_with_the_true_trend_and_change():
     assert abs(stale_day - t_true) <= spacing, (stale_day, t_true)
 
 
+def test_pooled_presses_name_aging_at_the_true_rate():
+    """All 96 presses of the sample in one table, diagnosed along the day: aging, at the
+    truth's -0.571 %/day (E0 and nu of the pooled fit near the truth's too)."""
+    from tactilevision.history import pooled_diagnosis
+
+    p = pooled_diagnosis(gather(DAYS)["gelsight"])
+    assert p.missing_effect == "aging" and p.n_presses > 80
+    lo, hi = p.rate_ci_per_day
+    assert lo <= TRUTH["E_rate_per_day"] <= hi
+    assert p.rate_per_day == pytest.approx(TRUTH["E_rate_per_day"], rel=0.05)
+    assert p.E0_mpa == pytest.approx(TRUTH["E0_mpa"], rel=0.08)
+    assert abs(p.nu - TRUTH["nu"]) < 0.02
+    assert "name aging" in p.summary()
+
+
+def test_pooled_presses_of_a_steady_gel_name_no_change(tmp_path):
+    """The same presses under three dates: nothing along the day."""
+    from tactilevision.history import pooled_diagnosis
+
+    folders = []
+    for i in range(3):
+        f = tmp_path / f"c{i}"
+        shutil.copytree(DAYS[0], f)
+        folders.append(f)
+    dates = {f: datetime.date(2027, 1, 1) + datetime.timedelta(days=d)
+             for f, d in zip(folders, (0, 20, 45), strict=True)}
+    p = pooled_diagnosis(gather(folders, dates=dates)["gelsight"])
+    assert p.missing_effect not in ("aging", "stiffness_step:day")
+    assert np.isnan(p.rate_per_day)
+
+
 def test_sample_cli_says_recalibrate_and_names_the_stale_date(capsys, tmp_path):
     rc, out, err = _run(capsys, *DAYS, "--json", tmp_path / "h.json")
     assert rc == 0, err
@@ -105,6 +136,8 @@ def test_sample_cli_says_recalibrate_and_names_the_stale_date(capsys, tmp_path):
     assert "recalibrate" in out
     assert f"sessions after {obj['stale_from']}" in out and "used a stale E" in out
     assert out.count("*") == sum(r["beyond_day0_ci"] for r in obj["calibrations"])
+    assert obj["pooled_diagnosis"]["missing_effect"] == "aging"
+    assert obj["pooled_note"] in out
 
 
 # ------------------------------------------------------------------ a gel that does not change
@@ -118,13 +151,14 @@ def test_a_steady_gel_gives_no_warning(capsys, tmp_path):
         folders.append(f)
     dates = [f"--date={f}={(datetime.date(2027, 1, 1) + datetime.timedelta(days=d))}"
              for f, d in zip(folders, (0, 20, 45), strict=True)]
-    rc, out, err = _run(capsys, *folders, *dates, "--json", "-")
+    rc, out, err = _run(capsys, *folders, *dates, "--json", "-", "--no-pooled")
     assert rc == 0, err
     obj = json.loads(out)["sensors"]["gelsight"]
+    assert "pooled_diagnosis" not in obj
     assert obj["recalibrate"] is False and obj["stale_from"] is None
     assert obj["E_change"] == pytest.approx(0.0, abs=1e-12)
     assert [c["date_source"] for c in obj["calibrations"]] == ["--date"] * 3
-    rc, out, _ = _run(capsys, *folders, *dates)
+    rc, out, _ = _run(capsys, *folders, *dates, "--no-pooled")
     assert "recalibrate" not in out.replace("no recalibration needed", "")
     assert "no recalibration needed" in out
 
@@ -178,6 +212,7 @@ def test_report_html_and_figures_are_written(capsys, tmp_path):
     page = (rep / "report.html").read_text()
     assert page.count("data:image/png;base64,") == 2          # self-contained
     assert "recalibrate" in page and "2026-12-14" in page
+    assert "name aging" in page                               # the pooled diagnosis
     rows = (rep / "history_gelsight.csv").read_text().splitlines()
     assert len(rows) == 1 + len(DAYS)
     assert str(rep / "report.html") in out
@@ -198,8 +233,8 @@ def test_json_has_the_documented_keys(capsys):
     s = obj["sensors"]["gelsight"]
     assert set(s) == {"sensor", "n_calibrations", "first_date", "last_date", "calibrations",
                       "E_change", "E_change_ci", "recalibrate", "stale_from", "trend",
-                      "nu_beyond", "message", "csv"}
-    assert set(s) <= doc and set(s["trend"]) <= doc
+                      "nu_beyond", "message", "csv", "pooled_diagnosis", "pooled_note"}
+    assert set(s) <= doc and set(s["trend"]) <= doc and set(s["pooled_diagnosis"]) <= doc
     assert set(s["calibrations"][0]) == set(HISTORY_COLUMNS) <= doc
 
 
@@ -234,7 +269,7 @@ def test_existing_report_files_not_written_by_us_are_kept(capsys, tmp_path):
     rep = tmp_path / "rep"
     rep.mkdir()
     (rep / "report.html").write_text("mine")
-    rc, _, err = _run(capsys, *DAYS, "--report", rep)
+    rc, _, err = _run(capsys, *DAYS, "--report", rep, "--no-pooled")
     assert rc == 2 and "--overwrite" in err
     assert (rep / "report.html").read_text() == "mine"
 

@@ -46,6 +46,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--date", action="append", default=[], metavar="FOLDER=YYYY-MM-DD",
                    help="the date of a calibration folder whose fit.json has no session_date "
                         "(repeatable)")
+    p.add_argument("--no-pooled", action="store_true",
+                   help="skip the pooled diagnosis (every press of a sensor's calibrations "
+                        "diagnosed along the day: aging or a step; seconds per sensor)")
     add_overwrite_argument(p, "report folder")
     p.set_defaults(func=run)
 
@@ -164,6 +167,7 @@ def run(args: argparse.Namespace) -> int:
         gather,
         history_figures,
         history_rows,
+        pooled_diagnosis,
         sensor_file_name,
         write_history_csv,
         write_history_report,
@@ -177,7 +181,7 @@ def run(args: argparse.Namespace) -> int:
             raise InputError(f"--sensor {args.sensor}: no calibration of that sensor among the "
                              f"folders (sensors: {', '.join(sorted(by_sensor))})")
         by_sensor = {args.sensor: by_sensor[args.sensor]}
-    results = {}
+    results, pooled = {}, {}
     for sensor, records in by_sensor.items():
         a = assess(records)
         results[sensor] = (records, a, history_rows(records, a.beyond))
@@ -185,27 +189,43 @@ def run(args: argparse.Namespace) -> int:
     if len(set(names.values())) < len(names):
         raise InputError("two sensor names give the same file name "
                          f"({', '.join(sorted(names))}); filter with --sensor")
-    if args.report is not None:
+    if args.report is not None:                # refused at once, before the slow part
         stems = [names[s][len("history_"):-len(".csv")] for s in names]
         files = (["report.html"] + list(names.values()) + [f"E_{t}.png" for t in stems]
                  + [f"nu_{t}.png" for t in stems])
         check_overwrite(args.report, files, overwrite=args.overwrite)
+    for sensor, (records, _, _) in results.items():
+        if not args.no_pooled and len({r.date for r in records}) >= 2:
+            try:
+                pooled[sensor] = pooled_diagnosis(records)
+            except InputError as exc:          # the weighted line stands without it
+                pooled[sensor] = str(exc)
+    if args.report is not None:
         with StagedOutput(args.report, overwrite=args.overwrite, what="report folder") as stage:
             pages = {}
             for s, (records, a, rows) in results.items():
                 write_history_csv(stage.path / names[s], rows)
                 figs = history_figures(records, a, stage.path)
                 pages[s] = (records, a, rows, figs)
-            write_history_report(stage.path, pages)
+            write_history_report(stage.path, pages, pooled={
+                s: p.summary() if not isinstance(p, str) else f"No pooled diagnosis: {p}"
+                for s, p in pooled.items()})
             stage.commit()
     obj = {"confidence": 0.95, "sensors": {
         s: sensor_dict(records, a, rows, names[s] if args.report is not None else None)
         for s, (records, a, rows) in results.items()}}
+    for s, p in pooled.items():
+        d = obj["sensors"][s]
+        d["pooled_diagnosis"] = None if isinstance(p, str) else p.to_json_dict()
+        d["pooled_note"] = p if isinstance(p, str) else p.summary()
     if args.json is not None:
         _write_json(obj, args.json)
     if args.json != "-":
-        for records, a, _ in results.values():
+        for s, (records, a, _) in results.items():
             _print(records, a)
+            if s in pooled:
+                p = pooled[s]
+                print(f"  {p.summary() if not isinstance(p, str) else 'no pooled diagnosis: ' + p}")
         if args.report is not None:
             print(f"report: {args.report / 'report.html'}")
     return 0

@@ -117,8 +117,8 @@ def _img(path: Path, alt: str) -> str:
 
 def write_history_report(out_dir: str | Path,
                          sensors: Mapping[str, tuple[Sequence[CalibrationRecord], Assessment,
-                                                     list[dict], Mapping[str, Path]]]
-                         ) -> Path:
+                                                     list[dict], Mapping[str, Path]]],
+                         pooled: Mapping[str, str] | None = None) -> Path:
     """Write ``report.html``: per sensor, the verdict, the table and the figures.
 
     The page has the style of ``calibrate``'s report
@@ -134,6 +134,9 @@ def write_history_report(out_dir: str | Path,
         Per sensor: its calibrations, :func:`~tactilevision.history.assess`,
         :func:`~tactilevision.history.history_rows` and
         :func:`history_figures`.
+    pooled : mapping of str to str, optional
+        Per sensor, a sentence on its pooled presses
+        (:meth:`PooledDiagnosis.summary`), shown under the verdict.
 
     Returns
     -------
@@ -149,6 +152,8 @@ def write_history_report(out_dir: str | Path,
         parts.append(f"<h2>{e(sensor)}: {len(records)} calibration(s), {e(verdict)}</h2>\n")
         parts.append('<p class="big">' + "<br>".join(e(s.strip())
                                                       for s in a.message.split("\n")) + "</p>\n")
+        if pooled and sensor in pooled:
+            parts.append(f"<p>{e(pooled[sensor])}</p>\n")
         shown = [c for c in HISTORY_COLUMNS if c not in ("folder", "date_source")]
         parts.append("<table><tr>" + "".join(f"<th>{e(c)}</th>" for c in shown) + "</tr>\n")
         for row in rows:
