@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import signal
 from pathlib import Path
 
@@ -185,6 +186,18 @@ def test_batch_equals_the_single_process_run_frame_for_frame(client, clip, tmp_p
     assert len(built) == len(set(built)) <= 4 and len(rep.receipts) == 1 + N_VIDEO // 4
     saved = json.loads((out / "batch.json").read_text())
     assert [i["status"] for i in saved["inputs"]] == ["done", "done", "failed"]
+
+
+def test_a_bad_frame_fails_its_input_only_and_is_named(client, clip, tmp_path):
+    bad = tmp_path / "bad"
+    shutil.copytree(clip.parent / "frames", bad)
+    (bad / "press_25.png").write_bytes(b"\x89PNG\r\n\x1a\n truncated")
+    rep = run_batch("reconstruct", [bad, clip], tmp_path / "out",
+                    settings=_settings(clip, chunk_frames=1), client=client, progress=False)
+    st = {Path(o.input).name: o for o in rep.inputs}
+    assert st["bad"].status == "failed" and "press_25.png" in st["bad"].error
+    assert st["clip.avi"].status == "done"
+    assert not (tmp_path / "out" / "bad.parquet").exists()
 
 
 def test_interrupted_batch_resumes_without_redoing_done_chunks(client, clip, tmp_path):

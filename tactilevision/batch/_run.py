@@ -247,11 +247,11 @@ def _run_frames(client, paths, out, settings, outcomes, report, overwrite, progr
                 continue
             try:
                 receipt = fut.result()
-            except InputError as exc:
-                o.status, o.error = "failed", str(exc)
-                continue
-            except Exception as exc:           # a worker's own failure: listed, go on
-                o.status, o.error = "failed", f"{type(exc).__name__}: {exc}"
+            except Exception as exc:           # listed with its error; the others go on
+                o.status = "failed"
+                o.error = str(exc) if isinstance(exc, InputError) else (
+                    f"{type(exc).__name__}: {exc}")
+                client.cancel([f for f, oo in futures.items() if oo is o])
                 continue
             receipt["input"] = o.name
             report.receipts.append(receipt)
