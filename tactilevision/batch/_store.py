@@ -82,14 +82,17 @@ class InputStore:
         self.table_path.unlink(missing_ok=True)
         g = zarr.open_group(str(self.zarr_path), mode="w")
         h, w = shape
+        # dimension names: xarray.open_zarr reads the group as a Dataset
         g.create_array("height_mm", shape=(n_frames, h, w), chunks=(chunk_frames, h, w),
-                       dtype="float32", fill_value=np.nan)
+                       dtype="float32", fill_value=np.nan, dimension_names=("frame", "y", "x"))
         if force_shape is not None:
             r, c = force_shape
             g.create_array("force_n", shape=(n_frames, r, c, 3), chunks=(chunk_frames, r, c, 3),
-                           dtype="float32", fill_value=np.nan)
+                           dtype="float32", fill_value=np.nan,
+                           dimension_names=("frame", "node_y", "node_x", "component"))
             g.create_array("pressure_kpa", shape=(n_frames, r, c),
-                           chunks=(chunk_frames, r, c), dtype="float32", fill_value=np.nan)
+                           chunks=(chunk_frames, r, c), dtype="float32", fill_value=np.nan,
+                           dimension_names=("frame", "node_y", "node_x"))
         g.attrs.update({**attrs, "n_frames": n_frames, "complete": False})
         self.parts.mkdir(parents=True, exist_ok=True)
         return False
