@@ -14,6 +14,7 @@ import numpy as np
 from scipy.ndimage import map_coordinates
 
 from .._checks import InputError, check_array
+from ._features import channel_magnitude
 
 __all__ = ["detect_contact_circle", "detect_contact_circles", "fit_circle"]
 
@@ -91,7 +92,7 @@ def detect_contact_circle(frame: np.ndarray, reference: np.ndarray, *,
     change = (cv2.GaussianBlur(frame, (0, 0), 1.5).astype(np.float32)
               - cv2.GaussianBlur(reference, (0, 0), 1.5).astype(np.float32))
     change -= np.median(change[::4, ::4].reshape(-1, 3), axis=0)
-    mag = np.abs(change).max(axis=-1)
+    mag = channel_magnitude(change)
     peak = float(np.percentile(mag, 99.9))
     noise = 1.4826 * float(np.median(np.abs(mag - np.median(mag))))
     if peak < max(min_change, 4.0 * noise):

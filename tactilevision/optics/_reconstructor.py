@@ -18,7 +18,7 @@ import numpy as np
 from .._checks import InputError, check_array
 from ._ball import gradients_from_normals
 from ._calibration import PhotometricCalibration
-from ._features import blur_frames, colour_change, reference_inverse
+from ._features import blur_frames, channel_magnitude, colour_change, reference_inverse
 from ._markers import fill_masked_fields, marker_mask
 from ._mlp import MLPGradientModel, mlp_inputs
 from ._poisson import PoissonSolver, integrate_poisson_masked
@@ -209,7 +209,7 @@ class DepthReconstructor:
         # times the Poisson solve): colour change above the frame's median + 8 robust sd,
         # grown by 3 samples (12 px), holes filled (a flat face changes no colour)
         small = cv2.resize(frame, self._small_size, interpolation=cv2.INTER_AREA)
-        mag = np.abs(small.astype(np.float32) * self._ref_inv_small - 1.0).max(axis=-1)
+        mag = channel_magnitude(small.astype(np.float32) * self._ref_inv_small - 1.0)
         med = float(np.median(mag))
         thr = med + 8.0 * 1.4826 * float(np.median(np.abs(mag - med))) + 1e-3
         inside = ndi.binary_fill_holes(ndi.binary_dilation(mag > thr, iterations=3))
@@ -341,13 +341,13 @@ class DepthReconstructor:
         masks = []
         for f in one:
             if threshold == "frame":
-                mag = np.abs(colour_change(f, self._ref_inv, blur_sigma=max(cal.blur_sigma, 1.5))
-                             ).max(axis=-1)
+                mag = channel_magnitude(colour_change(f, self._ref_inv,
+                                                      blur_sigma=max(cal.blur_sigma, 1.5)))
                 med = float(np.median(mag))
                 thr = med + 8.0 * 1.4826 * float(np.median(np.abs(mag - med)))
             else:
-                mag = np.abs(colour_change(f, self._ref_inv, blur_sigma=cal.blur_sigma)
-                             ).max(axis=-1)
+                mag = channel_magnitude(colour_change(f, self._ref_inv,
+                                                      blur_sigma=cal.blur_sigma))
                 thr = cal.contact_threshold if threshold == "calibration" else float(threshold)
             m = (mag > thr).astype(np.uint8)
             if cal.markers:
