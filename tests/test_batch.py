@@ -321,3 +321,19 @@ def test_batch_calibrate_lists_a_broken_session_and_calibrates_the_others(client
     assert abs(fit["E_mpa"] / truth["E_mpa"] - 1) < 0.15
     again = run_batch("calibrate", [good], out, client=client, progress=False)
     assert again.inputs[0].status == "already complete"
+
+
+def test_cli_batch_starts_its_own_local_cluster(clip, tmp_path, capsys):
+    """No --scheduler: a local cluster of worker processes, started and closed by the
+    command; the printed summary and batch.json agree."""
+    out = tmp_path / "own"
+    argv = ["batch", "reconstruct", str(clip), str(clip.parent / "frames"), "--out", str(out),
+            "--calibration", str(clip.parent / "optics.npz"), "--workers", "1",
+            "--no-progress"]
+    assert main(argv) == 0
+    printed = capsys.readouterr().out
+    assert "2 of 2 input(s) complete" in printed and "on 1 worker(s)" in printed
+    saved = json.loads((out / "batch.json").read_text())
+    assert saved["workers"] == 1 and saved["frames_run"] == N_VIDEO + 4
+    np.testing.assert_allclose(zarr.open_group(str(out / "clip.zarr"), mode="r")
+                               ["height_mm"][:], _expected(clip), atol=1e-6)
