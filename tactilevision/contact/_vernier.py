@@ -236,14 +236,33 @@ def bevel_profile(frame: np.ndarray, reference: np.ndarray, centre_px: tuple[flo
     return BevelProfile(u_px=u, colour=colour, coverage=float(inside.mean()))
 
 
-def _box(u: np.ndarray, a: np.ndarray, b: np.ndarray, blur: float = _EDGE_BLUR_PX) -> np.ndarray:
-    """Blurred indicator of [a, b] (broadcast), edges of sd `blur` px."""
+def _flank_boxes(u: np.ndarray, crest: np.ndarray, half: np.ndarray,
+                 blur: float = _EDGE_BLUR_PX) -> tuple[np.ndarray, np.ndarray]:
+    """Blurred indicators of [c - L, c] and [c, c + L] for every candidate, (G, K) each,
+    edges of sd `blur` px: ``0.5 (erf((u - a) k) - erf((u - b) k))``, k = 1 / (sqrt(2) blur).
+
+    The candidates of a search grid share their edges (crests and half-widths on a lattice),
+    so erf is evaluated once per distinct edge and gathered: the same numbers as evaluating
+    it per candidate, at a fraction of the cost (20 times fewer erf calls on the 1 px grid).
+    """
     k = 1.0 / (math.sqrt(2.0) * blur)
-    return 0.5 * (erf((u - a) * k) - erf((u - b) * k))
+    edges = np.concatenate([crest - half, crest, crest + half])
+    uniq, inv = np.unique(edges, return_inverse=True)
+    e = erf((u[None, :] - uniq[:, None]) * k)                # (distinct edges, K)
+    g = crest.size
+    e_lo, e_c, e_hi = e[inv[:g]], e[inv[g:2 * g]], e[inv[2 * g:]]
+    return 0.5 * (e_lo - e_c), 0.5 * (e_c - e_hi)
 
 
 def _line(u: np.ndarray, m: np.ndarray, sd: float = _LINE_SD_PX) -> np.ndarray:
     return np.exp(-0.5 * ((u - m) / sd) ** 2)
+
+
+def _lines_at(u: np.ndarray, m: np.ndarray, sd: float) -> np.ndarray:
+    """:func:`_line` at every centre of `m` (G,), (G, K): evaluated once per distinct
+    centre (the candidates of a search grid share them) and gathered, the same numbers."""
+    uniq, inv = np.unique(m, return_inverse=True)
+    return _line(u[None, :], uniq[:, None], sd)[inv]
 
 
 def _background(u: np.ndarray, degree: int) -> np.ndarray:
@@ -259,15 +278,16 @@ def _basis(u: np.ndarray, crest: np.ndarray, half: np.ndarray, lines: str = "all
     uk = u[None, :]
     c, L = crest[:, None], half[:, None]
     bg = np.broadcast_to(_background(u, degree)[None], (c.shape[0], u.size, degree + 1))
-    b_in, b_out = _box(uk, c - L, c, blur), _box(uk, c, c + L, blur)
+    b_in, b_out = _flank_boxes(u, np.asarray(crest, np.float64).ravel(),
+                               np.asarray(half, np.float64).ravel(), blur)
     cols = [bg[..., j] for j in range(degree + 1)] + [b_in, b_out]
     if lines == "tilt":        # each flank's colour may drift linearly across it
         cols += [b_in * (uk - c + 0.5 * L) / np.maximum(L, 1.0),
                  b_out * (uk - c - 0.5 * L) / np.maximum(L, 1.0)]
     if lines in ("all", "edges"):
-        cols += [_line(uk, c - L, line_sd), _line(uk, c + L, line_sd)]
+        cols += [_lines_at(u, crest - half, line_sd), _lines_at(u, crest + half, line_sd)]
     if lines in ("all", "crest"):
-        cols += [_line(uk, c, line_sd)]
+        cols += [_lines_at(u, crest, line_sd)]
     if lines == "shadows":
         # a renderer's cast shadows: a thin line at each edge and tails running outward
         cols += [_line(uk, c - L, _SHADOW_LINE_SD_PX), _line(uk, c + L, _SHADOW_LINE_SD_PX)]
