@@ -104,7 +104,7 @@ def batch(video: Path, optics: Path, n_workers: int, out: Path, n: int | None = 
                 vw.write(f)
             vw.release()
     cluster = LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
-                           dashboard_address=None)
+                           dashboard_address=":0")
     client = Client(cluster)
     try:
         client.run(lambda: None)            # workers up before the clock starts

@@ -108,7 +108,8 @@ def _client(scheduler: str | None, n_workers: int | None):
 
     n = n_workers or os.cpu_count() or 1
     cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                           dashboard_address=None, silence_logs=logging.ERROR)
+                           dashboard_address=":0",   # any free port: never 8787 twice
+                           silence_logs=logging.ERROR)
     return Client(cluster), cluster
 
 
