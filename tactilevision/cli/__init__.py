@@ -21,6 +21,7 @@ from . import (
     _fit,
     _forces,
     _history,
+    _live,
     _optics,
     _reconstruct,
     _validate,
@@ -29,7 +30,7 @@ from . import (
 __all__ = ["build_parser", "main"]
 
 _COMMANDS = (_calibrate, _reconstruct, _optics, _fit, _diagnose, _validate, _fem, _forces,
-             _history, _batch)
+             _history, _batch, _live)
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -1,0 +1,199 @@
+"""``tactilevision live``: a camera, video or frame folder through the live pipeline."""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from .. import InputError
+from .._assets import KNOWN_SENSORS, default_calibration_path
+
+__all__ = ["add_parser", "annotate", "run"]
+
+_COLUMNS = ["frame", "t_s", "latency_ms", "dropped", "max_depth_mm", "contact_area_mm2",
+            "fx_n", "fy_n", "fz_n"]
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    """Register the ``live`` sub-command."""
+    p = sub.add_parser(
+        "live",
+        help="a camera, video or frame folder through the live pipeline: annotated video, CSV",
+        description="Run tactilevision.live.Pipeline on SOURCE (a camera index such as 0, a "
+        "video file or a frame folder): capture on its own thread, one result per frame "
+        "(height map, contact, force map and total force with E and nu), the latency from "
+        "capture to result. Writes an annotated video (the frame beside its height map, "
+        "force arrows, the total force) and a CSV of per-frame totals. Ctrl-C stops it "
+        "cleanly, keeping what was written.",
+    )
+    p.add_argument("source", metavar="SOURCE",
+                   help="camera index (0, 1, ...), video file, or folder of frames")
+    src = p.add_mutually_exclusive_group(required=True)
+    src.add_argument("--calibration", metavar="OPTICS", type=Path,
+                     help="photometric calibration (.npz)")
+    src.add_argument("--sensor", metavar="NAME", choices=KNOWN_SENSORS,
+                     help=f"shipped calibration: {', '.join(KNOWN_SENSORS)}")
+    p.add_argument("--reference", metavar="REF", default="auto",
+                   help="no-contact frame (image file), 'auto' (default: from the first "
+                   "--reference-frames frames) or 'calibration'")
+    p.add_argument("--reference-frames", type=int, default=10,
+                   help="frames the automatic reference is taken from (default 10)")
+    p.add_argument("--E-mpa", type=float, default=None, help="Young's modulus, MPa (forces)")
+    p.add_argument("--nu", type=float, default=None, help="Poisson's ratio (forces)")
+    p.add_argument("--thickness-mm", type=float, default=None, help="gel thickness h (forces)")
+    p.add_argument("--policy", choices=("latest", "every"), default=None,
+                   help="drop stale frames when slower than the camera (latest, the default "
+                   "for a camera) or process every frame (every, the default for files)")
+    p.add_argument("--max-frames", type=int, default=None, help="stop after N frames")
+    p.add_argument("--out", metavar="VIDEO", type=Path, default=None,
+                   help="annotated video to write (.mp4 or .avi)")
+    p.add_argument("--csv", metavar="FILE", type=Path, default=None,
+                   help="per-frame totals: " + ", ".join(_COLUMNS))
+    p.add_argument("--depth-range-mm", type=float, default=None,
+                   help="height of the colour map's top, mm (default: the first results' "
+                   "deepest point)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=run)
+
+
+def annotate(frame: np.ndarray, height_mm: np.ndarray, *, depth_range_mm: float,
+             forces=None, total_force_n: np.ndarray | None = None, cell_px: int = 24
+             ) -> np.ndarray:
+    """The frame beside its coloured height map, tangential force arrows and the total force.
+
+    Parameters
+    ----------
+    frame : (H, W, 3) uint8 ndarray
+        BGR.
+    height_mm : (H, W) float ndarray
+        mm, positive into the gel.
+    depth_range_mm : float
+        The height at the top of the colour map (viridis), mm.
+    forces : ForceMap, optional
+        Per-pixel forces (spectral): arrows of the tangential force summed over
+        cells of `cell_px` pixels, scaled to the largest.
+    total_force_n : (3,) ndarray, optional
+        Written as text.
+    cell_px : int, default 24
+
+    Returns
+    -------
+    image : (H, 2 W, 3) uint8 ndarray
+        BGR.
+    """
+    import cv2
+
+    h, w = height_mm.shape
+    z = np.clip(np.nan_to_num(height_mm) / max(depth_range_mm, 1e-9), 0.0, 1.0)
+    colour = cv2.applyColorMap((255 * z).astype(np.uint8), cv2.COLORMAP_VIRIDIS)
+    if forces is not None and np.ndim(forces.forces_n) == 3 and forces.forces_n.shape[:2] == (h, w):
+        f = np.asarray(forces.forces_n, np.float64)
+        rows, cols = h // cell_px, w // cell_px
+        if rows and cols:
+            cells = f[:rows * cell_px, :cols * cell_px, :2].reshape(
+                rows, cell_px, cols, cell_px, 2).sum(axis=(1, 3))
+            big = float(np.abs(cells).max())
+            if big > 0:
+                for i in range(rows):
+                    for j in range(cols):
+                        fx, fy = cells[i, j] / big * 0.9 * cell_px
+                        if abs(fx) + abs(fy) < 1.0:
+                            continue
+                        x0, y0 = j * cell_px + cell_px // 2, i * cell_px + cell_px // 2
+                        cv2.arrowedLine(colour, (x0, y0), (int(x0 + fx), int(y0 + fy)),
+                                        (255, 255, 255), 1, tipLength=0.3)
+    out = np.concatenate([frame, colour], axis=1)
+    scale = max(h / 480.0, 0.35)
+    cv2.putText(out, f"0-{depth_range_mm:.2f} mm", (w + 5, int(18 * scale) + 4),
+                cv2.FONT_HERSHEY_SIMPLEX, 0.5 * scale, (255, 255, 255), 1, cv2.LINE_AA)
+    if total_force_n is not None:
+        fx, fy, fz = (float(v) for v in total_force_n)
+        cv2.putText(out, f"Fz {fz:.3f} N  Fx {fx:+.3f}  Fy {fy:+.3f}",
+                    (5, h - 8), cv2.FONT_HERSHEY_SIMPLEX, 0.5 * scale, (255, 255, 255), 1,
+                    cv2.LINE_AA)
+    return out
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run ``live``; returns 0 (130 on Ctrl-C, with the outputs so far closed and kept)."""
+    import cv2
+
+    from ..io import read_reference
+    from ..live import Pipeline
+
+    cal_path = args.calibration or default_calibration_path(args.sensor)
+    source: int | Path = int(args.source) if str(args.source).isdigit() else Path(args.source)
+    if isinstance(source, Path) and not source.exists():
+        raise InputError(f"{source}: no such file or folder")
+    if args.out is not None and args.out.suffix.lower() not in (".mp4", ".avi"):
+        raise InputError(f"--out {args.out}: write a .mp4 or .avi video")
+    for p in (args.out, args.csv):
+        if p is not None and p.parent and not p.parent.exists():
+            raise InputError(f"{p}: its folder {p.parent} does not exist")
+    reference = args.reference
+    if reference not in ("auto", "calibration"):
+        reference = read_reference(Path(reference))
+    pipe = Pipeline(cal_path, reference=reference, n_reference=args.reference_frames,
+                    E_mpa=args.E_mpa, nu=args.nu, thickness_mm=args.thickness_mm)
+    mm2 = pipe.calibration.mm_per_px ** 2
+    writer = None
+    fh = wcsv = None
+    bar = None
+    n, lat, drops = 0, [], 0
+    depth_range = args.depth_range_mm
+    try:
+        if args.csv is not None:
+            fh = args.csv.open("w", newline="")
+            wcsv = csv.DictWriter(fh, fieldnames=_COLUMNS)
+            wcsv.writeheader()
+        if not args.no_progress:
+            from tqdm.auto import tqdm
+
+            bar = tqdm(desc="live", unit="frame", file=sys.stderr, mininterval=0.5)
+        t0 = None
+        for r in pipe.stream(source, policy=args.policy, max_frames=args.max_frames):
+            t0 = r.t_capture_s if t0 is None else t0
+            if depth_range is None:
+                depth_range = max(float(np.nanmax(r.height_mm)), 0.05)
+            if args.out is not None:
+                img = annotate(r.frame, r.height_mm, depth_range_mm=depth_range,
+                               forces=r.forces, total_force_n=r.total_force_n)
+                if writer is None:
+                    fourcc = "mp4v" if args.out.suffix.lower() == ".mp4" else "MJPG"
+                    writer = cv2.VideoWriter(str(args.out), cv2.VideoWriter_fourcc(*fourcc),
+                                             30.0, (img.shape[1], img.shape[0]))
+                writer.write(img)
+            if wcsv is not None:
+                tot = r.total_force_n
+                wcsv.writerow({
+                    "frame": r.index, "t_s": f"{r.t_capture_s - t0:.4f}",
+                    "latency_ms": f"{1e3 * r.latency_s:.2f}", "dropped": r.dropped,
+                    "max_depth_mm": f"{float(np.nanmax(r.height_mm)):.4f}",
+                    "contact_area_mm2": f"{float(r.contact.sum()) * mm2:.3f}",
+                    **({k: "" for k in ("fx_n", "fy_n", "fz_n")} if tot is None else
+                       {k: f"{float(v):.5f}" for k, v in zip(("fx_n", "fy_n", "fz_n"), tot,
+                                                            strict=True)})})
+            n += 1
+            lat.append(r.latency_s)
+            drops += r.dropped
+            if bar is not None:
+                bar.update(1)
+    finally:
+        if bar is not None:
+            bar.close()
+        if writer is not None:
+            writer.release()
+        if fh is not None:
+            fh.close()
+    if n == 0:
+        raise InputError(f"{args.source}: no frame was processed")
+    med = 1e3 * float(np.median(lat))
+    print(f"live: {n} frame(s) from {args.source}, {drops} dropped; latency median "
+          f"{med:.1f} ms, max {1e3 * max(lat):.1f} ms"
+          + (f"; video {args.out}" if args.out else "") + (f"; CSV {args.csv}" if args.csv
+                                                             else ""))
+    return 0

@@ -1,0 +1,392 @@
+"""A frame pipeline for a robot's perception loop: camera or file in, one result per frame out.
+
+Capture runs on its own thread and hands frames to the processing loop under a
+stated policy:
+
+- ``'latest'`` (live use): a one-frame mailbox. When processing is slower than
+  the camera, the newest frame replaces the waiting one and the stale one is
+  dropped (counted in :attr:`LiveResult.dropped`): the result is always about
+  the present, never a growing backlog.
+- ``'every'`` (offline use): a bounded queue; capture waits for processing, so
+  every frame is processed, in order.
+
+Each result carries its capture time and its latency, capture to result.
+"""
+
+from __future__ import annotations
+
+import collections
+import threading
+import time
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .._checks import InputError
+
+__all__ = ["LiveResult", "Pipeline", "auto_reference", "open_frames", "stream"]
+
+
+@dataclass(frozen=True)
+class LiveResult:
+    """One processed frame.
+
+    Attributes
+    ----------
+    index : int
+        The frame's position in the source (0 for the first captured).
+    t_capture_s : float
+        When the frame was captured, ``time.perf_counter()`` seconds.
+    latency_s : float
+        Capture to result, s.
+    frame : (H, W, 3) uint8 ndarray
+        The tactile frame, BGR.
+    height_mm : (H, W) float32 ndarray
+        Height map, mm, positive into the gel.
+    contact : (H, W) bool ndarray
+        Contact mask (colour change above the calibration's noise level).
+    forces : ForceMap or None
+        The force map, when the pipeline has E and nu.
+    total_force_n : (3,) float64 ndarray or None
+        (Fx, Fy, Fz) summed over the pad, N.
+    dropped : int
+        Frames the ``'latest'`` policy dropped since the previous result.
+    """
+
+    index: int
+    t_capture_s: float
+    latency_s: float
+    frame: np.ndarray
+    height_mm: np.ndarray
+    contact: np.ndarray
+    forces: object | None
+    total_force_n: np.ndarray | None
+    dropped: int
+
+
+def open_frames(source) -> tuple[Iterator[np.ndarray], bool]:
+    """Frames of a camera index, a video file, a frame folder, or an iterable of frames.
+
+    Parameters
+    ----------
+    source : int, str, Path or iterable of (H, W, 3) uint8 ndarray
+        An int is a camera (``cv2.VideoCapture(index)``); a path to a file is
+        a video, to a folder its frames in name order.
+
+    Returns
+    -------
+    frames : iterator of (H, W, 3) uint8 ndarray
+        BGR.
+    live : bool
+        True for a camera (the default policy is then ``'latest'``).
+
+    Raises
+    ------
+    InputError
+        A camera that does not open, a missing path, a file that is not a
+        video, a folder without frames.
+    """
+    import cv2
+
+    if isinstance(source, int | np.integer):
+        cap = cv2.VideoCapture(int(source))
+        if not cap.isOpened():
+            raise InputError(f"camera {int(source)} does not open")
+        return _capture_frames(cap), True
+    if isinstance(source, str | Path):
+        from ..io import VideoFrames, is_video, list_frames, read_frame
+
+        p = Path(source)
+        if not p.exists():
+            raise InputError(f"{p}: no such file or folder")
+        if p.is_file():
+            if not is_video(p):
+                raise InputError(f"{p}: not a video file (.mp4, .avi, .mov, .mkv, .m4v)")
+            v = VideoFrames(p)
+            return v.iter(0, v.n_frames), False
+        paths = list_frames(p)
+        if not paths:
+            raise InputError(f"{p} holds no .png or .jpg frames")
+        return (read_frame(q) for q in paths), False
+    if isinstance(source, np.ndarray) and source.ndim == 3:
+        raise InputError("a single frame is not a stream: pass a list of frames")
+    return iter(source), False
+
+
+def _capture_frames(cap) -> Iterator[np.ndarray]:
+    try:
+        while True:
+            ok, frame = cap.read()
+            if not ok:
+                return
+            yield frame
+    finally:
+        cap.release()
+
+
+def auto_reference(frames: np.ndarray, *, k: float = 3.0) -> tuple[np.ndarray, np.ndarray]:
+    """A no-contact reference from the first frames of a stream.
+
+    The median of the frames, then again over only the frames whose mean
+    absolute colour difference from that median is within `k` times the
+    median of those differences (a press among them is left out).
+
+    Parameters
+    ----------
+    frames : (N, H, W, 3) uint8 ndarray
+    k : float, default 3.0
+
+    Returns
+    -------
+    reference : (H, W, 3) uint8 ndarray
+    used : (N,) bool ndarray
+        The frames it was taken from.
+
+    Raises
+    ------
+    InputError
+        For fewer than one frame.
+    """
+    f = np.asarray(frames)
+    if f.ndim != 4 or f.shape[0] < 1:
+        raise InputError("auto_reference needs at least one (H, W, 3) frame")
+    med = np.median(f, axis=0)
+    diff = np.abs(f.astype(np.float32) - med).mean(axis=(1, 2, 3))
+    used = diff <= k * max(float(np.median(diff)), 0.25)
+    ref = np.median(f[used], axis=0)
+    return np.clip(np.rint(ref), 0, 255).astype(np.uint8), used
+
+
+class _Mailbox:
+    """Frames from the capture thread to the processing loop, under the policy."""
+
+    def __init__(self, policy: str, depth: int = 64) -> None:
+        self.latest = policy == "latest"
+        self.items: collections.deque = collections.deque(maxlen=1 if self.latest else None)
+        self.depth = depth
+        self.cond = threading.Condition()
+        self.done = False
+        self.dropped = 0
+        self.error: BaseException | None = None
+
+    def put(self, item, stop: threading.Event) -> None:
+        with self.cond:
+            if self.latest:
+                if self.items:
+                    self.dropped += 1
+                self.items.append(item)          # maxlen 1: the stale frame goes
+            else:
+                while len(self.items) >= self.depth and not stop.is_set():
+                    self.cond.wait(0.05)
+                self.items.append(item)
+            self.cond.notify_all()
+
+    def get(self):
+        """The next item and the frames dropped before it; None at the end of the source."""
+        with self.cond:
+            while not self.items and not self.done:
+                self.cond.wait(0.05)
+            if self.error is not None:
+                raise self.error
+            if not self.items:
+                return None
+            item = self.items.popleft()
+            dropped, self.dropped = self.dropped, 0
+            self.cond.notify_all()
+            return item, dropped
+
+    def finish(self, error: BaseException | None = None) -> None:
+        with self.cond:
+            self.done = True
+            self.error = error
+            self.cond.notify_all()
+
+
+class Pipeline:
+    """Tactile frames to height maps, contact masks and force maps, one frame at a time.
+
+    Parameters
+    ----------
+    calibration : PhotometricCalibration or str or Path
+        The sensor's photometric calibration (or its .npz file).
+    reference : (H, W, 3) uint8 ndarray, 'auto' or 'calibration', default 'auto'
+        The no-contact frame: given, taken from the first `n_reference` frames
+        of the stream (:func:`auto_reference`; those frames are then
+        processed too), or the calibration's own.
+    n_reference : int, default 10
+    E_mpa, nu, thickness_mm : float, optional
+        The gel; with all three, every result has a force map
+        (:class:`~tactilevision.fem.ForceEstimator`, spectral method).
+    beta : float, default 0.0
+        Eq. (5)'s large-deformation stiffening for the forces.
+    engine : {'table', 'onnx'}, default 'table'
+        The reconstructor's engine.
+
+    Raises
+    ------
+    InputError
+        For only some of E_mpa, nu and thickness_mm, or a bad reference.
+
+    Examples
+    --------
+    >>> pipe = Pipeline("calibration/gelsight.npz", E_mpa=0.2, nu=0.48,
+    ...                 thickness_mm=3.0)                        # doctest: +SKIP
+    >>> for r in pipe.stream(0):                                 # camera 0, doctest: +SKIP
+    ...     print(r.index, r.total_force_n[2], r.latency_s)
+    """
+
+    def __init__(self, calibration, *, reference="auto", n_reference: int = 10,
+                 E_mpa: float | None = None, nu: float | None = None,
+                 thickness_mm: float | None = None, beta: float = 0.0,
+                 engine: str = "table") -> None:
+        from ..optics import PhotometricCalibration
+
+        self.calibration = (calibration if isinstance(calibration, PhotometricCalibration)
+                            else PhotometricCalibration.load(calibration))
+        given = [v is not None for v in (E_mpa, nu, thickness_mm)]
+        if any(given) and not all(given):
+            raise InputError("forces need all of E_mpa, nu and thickness_mm")
+        self.material = (E_mpa, nu, thickness_mm, beta) if all(given) else None
+        if isinstance(reference, str) and reference not in ("auto", "calibration"):
+            raise InputError(f"reference must be a frame, 'auto' or 'calibration', got "
+                             f"{reference!r}")
+        if n_reference < 1:
+            raise InputError(f"n_reference must be >= 1, got {n_reference}")
+        self.n_reference = int(n_reference)
+        self.engine = engine
+        self.reference = reference
+        self._recon = None
+        self._est = None
+        if not (isinstance(reference, str) and reference == "auto"):
+            self._build(reference)
+
+    def _build(self, reference) -> None:
+        from ..fem import ForceEstimator
+        from ..optics import DepthReconstructor
+
+        cal = self.calibration
+        forces = self.material is not None
+        self._recon = DepthReconstructor(
+            cal, reference=reference, engine=self.engine,
+            boundary="contact" if forces else "neumann", level="median")
+        if forces:
+            E, nu, h, beta = self.material
+            self._est = ForceEstimator(cal.shape, cal.mm_per_px, thickness_mm=h, E_mpa=E,
+                                       nu=nu, beta=beta)
+        self.reference = reference
+
+    def process(self, frame: np.ndarray):
+        """Height map, contact mask and force map (or None) of one frame.
+
+        Raises
+        ------
+        InputError
+            Before a reference is set (``reference='auto'`` outside :meth:`stream`).
+        """
+        if self._recon is None:
+            raise InputError("no reference yet: give one, or run stream() to take it "
+                             "from the first frames")
+        h = self._recon(frame)
+        contact = self._recon.contact_mask(frame)
+        fm = self._est(h) if self._est is not None else None
+        return h, contact, fm
+
+    def stream(self, source, *, policy: str | None = None, max_frames: int | None = None
+               ) -> Iterator[LiveResult]:
+        """Process a source frame by frame (module docstring: capture thread, policies).
+
+        Parameters
+        ----------
+        source : int, str, Path or iterable of frames
+            :func:`open_frames`.
+        policy : {'latest', 'every'}, optional
+            Default: 'latest' for a camera, 'every' for files, folders and
+            iterables.
+        max_frames : int, optional
+            Stop after this many results.
+
+        Yields
+        ------
+        LiveResult
+
+        Notes
+        -----
+        Closing the generator (``break``, Ctrl-C in the loop, garbage
+        collection) stops the capture thread and releases the camera or file.
+        """
+        frames, live = open_frames(source)
+        policy = policy or ("latest" if live else "every")
+        if policy not in ("latest", "every"):
+            raise InputError(f"policy must be 'latest' or 'every', got {policy!r}")
+        box = _Mailbox(policy)
+        stop = threading.Event()
+
+        def capture() -> None:
+            try:
+                for i, frame in enumerate(frames):
+                    if stop.is_set():
+                        break
+                    box.put((i, time.perf_counter(), frame), stop)
+            except BaseException as exc:       # handed to the loop, raised there
+                box.finish(exc)
+                return
+            box.finish()
+
+        thread = threading.Thread(target=capture, name="tactilevision-capture", daemon=True)
+        thread.start()
+        n_out = 0
+        try:
+            pending: list = []
+            if self._recon is None:              # 'auto': the first frames make the reference
+                while len(pending) < self.n_reference:
+                    got = box.get()
+                    if got is None:
+                        break
+                    pending.append(got[0])
+                if not pending:
+                    raise InputError("the source gave no frame to take a reference from")
+                ref, _ = auto_reference(np.stack([p[2] for p in pending]))
+                self._build(ref)
+            queue_ = collections.deque(pending)
+            while max_frames is None or n_out < max_frames:
+                if queue_:
+                    (i, t_cap, frame), dropped = queue_.popleft(), 0
+                else:
+                    got = box.get()
+                    if got is None:
+                        break
+                    (i, t_cap, frame), dropped = got
+                h, contact, fm = self.process(frame)
+                total = None if fm is None else np.asarray(fm.total_n, np.float64)
+                yield LiveResult(index=i, t_capture_s=t_cap,
+                                 latency_s=time.perf_counter() - t_cap, frame=frame,
+                                 height_mm=h, contact=contact, forces=fm, total_force_n=total,
+                                 dropped=dropped)
+                n_out += 1
+        finally:
+            stop.set()
+            thread.join(timeout=2.0)
+
+
+def stream(source, calibration, *, policy: str | None = None, max_frames: int | None = None,
+           **kwargs) -> Iterator[LiveResult]:
+    """``Pipeline(calibration, **kwargs).stream(source, policy=, max_frames=)``.
+
+    Parameters
+    ----------
+    source : int, str, Path or iterable of frames
+    calibration : PhotometricCalibration or str or Path
+    policy : {'latest', 'every'}, optional
+    max_frames : int, optional
+    **kwargs
+        :class:`Pipeline`'s (reference, n_reference, E_mpa, nu, thickness_mm,
+        beta, engine).
+
+    Yields
+    ------
+    LiveResult
+    """
+    yield from Pipeline(calibration, **kwargs).stream(source, policy=policy,
+                                                      max_frames=max_frames)

@@ -1,0 +1,159 @@
+"""The live pipeline (tactilevision.live): one result per frame under the 'every' policy,
+the newest frame under 'latest', the reference taken from the first frames, a clean stop,
+and the ``live`` command's annotated video and CSV."""
+
+from __future__ import annotations
+
+import csv
+import threading
+import time
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from tactilevision import InputError
+from tactilevision.cli import main
+from tactilevision.fem import ForceEstimator
+from tactilevision.live import Pipeline, auto_reference, open_frames, stream
+from tactilevision.optics import DepthReconstructor, PhotometricCalibration
+
+BALL = Path(__file__).resolve().parents[1] / "sample_frames" / "gelsight_ball"
+SIZE = (160, 120)        # a quarter of GelSight's frame: cheap to process
+
+
+def _small(img: np.ndarray) -> np.ndarray:
+    return cv2.resize(img, SIZE, interpolation=cv2.INTER_AREA)
+
+
+@pytest.fixture(scope="module")
+def sensor(tmp_path_factory):
+    """The real GelSight presses at a quarter size, their reference, a LUT calibration."""
+    root = tmp_path_factory.mktemp("live")
+    ref = _small(cv2.imread(str(BALL / "reference.png")))
+    presses = [_small(cv2.imread(str(p))) for p in sorted((BALL / "frames").glob("press_*.png"))]
+    cal = PhotometricCalibration.from_ball_presses(ref, np.stack(presses), ball_radius_mm=2.0,
+                                                   mm_per_px=4 * 0.0295, model="lut")
+    cal.save(root / "optics.npz")
+    rng = np.random.default_rng(0)
+    rest = [np.clip(ref.astype(int) + rng.integers(-2, 3, ref.shape), 0, 255).astype(np.uint8)
+            for _ in range(8)]
+    return root, cal, ref, presses, rest
+
+
+def test_every_frame_in_order_with_the_reconstructors_heights(sensor):
+    _, cal, ref, presses, rest = sensor
+    frames = rest + [np.roll(presses[i % 4], i, axis=1) for i in range(12)]
+    out = list(stream(frames, cal, reference=ref))
+    assert [r.index for r in out] == list(range(len(frames)))
+    assert all(r.dropped == 0 for r in out)
+    recon = DepthReconstructor(cal, reference=ref)
+    for f, r in zip(frames, out, strict=True):
+        np.testing.assert_array_equal(r.height_mm, recon(f))
+        np.testing.assert_array_equal(r.contact, recon.contact_mask(f))
+    t = [r.t_capture_s for r in out]
+    assert np.all(np.diff(t) >= 0) and all(r.latency_s > 0 for r in out)
+    assert out[0].forces is None and out[0].total_force_n is None
+
+
+def test_auto_reference_leaves_out_a_press_among_the_first_frames(sensor):
+    _, cal, ref, presses, rest = sensor
+    first = [*rest[:4], presses[0], *rest[4:]]               # a press at frame 4
+    made, used = auto_reference(np.stack(first))
+    assert not used[4] and used.sum() == len(first) - 1
+    assert np.abs(made.astype(int) - ref).max() <= 2        # the noise of the rest frames
+    frames = first + presses
+    out = list(stream(frames, cal, reference="auto", n_reference=len(first)))
+    assert [r.index for r in out] == list(range(len(frames)))     # those frames processed too
+    recon = DepthReconstructor(cal, reference=made)
+    np.testing.assert_array_equal(out[-1].height_mm, recon(frames[-1]))
+
+
+def test_latest_policy_drops_stale_frames_and_ends_on_the_newest(sensor):
+    _, cal, ref, presses, _ = sensor
+    n = 60
+
+    def camera():                          # a 200 frames/s camera
+        for i in range(n):
+            time.sleep(0.005)
+            yield presses[i % 4]
+
+    got = []
+    for r in stream(camera(), cal, reference=ref, policy="latest"):
+        time.sleep(0.03)                   # a consumer six times slower
+        got.append(r)
+    idx = [r.index for r in got]
+    assert np.all(np.diff(idx) > 0) and idx[-1] == n - 1
+    assert sum(r.dropped for r in got) == n - len(got) > n // 2
+
+
+def test_closing_the_stream_stops_the_capture_thread(sensor):
+    _, cal, ref, presses, _ = sensor
+
+    def endless():
+        while True:
+            yield presses[0]
+
+    it = stream(endless(), cal, reference=ref)
+    for _ in range(3):
+        next(it)
+    it.close()
+    time.sleep(0.2)
+    assert not any(t.name == "tactilevision-capture" and t.is_alive()
+                   for t in threading.enumerate())
+
+
+def test_forces_follow_the_estimator(sensor):
+    _, cal, ref, presses, _ = sensor
+    out = list(stream(presses, cal, reference=ref, E_mpa=0.2, nu=0.48, thickness_mm=3.0))
+    recon = DepthReconstructor(cal, reference=ref, boundary="contact", level="median")
+    est = ForceEstimator(cal.shape, cal.mm_per_px, thickness_mm=3.0, E_mpa=0.2, nu=0.48)
+    for f, r in zip(presses, out, strict=True):
+        np.testing.assert_allclose(r.total_force_n, est(recon(f)).total_n, rtol=1e-6)
+        assert r.total_force_n[2] > 0.05
+    with pytest.raises(InputError, match="all of E_mpa, nu and thickness_mm"):
+        Pipeline(cal, reference=ref, E_mpa=0.2)
+
+
+def test_bad_sources(tmp_path, sensor):
+    (tmp_path / "notes.txt").write_text("x")
+    with pytest.raises(InputError, match="not a video"):
+        open_frames(tmp_path / "notes.txt")
+    with pytest.raises(InputError, match="no such file"):
+        open_frames(tmp_path / "missing.mp4")
+    (tmp_path / "empty").mkdir()
+    with pytest.raises(InputError, match="holds no"):
+        open_frames(tmp_path / "empty")
+    _, cal, ref, _, _ = sensor
+    with pytest.raises(InputError, match="policy"):
+        list(stream([ref], cal, reference=ref, policy="newest"))
+
+
+def test_cli_live_writes_the_annotated_video_and_the_csv(sensor, tmp_path, capsys):
+    root, _, _, presses, rest = sensor
+    video = tmp_path / "clip.avi"
+    vw = cv2.VideoWriter(str(video), cv2.VideoWriter_fourcc(*"MJPG"), 30.0, SIZE)
+    frames = rest + presses * 3
+    for f in frames:
+        vw.write(f)
+    vw.release()
+    out, table = tmp_path / "annotated.avi", tmp_path / "totals.csv"
+    assert main(["live", str(video), "--calibration", str(root / "optics.npz"),
+                 "--reference-frames", "8", "--E-mpa", "0.2", "--nu", "0.48",
+                 "--thickness-mm", "3", "--out", str(out), "--csv", str(table),
+                 "--no-progress"]) == 0
+    assert f"live: {len(frames)} frame(s)" in capsys.readouterr().out
+    cap = cv2.VideoCapture(str(out))
+    n = int(cap.get(cv2.CAP_PROP_FRAME_COUNT))
+    ok, img = cap.read()
+    cap.release()
+    assert ok and n == len(frames) and img.shape[:2] == (SIZE[1], 2 * SIZE[0])
+    rows = list(csv.DictReader(table.open()))
+    assert [int(r["frame"]) for r in rows] == list(range(len(frames)))
+    fz = np.array([float(r["fz_n"]) for r in rows])
+    assert np.all(fz[len(rest):] > 5 * np.abs(fz[:len(rest)]).max())   # presses vs rest
+    assert all(float(r["latency_ms"]) > 0 for r in rows)
+    assert main(["live", str(tmp_path / "nothing.mp4"), "--calibration",
+                 str(root / "optics.npz")]) == 2
+    assert "no such file" in capsys.readouterr().err
