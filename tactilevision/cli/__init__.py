@@ -25,6 +25,7 @@ from . import (
     _optics,
     _reconstruct,
     _validate,
+    _view,
 )
 
 __all__ = ["build_parser", "main"]

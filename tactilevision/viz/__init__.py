@@ -15,3 +15,6 @@ __all__ = ["bevel_panels", "calibration_figures", "depth_figure", "diagnosis_fig
            "nice_scale_bar_mm",
            "save_depth_image", "save_force_image", "save_validation_figure", "validation_figure",
            "write_calibration_report", "write_diagnosis_report"]
+from ._viewer import downsample_map, viewer_figure, write_viewer
+
+__all__ += ["downsample_map", "viewer_figure", "write_viewer"]

@@ -1,0 +1,244 @@
+"""``tactilevision view``: frames, a video or a batch's Zarr group -> one interactive HTML page."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+import numpy as np
+
+from .. import InputError
+from .._assets import KNOWN_SENSORS, default_calibration_path
+
+__all__ = ["add_parser", "run"]
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    """Register the ``view`` sub-command."""
+    p = sub.add_parser(
+        "view",
+        help="an interactive, self-contained HTML viewer (frame, height map, 3D surface, "
+        "force map, frame slider)",
+        description="Writes one HTML page (Plotly, its JavaScript inline: opens without a "
+        "network) with the tactile frame beside its height map (colour bar in mm), a 3D "
+        "surface to rotate, the pressure map (kPa) when E, nu and the thickness are given "
+        "or the Zarr group holds pressure_kpa, and a slider over the frames.",
+    )
+    p.add_argument("source", metavar="FRAMES_DIR|VIDEO|ZARR", type=Path,
+                   help="a folder of frames, a video file, or a NAME.zarr group written by "
+                   "'tactilevision batch'")
+    p.add_argument("--out", metavar="HTML", type=Path, default=Path("out/view.html"),
+                   help="the page to write (default: out/view.html)")
+    src = p.add_mutually_exclusive_group()
+    src.add_argument("--calibration", metavar="OPTICS", type=Path,
+                     help="photometric calibration file (.npz from 'optics calibrate')")
+    src.add_argument("--sensor", metavar="NAME", choices=KNOWN_SENSORS,
+                     help=f"use the shipped default calibration: {', '.join(KNOWN_SENSORS)}")
+    p.add_argument("--reference", metavar="REF", type=Path, default=None,
+                   help="no-contact frame; default found beside the frames or the video, "
+                   "else the calibration's")
+    p.add_argument("--max-frames", type=int, default=60, metavar="N",
+                   help="at most N frames, evenly spaced (default 60)")
+    p.add_argument("--max-px", type=int, default=160, metavar="PX",
+                   help="long side of the images on the page, px (default 160)")
+    p.add_argument("--fit", metavar="FIT.json", type=Path, default=None,
+                   help="E_mpa and nu from a fit/calibrate JSON (force map)")
+    p.add_argument("--E-mpa", type=float, default=None, help="Young's modulus, MPa (force map)")
+    p.add_argument("--nu", type=float, default=None, help="Poisson's ratio (force map)")
+    p.add_argument("--thickness-mm", type=float, default=None,
+                   help="gel thickness h, mm (force map)")
+    p.set_defaults(func=run)
+
+
+def _picks(n: int, k: int) -> np.ndarray:
+    """At most `k` indices of ``range(n)``, evenly spaced, first and last included."""
+    return np.unique(np.round(np.linspace(0, n - 1, min(n, k))).astype(int))
+
+
+def _material(args: argparse.Namespace) -> tuple[float, float, float] | None:
+    """(E_mpa, nu, thickness_mm) for the force map, or None when none was asked for."""
+    asked = (args.E_mpa is not None or args.nu is not None or args.fit is not None
+             or args.thickness_mm is not None)
+    if not asked:
+        return None
+    if args.fit is not None:
+        try:
+            obj = json.loads(Path(args.fit).read_text())
+            E, nu = float(obj["E_mpa"]), float(obj["nu"])
+        except FileNotFoundError:
+            raise InputError(f"{args.fit} does not exist") from None
+        except (json.JSONDecodeError, KeyError, TypeError, ValueError, UnicodeDecodeError) as e:
+            raise InputError(f"{args.fit} has no numeric E_mpa and nu ({e})") from None
+        if args.E_mpa is not None:
+            E = float(args.E_mpa)
+        if args.nu is not None:
+            nu = float(args.nu)
+    else:
+        if args.E_mpa is None or args.nu is None:
+            raise InputError("a force map needs both --E-mpa and --nu (or --fit FIT.json)")
+        E, nu = float(args.E_mpa), float(args.nu)
+    if args.thickness_mm is None:
+        raise InputError("a force map needs --thickness-mm (the gel thickness h)")
+    if not (np.isfinite(E) and E > 0 and np.isfinite(nu) and -1 < nu < 0.5
+            and np.isfinite(args.thickness_mm) and args.thickness_mm > 0):
+        raise InputError(f"E_mpa = {E}, nu = {nu}, thickness_mm = {args.thickness_mm}: "
+                         "need E > 0, -1 < nu < 0.5, h > 0")
+    return E, nu, float(args.thickness_mm)
+
+
+def _calibration(args: argparse.Namespace, required: bool):
+    from ..optics import PhotometricCalibration
+
+    path = args.calibration or (default_calibration_path(args.sensor) if args.sensor else None)
+    if path is None:
+        if required:
+            raise InputError("no photometric calibration: give --calibration OPTICS or --sensor")
+        return None
+    if not Path(path).is_file():
+        raise InputError(f"calibration {path} does not exist")
+    return PhotometricCalibration.load(path)
+
+
+def _read_source_frames(source: Path, args, shape: tuple[int, int] | None
+                        ) -> tuple[list[str], object, Path | None]:
+    """(labels of every frame, a reader ``i -> (H, W, 3) uint8 BGR``, the reference path)."""
+    from ..io import VideoFrames, find_reference, is_video, list_frames, read_frame
+
+    if source.is_dir():
+        paths = list_frames(source)
+        return ([p.name for p in paths], lambda i: read_frame(paths[i], shape),
+                find_reference(source))
+    if is_video(source):
+        vf = VideoFrames(source)
+        ref = None
+        for name in (f"{source.stem}_reference.png", "reference.png"):
+            if (source.parent / name).is_file():
+                ref = source.parent / name
+                break
+
+        def read(i: int) -> np.ndarray:
+            frame = vf.frame(i)
+            if shape is not None and frame.shape[:2] != tuple(shape):
+                raise InputError(f"video {source} is {frame.shape[1]} x {frame.shape[0]} px "
+                                 f"but the calibration expects {shape[1]} x {shape[0]} px")
+            return frame
+
+        return [f"{source.name}#{i}" for i in range(len(vf))], read, ref
+    raise InputError(f"{source} is neither a folder of frames, a video file nor a Zarr group")
+
+
+def _from_zarr(source: Path, args, picks_max: int):
+    import zarr
+
+    try:
+        g = zarr.open_group(str(source), mode="r")
+    except Exception as exc:  # zarr raises several types for a folder that is no group
+        raise InputError(f"{source} is not a readable Zarr group ({exc})") from None
+    if "height_mm" not in g:
+        raise InputError(f"Zarr group {source} has no 'height_mm' array (not written by "
+                         "'tactilevision batch'?)")
+    h = g["height_mm"]
+    if len(h.shape) != 3 or h.shape[0] == 0:
+        raise InputError(f"{source}/height_mm has shape {h.shape}, not (N, H, W) with N > 0")
+    idx = _picks(h.shape[0], picks_max)
+    heights = np.stack([np.asarray(h[int(i)], np.float32) for i in idx])
+    pressure = None
+    if "pressure_kpa" in g:
+        p = g["pressure_kpa"]
+        if len(p.shape) == 3 and p.shape[0] == h.shape[0]:
+            pressure = np.stack([np.asarray(p[int(i)], np.float32) for i in idx])
+    attrs = dict(g.attrs)
+    cal = _calibration(args, required=False)
+    if cal is None:
+        try:
+            from ..optics import PhotometricCalibration
+
+            cal_path = json.loads(attrs.get("settings", "{}")).get("calibration")
+            cal = PhotometricCalibration.load(cal_path) if cal_path else None
+        except Exception:  # the batch's calibration moved: axes in px then
+            cal = None
+    mm_per_px = cal.mm_per_px if cal is not None else None
+    frames = None
+    src = attrs.get("source")
+    labels = [f"frame {int(i)}" for i in idx]
+    if src:
+        try:
+            names, read, _ = _read_source_frames(Path(src), args, tuple(h.shape[1:]))
+            if len(names) == h.shape[0]:
+                frames = np.stack([read(int(i)) for i in idx])
+                labels = [names[int(i)] for i in idx]
+        except (InputError, OSError):
+            frames = None      # the source moved or changed: the height maps alone
+    return frames, heights, pressure, mm_per_px, labels
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run ``view``; returns 0, or 2 on bad input (nothing written then)."""
+    from ..viz._viewer import _plotly, write_viewer
+
+    source: Path = args.source
+    out: Path = args.out
+    if args.max_frames < 1:
+        raise InputError(f"--max-frames must be >= 1, got {args.max_frames}")
+    if args.max_px < 8:
+        raise InputError(f"--max-px must be >= 8, got {args.max_px}")
+    if out.is_dir():
+        raise InputError(f"--out {out} is a folder: give the .html file to write")
+    if not source.exists():
+        raise InputError(f"{source} does not exist")
+    _plotly()                                  # a missing Plotly says so before any work
+    material = _material(args)
+    is_zarr = source.is_dir() and ((source / "zarr.json").is_file()
+                                   or (source / ".zgroup").is_file()
+                                   or source.suffix == ".zarr")
+    if is_zarr:
+        if material is not None:
+            raise InputError(f"{source} is a Zarr group: its force maps come from "
+                             "'tactilevision batch forces', not --E-mpa/--nu/--fit")
+        frames, heights, pressure, mm_per_px, labels = _from_zarr(source, args,
+                                                                  args.max_frames)
+    else:
+        from ..optics import DepthReconstructor
+
+        if source.is_file() and not _is_video(source):
+            raise InputError(f"{source} is neither a folder of frames, a video file nor a "
+                             "Zarr group")
+        cal = _calibration(args, required=True)
+        names, read, ref_path = _read_source_frames(source, args, cal.shape)
+        if args.reference is not None:
+            if not args.reference.is_file():
+                raise InputError(f"reference {args.reference} does not exist")
+            ref_path = args.reference
+        if not names:
+            raise InputError(f"{source} holds no frames")
+        from ..io import read_reference
+
+        reference = read_reference(ref_path, cal.shape) if ref_path else None
+        recon = DepthReconstructor(cal, reference="calibration" if reference is None
+                                   else reference)
+        idx = _picks(len(names), args.max_frames)
+        frames = np.stack([read(int(i)) for i in idx])
+        heights = np.stack([recon(f) for f in frames]).astype(np.float32)
+        labels = [names[int(i)] for i in idx]
+        mm_per_px = cal.mm_per_px
+        pressure = None
+        if material is not None:
+            from ..fem import ForceEstimator
+
+            E, nu, h = material
+            est = ForceEstimator(cal.shape, cal.mm_per_px, thickness_mm=h, E_mpa=E, nu=nu)
+            pressure = np.stack([np.asarray(est(z).pressure_kpa, np.float32)
+                                 for z in heights])
+    path = write_viewer(out, frames, heights, mm_per_px=mm_per_px, pressure_kpa=pressure,
+                        titles=labels, max_px=args.max_px)
+    size = path.stat().st_size / 1e6
+    print(f"wrote {path} ({size:.1f} MB): {len(labels)} frame(s) of {source}"
+          + (", with the force map" if pressure is not None else ""))
+    return 0
+
+
+def _is_video(path: Path) -> bool:
+    from ..io import is_video
+
+    return is_video(path)
