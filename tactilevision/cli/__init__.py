@@ -31,7 +31,7 @@ from . import (
 __all__ = ["build_parser", "main"]
 
 _COMMANDS = (_calibrate, _reconstruct, _optics, _fit, _diagnose, _validate, _fem, _forces,
-             _history, _batch, _live)
+             _history, _batch, _live, _view)
 
 
 def build_parser() -> argparse.ArgumentParser:
