@@ -157,3 +157,24 @@ def test_cli_live_writes_the_annotated_video_and_the_csv(sensor, tmp_path, capsy
     assert main(["live", str(tmp_path / "nothing.mp4"), "--calibration",
                  str(root / "optics.npz")]) == 2
     assert "no such file" in capsys.readouterr().err
+
+
+def test_reconstruct_takes_a_video(sensor, tmp_path, capsys):
+    root, cal, ref, presses, _ = sensor
+    video = tmp_path / "clip.avi"
+    vw = cv2.VideoWriter(str(video), cv2.VideoWriter_fourcc(*"MJPG"), 30.0, SIZE)
+    for f in [ref, *presses]:
+        vw.write(f)
+    vw.release()
+    cv2.imwrite(str(tmp_path / "clip_reference.png"), ref)
+    out = tmp_path / "heights"
+    assert main(["reconstruct", str(video), "--calibration", str(root / "optics.npz"),
+                 "--out", str(out), "--no-images"]) == 0
+    assert "reference: " + str(tmp_path / "clip_reference.png") in capsys.readouterr().out
+    cap = cv2.VideoCapture(str(video))
+    decoded = [cap.read()[1] for _ in range(5)]
+    cap.release()
+    recon = DepthReconstructor(cal, reference=ref)
+    for i, f in enumerate(decoded):
+        np.testing.assert_array_equal(np.load(out / f"clip_{i:05d}_height.npy"), recon(f))
+    assert len(list(csv.DictReader((out / "heights.csv").open()))) == 5

@@ -21,13 +21,14 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     """Register the ``reconstruct`` sub-command."""
     p = sub.add_parser(
         "reconstruct",
-        help="height maps (.npy, mm) and depth images (.png) from a folder of frames",
+        help="height maps (.npy, mm) and depth images (.png) from a folder of frames or a video",
         description="Photometric stereo on every frame of FRAMES_DIR: writes <frame>_height.npy "
         "(float32, mm, positive into the gel), <frame>_depth.png (frame beside its coloured "
         "height map, colour bar in mm, scale bar) and heights.csv (one row per frame).",
     )
     p.add_argument("frames_dir", metavar="FRAMES_DIR", type=Path,
-                   help="folder of .png/.jpg frames (sorted by name)")
+                   help="folder of .png/.jpg frames (sorted by name), or a video file (.mp4, "
+                   ".avi, ...: its frames named <video stem>_<index>)")
     p.add_argument("--reference", metavar="REF", type=Path, default=None,
                    help="no-contact frame; default FRAMES_DIR/reference.png (or ref.jpg, or in "
                    "the parent folder), else the calibration's own reference")
@@ -52,7 +53,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run ``reconstruct``; returns 2 if any frame was skipped."""
-    from ..io import find_reference, list_frames, read_frame, read_reference
+    from ..io import VideoFrames, find_reference, is_video, list_frames, read_frame, read_reference
     from ..optics import DepthReconstructor, PhotometricCalibration
     from ..viz import save_depth_image
 
@@ -60,12 +61,18 @@ def run(args: argparse.Namespace) -> int:
     overwrite = args.overwrite
     cal_path = args.calibration or default_calibration_path(args.sensor)
     cal = PhotometricCalibration.load(cal_path)
-    frames = list_frames(args.frames_dir)
+    video = None
+    if args.frames_dir.is_file() and is_video(args.frames_dir):
+        video = VideoFrames(args.frames_dir)
+        frames = [_VideoFrame(args.frames_dir, i) for i in range(video.n_frames)]
+    else:
+        frames = list_frames(args.frames_dir)
     names = ["heights.csv"] + [f"{p.stem}_height.npy" for p in frames]
     if not args.no_images:
         names += [f"{p.stem}_depth.png" for p in frames]
     check_overwrite(out, names, overwrite=overwrite)
-    ref_path = args.reference or find_reference(args.frames_dir)
+    ref_path = args.reference or (_video_reference(args.frames_dir) if video is not None
+                                  else find_reference(args.frames_dir))
     if args.reference is not None and not args.reference.is_file():
         raise InputError(f"reference {args.reference} does not exist")
     reference = read_reference(ref_path, cal.shape) if ref_path else None
@@ -78,9 +85,11 @@ def run(args: argparse.Namespace) -> int:
     # written whole into a hidden folder in out, moved into place at the end (Ctrl-C: nothing)
     with StagedOutput(out, overwrite=overwrite) as stage:
         tmp = stage.path
+        decoded = video.iter(0, video.n_frames) if video is not None else None
         for path in tqdm(frames, desc="reconstruct", unit="frame", file=sys.stderr):
             try:
-                frame = read_frame(path, cal.shape)
+                frame = (read_frame(path, cal.shape) if decoded is None
+                         else _checked(next(decoded), cal.shape, path.name))
             except InputError as exc:
                 skipped.append(str(exc))
                 continue
@@ -107,3 +116,26 @@ def run(args: argparse.Namespace) -> int:
             print(f"tactilevision reconstruct: error: {msg}", file=sys.stderr)
         return 2
     return 0
+
+
+class _VideoFrame:
+    """A video's frame named as a file would be: ``<video stem>_<index>``."""
+
+    def __init__(self, video: Path, index: int) -> None:
+        self.stem = f"{video.stem}_{index:05d}"
+        self.name = f"{video.name}#{index}"
+
+
+def _video_reference(video: Path) -> Path | None:
+    """``<stem>_reference.png`` or ``reference.png`` beside a video, else None."""
+    for cand in (video.with_name(f"{video.stem}_reference.png"), video.parent / "reference.png"):
+        if cand.is_file():
+            return cand
+    return None
+
+
+def _checked(frame, shape: tuple[int, int], name: str):
+    if frame.shape[:2] != tuple(shape):
+        raise InputError(f"{name} is {frame.shape[1]} x {frame.shape[0]}, the calibration "
+                         f"{shape[1]} x {shape[0]}")
+    return frame
