@@ -1,0 +1,100 @@
+"""End-to-end rate and latency of the live pipeline (``tactilevision.live``), one core.
+
+Frames: the real GelSight presses of ``sample_frames/gelsight_ball`` (and their
+reference), resized to GelSlim 3.0's 427 x 320 and kept at GelSight's 640 x 480,
+with a LUT calibration fitted to them at each size. They come from an in-memory
+"camera" that never waits, through the pipeline's capture thread, under the
+'every' policy (every frame processed: the pipeline's own rate). For each size,
+height only and height + forces (spectral):
+
+- frames/s and the latency from capture to result (median, 95th percentile);
+- the same as a ratio to the bare per-frame work timed in the same run (the
+  reconstructor, and the force estimator, called in a plain loop): the
+  pipeline's own overhead.
+
+The design goal (issue 21): height + forces at 427 x 320 at 90 frames/s or more,
+latency under 2 frame periods (22 ms).
+
+Run: ``python benchmarks/bench_live.py [--frames 600]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import time
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from tactilevision.fem import ForceEstimator
+from tactilevision.live import Pipeline
+from tactilevision.optics import DepthReconstructor, PhotometricCalibration
+
+BALL = Path(__file__).resolve().parents[1] / "sample_frames" / "gelsight_ball"
+
+
+def _sensor(w: int, h: int):
+    def size(img):
+        return cv2.resize(img, (w, h), interpolation=cv2.INTER_AREA)
+
+    ref = size(cv2.imread(str(BALL / "reference.png")))
+    presses = [size(cv2.imread(str(p))) for p in sorted((BALL / "frames").glob("press_*.png"))]
+    cal = PhotometricCalibration.from_ball_presses(
+        ref, np.stack(presses), ball_radius_mm=2.0, mm_per_px=0.0295 * 640 / w, model="lut")
+    return cal, ref, presses
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--frames", type=int, default=600)
+    args = ap.parse_args()
+    cv2.setNumThreads(1)
+    os.environ.setdefault("OMP_NUM_THREADS", "1")
+    print(f"{os.cpu_count()} cores; OpenCV on 1 thread; {args.frames} frames per run, "
+          "'every' policy")
+    for w, h in ((427, 320), (640, 480)):
+        cal, ref, presses = _sensor(w, h)
+        frames = [np.roll(presses[i % 4], (i % 40) - 20, axis=1) for i in range(args.frames)]
+        for forces in (False, True):
+            kw = {"E_mpa": 0.2, "nu": 0.48, "thickness_mm": 3.0} if forces else {}
+            # the bare work, in a plain loop
+            recon = DepthReconstructor(cal, reference=ref,
+                                       boundary="contact" if forces else "neumann")
+            est = ForceEstimator(cal.shape, cal.mm_per_px, thickness_mm=3.0, E_mpa=0.2,
+                                 nu=0.48) if forces else None
+            t0 = time.perf_counter()
+            for f in frames:
+                z = recon(f)
+                recon.contact_mask(f)
+                if est is not None:
+                    est(z)
+            bare = (time.perf_counter() - t0) / len(frames)
+            pipe = Pipeline(cal, reference=ref, **kw)
+            lat = []
+            t0 = time.perf_counter()
+            for r in pipe.stream(iter(frames), policy="every"):
+                lat.append(r.latency_s)
+            per = (time.perf_counter() - t0) / len(frames)
+            # latency of a camera at the pipeline's own rate (no backlog): 'latest' policy
+            period = 1.1 * per
+
+            def camera(period=period, frames=frames):
+                nxt = time.perf_counter()
+                for f in frames[:200]:
+                    nxt += period
+                    time.sleep(max(0.0, nxt - time.perf_counter()))
+                    yield f
+
+            live = [r.latency_s for r in pipe.stream(camera(), policy="latest")]
+            what = "height + forces" if forces else "height only"
+            print(f"{w} x {h}, {what}: {1 / per:.0f} frames/s ({1e3 * per:.2f} ms a frame, "
+                  f"{per / bare:.2f} x the bare loop's {1e3 * bare:.2f} ms); latency with "
+                  f"every frame queued: median {1e3 * np.median(lat):.0f} ms; from a camera "
+                  f"at 0.9 x that rate ('latest'): median {1e3 * np.median(live):.1f} ms, "
+                  f"95th percentile {1e3 * np.percentile(live, 95):.1f} ms")
+
+
+if __name__ == "__main__":
+    main()
