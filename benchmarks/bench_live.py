@@ -8,6 +8,8 @@ with a LUT calibration fitted to them at each size. They come from an in-memory
 height only and height + forces (spectral):
 
 - frames/s and the latency from capture to result (median, 95th percentile);
+  with forces, at the heights' level 'median' (camera rate) and 'contact' (zero
+  outside the contact: the accurate footprint, the ``forces`` command's default);
 - the same as a ratio to the bare per-frame work timed in the same run (the
   reconstructor, and the force estimator, called in a plain loop): the
   pipeline's own overhead.
@@ -57,11 +59,11 @@ def main() -> None:
     for w, h in ((427, 320), (640, 480)):
         cal, ref, presses = _sensor(w, h)
         frames = [np.roll(presses[i % 4], (i % 40) - 20, axis=1) for i in range(args.frames)]
-        for forces in (False, True):
+        for forces, level in ((False, "median"), (True, "median"), (True, "contact")):
             kw = {"E_mpa": 0.2, "nu": 0.48, "thickness_mm": 3.0} if forces else {}
             # the bare work, in a plain loop
             recon = DepthReconstructor(cal, reference=ref,
-                                       boundary="contact" if forces else "neumann")
+                                       boundary="contact" if level == "contact" else "neumann")
             est = ForceEstimator(cal.shape, cal.mm_per_px, thickness_mm=3.0, E_mpa=0.2,
                                  nu=0.48) if forces else None
             t0 = time.perf_counter()
@@ -71,7 +73,7 @@ def main() -> None:
                 if est is not None:
                     est(z)
             bare = (time.perf_counter() - t0) / len(frames)
-            pipe = Pipeline(cal, reference=ref, **kw)
+            pipe = Pipeline(cal, reference=ref, level=level, **kw)
             lat = []
             t0 = time.perf_counter()
             for r in pipe.stream(iter(frames), policy="every"):
@@ -88,7 +90,7 @@ def main() -> None:
                     yield f
 
             live = [r.latency_s for r in pipe.stream(camera(), policy="latest")]
-            what = "height + forces" if forces else "height only"
+            what = (f"height + forces, level '{level}'" if forces else "height only")
             print(f"{w} x {h}, {what}: {1 / per:.0f} frames/s ({1e3 * per:.2f} ms a frame, "
                   f"{per / bare:.2f} x the bare loop's {1e3 * bare:.2f} ms); latency with "
                   f"every frame queued: median {1e3 * np.median(lat):.0f} ms; from a camera "

@@ -11,6 +11,7 @@ import numpy as np
 
 from .. import InputError
 from .._assets import KNOWN_SENSORS, default_calibration_path
+from ._out import check_output_folder, output_folder
 
 __all__ = ["add_parser", "annotate", "run"]
 
@@ -49,6 +50,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="drop stale frames when slower than the camera (latest, the default "
                    "for a camera) or process every frame (every, the default for files)")
     p.add_argument("--max-frames", type=int, default=None, help="stop after N frames")
+    p.add_argument("--level", choices=("contact", "median", "far_field"), default=None,
+                   help="the height's zero (default: contact with forces, the accurate "
+                   "footprint; median, several times faster, for camera rate)")
     p.add_argument("--out", metavar="VIDEO", type=Path, default=None,
                    help="annotated video to write (.mp4 or .avi)")
     p.add_argument("--csv", metavar="FILE", type=Path, default=None,
@@ -132,13 +136,19 @@ def run(args: argparse.Namespace) -> int:
     if args.out is not None and args.out.suffix.lower() not in (".mp4", ".avi"):
         raise InputError(f"--out {args.out}: write a .mp4 or .avi video")
     for p in (args.out, args.csv):
-        if p is not None and p.parent and not p.parent.exists():
-            raise InputError(f"{p}: its folder {p.parent} does not exist")
+        if p is not None:
+            check_output_folder(p.parent, f"folder of {p.name}")
+            if p.is_dir():
+                raise InputError(f"{p} is a folder: give a file name")
     reference = args.reference
     if reference not in ("auto", "calibration"):
         reference = read_reference(Path(reference))
     pipe = Pipeline(cal_path, reference=reference, n_reference=args.reference_frames,
-                    E_mpa=args.E_mpa, nu=args.nu, thickness_mm=args.thickness_mm)
+                    E_mpa=args.E_mpa, nu=args.nu, thickness_mm=args.thickness_mm,
+                    level=args.level)
+    for p in (args.out, args.csv):
+        if p is not None:
+            output_folder(p.parent, f"folder of {p.name}")
     mm2 = pipe.calibration.mm_per_px ** 2
     writer = None
     fh = wcsv = None

@@ -223,6 +223,11 @@ class Pipeline:
         Eq. (5)'s large-deformation stiffening for the forces.
     engine : {'table', 'onnx'}, default 'table'
         The reconstructor's engine.
+    level : {'contact', 'median', 'far_field'}, optional
+        The height's zero, as ``tactilevision forces --level``. Default
+        'contact' with forces (zero outside the contact, heights integrated
+        over it: the accurate footprint, at several times the cost a frame,
+        ``benchmarks/bench_live.py``), 'median' without.
 
     Raises
     ------
@@ -240,7 +245,7 @@ class Pipeline:
     def __init__(self, calibration, *, reference="auto", n_reference: int = 10,
                  E_mpa: float | None = None, nu: float | None = None,
                  thickness_mm: float | None = None, beta: float = 0.0,
-                 engine: str = "table") -> None:
+                 engine: str = "table", level: str | None = None) -> None:
         from ..optics import PhotometricCalibration
 
         self.calibration = (calibration if isinstance(calibration, PhotometricCalibration)
@@ -256,6 +261,9 @@ class Pipeline:
             raise InputError(f"n_reference must be >= 1, got {n_reference}")
         self.n_reference = int(n_reference)
         self.engine = engine
+        self.level = level or ("contact" if self.material is not None else "median")
+        if self.level not in ("contact", "median", "far_field"):
+            raise InputError(f"level must be 'contact', 'median' or 'far_field', got {level!r}")
         self.reference = reference
         self._recon = None
         self._est = None
@@ -270,7 +278,8 @@ class Pipeline:
         forces = self.material is not None
         self._recon = DepthReconstructor(
             cal, reference=reference, engine=self.engine,
-            boundary="contact" if forces else "neumann", level="median")
+            boundary="contact" if self.level == "contact" else "neumann",
+            level="median" if self.level == "contact" else self.level)
         if forces:
             E, nu, h, beta = self.material
             self._est = ForceEstimator(cal.shape, cal.mm_per_px, thickness_mm=h, E_mpa=E,
@@ -382,7 +391,7 @@ def stream(source, calibration, *, policy: str | None = None, max_frames: int | 
     max_frames : int, optional
     **kwargs
         :class:`Pipeline`'s (reference, n_reference, E_mpa, nu, thickness_mm,
-        beta, engine).
+        beta, engine, level).
 
     Yields
     ------
