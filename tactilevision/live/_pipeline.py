@@ -238,7 +238,7 @@ class Pipeline:
     --------
     >>> pipe = Pipeline("calibration/gelsight.npz", E_mpa=0.2, nu=0.48,
     ...                 thickness_mm=3.0)                        # doctest: +SKIP
-    >>> for r in pipe.stream(0):                                 # camera 0, doctest: +SKIP
+    >>> for r in pipe.stream(0):  # camera 0  # doctest: +SKIP
     ...     print(r.index, r.total_force_n[2], r.latency_s)
     """
 
