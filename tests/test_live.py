@@ -178,3 +178,29 @@ def test_reconstruct_takes_a_video(sensor, tmp_path, capsys):
     for i, f in enumerate(decoded):
         np.testing.assert_array_equal(np.load(out / f"clip_{i:05d}_height.npy"), recon(f))
     assert len(list(csv.DictReader((out / "heights.csv").open()))) == 5
+
+
+def test_forces_takes_a_video(sensor, tmp_path, capsys):
+    root, cal, ref, presses, _ = sensor
+    video = tmp_path / "clip.avi"
+    vw = cv2.VideoWriter(str(video), cv2.VideoWriter_fourcc(*"MJPG"), 30.0, SIZE)
+    for f in [ref, *presses]:
+        vw.write(f)
+    vw.release()
+    cv2.imwrite(str(tmp_path / "clip_reference.png"), ref)
+    assert main(["forces", str(video), "--calibration", str(root / "optics.npz"),
+                 "--E-mpa", "0.2", "--nu", "0.48", "--thickness-mm", "3", "--every", "2",
+                 "--no-images", "--no-progress"]) == 0
+    capsys.readouterr()
+    rows = list(csv.DictReader((tmp_path / "clip_forces" / "forces.csv").open()))
+    assert [r["frame"] for r in rows] == ["clip.avi#0", "clip.avi#2", "clip.avi#4"]
+    assert [float(r["t_s"]) for r in rows] == pytest.approx([0.0, 2 / 30, 4 / 30], abs=1e-4)
+    cap = cv2.VideoCapture(str(video))
+    decoded = [cap.read()[1] for _ in range(5)]
+    cap.release()
+    recon = DepthReconstructor(cal, reference=ref, boundary="contact", level="median")
+    est = ForceEstimator(cal.shape, cal.mm_per_px, thickness_mm=3.0, E_mpa=0.2, nu=0.48,
+                         contact="footprint", threshold_mm=0.02, beta=0.0)  # forces' defaults
+    for r, i in zip(rows, (0, 2, 4), strict=True):
+        assert float(r["fz_n"]) == pytest.approx(float(est(recon(decoded[i])).total_n[2]),
+                                                 rel=1e-4, abs=1e-5)

@@ -32,10 +32,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "sensor's fz at the frame's time). E and nu come from --E-mpa/--nu, --fit FIT.json, "
         "or a session's calibration/fit.json.",
     )
-    p.add_argument("source", metavar="SESSION_DIR|FRAMES_DIR", type=Path,
-                   help="a session folder (session.toml) or a folder of frames")
+    p.add_argument("source", metavar="SESSION_DIR|FRAMES_DIR|VIDEO", type=Path,
+                   help="a session folder (session.toml), a folder of frames, or a video "
+                   "file (frames named <stem>_<index>, t_s from its frame rate)")
     p.add_argument("--out", metavar="DIR", type=Path, default=None,
-                   help="output folder (default: SOURCE/forces)")
+                   help="output folder (default: SOURCE/forces; for a video <stem>_forces "
+                   "beside it)")
     src = p.add_mutually_exclusive_group()
     src.add_argument("--calibration", metavar="OPTICS", type=Path,
                      help="photometric calibration (.npz); a session's own by default")
@@ -126,17 +128,29 @@ def _beta(args: argparse.Namespace, fit_obj: dict, material_source: str
 def run(args: argparse.Namespace) -> int:
     """Run ``forces``; returns 0, or 2 on bad input (nothing written then)."""
     from ..fem import ForceEstimator
-    from ..io import find_reference, list_frames, read_frame, read_reference, read_session
+    from ..io import (
+        VideoFrames,
+        find_reference,
+        is_video,
+        list_frames,
+        read_frame,
+        read_reference,
+        read_session,
+    )
     from ..optics import DepthReconstructor, PhotometricCalibration
     from ..viz import save_force_image
+    from ._reconstruct import _checked, _video_reference, _VideoFrame
 
     source: Path = args.source
-    if not source.is_dir():
-        raise InputError(f"{source} is not a folder")
-    check_output_folder(args.out if args.out is not None else source / "forces")
+    video = VideoFrames(source) if source.is_file() and is_video(source) else None
+    if video is None and not source.is_dir():
+        raise InputError(f"{source} is not a folder nor a video file")
+    default_out = (source.with_name(f"{source.stem}_forces") if video is not None
+                   else source / "forces")
+    check_output_folder(args.out if args.out is not None else default_out)
     overwrite = args.overwrite
     session = None
-    if (source / "session.toml").is_file():
+    if video is None and (source / "session.toml").is_file():
         session = read_session(source)
         frames = list(session.frame_paths)
         times = np.asarray(session.frame_times_s, np.float64)
@@ -153,13 +167,18 @@ def run(args: argparse.Namespace) -> int:
         reference = session.reference
         mm_per_px = cfg.mm_per_px
     else:
-        frames = list_frames(source)
-        times = np.full(len(frames), np.nan)
+        if video is not None:
+            frames = [_VideoFrame(source, i) for i in range(video.n_frames)]
+            times = np.arange(video.n_frames) / video.fps
+        else:
+            frames = list_frames(source)
+            times = np.full(len(frames), np.nan)
         cal_path = args.calibration or (default_calibration_path(args.sensor) if args.sensor
                                         else None)
         optics_note = "--calibration" if args.calibration else f"shipped '{args.sensor}'"
         if args.thickness_mm is None:
-            raise InputError("a frames folder needs --thickness-mm (the gel thickness h)")
+            raise InputError("a frames folder or video needs --thickness-mm (the gel "
+                             "thickness h)")
         h = args.thickness_mm
         reference = None
         mm_per_px = None
@@ -167,7 +186,8 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("no photometric calibration: give --calibration OPTICS or --sensor")
     cal = PhotometricCalibration.load(cal_path)
     if session is None:
-        ref_path = args.reference or find_reference(source)
+        ref_path = args.reference or (_video_reference(source) if video is not None
+                                      else find_reference(source))
         if args.reference is not None and not args.reference.is_file():
             raise InputError(f"reference {args.reference} does not exist")
         reference = read_reference(ref_path, cal.shape) if ref_path else None
@@ -179,7 +199,7 @@ def run(args: argparse.Namespace) -> int:
     names = ["forces.csv"] + ([] if args.no_images else
                               [f"{frames[i].stem}_force.png"
                                for i in range(0, len(frames), args.every)])
-    check_overwrite(args.out if args.out is not None else source / "forces", names,
+    check_overwrite(args.out if args.out is not None else default_out, names,
                     overwrite=overwrite)
     E, nu, material_source, fit_obj = _material(args, source if session else None)
     beta, beta_source = _beta(args, fit_obj, material_source)
@@ -195,7 +215,7 @@ def run(args: argparse.Namespace) -> int:
     est = ForceEstimator(cal.shape, mm_per_px, thickness_mm=h, E_mpa=E, nu=nu, grid=grid,
                          method=args.method, contact=args.contact,
                          threshold_mm=args.threshold_mm, beta=beta)
-    out = args.out if args.out is not None else source / "forces"
+    out = args.out if args.out is not None else default_out
     ft = None
     ft_note = ""
     if session is not None and session.forces_n.size:
@@ -221,10 +241,17 @@ def run(args: argparse.Namespace) -> int:
 
             it = tqdm(picks, desc="forces", unit="frame", file=sys.stderr, mininterval=1.0)
         rows, skipped, at_edge = [], [], []
+        decoded = video.iter(0, video.n_frames) if video is not None else None
+        at = 0                        # the next frame the video decoder gives
         for i in it:
             path = frames[i]
             try:
-                frame = read_frame(path, cal.shape)
+                if decoded is None:
+                    frame = read_frame(path, cal.shape)
+                else:                 # decoded in order: skip to frame i
+                    while at <= i:
+                        frame, at = next(decoded), at + 1
+                    frame = _checked(frame, cal.shape, path.name)
             except InputError as exc:
                 skipped.append(str(exc))
                 continue

@@ -221,6 +221,15 @@ class Pipeline:
         (:class:`~tactilevision.fem.ForceEstimator`, spectral method).
     beta : float, default 0.0
         Eq. (5)'s large-deformation stiffening for the forces.
+    contact : {'field', 'footprint'}, default 'field'
+    threshold_mm : float, default 0.01
+        The forces' traction region (:class:`~tactilevision.fem.ForceEstimator`'s
+        defaults): the whole height map, or only the pixels higher than
+        `threshold_mm` (``tactilevision forces`` uses 'footprint' and 0.02 mm).
+        The footprint's solve is slow on median-levelled heights, whose
+        background is not zero: 432 ms a 427 x 320 frame against 15 ms with
+        'field' (``benchmarks/bench_live.py`` run once with the footprint,
+        2026-11-23); use it with ``level='contact'``.
     engine : {'table', 'onnx'}, default 'table'
         The reconstructor's engine.
     level : {'contact', 'median', 'far_field'}, optional
@@ -245,7 +254,8 @@ class Pipeline:
     def __init__(self, calibration, *, reference="auto", n_reference: int = 10,
                  E_mpa: float | None = None, nu: float | None = None,
                  thickness_mm: float | None = None, beta: float = 0.0,
-                 engine: str = "table", level: str | None = None) -> None:
+                 engine: str = "table", level: str | None = None,
+                 contact: str = "field", threshold_mm: float = 0.01) -> None:
         from ..optics import PhotometricCalibration
 
         self.calibration = (calibration if isinstance(calibration, PhotometricCalibration)
@@ -254,6 +264,7 @@ class Pipeline:
         if any(given) and not all(given):
             raise InputError("forces need all of E_mpa, nu and thickness_mm")
         self.material = (E_mpa, nu, thickness_mm, beta) if all(given) else None
+        self.contact, self.threshold_mm = contact, float(threshold_mm)
         if isinstance(reference, str) and reference not in ("auto", "calibration"):
             raise InputError(f"reference must be a frame, 'auto' or 'calibration', got "
                              f"{reference!r}")
@@ -283,7 +294,8 @@ class Pipeline:
         if forces:
             E, nu, h, beta = self.material
             self._est = ForceEstimator(cal.shape, cal.mm_per_px, thickness_mm=h, E_mpa=E,
-                                       nu=nu, beta=beta)
+                                       nu=nu, beta=beta, contact=self.contact,
+                                       threshold_mm=self.threshold_mm)
         self.reference = reference
 
     def process(self, frame: np.ndarray):
@@ -391,7 +403,7 @@ def stream(source, calibration, *, policy: str | None = None, max_frames: int | 
     max_frames : int, optional
     **kwargs
         :class:`Pipeline`'s (reference, n_reference, E_mpa, nu, thickness_mm,
-        beta, engine, level).
+        beta, engine, level, contact, threshold_mm).
 
     Yields
     ------
