@@ -170,3 +170,52 @@ def synthetic_presses(n: int = 6, *, shape: tuple[int, int] = (120, 160),
     frames = np.stack([render_press(shape, tuple(c), r, ball_radius, seed=seed + 1 + i)
                        for i, (c, r) in enumerate(zip(centres, radii, strict=True))])
     return ref, frames, centres, radii
+
+
+def quarter_gelsight(size: tuple[int, int] = (160, 120)):
+    """The real GelSight ball presses of ``sample_frames/gelsight_ball`` resized to `size`
+    (W, H; a quarter of the sensor's by default, cheap to process), their reference, and a
+    LUT calibration fitted to them: ``(reference, presses, calibration)``, BGR uint8."""
+    import cv2
+    import numpy as np
+
+    from tactilevision.optics import PhotometricCalibration
+
+    ball = ROOT / "sample_frames" / "gelsight_ball"
+
+    def small(img):
+        return cv2.resize(img, size, interpolation=cv2.INTER_AREA)
+
+    ref = small(cv2.imread(str(ball / "reference.png")))
+    presses = [small(cv2.imread(str(p))) for p in sorted((ball / "frames").glob("press_*.png"))]
+    cal = PhotometricCalibration.from_ball_presses(
+        ref, np.stack(presses), ball_radius_mm=2.0, mm_per_px=0.0295 * 640 / size[0],
+        model="lut")
+    return ref, presses, cal
+
+
+def write_video(path, frames, fourcc: str = "MJPG", fps: float = 90.0) -> None:
+    """Write BGR frames to a video with OpenCV (MJPG .avi by default)."""
+    import cv2
+
+    h, w = frames[0].shape[:2]
+    vw = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*fourcc), fps, (w, h))
+    for f in frames:
+        vw.write(f)
+    vw.release()
+
+
+def decoded(path):
+    """Every frame of a video, read sequentially (no seeking): (N, H, W, 3) uint8."""
+    import cv2
+    import numpy as np
+
+    cap = cv2.VideoCapture(str(path))
+    out = []
+    while True:
+        ok, f = cap.read()
+        if not ok:
+            break
+        out.append(f)
+    cap.release()
+    return np.stack(out)

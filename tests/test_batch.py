@@ -23,6 +23,7 @@ pytest.importorskip("pyarrow")
 import cv2
 import pyarrow.parquet as pq
 import zarr
+from _data import decoded, quarter_gelsight, write_video
 from distributed import Client, LocalCluster
 
 from tactilevision.batch import BatchSettings, open_source, run_batch
@@ -35,45 +36,16 @@ N_VIDEO = 24
 SIZE = (160, 120)
 
 
-def _small(img: np.ndarray) -> np.ndarray:
-    return cv2.resize(img, SIZE, interpolation=cv2.INTER_AREA)
-
-
-def _write_video(path: Path, frames: list[np.ndarray], fourcc: str, fps: float = 90.0) -> None:
-    h, w = frames[0].shape[:2]
-    vw = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*fourcc), fps, (w, h))
-    for f in frames:
-        vw.write(f)
-    vw.release()
-
-
-def _decoded(path: Path) -> np.ndarray:
-    """Every frame of a video, read sequentially (no seeking)."""
-    cap = cv2.VideoCapture(str(path))
-    out = []
-    while True:
-        ok, f = cap.read()
-        if not ok:
-            break
-        out.append(f)
-    cap.release()
-    return np.stack(out)
-
-
 @pytest.fixture(scope="module")
 def small(tmp_path_factory) -> Path:
     """The real GelSight presses at a quarter size: a frame folder (its reference in the
     parent) and a LUT calibration fitted to them (cheap to build in every worker)."""
     root = tmp_path_factory.mktemp("small")
     (root / "frames").mkdir()
-    ref = _small(cv2.imread(str(BALL / "reference.png")))
+    ref, presses, cal = quarter_gelsight(SIZE)
     cv2.imwrite(str(root / "reference.png"), ref)
-    presses = []
-    for p in sorted((BALL / "frames").glob("press_*.png")):
-        presses.append(_small(cv2.imread(str(p))))
-        cv2.imwrite(str(root / "frames" / p.name), presses[-1])
-    cal = PhotometricCalibration.from_ball_presses(ref, np.stack(presses), ball_radius_mm=2.0,
-                                                   mm_per_px=4 * 0.0295, model="lut")
+    for p, img in zip(sorted((BALL / "frames").glob("press_*.png")), presses, strict=True):
+        cv2.imwrite(str(root / "frames" / p.name), img)
     cal.save(root / "optics.npz")
     return root
 
@@ -86,7 +58,7 @@ def clip(small) -> Path:
     presses = [cv2.imread(str(p)) for p in sorted((small / "frames").glob("press_*.png"))]
     frames = [ref] + [np.roll(presses[i % 4], i, axis=1) for i in range(1, N_VIDEO)]
     path = small / "clip.avi"
-    _write_video(path, frames, "MJPG")
+    write_video(path, frames, "MJPG")
     cv2.imwrite(str(small / "clip_reference.png"), ref)
     return path
 
@@ -114,7 +86,7 @@ def _single_process(clip: Path, frames: np.ndarray, reference: np.ndarray) -> np
 
 
 def _expected(clip: Path) -> np.ndarray:
-    return _single_process(clip, _decoded(clip),
+    return _single_process(clip, decoded(clip),
                            cv2.imread(str(clip.with_name("clip_reference.png"))))
 
 
@@ -126,10 +98,10 @@ def test_video_chunks_equal_the_sequential_pass(tmp_path, suffix, fourcc):
     rng = np.random.default_rng(0)
     frames = [rng.integers(0, 255, (48, 64, 3), dtype=np.uint8) for _ in range(40)]
     path = tmp_path / f"v{suffix}"
-    _write_video(path, frames, fourcc)
+    write_video(path, frames, fourcc)
     v = VideoFrames(path)
     assert v.n_frames == 40 and v.shape == (48, 64) and v.fps == pytest.approx(90.0)
-    seq = _decoded(path)
+    seq = decoded(path)
     for start, stop in ((0, 7), (13, 29), (33, 40)):
         np.testing.assert_array_equal(v.read(start, stop), seq[start:stop])
     with pytest.raises(InputError, match="lie outside"):
@@ -280,7 +252,7 @@ def test_cli_batch_forces_on_a_running_scheduler(client, clip, tmp_path, capsys)
     recon = DepthReconstructor(cal, reference=ref, boundary="contact", level="median")
     est = ForceEstimator(cal.shape, cal.mm_per_px, thickness_mm=3.0, E_mpa=0.2, nu=0.48,
                          contact="footprint", threshold_mm=0.02, beta=0.0)
-    frame = _decoded(clip)[5]
+    frame = decoded(clip)[5]
     fm = est(recon(frame))
     table = pq.read_table(out / "clip.parquet").to_pydict()
     assert table["fz_n"][5] == pytest.approx(float(fm.total_n[2]), rel=1e-5)

@@ -7,34 +7,26 @@ from __future__ import annotations
 import csv
 import threading
 import time
-from pathlib import Path
 
 import cv2
 import numpy as np
 import pytest
+from _data import decoded, quarter_gelsight, write_video
 
 from tactilevision import InputError
 from tactilevision.cli import main
 from tactilevision.fem import ForceEstimator
 from tactilevision.live import Pipeline, auto_reference, open_frames, stream
-from tactilevision.optics import DepthReconstructor, PhotometricCalibration
+from tactilevision.optics import DepthReconstructor
 
-BALL = Path(__file__).resolve().parents[1] / "sample_frames" / "gelsight_ball"
 SIZE = (160, 120)        # a quarter of GelSight's frame: cheap to process
-
-
-def _small(img: np.ndarray) -> np.ndarray:
-    return cv2.resize(img, SIZE, interpolation=cv2.INTER_AREA)
 
 
 @pytest.fixture(scope="module")
 def sensor(tmp_path_factory):
     """The real GelSight presses at a quarter size, their reference, a LUT calibration."""
     root = tmp_path_factory.mktemp("live")
-    ref = _small(cv2.imread(str(BALL / "reference.png")))
-    presses = [_small(cv2.imread(str(p))) for p in sorted((BALL / "frames").glob("press_*.png"))]
-    cal = PhotometricCalibration.from_ball_presses(ref, np.stack(presses), ball_radius_mm=2.0,
-                                                   mm_per_px=4 * 0.0295, model="lut")
+    ref, presses, cal = quarter_gelsight(SIZE)
     cal.save(root / "optics.npz")
     rng = np.random.default_rng(0)
     rest = [np.clip(ref.astype(int) + rng.integers(-2, 3, ref.shape), 0, 255).astype(np.uint8)
@@ -133,11 +125,8 @@ def test_bad_sources(tmp_path, sensor):
 def test_cli_live_writes_the_annotated_video_and_the_csv(sensor, tmp_path, capsys):
     root, _, _, presses, rest = sensor
     video = tmp_path / "clip.avi"
-    vw = cv2.VideoWriter(str(video), cv2.VideoWriter_fourcc(*"MJPG"), 30.0, SIZE)
     frames = rest + presses * 3
-    for f in frames:
-        vw.write(f)
-    vw.release()
+    write_video(video, frames, fps=30.0)
     out, table = tmp_path / "annotated.avi", tmp_path / "totals.csv"
     assert main(["live", str(video), "--calibration", str(root / "optics.npz"),
                  "--reference-frames", "8", "--E-mpa", "0.2", "--nu", "0.48",
@@ -162,20 +151,15 @@ def test_cli_live_writes_the_annotated_video_and_the_csv(sensor, tmp_path, capsy
 def test_reconstruct_takes_a_video(sensor, tmp_path, capsys):
     root, cal, ref, presses, _ = sensor
     video = tmp_path / "clip.avi"
-    vw = cv2.VideoWriter(str(video), cv2.VideoWriter_fourcc(*"MJPG"), 30.0, SIZE)
-    for f in [ref, *presses]:
-        vw.write(f)
-    vw.release()
+    write_video(video, [ref, *presses], fps=30.0)
     cv2.imwrite(str(tmp_path / "clip_reference.png"), ref)
     out = tmp_path / "heights"
     assert main(["reconstruct", str(video), "--calibration", str(root / "optics.npz"),
                  "--out", str(out), "--no-images"]) == 0
     assert "reference: " + str(tmp_path / "clip_reference.png") in capsys.readouterr().out
-    cap = cv2.VideoCapture(str(video))
-    decoded = [cap.read()[1] for _ in range(5)]
-    cap.release()
+    frames = decoded(video)
     recon = DepthReconstructor(cal, reference=ref)
-    for i, f in enumerate(decoded):
+    for i, f in enumerate(frames):
         np.testing.assert_array_equal(np.load(out / f"clip_{i:05d}_height.npy"), recon(f))
     assert len(list(csv.DictReader((out / "heights.csv").open()))) == 5
 
@@ -183,10 +167,7 @@ def test_reconstruct_takes_a_video(sensor, tmp_path, capsys):
 def test_forces_takes_a_video(sensor, tmp_path, capsys):
     root, cal, ref, presses, _ = sensor
     video = tmp_path / "clip.avi"
-    vw = cv2.VideoWriter(str(video), cv2.VideoWriter_fourcc(*"MJPG"), 30.0, SIZE)
-    for f in [ref, *presses]:
-        vw.write(f)
-    vw.release()
+    write_video(video, [ref, *presses], fps=30.0)
     cv2.imwrite(str(tmp_path / "clip_reference.png"), ref)
     assert main(["forces", str(video), "--calibration", str(root / "optics.npz"),
                  "--E-mpa", "0.2", "--nu", "0.48", "--thickness-mm", "3", "--every", "2",
@@ -195,12 +176,10 @@ def test_forces_takes_a_video(sensor, tmp_path, capsys):
     rows = list(csv.DictReader((tmp_path / "clip_forces" / "forces.csv").open()))
     assert [r["frame"] for r in rows] == ["clip.avi#0", "clip.avi#2", "clip.avi#4"]
     assert [float(r["t_s"]) for r in rows] == pytest.approx([0.0, 2 / 30, 4 / 30], abs=1e-4)
-    cap = cv2.VideoCapture(str(video))
-    decoded = [cap.read()[1] for _ in range(5)]
-    cap.release()
+    frames = decoded(video)
     recon = DepthReconstructor(cal, reference=ref, boundary="contact", level="median")
     est = ForceEstimator(cal.shape, cal.mm_per_px, thickness_mm=3.0, E_mpa=0.2, nu=0.48,
                          contact="footprint", threshold_mm=0.02, beta=0.0)  # forces' defaults
     for r, i in zip(rows, (0, 2, 4), strict=True):
-        assert float(r["fz_n"]) == pytest.approx(float(est(recon(decoded[i])).total_n[2]),
+        assert float(r["fz_n"]) == pytest.approx(float(est(recon(frames[i])).total_n[2]),
                                                  rel=1e-4, abs=1e-5)

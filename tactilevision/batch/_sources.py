@@ -69,14 +69,6 @@ class FrameSource:
             yield from VideoFrames(self.path).iter(start, stop)
 
 
-def _video_reference(path: Path) -> Path | None:
-    for cand in (path.with_name(f"{path.stem}_reference.png"), path.parent / "reference.png",
-                 path.parent / "reference.jpg"):
-        if cand.is_file():
-            return cand
-    return None
-
-
 def open_source(path: str | Path) -> FrameSource:
     """Open a batch input: a folder of frames (or a session folder) or a video file.
 
@@ -95,7 +87,14 @@ def open_source(path: str | Path) -> FrameSource:
         (:data:`~tactilevision.io.VIDEO_SUFFIXES`), holds no frames, or its
         first frame cannot be read.
     """
-    from ..io import VideoFrames, find_reference, is_video, list_frames, read_image
+    from ..io import (
+        VideoFrames,
+        find_reference,
+        find_video_reference,
+        is_video,
+        list_frames,
+        read_image,
+    )
 
     p = Path(path)
     if not p.exists():
@@ -106,7 +105,7 @@ def open_source(path: str | Path) -> FrameSource:
                              "folder of frames")
         v = VideoFrames(p)
         return FrameSource(path=p, n_frames=v.n_frames, shape=v.shape, fps=v.fps,
-                           frame_paths=(), reference=_video_reference(p))
+                           frame_paths=(), reference=find_video_reference(p))
     frames = tuple(list_frames(p))
     if not frames:
         raise InputError(f"{p} holds no .png or .jpg frames")

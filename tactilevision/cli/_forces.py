@@ -131,6 +131,7 @@ def run(args: argparse.Namespace) -> int:
     from ..io import (
         VideoFrames,
         find_reference,
+        find_video_reference,
         is_video,
         list_frames,
         read_frame,
@@ -139,7 +140,7 @@ def run(args: argparse.Namespace) -> int:
     )
     from ..optics import DepthReconstructor, PhotometricCalibration
     from ..viz import save_force_image
-    from ._reconstruct import _checked, _video_reference, _VideoFrame
+    from ._reconstruct import _checked, _VideoFrame
 
     source: Path = args.source
     video = VideoFrames(source) if source.is_file() and is_video(source) else None
@@ -186,7 +187,7 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("no photometric calibration: give --calibration OPTICS or --sensor")
     cal = PhotometricCalibration.load(cal_path)
     if session is None:
-        ref_path = args.reference or (_video_reference(source) if video is not None
+        ref_path = args.reference or (find_video_reference(source) if video is not None
                                       else find_reference(source))
         if args.reference is not None and not args.reference.is_file():
             raise InputError(f"reference {args.reference} does not exist")

@@ -53,7 +53,15 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run ``reconstruct``; returns 2 if any frame was skipped."""
-    from ..io import VideoFrames, find_reference, is_video, list_frames, read_frame, read_reference
+    from ..io import (
+        VideoFrames,
+        find_reference,
+        find_video_reference,
+        is_video,
+        list_frames,
+        read_frame,
+        read_reference,
+    )
     from ..optics import DepthReconstructor, PhotometricCalibration
     from ..viz import save_depth_image
 
@@ -71,7 +79,7 @@ def run(args: argparse.Namespace) -> int:
     if not args.no_images:
         names += [f"{p.stem}_depth.png" for p in frames]
     check_overwrite(out, names, overwrite=overwrite)
-    ref_path = args.reference or (_video_reference(args.frames_dir) if video is not None
+    ref_path = args.reference or (find_video_reference(args.frames_dir) if video is not None
                                   else find_reference(args.frames_dir))
     if args.reference is not None and not args.reference.is_file():
         raise InputError(f"reference {args.reference} does not exist")
@@ -125,13 +133,6 @@ class _VideoFrame:
         self.stem = f"{video.stem}_{index:05d}"
         self.name = f"{video.name}#{index}"
 
-
-def _video_reference(video: Path) -> Path | None:
-    """``<stem>_reference.png`` or ``reference.png`` beside a video, else None."""
-    for cand in (video.with_name(f"{video.stem}_reference.png"), video.parent / "reference.png"):
-        if cand.is_file():
-            return cand
-    return None
 
 
 def _checked(frame, shape: tuple[int, int], name: str):

@@ -103,7 +103,14 @@ def _calibration(args: argparse.Namespace, required: bool):
 def _read_source_frames(source: Path, args, shape: tuple[int, int] | None
                         ) -> tuple[list[str], object, Path | None]:
     """(labels of every frame, a reader ``i -> (H, W, 3) uint8 BGR``, the reference path)."""
-    from ..io import VideoFrames, find_reference, is_video, list_frames, read_frame
+    from ..io import (
+        VideoFrames,
+        find_reference,
+        find_video_reference,
+        is_video,
+        list_frames,
+        read_frame,
+    )
 
     if source.is_dir():
         paths = list_frames(source)
@@ -111,11 +118,7 @@ def _read_source_frames(source: Path, args, shape: tuple[int, int] | None
                 find_reference(source))
     if is_video(source):
         vf = VideoFrames(source)
-        ref = None
-        for name in (f"{source.stem}_reference.png", "reference.png"):
-            if (source.parent / name).is_file():
-                ref = source.parent / name
-                break
+        ref = find_video_reference(source)
 
         def read(i: int) -> np.ndarray:
             frame = vf.frame(i)

@@ -39,6 +39,6 @@ from ._session import Session, SessionConfig, read_session  # noqa: E402
 __all__ += ["Session", "SessionConfig", "read_session"]
 
 # video files (batch, reconstruct): names appended below
-from ._video import VIDEO_SUFFIXES, VideoFrames, is_video  # noqa: E402
+from ._video import VIDEO_SUFFIXES, VideoFrames, find_video_reference, is_video  # noqa: E402
 
-__all__ += ["VIDEO_SUFFIXES", "VideoFrames", "is_video"]
+__all__ += ["VIDEO_SUFFIXES", "VideoFrames", "find_video_reference", "is_video"]

@@ -8,7 +8,7 @@ import numpy as np
 
 from .._checks import InputError
 
-__all__ = ["VIDEO_SUFFIXES", "VideoFrames", "is_video"]
+__all__ = ["VIDEO_SUFFIXES", "VideoFrames", "find_video_reference", "is_video"]
 
 #: File suffixes read as videos (OpenCV's FFmpeg backend decodes them).
 VIDEO_SUFFIXES = (".mp4", ".avi", ".mov", ".mkv", ".m4v")
@@ -17,6 +17,18 @@ VIDEO_SUFFIXES = (".mp4", ".avi", ".mov", ".mkv", ".m4v")
 def is_video(path: str | Path) -> bool:
     """Whether `path` names a video file (by its suffix, :data:`VIDEO_SUFFIXES`)."""
     return Path(path).suffix.lower() in VIDEO_SUFFIXES
+
+
+def find_video_reference(video: str | Path) -> Path | None:
+    """The no-contact frame beside a video: ``<stem>_reference.png``, else ``reference.png``
+    in its folder, else None (the convention of ``batch``, ``reconstruct``, ``forces`` and
+    ``view``)."""
+    video = Path(video)
+    for cand in (video.with_name(f"{video.stem}_reference.png"),
+                 video.parent / "reference.png"):
+        if cand.is_file():
+            return cand
+    return None
 
 
 class VideoFrames:
