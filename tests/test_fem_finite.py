@@ -220,10 +220,54 @@ def test_failed_sweep_warns_and_returns_what_it_reached(monkeypatch):
     monkeypatch.setattr(_finite_solver.ConstrainedNewton, "solve", failing)
     with pytest.warns(RuntimeWarning, match=r"Newton failed beyond w/h = 0.05"):
         res = neo_hookean_indentation(0.8, 0.45, contact="bonded", w_over_h_max=0.1, steps=4,
-                                      **COARSE)
+                                      cache=False, **COARSE)   # the solver itself, patched
     assert not res.complete
     np.testing.assert_allclose(res.w_over_h, [0.025, 0.05])
     assert np.all(np.isfinite(res.kappa_n)) and np.isfinite(res.beta_secant)
+
+
+def test_disk_cache_returns_the_sweep_it_stored_and_misses_on_any_change(tmp_path,
+                                                                          monkeypatch):
+    from tactilevision.fem import _sweep_cache
+
+    kw = {"contact": "bonded", "w_over_h_max": 0.1, "steps": 2, "cache_dir": tmp_path, **COARSE}
+    first = neo_hookean_indentation(0.8, 0.45, **kw)
+    again = neo_hookean_indentation(0.8, 0.45, **kw)
+    fresh = neo_hookean_indentation(0.8, 0.45, **{**kw, "cache": False})
+    assert not first.from_cache and again.from_cache and not fresh.from_cache
+    assert len(list(tmp_path.glob("sweep_*.npz"))) == 1
+    for f in ("w_over_h", "force", "kappa_n", "tangent_stiffness", "surface_uz",
+              "newton_iterations", "kappa0", "beta_secant", "n_dofs"):
+        a, b, c = getattr(first, f), getattr(again, f), getattr(fresh, f)
+        assert type(a) is type(b) and np.array_equal(a, b) and np.array_equal(a, c), f
+    # another input, or another solver source, is another entry
+    assert not neo_hookean_indentation(0.8, 0.46, **kw).from_cache
+    monkeypatch.setattr(_sweep_cache, "_source_digest", lambda: "edited solver")
+    assert not neo_hookean_indentation(0.8, 0.45, **kw).from_cache
+    monkeypatch.undo()
+    # a damaged entry is a miss: the sweep runs again and the entry is rewritten
+    for p in tmp_path.glob("sweep_*.npz"):
+        p.write_bytes(p.read_bytes()[:200])
+    redo = neo_hookean_indentation(0.8, 0.45, **kw)
+    assert not redo.from_cache and np.array_equal(redo.force, first.force)
+    assert neo_hookean_indentation(0.8, 0.45, **kw).from_cache
+
+
+def test_a_sweep_that_stopped_early_is_not_cached(tmp_path, monkeypatch):
+    from tactilevision.fem import _finite_solver
+
+    solve = _finite_solver.ConstrainedNewton.solve
+
+    def failing(self, x, target, **kw):
+        if self.problem.w > 0.05:
+            return x, 1, False
+        return solve(self, x, target, **kw)
+
+    monkeypatch.setattr(_finite_solver.ConstrainedNewton, "solve", failing)
+    with pytest.warns(RuntimeWarning, match="Newton failed"):
+        res = neo_hookean_indentation(0.8, 0.45, contact="bonded", w_over_h_max=0.1, steps=4,
+                                      cache_dir=tmp_path, **COARSE)
+    assert not res.complete and not list(tmp_path.glob("sweep_*"))
 
 
 @pytest.mark.parametrize(("kwargs", "name"), [

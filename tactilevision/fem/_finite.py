@@ -34,6 +34,7 @@ K dx/dw = -dR/dw (one solve with the factorisation already at hand).
 
 from __future__ import annotations
 
+import os
 import time
 import warnings
 from dataclasses import dataclass
@@ -105,6 +106,9 @@ class FiniteIndentation:
         Their displacements at each depth, units of h (u_z < 0: into the
         gel; u_z = -w under a bonded face). The deformed surface is
         (R + u_r, 1 + u_z).
+    from_cache : bool
+        True when the sweep was read from the disk cache (`seconds` is then
+        the wall time of the run that stored it).
     """
 
     a_over_h: float
@@ -129,6 +133,7 @@ class FiniteIndentation:
     surface_r: np.ndarray | None = None
     surface_ur: np.ndarray | None = None
     surface_uz: np.ndarray | None = None
+    from_cache: bool = False
 
 
 def _line_fit(x: np.ndarray, y: np.ndarray) -> tuple[float, float, float]:
@@ -191,7 +196,8 @@ def neo_hookean_indentation(a_over_h: float, nu: float, *, contact: str = "frict
                             edge_refinements: int = 7, edge_radius_over_h: float = 0.0,
                             contact_search: bool = True,
                             penalty: float = 1e3,
-                            c20_over_c10: float = 0.0) -> FiniteIndentation:
+                            c20_over_c10: float = 0.0, cache: bool = True,
+                            cache_dir: str | os.PathLike | None = None) -> FiniteIndentation:
     """Finite-strain flat-punch indentation of a bonded compressible Neo-Hookean layer.
 
     Parameters
@@ -234,6 +240,15 @@ def neo_hookean_indentation(a_over_h: float, nu: float, *, contact: str = "frict
         :mod:`tactilevision.fem._neohookean_forms`). 0 is the Neo-Hookean law;
         an extension for asking whether the material law explains a measured
         beta, not part of the tables.
+    cache : bool, default True
+        Read a complete sweep from, and write it to, the disk cache
+        (:mod:`tactilevision.fem._sweep_cache`): the key holds every input,
+        the library versions and a digest of the solver's own source, so an
+        entry is always the sweep this code computes. A sweep that stopped
+        early is never stored. False runs the sweep and leaves the cache alone.
+    cache_dir : path-like, optional
+        Cache folder; default ``$TACTILEVISION_CACHE/fem`` if that variable
+        is set, else ``~/.cache/tactilevision/fem`` (the pad stiffness's).
 
     Returns
     -------
@@ -307,6 +322,32 @@ def neo_hookean_indentation(a_over_h: float, nu: float, *, contact: str = "frict
            edge_refinements, edge_radius_over_h, penalty)
     if not (np.isfinite(c20_over_c10) and c20_over_c10 >= 0):
         raise InputError(f"c20_over_c10 must be non-negative and finite, got {c20_over_c10!r}")
+    inputs = {"a_over_h": float(a_over_h), "nu": float(nu), "contact": contact,
+              "w_over_h_max": float(w_over_h_max), "steps": int(steps),
+              "pad_radius_over_h": float(pad_radius_over_h), "cell": float(cell),
+              "edge_refinements": int(edge_refinements),
+              "edge_radius_over_h": float(edge_radius_over_h),
+              "contact_search": bool(contact_search), "penalty": float(penalty),
+              "c20_over_c10": float(c20_over_c10)}
+    if cache:
+        from ._sweep_cache import read_sweep
+
+        hit = read_sweep(inputs, FiniteIndentation, cache_dir)
+        if hit is not None:
+            return hit
+    result = _sweep(a_over_h, nu, contact, w_over_h_max, steps, pad_radius_over_h, cell,
+                    edge_refinements, edge_radius_over_h, contact_search, penalty, c20_over_c10)
+    if cache and result.complete:
+        from ._sweep_cache import write_sweep
+
+        write_sweep(inputs, result, cache_dir)
+    return result
+
+
+def _sweep(a_over_h: float, nu: float, contact: str, w_over_h_max: float, steps: int,
+           pad_radius_over_h: float, cell: float, edge_refinements: int,
+           edge_radius_over_h: float, contact_search: bool, penalty: float,
+           c20_over_c10: float) -> FiniteIndentation:
     t0 = time.perf_counter()
     a, rho = float(a_over_h), float(edge_radius_over_h)
     mesh = indentation_mesh(a, pad_radius_over_h=pad_radius_over_h, cell=cell,
@@ -366,7 +407,7 @@ def neo_hookean_indentation(a_over_h: float, nu: float, *, contact: str = "frict
             complete, prob.w, newton.cache = False, w_done, None
             warnings.warn(f"neo_hookean_indentation(a_over_h={a}, nu={nu}, contact={contact!r}):"
                           f" Newton failed beyond w/h = {w_done:.4g}; the sweep stops there "
-                          f"(requested {w_over_h_max})", RuntimeWarning, stacklevel=2)
+                          f"(requested {w_over_h_max})", RuntimeWarning, stacklevel=3)
             break
         pen, radius = punch.diagnostics(x, w_done)
         surf_ur.append(x[punch.ur].copy())
@@ -382,7 +423,7 @@ def neo_hookean_indentation(a_over_h: float, nu: float, *, contact: str = "frict
         w_over_h=w, force=p, kappa_n=p * (1.0 - nu**2) / (2.0 * a * w),
         kappa0=dpdw0 * (1.0 - nu**2) / (2.0 * a), beta_secant=cb / c,
         beta_tangent=ctb / (2.0 * ct), linearity_r2=r2,
-        newton_iterations=res[:, 3].astype(int), min_jacobian=res[:, 4], n_dofs=prob.n_dofs,
+        newton_iterations=res[:, 3].astype(int), min_jacobian=res[:, 4], n_dofs=int(prob.n_dofs),
         seconds=time.perf_counter() - t0, tangent_stiffness=dpdw, penetration=res[:, 5],
         contact_radius=res[:, 6], complete=complete, surface_r=punch.R.copy(),
         surface_ur=np.array(surf_ur).reshape(-1, punch.R.size),
