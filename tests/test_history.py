@@ -58,6 +58,22 @@ def _run(capsys, *argv: str) -> tuple[int, str, str]:
     return rc, out, err
 
 
+@pytest.fixture(scope="module")
+def sample_cli(tmp_path_factory):
+    """``history`` run once on the sample with --json and --report (the pooled diagnosis
+    is its costly part): return code, stdout, stderr, the JSON and the report folder."""
+    import contextlib
+    import io
+
+    tmp = tmp_path_factory.mktemp("history_cli")
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        rc = main(["history", *map(str, DAYS), "--json", str(tmp / "h.json"),
+                   "--report", str(tmp / "rep")])
+    obj = json.loads((tmp / "h.json").read_text()) if rc == 0 else None
+    return rc, out.getvalue(), err.getvalue(), obj, tmp / "rep"
+
+
 # ------------------------------------------------------------------ the shipped sample
 
 
@@ -125,10 +141,10 @@ def test_pooled_presses_of_a_steady_gel_name_no_change(tmp_path):
     assert np.isnan(p.rate_per_day)
 
 
-def test_sample_cli_says_recalibrate_and_names_the_stale_date(capsys, tmp_path):
-    rc, out, err = _run(capsys, *DAYS, "--json", tmp_path / "h.json")
+def test_sample_cli_says_recalibrate_and_names_the_stale_date(sample_cli):
+    rc, out, err, full, _ = sample_cli
     assert rc == 0, err
-    obj = json.loads((tmp_path / "h.json").read_text())["sensors"]["gelsight"]
+    obj = full["sensors"]["gelsight"]
     assert obj["recalibrate"] is True
     m = re.search(r"E fell ([\d.]+) % \[([\d.]+), ([\d.]+)\] since 2026-11-02 \(day 0\)", out)
     assert m, out
@@ -202,10 +218,9 @@ def test_two_sensors_two_tables_and_sensor_filters(capsys, tmp_path):
     assert rc == 2 and "gelC" in err and "gelA" in err
 
 
-def test_report_html_and_figures_are_written(capsys, tmp_path):
-    rc, out, err = _run(capsys, *DAYS, "--report", tmp_path / "rep")
+def test_report_html_and_figures_are_written(sample_cli):
+    rc, out, err, _, rep = sample_cli
     assert rc == 0, err
-    rep = tmp_path / "rep"
     for png in ("E_gelsight.png", "nu_gelsight.png"):
         data = (rep / png).read_bytes()
         assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 5000
@@ -224,10 +239,13 @@ def _documented_keys() -> set[str]:
     return set(re.findall(r"`([A-Za-z_0-9]+)`", section))
 
 
-def test_json_has_the_documented_keys(capsys):
-    rc, out, err = _run(capsys, *DAYS, "--json", "-")
+def test_json_has_the_documented_keys(sample_cli, capsys):
+    rc, _, err, obj, _ = sample_cli
     assert rc == 0, err
-    obj = json.loads(out)
+    # --json - writes the same object to stdout (the steady gel's copies: no pooled aging)
+    rc, out, err = _run(capsys, DAYS[0], "--json", "-")
+    assert rc == 0, err
+    assert set(json.loads(out)) == set(obj)
     doc = _documented_keys()
     assert set(obj) <= doc
     s = obj["sensors"]["gelsight"]
