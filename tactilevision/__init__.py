@@ -12,12 +12,12 @@ viz        depth-map images, plots, reports
 cli        the ``tactilevision`` command
 """
 
-from ._assets import KNOWN_SENSORS
+from ._assets import KNOWN_SENSORS, default_calibration_path
 from ._checks import InputError, ShapeError
 
 __version__ = "0.1.0"
 __all__ = ["KNOWN_SENSORS", "InputError", "SessionCalibration", "ShapeError", "__version__",
-           "calibrate_session"]
+           "calibrate_session", "default_calibration_path"]
 
 
 def __getattr__(name: str):

@@ -180,3 +180,14 @@ def test_a_flipped_fz_axis_is_named(tmp_path, capsys):
     err = capsys.readouterr().err
     assert rc == 2 and "forces.csv: fz_n departs from its rest level downwards" in err
     assert not out.exists()
+
+
+def test_the_cli_uses_only_the_public_api_of_the_other_packages():
+    """The command line is a client of the library: it imports the other packages'
+    public names (``from ..mechanics import diagnose``), never their private modules."""
+    import re
+
+    cli = Path(__file__).resolve().parents[1] / "tactilevision" / "cli"
+    private = re.compile(r"^\s*(?:from|import)\s+\.\.(?:\w+\.)*_\w+", re.M)
+    found = {p.name: private.findall(p.read_text()) for p in sorted(cli.glob("*.py"))}
+    assert not {k: v for k, v in found.items() if v}

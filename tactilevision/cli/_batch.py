@@ -7,8 +7,7 @@ import json
 import sys
 from pathlib import Path
 
-from .. import InputError
-from .._assets import KNOWN_SENSORS, default_calibration_path
+from .. import KNOWN_SENSORS, InputError, default_calibration_path
 from ._out import check_output_folder
 
 __all__ = ["add_parser", "run"]

@@ -71,7 +71,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 def _reconstructor(session):
     """Depth reconstructor of the session's sensor, or None when there is no calibration."""
-    from .._assets import KNOWN_SENSORS, default_calibration_path
+    from .. import KNOWN_SENSORS, default_calibration_path
     from ..optics import DepthReconstructor, PhotometricCalibration
 
     cfg = session.config

@@ -88,8 +88,7 @@ def _summary(diag, path: Path) -> str:
 def run(args: argparse.Namespace) -> int:
     """Run ``diagnose``; returns 0 (2 through InputError on bad input)."""
     from ..io import read_measurements
-    from ..mechanics import diagnose
-    from ..mechanics._effects import effect_names
+    from ..mechanics import diagnose, effect_names
 
     overwrite = args.overwrite
     if args.report is not None:

@@ -34,7 +34,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 def run_tables(args: argparse.Namespace) -> int:
     """Run ``fem tables``."""
     from .. import InputError
-    from ..fem._tables import build_beta_table, build_kappa_table, write_table
+    from ..fem import build_beta_table, build_kappa_table, write_table
 
     what = {w.strip() for w in args.what.split(",") if w.strip()}
     if not what or not what <= {"kappa", "beta"}:

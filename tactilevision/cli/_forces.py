@@ -10,8 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import InputError
-from .._assets import KNOWN_SENSORS, default_calibration_path
+from .. import KNOWN_SENSORS, InputError, default_calibration_path
 from ._out import StagedOutput, add_overwrite_argument, check_output_folder, check_overwrite
 
 __all__ = ["add_parser", "run"]

@@ -9,8 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import InputError
-from .._assets import KNOWN_SENSORS, default_calibration_path
+from .. import KNOWN_SENSORS, InputError, default_calibration_path
 from ._out import check_output_folder, output_folder
 
 __all__ = ["add_parser", "annotate", "run"]

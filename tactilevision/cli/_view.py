@@ -8,8 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import InputError
-from .._assets import KNOWN_SENSORS, default_calibration_path
+from .. import KNOWN_SENSORS, InputError, default_calibration_path
 
 __all__ = ["add_parser", "run"]
 
@@ -178,7 +177,9 @@ def _from_zarr(source: Path, args, picks_max: int):
 
 def run(args: argparse.Namespace) -> int:
     """Run ``view``; returns 0, or 2 on bad input (nothing written then)."""
-    from ..viz._viewer import _plotly, write_viewer
+    import importlib.util
+
+    from ..viz import write_viewer
 
     source: Path = args.source
     out: Path = args.out
@@ -190,7 +191,8 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"--out {out} is a folder: give the .html file to write")
     if not source.exists():
         raise InputError(f"{source} does not exist")
-    _plotly()                                  # a missing Plotly says so before any work
+    if importlib.util.find_spec("plotly") is None:   # said before any work
+        raise InputError("the viewer needs Plotly: pip install 'tactilevision[view]'")
     material = _material(args)
     is_zarr = source.is_dir() and ((source / "zarr.json").is_file()
                                    or (source / ".zgroup").is_file()

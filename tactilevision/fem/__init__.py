@@ -31,3 +31,7 @@ __all__ += ["ForceEstimator", "ForceMap", "PadStiffness", "layer_normal_stiffnes
 from ._press import PressProfile, press_profile  # noqa: E402
 
 __all__ += ["PressProfile", "press_profile"]
+# the kappa and beta tables of tactilevision.mechanics, rebuilt (``tactilevision fem tables``)
+from ._tables import build_beta_table, build_kappa_table, write_table  # noqa: E402
+
+__all__ += ["build_beta_table", "build_kappa_table", "write_table"]

@@ -52,7 +52,7 @@ from ._budget import NoiseBudget, noise_budget
 from ._catalogue import EFFECTS, Effect, FemLaw, Param, make_effect, register_effect
 from ._diagnose import Diagnosis, diagnose, noise_floor
 from ._diagnose_stats import CovariateTest, covariate_tests, cross_validated_rmse
-from ._effects import EFFECT_NAMES, FIT_EFFECTS, check_fit_effects, model_label
+from ._effects import EFFECT_NAMES, FIT_EFFECTS, check_fit_effects, effect_names, model_label
 from ._fem_tables import kappa_n
 from ._fit import MAX_W_OVER_H, fit_indentation
 from ._fit_model import fit_model
@@ -97,6 +97,7 @@ __all__ = [
     "covariate_tests",
     "cross_validated_rmse",
     "diagnose",
+    "effect_names",
     "elastic_force",
     "fit_indentation",
     "fit_model",
