@@ -231,38 +231,25 @@ class IndentationModel:
     def _predict(effects: Sequence[Effect], params: Mapping[str, float],
                  data: Mapping[str, np.ndarray], thickness_mm: float,
                  a_over_h: float | None = None) -> np.ndarray:
+        names = ("c_n_per_mm", *(f"{e.name}.{q.name}" for e in effects for q in e.params))
+        x = [float(params[q]) for q in names]
         d = dict(data)
         d["_h"] = float(thickness_mm)
         d["_a_over_h"] = a_over_h
-
-        def own(e: Effect) -> dict[str, float]:
-            return {q.name: float(params[f"{e.name}.{q.name}"]) for q in e.params}
-
-        w = np.asarray(d["depth_mm"], np.float64)
-        for e in effects:
-            if e.kind == "depth":
-                w = e.apply(own(e), d, w)
-        d["depth_mm"] = w
-        force = float(params["c_n_per_mm"]) * w
-        for e in effects:
-            if e.kind == "stiffness":
-                force = force * e.apply(own(e), d, force)
-        for e in effects:
-            if e.kind == "force":
-                force = e.apply(own(e), d, force)
-        return force
+        return _forward(_plan(effects), x, d)
 
     @staticmethod
     def _search(resid, fixed: np.ndarray, searched: dict[int, np.ndarray], x0: np.ndarray,
                 bounds: tuple[np.ndarray, np.ndarray], max_first: int = 16,
-                near: Mapping[int, float] | None = None) -> None:
+                near: Mapping[int, float] | None = None, jac="2-point") -> None:
         """Set the searched parameters in `fixed` (in place: `resid` reads it), one at a
         time, the others at their best: least squares at up to `max_first` evenly spaced
         candidates, then at every candidate next to the best (each solve starting from
         the last one's solution). A parameter with a value in `near` (a fit of the same
         model to the same or nearly the same presses) is found by descent instead: from
         the candidate nearest that value, step to a neighbour while it lowers the cost
-        (3 to 5 solves instead of about 20)."""
+        (3 to 5 solves instead of about 20). `jac` is least_squares' (a callable:
+        :meth:`_Residuals.jac`)."""
         start = [np.asarray(x0, np.float64)]
         near = near or {}
         for i, vals in searched.items():
@@ -272,8 +259,8 @@ class IndentationModel:
                    cost: dict[int, float] = cost) -> float:
                 if j not in cost:
                     fixed[i] = vals[j]
-                    sol = least_squares(resid, start[0], bounds=bounds, x_scale="jac",
-                                        method="trf")
+                    sol = least_squares(resid, start[0], jac=jac, bounds=bounds,
+                                        x_scale="jac", method="trf")
                     start[0] = np.clip(sol.x, bounds[0] + 1e-12, bounds[1] - 1e-12)
                     cost[j] = float(sol.cost)
                 return cost[j]
@@ -387,11 +374,7 @@ class IndentationModel:
         x0_f = np.clip(np.array(x0)[free], lo_f + 1e-12, hi_f - 1e-12)
         fixed = np.array(x0, np.float64)
 
-        def resid(x: np.ndarray) -> np.ndarray:
-            full = fixed.copy()
-            full[free] = x
-            return sw * (self._predict(effects, dict(zip(names, full, strict=True)), d,
-                                       thickness_mm, self.a_over_h) - P)
+        resid = _Residuals(effects, fixed, free, dh, sw, P, lo_f, hi_f)
 
         near: dict[int, float] = {}
         if start is not None:
@@ -399,8 +382,10 @@ class IndentationModel:
                 if q in start and i in searched:
                     near[i] = float(start[q])
         if searched:
-            self._search(resid, fixed, searched, x0_f, (lo_f, hi_f), near=near)
-        first = least_squares(resid, x0_f, bounds=(lo_f, hi_f), x_scale="jac", method="trf")
+            self._search(resid, fixed, searched, x0_f, (lo_f, hi_f), near=near,
+                         jac=resid.jac)
+        first = least_squares(resid, x0_f, jac=resid.jac, bounds=(lo_f, hi_f), x_scale="jac",
+                              method="trf")
         if loss == "linear":
             sol = first
             scale = math.nan
@@ -408,8 +393,8 @@ class IndentationModel:
             r0 = first.fun
             mad = 1.4826 * float(np.median(np.abs(r0 - np.median(r0))))
             scale = f_scale if f_scale is not None else 2.5 * max(mad, 1e-12)
-            sol = least_squares(resid, first.x, bounds=(lo_f, hi_f), x_scale="jac",
-                                method="trf", loss=loss, f_scale=scale)
+            sol = least_squares(resid, first.x, jac=resid.jac, bounds=(lo_f, hi_f),
+                                x_scale="jac", method="trf", loss=loss, f_scale=scale)
         r = sol.fun
         k = len(names)
         J = np.zeros((n, k))
@@ -471,3 +456,117 @@ class IndentationModel:
             aic=ll_term + 2 * k, n_presses=n, n_params=k, loss=loss,
             outliers=rho_w < 0.5, success=bool(sol.success), message=str(sol.message),
             unidentified=tuple(q for q, b in zip(names, bad, strict=True) if b))
+
+
+def _plan(effects: Sequence[Effect]) -> tuple[tuple[Effect, str, tuple], ...]:
+    """The effects in the order they act (depth, then stiffness, then force; the order
+    of `effects` within a kind), each with its parameters' names and their places in the
+    parameter vector (``c_n_per_mm`` first, then every effect's in the order of
+    `effects`, as :meth:`IndentationModel.param_names`)."""
+    places, i = [], 1
+    for e in effects:
+        places.append(tuple((q.name, i + j) for j, q in enumerate(e.params)))
+        i += len(e.params)
+    return tuple((e, kind, p) for kind in ("depth", "stiffness", "force")
+                 for e, p in zip(effects, places, strict=True) if e.kind == kind)
+
+
+def _forward(plan: Sequence[tuple[Effect, str, tuple]], x: Sequence[float],
+             d: dict[str, np.ndarray]) -> np.ndarray:
+    """Predicted force at the parameter values `x` (floats, in the order of
+    :func:`_plan`'s places) on the data `d` (with ``_h`` and ``_a_over_h``; its
+    ``depth_mm`` is replaced by the depth the law sees)."""
+    w = np.asarray(d["depth_mm"], np.float64)
+    force = None
+    for e, kind, places in plan:
+        p = {q: x[i] for q, i in places}
+        if kind == "depth":
+            w = e.apply(p, d, w)
+            continue
+        if force is None:
+            d["depth_mm"] = w
+            force = x[0] * w
+        if kind == "stiffness":
+            force = force * e.apply(p, d, force)
+        else:
+            force = e.apply(p, d, force)
+    if force is None:
+        d["depth_mm"] = w
+        force = x[0] * w
+    return force
+
+
+#: The relative step of scipy's '2-point' finite differences for float64
+#: (``scipy.optimize._numdiff._eps_for_method``).
+_REL_STEP = float(np.finfo(np.float64).eps ** 0.5)
+
+
+class _Residuals:
+    """The weighted residuals ``sw (P_model - P)`` of one fit as a function of its free
+    parameters (the others read from `fixed`, which a search changes in place), and
+    their Jacobian for :func:`scipy.optimize.least_squares`.
+
+    The effects' order, the parameters' places and the data dict are prepared once per
+    fit, not at every evaluation. :meth:`jac` takes the forward differences of
+    least_squares' default ``jac='2-point'`` with its step rule (step sqrt(eps) max(1,
+    |x|) signed as x, turned back or shortened at a bound, as
+    ``scipy.optimize._numdiff.approx_derivative``), so that the Jacobian, and every
+    fit, are the same to the last bit, without approx_derivative's overhead; the
+    residual at the point itself is the last one evaluated (least_squares asks for the
+    Jacobian where it has just evaluated the residuals).
+    """
+
+    def __init__(self, effects: Sequence[Effect], fixed: np.ndarray, free: np.ndarray,
+                 data: Mapping[str, np.ndarray], sw: np.ndarray, force_n: np.ndarray,
+                 lower: np.ndarray, upper: np.ndarray) -> None:
+        self.plan = _plan(effects)
+        self.fixed, self.free = fixed, free
+        self.data = dict(data)
+        self.sw, self.force_n = sw, force_n
+        self.lower, self.upper = lower, upper
+        self.bounded = not np.all((lower == -np.inf) & (upper == np.inf))
+        self.lower_l, self.upper_l = lower.tolist(), upper.tolist()
+        self.free_l = np.asarray(free).tolist()
+        self._x: np.ndarray | None = None
+        self._f: np.ndarray | None = None
+
+    def _full(self, x: np.ndarray) -> np.ndarray:
+        full = self.fixed.copy()
+        full[self.free] = x
+        return full
+
+    def __call__(self, x: np.ndarray) -> np.ndarray:
+        full = self._full(x)
+        f = self.sw * (_forward(self.plan, full.tolist(), dict(self.data)) - self.force_n)
+        # the last point, all parameters (a search changes the fixed ones between solves)
+        self._x, self._f = full, f
+        return f
+
+    def jac(self, x: np.ndarray) -> np.ndarray:
+        x0 = np.asarray(x, np.float64)
+        full = self._full(x0)
+        f0 = (self._f if self._x is not None and np.array_equal(full, self._x)
+              else self(x0))
+        # scipy's step rule (_compute_absolute_step, then _adjust_scheme_to_bounds for a
+        # one-sided scheme of one step), on floats: a few parameters, so faster than on
+        # arrays, and the same IEEE operations
+        base = full.tolist()
+        jt = np.empty((x0.size, f0.size))
+        for i, (xi, lb, ub, k) in enumerate(zip(x0.tolist(), self.lower_l, self.upper_l,
+                                                self.free_l, strict=True)):
+            h = _REL_STEP * (1.0 if xi >= 0 else -1.0) * max(1.0, abs(xi))
+            if self.bounded:
+                lower_dist, upper_dist = xi - lb, ub - xi
+                xh = xi + h
+                if abs(h) <= max(lower_dist, upper_dist):
+                    if xh < lb or xh > ub:
+                        h = -h
+                elif upper_dist >= lower_dist:
+                    h = upper_dist
+                else:
+                    h = -lower_dist
+            p = base.copy()
+            p[k] = xi + h
+            f = self.sw * (_forward(self.plan, p, dict(self.data)) - self.force_n)
+            jt[i] = (f - f0) / ((xi + h) - xi)
+        return jt.T
