@@ -149,11 +149,15 @@ def test_fem_recovers_the_hertz_load_of_a_finer_pad(nu, field_excess, cache):
       figures. (Its earlier nearest-node means, pixels up to half a pixel off-centre,
       read +7.5 / +12.9 %: the pad's k -> 0 stiffness, (lambda + 2 mu) / h, amplifies
       that shift on the contact's flanks as nu -> 0.5.)
-    - 'footprint', every node whose hat reaches into the mask kept until it pulls: the
-      default threshold (0.01 mm, the sink-in included) +0.08 / +0.06 %, the loaded disc
-      as the mask -0.13 / -0.06 %; no force off the footprint; pressure errors as above.
-      (Keeping only nodes with half their tributary pixels in the mask read +3.9 / +2.3
-      and -0.7 / -0.9 %.)
+    - 'footprint', every node whose hat reaches into the mask, held by a spring to the
+      mean height of the mask pixels under its hat (issue 21, see ForceEstimator): the
+      default threshold (0.01 mm, the sink-in included) +4.1 / +4.0 %, the loaded disc
+      as the mask +4.0 / +3.6 %; no force off the footprint. The heights off the mask
+      are no longer used, and the rim's mask-only mean lies above the falling profile
+      at the node: on this true surface (sink-in measured) the rule before, prescribing
+      the tributary mean of all pixels, read +0.08 / +0.06 and -0.13 / -0.06 %, but it
+      read a rigid flat punch (zero off the contact) 19 % low. (Keeping only nodes with
+      half their tributary pixels in the mask read +3.9 / +2.3 and -0.7 / -0.9 %.)
     """
     pressure = _hertz(3 * P_HZ / (2 * np.pi * A_HZ**2), A_HZ)
     xs, ys, grid, load = _pad_forward(pressure, nu)
@@ -200,7 +204,9 @@ def test_fem_recovers_the_hertz_load_of_a_finer_pad(nu, field_excess, cache):
     for mask in (None, RPX <= A_HZ):
         fm = fp(u, contact_mask=mask)
         total, rms, largest, off = errors(fm.forces_n[..., 2], fm.pressure_kpa)
-        assert abs(total) < 0.005 and rms < 0.05 and largest < 0.08 and off < 0.003
+        # (rms up to 5.6 %, largest up to 8.1 %, off the loaded disc's nodes 1.1 % of
+        # the load: the rim springs; 3.6 %, 5.7 % and < 0.3 % with the rule before)
+        assert 0 < total < 0.05 and rms < 0.06 and largest < 0.09 and off < 0.015
         assert fm.pressure_kpa.min() >= 0 and np.all(fm.contact[inside])
         assert np.all(fm.forces_n[~fm.contact] == 0)
 
@@ -210,9 +216,12 @@ def test_fem_footprint_keeps_the_rim_nodes_of_the_contact(cache):
     pixel (then drops those that pull): a node just outside the contact still carries
     load, its hat reaches into the contact. Hertz load a = 2.5 mm, nu = 0.45
     (measured): with the contact itself as the mask 36 nodes are kept and carry all of
-    the load's exact nodal forces, total -1.0 %; the mask grown by one node spacing or
-    the default threshold (the sink-in) -0.1 %. Keeping only the nodes with half their
-    tributary pixels in the mask kept 16, missed 12.6 % of the load, total -14.3 %.
+    the load's exact nodal forces, total +3.2 % (the rim nodes held by springs to the
+    mask's mean height, issue 21; -1.0 % when they were prescribed the tributary mean
+    of all pixels, sink-in included); the mask grown by one node spacing +4.6 %, the
+    default threshold (the sink-in) +4.0 % (-0.1 % both before). Keeping only the
+    nodes with half their tributary pixels in the mask kept 16, missed 12.6 % of the
+    load, total -14.3 %.
     """
     nu, a = 0.45, 2.5
     pressure = _hertz(3 * P_HZ / (2 * np.pi * a**2), a)
@@ -224,10 +233,10 @@ def test_fem_footprint_keeps_the_rim_nodes_of_the_contact(cache):
     tight = est(u, contact_mask=RPX <= a)
     assert tight.contact.sum() > 16
     assert exact[~tight.contact].sum() < 1e-3 * load                    # 0
-    assert abs(tight.total_n[2] / load - 1) < 0.02                      # -1.0 %
+    assert abs(tight.total_n[2] / load - 1) < 0.05                      # +3.2 %
     grown = est(u, contact_mask=RPX <= a + est.x_mm[1])
-    assert abs(grown.total_n[2] / load - 1) < 0.01                      # -0.1 %
-    assert abs(est(u).total_n[2] / load - 1) < 0.01                     # -0.1 %
+    assert abs(grown.total_n[2] / load - 1) < 0.05                      # +4.6 %
+    assert abs(est(u).total_n[2] / load - 1) < 0.05                     # +4.0 %
 
 
 # -- 2. the footprint assumption ------------------------------------------------------------
@@ -360,9 +369,11 @@ def test_field_total_depends_on_the_pads_sides_as_nu_nears_half(cache):
     spectral total over the image is 0.888 / 0.622 of (lambda + 2 mu) / h times the
     bump's volume with the default padding and 0.878 / 0.513 with 32 mm of it, while
     the free sides let the FEM pad bulge instead. A sphere press (R 10 mm, 0.3 mm deep,
-    a = 2.45 mm), 'footprint': FEM / spectral 0.938 / 0.932, the FEM's 1 mm nodes
-    resolving the contact coarsely, and nearly independent of nu. Its mask grown to
-    1.3 a: the FEM's tensile nodes are dropped (without that: -6.3 %, -1.8 kPa).
+    a = 2.45 mm), 'footprint': FEM / spectral 0.998 / 1.006 (0.901 / 0.899 before
+    issue 21's rim springs: the rim nodes averaged the profile's zero off the contact
+    in). Its mask grown to 1.3 a: the FEM's tensile nodes are dropped; the total reads
+    0.881 / 0.894 of the tight mask's (1.006 / 1.030 before): the rim nodes' mask
+    means now take in the zero heights inside the oversized mask.
     """
     bump = 0.1 * np.exp(-(RPX / 3.0) ** 2 / 2)
     sphere = np.maximum(0.3 - RPX**2 / 20.0, 0.0)
@@ -393,11 +404,11 @@ def test_field_total_depends_on_the_pads_sides_as_nu_nears_half(cache):
         spec = ForceEstimator((HPX, WPX), DX, contact="footprint", **kw)(sphere).total_n[2]
         est = ForceEstimator((HPX, WPX), DX, contact="footprint", **fem, **kw)
         fe = est(sphere)
-        assert fe.total_n[2] / spec == pytest.approx(0.90, abs=0.02)    # 0.901 / 0.899
+        assert fe.total_n[2] / spec == pytest.approx(1.0, abs=0.03)     # 0.998 / 1.006
         # a mask 1.3 times the sphere's chord radius holds the profile's zero beyond it:
-        # tension, and the tensile nodes are dropped; the total comes back (1.006 / 1.030)
+        # tension, and the tensile nodes are dropped (0.881 / 0.894 of the tight total)
         big = est(sphere, contact_mask=RPX <= 1.3 * chord)
-        assert big.total_n[2] == pytest.approx(fe.total_n[2], rel=0.04)
+        assert 0.80 < big.total_n[2] / fe.total_n[2] < 1.05             # 0.881 / 0.894
         assert big.pressure_kpa.min() >= 0 and big.contact.sum() < held  # 24 / 36 of 52
     assert 0.80 < ratio[0.45] < 0.92                           # 0.865
     assert 0.42 < ratio[0.49] < 0.54                           # 0.480
