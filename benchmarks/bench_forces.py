@@ -10,7 +10,8 @@ the FEM method at 40 x 30 surface nodes (normal mode: one (1200 x 1200)
 matrix-vector product); and frame -> height map -> force map with the shipped
 GelSight calibration at 640 x 480; the memory each estimator holds and its
 peak allocation per frame (tracemalloc). Issue 6's targets: spectral at 427 x 320
->= 200 frames/s, FEM 40 x 30 >= 1000 frames/s, frame to force >= 90 frames/s.
+>= 200 frames/s, FEM 40 x 30 >= 1000 frames/s, frame to force >= 90 frames/s;
+issue 21: the FEM's 'footprint' on a 2.5 mm punch against Hayes (1972), and its rate.
 """
 
 from __future__ import annotations
@@ -100,6 +101,22 @@ def main() -> None:
               f"{16 * rate(lambda: fem(np.repeat(u[None], 16, 0)), 20):.0f} frames/s in "
               f"batches of 16; memory held {held_mib(fem):.1f} MiB, peak per frame "
               f"{peak_mib(lambda: fem(u)):.1f} MiB")
+        # issue 21: a 2.5 mm flat punch 0.1 mm deep, 'footprint', the default grid, against
+        # Hayes (1972); the spectral method and 'field' timed in the same run as references
+        from tactilevision.mechanics import kappa
+
+        H2, W2, dx2, a = 320, 427, 0.0806, 2.5
+        yy, xx = np.indices((H2, W2), dtype=np.float64)
+        punch = np.where(np.hypot(xx - (W2 - 1) / 2, yy - (H2 - 1) / 2) * dx2 <= a, 0.1, 0.0)
+        kw = dict(thickness_mm=3.0, E_mpa=0.2, nu=0.48)
+        hayes = 2 * a * 0.2 * 0.1 * kappa(0.48, a / 3.0) / (1 - 0.48**2)
+        fp = ForceEstimator((H2, W2), dx2, method="fem", contact="footprint", **kw)
+        fd = ForceEstimator((H2, W2), dx2, method="fem", **kw)
+        sp = ForceEstimator((H2, W2), dx2, contact="footprint", **kw)
+        print(f"fem 40 x 30 footprint, 2.5 mm punch at 427 x 320 (h 3, nu 0.48): "
+              f"{fp(punch).total_n[2] / hayes:.3f} of Hayes (spectral "
+              f"{sp(punch).total_n[2] / hayes:.3f}); {rate(lambda: fp(punch), 200):.0f} "
+              f"frames/s ('field' {rate(lambda: fd(punch), 200):.0f} frames/s, same run)")
     except ImportError as exc:  # pragma: no cover
         print(f"fem: not available ({exc})")
     from tactilevision._assets import default_calibration_path
