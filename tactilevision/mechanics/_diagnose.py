@@ -486,6 +486,8 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
         raise InputError(f"depth_mm holds {n_depths} distinct depth(s); comparing eq. (5) with "
                          "the measurements needs presses at two depths or more")
 
+    materials: dict[tuple, tuple[float, float]] = {}
+
     def material(m: IndentationModel, d: Mapping[str, np.ndarray],
                  fit: ModelFit | None = None) -> tuple[float, float]:
         # the law's own curvature is a nuisance of the comparison: E and nu are read
@@ -493,10 +495,22 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
         full = m
         m = IndentationModel(m.base, tuple(e for e in m.effects if e not in law_rungs),
                              m.a_over_h)
+        if m.base == "fem" and fit is not None and m == full:
+            return _material(m, d, fit)     # that fit is this one
+        # the same model on the same presses (a law_curvature rung, left out here, adds
+        # nothing to the model before it): the same fit, made once
+        key = (m, tuple((k, v.tobytes()) for k, v in d.items()))
+        if key not in materials:
+            materials[key] = _material(m, d, None)
+        return materials[key]
+
+    def _material(m: IndentationModel, d: Mapping[str, np.ndarray],
+                  fit: ModelFit | None) -> tuple[float, float]:
+        """E and nu of `m` (without law rungs) on `d`; `fit`: m's own fit (base 'fem')."""
         if m.base == "fem":
             # the FEM law's own parameters: nu is its shape's, E from c = 2 a E kappa_0 /
             # (1 - nu^2) (eq. 1-2)
-            f = fit if fit is not None and m == full else None   # that fit is this one
+            f = fit
             if f is None:
                 try:
                     with warnings.catch_warnings():
@@ -632,13 +646,18 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
         if curvature == "gate" and {"large_deformation", "fem_law"} & set(current.names):
             tried += [r for r in law_rungs if r not in current.names]
         cands = []
+        refs: dict[bytes, ModelFit] = {}    # the current model on fewer rows, by the rows
+        cand_fits: dict[str, ModelFit] = {}
         for name in tried:
             m = current.with_effect(name)
             ok = rows_for(m)
             d = sub(ok)
             # the current model's change points are searched near their place in its fit
-            ref = (cur_fit if ok.sum() == cur_fit.n_presses
-                   else current.fit(d, thickness_mm=h, start=cur_fit.params))
+            if ok.sum() == cur_fit.n_presses:
+                ref = cur_fit
+            elif (ref := refs.get(ok.tobytes())) is None:
+                ref = refs[ok.tobytes()] = current.fit(d, thickness_mm=h,
+                                                       start=cur_fit.params)
             try:
                 with warnings.catch_warnings():
                     warnings.simplefilter("ignore")
@@ -653,6 +672,7 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
                 bar.update(1)
             own = {k: v for k, v in mf.params.items() if k.startswith(name + ".")}
             cands.append(Candidate(name, mf.bic - ref.bic, cv, mf.rmse_n, own, int(ok.sum())))
+            cand_fits[name] = mf
         cands.sort(key=lambda c: c.delta_bic)
         # the law's own curvature: the alternative every depth effect must beat
         curv = [c for c in cands if c.effect in law_rungs]
@@ -697,7 +717,13 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
             missing_effect, equivalent = best.effect, eq
         current = current.with_effect(best.effect)
         d = sub(rows_for(current))
-        cur_fit = current.fit(d, thickness_mm=h, start={**cur_fit.params, **best.params})
+        # the start matters only to parameters found by search (the new effect's change
+        # point is searched near its place in the candidate's fit): without one, the
+        # candidate's fit is this fit
+        dh = {**d, "_h": h, "_a_over_h": current.a_over_h}
+        cur_fit = (cand_fits[best.effect] if not make_effect(best.effect).profile(dh)
+                   else current.fit(d, thickness_mm=h,
+                                    start={**cur_fit.params, **best.params}))
         cur_cv = best.cv_rmse_n
         E, nu = material(current, d, cur_fit)
         ladder.append(LadderStep(("layer", *current.names), cur_fit.rmse_n, cur_cv, cur_fit.bic,
