@@ -155,7 +155,7 @@ def test_bad_input():
         full(np.zeros((10, 12)))
 
 
-def test_fem_and_spectral_agree_on_a_sphere_press(tmp_path):
+def test_fem_and_spectral_agree_on_a_sphere_press():
     """Two different models of the pad (40 x 30 B-bar hexahedra with free sides; the
     infinite layer's Green's function at 0.2 mm pixels) on one press."""
     Hpx, Wpx, dx, h = 150, 200, 0.2, 4.0
@@ -163,13 +163,12 @@ def test_fem_and_spectral_agree_on_a_sphere_press(tmp_path):
     u = np.maximum(0.3 - r**2 / 20.0, 0.0)          # R = 10 mm, 0.3 mm deep: a = 2.45 mm
     kw = dict(thickness_mm=h, E_mpa=0.2, nu=0.49, contact="footprint", threshold_mm=1e-6)
     sp = ForceEstimator((Hpx, Wpx), dx, **kw)(u)
-    fe = ForceEstimator((Hpx, Wpx), dx, method="fem", grid=(40, 30),
-                        cache_dir=str(tmp_path), **kw)(u)
+    fe = ForceEstimator((Hpx, Wpx), dx, method="fem", grid=(40, 30), **kw)(u)
     assert fe.forces_n.shape == (30, 40, 3) and fe.pressure_kpa.shape == (30, 40)
-    # 10.1 % apart: the FEM's 1 mm nodes resolve the 2.45 mm contact coarsely, and this
-    # profile is zero off the contact (a real gel sinks in there), which the rim nodes
-    # (hats reaching into the contact) average in
-    assert fe.total_n[2] == pytest.approx(sp.total_n[2], rel=0.12)
+    # 0.6 % apart (measured; the rim nodes' springs of the footprint rule, see
+    # tests/test_fem_forces_grid.py): the FEM's free sides and 1 mm nodes against the
+    # infinite layer at 0.2 mm; the rule's spread over press positions is about 2 %
+    assert fe.total_n[2] == pytest.approx(sp.total_n[2], rel=0.03)
     assert fe.pressure_kpa.min() >= 0
     # its peak is at the centre node
     iy, ix = np.unravel_index(np.argmax(fe.pressure_kpa), fe.pressure_kpa.shape)
