@@ -44,8 +44,10 @@ def _no_real_cache(tmp_path, monkeypatch):
 
 
 @functools.cache
+@functools.lru_cache(maxsize=8)
 def _pad(grid=(40, 30), nu=0.49, element="bbar", size=SIZE, h=H, layers=None):
-    """Memory-only builds shared between tests."""
+    """Memory-only builds (the builder itself, never the disk cache), shared between the
+    tests of this module (the default 40 x 30 B-bar pad at nu 0.49 serves three)."""
     return pad_surface_stiffness(grid, size, h, nu, layers=layers, element=element,
                                  cache=False)
 
