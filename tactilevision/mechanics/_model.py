@@ -25,6 +25,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from .._checks import InputError
+from . import _catalogue as _cat
 from ._catalogue import (  # noqa: F401  (the catalogue's names, also read from here)
     COLUMN_EFFECTS,
     EFFECTS,
@@ -496,6 +497,14 @@ def _forward(plan: Sequence[tuple[Effect, str, tuple]], x: Sequence[float],
     return force
 
 
+#: Catalogue effects whose ``apply`` broadcasts parameters given as (K, 1) columns
+#: against the (N,) columns (element by element the operations of scalar parameters);
+#: not FemLaw (it reads nu as one float), nor effects of one's own.
+_BROADCASTING = (_cat.LargeDeformation, _cat.DepthOffset, _cat.ForceOffset, _cat.ForceDrift,
+                 _cat.ForceCrosstalk, _cat.ViscoelasticRelaxation, _cat.IncompleteRecovery,
+                 _cat.Aging, _cat.SpatialNonuniformity, _cat.StiffnessTrend,
+                 _cat.StiffnessStep, _cat.ForceTrend, _cat.LawCurvature)
+
 #: The relative step of scipy's '2-point' finite differences for float64
 #: (``scipy.optimize._numdiff._eps_for_method``).
 _REL_STEP = float(np.finfo(np.float64).eps ** 0.5)
@@ -527,6 +536,7 @@ class _Residuals:
         self.bounded = not np.all((lower == -np.inf) & (upper == np.inf))
         self.lower_l, self.upper_l = lower.tolist(), upper.tolist()
         self.free_l = np.asarray(free).tolist()
+        self.batch = all(type(e) in _BROADCASTING for e in effects)
         self._x: np.ndarray | None = None
         self._f: np.ndarray | None = None
 
@@ -552,6 +562,7 @@ class _Residuals:
         # arrays, and the same IEEE operations
         base = full.tolist()
         jt = np.empty((x0.size, f0.size))
+        steps: list[float] = []
         for i, (xi, lb, ub, k) in enumerate(zip(x0.tolist(), self.lower_l, self.upper_l,
                                                 self.free_l, strict=True)):
             h = _REL_STEP * (1.0 if xi >= 0 else -1.0) * max(1.0, abs(xi))
@@ -565,8 +576,23 @@ class _Residuals:
                     h = upper_dist
                 else:
                     h = -lower_dist
-            p = base.copy()
-            p[k] = xi + h
+            if self.batch:
+                steps.append(xi + h)
+            else:
+                p = base.copy()
+                p[k] = xi + h
+                f = self.sw * (_forward(self.plan, p, dict(self.data)) - self.force_n)
+                jt[i] = (f - f0) / ((xi + h) - xi)
+        if self.batch:
+            # all the shifted points in one evaluation: parameter j is a column holding
+            # its own shifted value in row j and its value elsewhere (the effects' arrays
+            # broadcast to one row per point; element by element the same operations)
+            p = list(base)
+            for i, k in enumerate(self.free_l):
+                col = np.full((x0.size, 1), base[k])
+                col[i, 0] = steps[i]
+                p[k] = col
             f = self.sw * (_forward(self.plan, p, dict(self.data)) - self.force_n)
-            jt[i] = (f - f0) / ((xi + h) - xi)
+            dx = (np.array(steps) - x0)[:, None]
+            jt[:] = (np.broadcast_to(f, jt.shape) - f0) / dx
         return jt.T
