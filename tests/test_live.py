@@ -108,6 +108,45 @@ def test_forces_follow_the_estimator(sensor):
         Pipeline(cal, reference=ref, E_mpa=0.2)
 
 
+def test_fem_forces_follow_the_fem_estimator_and_draw_node_arrows(sensor):
+    """method='fem': the inverse FEM's node forces, as the estimator gives them; on the
+    footprint, their totals near the spectral method's (another model of the pad:
+    18.8 x 14 mm, free sides, 0.48 mm nodes; measured 0.91 to 0.985 of it); the
+    annotation draws its tangential arrows at the nodes."""
+    from tactilevision.cli._live import annotate
+
+    _, cal, ref, presses, _ = sensor
+    kw = dict(reference=ref, E_mpa=0.2, nu=0.48, thickness_mm=3.0, contact="footprint",
+              threshold_mm=0.02)
+    fem = list(stream(presses, cal, method="fem", **kw))
+    spectral = list(stream(presses, cal, **kw))
+    recon = DepthReconstructor(cal, reference=ref, boundary="contact", level="median")
+    est = ForceEstimator(cal.shape, cal.mm_per_px, thickness_mm=3.0, E_mpa=0.2, nu=0.48,
+                         method="fem", contact="footprint", threshold_mm=0.02)
+    for f, r, s in zip(presses, fem, spectral, strict=True):
+        assert r.forces.forces_n.shape == (30, 40, 3)
+        np.testing.assert_allclose(r.total_force_n, est(recon(f)).total_n, rtol=1e-6)
+        assert r.total_force_n[2] == pytest.approx(s.total_force_n[2], rel=0.12)
+    # normal forces only: no arrow; a tangential force on one node: its arrow, there
+    import dataclasses
+
+    r = fem[0]
+    plain = annotate(r.frame, r.height_mm, depth_range_mm=0.1)
+    assert np.array_equal(annotate(r.frame, r.height_mm, depth_range_mm=0.1, forces=r.forces),
+                          plain)
+    f = np.zeros_like(r.forces.forces_n)
+    f[15, 20, 0] = 0.1                                   # +x at the node (20, 15)
+    drawn = annotate(r.frame, r.height_mm, depth_range_mm=0.1,
+                     forces=dataclasses.replace(r.forces, forces_n=f))
+    rows, cols = np.nonzero(np.any(drawn != plain, axis=2))
+    x0 = r.forces.x_mm[20] / cal.mm_per_px + SIZE[0]
+    y0 = r.forces.y_mm[15] / cal.mm_per_px
+    assert rows.size > 3 and np.all(cols >= SIZE[0])
+    assert abs(rows.mean() - y0) < 2 and x0 - 1 <= cols.min() and cols.max() <= x0 + 6
+    with pytest.raises(InputError, match="method must be"):
+        Pipeline(cal, reference=ref, method="bem")
+
+
 def test_bad_sources(tmp_path, sensor):
     (tmp_path / "notes.txt").write_text("x")
     with pytest.raises(InputError, match="not a video"):

@@ -204,6 +204,34 @@ class _Mailbox:
             self.cond.notify_all()
 
 
+class _OneBlasThread:
+    """BLAS on one thread around one frame's work, the previous counts restored after.
+
+    A frame's dense products (the inverse FEM's 1200-node operator, the least-squares
+    levelling) are small: with OpenBLAS's threads they cost 5 to 10 times more as soon as
+    another process competes for a core (the inverse FEM's 'field' call: 8.0 against
+    1.1 ms a 427 x 320 frame on this 2-core machine under load, run once each way,
+    2026-11-23), and the capture thread is such a competitor. The loaded OpenBLAS
+    libraries' own setters, found once (a few microseconds a frame); nothing on other
+    BLAS builds.
+    """
+
+    def __init__(self) -> None:
+        from ..fem._pad_mesh import _openblas_thread_controls
+
+        self.controls = _openblas_thread_controls()
+        self.saved: list = []
+
+    def __enter__(self) -> None:
+        self.saved = [(setter, int(getter())) for setter, getter in self.controls]
+        for setter, _ in self.saved:
+            setter(1)
+
+    def __exit__(self, *exc) -> None:
+        for setter, count in self.saved:
+            setter(count)
+
+
 class Pipeline:
     """Tactile frames to height maps, contact masks and force maps, one frame at a time.
 
@@ -218,7 +246,13 @@ class Pipeline:
     n_reference : int, default 10
     E_mpa, nu, thickness_mm : float, optional
         The gel; with all three, every result has a force map
-        (:class:`~tactilevision.fem.ForceEstimator`, spectral method).
+        (:class:`~tactilevision.fem.ForceEstimator`).
+    method : {'spectral', 'fem'}, default 'spectral'
+        The force estimator's method: the infinite layer's Green's function
+        on every pixel, or the inverse FEM of the finite pad on its 40 x 30
+        node grid (forces per node; a fraction of the spectral method's cost
+        a frame, ``benchmarks/bench_live.py``; the pad's stiffness is built
+        once per sensor size and cached on disk).
     beta : float, default 0.0
         Eq. (5)'s large-deformation stiffening for the forces.
     contact : {'field', 'footprint'}, default 'field'
@@ -255,7 +289,8 @@ class Pipeline:
                  E_mpa: float | None = None, nu: float | None = None,
                  thickness_mm: float | None = None, beta: float = 0.0,
                  engine: str = "table", level: str | None = None,
-                 contact: str = "field", threshold_mm: float = 0.01) -> None:
+                 contact: str = "field", threshold_mm: float = 0.01,
+                 method: str = "spectral") -> None:
         from ..optics import PhotometricCalibration
 
         self.calibration = (calibration if isinstance(calibration, PhotometricCalibration)
@@ -265,6 +300,9 @@ class Pipeline:
             raise InputError("forces need all of E_mpa, nu and thickness_mm")
         self.material = (E_mpa, nu, thickness_mm, beta) if all(given) else None
         self.contact, self.threshold_mm = contact, float(threshold_mm)
+        if method not in ("spectral", "fem"):
+            raise InputError(f"method must be 'spectral' or 'fem', got {method!r}")
+        self.method = method
         if isinstance(reference, str) and reference not in ("auto", "calibration"):
             raise InputError(f"reference must be a frame, 'auto' or 'calibration', got "
                              f"{reference!r}")
@@ -278,6 +316,7 @@ class Pipeline:
         self.reference = reference
         self._recon = None
         self._est = None
+        self._blas = _OneBlasThread()
         if not (isinstance(reference, str) and reference == "auto"):
             self._build(reference)
 
@@ -295,7 +334,7 @@ class Pipeline:
             E, nu, h, beta = self.material
             self._est = ForceEstimator(cal.shape, cal.mm_per_px, thickness_mm=h, E_mpa=E,
                                        nu=nu, beta=beta, contact=self.contact,
-                                       threshold_mm=self.threshold_mm)
+                                       threshold_mm=self.threshold_mm, method=self.method)
         self.reference = reference
 
     def process(self, frame: np.ndarray):
@@ -309,9 +348,10 @@ class Pipeline:
         if self._recon is None:
             raise InputError("no reference yet: give one, or run stream() to take it "
                              "from the first frames")
-        h = self._recon(frame)
-        contact = self._recon.contact_mask(frame)
-        fm = self._est(h) if self._est is not None else None
+        with self._blas:
+            h = self._recon(frame)
+            contact = self._recon.contact_mask(frame)
+            fm = self._est(h) if self._est is not None else None
         return h, contact, fm
 
     def stream(self, source, *, policy: str | None = None, max_frames: int | None = None
