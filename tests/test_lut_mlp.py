@@ -605,3 +605,41 @@ def test_load_meta_missing_field(field, synth_lut, tmp_path):
         assert "old.npz" in str(exc) and field in str(exc)
     else:
         assert cal.model == "lut"
+
+
+def test_mlp_tabulation_is_cached_on_disk_and_a_damaged_file_is_rebuilt(tmp_path, monkeypatch):
+    """A reconstructor of an MLP calibration in a new process (memory cache empty) reads
+    the tabulation from the disk cache instead of evaluating the network; the heights are
+    the same; a damaged file is a miss, tabulated again and rewritten."""
+    import cv2
+
+    from tactilevision import default_calibration_path
+    from tactilevision.optics import DepthReconstructor, PhotometricCalibration
+    from tactilevision.optics import _reconstructor as rec
+
+    monkeypatch.setenv("TACTILEVISION_CACHE", str(tmp_path))
+    monkeypatch.setattr(rec, "_TABLES", type(rec._TABLES)())
+    cal = PhotometricCalibration.load(default_calibration_path("gelsight"))
+    from _data import ROOT
+
+    frame = cv2.imread(str(ROOT / "sample_frames" / "gelsight_ball" / "frames" /
+                           "press_01.png"))
+    first = DepthReconstructor(cal)(frame)
+    files = list((tmp_path / "optics").glob("mlp_table_*.npz"))
+    assert len(files) == 1
+
+    calls = []
+    tabulate = rec.tabulate_mlp
+
+    def counting(*a, **k):
+        calls.append(1)
+        return tabulate(*a, **k)
+
+    monkeypatch.setattr(rec, "tabulate_mlp", counting)
+    rec._TABLES.clear()
+    assert np.array_equal(DepthReconstructor(cal)(frame), first) and not calls
+    files[0].write_bytes(files[0].read_bytes()[:1000])
+    rec._TABLES.clear()
+    assert np.array_equal(DepthReconstructor(cal)(frame), first) and len(calls) == 1
+    rec._TABLES.clear()
+    assert np.array_equal(DepthReconstructor(cal)(frame), first) and len(calls) == 1

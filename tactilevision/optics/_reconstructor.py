@@ -364,6 +364,63 @@ class DepthReconstructor:
 _TABLES: OrderedDict[tuple, object] = OrderedDict()
 _TABLES_KEPT = 2
 
+#: Bump when the stored tabulation or its meaning changes: old files then miss.
+_TABLE_FORMAT = 1
+
+
+def _table_cache_path(key: tuple):
+    """``<cache root>/optics/mlp_table_<sha256>.npz``: the root is ``$TACTILEVISION_CACHE``
+    if set, else ``~/.cache/tactilevision`` (the FEM cache's); the digest covers the
+    network, the reference, the colour range, the bins, the position input, the format
+    and the onnxruntime version that evaluated the network."""
+    import os
+    from pathlib import Path
+
+    import onnxruntime
+
+    root = os.environ.get("TACTILEVISION_CACHE")
+    root = Path(root).expanduser() if root else Path.home() / ".cache" / "tactilevision"
+    h = hashlib.sha256(repr((_TABLE_FORMAT, onnxruntime.__version__, key)).encode())
+    return root / "optics" / f"mlp_table_{h.hexdigest()}.npz"
+
+
+def _read_table(path, ref_inv: np.ndarray, bins: int):
+    """The tabulation stored at `path`, or None (a miss, or a file that cannot be trusted)."""
+    from ._table import GradientTable
+
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            gx, gy, cell = data["gx_table"], data["gy_table"], data["cell_offset"]
+            lo, hi, b = data["lo"], data["hi"], int(data["bins"])
+    except Exception:          # missing, truncated, damaged or of another layout
+        return None
+    if (b != bins or cell.shape != ref_inv.shape[:2] or gx.shape != gy.shape
+            or not (np.all(np.isfinite(gx)) and np.all(np.isfinite(gy)))):
+        return None
+    return GradientTable(gx, gy, cell, b, lo, hi, ref_inv)
+
+
+def _write_table(path, table) -> None:
+    """Store a tabulation atomically; a folder that cannot be written is skipped."""
+    import os
+    import tempfile
+    from pathlib import Path
+
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=path.name + ".", suffix=".tmp", dir=path.parent)
+    except OSError:
+        return
+    try:
+        with os.fdopen(fd, "wb") as f:
+            np.savez(f, gx_table=table.gx_table, gy_table=table.gy_table,
+                     cell_offset=table.cell_offset, lo=np.asarray(table.lo),
+                     hi=np.asarray(table.hi), bins=np.int64(table.bins))
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, path)
+    except OSError:
+        Path(tmp).unlink(missing_ok=True)
+
 
 def _tabulated(calibration, ref_inv: np.ndarray, bins: int):
     key = (hashlib.blake2b(calibration.onnx_bytes, digest_size=16).digest(),
@@ -374,9 +431,15 @@ def _tabulated(calibration, ref_inv: np.ndarray, bins: int):
     if key in _TABLES:
         _TABLES.move_to_end(key)
         return _TABLES[key]
-    table = tabulate_mlp(MLPGradientModel(calibration.onnx_bytes, threads=0), ref_inv,
-                         lo=calibration.colour_lo, hi=calibration.colour_hi, bins=bins,
-                         use_position=calibration.use_position)
+    # then the disk cache (a CLI command or a worker process starts without the table in
+    # memory), else the network over every colour cell
+    path = _table_cache_path(key)
+    table = _read_table(path, ref_inv, bins)
+    if table is None:
+        table = tabulate_mlp(MLPGradientModel(calibration.onnx_bytes, threads=0), ref_inv,
+                             lo=calibration.colour_lo, hi=calibration.colour_hi, bins=bins,
+                             use_position=calibration.use_position)
+        _write_table(path, table)
     for arr in (table.gx_table, table.gy_table, table.cell_offset):
         arr.setflags(write=False)             # shared between reconstructors: read only
     _TABLES[key] = table
