@@ -90,35 +90,50 @@ class ShadingTable:
             If the height map is not (H, W) of the table or not finite.
         """
         z = np.asarray(height_mm, np.float64)
+        out = np.zeros((*z.shape, 3))
+        tilted, change = self._tilted_change(z)
+        if change is not None:
+            out[tilted] = change
+        return out
+
+    def _tilted_change(self, z: np.ndarray) -> tuple[tuple, np.ndarray | None]:
+        """The tilted pixels (row-major ``np.nonzero`` indices) and their (n, 3) change.
+
+        The flat gel: slope bin 0 of the same direction (the table's bin-0 rows
+        differ slightly between directions; subtracting the same direction's keeps a
+        flat gel exactly at the reference, with no sector pattern). A pixel in bin 0
+        changes by exactly nothing, so only the tilted pixels are evaluated, and the
+        slope angle and direction only where the gradient's magnitude can reach bin 1
+        (tan of the bin width, less a margin): a no-contact frame costs nothing, a
+        press its contact's neighbourhood.
+        """
         if z.shape != tuple(self.shape):
             raise InputError(f"height map of shape {z.shape} does not match the shading "
                              f"table's {tuple(self.shape)}")
         if not np.all(np.isfinite(z)):
             raise InputError("height map contains NaN or inf")
         if not z.any():                 # the flat gel: no change at all
-            return np.zeros((*z.shape, 3))
+            return (), None
         zp = z / self.mm_per_px
         d_row, d_col = np.gradient(zp)
-        slope = np.arctan(np.hypot(d_row, d_col))
-        direction = np.arctan2(d_row, d_col)  # Taxim: atan2(d/drow, d/dcol)
+        g = np.hypot(d_row, d_col)
         b = self.num_bins
-        i_mag = np.clip(np.floor(slope / (0.5 * np.pi / (b - 1))).astype(np.int64), 0, b - 1)
-        i_dir = np.clip(np.floor((direction + np.pi) / (2 * np.pi / (b - 1))).astype(np.int64),
-                        0, b - 1)
-        # the flat gel: slope bin 0 of the same direction (the table's bin-0 rows
-        # differ slightly between directions; subtracting the same direction's
-        # keeps a flat gel exactly at the reference, with no sector pattern). A pixel in
-        # bin 0 changes by exactly nothing, so only the tilted pixels are evaluated: a
-        # no-contact frame costs nothing, a press its contact's neighbourhood
-        out = np.zeros((*z.shape, 3))
-        tilted = np.nonzero(i_mag)
-        if tilted[0].size:
-            feats = self._features[tilted]                                  # (n, 6)
-            d = i_dir[tilted]
-            lit = np.einsum("nf,nfc->nc", feats, self.coeffs[i_mag[tilted], d])
-            flat = np.einsum("nf,nfc->nc", feats, self.coeffs[0, d])
-            out[tilted] = lit - flat
-        return out
+        width = 0.5 * np.pi / (b - 1)
+        near = np.nonzero(g >= np.tan(width) * (1.0 - 1e-6))
+        slope = np.arctan(g[near])
+        i_mag = np.clip(np.floor(slope / width).astype(np.int64), 0, b - 1)
+        keep = i_mag > 0
+        tilted = tuple(ix[keep] for ix in near)
+        if not tilted[0].size:
+            return (), None
+        i_mag = i_mag[keep]
+        direction = np.arctan2(d_row[tilted], d_col[tilted])  # Taxim: atan2(d/drow, d/dcol)
+        d = np.clip(np.floor((direction + np.pi) / (2 * np.pi / (b - 1))).astype(np.int64),
+                    0, b - 1)
+        feats = self._features[tilted]                                      # (n, 6)
+        lit = np.einsum("nf,nfc->nc", feats, self.coeffs[i_mag, d])
+        flat = np.einsum("nf,nfc->nc", feats, self.coeffs[0, d])
+        return tilted, lit - flat
 
     def render(self, height_mm: np.ndarray, reference: np.ndarray, *, noise_dn: float = 0.0,
                rng: np.random.Generator | None = None) -> np.ndarray:
@@ -148,12 +163,17 @@ class ShadingTable:
         if ref.shape != (*self.shape, 3):
             raise InputError(f"reference of shape {ref.shape} does not match the shading "
                              f"table's {(*self.shape, 3)}")
-        img = ref.astype(np.float64) + self.shading(height_mm)
+        if noise_dn > 0 and rng is None:
+            raise InputError("rng is required when noise_dn > 0")
+        img = ref.astype(np.float64)
+        tilted, change = self._tilted_change(np.asarray(height_mm, np.float64))
+        if change is not None:
+            img[tilted] += change            # reference + change (0 elsewhere: unchanged)
         if noise_dn > 0:
-            if rng is None:
-                raise InputError("rng is required when noise_dn > 0")
             img += rng.normal(0.0, noise_dn, img.shape)
-        return np.clip(np.rint(img), 0, 255).astype(np.uint8)
+        np.rint(img, out=img)
+        np.clip(img, 0, 255, out=img)        # the same as clipping first: 255.5 rounds to 256
+        return img.astype(np.uint8)
 
 
 def _taxim_folder(sensor: str) -> Path:
