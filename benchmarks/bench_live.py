@@ -5,7 +5,8 @@ reference), resized to GelSlim 3.0's 427 x 320 and kept at GelSight's 640 x 480,
 with a LUT calibration fitted to them at each size. They come from an in-memory
 "camera" that never waits, through the pipeline's capture thread, under the
 'every' policy (every frame processed: the pipeline's own rate). For each size,
-height only and height + forces (spectral):
+height only and height + forces, with the spectral method (every pixel) and the
+inverse FEM (``method='fem'``, 40 x 30 nodes):
 
 - frames/s and the latency from capture to result (median, 95th percentile);
   with forces, at the heights' level 'median' (camera rate) and 'contact' (zero
@@ -15,7 +16,9 @@ height only and height + forces (spectral):
   pipeline's own overhead.
 
 The design goal (issue 21): height + forces at 427 x 320 at 90 frames/s or more,
-latency under 2 frame periods (22 ms).
+latency under 2 frame periods (22 ms). The forces use the estimator's default
+'field' traction; the inverse FEM's node forces cost about a millisecond a
+frame on top of the heights, the spectral method's several.
 
 Run: ``python benchmarks/bench_live.py [--frames 600]``.
 """
@@ -32,6 +35,7 @@ import numpy as np
 
 from tactilevision.fem import ForceEstimator
 from tactilevision.live import Pipeline
+from tactilevision.live._pipeline import _OneBlasThread
 from tactilevision.optics import DepthReconstructor, PhotometricCalibration
 
 BALL = Path(__file__).resolve().parents[1] / "sample_frames" / "gelsight_ball"
@@ -59,19 +63,24 @@ def main() -> None:
     for w, h in ((427, 320), (640, 480)):
         cal, ref, presses = _sensor(w, h)
         frames = [np.roll(presses[i % 4], (i % 40) - 20, axis=1) for i in range(args.frames)]
-        for forces, level in ((False, "median"), (True, "median"), (True, "contact")):
-            kw = {"E_mpa": 0.2, "nu": 0.48, "thickness_mm": 3.0} if forces else {}
-            # the bare work, in a plain loop
+        for forces, level, method in ((False, "median", None), (True, "median", "spectral"),
+                                      (True, "median", "fem"), (True, "contact", "spectral"),
+                                      (True, "contact", "fem")):
+            kw = ({"E_mpa": 0.2, "nu": 0.48, "thickness_mm": 3.0, "method": method}
+                  if forces else {})
+            # the bare work, in a plain loop (BLAS on one thread, as the pipeline runs it)
             recon = DepthReconstructor(cal, reference=ref,
                                        boundary="contact" if level == "contact" else "neumann")
             est = ForceEstimator(cal.shape, cal.mm_per_px, thickness_mm=3.0, E_mpa=0.2,
-                                 nu=0.48) if forces else None
+                                 nu=0.48, method=method) if forces else None
+            blas = _OneBlasThread()
             t0 = time.perf_counter()
             for f in frames:
-                z = recon(f)
-                recon.contact_mask(f)
-                if est is not None:
-                    est(z)
+                with blas:
+                    z = recon(f)
+                    recon.contact_mask(f)
+                    if est is not None:
+                        est(z)
             bare = (time.perf_counter() - t0) / len(frames)
             pipe = Pipeline(cal, reference=ref, level=level, **kw)
             lat = []
@@ -90,7 +99,8 @@ def main() -> None:
                     yield f
 
             live = [r.latency_s for r in pipe.stream(camera(), policy="latest")]
-            what = (f"height + forces, level '{level}'" if forces else "height only")
+            what = (f"height + forces ({method}), level '{level}'" if forces
+                    else "height only")
             print(f"{w} x {h}, {what}: {1 / per:.0f} frames/s ({1e3 * per:.2f} ms a frame, "
                   f"{per / bare:.2f} x the bare loop's {1e3 * bare:.2f} ms); latency with "
                   f"every frame queued: median {1e3 * np.median(lat):.0f} ms; from a camera "
