@@ -108,3 +108,23 @@ def taxim_lut(taxim_presses):
     return PhotometricCalibration.from_ball_presses(
         ps.reference, ps.frames[0::2], ps.centers_px[0::2], ps.radii_px[0::2],
         ball_radius_mm=2.0, mm_per_px=0.0295, model="lut", source="taxim dataPack.npz")
+
+
+#: Test files by their measured time, longest first (``pytest --durations=0``, summed per
+#: file, 2026-11-23). pytest-xdist hands out whole files (``--dist loadfile``) in
+#: collection order (``--no-loadscope-reorder`` in pyproject.toml): the long files first and
+#: the many short ones after fill the two workers evenly, where the default order (files
+#: with the most tests first) left the longest files to the end, one worker busy alone.
+LONGEST_FIRST = (
+    "test_diagnose.py", "test_optics_real.py", "test_calibrate.py", "test_calibrate_gelslim.py",
+    "test_fem_pad.py", "test_batch.py", "test_forces_session.py", "test_relaxation.py",
+    "test_cli_forces.py", "test_vernier_taxim.py", "test_fem_forces_proof.py",
+    "test_lut_mlp.py", "test_forces_gelslim.py", "test_sample_relaxation.py",
+    "test_viewer.py", "test_history.py", "test_docs.py", "test_cli_optics.py",
+    "test_diagnose_separation.py", "test_noise_budget.py",
+)
+
+
+def pytest_collection_modifyitems(config, items):
+    rank = {name: i for i, name in enumerate(LONGEST_FIRST)}
+    items.sort(key=lambda item: rank.get(item.path.name, len(rank)))    # stable: same order
