@@ -117,14 +117,17 @@ def test_closed_form_hex2():
 
 
 def test_hex1_locks_and_bbar_does_not():
-    err = {(el, nu): closed_form_errors(_pad(element=el, nu=nu))[0]
+    # on the 27 x 20 grid (the 40 x 30 default: hex1 +62 % at nu 0.49, B-bar -2.5 %, at
+    # 8 times the cost); measured here: hex1 +4.8 % / +121 %, B-bar -1.1 % / -6.3 %
+    # (nu 0.3 / 0.49; B-bar's -6.3 % is the grid's, test_bbar_converges_to_closed_form)
+    err = {(el, nu): closed_form_errors(_pad(grid=(27, 20), element=el, nu=nu))[0]
            for el in ("hex1", "bbar") for nu in (0.3, 0.49)}
     # compressible: both fine
-    assert abs(err["bbar", 0.3]) < 0.02 and abs(err["hex1", 0.3]) < 0.05, err
-    # nearly incompressible: full integration locks (measured +62 %), B-bar not
-    assert err["hex1", 0.49] > 0.3, err
-    assert abs(err["bbar", 0.49]) < 0.04, err
-    assert err["hex1", 0.49] > err["hex1", 0.3] + 0.25, err
+    assert abs(err["bbar", 0.3]) < 0.02 and abs(err["hex1", 0.3]) < 0.06, err
+    # nearly incompressible: full integration locks, B-bar not
+    assert err["hex1", 0.49] > 0.6, err
+    assert abs(err["bbar", 0.49]) < 0.08, err
+    assert err["hex1", 0.49] > err["hex1", 0.3] + 0.5, err
 
 
 def test_bbar_converges_to_closed_form():

@@ -607,10 +607,10 @@ def test_load_meta_missing_field(field, synth_lut, tmp_path):
         assert cal.model == "lut"
 
 
-def test_mlp_tabulation_is_cached_on_disk_and_a_damaged_file_is_rebuilt(tmp_path, monkeypatch):
+def test_mlp_tabulation_is_cached_on_disk_and_a_damaged_file_is_a_miss(tmp_path, monkeypatch):
     """A reconstructor of an MLP calibration in a new process (memory cache empty) reads
     the tabulation from the disk cache instead of evaluating the network; the heights are
-    the same; a damaged file is a miss, tabulated again and rewritten."""
+    the same; a damaged file, or one for other bins, is a miss."""
     import cv2
 
     from tactilevision import default_calibration_path
@@ -638,8 +638,9 @@ def test_mlp_tabulation_is_cached_on_disk_and_a_damaged_file_is_rebuilt(tmp_path
     monkeypatch.setattr(rec, "tabulate_mlp", counting)
     rec._TABLES.clear()
     assert np.array_equal(DepthReconstructor(cal)(frame), first) and not calls
+    # a damaged or mismatched file is a miss (and then tabulated again and rewritten)
+    ref_inv = next(iter(rec._TABLES.values())).ref_inv
+    assert rec._read_table(files[0], ref_inv, 32) is not None
+    assert rec._read_table(files[0], ref_inv, 16) is None                 # other bins
     files[0].write_bytes(files[0].read_bytes()[:1000])
-    rec._TABLES.clear()
-    assert np.array_equal(DepthReconstructor(cal)(frame), first) and len(calls) == 1
-    rec._TABLES.clear()
-    assert np.array_equal(DepthReconstructor(cal)(frame), first) and len(calls) == 1
+    assert rec._read_table(files[0], ref_inv, 32) is None

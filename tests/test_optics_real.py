@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 from _data import GELSLIM, GELSLIM_BALL_RADIUS_MM, GELSLIM_MM_PER_PX, GELSLIM_REASON
 
-from tactilevision._assets import default_calibration_path
+from tactilevision import default_calibration_path
 from tactilevision.optics import (
     DepthReconstructor,
     PhotometricCalibration,

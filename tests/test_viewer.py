@@ -64,7 +64,7 @@ def test_sample_page_is_self_contained_with_one_step_per_frame(sample_page):
 
 
 def test_sample_heights_equal_the_reconstructor(sample_page):
-    from tactilevision._assets import default_calibration_path
+    from tactilevision import default_calibration_path
     from tactilevision.io import find_reference, list_frames, read_frame, read_reference
     from tactilevision.optics import DepthReconstructor, PhotometricCalibration
 
@@ -160,7 +160,7 @@ def _panel_px(domain_x, domain_y, layout) -> tuple[slice, slice]:
 def test_page_renders_in_chromium_and_the_slider_changes_the_frame(tmp_path):
     import cv2
 
-    from tactilevision.viz._viewer import viewer_figure
+    from tactilevision.viz import viewer_figure
 
     if CHROMIUM is None:
         pytest.skip("no chromium binary on PATH (apt-get install chromium)")
