@@ -544,13 +544,16 @@ class _Fem:
         # nu 0.45 / 0.49 instead of +0.6 / +1.3 %, tests/test_fem_forces_proof.py).
         # (separable: rows, then columns; each pixel meets at most two nodes per axis)
         self.sample_y = sp.csr_matrix(_overlap(self.y_mm, H, dx))
-        self.sample_xt = sp.csc_matrix(_overlap(self.x_mm, W, dx).T)
+        # (the columns' weights dense: a BLAS product, where scipy's dense @ sparse
+        # rebuilds its operand at every call)
+        self.sample_xt = np.ascontiguousarray(_overlap(self.x_mm, W, dx).T)
         # 'footprint': the hat functions at the pixel centres (a node is in contact
         # when its hat reaches a mask pixel; the hat's weight of the mask and the
         # mask's mean height under it set the node's constraint, see footprint)
         hy, hx = _hats(self.y_mm, H, dx), _hats(self.x_mm, W, dx)
         self.hat_y = sp.csr_matrix(hy)
         self.hat_xt = sp.csc_matrix(hx.T)
+        self.hat_y_dense, self.hat_x_dense = hy, hx     # for a small footprint's box
         self.hat_full = np.outer(hy.sum(axis=1), hx.sum(axis=1)).ravel()
         self._compliance = None
         self._diag = np.diag(self.K).copy()
@@ -592,8 +595,23 @@ class _Fem:
         C = self.compliance
         out, masks = [], []
         for d, m in zip(disp, contact, strict=True):
-            mf = m.astype(np.float64)
-            weight = ((self.hat_y @ mf) @ self.hat_xt).ravel()
+            # the mask's bounding box: a contact a fraction of the image is sampled by
+            # dense products on its box alone, a large one by the sparse hats
+            rows_on, cols_on = np.flatnonzero(m.any(axis=1)), np.flatnonzero(m.any(axis=0))
+            if rows_on.size and (rows_on[-1] + 1 - rows_on[0]) * (cols_on[-1] + 1 - cols_on[0]) \
+                    < 0.25 * m.size:
+                box = (slice(rows_on[0], rows_on[-1] + 1), slice(cols_on[0], cols_on[-1] + 1))
+                hy, hx = self.hat_y_dense[:, box[0]], self.hat_x_dense[:, box[1]]
+
+                def hats(a: np.ndarray, hy=hy, hx=hx) -> np.ndarray:
+                    return hy @ a @ hx.T
+            else:
+                box = (slice(None), slice(None))
+
+                def hats(a: np.ndarray) -> np.ndarray:
+                    return (self.hat_y @ a) @ self.hat_xt
+            mf, d = m[box].astype(np.float64), d[box]
+            weight = hats(mf).ravel()
             on = weight > 0
             # the hat's share of the mask, and the mean height over the mask pixels
             # alone, hat-weighted (the heights off the mask are not trusted)
@@ -601,7 +619,7 @@ class _Fem:
             w = np.where(on, weight, 1.0)
             target = np.empty((frac.size, c))
             for j in range(c):
-                target[:, j] = ((self.hat_y @ (d[..., j] * mf)) @ self.hat_xt).ravel() / w
+                target[:, j] = hats(d[..., j] * mf).ravel() / w
             target = target.ravel()
             f = np.zeros(frac.size * c)
             for _ in range(8):
