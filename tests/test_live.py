@@ -147,6 +147,39 @@ def test_fem_forces_follow_the_fem_estimator_and_draw_node_arrows(sensor):
         Pipeline(cal, reference=ref, method="bem")
 
 
+def _dotted(img: np.ndarray, shift_px: tuple[float, float] = (0.0, 0.0)) -> np.ndarray:
+    """`img` with dark dots 16 px apart, the dots moved by `shift_px` (x, y)."""
+    h, w = img.shape[:2]
+    dots = np.zeros((h, w), np.uint8)
+    for cy in np.arange(10.0, h - 6, 16):
+        for cx in np.arange(10.0, w - 6, 16):   # 4 fractional bits: sub-pixel centres
+            cv2.circle(dots, (round((cx + shift_px[0]) * 16), round((cy + shift_px[1]) * 16)),
+                       40, 255, -1, cv2.LINE_AA, shift=4)
+    return np.clip(np.rint(img * (1 - 0.7 * dots[..., None] / 255.0)), 0, 255).astype(np.uint8)
+
+
+def test_marker_gel_results_carry_the_lateral_field(sensor):
+    """markers=True: each result has the tracks and the lateral field; the dots moved by
+    (0.6, -0.4) px read as that shift in mm everywhere, the unmoved frame as zero."""
+    _, cal, ref, _, _ = sensor
+    moved = (0.6, -0.4)
+    ref_d = _dotted(ref.astype(np.float64))
+    frames = [ref_d, _dotted(ref.astype(np.float64), moved)]
+    out = list(stream(frames, cal, reference=ref_d, markers=True))
+    assert all(r.markers is not None and r.lateral_mm.shape == (*ref.shape[:2], 2)
+               for r in out)
+    assert out[1].markers.valid.sum() >= 0.9 * len(out[1].markers.valid) >= 30
+    np.testing.assert_allclose(out[0].lateral_mm, 0.0, atol=0.02 * cal.mm_per_px)
+    for k in (0, 1):
+        np.testing.assert_allclose(np.median(out[1].lateral_mm[..., k]),
+                                   moved[k] * cal.mm_per_px, atol=0.05 * cal.mm_per_px)
+    # no markers asked for: no fields; a reference without dots: refused
+    (plain,) = stream(frames[:1], cal, reference=ref_d)
+    assert plain.lateral_mm is None and plain.markers is None
+    with pytest.raises(InputError, match="marker"):
+        Pipeline(cal, reference=ref, markers=True)
+
+
 def test_bad_sources(tmp_path, sensor):
     (tmp_path / "notes.txt").write_text("x")
     with pytest.raises(InputError, match="not a video"):

@@ -53,6 +53,13 @@ class LiveResult:
         (Fx, Fy, Fz) summed over the pad, N.
     dropped : int
         Frames the ``'latest'`` policy dropped since the previous result.
+    markers : MarkerFlow or None
+        For a marker gel: the reference's markers tracked into the frame
+        (:func:`~tactilevision.optics.track_markers`).
+    lateral_mm : (H, W, 2) float32 ndarray or None
+        For a marker gel: the lateral displacement field of the gel surface,
+        (ux, uy) mm (:func:`~tactilevision.optics.lateral_displacement`, thin-plate
+        spline through the valid tracks); None with fewer than 3 valid tracks.
     """
 
     index: int
@@ -64,6 +71,8 @@ class LiveResult:
     forces: object | None
     total_force_n: np.ndarray | None
     dropped: int
+    markers: object | None = None
+    lateral_mm: np.ndarray | None = None
 
 
 def open_frames(source) -> tuple[Iterator[np.ndarray], bool]:
@@ -266,6 +275,9 @@ class Pipeline:
         2026-11-23); use it with ``level='contact'``.
     engine : {'table', 'onnx'}, default 'table'
         The reconstructor's engine.
+    markers : bool, optional
+        Track the gel's markers and give each result the lateral displacement
+        field. Default: the calibration's ``markers`` (a marker gel).
     level : {'contact', 'median', 'far_field'}, optional
         The height's zero, as ``tactilevision forces --level``. Default
         'contact' with forces (zero outside the contact, heights integrated
@@ -290,7 +302,7 @@ class Pipeline:
                  thickness_mm: float | None = None, beta: float = 0.0,
                  engine: str = "table", level: str | None = None,
                  contact: str = "field", threshold_mm: float = 0.01,
-                 method: str = "spectral") -> None:
+                 method: str = "spectral", markers: bool | None = None) -> None:
         from ..optics import PhotometricCalibration
 
         self.calibration = (calibration if isinstance(calibration, PhotometricCalibration)
@@ -303,6 +315,9 @@ class Pipeline:
         if method not in ("spectral", "fem"):
             raise InputError(f"method must be 'spectral' or 'fem', got {method!r}")
         self.method = method
+        self.markers = bool(self.calibration.markers if markers is None else markers)
+        self._marker_ref: np.ndarray | None = None
+        self._marker_pos: np.ndarray | None = None
         if isinstance(reference, str) and reference not in ("auto", "calibration"):
             raise InputError(f"reference must be a frame, 'auto' or 'calibration', got "
                              f"{reference!r}")
@@ -335,7 +350,30 @@ class Pipeline:
             self._est = ForceEstimator(cal.shape, cal.mm_per_px, thickness_mm=h, E_mpa=E,
                                        nu=nu, beta=beta, contact=self.contact,
                                        threshold_mm=self.threshold_mm, method=self.method)
+        if self.markers:
+            from ..optics import marker_centres
+
+            ref = cal.reference if isinstance(reference, str) else np.asarray(reference)
+            pos = marker_centres(ref)
+            if len(pos) < 3:
+                raise InputError(f"markers: the reference shows {len(pos)} marker(s); the "
+                                 "lateral field needs 3 or more (markers=False for a gel "
+                                 "without them)")
+            self._marker_ref, self._marker_pos = ref, pos
         self.reference = reference
+
+    def lateral(self, frame: np.ndarray):
+        """The markers tracked into `frame` and the lateral field (or None), for a
+        marker gel; (None, None) otherwise."""
+        if self._marker_ref is None:
+            return None, None
+        from ..optics import lateral_displacement, track_markers
+
+        flow = track_markers(self._marker_ref, frame, positions_px=self._marker_pos)
+        if int(np.count_nonzero(flow.valid)) < 3:
+            return flow, None
+        return flow, lateral_displacement(flow, self.calibration.shape,
+                                          self.calibration.mm_per_px)
 
     def process(self, frame: np.ndarray):
         """Height map, contact mask and force map (or None) of one frame.
@@ -420,11 +458,12 @@ class Pipeline:
                         break
                     (i, t_cap, frame), dropped = got
                 h, contact, fm = self.process(frame)
+                flow, lateral = self.lateral(frame)
                 total = None if fm is None else np.asarray(fm.total_n, np.float64)
                 yield LiveResult(index=i, t_capture_s=t_cap,
                                  latency_s=time.perf_counter() - t_cap, frame=frame,
                                  height_mm=h, contact=contact, forces=fm, total_force_n=total,
-                                 dropped=dropped)
+                                 dropped=dropped, markers=flow, lateral_mm=lateral)
                 n_out += 1
         finally:
             stop.set()
