@@ -206,18 +206,21 @@ def test_beta_fit_recovers_a_quadratic_force():
     assert (c0, c1 / c0, r2) == pytest.approx((3.0, 0.7, 1.0))
 
 
-def test_failed_sweep_warns_and_returns_what_it_reached(monkeypatch):
-    # Newton made to fail beyond w/h = 0.05: the sweep stops there, says so
-    from tactilevision.fem import _finite_solver
-
-    solve = _finite_solver.ConstrainedNewton.solve
+@pytest.fixture
+def newton_fails_beyond_005(monkeypatch):
+    """Newton made to fail at every depth beyond w/h = 0.05."""
+    solve = ConstrainedNewton.solve
 
     def failing(self, x, target, **kw):
         if self.problem.w > 0.05:
             return x, 1, False
         return solve(self, x, target, **kw)
 
-    monkeypatch.setattr(_finite_solver.ConstrainedNewton, "solve", failing)
+    monkeypatch.setattr(ConstrainedNewton, "solve", failing)
+
+
+def test_failed_sweep_warns_and_returns_what_it_reached(newton_fails_beyond_005):
+    # the sweep stops where Newton failed, and says so
     with pytest.warns(RuntimeWarning, match=r"Newton failed beyond w/h = 0.05"):
         res = neo_hookean_indentation(0.8, 0.45, contact="bonded", w_over_h_max=0.1, steps=4,
                                       cache=False, **COARSE)   # the solver itself, patched
@@ -253,17 +256,7 @@ def test_disk_cache_returns_the_sweep_it_stored_and_misses_on_any_change(tmp_pat
     assert neo_hookean_indentation(0.8, 0.45, **kw).from_cache
 
 
-def test_a_sweep_that_stopped_early_is_not_cached(tmp_path, monkeypatch):
-    from tactilevision.fem import _finite_solver
-
-    solve = _finite_solver.ConstrainedNewton.solve
-
-    def failing(self, x, target, **kw):
-        if self.problem.w > 0.05:
-            return x, 1, False
-        return solve(self, x, target, **kw)
-
-    monkeypatch.setattr(_finite_solver.ConstrainedNewton, "solve", failing)
+def test_a_sweep_that_stopped_early_is_not_cached(tmp_path, newton_fails_beyond_005):
     with pytest.warns(RuntimeWarning, match="Newton failed"):
         res = neo_hookean_indentation(0.8, 0.45, contact="bonded", w_over_h_max=0.1, steps=4,
                                       cache_dir=tmp_path, **COARSE)

@@ -21,14 +21,14 @@ from pathlib import Path
 
 import numpy as np
 
+from .._cache import ENV_VAR, cache_root
+
 __all__ = ["ENV_VAR", "FORMAT_VERSION", "CacheError", "cache_directory", "cache_key", "cache_path",
            "pack_upper", "read_entry", "unpack_upper", "write_entry"]
 
 #: Bump when the stored arrays or their meaning change: old files then miss.
 FORMAT_VERSION = 1
 
-#: Environment variable naming the package's cache root (files go to its ``fem/``).
-ENV_VAR = "TACTILEVISION_CACHE"
 
 
 class CacheError(Exception):
@@ -40,10 +40,7 @@ def cache_directory(cache_dir: str | os.PathLike | None) -> Path:
     else ``~/.cache/tactilevision/fem``."""
     if cache_dir is not None:
         return Path(cache_dir).expanduser()
-    root = os.environ.get(ENV_VAR)
-    if root:
-        return Path(root).expanduser() / "fem"
-    return Path.home() / ".cache" / "tactilevision" / "fem"
+    return cache_root() / "fem"
 
 
 def cache_key(inputs: dict) -> str:

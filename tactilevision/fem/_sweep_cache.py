@@ -20,11 +20,11 @@ import hashlib
 import json
 import os
 import platform
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
+from .._cache import savez_atomic
 from ._pad_cache import cache_directory
 
 __all__ = ["FORMAT_VERSION", "SOURCES", "read_sweep", "sweep_key", "write_sweep"]
@@ -105,15 +105,4 @@ def write_sweep(inputs: dict, result, cache_dir: str | os.PathLike | None = None
             scalars[f.name] = v.item() if isinstance(v, np.generic) else v
     meta = {"format": FORMAT_VERSION, "key": key, "inputs": inputs, "scalars": scalars,
             "versions": _versions()}
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=path.name + ".", suffix=".tmp", dir=path.parent)
-    except OSError:
-        return
-    try:
-        with os.fdopen(fd, "wb") as f:
-            np.savez(f, meta=np.array(json.dumps(meta, sort_keys=True)), **arrays)
-        os.chmod(tmp, 0o644)  # mkstemp's 0600 would hide a shared cache from other users
-        os.replace(tmp, path)
-    except OSError:
-        Path(tmp).unlink(missing_ok=True)
+    savez_atomic(path, meta=np.array(json.dumps(meta, sort_keys=True)), **arrays)

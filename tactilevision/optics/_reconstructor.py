@@ -373,15 +373,12 @@ def _table_cache_path(key: tuple):
     if set, else ``~/.cache/tactilevision`` (the FEM cache's); the digest covers the
     network, the reference, the colour range, the bins, the position input, the format
     and the onnxruntime version that evaluated the network."""
-    import os
-    from pathlib import Path
-
     import onnxruntime
 
-    root = os.environ.get("TACTILEVISION_CACHE")
-    root = Path(root).expanduser() if root else Path.home() / ".cache" / "tactilevision"
+    from .._cache import cache_root
+
     h = hashlib.sha256(repr((_TABLE_FORMAT, onnxruntime.__version__, key)).encode())
-    return root / "optics" / f"mlp_table_{h.hexdigest()}.npz"
+    return cache_root() / "optics" / f"mlp_table_{h.hexdigest()}.npz"
 
 
 def _read_table(path, ref_inv: np.ndarray, bins: int):
@@ -402,24 +399,11 @@ def _read_table(path, ref_inv: np.ndarray, bins: int):
 
 def _write_table(path, table) -> None:
     """Store a tabulation atomically; a folder that cannot be written is skipped."""
-    import os
-    import tempfile
-    from pathlib import Path
+    from .._cache import savez_atomic
 
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=path.name + ".", suffix=".tmp", dir=path.parent)
-    except OSError:
-        return
-    try:
-        with os.fdopen(fd, "wb") as f:
-            np.savez(f, gx_table=table.gx_table, gy_table=table.gy_table,
-                     cell_offset=table.cell_offset, lo=np.asarray(table.lo),
-                     hi=np.asarray(table.hi), bins=np.int64(table.bins))
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    except OSError:
-        Path(tmp).unlink(missing_ok=True)
+    savez_atomic(path, gx_table=table.gx_table, gy_table=table.gy_table,
+                 cell_offset=table.cell_offset, lo=np.asarray(table.lo),
+                 hi=np.asarray(table.hi), bins=np.int64(table.bins))
 
 
 def _tabulated(calibration, ref_inv: np.ndarray, bins: int):
