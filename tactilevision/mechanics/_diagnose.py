@@ -330,7 +330,7 @@ def _trend_passes(model: IndentationModel, column: str, d: Mapping[str, np.ndarr
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
-                f = model.with_effect(name).fit(d, thickness_mm=h)
+                f = model.with_effect(name).fit(d, thickness_mm=h, identify=False)
         except InputError:
             continue
         if f.bic < bic - DELTA_BIC:
@@ -515,7 +515,7 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
                 try:
                     with warnings.catch_warnings():
                         warnings.simplefilter("ignore")
-                        f = m.fit(d, thickness_mm=h)
+                        f = m.fit(d, thickness_mm=h, identify=False)
                 except InputError:
                     return math.nan, math.nan
             nu_f = f.params["fem_law.nu"]
@@ -647,7 +647,6 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
             tried += [r for r in law_rungs if r not in current.names]
         cands = []
         refs: dict[bytes, ModelFit] = {}    # the current model on fewer rows, by the rows
-        cand_fits: dict[str, ModelFit] = {}
         for name in tried:
             m = current.with_effect(name)
             ok = rows_for(m)
@@ -657,11 +656,11 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
                 ref = cur_fit
             elif (ref := refs.get(ok.tobytes())) is None:
                 ref = refs[ok.tobytes()] = current.fit(d, thickness_mm=h,
-                                                       start=cur_fit.params)
+                                                       start=cur_fit.params, identify=False)
             try:
                 with warnings.catch_warnings():
                     warnings.simplefilter("ignore")
-                    mf = m.fit(d, thickness_mm=h, start=cur_fit.params)
+                    mf = m.fit(d, thickness_mm=h, start=cur_fit.params, identify=False)
                     # only a candidate that can pass needs its folds
                     cv = (cross_validated_rmse(m, d, thickness_mm=h, k=cv_folds, seed=seed,
                                                start=mf.params)
@@ -672,7 +671,6 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
                 bar.update(1)
             own = {k: v for k, v in mf.params.items() if k.startswith(name + ".")}
             cands.append(Candidate(name, mf.bic - ref.bic, cv, mf.rmse_n, own, int(ok.sum())))
-            cand_fits[name] = mf
         cands.sort(key=lambda c: c.delta_bic)
         # the law's own curvature: the alternative every depth effect must beat
         curv = [c for c in cands if c.effect in law_rungs]
@@ -718,12 +716,12 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
         current = current.with_effect(best.effect)
         d = sub(rows_for(current))
         # the start matters only to parameters found by search (the new effect's change
-        # point is searched near its place in the candidate's fit): without one, the
-        # candidate's fit is this fit
+        # point is searched near its place in the candidate's fit): without one, this is
+        # the candidate's fit again, now with the identifiability check the search skipped
         dh = {**d, "_h": h, "_a_over_h": current.a_over_h}
-        cur_fit = (cand_fits[best.effect] if not make_effect(best.effect).profile(dh)
-                   else current.fit(d, thickness_mm=h,
-                                    start={**cur_fit.params, **best.params}))
+        cur_fit = current.fit(d, thickness_mm=h,
+                              start=(cur_fit.params if not make_effect(best.effect).profile(dh)
+                                     else {**cur_fit.params, **best.params}))
         cur_cv = best.cv_rmse_n
         E, nu = material(current, d, cur_fit)
         ladder.append(LadderStep(("layer", *current.names), cur_fit.rmse_n, cur_cv, cur_fit.bic,

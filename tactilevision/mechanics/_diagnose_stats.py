@@ -240,7 +240,7 @@ def cross_validated_rmse(model: IndentationModel, columns: Mapping[str, np.ndarr
         train = {c: v[~test] for c, v in d.items()}
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            mf = model.fit(train, thickness_mm=thickness_mm, start=start)
+            mf = model.fit(train, thickness_mm=thickness_mm, start=start, identify=False)
         td = {c: v[test] for c, v in d.items()}
         err[test] = model.predict(mf.params, td, thickness_mm) - td["force_n"]
     return float(np.sqrt(np.mean(err**2)))

@@ -75,7 +75,12 @@ class ModelFit:
         Parameters the data cannot determine: they lie along a null direction
         of the (column-normalised) Jacobian, e.g. ``c_n_per_mm`` and
         ``viscoelastic_relaxation.g`` when the fitted tau is far below the
-        shortest hold, so that only c (1 - g) is measured. Their standard
+        shortest hold, so that only c (1 - g) is measured; or that the fit
+        only seems to determine because it stopped on a bound in a corner
+        where another parameter is undetermined (g = 0 leaves tau free): such
+        a bounded parameter is held a quarter of its range inwards while the
+        others are refitted, and if the cost hardly rises it is flagged, with
+        every parameter that moved. Their standard
         errors are infinite and their covariance rows NaN (infinite on the
         diagonal), so any interval derived from them is not finite.
     """
@@ -288,7 +293,8 @@ class IndentationModel:
     def fit(self, data: Mapping[str, np.ndarray], *, thickness_mm: float,
             weights: np.ndarray | None = None, loss: str = "soft_l1",
             f_scale: float | None = None,
-            start: Mapping[str, float] | None = None) -> ModelFit:
+            start: Mapping[str, float] | None = None,
+            identify: bool = True) -> ModelFit:
         """Fit the model by (weighted, robust) least squares.
 
         Parameters
@@ -314,11 +320,18 @@ class IndentationModel:
         start : mapping of str to float, optional
             Parameter values to start from (e.g. ``ModelFit.params`` of this
             model, or of one effect fewer, on the same or nearly the same
-            presses); names the model lacks are ignored. A change point given
-            here is searched by descent from it, not over all its candidates:
-            faster, and the same answer unless the cost has another minimum
-            farther off. Default: every parameter's catalogue start and a full
-            search.
+            presses); names the model lacks are ignored. Only change points
+            read it: one given here is searched by descent from it, not over
+            all its candidates: faster, and the same answer unless the cost has
+            another minimum farther off. The other parameters start at their
+            catalogue values (:attr:`Param.value`). Default: a full search.
+        identify : bool, default True
+            Check the corners of the model for parameters that only seem
+            identified (:attr:`ModelFit.unidentified`): a few more fits when a
+            parameter ends on its bound while another is undetermined. False
+            keeps the local (Jacobian) check only, for a caller that reads
+            costs and predictions of many candidate fits (:func:`diagnose`'s
+            search and cross-validation folds).
 
         Returns
         -------
@@ -434,6 +447,9 @@ class IndentationModel:
         srch = np.zeros(k, bool)
         srch[list(searched)] = True
         bad &= ~srch                # found by search: no standard error, but identified
+        if identify and bad.any() and np.any(active != 0):
+            bad |= _off_bound_alias(resid, sol, free, x_full, active, bad, cov,
+                                    loss=loss, f_scale=scale, s2=s2)
         cov[bad, :] = np.nan
         cov[:, bad] = np.nan
         cov[bad, bad] = np.inf
@@ -457,6 +473,74 @@ class IndentationModel:
             aic=ll_term + 2 * k, n_presses=n, n_params=k, loss=loss,
             outliers=rho_w < 0.5, success=bool(sol.success), message=str(sol.message),
             unidentified=tuple(q for q, b in zip(names, bad, strict=True) if b))
+
+
+def _off_bound_alias(resid: _Residuals, sol, free: np.ndarray, x_full: np.ndarray,
+                     active: np.ndarray, bad: np.ndarray, cov: np.ndarray, *, loss: str,
+                     f_scale: float, s2: float) -> np.ndarray:
+    """Parameters that a fit ending on a bound only seems to identify.
+
+    When a parameter sits on its bound and another is already unidentified, the fit
+    may have stopped in a corner of the model where one effect switches the other off
+    (a relaxation of strength g = 0 has no time constant; one far faster than every hold
+    has no visible g, which then trades with c). The local Jacobian sees the corner
+    only. Each bounded parameter is therefore moved a quarter of its range inwards and
+    held there while the others are refitted, starting with every unidentified
+    parameter at either of its bounds; if the best refit's cost rises by less than one
+    unit of chi-square (s2), the data do not pin the bounded parameter, and it is
+    unidentified, with every parameter that moved by more than three of its standard
+    errors between the two fits (a profile-likelihood check; Raue et al.,
+    Bioinformatics 25(15), 2009, on structurally non-identifiable parameters).
+
+    Returns
+    -------
+    (k,) ndarray of bool
+        The parameters found unidentified by this check (all ``False`` if none).
+    """
+    k = x_full.size
+    out = np.zeros(k, bool)
+    se = np.sqrt(np.clip(np.diag(cov), 0, None))
+    lo_all = np.full(k, -np.inf)
+    hi_all = np.full(k, np.inf)
+    lo_all[free], hi_all[free] = resid.lower, resid.upper
+    kw = {} if loss == "linear" else {"loss": loss, "f_scale": f_scale}
+    for j in np.flatnonzero(active != 0):
+        lo, hi = lo_all[j], hi_all[j]
+        if not (np.isfinite(lo) and np.isfinite(hi)):
+            continue
+        trial = x_full.copy()
+        trial[j] = lo + 0.25 * (hi - lo) if active[j] < 0 else hi - 0.25 * (hi - lo)
+        rest = np.array([i for i in free if i != j], int)
+        if rest.size == 0:
+            continue
+        sub = _Residuals.__new__(_Residuals)
+        sub.__dict__.update(resid.__dict__)
+        keep = np.isin(free, rest)
+        sub.fixed, sub.free, sub.free_l = trial, rest, rest.tolist()
+        sub.lower, sub.upper = resid.lower[keep], resid.upper[keep]
+        sub.lower_l, sub.upper_l = sub.lower.tolist(), sub.upper.tolist()
+        sub.bounded = True
+        sub._x = sub._f = None
+        starts = [trial[rest]]
+        for i in np.flatnonzero(bad[rest]):
+            for edge in (sub.lower[i], sub.upper[i]):
+                if np.isfinite(edge):
+                    x = trial[rest].copy()
+                    x[i] = edge
+                    starts.append(x)
+        best = None
+        for x0 in starts:
+            x0 = np.clip(x0, sub.lower + 1e-12, sub.upper - 1e-12)
+            r = least_squares(sub, x0, jac=sub.jac, bounds=(sub.lower, sub.upper),
+                              x_scale="jac", method="trf", **kw)
+            if best is None or r.cost < best.cost:
+                best = r
+        if best is None or 2.0 * (best.cost - sol.cost) >= s2:
+            continue
+        out[j] = True
+        moved = np.abs(best.x - x_full[rest]) > 3.0 * se[rest]
+        out[rest[moved & np.isfinite(se[rest])]] = True
+    return out
 
 
 def _plan(effects: Sequence[Effect]) -> tuple[tuple[Effect, str, tuple], ...]:
