@@ -199,23 +199,25 @@ CLICK_LAST_STEP = """
 """
 
 
-def _clicked_title(page: Path) -> str:
-    """The page title after the scripted click (``--dump-dom`` with a 30 s time budget).
+def _clicked_title(page: Path) -> tuple[str, str]:
+    """The page title after the scripted click (``--dump-dom`` with a 30 s time budget),
+    and the DOM.
 
     Whether the redraw after the click lands within headless Chromium's virtual time
-    budget depends on the machine's load (measured: 20 of 20 runs with 30 s, two at a
-    time; 11 of 12 with 10 s under load), so a run whose title shows the click taken
-    but the old frame still drawn is repeated once.
+    budget is not certain: the slider's step is taken at once, but Plotly draws the new
+    frame on an animation frame, which virtual time does not always reach (measured: 20
+    of 20 runs on one machine; 8 of 9 on another, idle, where the ninth showed the step
+    taken and the old frame still drawn). Such a run is repeated, up to three runs.
     """
     dom = None
-    for _ in range(2):
+    for _ in range(3):
         dom = _chromium(["--dump-dom"], page, budget_ms=30000)
         assert dom.returncode == 0, dom.stderr[-2000:]
         assert "Uncaught" not in dom.stderr, dom.stderr[-2000:]
         title = re.search(r"<title>(clicks .*?)</title>", dom.stdout)
         if title and not title[1].endswith("peak at column 15"):
             break
-    return title[1] if title else dom.stdout[:300]
+    return (title[1] if title else dom.stdout[:300]), dom.stdout
 
 
 def test_page_renders_in_chromium_and_the_slider_changes_the_frame(tmp_path):
@@ -232,14 +234,13 @@ def test_page_renders_in_chromium_and_the_slider_changes_the_frame(tmp_path):
     first = write_viewer(tmp_path / "first.html", frames, heights, mm_per_px=0.05)
     last = write_viewer(tmp_path / "last.html", frames, heights, mm_per_px=0.05, active=2)
 
-    dom = _chromium(["--dump-dom"], first)
-    assert dom.returncode == 0, dom.stderr[-2000:]
-    assert "main-svg" in dom.stdout and "<canvas" in dom.stdout     # 2D and WebGL drawn
-    assert "Uncaught" not in dom.stderr, dom.stderr[-2000:]
-    # a click on the slider: the last step, and its frame's bump (x = 65) drawn
+    # the page drawn (2D and WebGL), and a click on the slider: the last step, and its
+    # frame's bump (x = 65) drawn
     clicked = tmp_path / "clicked.html"
     clicked.write_text(first.read_text().replace("</body>", CLICK_LAST_STEP + "</body>"))
-    assert _clicked_title(clicked) == "clicks 1, active step 2, peak at column 65"
+    title, dom = _clicked_title(clicked)
+    assert "main-svg" in dom and "<canvas" in dom
+    assert title == "clicks 1, active step 2, peak at column 65"
 
     shots = []
     for page in (first, last):
