@@ -5,8 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tactilevision._assets import KNOWN_SENSORS, asset_dir, default_calibration_path
-from tactilevision._checks import InputError, ShapeError, check_array
+from tactilevision import KNOWN_SENSORS, InputError, ShapeError, default_calibration_path
+from tactilevision._assets import asset_dir
+from tactilevision._checks import check_array
 
 
 def test_error_hierarchy():

@@ -19,8 +19,14 @@ import pytest
 from tactilevision import InputError
 from tactilevision.cli import main
 from tactilevision.io import write_measurements
-from tactilevision.mechanics import FemLaw, IndentationModel, diagnose, fit_model, kappa_n
-from tactilevision.mechanics._fem_tables import kappa_n_grid
+from tactilevision.mechanics import (
+    FemLaw,
+    IndentationModel,
+    diagnose,
+    fit_model,
+    kappa_n,
+    kappa_n_grid,
+)
 from tactilevision.sim import make_measurement_table
 
 

@@ -9,8 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tactilevision.mechanics import HAYES_1972, kappa
-from tactilevision.mechanics._fem_tables import fem_kappa_table, fem_table_meta
+from tactilevision.mechanics import HAYES_1972, fem_kappa_table, fem_table_meta, kappa
 
 
 def test_kappa_table_provenance():

@@ -16,7 +16,9 @@ Tables (every literature number lives in one table with its source):
   (:data:`PAPER_BETA_RELATION`, the paper's relation (7) at a/h = 0.8);
   :func:`nu_from_beta`, :func:`beta_from_nu` and :func:`beta_relation` with
   ``table='fem' | 'paper'``.
-- :func:`kappa_n` -- kappa_n(nu, a/h, w/h) of the finite-strain FEM table.
+- :func:`kappa_n` -- kappa_n(nu, a/h, w/h) of the finite-strain FEM table;
+  :func:`kappa_n_grid` the same on a grid; :func:`fem_kappa_table` the FEM's
+  kappa(nu, a/h) table; :func:`fem_table_meta` a stored table's provenance.
 
 Fit:
 
@@ -53,7 +55,7 @@ from ._catalogue import EFFECTS, Effect, FemLaw, Param, make_effect, register_ef
 from ._diagnose import Diagnosis, diagnose, noise_floor
 from ._diagnose_stats import CovariateTest, covariate_tests, cross_validated_rmse
 from ._effects import EFFECT_NAMES, FIT_EFFECTS, check_fit_effects, effect_names, model_label
-from ._fem_tables import kappa_n
+from ._fem_tables import fem_kappa_table, fem_table_meta, kappa_n, kappa_n_grid
 from ._fit import MAX_W_OVER_H, fit_indentation
 from ._fit_model import fit_model
 from ._kappa import HAYES_1972, KappaTable, kappa
@@ -99,12 +101,15 @@ __all__ = [
     "diagnose",
     "effect_names",
     "elastic_force",
+    "fem_kappa_table",
+    "fem_table_meta",
     "fit_indentation",
     "fit_model",
     "fit_relaxation",
     "instantaneous_forces",
     "kappa",
     "kappa_n",
+    "kappa_n_grid",
     "make_effect",
     "model_label",
     "neo_hookean_constants",

@@ -40,7 +40,25 @@ def _load(name: str) -> dict:
 
 
 def fem_table_meta(name: str = "kappa_fem.npz") -> dict:
-    """Provenance record of a stored FEM table (command, mesh, versions, date)."""
+    """Provenance record of a stored FEM table.
+
+    Parameters
+    ----------
+    name : str, default 'kappa_fem.npz'
+        File name of the table in the package's ``models`` folder (as
+        written by ``tactilevision fem tables``).
+
+    Returns
+    -------
+    meta : dict
+        The record stored with the table: the command that built it, the
+        mesh, the library versions and the date (a copy).
+
+    Raises
+    ------
+    InputError
+        If the table is missing (naming the path and the command that builds it).
+    """
     return dict(_load(name)["meta"])
 
 
