@@ -485,127 +485,22 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
         # as fit_indentation: one depth fixes no line, so no verdict can be drawn
         raise InputError(f"depth_mm holds {n_depths} distinct depth(s); comparing eq. (5) with "
                          "the measurements needs presses at two depths or more")
-
-    materials: dict[tuple, tuple[float, float]] = {}
-
-    def material(m: IndentationModel, d: Mapping[str, np.ndarray],
-                 fit: ModelFit | None = None) -> tuple[float, float]:
-        # the law's own curvature is a nuisance of the comparison: E and nu are read
-        # through the model without it (with it, beta trades against its gamma)
-        full = m
-        m = IndentationModel(m.base, tuple(e for e in m.effects if e not in law_rungs),
-                             m.a_over_h)
-        if m.base == "fem" and fit is not None and m == full:
-            return _material(m, d, fit)     # that fit is this one
-        # the same model on the same presses (a law_curvature rung, left out here, adds
-        # nothing to the model before it): the same fit, made once
-        key = (m, tuple((k, v.tobytes()) for k, v in d.items()))
-        if key not in materials:
-            materials[key] = _material(m, d, None)
-        return materials[key]
-
-    def _material(m: IndentationModel, d: Mapping[str, np.ndarray],
-                  fit: ModelFit | None) -> tuple[float, float]:
-        """E and nu of `m` (without law rungs) on `d`; `fit`: m's own fit (base 'fem')."""
-        if m.base == "fem":
-            # the FEM law's own parameters: nu is its shape's, E from c = 2 a E kappa_0 /
-            # (1 - nu^2) (eq. 1-2)
-            f = fit
-            if f is None:
-                try:
-                    with warnings.catch_warnings():
-                        warnings.simplefilter("ignore")
-                        f = m.fit(d, thickness_mm=h, identify=False)
-                except InputError:
-                    return math.nan, math.nan
-            nu_f = f.params["fem_law.nu"]
-            k0 = float(kappa_n(nu_f, a / h, 0.0))
-            return f.params["c_n_per_mm"] * (1 - nu_f ** 2) / (2 * a * k0), nu_f
-        if m.names == ("large_deformation",):
-            # eq. (5) alone: the fit `fit` makes (the paper's, errors in both variables
-            # where the table gives depth_std_mm in every row), so both report one E, nu
-            u = d.get("depth_std_mm")
-            u = u if u is not None and np.all(np.isfinite(u)) else None
-            try:
-                with warnings.catch_warnings():
-                    warnings.simplefilter("ignore")
-                    f = fit_indentation(d["depth_mm"], d["force_n"], thickness_mm=h,
-                                        radius_mm=a, beta_table=beta_table, depth_std_mm=u)
-                return f.E_mpa, f.nu
-            except InputError:
-                return math.nan, math.nan
-        try:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                fit, _ = fit_model(d, m, thickness_mm=h, radius_mm=a, beta_table=beta_table)
-            return fit.E_mpa, fit.nu
-        except InputError:
-            return math.nan, math.nan
-
-    def rows_for(m: IndentationModel) -> np.ndarray:
-        ok = np.ones(cols["depth_mm"].size, bool)
-        for c in m.columns:
-            if c != "wait_s":
-                ok &= np.isfinite(cols[c])
-        return ok
-
-    def sub(ok: np.ndarray) -> dict[str, np.ndarray]:
-        return {k: v[ok] for k, v in cols.items()}
-
-    named = [n for n in EFFECTS if n != "large_deformation" or base == "layer"]
     # the base law's own limits: rungs of the ladder, never verdicts, left out of E and nu
     # (on the FEM law, eq. (5)'s beta term is the departure of a gel that follows eq. 5)
     law_rungs = ("law_curvature",) + (("large_deformation",) if base == "fem" else ())
-    # the user's own candidates: registered (import specs, classes) and tried as named physics
-    if isinstance(candidates, str | Effect | type):
-        candidates = (candidates,)
-    own = [effect_name(c) for c in candidates]
-    named += [n for n in dict.fromkeys(own) if n not in named and n not in model.names]
-    untestable: dict[str, tuple[str, ...]] = {}
-    why_untestable: dict[str, str] = {}
-    for n in named:
-        why = _usable(n, cols)
-        if why is not None:
-            untestable[n] = tuple(make_effect(n).columns)
-            why_untestable[n] = _why(make_effect(n).columns, cols)
-    read_by_named = {c for n in (*EFFECTS, *named) for c in make_effect(n).columns}
-    scan = tuple(scan)
-    bad = [c for c in scan if c not in cols]
-    if bad:
-        raise InputError(f"scan names columns the table does not have: {', '.join(bad)}")
-    trend_cols = [c for c in _covariate_names(cols, scan)
-                  if c not in read_by_named and c not in ("press", "indenter", "force_std_n")
-                  and _usable(f"stiffness_trend:{c}", cols) is None]
-    # each named effect's counterpart of the other kind along the same column: a stiffness
-    # change (grows with depth) against a force added at every depth
-    generic = [f"stiffness_trend:{c}" for c in trend_cols]
-    partner: dict[str, str] = {}     # counterpart -> the named effect it challenges
-    for n in named:
-        if n in untestable:
-            continue
-        e = make_effect(n)
-        if e.kind not in ("stiffness", "force") or e.columns == ("depth_mm",):
-            continue
-        other = "force_trend" if e.kind == "stiffness" else "stiffness_trend"
-        for c in e.columns:
-            g = f"{other}:{c}"
-            if c in RESPONSE_COLUMNS and c not in scan:
-                continue            # a stiffness trend along a response is the force itself
-            if g not in generic and _usable(g, cols) is None and c != "wait_s":
-                generic.append(g)
-                partner[g] = n
-    steps = [f"stiffness_step:{c}" for c in STEP_COLUMNS if c in cols
-             and _usable(f"stiffness_step:{c}", cols) is None
-             and np.unique(cols[c][np.isfinite(cols[c])]).size > 1]
-
+    table = _Table(cols, h, a, beta_table, law_rungs)
+    pool = _candidate_pool(cols, base, model, candidates, tuple(scan))
     if curvature not in ("gate", "nuisance"):
         raise InputError(f"curvature must be 'gate' or 'nuisance', got {curvature!r}")
-    ok0 = rows_for(model)
-    d0 = sub(ok0)
+    scan = pool.scan
+
+    # rung 0: the model as given (and the law's curvature as a nuisance, if asked and seen)
+    ok0 = table.rows_for(model)
+    d0 = table.sub(ok0)
     fit0 = model.fit(d0, thickness_mm=h)
     cv0 = cross_validated_rmse(model, d0, thickness_mm=h, k=cv_folds, seed=seed,
                                start=fit0.params)
-    E0, nu0 = material(model, d0, fit0)
+    E0, nu0 = table.material(model, d0, fit0)
     n_depth = 2 if {"large_deformation", "fem_law"} & set(model.names) else 1
     cov0 = covariate_tests(fit0.residuals_n, fit0.predicted_n, d0, n_depth_params=n_depth,
                            scan=scan)
@@ -622,13 +517,14 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
         if fc.bic < fit0.bic - NUISANCE_BIC:
             cvc = cross_validated_rmse(mc, d0, thickness_mm=h, k=cv_folds, seed=seed,
                                        start=fc.params)
-            Ec, nuc = material(mc, d0, fc)
+            Ec, nuc = table.material(mc, d0, fc)
             ladder.append(LadderStep(("layer", *mc.names), fc.rmse_n, cvc, fc.bic, Ec, nuc,
                                      "law_curvature"))
             fits.append(fc)
             fit_rows.append(ok0)
             start = mc
 
+    # the greedy steps: the best passing candidate joins the model, one per rung
     missing_effect: str | None = None
     equivalent: tuple[str, ...] = ()
     unexplained: str | None = None
@@ -641,70 +537,18 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
 
         bar = tqdm(desc="diagnose", unit="fit", mininterval=0.5)
     for _step in range(max_steps):
-        tried = [n for n in named if n not in current.names and n not in untestable]
-        tried += [g for g in (*steps, *generic) if g not in current.names]
+        tried = [n for n in pool.named if n not in current.names and n not in pool.untestable]
+        tried += [g for g in (*pool.steps, *pool.generic) if g not in current.names]
         if curvature == "gate" and {"large_deformation", "fem_law"} & set(current.names):
             tried += [r for r in law_rungs if r not in current.names]
-        cands = []
-        refs: dict[bytes, ModelFit] = {}    # the current model on fewer rows, by the rows
-        for name in tried:
-            m = current.with_effect(name)
-            ok = rows_for(m)
-            d = sub(ok)
-            # the current model's change points are searched near their place in its fit
-            if ok.sum() == cur_fit.n_presses:
-                ref = cur_fit
-            elif (ref := refs.get(ok.tobytes())) is None:
-                ref = refs[ok.tobytes()] = current.fit(d, thickness_mm=h,
-                                                       start=cur_fit.params, identify=False)
-            try:
-                with warnings.catch_warnings():
-                    warnings.simplefilter("ignore")
-                    mf = m.fit(d, thickness_mm=h, start=cur_fit.params, identify=False)
-                    # only a candidate that can pass needs its folds
-                    cv = (cross_validated_rmse(m, d, thickness_mm=h, k=cv_folds, seed=seed,
-                                               start=mf.params)
-                          if mf.bic < ref.bic - DELTA_BIC else math.nan)
-            except InputError:
-                continue
-            if bar is not None:
-                bar.update(1)
-            own = {k: v for k, v in mf.params.items() if k.startswith(name + ".")}
-            cands.append(Candidate(name, mf.bic - ref.bic, cv, mf.rmse_n, own, int(ok.sum())))
-        cands.sort(key=lambda c: c.delta_bic)
-        # the law's own curvature: the alternative every depth effect must beat
-        curv = [c for c in cands if c.effect in law_rungs]
-        curv_bic = curv[0].delta_bic if curv else math.inf
+        cands = _score_candidates(table, current, cur_fit, tried, cv_folds=cv_folds,
+                                  seed=seed, bar=bar)
         if _step == 0:
             first_candidates = tuple(c for c in cands if c.effect not in law_rungs)
-        passing = [c for c in cands if c.delta_bic < -DELTA_BIC and c.cv_rmse_n < cur_cv
-                   and (make_effect(c.effect).columns != ("depth_mm",)
-                        or c.effect in law_rungs or curvature == "nuisance"
-                        or c.delta_bic < curv_bic - CURVATURE_BIC)]
-        # a counterpart competes only with its named effect: it does not raise an alarm
-        # of its own (so many more candidates would, by chance, on null tables)
-        names_passing = {c.effect for c in passing}
-        passing = [c for c in passing
-                   if c.effect not in partner or partner[c.effect] in names_passing]
-        if not passing:
+        chosen = _choose(cands, cur_cv, pool.partner, law_rungs, curvature)
+        if chosen is None:
             break
-        best = passing[0]
-        generic_first = None
-        if best.effect.startswith(_GENERIC):
-            # a generic trend must beat every named effect that passes by EQUIVALENT_BIC;
-            # else the named one (the catalogue's physics) is taken, the trend its equivalent
-            named_ok = [c for c in passing if not c.effect.startswith((*_GENERIC,
-                                                                       *law_rungs))]
-            if named_ok and named_ok[0].delta_bic - best.delta_bic < EQUIVALENT_BIC:
-                generic_first, best = best, named_ok[0]
-        # equivalent: as good by BIC, or leaving the same residual (a change point between
-        # two sessions is aging over their days; the BIC then differs by the step's place)
-        eq = tuple(c.effect for c in passing
-                   if c is not best and (c.delta_bic - best.delta_bic < EQUIVALENT_BIC
-                                         or c.rmse_n <= (1 + EQUIVALENT_RMSE) * best.rmse_n)
-                   and not c.effect.startswith((*_GENERIC, *law_rungs)))
-        if generic_first is not None:
-            eq = (*eq, generic_first.effect)
+        best, eq = chosen
         if best.effect in law_rungs:
             pass   # the base law's own limit: a rung of the ladder, not a verdict
         elif best.effect.startswith(_GENERIC):
@@ -714,7 +558,7 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
         elif missing_effect is None:
             missing_effect, equivalent = best.effect, eq
         current = current.with_effect(best.effect)
-        d = sub(rows_for(current))
+        d = table.sub(table.rows_for(current))
         # the start matters only to parameters found by search (the new effect's change
         # point is searched near its place in the candidate's fit): without one, this is
         # the candidate's fit again, now with the identifiability check the search skipped
@@ -723,15 +567,16 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
                               start=(cur_fit.params if not make_effect(best.effect).profile(dh)
                                      else {**cur_fit.params, **best.params}))
         cur_cv = best.cv_rmse_n
-        E, nu = material(current, d, cur_fit)
+        E, nu = table.material(current, d, cur_fit)
         ladder.append(LadderStep(("layer", *current.names), cur_fit.rmse_n, cur_cv, cur_fit.bic,
                                  E, nu, best.effect))
         fits.append(cur_fit)
-        fit_rows.append(rows_for(current))
+        fit_rows.append(table.rows_for(current))
     if bar is not None:
         bar.close()
 
-    d_final = sub(rows_for(current))
+    # what is left: structure along a covariate, the noise floor and the noise budget
+    d_final = table.sub(table.rows_for(current))
     n_depth = 2 if {"large_deformation", "fem_law"} & set(current.names) else 1
     cov_after = covariate_tests(cur_fit.residuals_n, cur_fit.predicted_n, d_final,
                                 n_depth_params=n_depth, scan=scan)
@@ -757,12 +602,237 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
         candidates=first_candidates, missing_effect=missing_effect,
         equivalent_effects=equivalent, separating_measurement=separating,
         unexplained_covariate=unexplained, offered_effect=offered, ladder=tuple(ladder),
-        untestable=untestable, untestable_reasons=why_untestable, fits=tuple(fits),
+        untestable=pool.untestable, untestable_reasons=pool.why_untestable, fits=tuple(fits),
         fit_rows=tuple(fit_rows), columns=cols, noise_budget=budget,
         noise_budget_missing=budget_missing,
         scanned_columns=tuple(t.name for t in cov0),
         responses_not_scanned=tuple(c for c in RESPONSE_COLUMNS if c in cols and c not in scan))
     return _with_message(diag)
+
+
+@dataclass
+class _Table:
+    """A diagnosis's table and constants, with what every rung reads from them: the rows a
+    model can use, a subset of the columns, and E and nu of a model (each model on each
+    set of presses fitted once)."""
+
+    cols: dict[str, np.ndarray]
+    h: float
+    a: float
+    beta_table: str
+    law_rungs: tuple[str, ...]
+    materials: dict[tuple, tuple[float, float]] = field(default_factory=dict)
+
+    def rows_for(self, m: IndentationModel) -> np.ndarray:
+        """Rows with every column `m` reads finite (``wait_s`` may be NaN: no press before)."""
+        ok = np.ones(self.cols["depth_mm"].size, bool)
+        for c in m.columns:
+            if c != "wait_s":
+                ok &= np.isfinite(self.cols[c])
+        return ok
+
+    def sub(self, ok: np.ndarray) -> dict[str, np.ndarray]:
+        """The columns on the rows `ok`."""
+        return {k: v[ok] for k, v in self.cols.items()}
+
+    def material(self, m: IndentationModel, d: Mapping[str, np.ndarray],
+                 fit: ModelFit | None = None) -> tuple[float, float]:
+        """E and nu of `m` on `d`; `fit`: m's own fit, if made.
+
+        The law's own curvature is a nuisance of the comparison: E and nu are read
+        through the model without it (with it, beta trades against its gamma).
+        """
+        full = m
+        m = IndentationModel(m.base, tuple(e for e in m.effects if e not in self.law_rungs),
+                             m.a_over_h)
+        if m.base == "fem" and fit is not None and m == full:
+            return self._material(m, d, fit)     # that fit is this one
+        # the same model on the same presses (a law_curvature rung, left out here, adds
+        # nothing to the model before it): the same fit, made once
+        key = (m, tuple((k, v.tobytes()) for k, v in d.items()))
+        if key not in self.materials:
+            self.materials[key] = self._material(m, d, None)
+        return self.materials[key]
+
+    def _material(self, m: IndentationModel, d: Mapping[str, np.ndarray],
+                  fit: ModelFit | None) -> tuple[float, float]:
+        """E and nu of `m` (without law rungs) on `d`; `fit`: m's own fit (base 'fem')."""
+        h, a = self.h, self.a
+        if m.base == "fem":
+            # the FEM law's own parameters: nu is its shape's, E from c = 2 a E kappa_0 /
+            # (1 - nu^2) (eq. 1-2)
+            f = fit
+            if f is None:
+                try:
+                    with warnings.catch_warnings():
+                        warnings.simplefilter("ignore")
+                        f = m.fit(d, thickness_mm=h, identify=False)
+                except InputError:
+                    return math.nan, math.nan
+            nu_f = f.params["fem_law.nu"]
+            k0 = float(kappa_n(nu_f, a / h, 0.0))
+            return f.params["c_n_per_mm"] * (1 - nu_f ** 2) / (2 * a * k0), nu_f
+        if m.names == ("large_deformation",):
+            # eq. (5) alone: the fit `fit` makes (the paper's, errors in both variables
+            # where the table gives depth_std_mm in every row), so both report one E, nu
+            u = d.get("depth_std_mm")
+            u = u if u is not None and np.all(np.isfinite(u)) else None
+            try:
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore")
+                    f = fit_indentation(d["depth_mm"], d["force_n"], thickness_mm=h,
+                                        radius_mm=a, beta_table=self.beta_table,
+                                        depth_std_mm=u)
+                return f.E_mpa, f.nu
+            except InputError:
+                return math.nan, math.nan
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                fit, _ = fit_model(d, m, thickness_mm=h, radius_mm=a,
+                                   beta_table=self.beta_table)
+            return fit.E_mpa, fit.nu
+        except InputError:
+            return math.nan, math.nan
+
+
+@dataclass(frozen=True)
+class _Pool:
+    """The effects a diagnosis may try, and why the others cannot be tried."""
+
+    named: list[str]                      # catalogue and user effects
+    untestable: dict[str, tuple[str, ...]]
+    why_untestable: dict[str, str]
+    generic: list[str]                    # trends along covariates, and counterparts
+    partner: dict[str, str]               # counterpart -> the named effect it challenges
+    steps: list[str]                      # stiffness change points
+    scan: tuple[str, ...]
+
+
+def _candidate_pool(cols: Mapping[str, np.ndarray], base: str, model: IndentationModel,
+                    candidates: Sequence, scan: tuple[str, ...]) -> _Pool:
+    """The catalogue's effects (and the user's `candidates`) the table can test, the
+    generic trends along its other covariates, each named effect's counterpart of the
+    other kind along its own column, and the stiffness change points; :class:`_Pool`."""
+    named = [n for n in EFFECTS if n != "large_deformation" or base == "layer"]
+    # the user's own candidates: registered (import specs, classes) and tried as named physics
+    if isinstance(candidates, str | Effect | type):
+        candidates = (candidates,)
+    own = [effect_name(c) for c in candidates]
+    named += [n for n in dict.fromkeys(own) if n not in named and n not in model.names]
+    untestable: dict[str, tuple[str, ...]] = {}
+    why_untestable: dict[str, str] = {}
+    for n in named:
+        why = _usable(n, cols)
+        if why is not None:
+            untestable[n] = tuple(make_effect(n).columns)
+            why_untestable[n] = _why(make_effect(n).columns, cols)
+    read_by_named = {c for n in (*EFFECTS, *named) for c in make_effect(n).columns}
+    bad = [c for c in scan if c not in cols]
+    if bad:
+        raise InputError(f"scan names columns the table does not have: {', '.join(bad)}")
+    trend_cols = [c for c in _covariate_names(cols, scan)
+                  if c not in read_by_named and c not in ("press", "indenter", "force_std_n")
+                  and _usable(f"stiffness_trend:{c}", cols) is None]
+    # each named effect's counterpart of the other kind along the same column: a stiffness
+    # change (grows with depth) against a force added at every depth
+    generic = [f"stiffness_trend:{c}" for c in trend_cols]
+    partner: dict[str, str] = {}
+    for n in named:
+        if n in untestable:
+            continue
+        e = make_effect(n)
+        if e.kind not in ("stiffness", "force") or e.columns == ("depth_mm",):
+            continue
+        other = "force_trend" if e.kind == "stiffness" else "stiffness_trend"
+        for c in e.columns:
+            g = f"{other}:{c}"
+            if c in RESPONSE_COLUMNS and c not in scan:
+                continue            # a stiffness trend along a response is the force itself
+            if g not in generic and _usable(g, cols) is None and c != "wait_s":
+                generic.append(g)
+                partner[g] = n
+    steps = [f"stiffness_step:{c}" for c in STEP_COLUMNS if c in cols
+             and _usable(f"stiffness_step:{c}", cols) is None
+             and np.unique(cols[c][np.isfinite(cols[c])]).size > 1]
+    return _Pool(named, untestable, why_untestable, generic, partner, steps, scan)
+
+
+def _score_candidates(table: _Table, current: IndentationModel, cur_fit: ModelFit,
+                      tried: Sequence[str], *, cv_folds: int, seed: int,
+                      bar: Any = None) -> list[Candidate]:
+    """The current model plus each effect of `tried`, against the current model on the
+    same presses, best BIC first (the folds only for a candidate whose BIC can pass)."""
+    h = table.h
+    cands = []
+    refs: dict[bytes, ModelFit] = {}    # the current model on fewer rows, by the rows
+    for name in tried:
+        m = current.with_effect(name)
+        ok = table.rows_for(m)
+        d = table.sub(ok)
+        # the current model's change points are searched near their place in its fit
+        if ok.sum() == cur_fit.n_presses:
+            ref = cur_fit
+        elif (ref := refs.get(ok.tobytes())) is None:
+            ref = refs[ok.tobytes()] = current.fit(d, thickness_mm=h,
+                                                   start=cur_fit.params, identify=False)
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                mf = m.fit(d, thickness_mm=h, start=cur_fit.params, identify=False)
+                # only a candidate that can pass needs its folds
+                cv = (cross_validated_rmse(m, d, thickness_mm=h, k=cv_folds, seed=seed,
+                                           start=mf.params)
+                      if mf.bic < ref.bic - DELTA_BIC else math.nan)
+        except InputError:
+            continue
+        if bar is not None:
+            bar.update(1)
+        own = {k: v for k, v in mf.params.items() if k.startswith(name + ".")}
+        cands.append(Candidate(name, mf.bic - ref.bic, cv, mf.rmse_n, own, int(ok.sum())))
+    cands.sort(key=lambda c: c.delta_bic)
+    return cands
+
+
+def _choose(cands: Sequence[Candidate], cur_cv: float, partner: Mapping[str, str],
+            law_rungs: tuple[str, ...], curvature: str
+            ) -> tuple[Candidate, tuple[str, ...]] | None:
+    """The candidate that joins the model and the effects equivalent to it, or None when
+    none passes: BIC lower by more than :data:`DELTA_BIC` and a lower cross-validated
+    RMSE; a depth effect must also beat the law's own curvature by :data:`CURVATURE_BIC`
+    ('gate'); a generic trend must beat every passing named effect by
+    :data:`EQUIVALENT_BIC`."""
+    # the law's own curvature: the alternative every depth effect must beat
+    curv = [c for c in cands if c.effect in law_rungs]
+    curv_bic = curv[0].delta_bic if curv else math.inf
+    passing = [c for c in cands if c.delta_bic < -DELTA_BIC and c.cv_rmse_n < cur_cv
+               and (make_effect(c.effect).columns != ("depth_mm",)
+                    or c.effect in law_rungs or curvature == "nuisance"
+                    or c.delta_bic < curv_bic - CURVATURE_BIC)]
+    # a counterpart competes only with its named effect: it does not raise an alarm
+    # of its own (so many more candidates would, by chance, on null tables)
+    names_passing = {c.effect for c in passing}
+    passing = [c for c in passing
+               if c.effect not in partner or partner[c.effect] in names_passing]
+    if not passing:
+        return None
+    best = passing[0]
+    generic_first = None
+    if best.effect.startswith(_GENERIC):
+        # a generic trend must beat every named effect that passes by EQUIVALENT_BIC;
+        # else the named one (the catalogue's physics) is taken, the trend its equivalent
+        named_ok = [c for c in passing if not c.effect.startswith((*_GENERIC, *law_rungs))]
+        if named_ok and named_ok[0].delta_bic - best.delta_bic < EQUIVALENT_BIC:
+            generic_first, best = best, named_ok[0]
+    # equivalent: as good by BIC, or leaving the same residual (a change point between
+    # two sessions is aging over their days; the BIC then differs by the step's place)
+    eq = tuple(c.effect for c in passing
+               if c is not best and (c.delta_bic - best.delta_bic < EQUIVALENT_BIC
+                                     or c.rmse_n <= (1 + EQUIVALENT_RMSE) * best.rmse_n)
+               and not c.effect.startswith((*_GENERIC, *law_rungs)))
+    if generic_first is not None:
+        eq = (*eq, generic_first.effect)
+    return best, eq
 
 
 def _separating(a: str, b: str, cols: Mapping[str, np.ndarray]) -> str:
