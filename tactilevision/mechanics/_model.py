@@ -344,29 +344,10 @@ class IndentationModel:
             presses than parameters + 1.
         """
         names = self.param_names()
-        missing = self.missing_columns(list(data))
-        if missing:
-            raise InputError(f"the model {self.names} needs the column(s) {', '.join(missing)}")
-        d = {c: np.asarray(data[c], np.float64) for c in self.columns}
+        d, sw, wts = self._checked(data, weights, len(names))
         n = d["depth_mm"].size
-        for c, v in d.items():
-            if v.shape != (n,):
-                raise InputError(f"column {c} has {v.size} values, depth_mm {n}")
-            if c != "wait_s" and not np.all(np.isfinite(v)):
-                row = int(np.argmax(~np.isfinite(v)))
-                raise InputError(f"column {c} holds NaN or inf (row {row})")
-        if n < len(names) + 1:
-            raise InputError(f"{n} presses are too few for {len(names)} parameters")
-        wts = np.ones(n) if weights is None else np.asarray(weights, np.float64)
-        if wts.shape != (n,) or not np.all(np.isfinite(wts) & (wts > 0)):
-            raise InputError("weights must be positive and finite, one per press")
-        sw = np.sqrt(wts / wts.mean())
         effects = self._effects()
-        x0, lo, hi = [], [], []
-        c0 = float(np.median(d["force_n"] / d["depth_mm"]))
-        x0.append(c0)
-        lo.append(0.0)
-        hi.append(math.inf)
+        x0, lo, hi = [float(np.median(d["force_n"] / d["depth_mm"]))], [0.0], [math.inf]
         for e in effects:
             for q in e.params:
                 x0.append(q.value)
@@ -398,17 +379,7 @@ class IndentationModel:
         if searched:
             self._search(resid, fixed, searched, x0_f, (lo_f, hi_f), near=near,
                          jac=resid.jac)
-        first = least_squares(resid, x0_f, jac=resid.jac, bounds=(lo_f, hi_f), x_scale="jac",
-                              method="trf")
-        if loss == "linear":
-            sol = first
-            scale = math.nan
-        else:
-            r0 = first.fun
-            mad = 1.4826 * float(np.median(np.abs(r0 - np.median(r0))))
-            scale = f_scale if f_scale is not None else 2.5 * max(mad, 1e-12)
-            sol = least_squares(resid, first.x, jac=resid.jac, bounds=(lo_f, hi_f),
-                                x_scale="jac", method="trf", loss=loss, f_scale=scale)
+        sol, scale = _solve(resid, x0_f, (lo_f, hi_f), loss=loss, f_scale=f_scale)
         r = sol.fun
         k = len(names)
         J = np.zeros((n, k))
@@ -417,33 +388,8 @@ class IndentationModel:
         x_full[free] = sol.x
         active = np.zeros(k, int)
         active[free] = sol.active_mask
-        # robust weights of the loss at the solution (1 for least squares)
-        if loss == "linear":
-            rho_w = np.ones(n)
-        else:
-            z = (r / scale) ** 2
-            if loss == "huber":
-                rho_w = 1 / np.sqrt(np.maximum(z, 1.0))
-            elif loss == "cauchy":
-                rho_w = 1 / (1 + z)
-            elif loss == "arctan":
-                rho_w = 1 / (1 + z ** 2)
-            else:
-                rho_w = 1 / np.sqrt(1 + z)
-        Jw = J * np.sqrt(rho_w)[:, None]
-        s2 = float(np.sum(rho_w * r ** 2)) / max(float(np.sum(rho_w)) - k, 1.0)
-        try:
-            cov = np.linalg.pinv(Jw.T @ Jw) * s2
-            # null directions of the column-normalised Jacobian: the parameters in
-            # them are not identified (pinv alone would give them a finite,
-            # too small, error)
-            norm = np.linalg.norm(Jw, axis=0)
-            _, sv, vt = np.linalg.svd(Jw / np.where(norm > 0, norm, 1.0), full_matrices=False)
-            null = vt[sv < 1e-7 * sv[0]] if sv.size and sv[0] > 0 else vt
-            bad = (np.any(np.abs(null) > 1e-3, axis=0) if null.size else np.zeros(k, bool))
-            bad |= norm == 0
-        except np.linalg.LinAlgError:  # pragma: no cover
-            cov, bad = np.full((k, k), np.nan), np.ones(k, bool)
+        rho_w = _robust_weights(r, scale, loss)
+        cov, bad, s2 = _covariance(J * np.sqrt(rho_w)[:, None], r, rho_w)
         srch = np.zeros(k, bool)
         srch[list(searched)] = True
         bad &= ~srch                # found by search: no standard error, but identified
@@ -473,6 +419,79 @@ class IndentationModel:
             aic=ll_term + 2 * k, n_presses=n, n_params=k, loss=loss,
             outliers=rho_w < 0.5, success=bool(sol.success), message=str(sol.message),
             unidentified=tuple(q for q, b in zip(names, bad, strict=True) if b))
+
+    def _checked(self, data: Mapping[str, np.ndarray], weights: np.ndarray | None,
+                 n_params: int) -> tuple[dict[str, np.ndarray], np.ndarray, np.ndarray]:
+        """The model's columns as float arrays, the square roots of the normalised
+        weights, and the weights, after the checks :meth:`fit` documents."""
+        missing = self.missing_columns(list(data))
+        if missing:
+            raise InputError(f"the model {self.names} needs the column(s) {', '.join(missing)}")
+        d = {c: np.asarray(data[c], np.float64) for c in self.columns}
+        n = d["depth_mm"].size
+        for c, v in d.items():
+            if v.shape != (n,):
+                raise InputError(f"column {c} has {v.size} values, depth_mm {n}")
+            if c != "wait_s" and not np.all(np.isfinite(v)):
+                row = int(np.argmax(~np.isfinite(v)))
+                raise InputError(f"column {c} holds NaN or inf (row {row})")
+        if n < n_params + 1:
+            raise InputError(f"{n} presses are too few for {n_params} parameters")
+        wts = np.ones(n) if weights is None else np.asarray(weights, np.float64)
+        if wts.shape != (n,) or not np.all(np.isfinite(wts) & (wts > 0)):
+            raise InputError("weights must be positive and finite, one per press")
+        return d, np.sqrt(wts / wts.mean()), wts
+
+
+def _solve(resid: _Residuals, x0: np.ndarray, bounds: tuple[np.ndarray, np.ndarray], *,
+           loss: str, f_scale: float | None):
+    """Least squares from `x0`, then, for a robust `loss`, again from there with that loss
+    at `f_scale` (default 2.5 times the MAD residual sd of the first fit); the solution
+    (:class:`scipy.optimize.OptimizeResult`) and the scale (NaN for 'linear')."""
+    first = least_squares(resid, x0, jac=resid.jac, bounds=bounds, x_scale="jac",
+                          method="trf")
+    if loss == "linear":
+        return first, math.nan
+    r0 = first.fun
+    mad = 1.4826 * float(np.median(np.abs(r0 - np.median(r0))))
+    scale = f_scale if f_scale is not None else 2.5 * max(mad, 1e-12)
+    sol = least_squares(resid, first.x, jac=resid.jac, bounds=bounds, x_scale="jac",
+                        method="trf", loss=loss, f_scale=scale)
+    return sol, scale
+
+
+def _robust_weights(r: np.ndarray, scale: float, loss: str) -> np.ndarray:
+    """The weights rho'(z) of the robust `loss` at the residuals `r` (z = (r / scale)^2;
+    1 for least squares), as scipy.optimize.least_squares defines the losses."""
+    if loss == "linear":
+        return np.ones(r.size)
+    z = (r / scale) ** 2
+    if loss == "huber":
+        return 1 / np.sqrt(np.maximum(z, 1.0))
+    if loss == "cauchy":
+        return 1 / (1 + z)
+    if loss == "arctan":
+        return 1 / (1 + z ** 2)
+    return 1 / np.sqrt(1 + z)
+
+
+def _covariance(Jw: np.ndarray, r: np.ndarray, rho_w: np.ndarray
+                ) -> tuple[np.ndarray, np.ndarray, float]:
+    """The parameters' covariance s2 (Jw' Jw)^+ from the weighted Jacobian `Jw` (N, K),
+    the parameters in a null direction of its column-normalised form (unidentified:
+    pinv alone would give them a finite, too small, error), and s2."""
+    k = Jw.shape[1]
+    s2 = float(np.sum(rho_w * r ** 2)) / max(float(np.sum(rho_w)) - k, 1.0)
+    try:
+        cov = np.linalg.pinv(Jw.T @ Jw) * s2
+        norm = np.linalg.norm(Jw, axis=0)
+        _, sv, vt = np.linalg.svd(Jw / np.where(norm > 0, norm, 1.0), full_matrices=False)
+        null = vt[sv < 1e-7 * sv[0]] if sv.size and sv[0] > 0 else vt
+        bad = (np.any(np.abs(null) > 1e-3, axis=0) if null.size else np.zeros(k, bool))
+        bad |= norm == 0
+    except np.linalg.LinAlgError:  # pragma: no cover
+        cov, bad = np.full((k, k), np.nan), np.ones(k, bool)
+    return cov, bad, s2
 
 
 def _off_bound_alias(resid: _Residuals, sol, free: np.ndarray, x_full: np.ndarray,
