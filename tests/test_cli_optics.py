@@ -10,14 +10,12 @@ import numpy as np
 import pytest
 from _data import TAXIM_BALL_RADIUS_MM, TAXIM_MM_PER_PX, ball_depth, synthetic_presses
 
-from tactilevision._assets import asset_dir
 from tactilevision.cli import main
 from tactilevision.optics import PhotometricCalibration
 
 BALL_PX = 40.0
 MM = 0.05
 SHAPE = (120, 160)
-GELSIGHT_CAL = asset_dir("calibration") / "gelsight.npz"
 
 
 def errors(stderr: str) -> list[str]:
@@ -302,7 +300,6 @@ def test_reconstruct_sensor_without_shipped_calibration(presses, tmp_path, capsy
     assert len(err) == 1 and "gelsight" in err[0]
 
 
-@pytest.mark.skipif(not GELSIGHT_CAL.is_file(), reason="calibration/gelsight.npz not shipped yet")
 def test_reconstruct_sensor_gelsight(taxim_presses, tmp_path, capsys):
     ps = taxim_presses
     src = tmp_path / "frames"

@@ -26,8 +26,6 @@ TAXIM_SESSION = Path(__file__).resolve().parents[1] / "sample_frames" / "taxim_g
 
 @pytest.fixture(scope="module")
 def taxim_run():
-    if not (TAXIM_SESSION / "session.toml").is_file():
-        pytest.skip(f"{TAXIM_SESSION} is missing")
     truth = json.loads((TAXIM_SESSION / "truth.json").read_text())
     return calibrate_session(TAXIM_SESSION), truth
 
