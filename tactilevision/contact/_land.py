@@ -13,7 +13,7 @@ undeformed surface, first contact happens at the depth w_c with
 For a bonded layer the crest is 7 to 13% of w (nu = 0.45 to 0.49, a/h = 0.83,
 from the finite-strain FEM surface), so certifying w0 overstates every depth
 by that much; :func:`land_contact_depth` solves for w_c on the FEM surface of
-:func:`tactilevision.sim.press_profile`.
+:func:`tactilevision.fem.press_profile`.
 """
 
 from __future__ import annotations
@@ -42,7 +42,7 @@ def bulge_height(profile: _Profile, w_over_h: float) -> tuple[float, float]:
     Parameters
     ----------
     profile : PressProfile
-        Surface profiles of the press (:func:`tactilevision.sim.press_profile`).
+        Surface profiles of the press (:func:`tactilevision.fem.press_profile`).
     w_over_h : float
         Indentation depth over the layer thickness.
 
@@ -187,7 +187,7 @@ def bulge_at(r_mm: float, depth_mm: np.ndarray, *, thickness_mm: float, radius_m
     Notes
     -----
     From the finite-strain FEM surface of a bonded Neo-Hookean layer
-    (:func:`tactilevision.sim.press_profile`, the cached coarse sweep of
+    (:func:`tactilevision.fem.press_profile`, the cached coarse sweep of
     :func:`land_contact_depths_mm`: against the sample sessions' finer mesh
     the bulge at 2 to 3 h differs by under 1% of itself). For a/h = 0.83 and
     nu = 0.48 it is 7.7% of w at r = 2 h, 3.8% at 2.5 h, 2.0% at 3 h and 1.2% at

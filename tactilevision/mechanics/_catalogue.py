@@ -19,7 +19,6 @@ from functools import lru_cache
 import numpy as np
 
 from .._checks import InputError
-from . import _effects
 
 
 @dataclass(frozen=True)
@@ -390,12 +389,6 @@ COLUMN_EFFECTS: dict[str, type[Effect]] = {
     "force_trend": ForceTrend,
 }
 
-# one catalogue: the names of _effects (what the command line checks without building a
-# model, the public contract) are exactly the classes here
-if (tuple(EFFECTS) + tuple(f"{k}:<column>" for k in COLUMN_EFFECTS) != _effects.EFFECT_NAMES
-        or tuple(COLUMN_EFFECTS) != _effects.COLUMN_KINDS):   # pragma: no cover
-    raise ImportError("the effect classes of mechanics._model and the catalogue names of "
-                      "mechanics._effects disagree")
 
 
 def make_effect(name: str | Effect | type[Effect]) -> Effect:

@@ -1,8 +1,8 @@
 """Names of the effect catalogue (``formats.md`` §4) and what ``fit`` accepts.
 
 The effects themselves (classes with parameters, composed into models) are
-in :mod:`tactilevision.mechanics._catalogue`; the names live here so that the
-command line can check them without building a model. Effects of your own
+in :mod:`tactilevision.mechanics._catalogue`, and the names here are read from
+it; the command line checks names here without building a model. Effects of your own
 (:func:`~tactilevision.mechanics.register_effect`) are given as
 ``package.module:ClassName``: :func:`effect_names` imports and checks them
 before any table is read.
@@ -13,29 +13,19 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from .._checks import InputError
+from ._catalogue import COLUMN_EFFECTS, EFFECTS, effect_name, is_registered
 
 __all__ = ["EFFECT_NAMES", "FIT_EFFECTS", "check_fit_effects", "effect_names", "model_label"]
 
-#: Catalogue names, part of the public contract (docs/formats.md §5);
-#: ``stiffness_trend:<column>``, ``stiffness_step:<column>`` and ``force_trend:<column>``
-#: take any covariate column after the colon.
-EFFECT_NAMES = (
-    "large_deformation",
-    "depth_offset",
-    "force_offset",
-    "force_drift",
-    "viscoelastic_relaxation",
-    "incomplete_recovery",
-    "aging",
-    "spatial_nonuniformity",
-    "force_crosstalk",
-    "stiffness_trend:<column>",
-    "stiffness_step:<column>",
-    "force_trend:<column>",
-)
+#: Catalogue names, part of the public contract (docs/formats.md §5): the classes of
+#: :data:`~tactilevision.mechanics.EFFECTS` in their order, then
+#: ``stiffness_trend:<column>``, ``stiffness_step:<column>`` and ``force_trend:<column>``,
+#: which take any covariate column after the colon. Read from the catalogue itself, the
+#: one place the effects are listed.
+EFFECT_NAMES = tuple(EFFECTS) + tuple(f"{k}:<column>" for k in COLUMN_EFFECTS)
 
 #: The catalogue's effects that take a column: ``<kind>:<column>``.
-COLUMN_KINDS = ("stiffness_trend", "stiffness_step", "force_trend")
+COLUMN_KINDS = tuple(COLUMN_EFFECTS)
 
 #: Effects of the paper's base model, eq. (5), which
 #: :func:`~tactilevision.mechanics.fit_indentation` fits.
@@ -76,7 +66,6 @@ def effect_names(specs: Sequence[str]) -> tuple[str, ...]:
         not an ``Effect`` subclass or is invalid (bounds, name taken by the
         catalogue, ...): the message names the spec.
     """
-    from ._catalogue import effect_name, is_registered
 
     out: list[str] = []
     for spec in specs:
