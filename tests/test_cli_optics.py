@@ -214,6 +214,73 @@ def test_reconstruct_no_images(calibration, presses, tmp_path):
     assert not list(out.glob("*.png"))
 
 
+def test_reconstruct_boundary_and_engine(calibration, presses, tmp_path, capsys):
+    """--boundary picks the Poisson solve (the same maps as the API's), --level contact is
+    --boundary contact, --engine onnx needs a network, and --no-progress draws no bar."""
+    from tactilevision.optics import DepthReconstructor, PhotometricCalibration
+
+    src = frames_dir(tmp_path / "frames", presses, idx=(3,))
+    cal = PhotometricCalibration.load(calibration)
+    ref = cv2.imread(str(src / "reference.png"))
+    frame = cv2.imread(str(src / "press_3.png"))
+    maps = {}
+    for opts in (["--boundary", "dirichlet"], ["--boundary", "contact"], ["--level", "contact"]):
+        out = tmp_path / "_".join(opts).strip("-")
+        assert main(["reconstruct", str(src), "--calibration", str(calibration), "--out",
+                     str(out), "--no-images", "--no-progress", *opts]) == 0
+        assert "reconstruct:" not in capsys.readouterr().err          # no progress bar
+        maps[opts[1]] = np.load(out / "press_3_height.npy")
+    for boundary in ("dirichlet", "contact"):
+        api = DepthReconstructor(cal, reference=ref, boundary=boundary)(frame)
+        np.testing.assert_array_equal(maps[boundary], api)
+    np.testing.assert_array_equal(maps["contact"], np.load(
+        tmp_path / "level_contact" / "press_3_height.npy"))
+    neumann = DepthReconstructor(cal, reference=ref)(frame)
+    assert np.abs(maps["dirichlet"] - neumann).max() > 1e-3       # a different solve
+    # contact: zero outside the contact region
+    assert np.count_nonzero(maps["contact"]) < 0.5 * maps["contact"].size
+    # a LUT has no network for onnx; contradictory options name both
+    for opts, words in ((["--engine", "onnx"], "engine='table'"),
+                        (["--level", "contact", "--boundary", "dirichlet"], "--boundary dirichlet"),
+                        (["--level", "far_field", "--boundary", "contact"], "--level far_field")):
+        out = tmp_path / "bad"
+        assert main(["reconstruct", str(src), "--calibration", str(calibration), "--out",
+                     str(out), "--no-progress", *opts]) == 2
+        err = errors(capsys.readouterr().err)
+        assert len(err) == 1 and words in err[0], err
+        assert not list(out.glob("*.npy")) if out.exists() else True
+
+
+def test_calibrate_label_fraction(presses, presses_npz, tmp_path, capsys):
+    """--label-fraction reaches the calibration (the same LUT as the API's), and a value
+    outside (0, 1] is refused before any work."""
+    from tactilevision.optics import DepthReconstructor, PhotometricCalibration
+
+    ref, frames, centres, radii = presses
+    out = tmp_path / "lf.npz"
+    assert main(["optics", "calibrate", str(presses_npz), "--ball-radius-mm",
+                 str(BALL_PX * MM), "--mm-per-px", str(MM), "--model", "lut", "--presses",
+                 "0::2", "--label-fraction", "0.6", "--no-progress", "--out", str(out)]) == 0
+    assert "%|" not in capsys.readouterr().err
+    idx = np.arange(0, len(frames), 2)
+    cli = PhotometricCalibration.load(out)
+    kw = dict(ball_radius_mm=BALL_PX * MM, mm_per_px=MM, model="lut")
+    api = PhotometricCalibration.from_ball_presses(ref, frames[idx], centres[idx], radii[idx],
+                                                   label_fraction=0.6, **kw)
+    full = PhotometricCalibration.from_ball_presses(ref, frames[idx], centres[idx], radii[idx],
+                                                    **kw)
+    heights = [DepthReconstructor(c, reference=ref)(frames[1]) for c in (cli, api, full)]
+    np.testing.assert_array_equal(heights[0], heights[1])
+    assert np.abs(heights[0] - heights[2]).max() > 1e-4        # fewer rim pixels learnt
+    for bad in ("0", "1.5", "-0.2"):
+        assert main(["optics", "calibrate", str(presses_npz), "--ball-radius-mm", "1",
+                     "--mm-per-px", str(MM), "--model", "lut", "--label-fraction", bad,
+                     "--out", str(tmp_path / "x.npz")]) == 2
+        err = errors(capsys.readouterr().err)
+        assert len(err) == 1 and "--label-fraction" in err[0]
+        assert not (tmp_path / "x.npz").exists()
+
+
 def test_reconstruct_missing_folder(calibration, tmp_path, capsys):
     missing = tmp_path / "nowhere"
     assert main(["reconstruct", str(missing), "--calibration", str(calibration),

@@ -94,7 +94,8 @@ def test_read_reference_size_checked(tmp_path):
 # ------------------------------------------------------------- list_frames
 def test_list_frames_natural_order_and_reference_excluded(tmp_path):
     for name in ["frame_10.png", "frame_2.png", "Frame_3.JPG", "frame_1.jpeg", "frame_100.png",
-                 "reference.png", "ref.jpg", "Reference.PNG"]:
+                 "reference.png", "ref.jpg", "Reference.PNG", "background.png",
+                 "Background.jpg"]:
         write(tmp_path / name, frame(5))
     (tmp_path / "notes.txt").write_text("not a frame")
     (tmp_path / "sub").mkdir()
@@ -126,6 +127,17 @@ def test_find_reference_in_folder_then_parent(tmp_path):
     assert find_reference(frames) == own  # the folder's own wins
     pref = write(frames / "reference.png", frame(4))
     assert find_reference(frames) == pref  # reference.png before ref.jpg
+
+
+def test_find_reference_reads_gs_sdk_background(tmp_path):
+    """gs_sdk names the no-contact frame background.png: found, never a frame, and last
+    in line behind our own names."""
+    bg = write(tmp_path / "background.png", frame(1))
+    write(tmp_path / "press_1.png", frame(2))
+    assert find_reference(tmp_path) == bg
+    assert [p.name for p in list_frames(tmp_path)] == ["press_1.png"]
+    ref = write(tmp_path / "ref.jpg", frame(3))
+    assert find_reference(tmp_path) == ref
 
 
 # -------------------------------------------------------- ball presses: dir

@@ -62,7 +62,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "BALL_PRESSES is a folder (reference.png or ref.jpg, the press frames, optionally "
         "circles.csv with frame,x_px,y_px,radius_px) or an .npz (reference, frames[, "
         "centers_px, radii_px], or taxim's dataPack.npz; 'taxim:gelsight' names the one inside "
-        "the installed taxim package). Circles are detected when not given. "
+        "the installed taxim package). A supplied circle is the contact circle: its radius "
+        "is where the ball leaves the gel, not the visible colour edge, which lies a little "
+        "outside it. Circles are detected when not given (their radius is the colour edge). "
+        "Pixels within --label-fraction of the radius are trained on. "
         "Presses left out by --presses are used to report the accuracy.",
     )
     c.add_argument("ball_presses", metavar="BALL_PRESSES", type=Path,
@@ -86,6 +89,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    "the image's edges)")
     c.add_argument("--detect-circles", action="store_true",
                    help="ignore given circles and detect them")
+    c.add_argument("--label-fraction", metavar="F", type=float, default=None,
+                   help="train on the pixels within F x the circle's radius, 0 < F <= 1 "
+                   "(default 1.0 for supplied circles, 0.85 for detected ones; lower it for "
+                   "circles drawn on the colour edge)")
+    c.add_argument("--no-progress", action="store_true", help="no progress bar")
     c.add_argument("--seed", type=int, default=0)
     add_overwrite_argument(c, "folder of the calibration file")
     c.add_argument("--credit", default=None,
@@ -105,6 +113,8 @@ def run_calibrate(args: argparse.Namespace) -> int:
                              ("--hidden", args.hidden, 1)):
         if value < low:
             raise InputError(f"{name} must be at least {low}, got {value}")
+    if args.label_fraction is not None and not 0 < args.label_fraction <= 1:
+        raise InputError(f"--label-fraction must be in (0, 1], got {args.label_fraction}")
     out = Path(args.out)
     if out.is_dir():
         raise InputError(f"--out {out} is a folder; give the calibration file to write (.npz)")
@@ -131,8 +141,8 @@ def run_calibrate(args: argparse.Namespace) -> int:
         ps.centers_px[idx] if given else None, ps.radii_px[idx] if given else None,
         ball_radius_mm=args.ball_radius_mm, mm_per_px=args.mm_per_px, model=args.model,
         bins=args.bins, lut_cells=cells, epochs=args.epochs, hidden=args.hidden, seed=args.seed,
-        source=str(args.ball_presses),
-        progress=True,
+        source=str(args.ball_presses), label_fraction=args.label_fraction,
+        progress=not args.no_progress,
     )
     cal.provenance["presses"] = [int(i) for i in idx]
     cal.provenance["command"] = "tactilevision " + " ".join(args.argv)

@@ -29,8 +29,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="folder of .png/.jpg frames (sorted by name), or a video file (.mp4, "
                    ".avi, ...: its frames named <video stem>_<index>)")
     p.add_argument("--reference", metavar="REF", type=Path, default=None,
-                   help="no-contact frame; default FRAMES_DIR/reference.png (or ref.jpg, or in "
-                   "the parent folder), else the calibration's own reference")
+                   help="no-contact frame; default FRAMES_DIR/reference.png (or ref.jpg, or "
+                   "gs_sdk's background.png, or in the parent folder), else the "
+                   "calibration's own reference; a file of one of these names is never read "
+                   "as a frame")
     src = p.add_mutually_exclusive_group(required=True)
     src.add_argument("--calibration", metavar="OPTICS", type=Path,
                      help="photometric calibration file (.npz from 'optics calibrate')")
@@ -44,8 +46,18 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    "surface fitted to the gel outside the contact, or zero outside the "
                    "contact region with the heights integrated over it (what 'forces' uses; "
                    "absolute heights: docs/absolute_depth.md)")
+    p.add_argument("--boundary", choices=("neumann", "dirichlet", "contact"), default=None,
+                   help="Poisson boundary condition: 'neumann' (default, whole image, camera "
+                   "rate), 'dirichlet' (zero height on the image border), or 'contact' (zero "
+                   "outside the frame's contact region, integrated over it only; slower, and "
+                   "the same as --level contact)")
+    p.add_argument("--engine", choices=("table", "onnx"), default="table",
+                   help="how an MLP calibration runs: 'table' (default: tabulated once, one "
+                   "lookup per pixel) or 'onnx' (the network on every pixel: exact, much "
+                   "slower); a LUT calibration runs only as 'table'")
     p.add_argument("--flat-reference", action="store_true",
                    help="subtract the optics model's gradient on the reference")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
     add_overwrite_argument(p)
     p.set_defaults(func=run)
 
@@ -64,6 +76,7 @@ def run(args: argparse.Namespace) -> int:
     from ..optics import DepthReconstructor, PhotometricCalibration
     from ..viz import save_depth_image
 
+    boundary, level = _boundary_and_level(args.boundary, args.level)
     out = check_output_folder(args.out)    # before any work: a bad --out fails at once
     overwrite = args.overwrite
     cal_path = args.calibration or default_calibration_path(args.sensor)
@@ -84,8 +97,7 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"reference {args.reference} does not exist")
     reference = read_reference(ref_path, cal.shape) if ref_path else None
     recon = DepthReconstructor(cal, reference="calibration" if reference is None else reference,
-                               boundary="contact" if args.level == "contact" else "neumann",
-                               level="median" if args.level == "contact" else args.level,
+                               boundary=boundary, level=level, engine=args.engine,
                                flat_reference=args.flat_reference)
     credit = cal.provenance.get("credit")
     rows, skipped = [], []
@@ -93,7 +105,8 @@ def run(args: argparse.Namespace) -> int:
     with StagedOutput(out, overwrite=overwrite) as stage:
         tmp = stage.path
         decoded = video.iter(0, video.n_frames) if video is not None else None
-        for path in tqdm(frames, desc="reconstruct", unit="frame", file=sys.stderr):
+        for path in tqdm(frames, desc="reconstruct", unit="frame", file=sys.stderr,
+                         disable=args.no_progress):
             try:
                 frame = (read_frame(path, cal.shape) if decoded is None
                          else _checked(next(decoded), cal.shape, path.name))
@@ -123,6 +136,27 @@ def run(args: argparse.Namespace) -> int:
             print(f"tactilevision reconstruct: error: {msg}", file=sys.stderr)
         return 2
     return 0
+
+
+def _boundary_and_level(boundary: str | None, level: str) -> tuple[str, str]:
+    """The reconstructor's boundary and level from ``--boundary`` and ``--level`` (``--level
+    contact`` is ``--boundary contact``; 'far_field' levels a Neumann solve only).
+
+    Raises
+    ------
+    InputError
+        For a combination that asks for two different things (naming both options).
+    """
+    if level == "contact":
+        if boundary not in (None, "contact"):
+            raise InputError(f"--level contact is --boundary contact; it cannot go with "
+                             f"--boundary {boundary}")
+        return "contact", "median"
+    boundary = boundary or "neumann"
+    if level == "far_field" and boundary != "neumann":
+        raise InputError(f"--level far_field levels a Neumann solve; with --boundary {boundary} "
+                         "the height's zero is set by the boundary itself (leave out --level)")
+    return boundary, level
 
 
 class _VideoFrame:

@@ -20,7 +20,8 @@ IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg")
 #: (GelSight Mini 3280 x 2464, GelSlim 3.0 427 x 320 after cropping), and an 8000 x 6000
 #: frame took minutes and gigabytes per session before anything said why.
 MAX_IMAGE_PIXELS = 4096 * 4096
-REFERENCE_NAMES = ("reference.png", "reference.jpg", "ref.png", "ref.jpg")
+REFERENCE_NAMES = ("reference.png", "reference.jpg", "ref.png", "ref.jpg", "background.png",
+                   "background.jpg")
 
 
 def _natural_key(p: Path) -> list:
@@ -163,7 +164,8 @@ def list_frames(folder: str | Path) -> list[Path]:
 def find_reference(frames_dir: str | Path) -> Path | None:
     """Find the no-contact reference frame of a frame folder.
 
-    Looks for ``reference.png``, ``reference.jpg``, ``ref.png`` or ``ref.jpg``
+    Looks for ``reference.png``, ``reference.jpg``, ``ref.png``, ``ref.jpg``,
+    ``background.png`` or ``background.jpg`` (gs_sdk's name), in that order,
     in the folder, then in its parent (the session-folder layout of
     ``formats.md``: ``<session>/reference.png`` beside ``<session>/frames/``).
 
@@ -286,7 +288,8 @@ def read_ball_presses(path: str | Path) -> BallPressSet:
         raise InputError(f"ball presses {path} is neither an .npz file nor a folder")
     ref_path = find_reference(path)
     if ref_path is None:
-        raise InputError(f"ball-press folder {path} has no reference.png / ref.jpg")
+        raise InputError(f"ball-press folder {path} has no reference.png / ref.jpg / "
+                         "background.png (the no-contact frame)")
     reference = read_image(ref_path)
     files = list_frames(path)
     frames = []
