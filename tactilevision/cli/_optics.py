@@ -70,7 +70,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     )
     c.add_argument("ball_presses", metavar="BALL_PRESSES", type=Path,
                    help="folder, .npz, or taxim:gelsight")
-    c.add_argument("--ball-radius-mm", type=float, required=True, help="ball radius R (mm)")
+    c.add_argument("--ball-radius-mm", type=float, default=None,
+                   help="ball radius R (mm); needed unless BALL_PRESSES is a gs_sdk folder, "
+                   "whose catalog.csv gives each press's ball diameter")
     c.add_argument("--mm-per-px", type=float, required=True, help="image scale (mm per px)")
     c.add_argument("--model", choices=("lut", "mlp"), default="mlp",
                    help="binned colour table, or position-aware network (needs the torch "
@@ -107,7 +109,7 @@ def run_calibrate(args: argparse.Namespace) -> int:
     from ..io import read_ball_presses, taxim_datapack
     from ..optics import DepthReconstructor, PhotometricCalibration, evaluate_ball_presses
 
-    if args.ball_radius_mm <= 0 or args.mm_per_px <= 0:
+    if (args.ball_radius_mm is not None and args.ball_radius_mm <= 0) or args.mm_per_px <= 0:
         raise InputError("--ball-radius-mm and --mm-per-px must be positive")
     for name, value, low in (("--bins", args.bins, 2), ("--epochs", args.epochs, 1),
                              ("--hidden", args.hidden, 1)):
@@ -134,12 +136,20 @@ def run_calibrate(args: argparse.Namespace) -> int:
     if cells != (1, 1) and args.model != "lut":
         raise InputError("--lut-cells needs --model lut (the network takes the position "
                          "itself)")
+    if ps.ball_radius_mm is not None and args.ball_radius_mm is not None:
+        raise InputError(f"{args.ball_presses} lists each press's ball diameter (catalog.csv); "
+                         "leave out --ball-radius-mm")
+    if ps.ball_radius_mm is None and args.ball_radius_mm is None:
+        raise InputError(f"--ball-radius-mm is needed: {args.ball_presses} does not say the "
+                         "ball's size")
+    ball_mm = (ps.ball_radius_mm if ps.ball_radius_mm is not None
+               else np.full(len(ps.frames), args.ball_radius_mm))
     idx = parse_presses(args.presses, len(ps.frames))
     given = ps.centers_px is not None and ps.radii_px is not None and not args.detect_circles
     cal = PhotometricCalibration.from_ball_presses(
         ps.reference, ps.frames[idx],
         ps.centers_px[idx] if given else None, ps.radii_px[idx] if given else None,
-        ball_radius_mm=args.ball_radius_mm, mm_per_px=args.mm_per_px, model=args.model,
+        ball_radius_mm=ball_mm[idx], mm_per_px=args.mm_per_px, model=args.model,
         bins=args.bins, lut_cells=cells, epochs=args.epochs, hidden=args.hidden, seed=args.seed,
         source=str(args.ball_presses), label_fraction=args.label_fraction,
         progress=not args.no_progress,
@@ -157,11 +167,14 @@ def run_calibrate(args: argparse.Namespace) -> int:
     print(f"wrote {args.model} calibration from {len(idx)} presses to {path}")
     rest = np.setdiff1d(np.arange(len(ps.frames)), idx)
     if rest.size and given:
-        rep = evaluate_ball_presses(DepthReconstructor(cal), ps.frames[rest], ps.centers_px[rest],
-                                    ps.radii_px[rest], args.ball_radius_mm / args.mm_per_px)
+        recon = DepthReconstructor(cal)
         mm = args.mm_per_px
-        print(f"held-out presses ({rest.size}): normal angle {rep.normal_angle_deg:.2f} deg, "
-              f"shape RMS {rep.shape_rms_px * mm * 1000:.1f} um, fitted ball radius "
-              f"{rep.fitted_radius_px * mm:.3f} +- {rep.fitted_radius_std_px * mm:.3f} mm "
-              f"(true {args.ball_radius_mm:g})")
+        for radius in np.unique(ball_mm[rest]):        # one line per ball size
+            sel = rest[ball_mm[rest] == radius]
+            rep = evaluate_ball_presses(recon, ps.frames[sel], ps.centers_px[sel],
+                                        ps.radii_px[sel], radius / mm)
+            print(f"held-out presses ({sel.size}): normal angle {rep.normal_angle_deg:.2f} "
+                  f"deg, shape RMS {rep.shape_rms_px * mm * 1000:.1f} um, fitted ball radius "
+                  f"{rep.fitted_radius_px * mm:.3f} +- {rep.fitted_radius_std_px * mm:.3f} mm "
+                  f"(true {radius:g})")
     return 0

@@ -16,9 +16,11 @@ from ._frames import (
     read_reference,
     taxim_datapack,
 )
+from ._gs_sdk import read_gs_sdk
 
 __all__ = ["MAX_IMAGE_PIXELS", "BallPressSet", "find_reference", "list_frames",
-           "read_ball_presses", "read_frame", "read_image", "read_reference", "taxim_datapack"]
+           "read_ball_presses", "read_frame", "read_gs_sdk", "read_image", "read_reference",
+           "taxim_datapack"]
 
 # measurements tables (mechanics): names appended below
 from ._measurements import (

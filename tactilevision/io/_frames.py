@@ -251,6 +251,9 @@ class BallPressSet:
         Annotated circle radii, px, when known.
     names : list of str
         Frame names.
+    ball_radius_mm : (N,) float64 ndarray or None
+        Each press's ball radius, mm, where the set says it (gs_sdk's
+        ``catalog.csv``); None where the caller gives one radius for all.
     """
 
     reference: np.ndarray
@@ -258,6 +261,7 @@ class BallPressSet:
     centers_px: np.ndarray | None
     radii_px: np.ndarray | None
     names: list[str]
+    ball_radius_mm: np.ndarray | None = None
 
 
 def read_ball_presses(path: str | Path) -> BallPressSet:
@@ -270,7 +274,10 @@ def read_ball_presses(path: str | Path) -> BallPressSet:
         ``centers_px``, ``radii_px`` (or the ``taxim`` layout ``f0``,
         ``imgs``, ``touch_center``, ``touch_radius``), or a folder with a
         reference frame (see :func:`find_reference`), the press frames and
-        optionally ``circles.csv`` with columns ``frame,x_px,y_px,radius_px``.
+        optionally ``circles.csv`` with columns ``frame,x_px,y_px,radius_px``,
+        or a gs_sdk calibration folder (``catalog.csv``, ``background.png``,
+        ``<diameter>mm/<i>/gelsight.png``; :func:`read_gs_sdk`), which also
+        gives each press's ball radius.
 
     Returns
     -------
@@ -286,6 +293,10 @@ def read_ball_presses(path: str | Path) -> BallPressSet:
         return _read_npz(path)
     if not path.is_dir():
         raise InputError(f"ball presses {path} is neither an .npz file nor a folder")
+    if (path / "catalog.csv").is_file():
+        from ._gs_sdk import read_gs_sdk
+
+        return read_gs_sdk(path)
     ref_path = find_reference(path)
     if ref_path is None:
         raise InputError(f"ball-press folder {path} has no reference.png / ref.jpg / "

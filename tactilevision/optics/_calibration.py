@@ -95,7 +95,7 @@ class PhotometricCalibration:
         centers_px: np.ndarray | None = None,
         radii_px: np.ndarray | None = None,
         *,
-        ball_radius_mm: float,
+        ball_radius_mm: float | np.ndarray,
         mm_per_px: float,
         model: ModelKind = "mlp",
         use_position: bool = True,
@@ -124,8 +124,10 @@ class PhotometricCalibration:
             (:func:`detect_contact_circles`).
         radii_px : (N,) float ndarray, optional
             Contact-circle radii, px; given together with ``centers_px``.
-        ball_radius_mm : float
-            Ball radius R, mm.
+        ball_radius_mm : float or (N,) array_like
+            Ball radius R, mm: one for all presses, or one per press (several
+            ball sizes in one calibration, as gs_sdk's ``catalog.csv`` lists
+            them: :attr:`tactilevision.io.BallPressSet.ball_radius_mm`).
         mm_per_px : float
             Image scale on the gel, mm per px.
         model : {'lut', 'mlp'}, default 'mlp'

@@ -51,7 +51,12 @@ def fit_from_ball_presses(cls, reference: np.ndarray, frames: np.ndarray,
         raise InputError(f"model must be 'lut' or 'mlp', got {model!r}")
     if len(frames) < 2:
         raise InputError(f"need at least 2 ball presses, got {len(frames)}")
-    if not (ball_radius_mm > 0 and mm_per_px > 0):
+    ball_mm = np.asarray(ball_radius_mm, np.float64)
+    if ball_mm.ndim > 1 or (ball_mm.ndim == 1 and ball_mm.size != len(frames)):
+        raise InputError(f"ball_radius_mm must be one radius or one per press ({len(frames)}), "
+                         f"got shape {ball_mm.shape}")
+    ball_mm = np.broadcast_to(ball_mm, (len(frames),))
+    if not (np.all(np.isfinite(ball_mm) & (ball_mm > 0)) and mm_per_px > 0):
         raise InputError("ball_radius_mm and mm_per_px must be positive")
     detected = centers_px is None and radii_px is None
     if detected:
@@ -62,7 +67,7 @@ def fit_from_ball_presses(cls, reference: np.ndarray, frames: np.ndarray,
     radii = check_array(radii_px, "radii_px", [(len(frames),)], finite=True)
     centers = centers.astype(np.float64).copy()
     radii = radii.astype(np.float64)
-    ball_px = ball_radius_mm / mm_per_px
+    ball_px = ball_mm / mm_per_px              # (N,): each press's ball
     if label_fraction is None:
         label_fraction = 0.85 if detected else 1.0
     if refine_centers is None:
@@ -71,7 +76,7 @@ def fit_from_ball_presses(cls, reference: np.ndarray, frames: np.ndarray,
     if bad.size:
         raise InputError(f"press {bad[0]}: contact radius {radii[bad[0]]:.1f} px (x label "
                          f"fraction {label_fraction:g}) is not smaller than the ball radius "
-                         f"{ball_px:.1f} px: check ball_radius_mm and mm_per_px")
+                         f"{ball_px[bad[0]]:.1f} px: check ball_radius_mm and mm_per_px")
     ref_mask = marker_mask(reference)
     if markers is None:
         markers = bool(ref_mask.mean() > 0.02)
@@ -113,12 +118,13 @@ def fit_from_ball_presses(cls, reference: np.ndarray, frames: np.ndarray,
             for i, f in enumerate(frames):
                 gx, gy = recon.gradients(f)
                 centers[i] = fit_ball_centre(gx, gy, centers[i], label_fraction * radii[i],
-                                             ball_px)
+                                             ball_px[i])
     cal.provenance = {
         "source": source,
         "created": _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds"),
         "n_presses": len(frames),
-        "ball_radius_mm": float(ball_radius_mm),
+        "ball_radius_mm": (float(ball_mm[0]) if np.all(ball_mm == ball_mm[0])
+                           else ball_mm.round(4).tolist()),
         "circles": "detected" if detected else "given",
         "centers_refined": bool(refine_centers),
         "label_fraction": float(label_fraction),
@@ -133,7 +139,7 @@ def fit_from_ball_presses(cls, reference: np.ndarray, frames: np.ndarray,
 
 def _training_samples(changes: list[np.ndarray], valid: list[np.ndarray],
                       background: list[np.ndarray], centers: np.ndarray,
-                      label_radii: np.ndarray, ball_px: float
+                      label_radii: np.ndarray, ball_px: np.ndarray
                       ) -> tuple[np.ndarray, ...]:
     """Labelled pixels of all presses: inside each label disc the ball's normal,
     beyond twice the contact radius (sampled) the flat normal; the ring
@@ -144,9 +150,9 @@ def _training_samples(changes: list[np.ndarray], valid: list[np.ndarray],
     """
     h, w = changes[0].shape[:2]
     xs, ys, feats, labels, bg_mag = [], [], [], [], []
-    for change, ok, bg, centre, rad in zip(changes, valid, background, centers, label_radii,
-                                           strict=True):
-        gx, gy, inside = ball_gradients((h, w), centre, rad, ball_px)
+    for change, ok, bg, centre, rad, ball in zip(changes, valid, background, centers,
+                                                 label_radii, ball_px, strict=True):
+        gx, gy, inside = ball_gradients((h, w), centre, rad, ball)
         dx = np.arange(w)[None, :] - centre[0]
         dy = np.arange(h)[:, None] - centre[1]
         far = (dx * dx + dy * dy) > (2.0 * rad) ** 2
