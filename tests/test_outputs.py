@@ -136,15 +136,16 @@ def test_diagnose_and_validate_reports_refuse_foreign_files(tmp_path, capsys):
 
 
 def test_optics_calibrate_writes_its_file_whole_and_may_replace_its_own(tmp_path, capsys):
-    """optics calibrate: the .npz goes into place through the stage and the folder's
-    manifest lists it, so a rerun replaces it without --overwrite (LUT: a few seconds)."""
+    """optics calibrate: the .npz and its accuracy report go into place through the stage
+    and the folder's manifest lists them, so a rerun replaces it without --overwrite (LUT: a few seconds)."""
     from tactilevision.optics import PhotometricCalibration
 
     ball = ROOT / "sample_frames" / "gelsight_ball" / "frames"
     argv = ["optics", "calibrate", str(ball), "--ball-radius-mm", "2", "--mm-per-px", "0.0295",
             "--model", "lut", "--out", str(tmp_path / "cal")]
     assert main(argv) == 0
-    assert json.loads((tmp_path / MANIFEST).read_text())["files"] == ["cal.npz"]
+    assert json.loads((tmp_path / MANIFEST).read_text())["files"] == ["cal.npz",
+                                                                      "cal_accuracy.json"]
     assert PhotometricCalibration.load(tmp_path / "cal.npz").model == "lut"
     assert main(argv) == 0                               # its own file: replaced
     assert not list(tmp_path.glob(".tactilevision-tmp-*"))

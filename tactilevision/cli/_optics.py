@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import json
 from pathlib import Path
 
 import numpy as np
@@ -48,6 +49,29 @@ def parse_presses(text: str | None, n: int) -> np.ndarray:
     if idx.size == 0 or idx.min() < -n or idx.max() >= n:
         raise InputError(f"--presses '{text}' selects no press or one outside 0..{n - 1}")
     return idx % n
+
+
+def _accuracy_text(report: dict, mm: float) -> str:
+    """The accuracy report as printed: a line per ball size."""
+    which = ("training presses (in sample: every press was trained on; --presses 0::2 "
+             "holds the odd ones out)" if report["in_sample"] else "held-out presses")
+    lines = []
+    for b in report["balls"]:
+        radius = b["ball_radius_px"] * mm
+        cut = f"; {b['n_edge_cut']} cut by the image edge, left out" if b["n_edge_cut"] else ""
+        head = f"{which} ({b['n_scored']}{cut}), ball radius {radius:g} mm"
+        if not b["n_scored"]:
+            lines.append(f"{head}: none to score")
+            continue
+        trained = (f"slopes trained up to {b['trained_tilt_deg']:.1f} deg"
+                   if b["trained_tilt_deg"] is not None else "no press of this ball trained on")
+        lines.append(
+            f"{head}: normal angle {b['normal_angle_deg']:.2f} deg (median), deepest point "
+            f"{100 * b['deepest_point']:+.1f} %, shape RMS {b['shape_rms_px'] * mm * 1000:.1f} "
+            f"um, fitted ball radius {b['fitted_radius_px'] * mm:.3f} +- "
+            f"{b['fitted_radius_std_px'] * mm:.3f} mm (true {radius:g}); {trained}, these "
+            f"rims reach {b['rim_tilt_deg']:.1f} deg")
+    return "\n".join(lines)
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -107,7 +131,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 def run_calibrate(args: argparse.Namespace) -> int:
     """Run ``optics calibrate``."""
     from ..io import read_ball_presses, taxim_datapack
-    from ..optics import DepthReconstructor, PhotometricCalibration, evaluate_ball_presses
+    from ..optics import (
+        DepthReconstructor,
+        PhotometricCalibration,
+        calibration_accuracy,
+        detect_contact_circles,
+    )
 
     if (args.ball_radius_mm is not None and args.ball_radius_mm <= 0) or args.mm_per_px <= 0:
         raise InputError("--ball-radius-mm and --mm-per-px must be positive")
@@ -122,7 +151,8 @@ def run_calibrate(args: argparse.Namespace) -> int:
         raise InputError(f"--out {out} is a folder; give the calibration file to write (.npz)")
     check_output_folder(out.parent, "folder of the calibration file")
     name = out.name if out.suffix == ".npz" else out.name + ".npz"
-    check_overwrite(out.parent, [name], overwrite=args.overwrite)
+    report_name = Path(name).stem + "_accuracy.json"
+    check_overwrite(out.parent, [name, report_name], overwrite=args.overwrite)
     src = str(args.ball_presses)
     ps = read_ball_presses(taxim_datapack(src.split(":", 1)[1]) if src.startswith("taxim:")
                            else args.ball_presses)
@@ -158,23 +188,30 @@ def run_calibrate(args: argparse.Namespace) -> int:
     cal.provenance["command"] = "tactilevision " + " ".join(args.argv)
     if args.credit:
         cal.provenance["credit"] = args.credit
+    # the accuracy report: held-out presses (else the training ones, said so), by ball
+    mm = args.mm_per_px
+    trained = np.zeros(len(ps.frames), bool)
+    trained[idx] = True
+    try:
+        if given:
+            centres, radii = ps.centers_px, ps.radii_px
+        else:
+            centres, radii = detect_contact_circles(ps.frames, ps.reference)
+        report = calibration_accuracy(DepthReconstructor(cal), ps.frames, centres, radii,
+                                      ball_mm / mm, trained=trained,
+                                      label_fraction=cal.provenance["label_fraction"],
+                                      circles="given" if given else "detected")
+    except InputError as exc:      # the calibration stands; only its report is missing
+        report = {"error": f"no accuracy report: {exc}"}
+    report["mm_per_px"] = mm
     # into place only when complete; the folder's manifest records it (a rerun may replace it)
     with StagedOutput(out.parent, overwrite=args.overwrite,
                       what="folder of the calibration file") as stage:
         cal.save(stage.path / name)
+        (stage.path / report_name).write_text(json.dumps(report, indent=2) + "\n")
         stage.commit()
     path = out.parent / name
     print(f"wrote {args.model} calibration from {len(idx)} presses to {path}")
-    rest = np.setdiff1d(np.arange(len(ps.frames)), idx)
-    if rest.size and given:
-        recon = DepthReconstructor(cal)
-        mm = args.mm_per_px
-        for radius in np.unique(ball_mm[rest]):        # one line per ball size
-            sel = rest[ball_mm[rest] == radius]
-            rep = evaluate_ball_presses(recon, ps.frames[sel], ps.centers_px[sel],
-                                        ps.radii_px[sel], radius / mm)
-            print(f"held-out presses ({sel.size}): normal angle {rep.normal_angle_deg:.2f} "
-                  f"deg, shape RMS {rep.shape_rms_px * mm * 1000:.1f} um, fitted ball radius "
-                  f"{rep.fitted_radius_px * mm:.3f} +- {rep.fitted_radius_std_px * mm:.3f} mm "
-                  f"(true {radius:g})")
+    print(report["error"] if "error" in report else _accuracy_text(report, mm))
+    print(f"accuracy report: {out.parent / report_name}")
     return 0

@@ -313,6 +313,8 @@ def read_ball_presses(path: str | Path) -> BallPressSet:
     names = [f.name for f in files]
     centers = radii = None
     circles = path / "circles.csv"
+    if not circles.is_file():
+        circles = files[0].parent / "circles.csv"      # beside the frames (a frames/ folder)
     if circles.is_file():
         centers, radii = _read_circles(circles, names)
     return BallPressSet(reference, np.stack(frames), centers, radii, names)

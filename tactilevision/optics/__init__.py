@@ -9,6 +9,7 @@ from ._absolute import (
     absolute_depth_metrics,
     fit_ball_cap,
 )
+from ._accuracy import calibration_accuracy, edge_cut, max_tilt_deg
 from ._ball import (
     BallPressMetrics,
     ball_gradients,
@@ -42,10 +43,12 @@ __all__ = [
     "absolute_depth_metrics",
     "ball_gradients",
     "ball_press_metrics",
+    "calibration_accuracy",
     "colour_change",
     "detect_contact_circle",
     "detect_contact_circles",
     "divergence",
+    "edge_cut",
     "evaluate_ball_presses",
     "fill_masked",
     "fit_ball_cap",
@@ -60,6 +63,7 @@ __all__ = [
     "lateral_displacement",
     "marker_centres",
     "marker_mask",
+    "max_tilt_deg",
     "mlp_inputs",
     "normals_from_gradients",
     "reference_inverse",

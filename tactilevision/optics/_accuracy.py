@@ -1,0 +1,153 @@
+"""The accuracy report of a photometric calibration: what ``optics calibrate`` prints and
+saves after every calibration."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ._evaluate import evaluate_ball_presses
+from ._reconstructor import DepthReconstructor
+
+__all__ = ["calibration_accuracy", "edge_cut", "max_tilt_deg"]
+
+
+def edge_cut(centers_px: np.ndarray, radii_px: np.ndarray, shape: tuple[int, int]
+             ) -> np.ndarray:
+    """Whether each contact disc reaches past the image edge.
+
+    Parameters
+    ----------
+    centers_px : (N, 2) float ndarray
+        Circle centres (x, y), px.
+    radii_px : (N,) float ndarray
+        Circle radii, px.
+    shape : (H, W)
+        Image size.
+
+    Returns
+    -------
+    cut : (N,) bool ndarray
+        True where part of the disc lies outside the pixel centres 0..W-1,
+        0..H-1: its rim, and so its steepest slopes, are not in the frame.
+    """
+    c = np.asarray(centers_px, np.float64).reshape(-1, 2)
+    r = np.asarray(radii_px, np.float64).reshape(-1)
+    h, w = shape
+    return ((c[:, 0] - r < 0) | (c[:, 0] + r > w - 1) | (c[:, 1] - r < 0)
+            | (c[:, 1] + r > h - 1))
+
+
+def max_tilt_deg(radius_px: np.ndarray | float, ball_radius_px: np.ndarray | float
+                 ) -> np.ndarray:
+    """Tilt of a sphere of radius R at distance r from its axis, degrees:
+    ``atan(r / sqrt(R^2 - r^2))`` (the slope at a contact disc's rim)."""
+    r = np.asarray(radius_px, np.float64)
+    big = np.asarray(ball_radius_px, np.float64)
+    return np.degrees(np.arctan2(r, np.sqrt(np.maximum(big * big - r * r, 0.0))))
+
+
+def _deepest_point(recon: DepthReconstructor, frame: np.ndarray, centre: np.ndarray,
+                   radius: float, ball_px: float) -> float:
+    """Reconstructed cap depth over the ball's, less one: the height at the disc's deepest
+    point above the median height on its rim circle, against R - sqrt(R^2 - r^2)."""
+    h = recon(frame) / recon.calibration.mm_per_px
+    hh, ww = h.shape
+    yy, xx = np.mgrid[0:hh, 0:ww]
+    d = np.hypot(xx - centre[0], yy - centre[1])
+    inside = d <= radius
+    ring = np.abs(d - radius) <= 1.0
+    if not inside.any() or not ring.any():
+        return math.nan
+    cap = ball_px - math.sqrt(max(ball_px * ball_px - radius * radius, 0.0))
+    return float((h[inside].max() - np.median(h[ring])) / cap - 1.0)
+
+
+def calibration_accuracy(recon: DepthReconstructor, frames: np.ndarray,
+                         centers_px: np.ndarray, radii_px: np.ndarray,
+                         ball_radius_px: np.ndarray, *, trained: np.ndarray,
+                         label_fraction: float, circles: str = "given") -> dict:
+    """Accuracy of a calibration on its ball presses, by ball size.
+
+    Held-out presses (not `trained`) are scored; when every press was trained on, the
+    training presses are, and the report says it is in sample. Presses whose disc
+    reaches past the image edge are left out and counted.
+
+    Parameters
+    ----------
+    recon : DepthReconstructor
+        The calibration under test (its own reference).
+    frames : (N, H, W, 3) uint8 ndarray
+        All ball presses, BGR.
+    centers_px : (N, 2) float ndarray
+        Contact-circle centres (x, y), px.
+    radii_px : (N,) float ndarray
+        Contact-circle radii, px (given: the contact; detected: the colour edge).
+    ball_radius_px : (N,) float ndarray
+        Each press's ball radius, px.
+    trained : (N,) bool ndarray
+        The presses the calibration was trained on.
+    label_fraction : float
+        The fraction of each radius trained on: the slope range covered is
+        read at ``label_fraction * radius`` of the training presses.
+    circles : {'given', 'detected'}, default 'given'
+        Where the circles came from (written into the report). A detected
+        radius marks the colour edge, outside the contact: it is scored at
+        ``label_fraction`` of itself, the contact the calibration assumed.
+
+    Returns
+    -------
+    report : dict
+        JSON-ready: ``in_sample`` (bool), ``circles``, ``label_fraction``, and
+        ``balls``, one entry per ball radius (mm-free, px): ``ball_radius_px``,
+        ``n_scored``, ``n_edge_cut`` (left out), ``normal_angle_deg`` (median
+        over presses of the mean normal-angle error inside 0.9 of the radius),
+        ``deepest_point`` (median relative error of the cap depth: reconstructed
+        height at the deepest point above the rim, over R - sqrt(R^2 - r^2)),
+        ``trained_tilt_deg`` (the steepest slope the training labels reached,
+        at ``label_fraction`` of the radius) and ``rim_tilt_deg`` (the steepest
+        slope of the scored presses' rims), ``shape_rms_px``,
+        ``fitted_radius_px`` and ``fitted_radius_std_px`` (means over the
+        scored presses, :func:`evaluate_ball_presses` inside 0.9 of the
+        radius); None where nothing is scored.
+    """
+    frames = np.asarray(frames)
+    centers = np.asarray(centers_px, np.float64)
+    radii = np.asarray(radii_px, np.float64)
+    if circles == "detected":
+        # a detected radius is the colour edge, outside the contact: the calibration took
+        # label_fraction of it as the contact, and so does its score
+        radii = label_fraction * radii
+    ball = np.broadcast_to(np.asarray(ball_radius_px, np.float64), radii.shape)
+    trained = np.asarray(trained, bool)
+    in_sample = bool(trained.all())
+    scored = trained if in_sample else ~trained
+    cut = edge_cut(centers, radii, frames.shape[1:3])
+    balls = []
+    for b in np.unique(ball):
+        same = ball == b
+        use = np.flatnonzero(same & scored & ~cut)
+        entry = {"ball_radius_px": float(b), "n_scored": int(use.size),
+                 "n_edge_cut": int(np.count_nonzero(same & scored & cut)),
+                 "trained_tilt_deg": (float(max_tilt_deg(
+                     radii[same & trained] * (1.0 if circles == "detected" else label_fraction),
+                     b).max())
+                                      if np.any(same & trained) else None),
+                 "normal_angle_deg": None, "deepest_point": None, "rim_tilt_deg": None,
+                 "shape_rms_px": None, "fitted_radius_px": None, "fitted_radius_std_px": None}
+        if use.size:
+            rep = evaluate_ball_presses(recon, frames[use], centers[use], radii[use], float(b),
+                                        disc_fraction=0.9)
+            entry["normal_angle_deg"] = float(np.median([p.normal_angle_deg
+                                                         for p in rep.per_press]))
+            entry["deepest_point"] = float(np.nanmedian([
+                _deepest_point(recon, frames[i], centers[i], radii[i], float(b))
+                for i in use]))
+            entry["rim_tilt_deg"] = float(max_tilt_deg(radii[use], b).max())
+            entry["shape_rms_px"] = rep.shape_rms_px
+            entry["fitted_radius_px"] = rep.fitted_radius_px
+            entry["fitted_radius_std_px"] = rep.fitted_radius_std_px
+        balls.append(entry)
+    return {"in_sample": in_sample, "circles": circles, "label_fraction": float(label_fraction),
+            "balls": balls}

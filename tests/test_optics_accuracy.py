@@ -1,0 +1,101 @@
+"""The accuracy report optics calibrate prints and saves: held-out presses by ball size,
+edge-cut presses left out and counted, the deepest point, and the slope range covered."""
+
+from __future__ import annotations
+
+import json
+
+import cv2
+import numpy as np
+import pytest
+from _data import synthetic_presses
+
+from tactilevision.cli import main
+from tactilevision.io import read_ball_presses
+from tactilevision.optics import (
+    DepthReconstructor,
+    PhotometricCalibration,
+    calibration_accuracy,
+    edge_cut,
+    max_tilt_deg,
+)
+
+MM, BALL_PX, SHAPE = 0.05, 40.0, (120, 160)
+
+
+def test_max_tilt_and_edge_cut_closed_forms():
+    # a sphere's slope at r: atan(r / sqrt(R^2 - r^2)): 30 deg at R/2, 45 at R/sqrt(2)
+    np.testing.assert_allclose(max_tilt_deg([20.0, 40 / np.sqrt(2), 0.0], 40.0),
+                               [30.0, 45.0, 0.0], atol=1e-12)
+    cut = edge_cut([[10, 60], [80, 60], [150, 60], [80, 115], [80, 5]], [9, 20, 12, 3, 6],
+                   SHAPE)
+    assert cut.tolist() == [False, False, True, False, True]
+
+
+@pytest.fixture(scope="module")
+def presses():
+    return synthetic_presses(8, shape=SHAPE, ball_radius=BALL_PX, seed=0)
+
+
+def test_report_scores_held_out_presses_and_counts_edge_cuts(presses):
+    ref, frames, centres, radii = presses
+    centres = centres.copy()
+    centres[7] = (radii[7] - 3.0, 60.0)              # this press runs off the left edge
+    trained = np.zeros(8, bool)
+    trained[::2] = True
+    cal = PhotometricCalibration.from_ball_presses(
+        ref, frames[trained], centres[trained], radii[trained], ball_radius_mm=BALL_PX * MM,
+        mm_per_px=MM, model="lut")
+    rep = calibration_accuracy(DepthReconstructor(cal), frames, centres, radii,
+                               np.full(8, BALL_PX), trained=trained, label_fraction=1.0)
+    assert rep["in_sample"] is False and rep["circles"] == "given"
+    (ball,) = rep["balls"]
+    assert ball["n_scored"] == 3 and ball["n_edge_cut"] == 1
+    # the slope range: the training rims' steepest slope, and the scored ones'
+    assert ball["trained_tilt_deg"] == pytest.approx(
+        float(max_tilt_deg(radii[::2], BALL_PX).max()))
+    assert ball["rim_tilt_deg"] == pytest.approx(float(max_tilt_deg(radii[[1, 3, 5]],
+                                                                    BALL_PX).max()))
+    # on these clean synthetic presses: a few degrees, the cap depth within 15 %
+    assert 0 < ball["normal_angle_deg"] < 5
+    assert abs(ball["deepest_point"]) < 0.15
+    assert ball["fitted_radius_px"] == pytest.approx(BALL_PX, rel=0.1)
+    # every press trained on: scored in sample, and said so
+    rep_in = calibration_accuracy(DepthReconstructor(cal), frames, centres, radii,
+                                  np.full(8, BALL_PX), trained=np.ones(8, bool),
+                                  label_fraction=1.0)
+    assert rep_in["in_sample"] is True and rep_in["balls"][0]["n_scored"] == 7
+
+
+def test_cli_saves_the_report_and_reads_circles_beside_the_frames(presses, tmp_path,
+                                                                   capsys):
+    ref, frames, centres, radii = presses
+    folder = tmp_path / "presses"
+    (folder / "frames").mkdir(parents=True)
+    cv2.imwrite(str(folder / "reference.png"), ref)
+    rows = ["frame,x_px,y_px,radius_px"]
+    for i, f in enumerate(frames):
+        cv2.imwrite(str(folder / "frames" / f"press_{i}.png"), f)
+        rows.append(f"press_{i}.png,{centres[i, 0]},{centres[i, 1]},{radii[i]}")
+    (folder / "frames" / "circles.csv").write_text("\n".join(rows) + "\n")
+    ps = read_ball_presses(folder)                    # circles.csv beside the frames
+    np.testing.assert_allclose(ps.radii_px, radii)
+    out = tmp_path / "cal" / "optics.npz"
+    assert main(["optics", "calibrate", str(folder), "--ball-radius-mm", str(BALL_PX * MM),
+                 "--mm-per-px", str(MM), "--model", "lut", "--no-progress",
+                 "--out", str(out)]) == 0
+    stdout = capsys.readouterr().out
+    assert "training presses (in sample" in stdout and "deepest point" in stdout
+    report = json.loads((out.parent / "optics_accuracy.json").read_text())
+    assert report["in_sample"] is True and report["circles"] == "given"
+    assert report["mm_per_px"] == MM and report["balls"][0]["n_scored"] == 8
+    # a file of that name that tactilevision did not write stops the next run, before work
+    other = tmp_path / "other"
+    other.mkdir()
+    (other / "optics_accuracy.json").write_text("mine\n")
+    assert main(["optics", "calibrate", str(folder), "--ball-radius-mm", str(BALL_PX * MM),
+                 "--mm-per-px", str(MM), "--model", "lut", "--no-progress",
+                 "--out", str(other / "optics.npz")]) == 2
+    assert "optics_accuracy.json" in capsys.readouterr().err
+    assert (other / "optics_accuracy.json").read_text() == "mine\n"
+    assert not (other / "optics.npz").exists()
