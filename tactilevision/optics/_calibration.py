@@ -13,6 +13,7 @@ from __future__ import annotations
 import io
 import json
 import os
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
@@ -197,6 +198,85 @@ class PhotometricCalibration:
             label_fraction=label_fraction, refine_centers=refine_centers, bins=bins,
             lut_cells=lut_cells, epochs=epochs, hidden=hidden, blur_sigma=blur_sigma, seed=seed,
             source=source, progress=progress)
+
+    @classmethod
+    def from_gs_sdk(cls, model: str | Path | Mapping[str, Any], reference: np.ndarray, *,
+                    mm_per_px: float, source: str = "") -> PhotometricCalibration:
+        """A calibration made with gs_sdk, run by this library (no recalibration).
+
+        gs_sdk's per-pixel network (``BGRXYMLPNet``: 1 x 1 convolutions 5 -> 32
+        -> 32 -> 32 -> 2 with batch normalisation, on (B, G, R) / 255 and
+        (x / W, y / H), giving gradient angles) is folded into this library's
+        network form (:func:`~tactilevision.optics._gs_sdk_net.onnx_from_gs_sdk`):
+        a ``model='mlp'`` calibration that :class:`DepthReconstructor` runs with
+        either engine (``'table'``, tabulated once, or ``'onnx'``, exact), its
+        slopes referred to the network's output on `reference` as gs_sdk does.
+
+        Parameters
+        ----------
+        model : str, Path or mapping
+            gs_sdk's saved model (``torch.save(net.state_dict(), path)``, read
+            with ``torch.load(weights_only=True)``), or its state dict.
+        reference : (H, W, 3) uint8 ndarray
+            The no-contact frame (gs_sdk's ``background.png``), BGR.
+        mm_per_px : float
+            Image scale (gs_sdk's ``1 / ppmm``), mm per px.
+        source : str, optional
+            Where the model came from, for the provenance.
+
+        Returns
+        -------
+        PhotometricCalibration
+
+        Raises
+        ------
+        InputError
+            For a missing file, a file that is not a state dict, a state dict
+            of another shape, a bad reference or a non-positive scale.
+        ImportError
+            Without the torch extra (torch to read the file, onnx to write the
+            graph): ``pip install 'tactilevision[torch]'``.
+        """
+        from .._checks import check_array
+        from ._gs_sdk_net import gs_sdk_layers, onnx_from_gs_sdk
+
+        reference = check_array(reference, "reference", [("H", "W", 3)], dtype=np.uint8)
+        if not mm_per_px > 0:
+            raise InputError(f"mm_per_px must be positive, got {mm_per_px!r}")
+        if not isinstance(model, Mapping):
+            path = Path(model)
+            if not path.is_file():
+                raise InputError(f"gs_sdk model {path} does not exist")
+            try:
+                import torch
+            except ImportError as exc:  # pragma: no cover - exercised without the extra
+                raise ImportError("reading a gs_sdk model needs torch: pip install "
+                                  "'tactilevision[torch]' (torch==2.13.0 on this machine)"
+                                  ) from exc
+            try:
+                state = torch.load(path, map_location="cpu", weights_only=True)
+            except Exception as exc:  # torch raises many kinds for a bad file
+                raise InputError(f"gs_sdk model {path} is not a torch state dict: "
+                                 f"{exc}") from None
+            if not isinstance(state, Mapping):
+                raise InputError(f"gs_sdk model {path} holds a {type(state).__name__}, not a "
+                                 "state dict")
+            source = source or str(path)
+        else:
+            state = model
+        layers = gs_sdk_layers(state)
+        cal = cls(model="mlp", reference=reference.copy(), mm_per_px=float(mm_per_px),
+                  use_position=True, markers=False)
+        cal.onnx_bytes = onnx_from_gs_sdk(layers, cal.shape)
+        import datetime as _dt
+
+        cal.provenance = {
+            "source": source, "imported_from": "gs_sdk BGRXYMLPNet",
+            "layers": [int(layers[0][0].shape[1])] + [int(w.shape[0]) for w, _ in layers],
+            "created": _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds"),
+            "tactilevision": _version(),
+        }
+        return cal
 
     # ------------------------------------------------------------------- I/O
     def save(self, path: str | Path) -> Path:
