@@ -137,7 +137,8 @@ def test_diagnose_and_validate_reports_refuse_foreign_files(tmp_path, capsys):
 
 def test_optics_calibrate_writes_its_file_whole_and_may_replace_its_own(tmp_path, capsys):
     """optics calibrate: the .npz and its accuracy report go into place through the stage
-    and the folder's manifest lists them, so a rerun replaces it without --overwrite (LUT: a few seconds)."""
+    and the folder's manifest lists them, so a rerun replaces them without --overwrite
+    (LUT: a few seconds)."""
     from tactilevision.optics import PhotometricCalibration
 
     ball = ROOT / "sample_frames" / "gelsight_ball" / "frames"
