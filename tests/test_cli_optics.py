@@ -190,7 +190,8 @@ def test_reconstruct_folder(calibration, presses, tmp_path, capsys):
     with (out / "heights.csv").open() as fh:
         rows = list(csv.DictReader(fh))
     assert [r["frame"] for r in rows] == [f"{s}.png" for s in stems]
-    assert set(rows[0]) == {"frame", "max_depth_mm", "contact_area_mm2"}
+    assert set(rows[0]) == {"frame", "max_depth_mm", "contact_area_mm2", "out_of_range_px"}
+    assert all(int(r["out_of_range_px"]) >= 0 for r in rows)
     _, _, centres, radii = presses
     for r, i in zip(rows[:3], (1, 3, 5), strict=True):
         depth, _, _ = ball_depth(SHAPE, centres[i], radii[i], BALL_PX)
@@ -203,6 +204,35 @@ def test_reconstruct_folder(calibration, presses, tmp_path, capsys):
             float(r["max_depth_mm"]), abs=1e-4)
     # no contact: a small fraction of a press depth
     assert float(rows[3]["max_depth_mm"]) < 0.1 * float(rows[0]["max_depth_mm"])
+
+
+def test_out_of_range_flags_colours_the_calibration_never_saw(calibration, presses,
+                                                             tmp_path):
+    """A press the calibration has seen the like of: almost no pixel flagged; the same
+    press with a patch painted a colour far outside the calibrated range: the patch
+    flagged, and counted in heights.csv."""
+    from tactilevision.optics import DepthReconstructor, PhotometricCalibration
+
+    ref, frames, _, _ = presses
+    cal = PhotometricCalibration.load(calibration)
+    recon = DepthReconstructor(cal, reference=ref)
+    plain = recon.out_of_range(frames[3])
+    assert plain.shape == SHAPE and plain.mean() < 0.01
+    painted = frames[3].copy()
+    painted[10:30, 20:50] = (255, 0, 255)
+    flagged = recon.out_of_range(painted)
+    assert flagged[12:28, 22:48].all()
+    assert flagged.sum() - plain.sum() <= 20 * 30 + 4 * 50    # the patch, a blur's width
+    src = tmp_path / "frames"
+    src.mkdir()
+    cv2.imwrite(str(src / "reference.png"), ref)
+    cv2.imwrite(str(src / "painted.png"), painted)
+    out = tmp_path / "out"
+    assert main(["reconstruct", str(src), "--calibration", str(calibration), "--out", str(out),
+                 "--no-images", "--no-progress"]) == 0
+    with (out / "heights.csv").open() as fh:
+        (row,) = list(csv.DictReader(fh))
+    assert int(row["out_of_range_px"]) == int(flagged.sum())
 
 
 def test_reconstruct_no_images(calibration, presses, tmp_path):

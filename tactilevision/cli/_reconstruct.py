@@ -121,10 +121,11 @@ def run(args: argparse.Namespace) -> int:
                                  credit=credit)
             contact = recon.contact_mask(frame)
             rows.append({"frame": path.name, "max_depth_mm": f"{float(height.max()):.4f}",
-                         "contact_area_mm2": f"{contact.sum() * cal.mm_per_px ** 2:.3f}"})
+                         "contact_area_mm2": f"{contact.sum() * cal.mm_per_px ** 2:.3f}",
+                         "out_of_range_px": int(recon.out_of_range(frame).sum())})
         with (tmp / "heights.csv").open("w", newline="") as fh:
             writer = csv.DictWriter(fh, fieldnames=["frame", "max_depth_mm",
-                                                    "contact_area_mm2"])
+                                                    "contact_area_mm2", "out_of_range_px"])
             writer.writeheader()
             writer.writerows(rows)
         stage.commit()

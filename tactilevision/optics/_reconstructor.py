@@ -290,6 +290,47 @@ class DepthReconstructor:
             return self._integrate(*self._one(frames), frames)
         return np.stack([self._integrate(*self._one(f), f) for f in frames])
 
+    def out_of_range(self, frames: np.ndarray) -> np.ndarray:
+        """Pixels whose colour lies outside what the calibration saw.
+
+        The colour change, read as the model reads it (after the calibration's
+        blur), outside the calibration's range ``[colour_lo, colour_hi]`` (the
+        0.1 and 99.9 percentiles of its labelled pixels) in any channel: the
+        table clips such colours to its edge and the network was not trained
+        on them, so their slopes are extrapolated, typically too shallow (a
+        rim steeper than the calibration's steepest, a shadow, a foreign
+        object).
+
+        Parameters
+        ----------
+        frames : (H, W, 3) or (N, H, W, 3) uint8 ndarray
+            Tactile frames, BGR.
+
+        Returns
+        -------
+        mask : ([N, ]H, W) bool ndarray
+            Marker pixels excluded.
+
+        Raises
+        ------
+        ShapeError
+            If the frame is not uint8 BGR of the calibration's size.
+        """
+        frames = self._check(frames)
+        cal = self.calibration
+        lo = np.asarray(cal.colour_lo, np.float32)
+        hi = np.asarray(cal.colour_hi, np.float32)
+        one = frames[None] if frames.ndim == 3 else frames
+        masks = []
+        for f in one:
+            blurred = blur_frames(f, cal.blur_sigma) if cal.blur_sigma > 0 else f
+            change = colour_change(blurred, self._ref_inv)
+            m = np.any((change < lo) | (change > hi), axis=-1)
+            if cal.markers:
+                m &= ~marker_mask(f)
+            masks.append(m)
+        return masks[0] if frames.ndim == 3 else np.stack(masks)
+
     def contact_mask(self, frames: np.ndarray, *,
                      threshold: float | Literal["calibration", "frame"] = "calibration",
                      fill_holes: bool = False) -> np.ndarray:
