@@ -85,12 +85,17 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         description="Fit a photometric calibration from frames of a ball pressed into the gel. "
         "BALL_PRESSES is a folder (reference.png or ref.jpg, the press frames, optionally "
         "circles.csv with frame,x_px,y_px,radius_px) or an .npz (reference, frames[, "
-        "centers_px, radii_px], or taxim's dataPack.npz; 'taxim:gelsight' names the one inside "
-        "the installed taxim package). A supplied circle is the contact circle: its radius "
-        "is where the ball leaves the gel, not the visible colour edge, which lies a little "
-        "outside it. Circles are detected when not given (their radius is the colour edge). "
-        "Pixels within --label-fraction of the radius are trained on. "
-        "Presses left out by --presses are used to report the accuracy.",
+        "centers_px, radii_px], or taxim's dataPack.npz; 'taxim:gelsight' names the one "
+        "inside the installed taxim package), or a gs_sdk calibration folder "
+        "(background.png, catalog.csv with each press's ball diameter, "
+        "<diameter>mm/<i>/gelsight.png and label.npz circles; several ball sizes in one "
+        "calibration). A supplied circle is the contact circle: its radius is where the "
+        "ball leaves the gel, not the visible colour edge, which lies a little outside it. "
+        "Circles are detected when not given (their radius is the colour edge). Pixels "
+        "within --label-fraction of the radius are trained on. Presses left out by "
+        "--presses are used to report the accuracy (printed, and saved as "
+        "<name>_accuracy.json beside the calibration); with none left out, the training "
+        "presses are, and the report says it is in sample.",
     )
     c.add_argument("ball_presses", metavar="BALL_PRESSES", type=Path,
                    help="folder, .npz, or taxim:gelsight")
