@@ -28,6 +28,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="worker processes for the beta sweeps (default 1)")
     t.add_argument("--quick", action="store_true",
                    help="a 3 x 3 grid on coarse meshes, for a smoke test (not for use)")
+    t.add_argument("--no-progress", action="store_true", help="no progress bars")
     t.set_defaults(func=run_tables)
 
 
@@ -45,14 +46,14 @@ def run_tables(args: argparse.Namespace) -> int:
         grid = {"nu": [0.3, 0.45, 0.49], "a_over_h": [0.4, 0.8, 1.2]}
     if "kappa" in what:
         mesh = {"cell": 0.25, "edge_refinements": 6} if args.quick else {}
-        path = write_table(args.out_dir / "kappa_fem.npz", build_kappa_table(**grid, **mesh),
-                           command=command)
+        table = build_kappa_table(**grid, **mesh, progress=not args.no_progress)
+        path = write_table(args.out_dir / "kappa_fem.npz", table, command=command)
         print(f"wrote {path}")
     if "beta" in what:
         mesh = {"cell": 0.5, "edge_refinements": 4, "steps": 4} if args.quick else {}
         if args.jobs < 1:
             raise InputError(f"--jobs must be at least 1, got {args.jobs}")
-        path = write_table(args.out_dir / "beta_fem.npz",
-                           build_beta_table(**grid, **mesh, jobs=args.jobs), command=command)
+        table = build_beta_table(**grid, **mesh, jobs=args.jobs, progress=not args.no_progress)
+        path = write_table(args.out_dir / "beta_fem.npz", table, command=command)
         print(f"wrote {path}")
     return 0

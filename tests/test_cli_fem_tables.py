@@ -1,0 +1,50 @@
+"""tactilevision fem tables: the options reach the builders (the builds themselves, minutes
+each, are tested in test_fem_tables / test_fem_beta_table), and bad options are named."""
+
+from __future__ import annotations
+
+import pytest
+
+import tactilevision.fem as fem
+from tactilevision.cli import main
+
+
+@pytest.fixture
+def builders(monkeypatch):
+    """The table builders replaced by recorders; write_table records what it was given."""
+    calls: dict[str, dict] = {}
+
+    def record(name):
+        def build(**kw):
+            calls[name] = kw
+            return {"table": name}
+        return build
+
+    monkeypatch.setattr(fem, "build_kappa_table", record("kappa"))
+    monkeypatch.setattr(fem, "build_beta_table", record("beta"))
+    monkeypatch.setattr(fem, "write_table",
+                        lambda path, table, *, command: calls.setdefault("written", []).append(
+                            (path.name, table["table"], command)) or path)
+    return calls
+
+
+def test_options_reach_the_builders(builders, tmp_path, capsys):
+    assert main(["fem", "tables", "--quick", "--no-progress", "--jobs", "2",
+                 "--out-dir", str(tmp_path)]) == 0
+    assert builders["kappa"]["progress"] is False and builders["beta"]["progress"] is False
+    assert builders["beta"]["jobs"] == 2
+    assert builders["kappa"]["nu"] == [0.3, 0.45, 0.49]
+    assert [w[:2] for w in builders["written"]] == [("kappa_fem.npz", "kappa"),
+                                                    ("beta_fem.npz", "beta")]
+    assert builders["written"][0][2].startswith("tactilevision fem tables --quick")
+    builders.clear()
+    assert main(["fem", "tables", "--what", "kappa", "--out-dir", str(tmp_path)]) == 0
+    assert builders["kappa"]["progress"] is True and "beta" not in builders
+
+
+@pytest.mark.parametrize("argv, words", [(["--what", "gamma"], "--what must name"),
+                                         (["--what", "beta", "--jobs", "0"], "--jobs must be")])
+def test_bad_options_are_named(builders, tmp_path, capsys, argv, words):
+    assert main(["fem", "tables", "--out-dir", str(tmp_path), *argv]) == 2
+    assert words in capsys.readouterr().err
+    assert "written" not in builders
