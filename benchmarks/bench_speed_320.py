@@ -15,31 +15,19 @@ figures can be compared across machines as ratios. Median of repeated runs.
 from __future__ import annotations
 
 import os
-import statistics
-import time
 
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 import cv2
 import numpy as np
 import scipy.fft
+from bench_speed import per_frame_ms  # the same timing as the 640 x 480 benchmark
 
 from tactilevision.io import read_ball_presses, taxim_datapack
 from tactilevision.optics import DepthReconstructor, PhotometricCalibration
 
 cv2.setNumThreads(1)
 SIZE = (320, 240)
-
-
-def per_frame_ms(fn, frames, rounds: int = 15) -> float:
-    fn(frames[0])
-    times = []
-    for _ in range(rounds):
-        t0 = time.perf_counter()
-        for f in frames:
-            fn(f)
-        times.append((time.perf_counter() - t0) / len(frames) * 1e3)
-    return statistics.median(times)
 
 
 def main() -> None:
@@ -53,7 +41,7 @@ def main() -> None:
     test = frames[1::2][:8]
     a = np.random.default_rng(0).random(SIZE[::-1]).astype(np.float32)
     ref_ms = per_frame_ms(lambda _: scipy.fft.idctn(scipy.fft.dctn(a, norm="ortho"),
-                                                    norm="ortho"), test)
+                                                    norm="ortho"), test, 15)
     print(f"{SIZE[0]} x {SIZE[1]}, LUT, one thread; reference: a dctn + idctn pair "
           f"{ref_ms:.2f} ms")
     print("| path | ms per frame | frames/s | x reference |")
@@ -62,7 +50,7 @@ def main() -> None:
                       ("absolute: level='far_field'", {"level": "far_field"}),
                       ("absolute: boundary='contact'", {"boundary": "contact"})):
         recon = DepthReconstructor(cal, reference=ref, **kw)
-        ms = per_frame_ms(recon, test)
+        ms = per_frame_ms(recon, test, 15)
         print(f"| {label} | {ms:.2f} | {1e3 / ms:.0f} | {ms / ref_ms:.1f} |")
 
 

@@ -17,6 +17,7 @@ law, then multiplicative stiffness effects, then additive force effects
 
 from __future__ import annotations
 
+import copy
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -532,14 +533,8 @@ def _off_bound_alias(resid: _Residuals, sol, free: np.ndarray, x_full: np.ndarra
         rest = np.array([i for i in free if i != j], int)
         if rest.size == 0:
             continue
-        sub = _Residuals.__new__(_Residuals)
-        sub.__dict__.update(resid.__dict__)
         keep = np.isin(free, rest)
-        sub.fixed, sub.free, sub.free_l = trial, rest, rest.tolist()
-        sub.lower, sub.upper = resid.lower[keep], resid.upper[keep]
-        sub.lower_l, sub.upper_l = sub.lower.tolist(), sub.upper.tolist()
-        sub.bounded = True
-        sub._x = sub._f = None
+        sub = resid.with_free(trial, rest, resid.lower[keep], resid.upper[keep])
         starts = [trial[rest]]
         for i in np.flatnonzero(bad[rest]):
             for edge in (sub.lower[i], sub.upper[i]):
@@ -547,14 +542,11 @@ def _off_bound_alias(resid: _Residuals, sol, free: np.ndarray, x_full: np.ndarra
                     x = trial[rest].copy()
                     x[i] = edge
                     starts.append(x)
-        best = None
-        for x0 in starts:
-            x0 = np.clip(x0, sub.lower + 1e-12, sub.upper - 1e-12)
-            r = least_squares(sub, x0, jac=sub.jac, bounds=(sub.lower, sub.upper),
-                              x_scale="jac", method="trf", **kw)
-            if best is None or r.cost < best.cost:
-                best = r
-        if best is None or 2.0 * (best.cost - sol.cost) >= s2:
+        best = min((least_squares(sub, np.clip(x0, sub.lower + 1e-12, sub.upper - 1e-12),
+                                  jac=sub.jac, bounds=(sub.lower, sub.upper), x_scale="jac",
+                                  method="trf", **kw) for x0 in starts),
+                   key=lambda r: r.cost)
+        if 2.0 * (best.cost - sol.cost) >= s2:
             continue
         out[j] = True
         moved = np.abs(best.x - x_full[rest]) > 3.0 * se[rest]
@@ -642,6 +634,18 @@ class _Residuals:
         self.batch = all(type(e) in _BROADCASTING for e in effects)
         self._x: np.ndarray | None = None
         self._f: np.ndarray | None = None
+
+    def with_free(self, fixed: np.ndarray, free: np.ndarray, lower: np.ndarray,
+                  upper: np.ndarray) -> _Residuals:
+        """The same residuals with other parameters held (`fixed`) and freed (`free`,
+        bounded by `lower` and `upper`): the effects and data are shared, not rebuilt."""
+        other = copy.copy(self)
+        other.fixed, other.free, other.free_l = fixed, free, np.asarray(free).tolist()
+        other.lower, other.upper = lower, upper
+        other.lower_l, other.upper_l = lower.tolist(), upper.tolist()
+        other.bounded = not np.all((lower == -np.inf) & (upper == np.inf))
+        other._x = other._f = None
+        return other
 
     def _full(self, x: np.ndarray) -> np.ndarray:
         full = self.fixed.copy()

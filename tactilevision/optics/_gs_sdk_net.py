@@ -27,7 +27,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from .._checks import InputError
-from ._mlp import N_INPUTS
+from ._mlp import serialise_normal_graph
 
 __all__ = ["gs_sdk_layers", "onnx_from_gs_sdk"]
 
@@ -118,8 +118,7 @@ def onnx_from_gs_sdk(layers: list[tuple[np.ndarray, np.ndarray]], shape: tuple[i
     ImportError
         Without the ``onnx`` package (the torch extra).
     """
-    import onnx
-    from onnx import TensorProto, helper, numpy_helper
+    from onnx import helper, numpy_helper
 
     h, w = shape
     inits = [
@@ -166,14 +165,5 @@ def onnx_from_gs_sdk(layers: list[tuple[np.ndarray, np.ndarray]], shape: tuple[i
         helper.make_node("Sqrt", ["G2s1"], ["norm"]),
         helper.make_node("Div", ["G", "norm"], ["nxy"]),
     ]
-    graph = helper.make_graph(
-        nodes, "gs_sdk_bgrxy_mlp",
-        [helper.make_tensor_value_info("x", TensorProto.FLOAT, ["M", N_INPUTS])],
-        [helper.make_tensor_value_info("nxy", TensorProto.FLOAT, ["M", 2])],
-        initializer=inits,
-    )
-    model = helper.make_model(graph, opset_imports=[helper.make_opsetid("", 17)],
-                              producer_name="tactilevision (gs_sdk import)")
-    model.ir_version = 8
-    onnx.checker.check_model(model)
-    return model.SerializeToString()
+    return serialise_normal_graph(nodes, inits, "gs_sdk_bgrxy_mlp",
+                                  "tactilevision (gs_sdk import)")

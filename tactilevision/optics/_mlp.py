@@ -104,8 +104,7 @@ class MLPGradientModel:
 
 def _onnx_from_layers(layers: list[tuple[np.ndarray, np.ndarray]]) -> bytes:
     """Serialise a SiLU MLP (list of (W (out, in), b (out,))) as ONNX bytes."""
-    import onnx
-    from onnx import TensorProto, helper, numpy_helper
+    from onnx import helper, numpy_helper
 
     nodes, inits = [], []
     cur = "x"
@@ -119,14 +118,23 @@ def _onnx_from_layers(layers: list[tuple[np.ndarray, np.ndarray]]) -> bytes:
             nodes.append(helper.make_node("Sigmoid", [lin], [f"sig{k}"]))
             nodes.append(helper.make_node("Mul", [lin, f"sig{k}"], [out]))
         cur = out
+    return serialise_normal_graph(nodes, inits, "tactilevision_normal_mlp", "tactilevision")
+
+
+def serialise_normal_graph(nodes: list, initializers: list, name: str, producer: str) -> bytes:
+    """Check and serialise an ONNX graph of this library's network signature: input ``x``
+    (M, 8) float32 (:func:`mlp_inputs`), output ``nxy`` (M, 2) float32 (opset 17)."""
+    import onnx
+    from onnx import TensorProto, helper
+
     graph = helper.make_graph(
-        nodes, "tactilevision_normal_mlp",
+        nodes, name,
         [helper.make_tensor_value_info("x", TensorProto.FLOAT, ["M", N_INPUTS])],
         [helper.make_tensor_value_info("nxy", TensorProto.FLOAT, ["M", 2])],
-        initializer=inits,
+        initializer=initializers,
     )
     model = helper.make_model(graph, opset_imports=[helper.make_opsetid("", 17)],
-                              producer_name="tactilevision")
+                              producer_name=producer)
     model.ir_version = 8
     onnx.checker.check_model(model)
     return model.SerializeToString()
