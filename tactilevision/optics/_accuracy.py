@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from ._evaluate import evaluate_ball_presses
+from ._ball import ball_press_metrics
 from ._reconstructor import DepthReconstructor
 
 __all__ = ["calibration_accuracy", "edge_cut", "max_tilt_deg"]
@@ -48,12 +48,11 @@ def max_tilt_deg(radius_px: np.ndarray | float, ball_radius_px: np.ndarray | flo
     return np.degrees(np.arctan2(r, np.sqrt(np.maximum(big * big - r * r, 0.0))))
 
 
-def _deepest_point(recon: DepthReconstructor, frame: np.ndarray, centre: np.ndarray,
-                   radius: float, ball_px: float) -> float:
+def _deepest_point(height_px: np.ndarray, centre: np.ndarray, radius: float,
+                   ball_px: float) -> float:
     """Reconstructed cap depth over the ball's, less one: the height at the disc's deepest
     point above the median height on its rim circle, against R - sqrt(R^2 - r^2)."""
-    h = recon(frame) / recon.calibration.mm_per_px
-    hh, ww = h.shape
+    hh, ww = height_px.shape
     yy, xx = np.mgrid[0:hh, 0:ww]
     d = np.hypot(xx - centre[0], yy - centre[1])
     inside = d <= radius
@@ -61,7 +60,7 @@ def _deepest_point(recon: DepthReconstructor, frame: np.ndarray, centre: np.ndar
     if not inside.any() or not ring.any():
         return math.nan
     cap = ball_px - math.sqrt(max(ball_px * ball_px - radius * radius, 0.0))
-    return float((h[inside].max() - np.median(h[ring])) / cap - 1.0)
+    return float((height_px[inside].max() - np.median(height_px[ring])) / cap - 1.0)
 
 
 def calibration_accuracy(recon: DepthReconstructor, frames: np.ndarray,
@@ -109,8 +108,8 @@ def calibration_accuracy(recon: DepthReconstructor, frames: np.ndarray,
         at ``label_fraction`` of the radius) and ``rim_tilt_deg`` (the steepest
         slope of the scored presses' rims), ``shape_rms_px``,
         ``fitted_radius_px`` and ``fitted_radius_std_px`` (means over the
-        scored presses, :func:`evaluate_ball_presses` inside 0.9 of the
-        radius); None where nothing is scored.
+        scored presses, as :func:`evaluate_ball_presses` gives them, inside 0.9
+        of the radius); None where nothing is scored.
     """
     frames = np.asarray(frames)
     centers = np.asarray(centers_px, np.float64)
@@ -124,6 +123,7 @@ def calibration_accuracy(recon: DepthReconstructor, frames: np.ndarray,
     in_sample = bool(trained.all())
     scored = trained if in_sample else ~trained
     cut = edge_cut(centers, radii, frames.shape[1:3])
+    mm = recon.calibration.mm_per_px
     balls = []
     for b in np.unique(ball):
         same = ball == b
@@ -137,17 +137,20 @@ def calibration_accuracy(recon: DepthReconstructor, frames: np.ndarray,
                  "normal_angle_deg": None, "deepest_point": None, "rim_tilt_deg": None,
                  "shape_rms_px": None, "fitted_radius_px": None, "fitted_radius_std_px": None}
         if use.size:
-            rep = evaluate_ball_presses(recon, frames[use], centers[use], radii[use], float(b),
-                                        disc_fraction=0.9)
-            entry["normal_angle_deg"] = float(np.median([p.normal_angle_deg
-                                                         for p in rep.per_press]))
-            entry["deepest_point"] = float(np.nanmedian([
-                _deepest_point(recon, frames[i], centers[i], radii[i], float(b))
-                for i in use]))
+            per, deepest = [], []
+            for i in use:       # each press reconstructed once, for both measures
+                gx, gy = recon.gradients(frames[i])
+                height_px = recon(frames[i]) / mm
+                per.append(ball_press_metrics(gx, gy, height_px, centers[i], 0.9 * radii[i],
+                                              float(b)))
+                deepest.append(_deepest_point(height_px, centers[i], radii[i], float(b)))
+            fitted = np.array([p.fitted_radius_px for p in per])
+            entry["normal_angle_deg"] = float(np.median([p.normal_angle_deg for p in per]))
+            entry["deepest_point"] = float(np.nanmedian(deepest))
             entry["rim_tilt_deg"] = float(max_tilt_deg(radii[use], b).max())
-            entry["shape_rms_px"] = rep.shape_rms_px
-            entry["fitted_radius_px"] = rep.fitted_radius_px
-            entry["fitted_radius_std_px"] = rep.fitted_radius_std_px
+            entry["shape_rms_px"] = float(np.mean([p.shape_rms_px for p in per]))
+            entry["fitted_radius_px"] = float(fitted.mean())
+            entry["fitted_radius_std_px"] = float(fitted.std())
         balls.append(entry)
     return {"in_sample": in_sample, "circles": circles, "label_fraction": float(label_fraction),
             "balls": balls}
