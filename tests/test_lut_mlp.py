@@ -493,7 +493,10 @@ def test_gelslim_lut_fitted_radius_consistent(name):
         mm_per_px=GELSLIM_MM_PER_PX, model="lut")
     assert cal.markers == (name == "set_2020_09")
     test = ps.frames[1::3]
-    centres, radii = detect_contact_circles(test, ps.reference)
+    # scored on the disc the calibration labelled: its circles (the contact edge) at its
+    # label fraction
+    centres, radii = detect_contact_circles(test, ps.reference,
+                                            edge=cal.provenance["detected_edge"])
     ball_px = GELSLIM_BALL_RADIUS_MM / GELSLIM_MM_PER_PX
     rep = evaluate_ball_presses(DepthReconstructor(cal), test, centres, radii, ball_px,
                                 disc_fraction=cal.provenance["label_fraction"])

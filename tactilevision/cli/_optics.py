@@ -91,8 +91,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "<diameter>mm/<i>/gelsight.png and label.npz circles; several ball sizes in one "
         "calibration). A supplied circle is the contact circle: its radius is where the "
         "ball leaves the gel, not the visible colour edge, which lies a little outside it. "
-        "Circles are detected when not given (their radius is the colour edge). Pixels "
-        "within --label-fraction of the radius are trained on. Presses left out by "
+        "Circles are detected when not given: at the contact edge (the shoulder where the "
+        "colour change stops growing, see --detect-edge). Pixels within --label-fraction "
+        "of the radius are trained on. Presses left out by "
         "--presses are used to report the accuracy (printed, and saved as "
         "<name>_accuracy.json beside the calibration); with none left out, the training "
         "presses are, and the report says it is in sample.",
@@ -120,10 +121,14 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    "the image's edges)")
     c.add_argument("--detect-circles", action="store_true",
                    help="ignore given circles and detect them")
+    c.add_argument("--detect-edge", choices=("contact", "colour"), default="contact",
+                   help="detected circles: at the contact edge, where the colour change "
+                   "levels off before it falls (default), or at the colour edge, its "
+                   "steepest fall, outside the contact (then trained to 0.85 of it)")
     c.add_argument("--label-fraction", metavar="F", type=float, default=None,
                    help="train on the pixels within F x the circle's radius, 0 < F <= 1 "
-                   "(default 1.0 for supplied circles, 0.85 for detected ones; lower it for "
-                   "circles drawn on the colour edge)")
+                   "(default 1.0; 0.85 with --detect-edge colour; lower it for circles "
+                   "drawn on the colour edge)")
     c.add_argument("--no-progress", action="store_true", help="no progress bar")
     c.add_argument("--seed", type=int, default=0)
     add_overwrite_argument(c, "folder of the calibration file")
@@ -187,7 +192,7 @@ def run_calibrate(args: argparse.Namespace) -> int:
         ball_radius_mm=ball_mm[idx], mm_per_px=args.mm_per_px, model=args.model,
         bins=args.bins, lut_cells=cells, epochs=args.epochs, hidden=args.hidden, seed=args.seed,
         source=str(args.ball_presses), label_fraction=args.label_fraction,
-        progress=not args.no_progress,
+        progress=not args.no_progress, detect_edge=args.detect_edge,
     )
     cal.provenance["presses"] = [int(i) for i in idx]
     cal.provenance["command"] = "tactilevision " + " ".join(args.argv)
@@ -201,11 +206,13 @@ def run_calibrate(args: argparse.Namespace) -> int:
         if given:
             centres, radii = ps.centers_px, ps.radii_px
         else:
-            centres, radii = detect_contact_circles(ps.frames, ps.reference)
+            centres, radii = detect_contact_circles(ps.frames, ps.reference,
+                                                    edge=args.detect_edge)
         report = calibration_accuracy(DepthReconstructor(cal), ps.frames, centres, radii,
                                       ball_mm / mm, trained=trained,
                                       label_fraction=cal.provenance["label_fraction"],
-                                      circles="given" if given else "detected")
+                                      circles="given" if given else "detected",
+                                      edge="contact" if given else args.detect_edge)
     except InputError as exc:      # the calibration stands; only its report is missing
         report = {"error": f"no accuracy report: {exc}"}
     report["mm_per_px"] = mm

@@ -19,7 +19,12 @@ from ._ball import (
     normals_from_gradients,
 )
 from ._calibration import PhotometricCalibration
-from ._circles import detect_contact_circle, detect_contact_circles, fit_circle
+from ._circles import (
+    detect_contact_circle,
+    detect_contact_circles,
+    fit_circle,
+    locate_contact_edge,
+)
 from ._evaluate import BallPressReport, evaluate_ball_presses
 from ._features import colour_change, frame_gain, reference_inverse
 from ._lut import ColourLUT, fit_cell_luts, fit_colour_lut
@@ -61,6 +66,7 @@ __all__ = [
     "integrate_poisson",
     "integrate_poisson_masked",
     "lateral_displacement",
+    "locate_contact_edge",
     "marker_centres",
     "marker_mask",
     "max_tilt_deg",

@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 
+from .._checks import InputError
 from ._ball import ball_press_metrics
 from ._reconstructor import DepthReconstructor
 
@@ -66,7 +67,8 @@ def _deepest_point(height_px: np.ndarray, centre: np.ndarray, radius: float,
 def calibration_accuracy(recon: DepthReconstructor, frames: np.ndarray,
                          centers_px: np.ndarray, radii_px: np.ndarray,
                          ball_radius_px: np.ndarray, *, trained: np.ndarray,
-                         label_fraction: float, circles: str = "given") -> dict:
+                         label_fraction: float, circles: str = "given",
+                         edge: str | None = None) -> dict:
     """Accuracy of a calibration on its ball presses, by ball size.
 
     Held-out presses (not `trained`) are scored; when every press was trained on, the
@@ -82,7 +84,7 @@ def calibration_accuracy(recon: DepthReconstructor, frames: np.ndarray,
     centers_px : (N, 2) float ndarray
         Contact-circle centres (x, y), px.
     radii_px : (N,) float ndarray
-        Contact-circle radii, px (given: the contact; detected: the colour edge).
+        Circle radii, px: the contact's, or the colour edge's (``edge``).
     ball_radius_px : (N,) float ndarray
         Each press's ball radius, px.
     trained : (N,) bool ndarray
@@ -91,14 +93,19 @@ def calibration_accuracy(recon: DepthReconstructor, frames: np.ndarray,
         The fraction of each radius trained on: the slope range covered is
         read at ``label_fraction * radius`` of the training presses.
     circles : {'given', 'detected'}, default 'given'
-        Where the circles came from (written into the report). A detected
-        radius marks the colour edge, outside the contact: it is scored at
-        ``label_fraction`` of itself, the contact the calibration assumed.
+        Where the circles came from (written into the report).
+    edge : {'contact', 'colour'}, optional
+        What the radii mark. ``'contact'`` (given circles; circles detected at
+        the contact edge, :func:`locate_contact_edge`): they are scored as
+        they are. ``'colour'`` (circles detected at the colour edge, outside
+        the contact): scored at ``label_fraction`` of themselves, the contact
+        the calibration assumed. Default: ``'contact'`` for given circles,
+        ``'colour'`` for detected ones (the behaviour before the contact edge).
 
     Returns
     -------
     report : dict
-        JSON-ready: ``in_sample`` (bool), ``circles``, ``label_fraction``, and
+        JSON-ready: ``in_sample`` (bool), ``circles``, ``edge``, ``label_fraction``, and
         ``balls``, one entry per ball radius (mm-free, px): ``ball_radius_px``,
         ``n_scored``, ``n_edge_cut`` (left out), ``normal_angle_deg`` (median
         over presses of the mean normal-angle error inside 0.9 of the radius),
@@ -114,9 +121,14 @@ def calibration_accuracy(recon: DepthReconstructor, frames: np.ndarray,
     frames = np.asarray(frames)
     centers = np.asarray(centers_px, np.float64)
     radii = np.asarray(radii_px, np.float64)
-    if circles == "detected":
-        # a detected radius is the colour edge, outside the contact: the calibration took
-        # label_fraction of it as the contact, and so does its score
+    if edge is None:
+        edge = "colour" if circles == "detected" else "contact"
+    if edge not in ("contact", "colour"):
+        raise InputError(f"edge must be 'contact' or 'colour', got {edge!r}")
+    colour_edge = edge == "colour"
+    if colour_edge:
+        # the colour edge lies outside the contact: the calibration took label_fraction of
+        # it as the contact, and so does its score
         radii = label_fraction * radii
     ball = np.broadcast_to(np.asarray(ball_radius_px, np.float64), radii.shape)
     trained = np.asarray(trained, bool)
@@ -131,7 +143,7 @@ def calibration_accuracy(recon: DepthReconstructor, frames: np.ndarray,
         entry = {"ball_radius_px": float(b), "n_scored": int(use.size),
                  "n_edge_cut": int(np.count_nonzero(same & scored & cut)),
                  "trained_tilt_deg": (float(max_tilt_deg(
-                     radii[same & trained] * (1.0 if circles == "detected" else label_fraction),
+                     radii[same & trained] * (1.0 if colour_edge else label_fraction),
                      b).max())
                                       if np.any(same & trained) else None),
                  "normal_angle_deg": None, "deepest_point": None, "rim_tilt_deg": None,
@@ -152,5 +164,6 @@ def calibration_accuracy(recon: DepthReconstructor, frames: np.ndarray,
             entry["fitted_radius_px"] = float(fitted.mean())
             entry["fitted_radius_std_px"] = float(fitted.std())
         balls.append(entry)
-    return {"in_sample": in_sample, "circles": circles, "label_fraction": float(label_fraction),
+    return {"in_sample": in_sample, "circles": circles, "edge": edge,
+            "label_fraction": float(label_fraction),
             "balls": balls}

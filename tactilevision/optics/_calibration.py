@@ -111,6 +111,7 @@ class PhotometricCalibration:
         seed: int = 0,
         source: str = "",
         progress: bool = False,
+        detect_edge: Literal["contact", "colour"] = "contact",
     ) -> PhotometricCalibration:
         """Calibrate from frames of a ball pressed into the gel.
 
@@ -122,9 +123,11 @@ class PhotometricCalibration:
             Ball presses, BGR, one contact each.
         centers_px : (N, 2) float ndarray, optional
             Contact-circle centres (x = column, y = row), px. None: detected
-            (:func:`detect_contact_circles`).
+            (:func:`detect_contact_circles` with ``edge=detect_edge``).
         radii_px : (N,) float ndarray, optional
-            Contact-circle radii, px; given together with ``centers_px``.
+            Contact-circle radii, px; given together with ``centers_px``. The
+            contact circle: where the gel leaves the ball, not the visible
+            colour edge a few pixels outside it.
         ball_radius_mm : float or (N,) array_like
             Ball radius R, mm: one for all presses, or one per press (several
             ball sizes in one calibration, as gs_sdk's ``catalog.csv`` lists
@@ -140,9 +143,8 @@ class PhotometricCalibration:
             of the reference's pixels are dark dots).
         label_fraction : float, optional
             Pixels within ``label_fraction * radius`` of the centre are
-            labelled. Default 1.0 for given circles and 0.85 for detected
-            ones (the detected radius marks the colour edge, slightly outside
-            the contact).
+            labelled. Default 1.0, but 0.85 for circles detected at the colour
+            edge (``detect_edge='colour'``), which lies outside the contact.
         refine_centers : bool, optional
             Refit every centre to the first model's gradients and calibrate
             again (:func:`fit_ball_centre`). Default: True for detected
@@ -175,6 +177,16 @@ class PhotometricCalibration:
             Where the frames came from, stored in ``provenance``.
         progress : bool, default False
             Progress bars.
+        detect_edge : {'contact', 'colour'}, default 'contact'
+            Detected circles only: the contact edge
+            (:func:`locate_contact_edge`: the shoulder where the colour change
+            stops growing, so labels reach the rim's steepest slopes) or the
+            colour edge (its steepest fall, outside the contact; labelled to
+            0.85 of it, the behaviour before the contact edge). On the real
+            GelSight presses of ``taxim`` (trained on the even ones, scored on
+            the odd against the annotated circles) the contact edge took the
+            deepest point from -6.1 % to -0.2 % (LUT) and from -5.1 % to 0.0 %
+            (network) of the ball's cap (docs/guide/optics.md).
 
         Returns
         -------
@@ -186,7 +198,8 @@ class PhotometricCalibration:
             If frames and reference differ in size or are not uint8 BGR.
         InputError
             If only one of centres and radii is given, a circle is larger
-            than the ball, or fewer than two presses are given.
+            than the ball, fewer than two presses are given, ``detect_edge``
+            is not a known edge, or a detected press has no contact.
         ImportError
             For ``model='mlp'`` without torch.
         """
@@ -197,7 +210,7 @@ class PhotometricCalibration:
             mm_per_px=mm_per_px, model=model, use_position=use_position, markers=markers,
             label_fraction=label_fraction, refine_centers=refine_centers, bins=bins,
             lut_cells=lut_cells, epochs=epochs, hidden=hidden, blur_sigma=blur_sigma, seed=seed,
-            source=source, progress=progress)
+            source=source, progress=progress, detect_edge=detect_edge)
 
     @classmethod
     def from_gs_sdk(cls, model: str | Path | Mapping[str, Any], reference: np.ndarray, *,

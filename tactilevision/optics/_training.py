@@ -36,7 +36,8 @@ def fit_from_ball_presses(cls, reference: np.ndarray, frames: np.ndarray,
                           refine_centers: bool | None = None, bins: int = 32,
                           lut_cells: tuple[int, int] = (1, 1), epochs: int = 30,
                           hidden: int = 128, blur_sigma: float = 0.0, seed: int = 0,
-                          source: str = "", progress: bool = False):
+                          source: str = "", progress: bool = False,
+                          detect_edge: str = "contact"):
     """Train a photometric calibration of class `cls` from ball presses.
 
     The parameters, return value and errors are those of
@@ -58,9 +59,11 @@ def fit_from_ball_presses(cls, reference: np.ndarray, frames: np.ndarray,
     ball_mm = np.broadcast_to(ball_mm, (len(frames),))
     if not (np.all(np.isfinite(ball_mm) & (ball_mm > 0)) and mm_per_px > 0):
         raise InputError("ball_radius_mm and mm_per_px must be positive")
+    if detect_edge not in ("contact", "colour"):
+        raise InputError(f"detect_edge must be 'contact' or 'colour', got {detect_edge!r}")
     detected = centers_px is None and radii_px is None
     if detected:
-        centers_px, radii_px = detect_contact_circles(frames, reference)
+        centers_px, radii_px = detect_contact_circles(frames, reference, edge=detect_edge)
     elif centers_px is None or radii_px is None:
         raise InputError("give both centers_px and radii_px, or neither (to detect them)")
     centers = check_array(centers_px, "centers_px", [(len(frames), 2)], finite=True)
@@ -68,8 +71,8 @@ def fit_from_ball_presses(cls, reference: np.ndarray, frames: np.ndarray,
     centers = centers.astype(np.float64).copy()
     radii = radii.astype(np.float64)
     ball_px = ball_mm / mm_per_px              # (N,): each press's ball
-    if label_fraction is None:
-        label_fraction = 0.85 if detected else 1.0
+    if label_fraction is None:     # the colour edge lies outside the contact (_circles.py)
+        label_fraction = 0.85 if detected and detect_edge == "colour" else 1.0
     if refine_centers is None:
         refine_centers = detected
     bad = np.nonzero(radii * label_fraction >= ball_px)[0]
@@ -126,6 +129,7 @@ def fit_from_ball_presses(cls, reference: np.ndarray, frames: np.ndarray,
         "ball_radius_mm": (float(ball_mm[0]) if np.all(ball_mm == ball_mm[0])
                            else ball_mm.round(4).tolist()),
         "circles": "detected" if detected else "given",
+        "detected_edge": detect_edge if detected else None,
         "centers_refined": bool(refine_centers),
         "label_fraction": float(label_fraction),
         "lut_cells": [int(c) for c in lut_cells] if model == "lut" else None,
