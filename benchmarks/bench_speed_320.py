@@ -10,6 +10,15 @@ fitted to the gel outside the contact and subtracted; ``boundary='contact'``: ze
 outside the contact region, integrated over it), and a same-run reference operation, a
 bare forward and inverse ``scipy.fft.dctn`` pair on a 320 x 240 float32 array, so the
 figures can be compared across machines as ratios. Median of repeated runs.
+
+With torch installed (``--torch``, on by default when it imports) it also times the
+pipeline the issue compares against: a per-pixel network of gs_sdk's form (1 x 1
+convolutions 5-32-32-32-2 with batch normalisation, on (B, G, R) / 255 and (x / W,
+y / H)) run by torch on the whole frame, its tangents less the reference's, integrated
+by a DCT Poisson solve (Neumann, scipy.fft): written here, none of gs_sdk's code. The
+same network (random weights: the time does not depend on them) is then imported with
+``PhotometricCalibration.from_gs_sdk`` and run by ``DepthReconstructor``, tabulated
+(the default engine) and, for reference, exact through onnxruntime.
 """
 
 from __future__ import annotations
@@ -28,6 +37,50 @@ from tactilevision.optics import DepthReconstructor, PhotometricCalibration
 
 cv2.setNumThreads(1)
 SIZE = (320, 240)
+
+
+def torch_pipeline(ref: np.ndarray):
+    """A torch per-pixel MLP (gs_sdk's form, eval mode) with a DCT Poisson solve, on one
+    thread: ``(state_dict, frame -> height)``."""
+    import torch
+    from torch import nn
+
+    torch.set_num_threads(1)
+    torch.manual_seed(0)
+    layers: list[nn.Module] = []
+    for i, (n_in, n_out) in enumerate(((5, 32), (32, 32), (32, 32), (32, 2))):
+        layers.append(nn.Conv2d(n_in, n_out, 1))
+        if i < 3:
+            layers += [nn.BatchNorm2d(n_out), nn.ReLU()]
+    net = nn.Sequential(*layers).eval()
+    names = {0: "conv1", 1: "bn1", 3: "conv2", 4: "bn2", 6: "conv3", 7: "bn3", 9: "conv4"}
+    state = {f"{names[int(k.split('.')[0])]}.{k.split('.', 1)[1]}": v
+             for k, v in net.state_dict().items() if int(k.split(".")[0]) in names}
+    h, w = ref.shape[:2]
+    yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)
+    xy = torch.from_numpy(np.stack([xx / w, yy / h]))[None]
+
+    def slopes(frame: np.ndarray) -> np.ndarray:
+        bgr = torch.from_numpy(np.ascontiguousarray(frame.transpose(2, 0, 1),
+                                                    np.float32) / 255.0)[None]
+        with torch.no_grad():
+            return torch.tan(net(torch.cat([bgr, xy], 1)))[0].numpy()
+
+    bg = slopes(ref)
+    ky = np.pi * np.arange(h)[:, None] / h
+    kx = np.pi * np.arange(w)[None, :] / w
+    denom = (2 * np.cos(kx) - 2) + (2 * np.cos(ky) - 2)
+    denom[0, 0] = 1.0
+
+    def height(frame: np.ndarray) -> np.ndarray:
+        gx, gy = slopes(frame) - bg
+        div = np.gradient(gx, axis=1) + np.gradient(gy, axis=0)
+        f = scipy.fft.dctn(div, norm="ortho")
+        f /= denom
+        f[0, 0] = 0.0
+        return scipy.fft.idctn(f, norm="ortho")
+
+    return state, height
 
 
 def main() -> None:
@@ -52,6 +105,29 @@ def main() -> None:
         recon = DepthReconstructor(cal, reference=ref, **kw)
         ms = per_frame_ms(recon, test, 15)
         print(f"| {label} | {ms:.2f} | {1e3 / ms:.0f} | {ms / ref_ms:.1f} |")
+    try:
+        import torch  # noqa: F401
+    except ImportError:
+        print("\n(torch not installed: the torch per-pixel MLP comparison is left out)")
+        return
+    state, torch_height = torch_pipeline(ref)
+    net_cal = PhotometricCalibration.from_gs_sdk(state, ref, mm_per_px=0.0295 * scale)
+    torch_ms = per_frame_ms(torch_height, test, 15)
+    print("\nThe same network (gs_sdk's form, random weights), same frames, same run:\n")
+    print("| pipeline | ms per frame | frames/s | torch pipeline / this |")
+    print("|---|---|---|---|")
+    print(f"| torch per-pixel MLP + DCT Poisson (reference) | {torch_ms:.2f} | "
+          f"{1e3 / torch_ms:.0f} | 1.0 |")
+    for label, recon in (
+            ("DepthReconstructor, tabulated MLP (default engine)",
+             DepthReconstructor(net_cal, reference=ref)),
+            ("DepthReconstructor, tabulated MLP, level='far_field'",
+             DepthReconstructor(net_cal, reference=ref, level="far_field")),
+            ("DepthReconstructor, LUT (above)", DepthReconstructor(cal, reference=ref)),
+            ("DepthReconstructor, MLP exact (onnxruntime)",
+             DepthReconstructor(net_cal, reference=ref, engine="onnx"))):
+        ms = per_frame_ms(recon, test, 15)
+        print(f"| {label} | {ms:.2f} | {1e3 / ms:.0f} | {torch_ms / ms:.1f} |")
 
 
 if __name__ == "__main__":
