@@ -113,7 +113,6 @@ TAXIM_DEPTHS_MM = (0.1, 0.2, 0.4, 0.6)
 CAMERA_NOISE_GREY = 1.5
 GELSLIM_MM_PER_PX = 0.0806         # tests/_data.py: the only stated scale the frames allow
 GELSLIM_BALL_MM = 3.8
-DETECTED_FRACTION = 0.85           # contact radius / detected colour-edge radius (_circles.py)
 DISC = 0.9                         # contact evaluated within this fraction of its radius
 FAR = 1.5                          # background beyond this many contact radii
 FAR_OUT = 3.0                      # far-field level: median height from FAR to FAR_OUT radii
@@ -299,7 +298,8 @@ def render_taxim(depths_mm: Sequence[float] = TAXIM_DEPTHS_MM, *, shadow: bool =
                           radii_px=np.array(radii))
 
 
-def _bench_taxim(make: Maker, *, shadow: bool, log, own_optics: int = 0) -> dict:
+def _bench_taxim(make: Maker, *, shadow: bool, log, own_optics: int = 0,
+                 optics_circles: str = "geometric") -> dict:
     t0 = time.perf_counter()
     if own_optics:
         ref, presses, balls = render_taxim(shadow=shadow, calibration_presses=own_optics)
@@ -309,8 +309,10 @@ def _bench_taxim(make: Maker, *, shadow: bool, log, own_optics: int = 0) -> dict
     log(f"[taxim] {len(presses) + 1 + own_optics} Taxim renders in {t_render:.1f} s")
     if own_optics:
         # the renderer's own optics, made as a rig makes them: ball presses of its sensor
+        given = optics_circles == "geometric"
         cal = PhotometricCalibration.from_ball_presses(
-            ref, balls["frames"], balls["centers_px"], balls["radii_px"],
+            ref, balls["frames"], balls["centers_px"] if given else None,
+            balls["radii_px"] if given else None,
             ball_radius_mm=CAL_BALL_MM, mm_per_px=MM_PER_PX, model="lut",
             lut_cells=OWN_LUT_CELLS)
     else:
@@ -346,7 +348,10 @@ def _bench_taxim(make: Maker, *, shadow: bool, log, own_optics: int = 0) -> dict
     if own_optics:
         notes.append(f"Optics: LUT with {OWN_LUT_CELLS[0]} x {OWN_LUT_CELLS[1]} position cells "
                      f"calibrated on {own_optics} Taxim presses of a {CAL_BALL_MM:g} mm ball "
-                     "(random positions, 0.2 to 1.2 mm deep), not the shipped calibration.")
+                     "(random positions, 0.2 to 1.2 mm deep), not the shipped calibration; "
+                     + ("labelled to the geometric contact radius sqrt(2 R d - d^2)."
+                        if optics_circles == "geometric" else
+                        "circles detected (the contact edge, labelled to it)."))
     if gel_far:
         worst = max(gel_far, key=lambda t: t[2])
         notes.append("Taxim's own deformed gel beyond 1.5 a (its Gaussian-pyramid skirt): "
@@ -511,19 +516,19 @@ def _bench_gelslim(make: Maker, *, log) -> dict:
         cal = PhotometricCalibration.from_ball_presses(
             ps.reference, ps.frames[0::2], None, None, ball_radius_mm=GELSLIM_BALL_MM,
             mm_per_px=GELSLIM_MM_PER_PX, model="lut")
-        centres, r_det = detect_contact_circles(ps.frames, ps.reference)
+        centres, r_det = detect_contact_circles(ps.frames, ps.reference, edge="contact")
         log(f"[gelslim] {sub}: LUT calibration and circles in {time.perf_counter() - t:.1f} s")
         idx = np.arange(1, len(ps.frames), 2)
         tag = ", markers" if sub.endswith("09") else ""
-        res = _bench_balls(make, cal, ps, idx, centres, DETECTED_FRACTION * r_det,
+        res = _bench_balls(make, cal, ps, idx, centres, r_det,
                            GELSLIM_MM_PER_PX, GELSLIM_BALL_MM,
                            f"GelSlim {sub}{tag}, {idx.size} odd presses (mean)")
         rows += res["rows"]
         per += [dict(r, set=sub) for r in res["per_press"]]
         notes += res["notes"]
     notes.insert(0, "Real GelSlim 3.0 ball presses, LUT calibrated on the even presses "
-                 f"(circles detected), tested on the odd; contact radius {DETECTED_FRACTION:g} x "
-                 f"the detected one; R = {GELSLIM_BALL_MM:g} mm at {GELSLIM_MM_PER_PX} mm/px. "
+                 "(circles detected), tested on the odd; contact radius: the detected contact "
+                 f"edge; R = {GELSLIM_BALL_MM:g} mm at {GELSLIM_MM_PER_PX} mm/px. "
                  "The geometric truth hangs on that radius: at a = 0.6 R, 5% in a is 0.09 mm "
                  "in d.")
     return dict(rows=rows, per_press=per, notes=notes)
@@ -569,7 +574,7 @@ class ColourGated(DepthReconstructor):
 
 def run(make_reconstructor: Maker = default_reconstructor,
         datasets: Sequence[str] = DATASETS, *, taxim_shadow: bool = True,
-        fem_presses: int = 10, taxim_optics: int = 0,
+        fem_presses: int = 10, taxim_optics: int = 0, taxim_optics_circles: str = "geometric",
         log: Callable[[str], None] | None = None) -> dict:
     """Run the benchmark with the reconstructor ``make_reconstructor(calibration, reference)``.
 
@@ -588,6 +593,10 @@ def run(make_reconstructor: Maker = default_reconstructor,
     taxim_optics : int, default 0
         0: read Taxim's frames with the shipped GelSight calibration; N > 0: with a
         position-cell LUT calibrated on N Taxim presses of another ball.
+    taxim_optics_circles : {'geometric', 'detected'}, default 'geometric'
+        The circles that LUT is labelled to: the geometric ones, sqrt(2 R d - d^2)
+        (Taxim's smoothed gel leaves the ball at 0.86 to 0.93 of that), or those
+        ``from_ball_presses`` detects (the contact edge).
     log : callable, optional
         Progress lines (default: to stderr).
 
@@ -617,7 +626,8 @@ def run(make_reconstructor: Maker = default_reconstructor,
                 res = dict(skipped=f"taxim or jax not installed ({exc})")
             else:
                 res = _bench_taxim(make_reconstructor, shadow=taxim_shadow, log=log,
-                                   own_optics=taxim_optics)
+                                   own_optics=taxim_optics,
+                                   optics_circles=taxim_optics_circles)
         elif name == "fem":
             res = _bench_fem(make_reconstructor, n_presses=fem_presses, log=log)
         elif name == "gelsight":
@@ -748,6 +758,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--taxim-optics", type=int, default=0, metavar="N",
                     help="read Taxim's frames with a LUT (4 x 3 cells) calibrated on N Taxim "
                          "presses of a 3 mm ball instead of the shipped calibration")
+    ap.add_argument("--taxim-optics-circles", choices=("geometric", "detected"),
+                    default="geometric",
+                    help="--taxim-optics: label its LUT to the geometric circles (default) or "
+                         "to the circles it detects (the contact edge)")
     a = ap.parse_args(argv)
     names = [d.strip() for d in a.datasets.split(",") if d.strip()]
     bad = [d for d in names if d not in DATASETS]
@@ -766,7 +780,7 @@ def main(argv: list[str] | None = None) -> int:
         return DepthReconstructor(cal, reference=ref, **kwargs)
 
     res = run(make, names, taxim_shadow=not a.taxim_no_shadow, fem_presses=a.fem_presses,
-              taxim_optics=a.taxim_optics)
+              taxim_optics=a.taxim_optics, taxim_optics_circles=a.taxim_optics_circles)
     res["command"] = " ".join(["python benchmarks/bench_absolute_depth.py",
                                *(sys.argv[1:] if argv is None else argv)])
     res["boundary"] = a.boundary
