@@ -171,12 +171,16 @@ def test_calibration_to_the_contact_edge_reads_the_cap_depth(taxim_presses):
     assert deepest["colour"] < -0.04
 
 
-def test_from_ball_presses_rejects_an_unknown_edge(taxim_presses):
+def test_an_unknown_edge_is_named(taxim_presses, taxim_lut):
     ps = taxim_presses
     with pytest.raises(InputError, match="detect_edge"):
         PhotometricCalibration.from_ball_presses(
             ps.reference, ps.frames[:2], ball_radius_mm=2.0, mm_per_px=0.0295, model="lut",
             detect_edge="rim")
+    with pytest.raises(InputError, match="edge must be"):
+        calibration_accuracy(DepthReconstructor(taxim_lut), ps.frames[:2], ps.centers_px[:2],
+                             ps.radii_px[:2], np.full(2, 67.8), trained=np.ones(2, bool),
+                             label_fraction=1.0, edge="rim")
 
 
 # ------------------------------------------------------------------ Taxim's own gel

@@ -103,6 +103,42 @@ def test_cli_saves_the_report_and_reads_circles_beside_the_frames(presses, tmp_p
     assert not (other / "optics.npz").exists()
 
 
+def test_cli_detects_circles_at_the_contact_edge_or_the_colour_edge(presses, tmp_path,
+                                                                    capsys):
+    """Without circles, optics calibrate detects them at the contact edge and trains to
+    it (label fraction 1.0); --detect-edge colour gives the earlier default, the colour
+    edge trained and scored at 0.85 of it. Both say so in the report and the file."""
+    ref, frames, _, _ = presses
+    npz = tmp_path / "presses.npz"
+    np.savez(npz, reference=ref, frames=frames)
+    reports = {}
+    for edge in ("contact", "colour"):
+        out = tmp_path / edge / "optics.npz"
+        extra = [] if edge == "contact" else ["--detect-edge", "colour"]
+        assert main(["optics", "calibrate", str(npz), "--ball-radius-mm", str(BALL_PX * MM),
+                     "--mm-per-px", str(MM), "--model", "lut", "--no-progress",
+                     "--presses", "0::2", "--out", str(out), *extra]) == 0
+        stdout = capsys.readouterr().out
+        reports[edge] = json.loads((out.parent / "optics_accuracy.json").read_text())
+        cal = PhotometricCalibration.load(out)
+        assert cal.provenance["circles"] == "detected"
+        assert cal.provenance["detected_edge"] == edge
+        assert f"circles detected at the {edge} edge" in stdout
+    assert reports["contact"]["edge"] == "contact"
+    assert reports["contact"]["label_fraction"] == 1.0
+    assert reports["colour"]["edge"] == "colour"
+    assert reports["colour"]["label_fraction"] == 0.85
+    for rep in reports.values():
+        assert rep["circles"] == "detected" and rep["balls"][0]["n_scored"] == 4
+        assert rep["balls"][0]["normal_angle_deg"] < 6
+    # a mistyped edge is refused by the parser (exit 2), before any work
+    with pytest.raises(SystemExit) as exc:
+        main(["optics", "calibrate", str(npz), "--ball-radius-mm", "2", "--mm-per-px",
+              "0.05", "--detect-edge", "rim", "--out", str(tmp_path / "x.npz")])
+    assert exc.value.code == 2
+    assert not (tmp_path / "x.npz").exists()
+
+
 def test_out_of_range_colours_lie_on_the_rims_of_real_presses():
     """The shipped calibration on the real GelSight presses of sample_frames: the colours
     it never saw are the steep rims' (measured: 1724 of 1835 flagged pixels between 0.8

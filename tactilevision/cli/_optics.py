@@ -55,7 +55,14 @@ def _accuracy_text(report: dict, mm: float) -> str:
     """The accuracy report as printed: a line per ball size."""
     which = ("training presses (in sample: every press was trained on; --presses 0::2 "
              "holds the odd ones out)" if report["in_sample"] else "held-out presses")
-    lines = []
+    if report["circles"] == "given":
+        circles = "circles given (contact circles)"
+    elif report.get("edge") == "colour":
+        circles = (f"circles detected at the colour edge, scored at "
+                   f"{report['label_fraction']:g} of their radius")
+    else:
+        circles = "circles detected at the contact edge"
+    lines = [f"{circles}; trained to {report['label_fraction']:g} of their radius"]
     for b in report["balls"]:
         radius = b["ball_radius_px"] * mm
         cut = f"; {b['n_edge_cut']} cut by the image edge, left out" if b["n_edge_cut"] else ""
