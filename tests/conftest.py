@@ -118,7 +118,8 @@ def taxim_lut(taxim_presses):
 LONGEST_FIRST = (
     "test_diagnose.py", "test_optics_real.py", "test_calibrate.py", "test_calibrate_gelslim.py",
     "test_fem_pad.py", "test_batch.py", "test_forces_session.py", "test_relaxation.py",
-    "test_cli_forces.py", "test_vernier_taxim.py", "test_fem_forces_proof.py",
+    "test_cli_forces.py", "test_contact_edge.py", "test_vernier_taxim.py",
+    "test_fem_forces_proof.py",
     "test_lut_mlp.py", "test_forces_gelslim.py", "test_sample_relaxation.py",
     "test_viewer.py", "test_history.py", "test_docs.py", "test_cli_optics.py",
     "test_diagnose_separation.py", "test_noise_budget.py",
