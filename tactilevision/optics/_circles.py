@@ -252,9 +252,11 @@ def locate_contact_edge(frame: np.ndarray, reference: np.ndarray,
     shoulder : float, default 0.03
         Relative drop from the ray's largest colour change that ends the
         shoulder. Measured on the 48 real GelSight presses of ``taxim``
-        against their hand-annotated circles: 0.02 gives 0.992, 0.05 gives
-        1.020 of the annotated radius (median over presses; spread 0.023);
+        against their hand-annotated circles: 0.02 gives 0.993, 0.03 1.005,
+        0.05 1.022 of the annotated radius (median over presses; sd 0.022);
         the colour edge lies at 1.115 (``benchmarks/bench_contact_edge.py``).
+        On presses drawn by Taxim's renderer without shadows, 0.03 gives
+        1.010 (sd 0.058) of the radius where Taxim's own gel leaves the ball.
     floor : float, default 0.85
         The smallest radius returned, as a fraction of `radius_px`; 0 turns
         the bound off.
