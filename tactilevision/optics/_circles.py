@@ -46,6 +46,17 @@ def fit_circle(x: np.ndarray, y: np.ndarray) -> tuple[float, float, float]:
     return float(cx), float(cy), float(np.sqrt(max(sol[2] + cx * cx + cy * cy, 0.0)))
 
 
+def _colour_difference(frame: np.ndarray, reference: np.ndarray, sigma: float) -> np.ndarray:
+    """Frame less reference (H, W, 3) float32, both blurred by `sigma` px (0: not blurred),
+    less the median difference (a global brightness change is no contact)."""
+    if sigma > 0:
+        frame = cv2.GaussianBlur(frame, (0, 0), sigma)
+        reference = cv2.GaussianBlur(reference, (0, 0), sigma)
+    change = frame.astype(np.float32) - reference.astype(np.float32)
+    change -= np.median(change[::4, ::4].reshape(-1, 3), axis=0)
+    return change
+
+
 def _fill_holes(mask: np.ndarray) -> np.ndarray:
     """Fill the holes of a binary blob (flood the background from the border)."""
     h, w = mask.shape
@@ -104,9 +115,7 @@ def detect_contact_circle(frame: np.ndarray, reference: np.ndarray, *,
     reference = check_array(reference, "reference", [frame.shape], dtype=np.uint8)
     # absolute colour difference (not the ratio): the dark corners of a pad
     # give large, noisy ratios but small differences
-    change = (cv2.GaussianBlur(frame, (0, 0), 1.5).astype(np.float32)
-              - cv2.GaussianBlur(reference, (0, 0), 1.5).astype(np.float32))
-    change -= np.median(change[::4, ::4].reshape(-1, 3), axis=0)
+    change = _colour_difference(frame, reference, 1.5)
     mag = channel_magnitude(change)
     peak = float(np.percentile(mag, 99.9))
     noise = 1.4826 * float(np.median(np.abs(mag - np.median(mag))))
@@ -288,9 +297,7 @@ def locate_contact_edge(frame: np.ndarray, reference: np.ndarray,
         raise InputError(f"shoulder must lie in (0, 1), got {shoulder!r}")
     if not 0 <= floor <= 1:
         raise InputError(f"floor must lie in [0, 1], got {floor!r}")
-    blur = (lambda im: cv2.GaussianBlur(im, (0, 0), sigma)) if sigma > 0 else (lambda im: im)
-    change = blur(frame).astype(np.float32) - blur(reference).astype(np.float32)
-    change -= np.median(change[::4, ::4].reshape(-1, 3), axis=0)
+    change = _colour_difference(frame, reference, sigma)
     norm = np.sqrt(np.sum(change * change, axis=-1))
     h, w = norm.shape
     theta = np.linspace(0.0, 2.0 * np.pi, n_rays, endpoint=False)
@@ -309,12 +316,13 @@ def locate_contact_edge(frame: np.ndarray, reference: np.ndarray,
         in_run = np.cumprod(inside, axis=1).astype(bool)
         fall = np.gradient(prof, axis=1)
         near = np.abs(rs - rc) <= 0.2 * rc
-        jf = np.where(in_run & near[None, :], fall, np.inf).argmin(axis=1)
+        window = in_run & near[None, :]
+        jf = np.where(window, fall, np.inf).argmin(axis=1)
         j = np.arange(rs.size)[None, :]
         before = j <= jf[:, None]
         jp = np.where(before, prof, -np.inf).argmax(axis=1)
         peak = prof[rows, jp]
-        ok = (in_run[rows, np.minimum(jf + 8, rs.size - 1)] & np.isfinite(fall[rows, jf])
+        ok = (window[rows, jf] & in_run[rows, np.minimum(jf + 8, rs.size - 1)]
               & (fall[rows, jf] < 0) & (jp > 0))
         on = before & (j >= jp[:, None]) & (prof >= (1.0 - shoulder) * peak[:, None])
         js = np.where(on, j, -1).max(axis=1)
