@@ -62,7 +62,7 @@ def _accuracy_text(report: dict, mm: float) -> str:
                    f"{report['label_fraction']:g} of their radius")
     else:
         circles = "circles detected at the contact edge"
-    lines = [f"{circles}; trained to {report['label_fraction']:g} of their radius"]
+    lines = [f"{circles}; trained to {report['label_fraction']:.2f} x their radius"]
     for b in report["balls"]:
         radius = b["ball_radius_px"] * mm
         cut = f"; {b['n_edge_cut']} cut by the image edge, left out" if b["n_edge_cut"] else ""
@@ -213,8 +213,16 @@ def run_calibrate(args: argparse.Namespace) -> int:
         if given:
             centres, radii = ps.centers_px, ps.radii_px
         else:
-            centres, radii = detect_contact_circles(ps.frames, ps.reference,
-                                                    edge=args.detect_edge)
+            # the trained presses' circles are the calibration's own (its refined centres);
+            # only the held-out presses are detected here
+            centres = np.zeros((len(ps.frames), 2))
+            radii = np.zeros(len(ps.frames))
+            centres[idx] = cal.provenance["centers_px"]
+            radii[idx] = cal.provenance["radii_px"]
+            rest = np.flatnonzero(~trained)
+            if rest.size:
+                centres[rest], radii[rest] = detect_contact_circles(
+                    ps.frames[rest], ps.reference, edge=args.detect_edge)
         report = calibration_accuracy(DepthReconstructor(cal), ps.frames, centres, radii,
                                       ball_mm / mm, trained=trained,
                                       label_fraction=cal.provenance["label_fraction"],
