@@ -69,6 +69,7 @@ cores; 2 minutes with ``--boundary contact``). Tables and findings:
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import math
 import os
@@ -212,6 +213,23 @@ def machine() -> dict:
 # ------------------------------------------------------------------ (a) Taxim
 
 
+@contextlib.contextmanager
+def flat_gel_taxim():
+    """Taxim's renderer (jax backend) on its GelSight calibration with a flat gel (its
+    ``gelmap.npy`` at its maximum everywhere) and ``contact_scale = 0``; yields the
+    ``taxim.Taxim`` instance (its calibration copied to a temporary folder)."""
+    import taxim
+
+    with tempfile.TemporaryDirectory(prefix="taxim_flat_") as tmp:
+        src = Path(taxim.__file__).parent / "calib" / "gelsight"
+        calib = Path(tmp) / "gelsight_flat"
+        shutil.copytree(src, calib)
+        gel = np.load(src / "gelmap.npy")
+        np.save(calib / "gelmap.npy", np.full_like(gel, gel.max()))   # a flat gel
+        yield taxim.Taxim(calib_folder=calib, backend="jax",
+                          params={"simulator": {"contact_scale": 0.0}})
+
+
 def render_taxim(depths_mm: Sequence[float] = TAXIM_DEPTHS_MM, *, shadow: bool = True,
                  seed: int = 0, calibration_presses: int = 0
                  ) -> tuple[np.ndarray, list[dict]] | tuple[np.ndarray, list[dict], dict]:
@@ -231,7 +249,6 @@ def render_taxim(depths_mm: Sequence[float] = TAXIM_DEPTHS_MM, *, shadow: bool =
     (N,), the contact circles, for ``PhotometricCalibration.from_ball_presses``.
     """
     import jax  # Taxim's jax backend; jit for its deformed gel
-    import taxim
 
     h, w = SHAPE
     x = (np.arange(w) - (w - 1) / 2) * MM_PER_PX
@@ -251,14 +268,7 @@ def render_taxim(depths_mm: Sequence[float] = TAXIM_DEPTHS_MM, *, shadow: bool =
         return np.clip(np.rint(img), 0, 255).astype(np.uint8)[..., ::-1]
 
     out = []
-    with tempfile.TemporaryDirectory(prefix="taxim_flat_") as tmp:
-        src = Path(taxim.__file__).parent / "calib" / "gelsight"
-        calib = Path(tmp) / "gelsight_flat"
-        shutil.copytree(src, calib)
-        gel = np.load(src / "gelmap.npy")
-        np.save(calib / "gelmap.npy", np.full_like(gel, gel.max()))   # a flat gel
-        sim = taxim.Taxim(calib_folder=calib, backend="jax",
-                          params={"simulator": {"contact_scale": 0.0}})
+    with flat_gel_taxim() as sim:
         ref = bgr(sim.render(np.full(SHAPE, 1.0, np.float32), with_shadow=shadow), 0.0)
         deform = getattr(sim, "_TaximJax__compute_gel_pad_deformation", None)
         shift = getattr(sim, "_TaximJax__get_shifted_height_map", None)

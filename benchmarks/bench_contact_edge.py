@@ -37,9 +37,7 @@ import json
 import math
 import os
 import platform
-import shutil
 import sys
-import tempfile
 import time
 from pathlib import Path
 
@@ -73,19 +71,12 @@ def render_taxim(n_first: int, n_second: int, *, shadow: bool, balls=(2.0, 3.0),
     """Ball presses drawn by Taxim with its own gel: frames, reference, centres, geometric
     radii, ball radius (mm) per press, and the gel edge radius (px) per press."""
     import jax
-    import taxim
+    from bench_absolute_depth import flat_gel_taxim
 
     rng = np.random.default_rng(seed)
     h, w = SHAPE
     xx, yy = np.meshgrid(np.arange(w, dtype=float), np.arange(h, dtype=float))
-    with tempfile.TemporaryDirectory() as tmp:
-        src = Path(taxim.__file__).parent / "calib" / "gelsight"
-        calib = Path(tmp) / "gelsight_flat"
-        shutil.copytree(src, calib)
-        gel = np.load(src / "gelmap.npy")
-        np.save(calib / "gelmap.npy", np.full_like(gel, gel.max()))
-        sim = taxim.Taxim(calib_folder=calib, backend="jax",
-                          params={"simulator": {"contact_scale": 0.0}})
+    with flat_gel_taxim() as sim:
         deform = getattr(sim, "_TaximJax__compute_gel_pad_deformation", None)
         shift = getattr(sim, "_TaximJax__get_shifted_height_map", None)
         if deform is None or shift is None:

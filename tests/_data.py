@@ -26,6 +26,7 @@ its default place beside the repository); tests using it skip when it is absent.
 
 from __future__ import annotations
 
+import contextlib
 import os
 from pathlib import Path
 
@@ -219,3 +220,24 @@ def decoded(path):
         out.append(f)
     cap.release()
     return np.stack(out)
+
+
+@contextlib.contextmanager
+def flat_gel_taxim():
+    """Taxim's own renderer (jax backend) on its GelSight calibration with the gel made
+    flat (its ``gelmap.npy`` at its maximum everywhere) and ``contact_scale = 0``, the
+    conventions of ``benchmarks/taxim_gauge_session.py``; the caller has skipped when
+    ``taxim`` or ``jax`` is missing. Yields the ``taxim.Taxim`` instance."""
+    import shutil
+    import tempfile
+
+    import taxim
+
+    src = Path(taxim.__file__).parent / "calib" / "gelsight"
+    with tempfile.TemporaryDirectory(prefix="taxim_flat_") as tmp:
+        flat = Path(tmp) / "gelsight"
+        shutil.copytree(src, flat)
+        gel = np.load(flat / "gelmap.npy")
+        np.save(flat / "gelmap.npy", np.full_like(gel, gel.max()))
+        yield taxim.Taxim(calib_folder=flat, backend="jax",
+                          params={"simulator": {"contact_scale": 0.0}})

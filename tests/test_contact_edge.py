@@ -11,12 +11,17 @@ from __future__ import annotations
 
 import math
 import warnings
-from pathlib import Path
 
 import cv2
 import numpy as np
 import pytest
-from _data import TAXIM_BALL_RADIUS_MM, TAXIM_MM_PER_PX, change_from_normals, illumination
+from _data import (
+    TAXIM_BALL_RADIUS_MM,
+    TAXIM_MM_PER_PX,
+    change_from_normals,
+    flat_gel_taxim,
+    illumination,
+)
 
 from tactilevision import InputError
 from tactilevision.optics import (
@@ -189,11 +194,8 @@ def taxim_ball_presses():
     """Ball presses drawn by Taxim's renderer (flat gel, contact_scale 0) with Taxim's own
     deformed gel: ``{shadow: [(frame, reference, centre, gel_edge_px)]}``, the gel edge
     being the radius where Taxim's gel tilt is largest (a circle fitted over 120 rays)."""
-    taxim = pytest.importorskip("taxim")
+    pytest.importorskip("taxim")
     pytest.importorskip("jax")
-    import shutil
-    import tempfile
-
     from scipy.ndimage import map_coordinates
 
     s, h, w = TAXIM_MM_PER_PX, 480, 640
@@ -205,14 +207,7 @@ def taxim_ball_presses():
              True: [(2.0, 0.6, (380.2, 260.1)), (2.0, 0.9, (300.7, 230.4)),
                     (3.0, 0.9, (350.4, 240.3))]}
     out = {}
-    with tempfile.TemporaryDirectory() as tmp:
-        src = Path(taxim.__file__).parent / "calib" / "gelsight"
-        calib = Path(tmp) / "gelsight_flat"
-        shutil.copytree(src, calib)
-        gel = np.load(src / "gelmap.npy")
-        np.save(calib / "gelmap.npy", np.full_like(gel, gel.max()))
-        sim = taxim.Taxim(calib_folder=calib, backend="jax",
-                          params={"simulator": {"contact_scale": 0.0}})
+    with flat_gel_taxim() as sim:
         deform = getattr(sim, "_TaximJax__compute_gel_pad_deformation", None)
         shift = getattr(sim, "_TaximJax__get_shifted_height_map", None)
         if deform is None or shift is None:

@@ -61,16 +61,13 @@ def test_taxim_session_fit_matches_the_true_depths(taxim_run):
 def taxim_bevel():
     """Render gauge-block presses with Taxim now (flat gel, contact_scale 0, default
     shadows): ``render(w0, overshoot) -> (frame, reference, centre, geometry)``."""
-    taxim = pytest.importorskip("taxim")
+    pytest.importorskip("taxim")
     pytest.importorskip("jax")
-    import shutil
-    import tempfile
-
     import cv2
+    from _data import flat_gel_taxim
 
     from tactilevision.contact import BevelGeometry
 
-    src = Path(taxim.__file__).parent / "calib" / "gelsight"
     s, h, w = 0.0295, 480, 640
     geom = BevelGeometry(offset_mm=7.5, direction_deg=0.0, angle_deg=5.0, length_mm=3.0)
     centre = (150.37, 233.81)
@@ -78,13 +75,7 @@ def taxim_bevel():
     dx, dy = (cols - centre[0]) * s, (rows - centre[1]) * s
     to8 = lambda x: cv2.cvtColor((np.clip(x, 0, 1) * 255).round().astype(np.uint8),  # noqa: E731
                                  cv2.COLOR_RGB2BGR)
-    with tempfile.TemporaryDirectory() as tmp:
-        flat = Path(tmp) / "gelsight"
-        shutil.copytree(src, flat)
-        g = np.load(flat / "gelmap.npy")
-        np.save(flat / "gelmap.npy", np.full_like(g, g.max()))
-        sim = taxim.Taxim(calib_folder=flat, backend="jax",
-                          params={"simulator": {"contact_scale": 0.0}})
+    with flat_gel_taxim() as sim:
         reference = to8(sim.render(np.full((h, w), 5.0), press_depth=None))
 
         def render(w0: float, overshoot: float):
