@@ -47,15 +47,19 @@ def torch_pipeline(ref: np.ndarray):
 
     torch.set_num_threads(1)
     torch.manual_seed(0)
-    layers: list[nn.Module] = []
-    for i, (n_in, n_out) in enumerate(((5, 32), (32, 32), (32, 32), (32, 2))):
-        layers.append(nn.Conv2d(n_in, n_out, 1))
-        if i < 3:
-            layers += [nn.BatchNorm2d(n_out), nn.ReLU()]
-    net = nn.Sequential(*layers).eval()
-    names = {0: "conv1", 1: "bn1", 3: "conv2", 4: "bn2", 6: "conv3", 7: "bn3", 9: "conv4"}
-    state = {f"{names[int(k.split('.')[0])]}.{k.split('.', 1)[1]}": v
-             for k, v in net.state_dict().items() if int(k.split(".")[0]) in names}
+    net = nn.Module()                       # gs_sdk's names: conv1, bn1, ..., conv4
+    for k, (n_in, n_out) in enumerate(((5, 32), (32, 32), (32, 32), (32, 2)), start=1):
+        setattr(net, f"conv{k}", nn.Conv2d(n_in, n_out, 1))
+        if k < 4:
+            setattr(net, f"bn{k}", nn.BatchNorm2d(n_out))
+    net.eval()
+    state = net.state_dict()
+
+    def forward(x):
+        for k in (1, 2, 3):
+            x = torch.relu(getattr(net, f"bn{k}")(getattr(net, f"conv{k}")(x)))
+        return net.conv4(x)
+
     h, w = ref.shape[:2]
     yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)
     xy = torch.from_numpy(np.stack([xx / w, yy / h]))[None]
@@ -64,7 +68,7 @@ def torch_pipeline(ref: np.ndarray):
         bgr = torch.from_numpy(np.ascontiguousarray(frame.transpose(2, 0, 1),
                                                     np.float32) / 255.0)[None]
         with torch.no_grad():
-            return torch.tan(net(torch.cat([bgr, xy], 1)))[0].numpy()
+            return torch.tan(forward(torch.cat([bgr, xy], 1)))[0].numpy()
 
     bg = slopes(ref)
     ky = np.pi * np.arange(h)[:, None] / h
