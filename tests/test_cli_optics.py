@@ -311,6 +311,32 @@ def test_calibrate_label_fraction(presses, presses_npz, tmp_path, capsys):
         assert not (tmp_path / "x.npz").exists()
 
 
+def test_calibrate_flat_fraction(presses, presses_npz, tmp_path, capsys):
+    """--flat-fraction reaches the calibration (the same LUT as the API's, saved in its
+    provenance), and a value outside (0, 1] is refused before any work."""
+    from tactilevision.optics import DepthReconstructor, PhotometricCalibration
+
+    ref, frames, centres, radii = presses
+    out = tmp_path / "ff.npz"
+    assert main(["optics", "calibrate", str(presses_npz), "--ball-radius-mm",
+                 str(BALL_PX * MM), "--mm-per-px", str(MM), "--model", "lut", "--presses",
+                 "0::2", "--flat-fraction", "0.2", "--no-progress", "--out", str(out)]) == 0
+    idx = np.arange(0, len(frames), 2)
+    cli = PhotometricCalibration.load(out)
+    assert cli.provenance["flat_fraction"] == 0.2
+    api = PhotometricCalibration.from_ball_presses(
+        ref, frames[idx], centres[idx], radii[idx], ball_radius_mm=BALL_PX * MM,
+        mm_per_px=MM, model="lut", flat_fraction=0.2)
+    np.testing.assert_array_equal(DepthReconstructor(cli, reference=ref)(frames[1]),
+                                  DepthReconstructor(api, reference=ref)(frames[1]))
+    for bad in ("0", "1.5", "nan"):
+        assert main(["optics", "calibrate", str(presses_npz), "--ball-radius-mm", "1",
+                     "--mm-per-px", str(MM), "--model", "lut", "--flat-fraction", bad,
+                     "--out", str(tmp_path / "x.npz")]) == 2
+        err = errors(capsys.readouterr().err)
+        assert len(err) == 1 and "--flat-fraction" in err[0]
+        assert not (tmp_path / "x.npz").exists()
+
 def test_reconstruct_missing_folder(calibration, tmp_path, capsys):
     missing = tmp_path / "nowhere"
     assert main(["reconstruct", str(missing), "--calibration", str(calibration),

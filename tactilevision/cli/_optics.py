@@ -136,6 +136,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="train on the pixels within F x the circle's radius, 0 < F <= 1 "
                    "(default 1.0; 0.85 with --detect-edge colour; lower it for circles "
                    "drawn on the colour edge)")
+    c.add_argument("--flat-fraction", metavar="F", type=float, default=0.03,
+                   help="fraction of each press's pixels beyond twice the contact radius "
+                   "trained on as flat gel, 0 < F <= 1 (default 0.03). Lower: gentle slopes "
+                   "read less shallow, the flat gel's colour noise passes into the gradients "
+                   "(docs: guide/optics.md, 'Flat samples')")
     c.add_argument("--no-progress", action="store_true", help="no progress bar")
     c.add_argument("--seed", type=int, default=0)
     add_overwrite_argument(c, "folder of the calibration file")
@@ -163,6 +168,8 @@ def run_calibrate(args: argparse.Namespace) -> int:
             raise InputError(f"{name} must be at least {low}, got {value}")
     if args.label_fraction is not None and not 0 < args.label_fraction <= 1:
         raise InputError(f"--label-fraction must be in (0, 1], got {args.label_fraction}")
+    if not 0 < args.flat_fraction <= 1:
+        raise InputError(f"--flat-fraction must be in (0, 1], got {args.flat_fraction}")
     out = Path(args.out)
     if out.is_dir():
         raise InputError(f"--out {out} is a folder; give the calibration file to write (.npz)")
@@ -200,6 +207,7 @@ def run_calibrate(args: argparse.Namespace) -> int:
         bins=args.bins, lut_cells=cells, epochs=args.epochs, hidden=args.hidden, seed=args.seed,
         source=str(args.ball_presses), label_fraction=args.label_fraction,
         progress=not args.no_progress, detect_edge=args.detect_edge,
+        flat_fraction=args.flat_fraction,
     )
     cal.provenance["presses"] = [int(i) for i in idx]
     cal.provenance["command"] = "tactilevision " + " ".join(args.argv)

@@ -112,6 +112,7 @@ class PhotometricCalibration:
         source: str = "",
         progress: bool = False,
         detect_edge: Literal["contact", "colour"] = "contact",
+        flat_fraction: float = 0.03,
     ) -> PhotometricCalibration:
         """Calibrate from frames of a ball pressed into the gel.
 
@@ -212,7 +213,8 @@ class PhotometricCalibration:
             mm_per_px=mm_per_px, model=model, use_position=use_position, markers=markers,
             label_fraction=label_fraction, refine_centers=refine_centers, bins=bins,
             lut_cells=lut_cells, epochs=epochs, hidden=hidden, blur_sigma=blur_sigma, seed=seed,
-            source=source, progress=progress, detect_edge=detect_edge)
+            source=source, progress=progress, detect_edge=detect_edge,
+            flat_fraction=flat_fraction)
 
     @classmethod
     def from_gs_sdk(cls, model: str | Path | Mapping[str, Any], reference: np.ndarray, *,

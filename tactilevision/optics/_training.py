@@ -37,7 +37,7 @@ def fit_from_ball_presses(cls, reference: np.ndarray, frames: np.ndarray,
                           lut_cells: tuple[int, int] = (1, 1), epochs: int = 30,
                           hidden: int = 128, blur_sigma: float = 0.0, seed: int = 0,
                           source: str = "", progress: bool = False,
-                          detect_edge: str = "contact"):
+                          detect_edge: str = "contact", flat_fraction: float = 0.03):
     """Train a photometric calibration of class `cls` from ball presses.
 
     The parameters, return value and errors are those of
@@ -61,6 +61,8 @@ def fit_from_ball_presses(cls, reference: np.ndarray, frames: np.ndarray,
         raise InputError("ball_radius_mm and mm_per_px must be positive")
     if detect_edge not in ("contact", "colour"):
         raise InputError(f"detect_edge must be 'contact' or 'colour', got {detect_edge!r}")
+    if not 0 < flat_fraction <= 1:
+        raise InputError(f"flat_fraction must be in (0, 1], got {flat_fraction!r}")
     detected = centers_px is None and radii_px is None
     if detected:
         centers_px, radii_px = detect_contact_circles(frames, reference, edge=detect_edge)
@@ -90,7 +92,7 @@ def fit_from_ball_presses(cls, reference: np.ndarray, frames: np.ndarray,
     changes = [colour_change(f, ref_inv, blur_sigma=blur_sigma) for f in
                tqdm(frames, desc="colour change", disable=not progress)]
     valid = [~marker_mask(f) if markers else np.ones((h, w), bool) for f in frames]
-    background = [(rng.random((h, w)) < 0.03) & v for v in valid]
+    background = [(rng.random((h, w)) < flat_fraction) & v for v in valid]
 
     cal = cls(model=model, reference=reference.copy(), mm_per_px=float(mm_per_px),
               use_position=use_position, markers=markers, blur_sigma=blur_sigma)
@@ -132,6 +134,7 @@ def fit_from_ball_presses(cls, reference: np.ndarray, frames: np.ndarray,
         "detected_edge": detect_edge if detected else None,
         "centers_refined": bool(refine_centers),
         "label_fraction": float(label_fraction),
+        "flat_fraction": float(flat_fraction),
         "lut_cells": [int(c) for c in lut_cells] if model == "lut" else None,
         "lut_cells_fell_back": int(np.count_nonzero(fell_back)),
         "centers_px": centers.round(2).tolist(),
