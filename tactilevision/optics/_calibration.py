@@ -190,6 +190,16 @@ class PhotometricCalibration:
             (network) of the ball's cap, and the mean normal angle from 5.98 to
             6.33 and from 3.49 to 4.08 degrees (docs/guide/optics.md, "The
             contact edge").
+        flat_fraction : float, default 0.03
+            Fraction of each press's pixels beyond twice its contact radius
+            (markers excluded) trained on as flat gel, 0 < f <= 1. Colour
+            changes within the camera's noise may be flat gel or a gentle
+            slope; many flat samples teach the model to read them as flat,
+            so the gentle slopes (the middle of a contact, the skirt around
+            it) read shallow, and few pass the flat gel's noise into the
+            gradients, tilting the background. 0.03 favours a quiet
+            background; lower it for depth (docs/guide/optics.md, "Flat
+            samples", gives the measured trade).
 
         Returns
         -------
@@ -202,7 +212,8 @@ class PhotometricCalibration:
         InputError
             If only one of centres and radii is given, a circle is larger
             than the ball, fewer than two presses are given, ``detect_edge``
-            is not a known edge, or a detected press has no contact.
+            is not a known edge, ``flat_fraction`` is outside (0, 1], or a
+            detected press has no contact.
         ImportError
             For ``model='mlp'`` without torch.
         """
