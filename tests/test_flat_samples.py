@@ -86,3 +86,11 @@ def test_flat_fraction_out_of_range_is_named(bad, taxim_presses):
         PhotometricCalibration.from_ball_presses(
             ps.reference, ps.frames[:2], ps.centers_px[:2], ps.radii_px[:2],
             ball_radius_mm=2.0, mm_per_px=0.0295, model="lut", flat_fraction=bad)
+
+
+def test_too_few_flat_pixels_are_named(taxim_presses):
+    ps = taxim_presses
+    with pytest.raises(InputError, match="flat_fraction 1e-08 leaves no flat"):
+        PhotometricCalibration.from_ball_presses(
+            ps.reference, ps.frames[:2], ps.centers_px[:2], ps.radii_px[:2],
+            ball_radius_mm=2.0, mm_per_px=0.0295, model="lut", flat_fraction=1e-8)

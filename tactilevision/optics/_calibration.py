@@ -212,8 +212,8 @@ class PhotometricCalibration:
         InputError
             If only one of centres and radii is given, a circle is larger
             than the ball, fewer than two presses are given, ``detect_edge``
-            is not a known edge, ``flat_fraction`` is outside (0, 1], or a
-            detected press has no contact.
+            is not a known edge, ``flat_fraction`` is outside (0, 1] or
+            leaves no flat pixel, or a detected press has no contact.
         ImportError
             For ``model='mlp'`` without torch.
         """

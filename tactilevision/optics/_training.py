@@ -101,6 +101,9 @@ def fit_from_ball_presses(cls, reference: np.ndarray, frames: np.ndarray,
     for rnd in range(rounds):
         x_all, y_all, f_all, n_all, bg_mag = _training_samples(
             changes, valid, background, centers, label_fraction * radii, ball_px)
+        if bg_mag.size == 0:
+            raise InputError(f"flat_fraction {flat_fraction:g} leaves no flat pixel (beyond "
+                             "twice the contact radius) to train on; raise it")
         cal.contact_threshold = float(np.percentile(bg_mag, 99.9))
         cal.colour_lo = np.percentile(f_all, 0.1, axis=0).astype(np.float32)
         cal.colour_hi = np.percentile(f_all, 99.9, axis=0).astype(np.float32)
