@@ -81,7 +81,7 @@ def real_rows(models, fractions) -> list[str]:
     return lines
 
 
-def taxim_rows(data: dict, models, fractions) -> list[str]:
+def taxim_rows(data: dict, models, fractions, label: str) -> list[str]:
     """One line per (model, flat fraction) on Taxim renders, against Taxim's own gel."""
     from bench_contact_edge import score
 
@@ -101,7 +101,7 @@ def taxim_rows(data: dict, models, fractions) -> list[str]:
                 s = score(recon, frames, idx, data["centres"], data["radii"], ball_mm / MM,
                           gel=data["gel"])
                 cells.append(f"{s['angle_deg']:.2f} deg, {100 * s['deepest']:+.1f} % (n={s['n']})")
-            lines.append(f"| Taxim, no shadows | {model} | {ff:g} | " + " | ".join(cells) + " |")
+            lines.append(f"| {label} | {model} | {ff:g} | " + " | ".join(cells) + " |")
             print(lines[-1], flush=True)
     return lines
 
@@ -116,6 +116,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--save-taxim", type=Path, default=None)
     p.add_argument("--taxim-npz", type=Path, default=None,
                    help="renders saved by --save-taxim")
+    p.add_argument("--taxim-label", default="Taxim, no shadows",
+                   help="what the renders are, for the table (e.g. 'Taxim, shadows')")
     a = p.parse_args(argv)
     print(f"# bench_flat_samples: {platform.processor() or platform.machine()}, "
           f"{os.cpu_count()} cores, {time.strftime('%Y-%m-%d %H:%M')}")
@@ -140,7 +142,7 @@ def main(argv: list[str] | None = None) -> int:
     if data is not None:
         print("| data | model | flat_fraction | odd presses: angle, deepest | unseen ball |")
         print("|---|---|---|---|---|")
-        taxim_rows(data, a.models, a.fractions)
+        taxim_rows(data, a.models, a.fractions, a.taxim_label)
     return 0
 
 
