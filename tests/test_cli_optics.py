@@ -302,12 +302,19 @@ def test_calibrate_label_fraction(presses, presses_npz, tmp_path, capsys):
     heights = [DepthReconstructor(c, reference=ref)(frames[1]) for c in (cli, api, full)]
     np.testing.assert_array_equal(heights[0], heights[1])
     assert np.abs(heights[0] - heights[2]).max() > 1e-4        # fewer rim pixels learnt
-    for bad in ("0", "1.5", "-0.2"):
+    _refused_before_any_work("--label-fraction", ("0", "1.5", "-0.2"), presses_npz, tmp_path,
+                             capsys)
+
+
+def _refused_before_any_work(option, bads, presses_npz, tmp_path, capsys):
+    """`optics calibrate OPTION BAD` exits 2 with one error naming the option and writes
+    nothing, for every BAD."""
+    for bad in bads:
         assert main(["optics", "calibrate", str(presses_npz), "--ball-radius-mm", "1",
-                     "--mm-per-px", str(MM), "--model", "lut", "--label-fraction", bad,
+                     "--mm-per-px", str(MM), "--model", "lut", option, bad,
                      "--out", str(tmp_path / "x.npz")]) == 2
         err = errors(capsys.readouterr().err)
-        assert len(err) == 1 and "--label-fraction" in err[0]
+        assert len(err) == 1 and option in err[0]
         assert not (tmp_path / "x.npz").exists()
 
 
@@ -329,13 +336,8 @@ def test_calibrate_flat_fraction(presses, presses_npz, tmp_path, capsys):
         mm_per_px=MM, model="lut", flat_fraction=0.2)
     np.testing.assert_array_equal(DepthReconstructor(cli, reference=ref)(frames[1]),
                                   DepthReconstructor(api, reference=ref)(frames[1]))
-    for bad in ("0", "1.5", "nan"):
-        assert main(["optics", "calibrate", str(presses_npz), "--ball-radius-mm", "1",
-                     "--mm-per-px", str(MM), "--model", "lut", "--flat-fraction", bad,
-                     "--out", str(tmp_path / "x.npz")]) == 2
-        err = errors(capsys.readouterr().err)
-        assert len(err) == 1 and "--flat-fraction" in err[0]
-        assert not (tmp_path / "x.npz").exists()
+    _refused_before_any_work("--flat-fraction", ("0", "1.5", "nan"), presses_npz, tmp_path,
+                             capsys)
 
 def test_reconstruct_missing_folder(calibration, tmp_path, capsys):
     missing = tmp_path / "nowhere"
