@@ -269,6 +269,14 @@ def test_reconstruct_boundary_and_engine(calibration, presses, tmp_path, capsys)
     assert np.abs(maps["dirichlet"] - neumann).max() > 1e-3       # a different solve
     # contact: zero outside the contact region
     assert np.count_nonzero(maps["contact"]) < 0.5 * maps["contact"].size
+    # --zero-background: the API's map, the gradients outside the contact set to zero
+    out = tmp_path / "zero_background"
+    assert main(["reconstruct", str(src), "--calibration", str(calibration), "--out",
+                 str(out), "--no-images", "--no-progress", "--zero-background"]) == 0
+    zb = np.load(out / "press_3_height.npy")
+    np.testing.assert_array_equal(
+        zb, DepthReconstructor(cal, reference=ref, zero_background=True)(frame))
+    assert np.abs(zb - neumann).max() > 1e-3
     # a LUT has no network for onnx; contradictory options name both
     for opts, words in ((["--engine", "onnx"], "engine='table'"),
                         (["--level", "contact", "--boundary", "dirichlet"], "--boundary dirichlet"),

@@ -62,21 +62,66 @@ def test_fewer_flat_samples_read_gentle_slopes_in_full_and_pass_noise():
     assert read[0.003][1] > 1.8 * read[0.03][1]
 
 
-def test_fewer_flat_samples_tilt_real_flat_gel(taxim_presses):
+@pytest.fixture(scope="module")
+def real_lut_few_flat(taxim_presses):
+    """LUT on the even taxim presses with their annotated circles, 0.3 % flat samples."""
+    ps = taxim_presses
+    return PhotometricCalibration.from_ball_presses(
+        ps.reference, ps.frames[0::2], ps.centers_px[0::2], ps.radii_px[0::2],
+        ball_radius_mm=2.0, mm_per_px=0.0295, model="lut", flat_fraction=0.003)
+
+
+def test_fewer_flat_samples_tilt_real_flat_gel(taxim_presses, taxim_lut, real_lut_few_flat):
     """taxim's real GelSight presses, LUT on the even ones with their annotated circles:
     the flat gel beyond twice the contact radius of the odd ones reads 0.63 deg of
     tilt with 3 % flat samples and 1.67 deg with 0.3 % (measured)."""
     ps = taxim_presses
     tr = np.arange(len(ps.frames)) % 2 == 0
     tilt = {}
-    for ff in (0.03, 0.003):
-        cal = PhotometricCalibration.from_ball_presses(
-            ps.reference, ps.frames[tr], ps.centers_px[tr], ps.radii_px[tr],
-            ball_radius_mm=2.0, mm_per_px=0.0295, model="lut", flat_fraction=ff)
+    for ff, cal in ((0.03, taxim_lut), (0.003, real_lut_few_flat)):
+        assert cal.provenance["flat_fraction"] == ff
         _, tilt[ff] = _centre_slope_and_background_tilt(
             cal, ps.frames[~tr], ps.centers_px[~tr], ps.radii_px[~tr], 2.0 / 0.0295)
     assert tilt[0.03] < 1.0
     assert tilt[0.003] > 1.5 * tilt[0.03]
+
+
+def test_zero_background_keeps_the_flat_gel_noise_out_of_real_heights(taxim_presses,
+                                                                      real_lut_few_flat):
+    """The odd real presses, read by the LUT with 0.3 % flat samples, against the ball
+    (radius 2.0 mm) over the annotated circles: with ``zero_background`` the flat gel
+    beyond twice the contact radius falls from 80 to 39 um rms (median level; measured),
+    while the cap above the contact edge stays within 3 % of the ball's (median over
+    presses: -1.2 % without, -1.4 % with) and the gradients are untouched."""
+    ps = taxim_presses
+    cal = real_lut_few_flat
+    tr = np.arange(len(ps.frames)) % 2 == 0
+    h, w = cal.shape
+    yy, xx = np.mgrid[0:h, 0:w]
+    ball_px = 2.0 / 0.0295
+    plain = DepthReconstructor(cal)
+    zero = DepthReconstructor(cal, zero_background=True)
+    rms, deepest = {False: [], True: []}, {False: [], True: []}
+    for f, c, r in zip(ps.frames[~tr], ps.centers_px[~tr], ps.radii_px[~tr], strict=True):
+        d = np.hypot(xx - c[0], yy - c[1])
+        far, ring = d > 2 * r, np.abs(d - r) <= 1
+        cap = (ball_px - np.sqrt(ball_px**2 - r**2)) * 0.0295            # mm, the ball's
+        for zb, rec in ((False, plain), (True, zero)):
+            hp = rec(f)
+            rms[zb].append(np.sqrt(np.mean((hp[far] - np.median(hp[far])) ** 2)))
+            deepest[zb].append((hp[d <= r].max() - np.median(hp[ring])) / cap - 1)
+    assert np.median(rms[True]) < 0.6 * np.median(rms[False])
+    for zb in (False, True):
+        assert abs(np.median(deepest[zb])) < 0.03
+    np.testing.assert_array_equal(zero.gradients(ps.frames[1])[0],
+                                  plain.gradients(ps.frames[1])[0])
+
+
+def test_zero_background_reads_the_reference_as_exactly_flat(real_lut_few_flat):
+    """No colour change anywhere: no contact region, every gradient zeroed, height 0."""
+    cal = real_lut_few_flat
+    assert np.sqrt(np.mean(DepthReconstructor(cal)(cal.reference) ** 2)) > 1e-3
+    assert not np.any(DepthReconstructor(cal, zero_background=True)(cal.reference))
 
 
 @pytest.mark.parametrize("bad", [0.0, -0.1, 1.5, float("nan")])

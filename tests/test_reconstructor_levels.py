@@ -31,7 +31,8 @@ def test_far_field_level_removes_a_bowl_outside_the_contact():
     x, y = cols / w - 0.5, rows / h - 0.5
     bowl = 3.0 * x**2 + 2.0 * y**2 - 1.5 * x * y + 0.7 * x + 0.4       # px of height
     cap = np.where(disc, 10.0 * (1 - (r / 60) ** 2), 0.0)
-    levelled = recon._level_far_field((bowl + cap).astype(np.float32), frame)
+    levelled = recon._level_far_field((bowl + cap).astype(np.float32),
+                                      recon._contact_small(frame))
     far = r > 80
     assert np.abs(levelled[far]).max() < 1e-3
     np.testing.assert_allclose(levelled[disc], cap[disc], atol=1e-3)

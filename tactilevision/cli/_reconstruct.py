@@ -57,6 +57,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    "slower); a LUT calibration runs only as 'table'")
     p.add_argument("--flat-reference", action="store_true",
                    help="subtract the optics model's gradient on the reference")
+    p.add_argument("--zero-background", action="store_true",
+                   help="zero the gradients outside each frame's contact region before "
+                   "integrating, so the flat gel's noise stays out of the height map; meant "
+                   "for calibrations made with a small --flat-fraction such as 0.003 (no "
+                   "effect with --boundary contact)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     add_overwrite_argument(p)
     p.set_defaults(func=run)
@@ -98,7 +103,8 @@ def run(args: argparse.Namespace) -> int:
     reference = read_reference(ref_path, cal.shape) if ref_path else None
     recon = DepthReconstructor(cal, reference="calibration" if reference is None else reference,
                                boundary=boundary, level=level, engine=args.engine,
-                               flat_reference=args.flat_reference)
+                               flat_reference=args.flat_reference,
+                               zero_background=args.zero_background)
     credit = cal.provenance.get("credit")
     rows, skipped = [], []
     # written whole into a hidden folder in out, moved into place at the end (Ctrl-C: nothing)

@@ -84,6 +84,19 @@ class DepthReconstructor:
         its own bias (a position-aware network's offsets, a LUT's cell
         centre). Without it that bias integrates to a bowl of about 0.1 mm
         rms over the shipped GelSight calibration's frames.
+    zero_background : bool, default False
+        Before integrating, set the gradients outside the frame's contact
+        region to zero (the region of ``level='far_field'``: colour change
+        above the frame's median plus 8 robust sd on a quarter-resolution
+        copy, grown 12 px, holes filled), so the flat gel's noise does not
+        integrate into the height map. :meth:`gradients` is left as read.
+        Kept off when the contact covers over three quarters of the frame;
+        no effect with ``boundary='contact'``, which already zeroes the
+        height there. Meant for calibrations with fewer flat samples
+        (``PhotometricCalibration.from_ball_presses(flat_fraction=0.003)``),
+        which read gentle slopes in full but also read the flat gel's noise
+        (``docs/guide/optics.md``, "Flat samples"); about 2 ms per
+        640 x 480 frame, shared with ``level='far_field'``.
 
     Notes
     -----
@@ -104,7 +117,7 @@ class DepthReconstructor:
                  boundary: Boundary = "neumann", table_bins: int = 32,
                  threads: int = 1, flat_reference: bool = False,
                  level: Literal["median", "far_field"] = "median",
-                 level_degree: int = 4) -> None:
+                 level_degree: int = 4, zero_background: bool = False) -> None:
         if engine not in ("table", "onnx"):
             raise InputError(f"engine must be 'table' or 'onnx', got {engine!r}")
         if boundary not in ("neumann", "dirichlet", "contact"):
@@ -116,6 +129,7 @@ class DepthReconstructor:
         if not 0 <= int(level_degree) <= 8:
             raise InputError(f"level_degree must be 0 to 8, got {level_degree!r}")
         self.level, self.level_degree = level, int(level_degree)
+        self.zero_background = bool(zero_background)
         self._ref_inv_small: np.ndarray | None = None
         self._level_basis: tuple | None = None
         self.calibration = calibration
@@ -169,6 +183,7 @@ class DepthReconstructor:
         k = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (13, 13))
         self._dilate = k
         self._open = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (5, 5))
+        self._grow = cv2.getStructuringElement(cv2.MORPH_CROSS, (3, 3))
 
     # ---------------------------------------------------------------- pieces
     def _one(self, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -194,27 +209,49 @@ class DepthReconstructor:
             z = integrate_poisson_masked(gx, gy, self.contact_mask(frame, threshold="frame",
                                                                    fill_holes=True))
         else:
+            far_field = self.level == "far_field" and self.boundary == "neumann"
+            grown = self._contact_small(frame) if far_field or self.zero_background else None
+            if self.zero_background:
+                keep = self._hull(grown)
+                if keep.mean() <= 0.75:        # else the contact covers the frame: keep all
+                    h, w = self.shape
+                    keep = cv2.resize(keep, (w, h), interpolation=cv2.INTER_NEAREST).view(bool)
+                    gx, gy = gx * keep, gy * keep
             z = self._solver(gx, gy)
-            if self.level == "far_field" and self.boundary == "neumann":
-                z = self._level_far_field(z, frame)
+            if far_field:
+                z = self._level_far_field(z, grown)
         z *= self._mm
         return z
 
-    def _level_far_field(self, z: np.ndarray, frame: np.ndarray) -> np.ndarray:
-        """Subtract the polynomial surface fitted to z outside the contact region."""
-        from scipy import ndimage as ndi
-
-        step = 4
-        # the contact region on every 4th pixel (the full-resolution contact_mask costs 10
-        # times the Poisson solve): colour change above the frame's median + 8 robust sd,
-        # grown by 3 samples (12 px), holes filled (a flat face changes no colour)
+    def _contact_small(self, frame: np.ndarray) -> np.ndarray:
+        """The frame's contact region on the quarter-resolution grid of z[::4, ::4]: colour
+        change above the frame's median + 8 robust sd, grown by 3 samples (12 px); uint8."""
+        # every 4th pixel: the full-resolution contact_mask costs 10 times the Poisson solve
         small = cv2.resize(frame, self._small_size, interpolation=cv2.INTER_AREA)
         mag = channel_magnitude(small.astype(np.float32) * self._ref_inv_small - 1.0)
         med = float(np.median(mag))
         thr = med + 8.0 * 1.4826 * float(np.median(np.abs(mag - med))) + 1e-3
-        inside = ndi.binary_fill_holes(ndi.binary_dilation(mag > thr, iterations=3))
-        free = ~inside
+        return cv2.dilate((mag > thr).view(np.uint8), self._grow, iterations=3)
+
+    @staticmethod
+    def _hull(grown: np.ndarray) -> np.ndarray:
+        """Each region of `grown` filled to its convex hull (uint8): a ball's contact ring,
+        seen above the noise only where steep and so often open on its gentle side, is
+        closed over its middle, which ``binary_fill_holes`` leaves out."""
+        contours, _ = cv2.findContours(grown, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+        out = np.zeros_like(grown)
+        for c in contours:
+            cv2.fillPoly(out, [cv2.convexHull(c)], 1)
+        return out
+
+    def _level_far_field(self, z: np.ndarray, grown: np.ndarray) -> np.ndarray:
+        """Subtract the polynomial surface fitted to z outside the contact region `grown`,
+        its holes filled (a flat face changes no colour)."""
+        from scipy import ndimage as ndi
+
+        step = 4
         d = self.level_degree
+        free = ~ndi.binary_fill_holes(grown)
         if free.mean() < 0.25:                 # the contact covers the frame: keep the median
             return z
         if self._level_basis is None:
