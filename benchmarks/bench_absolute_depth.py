@@ -2,7 +2,7 @@
 
     python benchmarks/bench_absolute_depth.py [--boundary {neumann,dirichlet,contact}]
         [--flat-reference] [--datasets taxim,fem,gelsight,gelslim] [--json PATH]
-        [--taxim-no-shadow] [--fem-presses N] [--level far_field] [--colour-gate K]
+        [--taxim-no-shadow] [--fem-presses N] [--level far_field] [--zero-background]
 
 The project's shape metrics (:func:`tactilevision.optics.evaluate_ball_presses`)
 remove the unknown offset between a reconstruction and the truth; this
@@ -547,41 +547,6 @@ def _bench_gelslim(make: Maker, *, log) -> dict:
 # ------------------------------------------------------------------ run
 
 
-class ColourGated(DepthReconstructor):
-    """Experiment (not in the library): no colour change, no slope.
-
-    Photometric stereo reads a slope only through a colour change, so where the
-    frame does not differ from the reference by more than the noise the
-    gradient is set to zero before the Poisson integration: the model's bias
-    and the lighting's drift there no longer integrate into a bowl. The region
-    is the far-field level's contact region (colour change over the frame's
-    median plus `k_sigma` robust sd on a quarter-resolution copy, grown 12 px,
-    holes filled), upsampled; frames whose region covers over three quarters of
-    the image are left as they are.
-    """
-
-    def __init__(self, *args, k_sigma: float = 8.0, **kwargs) -> None:
-        super().__init__(*args, **kwargs)
-        self.k_sigma = float(k_sigma)
-
-    def _one(self, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        import cv2
-        from scipy import ndimage as ndi
-
-        gx, gy = super()._one(frame)
-        small = cv2.resize(frame, self._small_size, interpolation=cv2.INTER_AREA)
-        mag = np.abs(small.astype(np.float32) * self._ref_inv_small - 1.0).max(axis=-1)
-        med = float(np.median(mag))
-        thr = med + self.k_sigma * 1.4826 * float(np.median(np.abs(mag - med))) + 1e-3
-        inside = ndi.binary_fill_holes(ndi.binary_dilation(mag > thr, iterations=3))
-        if inside.mean() > 0.75:
-            return gx, gy
-        full = cv2.resize(inside.astype(np.uint8), (self.shape[1], self.shape[0]),
-                          interpolation=cv2.INTER_NEAREST).astype(bool)
-        return (np.where(full, gx, 0.0).astype(np.float32),
-                np.where(full, gy, 0.0).astype(np.float32))
-
-
 def run(make_reconstructor: Maker = default_reconstructor,
         datasets: Sequence[str] = DATASETS, *, taxim_shadow: bool = True,
         fem_presses: int = 10, taxim_optics: int = 0, taxim_optics_circles: str = "geometric",
@@ -758,10 +723,9 @@ def main(argv: list[str] | None = None) -> int:
                     help="DepthReconstructor's zero level (default median)")
     ap.add_argument("--level-degree", type=int, default=4,
                     help="degree of the far-field surface (default 4)")
-    ap.add_argument("--colour-gate", type=float, default=None, metavar="K",
-                    help="experiment: zero the gradients where the colour change is under "
-                         "the frame's median + K robust sd (quarter resolution, grown 12 px, "
-                         "holes filled) before integrating (ColourGated)")
+    ap.add_argument("--zero-background", action="store_true",
+                    help="DepthReconstructor(zero_background=True): the gradients outside "
+                         "each frame's contact region set to zero before integrating")
     ap.add_argument("--json", type=Path, default=None, help="also write the result as JSON")
     ap.add_argument("--taxim-no-shadow", action="store_true", help="Taxim with_shadow=False")
     ap.add_argument("--fem-presses", type=int, default=10)
@@ -783,10 +747,10 @@ def main(argv: list[str] | None = None) -> int:
         kwargs["flat_reference"] = True
     if a.level != "median":
         kwargs.update(level=a.level, level_degree=a.level_degree)
+    if a.zero_background:
+        kwargs["zero_background"] = True
 
     def make(cal: PhotometricCalibration, ref: np.ndarray) -> DepthReconstructor:
-        if a.colour_gate is not None:
-            return ColourGated(cal, reference=ref, k_sigma=a.colour_gate, **kwargs)
         return DepthReconstructor(cal, reference=ref, **kwargs)
 
     res = run(make, names, taxim_shadow=not a.taxim_no_shadow, fem_presses=a.fem_presses,
@@ -795,9 +759,7 @@ def main(argv: list[str] | None = None) -> int:
                                *(sys.argv[1:] if argv is None else argv)])
     res["boundary"] = a.boundary
     call = ", ".join(f"{k}={v!r}" for k, v in kwargs.items())
-    res["reconstructor"] = (f"ColourGated(cal, reference=ref, k_sigma={a.colour_gate}, {call})"
-                            if a.colour_gate is not None
-                            else f"DepthReconstructor(cal, reference=ref, {call})")
+    res["reconstructor"] = f"DepthReconstructor(cal, reference=ref, {call})"
     print(f"Command: {res['command']}")
     print(f"Reconstructor: {res['reconstructor']}\n")
     print(format_report(res))

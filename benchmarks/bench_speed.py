@@ -60,6 +60,8 @@ def main() -> int:
             ("MLP position-aware, table", DepthReconstructor(mlp), 15),
             ("MLP position-aware, table, level='far_field'",
              DepthReconstructor(mlp, level="far_field"), 15),
+            ("MLP position-aware, table, zero_background=True",
+             DepthReconstructor(mlp, zero_background=True), 15),
             ("MLP position-aware, onnx", DepthReconstructor(mlp, engine="onnx"), 2)]
     for name, recon, rounds in rows:
         ms = per_frame_ms(recon, frames, rounds)

@@ -86,17 +86,21 @@ class DepthReconstructor:
         rms over the shipped GelSight calibration's frames.
     zero_background : bool, default False
         Before integrating, set the gradients outside the frame's contact
-        region to zero (the region of ``level='far_field'``: colour change
-        above the frame's median plus 8 robust sd on a quarter-resolution
-        copy, grown 12 px, holes filled), so the flat gel's noise does not
-        integrate into the height map. :meth:`gradients` is left as read.
-        Kept off when the contact covers over three quarters of the frame;
-        no effect with ``boundary='contact'``, which already zeroes the
-        height there. Meant for calibrations with fewer flat samples
+        region to zero, so the flat gel's noise does not integrate into the
+        height map. The region: colour change above the frame's median plus
+        8 robust sd on a quarter-resolution copy, grown 12 px (as for
+        ``level='far_field'``), each region filled to its convex hull (a
+        ball's ring, above the noise only where steep, is often open on its
+        gentle side). Right while the contact covers under half of the
+        frame (the median measures the noise); kept off when the region
+        covers over three quarters of it. :meth:`gradients` is left as
+        read; no effect with ``boundary='contact'``, which zeroes the height
+        there. Meant for calibrations with fewer flat samples
         (``PhotometricCalibration.from_ball_presses(flat_fraction=0.003)``),
         which read gentle slopes in full but also read the flat gel's noise
-        (``docs/guide/optics.md``, "Flat samples"); about 2 ms per
-        640 x 480 frame, shared with ``level='far_field'``.
+        (``docs/guide/optics.md``, "Flat samples"). About 3 ms per
+        640 x 480 frame on one core (14.1 against 11.3 ms with the shipped
+        GelSight network, ``benchmarks/bench_speed.py``, 2026-11-23).
 
     Notes
     -----
