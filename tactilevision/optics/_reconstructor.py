@@ -99,8 +99,9 @@ class DepthReconstructor:
         (``PhotometricCalibration.from_ball_presses(flat_fraction=0.003)``),
         which read gentle slopes in full but also read the flat gel's noise
         (``docs/guide/optics.md``, "Flat samples"). About 3 ms per
-        640 x 480 frame on one core (14.1 against 11.3 ms with the shipped
-        GelSight network, ``benchmarks/bench_speed.py``, 2026-11-23).
+        640 x 480 frame on one core (14.1 against 11.3 ms without it in the
+        same run, shipped GelSight network, ``benchmarks/bench_speed.py``,
+        2-core AMD EPYC, 2026-11-23).
 
     Notes
     -----
