@@ -100,6 +100,11 @@ class SessionCalibration:
         the F/T window's mean of the elastic force behind the log
         (:func:`~tactilevision.mechanics.elastic_force`), the bevel's band
         not yet taken off; empty otherwise. The fit uses it.
+    force_fit_n : (N,) float64 ndarray
+        The force of each certified press exactly as the fit used it, N: the
+        F/T window's mean (``force0_n`` for a relaxing gel) less the bevel's
+        band; the figures and the report show these (empty when nothing was
+        fitted).
     """
 
     session: Session
@@ -117,6 +122,7 @@ class SessionCalibration:
     relaxation: RelaxationFit | None = None
     moduli: dict | None = None
     force0_n: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    force_fit_n: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     def _bevel(self) -> np.ndarray:
         n = len(self.certification.presses)
@@ -472,7 +478,8 @@ def calibrate_session(session: Session | str | Path, *, depth_rule: str = "auto"
                               seconds=time.perf_counter() - t0, warnings=notes,
                               depth_std_mm=std, bulge_mm=bulge, bevel_force_n=bevel_n,
                               relaxation=relax, moduli=moduli,
-                              force0_n=force0 if force0 is not None else np.zeros(0))
+                              force0_n=force0 if force0 is not None else np.zeros(0),
+                              force_fit_n=force - bevel_n)
 
 
 def _vernier_depths(w0: np.ndarray, closure: np.ndarray, cfg, nu: float

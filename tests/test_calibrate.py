@@ -13,6 +13,7 @@ import json
 import shutil
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from tactilevision import InputError, calibrate_session
@@ -22,14 +23,49 @@ from tactilevision.io import COLUMN_ORDER, read_measurements
 SAMPLE = Path(__file__).resolve().parents[1] / "sample_frames" / "gelsight_session"
 
 
+#: What the report's figures plotted: (axes, x, y) of every errorbar call (the sample run).
+PLOTTED: list = []
+
+
 @pytest.fixture(scope="module")
 def sample_run(tmp_path_factory):
+    from matplotlib.axes import Axes
+
     out = tmp_path_factory.mktemp("calibrate")
-    status = main(["calibrate", str(SAMPLE), "--out", str(out / "report"), "--json",
-                   str(out / "result.json"), "--no-progress"])
+    errorbar = Axes.errorbar
+
+    def record(ax, x, y, *args, **kwargs):
+        PLOTTED.append((ax, np.array(x, float), np.array(y, float)))
+        return errorbar(ax, x, y, *args, **kwargs)
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(Axes, "errorbar", record)
+        status = main(["calibrate", str(SAMPLE), "--out", str(out / "report"), "--json",
+                       str(out / "result.json"), "--no-progress"])
     assert status == 0
     truth = json.loads((SAMPLE / "truth.json").read_text())
     return out, truth
+
+
+def test_figures_show_the_forces_the_fit_used(sample_run):
+    """The residual plot's points are the fit's residuals (issue 39: it showed the F/T
+    window's mean before the bevel's band was taken off, nearly every point above zero):
+    its mean residual equals the fit's within 1 mN, and the force-depth plot shows the
+    table's force_n, the force the fit used."""
+    out, _ = sample_run
+    fit = json.loads((out / "report" / "fit.json").read_text())
+    table = read_measurements(out / "report" / "measurements.csv")
+    w, p = table.columns["depth_mm"], table.columns["force_n"]
+    model = w * fit["c_n_per_mm"] * (1 + fit["beta"] * w / table.thickness_mm)
+    fit_res = p - model
+    assert np.sqrt(np.mean(fit_res ** 2)) == pytest.approx(fit["rmse_n"], rel=1e-3)
+    (res,) = [y for ax, _, y in PLOTTED if ax.get_ylabel() == "P - model (N)"]
+    assert abs(np.mean(res) - np.mean(fit_res)) < 1e-3
+    assert np.sqrt(np.mean(res ** 2)) == pytest.approx(fit["rmse_n"], rel=1e-3)
+    shown = np.concatenate([y for ax, _, y in PLOTTED if ax.get_ylabel().startswith("force P")])
+    assert np.sort(shown) == pytest.approx(np.sort(p), abs=1e-5)   # the table has 6 decimals
+    html = (out / "report" / "report.html").read_text()
+    assert "force P fitted (N)" in html and "less the bevel" in html
 
 
 def test_sample_session_is_small_and_complete():
@@ -82,7 +118,6 @@ def test_certified_depths_and_forces(sample_run):
     error within 2 um and sd under 3 um (the issue's targets), the stated uncertainties
     honest to a factor of two; forces within 0.01 N (the F/T window's own scatter is
     1/80 N / sqrt(200) = 0.9 mN)."""
-    import numpy as np
 
     out, truth = sample_run
     tp = {p["press"]: p for p in truth["presses"]}

@@ -9,7 +9,7 @@ import numpy as np
 
 from ._depth import _scale_bar
 
-__all__ = ["bevel_panels", "calibration_figures", "write_calibration_report"]
+__all__ = ["bevel_panels", "calibration_figures", "fitted_forces", "write_calibration_report"]
 
 
 def _plt():
@@ -49,6 +49,37 @@ def _band(fit, w: np.ndarray, z: float = 1.96) -> np.ndarray:
     return z * np.sqrt(np.maximum(var, 0.0))
 
 
+def fitted_forces(cal) -> tuple[np.ndarray, str]:
+    """The forces a session's fit used, and what they are, for the figures' axes.
+
+    Parameters
+    ----------
+    cal : SessionCalibration
+
+    Returns
+    -------
+    force_n : (N,) float64 ndarray
+        Each certified press's force as the fit used it, N
+        (:attr:`~tactilevision.SessionCalibration.force_fit_n`; the F/T
+        window's mean when a calibration carries none).
+    what : str
+        What was taken off the F/T window's mean, for an axis label.
+    """
+    ps = cal.certification.presses
+    f = np.asarray(getattr(cal, "force_fit_n", np.zeros(0)), np.float64)
+    if f.shape != (len(ps),):
+        return np.array([q.force_n for q in ps], np.float64), "F/T window mean"
+    parts = []
+    if len(getattr(cal, "force0_n", ())) == len(ps):
+        parts.append("at the instant of loading")
+    if np.any(np.asarray(cal.bevel_force_n) != 0):
+        parts.append("less the bevel's band")
+    zero = getattr(cal, "ft_zero", None)
+    if zero is not None and zero.subtracted_n:
+        parts.append("less the F/T zero")
+    return f, "as fitted" + (": " + ", ".join(parts) if parts else "")
+
+
 def calibration_figures(cal, out_dir: str | Path, *, reconstructor=None, dpi: int = 100
                         ) -> dict[str, Path]:
     """Write the report's figures for a :class:`~tactilevision.SessionCalibration`.
@@ -81,7 +112,7 @@ def calibration_figures(cal, out_dir: str | Path, *, reconstructor=None, dpi: in
     fit = cal.fit
     ps = cal.certification.presses
     w = cal.depth_mm
-    p = np.array([q.force_n for q in ps])
+    p, what = fitted_forces(cal)
     ind = np.array([q.indenter for q in ps])
     h = fit.thickness_mm
     ok = np.isfinite(fit.c_n_per_mm) and np.isfinite(fit.beta)
@@ -98,7 +129,7 @@ def calibration_figures(cal, out_dir: str | Path, *, reconstructor=None, dpi: in
         ax.plot(ww, ww * _fit_line(fit, ww), "-", color="0.3",
                 label=f"eq. (5): c = {fit.c_n_per_mm:.3f} N/mm, beta = {fit.beta:.3f}")
     ax.set_xlabel("certified depth w (mm; bars: 2 sd)")
-    ax.set_ylabel("force P (N)")
+    ax.set_ylabel(f"force P (N), {what}", fontsize=8)
     ax.legend(fontsize=7)
     ax.set_title("force against depth")
     paths["force_depth"] = out / "force_depth.png"
@@ -115,7 +146,7 @@ def calibration_figures(cal, out_dir: str | Path, *, reconstructor=None, dpi: in
         ax.fill_between(xx / h, line - band, line + band, color="C0", alpha=0.2,
                         label=f"{fit.confidence:.0%} band of the line")
     ax.set_xlabel("w / h")
-    ax.set_ylabel("P / w (N/mm)")
+    ax.set_ylabel(f"P / w (N/mm), P {what}", fontsize=8)
     txt = (f"E = {fit.E_mpa:.4f} MPa [{fit.E_ci95_mpa[0]:.4f}, {fit.E_ci95_mpa[1]:.4f}]\n"
            f"nu = {fit.nu:.4f} [{fit.nu_ci95[0]:.4f}, {fit.nu_ci95[1]:.4f}]"
            if np.isfinite(fit.E_mpa) else "E, nu out of the table")
@@ -134,6 +165,9 @@ def calibration_figures(cal, out_dir: str | Path, *, reconstructor=None, dpi: in
     a1.axhline(0, color="0.4", lw=0.8)
     a1.set_xlabel("certified depth w (mm)")
     a1.set_ylabel("P - model (N)")
+    a1.text(0.01, 0.99, f"P {what}; mean {1e3 * float(np.mean(res)):+.2f} mN, rms "
+            f"{1e3 * float(np.sqrt(np.mean(res ** 2))):.2f} mN", transform=a1.transAxes,
+            va="top", fontsize=7)
     a1.set_title("residuals (bars: 2 sd of the window mean)", fontsize=9)
     t = np.array([q.time_s for q in ps])
     a2.plot(t, res, "o", ms=3, color="C2")
@@ -349,14 +383,20 @@ def write_calibration_report(cal, out_dir: str | Path, figures: dict[str, Path])
         sd = (cal.depth_std_mm if len(cal.depth_std_mm) == len(c.presses)
               else np.zeros(len(c.presses)))
         bulge = cal.bulge_mm if len(cal.bulge_mm) == len(c.presses) else np.zeros(len(c.presses))
+        fitted, what = (fitted_forces(cal) if fit is not None
+                        else (np.full(len(c.presses), np.nan), ""))
         trs = "".join(
             f"<tr><td>{q.press}</td><td>{q.indenter}</td><td>{q.w0_mm:g}</td>"
             f"<td>{d:.5f}</td><td>{1e3 * u:.2f}</td><td>{1e3 * (d - q.w0_mm):+.2f}</td>"
-            f"<td>{1e3 * b:.2f}</td><td>{q.force_n:.4f}</td><td>{q.bevel_score:.0f}</td></tr>"
-            for q, d, u, b in zip(c.presses, cal.depth_mm, sd, bulge, strict=True))
-        table = ("<h2>Certified presses</h2><table><tr><th>press</th><th>indenter</th>"
+            f"<td>{1e3 * b:.2f}</td><td>{q.force_n:.4f}</td><td>{f:.4f}</td>"
+            f"<td>{q.bevel_score:.0f}</td></tr>"
+            for q, d, u, b, f in zip(c.presses, cal.depth_mm, sd, bulge, fitted, strict=True))
+        table = ("<h2>Certified presses</h2>"
+                 + (f"<p>force P: {e(what)}.</p>" if what else "")
+                 + "<table><tr><th>press</th><th>indenter</th>"
                  "<th>w0 (mm)</th><th>depth (mm)</th><th>sd (um)</th><th>overshoot (um)</th>"
-                 "<th>bulge (um)</th><th>force (N)</th><th>bevel SNR</th></tr>"
+                 "<th>bulge (um)</th><th>F/T window mean (N)</th><th>force P fitted (N)</th>"
+                 "<th>bevel SNR</th></tr>"
                  f"{trs}</table>")
     figs = _figures_html(figures)
     page = _html_head(f"tactilevision calibrate: {cal.session.path}") + f"""\
