@@ -89,7 +89,7 @@ def evaluate(folder: Path, name: str) -> dict:
           + (", ".join(f"{r.press} {r.reason}" for r in cert.rejected) or "none"))
     for r in cert.rejected:
         p = tp[r.press]
-        if r.reason == "bevel never seen" and "bevel_reach_mm" in p:
+        if r.reason in ("bevel never seen", "bevel band unsteady") and "bevel_reach_mm" in p:
             reach = 0.5 * sum(p["bevel_reach_mm"]) / truth["mm_per_px"]
             print(f"    press {r.press} unseen: w0 {p['w0_mm']} mm, overshoot "
                   f"{1e3 * p['overshoot_mm']:.1f} um, true band half-width {reach:.1f} px")

@@ -209,6 +209,15 @@ def test_rejections_have_reasons(sample_run):
     edge = [p["press"] for p in truth["presses"] if p["edge"]]
     assert all(reasons.get(i) == "misaligned" for i in mis) and mis
     assert all(reasons.get(i) == "footprint cut by the pad edge" for i in edge) and edge
+    # a band seen above the threshold whose frames disagree on its width: the deciding
+    # reason comes first, and the ratio that passed is not presented as the failure
+    for r in res["rejected"]:
+        if r["reason"] == "bevel band unsteady":
+            assert r["detail"].startswith("the frames of the hold disagree on the width")
+            assert f"{r['bevel_snr']:.1f}, passes the threshold" in r["detail"]
+        if r["reason"] == "bevel never seen":
+            ratio = float(r["detail"].split("signal-to-noise ratio ")[1].split(",")[0])
+            assert ratio < float(r["detail"].split("threshold ")[1].split(";")[0].rstrip(")"))
     with open(out / "report" / "rejected.csv") as fh:
         assert next(csv.reader(fh)) == ["press", "reason", "detail", "t_frame_s", "bevel_snr"]
     with open(out / "report" / "measurements.csv") as fh:

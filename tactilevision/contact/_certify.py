@@ -951,9 +951,20 @@ def _vernier_onset(session, geom: BevelGeometry, centre: tuple[float, float], s:
     agree = [abs(r.half_width_px - plain.half_width_px) <= max(2.5 * r.half_width_std_px, 2.5)
              for r in per]
     consistent = float(np.mean(agree)) >= 0.75       # one noisy frame of 18 (90 fps) may stray
-    if joint.snr < VERNIER_SNR or not consistent:
-        why = "" if consistent else "; the frames of the hold disagree on its width"
+    if joint.snr < VERNIER_SNR:
+        why = "" if consistent else "; the frames of the hold also disagree on its width"
         return _never_seen(geom, joint.snr, onset, why)
+    if not consistent:
+        # seen, but not steady: the deciding reason first, the ratio that passed after it
+        return Rejection(
+            press=-1, reason="bevel band unsteady",
+            detail=f"the frames of the hold disagree on the width of the band on the bevel "
+                   f"{geom.offset_mm:g} mm from the indenter at {geom.direction_deg:g} deg: "
+                   f"{int(np.sum(agree))} of {len(agree)} frames agree with their joint reading "
+                   f"({plain.half_width_px:.1f} px half-width), three in four are needed; the "
+                   f"band's signal-to-noise ratio, {joint.snr:.1f}, passes the threshold "
+                   f"{VERNIER_SNR:g}",
+            t_frame_s=float("nan"), frame=onset, bevel_score=joint.snr)
     return t_cert, onset, tuple(window), [profiles[i] for i in window], joint.snr, joint
 
 
