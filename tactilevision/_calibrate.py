@@ -29,7 +29,7 @@ import math
 import time
 import warnings
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -38,10 +38,12 @@ from ._checks import InputError
 from .contact import (
     BevelGeometry,
     Certification,
+    ForceZero,
     bevel_force,
     bulge_at,
     certified_depths,
     certify_session,
+    force_zero,
 )
 from .io import Session, read_session
 from .mechanics import (
@@ -105,6 +107,11 @@ class SessionCalibration:
         F/T window's mean (``force0_n`` for a relaxing gel) less the bevel's
         band; the figures and the report show these (empty when nothing was
         fitted).
+    ft_zero : ForceZero or None
+        The F/T's zero read between the presses (:func:`~tactilevision.contact.
+        force_zero`) and what was taken off the forces (``ft_zero.subtracted``);
+        None when no settled rest was found. ``session`` then holds the log
+        with it taken off.
     """
 
     session: Session
@@ -123,6 +130,12 @@ class SessionCalibration:
     moduli: dict | None = None
     force0_n: np.ndarray = field(default_factory=lambda: np.zeros(0))
     force_fit_n: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    ft_zero: ForceZero | None = None
+
+    def _window_times(self) -> np.ndarray:
+        """The middle of each certified press's force window, F/T clock, s."""
+        off = self.certification.clock_offset_s
+        return np.array([p.t_frame_s + off + p.hold_s for p in self.certification.presses])
 
     def _bevel(self) -> np.ndarray:
         n = len(self.certification.presses)
@@ -164,8 +177,12 @@ class SessionCalibration:
             bevel_force_n, force_std_n, force_sem_n, fx_n, fy_n, time_s, hold_s, wait_s, x_mm,
             y_mm`` (``overshoot_mm``: certified depth minus the indenter's w0;
             ``force_n``: the F/T window's mean less ``bevel_force_n``, the
-            bevel's own band); for a relaxing gel also ``force0_n``, the
-            force at the instant of loading, less the bevel's.
+            bevel's own band, and less ``ft_zero_n``, the F/T's zero read
+            between the presses); for a relaxing gel also ``force0_n``, the
+            force at the instant of loading, less the bevel's; with a zero
+            that drifts and was taken off as a constant, ``ft_drift_n``: the
+            zero at the press less that constant, N (the drift left in
+            ``force_n``).
         """
         ps = self.certification.presses
         col = {
@@ -184,6 +201,12 @@ class SessionCalibration:
         }
         if len(self.force0_n) == len(ps):
             col["force0_n"] = list(self.force0_n - self._bevel())
+        z = self.ft_zero
+        if z is not None:
+            t = self._window_times()
+            col["ft_zero_n"] = list(z.taken_off(t))
+            if z.drifts and z.subtracted == "constant":
+                col["ft_drift_n"] = list(z.at(t) - z.zero_n)
         return {k: np.asarray(v, np.float64 if k not in ("press", "indenter") else np.int64)
                 for k, v in col.items()}
 
@@ -269,7 +292,8 @@ def calibrate_session(session: Session | str | Path, *, depth_rule: str = "auto"
                       beta_table: str = "fem", nu_start: float = 0.48, max_rounds: int = 8,
                       nu_tol: float = 2e-4, progress: Callable | None = None,
                       allow_failure: bool = False, relaxation: str = "auto",
-                      bevel_threshold: float = 12.0) -> SessionCalibration:
+                      bevel_threshold: float = 12.0, ft_zero: str = "constant"
+                      ) -> SessionCalibration:
     """Certify every press of a session and fit E and nu.
 
     Parameters
@@ -311,6 +335,15 @@ def calibrate_session(session: Session | str | Path, *, depth_rule: str = "auto"
         certify_session`; two consecutive frames above it, or one above
         twice it). Lower it for a sensor whose mark is faint, at the risk of
         certifying a press before its mark shows.
+    ft_zero : {'constant', 'drift', 'off'}, default 'constant'
+        The F/T's zero, read from the log between the presses once each
+        release has settled (:func:`~tactilevision.contact.force_zero`):
+        'constant' takes its mean off every sample of fz (a sensor tared
+        before the gauge block was mounted reads the block's weight
+        throughout); a zero that drifts is then reported, and its drift at
+        each press listed (``ft_drift_n``) for ``diagnose``; 'drift' takes
+        off the zero's line at each sample's time; 'off' keeps the forces as
+        the F/T read them (the zero is still reported).
 
     Returns
     -------
@@ -334,11 +367,15 @@ def calibrate_session(session: Session | str | Path, *, depth_rule: str = "auto"
     cfg = session.config
     if relaxation not in ("auto", "off"):
         raise InputError(f"relaxation must be 'auto' or 'off', got {relaxation!r}")
+    if ft_zero not in ("constant", "drift", "off"):
+        raise InputError(f"ft_zero must be 'constant', 'drift' or 'off', got {ft_zero!r}")
     cert = certify_session(session, progress=progress, bevel_threshold=bevel_threshold)
+    session, cert, zero, zero_notes = _take_off_zero(session, cert, ft_zero)
     relax, relax_notes, force0 = None, [], None
     if relaxation == "auto" and cert.presses:
         cert, relax, relax_notes, force0 = _relaxation(session, cert, progress, bevel_threshold)
-    notes = list(session.notes) + list(cert.warnings) + relax_notes  # the reader's notes first
+    notes = (list(session.notes) + list(cert.warnings) + zero_notes  # the reader's notes first
+             + relax_notes)
     if depth_rule == "auto":
         depth_rule = "vernier" if cfg.bevel_angle_deg > 0 else "nominal"
     if depth_rule not in ("vernier", "nominal", "land"):
@@ -361,7 +398,7 @@ def calibrate_session(session: Session | str | Path, *, depth_rule: str = "auto"
                                   depth_mm=z, fit=None, nu_rounds=[],
                                   seconds=time.perf_counter() - t0, warnings=notes,
                                   depth_std_mm=np.zeros_like(z), bulge_mm=np.zeros_like(z),
-                                  failure=msg)
+                                  failure=msg, ft_zero=zero)
     w0 = np.array([p.w0_mm for p in presses])
     force = np.array([p.force_n for p in presses])
     if force0 is not None:
@@ -464,7 +501,7 @@ def calibrate_session(session: Session | str | Path, *, depth_rule: str = "auto"
                                   depth_mm=w0 + closure, fit=None, nu_rounds=rounds,
                                   seconds=time.perf_counter() - t0, warnings=notes,
                                   depth_std_mm=std, bulge_mm=bulge, bevel_force_n=bevel_n,
-                                  failure=msg)
+                                  failure=msg, ft_zero=zero)
     for msg in caught_by_fit.get(id(fit), []):      # the warnings of the fit reported
         if msg not in notes:
             notes.append(msg)
@@ -479,7 +516,33 @@ def calibrate_session(session: Session | str | Path, *, depth_rule: str = "auto"
                               depth_std_mm=std, bulge_mm=bulge, bevel_force_n=bevel_n,
                               relaxation=relax, moduli=moduli,
                               force0_n=force0 if force0 is not None else np.zeros(0),
-                              force_fit_n=force - bevel_n)
+                              force_fit_n=force - bevel_n, ft_zero=zero)
+
+
+def _take_off_zero(session: Session, cert: Certification, mode: str
+                   ) -> tuple[Session, Certification, ForceZero | None, list[str]]:
+    """Read the F/T's zero between the presses and take it off the log and the presses'
+    forces (``mode``: 'constant', 'drift' or 'off'); the notes say what was done."""
+    spans = cert.press_spans_s
+    if spans.shape[0] == 0:
+        return session, cert, None, []
+    period = (float(np.median(np.diff(session.frame_times_s))) if session.n_frames > 1
+              else 0.0)
+    # a press touches the gel from before its first frame in contact to after its last
+    contact = spans + cert.clock_offset_s + np.array([-period, period])
+    zero = force_zero(session.force_times_s, session.forces_n[:, 2], contact, subtracted=mode)
+    if zero is None:
+        return session, cert, None, ["the F/T's zero could not be read: no settled rest between "
+                                     "the presses; the forces are as the F/T read them"]
+    note = zero.sentence()
+    if mode == "off":
+        return session, cert, zero, [note]
+    forces = session.forces_n.copy()
+    forces[:, 2] -= zero.taken_off(session.force_times_s)
+    off = cert.clock_offset_s
+    presses = [replace(p, force_n=p.force_n - float(zero.taken_off(p.t_frame_s + off + p.hold_s)))
+               for p in cert.presses]
+    return (replace(session, forces_n=forces), replace(cert, presses=presses), zero, [note])
 
 
 def _vernier_depths(w0: np.ndarray, closure: np.ndarray, cfg, nu: float

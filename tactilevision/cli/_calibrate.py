@@ -63,6 +63,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="for a bevel mark (bevel_angle_deg = 0): the signal-to-noise ratio "
                         "above which the mark is seen, in two consecutive frames or once above "
                         "twice it (default 12; rejected.csv gives each press's best)")
+    p.add_argument("--ft-zero", choices=("constant", "drift", "off"), default="constant",
+                   help="the F/T's zero, read between the presses once each release has "
+                        "settled: constant (default) takes its mean off fz (a sensor tared "
+                        "before the gauge block was mounted reads the block's weight); drift "
+                        "takes off its line over the session at each sample; off keeps the "
+                        "forces as the F/T read them. fit.json's ft_zero reports it either way")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--no-report", action="store_true",
                    help="write measurements.csv, fit.json and rejected.csv only")
@@ -143,6 +149,7 @@ def result_dict(cal) -> dict:
                      for r in c.rejected],
         "warnings": list(cal.warnings),
         "seconds": cal.seconds,
+        "ft_zero": cal.ft_zero.to_json_dict() if cal.ft_zero is not None else None,
     })
     if cal.relaxation is not None:
         r = cal.relaxation.to_json_dict()
@@ -189,7 +196,8 @@ def run(args: argparse.Namespace) -> int:
             return tqdm(it, desc="frames", unit="frame", file=sys.stderr, mininterval=1.0)
     cal = calibrate_session(session, depth_rule=args.depth_rule, beta_table=args.beta_table,
                             progress=progress, allow_failure=True,
-                            relaxation=args.relaxation, bevel_threshold=args.bevel_threshold)
+                            relaxation=args.relaxation, bevel_threshold=args.bevel_threshold,
+                            ft_zero=args.ft_zero)
     cfg = session.config
     # written whole into a hidden folder in out, moved into place at the end (or dropped)
     with StagedOutput(out, overwrite=overwrite) as stage:

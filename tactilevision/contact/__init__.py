@@ -34,13 +34,13 @@ from ._vernier import (
     bevel_profile,
     read_bevel,
 )
+from ._zero import ForceZero, force_zero
 
 __all__ = ["BevelGeometry", "BevelProfile", "BevelReading", "Certification", "CertifiedPress",
-           "ClockSync", "Footprint", "ForceWindow", "Rejection", "approach_start", "bevel_force",
-           "bevel_profile", "bevel_score",
-           "bulge_at", "bulge_height", "certified_depths", "certify_session",
-           "contact_mask", "contact_onsets", "estimate_clock_offset", "fit_footprint",
-           "footprint_from_frame", "force_onsets", "force_window", "hold_end", "hold_start",
-           "land_contact_depth",
+           "ClockSync", "Footprint", "ForceWindow", "ForceZero", "Rejection", "approach_start",
+           "bevel_force", "bevel_profile", "bevel_score", "bulge_at", "bulge_height",
+           "certified_depths", "certify_session", "contact_mask", "contact_onsets",
+           "estimate_clock_offset", "fit_footprint", "footprint_from_frame", "force_onsets",
+           "force_window", "force_zero", "hold_end", "hold_start", "land_contact_depth",
            "land_contact_depths_mm", "nearest_indenter", "noise_level", "read_bevel",
            "refine_clock_offset", "window_standard_error"]

@@ -216,6 +216,10 @@ class Certification:
         session's long bands, how many bands chose it (``n_bands``), the band
         model's lines (``lines``) and whether the short bands leaned on the
         session's flank colours (``prior``).
+    press_spans_s : (P, 2) float64 ndarray
+        First and last frame in contact of every press found, certified or
+        not, camera clock, s (where the F/T's zero is read between them:
+        :func:`force_zero`).
     """
 
     presses: list[CertifiedPress]
@@ -227,6 +231,7 @@ class Certification:
     contact_area_px: np.ndarray
     warnings: list[str] = field(default_factory=list)
     bevel_optics: dict | None = None
+    press_spans_s: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
 
 
 class _Sized:
@@ -357,7 +362,9 @@ def certify_session(session, *, min_contact_px: int = 200, bevel_threshold: floa
         certified.sort(key=lambda p: p.press)
     return Certification(presses=certified, rejected=rejected, clock=clock,
                          clock_offset_s=offset, clock_source=source, noise_sigma=sigma,
-                         contact_area_px=area, warnings=warnings, bevel_optics=optics)
+                         contact_area_px=area, warnings=warnings, bevel_optics=optics,
+                         press_spans_s=np.array([(times[r[0]], times[r[-1]]) for r in runs],
+                                                np.float64).reshape(-1, 2))
 
 
 def _contact_areas(session, sigma: float, min_contact_px: int, progress: Callable | None,

@@ -28,13 +28,15 @@ MAX_FORCE_N = 1.0e4
 # every cell is a number, else kept as labels.
 _NUMERIC_COLUMNS = frozenset({
     "press", "depth_std_mm", "overshoot_mm", "force0_n", "force_std_n", "force_sem_n", "fx_n",
-    "fy_n",
+    "fy_n", "ft_zero_n", "ft_drift_n",
     "time_s", "hold_s", "wait_s", "x_mm", "y_mm", "day", "temperature_c",
 })
 
 # Optional columns that are uncertainties of another column, or another reading of the
 # force, not covariates.
 _UNCERTAINTY_COLUMNS = ("depth_std_mm", "force_sem_n", "force0_n")
+# Columns that say what was done to the force (the F/T's zero taken off), not covariates.
+_FORCE_COLUMNS = ("ft_zero_n",)
 
 # (table, key, argument name) of the sidecar values.
 _SIDECAR = {"thickness_mm": ("sensor", "gel_thickness_mm"),
@@ -87,9 +89,10 @@ class Measurements:
 
     @property
     def covariates(self) -> tuple[str, ...]:
-        """Names of the numeric columns but ``depth_mm``, ``force_n`` and ``depth_std_mm``."""
-        return tuple(k for k in self.columns
-                     if k not in REQUIRED_COLUMNS and k not in _UNCERTAINTY_COLUMNS)
+        """Names of the numeric columns but ``depth_mm``, ``force_n``, the uncertainties
+        (``depth_std_mm``, ``force_sem_n``), ``force0_n`` and ``ft_zero_n``."""
+        return tuple(k for k in self.columns if k not in REQUIRED_COLUMNS
+                     and k not in _UNCERTAINTY_COLUMNS and k not in _FORCE_COLUMNS)
 
     def __len__(self) -> int:
         return int(self.depth_mm.shape[0])
@@ -308,8 +311,9 @@ def read_measurements(path: str | Path, *, thickness_mm: float | None = None,
 #: Column order of :func:`write_measurements` (formats.md section 2); other
 #: columns follow in the order given.
 COLUMN_ORDER = ("press", "indenter", "depth_mm", "depth_std_mm", "overshoot_mm", "force_n",
-                "force0_n", "bevel_force_n", "force_std_n", "force_sem_n", "fx_n", "fy_n",
-                "time_s", "hold_s", "wait_s", "x_mm", "y_mm", "day", "temperature_c")
+                "force0_n", "bevel_force_n", "ft_zero_n", "ft_drift_n", "force_std_n",
+                "force_sem_n", "fx_n", "fy_n", "time_s", "hold_s", "wait_s", "x_mm", "y_mm",
+                "day", "temperature_c")
 
 
 def write_measurements(path: str | Path, columns: dict[str, np.ndarray], *, thickness_mm: float,
