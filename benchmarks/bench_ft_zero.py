@@ -4,10 +4,10 @@ The frames do not depend on the F/T's zero, so one rendered session serves every
 variant: its ``forces.csv`` is rewritten with fz + z0 + d (t - t0) / (t1 - t0) (a
 constant zero z0, e.g. the gauge block's weight on a sensor tared before the block
 was mounted, and a linear drift d over the log), the frames linked. Each variant is
-calibrated with the default ``ft_zero='constant'``, with ``'drift'`` and with
-``'off'``; printed: the zero measured against the truth (at each press's force
-window), E against the same session without a zero (the reference run, same
-command), and the drift's test.
+calibrated with the default ``ft_zero='auto'`` (the line when the zero drifts, else
+its mean), with ``'constant'``, ``'drift'`` and ``'off'``; printed: the zero measured
+against the truth (at each press's force window), E against the same session without
+a zero (the reference run, same command), and the drift's test.
 
     python benchmarks/bench_ft_zero.py [SESSION_DIR] [--zeros 0.05 0.3 0.5]
                                        [--drifts 0 0.1 -0.1]
@@ -76,7 +76,7 @@ def main() -> None:
         for z0 in args.zeros:
             for d in args.drifts:
                 folder = variant(args.session, Path(tmp) / f"z{z0}_d{d}", z0, d)
-                for mode in ("constant", "drift", "off"):
+                for mode in ("auto", "constant", "drift", "off"):
                     cal = calibrate_session(folder, ft_zero=mode)
                     zt = true_zero(folder, cal, z0, d) + ref.ft_zero.zero_n
                     off = cal.certification.clock_offset_s

@@ -254,15 +254,23 @@ def _relaxation(session: Session, cert: Certification, progress: Callable | None
 
     from .contact import force_window
 
+    def fit(c: Certification, holds: dict[str, np.ndarray]) -> RelaxationFit:
+        # with each press's time and indenter: softening, which does not recover between
+        # presses, is told from relaxation, which does
+        return fit_relaxation(holds["press"], holds["t_s"], holds["fz_n"], holds["ramp_s"],
+                              press_time_s={p.press: p.time_s for p in c.presses},
+                              press_group={p.press: p.indenter for p in c.presses})
+
     holds = _hold_curves(session, cert)
     if np.unique(holds["press"]).size < 3:
         return cert, None, ["relaxation: fewer than 3 holds found in the F/T log, not tested"], None
     try:
-        relax = fit_relaxation(holds["press"], holds["t_s"], holds["fz_n"], holds["ramp_s"])
+        relax = fit(cert, holds)
     except InputError as exc:
         return cert, None, [f"relaxation: not tested ({exc})"], None
     if not relax.resolved:
-        return cert, relax, [], None
+        return cert, relax, ([] if relax.verdict == "flat" else
+                             [f"relaxation {relax.verdict}: {relax.why}"]), None
     elastic = elastic_force(session.force_times_s, session.forces_n, relax.g, relax.tau_s)
     again = certify_session(session, progress=progress, sync_fz_n=elastic[:, 2],
                             contact_area_px=cert.contact_area_px, bevel_threshold=bevel_threshold)
@@ -274,14 +282,13 @@ def _relaxation(session: Session, cert: Certification, progress: Callable | None
     if starts(again) != starts(cert):
         holds = _hold_curves(session, again)
         if np.unique(holds["press"]).size >= 3:
-            relax = fit_relaxation(holds["press"], holds["t_s"], holds["fz_n"],
-                                   holds["ramp_s"])
+            relax = fit(again, holds)
     off, n = again.clock_offset_s, session.config.window_samples
     force0 = np.array([force_window(session.force_times_s, elastic, p.t_frame_s + off + p.hold_s,
                                     n).fz_n for p in again.presses])
     note = (f"the gel relaxes while held (g = {relax.g:.3f}, tau = {relax.tau_s:.3g} s from "
-            f"{relax.n_presses} holds): the clock was synchronised on the elastic force "
-            f"behind the F/T log ({cert.clock_offset_s:.4f} s on the measured force, "
+            f"{relax.n_presses} holds; {relax.why}): the clock was synchronised on the "
+            f"elastic force behind the F/T log ({cert.clock_offset_s:.4f} s on the measured force, "
             f"{again.clock_offset_s:.4f} s on the elastic one), and the fit takes each "
             "press's force from it (force0_n, the force at the instant of loading): E is "
             "E_0, the instantaneous modulus")
@@ -292,7 +299,7 @@ def calibrate_session(session: Session | str | Path, *, depth_rule: str = "auto"
                       beta_table: str = "fem", nu_start: float = 0.48, max_rounds: int = 8,
                       nu_tol: float = 2e-4, progress: Callable | None = None,
                       allow_failure: bool = False, relaxation: str = "auto",
-                      bevel_threshold: float = 12.0, ft_zero: str = "constant"
+                      bevel_threshold: float = 12.0, ft_zero: str = "auto"
                       ) -> SessionCalibration:
     """Certify every press of a session and fit E and nu.
 
@@ -335,15 +342,18 @@ def calibrate_session(session: Session | str | Path, *, depth_rule: str = "auto"
         certify_session`; two consecutive frames above it, or one above
         twice it). Lower it for a sensor whose mark is faint, at the risk of
         certifying a press before its mark shows.
-    ft_zero : {'constant', 'drift', 'off'}, default 'constant'
+    ft_zero : {'auto', 'constant', 'drift', 'off'}, default 'auto'
         The F/T's zero, read from the log between the presses once each
         release has settled (:func:`~tactilevision.contact.force_zero`):
         'constant' takes its mean off every sample of fz (a sensor tared
         before the gauge block was mounted reads the block's weight
         throughout); a zero that drifts is then reported, and its drift at
         each press listed (``ft_drift_n``) for ``diagnose``; 'drift' takes
-        off the zero's line at each sample's time; 'off' keeps the forces as
-        the F/T read them (the zero is still reported).
+        off the zero's line at each sample's time; 'auto' does 'drift' when
+        the zero is seen to drift (``ForceZero.drifts``), else 'constant'
+        (a drift of -0.1 N over the sample session left in the forces read
+        E 25 % high: ``benchmarks/bench_ft_zero.py``); 'off' keeps the
+        forces as the F/T read them (the zero is still reported).
 
     Returns
     -------
@@ -367,8 +377,9 @@ def calibrate_session(session: Session | str | Path, *, depth_rule: str = "auto"
     cfg = session.config
     if relaxation not in ("auto", "off"):
         raise InputError(f"relaxation must be 'auto' or 'off', got {relaxation!r}")
-    if ft_zero not in ("constant", "drift", "off"):
-        raise InputError(f"ft_zero must be 'constant', 'drift' or 'off', got {ft_zero!r}")
+    if ft_zero not in ("auto", "constant", "drift", "off"):
+        raise InputError(f"ft_zero must be 'auto', 'constant', 'drift' or 'off', got "
+                         f"{ft_zero!r}")
     cert = certify_session(session, progress=progress, bevel_threshold=bevel_threshold)
     session, cert, zero, zero_notes = _take_off_zero(session, cert, ft_zero)
     relax, relax_notes, force0 = None, [], None
@@ -522,7 +533,7 @@ def calibrate_session(session: Session | str | Path, *, depth_rule: str = "auto"
 def _take_off_zero(session: Session, cert: Certification, mode: str
                    ) -> tuple[Session, Certification, ForceZero | None, list[str]]:
     """Read the F/T's zero between the presses and take it off the log and the presses'
-    forces (``mode``: 'constant', 'drift' or 'off'); the notes say what was done."""
+    forces (``mode``: 'auto', 'constant', 'drift' or 'off'); the notes say what was done."""
     spans = cert.press_spans_s
     if spans.shape[0] == 0:
         return session, cert, None, []
@@ -530,7 +541,10 @@ def _take_off_zero(session: Session, cert: Certification, mode: str
               else 0.0)
     # a press touches the gel from before its first frame in contact to after its last
     contact = spans + cert.clock_offset_s + np.array([-period, period])
-    zero = force_zero(session.force_times_s, session.forces_n[:, 2], contact, subtracted=mode)
+    zero = force_zero(session.force_times_s, session.forces_n[:, 2], contact,
+                      subtracted="constant" if mode == "auto" else mode)
+    if zero is not None and mode == "auto" and zero.drifts:
+        zero = replace(zero, subtracted="drift")
     if zero is None:
         return session, cert, None, ["the F/T's zero could not be read: no settled rest between "
                                      "the presses; the forces are as the F/T read them"]

@@ -109,36 +109,57 @@ def offset_session(tmp_path_factory):
     return folder, t[0], t[-1]
 
 
-def test_calibrate_takes_the_zero_off(offset_session, tmp_path):
-    """End to end: the zero is read within 2 mN at every press, taken off force_n as a
-    constant, its drift listed per press (ft_drift_n) and said in fit.json; E within 5 %
-    of the truth (the same session without the zero reads E 2.4 % low; without taking
-    the zero off, beta leaves the table)."""
-    folder, t0, t1 = offset_session
-    out = tmp_path / "cal"
-    assert main(["calibrate", str(folder), "--out", str(out), "--no-progress",
-                 "--no-report"]) == 0
-    fit = json.loads((out / "fit.json").read_text())
-    truth = json.loads((SAMPLE / "truth.json").read_text())
-    z = fit["ft_zero"]
-    assert z["subtracted"] == "constant" and z["drifts"] is True
-    assert z["drift_n"] == pytest.approx(0.1 * (z["n_rests"] - 1) / z["n_rests"], abs=0.01)
+def _run(folder: Path, out: Path, *options: str) -> tuple[dict, list[dict]]:
+    assert main(["calibrate", str(folder), "--out", str(out), "--no-progress", "--no-report",
+                 *options]) == 0
     with open(out / "measurements.csv") as fh:
         rows = list(csv.DictReader(fh))
-    off = fit["clock_offset_s"]
+    return json.loads((out / "fit.json").read_text()), rows
+
+
+def _true_zero(fit: dict, row: dict, t0: float, t1: float) -> float:
+    """The added zero at a press's force window (on the F/T clock; time_s counts from
+    the first frame)."""
     with open(SAMPLE / "frames.csv") as fh:
         first_frame = float(next(csv.DictReader(fh))["t_s"])
+    t_win = float(row["time_s"]) + first_frame + float(row["hold_s"]) + fit["clock_offset_s"]
+    return 0.3 + 0.1 * (t_win - t0) / (t1 - t0)
+
+
+def test_calibrate_takes_the_zero_off(offset_session, tmp_path):
+    """End to end, default options: the zero and its drift are read within 2 mN at every
+    press and taken off force_n (the drift seen, so its line: --ft-zero auto), which then
+    matches the truth; E within 5 % of the truth (the same session without the zero reads
+    E 2.4 % low; with the zero left in, beta leaves the table)."""
+    folder, t0, t1 = offset_session
+    fit, rows = _run(folder, tmp_path / "auto")
+    truth = json.loads((SAMPLE / "truth.json").read_text())
+    z = fit["ft_zero"]
+    assert z["subtracted"] == "drift" and z["drifts"] is True and z["drift_p_value"] < 1e-6
+    assert z["drift_n"] == pytest.approx(0.1 * (z["n_rests"] - 1) / z["n_rests"], abs=0.01)
     tp = {p["press"]: p for p in truth["presses"]}
     for r in rows:
-        # the press's window on the F/T clock (time_s counts from the first frame)
-        t_win = float(r["time_s"]) + first_frame + float(r["hold_s"]) + off
-        true = 0.3 + 0.1 * (t_win - t0) / (t1 - t0)
-        measured = float(r["ft_zero_n"]) + float(r["ft_drift_n"])
-        assert measured == pytest.approx(true, abs=2e-3)
-        # force_n: the constant zero off; the drift left in it
-        assert float(r["force_n"]) == pytest.approx(
-            tp[int(r["press"])]["force_n"] + float(r["ft_drift_n"]), abs=0.01)
+        assert float(r["ft_zero_n"]) == pytest.approx(_true_zero(fit, r, t0, t1), abs=2e-3)
+        assert float(r["force_n"]) == pytest.approx(tp[int(r["press"])]["force_n"], abs=0.01)
+        assert "ft_drift_n" not in r
     assert fit["E_mpa"] == pytest.approx(truth["E_mpa"], rel=0.05)
     said = [w for w in fit["warnings"] if w.startswith("the F/T read ")]
     assert len(said) == 1 and f"{1e3 * z['zero_n']:+.1f} mN" in said[0]
+    assert "the zero on its line was taken off each force" in said[0]
     assert 0.3 < z["zero_n"] < 0.4
+
+
+def test_calibrate_constant_zero_lists_the_drift(offset_session, tmp_path):
+    """--ft-zero constant: the mean zero off, the drift left in force_n and listed per press
+    (ft_drift_n: the measured zero less that mean), which diagnose reads as a covariate."""
+    folder, t0, t1 = offset_session
+    fit, rows = _run(folder, tmp_path / "constant", "--ft-zero", "constant")
+    truth = json.loads((SAMPLE / "truth.json").read_text())
+    assert fit["ft_zero"]["subtracted"] == "constant"
+    tp = {p["press"]: p for p in truth["presses"]}
+    for r in rows:
+        measured = float(r["ft_zero_n"]) + float(r["ft_drift_n"])
+        assert measured == pytest.approx(_true_zero(fit, r, t0, t1), abs=2e-3)
+        assert float(r["ft_zero_n"]) == pytest.approx(fit["ft_zero"]["zero_n"], abs=1e-6)
+        assert float(r["force_n"]) == pytest.approx(
+            tp[int(r["press"])]["force_n"] + float(r["ft_drift_n"]), abs=0.01)

@@ -63,12 +63,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="for a bevel mark (bevel_angle_deg = 0): the signal-to-noise ratio "
                         "above which the mark is seen, in two consecutive frames or once above "
                         "twice it (default 12; rejected.csv gives each press's best)")
-    p.add_argument("--ft-zero", choices=("constant", "drift", "off"), default="constant",
+    p.add_argument("--ft-zero", choices=("auto", "constant", "drift", "off"), default="auto",
                    help="the F/T's zero, read between the presses once each release has "
-                        "settled: constant (default) takes its mean off fz (a sensor tared "
-                        "before the gauge block was mounted reads the block's weight); drift "
-                        "takes off its line over the session at each sample; off keeps the "
-                        "forces as the F/T read them. fit.json's ft_zero reports it either way")
+                        "settled: constant takes its mean off fz (a sensor tared before the "
+                        "gauge block was mounted reads the block's weight); drift takes off its "
+                        "line over the session at each sample; auto (default): drift when the "
+                        "zero is seen to drift, else constant; off keeps the forces as the F/T "
+                        "read them. fit.json's ft_zero reports it either way")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--no-report", action="store_true",
                    help="write measurements.csv, fit.json and rejected.csv only")
@@ -100,7 +101,7 @@ def _write_holds(path: Path, holds: dict) -> None:
         w.writerow(["press", "t_s", "fz_n", "ramp_s"])
         for p, t, f, r in zip(holds["press"], holds["t_s"], holds["fz_n"], holds["ramp_s"],
                               strict=True):
-            w.writerow([int(p), f"{t:.4f}", f"{f:.5f}", "" if np.isnan(r) else f"{r:.4f}"])
+            w.writerow([int(p), f"{t:.4f}", f"{f:.9g}", "" if np.isnan(r) else f"{r:.4f}"])
 
 
 def _write_rejected(path: Path, rejected) -> None:

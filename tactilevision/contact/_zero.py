@@ -115,7 +115,7 @@ class ForceZero:
             text += (f"; it {'drifts' if self.drifts else 'does not drift measurably'}: "
                      f"{1e3 * self.drift_n:+.1f} mN over the session (se "
                      f"{1e3 * self.drift_se_n:.2f} mN, p = {self.drift_p_value:.2g})")
-        text += {"constant": "; this zero was taken off every force",
+        text += {"constant": "; its mean was taken off every force",
                  "drift": "; the zero on its line was taken off each force at its time",
                  "off": "; the forces were left as the F/T read them (--ft-zero off)"
                  }[self.subtracted]
