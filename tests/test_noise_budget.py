@@ -7,7 +7,9 @@ import numpy as np
 import pytest
 
 from tactilevision.contact import window_standard_error
-from tactilevision.mechanics import diagnose
+from tactilevision.mechanics import NoiseBudget, diagnose
+from tactilevision.mechanics._budget import BUDGET_ALPHA, BUDGET_RATIO
+from tactilevision.mechanics._diagnose import _budget_sentence
 from tactilevision.sim import make_measurement_table
 
 
@@ -137,3 +139,72 @@ def test_noise_budget_on_known_scatter():
                              {"depth_mm": np.full(20, 0.2), "force_sem_n": np.full(20, 0.01)},
                              np.zeros(20, int))
     assert none is None and "two depths" in why
+
+
+def _budget(floor_mn: float, budget_mn: float, p: float) -> NoiseBudget:
+    """A NoiseBudget with the given scatter and budget (mN) and p; `exceeds` by its rule."""
+    ratio = floor_mn / budget_mn
+    return NoiseBudget(floor_n=floor_mn * 1e-3, budget_n=budget_mn * 1e-3,
+                       force_window_n=budget_mn * 1e-3, depth_n=0.0, ratio=ratio, chi2=0.0,
+                       dof=40, p_value=p,
+                       exceeds=bool(p < BUDGET_ALPHA and ratio > BUDGET_RATIO), note="")
+
+
+def test_budget_sentence_follows_p_and_ratio():
+    """Issue 39: a p of 0.0057 was printed as 'consistent'. The wording follows both
+    numbers: 'consistent' only at p >= 0.05; below it, above the budget but below the
+    threshold that is acted on (p < 0.001 and 1.5 times the budget)."""
+    # p >= 0.05: consistent
+    assert _budget_sentence(_budget(6.71, 6.50, 0.30)) == (
+        "The replicate scatter (6.71 mN) is consistent with what the instruments explain "
+        "(6.50 mN; p = 0.3).")
+    # the sample session's numbers (docs/guide/diagnose.md): p = 0.0057, 1.29 times
+    assert _budget_sentence(_budget(8.67, 6.71, 0.0057)) == (
+        "The replicate scatter (8.67 mN) is somewhat above what the instruments explain "
+        "(6.71 mN, 1.29 times; p = 0.0057), but below the threshold this diagnosis acts on "
+        "(p < 0.001 and a scatter more than 1.5 times the budget).")
+    # p below BUDGET_ALPHA but the ratio not above BUDGET_RATIO: still not acted on
+    tiny = _budget(7.20, 6.00, 1e-5)
+    assert not tiny.exceeds
+    assert _budget_sentence(tiny).startswith(
+        "The replicate scatter (7.20 mN) is somewhat above what the instruments explain "
+        "(6.00 mN, 1.20 times; p = 1e-05), but below the threshold")
+    # a small p with the pooled scatter at or below the budget: said as it is
+    assert _budget_sentence(_budget(5.00, 5.50, 0.02)) == (
+        "The replicate scatter (5.00 mN) is no larger than what the instruments explain "
+        "(5.50 mN) on average, but larger at some presses than their own budget allows "
+        "(p = 0.02); it stays below the threshold this diagnosis acts on (p < 0.001 and a "
+        "scatter more than 1.5 times the budget).")
+    # exceeded: above the threshold
+    big = _budget(13.0, 6.5, 1e-6)
+    assert big.exceeds
+    assert _budget_sentence(big) == (
+        "The replicate scatter (13.00 mN) is 2.00 times what the instruments explain "
+        "(6.50 mN; p = 1e-06), above the threshold this diagnosis acts on (p < 0.001 and a "
+        "scatter more than 1.5 times the budget).")
+    # never 'consistent' with p < 0.05, always with p >= 0.05
+    for p in (0.049, 0.01, 1e-3, 2e-4, 1e-9):
+        for ratio in (0.8, 1.0, 1.2, 1.5, 2.0):
+            assert "consistent" not in _budget_sentence(_budget(6.0 * ratio, 6.0, p))
+    for p in (0.05, 0.2, 0.9):
+        assert "is consistent with" in _budget_sentence(_budget(6.5, 6.0, p))
+
+
+@pytest.mark.parametrize("sem_scale, p_range, words", [
+    (1.0, (0.05, 1.0), "consistent with what the instruments explain"),
+    (0.8, (BUDGET_ALPHA, 0.05), "somewhat above what the instruments explain"),
+])
+def test_diagnose_says_consistent_only_at_p_not_small(sem_scale, p_range, words):
+    """The null table of seed 311 (p = 0.073 with the generator's own F/T noise), and the
+    same table with force_sem_n understated by 20 % (p = 0.019, 1.22 times the budget:
+    not acted on, but not consistent either)."""
+    c, t = _table(311)
+    c["force_sem_n"] = c["force_sem_n"] * sem_scale
+    d = diagnose(c, thickness_mm=t.thickness_mm, radius_mm=t.radius_mm)
+    b = d.noise_budget
+    assert b is not None and not b.exceeds and p_range[0] <= b.p_value < p_range[1]
+    assert words in d.message
+    assert f"p = {b.p_value:.2g}" in d.message
+    if b.p_value < 0.05:
+        assert "consistent" not in d.message
+        assert "below the threshold this diagnosis acts on (p < 0.001" in d.message

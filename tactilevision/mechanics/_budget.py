@@ -25,6 +25,9 @@ __all__ = ["NoiseBudget", "noise_budget"]
 BUDGET_ALPHA = 1e-3
 #: And by how much the scatter must exceed the budget to be reported (ratio of sds).
 BUDGET_RATIO = 1.5
+#: Below this p the scatter is not called consistent with the budget, even when it stays
+#: below the threshold above (p < BUDGET_ALPHA and ratio > BUDGET_RATIO) that is acted on.
+BUDGET_CONSISTENT_P = 0.05
 
 
 @dataclass(frozen=True)

@@ -19,7 +19,13 @@ from typing import Any
 import numpy as np
 
 from .._checks import InputError
-from ._budget import NoiseBudget, noise_budget
+from ._budget import (
+    BUDGET_ALPHA,
+    BUDGET_CONSISTENT_P,
+    BUDGET_RATIO,
+    NoiseBudget,
+    noise_budget,
+)
 from ._catalogue import EFFECTS, Effect, effect_name, make_effect
 from ._diagnose_stats import (  # noqa: F401  (the statistics' names, also read from here)
     _NOT_COVARIATES,
@@ -295,6 +301,46 @@ def _coarse_depth_link(d: Diagnosis) -> str:
             "cannot show at all: the law's curvature takes it up. A finer depth link (the "
             "bevel's vernier, bevel_angle_deg > 0; for a mark's onset, a faster camera or a "
             "slower approach) would show them.")
+
+
+def _budget_sentence(b: NoiseBudget) -> str:
+    """The diagnosis's sentence on a noise budget, its wording following both numbers.
+
+    A small p is never called consistent: "consistent with" only for
+    ``p >= BUDGET_CONSISTENT_P`` (0.05). Below it, and while the budget does
+    not exceed (``p < BUDGET_ALPHA`` and ``ratio > BUDGET_RATIO``, the
+    threshold this diagnosis acts on: :attr:`NoiseBudget.exceeds`), the
+    scatter is said to be somewhat above the budget (or, with ``ratio <= 1``,
+    larger than some presses' own budgets allow) but below that threshold.
+    An exceeded budget gets the sentence that it is above the threshold (the
+    diagnosis itself says more, on the measurement chain).
+
+    Parameters
+    ----------
+    b : NoiseBudget
+
+    Returns
+    -------
+    sentence : str
+        One sentence: scatter and budget in mN (2 decimals), p to 2
+        significant digits, the ratio to 2 decimals.
+    """
+    floor, budget = f"{b.floor_n * 1e3:.2f} mN", f"{b.budget_n * 1e3:.2f} mN"
+    threshold = (f"the threshold this diagnosis acts on (p < {BUDGET_ALPHA:g} and a scatter "
+                 f"more than {BUDGET_RATIO:g} times the budget)")
+    if b.exceeds:
+        return (f"The replicate scatter ({floor}) is {b.ratio:.2f} times what the instruments "
+                f"explain ({budget}; p = {b.p_value:.2g}), above {threshold}.")
+    if not b.p_value < BUDGET_CONSISTENT_P:   # a NaN p has nothing to contradict either
+        return (f"The replicate scatter ({floor}) is consistent with what the instruments "
+                f"explain ({budget}; p = {b.p_value:.2g}).")
+    if b.ratio > 1:
+        return (f"The replicate scatter ({floor}) is somewhat above what the instruments "
+                f"explain ({budget}, {b.ratio:.2f} times; p = {b.p_value:.2g}), but below "
+                f"{threshold}.")
+    return (f"The replicate scatter ({floor}) is no larger than what the instruments explain "
+            f"({budget}) on average, but larger at some presses than their own budget allows "
+            f"(p = {b.p_value:.2g}); it stays below {threshold}.")
 
 
 def _usable(name: str, columns: Mapping[str, np.ndarray]) -> str | None:
@@ -920,8 +966,7 @@ def _with_message(d: Diagnosis) -> Diagnosis:
     elif chain:
         s.append("Also, " + chain)
     if b is not None and not b.exceeds:
-        s.append(f"The replicate scatter ({b.floor_n * 1e3:.2f} mN) is consistent with what "
-                 f"the instruments explain ({b.budget_n * 1e3:.2f} mN; p = {b.p_value:.2g}).")
+        s.append(_budget_sentence(b))
     if d.untestable:
         s.append("Not testable on this table: " + "; ".join(
             f"{k} ({d.untestable_reasons.get(k) or 'needs ' + ', '.join(v)})"

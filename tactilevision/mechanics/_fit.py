@@ -136,6 +136,15 @@ def fit_indentation(depth_mm: np.ndarray, force_n: np.ndarray, *, thickness_mm: 
     :func:`neo_hookean_constants`. The beta table never enters the
     regression: residuals do not depend on it.
 
+    At the edges of the FEM table: a beta above its largest (the peak of
+    beta over nu) or below its smallest (where beta starts to rise with nu)
+    whose interval still reaches into the table gives nu at that edge, the
+    interval of nu from the smallest to the largest tabulated nu whose beta
+    lies within beta's interval, and E at that nu with its interval over that
+    range of nu and c's own bounds; a note says so. A beta whose interval does not reach the
+    table gives no E and nu (`out_of_table`), as does any beta outside the
+    paper's relation (7).
+
     Intervals: delta method (first-order propagation) of the covariance of
     intercept and slope through beta, nu and E, with a Student t quantile on
     ``n - 2`` degrees of freedom. The covariance is the HC3
@@ -466,13 +475,17 @@ def material_fit(c: float, slope: float, cov: np.ndarray, *, depth_mm: np.ndarra
     E_ci = nu_ci = _NAN2
     msg = None
     top = _table_top(rel, c, beta, beta_se, tq)
-    if top is not None:
-        # beta above the table's peak but within its interval: nu at the peak, bounded below
-        nu, nu_ci, E, E_ci, kap, top_note = _at_table_top(rel, top, c, cov, tq, a, ah,
-                                                          kappa_source, contact, confidence)
+    bottom = _table_bottom(rel, c, beta, beta_se, tq)
+    if top is not None or bottom is not None:
+        # beta beyond the table's peak (or below its smallest beta) but within its interval:
+        # nu at that edge, its interval from the part of the table that the interval reaches
+        at_edge = _at_table_top if top is not None else _at_table_bottom
+        nu, nu_ci, E, E_ci, kap, edge_note = at_edge(
+            rel, top if top is not None else bottom, c, cov, tq, a, ah, kappa_source, contact,
+            confidence)
         C10, D1 = neo_hookean_constants(E, nu)
         nu_se, E_se = (nu_ci[1] - nu_ci[0]) / (2 * tq), (E_ci[1] - E_ci[0]) / (2 * tq)
-        notes.append(top_note)
+        notes.append(edge_note)
     elif not (c > 0 and rel.beta_min <= beta < rel.beta_max):
         msg = (f"c = {c:.4g} N/mm and beta = {beta:.4g} are outside the {beta_table} beta "
                f"table (c > 0, {rel.range_text()}): E and nu not computed")
@@ -557,6 +570,23 @@ def _table_top(rel, c: float, beta: float, beta_se: float, tq: float) -> float |
     return None
 
 
+def _table_bottom(rel, c: float, beta: float, beta_se: float, tq: float) -> float | None:
+    """The upper end of beta's interval when beta lies below a tabulated relation's
+    smallest beta (:attr:`beta_min`, at the start of its rising branch) but its interval
+    reaches up into the table; else None.
+
+    The paper's relation (7) has no grid: None (its lower end, nu = 0.30, is where the
+    Hayes kappa table that E needs starts, not a flat stretch of beta(nu)).
+    """
+    grid = getattr(rel, "beta_grid", None)
+    if grid is None or not (c > 0 and np.isfinite(beta_se) and np.isfinite(tq)):
+        return None
+    hi = beta + tq * beta_se
+    if beta < rel.beta_min <= hi:
+        return float(hi)
+    return None
+
+
 def nu_range_reaching(beta_of_nu, nu_first: float, nu_last: float, nu_peak: float,
                       beta_lo: float) -> tuple[float, float]:
     """The nu whose beta reaches `beta_lo`, between `nu_first` and `nu_last`: from the
@@ -567,6 +597,54 @@ def nu_range_reaching(beta_of_nu, nu_first: float, nu_last: float, nu_peak: floa
     if not ok.any():
         return nu_peak, nu_peak
     return float(fine[np.argmax(ok)]), float(fine[len(ok) - 1 - np.argmax(ok[::-1])])
+
+
+def nu_range_below(beta_of_nu, nu_first: float, nu_last: float, nu_bottom: float,
+                   beta_hi: float) -> tuple[float, float]:
+    """The nu whose beta is at most `beta_hi`, between `nu_first` and `nu_last`.
+
+    The mirror of :func:`nu_range_reaching` at the bottom of a table.
+
+    Parameters
+    ----------
+    beta_of_nu : callable
+        beta(nu), vectorised.
+    nu_first, nu_last : float
+        The range of nu searched (the whole table).
+    nu_bottom : float
+        nu of the table's smallest beta (where nu is reported); always inside the range
+        returned.
+    beta_hi : float
+        The upper bound of beta's interval.
+
+    Returns
+    -------
+    nu_lo, nu_hi : float
+        The smallest and the largest nu, on a grid of 2001 plus `nu_bottom`, whose beta is
+        at most `beta_hi`: their hull, which holds every nu of the table that beta's
+        interval reaches (at low nu a FEM beta can dip before it rises, and past its peak it
+        falls again).
+    """
+    fine = np.union1d(np.linspace(nu_first, nu_last, 2001), [nu_bottom])
+    ok = np.asarray(beta_of_nu(fine)) <= beta_hi
+    if not ok.any():
+        return nu_bottom, nu_bottom
+    lo, hi = float(fine[np.argmax(ok)]), float(fine[len(ok) - 1 - np.argmax(ok[::-1])])
+    return min(lo, nu_bottom), max(hi, nu_bottom)
+
+
+def _modulus(rel, c: float, nu: float, a: float, ah: float, kappa_source: str,
+             contact: str) -> tuple[float, float]:
+    """E of eq. (4) at intercept `c` and `nu`, and the kappa it used.
+
+    kappa is the FEM kappa_n line's intercept at the fitted depths where the relation
+    holds it (as for beta), else the kappa table.
+    """
+    if getattr(rel, "kappa_line_grid", None) is not None:
+        k = rel.kappa_line(nu)
+    else:
+        k = float(kappa(nu, ah, source=kappa_source, contact=contact))
+    return c * (1 - nu ** 2) / (2 * a * k), k
 
 
 def _at_table_top(rel, beta_lo: float, c: float, cov: np.ndarray, tq: float, a: float,
@@ -585,20 +663,50 @@ def _at_table_top(rel, beta_lo: float, c: float, cov: np.ndarray, tq: float, a: 
     nu_peak = float(rel.nu_grid[last])
     nu_lo, nu_hi = nu_range_reaching(rel.beta, float(rel.nu_grid[first]),
                                      float(rel.nu_grid[-1]), nu_peak, beta_lo)
-
-    def modulus(cc: float, nu: float) -> tuple[float, float]:
-        if getattr(rel, "kappa_line_grid", None) is not None:
-            k = rel.kappa_line(nu)
-        else:
-            k = float(kappa(nu, ah, source=kappa_source, contact=contact))
-        return cc * (1 - nu ** 2) / (2 * a * k), k
-
-    E, kap = modulus(c, nu_peak)
+    E, kap = _modulus(rel, c, nu_peak, a, ah, kappa_source, contact)
     c_se = float(np.sqrt(cov[0, 0]))
-    Es = [modulus(cc, nn)[0] for cc in (c - tq * c_se, c + tq * c_se) for nn in (nu_lo, nu_hi)]
+    Es = [_modulus(rel, cc, nn, a, ah, kappa_source, contact)[0]
+          for cc in (c - tq * c_se, c + tq * c_se) for nn in (nu_lo, nu_hi)]
     note = (f"beta lies above the largest beta of the table ({rel.beta_max:.4f}, at nu = "
             f"{nu_peak:.3f}) but within its {confidence:.0%} interval (lower bound "
             f"{beta_lo:.4f}): nu is put at the table's top, {nu_peak:.3f}, with the interval "
             f"[{nu_lo:.4f}, {nu_hi:.4f}] of the nu whose beta reaches that bound; E at "
             f"nu = {nu_peak:.3f}, its interval over that range")
     return nu_peak, (nu_lo, nu_hi), E, (float(min(Es)), float(max(Es))), kap, note
+
+
+def _at_table_bottom(rel, beta_hi: float, c: float, cov: np.ndarray, tq: float, a: float,
+                     ah: float, kappa_source: str, contact: str, confidence: float):
+    """nu, its interval, E, its interval and kappa for beta at the bottom of the FEM table.
+
+    The mirror of :func:`_at_table_top`. Where the rising branch of the FEM's
+    beta(nu) starts (a bonded punch at a/h ~ 0.8: nu = 0.36, after a shallow
+    dip from nu = 0.30) beta is flat: a beta a little below the table's
+    smallest is that smallest within the scatter. nu is put there; its
+    interval is the hull of the tabulated nu whose beta is at most the upper
+    bound `beta_hi` of beta's interval (the dip below the branch and, for a
+    wide interval, the falling branch past the peak included); E at that nu,
+    its interval E over that range of nu with c at its own bounds.
+
+    Returns
+    -------
+    nu : float
+    nu_ci : (2,) tuple of float
+    E : float, MPa
+    E_ci : (2,) tuple of float, MPa
+    kappa : float
+    note : str
+    """
+    nu_bottom = float(rel.nu_min)
+    nu_lo, nu_hi = nu_range_below(rel.beta, float(rel.nu_grid[0]), float(rel.nu_grid[-1]),
+                                  nu_bottom, beta_hi)
+    E, kap = _modulus(rel, c, nu_bottom, a, ah, kappa_source, contact)
+    c_se = float(np.sqrt(cov[0, 0]))
+    Es = [_modulus(rel, cc, nn, a, ah, kappa_source, contact)[0]
+          for cc in (c - tq * c_se, c + tq * c_se) for nn in (nu_lo, nu_bottom, nu_hi)]
+    note = (f"beta lies below the smallest beta of the table ({rel.beta_min:.4f}, at nu = "
+            f"{nu_bottom:.3f}) but within its {confidence:.0%} interval (upper bound "
+            f"{beta_hi:.4f}): nu is put at the table's bottom, {nu_bottom:.3f}, with the "
+            f"interval [{nu_lo:.4f}, {nu_hi:.4f}] of the nu whose beta is at most that bound; "
+            f"E at nu = {nu_bottom:.3f}, its interval over that range")
+    return nu_bottom, (nu_lo, nu_hi), E, (float(min(Es)), float(max(Es))), kap, note

@@ -11,7 +11,14 @@ import numpy as np
 from .._checks import InputError
 from ._catalogue import make_effect
 from ._fem_tables import TABLE_EXTRAPOLATION
-from ._fit import MAX_W_OVER_H, _geometry, _positive, material_fit, nu_range_reaching
+from ._fit import (
+    MAX_W_OVER_H,
+    _geometry,
+    _positive,
+    material_fit,
+    nu_range_below,
+    nu_range_reaching,
+)
 from ._model import IndentationModel, ModelFit
 from ._result import IndentationFit
 
@@ -234,9 +241,13 @@ def _consistent_material(fit: IndentationFit, model: IndentationModel, mf: Model
     while lo > 0 and bg[lo - 1] < bg[lo]:
         lo -= 1
     b_lo = b - tq * math.sqrt(cov[1, 1]) if np.isfinite(cov[1, 1]) else math.nan
+    b_hi = b + tq * math.sqrt(cov[1, 1]) if np.isfinite(cov[1, 1]) else math.nan
     if top > lo and b > bg[top] and b_lo <= bg[top]:
         return _model_table_top(fit, model, nus, cg, bg, lo, top, b, b_lo, c, cov, tq,
                                 confidence, a)
+    if top > lo and b < bg[lo] and b_hi >= bg[lo]:
+        return _model_table_bottom(fit, model, nus, cg, bg, lo, b, b_hi, c, cov, tq,
+                                   confidence, a)
     nus, cg, bg = nus[lo:top + 1], cg[lo:top + 1], bg[lo:top + 1]
     rel_lo, rel_hi = float(nus[0]), float(nus[-1])
     if not (nus.size >= 2 and bg[0] <= b <= bg[-1]):
@@ -276,7 +287,8 @@ def _consistent_material(fit: IndentationFit, model: IndentationModel, mf: Model
 def _kept_notes(fit: IndentationFit) -> tuple[str, ...]:
     """The notes of eq. (5)'s fit that still hold once E and nu are read through a model."""
     return tuple(n for n in fit.notes if n != fit.out_of_table_message
-                 and "interval of nu" not in n and not n.startswith("beta lies above"))
+                 and "interval of nu" not in n
+                 and not n.startswith(("beta lies above", "beta lies below")))
 
 
 def _model_table_top(fit: IndentationFit, model: IndentationModel, nus: np.ndarray,
@@ -315,3 +327,41 @@ def _model_table_top(fit: IndentationFit, model: IndentationModel, nus: np.ndarr
                    nu_ci95=(nu_lo, nu_hi), nu_se=math.nan, E_se_mpa=math.nan, C10_mpa=C10,
                    D1_per_mpa=D1, kappa=c * (1 - nu_peak**2) / (2 * a * E), out_of_table=False,
                    out_of_table_message=None, notes=(*_kept_notes(fit), note))
+
+
+def _model_table_bottom(fit: IndentationFit, model: IndentationModel, nus: np.ndarray,
+                        cg: np.ndarray, bg: np.ndarray, lo: int, b: float, b_hi: float,
+                        c: float, cov: np.ndarray, tq: float, confidence: float, a: float
+                        ) -> IndentationFit:
+    """E and nu for a model's beta below the smallest the FEM gives it, within its interval.
+
+    The mirror of :func:`_model_table_top`, and the same rule as eq. (5)'s own fit at the
+    table's bottom (:func:`~tactilevision.mechanics.fit_indentation`): nu is put at the
+    start of the rising branch, ``nus[lo]`` (the smallest beta of the branch); its interval
+    is the hull of the grid's nu whose beta is at most beta's upper bound `b_hi`; E =
+    c / c(nu) there, its interval E over that range of nu with c at its own bounds.
+    """
+    from scipy.interpolate import PchipInterpolator
+
+    from ._neohookean import neo_hookean_constants
+
+    nu_bottom = float(nus[lo])
+    nu_lo, nu_hi = nu_range_below(PchipInterpolator(nus, bg), float(nus[0]), float(nus[-1]),
+                                  nu_bottom, b_hi)
+    c_of_nu = PchipInterpolator(nus, cg)
+    c_se = math.sqrt(cov[0, 0]) if np.isfinite(cov[0, 0]) else math.nan
+    E = c / float(c_of_nu(nu_bottom))
+    Es = [cc / float(c_of_nu(nn)) for cc in (c - tq * c_se, c + tq * c_se)
+          for nn in (nu_lo, nu_bottom, nu_hi)]
+    C10, D1 = neo_hookean_constants(E, nu_bottom)
+    note = (f"beta = {b:.4g} of the model {', '.join(model.names)} lies below the smallest "
+            f"beta the FEM gives this model at these depths ({bg[lo]:.4g}, at nu = "
+            f"{nu_bottom:.3f}) but within its {confidence:.0%} interval (upper bound "
+            f"{b_hi:.4g}): nu is put at the bottom, {nu_bottom:.3f}, with the interval "
+            f"[{nu_lo:.4f}, {nu_hi:.4f}] of the nu whose beta is at most that bound; E at "
+            f"nu = {nu_bottom:.3f}, its interval over that range")
+    return replace(fit, E_mpa=E, nu=nu_bottom, E_ci95_mpa=(float(min(Es)), float(max(Es))),
+                   nu_ci95=(nu_lo, nu_hi), nu_se=math.nan, E_se_mpa=math.nan, C10_mpa=C10,
+                   D1_per_mpa=D1, kappa=c * (1 - nu_bottom**2) / (2 * a * E),
+                   out_of_table=False, out_of_table_message=None,
+                   notes=(*_kept_notes(fit), note))
