@@ -170,12 +170,16 @@ def relaxation_lines(relax: RelaxationFit, moduli: dict | None, holds: Path, *,
     lines : list of str
     """
     pct = f"{relax.confidence:.0%}"
-    lines = [f"  relaxation ({holds}, {relax.n_presses} presses, standard linear solid after a "
-             f"linear ramp): g = {relax.g:.4f} {pct} CI {_fmt_ci(relax.g_ci, 4)}, tau = "
-             f"{relax.tau_s:.4g} s {pct} CI {_fmt_ci(relax.tau_ci_s, 3)} s, rmse = "
-             f"{relax.rmse_n * 1e3:.3g} mN"]
+    if relax.identified:
+        lines = [f"  relaxation ({holds}, {relax.n_presses} presses, standard linear solid after "
+                 f"a linear ramp): g = {relax.g:.4f} {pct} CI {_fmt_ci(relax.g_ci, 4)}, tau = "
+                 f"{relax.tau_s:.4g} s {pct} CI {_fmt_ci(relax.tau_ci_s, 3)} s, rmse = "
+                 f"{relax.rmse_n * 1e3:.3g} mN"]
+    else:
+        lines = [f"  relaxation ({holds}, {relax.n_presses} presses): {relax.verdict}, g and "
+                 "tau not identified"]
     if not relax.resolved:
-        lines.append("  no relaxation resolved in the holds: the forces are used as they are")
+        lines.append(f"  {relax.why}: the forces are used as they are")
     elif moduli is None:
         lines.append("  the forces were taken back to the instant of loading"
                      + ("" if e_finite else ", but E was not computed: no E_0 or E_inf"))
@@ -185,7 +189,7 @@ def relaxation_lines(relax: RelaxationFit, moduli: dict | None, holds: Path, *,
                      f"{moduli['E_inf_mpa']:.4f} MPa {pct} CI "
                      f"{_fmt_ci(moduli['E_inf_ci_mpa'], 4)} MPa (E_0 with g's and tau's "
                      f"uncertainty: {_fmt_ci(moduli['E0_ci_mpa'], 4)} MPa)")
-    lines += [f"  note: {n}" for n in relax.notes]
+    lines += [f"  note: {n}" for n in relax.notes if n != relax.why]
     return lines
 
 
@@ -202,8 +206,20 @@ def _relax_table(table: Measurements, holds_path: Path, effects: tuple[str, ...]
         raise InputError(f"{table.path}: --holds needs a hold_s in every row (the time from "
                          "reaching depth to the middle of the force window)")
     holds = read_holds(holds_path)
+    # the table's presses' times and indenters tell softening from relaxation
+    press, t = table.columns.get("press"), table.columns.get("time_s")
+    times = groups = None
+    if press is not None and t is not None:
+        ok = np.isfinite(press) & np.isfinite(t)
+        times = {int(p): float(v) for p, v in zip(press[ok], t[ok], strict=True)}
+        ind = table.columns.get("indenter")
+        if ind is None and "indenter" in table.labels:
+            ind = np.array(table.labels["indenter"], dtype=object)
+        if ind is not None:
+            groups = {int(p): g for p, g, k in zip(press, ind, ok, strict=True) if k}
     try:
-        relax = fit_relaxation(holds["press"], holds["t_s"], holds["fz_n"], holds["ramp_s"])
+        relax = fit_relaxation(holds["press"], holds["t_s"], holds["fz_n"], holds["ramp_s"],
+                               press_time_s=times, press_group=groups)
     except InputError as exc:
         raise InputError(f"{holds_path}: {exc}") from None
     if not relax.resolved:

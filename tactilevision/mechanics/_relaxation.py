@@ -27,11 +27,26 @@ press relaxes by the same factor, so nu is unchanged).
 
 from __future__ import annotations
 
+import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy import optimize, stats
 
 from .._checks import InputError
+
+#: tau is identified only up to this many times the longest hold (the holds must show its
+#: curvature).
+TAU_HOLD_RATIO = 2.0
+#: ... and down to this fraction of the shortest hold: a faster relaxation is spent within
+#: the hold's first blocks (and mostly during the loading ramp), where its shape is not
+#: resolved (an elastic gel's first samples fitted tau = 31 ms, g = 0.04, p = 0.0009:
+#: benchmarks/bench_relaxation_identified.py).
+TAU_MIN_HOLD_FRACTION = 0.1
+#: Level of the tests of a decay (against flat holds) and of its curvature (against a
+#: straight decay).
+RELAX_ALPHA = 1e-3
 
 __all__ = ["RelaxationFit", "elastic_force", "fit_relaxation", "instantaneous_forces",
            "ramp_factor", "relaxed_moduli"]
@@ -82,13 +97,48 @@ class RelaxationFit:
         RMS residual of the fit over every sample, N.
     n_presses, n_samples : int
     resolved : bool
-        Whether relaxation is seen: the interval of g excludes 0 and the fit
-        beats a constant force per press (F test, p < 0.001).
+        Whether the gel is found to relax (``verdict == 'relaxing'``): the
+        holds decay (an F test against a constant force per press, p <
+        0.001), g and tau are both identified (``identified``), g's interval
+        excludes 0, and the decay is not the stiffness trend between the
+        presses. Only then are g and tau reported as the gel's.
     p_value : float
-        That F test's p-value.
+        The F test's p-value (decay against a constant force per press).
     notes : tuple of str
     boot : (B, 2) float64 ndarray
         The bootstrap's (g, tau_s) draws, for propagating the uncertainty.
+    verdict : {'relaxing', 'softening', 'decay not identified', 'flat'}
+        What the holds say: the gel relaxes; the holds fall as the
+        stiffness falls between presses over the session (a softening gel,
+        not relaxation, which recovers between presses); they fall, but tau
+        is not identified (only the initial decay rate is); or they hold
+        their force.
+    why : str
+        One sentence with the numbers behind `verdict`.
+    identified : bool
+        Whether tau (and so g) is pinned by the holds: the decay's curvature
+        is seen (a straight decay, tau much longer than the holds, is
+        rejected at p < 0.001 against the best fit: the profile of tau is
+        bounded above) and tau lies from :data:`TAU_MIN_HOLD_FRACTION` of the
+        shortest hold to :data:`TAU_HOLD_RATIO` times the longest.
+    tau_profile_ci_s : (float, float)
+        Profile-likelihood interval of tau at `confidence`, s (inf above
+        when the profile never rises enough: tau not identified).
+    curvature_p_value : float
+        p-value of the straight decay (tau at the top of the profile's grid)
+        against the best fit.
+    longest_hold_s : float
+        The longest hold, s.
+    decay_rate_per_s, decay_rate_se_per_s : float
+        The force's relative rate of change over the holds, 1/s (negative
+        when it falls), from a straight line through each hold (its slope
+        over its value at the hold's start), averaged over the presses, and
+        its standard error: what a hold identifies when tau does not (for
+        tau much longer than the hold, ``-g phi(T / tau) / tau``).
+    trend_per_s, trend_se_per_s : float
+        The relative rate at which the presses' forces at the hold's start
+        change over the session, 1/s, with each depth (``press_group``)
+        apart, and its standard error; NaN without ``press_time_s``.
     """
 
     g: float
@@ -105,6 +155,16 @@ class RelaxationFit:
     p_value: float = float("nan")
     notes: tuple[str, ...] = ()
     boot: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)), repr=False)
+    verdict: str = "flat"
+    why: str = ""
+    identified: bool = False
+    tau_profile_ci_s: tuple[float, float] = (float("nan"), float("nan"))
+    curvature_p_value: float = float("nan")
+    longest_hold_s: float = float("nan")
+    decay_rate_per_s: float = float("nan")
+    decay_rate_se_per_s: float = float("nan")
+    trend_per_s: float = float("nan")
+    trend_se_per_s: float = float("nan")
 
     def factor(self, hold_s: np.ndarray | float, ramp_s: np.ndarray | float,
                g: float | None = None, tau_s: float | None = None) -> np.ndarray:
@@ -133,11 +193,23 @@ class RelaxationFit:
         def clean(v: float) -> float | None:
             return float(v) if np.isfinite(v) else None
 
+        shown = self.identified      # g and tau are the gel's only when identified
         return {"model": "standard linear solid, linear ramp then hold (Boltzmann "
                          "superposition)",
-                "g": clean(self.g), "g_ci": [clean(v) for v in self.g_ci],
-                "tau_s": clean(self.tau_s), "tau_ci_s": [clean(v) for v in self.tau_ci_s],
+                "g": clean(self.g) if shown else None,
+                "g_ci": [clean(v) for v in self.g_ci] if shown else [None, None],
+                "tau_s": clean(self.tau_s) if shown else None,
+                "tau_ci_s": [clean(v) for v in self.tau_ci_s] if shown else [None, None],
                 "confidence": self.confidence, "resolved": self.resolved,
+                "verdict": self.verdict, "why": self.why, "identified": self.identified,
+                "tau_profile_ci_s": [clean(v) if not np.isposinf(v) else "inf"
+                                     for v in self.tau_profile_ci_s],
+                "curvature_p_value": clean(self.curvature_p_value),
+                "longest_hold_s": clean(self.longest_hold_s),
+                "decay_rate_per_s": clean(self.decay_rate_per_s),
+                "decay_rate_se_per_s": clean(self.decay_rate_se_per_s),
+                "trend_per_s": clean(self.trend_per_s),
+                "trend_se_per_s": clean(self.trend_se_per_s),
                 "p_value": clean(self.p_value), "rmse_n": clean(self.rmse_n),
                 "n_presses": self.n_presses, "n_samples": self.n_samples,
                 "notes": list(self.notes)}
@@ -229,7 +301,8 @@ def _solve(curves: list[tuple[np.ndarray, np.ndarray, float]], start: tuple[floa
 def fit_relaxation(press: np.ndarray, t_s: np.ndarray, fz_n: np.ndarray,
                    ramp_s: np.ndarray | None = None, *, confidence: float = 0.95,
                    n_boot: int = 200, points_per_press: int = 100,
-                   seed: int = 0) -> RelaxationFit:
+                   seed: int = 0, press_time_s: Mapping[int, float] | None = None,
+                   press_group: Mapping[int, object] | None = None) -> RelaxationFit:
     """Fit a standard linear solid to the force over each press's hold.
 
     Parameters
@@ -254,6 +327,15 @@ def fit_relaxation(press: np.ndarray, t_s: np.ndarray, fz_n: np.ndarray,
         Each hold is averaged in blocks down to this many points first.
     seed : int, default 0
         For the bootstrap.
+    press_time_s : mapping of int to float, optional
+        Each press's time in the session (the measurements' ``time_s``), s:
+        with it, the presses' forces at the hold's start are tested for a
+        trend over the session (a gel that softens does not recover between
+        presses; a relaxing one does).
+    press_group : mapping of int to object, optional
+        Each press's depth group (its indenter): the trend compares presses
+        of one group only. Default: one group (the forces then mix depths,
+        and the trend is blurred by them).
 
     Returns
     -------
@@ -271,10 +353,38 @@ def fit_relaxation(press: np.ndarray, t_s: np.ndarray, fz_n: np.ndarray,
     The model (module docstring): F_i(t) = P_i [(1 - g) + g phi(T_i / tau)
     exp(-t / tau)], one P_i per press, g and tau shared. For given (g, tau)
     the P_i are linear and solved for; (g, log tau) by
-    :func:`scipy.optimize.least_squares` from the best of a grid. tau is only
-    determined by holds that last a good part of it: a hold much shorter
-    than tau shows a straight line, along which g and tau trade off (wide
-    intervals say so).
+    :func:`scipy.optimize.least_squares` from the best of a grid.
+
+    What the holds identify (issue 39: a gel that only softened over a
+    session was reported relaxing with g 0.99 and tau 997 s):
+
+    1. A decay at all: the fit against a constant force per press (F test,
+       2 and n - P - 2 degrees of freedom on the block means, p <
+       :data:`RELAX_ALPHA`); else ``'flat'``.
+    2. tau: only by the decay's curvature. A hold much shorter than tau
+       shows a straight line, F_i = A_i (1 + r t), along which g and tau
+       trade off with g / tau fixed; the fit must beat that straight decay
+       (F test, 1 degree of freedom, p < :data:`RELAX_ALPHA`), which bounds
+       tau's profile above, and tau must lie within :data:`TAU_HOLD_RATIO`
+       times the longest hold. The profile interval of tau (g and the P_i
+       refitted at each tau, within the F quantile at `confidence`) is
+       reported either way (``tau_profile_ci_s``). tau must also reach
+       :data:`TAU_MIN_HOLD_FRACTION` of the shortest hold: a faster decay
+       is spent in the hold's first instants, its shape not resolved.
+    3. Softening, not relaxation: relaxation recovers between presses, so
+       the presses start from the same force at the same depth; a gel that
+       softens over the session starts each press lower. With
+       `press_time_s`, the presses' forces at the hold's start (a line
+       through each hold) are regressed, in logarithm, on the session's
+       time with a level per `press_group`; a trend beyond three standard
+       errors, of the holds' sign, and agreeing with the holds' own rate
+       within three standard errors of their difference, explains the holds
+       when they do not show a curvature (2): ``'softening'``.
+    4. Otherwise a decay whose tau is not identified: ``'decay not
+       identified'``; only the initial rate is (``decay_rate_per_s``).
+
+    ``resolved`` (and g and tau reported as the gel's) only for
+    ``'relaxing'``: identified (2), g's bootstrap interval above 0.
     """
     press = np.asarray(press)
     t = np.asarray(t_s, np.float64)
@@ -332,17 +442,25 @@ def fit_relaxation(press: np.ndarray, t_s: np.ndarray, fz_n: np.ndarray,
     # seen at all? an F test of the fit against a constant force per press (g = 0), on the
     # block means (which whiten the F/T noise); the bootstrap's interval alone is not enough:
     # on a flat hold the fit can park tau at a few ms and g anywhere
-    from scipy.stats import f as f_dist
-
     n_pts = sum(c[0].size for c in curves)
     rss1 = rmse ** 2 * n_pts
     rss0 = float(sum(np.sum((c[1] - c[1].mean()) ** 2) for c in curves))
     dof = max(n_pts - len(curves) - 2, 1)
-    f_stat = max(rss0 - rss1, 0.0) / 2 / max(rss1 / dof, 1e-300)
-    p_value = float(f_dist.sf(f_stat, 2, dof))
+    s2 = max(rss1 / dof, 1e-300)
+    p_value = float(stats.f.sf(max(rss0 - rss1, 0.0) / 2 / s2, 2, dof))
+    # identified? a straight decay (tau -> infinity at a fixed g / tau) against the fit:
+    # the decay's curvature is what pins tau; then the profile of tau at `confidence`
+    longest = float(max(c[0][-1] for c in curves))
+    shortest = float(min(c[0][-1] for c in curves))
+    _, rss_line = _straight_decay(curves)
+    curv_p = float(stats.f.sf(max(rss_line - rss1, 0.0) / s2, 1, dof))
+    crit = s2 * float(stats.f.ppf(confidence, 1, dof))
+    profile_ci = _tau_profile(curves, tau, rss1, crit, rss_line, rss0, longest)
+    span_ok = TAU_MIN_HOLD_FRACTION * shortest <= tau <= TAU_HOLD_RATIO * longest
+    identified = bool(p_value < RELAX_ALPHA and curv_p < RELAX_ALPHA and span_ok)
     q = [(1 - confidence) / 2 * 100, (1 + confidence) / 2 * 100]
     draws = []
-    if p_value < 1e-3:                   # intervals only for a relaxation that is there
+    if identified:                        # intervals only for a relaxation that is there
         rng = np.random.default_rng(seed)
         for _ in range(int(n_boot)):
             pick = rng.integers(0, len(curves), len(curves))
@@ -354,20 +472,163 @@ def fit_relaxation(press: np.ndarray, t_s: np.ndarray, fz_n: np.ndarray,
         tau_ci = tuple(float(v) for v in np.percentile(boot[:, 1], q))
     else:
         g_ci, tau_ci = (np.nan, np.nan), (np.nan, np.nan)
-    resolved = bool(p_value < 1e-3 and g_ci[0] > 0.0)
-    if not resolved:
-        notes.append(f"no relaxation resolved: the holds are as flat as their noise allows "
-                     f"(F test against a constant force, p = {p_value:.2g})")
-    if span < 0.3 * tau:
+    # relaxation recovers between presses, softening does not: the presses' forces at the
+    # hold's start, against the session's time, each depth apart
+    r_w, se_w, starts = _decay_rate(curves)
+    r_b, se_b = _trend(ids, starts, press_time_s, press_group)
+    softening = bool(np.isfinite(r_b) and abs(r_b) > 3.0 * se_b and r_b * r_w > 0
+                     and abs(r_w - r_b) <= 3.0 * math.hypot(se_w, se_b))
+    pct = f"{100 * r_w:+.3g} %/s (se {100 * se_w:.2g})"
+    trend = (f"{100 * r_b:+.3g} %/s (se {100 * se_b:.2g}) over the session"
+             if np.isfinite(r_b) else "")
+    if p_value >= RELAX_ALPHA:
+        verdict = "flat"
+        why = (f"the holds are as flat as their noise allows (F test against a constant force "
+               f"per press, p = {p_value:.2g}): no relaxation")
+    elif identified and g_ci[0] > 0.0:
+        verdict = "relaxing"
+        why = (f"the holds relax with a curvature that pins tau (a straight decay is rejected, "
+               f"p = {curv_p:.2g}; tau = {tau:.3g} s lies within the span the holds resolve, "
+               f"{TAU_MIN_HOLD_FRACTION:g} of the shortest hold to {TAU_HOLD_RATIO:g} times the "
+               f"longest: {shortest:.3g} to {longest:.3g} s)")
+        if softening:
+            why += (f"; the presses' forces also trend between presses ({trend}): a gel that "
+                    "softens too")
+    elif softening:
+        verdict = "softening"
+        why = (f"the holds fall at {pct}, as the presses' forces at the same depth fall "
+               f"between presses ({trend}): the gel softens over the session, which does not "
+               "recover between presses as relaxation would; not relaxation (the stiffness "
+               "trend along time_s explains the holds"
+               + (f": a straight decay fits them as well, p = {curv_p:.2g})"
+                  if curv_p >= RELAX_ALPHA else ")"))
+    else:
+        verdict = "decay not identified"
+        reason = (f"the decay is straight within the noise (p = {curv_p:.2g} against the fit)"
+                  if curv_p >= RELAX_ALPHA else
+                  f"tau = {tau:.3g} s lies beyond {TAU_HOLD_RATIO:g} times the longest hold "
+                  f"({longest:.3g} s)" if tau > TAU_HOLD_RATIO * longest else
+                  f"tau = {tau:.3g} s lies under {TAU_MIN_HOLD_FRACTION:g} of the shortest "
+                  f"hold ({shortest:.3g} s): a drop in the hold's first instants, its shape "
+                  "not resolved")
+        why = (f"the holds fall at {pct} at most, but tau is not identified: {reason}; only "
+               f"that initial rate is (g / tau = {-r_w:.3g} 1/s for a slow relaxation): g and "
+               "tau are not reported and the gel is not called relaxing; longer holds, or "
+               "holds of different lengths, would tell"
+               + (f" (no trend between presses: {trend})" if trend else ""))
+    notes.append(why)
+    if verdict == "relaxing" and span < 0.3 * tau:
         notes.append(f"the holds last {span:.3g} s, under a third of tau = {tau:.3g} s: the "
                      "relaxed level is extrapolated; a longer hold pins it down")
     return RelaxationFit(g=g, tau_s=tau, g_ci=g_ci, tau_ci_s=tau_ci, confidence=confidence,
                          elastic_force_n={int(i): float(a) for i, a in zip(ids, amps,
                                                                          strict=True)},
                          ramp_s=ramps, rmse_n=rmse, n_presses=int(ids.size),
-                         n_samples=int(t.size), resolved=resolved, p_value=p_value,
-                         notes=tuple(notes),
-                         boot=boot)
+                         n_samples=int(t.size), resolved=verdict == "relaxing",
+                         p_value=p_value, notes=tuple(notes), boot=boot, verdict=verdict,
+                         why=why, identified=identified, tau_profile_ci_s=profile_ci,
+                         curvature_p_value=curv_p, longest_hold_s=longest,
+                         decay_rate_per_s=r_w, decay_rate_se_per_s=se_w, trend_per_s=r_b,
+                         trend_se_per_s=se_b)
+
+
+def _straight_decay(curves: list[tuple[np.ndarray, np.ndarray, float]]) -> tuple[float, float]:
+    """F_i(t) = A_i (1 + r t), r shared: the limit of the model as tau -> infinity at a
+    fixed g / tau (``r = -g phi / tau``). Returns r (1/s) and the residual sum of squares
+    (the A_i profiled out in closed form)."""
+    def rss(r: float) -> float:
+        total = 0.0
+        for t, f, _ in curves:
+            b = 1.0 + r * t
+            a = float(b @ f / (b @ b))
+            total += float(np.sum((f - a * b) ** 2))
+        return total
+
+    longest = max(float(c[0][-1]) for c in curves)
+    res = optimize.minimize_scalar(rss, bounds=(-0.9 / max(longest, 1e-9), 10.0),
+                                   method="bounded", options={"xatol": 1e-10})
+    return float(res.x), float(res.fun)
+
+
+def _tau_profile(curves: list[tuple[np.ndarray, np.ndarray, float]], tau: float, rss1: float,
+                 crit: float, rss_line: float, rss_flat: float, longest: float
+                 ) -> tuple[float, float]:
+    """The interval of tau whose profile (g and the amplitudes refitted) stays within
+    `crit` of the best fit: an end is 0 or inf when the flat hold (tau -> 0) or the straight
+    decay (tau -> infinity) is itself within `crit`."""
+    def prof(tt: float) -> float:
+        def rss_g(g: float) -> float:
+            total = 0.0
+            for t, f, ramp in curves:
+                b = (1.0 - g) + g * ramp_factor(ramp, tt) * np.exp(-t / tt)
+                a = float(b @ f / (b @ b))
+                total += float(np.sum((f - a * b) ** 2))
+            return total
+
+        return float(optimize.minimize_scalar(rss_g, bounds=(0.0, 0.99), method="bounded",
+                                              options={"xatol": 1e-6}).fun)
+
+    lo = 0.0 if rss_flat - rss1 <= crit else None
+    hi = np.inf if rss_line - rss1 <= crit else None
+    if lo is None:
+        grid = tau * np.geomspace(1.0, 1e-3, 25)[1:]
+        inside = tau
+        for tt in grid:
+            if prof(tt) - rss1 > crit:
+                break
+            inside = tt
+        lo = float(inside)
+    if hi is None:
+        grid = tau * np.geomspace(1.0, max(1e3, 100 * longest / tau), 25)[1:]
+        inside = tau
+        for tt in grid:
+            if prof(tt) - rss1 > crit:
+                break
+            inside = tt
+        hi = float(inside)
+    return float(lo), float(hi)
+
+
+def _decay_rate(curves: list[tuple[np.ndarray, np.ndarray, float]]
+                ) -> tuple[float, float, np.ndarray]:
+    """A straight line through each hold: the mean over presses of its slope over its value
+    at the hold's start (1/s), that mean's standard error, and each press's start value."""
+    rates, starts = [], []
+    for t, f, _ in curves:
+        slope, start = np.polyfit(t, f, 1)
+        rates.append(slope / start)
+        starts.append(start)
+    rates = np.array(rates)
+    se = float(np.std(rates, ddof=1) / math.sqrt(rates.size)) if rates.size > 1 else np.inf
+    return float(np.mean(rates)), se, np.array(starts)
+
+
+def _trend(ids: np.ndarray, starts: np.ndarray, press_time_s: Mapping | None,
+           press_group: Mapping | None) -> tuple[float, float]:
+    """Relative change per second of the presses' start forces over the session, each group
+    (depth) with its own level: least squares of log(start) on time with a dummy per group;
+    (NaN, NaN) without times or with too few presses."""
+    nan = (float("nan"), float("nan"))
+    if press_time_s is None:
+        return nan
+    keep = [k for k, i in enumerate(ids) if int(i) in press_time_s and starts[k] > 0
+            and np.isfinite(press_time_s[int(i)])]
+    if len(keep) < 4:
+        return nan
+    tt = np.array([float(press_time_s[int(ids[k])]) for k in keep])
+    y = np.log(starts[keep])
+    groups = ([press_group.get(int(ids[k]), -1) for k in keep] if press_group is not None
+              else [0] * len(keep))
+    levels = sorted(set(groups), key=str)
+    X = np.column_stack([tt - tt.mean()] + [[1.0 if gr == lv else 0.0 for gr in groups]
+                                            for lv in levels])
+    dof = X.shape[0] - X.shape[1]
+    if dof < 2 or np.ptp(tt) <= 0:
+        return nan
+    coef, *_ = np.linalg.lstsq(X, y, rcond=None)
+    r = y - X @ coef
+    cov = np.linalg.pinv(X.T @ X) * float(r @ r) / dof
+    return float(coef[0]), float(np.sqrt(cov[0, 0]))
 
 
 def _row_ramps(relax: RelaxationFit, n: int, press: np.ndarray | None) -> np.ndarray:

@@ -166,6 +166,8 @@ def ft_log(schedule: PressSchedule, force_of_depth: Callable[[int, np.ndarray], 
            tangential_fraction: float | np.ndarray = 0.01,
            bias_n: tuple[float, float, float] = (0, 0, 0),
            relaxation: tuple[float, float] = (0.0, 1.0),
+           stiffness: Callable[[np.ndarray], np.ndarray] | None = None,
+           drift_n: float = 0.0,
            seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
     """Sample the F/T log of a schedule on the sensor's own clock.
 
@@ -195,6 +197,14 @@ def ft_log(schedule: PressSchedule, force_of_depth: Callable[[int, np.ndarray], 
         ``F(t) = (1 - g) P(t) + g int exp(-(t - s) / tau) dP(s)``, P the
         elastic force of `force_of_depth` (quasi-linear viscoelasticity, Fung
         1993, *Biomechanics*, ch. 7). g = 0: elastic.
+    stiffness : callable (t_s array, camera clock) -> factor array, optional
+        The gel's stiffness against the session's time, relative: the elastic
+        force at each sample is multiplied by it (a gel softening or
+        stiffening over the session, which does not recover between
+        presses). Default: constant.
+    drift_n : float, default 0.0
+        The F/T's zero drifting linearly on fz by this much from the first
+        sample to the last, N (on top of ``bias_n``).
     seed : int, default 0
 
     Returns
@@ -217,6 +227,8 @@ def ft_log(schedule: PressSchedule, force_of_depth: Callable[[int, np.ndarray], 
     for i in np.unique(press[press >= 0]):
         sel = press == i
         fz[sel] = force_of_depth(int(i), depth[sel])
+    if stiffness is not None:
+        fz = fz * np.asarray(stiffness(t_cam), np.float64)
     if g > 0:
         from scipy.signal import lfilter
 
@@ -230,5 +242,7 @@ def ft_log(schedule: PressSchedule, force_of_depth: Callable[[int, np.ndarray], 
     fx = fz * frac * np.cos(ang[np.maximum(press, 0)])
     fy = fz * frac * np.sin(ang[np.maximum(press, 0)])
     forces = np.stack([fx, fy, fz], axis=1) + np.asarray(bias_n, np.float64)
+    if drift_n:
+        forces[:, 2] += drift_n * (t_cam - t_cam[0]) / max(float(t_cam[-1] - t_cam[0]), 1e-12)
     forces = forces + rng.normal(0, 1, forces.shape) * np.asarray(noise_n, np.float64)
     return t_cam + clock_offset_s, forces

@@ -90,6 +90,19 @@ class SessionSpec:
         exp(-t / tau)) (:func:`~tactilevision.sim.ft_log`). E_mpa is then
         the instantaneous modulus E_0; the relaxed one is (1 - g) E_0.
         Give long holds (`hold_s`) to see it relax.
+    softening : float
+        A gel softening over the session (default 0): its stiffness falls
+        linearly by this fraction from the first press's start to the last
+        press's end, and does not recover between presses (the F/T log's
+        elastic force times ``1 - softening (t - t_first) / (t_last -
+        t_first)``). ``E_mpa`` is the gel's at the first press.
+    ft_zero_n, ft_drift_n : float
+        The F/T's zero on fz (default 0): a constant (e.g. a gauge block's
+        weight on a sensor tared before the block was mounted) and a linear
+        drift over the log, N; every sample reads it, between presses too.
+    ft_seed : int or None
+        Seed of the F/T log's noise and tangential directions (default
+        ``seed + 1``): variants of one schedule with other noise.
     jpeg_quality : int
     sensor_name : str
         ``[sensor] name`` of session.toml ('gelsight' picks the shipped
@@ -127,6 +140,10 @@ class SessionSpec:
     recovery_tau_s: float = 2.0
     relaxation_g: float = 0.0
     relaxation_tau_s: float = 1.0
+    softening: float = 0.0
+    ft_zero_n: float = 0.0
+    ft_drift_n: float = 0.0
+    ft_seed: int | None = None
     jpeg_quality: int = 75
     sensor_name: str = "gelsight"
     seed: int = 0
@@ -146,7 +163,8 @@ def _positions(spec: SessionSpec, n: int, rng: np.random.Generator, half_mm: np.
 
 def make_session(folder: str | Path, spec: SessionSpec | None = None, *,
                  shading: tuple[ShadingTable, np.ndarray] | None = None,
-                 profile: PressProfile | None = None, progress: bool = False) -> dict:
+                 profile: PressProfile | None = None, progress: bool = False,
+                 frames: bool = True) -> dict:
     """Simulate a gauge-block calibration session and write it to `folder`.
 
     Parameters
@@ -163,6 +181,13 @@ def make_session(folder: str | Path, spec: SessionSpec | None = None, *,
         10 s).
     progress : bool, default False
         Show a progress bar while rendering.
+    frames : bool, default True
+        Render and write the frames. False writes everything else (the
+        F/T log, ``frames.csv``, ``truth.json``, ...) but leaves ``frames/``
+        empty: the frames depend on the depths and nu only, so a session of
+        the same seed, block, nu and schedule rendered once lends them to
+        variants of its force log (other E, relaxation, softening, F/T
+        zero); ``frames/`` is then not made.
 
     Returns
     -------
@@ -240,7 +265,8 @@ def make_session(folder: str | Path, spec: SessionSpec | None = None, *,
     d_frames, p_frames = depth_trajectory(sched, t_frames)
 
     out.mkdir(parents=True, exist_ok=True)
-    (out / "frames").mkdir()
+    if frames:
+        (out / "frames").mkdir()
     cv2.imwrite(str(out / "reference.png"), reference)
     names = []
     it = range(t_frames.size)
@@ -249,6 +275,10 @@ def make_session(folder: str | Path, spec: SessionSpec | None = None, *,
 
         it = tqdm(it, desc="rendering", unit="frame", mininterval=1.0)
     for k in it:
+        name = f"{k:05d}.jpg"
+        names.append(name)
+        if not frames:
+            continue
         i = int(p_frames[k])
         if i < 0 or d_frames[k] <= 0:
             z = np.zeros(shape, np.float32)
@@ -258,10 +288,8 @@ def make_session(folder: str | Path, spec: SessionSpec | None = None, *,
                                  depth_mm=float(d_frames[k]), centre_px=c, shape=shape,
                                  mm_per_px=s, thickness_mm=h)
         img = table.render(z, reference, noise_dn=spec.noise_dn, rng=rng)
-        name = f"{k:05d}.jpg"
         cv2.imwrite(str(out / "frames" / name), img,
                     [cv2.IMWRITE_JPEG_QUALITY, int(spec.jpeg_quality)])
-        names.append(name)
     with open(out / "frames.csv", "w") as f:
         f.write("frame,t_s\n")
         for name, t in zip(names, t_frames, strict=True):
@@ -272,11 +300,20 @@ def make_session(folder: str | Path, spec: SessionSpec | None = None, *,
         if not 0 <= i < n:
             raise InputError(f"misaligned press {i} is not a press (0 to {n - 1})")
         tang[i] = spec.misaligned_fraction
+    stiffness = None
+    if spec.softening:
+        t_a, t_b = float(sched.t_start_s[0]), float(sched.t_end_s[-1])
+
+        def stiffness(t: np.ndarray) -> np.ndarray:
+            return 1.0 - spec.softening * np.clip((t - t_a) / (t_b - t_a), 0.0, 1.0)
+
     t_f, forces = ft_log(sched, ft_force_of_depth, duration_s=float(sched.t_end_s[-1]) + 1.0,
                          rate_hz=spec.rate_hz, clock_offset_s=spec.clock_offset_s,
                          noise_n=spec.force_noise_n, tangential_fraction=tang,
                          relaxation=(spec.relaxation_g, spec.relaxation_tau_s),
-                         seed=spec.seed + 1)
+                         stiffness=stiffness, bias_n=(0.0, 0.0, spec.ft_zero_n),
+                         drift_n=spec.ft_drift_n,
+                         seed=spec.seed + 1 if spec.ft_seed is None else spec.ft_seed)
     with open(out / "forces.csv", "w") as f:
         f.write("t_s,fx_n,fy_n,fz_n\n")
         np.savetxt(f, np.column_stack([t_f, forces]), fmt=["%.4f", "%.4f", "%.4f", "%.4f"],
@@ -343,6 +380,8 @@ def _truth(spec: SessionSpec, sched: PressSchedule, w_c: np.ndarray, force_of_de
         "mm_per_px": s, "seed": spec.seed,
         "recovery_r": spec.recovery_r, "recovery_tau_s": spec.recovery_tau_s,
         "relaxation_g": spec.relaxation_g, "relaxation_tau_s": spec.relaxation_tau_s,
+        "softening": spec.softening, "ft_zero_n": spec.ft_zero_n,
+        "ft_drift_n": spec.ft_drift_n,
         "land_contact_depth_mm": [round(float(v), 7) for v in w_c],
         "land": spec.block.land,
         "bevel": {"offset_mm": spec.block.bevel_offset_mm,
