@@ -14,8 +14,15 @@ The certified depth of a press (``depth_rule``):
   Certification and fit are iterated towards a fixed point in nu; with the
   bevel 2.5 h or more from the axis the bulge is a few % of w and the
   iteration is well conditioned (d nu_fit / d nu is reported).
-- ``'nominal'`` (the default for a bevel mark, ``bevel_angle_deg = 0``):
-  the paper's rule, w = w0, with the uncertainty of the onset frame.
+- ``'mark'`` (the default for a bevel mark, ``bevel_angle_deg = 0``):
+  w0, plus what the force says the stage went on by past it, from the frame
+  period before the first frame showing the mark (where the land reached
+  w0) to the force window (:func:`tactilevision.contact.mark_depths`);
+  what every press shares (the clock, eq. 5's slope) widens E's and nu's
+  intervals (:func:`tactilevision.contact.mark_shared_mm`).
+- ``'nominal'``: the paper's rule, w = w0, with the uncertainty of the onset
+  frame; for a mark, the overshoot it leaves out (read as for ``'mark'``) is a
+  shared one-sided error that widens E's and nu's intervals.
 - ``'land'``: the depth at which the bulging gel meets a flat land, which
   depends on nu. Ill-conditioned: a smaller nu means a smaller bulge, larger
   certified depths, a smaller fitted beta and a smaller nu again (d nu_fit /
@@ -44,6 +51,8 @@ from .contact import (
     certified_depths,
     certify_session,
     force_zero,
+    mark_depths,
+    mark_shared_mm,
 )
 from .io import Session, read_session
 from .mechanics import (
@@ -307,9 +316,9 @@ def calibrate_session(session: Session | str | Path, *, depth_rule: str = "auto"
     ----------
     session : Session or path
         A session read by :func:`~tactilevision.io.read_session`, or its folder.
-    depth_rule : {'auto', 'vernier', 'nominal', 'land'}, default 'auto'
+    depth_rule : {'auto', 'vernier', 'mark', 'nominal', 'land'}, default 'auto'
         Certified depth (module docstring). ``'auto'``: ``'vernier'`` for a
-        machined bevel (``bevel_angle_deg > 0``), ``'nominal'`` for a mark.
+        machined bevel (``bevel_angle_deg > 0``), ``'mark'`` for a mark.
     beta_table : {'fem', 'paper'}, default 'fem'
         Passed to :func:`~tactilevision.mechanics.fit_indentation`.
     nu_start : float, default 0.48
@@ -388,10 +397,14 @@ def calibrate_session(session: Session | str | Path, *, depth_rule: str = "auto"
     notes = (list(session.notes) + list(cert.warnings) + zero_notes  # the reader's notes first
              + relax_notes)
     if depth_rule == "auto":
-        depth_rule = "vernier" if cfg.bevel_angle_deg > 0 else "nominal"
-    if depth_rule not in ("vernier", "nominal", "land"):
-        raise InputError(f"depth rule must be 'auto', 'vernier', 'nominal' or 'land', got "
-                         f"{depth_rule!r}")
+        depth_rule = "vernier" if cfg.bevel_angle_deg > 0 else "mark"
+    if depth_rule not in ("vernier", "mark", "nominal", "land"):
+        raise InputError(f"depth rule must be 'auto', 'vernier', 'mark', 'nominal' or 'land', "
+                         f"got {depth_rule!r}")
+    if depth_rule == "mark" and cfg.bevel_angle_deg > 0:
+        raise InputError(f"{session.path}: the 'mark' depth rule is for a bevel mark "
+                         "([gauge_block] bevel_angle_deg = 0); a machined bevel is read by "
+                         "'vernier'")
     if depth_rule == "vernier" and cfg.bevel_angle_deg <= 0:
         raise InputError(f"{session.path}: the 'vernier' depth rule needs a machined bevel "
                          "([gauge_block] bevel_angle_deg > 0)")
@@ -430,6 +443,7 @@ def calibrate_session(session: Session | str | Path, *, depth_rule: str = "auto"
         return f
 
     rounds: list[float] = []
+    shared: tuple[np.ndarray, np.ndarray] | None = None   # shared depth error, (low, high)
     bulge = np.zeros_like(w0)
     bevel_n = np.zeros_like(w0)
     std = closure_std.copy()
@@ -480,6 +494,10 @@ def calibrate_session(session: Session | str | Path, *, depth_rule: str = "auto"
                              f"{1e3 * bevel_n.min():.1f} to {1e3 * bevel_n.max():.1f} mN "
                              f"({100 * frac.max():.1f}% of the F/T force at most; layer model at "
                              "the fitted E, nu), taken off the forces")
+        elif depth_rule == "mark":
+            depth, std, fit, shared, mark_notes = _mark_rule(presses, force, fit_at, cfg,
+                                                             _period(session))
+            notes.extend(mark_notes)
         elif depth_rule == "nominal":
             depth = certified_depths(w0, rule="nominal", thickness_mm=h, radius_mm=a)
             if all(p.rule == "vernier" for p in presses):
@@ -487,6 +505,15 @@ def calibrate_session(session: Session | str | Path, *, depth_rule: str = "auto"
                 notes.append("depth rule 'nominal' on a vernier session: the overshoot the bevel "
                              "reads is ignored")
             fit = fit_at(depth, std if np.any(std > 0) else None)
+            if all(p.rule == "onset" for p in presses):
+                # what w = w0 leaves out: the onset's half frame and the force's overshoot
+                marked, *_ = _mark_rule(presses, force, fit_at, cfg, _period(session))
+                left = marked - depth
+                shared = (np.zeros_like(left), np.maximum(left, 0.0))
+                notes.append(f"depth rule 'nominal' on a mark: w = w0 leaves out the depth past "
+                             f"w0 that the force reads ({1e3 * float(np.median(left)):.1f} um "
+                             "median), one-sided and shared by every press: E's and nu's "
+                             "intervals carry it")
         else:
             std = np.zeros_like(w0)
             nu = float(nu_start)
@@ -516,6 +543,8 @@ def calibrate_session(session: Session | str | Path, *, depth_rule: str = "auto"
     for msg in caught_by_fit.get(id(fit), []):      # the warnings of the fit reported
         if msg not in notes:
             notes.append(msg)
+    if shared is not None:
+        fit = _with_shared_depth(fit, fit_at, depth, std, force - bevel_n, *shared)
     moduli = None
     if relax is not None and relax.resolved and np.isfinite(fit.E_mpa):
         moduli = relaxed_moduli(fit.E_mpa, fit.E_ci95_mpa, relax,
@@ -528,6 +557,95 @@ def calibrate_session(session: Session | str | Path, *, depth_rule: str = "auto"
                               relaxation=relax, moduli=moduli,
                               force0_n=force0 if force0 is not None else np.zeros(0),
                               force_fit_n=force - bevel_n, ft_zero=zero)
+
+
+def _period(session: Session) -> float:
+    """The frames' period, s (median step; 0 with one frame)."""
+    t = session.frame_times_s
+    return float(np.median(np.diff(t))) if t.size > 1 else 0.0
+
+
+def _mark_rule(presses, force: np.ndarray, fit_at, cfg, period: float):
+    """The ``'mark'`` depth rule: depths from w0, the onset's travel and the force's rise
+    past the onset (:func:`~tactilevision.contact.mark_depths`), iterated with the fit's
+    dP/dw. Returns the depths, their random uncertainty, the fit, the shared error as
+    (low, high) per press (mm), and the notes."""
+    if any(p.rule != "onset" for p in presses):
+        raise InputError("the 'mark' depth rule needs every press certified by a mark's onset")
+    w0 = np.array([p.w0_mm for p in presses])
+    travel = np.array([p.travel_mm for p in presses])
+    f_on = np.array([p.force_onset_n for p in presses])
+    sem = np.array([p.force_sem_n for p in presses])
+    sem_on = np.array([p.force_onset_sem_n for p in presses])
+    h = cfg.gel_thickness_mm
+    depth = w0 + travel / 2
+    fit = None
+    after = travel / 2
+    for _ in range(8):
+        if fit is not None and np.isfinite(fit.c_n_per_mm) and fit.c_n_per_mm > 0:
+            mid = depth - after / 2      # dP/dw between the onset and the window
+            k = fit.c_n_per_mm * (1 + 2 * fit.beta * mid / h)
+        else:
+            k = force / np.maximum(depth, 1e-9)     # the secant, before any fit
+        k = np.maximum(k, 1e-6)
+        new, std, after = mark_depths(w0, force, f_on, k, force_sem_n=sem,
+                                      force_crossing_sd_n=sem_on, travel_mm=travel)
+        fit = fit_at(new, std)
+        moved = float(np.max(np.abs(new - depth)))
+        depth = new
+        if moved < 1e-5:
+            break
+    half = mark_shared_mm(travel, after, period)
+    unread = int(np.sum(~np.isfinite(f_on)))
+    notes = [f"depth rule 'mark': w = w0 + the depth past w0 that the force reads, from the "
+             "frame period before the first frame showing the mark (where the land reached w0) "
+             f"to the force window ({1e3 * float(np.median(after)):.1f} um median, "
+             f"{1e3 * float(np.min(after)):.1f} to {1e3 * float(np.max(after)):.1f} um; dP/dw of "
+             f"eq. 5); shared by every press, +-{1e3 * float(np.median(half)):.1f} um median "
+             "(the clock, dP/dw), carried whole into E's and nu's intervals"
+             + (f"; {unread} presses without the crossing's force keep w0 + half a frame's "
+                "travel" if unread else "")]
+    return depth, std, fit, (-half, half), notes
+
+
+def _with_shared_depth(fit: IndentationFit, fit_at, depth: np.ndarray, std: np.ndarray,
+                       force: np.ndarray, low: np.ndarray, high: np.ndarray) -> IndentationFit:
+    """E's and nu's intervals widened by a depth error that every press shares.
+
+    The depths are moved by `low` and by `high` (mm, per press: the error's bounds) and
+    fitted again; E's and nu's intervals become the hull of the three fits' intervals
+    and point values. A bounded systematic error does not average out over presses: its
+    whole range is carried (the hull covers at least as often as each fit's interval,
+    whatever the error within its bounds)."""
+    if not (np.isfinite(fit.E_mpa) and np.isfinite(fit.nu)):
+        return fit
+    E_lo, E_hi = fit.E_ci95_mpa
+    nu_lo, nu_hi = fit.nu_ci95
+    moved = []
+    for shift in (low, high):
+        if not np.any(shift != 0):
+            continue
+        d = depth + shift
+        if np.any(d <= 0):
+            continue
+        f2 = fit_at(d, std, force)
+        if not (np.isfinite(f2.E_mpa) and np.isfinite(f2.nu)):
+            continue
+        moved.append(f2)
+        E_lo, E_hi = min(E_lo, f2.E_mpa, f2.E_ci95_mpa[0]), max(E_hi, f2.E_mpa, f2.E_ci95_mpa[1])
+        nu_lo = min(nu_lo, f2.nu, f2.nu_ci95[0])
+        nu_hi = max(nu_hi, f2.nu, f2.nu_ci95[1])
+    if not moved:
+        return fit
+    note = (f"shared depth error {1e3 * float(np.median(low)):+.1f} to "
+            f"{1e3 * float(np.median(high)):+.1f} um (median over presses): E and nu refitted at "
+            f"its bounds ({', '.join(f'E = {m.E_mpa:.4f} MPa, nu = {m.nu:.4f}' for m in moved)}); "
+            f"the intervals are the hull: E [{E_lo:.4f}, {E_hi:.4f}] MPa, nu [{nu_lo:.4f}, "
+            f"{nu_hi:.4f}] (the press scatter alone: E [{fit.E_ci95_mpa[0]:.4f}, "
+            f"{fit.E_ci95_mpa[1]:.4f}], nu [{fit.nu_ci95[0]:.4f}, {fit.nu_ci95[1]:.4f}])")
+    return replace(fit, E_ci95_mpa=(float(E_lo), float(E_hi)), nu_ci95=(float(nu_lo),
+                                                                          float(nu_hi)),
+                   notes=(*fit.notes, note))
 
 
 def _take_off_zero(session: Session, cert: Certification, mode: str
@@ -554,7 +672,8 @@ def _take_off_zero(session: Session, cert: Certification, mode: str
     forces = session.forces_n.copy()
     forces[:, 2] -= zero.taken_off(session.force_times_s)
     off = cert.clock_offset_s
-    presses = [replace(p, force_n=p.force_n - float(zero.taken_off(p.t_frame_s + off + p.hold_s)))
+    presses = [replace(p, force_n=p.force_n - float(zero.taken_off(p.t_frame_s + off + p.hold_s)),
+                       force_onset_n=p.force_onset_n - float(zero.taken_off(p.t_frame_s + off)))
                for p in cert.presses]
     return (replace(session, forces_n=forces), replace(cert, presses=presses), zero, [note])
 

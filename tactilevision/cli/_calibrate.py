@@ -45,12 +45,15 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="report folder (default: SESSION_DIR/calibration)")
     p.add_argument("--json", metavar="FILE",
                    help="write the fit.json object to FILE too ('-' for standard output)")
-    p.add_argument("--depth-rule", choices=("auto", "vernier", "nominal", "land"),
+    p.add_argument("--depth-rule", choices=("auto", "vernier", "mark", "nominal", "land"),
                    default="auto",
                    help="certified depth: 'vernier' (w0 plus the overshoot read on a machined "
                         "bevel, less the gel's bulge there; the default when [gauge_block] "
-                        "bevel_angle_deg > 0), 'nominal' (the paper's w = w0; the default for a "
-                        "bevel mark), or 'land' (where the bulging gel meets a flat block land; "
+                        "bevel_angle_deg > 0), 'mark' (w0 plus the depth past it that the "
+                        "force reads from the frame before the mark first shows to the force "
+                        "window; the default for a bevel mark), 'nominal' (the paper's w = w0; "
+                        "for a mark, the overshoot it leaves out widens E's and nu's "
+                        "intervals), or 'land' (where the bulging gel meets a flat block land; "
                         "FEM at the fitted nu; ill-conditioned)")
     p.add_argument("--beta-table", choices=("fem", "paper"), default="fem")
     add_overwrite_argument(p)

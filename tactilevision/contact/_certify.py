@@ -130,6 +130,17 @@ class CertifiedPress:
     force_sem_n : float
         Standard error of the F/T window's mean fz, its autocorrelation
         included (``force_std_n`` is the window's sd), N.
+    force_onset_n, force_onset_sem_n : float
+        ``'onset'``: fz when the land reached w0 (the mean of the smoothed
+        fz over the frame period before the first frame showing the mark,
+        up to the hold's start) and its uncertainty (that fz's spread over
+        the period and its noise), N: the force rises from there to the
+        window's as the stage goes on past w0 (NaN for ``'vernier'``).
+    travel_mm : float
+        ``'onset'``: the depth the stage covers in one frame period at the
+        onset, mm (the speed read from the approach's force: the mark shows
+        w0 into it): the mark shows within that of w0 (NaN for
+        ``'vernier'``).
     """
 
     press: int
@@ -155,6 +166,9 @@ class CertifiedPress:
     reading: BevelReading | None = None
     window_frames: tuple[int, ...] = ()
     force_sem_n: float = float("nan")
+    force_onset_n: float = float("nan")
+    force_onset_sem_n: float = float("nan")
+    travel_mm: float = float("nan")
 
 
 @dataclass(frozen=True)
@@ -500,17 +514,25 @@ def _press_indenter(ctx: _PressContext, k: int, x_mm: float, y_mm: float) -> int
     return indenter
 
 
-def _mark_onset(ctx: _PressContext, centre: tuple[float, float], cand: np.ndarray
-                ) -> tuple[int, float]:
-    """A bevel mark with no vernier: the first frame of `cand` where it shows and shows in
-    the next frame too (or at twice the threshold), ``(frame, score)``."""
+def _mark_score(ctx: _PressContext, centre: tuple[float, float], i: int) -> float:
+    """:func:`bevel_score` of frame `i` at the mark of the press centred at `centre`."""
     session = ctx.session
     cfg = session.config
+    return float(bevel_score(session.frame(int(i)), session.reference, centre, cfg.mm_per_px,
+                             offset_mm=cfg.bevel_offset_mm,
+                             direction_deg=cfg.bevel_direction_deg,
+                             length_mm=cfg.bevel_length_mm))
+
+
+def _mark_onset(ctx: _PressContext, centre: tuple[float, float], cand: np.ndarray,
+                run: np.ndarray) -> tuple[int, float]:
+    """A bevel mark with no vernier: the first frame of `cand` where it shows and shows in
+    the next frame too (or at twice the threshold), then back through the press's earlier
+    frames while they show it too (`cand` starts near full contact, which the sink-in
+    ring's growth can put frames after the mark's first showing), ``(frame, score)``."""
+    cfg = ctx.session.config
     thr = ctx.bevel_threshold
-    scores = np.array([bevel_score(session.frame(int(i)), session.reference, centre,
-                                   cfg.mm_per_px, offset_mm=cfg.bevel_offset_mm,
-                                   direction_deg=cfg.bevel_direction_deg,
-                                   length_mm=cfg.bevel_length_mm) for i in cand])
+    scores = np.array([_mark_score(ctx, centre, int(i)) for i in cand])
     seen = scores > thr
     firm = seen & (np.append(seen[1:], False) | (scores > 2 * thr))
     if not firm.any():
@@ -519,7 +541,15 @@ def _mark_onset(ctx: _PressContext, centre: tuple[float, float], cand: np.ndarra
                       f"{cfg.bevel_direction_deg:g} deg (best signal-to-noise ratio "
                       f"{scores.max():.1f}; the rule: two consecutive frames above "
                       f"{thr:g}, or one above {2 * thr:g})", score=float(scores.max()))
-    return int(cand[np.argmax(firm)]), float(scores[np.argmax(firm)])
+    onset, score = int(cand[np.argmax(firm)]), float(scores[np.argmax(firm)])
+    j = int(np.searchsorted(run, onset))
+    while j > 0:
+        before = _mark_score(ctx, centre, int(run[j - 1]))
+        if not before > thr:
+            break
+        j -= 1
+        onset, score = int(run[j]), before
+    return onset, score
 
 
 def _press_reading(ctx: _PressContext, k: int, run: np.ndarray, peak: int, fp: Footprint,
@@ -548,7 +578,7 @@ def _press_reading(ctx: _PressContext, k: int, run: np.ndarray, peak: int, fp: F
             raise _Reject(got.reason, got.detail, at=got.frame, score=got.bevel_score)
         t_cert, onset, window, profiles, score, quick = got
     else:
-        onset, score = _mark_onset(ctx, centre, cand)
+        onset, score = _mark_onset(ctx, centre, cand, run)
         t_cert = float(times[onset])
     hold_mid = _window_middle(session, t_cert, ctx.offset, ctx.half, t_hold_end, ctx.period)
     if isinstance(hold_mid, tuple):
@@ -572,13 +602,52 @@ def _press_reading(ctx: _PressContext, k: int, run: np.ndarray, peak: int, fp: F
     if ctx.vernier:
         return {"press": press, "profiles": profiles, "window": window, "quick": quick,
                 "t0": float(times[run[0]]), "centre": centre}
-    return replace(press, rule="onset", closure_mm=0.0,
-                   closure_std_mm=_onset_std(session, run, onset, ctx.offset, ctx.period, w0))
+    travel = _onset_travel(session, run, onset, ctx.offset, ctx.period, w0)
+    f_on, f_on_se = _crossing_force(session, run, t_cert + ctx.offset, ctx.offset, ctx.period)
+    return replace(press, rule="onset", closure_mm=0.0, closure_std_mm=travel / np.sqrt(12.0),
+                   force_onset_n=f_on, force_onset_sem_n=f_on_se, travel_mm=float(travel))
 
 
-def _onset_std(session, run: np.ndarray, onset: int, offset: float, period: float,
-               w0: float) -> float:
-    """Uncertainty of a depth certified by the onset of a mark: one frame's travel / sqrt(12).
+def _crossing_force(session, run: np.ndarray, t_on: float, offset: float, period: float
+                    ) -> tuple[float, float]:
+    """fz when the land reached w0, from the F/T log, and its uncertainty, N.
+
+    The mark first shows at `t_on` (F/T clock), so the land reached w0 within the frame
+    period before, and not after the stage stopped (the hold's start, :func:`hold_start`):
+    the crossing is taken as uniform in time over ``[t_on - period, min(t_on, t_hold)]``,
+    and fz there (a 10 ms moving average) gives its mean and spread. A hold that started
+    before that period (the mark seen late) puts the crossing in the period before the
+    hold's start. ``(nan, nan)`` when the log does not cover it.
+    """
+    tf, fz = session.force_times_s, session.forces_n[:, 2]
+    times = session.frame_times_s
+    t_hold = hold_start(tf, fz, float(times[run[0]]) + offset - period,
+                        float(times[run[-1]]) + offset + period)
+    t_a, t_b = t_on - period, t_on
+    if t_hold is not None:
+        t_b = min(t_b, t_hold)
+        if t_b <= t_a:
+            t_a, t_b = t_hold - period, t_hold
+    dt = float(np.median(np.diff(tf))) if tf.size > 1 else 1.0
+    k = max(1, round(0.01 / dt))
+    sel = np.flatnonzero((tf >= t_a - k * dt) & (tf <= t_b + k * dt))
+    if sel.size < k + 2:
+        return float("nan"), float("nan")
+    smooth = np.convolve(fz[sel], np.ones(k) / k, mode="same")
+    inside = (tf[sel] >= t_a) & (tf[sel] <= t_b)
+    inside[: k // 2] = inside[len(inside) - k // 2:] = False      # the average's own edges
+    if not inside.any():
+        return float("nan"), float("nan")
+    vals = smooth[inside]
+    noise = float(np.std(np.diff(fz[sel]))) / np.sqrt(2.0 * k)      # one smoothed sample's
+    spread = float(np.std(vals)) if vals.size > 1 else 0.0
+    return float(vals.mean()), float(np.hypot(spread, noise))
+
+
+def _onset_travel(session, run: np.ndarray, onset: int, offset: float, period: float,
+                  w0: float) -> float:
+    """The stage's travel in one frame period at a mark's onset, mm (the onset frame shows
+    the mark within that of w0: its uncertainty, uniform, is that / sqrt(12)).
 
     The stage speed is read from the approach: the indenter first touches the
     gel when the F/T force first rises (2% of its value at the onset, on a
@@ -597,7 +666,7 @@ def _onset_std(session, run: np.ndarray, onset: int, offset: float, period: floa
         if above.size and fs[-k - 1] > 0:
             travel = t_on - float(t[above[0]])
     speed = w0 / max(travel, period)
-    return speed * period / np.sqrt(12.0)
+    return speed * period
 
 
 def hold_start(force_times_s: np.ndarray, fz_n: np.ndarray, t0_s: float, t1_s: float, *,

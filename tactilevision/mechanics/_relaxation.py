@@ -511,10 +511,10 @@ def fit_relaxation(press: np.ndarray, t_s: np.ndarray, fz_n: np.ndarray,
                   f"tau = {tau:.3g} s lies under {TAU_MIN_HOLD_FRACTION:g} of the shortest "
                   f"hold ({shortest:.3g} s): a drop in the hold's first instants, its shape "
                   "not resolved")
-        why = (f"the holds fall at {pct} at most, but tau is not identified: {reason}; only "
-               f"that initial rate is (g / tau = {-r_w:.3g} 1/s for a slow relaxation): g and "
-               "tau are not reported and the gel is not called relaxing; longer holds, or "
-               "holds of different lengths, would tell"
+        why = (f"the holds fall at {pct} (a line through each), but tau is not identified: "
+               f"{reason}; only that rate is (g phi / tau = {-r_w:.3g} 1/s for a slow "
+               "relaxation): g and tau are not reported and the gel is not called relaxing; "
+               "longer holds, or holds of different lengths, would tell"
                + (f" (no trend between presses: {trend})" if trend else ""))
     notes.append(why)
     if verdict == "relaxing" and span < 0.3 * tau:

@@ -1,0 +1,123 @@
+"""The depth of a press certified by a bevel mark (no vernier): w0, plus what the force says.
+
+A drawn mark (``bevel_angle_deg = 0``) shows when the block's land reaches the gel,
+at depth w0. The first frame that shows it comes up to one frame period after that
+instant, and the stage goes on to its stop: every press is held past w0, by the same
+sign (issue 39: a median of 22 um random uncertainty stated, E's interval excluding
+the truth on 3 of 4 sessions). The force says how far. The land reached w0 within
+the frame period before the onset frame (and before the stage stopped), where the
+F/T log reads fz; from there to the force window fz rises by dP/dw times the depth
+the stage went on by:
+
+    w = w0 + (P_window - P_crossing) / (dP/dw),
+
+with P_crossing the mean of fz over that period (the crossing uniform in time over
+it; its spread is the random uncertainty: ``CertifiedPress.force_onset_n``) and
+dP/dw from the fitted eq. (5) between the two. What stays shared by every press,
+and so cannot average out: the clock offset (a clock off by dt puts the crossing's
+force ``speed x dt`` along the ramp) and dP/dw (eq. 5's slope scales every overshoot
+alike): :func:`mark_shared_mm`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .._checks import InputError, check_array
+
+__all__ = ["CLOCK_SD_S", "STIFFNESS_REL", "mark_depths", "mark_shared_mm"]
+
+#: The clock offset's error taken as shared by every press, s (the profile correlation
+#: that synchronises the F/T log gave 0.1335 to 0.1370 s against the true 0.137 s on the
+#: simulated sessions: docs/relaxation.md).
+CLOCK_SD_S = 0.003
+#: Relative error of dP/dw taken as shared (eq. 5's slope between the onset and the
+#: window, against the FEM's).
+STIFFNESS_REL = 0.05
+
+
+def mark_depths(w0_mm: np.ndarray, force_n: np.ndarray, force_crossing_n: np.ndarray,
+                stiffness_n_per_mm: np.ndarray, *, force_sem_n: np.ndarray,
+                force_crossing_sd_n: np.ndarray, travel_mm: np.ndarray
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Certified depths of presses whose mark's onset was seen (module docstring).
+
+    Parameters
+    ----------
+    w0_mm : (N,) float ndarray
+        Each press's indenter protrusion over the land, mm.
+    force_n : (N,) float ndarray
+        The force window's mean, N.
+    force_crossing_n : (N,) float ndarray
+        fz when the land reached w0, N (NaN where not read: the press then
+        keeps w0 + travel / 2, with travel / sqrt(12) as its uncertainty).
+    stiffness_n_per_mm : (N,) float ndarray
+        dP/dw between the crossing and the window, N/mm (> 0).
+    force_sem_n, force_crossing_sd_n : (N,) float ndarray
+        Standard error of the window's mean, and the crossing force's
+        uncertainty, N (NaN counts as 0).
+    travel_mm : (N,) float ndarray
+        The stage's depth per frame period at the onset, mm (>= 0).
+
+    Returns
+    -------
+    depth_mm : (N,) float64 ndarray
+        w0 + the depth the force says the stage went on by past it.
+    depth_std_mm : (N,) float64 ndarray
+        The random part of its uncertainty, mm: ``sqrt(sd_crossing^2 +
+        sem^2) / (dP/dw)``.
+    after_mm : (N,) float64 ndarray
+        ``(P_window - P_crossing) / (dP/dw)``, mm (travel / 2 where not read).
+
+    Raises
+    ------
+    ShapeError
+        For arrays of different lengths.
+    InputError
+        For a negative travel or a stiffness that is not positive.
+    """
+    w0 = check_array(w0_mm, "w0_mm", [("N",)], dtype=np.number).astype(np.float64)
+    n = (w0.shape[0],)
+
+    def arr(x, name):
+        return check_array(x, name, [n], dtype=np.number).astype(np.float64)
+
+    f, fc, k = arr(force_n, "force_n"), arr(force_crossing_n, "force_crossing_n"), arr(
+        stiffness_n_per_mm, "stiffness_n_per_mm")
+    se = np.nan_to_num(arr(force_sem_n, "force_sem_n"))
+    sd_c = np.nan_to_num(arr(force_crossing_sd_n, "force_crossing_sd_n"))
+    u = arr(travel_mm, "travel_mm")
+    if np.any(u < 0) or not np.all(np.isfinite(u)):
+        raise InputError("travel_mm must be finite and >= 0")
+    if not np.all(np.isfinite(k) & (k > 0)):
+        raise InputError("stiffness_n_per_mm must be positive")
+    read = np.isfinite(fc)
+    after = np.where(read, (f - np.where(read, fc, 0.0)) / k, u / 2)
+    std = np.where(read, np.sqrt(sd_c ** 2 + se ** 2) / k, u / np.sqrt(12.0))
+    return w0 + after, std, after
+
+
+def mark_shared_mm(travel_mm: np.ndarray, after_onset_mm: np.ndarray, period_s: float
+                   ) -> np.ndarray:
+    """Half-width of the depth error every press shares under :func:`mark_depths`, mm.
+
+    Parameters
+    ----------
+    travel_mm : (N,) float ndarray
+        The stage's depth per frame period at each onset, mm.
+    after_onset_mm : (N,) float ndarray
+        The depth read from the force after the onset, mm.
+    period_s : float
+        The frame period, s.
+
+    Returns
+    -------
+    shared_mm : (N,) float64 ndarray
+        ``speed x CLOCK_SD_S + STIFFNESS_REL x |after_onset|`` per press: the
+        clock's share (the onset's force read ``CLOCK_SD_S`` early or late on
+        the ramp) and dP/dw's; every press moves the same way, so the
+        intervals of E and nu carry it whole, not averaged.
+    """
+    u = np.asarray(travel_mm, np.float64)
+    speed = u / float(period_s) if period_s > 0 else np.zeros_like(u)
+    return speed * CLOCK_SD_S + STIFFNESS_REL * np.abs(np.asarray(after_onset_mm, np.float64))

@@ -1,0 +1,50 @@
+"""The depth of a press certified by a bevel mark: w0 plus the force's rise past the
+crossing (tactilevision.contact.mark_depths), worked by hand."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from tactilevision import InputError
+from tactilevision.contact import mark_depths, mark_shared_mm
+from tactilevision.contact._mark import CLOCK_SD_S, STIFFNESS_REL
+
+
+def test_depth_is_w0_plus_the_force_rise_over_the_slope():
+    """P rises from 1.00 N at the crossing to 1.15 N in the window at dP/dw = 5 N/mm: the
+    stage went 30 um past w0; the uncertainty is the two forces' over dP/dw."""
+    d, sd, after = mark_depths([0.3, 0.5], [1.15, 2.0], [1.0, 2.0], [5.0, 6.0],
+                               force_sem_n=[0.001, 0.001], force_crossing_sd_n=[0.02, 0.0],
+                               travel_mm=[0.06, 0.1])
+    np.testing.assert_allclose(after, [0.03, 0.0])
+    np.testing.assert_allclose(d, [0.33, 0.5])
+    np.testing.assert_allclose(sd, [np.hypot(0.02, 0.001) / 5.0, 0.001 / 6.0])
+
+
+def test_unread_crossing_keeps_half_a_frame():
+    """Without the crossing's force, w0 + half the stage's travel in a frame, +- travel /
+    sqrt(12) (the onset comes within one frame of w0)."""
+    d, sd, after = mark_depths([0.3], [1.2], [np.nan], [5.0], force_sem_n=[0.001],
+                               force_crossing_sd_n=[np.nan], travel_mm=[0.06])
+    assert d[0] == pytest.approx(0.33) and after[0] == pytest.approx(0.03)
+    assert sd[0] == pytest.approx(0.06 / np.sqrt(12))
+
+
+def test_shared_part_is_clock_and_slope():
+    """speed x CLOCK_SD_S + STIFFNESS_REL x |depth past w0|: at 1 mm/s (0.1 mm a 0.1 s
+    frame) and 40 um past w0."""
+    half = mark_shared_mm([0.1], [0.04], 0.1)
+    assert half[0] == pytest.approx(1.0 * CLOCK_SD_S + STIFFNESS_REL * 0.04)
+
+
+def test_bad_input():
+    with pytest.raises(InputError, match="stiffness"):
+        mark_depths([0.3], [1.0], [0.9], [0.0], force_sem_n=[0], force_crossing_sd_n=[0],
+                    travel_mm=[0.1])
+    with pytest.raises(InputError, match="travel"):
+        mark_depths([0.3], [1.0], [0.9], [5.0], force_sem_n=[0], force_crossing_sd_n=[0],
+                    travel_mm=[-0.1])
+    with pytest.raises(ValueError, match="force_n"):
+        mark_depths([0.3, 0.4], [1.0], [0.9, 1.0], [5.0, 5.0], force_sem_n=[0, 0],
+                    force_crossing_sd_n=[0, 0], travel_mm=[0.1, 0.1])
