@@ -50,8 +50,8 @@ def main() -> None:
     print("|---|---|---|---|---|---|---|---|")
     tally = {}
     t_all = time.perf_counter()
-    for fps in args.fps:
-        for k in range(args.sessions):
+    for k in range(args.sessions):          # the designs interleaved: a partial run has both
+        for fps in args.fps:
             seed = args.first_seed + k
             spec = SessionSpec(E_mpa=E, nu=nu, block=block, repeats=4, fps=fps,
                                overshoot_mm=(0.005, 0.060), seed=seed)
