@@ -45,6 +45,7 @@ from ._checks import InputError
 from .contact import (
     BevelGeometry,
     Certification,
+    CertifiedPress,
     ForceZero,
     bevel_force,
     bulge_at,
@@ -61,6 +62,7 @@ from .mechanics import (
     elastic_force,
     fit_indentation,
     fit_relaxation,
+    refine_relaxation,
     relaxed_moduli,
 )
 
@@ -220,19 +222,32 @@ class SessionCalibration:
                 for k, v in col.items()}
 
 
-def _hold_curves(session: Session, certification: Certification, max_points: int = 1000
-                 ) -> dict[str, np.ndarray]:
-    """The columns of ``holds.csv`` (:meth:`SessionCalibration.holds`)."""
-    from .contact import approach_start, hold_end
+def _hold_spans(session: Session, certification: Certification
+                ) -> list[tuple[CertifiedPress, float, float]]:
+    """Each certified press's hold on the F/T clock, (press, start, end), s: from its
+    arrival at depth to the start of its release (presses whose release is not found left
+    out)."""
+    from .contact import hold_end
 
     t, fz = np.asarray(session.force_times_s, np.float64), np.asarray(session.forces_n[:, 2])
     off = certification.clock_offset_s
-    press, ts, fs, ramps = [], [], [], []
+    spans = []
     for p in certification.presses:
         t0 = p.t_frame_s + off
         t1 = hold_end(t, fz, t0)
-        if t1 is None:
-            continue
+        if t1 is not None:
+            spans.append((p, t0, t1))
+    return spans
+
+
+def _hold_curves(session: Session, certification: Certification, max_points: int = 1000
+                 ) -> dict[str, np.ndarray]:
+    """The columns of ``holds.csv`` (:meth:`SessionCalibration.holds`)."""
+    from .contact import approach_start
+
+    t, fz = np.asarray(session.force_times_s, np.float64), np.asarray(session.forces_n[:, 2])
+    press, ts, fs, ramps = [], [], [], []
+    for p, t0, t1 in _hold_spans(session, certification):
         ta = approach_start(t, fz, t0)
         ramp = np.nan if ta is None else t0 - ta
         sel = np.flatnonzero((t >= t0) & (t <= t1))
@@ -280,6 +295,16 @@ def _relaxation(session: Session, cert: Certification, progress: Callable | None
     if not relax.resolved:
         return cert, relax, ([] if relax.verdict == "flat" else
                              [f"relaxation {relax.verdict}: {relax.why}"]), None
+
+    def refined(c: Certification, r: RelaxationFit) -> RelaxationFit:
+        # each hold remembers the presses before it: g and tau from the whole log
+        spans = np.array([(t0, t1) for _, t0, t1 in _hold_spans(session, c)]).reshape(-1, 2)
+        try:
+            return refine_relaxation(session.force_times_s, session.forces_n[:, 2], spans, r)
+        except InputError:
+            return r
+
+    relax = refined(cert, relax)
     elastic = elastic_force(session.force_times_s, session.forces_n, relax.g, relax.tau_s)
     again = certify_session(session, progress=progress, sync_fz_n=elastic[:, 2],
                             contact_area_px=cert.contact_area_px, bevel_threshold=bevel_threshold)
@@ -291,7 +316,9 @@ def _relaxation(session: Session, cert: Certification, progress: Callable | None
     if starts(again) != starts(cert):
         holds = _hold_curves(session, again)
         if np.unique(holds["press"]).size >= 3:
-            relax = fit(again, holds)
+            again_relax = fit(again, holds)
+            if again_relax.resolved:
+                relax = refined(again, again_relax)
     off, n = again.clock_offset_s, session.config.window_samples
     force0 = np.array([force_window(session.force_times_s, elastic, p.t_frame_s + off + p.hold_s,
                                     n).fz_n for p in again.presses])

@@ -69,6 +69,7 @@ from ._relaxation import (
     ramp_factor,
     relaxed_moduli,
 )
+from ._relaxation_log import refine_relaxation
 from ._result import IndentationFit
 from ._validate import IndentationValidation, validate_indentation
 
@@ -117,6 +118,7 @@ __all__ = [
     "noise_floor",
     "nu_from_beta",
     "ramp_factor",
+    "refine_relaxation",
     "register_effect",
     "relaxed_moduli",
     "validate_indentation",
