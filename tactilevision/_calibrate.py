@@ -51,6 +51,7 @@ from .contact import (
     bulge_at,
     certified_depths,
     certify_session,
+    crossing_forces,
     force_zero,
     mark_depths,
     mark_shared_mm,
@@ -601,9 +602,10 @@ def _mark_rule(presses, force: np.ndarray, fit_at, cfg, period: float):
         raise InputError("the 'mark' depth rule needs every press certified by a mark's onset")
     w0 = np.array([p.w0_mm for p in presses])
     travel = np.array([p.travel_mm for p in presses])
-    f_on = np.array([p.force_onset_n for p in presses])
+    f_on, sem_on, disjoint = crossing_forces(
+        np.array([p.indenter for p in presses]), np.array([p.force_onset_n for p in presses]),
+        np.array([p.force_onset_sem_n for p in presses]))
     sem = np.array([p.force_sem_n for p in presses])
-    sem_on = np.array([p.force_onset_sem_n for p in presses])
     h = cfg.gel_thickness_mm
     depth = w0 + travel / 2
     fit = None
@@ -625,13 +627,16 @@ def _mark_rule(presses, force: np.ndarray, fit_at, cfg, period: float):
     half = mark_shared_mm(travel, after, period)
     unread = int(np.sum(~np.isfinite(f_on)))
     notes = [f"depth rule 'mark': w = w0 + the depth past w0 that the force reads, from the "
-             "frame period before the first frame showing the mark (where the land reached w0) "
-             f"to the force window ({1e3 * float(np.median(after)):.1f} um median, "
+             "crossing of w0 (P(w0) of each indenter: the intersection of its presses' frame "
+             "periods before the mark first showed) to the force window "
+             f"({1e3 * float(np.median(after)):.1f} um median, "
              f"{1e3 * float(np.min(after)):.1f} to {1e3 * float(np.max(after)):.1f} um; dP/dw of "
              f"eq. 5); shared by every press, +-{1e3 * float(np.median(half)):.1f} um median "
              "(the clock, dP/dw), carried whole into E's and nu's intervals"
              + (f"; {unread} presses without the crossing's force keep w0 + half a frame's "
-                "travel" if unread else "")]
+                "travel" if unread else "")
+             + (f"; the presses of {disjoint} indenter(s) do not agree on P(w0) (their mean is "
+                "used): a gel not uniform, or a drifting force?" if disjoint else "")]
     return depth, std, fit, (-half, half), notes
 
 

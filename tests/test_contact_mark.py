@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from tactilevision import InputError
-from tactilevision.contact import mark_depths, mark_shared_mm
+from tactilevision.contact import crossing_forces, mark_depths, mark_shared_mm
 from tactilevision.contact._mark import CLOCK_SD_S, STIFFNESS_REL
 
 
@@ -48,3 +48,20 @@ def test_bad_input():
     with pytest.raises(ValueError, match="force_n"):
         mark_depths([0.3, 0.4], [1.0], [0.9, 1.0], [5.0, 5.0], force_sem_n=[0, 0],
                     force_crossing_sd_n=[0, 0], travel_mm=[0.1, 0.1])
+
+
+def test_crossing_force_is_the_intersection_of_an_indenters_brackets():
+    """Three presses of one indenter bracket P(w0) by [1.00, 1.20], [1.10, 1.30] and [0.95,
+    1.15] N: P(w0) lies in [1.10, 1.15], its middle 1.125 N, its sd 0.05 / sqrt(12) shared by
+    the three (so stated times sqrt(3)); another indenter's single press keeps its own; an
+    indenter whose brackets do not meet gets their mean and is counted."""
+    half = np.array([0.1, 0.1, 0.1, 0.05, 0.01, 0.01]) / np.sqrt(3)   # sd of a bracket
+    mid = np.array([1.10, 1.20, 1.05, 2.0, 3.0, 3.5])
+    ind = np.array([0, 0, 0, 1, 2, 2])
+    f, sd, disjoint = crossing_forces(ind, mid, half)
+    np.testing.assert_allclose(f[:3], 1.125)
+    np.testing.assert_allclose(sd[:3], 0.05 / np.sqrt(12) * np.sqrt(3))
+    assert f[3] == pytest.approx(2.0) and sd[3] == pytest.approx(0.1 / np.sqrt(12))
+    assert disjoint == 1 and f[4] == f[5] == pytest.approx(3.25)
+    f2, _, _ = crossing_forces([0, 0], [1.0, np.nan], [0.01, np.nan])
+    assert f2[0] == pytest.approx(1.0) and np.isnan(f2[1])

@@ -18,7 +18,7 @@ from ._certify import (
 from ._footprint import Footprint, fit_footprint, nearest_indenter
 from ._force import ForceWindow, force_window, window_standard_error
 from ._land import bulge_at, bulge_height, land_contact_depth, land_contact_depths_mm
-from ._mark import mark_depths, mark_shared_mm
+from ._mark import crossing_forces, mark_depths, mark_shared_mm
 from ._mask import contact_mask, noise_level
 from ._sync import (
     ClockSync,
@@ -41,7 +41,8 @@ __all__ = ["BevelGeometry", "BevelProfile", "BevelReading", "Certification", "Ce
            "ClockSync", "Footprint", "ForceWindow", "ForceZero", "Rejection", "approach_start",
            "bevel_force", "bevel_profile", "bevel_score", "bulge_at", "bulge_height",
            "certified_depths", "certify_session", "contact_mask", "contact_onsets",
-           "estimate_clock_offset", "fit_footprint", "footprint_from_frame", "force_onsets",
-           "force_window", "force_zero", "hold_end", "hold_start", "land_contact_depth",
-           "land_contact_depths_mm", "mark_depths", "mark_shared_mm", "nearest_indenter",
-           "noise_level", "read_bevel", "refine_clock_offset", "window_standard_error"]
+           "crossing_forces", "estimate_clock_offset", "fit_footprint", "footprint_from_frame",
+           "force_onsets", "force_window", "force_zero", "hold_end", "hold_start",
+           "land_contact_depth", "land_contact_depths_mm", "mark_depths", "mark_shared_mm",
+           "nearest_indenter", "noise_level", "read_bevel", "refine_clock_offset",
+           "window_standard_error"]
