@@ -175,6 +175,11 @@ def _pixel_grid_mm(shape=SHAPE, mm_per_px=MM_PER_PX):
     return np.meshgrid(x, y)
 
 
+#: Width of the line of a mark (``--theta 0``), mm: the paper's bevel mark, a line on the
+#: block's land with no flanks to read.
+MARK_WIDTH_MM = 0.15
+
+
 def gauge_height_map(x_mm: float, y_mm: float, w0_mm: float, *, radius_mm=INDENTER_RADIUS_MM,
                      offset_mm=7.5, direction_deg=0.0, theta_deg=5.0, length_mm=3.0,
                      relief_mm=RELIEF_MM, shape=SHAPE, mm_per_px=MM_PER_PX) -> np.ndarray:
@@ -192,7 +197,12 @@ def gauge_height_map(x_mm: float, y_mm: float, w0_mm: float, *, radius_mm=INDENT
     u = X * c + Y * s - offset_mm
     v = -X * s + Y * c
     h = np.full(shape, w0_mm + relief_mm)
-    ridge = w0_mm + np.abs(u) * math.tan(math.radians(theta_deg))
+    if theta_deg > 0:
+        ridge = w0_mm + np.abs(u) * math.tan(math.radians(theta_deg))
+    else:
+        # a mark, not a vernier: a line MARK_WIDTH_MM wide at the land's level (w0 behind
+        # the indenter face), whose contact shows once the press passes w0
+        ridge = np.where(np.abs(u) <= MARK_WIDTH_MM / 2, w0_mm, w0_mm + relief_mm)
     h = np.where(np.abs(v) <= length_mm / 2, np.minimum(h, ridge), h)
     h = np.where(X * X + Y * Y <= radius_mm * radius_mm, 0.0, h)
     return h.astype(np.float32)
@@ -476,7 +486,7 @@ def make_taxim_session(folder, *, repeats: int = 2, presses: int | None = None, 
                       direction_deg, length_mm)
     tan_t = math.tan(math.radians(theta_deg))
     for p in plist:
-        L = p["overshoot_mm"] / tan_t
+        L = p["overshoot_mm"] / tan_t if tan_t > 0 else MARK_WIDTH_MM / 2
         p["bevel_half_width_mm"] = round(L, 5)
         p["bevel_half_width_px"] = round(L / MM_PER_PX, 3)
         p["taxim_narrow_band"] = bool(L / MM_PER_PX < NARROW_BAND_PX)
@@ -625,7 +635,8 @@ def main(argv=None) -> None:
     ap.add_argument("--no-shadow", action="store_true", help="Taxim with_shadow=False")
     ap.add_argument("--taxim-contact-scale", type=float, default=0.0,
                     help="Taxim's contact_scale (default 0; Taxim's own default is 0.4)")
-    ap.add_argument("--theta", type=float, default=5.0, help="bevel flank angle, deg")
+    ap.add_argument("--theta", type=float, default=5.0,
+                    help="bevel flank angle, deg (0: a mark, a line on the land, no vernier)")
     ap.add_argument("--offset-mm", type=float, default=7.5, help="axis to crest, mm")
     ap.add_argument("--direction-deg", type=float, default=0.0,
                     help="direction to the bevel: 0 = +x, 90 = +y")
@@ -636,8 +647,9 @@ def main(argv=None) -> None:
     a = ap.parse_args(argv)
     if (a.presses is not None and a.presses < 1) or a.repeats < 1:
         ap.error("--presses and --repeats must be positive")
-    if a.fps <= 0 or not 0 < a.theta < 90 or a.length_mm <= 0 or a.offset_mm < 0:
-        ap.error("need fps > 0, 0 < theta < 90, length > 0, offset >= 0")
+    if a.fps <= 0 or not 0 <= a.theta < 90 or a.length_mm <= 0 or a.offset_mm < 0:
+        ap.error("need fps > 0, 0 <= theta < 90 (0: a mark, no vernier), length > 0, "
+                 "offset >= 0")
     if not 0 <= a.overshoot_mm[0] <= a.overshoot_mm[1]:
         ap.error("--overshoot-mm needs 0 <= LO <= HI")
     t = time.perf_counter()

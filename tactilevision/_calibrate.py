@@ -269,7 +269,7 @@ def _hold_curves(session: Session, certification: Certification, max_points: int
 
 
 def _relaxation(session: Session, cert: Certification, progress: Callable | None,
-                bevel_threshold: float = 12.0
+                bevel_threshold: float | str = "auto"
                 ) -> tuple[Certification, RelaxationFit | None, list[str], np.ndarray | None]:
     """Fit the holds; for a relaxing gel, certify again with the clock on the elastic force.
 
@@ -336,7 +336,7 @@ def calibrate_session(session: Session | str | Path, *, depth_rule: str = "auto"
                       beta_table: str = "fem", nu_start: float = 0.48, max_rounds: int = 8,
                       nu_tol: float = 2e-4, progress: Callable | None = None,
                       allow_failure: bool = False, relaxation: str = "auto",
-                      bevel_threshold: float = 12.0, ft_zero: str = "auto"
+                      bevel_threshold: float | str = "auto", ft_zero: str = "auto"
                       ) -> SessionCalibration:
     """Certify every press of a session and fit E and nu.
 
@@ -373,12 +373,11 @@ def calibrate_session(session: Session | str | Path, *, depth_rule: str = "auto"
         (``relaxation`` and ``moduli``). ``measurements.csv`` keeps the
         measured ``force_n`` and adds ``force0_n``, which ``fit --holds``
         uses. 'off': none of it.
-    bevel_threshold : float, default 12.0
-        For a bevel mark (``bevel_angle_deg = 0``): the signal-to-noise ratio
-        above which the mark is seen (:func:`~tactilevision.contact.
-        certify_session`; two consecutive frames above it, or one above
-        twice it). Lower it for a sensor whose mark is faint, at the risk of
-        certifying a press before its mark shows.
+    bevel_threshold : float or 'auto', default 'auto'
+        For a bevel mark (``bevel_angle_deg = 0``): when the mark is seen
+        (:func:`~tactilevision.contact.certify_session`). ``'auto'``: from
+        the session's own no-contact frames' scores. A number: the fixed
+        rule, two consecutive frames above it or one above twice it.
     ft_zero : {'auto', 'constant', 'drift', 'off'}, default 'auto'
         The F/T's zero, read from the log between the presses once each
         release has settled (:func:`~tactilevision.contact.force_zero`):
@@ -405,10 +404,11 @@ def calibrate_session(session: Session | str | Path, *, depth_rule: str = "auto"
         session whose bevel has no vernier.
     """
     t0 = time.perf_counter()
-    if isinstance(bevel_threshold, bool) or not (
+    if bevel_threshold != "auto" and (isinstance(bevel_threshold, bool) or not (
             isinstance(bevel_threshold, int | float) and math.isfinite(bevel_threshold)
-            and bevel_threshold > 0):
-        raise InputError(f"bevel_threshold must be a positive number, got {bevel_threshold!r}")
+            and bevel_threshold > 0)):
+        raise InputError(f"bevel_threshold must be a positive number or 'auto', got "
+                         f"{bevel_threshold!r}")
     if not isinstance(session, Session):
         session = read_session(session)
     cfg = session.config

@@ -62,10 +62,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                         "hold; for a gel seen to relax, synchronise the clock on the elastic "
                         "force and report E as the instantaneous E_0 with the relaxed E_inf "
                         "beside it. off: the forces as measured")
-    p.add_argument("--bevel-threshold", type=float, default=12.0, metavar="SNR",
-                   help="for a bevel mark (bevel_angle_deg = 0): the signal-to-noise ratio "
-                        "above which the mark is seen, in two consecutive frames or once above "
-                        "twice it (default 12; rejected.csv gives each press's best)")
+    p.add_argument("--bevel-threshold", type=_threshold, default="auto", metavar="SNR|auto",
+                   help="for a bevel mark (bevel_angle_deg = 0): when the mark is seen. auto "
+                        "(default): from the session's own no-contact frames (a frame 3 sd of "
+                        "their scores above their median, with the next 3 averaging 4 sd / 2 "
+                        "above it); a number: the fixed rule, two consecutive frames above it "
+                        "or one above twice it (rejected.csv gives each press's best)")
     p.add_argument("--ft-zero", choices=("auto", "constant", "drift", "off"), default="auto",
                    help="the F/T's zero, read between the presses once each release has "
                         "settled: constant takes its mean off fz (a sensor tared before the "
@@ -77,6 +79,16 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--no-report", action="store_true",
                    help="write measurements.csv, fit.json and rejected.csv only")
     p.set_defaults(func=run)
+
+
+def _threshold(text: str) -> float | str:
+    """``--bevel-threshold``: 'auto' or a number (checked by calibrate_session)."""
+    if text == "auto":
+        return text
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a number or 'auto', got {text!r}") from None
 
 
 def _reconstructor(session):

@@ -73,6 +73,20 @@ BACKGROUND_DEGREE = 4
 MAX_CLOSURE_MM = 0.1
 #: Vernier: least fraction of the bevel's band inside the image.
 MIN_BEVEL_COVERAGE = 0.6
+#: Mark, ``bevel_threshold='auto'``: a frame shows the mark when its score lies this many
+#: sds of the session's no-contact frames above their median...
+MARK_Z_FRAME = 2.5
+#: ... and the mean of it and the next MARK_BLOCK - 1 frames (the mark stays through the
+#: hold) this many sds of such a mean (sd / sqrt(MARK_BLOCK)).
+MARK_Z_BLOCK = 4.0
+MARK_BLOCK = 4
+#: No-contact frames scored per press for the null.
+MARK_NULL_FRAMES = 6
+#: A press's approach frames under this share of its largest fz are before the land can
+#: reach the gel (depth under about 0.6 of the deepest: w0 + an overshoot of less than 60 %
+#: of w0): the press's own baseline of the mark's score.
+MARK_BASELINE_FORCE = 0.6
+
 #: Vernier: least colour contrast of a band (:attr:`BevelReading.contrast`), as a fraction
 #: of the median over the session's long, clear bands. The flanks tilt the gel by theta
 #: whatever the band's length, so real bands keep most of it: 0.41 or more of the median
@@ -234,6 +248,11 @@ class Certification:
         First and last frame in contact of every press found, certified or
         not, camera clock, s (where the F/T's zero is read between them:
         :func:`force_zero`).
+    mark_rule : dict or None
+        For a bevel mark: when it counts as seen. ``{'rule': 'auto', 'median',
+        'sd', 'n_frames', 'frame', 'block'}`` (the null of the session's
+        no-contact frames and the two thresholds) or ``{'rule': 'fixed',
+        'threshold'}``; None for a vernier.
     """
 
     presses: list[CertifiedPress]
@@ -246,6 +265,7 @@ class Certification:
     warnings: list[str] = field(default_factory=list)
     bevel_optics: dict | None = None
     press_spans_s: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+    mark_rule: dict | None = None
 
 
 class _Sized:
@@ -288,7 +308,8 @@ def _saturated(frame: np.ndarray, reference: np.ndarray, mask: np.ndarray) -> fl
     return float(new.mean()) if new.size else 0.0
 
 
-def certify_session(session, *, min_contact_px: int = 200, bevel_threshold: float = 12.0,
+def certify_session(session, *, min_contact_px: int = 200,
+                    bevel_threshold: float | str = "auto",
                     progress: Callable | None = None, sync_fz_n: np.ndarray | None = None,
                     contact_area_px: np.ndarray | None = None) -> Certification:
     """Find and certify every press of a session.
@@ -298,12 +319,22 @@ def certify_session(session, *, min_contact_px: int = 200, bevel_threshold: floa
     session : tactilevision.io.Session
     min_contact_px : int, default 200
         A frame is in contact when its contact mask holds this many pixels.
-    bevel_threshold : float, default 12.0
-        For a bevel mark with no vernier (``bevel_angle_deg = 0``): the
-        :func:`bevel_score` above which it is seen (at most 9.0 on approach
-        frames before the mark, at least 16.6 with it, over the 48 good
-        presses of the legacy sample session; ``benchmarks/bench_certification.py``).
-        A machined bevel is seen above :data:`VERNIER_SNR`.
+    bevel_threshold : float or 'auto', default 'auto'
+        For a bevel mark with no vernier (``bevel_angle_deg = 0``): when the
+        mark is seen. ``'auto'``: from the session's own frames. The score
+        (:func:`bevel_score`) of no-contact frames at each press's mark
+        (:data:`MARK_NULL_FRAMES` per press, the nearest in time) gives the
+        null's median m and robust sd s (1.4826 MAD); a frame shows the mark
+        when its score exceeds m + :data:`MARK_Z_FRAME` s and the mean of it
+        and the next frames (:data:`MARK_BLOCK` in all, while the press
+        lasts) exceeds m + :data:`MARK_Z_BLOCK` s / sqrt(n): the mark stays
+        through the hold, noise does not (Taxim's thin mark line scored 7 to
+        9.5 against a null of 4.9 +- 0.9, under the old fixed 12). A number:
+        the fixed rule, two consecutive frames above it or one above twice it
+        (at most 9.0 on approach frames before the mark, at least 16.6 with
+        it, over the 48 good presses of the legacy sample session;
+        ``benchmarks/bench_certification.py``). A machined bevel is seen
+        above :data:`VERNIER_SNR` either way.
     progress : callable, optional
         Wraps the frame iterator (e.g. ``tqdm``).
     sync_fz_n : (M,) float64 ndarray, optional
@@ -351,8 +382,26 @@ def certify_session(session, *, min_contact_px: int = 200, bevel_threshold: floa
                         f"{len(runs)}: presses are matched to the nearest commanded position")
     geom = BevelGeometry(offset_mm=cfg.bevel_offset_mm, direction_deg=cfg.bevel_direction_deg,
                          angle_deg=cfg.bevel_angle_deg, length_mm=cfg.bevel_length_mm)
+    mark_rule = None
+    if geom.tan_theta <= 0:
+        if bevel_threshold == "auto":
+            mark_rule = _mark_null(session, runs, area, min_contact_px, sigma)
+            if mark_rule is None:
+                warnings.append("too few frames without contact to read the mark's noise from: "
+                                "the fixed threshold 12 is used")
+            else:
+                warnings.append(
+                    f"bevel mark seen from the session's own frames: {mark_rule['n_frames']} "
+                    f"no-contact frames score {mark_rule['median']:.2f} at the presses' marks, "
+                    f"+- {mark_rule['sd']:.2f} from frame to frame; a frame shows it "
+                    f"{MARK_Z_FRAME:g} sd above its press's approach, when it and the next "
+                    f"{MARK_BLOCK - 1} average {MARK_Z_BLOCK:g} sd / sqrt({MARK_BLOCK}) above "
+                    "it and it lies nearer the mark's level than the approach's")
+        if mark_rule is None:
+            thr = 12.0 if bevel_threshold == "auto" else float(bevel_threshold)
+            mark_rule = {"rule": "fixed", "threshold": thr}
     ctx = _PressContext(session=session, sigma=sigma, area=area, period=period, offset=offset,
-                        geom=geom, n_runs=len(runs), bevel_threshold=bevel_threshold)
+                        geom=geom, n_runs=len(runs), mark_rule=mark_rule)
 
     certified: list[CertifiedPress] = []
     rejected: list[Rejection] = []
@@ -377,6 +426,7 @@ def certify_session(session, *, min_contact_px: int = 200, bevel_threshold: floa
     return Certification(presses=certified, rejected=rejected, clock=clock,
                          clock_offset_s=offset, clock_source=source, noise_sigma=sigma,
                          contact_area_px=area, warnings=warnings, bevel_optics=optics,
+                         mark_rule=mark_rule,
                          press_spans_s=np.array([(times[r[0]], times[r[-1]]) for r in runs],
                                                 np.float64).reshape(-1, 2))
 
@@ -416,7 +466,7 @@ class _PressContext:
     offset: float
     geom: BevelGeometry
     n_runs: int
-    bevel_threshold: float
+    mark_rule: dict | None
 
     @property
     def vernier(self) -> bool:
@@ -524,28 +574,110 @@ def _mark_score(ctx: _PressContext, centre: tuple[float, float], i: int) -> floa
                              length_mm=cfg.bevel_length_mm))
 
 
+def _mark_null(session, runs: list[np.ndarray], area: np.ndarray, min_contact_px: int,
+               sigma: float) -> dict | None:
+    """The mark's score on frames without contact, at each press's mark: the null that
+    ``bevel_threshold='auto'`` reads its thresholds from: the median, and the frame-to-frame
+    sd at one place (each press's scores about their own median, pooled; the places' own
+    levels differ more than the frames at one place do). None with fewer than 10."""
+    cfg = session.config
+    ref = session.reference
+    free = np.flatnonzero(area < min_contact_px)
+    if free.size == 0:
+        return None
+    scores, resid = [], []
+    for r in runs:
+        peak = int(r[np.argmax(area[r])])
+        ys, xs = np.nonzero(contact_mask(session.frame(peak), ref, sigma=sigma))
+        if xs.size == 0:
+            continue
+        centre = (float(xs.mean()), float(ys.mean()))
+        near = free[np.argsort(np.abs(free - r[0]), kind="stable")[:MARK_NULL_FRAMES]]
+        v = np.array([bevel_score(session.frame(int(i)), ref, centre, cfg.mm_per_px,
+                                  offset_mm=cfg.bevel_offset_mm,
+                                  direction_deg=cfg.bevel_direction_deg,
+                                  length_mm=cfg.bevel_length_mm) for i in near])
+        v = v[np.isfinite(v)]
+        scores += list(v)
+        if v.size >= 2:
+            # the frame-to-frame noise at one place: each press's scores about their median
+            resid += list((v - np.median(v)) * np.sqrt(v.size / (v.size - 1)))
+    v = np.asarray(scores, np.float64)
+    if v.size < 10 or len(resid) < 10:
+        return None
+    med = float(np.median(v))
+    res = np.asarray(resid)
+    sd = max(1.4826 * float(np.median(np.abs(res - np.median(res)))), 1e-3)
+    return {"rule": "auto", "median": med, "sd": sd, "n_frames": int(v.size),
+            "frame": med + MARK_Z_FRAME * sd,
+            "block": med + MARK_Z_BLOCK * sd / np.sqrt(MARK_BLOCK)}
+
+
+def _mark_baseline(ctx: _PressContext, centre: tuple[float, float], run: np.ndarray,
+                   fallback: float) -> tuple[float, int]:
+    """The mark's score on this press's own approach, before the land can reach the gel:
+    the median over its frames whose fz (the F/T log at their time) is under
+    :data:`MARK_BASELINE_FORCE` of the press's largest (the indenter's contact moves the
+    score at the mark on some renderers: Taxim's by up to 4 sd); `fallback` without such
+    frames. Returns the baseline and the frames it used."""
+    session = ctx.session
+    tf, fz = session.force_times_s, session.forces_n[:, 2]
+    t = session.frame_times_s[run] + ctx.offset
+    f = np.interp(t, tf, fz)
+    early = run[f < MARK_BASELINE_FORCE * float(np.max(f))] if f.size else run[:0]
+    if early.size == 0:
+        return fallback, 0
+    return float(np.median([_mark_score(ctx, centre, int(i)) for i in early])), int(early.size)
+
+
 def _mark_onset(ctx: _PressContext, centre: tuple[float, float], cand: np.ndarray,
                 run: np.ndarray) -> tuple[int, float]:
-    """A bevel mark with no vernier: the first frame of `cand` where it shows and shows in
-    the next frame too (or at twice the threshold), then back through the press's earlier
+    """A bevel mark with no vernier: the first frame of `cand` where it shows firmly
+    (:func:`certify_session`'s `bevel_threshold`), then back through the press's earlier
     frames while they show it too (`cand` starts near full contact, which the sink-in
     ring's growth can put frames after the mark's first showing), ``(frame, score)``."""
     cfg = ctx.session.config
-    thr = ctx.bevel_threshold
+    rule = ctx.mark_rule
     scores = np.array([_mark_score(ctx, centre, int(i)) for i in cand])
-    seen = scores > thr
-    firm = seen & (np.append(seen[1:], False) | (scores > 2 * thr))
+    if rule["rule"] == "auto":
+        base, n_base = _mark_baseline(ctx, centre, run, rule["median"])
+        thr = base + MARK_Z_FRAME * rule["sd"]
+        seen = scores > thr
+        firm = np.zeros(seen.shape, bool)
+        for j in np.flatnonzero(seen):
+            block = scores[j:j + MARK_BLOCK]
+            after = scores[j + 1:j + 1 + MARK_BLOCK]
+            # the block is the mark, and frame j looks like it rather than the approach (a
+            # frame just before the step, lifted by noise or the approach, is not the onset)
+            firm[j] = (block.mean() > base + MARK_Z_BLOCK * rule["sd"] / np.sqrt(block.size)
+                       and (after.size == 0
+                            or scores[j] > 0.5 * (base + float(np.median(after)))))
+        text = (f"the rule from the session's own frames: this press's approach scores "
+                f"{base:.2f} ({n_base} frames), the no-contact frames' sd {rule['sd']:.2f}; a "
+                f"frame above {thr:.2f} whose next {MARK_BLOCK - 1} average above "
+                f"{base + MARK_Z_BLOCK * rule['sd'] / np.sqrt(MARK_BLOCK):.2f} with it")
+    else:
+        thr = rule["threshold"]
+        seen = scores > thr
+        firm = seen & (np.append(seen[1:], False) | (scores > 2 * thr))
+        text = f"the rule: two consecutive frames above {thr:g}, or one above {2 * thr:g}"
     if not firm.any():
         raise _Reject("bevel never seen", f"no frame of the press shows a mark "
                       f"{cfg.bevel_offset_mm:g} mm from the indenter at "
                       f"{cfg.bevel_direction_deg:g} deg (best signal-to-noise ratio "
-                      f"{scores.max():.1f}; the rule: two consecutive frames above "
-                      f"{thr:g}, or one above {2 * thr:g})", score=float(scores.max()))
-    onset, score = int(cand[np.argmax(firm)]), float(scores[np.argmax(firm)])
+                      f"{scores.max():.1f}; {text})", score=float(scores.max()))
+    first = int(np.argmax(firm))
+    onset, score = int(cand[first]), float(scores[first])
+    # back through earlier frames while they show it too; with the session's rule, a frame
+    # must also lie nearer the mark's level (its first block's median) than the baseline:
+    # a faint mark's noise before the step is not the mark
+    back = thr
+    if rule["rule"] == "auto":
+        back = max(thr, 0.5 * (base + float(np.median(scores[first:first + MARK_BLOCK]))))
     j = int(np.searchsorted(run, onset))
     while j > 0:
         before = _mark_score(ctx, centre, int(run[j - 1]))
-        if not before > thr:
+        if not before > back:
             break
         j -= 1
         onset, score = int(run[j]), before
