@@ -593,6 +593,12 @@ def _period(session: Session) -> float:
     return float(np.median(np.diff(t))) if t.size > 1 else 0.0
 
 
+#: The stiffening of eq. (5) that the 'mark' rule's dP/dw assumes: the FEM's secant beta
+#: of a bonded layer at a/h 0.5 to 1.2 and nu 0.45 to 0.499 lies in 0.6 to 1.0, which moves
+#: dP/dw by under 3 % at w/h <= 0.2 (within mark_shared_mm's STIFFNESS_REL).
+MARK_BETA = 0.8
+
+
 def _mark_rule(presses, force: np.ndarray, fit_at, cfg, period: float):
     """The ``'mark'`` depth rule: depths from w0, the onset's travel and the force's rise
     past the onset (:func:`~tactilevision.contact.mark_depths`), iterated with the fit's
@@ -608,31 +614,31 @@ def _mark_rule(presses, force: np.ndarray, fit_at, cfg, period: float):
     sem = np.array([p.force_sem_n for p in presses])
     h = cfg.gel_thickness_mm
     depth = w0 + travel / 2
-    fit = None
     after = travel / 2
-    for _ in range(8):
-        if fit is not None and np.isfinite(fit.c_n_per_mm) and fit.c_n_per_mm > 0:
-            mid = depth - after / 2      # dP/dw between the onset and the window
-            k = fit.c_n_per_mm * (1 + 2 * fit.beta * mid / h)
-        else:
-            k = force / np.maximum(depth, 1e-9)     # the secant, before any fit
+    for _ in range(20):
+        # dP/dw between the crossing and the window, from each press's own P/w with eq. 5's
+        # shape at a typical beta (not the fit's: a low beta would give a low dP/dw, deeper
+        # deep presses and a lower beta again, a loop that ran nu to the table's bottom)
+        x = (depth - after / 2) / h
+        k = force / np.maximum(depth, 1e-9) * (1 + 2 * MARK_BETA * x) / (1 + MARK_BETA * x)
         k = np.maximum(k, 1e-6)
         new, std, after = mark_depths(w0, force, f_on, k, force_sem_n=sem,
                                       force_crossing_sd_n=sem_on, travel_mm=travel)
-        fit = fit_at(new, std)
         moved = float(np.max(np.abs(new - depth)))
         depth = new
-        if moved < 1e-5:
+        if moved < 1e-6:
             break
+    fit = fit_at(depth, std)
     half = mark_shared_mm(travel, after, period)
     unread = int(np.sum(~np.isfinite(f_on)))
     notes = [f"depth rule 'mark': w = w0 + the depth past w0 that the force reads, from the "
              "crossing of w0 (P(w0) of each indenter: the intersection of its presses' frame "
              "periods before the mark first showed) to the force window "
              f"({1e3 * float(np.median(after)):.1f} um median, "
-             f"{1e3 * float(np.min(after)):.1f} to {1e3 * float(np.max(after)):.1f} um; dP/dw of "
-             f"eq. 5); shared by every press, +-{1e3 * float(np.median(half)):.1f} um median "
-             "(the clock, dP/dw), carried whole into E's and nu's intervals"
+             f"{1e3 * float(np.min(after)):.1f} to {1e3 * float(np.max(after)):.1f} um; dP/dw "
+             f"from each press's P/w, eq. 5 at beta {MARK_BETA:g}); shared by every press, "
+             f"+-{1e3 * float(np.median(half)):.1f} um median (the clock, dP/dw), carried whole "
+             "into E's and nu's intervals"
              + (f"; {unread} presses without the crossing's force keep w0 + half a frame's "
                 "travel" if unread else "")
              + (f"; the presses of {disjoint} indenter(s) do not agree on P(w0) (their mean is "
@@ -653,20 +659,32 @@ def _with_shared_depth(fit: IndentationFit, fit_at, depth: np.ndarray, std: np.n
         return fit
     E_lo, E_hi = fit.E_ci95_mpa
     nu_lo, nu_hi = fit.nu_ci95
-    moved = []
+    moved, failed = [], []
     for shift in (low, high):
         if not np.any(shift != 0):
             continue
         d = depth + shift
-        if np.any(d <= 0):
+        try:
+            if np.any(d <= 0):
+                raise InputError("a depth at the error's bound is not positive")
+            f2 = fit_at(d, std, force)
+        except InputError as exc:
+            failed.append(str(exc))
             continue
-        f2 = fit_at(d, std, force)
         if not (np.isfinite(f2.E_mpa) and np.isfinite(f2.nu)):
+            failed.append("E and nu out of the beta table there")
             continue
         moved.append(f2)
         E_lo, E_hi = min(E_lo, f2.E_mpa, f2.E_ci95_mpa[0]), max(E_hi, f2.E_mpa, f2.E_ci95_mpa[1])
         nu_lo = min(nu_lo, f2.nu, f2.nu_ci95[0])
         nu_hi = max(nu_hi, f2.nu, f2.nu_ci95[1])
+    if failed:
+        # a bound that cannot be fitted: the intervals cannot carry the error, and say so
+        note = (f"the shared depth error ({1e3 * float(np.median(low)):+.1f} to "
+                f"{1e3 * float(np.median(high)):+.1f} um median) could not be carried into the "
+                f"intervals: at its bound {'; '.join(failed)}; E's and nu's intervals hold the "
+                "press scatter only and are too narrow")
+        fit = replace(fit, notes=(*fit.notes, note))
     if not moved:
         return fit
     note = (f"shared depth error {1e3 * float(np.median(low)):+.1f} to "

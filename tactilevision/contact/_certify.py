@@ -746,10 +746,11 @@ def _crossing_force(session, run: np.ndarray, t_on: float, offset: float, period
 
     The mark first shows at `t_on` (F/T clock), so the land reached w0 within the frame
     period before, and not after the stage stopped (the hold's start, :func:`hold_start`):
-    the crossing is taken as uniform in time over ``[t_on - period, min(t_on, t_hold)]``,
-    and fz there (a 10 ms moving average) gives its mean and spread. A hold that started
-    before that period (the mark seen late) puts the crossing in the period before the
-    hold's start. ``(nan, nan)`` when the log does not cover it.
+    fz at the ends of ``[t_on - period, min(t_on, t_hold)]`` (a 10 ms moving average,
+    read at the instants) brackets P(w0), widened by twice that average's noise. Returned
+    as the bracket's middle and the sd of a uniform over it. A hold that started before
+    that period (the mark seen late) puts the crossing in the period before the hold's
+    start. ``(nan, nan)`` when the log does not cover it.
     """
     tf, fz = session.force_times_s, session.forces_n[:, 2]
     times = session.frame_times_s
@@ -766,14 +767,16 @@ def _crossing_force(session, run: np.ndarray, t_on: float, offset: float, period
     if sel.size < k + 2:
         return float("nan"), float("nan")
     smooth = np.convolve(fz[sel], np.ones(k) / k, mode="same")
-    inside = (tf[sel] >= t_a) & (tf[sel] <= t_b)
-    inside[: k // 2] = inside[len(inside) - k // 2:] = False      # the average's own edges
-    if not inside.any():
+    ok = np.arange(sel.size)
+    ok = ok[(ok >= k // 2) & (ok < sel.size - k // 2)]          # the average's own edges
+    if ok.size < 2:
         return float("nan"), float("nan")
-    vals = smooth[inside]
+    f_a, f_b = np.interp([t_a, t_b], tf[sel][ok], smooth[ok])
     noise = float(np.std(np.diff(fz[sel]))) / np.sqrt(2.0 * k)      # one smoothed sample's
-    spread = float(np.std(vals)) if vals.size > 1 else 0.0
-    return float(vals.mean()), float(np.hypot(spread, noise))
+    # the bracket [fz(t_a), fz(t_b)] holds P(w0), widened by twice the smoothed noise; given
+    # as its middle and the sd of a uniform over it (crossing_forces reads it back)
+    lo, hi = min(f_a, f_b) - 2 * noise, max(f_a, f_b) + 2 * noise
+    return float(0.5 * (lo + hi)), float((hi - lo) / np.sqrt(12.0))
 
 
 def _onset_travel(session, run: np.ndarray, onset: int, offset: float, period: float,
