@@ -166,6 +166,8 @@ def result_dict(cal) -> dict:
         "warnings": list(cal.warnings),
         "seconds": cal.seconds,
         "ft_zero": cal.ft_zero.to_json_dict() if cal.ft_zero is not None else None,
+        "mark_rule": ({k: (float(v) if isinstance(v, float) else v)
+                       for k, v in c.mark_rule.items()} if c.mark_rule is not None else None),
     })
     if cal.relaxation is not None:
         r = cal.relaxation.to_json_dict()
