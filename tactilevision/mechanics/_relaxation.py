@@ -568,24 +568,17 @@ def _tau_profile(curves: list[tuple[np.ndarray, np.ndarray, float]], tau: float,
         return float(optimize.minimize_scalar(rss_g, bounds=(0.0, 0.99), method="bounded",
                                               options={"xatol": 1e-6}).fun)
 
-    lo = 0.0 if rss_flat - rss1 <= crit else None
-    hi = np.inf if rss_line - rss1 <= crit else None
-    if lo is None:
-        grid = tau * np.geomspace(1.0, 1e-3, 25)[1:]
+    def last_inside(factor: float) -> float:
+        """Walk out from tau by up to `factor` until the profile leaves the interval."""
         inside = tau
-        for tt in grid:
+        for tt in tau * np.geomspace(1.0, factor, 25)[1:]:
             if prof(tt) - rss1 > crit:
                 break
             inside = tt
-        lo = float(inside)
-    if hi is None:
-        grid = tau * np.geomspace(1.0, max(1e3, 100 * longest / tau), 25)[1:]
-        inside = tau
-        for tt in grid:
-            if prof(tt) - rss1 > crit:
-                break
-            inside = tt
-        hi = float(inside)
+        return float(inside)
+
+    lo = 0.0 if rss_flat - rss1 <= crit else last_inside(1e-3)
+    hi = np.inf if rss_line - rss1 <= crit else last_inside(max(1e3, 100 * longest / tau))
     return float(lo), float(hi)
 
 
