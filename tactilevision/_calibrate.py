@@ -47,12 +47,15 @@ from .contact import (
     Certification,
     CertifiedPress,
     ForceZero,
+    approach_start,
     bevel_force,
     bulge_at,
     certified_depths,
     certify_session,
     crossing_forces,
+    force_window,
     force_zero,
+    hold_end,
     mark_depths,
     mark_shared_mm,
 )
@@ -116,9 +119,9 @@ class SessionCalibration:
         not yet taken off; empty otherwise. The fit uses it.
     force_fit_n : (N,) float64 ndarray
         The force of each certified press exactly as the fit used it, N: the
-        F/T window's mean (``force0_n`` for a relaxing gel) less the bevel's
-        band; the figures and the report show these (empty when nothing was
-        fitted).
+        F/T window's mean (``force0_n`` for a relaxing gel), the F/T's zero
+        and the bevel's band taken off; the figures and the report show
+        these (empty when nothing was fitted).
     ft_zero : ForceZero or None
         The F/T's zero read between the presses (:func:`~tactilevision.contact.
         force_zero`) and what was taken off the forces (``ft_zero.subtracted``);
@@ -228,8 +231,6 @@ def _hold_spans(session: Session, certification: Certification
     """Each certified press's hold on the F/T clock, (press, start, end), s: from its
     arrival at depth to the start of its release (presses whose release is not found left
     out)."""
-    from .contact import hold_end
-
     t, fz = np.asarray(session.force_times_s, np.float64), np.asarray(session.forces_n[:, 2])
     off = certification.clock_offset_s
     spans = []
@@ -244,8 +245,6 @@ def _hold_spans(session: Session, certification: Certification
 def _hold_curves(session: Session, certification: Certification, max_points: int = 1000
                  ) -> dict[str, np.ndarray]:
     """The columns of ``holds.csv`` (:meth:`SessionCalibration.holds`)."""
-    from .contact import approach_start
-
     t, fz = np.asarray(session.force_times_s, np.float64), np.asarray(session.forces_n[:, 2])
     press, ts, fs, ramps = [], [], [], []
     for p, t0, t1 in _hold_spans(session, certification):
@@ -276,9 +275,6 @@ def _relaxation(session: Session, cert: Certification, progress: Callable | None
     Returns the certification, the fit (None when not tested), notes, and each certified
     press's force at the instant of loading (the F/T window's mean of the elastic force
     behind the log; None unless the gel relaxes)."""
-
-    from .contact import force_window
-
     def fit(c: Certification, holds: dict[str, np.ndarray]) -> RelaxationFit:
         # with each press's time and indenter: softening, which does not recover between
         # presses, is told from relaxation, which does
