@@ -515,7 +515,12 @@ def fit_relaxation(press: np.ndarray, t_s: np.ndarray, fz_n: np.ndarray,
                f"{reason}; only that rate is (g phi / tau = {-r_w:.3g} 1/s for a slow "
                "relaxation): g and tau are not reported and the gel is not called relaxing; "
                "longer holds, or holds of different lengths, would tell"
-               + (f" (no trend between presses: {trend})" if trend else ""))
+               + ("" if not trend else
+                  f" (the presses' forces at one depth move by {trend} between presses"
+                  + ("; the same rate as the holds', too weak alone to name a softening gel "
+                     "(3 se): diagnose's structure along time_s tells"
+                     if abs(r_w - r_b) <= 3.0 * math.hypot(se_w, se_b) and r_b * r_w > 0
+                     else "") + ")"))
     notes.append(why)
     if verdict == "relaxing" and span < 0.3 * tau:
         notes.append(f"the holds last {span:.3g} s, under a third of tau = {tau:.3g} s: the "
