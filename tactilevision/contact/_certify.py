@@ -250,9 +250,10 @@ class Certification:
         :func:`force_zero`).
     mark_rule : dict or None
         For a bevel mark: when it counts as seen. ``{'rule': 'auto', 'median',
-        'sd', 'n_frames', 'frame', 'block'}`` (the null of the session's
-        no-contact frames and the two thresholds) or ``{'rule': 'fixed',
-        'threshold'}``; None for a vernier.
+        'sd', 'n_frames', 'z_frame', 'z_block', 'block_frames'}`` (the null of
+        the session's no-contact frames, and how many of its sds above each
+        press's approach a frame, and a block of frames, must lie) or
+        ``{'rule': 'fixed', 'threshold'}``; None for a vernier.
     """
 
     presses: list[CertifiedPress]
@@ -609,8 +610,7 @@ def _mark_null(session, runs: list[np.ndarray], area: np.ndarray, min_contact_px
     res = np.asarray(resid)
     sd = max(1.4826 * float(np.median(np.abs(res - np.median(res)))), 1e-3)
     return {"rule": "auto", "median": med, "sd": sd, "n_frames": int(v.size),
-            "frame": med + MARK_Z_FRAME * sd,
-            "block": med + MARK_Z_BLOCK * sd / np.sqrt(MARK_BLOCK)}
+            "z_frame": MARK_Z_FRAME, "z_block": MARK_Z_BLOCK, "block_frames": MARK_BLOCK}
 
 
 def _mark_baseline(ctx: _PressContext, centre: tuple[float, float], run: np.ndarray,
