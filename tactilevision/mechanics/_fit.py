@@ -647,6 +647,18 @@ def _modulus(rel, c: float, nu: float, a: float, ah: float, kappa_source: str,
     return c * (1 - nu ** 2) / (2 * a * k), k
 
 
+def _modulus_over(rel, c: float, cov: np.ndarray, tq: float, nu: float, nus: tuple[float, ...],
+                  a: float, ah: float, kappa_source: str, contact: str
+                  ) -> tuple[float, tuple[float, float], float]:
+    """E at (c, nu), its interval over `nus` with c at its own bounds, and kappa at nu:
+    the modulus of a fit whose nu is put at an edge of the beta table."""
+    E, kap = _modulus(rel, c, nu, a, ah, kappa_source, contact)
+    c_se = float(np.sqrt(cov[0, 0]))
+    Es = [_modulus(rel, cc, nn, a, ah, kappa_source, contact)[0]
+          for cc in (c - tq * c_se, c + tq * c_se) for nn in nus]
+    return E, (float(min(Es)), float(max(Es))), kap
+
+
 def _at_table_top(rel, beta_lo: float, c: float, cov: np.ndarray, tq: float, a: float,
                   ah: float, kappa_source: str, contact: str, confidence: float):
     """nu, its interval, E, its interval and kappa for beta at the top of the FEM table.
@@ -663,16 +675,14 @@ def _at_table_top(rel, beta_lo: float, c: float, cov: np.ndarray, tq: float, a: 
     nu_peak = float(rel.nu_grid[last])
     nu_lo, nu_hi = nu_range_reaching(rel.beta, float(rel.nu_grid[first]),
                                      float(rel.nu_grid[-1]), nu_peak, beta_lo)
-    E, kap = _modulus(rel, c, nu_peak, a, ah, kappa_source, contact)
-    c_se = float(np.sqrt(cov[0, 0]))
-    Es = [_modulus(rel, cc, nn, a, ah, kappa_source, contact)[0]
-          for cc in (c - tq * c_se, c + tq * c_se) for nn in (nu_lo, nu_hi)]
+    E, E_ci, kap = _modulus_over(rel, c, cov, tq, nu_peak, (nu_lo, nu_hi), a, ah, kappa_source,
+                                 contact)
     note = (f"beta lies above the largest beta of the table ({rel.beta_max:.4f}, at nu = "
             f"{nu_peak:.3f}) but within its {confidence:.0%} interval (lower bound "
             f"{beta_lo:.4f}): nu is put at the table's top, {nu_peak:.3f}, with the interval "
             f"[{nu_lo:.4f}, {nu_hi:.4f}] of the nu whose beta reaches that bound; E at "
             f"nu = {nu_peak:.3f}, its interval over that range")
-    return nu_peak, (nu_lo, nu_hi), E, (float(min(Es)), float(max(Es))), kap, note
+    return nu_peak, (nu_lo, nu_hi), E, E_ci, kap, note
 
 
 def _at_table_bottom(rel, beta_hi: float, c: float, cov: np.ndarray, tq: float, a: float,
@@ -700,13 +710,11 @@ def _at_table_bottom(rel, beta_hi: float, c: float, cov: np.ndarray, tq: float, 
     nu_bottom = float(rel.nu_min)
     nu_lo, nu_hi = nu_range_below(rel.beta, float(rel.nu_grid[0]), float(rel.nu_grid[-1]),
                                   nu_bottom, beta_hi)
-    E, kap = _modulus(rel, c, nu_bottom, a, ah, kappa_source, contact)
-    c_se = float(np.sqrt(cov[0, 0]))
-    Es = [_modulus(rel, cc, nn, a, ah, kappa_source, contact)[0]
-          for cc in (c - tq * c_se, c + tq * c_se) for nn in (nu_lo, nu_bottom, nu_hi)]
+    E, E_ci, kap = _modulus_over(rel, c, cov, tq, nu_bottom, (nu_lo, nu_bottom, nu_hi), a, ah,
+                                 kappa_source, contact)
     note = (f"beta lies below the smallest beta of the table ({rel.beta_min:.4f}, at nu = "
             f"{nu_bottom:.3f}) but within its {confidence:.0%} interval (upper bound "
             f"{beta_hi:.4f}): nu is put at the table's bottom, {nu_bottom:.3f}, with the "
             f"interval [{nu_lo:.4f}, {nu_hi:.4f}] of the nu whose beta is at most that bound; "
             f"E at nu = {nu_bottom:.3f}, its interval over that range")
-    return nu_bottom, (nu_lo, nu_hi), E, (float(min(Es)), float(max(Es))), kap, note
+    return nu_bottom, (nu_lo, nu_hi), E, E_ci, kap, note

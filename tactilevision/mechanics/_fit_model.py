@@ -7,10 +7,12 @@ from collections.abc import Mapping
 from dataclasses import replace
 
 import numpy as np
+from scipy import stats
+from scipy.interpolate import PchipInterpolator
 
 from .._checks import InputError
 from ._catalogue import make_effect
-from ._fem_tables import TABLE_EXTRAPOLATION
+from ._fem_tables import TABLE_EXTRAPOLATION, kappa_n
 from ._fit import (
     MAX_W_OVER_H,
     _geometry,
@@ -20,6 +22,7 @@ from ._fit import (
     nu_range_reaching,
 )
 from ._model import IndentationModel, ModelFit
+from ._neohookean import neo_hookean_constants
 from ._result import IndentationFit
 
 __all__ = ["fit_model"]
@@ -208,10 +211,6 @@ def _consistent_material(fit: IndentationFit, model: IndentationModel, mf: Model
     relaxation with tau -> 0 is a constant factor on c, which moved E by up
     to 40 % on generated tables).
     """
-    from scipy import stats
-
-    from ._fem_tables import kappa_n
-
     rel_lo, rel_hi = 0.33, 0.495
     w = np.asarray(columns["depth_mm"], np.float64)
     ws, inv = np.unique(w, return_inverse=True)
@@ -258,8 +257,6 @@ def _consistent_material(fit: IndentationFit, model: IndentationModel, mf: Model
                        nu_ci95=(math.nan, math.nan), out_of_table=True,
                        out_of_table_message=msg,
                        notes=(msg, *(n for n in fit.notes if n != fit.out_of_table_message)))
-    from scipy.interpolate import PchipInterpolator
-
     nu_of_b = PchipInterpolator(bg, nus)
     c_of_nu = PchipInterpolator(nus, cg)
     nu = float(nu_of_b(b))
@@ -272,8 +269,6 @@ def _consistent_material(fit: IndentationFit, model: IndentationModel, mf: Model
     with np.errstate(invalid="ignore"):   # NaN covariance of unidentified parameters
         nu_se = float(np.sqrt(g_nu @ cov @ g_nu))
         E_se = float(np.sqrt(g_E @ cov @ g_E))
-    from ._neohookean import neo_hookean_constants
-
     C10, D1 = neo_hookean_constants(E, nu)
     kept = _kept_notes(fit)
     note = ("E and nu read through this model: fitted by it to the FEM's P(w) at these depths "
@@ -304,28 +299,32 @@ def _model_table_top(fit: IndentationFit, model: IndentationModel, nus: np.ndarr
     (falling branch); E = c / c(nu) at the peak, its interval E over that range of nu with c
     at its own bounds.
     """
-    from scipy.interpolate import PchipInterpolator
-
-    from ._neohookean import neo_hookean_constants
-
     nu_peak = float(nus[top])
     nu_lo, nu_hi = nu_range_reaching(PchipInterpolator(nus, bg), float(nus[lo]),
                                      float(nus[-1]), nu_peak, b_lo)
-    c_of_nu = PchipInterpolator(nus, cg)
-    c_se = math.sqrt(cov[0, 0]) if np.isfinite(cov[0, 0]) else math.nan
-    E = c / float(c_of_nu(nu_peak))
-    Es = [cc / float(c_of_nu(nn)) for cc in (c - tq * c_se, c + tq * c_se)
-          for nn in (nu_lo, nu_peak, nu_hi)]
-    C10, D1 = neo_hookean_constants(E, nu_peak)
     note = (f"beta = {b:.4g} of the model {', '.join(model.names)} lies above the largest "
             f"beta the FEM gives this model at these depths ({bg[top]:.4g}, at nu = "
             f"{nu_peak:.3f}) but within its {confidence:.0%} interval (lower bound "
             f"{b_lo:.4g}): nu is put at the top, {nu_peak:.3f}, with the interval "
             f"[{nu_lo:.4f}, {nu_hi:.4f}] of the nu whose beta reaches that bound; E at "
             f"nu = {nu_peak:.3f}, its interval over that range")
-    return replace(fit, E_mpa=E, nu=nu_peak, E_ci95_mpa=(float(min(Es)), float(max(Es))),
-                   nu_ci95=(nu_lo, nu_hi), nu_se=math.nan, E_se_mpa=math.nan, C10_mpa=C10,
-                   D1_per_mpa=D1, kappa=c * (1 - nu_peak**2) / (2 * a * E), out_of_table=False,
+    return _at_model_edge(fit, nus, cg, nu_peak, (nu_lo, nu_hi), c, cov, tq, a, note)
+
+
+def _at_model_edge(fit: IndentationFit, nus: np.ndarray, cg: np.ndarray, nu: float,
+                   nu_ci: tuple[float, float], c: float, cov: np.ndarray, tq: float, a: float,
+                   note: str) -> IndentationFit:
+    """`fit` with nu put at an edge of the model's FEM grid: E = c / c(nu), its interval E
+    over ``nu_ci`` and nu with c at its own bounds, and `note`."""
+    c_of_nu = PchipInterpolator(nus, cg)
+    c_se = math.sqrt(cov[0, 0]) if np.isfinite(cov[0, 0]) else math.nan
+    E = c / float(c_of_nu(nu))
+    Es = [cc / float(c_of_nu(nn)) for cc in (c - tq * c_se, c + tq * c_se)
+          for nn in (nu_ci[0], nu, nu_ci[1])]
+    C10, D1 = neo_hookean_constants(E, nu)
+    return replace(fit, E_mpa=E, nu=nu, E_ci95_mpa=(float(min(Es)), float(max(Es))),
+                   nu_ci95=nu_ci, nu_se=math.nan, E_se_mpa=math.nan, C10_mpa=C10,
+                   D1_per_mpa=D1, kappa=c * (1 - nu**2) / (2 * a * E), out_of_table=False,
                    out_of_table_message=None, notes=(*_kept_notes(fit), note))
 
 
@@ -341,27 +340,13 @@ def _model_table_bottom(fit: IndentationFit, model: IndentationModel, nus: np.nd
     is the hull of the grid's nu whose beta is at most beta's upper bound `b_hi`; E =
     c / c(nu) there, its interval E over that range of nu with c at its own bounds.
     """
-    from scipy.interpolate import PchipInterpolator
-
-    from ._neohookean import neo_hookean_constants
-
     nu_bottom = float(nus[lo])
     nu_lo, nu_hi = nu_range_below(PchipInterpolator(nus, bg), float(nus[0]), float(nus[-1]),
                                   nu_bottom, b_hi)
-    c_of_nu = PchipInterpolator(nus, cg)
-    c_se = math.sqrt(cov[0, 0]) if np.isfinite(cov[0, 0]) else math.nan
-    E = c / float(c_of_nu(nu_bottom))
-    Es = [cc / float(c_of_nu(nn)) for cc in (c - tq * c_se, c + tq * c_se)
-          for nn in (nu_lo, nu_bottom, nu_hi)]
-    C10, D1 = neo_hookean_constants(E, nu_bottom)
     note = (f"beta = {b:.4g} of the model {', '.join(model.names)} lies below the smallest "
             f"beta the FEM gives this model at these depths ({bg[lo]:.4g}, at nu = "
             f"{nu_bottom:.3f}) but within its {confidence:.0%} interval (upper bound "
             f"{b_hi:.4g}): nu is put at the bottom, {nu_bottom:.3f}, with the interval "
             f"[{nu_lo:.4f}, {nu_hi:.4f}] of the nu whose beta is at most that bound; E at "
             f"nu = {nu_bottom:.3f}, its interval over that range")
-    return replace(fit, E_mpa=E, nu=nu_bottom, E_ci95_mpa=(float(min(Es)), float(max(Es))),
-                   nu_ci95=(nu_lo, nu_hi), nu_se=math.nan, E_se_mpa=math.nan, C10_mpa=C10,
-                   D1_per_mpa=D1, kappa=c * (1 - nu_bottom**2) / (2 * a * E),
-                   out_of_table=False, out_of_table_message=None,
-                   notes=(*_kept_notes(fit), note))
+    return _at_model_edge(fit, nus, cg, nu_bottom, (nu_lo, nu_hi), c, cov, tq, a, note)
