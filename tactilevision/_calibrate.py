@@ -589,17 +589,19 @@ def _period(session: Session) -> float:
     return float(np.median(np.diff(t))) if t.size > 1 else 0.0
 
 
-#: The stiffening of eq. (5) that the 'mark' rule's dP/dw assumes: the FEM's secant beta
-#: of a bonded layer at a/h 0.5 to 1.2 and nu 0.45 to 0.499 lies in 0.6 to 1.0, which moves
-#: dP/dw by under 3 % at w/h <= 0.2 (within mark_shared_mm's STIFFNESS_REL).
+#: The stiffening of eq. (5) that the 'mark' rule's dP/dw assumes. The FEM's beta of a
+#: bonded layer at w/h 0.05 to 0.2 (mechanics.beta_relation) is 0.77 to 0.82 at a/h 0.83
+#: and nu 0.45 to 0.499 (dP/dw within 1 %), and 0.37 to 1.14 over a/h 0.5 to 1.2: dP/dw
+#: then -6 to +4 % off at w/h 0.2, half that at 0.1, about mark_shared_mm's STIFFNESS_REL.
 MARK_BETA = 0.8
 
 
 def _mark_rule(presses, force: np.ndarray, fit_at, cfg, period: float):
-    """The ``'mark'`` depth rule: depths from w0, the onset's travel and the force's rise
-    past the onset (:func:`~tactilevision.contact.mark_depths`), iterated with the fit's
-    dP/dw. Returns the depths, their random uncertainty, the fit, the shared error as
-    (low, high) per press (mm), and the notes."""
+    """The ``'mark'`` depth rule: depths from w0 and the force's rise from each indenter's
+    P(w0) to the force window (:func:`~tactilevision.contact.crossing_forces`,
+    :func:`~tactilevision.contact.mark_depths`), dP/dw from each press's own P/w. Returns
+    the depths, their random uncertainty, the fit, the shared error as (low, high) per press
+    (mm), and the notes."""
     if any(p.rule != "onset" for p in presses):
         raise InputError("the 'mark' depth rule needs every press certified by a mark's onset")
     w0 = np.array([p.w0_mm for p in presses])
@@ -613,8 +615,7 @@ def _mark_rule(presses, force: np.ndarray, fit_at, cfg, period: float):
     after = travel / 2
     for _ in range(20):
         # dP/dw between the crossing and the window, from each press's own P/w with eq. 5's
-        # shape at a typical beta (not the fit's: a low beta would give a low dP/dw, deeper
-        # deep presses and a lower beta again, a loop that ran nu to the table's bottom)
+        # shape at a typical beta: the depths do not lean on the fit made from them
         x = (depth - after / 2) / h
         k = force / np.maximum(depth, 1e-9) * (1 + 2 * MARK_BETA * x) / (1 + MARK_BETA * x)
         k = np.maximum(k, 1e-6)

@@ -64,10 +64,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                         "beside it. off: the forces as measured")
     p.add_argument("--bevel-threshold", type=_threshold, default="auto", metavar="SNR|auto",
                    help="for a bevel mark (bevel_angle_deg = 0): when the mark is seen. auto "
-                        "(default): from the session's own no-contact frames (a frame 3 sd of "
-                        "their scores above their median, with the next 3 averaging 4 sd / 2 "
-                        "above it); a number: the fixed rule, two consecutive frames above it "
-                        "or one above twice it (rejected.csv gives each press's best)")
+                        "(default): from the session's own frames (a frame 2.5 sd of the "
+                        "no-contact frames' score noise above its press's approach, the next 3 "
+                        "averaging with it 2 sd above); a number: the fixed rule, two "
+                        "consecutive frames above it or one above twice it (rejected.csv gives "
+                        "each press's best)")
     p.add_argument("--ft-zero", choices=("auto", "constant", "drift", "off"), default="auto",
                    help="the F/T's zero, read between the presses once each release has "
                         "settled: constant takes its mean off fz (a sensor tared before the "

@@ -74,7 +74,7 @@ MAX_CLOSURE_MM = 0.1
 #: Vernier: least fraction of the bevel's band inside the image.
 MIN_BEVEL_COVERAGE = 0.6
 #: Mark, ``bevel_threshold='auto'``: a frame shows the mark when its score lies this many
-#: sds of the session's no-contact frames above their median...
+#: sds (the no-contact frames' frame-to-frame sd) above its press's approach...
 MARK_Z_FRAME = 2.5
 #: ... and the mean of it and the next MARK_BLOCK - 1 frames (the mark stays through the
 #: hold) this many sds of such a mean (sd / sqrt(MARK_BLOCK)).
@@ -325,12 +325,17 @@ def certify_session(session, *, min_contact_px: int = 200,
         mark is seen. ``'auto'``: from the session's own frames. The score
         (:func:`bevel_score`) of no-contact frames at each press's mark
         (:data:`MARK_NULL_FRAMES` per press, the nearest in time) gives the
-        null's median m and robust sd s (1.4826 MAD); a frame shows the mark
-        when its score exceeds m + :data:`MARK_Z_FRAME` s and the mean of it
-        and the next frames (:data:`MARK_BLOCK` in all, while the press
-        lasts) exceeds m + :data:`MARK_Z_BLOCK` s / sqrt(n): the mark stays
-        through the hold, noise does not (Taxim's thin mark line scored 7 to
-        9.5 against a null of 4.9 +- 0.9, under the old fixed 12). A number:
+        score's frame-to-frame sd s (each press's scores about their own
+        median, pooled; 1.4826 MAD); each press's approach, its frames with
+        fz under :data:`MARK_BASELINE_FORCE` of its largest, gives its
+        baseline b. A frame shows the mark when its score exceeds b +
+        :data:`MARK_Z_FRAME` s, the mean of it and the next frames
+        (:data:`MARK_BLOCK` in all, while the press lasts) exceeds b +
+        :data:`MARK_Z_BLOCK` s / sqrt(n), and it lies nearer the next frames'
+        median than b: the mark stays through the hold, noise does not
+        (Taxim's thin mark line with shadows scored 7 to 9.6 where its
+        approach scored 5 to 8 and the no-contact frames 4.6 +- 1.0, under
+        the old fixed 12: 14 of 20 presses certified, 0 before). A number:
         the fixed rule, two consecutive frames above it or one above twice it
         (at most 9.0 on approach frames before the mark, at least 16.6 with
         it, over the 48 good presses of the legacy sample session;
@@ -618,7 +623,7 @@ def _mark_baseline(ctx: _PressContext, centre: tuple[float, float], run: np.ndar
     """The mark's score on this press's own approach, before the land can reach the gel:
     the median over its frames whose fz (the F/T log at their time) is under
     :data:`MARK_BASELINE_FORCE` of the press's largest (the indenter's contact moves the
-    score at the mark on some renderers: Taxim's by up to 4 sd); `fallback` without such
+    score at the mark on some renderers: Taxim's by up to 3.4 sd); `fallback` without such
     frames. Returns the baseline and the frames it used."""
     session = ctx.session
     tf, fz = session.force_times_s, session.forces_n[:, 2]
