@@ -294,12 +294,13 @@ def _taxim_version() -> str:
 
 
 def _schedule(rng, rng_pos, n_presses, repeats, overshoot_mm, offset_mm, direction_deg,
-              length_mm):
+              length_mm, hold_s=(HOLD_S, HOLD_S), rng_hold=None):
     """Chronological presses: indenter, overshoot, position and times (camera clock).
 
-    Order, waits and overshoots come from ``rng``, positions from ``rng_pos``:
-    sessions of one seed share their indenters, overshoots and timing whatever
-    the bevel geometry.
+    Order, waits and overshoots come from ``rng``, positions from ``rng_pos``,
+    hold lengths (uniform in ``hold_s``) from ``rng_hold``: sessions of one seed
+    share their indenters, overshoots and timing whatever the bevel geometry, and
+    a constant hold draws nothing.
     """
     k = len(DEPTHS_MM)
     if n_presses is None:
@@ -323,14 +324,16 @@ def _schedule(rng, rng_pos, n_presses, repeats, overshoot_mm, offset_mm, directi
             raise ValueError("no press position keeps the footprint and the bevel band inside "
                              "the image: reduce --offset-mm or --length-mm")
         t0 = round(t_prev + wait, 4)
+        hold = (float(hold_s[0]) if hold_s[0] == hold_s[1] or rng_hold is None
+                else float(rng_hold.uniform(*hold_s)))
         w0 = DEPTHS_MM[int(ind)]
         depth = round(w0 + delta, 5)
         p = {"press": i, "indenter": int(ind), "w0_mm": w0, "overshoot_mm": delta,
              "depth_mm": depth, "force_n": round(float(force_n(depth)), 6),
              "x_mm": x, "y_mm": y, "t_start_s": t0,
              "hold_from_s": round(t0 + APPROACH_S, 4),
-             "hold_to_s": round(t0 + APPROACH_S + HOLD_S, 4),
-             "release_end_s": round(t0 + APPROACH_S + HOLD_S + RELEASE_S, 4),
+             "hold_to_s": round(t0 + APPROACH_S + hold, 4),
+             "release_end_s": round(t0 + APPROACH_S + hold + RELEASE_S, 4),
              "wait_s": round(wait, 4)}
         presses.append(p)
         t_prev = p["release_end_s"]
@@ -366,6 +369,11 @@ def _session_toml(offset_mm, direction_deg, theta_deg, length_mm) -> str:
     return "\n".join(lines)
 
 
+def _holds(truth: dict) -> str:
+    lo, hi = truth["hold_range_s"]
+    return f"{lo:g} s" if lo == hi else f"{lo:g} to {hi:g} s (uniform)"
+
+
 def _session_readme(truth: dict, command: str) -> str:
     tx, b = truth["taxim"], truth["bevel"]
     n = len(truth["presses"])
@@ -389,7 +397,7 @@ RA-L 2022), not by any `tactilevision` code: the generator
   contact is the band |u| <= delta / tan(theta): its half-width is the vernier.
 - **Presses** ({n}, chronological in `presses.csv`, centres in mm from the image
   centre, sub-pixel): shuffled indenters, idle 1.5 to 2.5 s, approach from
-  w = 0 to w0 + delta in 0.5 s, hold 0.5 s, release in 0.25 s; delta uniform in
+  w = 0 to w0 + delta in 0.5 s, hold {_holds(truth)}, release in 0.25 s; delta uniform in
   [{truth['overshoot_range_mm'][0]:g}, {truth['overshoot_range_mm'][1]:g}] mm.
 - **Frames** (`frames/`, 640 x 480 JPEG quality {tx['jpeg_quality']}, {truth['fps']:g} frames/s
   from 0.2 s before each press to its release end, times on the camera clock in
@@ -437,6 +445,7 @@ def make_taxim_session(folder, *, repeats: int = 2, presses: int | None = None, 
                        theta_deg: float = 5.0, offset_mm: float = 7.5,
                        direction_deg: float = 0.0, length_mm: float = 3.0,
                        overshoot_mm: tuple[float, float] = (0.0, 0.050),
+                       hold_s: tuple[float, float] = (HOLD_S, HOLD_S),
                        progress: bool = False, command: str | None = None,
                        timing: dict | None = None) -> dict:
     """Render a gauge-block session with Taxim into ``folder``; return its truth (truth.json).
@@ -460,6 +469,8 @@ def make_taxim_session(folder, *, repeats: int = 2, presses: int | None = None, 
         image (0 = +x, 90 = +y) and the crest length.
     overshoot_mm : (lo, hi)
         Range of the uniform overshoot delta past w0.
+    hold_s : (lo, hi)
+        Range of the uniform hold length, s (default: every hold 0.5 s).
     progress : bool
         tqdm progress bar over the frames.
     command : str or None
@@ -481,9 +492,10 @@ def make_taxim_session(folder, *, repeats: int = 2, presses: int | None = None, 
     rng_pos = np.random.default_rng([seed, 3])
     rng_cam = np.random.default_rng([seed, 1])
     rng_force = np.random.default_rng([seed, 2])
+    rng_hold = np.random.default_rng([seed, 4])
 
     plist = _schedule(rng_layout, rng_pos, presses, repeats, tuple(overshoot_mm), offset_mm,
-                      direction_deg, length_mm)
+                      direction_deg, length_mm, tuple(hold_s), rng_hold)
     tan_t = math.tan(math.radians(theta_deg))
     for p in plist:
         L = p["overshoot_mm"] / tan_t if tan_t > 0 else MARK_WIDTH_MM / 2
@@ -518,11 +530,14 @@ def make_taxim_session(folder, *, repeats: int = 2, presses: int | None = None, 
             from tqdm import tqdm
             bar = tqdm(total=len(frame_rows), unit="frame", desc="taxim")
         hmaps = {}
+        last = (None, None, None)       # (press, depth, image): a hold's frames share a render
         for name, tf, pi in frame_rows:
             p = plist[pi]
             w = float(_depth(tf, p))
             if w <= 0.0:
                 img = ref255
+            elif last[0] == pi and last[1] == w:
+                img = last[2]
             else:
                 if pi not in hmaps:
                     hmaps.clear()
@@ -534,6 +549,7 @@ def make_taxim_session(folder, *, repeats: int = 2, presses: int | None = None, 
                 timings["render_s"] += time.perf_counter() - t
                 timings["renders"] += 1
                 img = img.astype(np.float64) * 255.0
+                last = (pi, w, img)
             noisy = img + rng_cam.normal(0.0, CAMERA_NOISE_GREY, img.shape)
             out = np.clip(np.rint(noisy), 0, 255).astype(np.uint8)[..., ::-1]
             cv2.imwrite(str(folder / "frames" / name), out,
@@ -577,6 +593,7 @@ def make_taxim_session(folder, *, repeats: int = 2, presses: int | None = None, 
         "radius_mm": INDENTER_RADIUS_MM, "clock_offset_s": CLOCK_OFFSET_S,
         "mm_per_px": MM_PER_PX, "seed": seed, "fps": fps,
         "overshoot_range_mm": [float(overshoot_mm[0]), float(overshoot_mm[1])],
+        "hold_range_s": [float(hold_s[0]), float(hold_s[1])],
         "force_law": "P(w) = c w (1 + beta w / h), eq. 5 of the in-situ calibration paper; "
                      "Fx = Fy = 0.01 P; noise sd 1/40, 1/40, 1/80 N",
         "taxim": {"renderer": "taxim.Taxim(backend='jax').render(height_map, press_depth=w)",
@@ -610,6 +627,8 @@ def make_taxim_session(folder, *, repeats: int = 2, presses: int | None = None, 
             args += [f"{flag} {value:g}"] if value != default else []
         if tuple(overshoot_mm) != (0.0, 0.050):
             args.append(f"--overshoot-mm {overshoot_mm[0]:g} {overshoot_mm[1]:g}")
+        if tuple(hold_s) != (HOLD_S, HOLD_S):
+            args.append(f"--hold-s {hold_s[0]:g} {hold_s[1]:g}")
         command = f"python benchmarks/taxim_gauge_session.py {folder.as_posix()} " + " ".join(args)
     (folder / "README.md").write_text(_session_readme(truth, command))
     (folder / "LICENSE").write_text(
@@ -643,6 +662,8 @@ def main(argv=None) -> None:
     ap.add_argument("--length-mm", type=float, default=3.0, help="crest length, mm")
     ap.add_argument("--overshoot-mm", type=float, nargs=2, default=(0.0, 0.050),
                     metavar=("LO", "HI"))
+    ap.add_argument("--hold-s", type=float, nargs=2, default=(HOLD_S, HOLD_S),
+                    metavar=("LO", "HI"), help=f"hold lengths, uniform (default {HOLD_S} s)")
     ap.add_argument("--progress", action="store_true")
     a = ap.parse_args(argv)
     if (a.presses is not None and a.presses < 1) or a.repeats < 1:
@@ -652,6 +673,8 @@ def main(argv=None) -> None:
                  "offset >= 0")
     if not 0 <= a.overshoot_mm[0] <= a.overshoot_mm[1]:
         ap.error("--overshoot-mm needs 0 <= LO <= HI")
+    if not 0 < a.hold_s[0] <= a.hold_s[1]:
+        ap.error("--hold-s needs 0 < LO <= HI")
     t = time.perf_counter()
     tm: dict = {}
     truth = make_taxim_session(a.out_dir, repeats=a.repeats, presses=a.presses, fps=a.fps,
@@ -659,7 +682,7 @@ def main(argv=None) -> None:
                                contact_scale=a.taxim_contact_scale, theta_deg=a.theta,
                                offset_mm=a.offset_mm, direction_deg=a.direction_deg,
                                length_mm=a.length_mm, overshoot_mm=tuple(a.overshoot_mm),
-                               progress=a.progress, timing=tm)
+                               hold_s=tuple(a.hold_s), progress=a.progress, timing=tm)
     per = tm["render_s"] / max(tm["renders"], 1)
     print(f"{a.out_dir}: {len(truth['presses'])} presses, {tm['frames']} frames, "
           f"{tm['renders']} Taxim renders, {per:.2f} s per render (first, with jit: "
