@@ -43,6 +43,8 @@ import numpy as np
 
 from ._checks import InputError
 from .contact import (
+    EDGE_SHARED_FRACTION,
+    RESOLVED_PX,
     BevelGeometry,
     Certification,
     CertifiedPress,
@@ -58,6 +60,8 @@ from .contact import (
     hold_end,
     mark_depths,
     mark_shared_mm,
+    unresolved_closure,
+    vernier_shared_mm,
 )
 from .io import Session, read_session
 from .mechanics import (
@@ -506,6 +510,26 @@ def calibrate_session(session: Session | str | Path, *, depth_rule: str = "auto"
                 if corrections:
                     notes.append(f"nu did not settle in {max_rounds} rounds of the corrections "
                                  f"(last {rounds[-2:]})")
+            edge = (cert.bevel_optics or {}).get("edge_px")
+            half = (vernier_shared_mm([p.band_resolved for p in presses], geom, cfg.mm_per_px,
+                                      edge) if edge else np.zeros_like(w0))
+            if np.any(half > 0):
+                shared = (-half, half)
+                n_read = int(np.sum(half > 0))
+                notes.append(f"the band's edges sit within +-{EDGE_SHARED_FRACTION:g} of the "
+                             f"session's edge width ({edge:.2f} px) of the true edges of "
+                             f"contact, the same way for every press: +-"
+                             f"{1e3 * float(half.max()):.2f} um shared by the {n_read} read "
+                             "bands, carried into E's and nu's intervals")
+            unread = sum(not p.band_resolved for p in presses)
+            if unread:
+                top = 2e3 * unresolved_closure(geom, cfg.mm_per_px)[0]
+                notes.append(f"{unread} of {len(presses)} bands not read (shorter than "
+                             f"{RESOLVED_PX:g} px without the session's flank colours, or their "
+                             "crest away from the long bands'): their overshoot is only "
+                             f"bounded, 0 to {top:.1f} um or to their reading if longer, and "
+                             "given as its middle with the sd of a uniform; the fit weighs "
+                             "them accordingly")
             if cfg.bulge_correction:
                 notes.append(_bulge_note(bulge, depth, cfg, rounds, w0, closure, fit_at, std,
                                          force - bevel_n))
@@ -651,12 +675,15 @@ def _with_shared_depth(fit: IndentationFit, fit_at, depth: np.ndarray, std: np.n
     fitted again; E's and nu's intervals become the hull of the three fits' intervals
     and point values. A bounded systematic error does not average out over presses: its
     whole range is carried (the hull covers at least as often as each fit's interval,
-    whatever the error within its bounds)."""
+    whatever the error within its bounds). A bound at which beta's whole interval leaves
+    the FEM table is excluded by the data (no layer fits the presses so moved) and adds
+    nothing; one that cannot be fitted for another reason is said to leave the intervals
+    too narrow."""
     if not (np.isfinite(fit.E_mpa) and np.isfinite(fit.nu)):
         return fit
     E_lo, E_hi = fit.E_ci95_mpa
     nu_lo, nu_hi = fit.nu_ci95
-    moved, failed = [], []
+    moved, failed, excluded = [], [], []
     for shift in (low, high):
         if not np.any(shift != 0):
             continue
@@ -669,7 +696,9 @@ def _with_shared_depth(fit: IndentationFit, fit_at, depth: np.ndarray, std: np.n
             failed.append(str(exc))
             continue
         if not (np.isfinite(f2.E_mpa) and np.isfinite(f2.nu)):
-            failed.append("E and nu out of the beta table there")
+            # beta's whole interval beyond the table: no layer of any nu fits the presses
+            # with the depths moved so far, so the data exclude that end of the error
+            excluded.append(f"{1e3 * float(np.median(shift)):+.1f} um")
             continue
         moved.append(f2)
         E_lo, E_hi = min(E_lo, f2.E_mpa, f2.E_ci95_mpa[0]), max(E_hi, f2.E_mpa, f2.E_ci95_mpa[1])
@@ -682,11 +711,18 @@ def _with_shared_depth(fit: IndentationFit, fit_at, depth: np.ndarray, std: np.n
                 f"intervals: at its bound {'; '.join(failed)}; E's and nu's intervals hold the "
                 "press scatter only and are too narrow")
         fit = replace(fit, notes=(*fit.notes, note))
+    if excluded:
+        fit = replace(fit, notes=(*fit.notes, (
+            f"the shared depth error at {' and '.join(excluded)} (median over presses) puts "
+            "beta's whole interval outside the FEM table (no nu of a bonded elastic layer fits "
+            "the presses so moved): the data exclude that end of it, and E's and nu's "
+            "intervals carry the rest")))
     if not moved:
         return fit
+    where = "its bounds" if len(moved) == 2 else "the bound the data allow"
     note = (f"shared depth error {1e3 * float(np.median(low)):+.1f} to "
             f"{1e3 * float(np.median(high)):+.1f} um (median over presses): E and nu refitted at "
-            f"its bounds ({', '.join(f'E = {m.E_mpa:.4f} MPa, nu = {m.nu:.4f}' for m in moved)}); "
+            f"{where} ({', '.join(f'E = {m.E_mpa:.4f} MPa, nu = {m.nu:.4f}' for m in moved)}); "
             f"the intervals are the hull: E [{E_lo:.4f}, {E_hi:.4f}] MPa, nu [{nu_lo:.4f}, "
             f"{nu_hi:.4f}] (the press scatter alone: E [{fit.E_ci95_mpa[0]:.4f}, "
             f"{fit.E_ci95_mpa[1]:.4f}], nu [{fit.nu_ci95[0]:.4f}, {fit.nu_ci95[1]:.4f}])")

@@ -157,6 +157,8 @@ def result_dict(cal) -> dict:
         "nu_rounds": cal.nu_rounds,
         "depth_std_median_mm": float(np.median(std)) if len(std) else None,
         "bevel_optics": c.bevel_optics,
+        "bands_not_read": ([p.press for p in c.presses if not p.band_resolved]
+                           if c.bevel_optics is not None else None),
         "clock_offset_s": c.clock_offset_s,
         "clock_source": c.clock_source,
         "n_rejected": len(c.rejected),

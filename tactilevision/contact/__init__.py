@@ -6,6 +6,7 @@ session read by :mod:`tactilevision.io`.
 
 from ._bevel import bevel_score, footprint_from_frame
 from ._certify import (
+    EDGE_SHARED_FRACTION,
     Certification,
     CertifiedPress,
     Rejection,
@@ -14,6 +15,8 @@ from ._certify import (
     certify_session,
     hold_end,
     hold_start,
+    unresolved_closure,
+    vernier_shared_mm,
 )
 from ._footprint import Footprint, fit_footprint, nearest_indenter
 from ._force import ForceWindow, force_window, window_standard_error
@@ -28,6 +31,7 @@ from ._sync import (
     refine_clock_offset,
 )
 from ._vernier import (
+    RESOLVED_PX,
     BevelGeometry,
     BevelProfile,
     BevelReading,
@@ -37,12 +41,12 @@ from ._vernier import (
 )
 from ._zero import ForceZero, force_zero
 
-__all__ = ["BevelGeometry", "BevelProfile", "BevelReading", "Certification", "CertifiedPress",
-           "ClockSync", "Footprint", "ForceWindow", "ForceZero", "Rejection", "approach_start",
-           "bevel_force", "bevel_profile", "bevel_score", "bulge_at", "bulge_height",
-           "certified_depths", "certify_session", "contact_mask", "contact_onsets",
+__all__ = ["EDGE_SHARED_FRACTION", "RESOLVED_PX", "BevelGeometry", "BevelProfile", "BevelReading",
+           "Certification", "CertifiedPress", "ClockSync", "Footprint", "ForceWindow", "ForceZero",
+           "Rejection", "approach_start", "bevel_force", "bevel_profile", "bevel_score", "bulge_at",
+           "bulge_height", "certified_depths", "certify_session", "contact_mask", "contact_onsets",
            "crossing_forces", "estimate_clock_offset", "fit_footprint", "footprint_from_frame",
            "force_onsets", "force_window", "force_zero", "hold_end", "hold_start",
            "land_contact_depth", "land_contact_depths_mm", "mark_depths", "mark_shared_mm",
            "nearest_indenter", "noise_level", "read_bevel", "refine_clock_offset",
-           "window_standard_error"]
+           "unresolved_closure", "vernier_shared_mm", "window_standard_error"]

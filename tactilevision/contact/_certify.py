@@ -32,6 +32,7 @@ needs nu.
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
@@ -155,6 +156,11 @@ class CertifiedPress:
         onset, mm (the speed read from the approach's force: the mark shows
         w0 into it): the mark shows within that of w0 (NaN for
         ``'vernier'``).
+    band_resolved : bool
+        ``'vernier'``: whether the band's half-width was read (long enough to
+        show its shape, or read with the session's flank colours as a prior);
+        False: only bounded, the closure then the middle of its possible range
+        (:func:`unresolved_closure`). True for ``'onset'``.
     """
 
     press: int
@@ -183,6 +189,7 @@ class CertifiedPress:
     force_onset_n: float = float("nan")
     force_onset_sem_n: float = float("nan")
     travel_mm: float = float("nan")
+    band_resolved: bool = True
 
 
 @dataclass(frozen=True)
@@ -1112,7 +1119,9 @@ def _vernier_onset(session, geom: BevelGeometry, centre: tuple[float, float], s:
     """
     ref = session.reference
     times = session.frame_times_s
-    profiles = {int(i): bevel_profile(session.frame(int(i)), ref, centre, s, geom, reach_px=reach)
+    inner = (geom.offset_mm - session.config.indenter_radius_mm - INDENTER_CLEARANCE_MM) / s
+    profiles = {int(i): bevel_profile(session.frame(int(i)), ref, centre, s, geom, reach_px=reach,
+                                      inner_px=min(reach, inner))
                 for i in cand}
     cover = min(p.coverage for p in profiles.values())
     if cover < MIN_BEVEL_COVERAGE:
@@ -1193,24 +1202,129 @@ def _never_seen(geom: BevelGeometry, best: float, frame: int, why: str = "") -> 
                      t_frame_s=float("nan"), frame=frame, bevel_score=best)
 
 
+#: With lines, a long band is read only when its edges alone (``read_bevel(lines='only')``)
+#: give its half-width within this (px): Taxim's shadow block beside a narrow band read 17
+#: to 21 px with flanks and 4 to 5 px without; its long bands agreed within 0.5 px
+#: (``benchmarks/bench_vernier.py --sweep``).
+AGREE_PX = 1.5
+#: A band whose crest lies farther than this (px), or 4 robust sd of the long bands'
+#: crests, from their median is not read (the crest's place is fixed by the block: the
+#: long bands of a session scatter by 0.3 to 0.5 px about it).
+CREST_TOLERANCE_PX = 2.0
+
+
+#: The shared error of a read band's half-width, as a fraction of the session's edge width
+#: (:func:`vernier_shared_mm`).
+EDGE_SHARED_FRACTION = 0.4
+
+
+def _edge_width(optics: dict) -> float:
+    """The session's edge width, px: the least-squares edge blur of its long bands (before
+    :data:`BLUR_SHRINK`), or their edge lines' sd when they carry lines, if wider."""
+    blur = float(optics["blur_px"]) / (BLUR_SHRINK if optics.get("n_bands", 0) >= 2 else 1.0)
+    if optics.get("lines", "none") != "none":
+        blur = max(blur, float(optics.get("line_px", 0.0)))
+    return round(blur, 4)
+
+
+def vernier_shared_mm(band_resolved: np.ndarray, bevel: BevelGeometry, mm_per_px: float,
+                      edge_px: float) -> np.ndarray:
+    """The bound of the vernier's error that every read band shares: where its edges sit.
+
+    Parameters
+    ----------
+    band_resolved : (N,) array_like of bool
+        Which presses' bands were read (:attr:`CertifiedPress.band_resolved`);
+        unresolved ones carry their whole range already.
+    bevel : BevelGeometry
+    mm_per_px : float
+    edge_px : float
+        The session's edge width, px (``Certification.bevel_optics['edge_px']``).
+
+    Returns
+    -------
+    (N,) float64 ndarray
+        ``EDGE_SHARED_FRACTION * edge_px * tan(theta) * mm_per_px`` for read
+        bands, 0 for the others, mm: the error lies within plus or minus it.
+
+    Notes
+    -----
+    The band model places each edge at the middle of a blurred step (or on a
+    line). Where a renderer's or a sensor's colour edge sits against the true
+    edge of contact is not known from the frames: the gel leaves the flank
+    tangentially, and shadows fall outward. Taxim's long bands read 0.9 px
+    short on a 3 deg bevel and 0.4 px long on a 5 deg one (edge width 3 px:
+    0.3 and 0.13 of it), ours 0.2 px short (edge width 2.5 px: 0.09 of it;
+    ``benchmarks/bench_vernier.py --sweep``), the same sign for every press
+    of a session: a systematic error, carried into E's and nu's intervals by
+    refits at its bounds, not averaged over the presses.
+    """
+    r = np.asarray(band_resolved, bool)
+    half = EDGE_SHARED_FRACTION * float(edge_px) * bevel.tan_theta * float(mm_per_px)
+    return np.where(r, half, 0.0)
+
+
+def unresolved_closure(bevel: BevelGeometry, mm_per_px: float,
+                       top_px: float = RESOLVED_PX, bottom_px: float = 0.0
+                       ) -> tuple[float, float]:
+    """The closure of a band too short to read, as a uniform over its possible range.
+
+    Parameters
+    ----------
+    bevel : BevelGeometry
+        Needs ``angle_deg > 0``.
+    mm_per_px : float
+    top_px : float, default ``RESOLVED_PX``
+        The largest half-width the band may have, px.
+    bottom_px : float, default 0
+        The smallest (a band whose inner edge lies beyond the profile's end
+        is at least as long as the crest's distance to it).
+
+    Returns
+    -------
+    closure_mm, closure_std_mm : float
+        The middle of ``[bottom_px, top_px] tan(theta) mm_per_px`` and the
+        sd of a uniform over it (``/ sqrt(12)``), mm: the band was seen, so
+        the crest reached the gel, but its half-width is somewhere in there.
+    """
+    k = bevel.tan_theta * float(mm_per_px)
+    lo = max(float(bottom_px), 0.0)
+    hi = max(float(top_px), lo)
+    return 0.5 * (lo + hi) * k, (hi - lo) * k / math.sqrt(12.0)
+
+
 def _read_vernier_presses(pending: list[dict], geom: BevelGeometry, s: float
                           ) -> tuple[list[CertifiedPress], list[Rejection], dict]:
     """Read every press's band over its window, with the session's own optics.
 
     1. The session's edge blur is chosen on its longest, clearest bands
        (:func:`_session_optics`).
-    2. Every press is read with it, its flank colours free. In a session
-       whose bands carry lines along their edges, each press is also read
-       with shadows cast outward from the edges (``lines='shadows'`` of
-       :func:`read_bevel`; Taxim's renderer paints such blocks beside bands
-       under about 10 px) and keeps the model with the smaller residual.
+    2. Every press is read with it, its flank colours free.
     3. The flank colours of the long bands (half-width >= ``RESOLVED_PX``)
        are fitted as a plane over the bevel's position in the image (the
        sensor's lighting varies across it: 6% of the colours left against 19%
        for one colour, on the simulated sample session); short bands, whose
        shape the blur hides, are read again with that plane's colours at
        their position as a prior, weighted by its residual spread.
-    4. A band whose colour contrast is under :data:`MIN_BAND_CONTRAST` of the
+    4. Without that prior (bands carrying lines or shadows along their
+       edges, or too few long bands), a band is read only when it is long
+       (half-width >= ``RESOLVED_PX``), its crest lies where the session's
+       long bands put it (within :data:`CREST_TOLERANCE_PX`, or 4 robust sd
+       of theirs, of their median crest; three or more long bands needed),
+       and, in a session with lines, its edges alone (``lines='only'``) give
+       its width within :data:`AGREE_PX`. With or without the prior, its
+       inner edge must also lie two edge widths clear of the profile's end
+       on the indenter's side (:data:`INDENTER_CLEARANCE_MM`). Any other band
+       is *unresolved*: its width is only bounded, its closure stated as
+       uniform over ``[0, max(RESOLVED_PX, L)]`` pixels' worth (L plus two
+       edge widths for a band cut off at the profile's end;
+       :func:`unresolved_closure`), and the fit weighs it accordingly. On
+       Taxim's renders, whose shadows paint a block 10 to 25 px wide beside
+       narrow bands, every band model read such bands 2 to 21 px long
+       whatever their true length (1 to 7 px), at
+       stated uncertainties of a fraction of that: 49 um off at 4 um stated
+       on a 15 deg bevel (``benchmarks/bench_vernier.py --sweep``).
+    5. A band whose colour contrast is under :data:`MIN_BAND_CONTRAST` of the
        long bands' (median, when two or more are long) is shading, not a
        band: the press is rejected as ``'bevel never seen'``.
 
@@ -1220,15 +1334,16 @@ def _read_vernier_presses(pending: list[dict], geom: BevelGeometry, s: float
     kw = dict(max_closure_mm=MAX_CLOSURE_MM, lines=optics["lines"], blur_px=optics["blur_px"],
               line_px=optics.get("line_px", 2.0))
     first = [read_bevel(d["profiles"], geom, s, **kw) for d in pending]
-    n_shadows = 0
-    if optics["lines"] == "all":
-        # a session whose bands carry lines may also cast long shadows beside its narrow
-        # bands (Taxim's renderer): each press keeps the model that leaves less residual
+    # with lines: the band seen by its edges alone must be the band seen with its flanks (a
+    # block of colour beside a narrow band, such as Taxim's shadow, reads as a long band
+    # only with flanks)
+    agrees = np.ones(len(first), bool)
+    if optics["lines"] != "none":
         for k, (d, r) in enumerate(zip(pending, first, strict=True)):
-            sh = read_bevel(d["profiles"], geom, s, **{**kw, "lines": "shadows"})
-            if sh.noise < r.noise:
-                first[k], n_shadows = sh, n_shadows + 1
-    long = np.array([r.resolved and r.snr >= 2 * VERNIER_SNR for r in first])
+            if r.resolved:
+                edges = read_bevel(d["profiles"], geom, s, **{**kw, "lines": "only"})
+                agrees[k] = abs(edges.half_width_px - r.half_width_px) <= AGREE_PX
+    long = np.array([r.resolved and r.snr >= 2 * VERNIER_SNR for r in first]) & agrees
     X = np.array([[1.0, d["press"].x_mm, d["press"].y_mm] for d in pending])
     C = np.array([r.flank_colours.ravel() for r in first])            # (N, 6)
     plane = None
@@ -1247,6 +1362,14 @@ def _read_vernier_presses(pending: list[dict], geom: BevelGeometry, s: float
         plane = None       # lines or shadows at the edges: the model reads short bands itself
     out: list[CertifiedPress] = []
     faint: list[Rejection] = []
+    n_unresolved = 0
+    edge = _edge_width(optics)
+    crest0, crest_tol = float("nan"), float("inf")
+    seen_long = [r.crest_px for r, ok in zip(first, agrees, strict=True) if r.resolved and ok]
+    if len(seen_long) >= 3:
+        cr = np.array(seen_long)
+        crest0 = float(np.median(cr))
+        crest_tol = max(CREST_TOLERANCE_PX, 4.0 * 1.4826 * float(np.median(np.abs(cr - crest0))))
     contrast_long = (float(np.median([r.contrast for r, ok in zip(first, long, strict=True)
                                       if ok])) if long.sum() >= 2 else float("nan"))
     for k, (d, r) in enumerate(zip(pending, first, strict=True)):
@@ -1261,16 +1384,32 @@ def _read_vernier_presses(pending: list[dict], geom: BevelGeometry, s: float
                        "shading, not a band of contact",
                 t_frame_s=d["t0"], frame=p.frame, bevel_score=r.snr, centre_px=d["centre"]))
             continue
+        closure, closure_std = r.closure_mm, r.closure_std_mm
         if plane is not None and not r.resolved:
             # a short band: lines at its edges would trade off against L; its colours
             # come from the long bands at its position
             prior = (X[k] @ plane[0]).reshape(2, 3)
             r = read_bevel(d["profiles"], geom, s, flank_colours=prior, colour_sd=plane[1],
                            **{**kw, "lines": "none"})
-        out.append(replace(d["press"], rule="vernier", closure_mm=r.closure_mm,
-                           closure_std_mm=r.closure_std_mm, reading=r, bevel_score=r.snr,
-                           window_frames=d["window"]))
-    optics["shadows"] = n_shadows
+            closure, closure_std = r.closure_mm, r.closure_std_mm
+        # the inner edge must lie inside the profile, clear of its end by two edge widths
+        to_end = r.crest_px - d["profiles"][0].u_px[0]          # crest to the profile's end
+        clear = to_end - r.half_width_px >= 2.0 * edge
+        read = clear and (plane is not None or (r.resolved and abs(r.crest_px - crest0)
+                                                <= crest_tol and agrees[k]))
+        if not read:
+            # no prior, and not long where the long bands are: only bounded (step 4)
+            # (a band cut off at the profile's end may be longer than read; a short band
+            # misread long may reach the end too, so no lower bound is drawn from it)
+            closure, closure_std = unresolved_closure(
+                geom, s, max(RESOLVED_PX, r.half_width_px + (0.0 if clear else 2.0 * edge)))
+            n_unresolved += 1
+        out.append(replace(d["press"], rule="vernier", closure_mm=closure,
+                           closure_std_mm=closure_std, reading=r, bevel_score=r.snr,
+                           window_frames=d["window"], band_resolved=read))
+    optics["unresolved"] = n_unresolved
+    optics["edge_px"] = edge
+    optics["crest_px"] = None if np.isnan(crest0) else round(crest0, 3)
     optics["prior"] = plane is not None and any(not r.resolved for r in first)
     optics["colour_spread"] = None if plane is None else round(plane[1], 4)
     optics["contrast_long"] = None if np.isnan(contrast_long) else round(contrast_long, 2)
@@ -1286,6 +1425,17 @@ def _read_vernier_presses(pending: list[dict], geom: BevelGeometry, s: float
 BLUR_SHRINK = 0.8
 #: Widths (sd, px) of the lines along the band's edges tried on the session's long bands.
 _LINE_SDS = (1.2, 2.0, 3.0)
+#: The bevel's profile stops this far (mm) from the indenter's footprint on its side: the
+#: indenter's own contact shades the gel beside it (Taxim's renders: a trough whose deepest
+#: part lies within 0.2 mm of the edge; a 3.5 deg bevel 4 mm from the axis of a 2.5 mm
+#: indenter read it into its bands, 3 px too long, and saw 8 of 20 bands under the
+#: threshold; ``benchmarks/bench_vernier.py --sweep``, cell L).
+INDENTER_CLEARANCE_MM = 0.25
+#: A session's bands carry lines when lines at their edges leave less than this share of
+#: the residual variance (median over its long bands): 0.05 to 0.39 on five Taxim sessions
+#: (bevels of 3 to 12 deg), 0.70 on our simulated sample session, whose bands have none
+#: (``benchmarks/bench_vernier.py --sweep``).
+LINES_RSS_RATIO = 0.5
 #: Edge blurs (sd, px) tried on the session's long bands.
 _BLURS = (0.6, 0.8, 1.0, 1.25, 1.5, 1.75, 2.0, 2.5, 3.0)
 
@@ -1298,7 +1448,8 @@ def _session_optics(pending: list[dict], geom: BevelGeometry, s: float, *, n_max
     the blur of :data:`_BLURS` with the least summed residual, times
     :data:`BLUR_SHRINK`; then whether
     the bands carry lines along their edges (renderers' and real optics'
-    shadows): if reading them with lines moves L by more than 1 px (median
+    shadows): if reading them with lines moves L by more than 1 px, or
+    leaves under :data:`LINES_RSS_RATIO` of the residual variance (medians
     over the bands), the session is read with lines, else without (a line
     at an edge trades off against the edge's position, so it costs
     precision where it is not needed). Defaults (1.0 px, no lines) when
@@ -1321,8 +1472,12 @@ def _session_optics(pending: list[dict], geom: BevelGeometry, s: float, *, n_max
     # where there are none
     shift = float(np.median([abs(a.half_width_px - b.half_width_px)
                              for a, b in zip(plain, lined[_LINE_SDS[0]], strict=True)]))
-    return {"blur_px": round(BLUR_SHRINK * blur, 4), "lines": "all" if shift > 1.0 else "none",
-            "line_px": line_sd, "n_bands": len(long), "line_shift_px": round(shift, 3)}
+    ratio = float(np.median([(b.noise / max(a.noise, 1e-12)) ** 2
+                             for a, b in zip(plain, lined[line_sd], strict=True)]))
+    lines = "all" if shift > 1.0 or ratio < LINES_RSS_RATIO else "none"
+    return {"blur_px": round(BLUR_SHRINK * blur, 4), "lines": lines,
+            "line_px": line_sd, "n_bands": len(long), "line_shift_px": round(shift, 3),
+            "line_rss_ratio": round(ratio, 3)}
 
 
 def certified_depths(w0_mm: np.ndarray, *, rule: str, thickness_mm: float, radius_mm: float,

@@ -177,7 +177,8 @@ class BevelReading:
 
 def bevel_profile(frame: np.ndarray, reference: np.ndarray, centre_px: tuple[float, float],
                   mm_per_px: float, bevel: BevelGeometry, *, reach_px: float,
-                  step_px: float = 0.5, crest_fraction: float = 0.8) -> BevelProfile:
+                  step_px: float = 0.5, crest_fraction: float = 0.8,
+                  inner_px: float | None = None) -> BevelProfile:
     """Sample the colour change across the bevel's crest, averaged along it.
 
     Parameters
@@ -194,6 +195,10 @@ def bevel_profile(frame: np.ndarray, reference: np.ndarray, centre_px: tuple[flo
         Sampling step across the crest (bilinear interpolation), px.
     crest_fraction : float, default 0.8
         Central part of the crest that is averaged (its ends are left out).
+    inner_px : float, optional
+        The profile runs only to ``u >= -inner_px`` on the indenter's side
+        (default `reach_px`): keeps the indenter's own contact, and the
+        shading beside it, out of the bevel's profile.
 
     Returns
     -------
@@ -216,6 +221,8 @@ def bevel_profile(frame: np.ndarray, reference: np.ndarray, centre_px: tuple[flo
     cu, su = math.cos(t), math.sin(t)
     bx, by = bevel.crest_px(centre_px, s)
     u = np.arange(-reach_px, reach_px + 1e-9, step_px)
+    if inner_px is not None:
+        u = u[u >= -max(float(inner_px), 2 * step_px) - 1e-9]
     half_v = 0.5 * crest_fraction * bevel.length_mm / s
     v = np.arange(-half_v, half_v + 1e-9, 0.5)
     uu, vv = np.meshgrid(u, v)                        # (V, K)
@@ -274,13 +281,18 @@ def _background(u: np.ndarray, degree: int) -> np.ndarray:
 def _basis(u: np.ndarray, crest: np.ndarray, half: np.ndarray, lines: str = "all",
            blur: float = _EDGE_BLUR_PX, degree: int = 2, line_sd: float = _LINE_SD_PX
            ) -> np.ndarray:
-    """(G, K, p) design: background (degree + 1), inner and outer flank, then the lines."""
+    """(G, K, p) design: background (degree + 1), inner and outer flank, then the lines
+    (``'only'``: the background and the two edge lines)."""
     uk = u[None, :]
     c, L = crest[:, None], half[:, None]
     bg = np.broadcast_to(_background(u, degree)[None], (c.shape[0], u.size, degree + 1))
+    cols = [bg[..., j] for j in range(degree + 1)]
+    if lines == "only":        # lines at the edges and no flanks: renderers' shadow lines
+        return np.stack([*cols, _lines_at(u, crest - half, line_sd),
+                         _lines_at(u, crest + half, line_sd)], axis=-1)
     b_in, b_out = _flank_boxes(u, np.asarray(crest, np.float64).ravel(),
                                np.asarray(half, np.float64).ravel(), blur)
-    cols = [bg[..., j] for j in range(degree + 1)] + [b_in, b_out]
+    cols += [b_in, b_out]
     if lines == "tilt":        # each flank's colour may drift linearly across it
         cols += [b_in * (uk - c + 0.5 * L) / np.maximum(L, 1.0),
                  b_out * (uk - c - 0.5 * L) / np.maximum(L, 1.0)]
@@ -368,15 +380,18 @@ def read_bevel(profiles: list[BevelProfile] | BevelProfile, bevel: BevelGeometry
         over the sensor with its lighting).
     coarse : bool, default False
         Stop at the 1 px grid (a quick look: L and the crest to +-0.5 px).
-    lines : {'none', 'all', 'edges', 'crest', 'tilt', 'shadows'}, default 'none'
+    lines : {'none', 'all', 'edges', 'crest', 'tilt', 'shadows', 'only'}, default 'none'
         Which lines the band model carries: none, or at both edges and the
         crest (renderers and optics that draw shadows along the edges), the
         edges or the crest only; 'tilt' lets each flank's colour drift
         linearly across it instead; 'shadows': thin lines at the edges and
         shadows cast outward from them (one-sided tails peaking 4 and 12 px
         out, free colours), for renderers that paint long shadows beside
-        narrow bands. A line at an edge trades off against the edge's
-        position: use lines only where the images have them.
+        narrow bands; 'only': the two edge lines and no flanks (a band seen
+        by its edges alone: a broad block of colour is no band to it, so it
+        checks a reading with flanks). A line at an edge trades off against
+        the edge's position: use lines only where the images have them.
+        With 'only', ``flank_colours`` holds the edge lines' colours.
     blur_px : float, default 1.0
         sd of the Gaussian blur of the band's edges, px.
     background_degree : int, default 4
@@ -444,9 +459,9 @@ def read_bevel(profiles: list[BevelProfile] | BevelProfile, bevel: BevelGeometry
     # without the prior), then 0.25 px and 0.05 px around the best
     crests = np.arange(-crest_range_px, crest_range_px + 1e-9, 1.0)
     halves = np.arange(0.5, l_max + 1e-9, 1.0)
-    if lines not in ("none", "all", "edges", "crest", "tilt", "shadows"):
-        raise InputError(f"lines must be 'none', 'all', 'edges', 'crest', 'tilt' or 'shadows', "
-                         f"got {lines!r}")
+    if lines not in ("none", "all", "edges", "crest", "tilt", "shadows", "only"):
+        raise InputError(f"lines must be 'none', 'all', 'edges', 'crest', 'tilt', 'shadows' "
+                         f"or 'only', got {lines!r}")
     cc, hh, coef, rss, _ = search(crests, halves, 0.0)
     k = int(np.argmin(rss))
     weight = 0.0
