@@ -163,10 +163,10 @@ def steep_taxim_session(tmp_path_factory):
 
 def test_narrow_bands_are_bounded_not_read(steep_taxim_session):
     """Bands too short to show their shape, with no flank colours to lean on, are only
-    bounded: each certified press's overshoot is the middle of 0 to RESOLVED_PX px's worth,
-    its sd that of a uniform, so the truth lies within sqrt(3) sd (before this rule the
-    band model read Taxim's shadow beside such bands as a band: 40 to 49 um off at 4 um
-    stated on a 15 deg bevel)."""
+    bounded: each certified press's overshoot lies within 0 to RESOLVED_PX px's worth, its
+    sd that of a uniform over it, so the truth lies within sqrt(12) sd (before this rule
+    the band model read Taxim's shadow beside such bands as a band: 40 to 49 um off at
+    4 um stated on a 15 deg bevel)."""
     from tactilevision.contact import RESOLVED_PX, BevelGeometry, unresolved_closure
 
     folder, truth = steep_taxim_session
@@ -180,9 +180,9 @@ def test_narrow_bands_are_bounded_not_read(steep_taxim_session):
         t = tp[p.press]
         assert t["bevel_half_width_px"] < RESOLVED_PX
         assert not p.band_resolved
-        assert d == pytest.approx(p.w0_mm + mid, abs=1e-9)
+        assert p.w0_mm - 1e-9 <= d <= p.w0_mm + 2 * mid + 1e-9
         assert u == pytest.approx(sd, rel=1e-9)
-        assert abs(d - t["depth_mm"]) <= math.sqrt(3.0) * u + 1e-9
+        assert abs(d - t["depth_mm"]) <= math.sqrt(12.0) * u + 1e-9
     assert any("not read" in w for w in cal.warnings)
 
 

@@ -1315,10 +1315,12 @@ def _read_vernier_presses(pending: list[dict], geom: BevelGeometry, s: float
        its width within :data:`AGREE_PX`. With or without the prior, its
        inner edge must also lie two edge widths clear of the profile's end
        on the indenter's side (:data:`INDENTER_CLEARANCE_MM`). Any other band
-       is *unresolved*: its width is only bounded, its closure stated as
-       uniform over ``[0, max(RESOLVED_PX, L)]`` pixels' worth (L plus two
-       edge widths for a band cut off at the profile's end;
-       :func:`unresolved_closure`), and the fit weighs it accordingly. On
+       is *unresolved*: its width is only bounded, to ``[0, max(RESOLVED_PX,
+       L)]`` pixels' worth (L plus two edge widths for a band cut off at the
+       profile's end), its uncertainty that of a uniform over that range
+       (:func:`unresolved_closure`), and the fit weighs it accordingly; the
+       point within it is the band read with thin edge lines and shadows cast
+       outward (``lines='shadows'``), clipped to the range. On
        Taxim's renders, whose shadows paint a block 10 to 25 px wide beside
        narrow bands, every band model read such bands 2 to 21 px long
        whatever their true length (1 to 7 px), at
@@ -1401,8 +1403,12 @@ def _read_vernier_presses(pending: list[dict], geom: BevelGeometry, s: float
             # no prior, and not long where the long bands are: only bounded (step 4)
             # (a band cut off at the profile's end may be longer than read; a short band
             # misread long may reach the end too, so no lower bound is drawn from it)
-            closure, closure_std = unresolved_closure(
-                geom, s, max(RESOLVED_PX, r.half_width_px + (0.0 if clear else 2.0 * edge)))
+            top = max(RESOLVED_PX, r.half_width_px + (0.0 if clear else 2.0 * edge))
+            closure, closure_std = unresolved_closure(geom, s, top)
+            # the point within the bounds: the band read with thin edge lines and shadows
+            # cast outward (read_bevel(lines='shadows'))
+            sh = read_bevel(d["profiles"], geom, s, **{**kw, "lines": "shadows"})
+            closure = float(np.clip(sh.half_width_px, 0.0, top)) * geom.tan_theta * s
             n_unresolved += 1
         out.append(replace(d["press"], rule="vernier", closure_mm=closure,
                            closure_std_mm=closure_std, reading=r, bevel_score=r.snr,
