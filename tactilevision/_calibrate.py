@@ -527,9 +527,10 @@ def calibrate_session(session: Session | str | Path, *, depth_rule: str = "auto"
                 notes.append(f"{unread} of {len(presses)} bands not read (shorter than "
                              f"{RESOLVED_PX:g} px without the session's flank colours, or their "
                              "crest away from the long bands'): their overshoot is only "
-                             f"bounded, 0 to {top:.1f} um or to their reading if longer, and "
-                             "given as its middle with the sd of a uniform; the fit weighs "
-                             "them accordingly")
+                             f"bounded, 0 to {top:.1f} um or to their reading if longer, with "
+                             "the sd of a uniform over that (the point: the band read with "
+                             "edge lines and shadows, clipped to it); the fit weighs them "
+                             "accordingly")
             if cfg.bulge_correction:
                 notes.append(_bulge_note(bulge, depth, cfg, rounds, w0, closure, fit_at, std,
                                          force - bevel_n))
