@@ -39,6 +39,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import subprocess
 import sys
 import tempfile
@@ -184,6 +185,10 @@ def sweep_cell(folder: Path, name: str) -> dict:
     n_view = len([p for p in truth["presses"] if p["press"] not in out_of_view])
     ps = cert.presses
     row = {"cell": name, "args": SWEEP[name], "in_view": n_view, "certified": len(ps)}
+    optics = cert.bevel_optics or {}
+    row["rss_ratio"] = optics.get("line_rss_ratio")
+    row["edge_px"] = optics.get("edge_px")
+    um_per_px = 1e3 * math.tan(math.radians(truth["bevel"]["angle_deg"])) * truth["mm_per_px"]
     if ps:
         err = 1e3 * np.array([d - tp[p.press]["depth_mm"]
                               for p, d in zip(ps, cal.depth_mm, strict=True)])
@@ -194,7 +199,9 @@ def sweep_cell(folder: Path, name: str) -> dict:
                    stated_um=float(np.median(1e3 * cal.depth_std_mm)),
                    read_bias_um=float(err[read].mean()) if read.any() else float("nan"),
                    read_sd_um=float(err[read].std()) if read.any() else float("nan"),
-                   read_z_sd=float(z[read].std()) if read.sum() > 1 else float("nan"))
+                   read_z_sd=float(z[read].std()) if read.sum() > 1 else float("nan"),
+                   read_bias_px=float(err[read].mean()) / um_per_px if read.any()
+                   else float("nan"))
     f = cal.fit
     if f is not None and np.isfinite(f.beta):
         row.update(c_rel=f.c_n_per_mm / truth["c_n_per_mm"] - 1, beta=f.beta,
@@ -207,7 +214,8 @@ def sweep(base: Path, cells: list[str]) -> None:
     print("machine: 2 cores; Taxim renders (taxim_gauge_session.py), 20 presses, overshoot "
           "5-60 um, bands read by calibrate_session with its defaults")
     print("cell  args                                                         certified  read  "
-          "error mean/sd um  z sd/rms  stated um | read bands: mean/sd um, z sd | c      beta")
+          "error mean/sd um  z sd/rms  stated um | read bands: mean/sd um, z sd | c      beta"
+          "  | read bias px / edge px, lines' rss ratio")
     rows = []
     for name in cells:
         r = sweep_cell(base / f"sweep_{name}", name)
@@ -220,7 +228,9 @@ def sweep(base: Path, cells: list[str]) -> None:
               f"    {g['z_sd']:.2f}/{g['z_rms']:.2f}  {g['stated_um']:6.2f}   | "
               f"{g['read_bias_um']:+6.2f} / {g['read_sd_um']:5.2f}, {g['read_z_sd']:.2f} | "
               f"{100 * g['c_rel']:+5.1f}% {g['beta']:.3f}"
-              f"{'' if r.get('beta_covers', True) else ' (interval misses 0.78)'}")
+              f"{'' if r.get('beta_covers', True) else ' (interval misses 0.78)'}"
+              f"  | {r.get('read_bias_px', np.nan):+.2f} / {r.get('edge_px') or np.nan:.2f}, "
+              f"{r.get('rss_ratio') if r.get('rss_ratio') is not None else np.nan:.3f}")
     ok = [r for r in rows if r["certified"] >= 0.95 * r["in_view"]]
     honest = [r for r in rows if 0.8 <= r.get("z_sd", 0) <= 1.2]
     print(f"\ntargets: >= 95% certified on {len(ok)} of {len(rows)} cells; z-score sd 0.8-1.2 on "

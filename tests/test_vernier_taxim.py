@@ -201,8 +201,8 @@ def test_unresolved_closure_and_shared_edge_error():
     mid, sd = unresolved_closure(geom, 0.03)
     assert mid == pytest.approx(0.5 * RESOLVED_PX * k)
     assert sd == pytest.approx(RESOLVED_PX * k / math.sqrt(12.0))
-    mid, sd = unresolved_closure(geom, 0.03, top_px=30.0, bottom_px=18.0)
-    assert mid == pytest.approx(24.0 * k) and sd == pytest.approx(12.0 * k / math.sqrt(12.0))
+    mid, sd = unresolved_closure(geom, 0.03, top_px=30.0)
+    assert mid == pytest.approx(15.0 * k) and sd == pytest.approx(30.0 * k / math.sqrt(12.0))
     half = vernier_shared_mm([True, False, True], geom, 0.03, edge_px=2.5)
     assert half == pytest.approx([EDGE_SHARED_FRACTION * 2.5 * k, 0.0,
                                   EDGE_SHARED_FRACTION * 2.5 * k])

@@ -159,8 +159,9 @@ class CertifiedPress:
     band_resolved : bool
         ``'vernier'``: whether the band's half-width was read (long enough to
         show its shape, or read with the session's flank colours as a prior);
-        False: only bounded, the closure then the middle of its possible range
-        (:func:`unresolved_closure`). True for ``'onset'``.
+        False: only bounded, ``closure_std_mm`` that of a uniform over its
+        possible range (:func:`unresolved_closure`) and ``closure_mm`` within
+        it. True for ``'onset'``.
     """
 
     press: int
@@ -1203,13 +1204,15 @@ def _never_seen(geom: BevelGeometry, best: float, frame: int, why: str = "") -> 
 
 
 #: With lines, a long band is read only when its edges alone (``read_bevel(lines='only')``)
-#: give its half-width within this (px): Taxim's shadow block beside a narrow band read 17
-#: to 21 px with flanks and 4 to 5 px without; its long bands agreed within 0.5 px
-#: (``benchmarks/bench_vernier.py --sweep``).
+#: give its half-width within this (px): in cell E of ``benchmarks/bench_vernier.py
+#: --sweep``, Taxim's shadow block beside four narrow bands (2 to 4 px) read 19 to 21 px
+#: with flanks and 4 to 5 px without, its long bands agreeing within 0.5 px; in cells B
+#: and D some long bands disagree by 2 to 5 px and are not read.
 AGREE_PX = 1.5
 #: A band whose crest lies farther than this (px), or 4 robust sd of the long bands'
 #: crests, from their median is not read (the crest's place is fixed by the block: the
-#: long bands of a session scatter by 0.3 to 0.5 px about it).
+#: long bands of sweep cells A and B lie within 1 px of their median; the misread narrow
+#: bands that passed for long ones, 3 to 5.5 px off).
 CREST_TOLERANCE_PX = 2.0
 
 
@@ -1252,12 +1255,13 @@ def vernier_shared_mm(band_resolved: np.ndarray, bevel: BevelGeometry, mm_per_px
     The band model places each edge at the middle of a blurred step (or on a
     line). Where a renderer's or a sensor's colour edge sits against the true
     edge of contact is not known from the frames: the gel leaves the flank
-    tangentially, and shadows fall outward. Taxim's long bands read 0.9 px
-    short on a 3 deg bevel and 0.4 px long on a 5 deg one (edge width 3 px:
-    0.3 and 0.13 of it), ours 0.2 px short (edge width 2.5 px: 0.09 of it;
-    ``benchmarks/bench_vernier.py --sweep``), the same sign for every press
-    of a session: a systematic error, carried into E's and nu's intervals by
-    refits at its bounds, not averaged over the presses.
+    tangentially, and shadows fall outward. The read bands' mean error was
+    -0.85 to +0.14 px on the Taxim cells of ``benchmarks/bench_vernier.py
+    --sweep`` (edge width 3 px: at most 0.28 of it), and -0.22 and -0.05 px
+    on our two simulated 50-press sessions (``bench_vernier.py``; edge widths
+    2.5 and 1.75 px), one value for every press of a session: a systematic
+    error, carried into E's and nu's intervals by refits at its bounds, not
+    averaged over the presses.
     """
     r = np.asarray(band_resolved, bool)
     half = EDGE_SHARED_FRACTION * float(edge_px) * bevel.tan_theta * float(mm_per_px)
@@ -1265,8 +1269,7 @@ def vernier_shared_mm(band_resolved: np.ndarray, bevel: BevelGeometry, mm_per_px
 
 
 def unresolved_closure(bevel: BevelGeometry, mm_per_px: float,
-                       top_px: float = RESOLVED_PX, bottom_px: float = 0.0
-                       ) -> tuple[float, float]:
+                       top_px: float = RESOLVED_PX) -> tuple[float, float]:
     """The closure of a band too short to read, as a uniform over its possible range.
 
     Parameters
@@ -1276,21 +1279,16 @@ def unresolved_closure(bevel: BevelGeometry, mm_per_px: float,
     mm_per_px : float
     top_px : float, default ``RESOLVED_PX``
         The largest half-width the band may have, px.
-    bottom_px : float, default 0
-        The smallest (a band whose inner edge lies beyond the profile's end
-        is at least as long as the crest's distance to it).
 
     Returns
     -------
     closure_mm, closure_std_mm : float
-        The middle of ``[bottom_px, top_px] tan(theta) mm_per_px`` and the
-        sd of a uniform over it (``/ sqrt(12)``), mm: the band was seen, so
-        the crest reached the gel, but its half-width is somewhere in there.
+        The middle of ``[0, top_px] tan(theta) mm_per_px`` and the sd of a
+        uniform over it (``/ sqrt(12)``), mm: the band was seen, so the crest
+        reached the gel, but its half-width is somewhere under `top_px`.
     """
-    k = bevel.tan_theta * float(mm_per_px)
-    lo = max(float(bottom_px), 0.0)
-    hi = max(float(top_px), lo)
-    return 0.5 * (lo + hi) * k, (hi - lo) * k / math.sqrt(12.0)
+    top = max(float(top_px), 0.0) * bevel.tan_theta * float(mm_per_px)
+    return 0.5 * top, top / math.sqrt(12.0)
 
 
 def _read_vernier_presses(pending: list[dict], geom: BevelGeometry, s: float
@@ -1414,6 +1412,7 @@ def _read_vernier_presses(pending: list[dict], geom: BevelGeometry, s: float
                            closure_std_mm=closure_std, reading=r, bevel_score=r.snr,
                            window_frames=d["window"], band_resolved=read))
     optics["unresolved"] = n_unresolved
+    optics["shadows"] = n_unresolved          # their point: the shadows reading
     optics["edge_px"] = edge
     optics["crest_px"] = None if np.isnan(crest0) else round(crest0, 3)
     optics["prior"] = plane is not None and any(not r.resolved for r in first)
@@ -1438,9 +1437,9 @@ _LINE_SDS = (1.2, 2.0, 3.0)
 #: threshold; ``benchmarks/bench_vernier.py --sweep``, cell L).
 INDENTER_CLEARANCE_MM = 0.25
 #: A session's bands carry lines when lines at their edges leave less than this share of
-#: the residual variance (median over its long bands): 0.05 to 0.39 on five Taxim sessions
-#: (bevels of 3 to 12 deg), 0.70 on our simulated sample session, whose bands have none
-#: (``benchmarks/bench_vernier.py --sweep``).
+#: the residual variance (median over its long bands): 0.03 to 0.39 on 13 Taxim sessions
+#: (bevels of 3 to 13 deg; ``benchmarks/bench_vernier.py --sweep`` and its Taxim rows),
+#: 0.65 and 0.70 on our two simulated 50-press sessions, whose bands have none.
 LINES_RSS_RATIO = 0.5
 #: Edge blurs (sd, px) tried on the session's long bands.
 _BLURS = (0.6, 0.8, 1.0, 1.25, 1.5, 1.75, 2.0, 2.5, 3.0)
