@@ -383,6 +383,13 @@ def test_onset_rule_without_a_vernier(tmp_path):
         # the crossing, taken as uniform over the frame period before the onset (up to the
         # stop), lies here at the stop: the depth within 3 of its stated sd
         assert abs(d - tp[p.press]["depth_mm"]) < 3 * sd
+    # the command line writes the report for the default rule on a mark session too
+    from tactilevision.cli import main
+
+    assert main(["calibrate", str(tmp_path / "s"), "--out", str(tmp_path / "mark_out"),
+                 "--no-progress"]) == 0
+    html = (tmp_path / "mark_out" / "report.html").read_text()
+    assert "what the force says the stage went on by past it" in html
     cal = calibrate_session(tmp_path / "s", depth_rule="nominal")
     assert cal.depth_rule == "nominal"
     assert len(cal.certification.presses) >= 3

@@ -366,6 +366,9 @@ def write_calibration_report(cal, out_dir: str | Path, figures: dict[str, Path])
     rule_text = {
         "land": "the depth at which the bulging gel meets the block land, from the FEM at the "
                 "fitted nu",
+        "mark": "w0, the indenter's height over the land at the first frame showing the bevel "
+                "mark, plus what the force says the stage went on by past it (the force's rise "
+                "from the frame period before that frame to the window, over eq. (5)'s slope)",
         "nominal": "the paper's w = w0, the indenter's height over the land, at the first frame "
                    "showing the bevel mark",
         "vernier": "w0 plus the overshoot read on the bevel: the band of contact on its flanks, "
