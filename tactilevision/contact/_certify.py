@@ -87,6 +87,12 @@ MARK_NULL_FRAMES = 6
 #: reach the gel (depth under about 0.6 of the deepest: w0 + an overshoot of less than 60 %
 #: of w0): the press's own baseline of the mark's score.
 MARK_BASELINE_FORCE = 0.6
+#: A press's frames with fz at least this share of its largest are its hold: the land is
+#: past w0 there, so they show the mark if any frame does (the press's template).
+MARK_HOLD_FORCE = 0.9
+#: The press's template: the onset's step, in sds of the difference of two approach
+#: frames' projections on it.
+MARK_Z_STEP = 5.0
 
 #: Vernier: least colour contrast of a band (:attr:`BevelReading.contrast`), as a fraction
 #: of the median over the session's long, clear bands. The flanks tilt the gel by theta
@@ -410,7 +416,9 @@ def certify_session(session, *, min_contact_px: int = 200,
                     f"+- {mark_rule['sd']:.2f} from frame to frame; a frame shows it "
                     f"{MARK_Z_FRAME:g} sd above its press's approach, when it and the next "
                     f"{MARK_BLOCK - 1} average {MARK_Z_BLOCK:g} sd / sqrt({MARK_BLOCK}) above "
-                    "it and it lies nearer the mark's level than the approach's")
+                    "it and it lies nearer the mark's level than the approach's; first, each "
+                    "press's own template (its hold's profile across the mark less its "
+                    "approach's) is looked for as a step from the approach to the hold")
         if mark_rule is None:
             thr = 12.0 if bevel_threshold == "auto" else float(bevel_threshold)
             mark_rule = {"rule": "fixed", "threshold": thr}
@@ -643,14 +651,109 @@ def _mark_baseline(ctx: _PressContext, centre: tuple[float, float], run: np.ndar
     return float(np.median([_mark_score(ctx, centre, int(i)) for i in early])), int(early.size)
 
 
+def _mark_residual(ctx: _PressContext, centre: tuple[float, float], i: int
+                   ) -> tuple[np.ndarray, np.ndarray] | None:
+    """Frame `i`'s profile across the mark, less a quadratic background (the press's own
+    shading), as :func:`bevel_score` fits it: ``(u_px, residual (n, 3))``; None where
+    under 0.3 of the line lies in the image."""
+    session = ctx.session
+    cfg = session.config
+    s = cfg.mm_per_px
+    geom = BevelGeometry(offset_mm=cfg.bevel_offset_mm, direction_deg=cfg.bevel_direction_deg,
+                         length_mm=cfg.bevel_length_mm)
+    prof = bevel_profile(session.frame(int(i)), session.reference, centre, s, geom,
+                         reach_px=max(0.8 / s, 12.0))
+    if prof.coverage < 0.3:
+        return None
+    u, R = prof.u_px, np.asarray(prof.colour, np.float64)
+    scale = max(float(np.abs(u).max()), 1.0)
+    B = np.stack([np.ones_like(u), u / scale, (u / scale) ** 2], axis=1)
+    coef, *_ = np.linalg.lstsq(B, R, rcond=None)
+    return u, R - B @ coef
+
+
+def _mark_template_onset(ctx: _PressContext, centre: tuple[float, float], run: np.ndarray
+                         ) -> tuple[int | None, str]:
+    """A mark's onset from the press's own template: ``(frame, why)``, frame None where
+    the press has too few frames to build one or the template shows no step (``why``
+    says which).
+
+    The per-frame score (:func:`bevel_score`) is a generic line filter; a thin mark
+    under a renderer's shadows (Taxim's: a trough some 30 px wide) scores barely above
+    an approach whose shading moves. Here the mark's change is what the press's hold
+    (frames with fz at least :data:`MARK_HOLD_FORCE` of its largest) shows that its
+    approach and release (under :data:`MARK_BASELINE_FORCE` of it, before the land can
+    reach the gel) do not: the difference of their mean profiles across the mark,
+    each less its quadratic background. Each frame is projected on that template (0:
+    the approach's level, 1: the hold's); a hold frame on the template of the other
+    hold frames, so that no frame is scored on its own noise. The onset is the first
+    frame projected at least half-way whose next :data:`MARK_BLOCK` - 1 frames are
+    half-way on average, and the mark counts as seen only when it steps there: the
+    last frame under a quarter of the way lies at most two frames before the onset,
+    and the step from it is :data:`MARK_Z_STEP` sds of a difference of two frames (the
+    approach frames' projections' sd) high. A change that grows with the press's
+    depth (the indenter's shading, no mark) rises over the approach instead."""
+    session = ctx.session
+    tf, fz = session.force_times_s, session.forces_n[:, 2]
+    f = np.interp(session.frame_times_s[run] + ctx.offset, tf, fz)
+    few = "the press has too few frames for its own template"
+    if f.size == 0:
+        return None, few
+    top = float(np.max(f))
+    hold_idx = np.flatnonzero(f >= MARK_HOLD_FORCE * top)
+    last = int(hold_idx[-1])
+    base_idx = np.flatnonzero(f[:last + 1] < MARK_BASELINE_FORCE * top)
+    if base_idx.size < 3 or hold_idx.size < 2:
+        return None, few
+    res = [_mark_residual(ctx, centre, int(i)) for i in run[:last + 1]]
+    if any(r is None for r in res):
+        return None, "the mark's line lies mostly outside the image"
+    R = np.stack([r[1] for r in res])
+    base_mean = R[base_idx].mean(axis=0)
+    D = R - base_mean
+    hold_sum = D[hold_idx].sum(axis=0)
+    T = hold_sum / hold_idx.size
+
+    def along(d: np.ndarray, t: np.ndarray) -> float:
+        tt = float(np.sum(t * t))
+        return float(np.sum(d * t)) / tt if tt > 0 else 0.0
+
+    a = np.array([along(D[j], T) for j in range(last + 1)])
+    for j in hold_idx:                     # leave the frame out of its own template
+        a[j] = along(D[j], (hold_sum - D[j]) / (hold_idx.size - 1))
+    sd_a = max(float(np.std(a[base_idx], ddof=1)), 1e-3)
+    why = "no frame of the press steps half-way"
+    for j in range(1, last + 1):
+        if a[j] < 0.5 or a[j:j + MARK_BLOCK].mean() < 0.5:
+            continue
+        low = np.flatnonzero(a[:j] < 0.25)
+        if low.size == 0 or j - int(low[-1]) > 2:
+            why = "the press's frames rise towards it over the approach, with no step"
+            break
+        step = (a[j] - a[int(low[-1])]) / (np.sqrt(2.0) * sd_a)
+        if step < MARK_Z_STEP:
+            why = (f"its step is {step:.1f} sd of a frame difference, under "
+                   f"{MARK_Z_STEP:g}")
+            break
+        return int(run[j]), ""
+    return None, f"the press's own template shows no step: {why}"
+
+
 def _mark_onset(ctx: _PressContext, centre: tuple[float, float], cand: np.ndarray,
                 run: np.ndarray) -> tuple[int, float]:
     """A bevel mark with no vernier: the first frame of `cand` where it shows firmly
     (:func:`certify_session`'s `bevel_threshold`), then back through the press's earlier
     frames while they show it too (`cand` starts near full contact, which the sink-in
-    ring's growth can put frames after the mark's first showing), ``(frame, score)``."""
+    ring's growth can put frames after the mark's first showing), ``(frame, score)``.
+    With the session's own rule, the press's own template decides first where it can
+    (:func:`_mark_template_onset`); the score is then the onset frame's
+    :func:`bevel_score`."""
     cfg = ctx.session.config
     rule = ctx.mark_rule
+    if rule["rule"] == "auto":
+        onset, template_why = _mark_template_onset(ctx, centre, run)
+        if onset is not None:
+            return onset, _mark_score(ctx, centre, onset)
     scores = np.array([_mark_score(ctx, centre, int(i)) for i in cand])
     if rule["rule"] == "auto":
         base, n_base = _mark_baseline(ctx, centre, run, rule["median"])
@@ -668,7 +771,8 @@ def _mark_onset(ctx: _PressContext, centre: tuple[float, float], cand: np.ndarra
         text = (f"the rule from the session's own frames: this press's approach scores "
                 f"{base:.2f} ({n_base} frames), the no-contact frames' sd {rule['sd']:.2f}; a "
                 f"frame above {thr:.2f} whose next {MARK_BLOCK - 1} average above "
-                f"{base + MARK_Z_BLOCK * rule['sd'] / np.sqrt(MARK_BLOCK):.2f} with it")
+                f"{base + MARK_Z_BLOCK * rule['sd'] / np.sqrt(MARK_BLOCK):.2f} with it; "
+                f"{template_why}")
     else:
         thr = rule["threshold"]
         seen = scores > thr
