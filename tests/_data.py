@@ -37,6 +37,12 @@ GELSLIM = Path(os.environ.get("TACTILEVISION_GELSLIM",
                               ROOT.parent / "shared" / "real" / "gelslim3"))
 GELSLIM_REASON = (f"GelSlim 3.0 frames not found at {GELSLIM} (set TACTILEVISION_GELSLIM to "
                   "their folder)")
+GELSIGHT_MINI = Path(os.environ.get("TACTILEVISION_GELSIGHT_MINI",
+                                    ROOT.parent / "shared" / "real" / "gelsight_mini"))
+GELSIGHT_MINI_REASON = (f"GelSight Mini calibration folder not found at {GELSIGHT_MINI} (set "
+                        "TACTILEVISION_GELSIGHT_MINI to it)")
+#: GelSight Mini folder's scale (gs_sdk's config calls it ppmm; it is mm per pixel).
+GELSIGHT_MINI_MM_PER_PX = 0.0634
 #: GelSlim release's ball (7.6 mm diameter). Its calibration script names two
 #: scales, 0.10577 mm/px and "0.0806 x 1.5" (the release's README: uncertain).
 #: The frames rule out 0.10577: the ball would be 35.9 px in radius, yet the

@@ -155,8 +155,58 @@ def test_bad_gs_sdk_models_are_named(tmp_path):
     with pytest.raises(InputError, match=re.escape("conv2 has no bn2.running_var")):
         PhotometricCalibration.from_gs_sdk(
             {k: v for k, v in sd.items() if k != "bn2.running_var"}, ref, mm_per_px=MM)
-    with pytest.raises(InputError, match=re.escape("needs conv1.weight")):
-        PhotometricCalibration.from_gs_sdk({"fc1.weight": np.zeros((2, 5))}, ref,
+    with pytest.raises(InputError, match=re.escape("needs fc1.weight")):
+        PhotometricCalibration.from_gs_sdk({"layer1.weight": np.zeros((2, 5))}, ref,
+                                           mm_per_px=MM)
+    # today's form: a gap in the layers, a bias of the wrong size, the wrong input count
+    fc = {f"fc{k}.{p}": v for k, (w, b) in enumerate(
+        [(np.zeros((32, 5)), np.zeros(32)), (np.zeros((2, 32)), np.zeros(2))], start=1)
+        for p, v in (("weight", w), ("bias", b))}
+    with pytest.raises(InputError, match=re.escape("needs fc1.weight")):
+        PhotometricCalibration.from_gs_sdk({**fc, "fc4.weight": np.zeros((2, 2))}, ref,
+                                           mm_per_px=MM)
+    with pytest.raises(InputError, match=re.escape("fc2.bias has shape (3,)")):
+        PhotometricCalibration.from_gs_sdk({**fc, "fc2.bias": np.zeros(3)}, ref, mm_per_px=MM)
+    with pytest.raises(InputError, match="6 inputs and 2 outputs, expected 5"):
+        PhotometricCalibration.from_gs_sdk({**fc, "fc1.weight": np.zeros((32, 6))}, ref,
                                            mm_per_px=MM)
     with pytest.raises(InputError, match="mm_per_px must be positive"):
         PhotometricCalibration.from_gs_sdk(sd, ref, mm_per_px=0)
+
+
+def test_todays_gs_sdk_network_reproduces_gs_sdk_on_a_real_gelsight_mini():
+    """gs_sdk's current BGRXYMLPNet (four nn.Linear layers, no batch norm), trained by its
+    owners on a real GelSight Mini, loaded from its state dict as saved: the exact engine
+    gives gs_sdk's own gradients (``gs_sdk_reference.npz``, computed by gs_sdk itself on
+    six of the folder's presses) to 0.05 deg everywhere (gs_sdk feeds its network the raw
+    frame and background, so the import keeps the reference unblurred and the exposure
+    gain off); the default table engine within 2 deg median inside the contact (today's
+    table: 1.2 to 2.0 deg; the issue's target of 1.0 is not met yet)."""
+    import cv2
+    from _data import GELSIGHT_MINI, GELSIGHT_MINI_MM_PER_PX, GELSIGHT_MINI_REASON
+
+    if not (GELSIGHT_MINI / "gs_sdk_reference.npz").is_file():
+        pytest.skip(GELSIGHT_MINI_REASON)
+    ref_npz = np.load(GELSIGHT_MINI / "gs_sdk_reference.npz")
+    background = cv2.imread(str(GELSIGHT_MINI / "background.png"))
+    cal = PhotometricCalibration.from_gs_sdk(GELSIGHT_MINI / "model" / "nnmodel.pth",
+                                             background, mm_per_px=GELSIGHT_MINI_MM_PER_PX)
+    assert cal.provenance["layers"] == [5, 32, 32, 32, 2]
+    assert cal.reference_blur == 0.0 and not cal.normalise_gain
+    exact = DepthReconstructor(cal, engine="onnx")
+    table = DepthReconstructor(cal)
+
+    def angle_deg(G, gx, gy):
+        # gs_sdk's G is the slope of the height towards the camera: our depth slope is -G
+        a = np.dstack([-G, np.ones(G.shape[:2])])
+        b = np.dstack([gx, gy, np.ones(G.shape[:2])])
+        cos = (a * b).sum(-1) / np.linalg.norm(a, axis=-1) / np.linalg.norm(b, axis=-1)
+        return np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))
+
+    for k, name in enumerate(ref_npz["presses"]):
+        frame = cv2.imread(str(GELSIGHT_MINI / str(name) / "gelsight.png"))
+        G = ref_npz["gradients"][k].astype(np.float64)
+        contact = np.hypot(G[..., 0], G[..., 1]) > np.tan(np.radians(5.0))
+        assert contact.sum() > 5000
+        assert angle_deg(G, *exact.gradients(frame)).max() < 0.05
+        assert np.median(angle_deg(G, *table.gradients(frame))[contact]) < 2.0

@@ -58,6 +58,13 @@ class PhotometricCalibration:
         Whether the gel carries marker dots (masked and filled in).
     blur_sigma : float
         Gaussian blur (px) of frames before the colour change.
+    reference_blur : float
+        Gaussian blur (px) of the reference against its camera noise, default
+        2.0; 0 for a network trained on the raw reference (gs_sdk's).
+    normalise_gain : bool
+        Whether each frame's colour change is divided by its per-channel
+        median ratio to the reference (a global exposure change), default
+        True; False for gs_sdk's networks, which do not.
     contact_threshold : float
         Colour change (max over channels) above which a pixel is in contact;
         the 99.9th percentile of the calibration frames' background.
@@ -78,6 +85,8 @@ class PhotometricCalibration:
     markers: bool = False
     blur_sigma: float = 0.0
     contact_threshold: float = 0.05
+    reference_blur: float = 2.0
+    normalise_gain: bool = True
     colour_lo: np.ndarray = field(default_factory=lambda: np.full(3, -0.5, np.float32))
     colour_hi: np.ndarray = field(default_factory=lambda: np.full(3, 0.5, np.float32))
     provenance: dict[str, Any] = field(default_factory=dict)
@@ -293,8 +302,9 @@ class PhotometricCalibration:
         else:
             state = model
         layers = gs_sdk_layers(state)
+        # gs_sdk feeds its network the raw frame and the raw background, no exposure gain
         cal = cls(model="mlp", reference=reference.copy(), mm_per_px=float(mm_per_px),
-                  use_position=True, markers=False)
+                  use_position=True, markers=False, reference_blur=0.0, normalise_gain=False)
         cal.onnx_bytes = onnx_from_gs_sdk(layers, cal.shape)
         import datetime as _dt
 
@@ -328,6 +338,7 @@ class PhotometricCalibration:
             "format_version": FORMAT_VERSION, "model": self.model, "mm_per_px": self.mm_per_px,
             "use_position": self.use_position, "markers": self.markers,
             "blur_sigma": self.blur_sigma, "contact_threshold": self.contact_threshold,
+            "reference_blur": self.reference_blur, "normalise_gain": self.normalise_gain,
             "colour_lo": [float(v) for v in self.colour_lo],
             "colour_hi": [float(v) for v in self.colour_hi],
             "provenance": self.provenance,
@@ -448,6 +459,8 @@ class PhotometricCalibration:
                    blur_sigma=float(meta.get("blur_sigma", defaults.blur_sigma)),
                    contact_threshold=float(meta.get("contact_threshold",
                                                     defaults.contact_threshold)),
+                   reference_blur=float(meta.get("reference_blur", defaults.reference_blur)),
+                   normalise_gain=bool(meta.get("normalise_gain", defaults.normalise_gain)),
                    colour_lo=np.asarray(lo, np.float32), colour_hi=np.asarray(hi, np.float32),
                    provenance=dict(meta.get("provenance", {})))
 

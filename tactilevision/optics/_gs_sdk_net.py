@@ -1,9 +1,17 @@
 """A colour-to-gradient network trained with gs_sdk, run as a tactilevision calibration.
 
 gs_sdk (GelSight and CMU's Robotics and Perception Lab; GPL-3.0, none of its code is
-used here) calibrates a sensor with a per-pixel network, ``BGRXYMLPNet``: 1 x 1
-convolutions 5 -> 32 -> 32 -> 32 -> 2, batch normalisation and ReLU after the first
-three, on the features (B, G, R) / 255 and (x / W, y / H) of a frame, trained to the
+used here) calibrates a sensor with a per-pixel network, ``BGRXYMLPNet``, 5 -> 32 -> 32
+-> 32 -> 2 with a ReLU after the first three layers, in one of two forms:
+
+- today's (gs_sdk's ``gs_reconstruct.py`` since 2025): four ``nn.Linear`` layers,
+  state dict keys ``fc1.weight``, ``fc1.bias``, ..., ``fc4.bias``, no batch
+  normalisation;
+- the older one: 1 x 1 convolutions ``conv1`` ... ``conv4`` with batch normalisation
+  ``bn1`` ... ``bn3`` after the first three.
+
+Either is recognised from the state dict's keys. The network takes the features
+(B, G, R) / 255 and (x / W, y / H) of a frame and is trained to the
 gradient *angles* (atan of the surface slope) of ball presses:
 ``atan2(x - x_c, sqrt(R^2 - d^2))`` along x, the same along y (its
 ``calibration/prepare_data.py``). At run time it takes the tangent and subtracts the
@@ -45,10 +53,12 @@ def gs_sdk_layers(state_dict: Mapping[str, object], *, eps: float = 1e-5
     Parameters
     ----------
     state_dict : mapping of str to array_like
-        ``conv<k>.weight`` (out, in, 1, 1) or (out, in) and ``conv<k>.bias``
-        for k = 1, 2, ..., and ``bn<k>.weight``, ``.bias``, ``.running_mean``,
+        Today's form, ``fc<k>.weight`` (out, in) and ``fc<k>.bias`` for
+        k = 1, 2, ... (``nn.Linear``, no batch normalisation); or the older
+        form, ``conv<k>.weight`` (out, in, 1, 1) or (out, in) and
+        ``conv<k>.bias``, with ``bn<k>.weight``, ``.bias``, ``.running_mean``,
         ``.running_var`` after each convolution but the last (torch tensors or
-        numpy arrays).
+        numpy arrays). A ``module.`` prefix (``nn.DataParallel``) is allowed.
     eps : float, default 1e-5
         torch's ``BatchNorm2d`` epsilon.
 
@@ -61,23 +71,39 @@ def gs_sdk_layers(state_dict: Mapping[str, object], *, eps: float = 1e-5
     Raises
     ------
     InputError
-        For a state dict of another shape (naming the key at fault).
+        For a state dict of neither form or of another shape (naming the key
+        at fault).
     """
-    convs = sorted({int(m[1]) for k in state_dict if (m := re.fullmatch(r"conv(\d+)\.weight", k))})
-    if not convs or convs != list(range(1, len(convs) + 1)):
-        raise InputError("not a gs_sdk BGRXYMLPNet state dict: it needs conv1.weight, "
-                         f"conv2.weight, ...; it has {sorted(state_dict)[:8]}")
+    state = {(k[len("module."):] if k.startswith("module.") else k): v
+             for k, v in state_dict.items()}
+    forms = {}
+    for prefix in ("fc", "conv"):
+        forms[prefix] = sorted({int(m[1]) for k in state
+                                if (m := re.fullmatch(rf"{prefix}(\d+)\.weight", k))})
+    prefix = "fc" if forms["fc"] else "conv"
+    index = forms[prefix]
+    if not index or index != list(range(1, len(index) + 1)) or (forms["fc"] and forms["conv"]):
+        raise InputError("not a gs_sdk BGRXYMLPNet state dict: it needs fc1.weight, "
+                         "fc2.weight, ... (today's gs_sdk) or conv1.weight, conv2.weight, ... "
+                         f"(older gs_sdk); it has {sorted(state)[:8]}")
+    batch_norm = prefix == "conv"
     layers = []
-    for i, k in enumerate(convs):
-        w = _array(state_dict[f"conv{k}.weight"])
+    for i, k in enumerate(index):
+        w = _array(state[f"{prefix}{k}.weight"])
+        if w.ndim not in (2, 4) or (w.ndim == 4 and w.shape[2:] != (1, 1)):
+            raise InputError(f"gs_sdk state dict: {prefix}{k}.weight has shape {w.shape}, "
+                             "not (out, in) or (out, in, 1, 1)")
         w = w.reshape(w.shape[0], -1)
-        b = _array(state_dict.get(f"conv{k}.bias", np.zeros(w.shape[0])))
-        if i < len(convs) - 1:
+        b = _array(state.get(f"{prefix}{k}.bias", np.zeros(w.shape[0])))
+        if b.shape != (w.shape[0],):
+            raise InputError(f"gs_sdk state dict: {prefix}{k}.bias has shape {b.shape}, "
+                             f"its weight {w.shape[0]} outputs")
+        if batch_norm and i < len(index) - 1:
             need = [f"bn{k}.{p}" for p in ("weight", "bias", "running_mean", "running_var")]
-            missing = [n for n in need if n not in state_dict]
+            missing = [n for n in need if n not in state]
             if missing:
                 raise InputError(f"gs_sdk state dict: conv{k} has no {missing[0]}")
-            g, beta, mean, var = (_array(state_dict[n]) for n in need)
+            g, beta, mean, var = (_array(state[n]) for n in need)
             scale = g / np.sqrt(var + eps)
             w = w * scale[:, None]
             b = (b - mean) * scale + beta

@@ -150,7 +150,8 @@ class DepthReconstructor:
             reference = calibration.reference
         ref = check_array(reference, "reference", [(*self.shape, 3)], dtype=np.uint8)
         ref_mask = marker_mask(ref) if calibration.markers else None
-        self._ref_inv = reference_inverse(ref, marker_mask=ref_mask)
+        self._ref_inv = reference_inverse(ref, marker_mask=ref_mask,
+                                          blur_sigma=calibration.reference_blur)
         # a quarter-resolution copy for level='far_field', on the grid of z[::4, ::4]
         self._small_size = ((self.shape[1] + 3) // 4, (self.shape[0] + 3) // 4)   # (w, h)
         small = cv2.resize(ref, self._small_size, interpolation=cv2.INTER_AREA)
@@ -195,9 +196,10 @@ class DepthReconstructor:
         cal = self.calibration
         blurred = blur_frames(frame, cal.blur_sigma) if cal.blur_sigma > 0 else frame
         if self._table is not None:
-            gx, gy = self._table.gradients(blurred)
+            gx, gy = self._table.gradients(blurred, normalise_gain=cal.normalise_gain)
         else:
-            change = colour_change(blurred, self._ref_inv).reshape(-1, 3)
+            change = colour_change(blurred, self._ref_inv,
+                                   normalise_gain=cal.normalise_gain).reshape(-1, 3)
             inputs = mlp_inputs(change, self._ref_colour, self._xx, self._yy, self.shape,
                                 use_position=cal.use_position)
             nxy = self._mlp.normals(inputs)

@@ -63,13 +63,17 @@ class GradientTable:
         self._weights = np.array([[b * b, b, 1]], np.float32)
         self._single_cell = not np.any(self.cell_offset)
 
-    def gradients(self, blurred: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def gradients(self, blurred: np.ndarray, *, normalise_gain: bool = True
+                  ) -> tuple[np.ndarray, np.ndarray]:
         """Look up one (already blurred) frame.
 
         Parameters
         ----------
         blurred : (H, W, 3) uint8 ndarray
             Frame, BGR, blurred as in calibration.
+        normalise_gain : bool, default True
+            Divide by the frame's per-channel gain (else g = 1: the
+            calibration's ``normalise_gain``).
 
         Returns
         -------
@@ -88,8 +92,11 @@ class GradientTable:
         OpenCV and numpy whole-image operations: about 2 ms at 640 x 480 on
         one core.
         """
-        sub = blurred[::8, ::8].reshape(-1, 3) * self._sub_ref_inv
-        gain = np.median(sub, axis=0)
+        if normalise_gain:
+            sub = blurred[::8, ::8].reshape(-1, 3) * self._sub_ref_inv
+            gain = np.median(sub, axis=0)
+        else:
+            gain = np.ones(3, np.float32)
         a = self._affine
         a[0, 0], a[1, 1], a[2, 2] = 1.0 / gain
         a[:, 3] = self._offset
