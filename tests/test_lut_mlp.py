@@ -351,6 +351,29 @@ def test_train_mlp_input_checks(torch_one_thread):
         train_mlp(bad, np.zeros((64, 2), np.float32), epochs=1)
 
 
+def test_train_mlp_stops_at_its_step_budget(torch_one_thread, monkeypatch):
+    """max_steps caps the optimisation steps (batches), part-way through the epochs; None
+    or a budget above the epochs' steps trains every epoch in full; a budget that is no
+    positive integer is refused."""
+    import torch
+
+    calls = []
+    step = torch.optim.Adam.step
+    monkeypatch.setattr(torch.optim.Adam, "step",
+                        lambda self, *a, **k: (calls.append(1), step(self, *a, **k))[1])
+    rng = np.random.default_rng(0)
+    x = rng.normal(size=(1000, 8)).astype(np.float32)
+    y = rng.normal(size=(1000, 2)).astype(np.float32) * 0.1
+    for budget, expected in ((None, 5 * 4), (7, 7), (100, 5 * 4), (4, 4)):
+        calls.clear()
+        onnx_bytes = train_mlp(x, y, hidden=8, epochs=5, batch_size=256, max_steps=budget)
+        assert len(calls) == expected
+        assert MLPGradientModel(onnx_bytes).normals(x[:3]).shape == (3, 2)
+    for bad in (0, -1, 2.5, True):
+        with pytest.raises(InputError, match="max_steps must be a positive integer"):
+            train_mlp(x, y, hidden=8, epochs=1, max_steps=bad)
+
+
 # -------------------------------------------- calibration and reconstruction
 BALL_PX = 40.0
 MM_PER_PX = 0.05

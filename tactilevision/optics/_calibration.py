@@ -122,6 +122,7 @@ class PhotometricCalibration:
         progress: bool = False,
         detect_edge: Literal["contact", "colour"] = "contact",
         flat_fraction: float = 0.03,
+        max_steps: int | None = 2400,
     ) -> PhotometricCalibration:
         """Calibrate from frames of a ball pressed into the gel.
 
@@ -173,6 +174,12 @@ class PhotometricCalibration:
             within 5 %) (``benchmarks/bench_forces_session.py``).
         epochs : int, default 30
             MLP training epochs.
+        max_steps : int or None, default 2400
+            MLP only: the most optimisation steps (batches of 4096 pixels) of
+            a round (two with ``refine_centers``); with more labelled pixels
+            the training stops part-way through its epochs, so the time no
+            longer grows with the folder (on the taxim GelSight presses,
+            36 of 640 x 480, 3600 steps otherwise). None: every epoch in full.
         hidden : int, default 128
             MLP units per hidden layer (two layers). On the taxim GelSight
             presses 128 units gave 4.7 degrees and 56 um against 4.9 to 5.0
@@ -234,7 +241,7 @@ class PhotometricCalibration:
             label_fraction=label_fraction, refine_centers=refine_centers, bins=bins,
             lut_cells=lut_cells, epochs=epochs, hidden=hidden, blur_sigma=blur_sigma, seed=seed,
             source=source, progress=progress, detect_edge=detect_edge,
-            flat_fraction=flat_fraction)
+            flat_fraction=flat_fraction, max_steps=max_steps)
 
     @classmethod
     def from_gs_sdk(cls, model: str | Path | Mapping[str, Any], reference: np.ndarray, *,

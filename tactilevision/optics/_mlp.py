@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._checks import check_array
+from .._checks import InputError, check_array
 
 __all__ = ["MLPGradientModel", "mlp_inputs", "train_mlp"]
 
@@ -142,7 +142,7 @@ def serialise_normal_graph(nodes: list, initializers: list, name: str, producer:
 
 def train_mlp(inputs: np.ndarray, nxy: np.ndarray, *, hidden: int = 128, epochs: int = 12,
               batch_size: int = 4096, learning_rate: float = 3e-3, seed: int = 0,
-              progress: bool = False) -> bytes:
+              progress: bool = False, max_steps: int | None = None) -> bytes:
     """Train the colour-to-normal network and return it as ONNX bytes.
 
     Parameters
@@ -162,6 +162,11 @@ def train_mlp(inputs: np.ndarray, nxy: np.ndarray, *, hidden: int = 128, epochs:
         Seed of the initialisation and the batch order (deterministic on CPU).
     progress : bool, default False
         Show a progress bar over epochs.
+    max_steps : int, optional
+        The most optimisation steps (batches): with more data than
+        ``max_steps / epochs`` batches the training stops there, part-way
+        through a pass, the learning-rate cycle fitted to it. None: every
+        epoch in full.
 
     Returns
     -------
@@ -172,6 +177,8 @@ def train_mlp(inputs: np.ndarray, nxy: np.ndarray, *, hidden: int = 128, epochs:
     ------
     ImportError
         If torch or onnx is missing: ``pip install tactilevision[torch]``.
+    InputError
+        For a ``max_steps`` that is not a positive integer.
     """
     try:
         import torch
@@ -194,12 +201,23 @@ def train_mlp(inputs: np.ndarray, nxy: np.ndarray, *, hidden: int = 128, epochs:
         torch.nn.Linear(hidden, hidden), torch.nn.SiLU(),
         torch.nn.Linear(hidden, 2),
     )
-    steps = epochs * ((len(x) + batch_size - 1) // batch_size)
+    if max_steps is not None and (isinstance(max_steps, bool) or int(max_steps) != max_steps
+                                  or max_steps < 1):
+        raise InputError(f"max_steps must be a positive integer or None, got {max_steps!r}")
+    per_epoch = (len(x) + batch_size - 1) // batch_size
+    steps = epochs * per_epoch
+    if max_steps is not None:
+        steps = min(steps, int(max_steps))
     opt = torch.optim.Adam(net.parameters(), lr=learning_rate)
     sched = torch.optim.lr_scheduler.OneCycleLR(opt, max_lr=learning_rate, total_steps=steps)
-    for _ in tqdm(range(epochs), desc="training MLP", unit="epoch", disable=not progress):
+    done = 0
+    for _ in tqdm(range(-(-steps // per_epoch)), desc="training MLP", unit="epoch",
+                  disable=not progress):
         perm = torch.randperm(len(x), generator=gen)
         for k in range(0, len(x), batch_size):
+            if done == steps:
+                break
+            done += 1
             b = perm[k:k + batch_size]
             loss = torch.mean((net(x[b]) - y[b]) ** 2)
             opt.zero_grad()

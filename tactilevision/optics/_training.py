@@ -28,6 +28,12 @@ from ._mlp import mlp_inputs, train_mlp
 __all__ = ["fit_from_ball_presses"]
 
 
+#: Network training: the most optimisation steps of a round; with more labelled pixels
+#: the training stops part-way through its epochs, so its time no longer grows with the
+#: folder (``benchmarks/bench_optics_calibration_time.py``).
+MLP_MAX_STEPS = 2400
+
+
 def fit_from_ball_presses(cls, reference: np.ndarray, frames: np.ndarray,
                           centers_px: np.ndarray | None = None,
                           radii_px: np.ndarray | None = None, *, ball_radius_mm: float,
@@ -37,7 +43,8 @@ def fit_from_ball_presses(cls, reference: np.ndarray, frames: np.ndarray,
                           lut_cells: tuple[int, int] = (1, 1), epochs: int = 30,
                           hidden: int = 128, blur_sigma: float = 0.0, seed: int = 0,
                           source: str = "", progress: bool = False,
-                          detect_edge: str = "contact", flat_fraction: float = 0.03):
+                          detect_edge: str = "contact", flat_fraction: float = 0.03,
+                          max_steps: int | None = MLP_MAX_STEPS):
     """Train a photometric calibration of class `cls` from ball presses.
 
     The parameters, return value and errors are those of
@@ -118,7 +125,7 @@ def fit_from_ball_presses(cls, reference: np.ndarray, frames: np.ndarray,
             inputs = mlp_inputs(f_all, ref_colour[y_all, x_all], x_all, y_all, (h, w),
                                 use_position=use_position)
             cal.onnx_bytes = train_mlp(inputs, n_all, hidden=hidden, epochs=epochs,
-                                       seed=seed, progress=progress)
+                                       seed=seed, progress=progress, max_steps=max_steps)
         if rnd + 1 < rounds:
             from ._reconstructor import DepthReconstructor
 
