@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 from _data import synthetic_presses
 
+from tactilevision import InputError
 from tactilevision.cli import main
 from tactilevision.io import read_ball_presses
 from tactilevision.optics import (
@@ -87,10 +88,31 @@ def test_cli_saves_the_report_and_reads_circles_beside_the_frames(presses, tmp_p
                  "--mm-per-px", str(MM), "--model", "lut", "--no-progress",
                  "--out", str(out)]) == 0
     stdout = capsys.readouterr().out
-    assert "training presses (in sample" in stdout and "deepest point" in stdout
+    # by default one press in four is held out, scored by a calibration trained without it;
+    # the one saved is trained on all
     report = json.loads((out.parent / "optics_accuracy.json").read_text())
-    assert report["in_sample"] is True and report["circles"] == "given"
-    assert report["mm_per_px"] == MM and report["balls"][0]["n_scored"] == 8
+    held = report["held_out"]["presses"]
+    assert len(held) == 2 and report["in_sample"] is False and report["circles"] == "given"
+    assert report["balls"][0]["presses"] == held and report["balls"][0]["n_scored"] == 2
+    assert "held out for the report: presses " + ", ".join(map(str, held)) in stdout
+    assert "inner cap" in stdout and "deepest point" in stdout
+    assert PhotometricCalibration.load(out).provenance["presses"] == list(range(8))
+    assert report["mm_per_px"] == MM
+    # --holdout 0: the training presses, in sample, and said so
+    assert main(["optics", "calibrate", str(folder), "--ball-radius-mm", str(BALL_PX * MM),
+                 "--mm-per-px", str(MM), "--model", "lut", "--no-progress", "--holdout", "0",
+                 "--out", str(out), "--overwrite"]) == 0
+    stdout = capsys.readouterr().out
+    assert "training presses (in sample" in stdout
+    report = json.loads((out.parent / "optics_accuracy.json").read_text())
+    assert report["in_sample"] is True and report["held_out"] is None
+    assert report["balls"][0]["n_scored"] == 8
+    for bad in ("1", "-0.1", "1.5"):
+        assert main(["optics", "calibrate", str(folder), "--ball-radius-mm",
+                     str(BALL_PX * MM), "--mm-per-px", str(MM), "--model", "lut",
+                     "--no-progress", "--holdout", bad, "--out", str(tmp_path / "b.npz")]) == 2
+        assert "--holdout must be at least 0 and under 1" in capsys.readouterr().err
+    assert not (tmp_path / "b.npz").exists()
     # a file of that name that tactilevision did not write stops the next run, before work
     other = tmp_path / "other"
     other.mkdir()
@@ -156,3 +178,33 @@ def test_out_of_range_colours_lie_on_the_rims_of_real_presses():
         rim += int(((d >= 0.8) & (d < 1.15)).sum())
         total += d.size
     assert total > 500 and rim > 0.85 * total
+
+
+def test_holdout_presses_spread_over_the_pad_and_the_ball_sizes():
+    """One in four of the presses the report can score (inside the image), in every ball
+    size, spread over the pad; presses cut by the image edge are always trained on."""
+    from tactilevision.optics import holdout_presses
+
+    rng = np.random.default_rng(3)
+    shape = (240, 320)
+    centres = np.column_stack([rng.uniform(40, 280, 40), rng.uniform(40, 200, 40)])
+    radii = np.full(40, 30.0)
+    ball = np.where(np.arange(40) < 28, 50.0, 80.0)
+    centres[:4] = [[5, 120], [315, 100], [160, 3], [100, 238]]      # cut by the edge
+    held = holdout_presses(centres, radii, ball, shape)
+    assert not held[:4].any()
+    for b, n_inside in ((50.0, 24), (80.0, 12)):
+        sel = ball == b
+        assert np.count_nonzero(held & sel) == round(n_inside / 4)
+    # spread: held-out presses in each third of the pad's height where there are presses
+    bands = np.clip((centres[:, 1] * 3 // 240).astype(int), 0, 2)
+    inside = np.arange(40) >= 4
+    for k in range(3):
+        if np.count_nonzero(inside & (bands == k)) >= 6:
+            assert np.any(held & (bands == k))
+    assert np.count_nonzero(holdout_presses(centres, radii, ball, shape, share=0.5)) == 18
+    for bad in (0.0, 1.0, -0.2):
+        with pytest.raises(InputError, match="held-out share must lie between 0 and 1"):
+            holdout_presses(centres, radii, ball, shape, share=bad)
+    with pytest.raises(InputError, match="one each per press"):
+        holdout_presses(centres, radii[:3], ball, shape)

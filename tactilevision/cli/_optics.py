@@ -53,8 +53,8 @@ def parse_presses(text: str | None, n: int) -> np.ndarray:
 
 def _accuracy_text(report: dict, mm: float) -> str:
     """The accuracy report as printed: a line per ball size."""
-    which = ("training presses (in sample: every press was trained on; --presses 0::2 "
-             "holds the odd ones out)" if report["in_sample"] else "held-out presses")
+    which = ("training presses (in sample: every press was trained on; --holdout 0.25 "
+             "holds one in four out)" if report["in_sample"] else "held-out presses")
     if report["circles"] == "given":
         circles = "circles given (contact circles)"
     elif report.get("edge") == "colour":
@@ -73,8 +73,11 @@ def _accuracy_text(report: dict, mm: float) -> str:
         trained = (f"slopes trained up to {b['trained_tilt_deg']:.1f} deg"
                    if b["trained_tilt_deg"] is not None else "no press of this ball trained on")
         lines.append(
-            f"{head}: normal angle {b['normal_angle_deg']:.2f} deg (median), deepest point "
-            f"{100 * b['deepest_point']:+.1f} %, shape RMS {b['shape_rms_px'] * mm * 1000:.1f} "
+            f"{head}: normal angle {b['normal_angle_deg']:.2f} deg (median; "
+            f"{b['normal_angle_08_deg']:.2f} inside 0.8 of the radius), inner cap "
+            f"{100 * b['inner_cap']:+.1f} % (centre against 0.8 of the radius), deepest "
+            f"point {100 * b['deepest_point']:+.1f} %, shape RMS "
+            f"{b['shape_rms_px'] * mm * 1000:.1f} "
             f"um, fitted ball radius {b['fitted_radius_px'] * mm:.3f} +- "
             f"{b['fitted_radius_std_px'] * mm:.3f} mm (true {radius:g}); {trained}, these "
             f"rims reach {b['rim_tilt_deg']:.1f} deg")
@@ -100,10 +103,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "ball leaves the gel, not the visible colour edge, which lies a little outside it. "
         "Circles are detected when not given: at the contact edge (the shoulder where the "
         "colour change stops growing, see --detect-edge). Pixels within --label-fraction "
-        "of the radius are trained on. Presses left out by "
-        "--presses are used to report the accuracy (printed, and saved as "
-        "<name>_accuracy.json beside the calibration); with none left out, the training "
-        "presses are, and the report says it is in sample.",
+        "of the radius are trained on. The accuracy report (printed, and saved as "
+        "<name>_accuracy.json beside the calibration) never scores a press the scoring "
+        "calibration was trained on: by default one press in four (--holdout), spread over "
+        "the pad and the ball sizes, is held out, a calibration trained on the rest is "
+        "scored on them, and the calibration saved is then trained on every press. "
+        "--presses trains on the presses it names and scores the rest; --holdout 0 scores "
+        "the training presses, and the report says it is in sample.",
     )
     c.add_argument("ball_presses", metavar="BALL_PRESSES", type=Path,
                    help="folder, .npz, or taxim:gelsight")
@@ -117,7 +123,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     c.add_argument("--out", metavar="OPTICS", type=Path, required=True,
                    help="calibration file to write (.npz)")
     c.add_argument("--presses", metavar="SEL", default=None,
-                   help="presses to calibrate on: slice '0::2' or list '0,2,4' (default all)")
+                   help="presses to calibrate on: slice '0::2' or list '0,2,4' (default all); "
+                   "the others are scored")
+    c.add_argument("--holdout", metavar="SHARE", type=float, default=0.25,
+                   help="without --presses: the share of the presses held out for the "
+                   "accuracy report, spread over the pad and the ball sizes, 0 <= SHARE < 1 "
+                   "(default 0.25); the calibration saved is trained on every press. 0: the "
+                   "training presses are scored (in sample, and said so)")
     c.add_argument("--epochs", type=int, default=30, help="MLP training epochs (default 30)")
     c.add_argument("--hidden", type=int, default=128,
                    help="MLP units per hidden layer (default 128)")
@@ -158,6 +170,7 @@ def run_calibrate(args: argparse.Namespace) -> int:
         PhotometricCalibration,
         calibration_accuracy,
         detect_contact_circles,
+        holdout_presses,
     )
 
     if (args.ball_radius_mm is not None and args.ball_radius_mm <= 0) or args.mm_per_px <= 0:
@@ -170,6 +183,8 @@ def run_calibrate(args: argparse.Namespace) -> int:
         raise InputError(f"--label-fraction must be in (0, 1], got {args.label_fraction}")
     if not 0 < args.flat_fraction <= 1:
         raise InputError(f"--flat-fraction must be in (0, 1], got {args.flat_fraction}")
+    if not 0 <= args.holdout < 1:
+        raise InputError(f"--holdout must be at least 0 and under 1, got {args.holdout:g}")
     out = Path(args.out)
     if out.is_dir():
         raise InputError(f"--out {out} is a folder; give the calibration file to write (.npz)")
@@ -200,44 +215,76 @@ def run_calibrate(args: argparse.Namespace) -> int:
                else np.full(len(ps.frames), args.ball_radius_mm))
     idx = parse_presses(args.presses, len(ps.frames))
     given = ps.centers_px is not None and ps.radii_px is not None and not args.detect_circles
-    cal = PhotometricCalibration.from_ball_presses(
-        ps.reference, ps.frames[idx],
-        ps.centers_px[idx] if given else None, ps.radii_px[idx] if given else None,
-        ball_radius_mm=ball_mm[idx], mm_per_px=args.mm_per_px, model=args.model,
-        bins=args.bins, lut_cells=cells, epochs=args.epochs, hidden=args.hidden, seed=args.seed,
-        source=str(args.ball_presses), label_fraction=args.label_fraction,
-        progress=not args.no_progress, detect_edge=args.detect_edge,
-        flat_fraction=args.flat_fraction,
-    )
+    mm = args.mm_per_px
+    held = None         # the presses held out for the report (the saved one trains on all)
+    if args.presses is None and args.holdout > 0:
+        if given:
+            spread_c, spread_r = ps.centers_px, ps.radii_px
+        else:
+            spread_c, spread_r = detect_contact_circles(ps.frames, ps.reference,
+                                                        edge=args.detect_edge)
+        held = holdout_presses(spread_c, spread_r, ball_mm / mm, ps.reference.shape[:2],
+                               args.holdout)
+        if not held.any() or np.count_nonzero(~held) < 2:
+            held = None
+
+    def train(sel: np.ndarray) -> PhotometricCalibration:
+        return PhotometricCalibration.from_ball_presses(
+            ps.reference, ps.frames[sel],
+            ps.centers_px[sel] if given else None, ps.radii_px[sel] if given else None,
+            ball_radius_mm=ball_mm[sel], mm_per_px=mm, model=args.model,
+            bins=args.bins, lut_cells=cells, epochs=args.epochs, hidden=args.hidden,
+            seed=args.seed, source=str(args.ball_presses), label_fraction=args.label_fraction,
+            progress=not args.no_progress, detect_edge=args.detect_edge,
+            flat_fraction=args.flat_fraction,
+        )
+
+    scoring = None
+    if held is not None:
+        # the report's calibration never sees the presses it is scored on
+        rest = np.flatnonzero(~held)
+        scoring = train(rest)
+    cal = train(idx)
     cal.provenance["presses"] = [int(i) for i in idx]
     cal.provenance["command"] = "tactilevision " + " ".join(args.argv)
     if args.credit:
         cal.provenance["credit"] = args.credit
     # the accuracy report: held-out presses (else the training ones, said so), by ball
-    mm = args.mm_per_px
+    if scoring is None:
+        scoring, train_idx = cal, idx
+    else:
+        train_idx = rest
     trained = np.zeros(len(ps.frames), bool)
-    trained[idx] = True
+    trained[train_idx] = True
     try:
         if given:
             centres, radii = ps.centers_px, ps.radii_px
         else:
-            # the trained presses' circles are the calibration's own (its refined centres);
-            # only the held-out presses are detected here
+            # the trained presses' circles are the scoring calibration's own (its refined
+            # centres); the held-out presses' are detected, by no calibration
             centres = np.zeros((len(ps.frames), 2))
             radii = np.zeros(len(ps.frames))
-            centres[idx] = cal.provenance["centers_px"]
-            radii[idx] = cal.provenance["radii_px"]
-            rest = np.flatnonzero(~trained)
-            if rest.size:
-                centres[rest], radii[rest] = detect_contact_circles(
-                    ps.frames[rest], ps.reference, edge=args.detect_edge)
-        report = calibration_accuracy(DepthReconstructor(cal), ps.frames, centres, radii,
+            centres[train_idx] = scoring.provenance["centers_px"]
+            radii[train_idx] = scoring.provenance["radii_px"]
+            others = np.flatnonzero(~trained)
+            if others.size:
+                if held is not None:
+                    centres[others], radii[others] = spread_c[others], spread_r[others]
+                else:
+                    centres[others], radii[others] = detect_contact_circles(
+                        ps.frames[others], ps.reference, edge=args.detect_edge)
+        report = calibration_accuracy(DepthReconstructor(scoring), ps.frames, centres, radii,
                                       ball_mm / mm, trained=trained,
-                                      label_fraction=cal.provenance["label_fraction"],
+                                      label_fraction=scoring.provenance["label_fraction"],
                                       circles="given" if given else "detected",
                                       edge="contact" if given else args.detect_edge)
     except InputError as exc:      # the calibration stands; only its report is missing
         report = {"error": f"no accuracy report: {exc}"}
+    report["held_out"] = None if held is None else {
+        "presses": [int(i) for i in np.flatnonzero(held)], "share": float(args.holdout),
+        "scored_by": f"a calibration trained on the other {int(np.count_nonzero(~held))} "
+                     "presses",
+        "saved_calibration_trained_on": "every press"}
     report["mm_per_px"] = mm
     # into place only when complete; the folder's manifest records it (a rerun may replace it)
     with StagedOutput(out.parent, overwrite=args.overwrite,
@@ -247,6 +294,13 @@ def run_calibrate(args: argparse.Namespace) -> int:
         stage.commit()
     path = out.parent / name
     print(f"wrote {args.model} calibration from {len(idx)} presses to {path}")
+    if held is not None:
+        print(f"held out for the report: presses {', '.join(str(i) for i in np.flatnonzero(held))}"
+              f" ({np.count_nonzero(held)} of {len(ps.frames)}, spread over the pad and the "
+              f"ball sizes among the presses whose contact lies inside the image), scored by "
+              f"a calibration trained on the other "
+              f"{np.count_nonzero(~held)}; the calibration saved is trained on all "
+              f"{len(ps.frames)}")
     print(report["error"] if "error" in report else _accuracy_text(report, mm))
     print(f"accuracy report: {out.parent / report_name}")
     return 0

@@ -9,7 +9,7 @@ from ._absolute import (
     absolute_depth_metrics,
     fit_ball_cap,
 )
-from ._accuracy import calibration_accuracy, edge_cut, max_tilt_deg
+from ._accuracy import calibration_accuracy, edge_cut, holdout_presses, max_tilt_deg
 from ._ball import (
     BallPressMetrics,
     ball_gradients,
@@ -63,6 +63,7 @@ __all__ = [
     "fit_colour_lut",
     "frame_gain",
     "gradients_from_normals",
+    "holdout_presses",
     "integrate_poisson",
     "integrate_poisson_masked",
     "lateral_displacement",

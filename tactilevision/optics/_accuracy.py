@@ -11,7 +11,7 @@ from .._checks import InputError
 from ._ball import ball_press_metrics
 from ._reconstructor import DepthReconstructor
 
-__all__ = ["calibration_accuracy", "edge_cut", "max_tilt_deg"]
+__all__ = ["calibration_accuracy", "edge_cut", "holdout_presses", "max_tilt_deg"]
 
 
 def edge_cut(centers_px: np.ndarray, radii_px: np.ndarray, shape: tuple[int, int]
@@ -38,6 +38,84 @@ def edge_cut(centers_px: np.ndarray, radii_px: np.ndarray, shape: tuple[int, int
     h, w = shape
     return ((c[:, 0] - r < 0) | (c[:, 0] + r > w - 1) | (c[:, 1] - r < 0)
             | (c[:, 1] + r > h - 1))
+
+
+def holdout_presses(centers_px: np.ndarray, radii_px: np.ndarray,
+                    ball_radius_px: np.ndarray, shape: tuple[int, int],
+                    share: float = 0.25) -> np.ndarray:
+    """Presses held out of training for the accuracy report, stratified over the pad and
+    the ball sizes.
+
+    Only presses the report can score are held out: those whose contact disc lies
+    inside the image (:func:`edge_cut`; the others are always trained on). Each ball
+    size's such presses are ordered along the pad (in bands of a third of its height,
+    left to right, alternate bands right to left), and every ``1 / share``-th of them is
+    held out starting from the middle of the first stride, so the held-out presses
+    spread over the pad and every ball size with two or more such presses has at least
+    one.
+
+    Parameters
+    ----------
+    centers_px : (N, 2) float ndarray
+        Contact-circle centres (x, y), px.
+    radii_px : (N,) float ndarray
+        Contact-circle radii, px.
+    ball_radius_px : (N,) float ndarray
+        Each press's ball radius (the strata).
+    shape : (H, W)
+        Image size.
+    share : float, default 0.25
+        The share held out, 0 < share < 1.
+
+    Returns
+    -------
+    held_out : (N,) bool ndarray
+
+    Raises
+    ------
+    InputError
+        For a share outside (0, 1) or arrays of different lengths.
+    """
+    if not 0 < share < 1:
+        raise InputError(f"the held-out share must lie between 0 and 1, got {share!r}")
+    c = np.asarray(centers_px, np.float64).reshape(-1, 2)
+    ball = np.asarray(ball_radius_px, np.float64).reshape(-1)
+    r = np.asarray(radii_px, np.float64).reshape(-1)
+    if ball.size != len(c) or r.size != len(c):
+        raise InputError(f"{len(c)} centres, {r.size} radii and {ball.size} ball radii: one "
+                         "each per press")
+    inside = ~edge_cut(c, r, shape)
+    h, _ = shape
+    band = np.clip((c[:, 1] * 3 // max(h, 1)).astype(int), 0, 2)
+    x = np.where(band % 2 == 0, c[:, 0], -c[:, 0])        # a snake over the pad
+    held = np.zeros(len(c), bool)
+    stride = 1.0 / share
+    for b in np.unique(ball):
+        idx = np.flatnonzero((ball == b) & inside)
+        if idx.size < 2:
+            continue
+        order = idx[np.lexsort((x[idx], band[idx]))]
+        picks = np.arange(stride / 2 - 0.5, order.size, stride).astype(int)
+        held[order[np.unique(np.clip(picks, 0, order.size - 1))]] = True
+    return held
+
+
+def _inner_cap(height_px: np.ndarray, centre: np.ndarray, radius: float, ball_px: float,
+               fraction: float = 0.8) -> float:
+    """The inner cap's depth over the ball's, less one: the height at the disc's centre
+    (mean within 1.5 px) above the median on the circle at `fraction` of the radius,
+    against the sphere's drop there, R - sqrt(R^2 - (fraction r)^2). Inside the contact
+    the ball surely touches the gel, so the rim's unknown shape does not enter."""
+    hh, ww = height_px.shape
+    yy, xx = np.mgrid[0:hh, 0:ww]
+    d = np.hypot(xx - centre[0], yy - centre[1])
+    rho = fraction * radius
+    middle = d <= 1.5
+    ring = np.abs(d - rho) <= 1.0
+    if not middle.any() or not ring.any():
+        return math.nan
+    drop = ball_px - math.sqrt(max(ball_px * ball_px - rho * rho, 0.0))
+    return float((height_px[middle].mean() - np.median(height_px[ring])) / drop - 1.0)
 
 
 def max_tilt_deg(radius_px: np.ndarray | float, ball_radius_px: np.ndarray | float
@@ -111,6 +189,10 @@ def calibration_accuracy(recon: DepthReconstructor, frames: np.ndarray,
         over presses of the mean normal-angle error inside 0.9 of the radius),
         ``deepest_point`` (median relative error of the cap depth: reconstructed
         height at the deepest point above the rim, over R - sqrt(R^2 - r^2)),
+        ``inner_cap`` (the same for the centre against 0.8 of the radius, where
+        the ball surely touches: :func:`_inner_cap`), ``normal_angle_08_deg``
+        (as ``normal_angle_deg``, inside 0.8 of the radius), ``presses`` (the
+        scored presses' indices),
         ``trained_tilt_deg`` (the steepest slope the training labels reached,
         at ``label_fraction`` of the radius) and ``rim_tilt_deg`` (the steepest
         slope of the scored presses' rims), ``shape_rms_px``,
@@ -146,19 +228,26 @@ def calibration_accuracy(recon: DepthReconstructor, frames: np.ndarray,
                      radii[same & trained] * (1.0 if colour_edge else label_fraction),
                      b).max())
                                       if np.any(same & trained) else None),
-                 "normal_angle_deg": None, "deepest_point": None, "rim_tilt_deg": None,
+                 "presses": [int(i) for i in use],
+                 "normal_angle_deg": None, "normal_angle_08_deg": None,
+                 "deepest_point": None, "inner_cap": None, "rim_tilt_deg": None,
                  "shape_rms_px": None, "fitted_radius_px": None, "fitted_radius_std_px": None}
         if use.size:
-            per, deepest = [], []
-            for i in use:       # each press reconstructed once, for both measures
+            per, inner, deepest, caps = [], [], [], []
+            for i in use:       # each press reconstructed once, for every measure
                 gx, gy = recon.gradients(frames[i])
                 height_px = recon(frames[i]) / mm
                 per.append(ball_press_metrics(gx, gy, height_px, centers[i], 0.9 * radii[i],
                                               float(b)))
+                inner.append(ball_press_metrics(gx, gy, height_px, centers[i],
+                                                0.8 * radii[i], float(b)).normal_angle_deg)
                 deepest.append(_deepest_point(height_px, centers[i], radii[i], float(b)))
+                caps.append(_inner_cap(height_px, centers[i], radii[i], float(b)))
             fitted = np.array([p.fitted_radius_px for p in per])
             entry["normal_angle_deg"] = float(np.median([p.normal_angle_deg for p in per]))
+            entry["normal_angle_08_deg"] = float(np.median(inner))
             entry["deepest_point"] = float(np.nanmedian(deepest))
+            entry["inner_cap"] = float(np.nanmedian(caps))
             entry["rim_tilt_deg"] = float(max_tilt_deg(radii[use], b).max())
             entry["shape_rms_px"] = float(np.mean([p.shape_rms_px for p in per]))
             entry["fitted_radius_px"] = float(fitted.mean())
