@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import re
 from pathlib import Path
 
 import cv2
@@ -10,6 +11,7 @@ import numpy as np
 import pytest
 from _data import TAXIM_BALL_RADIUS_MM, TAXIM_MM_PER_PX, ball_depth, synthetic_presses
 
+from tactilevision import InputError
 from tactilevision.cli import main
 from tactilevision.optics import PhotometricCalibration
 
@@ -383,6 +385,20 @@ def test_reconstruct_wrong_size_frame_skipped(calibration, presses, tmp_path, ca
     with (out / "heights.csv").open() as fh:
         assert [r["frame"] for r in csv.DictReader(fh)] == ["press_1.png", "press_3.png",
                                                           "press_9.png"]
+    # a folder with no frame it can read: nothing written, not even an empty table
+    only_bad = tmp_path / "only_bad"
+    only_bad.mkdir()
+    (only_bad / "press_0.png").write_bytes(b"not a png")
+    out2 = tmp_path / "out2"
+    out2.mkdir()
+    (out2 / "keep.txt").write_text("written before")
+    assert main(["reconstruct", str(only_bad), "--calibration", str(calibration),
+                 "--out", str(out2), "--no-images"]) == 2
+    captured = capsys.readouterr()
+    assert "reconstructed 0" not in captured.out
+    err = errors(captured.err)
+    assert len(err) == 1 and "nothing written" in err[0] and "press_0.png" in err[0]
+    assert sorted(p.name for p in out2.iterdir()) == ["keep.txt"]
 
 
 def test_reconstruct_missing_calibration(presses, tmp_path, capsys):
@@ -392,6 +408,20 @@ def test_reconstruct_missing_calibration(presses, tmp_path, capsys):
                  "--out", str(tmp_path / "o")]) == 2
     err = errors(capsys.readouterr().err)
     assert len(err) == 1 and str(missing) in err[0]
+
+
+def test_corrupt_calibration_files_are_named(calibration, tmp_path):
+    """A calibration .npz cut short or with damaged bytes is refused with the file named
+    (it raised zipfile.BadZipFile or zlib.error before)."""
+    data = Path(calibration).read_bytes()
+    cut = tmp_path / "cut.npz"
+    cut.write_bytes(data[: len(data) // 2])
+    flipped = tmp_path / "flipped.npz"
+    flipped.write_bytes(data[:600] + bytes(b ^ 0xFF for b in data[600:1600]) + data[1600:])
+    for bad in (cut, flipped):
+        with pytest.raises(InputError, match=re.escape(f"calibration file {bad} is not a "
+                                                       "readable .npz")):
+            PhotometricCalibration.load(bad)
 
 
 def test_reconstruct_calibration_not_npz(presses, tmp_path, capsys):

@@ -129,6 +129,10 @@ def run(args: argparse.Namespace) -> int:
             rows.append({"frame": path.name, "max_depth_mm": f"{float(height.max()):.4f}",
                          "contact_area_mm2": f"{contact.sum() * cal.mm_per_px ** 2:.3f}",
                          "out_of_range_px": int(recon.out_of_range(frame).sum())})
+        if not rows:
+            # nothing to show for the run: the output folder is left as it was
+            raise InputError(f"no frame of {args.frames_dir} could be reconstructed, nothing "
+                             f"written: " + "; ".join(skipped))
         with (tmp / "heights.csv").open("w", newline="") as fh:
             writer = csv.DictWriter(fh, fieldnames=["frame", "max_depth_mm",
                                                     "contact_area_mm2", "out_of_range_px"])

@@ -13,6 +13,8 @@ from __future__ import annotations
 import io
 import json
 import os
+import zipfile
+import zlib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -418,8 +420,10 @@ class PhotometricCalibration:
         try:
             with np.load(path, allow_pickle=False) as z:
                 data = {k: z[k] for k in z.files}
-        except (OSError, ValueError) as exc:
-            raise InputError(f"calibration file {path} is not a readable .npz ({exc})") from None
+        except (OSError, ValueError, EOFError, zipfile.BadZipFile, zlib.error) as exc:
+            # a corrupt or cut-off zip raises any of these, some only when an array is read
+            raise InputError(f"calibration file {path} is not a readable .npz "
+                             f"({type(exc).__name__}: {exc})") from None
         for key in ("meta", "reference"):
             if key not in data:
                 raise InputError(f"calibration file {path} lacks the key '{key}'")
