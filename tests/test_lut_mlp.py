@@ -670,3 +670,26 @@ def test_mlp_tabulation_is_cached_on_disk_and_a_damaged_file_is_a_miss(tmp_path,
     assert rec._read_table(files[0], ref_inv, 16) is None                 # other bins
     files[0].write_bytes(files[0].read_bytes()[:1000])
     assert rec._read_table(files[0], ref_inv, 32) is None
+
+
+def test_half_float_table_lookup_is_the_tables_values_exactly():
+    """A table stored in float16 is widened to float32 by OpenCV: the gradients are the
+    table's entries exactly (as numpy's astype gives them), whatever the pixels' cells."""
+    from tactilevision.optics._table import GradientTable
+
+    rng = np.random.default_rng(5)
+    bins, cells, shape = 4, 3, (12, 16)
+    n = cells * bins ** 3
+    gx = rng.normal(0, 2, n).astype(np.float16)
+    gy = rng.normal(0, 2, n).astype(np.float16)
+    offset = (rng.integers(0, cells, shape) * bins ** 3).astype(np.int32)
+    ref_inv = np.full((*shape, 3), 1 / 128, np.float32)
+    table = GradientTable(gx, gy, offset, bins, np.full(3, -0.5, np.float32),
+                          np.full(3, 0.5, np.float32), ref_inv)
+    frame = rng.integers(60, 200, (*shape, 3)).astype(np.uint8)
+    got_x, got_y = table.gradients(frame, normalise_gain=False)
+    q = np.clip(np.floor((frame / 128.0 - 1 + 0.5) * bins), 0, bins - 1).astype(int)
+    idx = (q[..., 0] * bins + q[..., 1]) * bins + q[..., 2] + offset
+    assert got_x.dtype == np.float32 and got_y.dtype == np.float32
+    np.testing.assert_array_equal(got_x, gx[idx].astype(np.float32))
+    np.testing.assert_array_equal(got_y, gy[idx].astype(np.float32))
