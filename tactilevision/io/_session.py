@@ -362,8 +362,15 @@ def _read_csv(path: Path, required: tuple[str, ...]) -> tuple[list[str], list[li
     return header, rows, lines
 
 
+#: The largest force a sample of an F/T log may hold, N (torques: 1e3 times it, N mm): an
+#: indenter pressed into a gel sees newtons; 1e5 N is far beyond any F/T sensor a tactile
+#: lab uses, and beyond it a value is a logging fault (sums of squares overflow near
+#: 1e154).
+MAX_FT_ABS = 1e5
+
+
 def _numbers(path: Path, header: list[str], rows: list[list[str]], lines: list[int],
-             column: str, *, finite: bool = True) -> np.ndarray:
+             column: str, *, finite: bool = True, limit: float | None = None) -> np.ndarray:
     j = header.index(column)
     out = np.empty(len(rows))
     for i, row in enumerate(rows):
@@ -379,6 +386,9 @@ def _numbers(path: Path, header: list[str], rows: list[list[str]], lines: list[i
         if finite and not math.isfinite(v):
             raise InputError(f"{path} line {lines[i]}, column {column}: {text} (every value "
                              "must be a finite number)")
+        if limit is not None and abs(v) > limit:
+            raise InputError(f"{path} line {lines[i]}, column {column}: {text} is beyond "
+                             f"+-{limit:g}, not a force or torque an F/T sensor logs")
         out[i] = v
     return out
 
@@ -441,11 +451,12 @@ def _read_forces(folder: Path, rate_hz: float
     header, rows, lines = _read_csv(path, _FORCE_COLUMNS)
     t = _numbers(path, header, rows, lines, "t_s")
     _increasing(path, t, lines)
-    f = np.stack([_numbers(path, header, rows, lines, c) for c in _FORCE_COLUMNS[1:]], axis=1)
+    f = np.stack([_numbers(path, header, rows, lines, c, limit=MAX_FT_ABS)
+                  for c in _FORCE_COLUMNS[1:]], axis=1)
     torques = None
     if all(c in header for c in _TORQUE_COLUMNS):
-        torques = np.stack([_numbers(path, header, rows, lines, c) for c in _TORQUE_COLUMNS],
-                           axis=1)
+        torques = np.stack([_numbers(path, header, rows, lines, c, limit=1e3 * MAX_FT_ABS)
+                            for c in _TORQUE_COLUMNS], axis=1)         # N mm
     notes = []
     if t.size > 2:
         dt = float(np.median(np.diff(t)))
