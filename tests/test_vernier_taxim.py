@@ -142,10 +142,9 @@ def test_taxim_faint_shading_is_not_a_band(taxim_bevel):
     assert faint.contrast < MIN_BAND_CONTRAST * long.contrast
 
 
-@pytest.fixture(scope="module")
-def steep_taxim_session(tmp_path_factory):
-    """Five presses rendered by Taxim now on a 12 deg bevel 4 mm from the axis, toward +y,
-    stopped 5 to 30 um past w0: bands of 0.8 to 4.8 px, which Taxim's shadows swamp."""
+def _render_taxim_session(folder: Path, **kw) -> tuple[Path, dict]:
+    """A gauge-block session rendered by Taxim now, through
+    ``benchmarks/taxim_gauge_session.py`` (no project code); ``(folder, truth)``."""
     pytest.importorskip("taxim")
     pytest.importorskip("jax")
     import importlib.util
@@ -154,11 +153,16 @@ def steep_taxim_session(tmp_path_factory):
     spec = importlib.util.spec_from_file_location("taxim_gauge_session", path)
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
-    folder = tmp_path_factory.mktemp("steep")
-    truth = mod.make_taxim_session(folder, presses=5, fps=10.0, seed=3, theta_deg=12.0,
-                                   offset_mm=4.0, direction_deg=90.0,
-                                   overshoot_mm=(0.005, 0.030))
-    return folder, truth
+    return folder, mod.make_taxim_session(folder, **kw)
+
+
+@pytest.fixture(scope="module")
+def steep_taxim_session(tmp_path_factory):
+    """Five presses rendered by Taxim now on a 12 deg bevel 4 mm from the axis, toward +y,
+    stopped 5 to 30 um past w0: bands of 0.8 to 4.8 px, which Taxim's shadows swamp."""
+    return _render_taxim_session(tmp_path_factory.mktemp("steep"), presses=5, fps=10.0,
+                                 seed=3, theta_deg=12.0, offset_mm=4.0, direction_deg=90.0,
+                                 overshoot_mm=(0.005, 0.030))
 
 
 def test_narrow_bands_are_bounded_not_read(steep_taxim_session):
@@ -214,18 +218,8 @@ def taxim_mark_session(tmp_path_factory):
     (a 0.15 mm line at the land's level, no flanks) 7.5 mm from the axis, at 10 frames/s,
     stopped 5 to 60 um past w0: the mark scores 7 to 10 on the generic line filter against
     approaches of 5 to 8."""
-    pytest.importorskip("taxim")
-    pytest.importorskip("jax")
-    import importlib.util
-
-    path = Path(__file__).resolve().parents[1] / "benchmarks" / "taxim_gauge_session.py"
-    spec = importlib.util.spec_from_file_location("taxim_gauge_session", path)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    folder = tmp_path_factory.mktemp("mark")
-    truth = mod.make_taxim_session(folder, presses=8, fps=10.0, seed=1, theta_deg=0.0,
-                                   overshoot_mm=(0.005, 0.060))
-    return folder, truth
+    return _render_taxim_session(tmp_path_factory.mktemp("mark"), presses=8, fps=10.0,
+                                 seed=1, theta_deg=0.0, overshoot_mm=(0.005, 0.060))
 
 
 def test_thin_mark_under_shadows_is_seen_at_its_step(taxim_mark_session):

@@ -142,10 +142,15 @@ def bevel_score(frame: np.ndarray, reference: np.ndarray | None, centre_px: tupl
     return _line_snr(prof.u_px, prof.colour, max(search_mm / s, 2.0))
 
 
+def _background_basis(u: np.ndarray) -> np.ndarray:
+    """(n, 3) basis of the smooth background under a mark's profile: a quadratic in u."""
+    scale = max(float(np.abs(u).max()), 1.0)
+    return np.stack([np.ones_like(u), u / scale, (u / scale) ** 2], axis=1)
+
+
 def _line_snr(u: np.ndarray, R: np.ndarray, search_px: float) -> float:
     """Best matched-filter SNR of a line (and its derivative) over widths and offsets."""
-    scale = max(float(np.abs(u).max()), 1.0)
-    B0 = np.stack([np.ones_like(u), u / scale, (u / scale) ** 2], axis=1)
+    B0 = _background_basis(u)
     c0, *_ = np.linalg.lstsq(B0, R, rcond=None)
     rss0 = float(np.sum((R - B0 @ c0) ** 2))
     best = (np.inf, None)

@@ -41,7 +41,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from .._checks import InputError
-from ._bevel import bevel_score, footprint_from_frame
+from ._bevel import _background_basis, bevel_score, footprint_from_frame
 from ._footprint import Footprint
 from ._force import force_window
 from ._mask import contact_mask, noise_level
@@ -666,8 +666,7 @@ def _mark_residual(ctx: _PressContext, centre: tuple[float, float], i: int
     if prof.coverage < 0.3:
         return None
     u, R = prof.u_px, np.asarray(prof.colour, np.float64)
-    scale = max(float(np.abs(u).max()), 1.0)
-    B = np.stack([np.ones_like(u), u / scale, (u / scale) ** 2], axis=1)
+    B = _background_basis(u)
     coef, *_ = np.linalg.lstsq(B, R, rcond=None)
     return u, R - B @ coef
 

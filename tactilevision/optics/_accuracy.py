@@ -100,15 +100,13 @@ def holdout_presses(centers_px: np.ndarray, radii_px: np.ndarray,
     return held
 
 
-def _inner_cap(height_px: np.ndarray, centre: np.ndarray, radius: float, ball_px: float,
+def _inner_cap(height_px: np.ndarray, d: np.ndarray, radius: float, ball_px: float,
                fraction: float = 0.8) -> float:
     """The inner cap's depth over the ball's, less one: the height at the disc's centre
     (mean within 1.5 px) above the median on the circle at `fraction` of the radius,
     against the sphere's drop there, R - sqrt(R^2 - (fraction r)^2). Inside the contact
-    the ball surely touches the gel, so the rim's unknown shape does not enter."""
-    hh, ww = height_px.shape
-    yy, xx = np.mgrid[0:hh, 0:ww]
-    d = np.hypot(xx - centre[0], yy - centre[1])
+    the ball surely touches the gel, so the rim's unknown shape does not enter. `d`: each
+    pixel's distance from the disc's centre, px (:func:`_distances`)."""
     rho = fraction * radius
     middle = d <= 1.5
     ring = np.abs(d - rho) <= 1.0
@@ -127,13 +125,17 @@ def max_tilt_deg(radius_px: np.ndarray | float, ball_radius_px: np.ndarray | flo
     return np.degrees(np.arctan2(r, np.sqrt(np.maximum(big * big - r * r, 0.0))))
 
 
-def _deepest_point(height_px: np.ndarray, centre: np.ndarray, radius: float,
+def _distances(shape: tuple[int, int], centre: np.ndarray) -> np.ndarray:
+    """(H, W) distance of each pixel from `centre` (x, y), px."""
+    yy, xx = np.mgrid[0:shape[0], 0:shape[1]]
+    return np.hypot(xx - centre[0], yy - centre[1])
+
+
+def _deepest_point(height_px: np.ndarray, d: np.ndarray, radius: float,
                    ball_px: float) -> float:
     """Reconstructed cap depth over the ball's, less one: the height at the disc's deepest
-    point above the median height on its rim circle, against R - sqrt(R^2 - r^2)."""
-    hh, ww = height_px.shape
-    yy, xx = np.mgrid[0:hh, 0:ww]
-    d = np.hypot(xx - centre[0], yy - centre[1])
+    point above the median height on its rim circle, against R - sqrt(R^2 - r^2). `d`:
+    each pixel's distance from the disc's centre, px (:func:`_distances`)."""
     inside = d <= radius
     ring = np.abs(d - radius) <= 1.0
     if not inside.any() or not ring.any():
@@ -241,8 +243,9 @@ def calibration_accuracy(recon: DepthReconstructor, frames: np.ndarray,
                                               float(b)))
                 inner.append(ball_press_metrics(gx, gy, height_px, centers[i],
                                                 0.8 * radii[i], float(b)).normal_angle_deg)
-                deepest.append(_deepest_point(height_px, centers[i], radii[i], float(b)))
-                caps.append(_inner_cap(height_px, centers[i], radii[i], float(b)))
+                d = _distances(height_px.shape, centers[i])
+                deepest.append(_deepest_point(height_px, d, radii[i], float(b)))
+                caps.append(_inner_cap(height_px, d, radii[i], float(b)))
             fitted = np.array([p.fitted_radius_px for p in per])
             entry["normal_angle_deg"] = float(np.median([p.normal_angle_deg for p in per]))
             entry["normal_angle_08_deg"] = float(np.median(inner))
