@@ -14,8 +14,8 @@ cli        the ``tactilevision`` command
 
 from ._assets import KNOWN_SENSORS, default_calibration_path
 from ._checks import InputError, ShapeError
+from ._version import __version__
 
-__version__ = "0.1.0"
 __all__ = ["KNOWN_SENSORS", "InputError", "SessionCalibration", "ShapeError", "__version__",
            "calibrate_session", "default_calibration_path"]
 

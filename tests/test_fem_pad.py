@@ -353,9 +353,10 @@ def test_bad_input_names_the_argument(kwargs, name):
 
 
 def test_single_blas_thread_restores_the_count():
-    from tactilevision.fem._pad_mesh import _openblas_thread_controls, single_blas_thread
+    from tactilevision._blas import openblas_thread_controls
+    from tactilevision.fem._pad_mesh import single_blas_thread
 
-    controls = _openblas_thread_controls()
+    controls = openblas_thread_controls()
     before = [get() for _, get in controls]
     with single_blas_thread():
         assert all(get() == 1 for _, get in controls)

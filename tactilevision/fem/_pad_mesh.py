@@ -68,6 +68,7 @@ from skfem import (
 )
 from skfem.helpers import ddot, div, sym_grad
 
+from .._blas import openblas_thread_controls
 from .._checks import InputError
 
 __all__ = ["ELEMENTS", "BlockTridiagonalCholesky", "PadModel", "assemble_translated",
@@ -122,33 +123,6 @@ def default_layers(grid: tuple[int, int], size_mm: tuple[float, float],
     return max(2, round(thickness_mm / spacing))
 
 
-def _openblas_thread_controls() -> list[tuple[object, object]]:
-    """(set, get) num-threads functions of the OpenBLAS libraries loaded (Linux)."""
-    import ctypes
-
-    try:
-        with open("/proc/self/maps") as maps:
-            paths = sorted({line.split()[-1] for line in maps
-                            if "openblas" in line.lower() and ".so" in line})
-    except OSError:
-        return []
-    controls = []
-    for path in paths:
-        try:
-            lib = ctypes.CDLL(path)
-        except OSError:
-            continue
-        for name in ("scipy_openblas_{}_num_threads64_", "scipy_openblas_{}_num_threads",
-                     "openblas_{}_num_threads64_", "openblas_{}_num_threads"):
-            setter = getattr(lib, name.format("set"), None)
-            getter = getattr(lib, name.format("get"), None)
-            if setter is not None and getter is not None:
-                getter.restype = ctypes.c_int
-                controls.append((setter, getter))
-                break
-    return controls
-
-
 @contextlib.contextmanager
 def single_blas_thread() -> Iterator[None]:
     """Run BLAS on one thread inside the block, restoring the previous count after.
@@ -167,7 +141,7 @@ def single_blas_thread() -> Iterator[None]:
         with threadpool_limits(1, user_api="blas"):
             yield
         return
-    controls = [(setter, int(getter())) for setter, getter in _openblas_thread_controls()]
+    controls = [(setter, int(getter())) for setter, getter in openblas_thread_controls()]
     try:
         for setter, _ in controls:
             setter(1)

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..viz import html_head, pyplot
 from ._read import CalibrationRecord
 from ._table import HISTORY_COLUMNS
 from ._trend import Assessment
@@ -59,9 +60,7 @@ def history_figures(records: Sequence[CalibrationRecord], assessment: Assessment
     figures : dict of str to Path
         ``'E'`` and ``'nu'`` to the files written.
     """
-    from ..viz._calibration import _plt
-
-    plt = _plt()
+    plt = pyplot()
     out = Path(out_dir)
     name = _safe(assessment.sensor)
     first = records[0]
@@ -143,10 +142,8 @@ def write_history_report(out_dir: str | Path,
     path : Path
         ``out_dir/report.html``.
     """
-    from ..viz._calibration import _html_head
-
     e = html.escape
-    parts = [_html_head("tactilevision history"), "<h1>Calibration history</h1>\n"]
+    parts = [html_head("tactilevision history"), "<h1>Calibration history</h1>\n"]
     for sensor, (records, a, rows, figs) in sensors.items():
         verdict = "recalibrate" if a.recalibrate else "within its calibration"
         parts.append(f"<h2>{e(sensor)}: {len(records)} calibration(s), {e(verdict)}</h2>\n")

@@ -24,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._blas import openblas_thread_controls
 from .._checks import InputError
 
 __all__ = ["LiveResult", "Pipeline", "auto_reference", "open_frames", "stream"]
@@ -226,9 +227,7 @@ class _OneBlasThread:
     """
 
     def __init__(self) -> None:
-        from ..fem._pad_mesh import _openblas_thread_controls
-
-        self.controls = _openblas_thread_controls()
+        self.controls = openblas_thread_controls()
         self.saved: list = []
 
     def __enter__(self) -> None:

@@ -3,7 +3,10 @@
 from ._calibration import (
     bevel_panels,
     calibration_figures,
+    figures_html,
     fitted_forces,
+    html_head,
+    pyplot,
     write_calibration_report,
 )
 from ._depth import depth_figure, nice_scale_bar_mm, save_depth_image
@@ -12,8 +15,9 @@ from ._forces import force_figure, save_force_image
 from ._validation import save_validation_figure, validation_figure
 
 __all__ = ["bevel_panels", "calibration_figures", "depth_figure", "diagnosis_figures",
-           "fitted_forces", "force_figure", "nice_scale_bar_mm",
-           "save_depth_image", "save_force_image", "save_validation_figure", "validation_figure",
+           "figures_html", "fitted_forces", "force_figure", "html_head", "nice_scale_bar_mm",
+           "pyplot", "save_depth_image", "save_force_image", "save_validation_figure",
+           "validation_figure",
            "write_calibration_report", "write_diagnosis_report"]
 from ._viewer import downsample_map, viewer_figure, write_viewer
 

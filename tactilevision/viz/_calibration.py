@@ -9,10 +9,12 @@ import numpy as np
 
 from ._depth import _scale_bar
 
-__all__ = ["bevel_panels", "calibration_figures", "fitted_forces", "write_calibration_report"]
+__all__ = ["bevel_panels", "calibration_figures", "figures_html", "fitted_forces", "html_head",
+           "pyplot", "write_calibration_report"]
 
 
-def _plt():
+def pyplot():
+    """matplotlib.pyplot on the non-interactive Agg backend (unless one is already chosen)."""
     import matplotlib
 
     matplotlib.use("Agg", force=False)
@@ -21,7 +23,7 @@ def _plt():
     return plt
 
 
-def _html_head(title: str) -> str:
+def html_head(title: str) -> str:
     """Opening of a report page (escaped title, the shared style)."""
     return (f'<!doctype html>\n<html><head><meta charset="utf-8"><title>{html.escape(title)}'
             "</title>\n<style>body{font-family:sans-serif;max-width:1100px;margin:2em auto}\n"
@@ -29,7 +31,7 @@ def _html_head(title: str) -> str:
             "img{max-width:100%} figure{margin:1em 0}</style></head><body>\n")
 
 
-def _figures_html(figures: dict[str, Path]) -> str:
+def figures_html(figures: dict[str, Path]) -> str:
     """The report's figures as <figure> elements (images beside the page)."""
     e = html.escape
     return "".join(f'<figure><img src="{e(p.name)}" alt="{e(k)}"></figure>'
@@ -100,7 +102,7 @@ def calibration_figures(cal, out_dir: str | Path, *, reconstructor=None, dpi: in
         ``mosaic`` (with a certified press), ``bevel`` (the bevel of every
         press, certified or rejected).
     """
-    plt = _plt()
+    plt = pyplot()
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     paths: dict[str, Path] = {}
@@ -185,7 +187,7 @@ def calibration_figures(cal, out_dir: str | Path, *, reconstructor=None, dpi: in
 
 
 def _mosaic(cal, path: Path, reconstructor, dpi: int) -> Path:
-    plt = _plt()
+    plt = pyplot()
     from matplotlib.patches import Circle
 
     ps = cal.certification.presses
@@ -252,7 +254,7 @@ def bevel_panels(cal, path: str | Path, *, dpi: int = 100, columns: int = 10) ->
     """
     import cv2
 
-    plt = _plt()
+    plt = pyplot()
     cert = cal.certification
     cfg = cal.session.config
     s = cfg.mm_per_px
@@ -401,8 +403,8 @@ def write_calibration_report(cal, out_dir: str | Path, figures: dict[str, Path])
                  "<th>bulge (um)</th><th>F/T window mean (N)</th><th>force P fitted (N)</th>"
                  "<th>bevel SNR</th></tr>"
                  f"{trs}</table>")
-    figs = _figures_html(figures)
-    page = _html_head(f"tactilevision calibrate: {cal.session.path}") + f"""\
+    figs = figures_html(figures)
+    page = html_head(f"tactilevision calibrate: {cal.session.path}") + f"""\
 <h1>Elastomer calibration of {e(str(cal.session.path))}</h1>
 {result}
 <p>{len(c.presses)} presses certified, {len(c.rejected)} rejected. {fit_text}</p>

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ._calibration import _figures_html, _html_head, _plt
+from ._calibration import figures_html, html_head, pyplot
 
 __all__ = ["diagnosis_figures", "write_diagnosis_report"]
 
@@ -44,7 +44,7 @@ def diagnosis_figures(diag, out_dir: str | Path, *, dpi: int = 100) -> dict[str,
         ``ladder`` (error_ladder.png: RMSE and cross-validated RMSE of each
         step as bars, the replicate noise floor as a line, E at each step).
     """
-    plt = _plt()
+    plt = pyplot()
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     figs: dict[str, Path] = {}
@@ -157,9 +157,9 @@ def write_diagnosis_report(diag, out_dir: str | Path, figures: dict[str, Path], 
         f"<tr><td>{e(' + '.join(s.model))}</td><td>{s.rmse_n * 1e3:.3f}</td>"
         f"<td>{s.cv_rmse_n * 1e3:.3f}</td><td>{num(s.E_mpa, '.4f')}</td>"
         f"<td>{num(s.nu, '.4f')}</td></tr>" for s in diag.ladder)
-    figs = _figures_html(figures)
+    figs = figures_html(figures)
     verdict = diag.missing_effect or "nothing missing"
-    page = _html_head(f"tactilevision diagnose: {source}") + f"""\
+    page = html_head(f"tactilevision diagnose: {source}") + f"""\
 <h1>Model against measurement: {e(source)}</h1>
 <p class=big>Verdict: <b>{e(verdict)}</b>{
     f"; unexplained structure along <b>{e(diag.unexplained_covariate)}</b>"
