@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._checks import InputError
+from ._fem_tables import fem_beta_relation
 
 __all__ = ["PAPER_BETA_RELATION", "BetaRelation", "beta", "beta_from_nu", "beta_relation",
            "nu_from_beta"]
@@ -98,8 +99,6 @@ def _relation(table: str, a_over_h: float | None = None, contact: str = "bonded"
     if table == "fem":
         if a_over_h is None:
             raise InputError("table='fem' needs a_over_h (the FEM beta depends on it)")
-        from ._fem_tables import fem_beta_relation
-
         return fem_beta_relation(float(a_over_h), contact=contact, definition=definition,
                                  w_over_h=w_over_h)
     raise InputError(f"table must be 'paper' or 'fem', got {table!r}")

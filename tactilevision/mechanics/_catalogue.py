@@ -11,14 +11,21 @@ model is :mod:`tactilevision.mechanics._model`.
 
 from __future__ import annotations
 
+import hashlib
+import importlib
+import importlib.util
 import math
+import os
+import sys
 from collections.abc import Mapping
 from dataclasses import dataclass
 from functools import lru_cache
+from pathlib import Path
 
 import numpy as np
 
 from .._checks import InputError
+from ._fem_tables import kappa_n_grid
 
 
 @dataclass(frozen=True)
@@ -336,8 +343,6 @@ _FEM_X = np.linspace(0.0, 0.229, 93)
 @lru_cache(maxsize=64)
 def _fem_ratio_table(a_over_h: float) -> np.ndarray:
     """kappa_n(nu, a/h, w/h) / kappa_n(nu, a/h, 0) on ``_FEM_NU`` x ``_FEM_X``."""
-    from ._fem_tables import kappa_n_grid
-
     k = kappa_n_grid(_FEM_NU, a_over_h, _FEM_X)
     return k / k[:, :1]
 
@@ -628,15 +633,7 @@ def is_registered(name: str) -> bool:
 
 def _import_module(modname: str, spec: str) -> object:
     """Import `modname` (then from the working directory); InputError naming `spec`."""
-    import importlib
-    import os
-    import sys
-
     if modname.endswith(".py") or "/" in modname or os.sep in modname:
-        import hashlib
-        import importlib.util
-        from pathlib import Path
-
         path = Path(modname).expanduser().resolve()
         if not path.is_file():
             raise InputError(f"effect '{spec}': no such file {path}")

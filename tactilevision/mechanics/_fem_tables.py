@@ -11,10 +11,11 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
+from scipy.interpolate import PchipInterpolator
 
 from .._assets import asset_dir
 from .._checks import InputError
-from ._kappa import KappaTable
+from ._kappa_table import KappaTable
 
 __all__ = ["TABLE_EXTRAPOLATION", "TabulatedBetaRelation", "fem_beta_relation",
            "fem_kappa_table", "fem_table_meta", "kappa_n", "kappa_n_grid"]
@@ -131,14 +132,10 @@ class TabulatedBetaRelation:
         instead of the small-strain kappa (they differ by the curvature of
         P/w, under 1%).
         """
-        from scipy.interpolate import PchipInterpolator
-
         return float(PchipInterpolator(self.nu_grid, self.kappa_line_grid)(nu))
 
     def dkappa_line_dnu(self, nu: float) -> float:
         """d kappa_line / d nu at `nu`."""
-        from scipy.interpolate import PchipInterpolator
-
         return float(PchipInterpolator(self.nu_grid, self.kappa_line_grid).derivative()(nu))
 
     @property
@@ -188,8 +185,6 @@ class TabulatedBetaRelation:
         return float(np.nextafter(self.beta_grid[self.branch[1]], np.inf))
 
     def _inverse(self):
-        from scipy.interpolate import PchipInterpolator
-
         first, last = self.branch
         if last == first:
             raise InputError(
@@ -200,8 +195,6 @@ class TabulatedBetaRelation:
 
     def beta(self, nu: float | np.ndarray) -> float | np.ndarray:
         """beta at `nu` (PCHIP in nu over the whole table; no range check)."""
-        from scipy.interpolate import PchipInterpolator
-
         out = PchipInterpolator(self.nu_grid, self.beta_grid)(np.asarray(nu, np.float64))
         return float(out) if out.ndim == 0 else out
 
@@ -258,8 +251,6 @@ def fem_beta_relation(a_over_h: float, *, contact: str = "bonded",
         For a missing table, an a/h outside it, an unknown contact or
         definition, or a table with incomplete sweeps at this a/h.
     """
-    from scipy.interpolate import PchipInterpolator
-
     data = _load("beta_fem.npz")
     contacts = [str(c) for c in data["contacts"]]
     if contact not in contacts:
@@ -337,8 +328,6 @@ def kappa_n(nu: float | np.ndarray, a_over_h: float | np.ndarray,
        eq. (1)-(2); the table: ``models/beta_fem.npz`` (``tactilevision fem
        tables --what beta``).
     """
-    from scipy.interpolate import PchipInterpolator
-
     n, r, x = np.broadcast_arrays(*(np.asarray(v, np.float64) for v in (nu, a_over_h, w_over_h)))
     data, wt, kn = _kappa_n_nodes(n, r, x, contact)
     along_w = PchipInterpolator(wt, kn, axis=2)
@@ -375,8 +364,6 @@ def kappa_n_grid(nu: np.ndarray, a_over_h: float, w_over_h: np.ndarray, *,
     InputError
         As :func:`kappa_n`.
     """
-    from scipy.interpolate import PchipInterpolator
-
     nu = np.atleast_1d(np.asarray(nu, np.float64))
     x = np.atleast_1d(np.asarray(w_over_h, np.float64))
     data, wt, kn = _kappa_n_nodes(nu, np.asarray(float(a_over_h)), x, contact)

@@ -6,43 +6,14 @@ the package uses comes from :func:`kappa`.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 from scipy.interpolate import PchipInterpolator
 
 from .._checks import InputError
+from ._fem_tables import fem_kappa_table
+from ._kappa_table import KappaTable
 
 __all__ = ["HAYES_1972", "KappaTable", "kappa"]
-
-
-@dataclass(frozen=True)
-class KappaTable:
-    """A tabulated kappa(nu, a/h) with its provenance.
-
-    Attributes
-    ----------
-    a_over_h : (M,) float64 ndarray, dimensionless
-        Indenter radius over layer thickness, strictly increasing.
-    nu : (K,) float64 ndarray, dimensionless
-        Poisson's ratios, strictly increasing.
-    values : (M, K) float64 ndarray, dimensionless
-        ``values[i, j] = kappa(nu[j], a_over_h[i])``.
-    source : str
-        Author, year, journal and table the values come from.
-    doi : str
-        DOI of the source.
-    """
-
-    a_over_h: np.ndarray
-    nu: np.ndarray
-    values: np.ndarray
-    source: str
-    doi: str
-
-    def __post_init__(self) -> None:
-        for arr in (self.a_over_h, self.nu, self.values):
-            arr.setflags(write=False)
 
 
 #: Hayes et al. (1972): kappa of a rigid, frictionless, plane-ended cylindrical
@@ -170,8 +141,6 @@ def _table(source: str, contact: str) -> KappaTable:
             raise InputError("the Hayes 1972 table is for a frictionless punch only")
         return HAYES_1972
     if source == "fem":
-        from ._fem_tables import fem_kappa_table
-
         return fem_kappa_table(contact)
     raise InputError(f"source must be 'hayes' or 'fem', got {source!r}")
 

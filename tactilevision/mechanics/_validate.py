@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .._checks import InputError, check_array
+from ..fem import neo_hookean_indentation
 
 __all__ = ["IndentationValidation", "validate_indentation"]
 
@@ -148,8 +149,6 @@ def validate_indentation(depth_mm: np.ndarray, force_n: np.ndarray, *, E_mpa: fl
        Vision-based Tactile Sensors", IEEE ICRA 2023,
        section V.A and Fig. 8.
     """
-    from ..fem import neo_hookean_indentation
-
     w = check_array(depth_mm, "depth_mm", [("N",)], dtype=np.number, finite=True)
     p = check_array(force_n, "force_n", [w.shape], dtype=np.number, finite=True)
     w, p = w.astype(np.float64), p.astype(np.float64)

@@ -43,7 +43,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._checks import InputError
-from ..contact._land import bulge_height
+from ..contact import bulge_height
 from ..fem import PressProfile
 
 __all__ = ["GaugeBlock", "press_surface"]

@@ -25,13 +25,16 @@ approximation (our deformations come from the FEM) and its shadows.
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass
 from functools import cached_property
+from importlib.resources import files
 from pathlib import Path
 
 import numpy as np
 
 from .._checks import InputError
+from ..optics import ball_gradients
 
 __all__ = ["ShadingTable", "fit_shading_table", "taxim_shading"]
 
@@ -178,8 +181,6 @@ class ShadingTable:
 
 def _taxim_folder(sensor: str) -> Path:
     try:
-        from importlib.resources import files
-
         root = Path(str(files("taxim")))
     except ModuleNotFoundError as exc:  # pragma: no cover - depends on the install
         raise InputError("the Taxim shading table needs the 'taxim' package: "
@@ -219,8 +220,6 @@ def taxim_shading(sensor: str = "gelsight") -> tuple[ShadingTable, np.ndarray]:
     grad_b) they follow the BGR order of ``f0``. The test suite checks the
     order against the real ball presses of the same package.
     """
-    import json
-
     folder = _taxim_folder(sensor)
     with np.load(folder / "polycalib.npz") as d:
         coeffs = np.stack([d["grad_r"], d["grad_g"], d["grad_b"]], axis=-1).astype(np.float64)
@@ -270,8 +269,6 @@ def fit_shading_table(reference: np.ndarray, frames: np.ndarray, centres_px: np.
     InputError
         For mismatched shapes or no usable pixels.
     """
-    from ..optics import ball_gradients
-
     ref = np.asarray(reference, np.float64)
     fr = np.asarray(frames)
     if fr.ndim != 4 or fr.shape[1:] != ref.shape or ref.ndim != 3 or ref.shape[2] != 3:

@@ -23,8 +23,7 @@ import numpy as np
 from scipy.interpolate import PchipInterpolator
 
 from .._checks import InputError
-from ..contact._land import land_contact_depth
-from ..contact._vernier import BevelGeometry, bevel_force
+from ..contact import BevelGeometry, bevel_force, land_contact_depth
 from ..fem import PressProfile, press_profile
 from ._block import GaugeBlock, press_surface
 from ._render import ShadingTable, taxim_shading

@@ -48,6 +48,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._checks import InputError
+from ..mechanics import kappa_n
 
 __all__ = ["HIDDEN_EFFECTS", "HiddenTable", "make_measurement_table"]
 
@@ -99,8 +100,6 @@ class HiddenTable:
 
 def _fem_force(E: float, nu: float, a: float, h: float, w: np.ndarray) -> np.ndarray:
     """P = 2 a E w kappa_n(nu, a/h, w/h) / (1 - nu^2), the FEM's finite-strain force, N."""
-    from ..mechanics import kappa_n
-
     ws = np.unique(w)
     kn = np.array([kappa_n(nu, a / h, x / h) for x in ws])
     k = kn[np.searchsorted(ws, w)]

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..mechanics import make_effect
 from ._calibration import figures_html, html_head, pyplot
 
 __all__ = ["diagnosis_figures", "write_diagnosis_report"]
@@ -116,8 +117,6 @@ def diagnosis_figures(diag, out_dir: str | Path, *, dpi: int = 100) -> dict[str,
 
 
 def _effect_columns(name: str) -> tuple[str, ...]:
-    from ..mechanics import make_effect
-
     return tuple(make_effect(name).columns)
 
 
