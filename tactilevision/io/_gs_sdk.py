@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from .._checks import InputError
-from ._frames import BallPressSet, find_reference, read_image
+from ._images import BallPressSet, find_reference, read_image
 
 __all__ = ["CATALOG", "read_gs_sdk"]
 
