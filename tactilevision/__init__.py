@@ -23,7 +23,7 @@ __all__ = ["KNOWN_SENSORS", "InputError", "SessionCalibration", "ShapeError", "_
 def __getattr__(name: str):
     # the main job, imported on first use so that ``import tactilevision`` stays light
     if name in ("calibrate_session", "SessionCalibration"):
-        from . import _calibrate
+        from . import pipeline
 
-        return getattr(_calibrate, name)
+        return getattr(pipeline, name)
     raise AttributeError(f"module 'tactilevision' has no attribute {name!r}")

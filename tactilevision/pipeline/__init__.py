@@ -1,0 +1,26 @@
+"""The main job as a pipeline of named steps: a session folder in, E and nu out.
+
+:func:`calibrate_session` runs them all; each is public so that a user can run
+them one by one and look at what each returns:
+
+1. read: :func:`tactilevision.io.read_session`;
+2. decode, sync, certify: :func:`tactilevision.contact.certify_session`;
+3. the F/T's zero: :func:`take_off_zero`;
+4. relaxation: :func:`relaxation_step`;
+5. depth and fit: :func:`vernier_rule`, :func:`mark_rule`, :func:`nominal_rule`,
+   :func:`land_rule` (on a :class:`DepthState`, fitted by a :class:`Fitter`), the
+   shared depth error by :func:`with_shared_depth`;
+6. report: :class:`CalibrationResult` (``save`` and ``load`` of the output folder)
+   and :func:`write_calibration` (the folder with its figures and report).
+"""
+
+from ._calibrate import calibrate_session
+from ._calibration import SessionCalibration, hold_curves, hold_spans
+from ._rules import MARK_BETA, DepthState, land_rule, mark_rule, nominal_rule, vernier_rule
+from ._shared import with_shared_depth
+from ._steps import Fitter, frame_period, relaxation_step, take_off_zero
+
+__all__ = ["MARK_BETA", "DepthState", "Fitter", "SessionCalibration", "calibrate_session",
+           "frame_period", "hold_curves", "hold_spans", "land_rule", "mark_rule",
+           "nominal_rule", "relaxation_step", "take_off_zero", "vernier_rule",
+           "with_shared_depth"]

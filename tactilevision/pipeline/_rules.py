@@ -1,0 +1,298 @@
+"""The depth rules of the main job: each press's certified depth, and the fit at it.
+
+The rules (``vernier``, ``mark``, ``nominal``, ``land``) are described in
+:mod:`tactilevision.pipeline`. Each fills a :class:`DepthState`, which keeps what was
+built when a fit fails on the way.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .._checks import InputError
+from ..contact import (
+    EDGE_SHARED_FRACTION,
+    RESOLVED_PX,
+    BevelGeometry,
+    bevel_force,
+    bulge_at,
+    certified_depths,
+    crossing_forces,
+    mark_depths,
+    mark_shared_mm,
+    unresolved_closure,
+    vernier_shared_mm,
+)
+from ..mechanics import IndentationFit
+from ._steps import Fitter
+
+__all__ = ["MARK_BETA", "DepthState", "land_rule", "mark_rule", "nominal_rule", "vernier_depths",
+           "vernier_rule"]
+
+
+@dataclass
+class DepthState:
+    """The certified depths as a rule builds them, and the fit at them.
+
+    Attributes
+    ----------
+    depth, std : (N,) float64 ndarray
+        Certified depth and its standard uncertainty, mm.
+    bulge, bevel_n : (N,) float64 ndarray
+        The bulge taken off each vernier depth (mm) and the bevel's own force taken off
+        each press's force (N); zeros for the other rules.
+    rounds : list of float
+        nu after each certification-fit round.
+    notes : list of str
+        What the rule says (appended to the run's notes, which this list is).
+    fit : IndentationFit or None
+    shared : tuple of two (N,) ndarrays or None
+        A depth error shared by every press, its bounds (low, high), mm.
+    """
+
+    depth: np.ndarray
+    std: np.ndarray
+    bulge: np.ndarray
+    bevel_n: np.ndarray
+    notes: list[str]
+    rounds: list[float] = field(default_factory=list)
+    fit: IndentationFit | None = None
+    shared: tuple[np.ndarray, np.ndarray] | None = None
+
+
+#: The stiffening of eq. (5) that the 'mark' rule's dP/dw assumes. The FEM's beta of a
+#: bonded layer at w/h 0.05 to 0.2 (mechanics.beta_relation) is 0.77 to 0.82 at a/h 0.83
+#: and nu 0.45 to 0.499 (dP/dw within 1 %), and 0.37 to 1.14 over a/h 0.5 to 1.2: dP/dw
+#: then -6 to +4 % off at w/h 0.2, half that at 0.1, about mark_shared_mm's STIFFNESS_REL.
+MARK_BETA = 0.8
+
+
+def mark_rule(presses, force: np.ndarray, fit_at, cfg, period: float):
+    """The ``'mark'`` depth rule: depths from w0 and the force's rise from each indenter's
+    P(w0) to the force window (:func:`~tactilevision.contact.crossing_forces`,
+    :func:`~tactilevision.contact.mark_depths`), dP/dw from each press's own P/w. Returns
+    the depths, their random uncertainty, the fit, the shared error as (low, high) per press
+    (mm), and the notes."""
+    if any(p.rule != "onset" for p in presses):
+        raise InputError("the 'mark' depth rule needs every press certified by a mark's onset")
+    w0 = np.array([p.w0_mm for p in presses])
+    travel = np.array([p.travel_mm for p in presses])
+    f_on, sem_on, disjoint = crossing_forces(
+        np.array([p.indenter for p in presses]), np.array([p.force_onset_n for p in presses]),
+        np.array([p.force_onset_sem_n for p in presses]))
+    sem = np.array([p.force_sem_n for p in presses])
+    h = cfg.gel_thickness_mm
+    depth = w0 + travel / 2
+    after = travel / 2
+    for _ in range(20):
+        # dP/dw between the crossing and the window, from each press's own P/w with eq. 5's
+        # shape at a typical beta: the depths do not lean on the fit made from them
+        x = (depth - after / 2) / h
+        k = force / np.maximum(depth, 1e-9) * (1 + 2 * MARK_BETA * x) / (1 + MARK_BETA * x)
+        k = np.maximum(k, 1e-6)
+        new, std, after = mark_depths(w0, force, f_on, k, force_sem_n=sem,
+                                      force_crossing_sd_n=sem_on, travel_mm=travel)
+        moved = float(np.max(np.abs(new - depth)))
+        depth = new
+        if moved < 1e-6:
+            break
+    fit = fit_at(depth, std)
+    half = mark_shared_mm(travel, after, period)
+    # where P(w0) lies in its indenter's bracket is not random across indenters: a stage
+    # that stops soon after w0 puts every crossing near the top of its last frame period,
+    # so the brackets' middles read P(w0) low by up to their half-width, the deeper (faster)
+    # presses most (on simulated 10 frames/s sessions the depth error rose 2 to 47 um per mm
+    # of w0, and beta read low). Carried as shared: every press at its bracket's end at once.
+    ind = np.array([p.indenter for p in presses])
+    n_group = np.array([np.count_nonzero(ind == g) for g in ind], np.float64)
+    cross = np.where(np.isfinite(f_on), np.sqrt(3.0) * np.nan_to_num(sem_on)
+                     / np.sqrt(n_group) / k, 0.0)
+    half = half + cross
+    unread = int(np.sum(~np.isfinite(f_on)))
+    notes = [f"depth rule 'mark': w = w0 + the depth past w0 that the force reads, from the "
+             "crossing of w0 (P(w0) of each indenter: the intersection of its presses' frame "
+             "periods before the mark first showed) to the force window "
+             f"({1e3 * float(np.median(after)):.1f} um median, "
+             f"{1e3 * float(np.min(after)):.1f} to {1e3 * float(np.max(after)):.1f} um; dP/dw "
+             f"from each press's P/w, eq. 5 at beta {MARK_BETA:g}); shared by every press, "
+             f"+-{1e3 * float(np.median(half)):.1f} um median (the clock, dP/dw, and where "
+             f"P(w0) lies in its indenter's bracket, +-{1e3 * float(np.median(cross)):.1f} um "
+             "median), carried whole into E's and nu's intervals"
+             + (f"; {unread} presses without the crossing's force keep w0 + half a frame's "
+                "travel" if unread else "")
+             + (f"; the presses of {disjoint} indenter(s) do not agree on P(w0) (their mean is "
+                "used): a gel not uniform, or a drifting force?" if disjoint else "")]
+    return depth, std, fit, (-half, half), notes
+
+
+
+def vernier_depths(w0: np.ndarray, closure: np.ndarray, cfg, nu: float
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """Solve ``w + b(w) = w0 + closure`` for every press (b: the bulge at the bevel)."""
+    depth = w0 + closure
+    bulge = np.zeros_like(depth)
+    for _ in range(6):          # b is a few % of w: a contraction
+        bulge = bulge_at(cfg.bevel_offset_mm, depth, thickness_mm=cfg.gel_thickness_mm,
+                         radius_mm=cfg.indenter_radius_mm, nu=nu)
+        new = w0 + closure - bulge
+        if np.max(np.abs(new - depth)) < 1e-8:
+            depth = new
+            break
+        depth = new
+    return depth, bulge
+
+
+def _bulge_note(bulge: np.ndarray, depth: np.ndarray, cfg, rounds: list[float], w0, closure,
+                fit_at, std, force) -> str:
+    """One sentence on the bulge correction: its size and how it feeds back into nu."""
+    frac = float(np.median(bulge / depth))
+    text = (f"bulge correction: the gel rises {100 * frac:.2f}% of w at the bevel "
+            f"({cfg.bevel_offset_mm:g} mm = {cfg.bevel_offset_mm / cfg.gel_thickness_mm:.2f} h "
+            "from the axis; FEM, bonded Neo-Hookean layer)")
+    if rounds:
+        nu = rounds[-1]
+        d2, _ = vernier_depths(w0, closure, cfg, min(nu + 0.01, 0.499))
+        f2 = fit_at(d2, std, force)
+        if np.isfinite(f2.nu):
+            gain = (f2.nu - nu) / (min(nu + 0.01, 0.499) - nu)
+            text += (f", settled at nu = {nu:.4f} in {len(rounds)} round(s); d nu_fit / d nu = "
+                     f"{gain:.2f}")
+    return text
+
+
+def vernier_rule(st: DepthState, presses, cert, cfg, fit_at: Fitter, force: np.ndarray, *,
+                 nu_start: float, max_rounds: int, nu_tol: float) -> None:
+    """The ``'vernier'`` rule: w = w0 + closure - b(w), the bulge and the bevel's own force
+    iterated with the fit towards a fixed point in nu; the edges' shared error and the
+    unread bands said in the notes."""
+    if any(p.rule != "vernier" for p in presses):
+        raise InputError("the 'vernier' depth rule needs every press read by the vernier")
+    geom = BevelGeometry(offset_mm=cfg.bevel_offset_mm, direction_deg=cfg.bevel_direction_deg,
+                         angle_deg=cfg.bevel_angle_deg, length_mm=cfg.bevel_length_mm)
+    w0 = np.array([p.w0_mm for p in presses])
+    closure = np.array([p.closure_mm for p in presses])
+    _vernier_rounds(st, w0, closure, geom, cfg, fit_at, force, nu_start=nu_start,
+                    max_rounds=max_rounds, nu_tol=nu_tol)
+    _vernier_notes(st, presses, cert, geom, cfg)
+    if cfg.bulge_correction:
+        st.notes.append(_bulge_note(st.bulge, st.depth, cfg, st.rounds, w0, closure, fit_at,
+                                    st.std, force - st.bevel_n))
+    else:
+        st.notes.append("no bulge correction ([gauge_block] bulge_correction = false): the "
+                        "certified depth is w0 plus the vernier's reading")
+    if cfg.bevel_force_correction:
+        frac = st.bevel_n / np.maximum(force, 1e-12)
+        st.notes.append(f"the bevel's own band of contact pressed "
+                        f"{1e3 * st.bevel_n.min():.1f} to {1e3 * st.bevel_n.max():.1f} mN "
+                        f"({100 * frac.max():.1f}% of the F/T force at most; layer model at "
+                        "the fitted E, nu), taken off the forces")
+
+
+def _vernier_rounds(st: DepthState, w0, closure, geom, cfg, fit_at: Fitter, force, *,
+                    nu_start: float, max_rounds: int, nu_tol: float) -> None:
+    """The vernier's depths and the fit, the bulge and the bevel's force recomputed at each
+    round's nu and E until nu and E settle."""
+    h = cfg.gel_thickness_mm
+    st.depth = w0 + closure
+    if cfg.bulge_correction:
+        st.depth, st.bulge = vernier_depths(w0, closure, cfg, float(nu_start))
+    st.fit = fit = fit_at(st.depth, st.std)
+    nu, E = float(nu_start), None
+    if np.isfinite(fit.E_mpa) and np.isfinite(fit.nu):
+        nu, E = float(np.clip(fit.nu, 0.30, 0.499)), float(fit.E_mpa)
+    corrections = cfg.bulge_correction or cfg.bevel_force_correction
+    for _ in range(max_rounds if corrections else 0):
+        if cfg.bulge_correction:
+            st.depth, st.bulge = vernier_depths(w0, closure, cfg, nu)
+        if cfg.bevel_force_correction and E is not None:
+            st.bevel_n = bevel_force(closure, geom, thickness_mm=h, E_mpa=E, nu=nu)
+        st.fit = fit = fit_at(st.depth, st.std, force - st.bevel_n)
+        if fit.out_of_table or not np.isfinite(fit.nu):
+            st.notes.append("the fit left the beta table, so the corrections stay at "
+                            f"nu = {nu:.4f}: {fit.out_of_table_message}")
+            break
+        st.rounds.append(float(fit.nu))
+        settled = abs(fit.nu - nu) < nu_tol and (
+            E is not None and abs(fit.E_mpa / E - 1) < 1e-3)
+        nu, E = float(np.clip(fit.nu, 0.30, 0.499)), float(fit.E_mpa)
+        if settled:
+            break
+    else:
+        if corrections:
+            st.notes.append(f"nu did not settle in {max_rounds} rounds of the corrections "
+                            f"(last {st.rounds[-2:]})")
+
+
+def _vernier_notes(st: DepthState, presses, cert, geom, cfg) -> None:
+    """The read bands' shared edge error (carried as ``st.shared``) and the unread bands,
+    in the notes."""
+    edge = (cert.bevel_optics or {}).get("edge_px")
+    half = (vernier_shared_mm([p.band_resolved for p in presses], geom, cfg.mm_per_px,
+                              edge) if edge else np.zeros(len(presses)))
+    if np.any(half > 0):
+        st.shared = (-half, half)
+        n_read = int(np.sum(half > 0))
+        st.notes.append(f"the band's edges sit within +-{EDGE_SHARED_FRACTION:g} of the "
+                        f"session's edge width ({edge:.2f} px) of the true edges of "
+                        f"contact, the same way for every press: +-"
+                        f"{1e3 * float(half.max()):.2f} um shared by the {n_read} read "
+                        "bands, carried into E's and nu's intervals")
+    unread = sum(not p.band_resolved for p in presses)
+    if unread:
+        top = 2e3 * unresolved_closure(geom, cfg.mm_per_px)[0]
+        st.notes.append(f"{unread} of {len(presses)} bands not read (shorter than "
+                        f"{RESOLVED_PX:g} px without the session's flank colours, or their "
+                        "crest away from the long bands'): their overshoot is only "
+                        f"bounded, 0 to {top:.1f} um or to their reading if longer, with "
+                        "the sd of a uniform over that (the point: the band read with "
+                        "edge lines and shadows, clipped to it); the fit weighs them "
+                        "accordingly")
+
+
+def nominal_rule(st: DepthState, presses, cfg, fit_at: Fitter, force: np.ndarray,
+                 period: float) -> None:
+    """The paper's rule, w = w0; on a mark, the overshoot it leaves out carried as a shared
+    one-sided error."""
+    h, a = cfg.gel_thickness_mm, cfg.indenter_radius_mm
+    w0 = np.array([p.w0_mm for p in presses])
+    st.depth = certified_depths(w0, rule="nominal", thickness_mm=h, radius_mm=a)
+    if all(p.rule == "vernier" for p in presses):
+        st.std = np.zeros_like(w0)
+        st.notes.append("depth rule 'nominal' on a vernier session: the overshoot the bevel "
+                        "reads is ignored")
+    st.fit = fit_at(st.depth, st.std if np.any(st.std > 0) else None)
+    if all(p.rule == "onset" for p in presses):
+        # what w = w0 leaves out: the onset's half frame and the force's overshoot
+        marked, *_ = mark_rule(presses, force, fit_at, cfg, period)
+        left = marked - st.depth
+        st.shared = (np.zeros_like(left), np.maximum(left, 0.0))
+        st.notes.append(f"depth rule 'nominal' on a mark: w = w0 leaves out the depth past "
+                        f"w0 that the force reads ({1e3 * float(np.median(left)):.1f} um "
+                        "median), one-sided and shared by every press: E's and nu's "
+                        "intervals carry it")
+
+
+def land_rule(st: DepthState, presses, cfg, fit_at: Fitter, *, nu_start: float,
+              max_rounds: int, nu_tol: float) -> None:
+    """The ``'land'`` rule: where the bulging gel meets a flat land, at the fitted nu,
+    iterated to a fixed point (ill-conditioned: a diagnostic)."""
+    h, a = cfg.gel_thickness_mm, cfg.indenter_radius_mm
+    w0 = np.array([p.w0_mm for p in presses])
+    st.std = np.zeros_like(w0)
+    nu = float(nu_start)
+    for _ in range(max_rounds):
+        st.depth = certified_depths(w0, rule="land", thickness_mm=h, radius_mm=a, nu=nu)
+        st.fit = fit = fit_at(st.depth, None)
+        if fit.out_of_table or not np.isfinite(fit.nu):
+            st.notes.append("the fit left the beta table, so the land-contact depths stay at "
+                            f"nu = {nu:.4f}: {fit.out_of_table_message}")
+            break
+        st.rounds.append(float(fit.nu))
+        if abs(fit.nu - nu) < nu_tol:
+            break
+        nu = float(np.clip(fit.nu, 0.30, 0.499))
+    else:
+        st.notes.append(f"nu did not settle in {max_rounds} certification-fit rounds "
+                        f"(last {st.rounds[-2:]})")

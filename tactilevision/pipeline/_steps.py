@@ -1,0 +1,158 @@
+"""Steps of the main job between certification and the fit: the F/T's zero taken off, the
+relaxation of the holds, and the fit of eq. (5) with its warnings kept."""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Callable
+from dataclasses import replace
+
+import numpy as np
+
+from .._checks import InputError
+from ..contact import Certification, ForceZero, certify_session, force_window, force_zero
+from ..io import Session
+from ..mechanics import (
+    IndentationFit,
+    RelaxationFit,
+    elastic_force,
+    fit_indentation,
+    fit_relaxation,
+    refine_relaxation,
+)
+from ._calibration import hold_curves, hold_spans
+
+__all__ = ["Fitter", "frame_period", "relaxation_step", "take_off_zero"]
+
+
+class Fitter:
+    """eq. (5) fitted to the session's forces at given depths, each fit's warnings kept.
+
+    Parameters
+    ----------
+    force : (N,) float64 ndarray
+        The forces fitted when a call gives none, N.
+    thickness_mm, radius_mm : float
+        Layer thickness h and indenter radius a, mm.
+    beta_table : str
+        Passed to :func:`~tactilevision.mechanics.fit_indentation`.
+    """
+
+    def __init__(self, force: np.ndarray, *, thickness_mm: float, radius_mm: float,
+                 beta_table: str) -> None:
+        self.force = force
+        self.kw = dict(thickness_mm=thickness_mm, radius_mm=radius_mm, beta_table=beta_table)
+        self.caught: dict[int, list[str]] = {}
+
+    def __call__(self, depth: np.ndarray, std: np.ndarray | None,
+                 f_n: np.ndarray | None = None) -> IndentationFit:
+        """Fit at `depth` (mm) with uncertainty `std` (mm) to `f_n` (N; default the forces)."""
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            f = fit_indentation(depth, self.force if f_n is None else f_n, depth_std_mm=std,
+                                **self.kw)
+        self.caught[id(f)] = [str(w.message) for w in caught]
+        return f
+
+    def warnings_of(self, fit: IndentationFit) -> list[str]:
+        """The warnings a fit made by this object raised."""
+        return self.caught.get(id(fit), [])
+
+
+def frame_period(session: Session) -> float:
+    """The frames' period, s (median step; 0 with one frame)."""
+    t = session.frame_times_s
+    return float(np.median(np.diff(t))) if t.size > 1 else 0.0
+
+
+
+def take_off_zero(session: Session, cert: Certification, mode: str
+                   ) -> tuple[Session, Certification, ForceZero | None, list[str]]:
+    """Read the F/T's zero between the presses and take it off the log and the presses'
+    forces (``mode``: 'auto', 'constant', 'drift' or 'off'); the notes say what was done."""
+    spans = cert.press_spans_s
+    if spans.shape[0] == 0:
+        return session, cert, None, []
+    period = (float(np.median(np.diff(session.frame_times_s))) if session.n_frames > 1
+              else 0.0)
+    # a press touches the gel from before its first frame in contact to after its last
+    contact = spans + cert.clock_offset_s + np.array([-period, period])
+    zero = force_zero(session.force_times_s, session.forces_n[:, 2], contact,
+                      subtracted="constant" if mode == "auto" else mode)
+    if zero is not None and mode == "auto" and zero.drifts:
+        zero = replace(zero, subtracted="drift")
+    if zero is None:
+        return session, cert, None, ["the F/T's zero could not be read: no settled rest between "
+                                     "the presses; the forces are as the F/T read them"]
+    note = zero.sentence()
+    if mode == "off":
+        return session, cert, zero, [note]
+    forces = session.forces_n.copy()
+    forces[:, 2] -= zero.taken_off(session.force_times_s)
+    off = cert.clock_offset_s
+    presses = [replace(p, force_n=p.force_n - float(zero.taken_off(p.t_frame_s + off + p.hold_s)),
+                       force_onset_n=p.force_onset_n - float(zero.taken_off(p.t_frame_s + off)))
+               for p in cert.presses]
+    return (replace(session, forces_n=forces), replace(cert, presses=presses), zero, [note])
+
+
+
+def relaxation_step(session: Session, cert: Certification, progress: Callable | None,
+                bevel_threshold: float | str = "auto"
+                ) -> tuple[Certification, RelaxationFit | None, list[str], np.ndarray | None]:
+    """Fit the holds; for a relaxing gel, certify again with the clock on the elastic force.
+
+    Returns the certification, the fit (None when not tested), notes, and each certified
+    press's force at the instant of loading (the F/T window's mean of the elastic force
+    behind the log; None unless the gel relaxes)."""
+    def fit(c: Certification, holds: dict[str, np.ndarray]) -> RelaxationFit:
+        # with each press's time and indenter: softening, which does not recover between
+        # presses, is told from relaxation, which does
+        return fit_relaxation(holds["press"], holds["t_s"], holds["fz_n"], holds["ramp_s"],
+                              press_time_s={p.press: p.time_s for p in c.presses},
+                              press_group={p.press: p.indenter for p in c.presses})
+
+    holds = hold_curves(session, cert)
+    if np.unique(holds["press"]).size < 3:
+        return cert, None, ["relaxation: fewer than 3 holds found in the F/T log, not tested"], None
+    try:
+        relax = fit(cert, holds)
+    except InputError as exc:
+        return cert, None, [f"relaxation: not tested ({exc})"], None
+    if not relax.resolved:
+        return cert, relax, ([] if relax.verdict == "flat" else
+                             [f"relaxation {relax.verdict}: {relax.why}"]), None
+
+    def refined(c: Certification, r: RelaxationFit) -> RelaxationFit:
+        # each hold remembers the presses before it: g and tau from the whole log
+        spans = np.array([(t0, t1) for _, t0, t1 in hold_spans(session, c)]).reshape(-1, 2)
+        try:
+            return refine_relaxation(session.force_times_s, session.forces_n[:, 2], spans, r)
+        except InputError:
+            return r
+
+    relax = refined(cert, relax)
+    elastic = elastic_force(session.force_times_s, session.forces_n, relax.g, relax.tau_s)
+    again = certify_session(session, progress=progress, sync_fz_n=elastic[:, 2],
+                            contact_area_px=cert.contact_area_px, bevel_threshold=bevel_threshold)
+    # the holds are fitted again only if they moved: on the vernier's path a hold starts
+    # where the force stops rising, whatever the clock; on a frame-timed one it follows it
+    def starts(c: Certification) -> list[tuple[int, float]]:
+        return [(p.press, round(p.t_frame_s + c.clock_offset_s, 3)) for p in c.presses]
+
+    if starts(again) != starts(cert):
+        holds = hold_curves(session, again)
+        if np.unique(holds["press"]).size >= 3:
+            again_relax = fit(again, holds)
+            if again_relax.resolved:
+                relax = refined(again, again_relax)
+    off, n = again.clock_offset_s, session.config.window_samples
+    force0 = np.array([force_window(session.force_times_s, elastic, p.t_frame_s + off + p.hold_s,
+                                    n).fz_n for p in again.presses])
+    note = (f"the gel relaxes while held (g = {relax.g:.3f}, tau = {relax.tau_s:.3g} s from "
+            f"{relax.n_presses} holds; {relax.why}): the clock was synchronised on the "
+            f"elastic force behind the F/T log ({cert.clock_offset_s:.4f} s on the measured force, "
+            f"{again.clock_offset_s:.4f} s on the elastic one), and the fit takes each "
+            "press's force from it (force0_n, the force at the instant of loading): E is "
+            "E_0, the instantaneous modulus")
+    return again, relax, [note], force0
