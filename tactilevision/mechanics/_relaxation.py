@@ -33,6 +33,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from scipy import optimize, stats
+from scipy.optimize import least_squares
+from scipy.signal import lfilter
 
 from .._checks import InputError
 
@@ -253,8 +255,6 @@ def elastic_force(force_times_s: np.ndarray, forces_n: np.ndarray, g: float, tau
     the filter and added back, so that a constant offset is not amplified by
     the filter's 1 / (1 - g) gain at rest.
     """
-    from scipy.signal import lfilter
-
     t = np.asarray(force_times_s, np.float64)
     f = np.asarray(forces_n, np.float64)
     if not (0.0 <= float(g) < 1.0 and np.isfinite(tau_s) and tau_s > 0):
@@ -280,8 +280,6 @@ def _blocks(t: np.ndarray, f: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarra
 def _solve(curves: list[tuple[np.ndarray, np.ndarray, float]], start: tuple[float, float]
            ) -> tuple[float, float, np.ndarray, float]:
     """Least squares over (g, log tau), each press's amplitude profiled out."""
-    from scipy.optimize import least_squares
-
     def amplitudes_and_residuals(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         g, tau = p[0], np.exp(p[1])
         amps, res = [], []
@@ -386,6 +384,40 @@ def fit_relaxation(press: np.ndarray, t_s: np.ndarray, fz_n: np.ndarray,
     ``resolved`` (and g and tau reported as the gel's) only for
     ``'relaxing'``: identified (2), g's bootstrap interval above 0.
     """
+    press, t, f, ramp, ids = _check_holds(press, t_s, fz_n, ramp_s, confidence)
+    notes = []
+    curves, ramps = _hold_curves(press, t, f, ramp, ids, points_per_press, notes)
+    span = float(np.median([c[0][-1] for c in curves]))
+    g, tau, amps, rmse = _fit_shared(curves, span)
+    tests = _hold_tests(curves, tau, rmse, confidence)
+    boot, g_ci, tau_ci = _bootstrap(curves, g, tau, confidence, n_boot, seed,
+                                    tests.identified)
+    # relaxation recovers between presses, softening does not: the presses' forces at the
+    # hold's start, against the session's time, each depth apart
+    r_w, se_w, starts = _decay_rate(curves)
+    r_b, se_b = _trend(ids, starts, press_time_s, press_group)
+    verdict, why = _verdict(tests, g_ci[0], tau, r_w, se_w, r_b, se_b)
+    notes.append(why)
+    if verdict == "relaxing" and span < 0.3 * tau:
+        notes.append(f"the holds last {span:.3g} s, under a third of tau = {tau:.3g} s: the "
+                     "relaxed level is extrapolated; a longer hold pins it down")
+    return RelaxationFit(g=g, tau_s=tau, g_ci=g_ci, tau_ci_s=tau_ci, confidence=confidence,
+                         elastic_force_n={int(i): float(a) for i, a in zip(ids, amps,
+                                                                         strict=True)},
+                         ramp_s=ramps, rmse_n=rmse, n_presses=int(ids.size),
+                         n_samples=int(t.size), resolved=verdict == "relaxing",
+                         p_value=tests.p_value, notes=tuple(notes), boot=boot, verdict=verdict,
+                         why=why, identified=tests.identified,
+                         tau_profile_ci_s=tests.profile_ci,
+                         curvature_p_value=tests.curv_p, longest_hold_s=tests.longest,
+                         decay_rate_per_s=r_w, decay_rate_se_per_s=se_w, trend_per_s=r_b,
+                         trend_se_per_s=se_b)
+
+
+def _check_holds(press: np.ndarray, t_s: np.ndarray, fz_n: np.ndarray,
+                 ramp_s: np.ndarray | None, confidence: float
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Check :func:`fit_relaxation`'s inputs; return press, t, f, ramp and the press ids."""
     press = np.asarray(press)
     t = np.asarray(t_s, np.float64)
     f = np.asarray(fz_n, np.float64)
@@ -405,7 +437,13 @@ def fit_relaxation(press: np.ndarray, t_s: np.ndarray, fz_n: np.ndarray,
     ids = np.unique(press)
     if ids.size < 3:
         raise InputError(f"need the holds of at least 3 presses, got {ids.size}")
-    notes = []
+    return press, t, f, ramp, ids
+
+
+def _hold_curves(press: np.ndarray, t: np.ndarray, f: np.ndarray, ramp: np.ndarray,
+                 ids: np.ndarray, points_per_press: int, notes: list[str]
+                 ) -> tuple[list[tuple[np.ndarray, np.ndarray, float]], dict[int, float]]:
+    """Each press's hold in block means, with its loading time; notes on missing ones."""
     known = {int(i): float(np.nanmedian(ramp[press == i])) for i in ids
              if np.any(np.isfinite(ramp[press == i]))}
     if known:
@@ -431,14 +469,36 @@ def fit_relaxation(press: np.ndarray, t_s: np.ndarray, fz_n: np.ndarray,
         r = known.get(int(i), fill)
         ramps[int(i)] = r
         curves.append((*_blocks(ti, fi, points_per_press), r))
-    span = float(np.median([c[0][-1] for c in curves]))
+    return curves, ramps
+
+
+def _fit_shared(curves: list[tuple[np.ndarray, np.ndarray, float]], span: float
+                ) -> tuple[float, float, np.ndarray, float]:
+    """g, tau, the presses' amplitudes and the rmse, from the best start of a grid."""
     # the start: the best of a grid (tau from a tenth of the hold to ten holds)
     best = (np.inf, 0.1, np.log(max(span, 1e-3)))
     for tau in np.geomspace(max(span, 1e-3) / 10, max(span, 1e-3) * 10, 5):
         gs, ls, _, rm = _solve(curves, (0.2, np.log(tau)))
         if rm < best[0]:
             best = (rm, gs, np.log(ls))
-    g, tau, amps, rmse = _solve(curves, best[1:])
+    return _solve(curves, best[1:])
+
+
+@dataclass(frozen=True)
+class _HoldTests:
+    """What the holds identify (:func:`fit_relaxation`, Notes 1 and 2)."""
+
+    p_value: float
+    curv_p: float
+    profile_ci: tuple[float, float]
+    identified: bool
+    longest: float
+    shortest: float
+
+
+def _hold_tests(curves: list[tuple[np.ndarray, np.ndarray, float]], tau: float, rmse: float,
+                confidence: float) -> _HoldTests:
+    """The F tests of a decay and of its curvature, and tau's profile interval."""
     # seen at all? an F test of the fit against a constant force per press (g = 0), on the
     # block means (which whiten the F/T noise); the bootstrap's interval alone is not enough:
     # on a flat hold the fit can park tau at a few ms and g anywhere
@@ -458,6 +518,14 @@ def fit_relaxation(press: np.ndarray, t_s: np.ndarray, fz_n: np.ndarray,
     profile_ci = _tau_profile(curves, tau, rss1, crit, rss_line, rss0, longest)
     span_ok = TAU_MIN_HOLD_FRACTION * shortest <= tau <= TAU_HOLD_RATIO * longest
     identified = bool(p_value < RELAX_ALPHA and curv_p < RELAX_ALPHA and span_ok)
+    return _HoldTests(p_value=p_value, curv_p=curv_p, profile_ci=profile_ci,
+                      identified=identified, longest=longest, shortest=shortest)
+
+
+def _bootstrap(curves: list[tuple[np.ndarray, np.ndarray, float]], g: float, tau: float,
+               confidence: float, n_boot: int, seed: int, identified: bool
+               ) -> tuple[np.ndarray, tuple[float, float], tuple[float, float]]:
+    """Bootstrap draws of (g, tau) over the presses and their percentile intervals."""
     q = [(1 - confidence) / 2 * 100, (1 + confidence) / 2 * 100]
     draws = []
     if identified:                        # intervals only for a relaxation that is there
@@ -472,10 +540,14 @@ def fit_relaxation(press: np.ndarray, t_s: np.ndarray, fz_n: np.ndarray,
         tau_ci = tuple(float(v) for v in np.percentile(boot[:, 1], q))
     else:
         g_ci, tau_ci = (np.nan, np.nan), (np.nan, np.nan)
-    # relaxation recovers between presses, softening does not: the presses' forces at the
-    # hold's start, against the session's time, each depth apart
-    r_w, se_w, starts = _decay_rate(curves)
-    r_b, se_b = _trend(ids, starts, press_time_s, press_group)
+    return boot, g_ci, tau_ci
+
+
+def _verdict(tests: _HoldTests, g_lo: float, tau: float, r_w: float, se_w: float, r_b: float,
+             se_b: float) -> tuple[str, str]:
+    """The verdict on the holds and why (:func:`fit_relaxation`, Notes 1 to 4)."""
+    p_value, curv_p = tests.p_value, tests.curv_p
+    shortest, longest = tests.shortest, tests.longest
     softening = bool(np.isfinite(r_b) and abs(r_b) > 3.0 * se_b and r_b * r_w > 0
                      and abs(r_w - r_b) <= 3.0 * math.hypot(se_w, se_b))
     pct = f"{100 * r_w:+.3g} %/s (se {100 * se_w:.2g})"
@@ -485,7 +557,7 @@ def fit_relaxation(press: np.ndarray, t_s: np.ndarray, fz_n: np.ndarray,
         verdict = "flat"
         why = (f"the holds are as flat as their noise allows (F test against a constant force "
                f"per press, p = {p_value:.2g}): no relaxation")
-    elif identified and g_ci[0] > 0.0:
+    elif tests.identified and g_lo > 0.0:
         verdict = "relaxing"
         why = (f"the holds relax with a curvature that pins tau (a straight decay is rejected, "
                f"p = {curv_p:.2g}; tau = {tau:.3g} s lies within the span the holds resolve, "
@@ -504,37 +576,31 @@ def fit_relaxation(press: np.ndarray, t_s: np.ndarray, fz_n: np.ndarray,
                   if curv_p >= RELAX_ALPHA else ")"))
     else:
         verdict = "decay not identified"
-        reason = (f"the decay is straight within the noise (p = {curv_p:.2g} against the fit)"
-                  if curv_p >= RELAX_ALPHA else
-                  f"tau = {tau:.3g} s lies beyond {TAU_HOLD_RATIO:g} times the longest hold "
-                  f"({longest:.3g} s)" if tau > TAU_HOLD_RATIO * longest else
-                  f"tau = {tau:.3g} s lies under {TAU_MIN_HOLD_FRACTION:g} of the shortest "
-                  f"hold ({shortest:.3g} s): a drop in the hold's first instants, its shape "
-                  "not resolved")
-        why = (f"the holds fall at {pct} (a line through each), but tau is not identified: "
-               f"{reason}; only that rate is (g phi / tau = {-r_w:.3g} 1/s for a slow "
-               "relaxation): g and tau are not reported and the gel is not called relaxing; "
-               "longer holds, or holds of different lengths, would tell"
-               + ("" if not trend else
-                  f" (the presses' forces at one depth move by {trend} between presses"
-                  + ("; the same rate as the holds', too weak alone to name a softening gel "
-                     "(3 se): diagnose's structure along time_s tells"
-                     if abs(r_w - r_b) <= 3.0 * math.hypot(se_w, se_b) and r_b * r_w > 0
-                     else "") + ")"))
-    notes.append(why)
-    if verdict == "relaxing" and span < 0.3 * tau:
-        notes.append(f"the holds last {span:.3g} s, under a third of tau = {tau:.3g} s: the "
-                     "relaxed level is extrapolated; a longer hold pins it down")
-    return RelaxationFit(g=g, tau_s=tau, g_ci=g_ci, tau_ci_s=tau_ci, confidence=confidence,
-                         elastic_force_n={int(i): float(a) for i, a in zip(ids, amps,
-                                                                         strict=True)},
-                         ramp_s=ramps, rmse_n=rmse, n_presses=int(ids.size),
-                         n_samples=int(t.size), resolved=verdict == "relaxing",
-                         p_value=p_value, notes=tuple(notes), boot=boot, verdict=verdict,
-                         why=why, identified=identified, tau_profile_ci_s=profile_ci,
-                         curvature_p_value=curv_p, longest_hold_s=longest,
-                         decay_rate_per_s=r_w, decay_rate_se_per_s=se_w, trend_per_s=r_b,
-                         trend_se_per_s=se_b)
+        why = _not_identified_why(curv_p, tau, shortest, longest, pct, trend,
+                                  r_w, se_w, r_b, se_b)
+    return verdict, why
+
+
+def _not_identified_why(curv_p: float, tau: float, shortest: float, longest: float, pct: str,
+                        trend: str, r_w: float, se_w: float, r_b: float, se_b: float) -> str:
+    """Why a decay's tau is not identified (the verdict 'decay not identified')."""
+    reason = (f"the decay is straight within the noise (p = {curv_p:.2g} against the fit)"
+              if curv_p >= RELAX_ALPHA else
+              f"tau = {tau:.3g} s lies beyond {TAU_HOLD_RATIO:g} times the longest hold "
+              f"({longest:.3g} s)" if tau > TAU_HOLD_RATIO * longest else
+              f"tau = {tau:.3g} s lies under {TAU_MIN_HOLD_FRACTION:g} of the shortest "
+              f"hold ({shortest:.3g} s): a drop in the hold's first instants, its shape "
+              "not resolved")
+    return (f"the holds fall at {pct} (a line through each), but tau is not identified: "
+            f"{reason}; only that rate is (g phi / tau = {-r_w:.3g} 1/s for a slow "
+            "relaxation): g and tau are not reported and the gel is not called relaxing; "
+            "longer holds, or holds of different lengths, would tell"
+            + ("" if not trend else
+               f" (the presses' forces at one depth move by {trend} between presses"
+               + ("; the same rate as the holds', too weak alone to name a softening gel "
+                  "(3 se): diagnose's structure along time_s tells"
+                  if abs(r_w - r_b) <= 3.0 * math.hypot(se_w, se_b) and r_b * r_w > 0
+                  else "") + ")"))
 
 
 def _straight_decay(curves: list[tuple[np.ndarray, np.ndarray, float]]) -> tuple[float, float]:
