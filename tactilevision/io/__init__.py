@@ -44,3 +44,15 @@ __all__ += ["Session", "SessionConfig", "read_session"]
 from ._video import VIDEO_SUFFIXES, VideoFrames, find_video_reference, is_video  # noqa: E402
 
 __all__ += ["VIDEO_SUFFIXES", "VideoFrames", "find_video_reference", "is_video"]
+
+# output folders written whole or not at all (every command, the pipeline): names appended
+from ._output import (  # noqa: E402
+    MANIFEST,
+    StagedOutput,
+    check_output_folder,
+    check_overwrite,
+    output_folder,
+)
+
+__all__ += ["MANIFEST", "StagedOutput", "check_output_folder", "check_overwrite",
+            "output_folder"]

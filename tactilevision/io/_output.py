@@ -1,0 +1,195 @@
+"""Output folders of the library and its commands: checked before any work is done, written whole or
+not at all (:class:`StagedOutput`), never replacing files tactilevision did not write
+without ``--overwrite``."""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import tempfile
+from pathlib import Path
+
+from .._checks import InputError
+
+__all__ = ["MANIFEST", "StagedOutput", "check_output_folder", "check_overwrite", "output_folder"]
+
+
+def output_folder(path: Path, what: str = "output folder") -> Path:
+    """Create `path` (and its parents) or say in one sentence why it cannot be.
+
+    Parameters
+    ----------
+    path : Path
+        The folder a command writes into.
+    what : str
+        How the message names it ('output folder', 'report folder').
+
+    Returns
+    -------
+    path : Path
+
+    Raises
+    ------
+    InputError
+        If `path` is an existing file, cannot be created, or is not writable.
+    """
+    path = check_output_folder(path, what)
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InputError(f"cannot create the {what} {path}: {exc.strerror}") from None
+    if not os.access(path, os.W_OK | os.X_OK):
+        raise InputError(f"the {what} {path} is not writable")
+    return path
+
+
+def check_output_folder(path: Path, what: str = "output folder") -> Path:
+    """Say at once, creating nothing, whether `path` could be made a writable folder.
+
+    For commands that must not write anything before their input is read and
+    checked: this is called first, :func:`output_folder` when writing starts.
+
+    Raises
+    ------
+    InputError
+        If `path`, or the nearest of its parents that exists, is a file, or
+        that parent is not writable.
+    """
+    path = Path(path)
+    if path.exists() and not path.is_dir():
+        raise InputError(f"the {what} {path} is an existing file, not a folder")
+    parent = path
+    while not parent.exists():
+        if parent.parent == parent:
+            break
+        parent = parent.parent
+    if parent.exists() and not parent.is_dir():
+        raise InputError(f"cannot create the {what} {path}: {parent} is a file")
+    if parent.exists() and not os.access(parent, os.W_OK | os.X_OK):
+        raise InputError(f"cannot create the {what} {path}: {parent} is not writable")
+    return path
+
+
+#: The file in an output folder that lists what tactilevision wrote there (so that a rerun
+#: may replace those, and nothing else, without --overwrite).
+MANIFEST = ".tactilevision-outputs.json"
+
+
+def _ours(out: Path) -> set[str]:
+
+    try:
+        return set(json.loads((out / MANIFEST).read_text(encoding="utf-8")).get("files", []))
+    except (OSError, ValueError, AttributeError):
+        return set()
+
+
+def check_overwrite(out: Path, names, *, overwrite: bool = False) -> None:
+    """Refuse, before any work, to replace files in `out` that tactilevision did not write.
+
+    Parameters
+    ----------
+    out : Path
+        The output folder.
+    names : iterable of str
+        Files (relative to `out`) the command will write.
+    overwrite : bool, default False
+        ``--overwrite``: replace them whatever wrote them.
+
+    Raises
+    ------
+    InputError
+        Naming the files in the way, when `out` holds some of `names` that
+        its manifest (:data:`MANIFEST`) does not list and `overwrite` is off.
+    """
+    out = Path(out)
+    if overwrite or not out.is_dir():
+        return
+    ours = _ours(out)
+    blocking = sorted(n for n in set(names) if (out / n).exists() and n not in ours)
+    if blocking:
+        shown = ", ".join(blocking[:6]) + (f" and {len(blocking) - 6} more"
+                                            if len(blocking) > 6 else "")
+        raise InputError(f"{out} already holds {shown}, not written by tactilevision: give "
+                         "--overwrite to replace them, or another output folder")
+
+
+class StagedOutput:
+    """A command's files written into a hidden folder in `out`, moved into place at the end.
+
+    A run either replaces a complete result or changes nothing: the files are
+    written into ``out/.tactilevision-tmp-*`` (the same file system), and
+    :meth:`commit` moves each into `out` (``os.replace``) only when the
+    command has written them all. Leaving the ``with`` block without a
+    commit (an error, Ctrl-C) removes the hidden folder and leaves `out` as
+    it was. The files moved are listed in `out`'s manifest (:data:`MANIFEST`):
+    a rerun may replace them without ``--overwrite``; anything else in the
+    way stops the commit (and the run's files are dropped) unless
+    `overwrite`.
+
+    Parameters
+    ----------
+    out : Path
+        The output folder (created if needed).
+    overwrite : bool, default False
+    what : str
+        How messages name the folder.
+
+    Examples
+    --------
+    >>> with StagedOutput(out) as stage:          # doctest: +SKIP
+    ...     (stage.path / "fit.json").write_text("{}")
+    ...     stage.commit()
+    """
+
+    def __init__(self, out: Path, *, overwrite: bool = False,
+                 what: str = "output folder") -> None:
+        self.out = Path(out)
+        self.overwrite = bool(overwrite)
+        self.what = what
+        self.path: Path = self.out
+        self.committed = False
+
+    def __enter__(self) -> StagedOutput:
+
+        output_folder(self.out, self.what)
+        try:
+            self.path = Path(tempfile.mkdtemp(prefix=".tactilevision-tmp-", dir=self.out))
+        except OSError as exc:
+            raise InputError(f"cannot write into the {self.what} {self.out}: "
+                             f"{exc.strerror}") from None
+        return self
+
+    def commit(self) -> list[str]:
+        """Move every file written into place; returns their names relative to `out`.
+
+        Raises
+        ------
+        InputError
+            When files the command did not write before are in the way and
+            `overwrite` is off (nothing is moved then), or a move fails.
+        """
+        files = sorted(str(p.relative_to(self.path)) for p in self.path.rglob("*")
+                       if p.is_file())
+        check_overwrite(self.out, files, overwrite=self.overwrite)
+        try:
+            for name in files:
+                target = self.out / name
+                target.parent.mkdir(parents=True, exist_ok=True)
+                os.replace(self.path / name, target)
+            ours = _ours(self.out) | set(files)
+            (self.out / MANIFEST).write_text(json.dumps({"files": sorted(ours)}, indent=1)
+                                             + "\n", encoding="utf-8")
+        except OSError as exc:
+            raise InputError(f"cannot move the results into the {self.what} {self.out}: "
+                             f"{exc.strerror}") from None
+        finally:
+            shutil.rmtree(self.path, ignore_errors=True)
+        self.committed = True
+        return files
+
+    def __exit__(self, exc_type, exc, tb) -> bool:
+
+        if not self.committed:
+            shutil.rmtree(self.path, ignore_errors=True)
+        return False
