@@ -45,6 +45,7 @@ from .._checks import InputError
 from ._finite_solver import ConstrainedNewton, IndentationProblem, RigidPunch
 from ._mesh import indentation_mesh
 from ._neohookean_forms import AxisymmetricNeoHookean
+from ._sweep_cache import read_sweep, write_sweep
 
 __all__ = ["FiniteIndentation", "neo_hookean_indentation"]
 
@@ -330,16 +331,12 @@ def neo_hookean_indentation(a_over_h: float, nu: float, *, contact: str = "frict
               "contact_search": bool(contact_search), "penalty": float(penalty),
               "c20_over_c10": float(c20_over_c10)}
     if cache:
-        from ._sweep_cache import read_sweep
-
         hit = read_sweep(inputs, FiniteIndentation, cache_dir)
         if hit is not None:
             return hit
     result = _sweep(a_over_h, nu, contact, w_over_h_max, steps, pad_radius_over_h, cell,
                     edge_refinements, edge_radius_over_h, contact_search, penalty, c20_over_c10)
     if cache and result.complete:
-        from ._sweep_cache import write_sweep
-
         write_sweep(inputs, result, cache_dir)
     return result
 

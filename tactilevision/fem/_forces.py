@@ -63,8 +63,11 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 import scipy.fft as sfft
+import scipy.sparse as sp
 
 from .._checks import InputError, check_poisson, check_positive
+from ._layer import layer_normal_stiffness, layer_surface_stiffness
+from ._pad import pad_surface_stiffness
 
 __all__ = ["ForceEstimator", "ForceMap"]
 
@@ -360,8 +363,6 @@ class _Spectral:
 
     def __init__(self, shape: tuple[int, int], dx: float, h: float, E: float, nu: float,
                  mode: str, pad_mm: float) -> None:
-        from ._layer import layer_normal_stiffness, layer_surface_stiffness
-
         H, W = shape
         p = math.ceil(pad_mm / dx)
         self.shape = shape
@@ -510,8 +511,6 @@ class _Fem:
     def __init__(self, shape: tuple[int, int], dx: float, h: float, E: float, nu: float,
                  mode: str, grid: tuple[int, int], element: str, layers: int | None,
                  cache_dir: str | None) -> None:
-        from ._pad import pad_surface_stiffness
-
         H, W = shape
         if len(grid) != 2 or min(int(g) for g in grid) < 2:
             raise InputError(f"grid must be (nx, ny) with at least 2 nodes each, got {grid!r}")
@@ -534,7 +533,6 @@ class _Fem:
         if nx > W or ny > H:
             raise InputError(f"grid {grid} is finer than the image {shape}: some nodes "
                              "have no pixel")
-        import scipy.sparse as sp
 
         # A node's value is the mean of the height map over its tributary
         # rectangle [x_k - s/2, x_k + s/2] x [y_k - s/2, y_k + s/2] (clipped to

@@ -20,6 +20,8 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
+import scipy
+import skfem
 
 from .._cache import ENV_VAR, cache_root
 
@@ -74,9 +76,6 @@ def unpack_upper(packed: np.ndarray, n: int) -> np.ndarray:
 
 
 def _versions() -> dict:
-    import scipy
-    import skfem
-
     return {"scikit-fem": skfem.__version__, "scipy": scipy.__version__,
             "numpy": np.__version__, "python": platform.python_version()}
 

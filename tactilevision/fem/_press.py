@@ -13,8 +13,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.interpolate import PchipInterpolator
 
 from .._checks import InputError
+from ._finite import neo_hookean_indentation
 
 __all__ = ["PressProfile", "press_profile"]
 
@@ -86,8 +88,6 @@ class PressProfile:
 
     def force_at(self, w_over_h: float) -> float:
         """P / (E h^2) at `w_over_h` (PCHIP through the sweep's forces)."""
-        from scipy.interpolate import PchipInterpolator
-
         return float(PchipInterpolator(self.w_over_h, self.force)(w_over_h))
 
     def height_map(self, shape: tuple[int, int], mm_per_px: float, thickness_mm: float,
@@ -144,8 +144,6 @@ def press_profile(a_over_h: float, nu: float, *, w_over_h_max: float = 0.22, ste
         For bad arguments (see :func:`~tactilevision.fem.neo_hookean_indentation`)
         or a sweep that stops before `w_over_h_max`.
     """
-    from . import neo_hookean_indentation
-
     res = neo_hookean_indentation(a_over_h, nu, contact=contact, w_over_h_max=w_over_h_max,
                                   steps=steps, pad_radius_over_h=pad_radius_over_h, **mesh)
     if not res.complete:

@@ -23,6 +23,8 @@ import platform
 from pathlib import Path
 
 import numpy as np
+import scipy
+import skfem
 
 from .._cache import savez_atomic
 from ._pad_cache import cache_directory
@@ -48,9 +50,6 @@ def _source_digest() -> str:
 
 @functools.lru_cache(maxsize=1)
 def _versions() -> dict:
-    import scipy
-    import skfem
-
     return {"scikit-fem": skfem.__version__, "scipy": scipy.__version__,
             "numpy": np.__version__, "python": platform.python_version()}
 

@@ -15,9 +15,17 @@ import io
 import json
 import platform
 import time
+import warnings
+from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
+import scipy
+import skfem
+
+from .._version import __version__
+from ._finite import neo_hookean_indentation
+from ._linear import LinearIndentationSolver
 
 __all__ = ["A_OVER_H_GRID", "BETA_CONTACTS", "CONTACTS", "KAPPA_NU_GRID", "NU_GRID",
            "build_beta_table", "build_kappa_table", "write_table"]
@@ -41,11 +49,6 @@ BETA_CONTACTS = ("bonded",)
 
 
 def _versions() -> dict:
-    import scipy
-    import skfem
-
-    from .. import __version__
-
     return {"tactilevision": __version__, "scikit-fem": skfem.__version__,
             "scipy": scipy.__version__, "numpy": np.__version__,
             "python": platform.python_version()}
@@ -78,8 +81,6 @@ def build_kappa_table(*, nu: np.ndarray = KAPPA_NU_GRID, a_over_h: np.ndarray = 
     """
     from tqdm.auto import tqdm
 
-    from ._linear import LinearIndentationSolver
-
     nu = np.asarray(nu, np.float64)
     a_over_h = np.asarray(a_over_h, np.float64)
     kap = np.empty((len(contacts), a_over_h.size, nu.size))
@@ -111,10 +112,6 @@ def _beta_sweep(kwargs: dict):
     singularity, and at small nu (compressible) the finest edge cells fold
     first. Returns the result and the refinements it used.
     """
-    import warnings
-
-    from ._finite import neo_hookean_indentation
-
     kwargs = dict(kwargs)
     while True:
         with warnings.catch_warnings():
@@ -183,8 +180,6 @@ def build_beta_table(*, nu: np.ndarray = NU_GRID, a_over_h: np.ndarray = A_OVER_
               "pad_radius_over_h": pad_radius_over_h, "cell": cell,
               "edge_refinements": edge_refinements} for c, i, j in index]
     if jobs > 1:
-        from concurrent.futures import ProcessPoolExecutor
-
         pool = ProcessPoolExecutor(max_workers=int(jobs))
         results = pool.map(_beta_sweep, tasks)
     else:
