@@ -9,6 +9,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from ._checks import InputError
+
 __all__ = ["KNOWN_SENSORS", "asset_dir", "default_calibration_path"]
 
 _PKG = Path(__file__).resolve().parent
@@ -37,8 +39,6 @@ def asset_dir(kind: str) -> Path:
         If neither exists (a broken install).
     """
     if kind not in ("calibration", "models"):
-        from ._checks import InputError
-
         raise InputError(f"kind must be 'calibration' or 'models', got {kind!r}")
     for cand in (_PKG / "_assets" / kind, _PKG.parent / kind):
         if cand.is_dir():
@@ -64,8 +64,6 @@ def default_calibration_path(sensor: str) -> Path:
     tactilevision.InputError
         For a sensor without a shipped calibration.
     """
-    from ._checks import InputError
-
     path = asset_dir("calibration") / f"{sensor}.npz"
     if sensor not in KNOWN_SENSORS or not path.is_file():
         raise InputError(
