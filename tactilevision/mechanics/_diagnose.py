@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 import warnings
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -517,6 +517,46 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
     """
     cols = {k: np.asarray(v, np.float64) for k, v in columns.items()}
     h, a = float(thickness_mm), float(radius_mm)
+    model = _model_to_diagnose(cols, h, a, base, effects)
+    # the base law's own limits: rungs of the ladder, never verdicts, left out of E and nu
+    # (on the FEM law, eq. (5)'s beta term is the departure of a gel that follows eq. 5)
+    law_rungs = ("law_curvature",) + (("large_deformation",) if base == "fem" else ())
+    table = _Table(cols, h, a, beta_table, law_rungs)
+    pool = _candidate_pool(cols, base, model, candidates, tuple(scan))
+    if curvature not in ("gate", "nuisance"):
+        raise InputError(f"curvature must be 'gate' or 'nuisance', got {curvature!r}")
+    scan = pool.scan
+    climb = _Climb(table=table, pool=pool, cv_folds=cv_folds, seed=seed, curvature=curvature)
+    base_step, cov0 = _first_rungs(climb, model)
+    _climb(climb, max_steps, progress)
+    cov_after, d_final = _left_over(climb)
+    cur_fit = climb.cur_fit
+    floor = noise_floor(cur_fit.residuals_n, d_final)
+    budget, budget_missing = noise_budget(cur_fit.residuals_n, cur_fit.predicted_n, d_final,
+                                          _groups(d_final))
+    separating = None
+    if climb.missing_effect and climb.equivalent:
+        separating = "; ".join(_separating(climb.missing_effect, e, cols)
+                               for e in climb.equivalent)
+    diag = Diagnosis(
+        model=("layer", *model.names), E_mpa=base_step.E_mpa, nu=base_step.nu,
+        rmse_n=base_step.rmse_n, cv_rmse_n=base_step.cv_rmse_n,
+        noise_floor_n=floor, covariates=cov0, covariates_after=cov_after,
+        candidates=climb.first_candidates, missing_effect=climb.missing_effect,
+        equivalent_effects=climb.equivalent, separating_measurement=separating,
+        unexplained_covariate=climb.unexplained, offered_effect=climb.offered,
+        ladder=tuple(climb.ladder), untestable=pool.untestable,
+        untestable_reasons=pool.why_untestable, fits=tuple(climb.fits),
+        fit_rows=tuple(climb.fit_rows), columns=cols, noise_budget=budget,
+        noise_budget_missing=budget_missing,
+        scanned_columns=tuple(t.name for t in cov0),
+        responses_not_scanned=tuple(c for c in RESPONSE_COLUMNS if c in cols and c not in scan))
+    return _with_message(diag)
+
+
+def _model_to_diagnose(cols: Mapping[str, np.ndarray], h: float, a: float, base: str,
+                       effects: Sequence[str]) -> IndentationModel:
+    """The model as given to :func:`diagnose`, checked against the table."""
     if base == "fem" and not (0.2 <= a / h <= 2.0):
         raise InputError(f"base 'fem' reads the FEM table at a/h = {a / h:.3g}, outside its "
                          "0.2 to 2.0")
@@ -531,29 +571,58 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
         # as fit_indentation: one depth fixes no line, so no verdict can be drawn
         raise InputError(f"depth_mm holds {n_depths} distinct depth(s); comparing eq. (5) with "
                          "the measurements needs presses at two depths or more")
-    # the base law's own limits: rungs of the ladder, never verdicts, left out of E and nu
-    # (on the FEM law, eq. (5)'s beta term is the departure of a gel that follows eq. 5)
-    law_rungs = ("law_curvature",) + (("large_deformation",) if base == "fem" else ())
-    table = _Table(cols, h, a, beta_table, law_rungs)
-    pool = _candidate_pool(cols, base, model, candidates, tuple(scan))
-    if curvature not in ("gate", "nuisance"):
-        raise InputError(f"curvature must be 'gate' or 'nuisance', got {curvature!r}")
-    scan = pool.scan
+    return model
 
-    # rung 0: the model as given (and the law's curvature as a nuisance, if asked and seen)
+
+@dataclass
+class _Climb:
+    """A diagnosis under way: its table, pool and settings, and the ladder climbed so far
+    (its rungs, their fits and rows, the model reached and the verdicts found)."""
+
+    table: _Table
+    pool: _Pool
+    cv_folds: int
+    seed: int
+    curvature: str
+    ladder: list[LadderStep] = field(default_factory=list)
+    fits: list[ModelFit] = field(default_factory=list)
+    fit_rows: list[np.ndarray] = field(default_factory=list)
+    current: IndentationModel | None = None
+    cur_fit: ModelFit | None = None
+    cur_cv: float = math.nan
+    missing_effect: str | None = None
+    equivalent: tuple[str, ...] = ()
+    unexplained: str | None = None
+    offered: str | None = None
+    first_candidates: tuple[Candidate, ...] = ()
+
+    def add_rung(self, model: IndentationModel, fit: ModelFit, cv: float, rows: np.ndarray,
+                 d: Mapping[str, np.ndarray], added: str | None) -> LadderStep:
+        """Put `model` (fitted on the rows `rows`, the columns `d`) on the ladder."""
+        E, nu = self.table.material(model, d, fit)
+        step = LadderStep(("layer", *model.names), fit.rmse_n, cv, fit.bic, E, nu, added)
+        self.ladder.append(step)
+        self.fits.append(fit)
+        self.fit_rows.append(rows)
+        self.current, self.cur_fit, self.cur_cv = model, fit, cv
+        return step
+
+
+def _first_rungs(c: _Climb, model: IndentationModel
+                 ) -> tuple[LadderStep, tuple[CovariateTest, ...]]:
+    """Rung 0, the model as given (and the law's curvature as a nuisance, if asked and
+    seen); returns rung 0 and the covariate tests of its residuals."""
+    table, h = c.table, c.table.h
     ok0 = table.rows_for(model)
     d0 = table.sub(ok0)
     fit0 = model.fit(d0, thickness_mm=h)
-    cv0 = cross_validated_rmse(model, d0, thickness_mm=h, k=cv_folds, seed=seed,
+    cv0 = cross_validated_rmse(model, d0, thickness_mm=h, k=c.cv_folds, seed=c.seed,
                                start=fit0.params)
-    E0, nu0 = table.material(model, d0, fit0)
     n_depth = 2 if {"large_deformation", "fem_law"} & set(model.names) else 1
+    step0 = c.add_rung(model, fit0, cv0, ok0, d0, None)
     cov0 = covariate_tests(fit0.residuals_n, fit0.predicted_n, d0, n_depth_params=n_depth,
-                           scan=scan)
-    ladder = [LadderStep(("layer", *model.names), fit0.rmse_n, cv0, fit0.bic, E0, nu0, None)]
-    fits, fit_rows = [fit0], [ok0]
-    start = model
-    if (curvature == "nuisance" and "large_deformation" in model.names
+                           scan=c.pool.scan)
+    if (c.curvature == "nuisance" and "large_deformation" in model.names
             and "law_curvature" not in model.names
             and np.unique(d0["depth_mm"]).size >= 4):
         # the law's own curvature as a nuisance term, in the model before any effect is
@@ -561,99 +630,79 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
         mc = model.with_effect("law_curvature")
         fc = mc.fit(d0, thickness_mm=h)
         if fc.bic < fit0.bic - NUISANCE_BIC:
-            cvc = cross_validated_rmse(mc, d0, thickness_mm=h, k=cv_folds, seed=seed,
+            cvc = cross_validated_rmse(mc, d0, thickness_mm=h, k=c.cv_folds, seed=c.seed,
                                        start=fc.params)
-            Ec, nuc = table.material(mc, d0, fc)
-            ladder.append(LadderStep(("layer", *mc.names), fc.rmse_n, cvc, fc.bic, Ec, nuc,
-                                     "law_curvature"))
-            fits.append(fc)
-            fit_rows.append(ok0)
-            start = mc
+            c.add_rung(mc, fc, cvc, ok0, d0, "law_curvature")
+    return step0, cov0
 
-    # the greedy steps: the best passing candidate joins the model, one per rung
-    missing_effect: str | None = None
-    equivalent: tuple[str, ...] = ()
-    unexplained: str | None = None
-    offered: str | None = None
-    first_candidates: tuple[Candidate, ...] = ()
-    current, cur_fit, cur_cv = start, fits[-1], ladder[-1].cv_rmse_n
+
+def _climb(c: _Climb, max_steps: int, progress: bool) -> None:
+    """The greedy steps: the best passing candidate joins the model, one per rung."""
+    pool, law_rungs = c.pool, c.table.law_rungs
     bar = None
     if progress:
         from tqdm import tqdm
 
         bar = tqdm(desc="diagnose", unit="fit", mininterval=0.5)
     for _step in range(max_steps):
-        tried = [n for n in pool.named if n not in current.names and n not in pool.untestable]
-        tried += [g for g in (*pool.steps, *pool.generic) if g not in current.names]
-        if curvature == "gate" and {"large_deformation", "fem_law"} & set(current.names):
-            tried += [r for r in law_rungs if r not in current.names]
-        cands = _score_candidates(table, current, cur_fit, tried, cv_folds=cv_folds,
-                                  seed=seed, bar=bar)
+        tried = [n for n in pool.named if n not in c.current.names and n not in pool.untestable]
+        tried += [g for g in (*pool.steps, *pool.generic) if g not in c.current.names]
+        if c.curvature == "gate" and {"large_deformation", "fem_law"} & set(c.current.names):
+            tried += [r for r in law_rungs if r not in c.current.names]
+        cands = _score_candidates(c.table, c.current, c.cur_fit, tried, cv_folds=c.cv_folds,
+                                  seed=c.seed, bar=bar)
         if _step == 0:
-            first_candidates = tuple(c for c in cands if c.effect not in law_rungs)
-        chosen = _choose(cands, cur_cv, pool.partner, law_rungs, curvature)
+            c.first_candidates = tuple(x for x in cands if x.effect not in law_rungs)
+        chosen = _choose(cands, c.cur_cv, pool.partner, law_rungs, c.curvature)
         if chosen is None:
             break
-        best, eq = chosen
-        if best.effect in law_rungs:
-            pass   # the base law's own limit: a rung of the ladder, not a verdict
-        elif best.effect.startswith(_GENERIC):
-            if unexplained is None:
-                unexplained = best.effect.partition(":")[2]
-                offered = best.effect
-        elif missing_effect is None:
-            missing_effect, equivalent = best.effect, eq
-        current = current.with_effect(best.effect)
-        d = table.sub(table.rows_for(current))
-        # the start matters only to parameters found by search (the new effect's change
-        # point is searched near its place in the candidate's fit): without one, this is
-        # the candidate's fit again, now with the identifiability check the search skipped
-        dh = {**d, "_h": h, "_a_over_h": current.a_over_h}
-        cur_fit = current.fit(d, thickness_mm=h,
-                              start=(cur_fit.params if not make_effect(best.effect).profile(dh)
-                                     else {**cur_fit.params, **best.params}))
-        cur_cv = best.cv_rmse_n
-        E, nu = table.material(current, d, cur_fit)
-        ladder.append(LadderStep(("layer", *current.names), cur_fit.rmse_n, cur_cv, cur_fit.bic,
-                                 E, nu, best.effect))
-        fits.append(cur_fit)
-        fit_rows.append(table.rows_for(current))
+        _take_step(c, *chosen)
     if bar is not None:
         bar.close()
 
-    # what is left: structure along a covariate, the noise floor and the noise budget
-    d_final = table.sub(table.rows_for(current))
+
+def _take_step(c: _Climb, best: Candidate, eq: tuple[str, ...]) -> None:
+    """Add the chosen candidate to the model, as a verdict where it is one, and refit."""
+    if best.effect in c.table.law_rungs:
+        pass   # the base law's own limit: a rung of the ladder, not a verdict
+    elif best.effect.startswith(_GENERIC):
+        if c.unexplained is None:
+            c.unexplained = best.effect.partition(":")[2]
+            c.offered = best.effect
+    elif c.missing_effect is None:
+        c.missing_effect, c.equivalent = best.effect, eq
+    table, h = c.table, c.table.h
+    current = c.current.with_effect(best.effect)
+    d = table.sub(table.rows_for(current))
+    # the start matters only to parameters found by search (the new effect's change
+    # point is searched near its place in the candidate's fit): without one, this is
+    # the candidate's fit again, now with the identifiability check the search skipped
+    dh = {**d, "_h": h, "_a_over_h": current.a_over_h}
+    cur_fit = current.fit(d, thickness_mm=h,
+                          start=(c.cur_fit.params if not make_effect(best.effect).profile(dh)
+                                 else {**c.cur_fit.params, **best.params}))
+    c.add_rung(current, cur_fit, best.cv_rmse_n, table.rows_for(current), d, best.effect)
+
+
+def _left_over(c: _Climb) -> tuple[tuple[CovariateTest, ...], dict[str, np.ndarray]]:
+    """What is left: structure along a covariate (an unexplained one, if no step found
+    one); returns the final model's covariate tests and columns."""
+    current, cur_fit = c.current, c.cur_fit
+    d_final = c.table.sub(c.table.rows_for(current))
     n_depth = 2 if {"large_deformation", "fem_law"} & set(current.names) else 1
     cov_after = covariate_tests(cur_fit.residuals_n, cur_fit.predicted_n, d_final,
-                                n_depth_params=n_depth, scan=scan)
-    if unexplained is None:
+                                n_depth_params=n_depth, scan=c.pool.scan)
+    if c.unexplained is None:
         # along depth_mm, eq. (5) itself is not the FEM's exact P(w): depth structure
         # counts only through the named depth effects among the candidates
         left = [t for t in cov_after if t.significant and t.explained_fraction > 0.1
                 and t.name not in ("press", "depth_mm", "indenter")
-                and _trend_passes(current, t.name, d_final, cur_fit.bic, h)]
+                and _trend_passes(current, t.name, d_final, cur_fit.bic, c.table.h)]
         if left:
             worst = min(left, key=lambda t: t.p_value)
-            unexplained = worst.name
-            offered = f"stiffness_trend:{worst.name}"
-    floor = noise_floor(cur_fit.residuals_n, d_final)
-    budget, budget_missing = noise_budget(cur_fit.residuals_n, cur_fit.predicted_n, d_final,
-                                          _groups(d_final))
-    separating = None
-    if missing_effect and equivalent:
-        separating = "; ".join(_separating(missing_effect, e, cols) for e in equivalent)
-    diag = Diagnosis(
-        model=("layer", *model.names), E_mpa=E0, nu=nu0, rmse_n=fit0.rmse_n, cv_rmse_n=cv0,
-        noise_floor_n=floor, covariates=cov0, covariates_after=cov_after,
-        candidates=first_candidates, missing_effect=missing_effect,
-        equivalent_effects=equivalent, separating_measurement=separating,
-        unexplained_covariate=unexplained, offered_effect=offered, ladder=tuple(ladder),
-        untestable=pool.untestable, untestable_reasons=pool.why_untestable, fits=tuple(fits),
-        fit_rows=tuple(fit_rows), columns=cols, noise_budget=budget,
-        noise_budget_missing=budget_missing,
-        scanned_columns=tuple(t.name for t in cov0),
-        responses_not_scanned=tuple(c for c in RESPONSE_COLUMNS if c in cols and c not in scan))
-    return _with_message(diag)
+            c.unexplained = worst.name
+            c.offered = f"stiffness_trend:{worst.name}"
+    return cov_after, d_final
 
 
 @dataclass
@@ -899,8 +948,6 @@ def _separating(a: str, b: str, cols: Mapping[str, np.ndarray]) -> str:
 
 
 def _with_message(d: Diagnosis) -> Diagnosis:
-    from dataclasses import replace
-
     floor = d.noise_floor_n
     base = d.ladder[0]
     s = [f"The model {model_label(d.model)} leaves an RMSE of {base.rmse_n * 1e3:.2f} mN "
