@@ -5,24 +5,14 @@ session read by :mod:`tactilevision.io`.
 """
 
 from ._bevel import bevel_score, footprint_from_frame
-from ._certify import (
-    EDGE_SHARED_FRACTION,
-    Certification,
-    CertifiedPress,
-    Rejection,
-    approach_start,
-    certified_depths,
-    certify_session,
-    hold_end,
-    hold_start,
-    unresolved_closure,
-    vernier_shared_mm,
-)
+from ._certify import certified_depths, certify_session
 from ._footprint import Footprint, fit_footprint, nearest_indenter
 from ._force import ForceWindow, force_window, window_standard_error
+from ._holds import approach_start, hold_end, hold_start
 from ._land import bulge_at, bulge_height, land_contact_depth, land_contact_depths_mm
 from ._mark import crossing_forces, mark_depths, mark_shared_mm
 from ._mask import contact_mask, noise_level
+from ._results import Certification, CertifiedPress, Rejection
 from ._sync import (
     ClockSync,
     contact_onsets,
@@ -39,6 +29,7 @@ from ._vernier import (
     bevel_profile,
     read_bevel,
 )
+from ._vernier_presses import EDGE_SHARED_FRACTION, unresolved_closure, vernier_shared_mm
 from ._zero import ForceZero, force_zero
 
 __all__ = ["EDGE_SHARED_FRACTION", "RESOLVED_PX", "BevelGeometry", "BevelProfile", "BevelReading",

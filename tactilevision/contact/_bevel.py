@@ -19,6 +19,7 @@ from scipy import ndimage
 
 from .._checks import check_array
 from ._footprint import Footprint, _fit_circle_trimmed
+from ._vernier import BevelGeometry, bevel_profile
 
 __all__ = ["bevel_score", "footprint_from_frame"]
 
@@ -129,8 +130,6 @@ def bevel_score(frame: np.ndarray, reference: np.ndarray | None, centre_px: tupl
     ShapeError
         For frames that are not (H, W, 3) or differ in shape.
     """
-    from ._vernier import BevelGeometry, bevel_profile
-
     f = check_array(frame, "frame", [("H", "W", 3)])
     ref = np.zeros_like(f) if reference is None else check_array(reference, "reference",
                                                                  [f.shape])

@@ -25,6 +25,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from .._checks import InputError
+from ..fem import press_profile
 
 __all__ = ["bulge_at", "bulge_height", "land_contact_depth"]
 
@@ -95,8 +96,7 @@ def land_contact_depth(w0_over_h: float, profile: _Profile) -> float:
 
 @lru_cache(maxsize=16)
 def _cached_profile(a_over_h: float, nu: float, w_over_h_max: float):
-    from ..fem import press_profile
-
+    """The FEM press profile at (a/h, nu), cached (:func:`~tactilevision.fem.press_profile`)."""
     return press_profile(a_over_h, nu, w_over_h_max=w_over_h_max, steps=8, cell=0.5,
                          edge_refinements=5)
 

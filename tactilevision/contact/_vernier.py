@@ -40,6 +40,7 @@ import numpy as np
 from scipy.special import erf
 
 from .._checks import InputError, check_array
+from ..fem import ForceEstimator
 
 __all__ = ["BevelGeometry", "BevelProfile", "BevelReading", "bevel_force", "bevel_profile",
            "read_bevel"]
@@ -351,6 +352,30 @@ def _solve(B: np.ndarray, R: np.ndarray, prior: np.ndarray | None, weight: float
     return coef, rss
 
 
+def _residual_correlation(resid: np.ndarray, step: float) -> float:
+    """Summed |correlation| of the residuals (K, 3) along u over 8 px (interpolation, JPEG
+    blocks), `step` px apart."""
+    rho = 0.0
+    for lag in range(1, round(8.0 / step) + 1):
+        a, b = resid[:-lag], resid[lag:]
+        den = float(np.sqrt(np.sum(a * a) * np.sum(b * b)))
+        r_lag = float(np.sum(a * b)) / den if den > 0 else 0.0
+        rho += abs(r_lag)
+    return rho
+
+
+def _rss_curvature(halves: np.ndarray, rss: np.ndarray) -> float:
+    """Curvature of rss(L) at its least, from the half-widths tried at one crest (0.0 with
+    fewer than three around the least)."""
+    order = np.argsort(halves)
+    hs, rs = halves[order], rss[order]
+    j = int(np.argmin(rs))
+    lo, hi = max(j - 3, 0), min(j + 4, hs.size)
+    if hi - lo >= 3:
+        return 2.0 * float(np.polyfit(hs[lo:hi] - hs[j], rs[lo:hi], 2)[0])
+    return 0.0
+
+
 def read_bevel(profiles: list[BevelProfile] | BevelProfile, bevel: BevelGeometry,
                mm_per_px: float, *, max_closure_mm: float = 0.1, crest_range_px: float = 6.0,
                flank_colours: np.ndarray | None = None, colour_sd: float = 0.3,
@@ -484,25 +509,9 @@ def read_bevel(profiles: list[BevelProfile] | BevelProfile, bevel: BevelGeometry
     resid = R - B[k] @ coef[k]
     dof = max(R.size - 3 * (deg + 8), 1)
     sigma2 = float(np.sum(resid ** 2)) / dof
-    # correlation of the residuals along u over 8 px (interpolation, JPEG blocks)
-    rho = 0.0
-    for lag in range(1, round(8.0 / step) + 1):
-        a, b = resid[:-lag], resid[lag:]
-        den = float(np.sqrt(np.sum(a * a) * np.sum(b * b)))
-        r_lag = float(np.sum(a * b)) / den if den > 0 else 0.0
-        rho += abs(r_lag)
-    inflate = 1.0 + 2.0 * rho
-    # curvature of rss(L) at the best crest
-    row = np.isclose(cc, crest)
-    hs, rs = hh[row], rss[row]
-    order = np.argsort(hs)
-    hs, rs = hs[order], rs[order]
-    j = int(np.argmin(rs))
-    lo, hi = max(j - 3, 0), min(j + 4, hs.size)
-    if hi - lo >= 3:
-        curv = 2.0 * float(np.polyfit(hs[lo:hi] - hs[j], rs[lo:hi], 2)[0])
-    else:
-        curv = 0.0
+    inflate = 1.0 + 2.0 * _residual_correlation(resid, step)
+    row = np.isclose(cc, crest)                 # the curvature of rss(L) at the best crest
+    curv = _rss_curvature(hh[row], rss[row])
     half_std = math.sqrt(2.0 * sigma2 * inflate / curv) if curv > 0 else float(half)
     half_std = math.hypot(half_std, SHADOW_FLOOR_PX if lines == "shadows" else MODEL_FLOOR_PX)
     snr = math.sqrt(max(rss0 - float(rss[k]), 0.0) / max(sigma2 * inflate, 1e-12))
@@ -527,8 +536,6 @@ _FORCE_CLOSURES_MM = (0.004, 0.01, 0.02, 0.035, 0.05, 0.075, 0.11)
 def _bevel_force_table(angle_deg: float, length_mm: float, thickness_mm: float, nu: float
                        ) -> np.ndarray:
     """Force per MPa of E of the band at each of _FORCE_CLOSURES_MM, N/MPa."""
-    from ..fem import ForceEstimator
-
     s = 0.08
     tan = math.tan(math.radians(angle_deg))
     half_v = 0.5 * length_mm

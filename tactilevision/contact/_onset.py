@@ -1,0 +1,305 @@
+"""A bevel mark with no vernier (``bevel_angle_deg = 0``): when a press first shows it.
+
+The mark's score on the session's no-contact frames (the null of
+``bevel_threshold='auto'``), each press's own baseline and template, the first
+frame showing the mark, and the force and stage travel at that onset
+(step 3 of :mod:`tactilevision.contact._certify`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._bevel import _background_basis, bevel_score
+from ._holds import hold_start
+from ._mask import contact_mask
+from ._results import (
+    MARK_BASELINE_FORCE,
+    MARK_BLOCK,
+    MARK_HOLD_FORCE,
+    MARK_NULL_FRAMES,
+    MARK_Z_BLOCK,
+    MARK_Z_FRAME,
+    MARK_Z_STEP,
+    _PressContext,
+    _Reject,
+)
+from ._vernier import BevelGeometry, bevel_profile
+
+
+def _mark_score(ctx: _PressContext, centre: tuple[float, float], i: int) -> float:
+    """:func:`bevel_score` of frame `i` at the mark of the press centred at `centre`."""
+    session = ctx.session
+    cfg = session.config
+    return float(bevel_score(session.frame(int(i)), session.reference, centre, cfg.mm_per_px,
+                             offset_mm=cfg.bevel_offset_mm,
+                             direction_deg=cfg.bevel_direction_deg,
+                             length_mm=cfg.bevel_length_mm))
+
+
+def _mark_null(session, runs: list[np.ndarray], area: np.ndarray, min_contact_px: int,
+               sigma: float) -> dict | None:
+    """The mark's score on frames without contact, at each press's mark: the null that
+    ``bevel_threshold='auto'`` reads its thresholds from: the median, and the frame-to-frame
+    sd at one place (each press's scores about their own median, pooled; the places' own
+    levels differ more than the frames at one place do). None with fewer than 10."""
+    cfg = session.config
+    ref = session.reference
+    free = np.flatnonzero(area < min_contact_px)
+    if free.size == 0:
+        return None
+    scores, resid = [], []
+    for r in runs:
+        peak = int(r[np.argmax(area[r])])
+        ys, xs = np.nonzero(contact_mask(session.frame(peak), ref, sigma=sigma))
+        if xs.size == 0:
+            continue
+        centre = (float(xs.mean()), float(ys.mean()))
+        near = free[np.argsort(np.abs(free - r[0]), kind="stable")[:MARK_NULL_FRAMES]]
+        v = np.array([bevel_score(session.frame(int(i)), ref, centre, cfg.mm_per_px,
+                                  offset_mm=cfg.bevel_offset_mm,
+                                  direction_deg=cfg.bevel_direction_deg,
+                                  length_mm=cfg.bevel_length_mm) for i in near])
+        v = v[np.isfinite(v)]
+        scores += list(v)
+        if v.size >= 2:
+            # the frame-to-frame noise at one place: each press's scores about their median
+            resid += list((v - np.median(v)) * np.sqrt(v.size / (v.size - 1)))
+    v = np.asarray(scores, np.float64)
+    if v.size < 10 or len(resid) < 10:
+        return None
+    med = float(np.median(v))
+    res = np.asarray(resid)
+    sd = max(1.4826 * float(np.median(np.abs(res - np.median(res)))), 1e-3)
+    return {"rule": "auto", "median": med, "sd": sd, "n_frames": int(v.size),
+            "z_frame": MARK_Z_FRAME, "z_block": MARK_Z_BLOCK, "block_frames": MARK_BLOCK}
+
+
+def _mark_baseline(ctx: _PressContext, centre: tuple[float, float], run: np.ndarray,
+                   fallback: float) -> tuple[float, int]:
+    """The mark's score on this press's own approach, before the land can reach the gel:
+    the median over its frames whose fz (the F/T log at their time) is under
+    :data:`MARK_BASELINE_FORCE` of the press's largest (the indenter's contact moves the
+    score at the mark on some renderers: Taxim's by up to 3.4 sd); `fallback` without such
+    frames. Returns the baseline and the frames it used."""
+    session = ctx.session
+    tf, fz = session.force_times_s, session.forces_n[:, 2]
+    t = session.frame_times_s[run] + ctx.offset
+    f = np.interp(t, tf, fz)
+    early = run[f < MARK_BASELINE_FORCE * float(np.max(f))] if f.size else run[:0]
+    if early.size == 0:
+        return fallback, 0
+    return float(np.median([_mark_score(ctx, centre, int(i)) for i in early])), int(early.size)
+
+
+def _mark_residual(ctx: _PressContext, centre: tuple[float, float], i: int
+                   ) -> tuple[np.ndarray, np.ndarray] | None:
+    """Frame `i`'s profile across the mark, less a quadratic background (the press's own
+    shading), as :func:`bevel_score` fits it: ``(u_px, residual (n, 3))``; None where
+    under 0.3 of the line lies in the image."""
+    session = ctx.session
+    cfg = session.config
+    s = cfg.mm_per_px
+    geom = BevelGeometry(offset_mm=cfg.bevel_offset_mm, direction_deg=cfg.bevel_direction_deg,
+                         length_mm=cfg.bevel_length_mm)
+    prof = bevel_profile(session.frame(int(i)), session.reference, centre, s, geom,
+                         reach_px=max(0.8 / s, 12.0))
+    if prof.coverage < 0.3:
+        return None
+    u, R = prof.u_px, np.asarray(prof.colour, np.float64)
+    B = _background_basis(u)
+    coef, *_ = np.linalg.lstsq(B, R, rcond=None)
+    return u, R - B @ coef
+
+
+def _mark_template_onset(ctx: _PressContext, centre: tuple[float, float], run: np.ndarray
+                         ) -> tuple[int | None, str]:
+    """A mark's onset from the press's own template: ``(frame, why)``, frame None where
+    the press has too few frames to build one or the template shows no step (``why``
+    says which).
+
+    The per-frame score (:func:`bevel_score`) is a generic line filter; a thin mark
+    under a renderer's shadows (Taxim's: a trough some 30 px wide) scores barely above
+    an approach whose shading moves. Here the mark's change is what the press's hold
+    (frames with fz at least :data:`MARK_HOLD_FORCE` of its largest) shows that its
+    approach and release (under :data:`MARK_BASELINE_FORCE` of it, before the land can
+    reach the gel) do not: the difference of their mean profiles across the mark,
+    each less its quadratic background. Each frame is projected on that template (0:
+    the approach's level, 1: the hold's); a hold frame on the template of the other
+    hold frames, so that no frame is scored on its own noise. The onset is the first
+    frame projected at least half-way whose next :data:`MARK_BLOCK` - 1 frames are
+    half-way on average, and the mark counts as seen only when it steps there: the
+    last frame under a quarter of the way lies at most two frames before the onset,
+    and the step from it is :data:`MARK_Z_STEP` sds of a difference of two frames (the
+    approach frames' projections' sd) high. A change that grows with the press's
+    depth (the indenter's shading, no mark) rises over the approach instead."""
+    session = ctx.session
+    tf, fz = session.force_times_s, session.forces_n[:, 2]
+    f = np.interp(session.frame_times_s[run] + ctx.offset, tf, fz)
+    few = "the press has too few frames for its own template"
+    if f.size == 0:
+        return None, few
+    top = float(np.max(f))
+    hold_idx = np.flatnonzero(f >= MARK_HOLD_FORCE * top)
+    last = int(hold_idx[-1])
+    base_idx = np.flatnonzero(f[:last + 1] < MARK_BASELINE_FORCE * top)
+    if base_idx.size < 3 or hold_idx.size < 2:
+        return None, few
+    res = [_mark_residual(ctx, centre, int(i)) for i in run[:last + 1]]
+    if any(r is None for r in res):
+        return None, "the mark's line lies mostly outside the image"
+    R = np.stack([r[1] for r in res])
+    base_mean = R[base_idx].mean(axis=0)
+    D = R - base_mean
+    hold_sum = D[hold_idx].sum(axis=0)
+    T = hold_sum / hold_idx.size
+
+    def along(d: np.ndarray, t: np.ndarray) -> float:
+        tt = float(np.sum(t * t))
+        return float(np.sum(d * t)) / tt if tt > 0 else 0.0
+
+    a = np.array([along(D[j], T) for j in range(last + 1)])
+    for j in hold_idx:                     # leave the frame out of its own template
+        a[j] = along(D[j], (hold_sum - D[j]) / (hold_idx.size - 1))
+    sd_a = max(float(np.std(a[base_idx], ddof=1)), 1e-3)
+    why = "no frame of the press steps half-way"
+    for j in range(1, last + 1):
+        if a[j] < 0.5 or a[j:j + MARK_BLOCK].mean() < 0.5:
+            continue
+        low = np.flatnonzero(a[:j] < 0.25)
+        if low.size == 0 or j - int(low[-1]) > 2:
+            why = "the press's frames rise towards it over the approach, with no step"
+            break
+        step = (a[j] - a[int(low[-1])]) / (np.sqrt(2.0) * sd_a)
+        if step < MARK_Z_STEP:
+            why = (f"its step is {step:.1f} sd of a frame difference, under "
+                   f"{MARK_Z_STEP:g}")
+            break
+        return int(run[j]), ""
+    return None, f"the press's own template shows no step: {why}"
+
+
+def _mark_onset(ctx: _PressContext, centre: tuple[float, float], cand: np.ndarray,
+                run: np.ndarray) -> tuple[int, float]:
+    """A bevel mark with no vernier: the first frame of `cand` where it shows firmly
+    (:func:`certify_session`'s `bevel_threshold`), then back through the press's earlier
+    frames while they show it too (`cand` starts near full contact, which the sink-in
+    ring's growth can put frames after the mark's first showing), ``(frame, score)``.
+    With the session's own rule, the press's own template decides first where it can
+    (:func:`_mark_template_onset`); the score is then the onset frame's
+    :func:`bevel_score`."""
+    cfg = ctx.session.config
+    rule = ctx.mark_rule
+    if rule["rule"] == "auto":
+        onset, template_why = _mark_template_onset(ctx, centre, run)
+        if onset is not None:
+            return onset, _mark_score(ctx, centre, onset)
+    scores = np.array([_mark_score(ctx, centre, int(i)) for i in cand])
+    if rule["rule"] == "auto":
+        base, n_base = _mark_baseline(ctx, centre, run, rule["median"])
+        thr = base + MARK_Z_FRAME * rule["sd"]
+        seen = scores > thr
+        firm = np.zeros(seen.shape, bool)
+        for j in np.flatnonzero(seen):
+            block = scores[j:j + MARK_BLOCK]
+            after = scores[j + 1:j + 1 + MARK_BLOCK]
+            # the block is the mark, and frame j looks like it rather than the approach (a
+            # frame just before the step, lifted by noise or the approach, is not the onset)
+            firm[j] = (block.mean() > base + MARK_Z_BLOCK * rule["sd"] / np.sqrt(block.size)
+                       and (after.size == 0
+                            or scores[j] > 0.5 * (base + float(np.median(after)))))
+        text = (f"the rule from the session's own frames: this press's approach scores "
+                f"{base:.2f} ({n_base} frames), the no-contact frames' sd {rule['sd']:.2f}; a "
+                f"frame above {thr:.2f} whose next {MARK_BLOCK - 1} average above "
+                f"{base + MARK_Z_BLOCK * rule['sd'] / np.sqrt(MARK_BLOCK):.2f} with it; "
+                f"{template_why}")
+    else:
+        thr = rule["threshold"]
+        seen = scores > thr
+        firm = seen & (np.append(seen[1:], False) | (scores > 2 * thr))
+        text = f"the rule: two consecutive frames above {thr:g}, or one above {2 * thr:g}"
+    if not firm.any():
+        raise _Reject("bevel never seen", f"no frame of the press shows a mark "
+                      f"{cfg.bevel_offset_mm:g} mm from the indenter at "
+                      f"{cfg.bevel_direction_deg:g} deg (best signal-to-noise ratio "
+                      f"{scores.max():.1f}; {text})", score=float(scores.max()))
+    first = int(np.argmax(firm))
+    onset, score = int(cand[first]), float(scores[first])
+    # back through earlier frames while they show it too; with the session's rule, a frame
+    # must also lie nearer the mark's level (its first block's median) than the baseline:
+    # a faint mark's noise before the step is not the mark
+    back = thr
+    if rule["rule"] == "auto":
+        back = max(thr, 0.5 * (base + float(np.median(scores[first:first + MARK_BLOCK]))))
+    j = int(np.searchsorted(run, onset))
+    while j > 0:
+        before = _mark_score(ctx, centre, int(run[j - 1]))
+        if not before > back:
+            break
+        j -= 1
+        onset, score = int(run[j]), before
+    return onset, score
+
+
+def _crossing_force(session, run: np.ndarray, t_on: float, offset: float, period: float
+                    ) -> tuple[float, float]:
+    """fz when the land reached w0, from the F/T log, and its uncertainty, N.
+
+    The mark first shows at `t_on` (F/T clock), so the land reached w0 within the frame
+    period before, and not after the stage stopped (the hold's start, :func:`hold_start`):
+    fz at the ends of ``[t_on - period, min(t_on, t_hold)]`` (a 10 ms moving average,
+    read at the instants) brackets P(w0), widened by twice that average's noise. Returned
+    as the bracket's middle and the sd of a uniform over it. A hold that started before
+    that period (the mark seen late) puts the crossing in the period before the hold's
+    start. ``(nan, nan)`` when the log does not cover it.
+    """
+    tf, fz = session.force_times_s, session.forces_n[:, 2]
+    times = session.frame_times_s
+    t_hold = hold_start(tf, fz, float(times[run[0]]) + offset - period,
+                        float(times[run[-1]]) + offset + period)
+    t_a, t_b = t_on - period, t_on
+    if t_hold is not None:
+        t_b = min(t_b, t_hold)
+        if t_b <= t_a:
+            t_a, t_b = t_hold - period, t_hold
+    dt = float(np.median(np.diff(tf))) if tf.size > 1 else 1.0
+    k = max(1, round(0.01 / dt))
+    sel = np.flatnonzero((tf >= t_a - k * dt) & (tf <= t_b + k * dt))
+    if sel.size < k + 2:
+        return float("nan"), float("nan")
+    smooth = np.convolve(fz[sel], np.ones(k) / k, mode="same")
+    ok = np.arange(sel.size)
+    ok = ok[(ok >= k // 2) & (ok < sel.size - k // 2)]          # the average's own edges
+    if ok.size < 2:
+        return float("nan"), float("nan")
+    f_a, f_b = np.interp([t_a, t_b], tf[sel][ok], smooth[ok])
+    noise = float(np.std(np.diff(fz[sel]))) / np.sqrt(2.0 * k)      # one smoothed sample's
+    # the bracket [fz(t_a), fz(t_b)] holds P(w0), widened by twice the smoothed noise; given
+    # as its middle and the sd of a uniform over it (crossing_forces reads it back)
+    lo, hi = min(f_a, f_b) - 2 * noise, max(f_a, f_b) + 2 * noise
+    return float(0.5 * (lo + hi)), float((hi - lo) / np.sqrt(12.0))
+
+
+def _onset_travel(session, run: np.ndarray, onset: int, offset: float, period: float,
+                  w0: float) -> float:
+    """The stage's travel in one frame period at a mark's onset, mm (the onset frame shows
+    the mark within that of w0: its uncertainty, uniform, is that / sqrt(12)).
+
+    The stage speed is read from the approach: the indenter first touches the
+    gel when the F/T force first rises (2% of its value at the onset, on a
+    20 ms moving average), and the mark shows w0 deeper at `onset`.
+    """
+    times = session.frame_times_s
+    t_on = float(times[onset]) + offset
+    t_first = float(times[run[0]]) + offset - 1.0
+    sel = (session.force_times_s >= t_first) & (session.force_times_s <= t_on)
+    t, f = session.force_times_s[sel], session.forces_n[sel, 2]
+    travel = float(times[onset] - times[run[0]]) + period        # fallback: the frames'
+    if t.size > 40:
+        k = max(1, round(0.02 / float(np.median(np.diff(t)))))
+        fs = np.convolve(f, np.ones(k) / k, mode="same")
+        above = np.flatnonzero(fs > 0.02 * fs[-k - 1])
+        if above.size and fs[-k - 1] > 0:
+            travel = t_on - float(t[above[0]])
+    speed = w0 / max(travel, period)
+    return speed * period
