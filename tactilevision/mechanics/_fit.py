@@ -465,65 +465,129 @@ def material_fit(c: float, slope: float, cov: np.ndarray, *, depth_mm: np.ndarra
     n = w.size
     tq = float(stats.t.ppf(0.5 + confidence / 2, dof)) if dof > 0 else math.nan
     beta = s / c if c != 0 else math.nan
+    beta_se, beta_ci = (_interval(beta, np.array([-s / c**2, 1 / c]), cov, tq) if c
+                        else (math.nan, _NAN2))
+    m = _moduli(rel, c, s, cov, beta, beta_se, tq, a=a, ah=ah, kappa_source=kappa_source,
+                contact=contact, confidence=confidence, beta_table=beta_table, notes=notes)
+    _table_notes(notes, rel, a=a, h=h, ah=ah, beta_table=beta_table, contact=contact,
+                 kappa_source=kappa_source, a_over_h_given=a_over_h_given,
+                 extra_notes=extra_notes, ci_method=ci_method)
+    wh = float(np.max(w)) / h
+    if wh > MAX_W_OVER_H + 1e-12:
+        text = (f"deepest press has w/h = {wh:.3f} > {MAX_W_OVER_H}: the linear law (2) "
+                "may fail there (paper, section VI.1)")
+        warnings.warn(text, UserWarning, stacklevel=2)
+        notes.append(text)
+    cs = float(np.sqrt(cov[0, 0])), float(np.sqrt(cov[1, 1]))
+    return IndentationFit(
+        E_mpa=m.E, nu=m.nu, c_n_per_mm=c, beta=beta, E_ci95_mpa=m.E_ci, nu_ci95=m.nu_ci,
+        rmse_n=rmse_n, n_presses=n, effects=tuple(effects),
+        effect_params=dict(effect_params) if effect_params is not None else {"beta": beta},
+        C10_mpa=m.C10, D1_per_mpa=m.D1, a_over_h=ah, a_over_h_exact=ah_exact,
+        thickness_mm=h, radius_mm=a, kappa=m.kap, beta_table=beta_table,
+        kappa_source=kappa_source, contact=contact, slope_n_per_mm=s,
+        c_se_n_per_mm=cs[0], slope_se_n_per_mm=cs[1],
+        corr_c_slope=float(cov[0, 1] / (cs[0] * cs[1])) if cs[0] * cs[1] > 0 else math.nan,
+        beta_se=beta_se, beta_ci95=beta_ci, nu_se=m.nu_se, E_se_mpa=m.E_se, r_squared=r_squared,
+        confidence=confidence, ci_method=ci_method, max_w_over_h=wh,
+        out_of_table=m.msg is not None, out_of_table_message=m.msg, notes=tuple(notes),
+    )
 
-    def interval(est: float, grad: np.ndarray) -> tuple[float, tuple[float, float]]:
-        se = float(np.sqrt(grad @ cov @ grad))
-        return se, (est - tq * se, est + tq * se)
 
-    beta_se, beta_ci = interval(beta, np.array([-s / c**2, 1 / c])) if c else (math.nan, _NAN2)
-    E = nu = C10 = D1 = kap = nu_se = E_se = math.nan
-    E_ci = nu_ci = _NAN2
-    msg = None
+def _interval(est: float, grad: np.ndarray, cov: np.ndarray, tq: float
+              ) -> tuple[float, tuple[float, float]]:
+    """Standard error and interval of `est` by the delta method (gradient `grad`)."""
+    se = float(np.sqrt(grad @ cov @ grad))
+    return se, (est - tq * se, est + tq * se)
+
+
+@dataclasses.dataclass
+class _Moduli:
+    """E and nu (with C10, D1, kappa and intervals) of :func:`material_fit`; `msg`: why not."""
+
+    E: float = math.nan
+    nu: float = math.nan
+    C10: float = math.nan
+    D1: float = math.nan
+    kap: float = math.nan
+    nu_se: float = math.nan
+    E_se: float = math.nan
+    E_ci: tuple[float, float] = _NAN2
+    nu_ci: tuple[float, float] = _NAN2
+    msg: str | None = None
+
+
+def _moduli(rel, c: float, s: float, cov: np.ndarray, beta: float, beta_se: float, tq: float,
+            *, a: float, ah: float, kappa_source: str, contact: str, confidence: float,
+            beta_table: str, notes: list[str]) -> _Moduli:
+    """nu from the beta table, E from eq. (4), with intervals (at the table's edge too)."""
+    m = _Moduli()
     top = _table_top(rel, c, beta, beta_se, tq)
     bottom = _table_bottom(rel, c, beta, beta_se, tq)
     if top is not None or bottom is not None:
         # beta beyond the table's peak (or below its smallest beta) but within its interval:
         # nu at that edge, its interval from the part of the table that the interval reaches
         at_edge = _at_table_top if top is not None else _at_table_bottom
-        nu, nu_ci, E, E_ci, kap, edge_note = at_edge(
+        m.nu, m.nu_ci, m.E, m.E_ci, m.kap, edge_note = at_edge(
             rel, top if top is not None else bottom, c, cov, tq, a, ah, kappa_source, contact,
             confidence)
-        C10, D1 = neo_hookean_constants(E, nu)
-        nu_se, E_se = (nu_ci[1] - nu_ci[0]) / (2 * tq), (E_ci[1] - E_ci[0]) / (2 * tq)
+        m.C10, m.D1 = neo_hookean_constants(m.E, m.nu)
+        m.nu_se, m.E_se = (m.nu_ci[1] - m.nu_ci[0]) / (2 * tq), (m.E_ci[1] - m.E_ci[0]) / (2 * tq)
         notes.append(edge_note)
     elif not (c > 0 and rel.beta_min <= beta < rel.beta_max):
-        msg = (f"c = {c:.4g} N/mm and beta = {beta:.4g} are outside the {beta_table} beta "
-               f"table (c > 0, {rel.range_text()}): E and nu not computed")
-        notes.append(msg)
+        m.msg = (f"c = {c:.4g} N/mm and beta = {beta:.4g} are outside the {beta_table} beta "
+                 f"table (c > 0, {rel.range_text()}): E and nu not computed")
+        notes.append(m.msg)
     else:
-        nu = float(rel.nu(beta))  # eq. (7) or the FEM table, inverted
-        line = getattr(rel, "kappa_line_grid", None) is not None
-        if line:  # the FEM line at these depths: its intercept, like its beta
-            kap, dkap = rel.kappa_line(nu), rel.dkappa_line_dnu(nu)
-        else:
-            kap = float(kappa(nu, ah, source=kappa_source, contact=contact))
-            dkap = _dkappa_dnu(nu, ah, source=kappa_source, contact=contact)
-        E = c * (1 - nu**2) / (2 * a * kap)  # eq. (4)
-        C10, D1 = neo_hookean_constants(E, nu)
-        g_nu = rel.dnu_dbeta(beta) * np.array([-s / c**2, 1 / c])  # d nu / d(c, s)
-        dlnE_dnu = (-2 * nu / (1 - nu**2)
-                    - dkap / kap)
-        nu_se, nu_ci = interval(nu, g_nu)
-        E_se, E_ci = interval(E, E * (np.array([1 / c, 0.0]) + dlnE_dnu * g_nu))
-        if (getattr(rel, "beta_grid", None) is not None and np.isfinite(beta_se)
-                and beta + tq * beta_se >= rel.beta_max):
-            # beta's interval reaches the table's peak, where d nu / d beta -> infinity and
-            # the delta method fails: invert beta's interval through the table instead
-            _, nu_ci, _, E_ci, _, _ = _at_table_top(rel, beta - tq * beta_se, c, cov, tq, a, ah,
-                                                    kappa_source, contact, confidence)
-            nu_ci = (nu_ci[0], max(nu_ci[1], nu))
-            E_ci = (min(E_ci[0], E), max(E_ci[1], E))
-            nu_se, E_se = (nu_ci[1] - nu_ci[0]) / (2 * tq), (E_ci[1] - E_ci[0]) / (2 * tq)
-            notes.append(f"the {confidence:.0%} interval of beta reaches the top of the table "
-                         f"({rel.beta_max:.4f}, where beta peaks over nu): the intervals of nu "
-                         "and E are beta's interval inverted through the table, not the delta "
-                         "method")
-        elif np.all(np.isfinite(nu_ci)) and not (rel.nu_min <= nu_ci[0]
-                                                  and nu_ci[1] < rel.nu_max):
-            notes.append(f"the {confidence:.0%} interval of nu, [{nu_ci[0]:.4f}, "
-                         f"{nu_ci[1]:.4f}], reaches outside the beta table "
-                         f"({rel.range_text()})")
+        _in_table(m, rel, c, s, cov, beta, beta_se, tq, a=a, ah=ah, kappa_source=kappa_source,
+                  contact=contact, confidence=confidence, notes=notes)
+    return m
 
+
+def _in_table(m: _Moduli, rel, c: float, s: float, cov: np.ndarray, beta: float,
+              beta_se: float, tq: float, *, a: float, ah: float, kappa_source: str, contact: str,
+              confidence: float, notes: list[str]) -> None:
+    """Fill `m` for a beta within the table: the delta method, or beta's interval inverted
+    through the table where it reaches the table's peak."""
+    nu = float(rel.nu(beta))  # eq. (7) or the FEM table, inverted
+    line = getattr(rel, "kappa_line_grid", None) is not None
+    if line:  # the FEM line at these depths: its intercept, like its beta
+        kap, dkap = rel.kappa_line(nu), rel.dkappa_line_dnu(nu)
+    else:
+        kap = float(kappa(nu, ah, source=kappa_source, contact=contact))
+        dkap = _dkappa_dnu(nu, ah, source=kappa_source, contact=contact)
+    E = c * (1 - nu**2) / (2 * a * kap)  # eq. (4)
+    m.E, m.nu, m.kap = E, nu, kap
+    m.C10, m.D1 = neo_hookean_constants(E, nu)
+    g_nu = rel.dnu_dbeta(beta) * np.array([-s / c**2, 1 / c])  # d nu / d(c, s)
+    dlnE_dnu = (-2 * nu / (1 - nu**2)
+                - dkap / kap)
+    m.nu_se, m.nu_ci = _interval(nu, g_nu, cov, tq)
+    m.E_se, m.E_ci = _interval(E, E * (np.array([1 / c, 0.0]) + dlnE_dnu * g_nu), cov, tq)
+    if (getattr(rel, "beta_grid", None) is not None and np.isfinite(beta_se)
+            and beta + tq * beta_se >= rel.beta_max):
+        # beta's interval reaches the table's peak, where d nu / d beta -> infinity and
+        # the delta method fails: invert beta's interval through the table instead
+        _, nu_ci, _, E_ci, _, _ = _at_table_top(rel, beta - tq * beta_se, c, cov, tq, a, ah,
+                                                kappa_source, contact, confidence)
+        m.nu_ci = (nu_ci[0], max(nu_ci[1], nu))
+        m.E_ci = (min(E_ci[0], E), max(E_ci[1], E))
+        m.nu_se, m.E_se = (m.nu_ci[1] - m.nu_ci[0]) / (2 * tq), (m.E_ci[1] - m.E_ci[0]) / (2 * tq)
+        notes.append(f"the {confidence:.0%} interval of beta reaches the top of the table "
+                     f"({rel.beta_max:.4f}, where beta peaks over nu): the intervals of nu "
+                     "and E are beta's interval inverted through the table, not the delta "
+                     "method")
+    elif np.all(np.isfinite(m.nu_ci)) and not (rel.nu_min <= m.nu_ci[0]
+                                                and m.nu_ci[1] < rel.nu_max):
+        notes.append(f"the {confidence:.0%} interval of nu, [{m.nu_ci[0]:.4f}, "
+                     f"{m.nu_ci[1]:.4f}], reaches outside the beta table "
+                     f"({rel.range_text()})")
+
+
+def _table_notes(notes: list[str], rel, *, a: float, h: float, ah: float, beta_table: str,
+                 contact: str, kappa_source: str, a_over_h_given: bool,
+                 extra_notes: tuple[str, ...], ci_method: str) -> None:
+    """The notes on the intervals, the tables and the a/h they were read at."""
     notes.append(f"intervals: {ci_method}; the kappa and beta tables are taken as exact")
     notes.extend(extra_notes)
     notes.append(f"beta table '{beta_table}': {rel.source}; kappa: "
@@ -535,27 +599,7 @@ def material_fit(c: float, slope: float, cov: np.ndarray, *, depth_mm: np.ndarra
         notes.append(f"kappa read at the exact a/h = {a:g}/{h:g} = {ah:.4f}; the paper rounds "
                      "to 0.8 (a_over_h=0.8 reproduces it)")
     else:
-        notes.append(f"kappa read at a/h = {ah:g} as given (exact a/h = {ah_exact:.4f})")
-    wh = float(np.max(w)) / h
-    if wh > MAX_W_OVER_H + 1e-12:
-        text = (f"deepest press has w/h = {wh:.3f} > {MAX_W_OVER_H}: the linear law (2) "
-                "may fail there (paper, section VI.1)")
-        warnings.warn(text, UserWarning, stacklevel=2)
-        notes.append(text)
-    cs = float(np.sqrt(cov[0, 0])), float(np.sqrt(cov[1, 1]))
-    return IndentationFit(
-        E_mpa=E, nu=nu, c_n_per_mm=c, beta=beta, E_ci95_mpa=E_ci, nu_ci95=nu_ci,
-        rmse_n=rmse_n, n_presses=n, effects=tuple(effects),
-        effect_params=dict(effect_params) if effect_params is not None else {"beta": beta},
-        C10_mpa=C10, D1_per_mpa=D1, a_over_h=ah, a_over_h_exact=ah_exact,
-        thickness_mm=h, radius_mm=a, kappa=kap, beta_table=beta_table,
-        kappa_source=kappa_source, contact=contact, slope_n_per_mm=s,
-        c_se_n_per_mm=cs[0], slope_se_n_per_mm=cs[1],
-        corr_c_slope=float(cov[0, 1] / (cs[0] * cs[1])) if cs[0] * cs[1] > 0 else math.nan,
-        beta_se=beta_se, beta_ci95=beta_ci, nu_se=nu_se, E_se_mpa=E_se, r_squared=r_squared,
-        confidence=confidence, ci_method=ci_method, max_w_over_h=wh,
-        out_of_table=msg is not None, out_of_table_message=msg, notes=tuple(notes),
-    )
+        notes.append(f"kappa read at a/h = {ah:g} as given (exact a/h = {a / h:.4f})")
 
 
 def _table_top(rel, c: float, beta: float, beta_se: float, tq: float) -> float | None:
