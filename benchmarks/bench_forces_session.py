@@ -44,6 +44,7 @@ import numpy as np
 from tactilevision.fem import ForceEstimator
 from tactilevision.io import read_session
 from tactilevision.optics import DepthReconstructor, PhotometricCalibration
+from tactilevision.pipeline import session_reconstructor
 from tactilevision.sim import render_ball_presses, taxim_shading
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -111,10 +112,9 @@ def main() -> None:
                          threshold_mm=0.02, beta=beta)
     naive = None
     if args.naive:
-        from tactilevision.cli._calibrate import _reconstructor
-
-        naive = (_reconstructor(s), ForceEstimator(s.shape, mm, thickness_mm=h, E_mpa=E, nu=nu,
-                                                   contact="footprint", threshold_mm=0.02))
+        naive = (session_reconstructor(s),
+                 ForceEstimator(s.shape, mm, thickness_mm=h, E_mpa=E, nu=nu,
+                                contact="footprint", threshold_mm=0.02))
     surface = None
     if args.true_surface:
         from tactilevision.sim import SessionSpec, press_profile

@@ -3,21 +3,21 @@
 from __future__ import annotations
 
 import argparse
-import csv
 import sys
 from pathlib import Path
 
 import numpy as np
+from tqdm import tqdm
 
-from .. import InputError
+from .._checks import InputError
+from ..io import check_output_folder, check_overwrite, read_session
+from ..pipeline import CALIBRATION_FILES, calibrate_session, write_calibration
 from ._fit import _write_json, relaxation_lines, summary
-from ._out import StagedOutput, add_overwrite_argument, check_output_folder, check_overwrite
+from ._out import add_overwrite_argument
 
 #: The files ``calibrate`` writes into its output folder (figures and report unless
 #: --no-report).
-CALIBRATE_FILES = ("rejected.csv", "measurements.csv", "session.toml", "holds.csv", "fit.json",
-                   "report.html", "force_depth.png", "stiffness_line.png", "residuals.png",
-                   "mosaic.png", "bevel.png")
+CALIBRATE_FILES = CALIBRATION_FILES
 
 _DESCRIPTION = """\
 The main job. Reads a session folder (session.toml, reference.png, frames/,
@@ -92,96 +92,6 @@ def _threshold(text: str) -> float | str:
         raise argparse.ArgumentTypeError(f"must be a number or 'auto', got {text!r}") from None
 
 
-def _reconstructor(session):
-    """Depth reconstructor of the session's sensor, or None when there is no calibration."""
-    from .. import KNOWN_SENSORS, default_calibration_path
-    from ..optics import DepthReconstructor, PhotometricCalibration
-
-    cfg = session.config
-    path = cfg.calibration
-    if path is None and cfg.sensor_name in KNOWN_SENSORS:
-        path = default_calibration_path(cfg.sensor_name)
-    if path is None:
-        return None
-    cal = PhotometricCalibration.load(path)
-    if cal.shape != session.shape:
-        return None
-    return DepthReconstructor(cal, reference=session.reference)
-
-
-def _write_holds(path: Path, holds: dict) -> None:
-    """``holds.csv``: press, t_s (since the hold's start), fz_n over each press's hold, and
-    the press's loading time ramp_s (empty when not found)."""
-    with path.open("w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(["press", "t_s", "fz_n", "ramp_s"])
-        for p, t, f, r in zip(holds["press"], holds["t_s"], holds["fz_n"], holds["ramp_s"],
-                              strict=True):
-            w.writerow([int(p), f"{t:.4f}", f"{f:.9g}", "" if np.isnan(r) else f"{r:.4f}"])
-
-
-def _write_rejected(path: Path, rejected) -> None:
-    """``rejected.csv``: each rejected press, its reason, detail, time and best bevel SNR."""
-    with open(path, "w", newline="") as fh:
-        wr = csv.writer(fh)
-        wr.writerow(["press", "reason", "detail", "t_frame_s", "bevel_snr"])
-        for r in rejected:
-            wr.writerow([r.press, r.reason, r.detail, f"{r.t_frame_s:.4f}",
-                         f"{r.bevel_score:.2f}" if np.isfinite(r.bevel_score) else ""])
-
-
-def result_dict(cal) -> dict:
-    """The ``fit.json`` object: the ``fit --json`` keys, then the session's.
-
-    The session's keys include ``sensor_name`` (``[sensor] name``) and
-    ``session_date`` (``[session] date`` as an ISO string, or None), which
-    ``tactilevision history`` reads.
-
-    Parameters
-    ----------
-    cal : SessionCalibration
-
-    Returns
-    -------
-    obj : dict
-    """
-    obj = cal.fit.to_json_dict()
-    c = cal.certification
-    std = cal.depth_std_mm
-    obj.update({
-        "session": str(cal.session.path),
-        "sensor_name": cal.session.config.sensor_name,
-        "session_date": (cal.session.config.date.isoformat()
-                         if cal.session.config.date is not None else None),
-        "depth_rule": cal.depth_rule,
-        "nu_rounds": cal.nu_rounds,
-        "depth_std_median_mm": float(np.median(std)) if len(std) else None,
-        "bevel_optics": c.bevel_optics,
-        "bands_not_read": ([p.press for p in c.presses if not p.band_resolved]
-                           if c.bevel_optics is not None else None),
-        "clock_offset_s": c.clock_offset_s,
-        "clock_source": c.clock_source,
-        "n_rejected": len(c.rejected),
-        "rejected": [{"press": r.press, "reason": r.reason, "detail": r.detail,
-                      "t_frame_s": r.t_frame_s,
-                      "bevel_snr": r.bevel_score if np.isfinite(r.bevel_score) else None}
-                     for r in c.rejected],
-        "warnings": list(cal.warnings),
-        "seconds": cal.seconds,
-        "ft_zero": cal.ft_zero.to_json_dict() if cal.ft_zero is not None else None,
-        "mark_rule": ({k: (float(v) if isinstance(v, float) else v)
-                       for k, v in c.mark_rule.items()} if c.mark_rule is not None else None),
-    })
-    if cal.relaxation is not None:
-        r = cal.relaxation.to_json_dict()
-        r["holds"] = "holds.csv"
-        if cal.moduli is not None:
-            r.update({k: list(v) if isinstance(v, tuple) else v for k, v in cal.moduli.items()})
-            r["headline_E"] = "E_mpa is E0_mpa, the instantaneous modulus"
-        obj["relaxation"] = r
-    return obj
-
-
 def run(args: argparse.Namespace) -> int:
     """Run ``calibrate``.
 
@@ -201,56 +111,32 @@ def run(args: argparse.Namespace) -> int:
         (rejected.csv, the certified presses' measurements.csv, the figures
         and report.html are written first, saying why).
     """
-    from .. import calibrate_session
-    from ..io import read_session, write_measurements
-
     session = read_session(args.session)
     out = args.out if args.out is not None else session.path / "calibration"
     check_output_folder(out)               # before the minute of work, not after
-    overwrite = args.overwrite
-    check_overwrite(out, CALIBRATE_FILES, overwrite=overwrite)
+    check_overwrite(out, CALIBRATE_FILES, overwrite=args.overwrite)
     progress = None
     if not args.no_progress:
-        from tqdm import tqdm
-
         def progress(it):
             return tqdm(it, desc="frames", unit="frame", file=sys.stderr, mininterval=1.0)
     cal = calibrate_session(session, depth_rule=args.depth_rule, beta_table=args.beta_table,
                             progress=progress, allow_failure=True,
                             relaxation=args.relaxation, bevel_threshold=args.bevel_threshold,
                             ft_zero=args.ft_zero)
-    cfg = session.config
     # written whole into a hidden folder in out, moved into place at the end (or dropped)
-    with StagedOutput(out, overwrite=overwrite) as stage:
-        tmp = stage.path
-        _write_rejected(tmp / "rejected.csv", cal.certification.rejected)
-        if cal.fit is None:
-            # nothing to fit: keep what certification found, and say why
-            if cal.certification.presses:
-                write_measurements(tmp / "measurements.csv", cal.measurements(),
-                                   thickness_mm=cfg.gel_thickness_mm,
-                                   radius_mm=cfg.indenter_radius_mm)
-            if not args.no_report:
-                from ..viz import calibration_figures, write_calibration_report
+    result = write_calibration(cal, out, overwrite=args.overwrite, report=not args.no_report)
+    if cal.fit is None:
+        # nothing to fit: what certification found is kept, and says why
+        raise InputError(f"{cal.failure}; rejected.csv"
+                         + ("" if args.no_report else ", the bevel panels and report.html")
+                         + f" in {out} say why")
+    _print_summary(cal, result, out, args)
+    return 0
 
-                figs = calibration_figures(cal, tmp, reconstructor=_reconstructor(session))
-                write_calibration_report(cal, tmp, figs)
-            stage.commit()
-            raise InputError(f"{cal.failure}; rejected.csv"
-                             + ("" if args.no_report else ", the bevel panels and report.html")
-                             + f" in {out} say why")
-        obj = result_dict(cal)
-        write_measurements(tmp / "measurements.csv", cal.measurements(),
-                           thickness_mm=cfg.gel_thickness_mm, radius_mm=cfg.indenter_radius_mm)
-        holds = cal.holds()
-        _write_holds(tmp / "holds.csv", holds)
-        _write_json(obj, str(tmp / "fit.json"))
-        if not args.no_report:
-            from ..viz import calibration_figures, write_calibration_report
 
-            figs = calibration_figures(cal, tmp, reconstructor=_reconstructor(session))
-            write_calibration_report(cal, tmp, figs)
-        stage.commit()
+def _print_summary(cal, result, out: Path, args: argparse.Namespace) -> None:
+    """The run's summary on standard output (and fit.json to --json)."""
+    obj = result.fit
     if args.json is not None:
         _write_json(obj, args.json)
     if args.json != "-":
@@ -270,10 +156,9 @@ def run(args: argparse.Namespace) -> int:
                   f"{1e3 * float(np.median(cal.depth_std_mm)):.2f} um")
         for w in cal.warnings:
             print(f"  warning: {w}")
-        n_held = len(np.unique(holds["press"]))
+        n_held = len(np.unique(result.holds["press"]))
         print(f"  holds.csv: the force over the hold of {n_held} of {len(c.presses)} presses"
               + ("" if n_held == len(c.presses) else " (no release found in the log for the "
                  "others)"))
         if not args.no_report:
             print(f"  report: {out / 'report.html'}")
-    return 0

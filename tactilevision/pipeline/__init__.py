@@ -24,3 +24,14 @@ __all__ = ["MARK_BETA", "DepthState", "Fitter", "SessionCalibration", "calibrate
            "frame_period", "hold_curves", "hold_spans", "land_rule", "mark_rule",
            "nominal_rule", "relaxation_step", "take_off_zero", "vernier_rule",
            "with_shared_depth"]
+
+from ._result import (
+    CALIBRATION_FILES,
+    CalibrationResult,
+    result_dict,
+    session_reconstructor,
+    write_calibration,
+)
+
+__all__ += ["CALIBRATION_FILES", "CalibrationResult", "result_dict", "session_reconstructor",
+            "write_calibration"]
