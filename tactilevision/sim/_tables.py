@@ -43,6 +43,7 @@ up, in units of the replicate noise.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -182,6 +183,50 @@ def make_measurement_table(hidden: str | None = None, seed: int = 0, *,
     noise = float(rng.uniform(0.001, 0.003))
     jitter = float(rng.uniform(0.0005, 0.0015))
 
+    c = _campaign(rng, depths, days)
+    w = c["depth_mm"]
+    n = w.size
+    session = c.pop("session").astype(int)
+    truth: dict = {"E_mpa": E, "nu": nu, "noise_n": noise, "depth_jitter_mm": jitter,
+                   "base": "paper",
+                   "covariate": HIDDEN_EFFECTS.get(hidden) if len(names) == 1 else None,
+                   "covariates": [HIDDEN_EFFECTS[k] for k in names], "strength": strength}
+
+    def u(lo: float, hi: float) -> float:
+        return float(rng.uniform(lo, hi)) * strength
+
+    w_true = w.copy()
+    if "depth_offset" in names:
+        delta = u(0.008, 0.02) * rng.choice([-1, 1])
+        step_err = rng.normal(0, 0.0002, n_depth)
+        w_true = w + delta + step_err[c["indenter"].astype(int)]
+        truth["delta_mm"] = delta
+    P = _fem_force(E, nu, a, h, np.round(w_true, 9))
+    P = _stiffness_effects(names, rng, u, c, P, truth)
+    fx = P * rng.normal(0, 0.02, n)
+    fy = P * rng.normal(0, 0.02, n)
+    # additive effects are sized against the press-to-press scatter
+    sd = math.hypot(noise, jitter * float(np.mean(P / w_true)))
+    truth["replicate_sd_n"] = sd
+    P, fx = _force_effects(names, rng, u, c, P, fx, truth, sd, n_sessions, session)
+    # F/T noise plus the stage's depth repeatability (force = local stiffness x depth error)
+    P = P + rng.normal(0, noise, n) + rng.normal(0, jitter, n) * np.gradient(
+        _fem_force(E, nu, a, h, depths), depths)[c["indenter"].astype(int)]
+    c["force_n"] = P
+    c["fx_n"] = fx + rng.normal(0, noise, n)
+    c["fy_n"] = fy + rng.normal(0, noise, n)
+    c["force_std_n"] = np.abs(rng.normal(noise * 10, noise, n))
+    order = ["press", "indenter", "depth_mm", "force_n", "force_std_n", "fx_n", "fy_n",
+             "time_s", "hold_s", "wait_s", "x_mm", "y_mm", "day", "temperature_c"]
+    return HiddenTable(columns={k: c[k] for k in order}, thickness_mm=h, radius_mm=a,
+                       hidden=hidden, truth=truth)
+
+
+def _campaign(rng: np.random.Generator, depths: np.ndarray, days: np.ndarray
+              ) -> dict[str, np.ndarray]:
+    """The presses of the sessions (one per day): shuffled depths, timing, positions and
+    room temperature; every column but the forces, and ``session``."""
+    n_depth = depths.size
     cols: dict[str, list] = {k: [] for k in (
         "press", "indenter", "depth_mm", "time_s", "hold_s", "wait_s", "x_mm", "y_mm", "day",
         "temperature_c", "session")}
@@ -213,25 +258,14 @@ def make_measurement_table(hidden: str | None = None, seed: int = 0, *,
             cols["session"].append(s)
             t += 0.5 + hold + 0.25     # approach, hold, release
             press += 1
-    c = {k: np.asarray(v, np.float64) for k, v in cols.items()}
-    w = c["depth_mm"]
-    n = w.size
-    session = c.pop("session").astype(int)
-    truth: dict = {"E_mpa": E, "nu": nu, "noise_n": noise, "depth_jitter_mm": jitter,
-                   "base": "paper",
-                   "covariate": HIDDEN_EFFECTS.get(hidden) if len(names) == 1 else None,
-                   "covariates": [HIDDEN_EFFECTS[k] for k in names], "strength": strength}
+    return {k: np.asarray(v, np.float64) for k, v in cols.items()}
 
-    def u(lo: float, hi: float) -> float:
-        return float(rng.uniform(lo, hi)) * strength
 
-    w_true = w.copy()
-    if "depth_offset" in names:
-        delta = u(0.008, 0.02) * rng.choice([-1, 1])
-        step_err = rng.normal(0, 0.0002, n_depth)
-        w_true = w + delta + step_err[c["indenter"].astype(int)]
-        truth["delta_mm"] = delta
-    P = _fem_force(E, nu, a, h, np.round(w_true, 9))
+def _stiffness_effects(names: tuple[str, ...], rng: np.random.Generator,
+                       u: Callable[[float, float], float], c: Mapping[str, np.ndarray],
+                       P: np.ndarray, truth: dict) -> np.ndarray:
+    """The hidden effects that scale the force (the stiffness's); their sizes into `truth`."""
+    n = P.size
     if "large_deformation" in names:
         truth["base"] = "layer"
     if "viscoelastic_relaxation" in names:
@@ -264,11 +298,16 @@ def make_measurement_table(hidden: str | None = None, seed: int = 0, *,
         later = np.where(after, 1 - np.exp(-(c["press"] - k_step) / 3.0), 0.0)
         P = P * (1 - d_step * after - 0.1 * d_step * later)
         truth.update(step=-d_step, step_settled=-1.1 * d_step, after_press=k_step)
-    fx = P * rng.normal(0, 0.02, n)
-    fy = P * rng.normal(0, 0.02, n)
-    # additive effects are sized against the press-to-press scatter
-    sd = math.hypot(noise, jitter * float(np.mean(P / w_true)))
-    truth["replicate_sd_n"] = sd
+    return P
+
+
+def _force_effects(names: tuple[str, ...], rng: np.random.Generator,
+                   u: Callable[[float, float], float], c: Mapping[str, np.ndarray],
+                   P: np.ndarray, fx: np.ndarray, truth: dict, sd: float, n_sessions: int,
+                   session: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The hidden effects that add a force, sized against the replicate scatter `sd`;
+    returns the force and the tangential force fx (which cross-talk redraws)."""
+    n = P.size
     if "force_offset" in names:
         b0 = u(6, 15) * sd * rng.choice([-1, 1])
         b = b0 * (1 + rng.normal(0, 0.03, n_sessions))
@@ -285,17 +324,7 @@ def make_measurement_table(hidden: str | None = None, seed: int = 0, *,
         chi = u(4, 8) * sd / float(np.std(fx)) * rng.choice([-1, 1])
         P = P + chi * fx
         truth.update(chi=chi)
-    # F/T noise plus the stage's depth repeatability (force = local stiffness x depth error)
-    P = P + rng.normal(0, noise, n) + rng.normal(0, jitter, n) * np.gradient(
-        _fem_force(E, nu, a, h, depths), depths)[c["indenter"].astype(int)]
-    c["force_n"] = P
-    c["fx_n"] = fx + rng.normal(0, noise, n)
-    c["fy_n"] = fy + rng.normal(0, noise, n)
-    c["force_std_n"] = np.abs(rng.normal(noise * 10, noise, n))
-    order = ["press", "indenter", "depth_mm", "force_n", "force_std_n", "fx_n", "fy_n",
-             "time_s", "hold_s", "wait_s", "x_mm", "y_mm", "day", "temperature_c"]
-    return HiddenTable(columns={k: c[k] for k in order}, thickness_mm=h, radius_mm=a,
-                       hidden=hidden, truth=truth)
+    return P, fx
 
 
 def _signal_rms(hidden: str, seed: int, strength: float) -> tuple[float, HiddenTable]:
