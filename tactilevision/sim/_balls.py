@@ -7,6 +7,7 @@ calibrated the same way, on ball presses rendered through that table.
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 
 from .._checks import InputError, check_positive
@@ -67,8 +68,6 @@ def render_ball_presses(table: ShadingTable, reference: np.ndarray, *, n: int = 
         radius, a ball that does not fit in the image, or a reference of
         the wrong size.
     """
-    import cv2
-
     check_positive(radius_mm, "radius_mm")
     lo, hi = (float(v) for v in depth_mm)
     if not 0 < lo <= hi < radius_mm:

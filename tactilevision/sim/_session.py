@@ -19,6 +19,7 @@ import json
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
+import cv2
 import numpy as np
 from scipy.interpolate import PchipInterpolator
 
@@ -198,8 +199,6 @@ def make_session(folder: str | Path, spec: SessionSpec | None = None, *,
     InputError
         For a non-empty `folder` or inconsistent settings.
     """
-    import cv2
-
     spec = spec or SessionSpec()
     out = Path(folder)
     if out.exists() and any(out.iterdir()):
@@ -227,34 +226,72 @@ def make_session(folder: str | Path, spec: SessionSpec | None = None, *,
     x, y = _positions(spec, n, rng, half)
     true_depth = w_c[sched.indenter] + rng.uniform(*spec.overshoot_mm, n)
     sched = replace(sched, depth_mm=true_depth, x_mm=x, y_mm=y)
-    eh2 = spec.E_mpa * h * h
-    p_of_w = PchipInterpolator(prof.w_over_h, prof.force)   # P / (E h^2) against w / h, built once
+    forces = _PressForces(spec, prof, sched)
 
-    recovery = np.ones(n)
-    if spec.recovery_r:
-        recovery[1:] += spec.recovery_r * (1 + sched.wait_s[1:] / spec.recovery_tau_s) ** -1.5
+    out.mkdir(parents=True, exist_ok=True)
+    if frames:
+        (out / "frames").mkdir()
+    cv2.imwrite(str(out / "reference.png"), reference)
+    _write_frames(out, spec, sched, prof, table, reference, rng, frames=frames,
+                  progress=progress)
+    tang = _write_forces(out, spec, sched, forces)
+    with open(out / "presses.csv", "w") as f:
+        f.write("press,indenter,x_mm,y_mm\n")
+        for i in range(n):
+            f.write(f"{i},{int(sched.indenter[i])},{x[i]:.3f},{y[i]:.3f}\n")
+    _write_toml(out, spec, s, table.shape, half)
+    truth = _truth(spec, sched, w_c, forces.force_of_depth, tang, s, prof,
+                   forces.bevel_force_of_depth)
+    (out / "truth.json").write_text(json.dumps(truth, indent=1) + "\n")
+    return truth
 
-    def force_of_depth(i: int, d: np.ndarray) -> np.ndarray:
+
+class _PressForces:
+    """The forces of a session's presses against depth: the indenter's (from the FEM
+    profile, with incomplete recovery) and the bevel band's, which the F/T reads too."""
+
+    def __init__(self, spec: SessionSpec, prof: PressProfile, sched: PressSchedule) -> None:
+        self.spec, self.prof, self.sched = spec, prof, sched
+        self.h = h = spec.thickness_mm
+        self.eh2 = spec.E_mpa * h * h
+        # P / (E h^2) against w / h, built once
+        self.p_of_w = PchipInterpolator(prof.w_over_h, prof.force)
+        n = sched.n_presses
+        self.recovery = np.ones(n)
+        if spec.recovery_r:
+            self.recovery[1:] += (spec.recovery_r
+                                  * (1 + sched.wait_s[1:] / spec.recovery_tau_s) ** -1.5)
+
+    def force_of_depth(self, i: int, d: np.ndarray) -> np.ndarray:
         """The indenter's force at depth d (what the fit is after)."""
-        return eh2 * p_of_w(np.asarray(d) / h) * recovery[i]
+        return self.eh2 * self.p_of_w(np.asarray(d) / self.h) * self.recovery[i]
 
-    def bevel_force_of_depth(i: int, d: np.ndarray) -> np.ndarray:
+    def bevel_force_of_depth(self, i: int, d: np.ndarray) -> np.ndarray:
         """What the bevel's band presses at depth d (the F/T sensor reads it too)."""
+        spec, h = self.spec, self.h
         b = spec.block
         d = np.asarray(d, np.float64)
         if not b.vernier:
             return np.zeros_like(d)
-        bulge = -prof.depth_at_many(d / h, b.bevel_offset_mm / h) * h
-        closure = d - b.depths_mm[int(sched.indenter[i])] + bulge
+        bulge = -self.prof.depth_at_many(d / h, b.bevel_offset_mm / h) * h
+        closure = d - b.depths_mm[int(self.sched.indenter[i])] + bulge
         geom = BevelGeometry(offset_mm=b.bevel_offset_mm, direction_deg=b.bevel_direction_deg,
                              angle_deg=b.bevel_angle_deg, length_mm=b.bevel_length_mm)
         return bevel_force(np.where(d > 0, closure, 0.0), geom, thickness_mm=h,
                            E_mpa=spec.E_mpa, nu=spec.nu)
 
-    def ft_force_of_depth(i: int, d: np.ndarray) -> np.ndarray:
-        return force_of_depth(i, d) + bevel_force_of_depth(i, d)
+    def ft_force_of_depth(self, i: int, d: np.ndarray) -> np.ndarray:
+        """What the F/T sensor reads at depth d: the indenter's and the bevel's force."""
+        return self.force_of_depth(i, d) + self.bevel_force_of_depth(i, d)
 
-    # frames: from lead_s before each press to its release
+
+def _write_frames(out: Path, spec: SessionSpec, sched: PressSchedule, prof: PressProfile,
+                  table: ShadingTable, reference: np.ndarray, rng: np.random.Generator, *,
+                  frames: bool, progress: bool) -> None:
+    """Render the frames (from lead_s before each press to its release) into
+    ``out/frames`` (unless not `frames`) and list them in ``frames.csv``."""
+    shape, s, h = table.shape, table.mm_per_px, spec.thickness_mm
+    x, y = sched.x_mm, sched.y_mm
     dt = 1.0 / spec.fps
     grid = np.arange(0.0, float(sched.t_end_s[-1]) + 1.0, dt)
     keep = np.zeros(grid.shape, bool)
@@ -262,11 +299,6 @@ def make_session(folder: str | Path, spec: SessionSpec | None = None, *,
         keep |= (grid >= t0 - spec.lead_s) & (grid <= t1 + dt)
     t_frames = grid[keep]
     d_frames, p_frames = depth_trajectory(sched, t_frames)
-
-    out.mkdir(parents=True, exist_ok=True)
-    if frames:
-        (out / "frames").mkdir()
-    cv2.imwrite(str(out / "reference.png"), reference)
     names = []
     it = range(t_frames.size)
     if progress:
@@ -294,6 +326,11 @@ def make_session(folder: str | Path, spec: SessionSpec | None = None, *,
         for name, t in zip(names, t_frames, strict=True):
             f.write(f"{name},{t:.6f}\n")
 
+
+def _write_forces(out: Path, spec: SessionSpec, sched: PressSchedule, forces: _PressForces
+                  ) -> np.ndarray:
+    """Write the F/T log ``forces.csv``; returns each press's tangential force fraction."""
+    n = sched.n_presses
     tang = np.full(n, 0.01)
     for i in spec.misaligned:
         if not 0 <= i < n:
@@ -306,25 +343,19 @@ def make_session(folder: str | Path, spec: SessionSpec | None = None, *,
         def stiffness(t: np.ndarray) -> np.ndarray:
             return 1.0 - spec.softening * np.clip((t - t_a) / (t_b - t_a), 0.0, 1.0)
 
-    t_f, forces = ft_log(sched, ft_force_of_depth, duration_s=float(sched.t_end_s[-1]) + 1.0,
-                         rate_hz=spec.rate_hz, clock_offset_s=spec.clock_offset_s,
-                         noise_n=spec.force_noise_n, tangential_fraction=tang,
-                         relaxation=(spec.relaxation_g, spec.relaxation_tau_s),
-                         stiffness=stiffness, bias_n=(0.0, 0.0, spec.ft_zero_n),
-                         drift_n=spec.ft_drift_n,
-                         seed=spec.seed + 1 if spec.ft_seed is None else spec.ft_seed)
+    t_f, f_ft = ft_log(sched, forces.ft_force_of_depth,
+                       duration_s=float(sched.t_end_s[-1]) + 1.0,
+                       rate_hz=spec.rate_hz, clock_offset_s=spec.clock_offset_s,
+                       noise_n=spec.force_noise_n, tangential_fraction=tang,
+                       relaxation=(spec.relaxation_g, spec.relaxation_tau_s),
+                       stiffness=stiffness, bias_n=(0.0, 0.0, spec.ft_zero_n),
+                       drift_n=spec.ft_drift_n,
+                       seed=spec.seed + 1 if spec.ft_seed is None else spec.ft_seed)
     with open(out / "forces.csv", "w") as f:
         f.write("t_s,fx_n,fy_n,fz_n\n")
-        np.savetxt(f, np.column_stack([t_f, forces]), fmt=["%.4f", "%.4f", "%.4f", "%.4f"],
+        np.savetxt(f, np.column_stack([t_f, f_ft]), fmt=["%.4f", "%.4f", "%.4f", "%.4f"],
                    delimiter=",")
-    with open(out / "presses.csv", "w") as f:
-        f.write("press,indenter,x_mm,y_mm\n")
-        for i in range(n):
-            f.write(f"{i},{int(sched.indenter[i])},{x[i]:.3f},{y[i]:.3f}\n")
-    _write_toml(out, spec, s, table.shape, half)
-    truth = _truth(spec, sched, w_c, force_of_depth, tang, s, prof, bevel_force_of_depth)
-    (out / "truth.json").write_text(json.dumps(truth, indent=1) + "\n")
-    return truth
+    return tang
 
 
 def _write_toml(out: Path, spec: SessionSpec, s: float, shape: tuple[int, int],
