@@ -11,8 +11,10 @@ from __future__ import annotations
 
 import base64
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
+import cv2
 import numpy as np
 
 from .._checks import InputError
@@ -58,8 +60,6 @@ def downsample_map(a: np.ndarray, max_px: int | None) -> np.ndarray:
         float32 for a float map, uint8 for a uint8 image; ``cv2.resize`` with
         ``INTER_AREA`` to ``round(H * s), round(W * s)``, ``s = max_px / max(H, W)``.
     """
-    import cv2
-
     a = np.asarray(a)
     h, w = _target_size(a.shape[0], a.shape[1], max_px)
     if a.dtype != np.uint8:
@@ -70,8 +70,6 @@ def downsample_map(a: np.ndarray, max_px: int | None) -> np.ndarray:
 
 
 def _png_uri(frame_bgr: np.ndarray) -> str:
-    import cv2
-
     ok, buf = cv2.imencode(".png", np.ascontiguousarray(frame_bgr))
     if not ok:  # pragma: no cover - OpenCV encodes any uint8 image
         raise InputError("could not encode a frame as PNG")
@@ -126,6 +124,62 @@ def viewer_figure(frames_bgr: np.ndarray | Sequence[np.ndarray] | None,
         For mismatched shapes or counts, or no finite height.
     """
     go = _plotly()
+    heights, frames, pressure, finite, titles = _check_maps(frames_bgr, heights_mm,
+                                                            pressure_kpa, titles, active)
+    n = heights.shape[0]
+    pan = _panels(heights, frames, pressure, mm_per_px, max_px)
+    zmin, zmax = float(finite.min()), float(finite.max())
+    if zmax <= zmin:
+        zmax = zmin + 1e-6
+
+    # panels of the top row, left to right: frame, height, pressure; the surface below
+    cols = (["frame"] if frames is not None else []) + ["height"] + (
+        ["pressure"] if pressure is not None else [])
+    layout, domain = _axes_layout(cols, pan.unit)
+    axis_of = {name: ("" if k == 0 else str(k + 1)) for k, name in enumerate(cols)}
+    layout["coloraxis"] = dict(colorscale=HEIGHT_COLORSCALE, cmin=zmin, cmax=zmax,
+                               colorbar=_colorbar(domain, "height", "height (mm)"))
+    pmax = 0.0
+    if pan.pressures is not None:
+        pf = pressure[np.isfinite(pressure)]
+        pmax = float(pf.max()) if pf.size and pf.max() > 0 else 1.0
+        layout["coloraxis2"] = dict(colorscale=PRESSURE_COLORSCALE, cmin=0.0, cmax=pmax,
+                                    colorbar=_colorbar(domain, "pressure", "pressure (kPa)"))
+    zrange = zmax - zmin
+    layout["scene"] = dict(
+        domain=dict(x=[0.1, 0.9], y=[0.0, 0.48]),
+        xaxis=dict(title=f"x ({pan.unit})"),
+        yaxis=dict(title=f"y ({pan.unit})", autorange="reversed"),
+        zaxis=dict(title="height (mm)", range=[zmin - 0.05 * zrange, zmax + 0.05 * zrange]),
+        aspectmode="manual",
+        aspectratio=dict(x=1.0, y=max(pan.ext_y, 1e-9) / max(pan.ext_x, 1e-9), z=0.35))
+
+    def traces(i: int) -> list:
+        return _traces(go, pan, axis_of, i)
+
+    frame_objs = [go.Frame(name=str(i), data=traces(i),
+                           traces=list(range(len(traces(0)))),
+                           layout=dict(title=dict(text=titles[i])))
+                  for i in range(n)]
+    steps = [dict(method="animate", label=titles[i],
+                  args=[[str(i)], dict(mode="immediate", frame=dict(duration=0, redraw=True),
+                                       transition=dict(duration=0))])
+             for i in range(n)]
+    layout.update(
+        title=dict(text=titles[active]), height=FIGURE_HEIGHT_PX,
+        margin=dict(l=60, r=60, t=70, b=110), annotations=_annotations(domain),
+        sliders=[dict(active=active, steps=steps, x=0.05, len=0.9, y=0.0, yanchor="top",
+                      pad=dict(t=40), currentvalue=dict(prefix="frame: "))],
+    )
+    return go.Figure(data=traces(active), frames=frame_objs, layout=layout)
+
+
+def _check_maps(frames_bgr: np.ndarray | Sequence[np.ndarray] | None, heights_mm: np.ndarray,
+                pressure_kpa: np.ndarray | None, titles: Sequence[str] | None, active: int
+                ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None, np.ndarray,
+                           list[str]]:
+    """Check :func:`viewer_figure`'s inputs; return the heights, frames and pressures as
+    (N, ...) arrays, the finite heights and the titles."""
     heights = np.asarray(heights_mm, dtype=np.float32)
     if heights.ndim == 2:
         heights = heights[None]
@@ -157,27 +211,54 @@ def viewer_figure(frames_bgr: np.ndarray | Sequence[np.ndarray] | None,
         raise InputError(f"{len(titles)} titles for {n} frames")
     if not 0 <= active < n:
         raise InputError(f"active frame {active} is not in 0..{n - 1}")
+    return heights, frames, pressure, finite, titles
 
+
+@dataclass(frozen=True)
+class _Panels:
+    """The maps as the page shows them (downsampled), with their axes in mm (or px)."""
+
+    unit: str
+    ext_x: float
+    ext_y: float
+    heights: list[np.ndarray]
+    xs: np.ndarray
+    ys: np.ndarray
+    surfaces: list[np.ndarray]
+    sx: np.ndarray
+    sy: np.ndarray
+    frames: list[str] | None          # PNG data URIs
+    pressures: list[np.ndarray] | None
+
+
+def _panels(heights: np.ndarray, frames: np.ndarray | None, pressure: np.ndarray | None,
+            mm_per_px: float | None, max_px: int | None) -> _Panels:
+    """Downsample the maps for the page (the surface to half of `max_px`)."""
+    _, H, W = heights.shape
     unit = "mm" if mm_per_px is not None else "px"
     scale = float(mm_per_px) if mm_per_px is not None else 1.0
     ext_x, ext_y = (W - 1) * scale, (H - 1) * scale
     h_small = [downsample_map(z, max_px) for z in heights]
     hh, hw = h_small[0].shape
-    xs, ys = _axis_mm(hw, ext_x), _axis_mm(hh, ext_y)
     surf_px = None if max_px is None else max(2, max_px // 2)
     s_small = [downsample_map(z, surf_px) for z in heights]
-    sx, sy = _axis_mm(s_small[0].shape[1], ext_x), _axis_mm(s_small[0].shape[0], ext_y)
-    f_small = None if frames is None else [_png_uri(downsample_map(f, max_px)) for f in frames]
-    p_small = None if pressure is None else [downsample_map(p, max_px) for p in pressure]
-    zmin, zmax = float(finite.min()), float(finite.max())
-    if zmax <= zmin:
-        zmax = zmin + 1e-6
+    return _Panels(
+        unit=unit, ext_x=ext_x, ext_y=ext_y, heights=h_small,
+        xs=_axis_mm(hw, ext_x), ys=_axis_mm(hh, ext_y), surfaces=s_small,
+        sx=_axis_mm(s_small[0].shape[1], ext_x), sy=_axis_mm(s_small[0].shape[0], ext_y),
+        frames=(None if frames is None
+                else [_png_uri(downsample_map(f, max_px)) for f in frames]),
+        pressures=None if pressure is None else [downsample_map(p, max_px) for p in pressure])
 
-    # panels of the top row, left to right: frame, height, pressure; the surface below
-    cols = (["frame"] if frames is not None else []) + ["height"] + (
-        ["pressure"] if pressure is not None else [])
+
+#: vertical extent of the top row of panels (figure fraction)
+_TOP = (0.55, 1.0)
+
+
+def _axes_layout(cols: list[str], unit: str) -> tuple[dict, dict[str, tuple[float, float]]]:
+    """The x and y axes of the top row's panels; returns the layout and each panel's x
+    domain."""
     width = 1.0 / len(cols)
-    top = (0.55, 1.0)
     layout: dict = {}
     domain = {}
     for k, name in enumerate(cols):
@@ -186,56 +267,49 @@ def viewer_figure(frames_bgr: np.ndarray | Sequence[np.ndarray] | None,
         ax = "" if k == 0 else str(k + 1)
         layout[f"xaxis{ax}"] = dict(domain=[x0, x1], anchor=f"y{ax}", title=f"x ({unit})",
                                     constrain="domain")
-        layout[f"yaxis{ax}"] = dict(domain=list(top), anchor=f"x{ax}", title=f"y ({unit})",
+        layout[f"yaxis{ax}"] = dict(domain=list(_TOP), anchor=f"x{ax}", title=f"y ({unit})",
                                     autorange="reversed", scaleanchor=f"x{ax}",
                                     constrain="domain")
-    axis_of = {name: ("" if k == 0 else str(k + 1)) for k, name in enumerate(cols)}
+    return layout, domain
 
-    def bar(name: str, title: str) -> dict:
-        return dict(title=dict(text=title, side="right"), x=domain[name][1] + 0.01,
-                    xanchor="left", y=top[0], yanchor="bottom", len=top[1] - top[0],
-                    lenmode="fraction", thickness=18)
 
-    layout["coloraxis"] = dict(colorscale=HEIGHT_COLORSCALE, cmin=zmin, cmax=zmax,
-                               colorbar=bar("height", "height (mm)"))
-    pmax = 0.0
-    if p_small is not None:
-        pf = pressure[np.isfinite(pressure)]
-        pmax = float(pf.max()) if pf.size and pf.max() > 0 else 1.0
-        layout["coloraxis2"] = dict(colorscale=PRESSURE_COLORSCALE, cmin=0.0, cmax=pmax,
-                                    colorbar=bar("pressure", "pressure (kPa)"))
-    zrange = zmax - zmin
-    layout["scene"] = dict(
-        domain=dict(x=[0.1, 0.9], y=[0.0, 0.48]),
-        xaxis=dict(title=f"x ({unit})"), yaxis=dict(title=f"y ({unit})", autorange="reversed"),
-        zaxis=dict(title="height (mm)", range=[zmin - 0.05 * zrange, zmax + 0.05 * zrange]),
-        aspectmode="manual", aspectratio=dict(x=1.0, y=max(ext_y, 1e-9) / max(ext_x, 1e-9),
-                                              z=0.35))
+def _colorbar(domain: dict[str, tuple[float, float]], name: str, title: str) -> dict:
+    """A colour bar right of the panel `name`, as tall as the top row."""
+    return dict(title=dict(text=title, side="right"), x=domain[name][1] + 0.01,
+                xanchor="left", y=_TOP[0], yanchor="bottom", len=_TOP[1] - _TOP[0],
+                lenmode="fraction", thickness=18)
 
-    def traces(i: int) -> list:
-        out = []
-        if f_small is not None:
-            fdx = ext_x / max(hw - 1, 1)
-            out.append(go.Image(source=f_small[i], x0=0.0, y0=0.0, dx=fdx,
-                                dy=ext_y / max(hh - 1, 1), xaxis=f"x{axis_of['frame']}",
-                                yaxis=f"y{axis_of['frame']}", name="frame",
-                                hoverinfo="skip"))
-        out.append(go.Heatmap(z=h_small[i], x=xs, y=ys, coloraxis="coloraxis",
-                              xaxis=f"x{axis_of['height']}", yaxis=f"y{axis_of['height']}",
-                              name="height (mm)",
-                              hovertemplate=f"x %{{x:.2f}} {unit}<br>y %{{y:.2f}} {unit}"
-                              "<br>height %{z:.4f} mm<extra></extra>"))
-        out.append(go.Surface(z=s_small[i], x=sx, y=sy, coloraxis="coloraxis",
-                              name="surface", scene="scene"))
-        if p_small is not None:
-            p = p_small[i]
-            out.append(go.Heatmap(z=p, x=_axis_mm(p.shape[1], ext_x),
-                                  y=_axis_mm(p.shape[0], ext_y), coloraxis="coloraxis2",
-                                  xaxis=f"x{axis_of['pressure']}",
-                                  yaxis=f"y{axis_of['pressure']}", name="pressure (kPa)",
-                                  hovertemplate="pressure %{z:.2f} kPa<extra></extra>"))
-        return out
 
+def _traces(go, pan: _Panels, axis_of: dict[str, str], i: int) -> list:
+    """The traces of frame `i`: the frame, the height map, the surface, the pressure."""
+    ext_x, ext_y, unit = pan.ext_x, pan.ext_y, pan.unit
+    hh, hw = pan.heights[0].shape
+    out = []
+    if pan.frames is not None:
+        fdx = ext_x / max(hw - 1, 1)
+        out.append(go.Image(source=pan.frames[i], x0=0.0, y0=0.0, dx=fdx,
+                            dy=ext_y / max(hh - 1, 1), xaxis=f"x{axis_of['frame']}",
+                            yaxis=f"y{axis_of['frame']}", name="frame",
+                            hoverinfo="skip"))
+    out.append(go.Heatmap(z=pan.heights[i], x=pan.xs, y=pan.ys, coloraxis="coloraxis",
+                          xaxis=f"x{axis_of['height']}", yaxis=f"y{axis_of['height']}",
+                          name="height (mm)",
+                          hovertemplate=f"x %{{x:.2f}} {unit}<br>y %{{y:.2f}} {unit}"
+                          "<br>height %{z:.4f} mm<extra></extra>"))
+    out.append(go.Surface(z=pan.surfaces[i], x=pan.sx, y=pan.sy, coloraxis="coloraxis",
+                          name="surface", scene="scene"))
+    if pan.pressures is not None:
+        p = pan.pressures[i]
+        out.append(go.Heatmap(z=p, x=_axis_mm(p.shape[1], ext_x),
+                              y=_axis_mm(p.shape[0], ext_y), coloraxis="coloraxis2",
+                              xaxis=f"x{axis_of['pressure']}",
+                              yaxis=f"y{axis_of['pressure']}", name="pressure (kPa)",
+                              hovertemplate="pressure %{z:.2f} kPa<extra></extra>"))
+    return out
+
+
+def _annotations(domain: dict[str, tuple[float, float]]) -> list[dict]:
+    """The panels' titles (the surface's below the top row)."""
     annotations = []
     for name, label in (("frame", "tactile frame"), ("height", "height map (mm)"),
                         ("pressure", "pressure (kPa)")):
@@ -246,21 +320,7 @@ def viewer_figure(frames_bgr: np.ndarray | Sequence[np.ndarray] | None,
     annotations.append(dict(text="3D surface (drag to rotate)", x=0.5, y=0.48, xref="paper",
                             yref="paper", xanchor="center", yanchor="bottom", showarrow=False,
                             font=dict(size=14)))
-    frame_objs = [go.Frame(name=str(i), data=traces(i),
-                           traces=list(range(len(traces(0)))),
-                           layout=dict(title=dict(text=titles[i])))
-                  for i in range(n)]
-    steps = [dict(method="animate", label=titles[i],
-                  args=[[str(i)], dict(mode="immediate", frame=dict(duration=0, redraw=True),
-                                       transition=dict(duration=0))])
-             for i in range(n)]
-    layout.update(
-        title=dict(text=titles[active]), height=FIGURE_HEIGHT_PX,
-        margin=dict(l=60, r=60, t=70, b=110), annotations=annotations,
-        sliders=[dict(active=active, steps=steps, x=0.05, len=0.9, y=0.0, yanchor="top",
-                      pad=dict(t=40), currentvalue=dict(prefix="frame: "))],
-    )
-    return go.Figure(data=traces(active), frames=frame_objs, layout=layout)
+    return annotations
 
 
 def write_viewer(path: str | Path, frames_bgr: np.ndarray | Sequence[np.ndarray] | None,
