@@ -4,35 +4,40 @@ Pressing a ball of known radius R into the gel gives, inside each contact
 circle, pixels whose surface normal is known exactly (:mod:`._ball`). Those
 pixels, plus flat background pixels far from the contact, train a model from
 colour change (and, for the MLP, reference colour and pixel position) to the
-in-plane normal (n_x, n_y). This module holds the calibration and its file
-format; the training is :func:`tactilevision.optics._training.fit_from_ball_presses`.
+in-plane normal (n_x, n_y). This module holds the calibration's constructors and
+its file format, on top of its fields (:class:`._calibration_data.CalibrationData`,
+which the reconstructor reads) and of the training
+(:func:`tactilevision.optics._training.fit_from_ball_presses`).
 """
 
 from __future__ import annotations
 
+import datetime as _dt
 import io
 import json
 import os
 import zipfile
 import zlib
 from collections.abc import Mapping
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
 
-from .._checks import InputError
+from .._assets import KNOWN_SENSORS, default_calibration_path
+from .._checks import InputError, check_array
+from .._version import __version__
+from ._calibration_data import CalibrationData, ModelKind
+from ._gs_sdk_net import gs_sdk_layers, onnx_from_gs_sdk
 from ._lut import ColourLUT
+from ._training import fit_from_ball_presses
 
 __all__ = ["PhotometricCalibration"]
 
-ModelKind = Literal["lut", "mlp"]
 FORMAT_VERSION = 1
 
 
-@dataclass
-class PhotometricCalibration:
+class PhotometricCalibration(CalibrationData):
     """A sensor's colour-to-normal model, with its reference frame and scale.
 
     Build one with :meth:`from_ball_presses` or :meth:`load`; hand it to
@@ -75,28 +80,9 @@ class PhotometricCalibration:
         percentiles), the domain of the tables.
     provenance : dict
         Source, date, press count, ball radius, version: how it was made.
+    shape : (int, int)
+        (H, W) of the frames this calibration applies to (a property).
     """
-
-    model: ModelKind
-    reference: np.ndarray
-    mm_per_px: float
-    lut: ColourLUT | None = None
-    cell_luts: np.ndarray | None = None
-    onnx_bytes: bytes | None = None
-    use_position: bool = True
-    markers: bool = False
-    blur_sigma: float = 0.0
-    contact_threshold: float = 0.05
-    reference_blur: float = 2.0
-    normalise_gain: bool = True
-    colour_lo: np.ndarray = field(default_factory=lambda: np.full(3, -0.5, np.float32))
-    colour_hi: np.ndarray = field(default_factory=lambda: np.full(3, 0.5, np.float32))
-    provenance: dict[str, Any] = field(default_factory=dict)
-
-    @property
-    def shape(self) -> tuple[int, int]:
-        """(H, W) of the frames this calibration applies to."""
-        return (int(self.reference.shape[0]), int(self.reference.shape[1]))
 
     # ------------------------------------------------------------------ build
     @classmethod
@@ -235,8 +221,6 @@ class PhotometricCalibration:
         ImportError
             For ``model='mlp'`` without torch.
         """
-        from ._training import fit_from_ball_presses
-
         return fit_from_ball_presses(
             cls, reference, frames, centers_px, radii_px, ball_radius_mm=ball_radius_mm,
             mm_per_px=mm_per_px, model=model, use_position=use_position, markers=markers,
@@ -283,9 +267,6 @@ class PhotometricCalibration:
             Without the torch extra (torch to read the file, onnx to write the
             graph): ``pip install 'tactilevision[torch]'``.
         """
-        from .._checks import check_array
-        from ._gs_sdk_net import gs_sdk_layers, onnx_from_gs_sdk
-
         reference = check_array(reference, "reference", [("H", "W", 3)], dtype=np.uint8)
         if not mm_per_px > 0:
             raise InputError(f"mm_per_px must be positive, got {mm_per_px!r}")
@@ -315,13 +296,11 @@ class PhotometricCalibration:
         cal = cls(model="mlp", reference=reference.copy(), mm_per_px=float(mm_per_px),
                   use_position=True, markers=False, reference_blur=0.0, normalise_gain=False)
         cal.onnx_bytes = onnx_from_gs_sdk(layers, cal.shape)
-        import datetime as _dt
-
         cal.provenance = {
             "source": source, "imported_from": "gs_sdk BGRXYMLPNet",
             "layers": [int(layers[0][0].shape[1])] + [int(w.shape[0]) for w, _ in layers],
             "created": _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds"),
-            "tactilevision": _version(),
+            "tactilevision": __version__,
         }
         return cal
 
@@ -407,8 +386,6 @@ class PhotometricCalibration:
         >>> cal.shape
         (480, 640)
         """
-        from .._assets import KNOWN_SENSORS, default_calibration_path
-
         name = str(path)
         path = Path(path)
         if not path.is_file() and name in KNOWN_SENSORS:
@@ -474,9 +451,3 @@ class PhotometricCalibration:
                    normalise_gain=bool(meta.get("normalise_gain", defaults.normalise_gain)),
                    colour_lo=np.asarray(lo, np.float32), colour_hi=np.asarray(hi, np.float32),
                    provenance=dict(meta.get("provenance", {})))
-
-
-def _version() -> str:
-    from .. import __version__
-
-    return __version__

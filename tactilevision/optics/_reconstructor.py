@@ -14,15 +14,17 @@ from typing import Literal
 
 import cv2
 import numpy as np
+from scipy import ndimage as ndi
 
+from .._cache import cache_root, savez_atomic
 from .._checks import InputError, check_array
 from ._ball import gradients_from_normals
-from ._calibration import PhotometricCalibration
+from ._calibration_data import CalibrationData
 from ._features import blur_frames, channel_magnitude, colour_change, reference_inverse
 from ._markers import fill_masked_fields, marker_mask
 from ._mlp import MLPGradientModel, mlp_inputs
 from ._poisson import PoissonSolver, integrate_poisson_masked
-from ._table import table_from_cell_luts, table_from_lut, tabulate_mlp
+from ._table import GradientTable, table_from_cell_luts, table_from_lut, tabulate_mlp
 
 __all__ = ["DepthReconstructor"]
 
@@ -117,7 +119,7 @@ class DepthReconstructor:
     >>> gx, gy = recon.gradients(frame)                                 # doctest: +SKIP
     """
 
-    def __init__(self, calibration: PhotometricCalibration, *,
+    def __init__(self, calibration: CalibrationData, *,
                  reference: np.ndarray | str = "calibration", engine: Engine = "table",
                  boundary: Boundary = "neumann", table_bins: int = 32,
                  threads: int = 1, flat_reference: bool = False,
@@ -254,8 +256,6 @@ class DepthReconstructor:
     def _level_far_field(self, z: np.ndarray, grown: np.ndarray) -> np.ndarray:
         """Subtract the polynomial surface fitted to z outside the contact region `grown`,
         its holes filled (a flat face changes no colour)."""
-        from scipy import ndimage as ndi
-
         step = 4
         d = self.level_degree
         free = ~ndi.binary_fill_holes(grown)
@@ -413,8 +413,6 @@ class DepthReconstructor:
         ValueError
             For an unknown `threshold` string or a non-positive number.
         """
-        from scipy import ndimage as ndi
-
         if isinstance(threshold, str):
             if threshold not in ("calibration", "frame"):
                 raise InputError("threshold must be 'calibration', 'frame' or a number, got "
@@ -461,16 +459,12 @@ def _table_cache_path(key: tuple):
     and the onnxruntime version that evaluated the network."""
     import onnxruntime
 
-    from .._cache import cache_root
-
     h = hashlib.sha256(repr((_TABLE_FORMAT, onnxruntime.__version__, key)).encode())
     return cache_root() / "optics" / f"mlp_table_{h.hexdigest()}.npz"
 
 
 def _read_table(path, ref_inv: np.ndarray, bins: int):
     """The tabulation stored at `path`, or None (a miss, or a file that cannot be trusted)."""
-    from ._table import GradientTable
-
     try:
         with np.load(path, allow_pickle=False) as data:
             gx, gy, cell = data["gx_table"], data["gy_table"], data["cell_offset"]
@@ -485,14 +479,14 @@ def _read_table(path, ref_inv: np.ndarray, bins: int):
 
 def _write_table(path, table) -> None:
     """Store a tabulation atomically; a folder that cannot be written is skipped."""
-    from .._cache import savez_atomic
-
     savez_atomic(path, gx_table=table.gx_table, gy_table=table.gy_table,
                  cell_offset=table.cell_offset, lo=np.asarray(table.lo),
                  hi=np.asarray(table.hi), bins=np.int64(table.bins))
 
 
 def _tabulated(calibration, ref_inv: np.ndarray, bins: int):
+    """The network's gradient table for `ref_inv`: from memory, else from the disk cache,
+    else tabulated (and kept in both)."""
     key = (hashlib.blake2b(calibration.onnx_bytes, digest_size=16).digest(),
            hashlib.blake2b(np.ascontiguousarray(ref_inv).tobytes(), digest_size=16).digest(),
            ref_inv.shape, tuple(np.asarray(calibration.colour_lo, np.float32).tolist()),

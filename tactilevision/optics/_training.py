@@ -18,12 +18,15 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from .._checks import InputError, check_array
+from .._version import __version__
 from ._ball import ball_gradients, fit_ball_centre, normals_from_gradients
+from ._calibration_data import CalibrationData
 from ._circles import detect_contact_circles
 from ._features import colour_change, reference_inverse
 from ._lut import fit_cell_luts, fit_colour_lut
 from ._markers import marker_mask
 from ._mlp import mlp_inputs, train_mlp
+from ._reconstructor import DepthReconstructor
 
 __all__ = ["fit_from_ball_presses"]
 
@@ -34,8 +37,8 @@ __all__ = ["fit_from_ball_presses"]
 MLP_MAX_STEPS = 2400
 
 
-def fit_from_ball_presses(cls, reference: np.ndarray, frames: np.ndarray,
-                          centers_px: np.ndarray | None = None,
+def fit_from_ball_presses(cls: type[CalibrationData], reference: np.ndarray,
+                          frames: np.ndarray, centers_px: np.ndarray | None = None,
                           radii_px: np.ndarray | None = None, *, ball_radius_mm: float,
                           mm_per_px: float, model: str = "mlp", use_position: bool = True,
                           markers: bool | None = None, label_fraction: float | None = None,
@@ -51,34 +54,10 @@ def fit_from_ball_presses(cls, reference: np.ndarray, frames: np.ndarray,
     :meth:`~tactilevision.optics.PhotometricCalibration.from_ball_presses`, which
     calls this with its own class.
     """
-    from ._calibration import _version
-
-    reference = check_array(reference, "reference", [("H", "W", 3)], dtype=np.uint8)
-    frames = check_array(frames, "frames", [("N", *reference.shape)], dtype=np.uint8)
-    if model not in ("lut", "mlp"):
-        raise InputError(f"model must be 'lut' or 'mlp', got {model!r}")
-    if len(frames) < 2:
-        raise InputError(f"need at least 2 ball presses, got {len(frames)}")
-    ball_mm = np.asarray(ball_radius_mm, np.float64)
-    if ball_mm.ndim > 1 or (ball_mm.ndim == 1 and ball_mm.size != len(frames)):
-        raise InputError(f"ball_radius_mm must be one radius or one per press ({len(frames)}), "
-                         f"got shape {ball_mm.shape}")
-    ball_mm = np.broadcast_to(ball_mm, (len(frames),))
-    if not (np.all(np.isfinite(ball_mm) & (ball_mm > 0)) and mm_per_px > 0):
-        raise InputError("ball_radius_mm and mm_per_px must be positive")
-    if detect_edge not in ("contact", "colour"):
-        raise InputError(f"detect_edge must be 'contact' or 'colour', got {detect_edge!r}")
-    if not 0 < flat_fraction <= 1:
-        raise InputError(f"flat_fraction must be in (0, 1], got {flat_fraction!r}")
+    reference, frames, ball_mm = _checked_presses(reference, frames, ball_radius_mm,
+                                                  mm_per_px, model, detect_edge, flat_fraction)
     detected = centers_px is None and radii_px is None
-    if detected:
-        centers_px, radii_px = detect_contact_circles(frames, reference, edge=detect_edge)
-    elif centers_px is None or radii_px is None:
-        raise InputError("give both centers_px and radii_px, or neither (to detect them)")
-    centers = check_array(centers_px, "centers_px", [(len(frames), 2)], finite=True)
-    radii = check_array(radii_px, "radii_px", [(len(frames),)], finite=True)
-    centers = centers.astype(np.float64).copy()
-    radii = radii.astype(np.float64)
+    centers, radii = _press_circles(frames, reference, centers_px, radii_px, detect_edge)
     ball_px = ball_mm / mm_per_px              # (N,): each press's ball
     if label_fraction is None:     # the colour edge lies outside the contact (_circles.py)
         label_fraction = 0.85 if detected and detect_edge == "colour" else 1.0
@@ -94,41 +73,20 @@ def fit_from_ball_presses(cls, reference: np.ndarray, frames: np.ndarray,
         markers = bool(ref_mask.mean() > 0.02)
     ref_inv = reference_inverse(reference, marker_mask=ref_mask if markers else None)
     ref_colour = 1.0 / ref_inv
-    h, w = reference.shape[:2]
-    rng = np.random.default_rng(seed)
-    changes = [colour_change(f, ref_inv, blur_sigma=blur_sigma) for f in
-               tqdm(frames, desc="colour change", disable=not progress)]
-    valid = [~marker_mask(f) if markers else np.ones((h, w), bool) for f in frames]
-    background = [(rng.random((h, w)) < flat_fraction) & v for v in valid]
+    changes, valid, background = _pixel_sets(frames, ref_inv, markers, blur_sigma,
+                                             flat_fraction, seed, progress)
 
     cal = cls(model=model, reference=reference.copy(), mm_per_px=float(mm_per_px),
               use_position=use_position, markers=markers, blur_sigma=blur_sigma)
     rounds = 2 if refine_centers else 1
     fell_back = np.zeros((0, 0), bool)         # position cells on the colour-only table
     for rnd in range(rounds):
-        x_all, y_all, f_all, n_all, bg_mag = _training_samples(
-            changes, valid, background, centers, label_fraction * radii, ball_px)
-        if bg_mag.size == 0:
-            raise InputError(f"flat_fraction {flat_fraction:g} leaves no flat pixel (beyond "
-                             "twice the contact radius) to train on; raise it")
-        cal.contact_threshold = float(np.percentile(bg_mag, 99.9))
-        cal.colour_lo = np.percentile(f_all, 0.1, axis=0).astype(np.float32)
-        cal.colour_hi = np.percentile(f_all, 99.9, axis=0).astype(np.float32)
-        if model == "lut":
-            cal.lut = fit_colour_lut(f_all, n_all, bins=bins, lo=cal.colour_lo,
-                                     hi=cal.colour_hi)
-            if tuple(lut_cells) != (1, 1):
-                cal.cell_luts, fell_back = fit_cell_luts(
-                    x_all, y_all, f_all, n_all, (h, w), lut_cells, lo=cal.colour_lo,
-                    hi=cal.colour_hi, bins=bins, fallback=cal.lut)
-        else:
-            inputs = mlp_inputs(f_all, ref_colour[y_all, x_all], x_all, y_all, (h, w),
-                                use_position=use_position)
-            cal.onnx_bytes = train_mlp(inputs, n_all, hidden=hidden, epochs=epochs,
-                                       seed=seed, progress=progress, max_steps=max_steps)
+        samples = _training_samples(changes, valid, background, centers,
+                                    label_fraction * radii, ball_px)
+        fell_back = _fit_round(cal, samples, ref_colour, fell_back, flat_fraction=flat_fraction,
+                               bins=bins, lut_cells=lut_cells, hidden=hidden, epochs=epochs,
+                               seed=seed, progress=progress, max_steps=max_steps)
         if rnd + 1 < rounds:
-            from ._reconstructor import DepthReconstructor
-
             recon = DepthReconstructor(cal)
             for i, f in enumerate(frames):
                 gx, gy = recon.gradients(f)
@@ -149,9 +107,90 @@ def fit_from_ball_presses(cls, reference: np.ndarray, frames: np.ndarray,
         "lut_cells_fell_back": int(np.count_nonzero(fell_back)),
         "centers_px": centers.round(2).tolist(),
         "radii_px": radii.round(2).tolist(),
-        "tactilevision": _version(),
+        "tactilevision": __version__,
     }
     return cal
+
+
+def _checked_presses(reference: np.ndarray, frames: np.ndarray, ball_radius_mm: float,
+                     mm_per_px: float, model: str, detect_edge: str, flat_fraction: float
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The reference, the frames and each press's ball radius (N,), mm, checked."""
+    reference = check_array(reference, "reference", [("H", "W", 3)], dtype=np.uint8)
+    frames = check_array(frames, "frames", [("N", *reference.shape)], dtype=np.uint8)
+    if model not in ("lut", "mlp"):
+        raise InputError(f"model must be 'lut' or 'mlp', got {model!r}")
+    if len(frames) < 2:
+        raise InputError(f"need at least 2 ball presses, got {len(frames)}")
+    ball_mm = np.asarray(ball_radius_mm, np.float64)
+    if ball_mm.ndim > 1 or (ball_mm.ndim == 1 and ball_mm.size != len(frames)):
+        raise InputError(f"ball_radius_mm must be one radius or one per press ({len(frames)}), "
+                         f"got shape {ball_mm.shape}")
+    ball_mm = np.broadcast_to(ball_mm, (len(frames),))
+    if not (np.all(np.isfinite(ball_mm) & (ball_mm > 0)) and mm_per_px > 0):
+        raise InputError("ball_radius_mm and mm_per_px must be positive")
+    if detect_edge not in ("contact", "colour"):
+        raise InputError(f"detect_edge must be 'contact' or 'colour', got {detect_edge!r}")
+    if not 0 < flat_fraction <= 1:
+        raise InputError(f"flat_fraction must be in (0, 1], got {flat_fraction!r}")
+    return reference, frames, ball_mm
+
+
+def _press_circles(frames: np.ndarray, reference: np.ndarray, centers_px: np.ndarray | None,
+             radii_px: np.ndarray | None, detect_edge: str) -> tuple[np.ndarray, np.ndarray]:
+    """Contact-circle centres (N, 2) (a copy, refitted in place) and radii (N,), px, float64:
+    the given ones checked, or detected when neither is given."""
+    if centers_px is None and radii_px is None:
+        centers_px, radii_px = detect_contact_circles(frames, reference, edge=detect_edge)
+    elif centers_px is None or radii_px is None:
+        raise InputError("give both centers_px and radii_px, or neither (to detect them)")
+    centers = check_array(centers_px, "centers_px", [(len(frames), 2)], finite=True)
+    radii = check_array(radii_px, "radii_px", [(len(frames),)], finite=True)
+    return centers.astype(np.float64).copy(), radii.astype(np.float64)
+
+
+def _pixel_sets(frames: np.ndarray, ref_inv: np.ndarray, markers: bool, blur_sigma: float,
+                flat_fraction: float, seed: int, progress: bool
+                ) -> tuple[list[np.ndarray], list[np.ndarray], list[np.ndarray]]:
+    """Per press: the colour change (H, W, 3), the pixels off the markers (H, W) and the
+    flat-gel sample, a `flat_fraction` of those drawn with `seed` (H, W)."""
+    h, w = frames.shape[1:3]
+    rng = np.random.default_rng(seed)
+    changes = [colour_change(f, ref_inv, blur_sigma=blur_sigma) for f in
+               tqdm(frames, desc="colour change", disable=not progress)]
+    valid = [~marker_mask(f) if markers else np.ones((h, w), bool) for f in frames]
+    background = [(rng.random((h, w)) < flat_fraction) & v for v in valid]
+    return changes, valid, background
+
+
+def _fit_round(cal: CalibrationData, samples: tuple[np.ndarray, ...], ref_colour: np.ndarray,
+               fell_back: np.ndarray, *, flat_fraction: float, bins: int,
+               lut_cells: tuple[int, int], hidden: int, epochs: int, seed: int,
+               progress: bool, max_steps: int | None) -> np.ndarray:
+    """Fit `cal`'s model, contact threshold and colour range to one round's labelled pixels
+    (:func:`_training_samples`) in place; returns the position cells left on the
+    colour-only table (`fell_back` when no cell tables are fitted)."""
+    x_all, y_all, f_all, n_all, bg_mag = samples
+    h, w = cal.shape
+    if bg_mag.size == 0:
+        raise InputError(f"flat_fraction {flat_fraction:g} leaves no flat pixel (beyond "
+                         "twice the contact radius) to train on; raise it")
+    cal.contact_threshold = float(np.percentile(bg_mag, 99.9))
+    cal.colour_lo = np.percentile(f_all, 0.1, axis=0).astype(np.float32)
+    cal.colour_hi = np.percentile(f_all, 99.9, axis=0).astype(np.float32)
+    if cal.model == "lut":
+        cal.lut = fit_colour_lut(f_all, n_all, bins=bins, lo=cal.colour_lo,
+                                 hi=cal.colour_hi)
+        if tuple(lut_cells) != (1, 1):
+            cal.cell_luts, fell_back = fit_cell_luts(
+                x_all, y_all, f_all, n_all, (h, w), lut_cells, lo=cal.colour_lo,
+                hi=cal.colour_hi, bins=bins, fallback=cal.lut)
+    else:
+        inputs = mlp_inputs(f_all, ref_colour[y_all, x_all], x_all, y_all, (h, w),
+                            use_position=cal.use_position)
+        cal.onnx_bytes = train_mlp(inputs, n_all, hidden=hidden, epochs=epochs,
+                                   seed=seed, progress=progress, max_steps=max_steps)
+    return fell_back
 
 
 def _training_samples(changes: list[np.ndarray], valid: list[np.ndarray],
