@@ -5,6 +5,7 @@ from __future__ import annotations
 import html
 from pathlib import Path
 
+import cv2
 import numpy as np
 
 from ._depth import _scale_bar
@@ -252,8 +253,6 @@ def bevel_panels(cal, path: str | Path, *, dpi: int = 100, columns: int = 10) ->
     -------
     path : Path
     """
-    import cv2
-
     plt = pyplot()
     cert = cal.certification
     cfg = cal.session.config
@@ -338,71 +337,20 @@ def write_calibration_report(cal, out_dir: str | Path, figures: dict[str, Path])
     path : Path
     """
     out = Path(out_dir)
-    fit = cal.fit
     c = cal.certification
     e = html.escape
     rows = "".join(
         f"<tr><td>{r.press}</td><td>{e(r.reason)}</td><td>{e(r.detail)}</td>"
         f"<td>{r.t_frame_s:.2f}</td></tr>" for r in c.rejected)
-    warn = "".join(f"<li>{e(w)}</li>" for w in cal.warnings) or "<li>none</li>"
-    if fit is None:
-        result = (f"<p class=big>Nothing was fitted: {e(cal.failure or '')}</p>"
-                  "<p>The bevel panels below show what each press looked like and why it was "
-                  "rejected.</p>")
-        fit_text = ""
-    else:
-        if np.isfinite(fit.E_mpa):
-            result = (f"<p class=big>E = {fit.E_mpa:.4f} MPa ({fit.confidence:.0%} CI "
-                      f"{fit.E_ci95_mpa[0]:.4f} to {fit.E_ci95_mpa[1]:.4f}), nu = {fit.nu:.4f} "
-                      f"({fit.nu_ci95[0]:.4f} to {fit.nu_ci95[1]:.4f})</p>")
-        else:
-            result = (f"<p class=big>E and nu not computed: "
-                      f"{e(fit.out_of_table_message or '')}</p>")
-        fit_text = (f"Fit of eq. (5) P/w = c (1 + beta w/h): c = {fit.c_n_per_mm:.4f} N/mm, "
-                    f"beta = {fit.beta:.4f}, rmse {fit.rmse_n:.4f} N, R<sup>2</sup> = "
-                    f"{fit.r_squared:.5f}; beta and kappa from the {e(fit.beta_table)} tables "
-                    f"({e(fit.contact)} punch), h = {fit.thickness_mm:g} mm, "
-                    f"a = {fit.radius_mm:g} mm. Intervals: {e(fit.ci_method)}.")
-        notes = [n for n in fit.notes if n not in cal.warnings]
-        warn += "".join(f"<li>{e(n)}</li>" for n in notes if "interval" in n or "table" in n)
-    rule_text = {
-        "land": "the depth at which the bulging gel meets the block land, from the FEM at the "
-                "fitted nu",
-        "mark": "w0, the indenter's height over the land at the first frame showing the bevel "
-                "mark, plus what the force says the stage went on by past it (the force's rise "
-                "from the frame period before that frame to the window, over eq. (5)'s slope)",
-        "nominal": "the paper's w = w0, the indenter's height over the land, at the first frame "
-                   "showing the bevel mark",
-        "vernier": "w0 plus the overshoot read on the bevel: the band of contact on its flanks, "
-                   "half-width L, closes the gap by L tan(theta); less the gel's bulge there "
-                   "(FEM) when bulge_correction is on",
-    }[cal.depth_rule]
+    result, fit_text, warn = _fit_html(cal)
+    rule_text = _DEPTH_RULE_TEXT[cal.depth_rule]
     optics = c.bevel_optics
     optics_text = ("" if not optics else
                    f" Bevel read with an edge blur of {optics['blur_px']:g} px (chosen on "
                    f"{optics['n_bands']} long bands)"
                    + ("; short bands leaned on the session's flank colours" if optics.get("prior")
                       else "") + ".")
-    table = ""
-    if c.presses:
-        sd = (cal.depth_std_mm if len(cal.depth_std_mm) == len(c.presses)
-              else np.zeros(len(c.presses)))
-        bulge = cal.bulge_mm if len(cal.bulge_mm) == len(c.presses) else np.zeros(len(c.presses))
-        fitted, what = (fitted_forces(cal) if fit is not None
-                        else (np.full(len(c.presses), np.nan), ""))
-        trs = "".join(
-            f"<tr><td>{q.press}</td><td>{q.indenter}</td><td>{q.w0_mm:g}</td>"
-            f"<td>{d:.5f}</td><td>{1e3 * u:.2f}</td><td>{1e3 * (d - q.w0_mm):+.2f}</td>"
-            f"<td>{1e3 * b:.2f}</td><td>{q.force_n:.4f}</td><td>{f:.4f}</td>"
-            f"<td>{q.bevel_score:.0f}</td></tr>"
-            for q, d, u, b, f in zip(c.presses, cal.depth_mm, sd, bulge, fitted, strict=True))
-        table = ("<h2>Certified presses</h2>"
-                 + (f"<p>force P: {e(what)}.</p>" if what else "")
-                 + "<table><tr><th>press</th><th>indenter</th>"
-                 "<th>w0 (mm)</th><th>depth (mm)</th><th>sd (um)</th><th>overshoot (um)</th>"
-                 "<th>bulge (um)</th><th>F/T window mean (N)</th><th>force P fitted (N)</th>"
-                 "<th>bevel SNR</th></tr>"
-                 f"{trs}</table>")
+    table = _presses_html(cal)
     figs = figures_html(figures)
     page = html_head(f"tactilevision calibrate: {cal.session.path}") + f"""\
 <h1>Elastomer calibration of {e(str(cal.session.path))}</h1>
@@ -422,3 +370,71 @@ Camera noise {c.noise_sigma:.2f} grey levels. Took {cal.seconds:.1f} s.</p>
     path = out / "report.html"
     path.write_text(page, encoding="utf-8")
     return path
+
+
+#: The certified depth rules of the report, in words.
+_DEPTH_RULE_TEXT = {
+    "land": "the depth at which the bulging gel meets the block land, from the FEM at the "
+            "fitted nu",
+    "mark": "w0, the indenter's height over the land at the first frame showing the bevel "
+            "mark, plus what the force says the stage went on by past it (the force's rise "
+            "from the frame period before that frame to the window, over eq. (5)'s slope)",
+    "nominal": "the paper's w = w0, the indenter's height over the land, at the first frame "
+               "showing the bevel mark",
+    "vernier": "w0 plus the overshoot read on the bevel: the band of contact on its flanks, "
+               "half-width L, closes the gap by L tan(theta); less the gel's bulge there "
+               "(FEM) when bulge_correction is on",
+}
+
+
+def _fit_html(cal) -> tuple[str, str, str]:
+    """The report's result line, the fit's sentence and the warnings' list items."""
+    fit = cal.fit
+    e = html.escape
+    warn = "".join(f"<li>{e(w)}</li>" for w in cal.warnings) or "<li>none</li>"
+    if fit is None:
+        result = (f"<p class=big>Nothing was fitted: {e(cal.failure or '')}</p>"
+                  "<p>The bevel panels below show what each press looked like and why it was "
+                  "rejected.</p>")
+        return result, "", warn
+    if np.isfinite(fit.E_mpa):
+        result = (f"<p class=big>E = {fit.E_mpa:.4f} MPa ({fit.confidence:.0%} CI "
+                  f"{fit.E_ci95_mpa[0]:.4f} to {fit.E_ci95_mpa[1]:.4f}), nu = {fit.nu:.4f} "
+                  f"({fit.nu_ci95[0]:.4f} to {fit.nu_ci95[1]:.4f})</p>")
+    else:
+        result = (f"<p class=big>E and nu not computed: "
+                  f"{e(fit.out_of_table_message or '')}</p>")
+    fit_text = (f"Fit of eq. (5) P/w = c (1 + beta w/h): c = {fit.c_n_per_mm:.4f} N/mm, "
+                f"beta = {fit.beta:.4f}, rmse {fit.rmse_n:.4f} N, R<sup>2</sup> = "
+                f"{fit.r_squared:.5f}; beta and kappa from the {e(fit.beta_table)} tables "
+                f"({e(fit.contact)} punch), h = {fit.thickness_mm:g} mm, "
+                f"a = {fit.radius_mm:g} mm. Intervals: {e(fit.ci_method)}.")
+    notes = [n for n in fit.notes if n not in cal.warnings]
+    warn += "".join(f"<li>{e(n)}</li>" for n in notes if "interval" in n or "table" in n)
+    return result, fit_text, warn
+
+
+def _presses_html(cal) -> str:
+    """The table of certified presses ('' when none)."""
+    c = cal.certification
+    e = html.escape
+    if not c.presses:
+        return ""
+    sd = (cal.depth_std_mm if len(cal.depth_std_mm) == len(c.presses)
+          else np.zeros(len(c.presses)))
+    bulge = cal.bulge_mm if len(cal.bulge_mm) == len(c.presses) else np.zeros(len(c.presses))
+    fitted, what = (fitted_forces(cal) if cal.fit is not None
+                    else (np.full(len(c.presses), np.nan), ""))
+    trs = "".join(
+        f"<tr><td>{q.press}</td><td>{q.indenter}</td><td>{q.w0_mm:g}</td>"
+        f"<td>{d:.5f}</td><td>{1e3 * u:.2f}</td><td>{1e3 * (d - q.w0_mm):+.2f}</td>"
+        f"<td>{1e3 * b:.2f}</td><td>{q.force_n:.4f}</td><td>{f:.4f}</td>"
+        f"<td>{q.bevel_score:.0f}</td></tr>"
+        for q, d, u, b, f in zip(c.presses, cal.depth_mm, sd, bulge, fitted, strict=True))
+    return ("<h2>Certified presses</h2>"
+            + (f"<p>force P: {e(what)}.</p>" if what else "")
+            + "<table><tr><th>press</th><th>indenter</th>"
+            "<th>w0 (mm)</th><th>depth (mm)</th><th>sd (um)</th><th>overshoot (um)</th>"
+            "<th>bulge (um)</th><th>F/T window mean (N)</th><th>force P fitted (N)</th>"
+            "<th>bevel SNR</th></tr>"
+            f"{trs}</table>")
