@@ -13,6 +13,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.signal import lfilter
 
 from .._checks import InputError
 
@@ -230,8 +231,6 @@ def ft_log(schedule: PressSchedule, force_of_depth: Callable[[int, np.ndarray], 
     if stiffness is not None:
         fz = fz * np.asarray(stiffness(t_cam), np.float64)
     if g > 0:
-        from scipy.signal import lfilter
-
         # q_n = a q_(n-1) + (P_n - P_(n-1)): the Prony term's memory, exact for a step per sample
         a = np.exp(-1.0 / (rate_hz * tau))
         q = lfilter([1.0], [1.0, -a], np.diff(fz, prepend=0.0))
