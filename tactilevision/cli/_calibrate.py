@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
-from .._checks import InputError
+from .. import InputError
 from ..io import check_output_folder, check_overwrite, read_session
 from ..pipeline import CALIBRATION_FILES, calibrate_session, write_calibration
 from ._fit import _write_json, relaxation_lines, summary

@@ -4,14 +4,20 @@ from __future__ import annotations
 
 import argparse
 import csv
-import json
 import sys
 from pathlib import Path
 
 import numpy as np
+from tqdm.auto import tqdm
 
-from .. import KNOWN_SENSORS, InputError, default_calibration_path
-from ._out import StagedOutput, add_overwrite_argument, check_output_folder, check_overwrite
+from .. import InputError
+from ..fem import ForceEstimator
+from ..io import FrameSource, StagedOutput, check_output_folder, check_overwrite, open_source
+from ..optics import DepthReconstructor
+from ..pipeline import read_material
+from ..viz import save_force_image
+from ._options import add_material_options, add_optics_options, optics_calibration
+from ._out import add_overwrite_argument
 
 __all__ = ["add_parser", "run"]
 
@@ -37,19 +43,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--out", metavar="DIR", type=Path, default=None,
                    help="output folder (default: SOURCE/forces; for a video <stem>_forces "
                    "beside it)")
-    src = p.add_mutually_exclusive_group()
-    src.add_argument("--calibration", metavar="OPTICS", type=Path,
-                     help="photometric calibration (.npz); a session's own by default")
-    src.add_argument("--sensor", metavar="NAME", choices=KNOWN_SENSORS,
-                     help=f"shipped calibration: {', '.join(KNOWN_SENSORS)}")
-    p.add_argument("--reference", metavar="REF", type=Path, default=None,
-                   help="no-contact frame of a frames folder (default: found beside it)")
-    p.add_argument("--fit", metavar="FIT.json", type=Path, default=None,
-                   help="E_mpa and nu from a fit/calibrate JSON")
-    p.add_argument("--E-mpa", type=float, default=None, help="Young's modulus, MPa")
-    p.add_argument("--nu", type=float, default=None, help="Poisson's ratio")
-    p.add_argument("--thickness-mm", type=float, default=None,
-                   help="gel thickness h, mm (a session's own by default)")
+    add_optics_options(p)
+    add_material_options(p)
     p.add_argument("--method", choices=("spectral", "fem"), default="spectral",
                    help="spectral layer model at full resolution (default) or inverse FEM")
     p.add_argument("--grid", metavar="NX,NY", default="40,30",
@@ -93,15 +88,7 @@ def _material(args: argparse.Namespace, session_dir: Path | None
                              "calibrate' first) and neither --E-mpa/--nu nor --fit was given")
     if path is None:
         raise InputError("no E and nu: give --E-mpa and --nu, or --fit FIT.json")
-    try:
-        obj = json.loads(Path(path).read_text())
-        E, nu = float(obj["E_mpa"]), float(obj["nu"])
-    except FileNotFoundError:
-        raise InputError(f"{path} does not exist") from None
-    except (json.JSONDecodeError, KeyError, TypeError, ValueError) as exc:
-        raise InputError(f"{path} has no numeric E_mpa and nu ({exc})") from None
-    if not (np.isfinite(E) and np.isfinite(nu)):
-        raise InputError(f"{path} has E_mpa = {E} and nu = {nu}: not a usable fit")
+    E, nu, obj = read_material(path)
     return E, nu, str(path), obj
 
 
@@ -126,81 +113,25 @@ def _beta(args: argparse.Namespace, fit_obj: dict, material_source: str
 
 def run(args: argparse.Namespace) -> int:
     """Run ``forces``; returns 0, or 2 on bad input (nothing written then)."""
-    from ..fem import ForceEstimator
-    from ..io import (
-        VideoFrames,
-        find_reference,
-        find_video_reference,
-        is_video,
-        list_frames,
-        read_frame,
-        read_reference,
-        read_session,
-    )
-    from ..optics import DepthReconstructor, PhotometricCalibration
-    from ..viz import save_force_image
-    from ._reconstruct import _checked, _VideoFrame
-
     source: Path = args.source
-    video = VideoFrames(source) if source.is_file() and is_video(source) else None
-    if video is None and not source.is_dir():
-        raise InputError(f"{source} is not a folder nor a video file")
-    default_out = (source.with_name(f"{source.stem}_forces") if video is not None
+    default_out = (source.with_name(f"{source.stem}_forces") if source.is_file()
                    else source / "forces")
-    check_output_folder(args.out if args.out is not None else default_out)
-    overwrite = args.overwrite
-    session = None
-    if video is None and (source / "session.toml").is_file():
-        session = read_session(source)
-        frames = list(session.frame_paths)
-        times = np.asarray(session.frame_times_s, np.float64)
-        cfg = session.config
-        h = args.thickness_mm if args.thickness_mm is not None else cfg.gel_thickness_mm
-        cal_path = args.calibration or (default_calibration_path(args.sensor) if args.sensor
-                                        else cfg.calibration)
-        optics_note = ("--calibration" if args.calibration else
-                       f"shipped '{args.sensor}'" if args.sensor else "the session's own")
-        if cal_path is None and cfg.sensor_name in KNOWN_SENSORS:
-            cal_path = default_calibration_path(cfg.sensor_name)
-            optics_note = (f"shipped '{cfg.sensor_name}' (the session names no [optics] "
-                           "calibration of its own)")
-        reference = session.reference
-        mm_per_px = cfg.mm_per_px
-    else:
-        if video is not None:
-            frames = [_VideoFrame(source, i) for i in range(video.n_frames)]
-            times = np.arange(video.n_frames) / video.fps
-        else:
-            frames = list_frames(source)
-            times = np.full(len(frames), np.nan)
-        cal_path = args.calibration or (default_calibration_path(args.sensor) if args.sensor
-                                        else None)
-        optics_note = "--calibration" if args.calibration else f"shipped '{args.sensor}'"
-        if args.thickness_mm is None:
-            raise InputError("a frames folder or video needs --thickness-mm (the gel "
-                             "thickness h)")
-        h = args.thickness_mm
-        reference = None
-        mm_per_px = None
-    if cal_path is None:
-        raise InputError("no photometric calibration: give --calibration OPTICS or --sensor")
-    cal = PhotometricCalibration.load(cal_path)
-    if session is None:
-        ref_path = args.reference or (find_video_reference(source) if video is not None
-                                      else find_reference(source))
-        if args.reference is not None and not args.reference.is_file():
-            raise InputError(f"reference {args.reference} does not exist")
-        reference = read_reference(ref_path, cal.shape) if ref_path else None
-        mm_per_px = cal.mm_per_px
-    if not frames:
-        raise InputError(f"{source} holds no frames")
+    out = args.out if args.out is not None else default_out
+    check_output_folder(out)
+    src = open_source(source, reference=args.reference)
+    session = src.session
+    if args.thickness_mm is None and session is None:
+        raise InputError("a frames folder or video needs --thickness-mm (the gel thickness h)")
+    h = args.thickness_mm if args.thickness_mm is not None else session.config.gel_thickness_mm
+    cal, cal_path, optics_note = optics_calibration(args, src)
+    reference = src.reference(cal.shape)
+    mm_per_px = src.mm_per_px if src.mm_per_px is not None else cal.mm_per_px
     if args.every < 1:
         raise InputError(f"--every must be >= 1, got {args.every}")
+    picks = range(0, src.n_frames, args.every)
     names = ["forces.csv"] + ([] if args.no_images else
-                              [f"{frames[i].stem}_force.png"
-                               for i in range(0, len(frames), args.every)])
-    check_overwrite(args.out if args.out is not None else default_out, names,
-                    overwrite=overwrite)
+                              [f"{src.frame_stem(i)}_force.png" for i in picks])
+    check_overwrite(out, names, overwrite=args.overwrite)
     E, nu, material_source, fit_obj = _material(args, source if session else None)
     beta, beta_source = _beta(args, fit_obj, material_source)
     try:
@@ -215,72 +146,14 @@ def run(args: argparse.Namespace) -> int:
     est = ForceEstimator(cal.shape, mm_per_px, thickness_mm=h, E_mpa=E, nu=nu, grid=grid,
                          method=args.method, contact=args.contact,
                          threshold_mm=args.threshold_mm, beta=beta)
-    out = args.out if args.out is not None else default_out
-    ft = None
-    ft_note = ""
-    if session is not None and session.forces_n.size:
-        # the clock offset: the session's, else the one calibrate estimated; unknown, the F/T
-        # column stays empty rather than misaligned
-        offset = session.config.clock_offset_s
-        if offset is None:
-            offset = fit_obj.get("clock_offset_s")
-        if offset is None:
-            ft_note = ("; ft_fz_n left empty: the clock offset between frames and F/T log is "
-                       "unknown (no [force_sensor] clock_offset_s, no fit.json from calibrate)")
-        else:
-            ft = (session.force_times_s - float(offset), session.forces_n[:, 2])
+    ft, ft_note = _ft_log(src, fit_obj)
     # written whole into a hidden folder in out, moved into place at the end (Ctrl-C:
     # nothing)
-    with StagedOutput(out, overwrite=overwrite) as stage:
-        tmp = stage.path
-        credit = cal.provenance.get("credit")
-        picks = list(range(0, len(frames), args.every))
-        it = picks
-        if not args.no_progress:
-            from tqdm.auto import tqdm
-
-            it = tqdm(picks, desc="forces", unit="frame", file=sys.stderr, mininterval=1.0)
-        rows, skipped, at_edge = [], [], []
-        decoded = video.iter(0, video.n_frames) if video is not None else None
-        at = 0                        # the next frame the video decoder gives
-        for i in it:
-            path = frames[i]
-            try:
-                if decoded is None:
-                    frame = read_frame(path, cal.shape)
-                else:                 # decoded in order: skip to frame i
-                    while at <= i:
-                        frame, at = next(decoded), at + 1
-                    frame = _checked(frame, cal.shape, path.name)
-            except InputError as exc:
-                skipped.append(str(exc))
-                continue
-            height = recon(frame)     # float32: the estimator's single-precision path
-            fm = est(height)
-            # the contact area: the footprint the traction acts on (pixels, or FEM nodes, above
-            # --threshold-mm that push: each node's area is its force over its pressure); with
-            # 'field', the colour change above the noise level
-            if fm.contact is None:
-                area = float(recon.contact_mask(frame).sum()) * mm_per_px ** 2
-            else:
-                c = fm.contact
-                area = float(np.sum(fm.forces_n[..., 2][c] / fm.pressure_kpa[c])) * 1e3
-                if c[0].any() or c[-1].any() or c[:, 0].any() or c[:, -1].any():
-                    at_edge.append(path.name)     # the force beyond the image is not seen
-            t = float(times[i])
-            row = {"frame": path.name, "t_s": "" if not np.isfinite(t) else f"{t:.4f}",
-                   "fx_n": f"{fm.total_n[0]:.5f}", "fy_n": f"{fm.total_n[1]:.5f}",
-                   "fz_n": f"{fm.total_n[2]:.5f}",
-                   "max_pressure_kpa": f"{float(fm.pressure_kpa.max()):.3f}",
-                   "contact_area_mm2": f"{area:.3f}",
-                   "ft_fz_n": ""}
-            if ft is not None and np.isfinite(t):
-                row["ft_fz_n"] = f"{float(np.interp(t, ft[0], ft[1])):.5f}"
-            rows.append(row)
-            if not args.no_images:
-                save_force_image(tmp / f"{path.stem}_force.png", fm, mm_per_px=mm_per_px,
-                                 frame=frame, title=path.name, credit=credit)
-        with (tmp / "forces.csv").open("w", newline="") as fh:
+    with StagedOutput(out, overwrite=args.overwrite) as stage:
+        rows, skipped, at_edge = _force_rows(src, picks, recon, est, ft, stage.path, args,
+                                             cal.shape, mm_per_px,
+                                             cal.provenance.get("credit"))
+        with (stage.path / "forces.csv").open("w", newline="") as fh:
             writer = csv.DictWriter(fh, fieldnames=_COLUMNS)
             writer.writeheader()
             writer.writerows(rows)
@@ -305,3 +178,58 @@ def run(args: argparse.Namespace) -> int:
     for msg in skipped:
         print(f"tactilevision forces: error: {msg}", file=sys.stderr)
     return 2 if skipped else 0
+
+
+def _ft_log(src: FrameSource, fit_obj: dict) -> tuple[tuple | None, str]:
+    """A session's F/T fz on the camera's clock (times, fz), and a note when the clock offset
+    is unknown (the F/T column then stays empty rather than misaligned)."""
+    session = src.session
+    if session is None or not session.forces_n.size:
+        return None, ""
+    # the clock offset: the session's, else the one calibrate estimated
+    offset = session.config.clock_offset_s
+    if offset is None:
+        offset = fit_obj.get("clock_offset_s")
+    if offset is None:
+        return None, ("; ft_fz_n left empty: the clock offset between frames and F/T log is "
+                      "unknown (no [force_sensor] clock_offset_s, no fit.json from calibrate)")
+    return (session.force_times_s - float(offset), session.forces_n[:, 2]), ""
+
+
+def _force_rows(src: FrameSource, picks, recon, est, ft, tmp: Path, args, shape,
+                mm_per_px: float, credit) -> tuple[list[dict], list[str], list[str]]:
+    """Each picked frame's force map (its image into `tmp`) and forces.csv row; the frames
+    skipped (their errors) and those whose footprint reaches the image's edge."""
+    rows, skipped, at_edge = [], [], []
+    frames = tqdm(src.frames_at(picks, shape), total=len(picks), desc="forces", unit="frame",
+                  file=sys.stderr, mininterval=1.0, disable=args.no_progress)
+    for i, frame in frames:
+        if isinstance(frame, InputError):
+            skipped.append(str(frame))
+            continue
+        name = src.frame_name(i)
+        height = recon(frame)     # float32: the estimator's single-precision path
+        fm = est(height)
+        # the contact area: the footprint the traction acts on (pixels, or FEM nodes, above
+        # --threshold-mm that push: each node's area is its force over its pressure); with
+        # 'field', the colour change above the noise level
+        if fm.contact is None:
+            area = float(recon.contact_mask(frame).sum()) * mm_per_px ** 2
+        else:
+            c = fm.contact
+            area = float(np.sum(fm.forces_n[..., 2][c] / fm.pressure_kpa[c])) * 1e3
+            if c[0].any() or c[-1].any() or c[:, 0].any() or c[:, -1].any():
+                at_edge.append(name)     # the force beyond the image is not seen
+        t = float(src.times_s[i])
+        row = {"frame": name, "t_s": "" if not np.isfinite(t) else f"{t:.4f}",
+               "fx_n": f"{fm.total_n[0]:.5f}", "fy_n": f"{fm.total_n[1]:.5f}",
+               "fz_n": f"{fm.total_n[2]:.5f}",
+               "max_pressure_kpa": f"{float(fm.pressure_kpa.max()):.3f}",
+               "contact_area_mm2": f"{area:.3f}", "ft_fz_n": ""}
+        if ft is not None and np.isfinite(t):
+            row["ft_fz_n"] = f"{float(np.interp(t, ft[0], ft[1])):.5f}"
+        rows.append(row)
+        if not args.no_images:
+            save_force_image(tmp / f"{src.frame_stem(i)}_force.png", fm, mm_per_px=mm_per_px,
+                             frame=frame, title=name, credit=credit)
+    return rows, skipped, at_edge

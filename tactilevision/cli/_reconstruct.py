@@ -10,8 +10,12 @@ from pathlib import Path
 import numpy as np
 from tqdm.auto import tqdm
 
-from .. import KNOWN_SENSORS, InputError, default_calibration_path
-from ._out import StagedOutput, add_overwrite_argument, check_output_folder, check_overwrite
+from .. import InputError
+from ..io import StagedOutput, check_output_folder, check_overwrite, open_source
+from ..optics import DepthReconstructor
+from ..viz import save_depth_image
+from ._options import add_optics_options, optics_calibration
+from ._out import add_overwrite_argument
 
 __all__ = ["add_parser", "run"]
 
@@ -28,16 +32,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("frames_dir", metavar="FRAMES_DIR", type=Path,
                    help="folder of .png/.jpg frames (sorted by name), or a video file (.mp4, "
                    ".avi, ...: its frames named <video stem>_<index>)")
-    p.add_argument("--reference", metavar="REF", type=Path, default=None,
-                   help="no-contact frame; default FRAMES_DIR/reference.png (or ref.jpg, or "
-                   "gs_sdk's background.png, or in the parent folder), else the "
-                   "calibration's own reference; a file of one of these names is never read "
-                   "as a frame")
-    src = p.add_mutually_exclusive_group(required=True)
-    src.add_argument("--calibration", metavar="OPTICS", type=Path,
-                     help="photometric calibration file (.npz from 'optics calibrate')")
-    src.add_argument("--sensor", metavar="NAME", choices=KNOWN_SENSORS,
-                     help=f"use the shipped default calibration: {', '.join(KNOWN_SENSORS)}")
+    add_optics_options(p, required=True)
     p.add_argument("--out", metavar="DIR", type=Path, default=Path("out/reconstruct"),
                    help="output folder (default: out/reconstruct)")
     p.add_argument("--no-images", action="store_true", help="write only the .npy height maps")
@@ -69,38 +64,16 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run ``reconstruct``; returns 2 if any frame was skipped."""
-    from ..io import (
-        VideoFrames,
-        find_reference,
-        find_video_reference,
-        is_video,
-        list_frames,
-        read_frame,
-        read_reference,
-    )
-    from ..optics import DepthReconstructor, PhotometricCalibration
-    from ..viz import save_depth_image
-
     boundary, level = _boundary_and_level(args.boundary, args.level)
     out = check_output_folder(args.out)    # before any work: a bad --out fails at once
-    overwrite = args.overwrite
-    cal_path = args.calibration or default_calibration_path(args.sensor)
-    cal = PhotometricCalibration.load(cal_path)
-    video = None
-    if args.frames_dir.is_file() and is_video(args.frames_dir):
-        video = VideoFrames(args.frames_dir)
-        frames = [_VideoFrame(args.frames_dir, i) for i in range(video.n_frames)]
-    else:
-        frames = list_frames(args.frames_dir)
-    names = ["heights.csv"] + [f"{p.stem}_height.npy" for p in frames]
+    src = open_source(args.frames_dir, reference=args.reference)
+    cal, cal_path, _ = optics_calibration(args, src)
+    stems = [src.frame_stem(i) for i in range(src.n_frames)]
+    names = ["heights.csv"] + [f"{s}_height.npy" for s in stems]
     if not args.no_images:
-        names += [f"{p.stem}_depth.png" for p in frames]
-    check_overwrite(out, names, overwrite=overwrite)
-    ref_path = args.reference or (find_video_reference(args.frames_dir) if video is not None
-                                  else find_reference(args.frames_dir))
-    if args.reference is not None and not args.reference.is_file():
-        raise InputError(f"reference {args.reference} does not exist")
-    reference = read_reference(ref_path, cal.shape) if ref_path else None
+        names += [f"{s}_depth.png" for s in stems]
+    check_overwrite(out, names, overwrite=args.overwrite)
+    reference = src.reference(cal.shape)
     recon = DepthReconstructor(cal, reference="calibration" if reference is None else reference,
                                boundary=boundary, level=level, engine=args.engine,
                                flat_reference=args.flat_reference,
@@ -108,25 +81,22 @@ def run(args: argparse.Namespace) -> int:
     credit = cal.provenance.get("credit")
     rows, skipped = [], []
     # written whole into a hidden folder in out, moved into place at the end (Ctrl-C: nothing)
-    with StagedOutput(out, overwrite=overwrite) as stage:
+    with StagedOutput(out, overwrite=args.overwrite) as stage:
         tmp = stage.path
-        decoded = video.iter(0, video.n_frames) if video is not None else None
-        for path in tqdm(frames, desc="reconstruct", unit="frame", file=sys.stderr,
-                         disable=args.no_progress):
-            try:
-                frame = (read_frame(path, cal.shape) if decoded is None
-                         else _checked(next(decoded), cal.shape, path.name))
-            except InputError as exc:
-                skipped.append(str(exc))
+        for i, frame in tqdm(src.frames_at(range(src.n_frames), cal.shape), total=src.n_frames,
+                             desc="reconstruct", unit="frame", file=sys.stderr,
+                             disable=args.no_progress):
+            if isinstance(frame, InputError):
+                skipped.append(str(frame))
                 continue
+            name, stem = src.frame_name(i), stems[i]
             height = recon(frame)
-            np.save(tmp / f"{path.stem}_height.npy", height)
+            np.save(tmp / f"{stem}_height.npy", height)
             if not args.no_images:
-                save_depth_image(tmp / f"{path.stem}_depth.png", height,
-                                 mm_per_px=cal.mm_per_px, frame=frame, title=path.name,
-                                 credit=credit)
+                save_depth_image(tmp / f"{stem}_depth.png", height, mm_per_px=cal.mm_per_px,
+                                 frame=frame, title=name, credit=credit)
             contact = recon.contact_mask(frame)
-            rows.append({"frame": path.name, "max_depth_mm": f"{float(height.max()):.4f}",
+            rows.append({"frame": name, "max_depth_mm": f"{float(height.max()):.4f}",
                          "contact_area_mm2": f"{contact.sum() * cal.mm_per_px ** 2:.3f}",
                          "out_of_range_px": int(recon.out_of_range(frame).sum())})
         if not rows:
@@ -139,7 +109,8 @@ def run(args: argparse.Namespace) -> int:
             writer.writeheader()
             writer.writerows(rows)
         stage.commit()
-    ref_note = str(ref_path) if ref_path else "the calibration's reference"
+    ref_note = (str(src.reference_path) if src.reference_path else
+                "the session's" if src.session is not None else "the calibration's reference")
     print(f"reconstructed {len(rows)} frame(s) from {args.frames_dir} with {cal_path} "
           f"(reference: {ref_note}) into {out}")
     if skipped:
@@ -168,19 +139,3 @@ def _boundary_and_level(boundary: str | None, level: str) -> tuple[str, str]:
         raise InputError(f"--level far_field levels a Neumann solve; with --boundary {boundary} "
                          "the height's zero is set by the boundary itself (leave out --level)")
     return boundary, level
-
-
-class _VideoFrame:
-    """A video's frame named as a file would be: ``<video stem>_<index>``."""
-
-    def __init__(self, video: Path, index: int) -> None:
-        self.stem = f"{video.stem}_{index:05d}"
-        self.name = f"{video.name}#{index}"
-
-
-
-def _checked(frame, shape: tuple[int, int], name: str):
-    if frame.shape[:2] != tuple(shape):
-        raise InputError(f"{name} is {frame.shape[1]} x {frame.shape[0]}, the calibration "
-                         f"{shape[1]} x {shape[0]}")
-    return frame

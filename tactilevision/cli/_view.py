@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import KNOWN_SENSORS, InputError, default_calibration_path
+from ..pipeline import read_material
 
 __all__ = ["add_parser", "run"]
 
@@ -62,13 +63,7 @@ def _material(args: argparse.Namespace) -> tuple[float, float, float] | None:
     if not asked:
         return None
     if args.fit is not None:
-        try:
-            obj = json.loads(Path(args.fit).read_text())
-            E, nu = float(obj["E_mpa"]), float(obj["nu"])
-        except FileNotFoundError:
-            raise InputError(f"{args.fit} does not exist") from None
-        except (json.JSONDecodeError, KeyError, TypeError, ValueError, UnicodeDecodeError) as e:
-            raise InputError(f"{args.fit} has no numeric E_mpa and nu ({e})") from None
+        E, nu, _ = read_material(args.fit)
         if args.E_mpa is not None:
             E = float(args.E_mpa)
         if args.nu is not None:

@@ -11,7 +11,6 @@ once, with one nu for the gel.
 
 from __future__ import annotations
 
-import json
 import math
 import warnings
 from collections.abc import Sequence
@@ -20,6 +19,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._checks import InputError
+from ..io import read_measurements
+from ..mechanics import diagnose, fit_model
+from ..pipeline import CalibrationResult
 from ._read import CalibrationRecord
 
 __all__ = ["PooledDiagnosis", "pooled_diagnosis", "pooled_measurements"]
@@ -48,8 +50,6 @@ def pooled_measurements(records: Sequence[CalibrationRecord]) -> dict[str, np.nd
     InputError
         If a calibration folder has no readable ``measurements.csv`` (named).
     """
-    from ..io import read_measurements
-
     day0 = records[0].date
     tables = []
     for r in records:
@@ -129,7 +129,7 @@ class PooledDiagnosis:
 def _geometry(records: Sequence[CalibrationRecord]) -> tuple[float, float]:
     hs, as_ = set(), set()
     for r in records:
-        obj = json.loads((r.folder / "fit.json").read_text())
+        obj = CalibrationResult.load(r.folder).fit
         hs.add(obj.get("thickness_mm"))
         as_.add(obj.get("radius_mm"))
     if len(hs) != 1 or len(as_) != 1 or None in hs or None in as_:
@@ -156,8 +156,6 @@ def pooled_diagnosis(records: Sequence[CalibrationRecord]) -> PooledDiagnosis:
         Fewer than two days, calibrations with different h or a, or a
         missing measurements table.
     """
-    from ..mechanics import diagnose, fit_model
-
     if len({r.date for r in records}) < 2:
         raise InputError("a pooled diagnosis needs calibrations on at least two days")
     h, a = _geometry(records)

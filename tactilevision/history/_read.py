@@ -10,14 +10,16 @@ them into one date-ordered list per sensor.
 from __future__ import annotations
 
 import datetime
-import json
 import math
 import tomllib
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
+from scipy import stats
+
 from .._checks import InputError
+from ..pipeline import CalibrationResult
 
 __all__ = ["CalibrationRecord", "gather", "read_calibration"]
 
@@ -142,19 +144,15 @@ def _date(fit: Mapping, toml: Mapping, folder: Path,
                      f"--date {folder}=YYYY-MM-DD")
 
 
-def _n_rejected(fit: Mapping, folder: Path) -> int:
-    v = fit.get("n_rejected")
+def _n_rejected(result: CalibrationResult, folder: Path) -> int:
+    """Presses rejected: fit.json's n_rejected, else the rows of rejected.csv."""
+    v = result.fit.get("n_rejected")
     if isinstance(v, int) and not isinstance(v, bool) and v >= 0:
         return v
-    path = folder / "rejected.csv"
-    if not path.is_file():
+    if not (folder / "rejected.csv").is_file():
         raise InputError(f"calibration folder {folder}: fit.json has no n_rejected and there "
                          "is no rejected.csv (is it the output of tactilevision calibrate?)")
-    import csv
-
-    with path.open(newline="", encoding="utf-8") as fh:
-        rows = [r for r in csv.reader(fh) if any(c.strip() for c in r)]
-    return max(len(rows) - 1, 0)
+    return len(result.rejected)
 
 
 def read_calibration(folder: str | Path, *, date: datetime.date | None = None
@@ -186,16 +184,9 @@ def read_calibration(folder: str | Path, *, date: datetime.date | None = None
     folder = Path(folder)
     if not folder.is_dir():
         raise InputError(f"calibration folder {folder} does not exist or is not a folder")
+    result = CalibrationResult.load(folder)
+    fit = result.fit
     path = folder / "fit.json"
-    if not path.is_file():
-        raise InputError(f"calibration folder {folder} has no fit.json (give the output folder "
-                         "of tactilevision calibrate)")
-    try:
-        fit = json.loads(path.read_text(encoding="utf-8"))
-    except (ValueError, UnicodeDecodeError) as exc:
-        raise InputError(f"{path} is not valid JSON: {exc}") from None
-    if not isinstance(fit, dict):
-        raise InputError(f"{path} is not a JSON object")
     toml = _toml(folder)
     sensor = fit.get("sensor_name")
     if not isinstance(sensor, str) or not sensor.strip():
@@ -209,8 +200,6 @@ def read_calibration(folder: str | Path, *, date: datetime.date | None = None
     conf = 0.95 if math.isnan(conf) else conf
     E_se = _number(fit, "E_se_mpa", path, required=False)
     if math.isnan(E_se):
-        from scipy import stats
-
         E_se = (E_ci[1] - E_ci[0]) / (2.0 * float(stats.norm.ppf(0.5 + conf / 2)))
     beta = _number(fit, "beta", path)
     beta_ci = _interval(fit, "beta_ci95", path)
@@ -229,7 +218,7 @@ def read_calibration(folder: str | Path, *, date: datetime.date | None = None
         folder=folder, sensor=sensor, date=when, date_source=source, E_mpa=E, E_ci95_mpa=E_ci,
         E_se_mpa=E_se, nu=_number(fit, "nu", path), nu_ci95=_interval(fit, "nu_ci95", path),
         c_n_per_mm=c, c_ci95_n_per_mm=c_ci, beta=beta, beta_ci95=beta_ci, confidence=conf,
-        n_presses=n, n_rejected=_n_rejected(fit, folder),
+        n_presses=n, n_rejected=_n_rejected(result, folder),
         clock_offset_s=_number(fit, "clock_offset_s", path, required=False))
 
 

@@ -56,3 +56,8 @@ from ._output import (  # noqa: E402
 
 __all__ += ["MANIFEST", "StagedOutput", "check_output_folder", "check_overwrite",
             "output_folder"]
+
+# one way in for frames: folder, video, session or camera (every command): names appended
+from ._source import FrameSource, open_source  # noqa: E402
+
+__all__ += ["FrameSource", "open_source"]

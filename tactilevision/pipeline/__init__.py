@@ -28,10 +28,11 @@ __all__ = ["MARK_BETA", "DepthState", "Fitter", "SessionCalibration", "calibrate
 from ._result import (
     CALIBRATION_FILES,
     CalibrationResult,
+    read_material,
     result_dict,
     session_reconstructor,
     write_calibration,
 )
 
-__all__ += ["CALIBRATION_FILES", "CalibrationResult", "result_dict", "session_reconstructor",
-            "write_calibration"]
+__all__ += ["CALIBRATION_FILES", "CalibrationResult", "read_material", "result_dict",
+            "session_reconstructor", "write_calibration"]

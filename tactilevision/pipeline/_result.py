@@ -25,8 +25,8 @@ from ..optics import DepthReconstructor, PhotometricCalibration
 from ..viz import calibration_figures, write_calibration_report
 from ._calibration import SessionCalibration
 
-__all__ = ["CALIBRATION_FILES", "CalibrationResult", "result_dict", "session_reconstructor",
-           "write_calibration"]
+__all__ = ["CALIBRATION_FILES", "CalibrationResult", "read_material", "result_dict",
+           "session_reconstructor", "write_calibration"]
 
 #: The files a calibration folder holds (the figures and report.html unless ``report=False``).
 CALIBRATION_FILES = ("rejected.csv", "measurements.csv", "session.toml", "holds.csv", "fit.json",
@@ -300,6 +300,41 @@ class CalibrationResult:
             h, a = table.thickness_mm, table.radius_mm
         return cls(fit=fit, holds=holds, rejected=_read_rejected(path / "rejected.csv"),
                    measurements=columns, thickness_mm=h, radius_mm=a, folder=path)
+
+
+def read_material(path: str | Path) -> tuple[float, float, dict]:
+    """E and nu from a calibration folder or a ``fit --json`` / ``fit.json`` file.
+
+    Parameters
+    ----------
+    path : str or Path
+        The folder ``calibrate`` wrote, or a JSON file with ``E_mpa`` and ``nu``.
+
+    Returns
+    -------
+    E_mpa : float
+        Young's modulus E, MPa.
+    nu : float
+        Poisson's ratio.
+    fit : dict
+        The whole JSON object (``beta``, ``thickness_mm`` and the rest).
+
+    Raises
+    ------
+    InputError
+        Naming `path`: it does not exist, is not a JSON object, or has no
+        finite numeric ``E_mpa`` and ``nu``.
+    """
+    path = Path(path)
+    if not path.exists():
+        raise InputError(f"{path} does not exist")
+    fit = CalibrationResult.load(path).fit or {}
+    E, nu = fit.get("E_mpa"), fit.get("nu")
+    if not all(isinstance(v, int | float) and not isinstance(v, bool) for v in (E, nu)):
+        raise InputError(f"{path} has no numeric E_mpa and nu (E_mpa {E!r}, nu {nu!r})")
+    if not (math.isfinite(E) and math.isfinite(nu)):
+        raise InputError(f"{path} has E_mpa = {E} and nu = {nu}: not a usable fit")
+    return float(E), float(nu), fit
 
 
 def _read_fit(path: Path) -> dict:
