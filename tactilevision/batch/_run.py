@@ -214,7 +214,7 @@ def _run_frames(client, paths, out, settings, outcomes, report, overwrite, progr
     for p, o in zip(paths, outcomes, strict=True):
         try:
             src = open_source(p)
-            ref = settings.reference or (str(src.reference) if src.reference else None)
+            ref = settings.reference or (str(src.reference_path) if src.reference_path else None)
             store = InputStore(out, o.name)
             shape = _force_shape(settings, src) if settings.kind == "forces" else None
             attrs = {"settings": settings.to_json(), "source": str(p),

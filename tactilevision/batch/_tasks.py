@@ -8,8 +8,6 @@ only a few numbers travel back to the client.
 
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 import os
 import time
@@ -17,9 +15,14 @@ from dataclasses import asdict, dataclass
 from functools import lru_cache
 from pathlib import Path
 
+import cv2
 import numpy as np
 
 from .._checks import InputError
+from ..fem import ForceEstimator
+from ..io import check_output_folder, check_overwrite, read_reference
+from ..optics import DepthReconstructor, PhotometricCalibration
+from ..pipeline import CALIBRATION_FILES, calibrate_session, write_calibration
 from ._sources import FrameSource
 from ._store import InputStore
 
@@ -37,7 +40,7 @@ class BatchSettings:
         Photometric calibration file (.npz).
     reference : str or None
         One no-contact frame for every input; None: each input's own
-        (:attr:`FrameSource.reference`), else the calibration's.
+        (:attr:`FrameSource.reference_path`), else the calibration's.
     level : {'median', 'far_field', 'contact'}
         The height's zero, as ``tactilevision reconstruct --level``.
     flat_reference : bool
@@ -90,12 +93,6 @@ def worker_tools(settings: BatchSettings, reference: str | None):
     estimator : ForceEstimator or None
         None for ``kind='reconstruct'``.
     """
-    import cv2
-
-    from ..fem import ForceEstimator
-    from ..io import read_reference
-    from ..optics import DepthReconstructor, PhotometricCalibration
-
     cv2.setNumThreads(1)                # one task per core: the cores are the workers'
     cal = PhotometricCalibration.load(settings.calibration)
     ref = read_reference(reference, cal.shape) if reference else "calibration"
@@ -154,7 +151,7 @@ def process_chunk(settings: BatchSettings, source: FrameSource, reference: str |
         heights[k] = h
         rows["frame"].append(i)
         rows["source_frame"].append(source.frame_name(i))
-        rows["t_s"].append(i / source.fps if np.isfinite(source.fps) else float("nan"))
+        rows["t_s"].append(float(source.times_s[i]))
         rows["max_depth_mm"].append(float(h.max()))
         if est is None:
             rows["contact_area_mm2"].append(float(recon.contact_mask(frame).sum()) * px_mm2)
@@ -183,27 +180,27 @@ def process_chunk(settings: BatchSettings, source: FrameSource, reference: str |
 
 
 def calibrate_task(session: str, out: str) -> dict:
-    """``tactilevision calibrate SESSION --out OUT`` in a worker.
+    """The main job on one session in a worker: what ``tactilevision calibrate SESSION
+    --out OUT`` writes, through the library (:func:`~tactilevision.pipeline.calibrate_session`,
+    :func:`~tactilevision.pipeline.write_calibration`).
 
     Returns
     -------
     summary : dict
-        ``E_mpa``, ``nu`` and ``n_presses`` from the written ``fit.json``.
+        ``E_mpa``, ``nu`` and ``n_presses`` of the written ``fit.json``.
 
     Raises
     ------
     InputError
-        With calibrate's own error message when it refuses the session.
+        When the session is refused, or too few presses are certified (then
+        rejected.csv and report.html in `out` say why, as calibrate's).
     """
-    from ..cli import main
-
-    err = io.StringIO()
-    with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
-        status = main(["calibrate", session, "--out", out, "--no-progress"])
-    if status != 0:
-        lines = [ln for ln in err.getvalue().splitlines() if "error:" in ln]
-        raise InputError(lines[-1].split("error: ", 1)[1] if lines
-                         else f"calibrate exited with status {status}")
-    fit = json.loads((Path(out) / "fit.json").read_text())
-    return {"E_mpa": fit.get("E_mpa"), "nu": fit.get("nu"),
-            "n_presses": fit.get("n_presses", fit.get("n"))}
+    check_output_folder(Path(out))
+    check_overwrite(Path(out), CALIBRATION_FILES)
+    cal = calibrate_session(session, allow_failure=True)
+    result = write_calibration(cal, out)
+    if cal.fit is None:
+        raise InputError(f"{cal.failure}; rejected.csv, the bevel panels and report.html in "
+                         f"{out} say why")
+    return {"E_mpa": result.fit.get("E_mpa"), "nu": result.fit.get("nu"),
+            "n_presses": result.n_presses}

@@ -7,7 +7,9 @@ import json
 import sys
 from pathlib import Path
 
-from .. import KNOWN_SENSORS, InputError, default_calibration_path
+from .. import InputError, default_calibration_path
+from ..batch import BatchSettings, run_batch
+from ._options import add_material_options, add_optics_options, beta_from_args, material_from_args
 from ._out import check_output_folder
 
 __all__ = ["add_parser", "run"]
@@ -38,11 +40,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="worker processes of the local cluster (default: one per core)")
     p.add_argument("--chunk-frames", type=int, default=32,
                    help="frames per task and per Zarr chunk (default 32)")
-    src = p.add_mutually_exclusive_group()
-    src.add_argument("--calibration", metavar="OPTICS", type=Path,
-                     help="photometric calibration (.npz)")
-    src.add_argument("--sensor", metavar="NAME", choices=KNOWN_SENSORS,
-                     help=f"shipped calibration: {', '.join(KNOWN_SENSORS)}")
+    add_optics_options(p, reference=False)
     p.add_argument("--reference", metavar="REF", type=Path, default=None,
                    help="one no-contact frame for every input (default: each input's own "
                    "reference.png / <video>_reference.png, else the calibration's)")
@@ -52,11 +50,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--engine", choices=("table", "onnx"), default="table",
                    help="reconstructor engine (table: built once per worker, fastest per "
                    "frame; onnx: no build)")
-    p.add_argument("--fit", metavar="FIT.json", type=Path, default=None,
-                   help="forces: E_mpa, nu and beta from a calibrate/fit JSON")
-    p.add_argument("--E-mpa", type=float, default=None, help="forces: Young's modulus, MPa")
-    p.add_argument("--nu", type=float, default=None, help="forces: Poisson's ratio")
-    p.add_argument("--thickness-mm", type=float, default=None, help="forces: gel thickness h")
+    add_material_options(p)
     p.add_argument("--beta", type=float, default=None, help="forces: eq. (5)'s beta")
     p.add_argument("--method", choices=("spectral", "fem"), default="spectral")
     p.add_argument("--grid", metavar="NX,NY", default="40,30")
@@ -69,9 +63,6 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def _settings(args: argparse.Namespace):
-    from ..batch import BatchSettings
-    from ._forces import _beta, _material
-
     cal = args.calibration or (default_calibration_path(args.sensor) if args.sensor else None)
     if cal is None:
         raise InputError(f"batch {args.kind} needs --calibration OPTICS or --sensor NAME")
@@ -84,8 +75,8 @@ def _settings(args: argparse.Namespace):
     level = args.level or ("contact" if args.kind == "forces" else "median")
     kw = {}
     if args.kind == "forces":
-        E, nu, source, fit_obj = _material(args, None)
-        beta, _ = _beta(args, fit_obj, source)
+        E, nu, source, fit_obj = material_from_args(args, None)
+        beta, _ = beta_from_args(args, fit_obj, source)
         if args.thickness_mm is None:
             raise InputError("batch forces needs --thickness-mm (the gel thickness h)")
         try:
@@ -101,8 +92,6 @@ def _settings(args: argparse.Namespace):
 
 def run(args: argparse.Namespace) -> int:
     """Run ``batch``; returns 0, or 2 when an input failed (listed) or on bad options."""
-    from ..batch import run_batch
-
     out = check_output_folder(args.out)
     settings = None if args.kind == "calibrate" else _settings(args)
     report = run_batch(args.kind, args.inputs, out, settings=settings, scheduler=args.scheduler,

@@ -14,9 +14,14 @@ from .. import InputError
 from ..fem import ForceEstimator
 from ..io import FrameSource, StagedOutput, check_output_folder, check_overwrite, open_source
 from ..optics import DepthReconstructor
-from ..pipeline import read_material
 from ..viz import save_force_image
-from ._options import add_material_options, add_optics_options, optics_calibration
+from ._options import (
+    add_material_options,
+    add_optics_options,
+    beta_from_args,
+    material_from_args,
+    optics_calibration,
+)
 from ._out import add_overwrite_argument
 
 __all__ = ["add_parser", "run"]
@@ -73,44 +78,6 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
-def _material(args: argparse.Namespace, session_dir: Path | None
-              ) -> tuple[float, float, str, dict]:
-    """E, nu, where they came from, and the fit JSON object (empty without one)."""
-    if args.E_mpa is not None or args.nu is not None:
-        if args.E_mpa is None or args.nu is None:
-            raise InputError("give both --E-mpa and --nu (or --fit FIT.json)")
-        return float(args.E_mpa), float(args.nu), "command line", {}
-    path = args.fit
-    if path is None and session_dir is not None:
-        path = session_dir / "calibration" / "fit.json"
-        if not path.is_file():
-            raise InputError(f"no E and nu: {path} does not exist (run 'tactilevision "
-                             "calibrate' first) and neither --E-mpa/--nu nor --fit was given")
-    if path is None:
-        raise InputError("no E and nu: give --E-mpa and --nu, or --fit FIT.json")
-    E, nu, obj = read_material(path)
-    return E, nu, str(path), obj
-
-
-def _beta(args: argparse.Namespace, fit_obj: dict, material_source: str
-          ) -> tuple[float, str]:
-    """Eq. (5)'s beta and where it came from: --beta, the fit JSON's, else 0."""
-    if args.beta is not None:
-        if not (np.isfinite(args.beta) and args.beta >= 0):
-            raise InputError(f"--beta must be finite and >= 0, got {args.beta}")
-        return float(args.beta), "command line"
-    value = fit_obj.get("beta")
-    if value is None:
-        return 0.0, "default (no fit JSON with a beta: linear layer)"
-    try:
-        beta = float(value)
-    except (TypeError, ValueError):
-        raise InputError(f"{material_source} has a beta of {value!r}, not a number") from None
-    if not (np.isfinite(beta) and beta >= 0):
-        raise InputError(f"{material_source} has beta = {beta}: give --beta")
-    return beta, material_source
-
-
 def run(args: argparse.Namespace) -> int:
     """Run ``forces``; returns 0, or 2 on bad input (nothing written then)."""
     source: Path = args.source
@@ -132,8 +99,8 @@ def run(args: argparse.Namespace) -> int:
     names = ["forces.csv"] + ([] if args.no_images else
                               [f"{src.frame_stem(i)}_force.png" for i in picks])
     check_overwrite(out, names, overwrite=args.overwrite)
-    E, nu, material_source, fit_obj = _material(args, source if session else None)
-    beta, beta_source = _beta(args, fit_obj, material_source)
+    E, nu, material_source, fit_obj = material_from_args(args, source if session else None)
+    beta, beta_source = beta_from_args(args, fit_obj, material_source)
     try:
         grid = tuple(int(v) for v in args.grid.split(","))
     except ValueError:

@@ -3,13 +3,19 @@
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import json
 from pathlib import Path
 
 import numpy as np
 
-from .. import KNOWN_SENSORS, InputError, default_calibration_path
+from .. import InputError
+from ..fem import ForceEstimator
+from ..io import open_source
+from ..optics import DepthReconstructor, PhotometricCalibration
 from ..pipeline import read_material
+from ..viz import write_viewer
+from ._options import add_material_options, add_optics_options, optics_calibration
 
 __all__ = ["add_parser", "run"]
 
@@ -30,24 +36,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    "'tactilevision batch'")
     p.add_argument("--out", metavar="HTML", type=Path, default=Path("out/view.html"),
                    help="the page to write (default: out/view.html)")
-    src = p.add_mutually_exclusive_group()
-    src.add_argument("--calibration", metavar="OPTICS", type=Path,
-                     help="photometric calibration file (.npz from 'optics calibrate')")
-    src.add_argument("--sensor", metavar="NAME", choices=KNOWN_SENSORS,
-                     help=f"use the shipped default calibration: {', '.join(KNOWN_SENSORS)}")
-    p.add_argument("--reference", metavar="REF", type=Path, default=None,
-                   help="no-contact frame; default found beside the frames or the video, "
-                   "else the calibration's")
+    add_optics_options(p)
     p.add_argument("--max-frames", type=int, default=60, metavar="N",
                    help="at most N frames, evenly spaced (default 60)")
     p.add_argument("--max-px", type=int, default=160, metavar="PX",
                    help="long side of the images on the page, px (default 160)")
-    p.add_argument("--fit", metavar="FIT.json", type=Path, default=None,
-                   help="E_mpa and nu from a fit/calibrate JSON (force map)")
-    p.add_argument("--E-mpa", type=float, default=None, help="Young's modulus, MPa (force map)")
-    p.add_argument("--nu", type=float, default=None, help="Poisson's ratio (force map)")
-    p.add_argument("--thickness-mm", type=float, default=None,
-                   help="gel thickness h, mm (force map)")
+    add_material_options(p)
     p.set_defaults(func=run)
 
 
@@ -81,52 +75,8 @@ def _material(args: argparse.Namespace) -> tuple[float, float, float] | None:
     return E, nu, float(args.thickness_mm)
 
 
-def _calibration(args: argparse.Namespace, required: bool):
-    from ..optics import PhotometricCalibration
-
-    path = args.calibration or (default_calibration_path(args.sensor) if args.sensor else None)
-    if path is None:
-        if required:
-            raise InputError("no photometric calibration: give --calibration OPTICS or --sensor")
-        return None
-    if not Path(path).is_file():
-        raise InputError(f"calibration {path} does not exist")
-    return PhotometricCalibration.load(path)
-
-
-def _read_source_frames(source: Path, args, shape: tuple[int, int] | None
-                        ) -> tuple[list[str], object, Path | None]:
-    """(labels of every frame, a reader ``i -> (H, W, 3) uint8 BGR``, the reference path)."""
-    from ..io import (
-        VideoFrames,
-        find_reference,
-        find_video_reference,
-        is_video,
-        list_frames,
-        read_frame,
-    )
-
-    if source.is_dir():
-        paths = list_frames(source)
-        return ([p.name for p in paths], lambda i: read_frame(paths[i], shape),
-                find_reference(source))
-    if is_video(source):
-        vf = VideoFrames(source)
-        ref = find_video_reference(source)
-
-        def read(i: int) -> np.ndarray:
-            frame = vf.frame(i)
-            if shape is not None and frame.shape[:2] != tuple(shape):
-                raise InputError(f"video {source} is {frame.shape[1]} x {frame.shape[0]} px "
-                                 f"but the calibration expects {shape[1]} x {shape[0]} px")
-            return frame
-
-        return [f"{source.name}#{i}" for i in range(len(vf))], read, ref
-    raise InputError(f"{source} is neither a folder of frames, a video file nor a Zarr group")
-
-
 def _from_zarr(source: Path, args, picks_max: int):
-    import zarr
+    import zarr  # the dask extra
 
     try:
         g = zarr.open_group(str(source), mode="r")
@@ -146,11 +96,9 @@ def _from_zarr(source: Path, args, picks_max: int):
         if len(p.shape) == 3 and p.shape[0] == h.shape[0]:
             pressure = np.stack([np.asarray(p[int(i)], np.float32) for i in idx])
     attrs = dict(g.attrs)
-    cal = _calibration(args, required=False)
+    cal, _, _ = optics_calibration(args, required=False)
     if cal is None:
         try:
-            from ..optics import PhotometricCalibration
-
             cal_path = json.loads(attrs.get("settings", "{}")).get("calibration")
             cal = PhotometricCalibration.load(cal_path) if cal_path else None
         except Exception:  # the batch's calibration moved: axes in px then
@@ -161,10 +109,10 @@ def _from_zarr(source: Path, args, picks_max: int):
     labels = [f"frame {int(i)}" for i in idx]
     if src:
         try:
-            names, read, _ = _read_source_frames(Path(src), args, tuple(h.shape[1:]))
-            if len(names) == h.shape[0]:
-                frames = np.stack([read(int(i)) for i in idx])
-                labels = [names[int(i)] for i in idx]
+            fs = open_source(src)
+            if fs.n_frames == h.shape[0]:
+                frames = np.stack([fs.frame(int(i), tuple(h.shape[1:])) for i in idx])
+                labels = [fs.frame_name(int(i)) for i in idx]
         except (InputError, OSError):
             frames = None      # the source moved or changed: the height maps alone
     return frames, heights, pressure, mm_per_px, labels
@@ -172,10 +120,6 @@ def _from_zarr(source: Path, args, picks_max: int):
 
 def run(args: argparse.Namespace) -> int:
     """Run ``view``; returns 0, or 2 on bad input (nothing written then)."""
-    import importlib.util
-
-    from ..viz import write_viewer
-
     source: Path = args.source
     out: Path = args.out
     if args.max_frames < 1:
@@ -199,37 +143,7 @@ def run(args: argparse.Namespace) -> int:
         frames, heights, pressure, mm_per_px, labels = _from_zarr(source, args,
                                                                   args.max_frames)
     else:
-        from ..optics import DepthReconstructor
-
-        if source.is_file() and not _is_video(source):
-            raise InputError(f"{source} is neither a folder of frames, a video file nor a "
-                             "Zarr group")
-        cal = _calibration(args, required=True)
-        names, read, ref_path = _read_source_frames(source, args, cal.shape)
-        if args.reference is not None:
-            if not args.reference.is_file():
-                raise InputError(f"reference {args.reference} does not exist")
-            ref_path = args.reference
-        if not names:
-            raise InputError(f"{source} holds no frames")
-        from ..io import read_reference
-
-        reference = read_reference(ref_path, cal.shape) if ref_path else None
-        recon = DepthReconstructor(cal, reference="calibration" if reference is None
-                                   else reference)
-        idx = _picks(len(names), args.max_frames)
-        frames = np.stack([read(int(i)) for i in idx])
-        heights = np.stack([recon(f) for f in frames]).astype(np.float32)
-        labels = [names[int(i)] for i in idx]
-        mm_per_px = cal.mm_per_px
-        pressure = None
-        if material is not None:
-            from ..fem import ForceEstimator
-
-            E, nu, h = material
-            est = ForceEstimator(cal.shape, cal.mm_per_px, thickness_mm=h, E_mpa=E, nu=nu)
-            pressure = np.stack([np.asarray(est(z).pressure_kpa, np.float32)
-                                 for z in heights])
+        frames, heights, pressure, mm_per_px, labels = _from_frames(source, args, material)
     path = write_viewer(out, frames, heights, mm_per_px=mm_per_px, pressure_kpa=pressure,
                         titles=labels, max_px=args.max_px)
     size = path.stat().st_size / 1e6
@@ -238,7 +152,22 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _is_video(path: Path) -> bool:
-    from ..io import is_video
-
-    return is_video(path)
+def _from_frames(source: Path, args, material):
+    """Frames of a folder, video or session, their height maps and (given E, nu and h) their
+    pressure maps, at most --max-frames of them."""
+    src = open_source(source, reference=args.reference)
+    cal, _, _ = optics_calibration(args, src)
+    if src.n_frames == 0:
+        raise InputError(f"{source} holds no frames")
+    reference = src.reference(cal.shape)
+    recon = DepthReconstructor(cal, reference="calibration" if reference is None else reference)
+    idx = _picks(src.n_frames, args.max_frames)
+    frames = np.stack([src.frame(int(i), cal.shape) for i in idx])
+    heights = np.stack([recon(f) for f in frames]).astype(np.float32)
+    labels = [src.frame_name(int(i)) for i in idx]
+    pressure = None
+    if material is not None:
+        E, nu, h = material
+        est = ForceEstimator(cal.shape, cal.mm_per_px, thickness_mm=h, E_mpa=E, nu=nu)
+        pressure = np.stack([np.asarray(est(z).pressure_kpa, np.float32) for z in heights])
+    return frames, heights, pressure, cal.mm_per_px, labels

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
 
 import cv2
@@ -63,6 +64,11 @@ class FrameSource:
     reference_path: Path | None = None
     session: Session | None = None
     camera: int | None = None
+
+    @cached_property
+    def _video(self) -> VideoFrames:
+        """The video's reader, opened once (random access by :meth:`frame`)."""
+        return VideoFrames(self.path)
 
     @property
     def is_video(self) -> bool:
@@ -174,7 +180,7 @@ class FrameSource:
         shape = shape if shape is not None else self.shape
         if self.frame_paths:
             return read_frame(self.frame_paths[i], shape)
-        return self._checked(VideoFrames(self.path).frame(i), shape, i)
+        return self._checked(self._video.frame(i), shape, i)
 
     def _checked(self, frame: np.ndarray, shape, i: int) -> np.ndarray:
         if shape is not None and frame.shape[:2] != tuple(shape):
@@ -193,10 +199,8 @@ class FrameSource:
         InputError
             The reference cannot be read or has another size (named).
         """
-        if self.session is not None and self.reference_path is None:
-            return self.session.reference
         if self.reference_path is None:
-            return None
+            return self.session.reference if self.session is not None else None
         return read_reference(self.reference_path, shape)
 
 
@@ -259,7 +263,7 @@ def open_source(source: str | Path | int, *, reference: str | Path | None = None
         return FrameSource(kind="session", path=p, n_frames=len(s.frame_paths),
                            shape=tuple(s.reference.shape[:2]), frame_paths=tuple(s.frame_paths),
                            times_s=np.asarray(s.frame_times_s, np.float64), session=s,
-                           reference_path=ref)
+                           reference_path=ref or find_reference(p))
     frames = tuple(list_frames(p))
     try:
         first = read_image(frames[0])

@@ -26,6 +26,15 @@ import numpy as np
 
 from .._blas import openblas_thread_controls
 from .._checks import InputError
+from ..fem import ForceEstimator
+from ..io import open_source
+from ..optics import (
+    DepthReconstructor,
+    PhotometricCalibration,
+    lateral_displacement,
+    marker_centres,
+    track_markers,
+)
 
 __all__ = ["LiveResult", "Pipeline", "auto_reference", "open_frames", "stream"]
 
@@ -83,7 +92,8 @@ def open_frames(source) -> tuple[Iterator[np.ndarray], bool]:
     ----------
     source : int, str, Path or iterable of (H, W, 3) uint8 ndarray
         An int is a camera (``cv2.VideoCapture(index)``); a path to a file is
-        a video, to a folder its frames in name order.
+        a video, to a folder its frames in name order, to a session folder its
+        frames (:func:`~tactilevision.io.open_source`).
 
     Returns
     -------
@@ -98,42 +108,12 @@ def open_frames(source) -> tuple[Iterator[np.ndarray], bool]:
         A camera that does not open, a missing path, a file that is not a
         video, a folder without frames.
     """
-    import cv2
-
-    if isinstance(source, int | np.integer):
-        cap = cv2.VideoCapture(int(source))
-        if not cap.isOpened():
-            raise InputError(f"camera {int(source)} does not open")
-        return _capture_frames(cap), True
-    if isinstance(source, str | Path):
-        from ..io import VideoFrames, is_video, list_frames, read_frame
-
-        p = Path(source)
-        if not p.exists():
-            raise InputError(f"{p}: no such file or folder")
-        if p.is_file():
-            if not is_video(p):
-                raise InputError(f"{p}: not a video file (.mp4, .avi, .mov, .mkv, .m4v)")
-            v = VideoFrames(p)
-            return v.iter(0, v.n_frames), False
-        paths = list_frames(p)
-        if not paths:
-            raise InputError(f"{p} holds no .png or .jpg frames")
-        return (read_frame(q) for q in paths), False
+    if isinstance(source, int | np.integer | str | Path) and not isinstance(source, bool):
+        src = open_source(source)
+        return src.iter(), src.kind == "camera"
     if isinstance(source, np.ndarray) and source.ndim == 3:
         raise InputError("a single frame is not a stream: pass a list of frames")
     return iter(source), False
-
-
-def _capture_frames(cap) -> Iterator[np.ndarray]:
-    try:
-        while True:
-            ok, frame = cap.read()
-            if not ok:
-                return
-            yield frame
-    finally:
-        cap.release()
 
 
 def auto_reference(frames: np.ndarray, *, k: float = 3.0) -> tuple[np.ndarray, np.ndarray]:
@@ -302,8 +282,6 @@ class Pipeline:
                  engine: str = "table", level: str | None = None,
                  contact: str = "field", threshold_mm: float = 0.01,
                  method: str = "spectral", markers: bool | None = None) -> None:
-        from ..optics import PhotometricCalibration
-
         self.calibration = (calibration if isinstance(calibration, PhotometricCalibration)
                             else PhotometricCalibration.load(calibration))
         given = [v is not None for v in (E_mpa, nu, thickness_mm)]
@@ -335,9 +313,6 @@ class Pipeline:
             self._build(reference)
 
     def _build(self, reference) -> None:
-        from ..fem import ForceEstimator
-        from ..optics import DepthReconstructor
-
         cal = self.calibration
         forces = self.material is not None
         self._recon = DepthReconstructor(
@@ -350,8 +325,6 @@ class Pipeline:
                                        nu=nu, beta=beta, contact=self.contact,
                                        threshold_mm=self.threshold_mm, method=self.method)
         if self.markers:
-            from ..optics import marker_centres
-
             ref = cal.reference if isinstance(reference, str) else np.asarray(reference)
             pos = marker_centres(ref)
             if len(pos) < 3:
@@ -366,8 +339,6 @@ class Pipeline:
         marker gel; (None, None) otherwise."""
         if self._marker_ref is None:
             return None, None
-        from ..optics import lateral_displacement, track_markers
-
         flow = track_markers(self._marker_ref, frame, positions_px=self._marker_pos)
         if int(np.count_nonzero(flow.valid)) < 3:
             return flow, None
