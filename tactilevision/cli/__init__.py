@@ -12,7 +12,7 @@ import argparse
 import sys
 from collections.abc import Sequence
 
-from .. import InputError
+from .. import InputError, __version__
 from . import (
     _batch,
     _calibrate,
@@ -41,8 +41,6 @@ def build_parser() -> argparse.ArgumentParser:
     -------
     parser : argparse.ArgumentParser
     """
-    from .. import __version__
-
     parser = argparse.ArgumentParser(
         prog="tactilevision",
         description="Vision-based tactile sensors: height maps by photometric stereo, "

@@ -8,6 +8,9 @@ import sys
 from pathlib import Path
 
 from .. import InputError
+from ..io import read_measurements
+from ..mechanics import diagnose, effect_names, model_label
+from ..viz import diagnosis_figures, write_diagnosis_report
 from ._fit import _write_json
 from ._out import StagedOutput, add_overwrite_argument, check_output_folder, check_overwrite
 
@@ -62,7 +65,6 @@ def _summary(diag, path: Path) -> str:
     def mn(v: float) -> str:
         return f"{v * 1e3:.3f} mN" if math.isfinite(v) else "-"
 
-    from ..mechanics import model_label
 
     lines = [f"{path}: {diag.fits[0].n_presses} presses, model {model_label(diag.model)}"]
     lines.append("  covariate          p-value   explained")
@@ -87,9 +89,6 @@ def _summary(diag, path: Path) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """Run ``diagnose``; returns 0 (2 through InputError on bad input)."""
-    from ..io import read_measurements
-    from ..mechanics import diagnose, effect_names
-
     overwrite = args.overwrite
     if args.report is not None:
         check_output_folder(args.report, "report folder")
@@ -117,8 +116,6 @@ def run(args: argparse.Namespace) -> int:
     if args.json is not None:
         _write_json(obj, args.json)
     if args.report is not None:
-        from ..viz import diagnosis_figures, write_diagnosis_report
-
         with StagedOutput(args.report, overwrite=overwrite, what="report folder") as stage:
             figs = diagnosis_figures(diag, stage.path)
             write_diagnosis_report(diag, stage.path, figs, source=str(path))

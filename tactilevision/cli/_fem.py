@@ -5,6 +5,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from .. import InputError
+from ..fem import build_beta_table, build_kappa_table, write_table
+
 __all__ = ["add_parser", "run_tables"]
 
 
@@ -25,7 +28,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     t.add_argument("--out-dir", type=Path, default=Path("models"),
                    help="folder for kappa_fem.npz and beta_fem.npz (default models/)")
     t.add_argument("--jobs", type=int, default=1, metavar="N",
-                   help="worker processes for the beta sweeps (default 1)")
+                   help="worker processes for the kappa and beta sweeps (default 1)")
     t.add_argument("--quick", action="store_true",
                    help="a 3 x 3 grid on coarse meshes, for a smoke test (not for use)")
     t.add_argument("--no-progress", action="store_true", help="no progress bars")
@@ -34,25 +37,22 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 def run_tables(args: argparse.Namespace) -> int:
     """Run ``fem tables``."""
-    from .. import InputError
-    from ..fem import build_beta_table, build_kappa_table, write_table
-
     what = {w.strip() for w in args.what.split(",") if w.strip()}
     if not what or not what <= {"kappa", "beta"}:
         raise InputError(f"--what must name kappa and/or beta, got '{args.what}'")
+    if args.jobs < 1:
+        raise InputError(f"--jobs must be at least 1, got {args.jobs}")
     command = "tactilevision " + " ".join(args.argv)
     grid = {}
     if args.quick:
         grid = {"nu": [0.3, 0.45, 0.49], "a_over_h": [0.4, 0.8, 1.2]}
     if "kappa" in what:
         mesh = {"cell": 0.25, "edge_refinements": 6} if args.quick else {}
-        table = build_kappa_table(**grid, **mesh, progress=not args.no_progress)
+        table = build_kappa_table(**grid, **mesh, jobs=args.jobs, progress=not args.no_progress)
         path = write_table(args.out_dir / "kappa_fem.npz", table, command=command)
         print(f"wrote {path}")
     if "beta" in what:
         mesh = {"cell": 0.5, "edge_refinements": 4, "steps": 4} if args.quick else {}
-        if args.jobs < 1:
-            raise InputError(f"--jobs must be at least 1, got {args.jobs}")
         table = build_beta_table(**grid, **mesh, jobs=args.jobs, progress=not args.no_progress)
         path = write_table(args.out_dir / "beta_fem.npz", table, command=command)
         print(f"wrote {path}")

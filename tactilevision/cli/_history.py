@@ -8,6 +8,16 @@ import math
 from pathlib import Path
 
 from .. import InputError
+from ..history import (
+    assess,
+    gather,
+    history_figures,
+    history_rows,
+    pooled_diagnosis,
+    sensor_file_name,
+    write_history_csv,
+    write_history_report,
+)
 from ._fit import _write_json
 from ._out import StagedOutput, add_overwrite_argument, check_output_folder, check_overwrite
 
@@ -162,17 +172,6 @@ def run(args: argparse.Namespace) -> int:
         ``--sensor`` no folder has, or a report folder that cannot be written.
         Every input is read before anything is written.
     """
-    from ..history import (
-        assess,
-        gather,
-        history_figures,
-        history_rows,
-        pooled_diagnosis,
-        sensor_file_name,
-        write_history_csv,
-        write_history_report,
-    )
-
     if args.report is not None:
         check_output_folder(args.report, "report folder")
     by_sensor = gather(args.folders, dates=parse_dates(args.date))

@@ -7,9 +7,13 @@ import csv
 import sys
 from pathlib import Path
 
+import cv2
 import numpy as np
 
-from .. import KNOWN_SENSORS, InputError, default_calibration_path
+from .. import InputError, default_calibration_path
+from ..io import read_reference
+from ..live import Pipeline
+from ._options import add_material_options, add_optics_options
 from ._out import check_output_folder, output_folder
 
 __all__ = ["add_parser", "annotate", "run"]
@@ -32,19 +36,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("source", metavar="SOURCE",
                    help="camera index (0, 1, ...), video file, or folder of frames")
-    src = p.add_mutually_exclusive_group(required=True)
-    src.add_argument("--calibration", metavar="OPTICS", type=Path,
-                     help="photometric calibration (.npz)")
-    src.add_argument("--sensor", metavar="NAME", choices=KNOWN_SENSORS,
-                     help=f"shipped calibration: {', '.join(KNOWN_SENSORS)}")
+    add_optics_options(p, required=True, reference=False)
     p.add_argument("--reference", metavar="REF", default="auto",
                    help="no-contact frame (image file), 'auto' (default: from the first "
                    "--reference-frames frames) or 'calibration'")
     p.add_argument("--reference-frames", type=int, default=10,
                    help="frames the automatic reference is taken from (default 10)")
-    p.add_argument("--E-mpa", type=float, default=None, help="Young's modulus, MPa (forces)")
-    p.add_argument("--nu", type=float, default=None, help="Poisson's ratio (forces)")
-    p.add_argument("--thickness-mm", type=float, default=None, help="gel thickness h (forces)")
+    add_material_options(p, fit=False)
     p.add_argument("--method", choices=("spectral", "fem"), default="spectral",
                    help="force method: spectral (every pixel, the default) or fem (the "
                    "inverse FEM on 40 x 30 nodes, faster a frame)")
@@ -92,8 +90,6 @@ def annotate(frame: np.ndarray, height_mm: np.ndarray, *, depth_range_mm: float,
     image : (H, 2 W, 3) uint8 ndarray
         BGR.
     """
-    import cv2
-
     h, w = height_mm.shape
     z = np.clip(np.nan_to_num(height_mm) / max(depth_range_mm, 1e-9), 0.0, 1.0)
     colour = cv2.applyColorMap((255 * z).astype(np.uint8), cv2.COLORMAP_VIRIDIS)
@@ -137,11 +133,6 @@ def annotate(frame: np.ndarray, height_mm: np.ndarray, *, depth_range_mm: float,
 
 def run(args: argparse.Namespace) -> int:
     """Run ``live``; returns 0 (130 on Ctrl-C, with the outputs so far closed and kept)."""
-    import cv2
-
-    from ..io import read_reference
-    from ..live import Pipeline
-
     cal_path = args.calibration or default_calibration_path(args.sensor)
     source: int | Path = int(args.source) if str(args.source).isdigit() else Path(args.source)
     if isinstance(source, Path) and not source.exists():

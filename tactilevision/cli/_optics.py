@@ -9,6 +9,14 @@ from pathlib import Path
 import numpy as np
 
 from .. import InputError
+from ..io import read_ball_presses, taxim_datapack
+from ..optics import (
+    DepthReconstructor,
+    PhotometricCalibration,
+    calibration_accuracy,
+    detect_contact_circles,
+    holdout_presses,
+)
 from ._out import StagedOutput, add_overwrite_argument, check_output_folder, check_overwrite
 
 __all__ = ["add_parser", "parse_presses", "run_calibrate"]
@@ -164,27 +172,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 def run_calibrate(args: argparse.Namespace) -> int:
     """Run ``optics calibrate``."""
-    from ..io import read_ball_presses, taxim_datapack
-    from ..optics import (
-        DepthReconstructor,
-        PhotometricCalibration,
-        calibration_accuracy,
-        detect_contact_circles,
-        holdout_presses,
-    )
-
-    if (args.ball_radius_mm is not None and args.ball_radius_mm <= 0) or args.mm_per_px <= 0:
-        raise InputError("--ball-radius-mm and --mm-per-px must be positive")
-    for name, value, low in (("--bins", args.bins, 2), ("--epochs", args.epochs, 1),
-                             ("--hidden", args.hidden, 1)):
-        if value < low:
-            raise InputError(f"{name} must be at least {low}, got {value}")
-    if args.label_fraction is not None and not 0 < args.label_fraction <= 1:
-        raise InputError(f"--label-fraction must be in (0, 1], got {args.label_fraction}")
-    if not 0 < args.flat_fraction <= 1:
-        raise InputError(f"--flat-fraction must be in (0, 1], got {args.flat_fraction}")
-    if not 0 <= args.holdout < 1:
-        raise InputError(f"--holdout must be at least 0 and under 1, got {args.holdout:g}")
+    cells = _check_calibrate_options(args)
     out = Path(args.out)
     if out.is_dir():
         raise InputError(f"--out {out} is a folder; give the calibration file to write (.npz)")
@@ -195,13 +183,6 @@ def run_calibrate(args: argparse.Namespace) -> int:
     src = str(args.ball_presses)
     ps = read_ball_presses(taxim_datapack(src.split(":", 1)[1]) if src.startswith("taxim:")
                            else args.ball_presses)
-    try:
-        cells = tuple(int(v) for v in args.lut_cells.split(","))
-    except ValueError:
-        cells = ()
-    if len(cells) != 2 or min(cells) < 1:
-        raise InputError(f"--lut-cells '{args.lut_cells}' must be two positive integers NX,NY "
-                         "(e.g. 8,6)")
     if cells != (1, 1) and args.model != "lut":
         raise InputError("--lut-cells needs --model lut (the network takes the position "
                          "itself)")
@@ -216,17 +197,7 @@ def run_calibrate(args: argparse.Namespace) -> int:
     idx = parse_presses(args.presses, len(ps.frames))
     given = ps.centers_px is not None and ps.radii_px is not None and not args.detect_circles
     mm = args.mm_per_px
-    held = None         # the presses held out for the report (the saved one trains on all)
-    if args.presses is None and args.holdout > 0:
-        if given:
-            spread_c, spread_r = ps.centers_px, ps.radii_px
-        else:
-            spread_c, spread_r = detect_contact_circles(ps.frames, ps.reference,
-                                                        edge=args.detect_edge)
-        held = holdout_presses(spread_c, spread_r, ball_mm / mm, ps.reference.shape[:2],
-                               args.holdout)
-        if not held.any() or np.count_nonzero(~held) < 2:
-            held = None
+    held, spread = _held_out(args, ps, given, ball_mm / mm)
 
     def train(sel: np.ndarray) -> PhotometricCalibration:
         return PhotometricCalibration.from_ball_presses(
@@ -239,53 +210,16 @@ def run_calibrate(args: argparse.Namespace) -> int:
             flat_fraction=args.flat_fraction,
         )
 
-    scoring = None
-    if held is not None:
-        # the report's calibration never sees the presses it is scored on
-        rest = np.flatnonzero(~held)
-        scoring = train(rest)
+    # the report's calibration never sees the presses it is scored on
+    train_idx = idx if held is None else np.flatnonzero(~held)
+    scoring = None if held is None else train(train_idx)
     cal = train(idx)
     cal.provenance["presses"] = [int(i) for i in idx]
     cal.provenance["command"] = "tactilevision " + " ".join(args.argv)
     if args.credit:
         cal.provenance["credit"] = args.credit
-    # the accuracy report: held-out presses (else the training ones, said so), by ball
-    if scoring is None:
-        scoring, train_idx = cal, idx
-    else:
-        train_idx = rest
-    trained = np.zeros(len(ps.frames), bool)
-    trained[train_idx] = True
-    try:
-        if given:
-            centres, radii = ps.centers_px, ps.radii_px
-        else:
-            # the trained presses' circles are the scoring calibration's own (its refined
-            # centres); the held-out presses' are detected, by no calibration
-            centres = np.zeros((len(ps.frames), 2))
-            radii = np.zeros(len(ps.frames))
-            centres[train_idx] = scoring.provenance["centers_px"]
-            radii[train_idx] = scoring.provenance["radii_px"]
-            others = np.flatnonzero(~trained)
-            if others.size:
-                if held is not None:
-                    centres[others], radii[others] = spread_c[others], spread_r[others]
-                else:
-                    centres[others], radii[others] = detect_contact_circles(
-                        ps.frames[others], ps.reference, edge=args.detect_edge)
-        report = calibration_accuracy(DepthReconstructor(scoring), ps.frames, centres, radii,
-                                      ball_mm / mm, trained=trained,
-                                      label_fraction=scoring.provenance["label_fraction"],
-                                      circles="given" if given else "detected",
-                                      edge="contact" if given else args.detect_edge)
-    except InputError as exc:      # the calibration stands; only its report is missing
-        report = {"error": f"no accuracy report: {exc}"}
-    report["held_out"] = None if held is None else {
-        "presses": [int(i) for i in np.flatnonzero(held)], "share": float(args.holdout),
-        "scored_by": f"a calibration trained on the other {int(np.count_nonzero(~held))} "
-                     "presses",
-        "saved_calibration_trained_on": "every press"}
-    report["mm_per_px"] = mm
+    report = _accuracy_report(args, ps, scoring if scoring is not None else cal, train_idx,
+                              given, held, spread, ball_mm / mm)
     # into place only when complete; the folder's manifest records it (a rerun may replace it)
     with StagedOutput(out.parent, overwrite=args.overwrite,
                       what="folder of the calibration file") as stage:
@@ -304,3 +238,81 @@ def run_calibrate(args: argparse.Namespace) -> int:
     print(report["error"] if "error" in report else _accuracy_text(report, mm))
     print(f"accuracy report: {out.parent / report_name}")
     return 0
+
+
+def _check_calibrate_options(args: argparse.Namespace) -> tuple[int, int]:
+    """Refuse an out-of-range option of ``optics calibrate`` (named); the LUT's cells."""
+    if (args.ball_radius_mm is not None and args.ball_radius_mm <= 0) or args.mm_per_px <= 0:
+        raise InputError("--ball-radius-mm and --mm-per-px must be positive")
+    for name, value, low in (("--bins", args.bins, 2), ("--epochs", args.epochs, 1),
+                             ("--hidden", args.hidden, 1)):
+        if value < low:
+            raise InputError(f"{name} must be at least {low}, got {value}")
+    if args.label_fraction is not None and not 0 < args.label_fraction <= 1:
+        raise InputError(f"--label-fraction must be in (0, 1], got {args.label_fraction}")
+    if not 0 < args.flat_fraction <= 1:
+        raise InputError(f"--flat-fraction must be in (0, 1], got {args.flat_fraction}")
+    if not 0 <= args.holdout < 1:
+        raise InputError(f"--holdout must be at least 0 and under 1, got {args.holdout:g}")
+    try:
+        cells = tuple(int(v) for v in args.lut_cells.split(","))
+    except ValueError:
+        cells = ()
+    if len(cells) != 2 or min(cells) < 1:
+        raise InputError(f"--lut-cells '{args.lut_cells}' must be two positive integers NX,NY "
+                         "(e.g. 8,6)")
+    return cells
+
+
+def _held_out(args: argparse.Namespace, ps, given: bool, ball_px: np.ndarray):
+    """The presses held out for the accuracy report (None: none), and the circles they were
+    spread by ((centres, radii); None when none were held out)."""
+    if args.presses is not None or args.holdout <= 0:
+        return None, None
+    if given:
+        spread = (ps.centers_px, ps.radii_px)
+    else:
+        spread = detect_contact_circles(ps.frames, ps.reference, edge=args.detect_edge)
+    held = holdout_presses(spread[0], spread[1], ball_px, ps.reference.shape[:2],
+                           args.holdout)
+    if not held.any() or np.count_nonzero(~held) < 2:
+        return None, None
+    return held, spread
+
+
+def _accuracy_report(args: argparse.Namespace, ps, scoring, train_idx: np.ndarray,
+                     given: bool, held, spread, ball_px: np.ndarray) -> dict:
+    """The accuracy report: held-out presses (else the training ones, said so), by ball."""
+    trained = np.zeros(len(ps.frames), bool)
+    trained[train_idx] = True
+    try:
+        if given:
+            centres, radii = ps.centers_px, ps.radii_px
+        else:
+            # the trained presses' circles are the scoring calibration's own (its refined
+            # centres); the held-out presses' are detected, by no calibration
+            centres = np.zeros((len(ps.frames), 2))
+            radii = np.zeros(len(ps.frames))
+            centres[train_idx] = scoring.provenance["centers_px"]
+            radii[train_idx] = scoring.provenance["radii_px"]
+            others = np.flatnonzero(~trained)
+            if others.size:
+                if held is not None:
+                    centres[others], radii[others] = spread[0][others], spread[1][others]
+                else:
+                    centres[others], radii[others] = detect_contact_circles(
+                        ps.frames[others], ps.reference, edge=args.detect_edge)
+        report = calibration_accuracy(DepthReconstructor(scoring), ps.frames, centres, radii,
+                                      ball_px, trained=trained,
+                                      label_fraction=scoring.provenance["label_fraction"],
+                                      circles="given" if given else "detected",
+                                      edge="contact" if given else args.detect_edge)
+    except InputError as exc:      # the calibration stands; only its report is missing
+        report = {"error": f"no accuracy report: {exc}"}
+    report["held_out"] = None if held is None else {
+        "presses": [int(i) for i in np.flatnonzero(held)], "share": float(args.holdout),
+        "scored_by": f"a calibration trained on the other {int(np.count_nonzero(~held))} "
+                     "presses",
+        "saved_calibration_trained_on": "every press"}
+    report["mm_per_px"] = args.mm_per_px
+    return report

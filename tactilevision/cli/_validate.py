@@ -10,6 +10,9 @@ import warnings
 from pathlib import Path
 
 from .. import InputError
+from ..io import read_measurements
+from ..mechanics import fit_indentation, validate_indentation
+from ..viz import save_validation_figure
 from ._fit import _write_json
 from ._out import StagedOutput, add_overwrite_argument, check_output_folder, check_overwrite
 
@@ -67,10 +70,6 @@ def _pad_radius(path: Path) -> float | None:
 
 def run(args: argparse.Namespace) -> int:
     """Run ``validate``; returns 0 (2 through InputError on bad input)."""
-    from ..io import read_measurements
-    from ..mechanics import fit_indentation, validate_indentation
-    from ..viz import save_validation_figure
-
     if (args.E_mpa is None) != (args.nu is None):
         raise InputError("give both --E-mpa and --nu, or neither (to use the fitted values)")
     overwrite = args.overwrite
