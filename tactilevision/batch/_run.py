@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import logging
 import os
 import sys
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+
+from tqdm.auto import tqdm
 
 from .._checks import InputError
 from ._sources import FrameSource, open_source
@@ -104,7 +107,6 @@ def _client(scheduler: str | None, n_workers: int | None):
             return Client(scheduler, timeout="10s"), None
         except OSError as exc:
             raise InputError(f"no Dask scheduler answers at {scheduler} ({exc})") from None
-    import logging
 
     n = n_workers or os.cpu_count() or 1
     cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
@@ -199,7 +201,6 @@ def run_batch(kind: str, inputs: Sequence[str | Path], out: str | Path, *,
 def _bar(progress: bool, total: int, unit: str, desc: str):
     if not progress:
         return None
-    from tqdm.auto import tqdm
 
     return tqdm(total=total, unit=unit, desc=desc, file=sys.stderr, mininterval=0.5)
 

@@ -8,6 +8,7 @@ import math
 import os
 import sys
 import warnings
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -196,7 +197,6 @@ def relaxation_lines(relax: RelaxationFit, moduli: dict | None, holds: Path, *,
 def _relax_table(table: Measurements, holds_path: Path, effects: tuple[str, ...]
                  ) -> tuple[Measurements, RelaxationFit, bool]:
     """Fit the holds; the table with its forces taken to the instant of loading."""
-    from dataclasses import replace
 
     if "viscoelastic_relaxation" in effects:
         raise InputError("--holds and --effects viscoelastic_relaxation both model the "

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import cv2
 import numpy as np
+from tqdm.auto import tqdm
 
 from .. import InputError, default_calibration_path
 from ..io import read_reference
@@ -165,7 +166,6 @@ def run(args: argparse.Namespace) -> int:
             wcsv = csv.DictWriter(fh, fieldnames=_COLUMNS)
             wcsv.writeheader()
         if not args.no_progress:
-            from tqdm.auto import tqdm
 
             bar = tqdm(desc="live", unit="frame", file=sys.stderr, mininterval=0.5)
         t0 = None

@@ -5,6 +5,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy import ndimage
+from skimage.measure import CircleModel
 
 from .._checks import InputError, check_array
 
@@ -45,7 +47,6 @@ class Footprint:
 
 def _fit_circle(pts: np.ndarray) -> tuple[float, float, float]:
     """(xc, yc, r) by scikit-image's CircleModel (the >= 0.26 API, else the older one)."""
-    from skimage.measure import CircleModel
 
     if hasattr(CircleModel, "from_estimate"):
         model = CircleModel.from_estimate(pts)
@@ -127,7 +128,6 @@ def fit_footprint(height_mm: np.ndarray, mm_per_px: float, *, indenter_radius_mm
     the median height inside 0.8 of the fitted radius, then the threshold is
     recomputed from it and the fit repeated once.
     """
-    from scipy import ndimage
 
     z = check_array(height_mm, "height_mm", [("H", "W")], dtype=np.number,
                     finite=True).astype(np.float64)

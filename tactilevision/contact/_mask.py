@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 
 from .._checks import InputError, check_array
@@ -84,7 +85,6 @@ def contact_mask(frame: np.ndarray, reference: np.ndarray, *, k_sigma: float = 6
     2026-11-23); 0.08 s with scipy.ndimage, which gives the same mask
     (tests/test_contact_mask.py).
     """
-    import cv2
 
     if not k_sigma > 0:
         raise InputError(f"k_sigma must be positive, got {k_sigma!r}")

@@ -36,6 +36,7 @@ import math
 from dataclasses import dataclass
 from functools import lru_cache
 
+import cv2
 import numpy as np
 from scipy.special import erf
 
@@ -213,7 +214,6 @@ def bevel_profile(frame: np.ndarray, reference: np.ndarray, centre_px: tuple[flo
     ShapeError
         For frames that are not (H, W, 3) or differ in shape.
     """
-    import cv2
 
     f = check_array(frame, "frame", [("H", "W", 3)])
     r = check_array(reference, "reference", [f.shape])

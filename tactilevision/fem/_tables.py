@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 import scipy
 import skfem
+from tqdm.auto import tqdm
 
 from .._version import __version__
 from ._finite import neo_hookean_indentation
@@ -82,7 +83,6 @@ def build_kappa_table(*, nu: np.ndarray = KAPPA_NU_GRID, a_over_h: np.ndarray = 
         ``nu`` (N,), ``a_over_h`` (A,), ``contacts`` (C,) str, ``kappa``
         (C, A, N) float64 and ``meta`` (dict: mesh, dofs, versions, seconds).
     """
-    from tqdm.auto import tqdm
 
     nu = np.asarray(nu, np.float64)
     a_over_h = np.asarray(a_over_h, np.float64)
@@ -183,7 +183,6 @@ def build_beta_table(*, nu: np.ndarray = NU_GRID, a_over_h: np.ndarray = A_OVER_
         (C, A, N), ``complete`` (C, A, N) bool, ``edge_refinements`` (C, A, N)
         int (the mesh each sweep used), and ``meta``.
     """
-    from tqdm.auto import tqdm
 
     nu = np.asarray(nu, np.float64)
     a_over_h = np.asarray(a_over_h, np.float64)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import base64
 import datetime
 import html
+import re
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
@@ -19,7 +20,6 @@ __all__ = ["history_figures", "write_history_report"]
 
 
 def _safe(sensor: str) -> str:
-    import re
 
     return re.sub(r"[^A-Za-z0-9_.-]", "_", sensor) or "unnamed"
 

@@ -22,6 +22,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from scipy import stats
 
 from .._checks import InputError
 from ._read import CalibrationRecord
@@ -107,7 +108,6 @@ def weighted_line(x: np.ndarray, y: np.ndarray, sigma: np.ndarray, *,
     InputError
         Fewer than two points, x all equal, or a sigma not positive and finite.
     """
-    from scipy import stats
 
     x, y, s = (np.asarray(v, dtype=float) for v in (x, y, sigma))
     if x.size < 2 or np.ptp(x) == 0:
@@ -151,7 +151,6 @@ def relative_change(first: float, first_se: float, last: float, last_se: float, 
     change, low, high : float
         Fractions (-0.12 is a 12 % fall).
     """
-    from scipy import stats
 
     r = math.log(last / first)
     se = math.hypot(first_se / first, last_se / last)

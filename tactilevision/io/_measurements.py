@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import math
+import os
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -347,7 +348,6 @@ def write_measurements(path: str | Path, columns: dict[str, np.ndarray], *, thic
         beside `path` with other values. Nothing is written then; the files
         are replaced only once complete.
     """
-    import os
 
     path = Path(path)
     for name in REQUIRED_COLUMNS:

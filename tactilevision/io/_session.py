@@ -11,12 +11,14 @@ headers, but their pixels are read only on demand (:meth:`Session.frame`).
 from __future__ import annotations
 
 import datetime
+import difflib
 import math
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+from PIL import Image
 
 from .._checks import InputError
 from ._frames import read_image
@@ -203,7 +205,6 @@ KNOWN_KEYS: dict[str, tuple[str, ...]] = {
 def _unknown_keys(folder: Path) -> list[str]:
     """Notes on tables and keys of session.toml this version does not read (a typo in an
     optional key would otherwise fall back to its default without a word)."""
-    import difflib
 
     toml = folder / "session.toml"
     with toml.open("rb") as fh:
@@ -403,7 +404,6 @@ def _increasing(path: Path, t: np.ndarray, lines: list[int], column: str = "t_s"
 
 def _read_frames(folder: Path, reference_shape: tuple[int, ...]
                  ) -> tuple[tuple[Path, ...], np.ndarray, list[str]]:
-    from PIL import Image
 
     table = folder / "frames.csv"
     header, rows, lines = _read_csv(table, ("frame", "t_s"))

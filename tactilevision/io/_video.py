@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import cv2
 import numpy as np
 
 from .._checks import InputError
@@ -74,7 +75,6 @@ class VideoFrames:
     """
 
     def __init__(self, path: str | Path) -> None:
-        import cv2
 
         self.path = Path(path)
         if not self.path.is_file():
@@ -115,7 +115,6 @@ class VideoFrames:
             For a range outside the video, or a frame that does not decode
             (a truncated file), naming the frame.
         """
-        import cv2
 
         if not (0 <= start < stop <= self.n_frames):
             raise InputError(f"{self.path}: frames {start} to {stop - 1} lie outside the "

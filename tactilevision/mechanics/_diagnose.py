@@ -17,6 +17,7 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
+from tqdm import tqdm
 
 from .._checks import InputError
 from ._budget import (
@@ -641,7 +642,6 @@ def _climb(c: _Climb, max_steps: int, progress: bool) -> None:
     pool, law_rungs = c.pool, c.table.law_rungs
     bar = None
     if progress:
-        from tqdm import tqdm
 
         bar = tqdm(desc="diagnose", unit="fit", mininterval=0.5)
     for _step in range(max_steps):

@@ -14,6 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from tqdm.auto import tqdm
 
 from .._checks import InputError, check_array
 
@@ -185,7 +186,6 @@ def train_mlp(inputs: np.ndarray, nxy: np.ndarray, *, hidden: int = 128, epochs:
     except ImportError as exc:  # pragma: no cover - exercised without the extra
         raise ImportError("training the MLP needs torch: pip install 'tactilevision[torch]'"
                           " (torch==2.13.0 on this machine)") from exc
-    from tqdm.auto import tqdm
 
     inputs = check_array(inputs, "inputs", [("M", N_INPUTS)], dtype=np.floating, finite=True)
     nxy = check_array(nxy, "nxy", [(inputs.shape[0], 2)], dtype=np.floating, finite=True)

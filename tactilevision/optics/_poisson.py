@@ -14,6 +14,8 @@ from typing import Literal
 
 import numpy as np
 from scipy import fft as sfft
+from scipy import sparse
+from scipy.sparse.linalg import spsolve
 
 from .._checks import InputError, check_array
 
@@ -255,8 +257,6 @@ def integrate_poisson_masked(gx: np.ndarray, gy: np.ndarray, mask: np.ndarray) -
     n = int(np.count_nonzero(mask))
     if n == 0:
         return out
-    from scipy import sparse
-    from scipy.sparse.linalg import spsolve
 
     H, W = mask.shape
     f = divergence(gx.astype(np.float64), gy.astype(np.float64), scale=0.5)

@@ -22,6 +22,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 from scipy.interpolate import PchipInterpolator
+from tqdm import tqdm
 
 from .._checks import InputError
 from ..contact import BevelGeometry, bevel_force, land_contact_depth
@@ -302,7 +303,6 @@ def _write_frames(out: Path, spec: SessionSpec, sched: PressSchedule, prof: Pres
     names = []
     it = range(t_frames.size)
     if progress:
-        from tqdm import tqdm
 
         it = tqdm(it, desc="rendering", unit="frame", mininterval=1.0)
     for k in it:
