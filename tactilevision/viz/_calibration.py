@@ -228,7 +228,7 @@ def _mosaic(cal, path: Path, reconstructor, dpi: int) -> Path:
     return path
 
 
-def bevel_panels(cal, path: str | Path, *, dpi: int = 100, columns: int = 10) -> Path:
+def bevel_panels(cal, path: str | Path, *, dpi: int = 100, columns: int = 8) -> Path:
     """One small panel per press: its bevel, seen across the crest, and what was read.
 
     Each panel is the colour change (frame - reference, the three channels
@@ -266,11 +266,11 @@ def bevel_panels(cal, path: str | Path, *, dpi: int = 100, columns: int = 10) ->
     rows = -(-n // cols)
     # a fixed grid (image panels with no axes: nothing for a layout engine to place; the
     # constrained layout took most of the figure's time for 50 panels)
-    fig_w, fig_h = 1.6 * cols, 1.9 * rows + 0.35
+    fig_w, fig_h = 2.1 * cols, 2.3 * rows + 0.8
     fig, axes = plt.subplots(rows, cols, figsize=(fig_w, fig_h), squeeze=False,
                              gridspec_kw={"left": 0.01, "right": 0.99, "bottom": 0.01,
-                                          "top": 1 - 0.55 / fig_h, "wspace": 0.12,
-                                          "hspace": 0.45})
+                                          "top": 1 - 1.0 / fig_h, "wspace": 0.12,
+                                          "hspace": 0.5})
     depth = {q.press: (d, sd) for q, d, sd in zip(
         cert.presses, cal.depth_mm,
         cal.depth_std_mm if len(cal.depth_std_mm) == len(cert.presses)
@@ -282,7 +282,7 @@ def bevel_panels(cal, path: str | Path, *, dpi: int = 100, columns: int = 10) ->
         centre = (tuple(q.footprint.center_px) if kind == "ok" else q.centre_px)
         if centre is None:
             ax.text(0.5, 0.5, f"press {q.press}\n{q.reason}", ha="center", va="center",
-                    fontsize=6, transform=ax.transAxes, color="C3")
+                    fontsize=8, transform=ax.transAxes, color="C3")
             continue
         bx = centre[0] + cfg.bevel_offset_mm / s * np.cos(t)
         by = centre[1] + cfg.bevel_offset_mm / s * np.sin(t)
@@ -308,14 +308,14 @@ def bevel_panels(cal, path: str | Path, *, dpi: int = 100, columns: int = 10) ->
                          f"± {1e3 * sd:.1f} um, SNR {q.bevel_score:.0f}")
             else:
                 title = f"press {q.press} (w0 {q.w0_mm:g})\nmark SNR {q.bevel_score:.0f}"
-            ax.set_title(title, fontsize=6)
+            ax.set_title(title, fontsize=8)
         else:
             snr = "" if not np.isfinite(q.bevel_score) else f", SNR {q.bevel_score:.0f}"
-            ax.set_title(f"press {q.press}: rejected\n{q.reason}{snr}", fontsize=6, color="C3")
+            ax.set_title(f"press {q.press}: rejected\n{q.reason}{snr}", fontsize=8, color="C3")
     mode = ("vernier: dashed lines at the crest (yellow) and the band's edges read; "
             "titles: overshoot past w0 ± 1 sd" if tan > 0 else "bevel mark at its onset")
-    fig.suptitle(f"the bevel of every press, across the crest (mm; indenter to the left); "
-                 f"{mode}", fontsize=8)
+    fig.suptitle(f"the bevel of every press, across the crest (mm; indenter to the left)\n"
+                 f"{mode}", fontsize=10, y=1 - 0.1 / fig_h, va="top")
     out = Path(path)
     fig.savefig(out, dpi=dpi)
     plt.close(fig)
