@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from tactilevision.mechanics import fit_indentation, fit_model
+from tactilevision.mechanics import fit_indentation, fit_model, kappa
 from tactilevision.mechanics._beta import beta_relation
 
 H, A = 3.0, 2.5  # mm: a/h = 0.833, where the bonded FEM beta peaks near nu = 0.485
@@ -154,3 +154,31 @@ def test_model_fit_below_the_table_is_read_at_the_bottom():
     assert fit.out_of_table and "not computed" in fit.out_of_table_message
     assert math.isnan(fit.E_mpa) and math.isnan(fit.nu)
 
+
+
+def test_beta_above_the_papers_relation_within_its_interval_is_read_at_nu_half():
+    """The paper's relation (7) ends at nu = 0.5 (beta 1.9334): a beta just above it whose
+    interval reaches back below is an incompressible gel within the scatter; E and nu are
+    reported there (the Taxim spatial session of issue 39 fitted beta 1.996 [1.73, 2.26]
+    and got no E). E at nu = 0.5 is eq. (4) with Hayes' kappa at 0.5."""
+    rel = beta_relation("paper")
+    assert rel.nu_max == 0.5 and round(rel.beta_max, 4) == 1.9334
+    ah = A / H
+    k_half = float(kappa(0.5, ah, source="hayes", contact="frictionless"))
+    c = 2 * A * E0 * k_half / (1 - 0.25)                    # eq. (4) at nu = 0.5: E0 back
+    b = rel.beta_max + 0.03
+    fit = fit_indentation(*presses(c, b, 0.01), thickness_mm=H, radius_mm=A,
+                          beta_table="paper")
+    assert fit.beta == pytest.approx(b, abs=1e-12)
+    lo = fit.beta_ci95[0]
+    assert lo < rel.beta_max < fit.beta                     # the case of the issue
+    assert not fit.out_of_table
+    assert fit.nu == 0.5 and fit.E_mpa == pytest.approx(E0, rel=1e-12)
+    assert fit.nu_ci95 == (pytest.approx(float(rel.nu(lo)), abs=1e-12), 0.5)
+    assert fit.E_ci95_mpa[0] < E0 < fit.E_ci95_mpa[1]
+    assert any("relation's top, 0.50" in n for n in fit.notes)
+    # an interval that does not reach back: still no E and nu
+    far = fit_indentation(*presses(c, rel.beta_max + 0.5, 0.002), thickness_mm=H,
+                          radius_mm=A, beta_table="paper")
+    assert far.beta_ci95[0] > rel.beta_max
+    assert far.out_of_table and math.isnan(far.E_mpa) and math.isnan(far.nu)

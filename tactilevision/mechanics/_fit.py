@@ -141,9 +141,12 @@ def fit_indentation(depth_mm: np.ndarray, force_n: np.ndarray, *, thickness_mm: 
     whose interval still reaches into the table gives nu at that edge, the
     interval of nu from the smallest to the largest tabulated nu whose beta
     lies within beta's interval, and E at that nu with its interval over that
-    range of nu and c's own bounds; a note says so. A beta whose interval does not reach the
-    table gives no E and nu (`out_of_table`), as does any beta outside the
-    paper's relation (7).
+    range of nu and c's own bounds; a note says so. The same above the paper's
+    relation (7), whose top is nu = 0.5: nu is put at 0.5, its interval from
+    the nu of beta's lower bound. A beta whose interval does not reach the
+    table gives no E and nu (`out_of_table`), as does any beta below the
+    paper's relation (7) (its bottom, nu = 0.30, is where Hayes' kappa table
+    starts).
 
     Intervals: delta method (first-order propagation) of the covariance of
     intercept and slope through beta, nu and E, with a Student t quantile on
@@ -528,6 +531,8 @@ def _moduli(rel, c: float, s: float, cov: np.ndarray, beta: float, beta_se: floa
         # beta beyond the table's peak (or below its smallest beta) but within its interval:
         # nu at that edge, its interval from the part of the table that the interval reaches
         at_edge = _at_table_top if top is not None else _at_table_bottom
+        if top is not None and getattr(rel, "beta_grid", None) is None:
+            at_edge = _at_relation_top
         m.nu, m.nu_ci, m.E, m.E_ci, m.kap, edge_note = at_edge(
             rel, top if top is not None else bottom, c, cov, tq, a, ah, kappa_source, contact,
             confidence)
@@ -604,9 +609,9 @@ def _table_notes(notes: list[str], rel, *, a: float, h: float, ah: float, beta_t
 
 def _table_top(rel, c: float, beta: float, beta_se: float, tq: float) -> float | None:
     """The lower end of beta's interval when beta lies above a tabulated relation's peak
-    but its interval reaches back into the table; else None."""
-    grid = getattr(rel, "beta_grid", None)
-    if grid is None or not (c > 0 and np.isfinite(beta_se) and np.isfinite(tq)):
+    (or above the paper's relation (7) at its top, nu = 0.5) but its interval reaches back
+    into the table; else None."""
+    if not (c > 0 and np.isfinite(beta_se) and np.isfinite(tq)):
         return None
     lo = beta - tq * beta_se
     if beta >= rel.beta_max and lo < rel.beta_max:
@@ -727,6 +732,29 @@ def _at_table_top(rel, beta_lo: float, c: float, cov: np.ndarray, tq: float, a: 
             f"[{nu_lo:.4f}, {nu_hi:.4f}] of the nu whose beta reaches that bound; E at "
             f"nu = {nu_peak:.3f}, its interval over that range")
     return nu_peak, (nu_lo, nu_hi), E, E_ci, kap, note
+
+
+def _at_relation_top(rel, beta_lo: float, c: float, cov: np.ndarray, tq: float, a: float,
+                     ah: float, kappa_source: str, contact: str, confidence: float):
+    """nu, its interval, E, its interval and kappa for beta above the paper's relation (7).
+
+    Relation (7), nu = 0.0813 ln(beta) + 0.4464, reaches nu = 0.5 (an
+    incompressible gel) at its largest beta: a beta above it whose interval
+    reaches back below it is a gel at or near nu = 0.5 within the scatter. nu is
+    put at the relation's top, 0.5; its interval runs from the nu of beta's
+    lower bound to 0.5; E at nu = 0.5, its interval E over that range of nu
+    with c at its own bounds (eq. 4 with Hayes' kappa, which reaches nu = 0.5).
+    """
+    nu_top = float(rel.nu_max)
+    nu_lo = max(float(rel.nu_min), float(rel.nu(beta_lo)))
+    E, E_ci, kap = _modulus_over(rel, c, cov, tq, nu_top, (nu_lo, nu_top), a, ah, kappa_source,
+                                 contact)
+    note = (f"beta lies above the relation's largest beta ({rel.beta_max:.4f}, nu = "
+            f"{nu_top:.2f}) but within its {confidence:.0%} interval (lower bound "
+            f"{beta_lo:.4f}): nu is put at the relation's top, {nu_top:.2f} (an "
+            f"incompressible gel), with the interval [{nu_lo:.4f}, {nu_top:.2f}]; E at "
+            f"nu = {nu_top:.2f}, its interval over that range")
+    return nu_top, (nu_lo, nu_top), E, E_ci, kap, note
 
 
 def _at_table_bottom(rel, beta_hi: float, c: float, cov: np.ndarray, tq: float, a: float,
