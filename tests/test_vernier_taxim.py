@@ -11,14 +11,21 @@ part of the test extra) and read them.
 
 from __future__ import annotations
 
+import hashlib
+import importlib.metadata
+import importlib.util
 import json
 import math
+import os
+import shutil
+import tempfile
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from tactilevision import InputError, calibrate_session
+from tactilevision._cache import cache_root
 from tactilevision.mechanics import fit_indentation
 
 TAXIM_SESSION = Path(__file__).resolve().parents[1] / "sample_frames" / "taxim_gauge"
@@ -143,17 +150,38 @@ def test_taxim_faint_shading_is_not_a_band(taxim_bevel):
 
 
 def _render_taxim_session(folder: Path, **kw) -> tuple[Path, dict]:
-    """A gauge-block session rendered by Taxim now, through
-    ``benchmarks/taxim_gauge_session.py`` (no project code); ``(folder, truth)``."""
+    """A gauge-block session rendered by Taxim through ``benchmarks/taxim_gauge_session.py``
+    (no project code); ``(folder, truth)``.
+
+    The renders are kept in the package's disk cache (``tests/taxim_<digest>``, the digest
+    of the generator's source, Taxim's and jax's versions and the arguments: the same
+    inputs give the same frames, so an entry is only ever read for the render that wrote
+    it) and copied into `folder`; a damaged entry is rendered again.
+    """
     pytest.importorskip("taxim")
     pytest.importorskip("jax")
-    import importlib.util
-
     path = Path(__file__).resolve().parents[1] / "benchmarks" / "taxim_gauge_session.py"
-    spec = importlib.util.spec_from_file_location("taxim_gauge_session", path)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return folder, mod.make_taxim_session(folder, **kw)
+    key = hashlib.sha256(path.read_bytes() + json.dumps(
+        [importlib.metadata.version("taxim"), importlib.metadata.version("jax"),
+         sorted(kw.items())], default=str).encode()).hexdigest()[:20]
+    entry = cache_root() / "tests" / f"taxim_{key}"
+    if not (entry / "truth.json").is_file():
+        spec = importlib.util.spec_from_file_location("taxim_gauge_session", path)
+        mod = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(mod)
+        staging = Path(tempfile.mkdtemp(prefix="taxim_", dir=folder.parent))
+        mod.make_taxim_session(staging / "s", **kw)
+        try:        # into the cache whole: a copy under another name, renamed at the end
+            entry.parent.mkdir(parents=True, exist_ok=True)
+            part = entry.with_name(f"{entry.name}.{os.getpid()}.part")
+            shutil.copytree(staging / "s", part)
+            shutil.rmtree(entry, ignore_errors=True)
+            os.replace(part, entry)
+        except OSError:
+            entry = staging / "s"                        # no cache: use the render itself
+    shutil.copytree(entry, folder, dirs_exist_ok=True)
+    truth = json.loads((folder / "truth.json").read_text())
+    return folder, truth
 
 
 @pytest.fixture(scope="module")
