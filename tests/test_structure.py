@@ -15,9 +15,9 @@ ROOT = Path(__file__).resolve().parents[1]
 PKG = ROOT / "tactilevision"
 DOC = ROOT / "docs" / "structure.md"
 
-#: Imported where they are used, not at module top: the optional extras, and the heavy
-#: matplotlib and onnxruntime (figures and the exact network engine only).
-LAZY = {"torch", "kornia", "onnx", "onnxruntime", "dask", "distributed", "zarr", "pyarrow",
+#: Imported where they are used, not at module top: the optional extras, and matplotlib
+#: (pyplot picks a backend when imported: only when a figure is made, never on import).
+LAZY = {"torch", "kornia", "onnx", "dask", "distributed", "zarr", "pyarrow",
         "plotly", "threadpoolctl", "matplotlib"}
 #: Longest function body allowed, lines of code (docstring, blanks and comments excluded).
 MAX_LINES = 80

@@ -14,6 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import onnxruntime as ort
 from tqdm.auto import tqdm
 
 from .._checks import InputError, check_array
@@ -75,8 +76,6 @@ class MLPGradientModel:
     threads: int = 1
 
     def __post_init__(self) -> None:
-        import onnxruntime as ort
-
         opts = ort.SessionOptions()
         opts.intra_op_num_threads = int(self.threads)
         opts.inter_op_num_threads = 1

@@ -14,6 +14,7 @@ from typing import Literal
 
 import cv2
 import numpy as np
+import onnxruntime
 from scipy import ndimage as ndi
 
 from .._cache import cache_root, savez_atomic
@@ -457,8 +458,6 @@ def _table_cache_path(key: tuple):
     if set, else ``~/.cache/tactilevision`` (the FEM cache's); the digest covers the
     network, the reference, the colour range, the bins, the position input, the format
     and the onnxruntime version that evaluated the network."""
-    import onnxruntime
-
     h = hashlib.sha256(repr((_TABLE_FORMAT, onnxruntime.__version__, key)).encode())
     return cache_root() / "optics" / f"mlp_table_{h.hexdigest()}.npz"
 
