@@ -72,6 +72,10 @@ class PoissonSolver:
         use it when the border is known to be flat and untouched.
     dtype : numpy dtype, default float32
         Working precision.
+    scale : float, default 1.0
+        Factor on every height returned (e.g. mm per pixel, for gradients in
+        height per pixel and heights in mm): folded into the cached
+        eigenvalues, so it costs nothing per frame.
 
     Notes
     -----
@@ -89,7 +93,7 @@ class PoissonSolver:
     """
 
     def __init__(self, shape: tuple[int, int], *, boundary: Boundary = "neumann",
-                 dtype: type = np.float32) -> None:
+                 dtype: type = np.float32, scale: float = 1.0) -> None:
         if boundary not in ("neumann", "dirichlet"):
             raise InputError(f"boundary must be 'neumann' or 'dirichlet', got {boundary!r}")
         h, w = (int(s) for s in shape)
@@ -103,7 +107,7 @@ class PoissonSolver:
         lam = ky[:, None] + kx[None, :]
         if boundary == "neumann":
             lam[0, 0] = 1.0  # the mean is free; fixed afterwards
-        inv = (0.5 / lam).astype(dtype)  # 0.5: the central difference of divergence()
+        inv = (0.5 * float(scale) / lam).astype(dtype)  # 0.5: divergence()'s central difference
         if boundary == "neumann":
             inv[0, 0] = 0.0
         self._inv_lambda = inv
@@ -125,7 +129,7 @@ class PoissonSolver:
         Returns
         -------
         z : ([N, ]H, W) ndarray, dtype of the solver
-            Height in the units of ``gx`` times pixels.
+            Height in the units of ``gx`` times pixels, times ``scale``.
         """
         gx = check_array(gx, "gx", [(*self.shape,), ("N", *self.shape)], dtype=np.floating)
         gy = check_array(gy, "gy", [gx.shape], dtype=np.floating)
@@ -134,12 +138,15 @@ class PoissonSolver:
         dt = self._inv_lambda.dtype
         f = divergence(gx.astype(dt, copy=False), gy.astype(dt, copy=False), scale=1.0)
         axes = (-2, -1)
+        # in place: the divergence and its transform are this call's own buffers
         if self.boundary == "neumann":
-            z = sfft.idctn(sfft.dctn(f, type=2, axes=axes, workers=1) * self._inv_lambda,
-                           type=2, axes=axes, workers=1)
+            c = sfft.dctn(f, type=2, axes=axes, workers=1, overwrite_x=True)
+            c *= self._inv_lambda
+            z = sfft.idctn(c, type=2, axes=axes, workers=1, overwrite_x=True)
             return _fix_offset(z, zero_mask)
-        return sfft.idstn(sfft.dstn(f, type=2, axes=axes, workers=1) * self._inv_lambda,
-                          type=2, axes=axes, workers=1)
+        c = sfft.dstn(f, type=2, axes=axes, workers=1, overwrite_x=True)
+        c *= self._inv_lambda
+        return sfft.idstn(c, type=2, axes=axes, workers=1, overwrite_x=True)
 
 
 def _fix_offset(z: np.ndarray, zero_mask: np.ndarray | None) -> np.ndarray:

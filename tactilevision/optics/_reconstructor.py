@@ -159,9 +159,11 @@ class DepthReconstructor:
         self._small_size = ((self.shape[1] + 3) // 4, (self.shape[0] + 3) // 4)   # (w, h)
         small = cv2.resize(ref, self._small_size, interpolation=cv2.INTER_AREA)
         self._ref_inv_small = 1.0 / np.maximum(small.astype(np.float32), 1.0)
-        self._solver = PoissonSolver(self.shape,
-                                     boundary="dirichlet" if boundary == "dirichlet" else "neumann")
         self._mm = np.float32(calibration.mm_per_px)
+        # heights in mm straight from the solve (mm per px folded into its eigenvalues)
+        self._solver = PoissonSolver(self.shape,
+                                     boundary="dirichlet" if boundary == "dirichlet" else "neumann",
+                                     scale=float(self._mm))
         self._mlp = None
         self._table = None
         if calibration.model == "lut":
@@ -218,6 +220,7 @@ class DepthReconstructor:
         if self.boundary == "contact":
             z = integrate_poisson_masked(gx, gy, self.contact_mask(frame, threshold="frame",
                                                                    fill_holes=True))
+            z *= self._mm
         else:
             far_field = self.level == "far_field" and self.boundary == "neumann"
             grown = self._contact_small(frame) if far_field or self.zero_background else None
@@ -227,10 +230,9 @@ class DepthReconstructor:
                     h, w = self.shape
                     keep = cv2.resize(keep, (w, h), interpolation=cv2.INTER_NEAREST).view(bool)
                     gx, gy = gx * keep, gy * keep
-            z = self._solver(gx, gy)
+            z = self._solver(gx, gy)              # mm
             if far_field:
                 z = self._level_far_field(z, grown)
-        z *= self._mm
         return z
 
     def _contact_small(self, frame: np.ndarray) -> np.ndarray:
