@@ -232,3 +232,14 @@ def test_masked_integration_limits_and_batches():
         integrate_poisson_masked(gx, gy, m[:-1])
     with pytest.raises(ShapeError, match="mask"):
         integrate_poisson_masked(gx, gy, m.astype(np.float32))
+
+
+@pytest.mark.parametrize("boundary", ["neumann", "dirichlet"])
+def test_scale_is_folded_into_the_solve(boundary):
+    """PoissonSolver(scale=s) returns s times the unscaled heights (mm per px folded into
+    the eigenvalues)."""
+    rng = np.random.default_rng(0)
+    gx, gy = rng.normal(size=(2, 48, 64)).astype(np.float32)
+    plain = PoissonSolver((48, 64), boundary=boundary)(gx, gy)
+    scaled = PoissonSolver((48, 64), boundary=boundary, scale=0.0295)(gx, gy)
+    np.testing.assert_allclose(scaled, 0.0295 * plain, rtol=1e-5, atol=1e-7)
