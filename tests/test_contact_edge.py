@@ -9,6 +9,9 @@ real presses' annotated circles.
 
 from __future__ import annotations
 
+import hashlib
+import importlib.metadata
+import inspect
 import math
 import warnings
 
@@ -22,8 +25,10 @@ from _data import (
     flat_gel_taxim,
     illumination,
 )
+from scipy.ndimage import map_coordinates
 
 from tactilevision import InputError
+from tactilevision._cache import cache_root, savez_atomic
 from tactilevision.optics import (
     DepthReconstructor,
     PhotometricCalibration,
@@ -189,23 +194,54 @@ def test_an_unknown_edge_is_named(taxim_presses, taxim_lut):
 
 
 # ------------------------------------------------------------------ Taxim's own gel
+_TAXIM_CASES = {False: [(2.0, 0.3, (250.3, 200.6)), (2.0, 0.6, (380.2, 260.1)),
+                        (2.0, 0.9, (300.7, 230.4)), (3.0, 0.3, (330.1, 250.2)),
+                        (3.0, 0.6, (280.5, 210.9)), (3.0, 0.9, (350.4, 240.3))],
+                True: [(2.0, 0.6, (380.2, 260.1)), (2.0, 0.9, (300.7, 230.4)),
+                       (3.0, 0.9, (350.4, 240.3))]}
+
+
 @pytest.fixture(scope="module")
 def taxim_ball_presses():
     """Ball presses drawn by Taxim's renderer (flat gel, contact_scale 0) with Taxim's own
     deformed gel: ``{shadow: [(frame, reference, centre, gel_edge_px)]}``, the gel edge
-    being the radius where Taxim's gel tilt is largest (a circle fitted over 120 rays)."""
+    being the radius where Taxim's gel tilt is largest (a circle fitted over 120 rays).
+
+    Kept in the package's disk cache (``tests/taxim_balls_<digest>.npz``: the digest of
+    this rendering code, the circle fit's and Taxim's and jax's versions), so the renders
+    are made once per machine and version."""
     pytest.importorskip("taxim")
     pytest.importorskip("jax")
-    from scipy.ndimage import map_coordinates
+    key = hashlib.sha256("".join(
+        [inspect.getsource(_render_taxim_balls), inspect.getsource(flat_gel_taxim),
+         inspect.getsource(fit_circle), repr(_TAXIM_CASES), importlib.metadata.version("taxim"),
+         importlib.metadata.version("jax")]).encode()).hexdigest()[:20]
+    path = cache_root() / "tests" / f"taxim_balls_{key}.npz"
+    try:
+        with np.load(path) as z:
+            return {shadow: [(z[f"frame_{int(shadow)}_{i}"], z[f"ref_{int(shadow)}"],
+                              tuple(c), float(z[f"edge_{int(shadow)}"][i]))
+                             for i, (_, _, c) in enumerate(presses)]
+                    for shadow, presses in _TAXIM_CASES.items()}
+    except (OSError, KeyError, ValueError):
+        pass                                   # not rendered yet, or damaged: render
+    out = _render_taxim_balls()
+    arrays = {}
+    for shadow, presses in out.items():
+        arrays[f"ref_{int(shadow)}"] = presses[0][1]
+        arrays[f"edge_{int(shadow)}"] = np.array([p[3] for p in presses])
+        for i, p in enumerate(presses):
+            arrays[f"frame_{int(shadow)}_{i}"] = p[0]
+    savez_atomic(path, **arrays)               # a cache only saves time: False is fine
+    return out
 
+
+def _render_taxim_balls():
+    """The renders of :func:`taxim_ball_presses` (a module-level function: its source is
+    part of the cache key)."""
     s, h, w = TAXIM_MM_PER_PX, 480, 640
     to8 = lambda im: np.clip(np.rint(np.asarray(im) * 255), 0, 255).astype(  # noqa: E731
         np.uint8)[..., ::-1]
-    cases = {False: [(2.0, 0.3, (250.3, 200.6)), (2.0, 0.6, (380.2, 260.1)),
-                     (2.0, 0.9, (300.7, 230.4)), (3.0, 0.3, (330.1, 250.2)),
-                     (3.0, 0.6, (280.5, 210.9)), (3.0, 0.9, (350.4, 240.3))],
-             True: [(2.0, 0.6, (380.2, 260.1)), (2.0, 0.9, (300.7, 230.4)),
-                    (3.0, 0.9, (350.4, 240.3))]}
     out = {}
     with flat_gel_taxim() as sim:
         deform = getattr(sim, "_TaximJax__compute_gel_pad_deformation", None)
@@ -213,7 +249,7 @@ def taxim_ball_presses():
         if deform is None or shift is None:
             pytest.skip("this taxim version hides its gel deformation (a private method)")
         theta = np.linspace(0, 2 * np.pi, 120, endpoint=False)
-        for shadow, presses in cases.items():
+        for shadow, presses in _TAXIM_CASES.items():
             ref = to8(sim.render(np.full((h, w), 1.0, np.float32), with_shadow=shadow))
             out[shadow] = []
             for radius, depth, c in presses:
