@@ -20,6 +20,15 @@ from tactilevision import InputError, calibrate_session
 from tactilevision.cli import main
 from tactilevision.contact import certify_session
 from tactilevision.io import COLUMN_ORDER, read_measurements, read_session
+from tactilevision.pipeline import (
+    CalibrationResult,
+    DepthState,
+    Fitter,
+    read_material,
+    take_off_zero,
+    vernier_rule,
+    with_shared_depth,
+)
 
 SAMPLE = Path(__file__).resolve().parents[1] / "sample_frames" / "gelsight_session"
 
@@ -529,3 +538,54 @@ def test_make_session_is_deterministic(tmp_path):
     assert c["presses"][0]["x_mm"] != a["presses"][0]["x_mm"]
     with pytest.raises(InputError, match="not empty"):
         make_session(tmp_path / "a", spec, profile=prof)
+
+
+def test_the_steps_in_order_give_what_calibrate_gives(sample_run):
+    """The main job run step by step, as docs/guide/calibrate.md shows it: each step's
+    result can be looked at, and the steps in order give the depths, E, nu and intervals
+    that calibrate wrote (the sample gel does not relax: that step changes nothing)."""
+    out, truth = sample_run
+    written = json.loads((out / "report" / "fit.json").read_text())
+    table = read_measurements(out / "report" / "measurements.csv")
+    session = read_session(SAMPLE)
+    cert = certify_session(session)                      # decode, sync, certify
+    assert cert.clock_offset_s == pytest.approx(written["clock_offset_s"], rel=1e-12)
+    session, cert, zero, notes = take_off_zero(session, cert, "auto")
+    assert zero is not None and notes
+    cfg, presses = session.config, cert.presses
+    force = np.array([p.force_n for p in presses])
+    w0 = np.array([p.w0_mm for p in presses])
+    closure = np.array([p.closure_mm for p in presses])
+    fit_at = Fitter(force, thickness_mm=cfg.gel_thickness_mm,
+                    radius_mm=cfg.indenter_radius_mm, beta_table="fem")
+    st = DepthState(depth=w0 + closure, std=np.array([p.closure_std_mm for p in presses]),
+                    bulge=np.zeros_like(w0), bevel_n=np.zeros_like(w0), notes=[])
+    vernier_rule(st, presses, cert, cfg, fit_at, force, nu_start=0.48, max_rounds=8,
+                 nu_tol=2e-4)
+    np.testing.assert_allclose(st.depth, table.columns["depth_mm"], rtol=1e-5)  # 6 digits
+    fit = st.fit
+    if st.shared is not None:
+        fit = with_shared_depth(fit, fit_at, st.depth, st.std, force - st.bevel_n, *st.shared)
+    assert fit.E_mpa == pytest.approx(written["E_mpa"], rel=1e-12)
+    assert fit.nu == pytest.approx(written["nu"], rel=1e-12)
+    assert list(fit.E_ci95_mpa) == pytest.approx(written["E_ci95_mpa"], rel=1e-12)
+    assert fit.E_ci95_mpa[0] <= truth["E_mpa"] <= fit.E_ci95_mpa[1]
+
+
+def test_the_folder_reads_back(sample_run):
+    """CalibrationResult.load reads what calibrate wrote: E, nu and their intervals, the
+    presses, the rejections, the holds and the geometry."""
+    out, _ = sample_run
+    folder = out / "report"
+    written = json.loads((folder / "fit.json").read_text())
+    back = CalibrationResult.load(folder)
+    assert (back.E_mpa, back.nu) == (written["E_mpa"], written["nu"])
+    assert list(back.nu_ci95) == written["nu_ci95"]
+    assert back.n_presses == written["n_presses"] == len(back.measurements["press"])
+    assert len(back.rejected) == written["n_rejected"]
+    assert [r["reason"] for r in back.rejected] == [r["reason"] for r in written["rejected"]]
+    assert back.holds is not None and set(back.holds["press"]) <= set(back.measurements["press"])
+    assert (back.thickness_mm, back.radius_mm) == (written["thickness_mm"],
+                                                   written["radius_mm"])
+    E, nu, obj = read_material(folder)
+    assert (E, nu) == (back.E_mpa, back.nu) and obj["depth_rule"] == "vernier"
