@@ -72,9 +72,33 @@ MARK_BETA = 0.8
 def mark_rule(presses, force: np.ndarray, fit_at, cfg, period: float):
     """The ``'mark'`` depth rule: depths from w0 and the force's rise from each indenter's
     P(w0) to the force window (:func:`~tactilevision.contact.crossing_forces`,
-    :func:`~tactilevision.contact.mark_depths`), dP/dw from each press's own P/w. Returns
-    the depths, their random uncertainty, the fit, the shared error as (low, high) per press
-    (mm), and the notes."""
+    :func:`~tactilevision.contact.mark_depths`), dP/dw from each press's own P/w.
+
+    Parameters
+    ----------
+    presses : sequence of CertifiedPress
+        Every one certified by a mark's onset (``rule == 'onset'``).
+    force : (N,) float64 ndarray
+        The presses' forces, N.
+    fit_at : Fitter
+    cfg : SessionConfig
+    period : float
+        The frames' period, s (:func:`frame_period`).
+
+    Returns
+    -------
+    depth, std : (N,) float64 ndarray
+        Certified depths and their random standard uncertainty, mm.
+    fit : IndentationFit
+    shared : tuple of two (N,) float64 ndarrays
+        The depth error every press shares, its bounds (low, high), mm.
+    notes : list of str
+
+    Raises
+    ------
+    InputError
+        A press not certified by a mark's onset, or a fit that fails.
+    """
     if any(p.rule != "onset" for p in presses):
         raise InputError("the 'mark' depth rule needs every press certified by a mark's onset")
     w0 = np.array([p.w0_mm for p in presses])
@@ -166,7 +190,32 @@ def vernier_rule(st: DepthState, presses, cert, cfg, fit_at: Fitter, force: np.n
                  nu_start: float, max_rounds: int, nu_tol: float) -> None:
     """The ``'vernier'`` rule: w = w0 + closure - b(w), the bulge and the bevel's own force
     iterated with the fit towards a fixed point in nu; the edges' shared error and the
-    unread bands said in the notes."""
+    unread bands said in the notes.
+
+    Parameters
+    ----------
+    st : DepthState
+        Filled in place: ``depth``, ``std``, ``bulge``, ``bevel_n``, ``rounds``,
+        ``fit``, ``shared`` and ``notes`` (kept as far as they got when a fit
+        raises).
+    presses : sequence of CertifiedPress
+        Every one read by the vernier (``rule == 'vernier'``).
+    cert : Certification
+    cfg : SessionConfig
+    fit_at : Fitter
+    force : (N,) float64 ndarray
+        The presses' forces, N.
+    nu_start : float
+        nu of the first round.
+    max_rounds : int
+    nu_tol : float
+        Stop when nu moves less than this between rounds.
+
+    Raises
+    ------
+    InputError
+        A press not read by the vernier, or a fit that fails.
+    """
     if any(p.rule != "vernier" for p in presses):
         raise InputError("the 'vernier' depth rule needs every press read by the vernier")
     geom = BevelGeometry(offset_mm=cfg.bevel_offset_mm, direction_deg=cfg.bevel_direction_deg,

@@ -69,7 +69,27 @@ def frame_period(session: Session) -> float:
 def take_off_zero(session: Session, cert: Certification, mode: str
                    ) -> tuple[Session, Certification, ForceZero | None, list[str]]:
     """Read the F/T's zero between the presses and take it off the log and the presses'
-    forces (``mode``: 'auto', 'constant', 'drift' or 'off'); the notes say what was done."""
+    forces; the notes say what was done.
+
+    Parameters
+    ----------
+    session : Session
+    cert : Certification
+        From :func:`~tactilevision.contact.certify_session` on `session`.
+    mode : {'auto', 'constant', 'drift', 'off'}
+        As ``ft_zero`` of :func:`~tactilevision.pipeline.calibrate_session`.
+
+    Returns
+    -------
+    session : Session
+        With the zero taken off ``forces_n[:, 2]`` (unchanged for 'off').
+    cert : Certification
+        Its presses' ``force_n`` and ``force_onset_n`` likewise.
+    zero : ForceZero or None
+        The zero read (:func:`~tactilevision.contact.force_zero`); None when no
+        settled rest was found.
+    notes : list of str
+    """
     spans = cert.press_spans_s
     if spans.shape[0] == 0:
         return session, cert, None, []
@@ -102,9 +122,29 @@ def relaxation_step(session: Session, cert: Certification, progress: Callable | 
                 ) -> tuple[Certification, RelaxationFit | None, list[str], np.ndarray | None]:
     """Fit the holds; for a relaxing gel, certify again with the clock on the elastic force.
 
-    Returns the certification, the fit (None when not tested), notes, and each certified
-    press's force at the instant of loading (the F/T window's mean of the elastic force
-    behind the log; None unless the gel relaxes)."""
+    Parameters
+    ----------
+    session : Session
+        With the F/T's zero taken off (:func:`take_off_zero`).
+    cert : Certification
+    progress : callable or None
+        Wraps the frame iterator of a second certification.
+    bevel_threshold : float or 'auto', default 'auto'
+        As in :func:`~tactilevision.contact.certify_session`.
+
+    Returns
+    -------
+    cert : Certification
+        Certified again on the elastic force for a relaxing gel, else `cert`.
+    relaxation : RelaxationFit or None
+        :func:`~tactilevision.mechanics.fit_relaxation` (refined on the whole log
+        for a relaxing gel); None when not tested (fewer than 3 holds).
+    notes : list of str
+    force0 : (N,) float64 ndarray or None
+        Each certified press's force at the instant of loading, N (the F/T
+        window's mean of the elastic force behind the log); None unless the gel
+        relaxes.
+    """
     def fit(c: Certification, holds: dict[str, np.ndarray]) -> RelaxationFit:
         # with each press's time and indenter: softening, which does not recover between
         # presses, is told from relaxation, which does
