@@ -145,6 +145,10 @@ def _vernier_onset(session, geom: BevelGeometry, centre: tuple[float, float], s:
     agree = [abs(r.half_width_px - plain.half_width_px) <= max(2.5 * r.half_width_std_px, 2.5)
              for r in per]
     consistent = float(np.mean(agree)) >= 0.75       # one noisy frame of 18 (90 fps) may stray
+    # a band shorter than RESOLVED_PX on every frame is only bounded, to the same range
+    # whatever its frames read (0 to RESOLVED_PX's worth of overshoot on each frame, so
+    # also over the window): its frames' disagreement changes nothing that is stated
+    consistent = consistent or max(r.half_width_px for r in [plain, *per]) < RESOLVED_PX
     if joint.snr < VERNIER_SNR:
         why = "" if consistent else "; the frames of the hold also disagree on its width"
         return _never_seen(geom, joint.snr, onset, why)
