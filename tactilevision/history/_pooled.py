@@ -129,7 +129,7 @@ class PooledDiagnosis:
 def _geometry(records: Sequence[CalibrationRecord]) -> tuple[float, float]:
     hs, as_ = set(), set()
     for r in records:
-        obj = CalibrationResult.load(r.folder).fit
+        obj = CalibrationResult.load(r.folder, tables=False).fit
         hs.add(obj.get("thickness_mm"))
         as_.add(obj.get("radius_mm"))
     if len(hs) != 1 or len(as_) != 1 or None in hs or None in as_:

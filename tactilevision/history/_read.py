@@ -184,7 +184,7 @@ def read_calibration(folder: str | Path, *, date: datetime.date | None = None
     folder = Path(folder)
     if not folder.is_dir():
         raise InputError(f"calibration folder {folder} does not exist or is not a folder")
-    result = CalibrationResult.load(folder)
+    result = CalibrationResult.load(folder, tables=False)
     fit = result.fit
     path = folder / "fit.json"
     toml = _toml(folder)

@@ -708,6 +708,13 @@ def _modulus_over(rel, c: float, cov: np.ndarray, tq: float, nu: float, nus: tup
     return E, (float(min(Es)), float(max(Es))), kap
 
 
+#: What a beta beyond the table's top may also mean, said with E and nu put at that top.
+_BEYOND_TABLE = (". A beta beyond the table also follows from deep presses stiffer for a "
+                 "reason the model lacks (a stiffness gradient across the pad that the deep "
+                 "presses sample, a force offset): E and its interval hold only if the model "
+                 "is complete (diagnose)")
+
+
 def _at_table_top(rel, beta_lo: float, c: float, cov: np.ndarray, tq: float, a: float,
                   ah: float, kappa_source: str, contact: str, confidence: float):
     """nu, its interval, E, its interval and kappa for beta at the top of the FEM table.
@@ -730,10 +737,7 @@ def _at_table_top(rel, beta_lo: float, c: float, cov: np.ndarray, tq: float, a: 
             f"{nu_peak:.3f}) but within its {confidence:.0%} interval (lower bound "
             f"{beta_lo:.4f}): nu is put at the table's top, {nu_peak:.3f}, with the interval "
             f"[{nu_lo:.4f}, {nu_hi:.4f}] of the nu whose beta reaches that bound; E at "
-            f"nu = {nu_peak:.3f}, its interval over that range. A beta beyond the table "
-            "also follows from deep presses stiffer for a reason the model lacks (a "
-            "stiffness gradient across the pad that the deep presses sample, a force "
-            "offset): E and its interval hold only if the model is complete (diagnose)")
+            f"nu = {nu_peak:.3f}, its interval over that range" + _BEYOND_TABLE)
     return nu_peak, (nu_lo, nu_hi), E, E_ci, kap, note
 
 
@@ -756,10 +760,7 @@ def _at_relation_top(rel, beta_lo: float, c: float, cov: np.ndarray, tq: float, 
             f"{nu_top:.2f}) but within its {confidence:.0%} interval (lower bound "
             f"{beta_lo:.4f}): nu is put at the relation's top, {nu_top:.2f} (an "
             f"incompressible gel), with the interval [{nu_lo:.4f}, {nu_top:.2f}]; E at "
-            f"nu = {nu_top:.2f}, its interval over that range. A beta beyond the relation "
-            "also follows from deep presses stiffer for a reason the model lacks (a "
-            "stiffness gradient across the pad that the deep presses sample, a force "
-            "offset): E and its interval hold only if the model is complete (diagnose)")
+            f"nu = {nu_top:.2f}, its interval over that range" + _BEYOND_TABLE)
     return nu_top, (nu_lo, nu_top), E, E_ci, kap, note
 
 

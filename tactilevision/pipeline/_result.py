@@ -255,7 +255,8 @@ class CalibrationResult:
         return written
 
     @classmethod
-    def load(cls, path: str | Path, *, require_fit: bool = True) -> CalibrationResult:
+    def load(cls, path: str | Path, *, require_fit: bool = True,
+             tables: bool = True) -> CalibrationResult:
         """Read a calibration folder written by ``calibrate`` (or :meth:`save`).
 
         Parameters
@@ -265,6 +266,9 @@ class CalibrationResult:
             --json`` keys: then only `fit` is read).
         require_fit : bool, default True
             Refuse a folder without ``fit.json`` (nothing was fitted).
+        tables : bool, default True
+            Also read ``measurements.csv`` and ``holds.csv`` (False: ``fit.json``
+            and ``rejected.csv`` only, for a reader that needs E and nu).
 
         Returns
         -------
@@ -290,10 +294,10 @@ class CalibrationResult:
                              "of tactilevision calibrate)")
         fit = _read_fit(fit_path) if fit_path.is_file() else None
         holds = None
-        if (path / "holds.csv").is_file():
+        if tables and (path / "holds.csv").is_file():
             holds = _read_holds(path / "holds.csv")
         columns, h, a = None, math.nan, math.nan
-        if (path / "measurements.csv").is_file():
+        if tables and (path / "measurements.csv").is_file():
             table = read_measurements(path / "measurements.csv")
             columns = dict(table.columns)
             columns.update({k: np.asarray(v) for k, v in table.labels.items()})
@@ -328,7 +332,7 @@ def read_material(path: str | Path) -> tuple[float, float, dict]:
     path = Path(path)
     if not path.exists():
         raise InputError(f"{path} does not exist")
-    fit = CalibrationResult.load(path).fit or {}
+    fit = CalibrationResult.load(path, tables=False).fit or {}
     E, nu = fit.get("E_mpa"), fit.get("nu")
     if not all(isinstance(v, int | float) and not isinstance(v, bool) for v in (E, nu)):
         raise InputError(f"{path} has no numeric E_mpa and nu (E_mpa {E!r}, nu {nu!r})")
