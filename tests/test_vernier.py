@@ -247,3 +247,73 @@ depths_mm = [0.15, 0.3]
     (folder / "session.toml").write_text(base.format(extra='bulge_correction = "yes"'))
     with pytest.raises(InputError, match="bulge_correction must be true or false"):
         read_session(folder)
+
+
+def test_crest_consistency_closed_form():
+    """Crests 0, 1, 2 px: chi2 about their mean is 2 on 2 degrees of freedom, so the Birge
+    ratio is 1 at a stated sd of 1 px and 2 at 0.5 px, with p = exp(-chi2 / 2)."""
+    from tactilevision.contact import crest_consistency
+
+    r, p = crest_consistency([0.0, 1.0, 2.0], [1.0, 1.0, 1.0])
+    assert r == pytest.approx(1.0) and p == pytest.approx(math.exp(-1.0))
+    r, p = crest_consistency([0.0, 1.0, 2.0], [0.5, 0.5, 0.5])
+    assert r == pytest.approx(2.0) and p == pytest.approx(math.exp(-4.0))
+    # weights: a precise crest pulls the mean to itself
+    r, _ = crest_consistency([0.0, 3.0, 3.0], [0.01, 1.0, 1.0])
+    mean = 6.0 / 10002.0
+    assert r == pytest.approx(math.sqrt((1e4 * mean ** 2 + 2 * (3.0 - mean) ** 2) / 2), rel=1e-12)
+    assert r < math.sqrt(9.0)          # about the unweighted mean 2 it would be 6 / sqrt(2)
+    assert all(math.isnan(v) for v in crest_consistency([0.0, 1.0], [1.0, 1.0]))
+
+
+def test_crest_check_holds_its_false_alarm_rate_and_sees_narrow_uncertainties():
+    """Crests drawn with the stated sd are flagged at the check's 5 % (within Monte Carlo
+    error over 4000 sessions of 12 bands); drawn 1.5 times wider, the median Birge ratio is
+    1.5 within 5 %."""
+    from tactilevision.contact import CREST_CHECK_P, crest_consistency
+
+    rng = np.random.default_rng(3)
+    sd = rng.uniform(0.4, 0.6, 12)
+    honest = [crest_consistency(rng.normal(0.0, sd), sd) for _ in range(4000)]
+    rate = np.mean([p < CREST_CHECK_P for _, p in honest])
+    assert abs(rate - CREST_CHECK_P) < 3 * math.sqrt(0.05 * 0.95 / 4000)
+    narrow = np.array([crest_consistency(rng.normal(0.0, 1.5 * sd), sd)[0]
+                       for _ in range(4000)])
+    # the median of sqrt(chi2_11 / 11) is 0.970: times 1.5
+    assert np.median(narrow) == pytest.approx(1.5 * 0.970, rel=0.05)
+
+
+def test_read_bands_are_widened_by_their_crests_scatter():
+    """The session check on its presses: crests scattering beyond their stated sd widen every
+    read band's closure sd by the Birge ratio and leave unread bands (a uniform over their
+    bounds) as they were; consistent crests change nothing. Both say so in the optics."""
+    from dataclasses import dataclass
+
+    from tactilevision.contact import crest_consistency
+    from tactilevision.contact._vernier_presses import _crest_checked
+
+    @dataclass(frozen=True)
+    class Reading:
+        crest_px: float
+        half_width_std_px: float
+
+    @dataclass(frozen=True)
+    class Press:
+        band_resolved: bool
+        reading: Reading
+        closure_std_mm: float
+
+    crests = [-1.5, 1.2, 0.1, -0.9, 1.6, -0.4, 0.8, -1.1]
+    presses = [Press(True, Reading(c, 0.45), 0.001) for c in crests]
+    presses.append(Press(False, Reading(9.0, 0.45), 0.007))       # unread: not in the check
+    optics: dict = {}
+    out = _crest_checked(presses, optics)
+    ratio, p = crest_consistency(crests, [0.45] * len(crests))
+    assert p < 0.05 and ratio > 2.0
+    assert optics["read_std_factor"] == pytest.approx(ratio, abs=1e-3)
+    assert optics["crest_birge"] == pytest.approx(ratio, abs=1e-3)
+    assert [q.closure_std_mm for q in out[:-1]] == pytest.approx([0.001 * ratio] * 8)
+    assert out[-1].closure_std_mm == 0.007
+    calm = [Press(True, Reading(0.2 * c, 0.45), 0.001) for c in crests]
+    optics = {}
+    assert _crest_checked(calm, optics) == calm and optics["read_std_factor"] == 1.0

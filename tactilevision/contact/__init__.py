@@ -29,13 +29,20 @@ from ._vernier import (
     bevel_profile,
     read_bevel,
 )
-from ._vernier_presses import EDGE_SHARED_FRACTION, unresolved_closure, vernier_shared_mm
+from ._vernier_presses import (
+    CREST_CHECK_P,
+    EDGE_SHARED_FRACTION,
+    crest_consistency,
+    unresolved_closure,
+    vernier_shared_mm,
+)
 from ._zero import ForceZero, force_zero
 
-__all__ = ["EDGE_SHARED_FRACTION", "RESOLVED_PX", "BevelGeometry", "BevelProfile", "BevelReading",
-           "Certification", "CertifiedPress", "ClockSync", "Footprint", "ForceWindow", "ForceZero",
-           "Rejection", "approach_start", "bevel_force", "bevel_profile", "bevel_score", "bulge_at",
-           "bulge_height", "certified_depths", "certify_session", "contact_mask", "contact_onsets",
+__all__ = ["CREST_CHECK_P", "EDGE_SHARED_FRACTION", "RESOLVED_PX", "BevelGeometry", "BevelProfile",
+           "BevelReading", "Certification", "CertifiedPress", "ClockSync", "Footprint",
+           "ForceWindow", "ForceZero", "Rejection", "approach_start", "bevel_force",
+           "bevel_profile", "bevel_score", "bulge_at", "bulge_height", "certified_depths",
+           "certify_session", "contact_mask", "contact_onsets", "crest_consistency",
            "crossing_forces", "estimate_clock_offset", "fit_footprint", "footprint_from_frame",
            "force_onsets", "force_window", "force_zero", "hold_end", "hold_start",
            "land_contact_depth", "land_contact_depths_mm", "mark_depths", "mark_shared_mm",

@@ -13,6 +13,7 @@ import math
 from dataclasses import replace
 
 import numpy as np
+from scipy import stats
 
 from ._holds import hold_start
 from ._results import (
@@ -27,7 +28,8 @@ from ._results import (
 )
 from ._vernier import RESOLVED_PX, BevelGeometry, bevel_profile, read_bevel
 
-__all__ = ["EDGE_SHARED_FRACTION", "unresolved_closure", "vernier_shared_mm"]
+__all__ = ["CREST_CHECK_P", "EDGE_SHARED_FRACTION", "crest_consistency", "unresolved_closure",
+           "vernier_shared_mm"]
 
 
 #: With lines, a long band is read only when its edges alone (``read_bevel(lines='only')``)
@@ -41,6 +43,10 @@ AGREE_PX = 1.5
 #: long bands of sweep cells A and B lie within 1 px of their median; the misread narrow
 #: bands that passed for long ones, 3 to 5.5 px off).
 CREST_TOLERANCE_PX = 2.0
+#: The read bands' stated half-width uncertainties are widened by their crests' Birge
+#: ratio when the crests scatter more than those uncertainties allow at this significance
+#: (:func:`crest_consistency`).
+CREST_CHECK_P = 0.05
 #: The shared error of a read band's half-width, as a fraction of the session's edge width
 #: (:func:`vernier_shared_mm`).
 EDGE_SHARED_FRACTION = 0.4
@@ -246,6 +252,73 @@ def unresolved_closure(bevel: BevelGeometry, mm_per_px: float,
     return 0.5 * top, top / math.sqrt(12.0)
 
 
+def crest_consistency(crest_px: np.ndarray, std_px: np.ndarray) -> tuple[float, float]:
+    """Whether the read bands' crests scatter as their stated uncertainties allow.
+
+    The crest's place on the bevel is fixed by the block, so across a
+    session's read bands it varies only by the reading's own error (and the
+    footprint centre's, which adds to it). A band's crest and half-width come
+    from its two edges, ``(outer + inner) / 2`` and ``(outer - inner) / 2``,
+    so with independent edge errors the two share one standard uncertainty:
+    the crests' scatter checks the half-widths' stated uncertainty on the
+    session's own frames, with no truth.
+
+    Parameters
+    ----------
+    crest_px : (N,) array_like of float
+        The read bands' crest positions, px.
+    std_px : (N,) array_like of float
+        Their stated half-width uncertainties, px (> 0).
+
+    Returns
+    -------
+    birge_ratio : float
+        ``sqrt(chi2 / (N - 1))`` about the weighted mean crest (R. T. Birge,
+        Phys. Rev. 40, 207, 1932): about 1 when the stated uncertainties hold,
+        above 1 when the crests scatter more. NaN for fewer than 3 bands.
+    p_value : float
+        The chance of a chi-square with ``N - 1`` degrees of freedom at least
+        that large: small when the stated uncertainties are too narrow.
+
+    Notes
+    -----
+    One-sided: an error that moves both edges outward or inward alike (a
+    shadow beside the band, a wrong edge blur) changes the half-width but not
+    the crest, and this check does not see it.
+    """
+    c = np.asarray(crest_px, np.float64)
+    sd = np.asarray(std_px, np.float64)
+    if c.size < 3:
+        return float("nan"), float("nan")
+    wt = 1.0 / sd ** 2
+    mean = float(np.sum(wt * c) / np.sum(wt))
+    chi2 = float(np.sum(wt * (c - mean) ** 2))
+    dof = c.size - 1
+    return math.sqrt(chi2 / dof), float(stats.chi2.sf(chi2, dof))
+
+
+def _crest_checked(out: list[CertifiedPress], optics: dict) -> list[CertifiedPress]:
+    """The read bands' closure uncertainties widened by their crests' Birge ratio, if needed.
+
+    Where :func:`crest_consistency` finds the crests scattering beyond their
+    stated uncertainties (p below :data:`CREST_CHECK_P`), every read band's
+    ``closure_std_mm`` is multiplied by the Birge ratio; the ratio, its p and
+    the factor applied go into `optics` (``crest_birge``, ``crest_p``,
+    ``read_std_factor``).
+    """
+    read = [p for p in out if p.band_resolved and p.reading is not None]
+    ratio, pval = crest_consistency([p.reading.crest_px for p in read],
+                                    [max(p.reading.half_width_std_px, 1e-6) for p in read])
+    factor = ratio if (np.isfinite(pval) and pval < CREST_CHECK_P and ratio > 1.0) else 1.0
+    optics["crest_birge"] = None if not np.isfinite(ratio) else round(ratio, 3)
+    optics["crest_p"] = None if not np.isfinite(pval) else round(pval, 4)
+    optics["read_std_factor"] = round(factor, 3)
+    if factor == 1.0:
+        return out
+    return [replace(p, closure_std_mm=p.closure_std_mm * factor) if p.band_resolved else p
+            for p in out]
+
+
 def _read_vernier_presses(pending: list[dict], geom: BevelGeometry, s: float
                           ) -> tuple[list[CertifiedPress], list[Rejection], dict]:
     """Read every press's band over its window, with the session's own optics.
@@ -366,6 +439,7 @@ def _read_vernier_presses(pending: list[dict], geom: BevelGeometry, s: float
         out.append(replace(d["press"], rule="vernier", closure_mm=closure,
                            closure_std_mm=closure_std, reading=r, bevel_score=r.snr,
                            window_frames=d["window"], band_resolved=read))
+    out = _crest_checked(out, optics)
     optics["unresolved"] = n_unresolved
     optics["shadows"] = n_unresolved          # their point: the shadows reading
     optics["edge_px"] = edge

@@ -288,6 +288,13 @@ def _vernier_notes(st: DepthState, presses, cert, geom, cfg) -> None:
                         f"contact, the same way for every press: +-"
                         f"{1e3 * float(half.max()):.2f} um shared by the {n_read} read "
                         "bands, carried into E's and nu's intervals")
+    optics = cert.bevel_optics or {}
+    factor = optics.get("read_std_factor") or 1.0
+    if factor > 1.0:
+        st.notes.append(f"the read bands' crests scatter {optics['crest_birge']:.2f} times "
+                        "what their stated uncertainties allow (Birge ratio, p = "
+                        f"{optics['crest_p']:.2g}; a crest's place is fixed by the block): "
+                        f"their depth uncertainties are widened by {factor:.2f}")
     unread = sum(not p.band_resolved for p in presses)
     if unread:
         top = 2e3 * unresolved_closure(geom, cfg.mm_per_px)[0]
