@@ -286,3 +286,37 @@ def test_columns_round_trip_and_covariates(tmp_path):
     cols["depth_std_mm"] = rng.uniform(0.001, 0.002, n)
     tests = covariate_tests(rng.standard_normal(n) * 1e-3, law(w), cols)
     assert {x.name for x in tests} == {"depth_mm", "overshoot_mm"}
+
+
+def test_a_press_just_past_the_fem_table_within_its_uncertainty_is_read_at_the_table_edge():
+    """A certified depth past the FEM beta table's reach (w/h 0.23) by less than two of its
+    stated uncertainties is within its uncertainty of the table: the fit reads the table at
+    its last w/h for that press and says so. Known answer: presses on one exact line of
+    eq. (5) give the same c and beta whether the deepest sits at w/h 0.2304 or 0.23, and the
+    table is read at the same depths, so E and nu agree. Past by more than two sd, or with
+    no uncertainty, the press is refused as before (a mark session failed whole on a press
+    at w/h 0.2304 with 23 um stated, benchmarks/bench_mark_coverage.py seed 3026)."""
+    h, a = 3.0, 2.5
+    c, beta = 3.75, 0.78
+    base = np.array([0.15, 0.30, 0.40, 0.50, 0.60])
+
+    def P(w):
+        return w * (c + c * beta * w / h)
+
+    past = np.append(base, 0.2304 * h)
+    edge = np.append(base, 0.23 * h)
+    u = np.full(past.size, 0.005)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")          # w/h > 0.2: the linear law's own warning
+        f_past = fit_indentation(past, P(past), thickness_mm=h, radius_mm=a, depth_std_mm=u)
+        f_edge = fit_indentation(edge, P(edge), thickness_mm=h, radius_mm=a, depth_std_mm=u)
+    assert f_past.c_n_per_mm == pytest.approx(c, rel=1e-9)
+    assert f_past.beta == pytest.approx(beta, rel=1e-9)
+    assert np.isfinite(f_past.E_mpa)
+    assert f_past.E_mpa == pytest.approx(f_edge.E_mpa, rel=1e-9)
+    assert f_past.nu == pytest.approx(f_edge.nu, abs=1e-9)
+    assert any("press(es) 5 reach w/h = 0.2304" in n for n in f_past.notes)
+    assert not any("reach w/h" in n for n in f_edge.notes)
+    for std in (None, np.full(past.size, 0.0001)):          # 0.0012 mm past: > 2 sd
+        with pytest.raises(InputError, match="beyond the FEM beta table"):
+            fit_indentation(past, P(past), thickness_mm=h, radius_mm=a, depth_std_mm=std)

@@ -241,3 +241,4 @@ def test_two_presses_fit_without_intervals():
     assert fit.nu == pytest.approx(0.4797, abs=1e-3)
     assert all(math.isnan(v) for v in fit.E_ci95_mpa)
     assert any("degrees of freedom" in n for n in fit.notes)
+

@@ -113,7 +113,11 @@ def fit_indentation(depth_mm: np.ndarray, force_n: np.ndarray, *, thickness_mm: 
         not positive, a/h is outside the kappa table [0.2, 2.0], the FEM
         table is missing, or it has no `contact` punch, or its beta does not
         increase with nu at this a/h (a bonded punch at a/h <~ 0.6: nu
-        cannot be told from beta there).
+        cannot be told from beta there), or (``'fem'``) a press lies past the
+        FEM beta table's reach, w/h = 0.23 (computed to 0.2, read 15 %
+        beyond), by two of its depth uncertainties or more (a press past it by
+        less is within its uncertainty of the table, which is read at its
+        last w/h for that press; a note says so).
     ValueError
         For an unknown `beta_table` or a `confidence` outside (0, 1).
 
@@ -223,12 +227,14 @@ def fit_indentation(depth_mm: np.ndarray, force_n: np.ndarray, *, thickness_mm: 
         raise InputError(f"depth_mm holds {depths.size} distinct depth(s); the fit of "
                          "eq. (5) needs presses at two depths or more")
     u = None if depth_std_mm is None else _depth_std(depth_std_mm, w.size)
-    ah, kappa_source, contact = _geometry(w, h, a, beta_table, a_over_h, contact)
+    w_table, reach_note = _table_depths(w, u, h, beta_table)
+    ah, kappa_source, contact = _geometry(w_table, h, a, beta_table, a_over_h, contact)
     if u is not None and np.any(u > 0):
         return _fit_with_depth_std(w, P, u, h=h, a=a, ah=ah, beta_table=beta_table,
                                        contact=contact, kappa_source=kappa_source,
                                        confidence=confidence,
-                                       a_over_h_given=a_over_h is not None)
+                                       a_over_h_given=a_over_h is not None,
+                                       w_table=w_table, reach_note=reach_note)
     zero_note = (("depth_std_mm is 0 for every press: the depths are taken as exact "
                   "(ordinary fit)",) if u is not None else ())
 
@@ -359,10 +365,36 @@ def _effective_variance_fit(depth_mm: np.ndarray, force_n: np.ndarray,
     return coef, cov, math.sqrt(t), converged
 
 
+def _table_depths(w: np.ndarray, u: np.ndarray | None, h: float, beta_table: str
+                  ) -> tuple[np.ndarray, str | None]:
+    """The depths the FEM beta table is read at, and a note when any was moved.
+
+    A press past the table's reach (w/h above ``MAX_W_OVER_H * TABLE_EXTRAPOLATION``)
+    by less than two of its stated depth uncertainties is within its uncertainty of the
+    table: the table is read at its last w/h for it (the regression keeps its depth).
+    Any other press past the reach is left as it is, for :func:`_geometry` to refuse.
+    """
+    top = MAX_W_OVER_H * TABLE_EXTRAPOLATION * h
+    past = w > top + 1e-12 * h
+    if beta_table != "fem" or u is None or not past.any():
+        return w, None
+    near = past & (w - 2.0 * u <= top)
+    if np.any(past & ~near):
+        return w, None
+    idx = ", ".join(str(int(i)) for i in np.flatnonzero(near))
+    note = (f"press(es) {idx} reach w/h = {float(np.max(w / h)):.4f}, past the FEM beta "
+            f"table's {top / h:g} by less than two of their depth uncertainties: the table "
+            "is read at its last w/h for them (their depths are fitted as certified)")
+    return np.minimum(w, top), note
+
+
 def _fit_with_depth_std(w: np.ndarray, P: np.ndarray, u: np.ndarray, *, h: float, a: float,
                             ah: float, beta_table: str, contact: str, kappa_source: str,
-                            confidence: float, a_over_h_given: bool) -> IndentationFit:
-    """:func:`fit_indentation` with depth uncertainties: effective variance, then E and nu."""
+                            confidence: float, a_over_h_given: bool,
+                            w_table: np.ndarray | None = None,
+                            reach_note: str | None = None) -> IndentationFit:
+    """:func:`fit_indentation` with depth uncertainties: effective variance, then E and nu
+    (the tables read at `w_table`, default `w`: :func:`_table_depths`)."""
     coef, cov, sigma0, converged = _effective_variance_fit(w, P, u, h)
     c, s = float(coef[0]), float(coef[1])
     x, y = w / h, P / w  # the ordinary fit's basis for R^2 and rmse
@@ -379,11 +411,14 @@ def _fit_with_depth_std(w: np.ndarray, P: np.ndarray, u: np.ndarray, *, h: float
     if not converged:
         notes.append(f"the effective-variance iteration did not converge in {_EV_MAX_ITER} "
                      "steps: the last estimate is reported")
-    fit = material_fit(c, s, cov, depth_mm=w, thickness_mm=h, radius_mm=a, a_over_h=ah,
-                       beta_table=beta_table, contact=contact, kappa_source=kappa_source,
-                       confidence=confidence, dof=w.size - 2, rmse_n=rmse, r_squared=r2,
-                       effects=FIT_EFFECTS, effect_params=None, a_over_h_given=a_over_h_given,
-                       extra_notes=tuple(notes), ci_method=_EV_CI_METHOD)
+    if reach_note:
+        notes.append(reach_note)
+    fit = material_fit(c, s, cov, depth_mm=w if w_table is None else w_table, thickness_mm=h,
+                       radius_mm=a, a_over_h=ah, beta_table=beta_table, contact=contact,
+                       kappa_source=kappa_source, confidence=confidence, dof=w.size - 2,
+                       rmse_n=rmse, r_squared=r2, effects=FIT_EFFECTS, effect_params=None,
+                       a_over_h_given=a_over_h_given, extra_notes=tuple(notes),
+                       ci_method=_EV_CI_METHOD)
     return dataclasses.replace(fit, depth_std_used=True, depth_std_median_mm=med,
                                sigma0_n=sigma0)
 
