@@ -108,6 +108,15 @@ def mark_rule(presses, force: np.ndarray, fit_at, cfg, period: float):
         np.array([p.force_onset_sem_n for p in presses]))
     sem = np.array([p.force_sem_n for p in presses])
     h = cfg.gel_thickness_mm
+    ind = np.array([p.indenter for p in presses])
+    n_group = np.array([np.count_nonzero(ind == g) for g in ind], np.float64)
+    # P(w0) is one number per indenter, so its error is shared by that indenter's presses:
+    # weighed as independent, n presses would count it n times. Its variance is carried n
+    # times over in each press (Kish's design effect: with the presses of one indenter at
+    # nearly one depth, the fit's estimate and covariance are then those of the correlated
+    # errors). Before this, 10 frames/s sessions read beta 2.8 se low with depth errors
+    # shared within each indenter (benchmarks/bench_mark_coverage.py, seed 3005).
+    sd_group = np.nan_to_num(sem_on) * np.sqrt(n_group)
     depth = w0 + travel / 2
     after = travel / 2
     for _ in range(20):
@@ -117,7 +126,7 @@ def mark_rule(presses, force: np.ndarray, fit_at, cfg, period: float):
         k = force / np.maximum(depth, 1e-9) * (1 + 2 * MARK_BETA * x) / (1 + MARK_BETA * x)
         k = np.maximum(k, 1e-6)
         new, std, after = mark_depths(w0, force, f_on, k, force_sem_n=sem,
-                                      force_crossing_sd_n=sem_on, travel_mm=travel)
+                                      force_crossing_sd_n=sd_group, travel_mm=travel)
         moved = float(np.max(np.abs(new - depth)))
         depth = new
         if moved < 1e-6:
@@ -129,8 +138,6 @@ def mark_rule(presses, force: np.ndarray, fit_at, cfg, period: float):
     # so the brackets' middles read P(w0) low by up to their half-width, the deeper (faster)
     # presses most (on simulated 10 frames/s sessions the depth error rose 2 to 47 um per mm
     # of w0, and beta read low). Carried as shared: every press at its bracket's end at once.
-    ind = np.array([p.indenter for p in presses])
-    n_group = np.array([np.count_nonzero(ind == g) for g in ind], np.float64)
     cross = np.where(np.isfinite(f_on), np.sqrt(3.0) * np.nan_to_num(sem_on)
                      / np.sqrt(n_group) / k, 0.0)
     half = half + cross
