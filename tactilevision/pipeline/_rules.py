@@ -88,7 +88,10 @@ def mark_rule(presses, force: np.ndarray, fit_at, cfg, period: float):
     Returns
     -------
     depth, std : (N,) float64 ndarray
-        Certified depths and their random standard uncertainty, mm.
+        Certified depths and their random standard uncertainty, mm; the part an
+        indenter's n presses share (the error of its P(w0)) counted n times over in
+        each (Kish's design effect: the fit, which takes presses as independent, then
+        weighs each indenter's P(w0) once).
     fit : IndentationFit
     shared : tuple of two (N,) float64 ndarrays
         The depth error every press shares, its bounds (low, high), mm.
