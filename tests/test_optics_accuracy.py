@@ -208,3 +208,66 @@ def test_holdout_presses_spread_over_the_pad_and_the_ball_sizes():
             holdout_presses(centres, radii, ball, shape, share=bad)
     with pytest.raises(InputError, match="one each per press"):
         holdout_presses(centres, radii[:3], ball, shape)
+
+
+def _sphere_maps(centre, ball_px, shape=(200, 200)):
+    """Exact gradients and depth of a ball of radius `ball_px` (px) centred at `centre`."""
+    from tactilevision.optics import ball_gradients
+
+    gx, gy, _ = ball_gradients(shape, centre, 0.9 * ball_px, ball_px)
+    yy, xx = np.mgrid[0:shape[0], 0:shape[1]]
+    d2 = (xx - centre[0]) ** 2 + (yy - centre[1]) ** 2
+    height = np.sqrt(np.maximum(ball_px ** 2 - d2, 0.0))
+    return gx.astype(np.float64), gy.astype(np.float64), height
+
+
+def test_scoring_circles_own_error_moves_the_inner_angle_as_the_sphere_says():
+    """A perfect reconstruction scores 0 deg and a 0 % inner cap on its own circle. Moved by
+    the systematic bound (0.025 r along an axis), the circle reads the sphere's gradient off
+    by about d / R everywhere (the slopes of two spheres whose centres are d apart, to first
+    order): atan(0.025 r / R); the inner cap, a height difference against the drop at the
+    same ring, hardly moves. The random part gives a positive sd of the median."""
+    from tactilevision.optics import CIRCLE_ERROR, CircleError
+    from tactilevision.optics._accuracy import _circle_propagation, _inner_scores
+
+    R, r = 100.0, 40.0
+    centres = np.array([[100.3, 99.6], [95.0, 104.0], [103.0, 97.5]])
+    radii = np.full(3, r)
+    maps = [_sphere_maps(c, R) for c in centres]
+    angle, cap = _inner_scores(*maps[0], centres[0], r, R)
+    assert angle < 0.02 and abs(cap) < 0.01           # float32 gradients
+    err = CircleError(centre_sd=0.035, radius_sd=0.025, centre_bias=0.025, radius_bias=0.025,
+                      source="test")
+    out = _circle_propagation(maps, centres, radii, R, err)
+    expected = np.degrees(np.arctan(0.025 * r / R))           # 0.57 deg
+    assert out["normal_angle_08_deg"]["systematic"] == pytest.approx(expected, rel=0.15)
+    assert out["inner_cap"]["systematic"] < 0.01
+    assert 0.0 < out["normal_angle_08_deg"]["random_sd"] < 2 * expected
+    assert CIRCLE_ERROR.centre_sd > 0 and "hand-annotated" in CIRCLE_ERROR.source
+
+
+def test_report_carries_the_circle_error_only_when_given(presses):
+    """calibration_accuracy adds circle_uncertainty per ball and circle_error with its
+    source when a CircleError is given; without one both stay None."""
+    from tactilevision.optics import CIRCLE_ERROR
+
+    ref, frames, centres, radii = presses
+    trained = np.zeros(len(frames), bool)
+    trained[::2] = True
+    cal = PhotometricCalibration.from_ball_presses(
+        ref, frames[trained], centres[trained], radii[trained], ball_radius_mm=BALL_PX * MM,
+        mm_per_px=MM, model="lut")
+    ball = np.full(len(frames), BALL_PX)
+    kw = dict(trained=trained, label_fraction=1.0, circles="detected", edge="contact")
+    plain = calibration_accuracy(DepthReconstructor(cal), frames, centres, radii, ball, **kw)
+    with_err = calibration_accuracy(DepthReconstructor(cal), frames, centres, radii, ball,
+                                    circle_error=CIRCLE_ERROR, **kw)
+    assert plain["circle_error"] is None
+    assert all(b["circle_uncertainty"] is None for b in plain["balls"])
+    assert with_err["circle_error"]["source"] == CIRCLE_ERROR.source
+    scored = [b for b in with_err["balls"] if b["n_scored"]]
+    assert scored and all(b["circle_uncertainty"]["normal_angle_08_deg"]["random_sd"] > 0
+                          for b in scored)
+    # the nominal figures are the same with and without the propagation
+    for a, b in zip(plain["balls"], with_err["balls"], strict=True):
+        assert a["normal_angle_08_deg"] == b["normal_angle_08_deg"]

@@ -11,6 +11,7 @@ import numpy as np
 from .. import InputError
 from ..io import read_ball_presses, taxim_datapack
 from ..optics import (
+    CIRCLE_ERROR,
     DepthReconstructor,
     PhotometricCalibration,
     calibration_accuracy,
@@ -89,6 +90,16 @@ def _accuracy_text(report: dict, mm: float) -> str:
             f"um, fitted ball radius {b['fitted_radius_px'] * mm:.3f} +- "
             f"{b['fitted_radius_std_px'] * mm:.3f} mm (true {radius:g}); {trained}, these "
             f"rims reach {b['rim_tilt_deg']:.1f} deg")
+        cu = b.get("circle_uncertainty")
+        if cu:
+            a, c, e = cu["normal_angle_08_deg"], cu["inner_cap"], report["circle_error"]
+            lines.append(
+                f"  the scoring circles' own error (centre {e['centre_sd_r']:g} r, radius "
+                f"{100 * e['radius_sd']:g} % per press; {e['centre_bias_r']:g} r and "
+                f"{100 * e['radius_bias']:g} % shared): angle inside 0.8 "
+                f"+- {a['random_sd']:.2f} deg random, up to {a['systematic']:.2f} deg shared; "
+                f"inner cap +- {100 * c['random_sd']:.1f} % random, up to "
+                f"{100 * c['systematic']:.1f} % shared")
     return "\n".join(lines)
 
 
@@ -306,7 +317,10 @@ def _accuracy_report(args: argparse.Namespace, ps, scoring, train_idx: np.ndarra
                                       ball_px, trained=trained,
                                       label_fraction=scoring.provenance["label_fraction"],
                                       circles="given" if given else "detected",
-                                      edge="contact" if given else args.detect_edge)
+                                      edge="contact" if given else args.detect_edge,
+                                      circle_error=(CIRCLE_ERROR if not given
+                                                    and args.detect_edge == "contact"
+                                                    else None))
     except InputError as exc:      # the calibration stands; only its report is missing
         report = {"error": f"no accuracy report: {exc}"}
     report["held_out"] = None if held is None else {

@@ -9,7 +9,14 @@ from ._absolute import (
     absolute_depth_metrics,
     fit_ball_cap,
 )
-from ._accuracy import calibration_accuracy, edge_cut, holdout_presses, max_tilt_deg
+from ._accuracy import (
+    CIRCLE_ERROR,
+    CircleError,
+    calibration_accuracy,
+    edge_cut,
+    holdout_presses,
+    max_tilt_deg,
+)
 from ._ball import (
     BallPressMetrics,
     ball_gradients,
@@ -35,10 +42,12 @@ from ._poisson import PoissonSolver, divergence, integrate_poisson, integrate_po
 from ._reconstructor import DepthReconstructor
 
 __all__ = [
+    "CIRCLE_ERROR",
     "AbsoluteDepthMetrics",
     "BallCapFit",
     "BallPressMetrics",
     "BallPressReport",
+    "CircleError",
     "ColourLUT",
     "DepthReconstructor",
     "MLPGradientModel",

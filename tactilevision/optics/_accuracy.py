@@ -4,14 +4,53 @@ saves after every calibration."""
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
 from .._checks import InputError
-from ._ball import ball_press_metrics
+from ._ball import ball_gradients, ball_press_metrics, normals_from_gradients
 from ._reconstructor import DepthReconstructor
 
-__all__ = ["calibration_accuracy", "edge_cut", "holdout_presses", "max_tilt_deg"]
+__all__ = ["CIRCLE_ERROR", "CircleError", "calibration_accuracy", "edge_cut", "holdout_presses",
+           "max_tilt_deg"]
+
+
+@dataclass(frozen=True)
+class CircleError:
+    """How far a contact circle may lie from the true contact, as fractions of its radius r.
+
+    Attributes
+    ----------
+    centre_sd, radius_sd : float
+        The random part: sd of the centre's offset along each axis (fraction of r) and
+        of the radius's relative error, drawn independently for every press.
+    centre_bias, radius_bias : float
+        The systematic part, shared by every press: the centre off by up to
+        `centre_bias` r along either axis, the radius by up to a `radius_bias` fraction
+        either way (evaluated at those bounds).
+    source : str
+        Where the figures were measured.
+    """
+
+    centre_sd: float
+    radius_sd: float
+    centre_bias: float
+    radius_bias: float
+    source: str
+
+
+#: The contact-edge detector (``detect_contact_circles(edge='contact')``) against the 48
+#: hand-annotated circles of ``taxim``'s real GelSight presses (no code of ours drew them):
+#: centre off by +0.002 and +0.021 r (mean, x and y) with sds 0.033 and 0.025 r, radius
+#: 1.002 with sd 0.023 (``python benchmarks/bench_circle_uncertainty.py``, 2026-11-25).
+#: Taken up: 0.035 r and 0.025 random, 0.025 r and 0.025 shared. On Taxim's renders with its
+#: shadows the detector does about twice worse (centre sd 0.054 and 0.059 r, radius +6 %
+#: sd 10 %, the same benchmark), so on a sensor with strong shading these are too narrow.
+CIRCLE_ERROR = CircleError(
+    centre_sd=0.035, radius_sd=0.025, centre_bias=0.025, radius_bias=0.025,
+    source="the contact-edge detector against taxim's 48 hand-annotated real GelSight "
+           "circles (benchmarks/bench_circle_uncertainty.py)")
 
 
 def edge_cut(centers_px: np.ndarray, radii_px: np.ndarray, shape: tuple[int, int]
@@ -144,11 +183,58 @@ def _deepest_point(height_px: np.ndarray, d: np.ndarray, radius: float,
     return float((height_px[inside].max() - np.median(height_px[ring])) / cap - 1.0)
 
 
+def _inner_scores(gx: np.ndarray, gy: np.ndarray, height_px: np.ndarray, centre: np.ndarray,
+                  radius: float, ball_px: float) -> tuple[float, float]:
+    """The mean normal-angle error inside 0.8 of the radius (deg) and the inner cap's
+    relative error (:func:`_inner_cap`) of one press for one circle."""
+    tgx, tgy, inside = ball_gradients(gx.shape, centre, 0.8 * radius, ball_px)
+    if not inside.any():
+        return math.nan, math.nan
+    n1 = normals_from_gradients(gx[inside], gy[inside])
+    n2 = normals_from_gradients(tgx[inside], tgy[inside])
+    angle = float(np.degrees(np.arccos(np.clip(np.sum(n1 * n2, axis=-1), -1.0, 1.0))).mean())
+    return angle, _inner_cap(height_px, _distances(height_px.shape, centre), radius, ball_px)
+
+
+def _circle_propagation(maps: list[tuple[np.ndarray, np.ndarray, np.ndarray]],
+                        centres: np.ndarray, radii: np.ndarray, ball_px: float,
+                        err: CircleError, draws: int = 16, seed: int = 0) -> dict:
+    """How the circles' own error moves the median inner angle and inner cap.
+
+    Random: `draws` sets of circles, each press's centre and radius drawn about its
+    own with `err`'s sds (seeded); the sd of the medians over the sets. Systematic:
+    every circle moved at once to each bound of `err` (centre along +-x and +-y,
+    radius scaled either way); the largest change of the medians from the nominal.
+    """
+    def medians(cs: np.ndarray, rs: np.ndarray) -> np.ndarray:
+        sc = np.array([_inner_scores(gx, gy, hp, c, r, ball_px)
+                       for (gx, gy, hp), c, r in zip(maps, cs, rs, strict=True)])
+        return np.nanmedian(sc, axis=0)
+
+    nominal = medians(centres, radii)
+    rng = np.random.default_rng(seed)
+    rand = np.array([medians(centres + rng.normal(0.0, err.centre_sd, centres.shape)
+                             * radii[:, None],
+                             radii * (1.0 + rng.normal(0.0, err.radius_sd, radii.shape)))
+                     for _ in range(draws)])
+    shifts = [(np.array([sx, sy]) * err.centre_bias, 1.0) for sx, sy in
+              ((1, 0), (-1, 0), (0, 1), (0, -1))]
+    shifts += [(np.zeros(2), 1.0 + err.radius_bias), (np.zeros(2), 1.0 - err.radius_bias)]
+    sys_ = np.array([medians(centres + d[None, :] * radii[:, None], radii * k)
+                     for d, k in shifts])
+    spread = np.nanstd(rand, axis=0, ddof=1)
+    worst = np.nanmax(np.abs(sys_ - nominal[None, :]), axis=0)
+    return {"normal_angle_08_deg": {"random_sd": float(spread[0]),
+                                    "systematic": float(worst[0])},
+            "inner_cap": {"random_sd": float(spread[1]), "systematic": float(worst[1])}}
+
+
 def calibration_accuracy(recon: DepthReconstructor, frames: np.ndarray,
                          centers_px: np.ndarray, radii_px: np.ndarray,
                          ball_radius_px: np.ndarray, *, trained: np.ndarray,
                          label_fraction: float, circles: str = "given",
-                         edge: str | None = None) -> dict:
+                         edge: str | None = None,
+                         circle_error: CircleError | None = None) -> dict:
     """Accuracy of a calibration on its ball presses, by ball size.
 
     Held-out presses (not `trained`) are scored; when every press was trained on, the
@@ -181,6 +267,14 @@ def calibration_accuracy(recon: DepthReconstructor, frames: np.ndarray,
         the contact): scored at ``label_fraction`` of themselves, the contact
         the calibration assumed. Default: ``'contact'`` for given circles,
         ``'colour'`` for detected ones (the behaviour before the contact edge).
+    circle_error : CircleError, optional
+        The scoring circles' own error (:data:`CIRCLE_ERROR` for detected
+        contact-edge circles). Given, each ball's entry gains
+        ``circle_uncertainty``: for ``normal_angle_08_deg`` and ``inner_cap``,
+        the sd of the median from the circles' random error and the largest
+        change from their systematic error (:func:`_circle_propagation`), and
+        the report ``circle_error`` (the figures and their source). None
+        (default): not propagated, ``circle_error`` None.
 
     Returns
     -------
@@ -200,7 +294,9 @@ def calibration_accuracy(recon: DepthReconstructor, frames: np.ndarray,
         slope of the scored presses' rims), ``shape_rms_px``,
         ``fitted_radius_px`` and ``fitted_radius_std_px`` (means over the
         scored presses, as :func:`evaluate_ball_presses` gives them, inside 0.9
-        of the radius); None where nothing is scored.
+        of the radius), ``circle_uncertainty`` (with `circle_error`, else None);
+        None where nothing is scored. ``circle_error``: the figures propagated
+        and their source, or None.
     """
     frames = np.asarray(frames)
     centers = np.asarray(centers_px, np.float64)
@@ -234,11 +330,13 @@ def calibration_accuracy(recon: DepthReconstructor, frames: np.ndarray,
                  "normal_angle_deg": None, "normal_angle_08_deg": None,
                  "deepest_point": None, "inner_cap": None, "rim_tilt_deg": None,
                  "shape_rms_px": None, "fitted_radius_px": None, "fitted_radius_std_px": None}
+        entry["circle_uncertainty"] = None
         if use.size:
-            per, inner, deepest, caps = [], [], [], []
+            per, inner, deepest, caps, maps = [], [], [], [], []
             for i in use:       # each press reconstructed once, for every measure
                 gx, gy = recon.gradients(frames[i])
                 height_px = recon(frames[i]) / mm
+                maps.append((gx, gy, height_px))
                 per.append(ball_press_metrics(gx, gy, height_px, centers[i], 0.9 * radii[i],
                                               float(b)))
                 inner.append(ball_press_metrics(gx, gy, height_px, centers[i],
@@ -255,7 +353,16 @@ def calibration_accuracy(recon: DepthReconstructor, frames: np.ndarray,
             entry["shape_rms_px"] = float(np.mean([p.shape_rms_px for p in per]))
             entry["fitted_radius_px"] = float(fitted.mean())
             entry["fitted_radius_std_px"] = float(fitted.std())
+            if circle_error is not None:
+                entry["circle_uncertainty"] = _circle_propagation(
+                    maps, centers[use], radii[use], float(b), circle_error)
         balls.append(entry)
     return {"in_sample": in_sample, "circles": circles, "edge": edge,
             "label_fraction": float(label_fraction),
+            "circle_error": (None if circle_error is None else
+                             {"centre_sd_r": circle_error.centre_sd,
+                              "radius_sd": circle_error.radius_sd,
+                              "centre_bias_r": circle_error.centre_bias,
+                              "radius_bias": circle_error.radius_bias,
+                              "source": circle_error.source}),
             "balls": balls}
