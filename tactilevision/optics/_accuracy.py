@@ -184,34 +184,41 @@ def _deepest_point(height_px: np.ndarray, d: np.ndarray, radius: float,
 
 
 def _inner_scores(gx: np.ndarray, gy: np.ndarray, height_px: np.ndarray, centre: np.ndarray,
-                  radius: float, ball_px: float) -> tuple[float, float]:
-    """The mean normal-angle error inside 0.8 of the radius (deg) and the inner cap's
-    relative error (:func:`_inner_cap`) of one press for one circle."""
+                  radius: float, ball_px: float, d: np.ndarray | None = None
+                  ) -> tuple[float, float]:
+    """The mean normal-angle error inside 0.8 of the radius (deg; as
+    :func:`ball_press_metrics` gives it there) and the inner cap's relative error
+    (:func:`_inner_cap`) of one press for one circle. `d`: the pixels' distances from
+    `centre` (:func:`_distances`), computed when not given."""
     tgx, tgy, inside = ball_gradients(gx.shape, centre, 0.8 * radius, ball_px)
     if not inside.any():
         return math.nan, math.nan
     n1 = normals_from_gradients(gx[inside], gy[inside])
     n2 = normals_from_gradients(tgx[inside], tgy[inside])
     angle = float(np.degrees(np.arccos(np.clip(np.sum(n1 * n2, axis=-1), -1.0, 1.0))).mean())
-    return angle, _inner_cap(height_px, _distances(height_px.shape, centre), radius, ball_px)
+    if d is None:
+        d = _distances(height_px.shape, centre)
+    return angle, _inner_cap(height_px, d, radius, ball_px)
 
 
 def _circle_propagation(maps: list[tuple[np.ndarray, np.ndarray, np.ndarray]],
                         centres: np.ndarray, radii: np.ndarray, ball_px: float,
-                        err: CircleError, draws: int = 16, seed: int = 0) -> dict:
+                        err: CircleError, nominal: np.ndarray, draws: int = 16,
+                        seed: int = 0) -> dict:
     """How the circles' own error moves the median inner angle and inner cap.
 
     Random: `draws` sets of circles, each press's centre and radius drawn about its
     own with `err`'s sds (seeded); the sd of the medians over the sets. Systematic:
     every circle moved at once to each bound of `err` (centre along +-x and +-y,
-    radius scaled either way); the largest change of the medians from the nominal.
+    radius scaled either way); the largest change of the medians from `nominal` (the
+    median angle and inner cap on the circles as given).
     """
     def medians(cs: np.ndarray, rs: np.ndarray) -> np.ndarray:
         sc = np.array([_inner_scores(gx, gy, hp, c, r, ball_px)
                        for (gx, gy, hp), c, r in zip(maps, cs, rs, strict=True)])
         return np.nanmedian(sc, axis=0)
 
-    nominal = medians(centres, radii)
+    nominal = np.asarray(nominal, np.float64)
     rng = np.random.default_rng(seed)
     rand = np.array([medians(centres + rng.normal(0.0, err.centre_sd, centres.shape)
                              * radii[:, None],
@@ -336,14 +343,16 @@ def calibration_accuracy(recon: DepthReconstructor, frames: np.ndarray,
             for i in use:       # each press reconstructed once, for every measure
                 gx, gy = recon.gradients(frames[i])
                 height_px = recon(frames[i]) / mm
-                maps.append((gx, gy, height_px))
+                if circle_error is not None:
+                    maps.append((gx, gy, height_px))
                 per.append(ball_press_metrics(gx, gy, height_px, centers[i], 0.9 * radii[i],
                                               float(b)))
-                inner.append(ball_press_metrics(gx, gy, height_px, centers[i],
-                                                0.8 * radii[i], float(b)).normal_angle_deg)
                 d = _distances(height_px.shape, centers[i])
+                angle08, cap = _inner_scores(gx, gy, height_px, centers[i], radii[i],
+                                             float(b), d)
+                inner.append(angle08)
+                caps.append(cap)
                 deepest.append(_deepest_point(height_px, d, radii[i], float(b)))
-                caps.append(_inner_cap(height_px, d, radii[i], float(b)))
             fitted = np.array([p.fitted_radius_px for p in per])
             entry["normal_angle_deg"] = float(np.median([p.normal_angle_deg for p in per]))
             entry["normal_angle_08_deg"] = float(np.median(inner))
@@ -355,7 +364,8 @@ def calibration_accuracy(recon: DepthReconstructor, frames: np.ndarray,
             entry["fitted_radius_std_px"] = float(fitted.std())
             if circle_error is not None:
                 entry["circle_uncertainty"] = _circle_propagation(
-                    maps, centers[use], radii[use], float(b), circle_error)
+                    maps, centers[use], radii[use], float(b), circle_error,
+                    nominal=np.array([np.nanmedian(inner), entry["inner_cap"]]))
         balls.append(entry)
     return {"in_sample": in_sample, "circles": circles, "edge": edge,
             "label_fraction": float(label_fraction),
