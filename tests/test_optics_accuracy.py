@@ -281,7 +281,8 @@ def test_held_out_report_on_detected_circles_agrees_with_hand_annotated_ones(tax
     on the held-out quarter reads the angle inside 0.8 of the radius within its propagated
     circle uncertainty (2 random sd plus the shared bound) of the same presses scored
     against the annotated circles (measured: 6.37 against 6.92 deg, +- 0.41 and 0.41), and
-    that uncertainty stays small beside the angle it qualifies."""
+    that uncertainty stays small beside the angle it qualifies. A consistency check:
+    CIRCLE_ERROR was measured on these same annotated presses."""
     from tactilevision.optics import CIRCLE_ERROR, detect_contact_circles, holdout_presses
 
     ps = taxim_presses
