@@ -31,10 +31,13 @@ from tactilevision.optics import (
     DepthReconstructor,
     MLPGradientModel,
     PhotometricCalibration,
+    cell_position_inputs,
+    default_position_cell_px,
     detect_contact_circles,
     evaluate_ball_presses,
     fit_cell_luts,
     fit_colour_lut,
+    gradients_from_normals,
     mlp_inputs,
     train_mlp,
 )
@@ -553,6 +556,9 @@ def test_save_load_round_trip(kind, synth, synth_lut, synth_mlp, tmp_path):
         np.testing.assert_array_equal(back.lut.counts, cal.lut.counts)
     else:
         assert back.onnx_bytes == cal.onnx_bytes
+        assert back.position_cell_px == cal.position_cell_px == 20
+        np.testing.assert_array_equal(back.table_lo, cal.table_lo)
+        np.testing.assert_array_equal(back.table_hi, cal.table_hi)
     frames = synth[1][:2]
     np.testing.assert_array_equal(DepthReconstructor(back)(frames),
                                   DepthReconstructor(cal)(frames))
@@ -693,3 +699,96 @@ def test_half_float_table_lookup_is_the_tables_values_exactly():
     assert got_x.dtype == np.float32 and got_y.dtype == np.float32
     np.testing.assert_array_equal(got_x, gx[idx].astype(np.float32))
     np.testing.assert_array_equal(got_y, gy[idx].astype(np.float32))
+
+
+def test_cell_position_inputs_are_cell_means_and_centres():
+    """Each pixel gets its cell's mean reference colour and centre (cells of 20 px over a
+    50 x 70 frame: the last row and column of cells are cut to 10 px)."""
+    ref = np.random.default_rng(0).uniform(20, 230, (50, 70, 3))
+    ref_cell, x_cell, y_cell = cell_position_inputs(ref, 20)
+    assert ref_cell.shape == (50, 70, 3) and ref_cell.dtype == np.float32
+    np.testing.assert_allclose(ref_cell[0, 0], ref[:20, :20].reshape(-1, 3).mean(0), rtol=1e-6)
+    np.testing.assert_allclose(ref_cell[49, 69], ref[40:, 60:].reshape(-1, 3).mean(0),
+                               rtol=1e-6)
+    np.testing.assert_allclose(ref_cell[25, 30], ref[20:40, 20:40].reshape(-1, 3).mean(0),
+                               rtol=1e-6)
+    assert x_cell[0, 0] == 9.5 and x_cell[0, 69] == 64.5 and y_cell[49, 0] == 44.5
+    assert x_cell[7, 21] == 29.5 and y_cell[21, 7] == 29.5
+    assert default_position_cell_px((240, 320)) == 20
+    assert default_position_cell_px((480, 640)) == 40
+    assert default_position_cell_px((40, 60)) == 20
+    assert default_position_cell_px((320, 427)) == 26
+
+
+def _network_at_colour_cells(cal, frame, lo, hi, bins, cell_px):
+    """The network of `cal` at the centre of each pixel's colour cell, fed each pixel's
+    position cell (what its table holds), and the pixels whose colour change lies within
+    1e-3 of a cell edge (where float rounding may pick either cell)."""
+    from tactilevision.optics._features import reference_inverse
+
+    ref_inv = reference_inverse(cal.reference, blur_sigma=cal.reference_blur)
+    ratio = frame.astype(np.float32) * ref_inv
+    gain = np.median(ratio[::8, ::8].reshape(-1, 3), axis=0)
+    change = (ratio / gain - 1.0).reshape(-1, 3)
+    u = (change - lo) * bins / (hi - lo)
+    q = np.clip(np.floor(u), 0, bins - 1)
+    edge = np.any((np.abs(u - np.round(u)) < 1e-3) & (u > 0.5) & (u < bins - 0.5), axis=1)
+    centre = (lo + (q + 0.5) * (hi - lo) / bins).astype(np.float32)
+    ref_cell, x_cell, y_cell = cell_position_inputs(1.0 / ref_inv, cell_px)
+    nxy = MLPGradientModel(cal.onnx_bytes).normals(mlp_inputs(
+        centre, ref_cell.reshape(-1, 3), x_cell.ravel(), y_cell.ravel(), cal.shape))
+    gx, gy = gradients_from_normals(nxy[:, 0], nxy[:, 1])
+    return gx.reshape(cal.shape), gy.reshape(cal.shape), edge.reshape(cal.shape)
+
+
+def test_cell_snapped_network_is_its_table_up_to_the_colour_cells(synth, synth_mlp,
+                                                                   torch_one_thread):
+    """A network calibrated with position cells (the default) sees each pixel's cell, so
+    its table holds exactly its value at each colour cell's centre: the default engine
+    differs from the exact one by the colour quantisation alone. A network of every
+    pixel's own position (position_cell_px=0) is not so reproduced by the same table."""
+    ref, frames, centres, radii = synth
+    cal = synth_mlp
+    lo, hi = cal.table_lo, cal.table_hi
+    assert np.all(lo >= cal.colour_lo) and np.all(hi <= cal.colour_hi)
+    frame = frames[1]
+    gx, gy = DepthReconstructor(cal).gradients(frame)
+    want_x, want_y, edge = _network_at_colour_cells(cal, frame, lo, hi, 32, 20)
+    assert edge.mean() < 0.01
+    # float16 table entries: a relative 1e-3
+    tol = 2e-3 * (1.0 + np.abs(want_x))
+    assert np.all(np.abs(gx - want_x)[~edge] <= tol[~edge])
+    assert np.all(np.abs(gy - want_y)[~edge] <= 2e-3 * (1.0 + np.abs(want_y))[~edge])
+
+    continuous = PhotometricCalibration.from_ball_presses(
+        ref, frames[0::2], centres[0::2], radii[0::2], ball_radius_mm=BALL_PX * MM_PER_PX,
+        mm_per_px=MM_PER_PX, model="mlp", epochs=2, position_cell_px=0)
+    assert continuous.position_cell_px == 0
+    gx, _ = DepthReconstructor(continuous).gradients(frame)
+    # its table is the old one: colour range and 40 px cells
+    want_x, _, edge = _network_at_colour_cells(continuous, frame, continuous.colour_lo,
+                                               continuous.colour_hi, 32, 40)
+    assert np.abs(gx - want_x)[~edge].max() > 1e-2
+
+
+def test_position_cell_px_is_checked(synth, tmp_path, synth_mlp):
+    ref, frames, centres, radii = synth
+    for bad in (-1, 2.5, True):
+        with pytest.raises(InputError, match="position_cell_px"):
+            PhotometricCalibration.from_ball_presses(
+                ref, frames[:2], centres[:2], radii[:2], ball_radius_mm=BALL_PX * MM_PER_PX,
+                mm_per_px=MM_PER_PX, model="mlp", position_cell_px=bad)
+    import json
+
+    path = synth_mlp.save(tmp_path / "cal.npz")
+    with np.load(path) as z:
+        data = {k: z[k] for k in z.files}
+    meta = json.loads(data["meta"].tobytes())
+    for key, value, match in (("position_cell_px", -3, "position_cell_px"),
+                              ("table_lo", [1.0, 1.0, 1.0], "table_lo"),
+                              ("table_hi", "x", "table_lo")):
+        broken = dict(meta, **{key: value})
+        data["meta"] = np.frombuffer(json.dumps(broken).encode(), np.uint8)
+        np.savez(tmp_path / "bad.npz", **data)
+        with pytest.raises(InputError, match=f"bad.npz.*{match}"):
+            PhotometricCalibration.load(tmp_path / "bad.npz")

@@ -37,7 +37,13 @@ from ._features import colour_change, frame_gain, reference_inverse
 from ._lut import ColourLUT, fit_cell_luts, fit_colour_lut
 from ._marker_flow import MarkerFlow, lateral_displacement, marker_centres, track_markers
 from ._markers import fill_masked, marker_mask
-from ._mlp import MLPGradientModel, mlp_inputs, train_mlp
+from ._mlp import (
+    MLPGradientModel,
+    cell_position_inputs,
+    default_position_cell_px,
+    mlp_inputs,
+    train_mlp,
+)
 from ._poisson import PoissonSolver, divergence, integrate_poisson, integrate_poisson_masked
 from ._reconstructor import DepthReconstructor
 
@@ -58,7 +64,9 @@ __all__ = [
     "ball_gradients",
     "ball_press_metrics",
     "calibration_accuracy",
+    "cell_position_inputs",
     "colour_change",
+    "default_position_cell_px",
     "detect_contact_circle",
     "detect_contact_circles",
     "divergence",

@@ -77,7 +77,18 @@ class PhotometricCalibration(CalibrationData):
         the 99.9th percentile of the calibration frames' background.
     colour_lo, colour_hi : (3,) float32 ndarray
         Colour-change range of the calibration pixels (0.1 and 99.9
-        percentiles), the domain of the tables.
+        percentiles), the domain of the LUT and of :meth:`out_of_range`.
+    position_cell_px : int
+        MLP only: 0 for a network that sees every pixel's own position and
+        reference colour; else the size of the square position cells whose
+        centre and mean reference colour it sees instead
+        (:func:`~tactilevision.optics._mlp.cell_position_inputs`), so that its
+        table over these cells reproduces it up to the colour quantisation.
+    table_lo, table_hi : (3,) float32 ndarray or None
+        MLP only: the colour-change range of the network's table (the 1st and
+        99th percentiles of the labelled contact pixels, widened to the flat
+        gel's 0.1 and 99.9, within ``colour_lo, colour_hi``); None: the
+        colour range. Colours beyond it are read at its edge.
     provenance : dict
         Source, date, press count, ball radius, version: how it was made.
     shape : (int, int)
@@ -111,6 +122,7 @@ class PhotometricCalibration(CalibrationData):
         detect_edge: Literal["contact", "colour"] = "contact",
         flat_fraction: float = 0.03,
         max_steps: int | None = 2400,
+        position_cell_px: int | None = None,
     ) -> PhotometricCalibration:
         """Calibrate from frames of a ball pressed into the gel.
 
@@ -204,6 +216,18 @@ class PhotometricCalibration(CalibrationData):
             gradients, tilting the background. 0.03 favours a quiet
             background; lower it for depth (docs/guide/optics.md, "Flat
             samples", gives the measured trade).
+        position_cell_px : int, optional
+            MLP with ``use_position`` only: the network sees each pixel's
+            position cell (its centre and mean reference colour) instead of the
+            pixel, cells of this size (px), so the default ``'table'`` engine
+            reproduces it up to the colour quantisation. None:
+            ``max(H, W) // 16``, at least 20 (:func:`default_position_cell_px`); 0: every
+            pixel's own position and reference (the form before 2026-11-25,
+            whose table differs from the network by about 1 degree median and
+            3 to 4 at the 95th percentile inside a contact). On held-out real
+            presses the cells cost the exact network 0.0 to 0.15 degrees median
+            and the table gained 0.04 to 1.2 (docs/guide/optics.md, "The
+            table engine").
 
         Returns
         -------
@@ -227,7 +251,8 @@ class PhotometricCalibration(CalibrationData):
             label_fraction=label_fraction, refine_centers=refine_centers, bins=bins,
             lut_cells=lut_cells, epochs=epochs, hidden=hidden, blur_sigma=blur_sigma, seed=seed,
             source=source, progress=progress, detect_edge=detect_edge,
-            flat_fraction=flat_fraction, max_steps=max_steps)
+            flat_fraction=flat_fraction, max_steps=max_steps,
+            position_cell_px=position_cell_px)
 
     @classmethod
     def from_gs_sdk(cls, model: str | Path | Mapping[str, Any], reference: np.ndarray, *,
@@ -329,8 +354,12 @@ class PhotometricCalibration(CalibrationData):
             "reference_blur": self.reference_blur, "normalise_gain": self.normalise_gain,
             "colour_lo": [float(v) for v in self.colour_lo],
             "colour_hi": [float(v) for v in self.colour_hi],
+            "position_cell_px": int(self.position_cell_px),
             "provenance": self.provenance,
         }
+        if self.table_lo is not None and self.table_hi is not None:
+            meta["table_lo"] = [float(v) for v in self.table_lo]
+            meta["table_hi"] = [float(v) for v in self.table_hi]
         arrays: dict[str, np.ndarray] = {
             "meta": np.frombuffer(json.dumps(meta).encode(), np.uint8),
             "reference": self.reference,
@@ -431,6 +460,21 @@ class PhotometricCalibration(CalibrationData):
         defaults = cls(model=model, reference=data["reference"], mm_per_px=1.0)
         lo = meta.get("colour_lo", lut.lo if lut is not None else defaults.colour_lo)
         hi = meta.get("colour_hi", lut.hi if lut is not None else defaults.colour_hi)
+        cell_px = meta.get("position_cell_px", 0)
+        if isinstance(cell_px, bool) or not isinstance(cell_px, int) or cell_px < 0:
+            raise InputError(f"calibration file {path}: 'position_cell_px' must be a "
+                             f"non-negative integer, got {cell_px!r}")
+        table_range: tuple = (None, None)
+        if "table_lo" in meta or "table_hi" in meta:
+            try:
+                table_range = tuple(np.asarray(meta[k], np.float32).reshape(3)
+                                    for k in ("table_lo", "table_hi"))
+            except (KeyError, TypeError, ValueError):
+                raise InputError(f"calibration file {path}: 'table_lo' and 'table_hi' must "
+                                 "both be three numbers") from None
+            if not (np.all(np.isfinite(table_range)) and np.all(table_range[0] < table_range[1])):
+                raise InputError(f"calibration file {path}: 'table_lo' must lie below "
+                                 "'table_hi', both finite")
         cell_luts = data.get("lut_cells") if model == "lut" else None
         if cell_luts is not None:
             cell_luts = cell_luts.astype(np.float32)
@@ -450,4 +494,5 @@ class PhotometricCalibration(CalibrationData):
                    reference_blur=float(meta.get("reference_blur", defaults.reference_blur)),
                    normalise_gain=bool(meta.get("normalise_gain", defaults.normalise_gain)),
                    colour_lo=np.asarray(lo, np.float32), colour_hi=np.asarray(hi, np.float32),
+                   position_cell_px=cell_px, table_lo=table_range[0], table_hi=table_range[1],
                    provenance=dict(meta.get("provenance", {})))

@@ -39,6 +39,9 @@ class CalibrationData:
     normalise_gain: bool = True
     colour_lo: np.ndarray = field(default_factory=lambda: np.full(3, -0.5, np.float32))
     colour_hi: np.ndarray = field(default_factory=lambda: np.full(3, 0.5, np.float32))
+    position_cell_px: int = 0
+    table_lo: np.ndarray | None = None
+    table_hi: np.ndarray | None = None
     provenance: dict[str, Any] = field(default_factory=dict)
 
     @property

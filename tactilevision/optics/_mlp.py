@@ -19,7 +19,8 @@ from tqdm.auto import tqdm
 
 from .._checks import InputError, check_array
 
-__all__ = ["MLPGradientModel", "mlp_inputs", "train_mlp"]
+__all__ = ["MLPGradientModel", "cell_position_inputs", "default_position_cell_px", "mlp_inputs",
+           "train_mlp"]
 
 N_INPUTS = 8
 
@@ -56,6 +57,72 @@ def mlp_inputs(change: np.ndarray, ref_colour: np.ndarray, x_px: np.ndarray, y_p
     else:
         out[:, 6:8] = 0.0
     return out
+
+
+def default_position_cell_px(shape: tuple[int, int]) -> int:
+    """The position cell of a new network: ``max(H, W) // 16`` px, at least 20.
+
+    Sixteen cells along the frame's long side, so the network's table
+    (:func:`~tactilevision.optics._table.tabulate_mlp`) holds at most 16 x 12
+    cells of 32^3 colours whatever the resolution (25 MB, 2 to 3 s to tabulate
+    on 2 cores): 20 px at 320 x 240, 26 px at 427 x 320, 40 px at 640 x 480;
+    smaller frames keep 20 px cells, and fewer of them.
+
+    Parameters
+    ----------
+    shape : (H, W)
+
+    Returns
+    -------
+    cell_px : int
+    """
+    return max(20, max(int(shape[0]), int(shape[1])) // 16)
+
+
+def cell_position_inputs(ref_colour: np.ndarray, cell_px: int
+                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The position and reference inputs of a cell-snapped network, per pixel.
+
+    A network calibrated with ``position_cell_px`` sees, at every pixel, the
+    centre of its square position cell and the cell's mean reference colour,
+    instead of the pixel's own: its output is then constant over a cell for a
+    given colour change, so a table over colour cells and these position cells
+    (:func:`~tactilevision.optics._table.tabulate_mlp`) reproduces it up to the
+    colour quantisation alone. Cell (i, j) covers rows ``[i c, min((i + 1) c,
+    H))`` and columns likewise, c = `cell_px`; its centre is the middle of
+    those pixel centres.
+
+    Parameters
+    ----------
+    ref_colour : (H, W, 3) float ndarray
+        Smoothed reference colour, 0..255.
+    cell_px : int
+        Cell size, px (positive).
+
+    Returns
+    -------
+    ref_cell : (H, W, 3) float32 ndarray
+        Each pixel's cell mean of `ref_colour`.
+    x_cell, y_cell : (H, W) float32 ndarray
+        Each pixel's cell centre, px (column, row).
+    """
+    h, w = ref_colour.shape[:2]
+    c = int(cell_px)
+    ny, nx = -(-h // c), -(-w // c)
+    rows = np.minimum(np.arange(h) // c, ny - 1)
+    cols = np.minimum(np.arange(w) // c, nx - 1)
+    starts_y, starts_x = np.arange(ny) * c, np.arange(nx) * c
+    centre_y = (starts_y + np.minimum(starts_y + c, h) - 1) / 2.0
+    centre_x = (starts_x + np.minimum(starts_x + c, w) - 1) / 2.0
+    ref = np.asarray(ref_colour, np.float64)
+    # cell sums: np.add.reduceat over the cell starts along rows, then columns
+    sums = np.add.reduceat(np.add.reduceat(ref, starts_y, axis=0), starts_x, axis=1)
+    counts = np.outer(np.diff(np.append(starts_y, h)), np.diff(np.append(starts_x, w)))
+    means = (sums / counts[..., None]).astype(np.float32)
+    ref_cell = means[rows[:, None], cols[None, :]]
+    x_cell = np.broadcast_to(centre_x[cols][None, :], (h, w)).astype(np.float32)
+    y_cell = np.broadcast_to(centre_y[rows][:, None], (h, w)).astype(np.float32)
+    return ref_cell, x_cell, y_cell
 
 
 @dataclass

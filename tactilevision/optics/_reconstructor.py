@@ -23,7 +23,7 @@ from ._ball import gradients_from_normals
 from ._calibration_data import CalibrationData
 from ._features import blur_frames, channel_magnitude, colour_change, reference_inverse
 from ._markers import fill_masked_fields, marker_mask
-from ._mlp import MLPGradientModel, mlp_inputs
+from ._mlp import MLPGradientModel, cell_position_inputs, mlp_inputs
 from ._poisson import PoissonSolver, integrate_poisson_masked
 from ._table import GradientTable, table_from_cell_luts, table_from_lut, tabulate_mlp
 
@@ -48,10 +48,13 @@ class DepthReconstructor:
     engine : {'table', 'onnx'}, default 'table'
         How the colour-to-gradient model runs per frame. 'table': one
         lookup per pixel in a gradient table (a LUT calibration's own
-        table, or an MLP tabulated over colour cells and 40 px position
-        cells at construction, 2 to 3 s at 640 x 480 on 2 cores). 'onnx':
-        the MLP evaluated per pixel by onnxruntime (exact, about 40 times
-        slower).
+        table, or an MLP tabulated over colour cells and position cells at
+        construction, 2 to 3 s at 640 x 480 on 2 cores: the calibration's
+        ``position_cell_px`` cells over its ``table_lo, table_hi`` range,
+        where the network differs from its table by the colour cells alone;
+        40 px cells over ``colour_lo, colour_hi`` for a network of every
+        pixel's own position). 'onnx': the MLP evaluated per pixel by
+        onnxruntime (exact, about 60 times slower).
     boundary : {'neumann', 'dirichlet', 'contact'}, default 'neumann'
         Poisson boundary condition. 'neumann' and 'dirichlet': the
         whole-image transform (:class:`PoissonSolver`), camera rate.
@@ -185,8 +188,14 @@ class DepthReconstructor:
         self.engine = engine
         if engine == "onnx":
             h, w = self.shape
-            self._yy, self._xx = (a.ravel() for a in np.mgrid[0:h, 0:w].astype(np.float32))
-            self._ref_colour = (1.0 / self._ref_inv).reshape(-1, 3)
+            if calibration.position_cell_px:   # the network sees each pixel's cell
+                ref_in, x_in, y_in = cell_position_inputs(1.0 / self._ref_inv,
+                                                          calibration.position_cell_px)
+                self._xx, self._yy = x_in.ravel(), y_in.ravel()
+                self._ref_colour = ref_in.reshape(-1, 3)
+            else:
+                self._yy, self._xx = (a.ravel() for a in np.mgrid[0:h, 0:w].astype(np.float32))
+                self._ref_colour = (1.0 / self._ref_inv).reshape(-1, 3)
         self.flat_reference = bool(flat_reference)
         self._g0: tuple[np.ndarray, np.ndarray] | None = None
         if self.flat_reference:
@@ -485,14 +494,26 @@ def _write_table(path, table) -> None:
                  hi=np.asarray(table.hi), bins=np.int64(table.bins))
 
 
+def table_domain(calibration) -> tuple[np.ndarray, np.ndarray, int]:
+    """The colour range (lo, hi: (3,) float32) and the position cell (px) of a network's
+    table: the calibration's table range and position cells where it has them, else its
+    colour range and 40 px cells (a network of every pixel's own position)."""
+    if calibration.table_lo is not None and calibration.table_hi is not None:
+        lo, hi = calibration.table_lo, calibration.table_hi
+    else:
+        lo, hi = calibration.colour_lo, calibration.colour_hi
+    cell_px = int(calibration.position_cell_px) or 40
+    return np.asarray(lo, np.float32), np.asarray(hi, np.float32), cell_px
+
+
 def _tabulated(calibration, ref_inv: np.ndarray, bins: int):
     """The network's gradient table for `ref_inv`: from memory, else from the disk cache,
     else tabulated (and kept in both)."""
+    lo, hi, cell_px = table_domain(calibration)
     key = (hashlib.blake2b(calibration.onnx_bytes, digest_size=16).digest(),
            hashlib.blake2b(np.ascontiguousarray(ref_inv).tobytes(), digest_size=16).digest(),
-           ref_inv.shape, tuple(np.asarray(calibration.colour_lo, np.float32).tolist()),
-           tuple(np.asarray(calibration.colour_hi, np.float32).tolist()), int(bins),
-           bool(calibration.use_position))
+           ref_inv.shape, tuple(lo.tolist()), tuple(hi.tolist()), int(bins),
+           bool(calibration.use_position), cell_px)
     if key in _TABLES:
         _TABLES.move_to_end(key)
         return _TABLES[key]
@@ -502,7 +523,7 @@ def _tabulated(calibration, ref_inv: np.ndarray, bins: int):
     table = _read_table(path, ref_inv, bins)
     if table is None:
         table = tabulate_mlp(MLPGradientModel(calibration.onnx_bytes, threads=0), ref_inv,
-                             lo=calibration.colour_lo, hi=calibration.colour_hi, bins=bins,
+                             lo=lo, hi=hi, bins=bins, cell_px=cell_px,
                              use_position=calibration.use_position)
         _write_table(path, table)
     for arr in (table.gx_table, table.gy_table, table.cell_offset):

@@ -20,7 +20,7 @@ import numpy as np
 
 from ._ball import gradients_from_normals
 from ._lut import ColourLUT
-from ._mlp import MLPGradientModel, mlp_inputs
+from ._mlp import MLPGradientModel, cell_position_inputs, mlp_inputs
 
 __all__ = ["GradientTable", "table_from_cell_luts", "table_from_lut", "tabulate_mlp"]
 
@@ -178,16 +178,21 @@ def tabulate_mlp(model: MLPGradientModel, ref_inv: np.ndarray, *, lo: np.ndarray
     model : MLPGradientModel
     ref_inv : (H, W, 3) float32 ndarray
         Inverse reference; the network's reference-colour input is the mean
-        reference colour of each position cell.
+        reference colour of each position cell and its position input the
+        cell's centre (:func:`cell_position_inputs`): exactly what a network
+        calibrated with ``position_cell_px = cell_px`` sees, so its table
+        differs from it by the colour quantisation alone.
     lo, hi : (3,) float ndarray
         Colour-change range (the calibration data's).
     bins : int, default 32
         Colour cells per channel.
     cell_px : int, default 40
         Size of the square position cells, px (480 x 640 -> 12 x 16 cells).
-        The network's position dependence is not smooth at the scale of
-        80 px: on the taxim GelSight frames 80 px cells cost 0.9 degrees of
-        normal accuracy against the network itself, 40 px cells about 0.5.
+        For a network of every pixel's own position and reference
+        (``position_cell_px = 0``) the cells cost accuracy: on the held-out
+        real GelSight presses of taxim, 40 px cells read 1.07 degrees median
+        from the network for the position alone (``docs/guide/optics.md``,
+        "The table engine").
     use_position : bool, default True
         Whether the network takes the position (else one cell).
 
@@ -205,15 +210,15 @@ def tabulate_mlp(model: MLPGradientModel, ref_inv: np.ndarray, *, lo: np.ndarray
     hi = np.asarray(hi, np.float32)
     centres = [lo[c] + (np.arange(bins) + 0.5) * (hi[c] - lo[c]) / bins for c in range(3)]
     grid = np.stack(np.meshgrid(*centres, indexing="ij"), axis=-1).reshape(-1, 3)
-    ref = 1.0 / ref_inv
+    # the cells' mean reference colour and centre, as a cell-snapped network sees them
+    ref_cell, x_cell, y_cell = cell_position_inputs(1.0 / ref_inv, cell_px)
     tables = []
     for cy in range(ny):
         for cx in range(nx):
-            ys = slice(cy * cell_px, min((cy + 1) * cell_px, h))
-            xs = slice(cx * cell_px, min((cx + 1) * cell_px, w))
-            ref_colour = np.broadcast_to(ref[ys, xs].reshape(-1, 3).mean(axis=0), grid.shape)
-            px = np.full(len(grid), (xs.start + xs.stop - 1) / 2.0, np.float32)
-            py = np.full(len(grid), (ys.start + ys.stop - 1) / 2.0, np.float32)
+            y0, x0 = cy * cell_px, cx * cell_px
+            ref_colour = np.broadcast_to(ref_cell[y0, x0], grid.shape)
+            px = np.full(len(grid), x_cell[y0, x0], np.float32)
+            py = np.full(len(grid), y_cell[y0, x0], np.float32)
             nxy = model.normals(mlp_inputs(grid.astype(np.float32), ref_colour, px, py, (h, w),
                                            use_position=use_position))
             gx, gy = gradients_from_normals(nxy[:, 0], nxy[:, 1])

@@ -25,7 +25,7 @@ from ._circles import detect_contact_circles
 from ._features import colour_change, reference_inverse
 from ._lut import fit_cell_luts, fit_colour_lut
 from ._markers import marker_mask
-from ._mlp import mlp_inputs, train_mlp
+from ._mlp import cell_position_inputs, default_position_cell_px, mlp_inputs, train_mlp
 from ._reconstructor import DepthReconstructor
 
 __all__ = ["fit_from_ball_presses"]
@@ -47,7 +47,8 @@ def fit_from_ball_presses(cls: type[CalibrationData], reference: np.ndarray,
                           hidden: int = 128, blur_sigma: float = 0.0, seed: int = 0,
                           source: str = "", progress: bool = False,
                           detect_edge: str = "contact", flat_fraction: float = 0.03,
-                          max_steps: int | None = MLP_MAX_STEPS):
+                          max_steps: int | None = MLP_MAX_STEPS,
+                          position_cell_px: int | None = None):
     """Train a photometric calibration of class `cls` from ball presses.
 
     The parameters, return value and errors are those of
@@ -56,6 +57,11 @@ def fit_from_ball_presses(cls: type[CalibrationData], reference: np.ndarray,
     """
     reference, frames, ball_mm = _checked_presses(reference, frames, ball_radius_mm,
                                                   mm_per_px, model, detect_edge, flat_fraction)
+    if position_cell_px is not None and (isinstance(position_cell_px, bool)
+                                         or int(position_cell_px) != position_cell_px
+                                         or position_cell_px < 0):
+        raise InputError(f"position_cell_px must be a non-negative integer or None, got "
+                         f"{position_cell_px!r}")
     detected = centers_px is None and radii_px is None
     centers, radii = _press_circles(frames, reference, centers_px, radii_px, detect_edge)
     ball_px = ball_mm / mm_per_px              # (N,): each press's ball
@@ -78,6 +84,9 @@ def fit_from_ball_presses(cls: type[CalibrationData], reference: np.ndarray,
 
     cal = cls(model=model, reference=reference.copy(), mm_per_px=float(mm_per_px),
               use_position=use_position, markers=markers, blur_sigma=blur_sigma)
+    if model == "mlp" and use_position:
+        cal.position_cell_px = (default_position_cell_px(cal.shape) if position_cell_px is None
+                                else int(position_cell_px))
     rounds = 2 if refine_centers else 1
     fell_back = np.zeros((0, 0), bool)         # position cells on the colour-only table
     for rnd in range(rounds):
@@ -105,6 +114,7 @@ def fit_from_ball_presses(cls: type[CalibrationData], reference: np.ndarray,
         "flat_fraction": float(flat_fraction),
         "lut_cells": [int(c) for c in lut_cells] if model == "lut" else None,
         "lut_cells_fell_back": int(np.count_nonzero(fell_back)),
+        "position_cell_px": int(cal.position_cell_px),
         "centers_px": centers.round(2).tolist(),
         "radii_px": radii.round(2).tolist(),
         "tactilevision": __version__,
@@ -170,7 +180,7 @@ def _fit_round(cal: CalibrationData, samples: tuple[np.ndarray, ...], ref_colour
     """Fit `cal`'s model, contact threshold and colour range to one round's labelled pixels
     (:func:`_training_samples`) in place; returns the position cells left on the
     colour-only table (`fell_back` when no cell tables are fitted)."""
-    x_all, y_all, f_all, n_all, bg_mag = samples
+    x_all, y_all, f_all, n_all, bg_mag, in_disc = samples
     h, w = cal.shape
     if bg_mag.size == 0:
         raise InputError(f"flat_fraction {flat_fraction:g} leaves no flat pixel (beyond "
@@ -186,11 +196,36 @@ def _fit_round(cal: CalibrationData, samples: tuple[np.ndarray, ...], ref_colour
                 x_all, y_all, f_all, n_all, (h, w), lut_cells, lo=cal.colour_lo,
                 hi=cal.colour_hi, bins=bins, fallback=cal.lut)
     else:
-        inputs = mlp_inputs(f_all, ref_colour[y_all, x_all], x_all, y_all, (h, w),
-                            use_position=cal.use_position)
+        if cal.position_cell_px:     # each pixel's position cell, not the pixel
+            ref_in, x_in, y_in = cell_position_inputs(ref_colour, cal.position_cell_px)
+            inputs = mlp_inputs(f_all, ref_in[y_all, x_all], x_in[y_all, x_all],
+                                y_in[y_all, x_all], (h, w), use_position=cal.use_position)
+        else:
+            inputs = mlp_inputs(f_all, ref_colour[y_all, x_all], x_all, y_all, (h, w),
+                                use_position=cal.use_position)
+        cal.table_lo, cal.table_hi = _table_range(f_all, in_disc, cal.colour_lo, cal.colour_hi)
         cal.onnx_bytes = train_mlp(inputs, n_all, hidden=hidden, epochs=epochs,
                                    seed=seed, progress=progress, max_steps=max_steps)
     return fell_back
+
+
+def _table_range(change: np.ndarray, in_disc: np.ndarray, lo: np.ndarray, hi: np.ndarray
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """The colour range of a network's table: the 1st and 99th percentiles of the labelled
+    contact pixels' colour change, widened to the flat samples' 0.1 and 99.9, within the
+    calibration's range `lo`, `hi`. The calibration's own range reaches its darkest
+    reference pixels' ratios (on the GelSlim 3.0, red up to 17 times the reference), so
+    32 colour cells over it were too coarse where contacts lie."""
+    t_lo, t_hi = np.array(lo, np.float32), np.array(hi, np.float32)
+    parts = [(change[in_disc], 1.0), (change[~in_disc], 0.1)]
+    got = [(np.percentile(c, p, axis=0), np.percentile(c, 100 - p, axis=0))
+           for c, p in parts if len(c)]
+    if got:
+        t_lo = np.maximum(t_lo, np.min([g[0] for g in got], axis=0)).astype(np.float32)
+        t_hi = np.minimum(t_hi, np.max([g[1] for g in got], axis=0)).astype(np.float32)
+    bad = t_hi <= t_lo
+    t_lo[bad], t_hi[bad] = np.asarray(lo, np.float32)[bad], np.asarray(hi, np.float32)[bad]
+    return t_lo, t_hi
 
 
 def _training_samples(changes: list[np.ndarray], valid: list[np.ndarray],
@@ -201,11 +236,12 @@ def _training_samples(changes: list[np.ndarray], valid: list[np.ndarray],
     beyond twice the contact radius (sampled) the flat normal; the ring
     between, where the gel leaves the ball in an unknown shape, is left out.
 
-    Returns x (M,), y (M,), colour change (M, 3), in-plane normal (M, 2) and
-    the background colour-change magnitudes (for the contact threshold).
+    Returns x (M,), y (M,), colour change (M, 3), in-plane normal (M, 2),
+    the background colour-change magnitudes (for the contact threshold) and
+    whether each pixel lies in a label disc (M,).
     """
     h, w = changes[0].shape[:2]
-    xs, ys, feats, labels, bg_mag = [], [], [], [], []
+    xs, ys, feats, labels, bg_mag, disc = [], [], [], [], [], []
     for change, ok, bg, centre, rad, ball in zip(changes, valid, background, centers,
                                                  label_radii, ball_px, strict=True):
         gx, gy, inside = ball_gradients((h, w), centre, rad, ball)
@@ -219,5 +255,6 @@ def _training_samples(changes: list[np.ndarray], valid: list[np.ndarray],
         feats.append(change[sel])
         labels.append(normals_from_gradients(gx[sel], gy[sel])[:, :2])
         bg_mag.append(np.abs(change[far & bg]).max(axis=-1))
+        disc.append(inside[sel])
     return (np.concatenate(xs), np.concatenate(ys), np.concatenate(feats),
-            np.concatenate(labels), np.concatenate(bg_mag))
+            np.concatenate(labels), np.concatenate(bg_mag), np.concatenate(disc))

@@ -1,0 +1,91 @@
+"""The default (table) engine against the exact network on held-out real presses.
+
+For the GelSight Mini (``../shared/real/gelsight_mini``, contact circles detected), the
+GelSlim 3.0 (``$TACTILEVISION_GELSLIM``, set_2020_11, detected) and the GelSight of
+``taxim`` (annotated circles): holds out presses by the accuracy report's own split
+(:func:`holdout_presses`, one in four), trains a network on the rest in both forms (every
+pixel's own position and reference, ``position_cell_px=0``, and the default position
+cells), and prints, per form and engine, the median and 95th percentile of the normal
+angle against the ball's sphere inside 0.8 of the contact radius over the held-out
+presses' pixels, and the table engine against the exact one.
+
+Run: ``python benchmarks/bench_table_engine.py`` (about 5 minutes on 2 cores; needs
+torch).
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from tactilevision.io import read_ball_presses, taxim_datapack
+from tactilevision.optics import (
+    DepthReconstructor,
+    PhotometricCalibration,
+    ball_gradients,
+    detect_contact_circles,
+    holdout_presses,
+    normals_from_gradients,
+)
+
+SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "real"
+GELSLIM = Path(os.environ.get("TACTILEVISION_GELSLIM", SHARED / "gelslim3"))
+MINI = Path(os.environ.get("TACTILEVISION_GELSIGHT_MINI", SHARED / "gelsight_mini"))
+
+
+def sensors():
+    if (MINI / "background.png").is_file():
+        ps = read_ball_presses(MINI)
+        yield "GelSight Mini", ps, 0.0634, np.asarray(ps.ball_radius_mm), None
+    if (GELSLIM / "set_2020_11").is_dir():
+        ps = read_ball_presses(GELSLIM / "set_2020_11")
+        yield "GelSlim 3.0", ps, 0.0806, np.full(len(ps.frames), 3.8), None
+    ps = read_ball_presses(taxim_datapack())
+    yield "GelSight (taxim)", ps, 0.0295, np.full(len(ps.frames), 2.0), (ps.centers_px,
+                                                                          ps.radii_px)
+
+
+def angles(gx, gy, tgx, tgy, inside):
+    n1 = normals_from_gradients(gx[inside], gy[inside])
+    n2 = normals_from_gradients(tgx[inside], tgy[inside])
+    return np.degrees(np.arccos(np.clip(np.sum(n1 * n2, axis=-1), -1.0, 1.0)))
+
+
+def main() -> int:
+    print("| sensor | network | engine | median deg | p95 deg | table vs exact median / p95 |")
+    print("|---|---|---|---|---|---|")
+    for name, ps, mm, ball_mm, given in sensors():
+        centres, radii = given if given else detect_contact_circles(ps.frames, ps.reference)
+        ball_px = ball_mm / mm
+        held = holdout_presses(centres, radii, ball_px, ps.reference.shape[:2], 0.25)
+        train = np.flatnonzero(~held)
+        for form, cell in (("own pixel", 0), ("position cells", None)):
+            cal = PhotometricCalibration.from_ball_presses(
+                ps.reference, ps.frames[train], centres[train] if given else None,
+                radii[train] if given else None, ball_radius_mm=ball_mm[train], mm_per_px=mm,
+                position_cell_px=cell)
+            got = {"table": [], "onnx": [], "diff": []}
+            engines = {e: DepthReconstructor(cal, engine=e) for e in ("table", "onnx")}
+            for i in np.flatnonzero(held):
+                tgx, tgy, inside = ball_gradients(cal.shape, centres[i], 0.8 * radii[i],
+                                                  ball_px[i])
+                g = {e: r.gradients(ps.frames[i]) for e, r in engines.items()}
+                for e in engines:
+                    got[e].append(angles(*g[e], tgx, tgy, inside))
+                got["diff"].append(angles(*g["table"], *g["onnx"], inside))
+            d = np.concatenate(got["diff"])
+            for e, label in (("onnx", "exact"), ("table", "table (default)")):
+                a = np.concatenate(got[e])
+                extra = (f"{np.median(d):.2f} / {np.percentile(d, 95):.2f}" if e == "table"
+                         else "")
+                print(f"| {name} ({np.count_nonzero(held)} held out) | {form} "
+                      f"({cal.position_cell_px or 'none'} px) | {label} | {np.median(a):.2f} | "
+                      f"{np.percentile(a, 95):.2f} | {extra} |", flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
