@@ -223,11 +223,12 @@ class PhotometricCalibration(CalibrationData):
             reproduces it up to the colour quantisation. None:
             ``max(H, W) // 16``, at least 20 (:func:`default_position_cell_px`); 0: every
             pixel's own position and reference (the form before 2026-11-25,
-            whose table differs from the network by about 1 degree median and
-            3 to 4 at the 95th percentile inside a contact). On held-out real
-            presses the cells cost the exact network 0.0 to 0.15 degrees median
-            and the table gained 0.04 to 1.2 (docs/guide/optics.md, "The
-            table engine").
+            whose table read 1.2 to 2.1 degrees median and 3.9 to 6.2 at the
+            95th percentile from it inside held-out real contacts). With the
+            cells the default engine read 0.03 to 0.37 degrees median and 0.05
+            to 1.2 at the 95th percentile better than before on those presses
+            (``benchmarks/bench_table_engine.py``; docs/guide/optics.md, "The
+            table engine: a network that its table reproduces").
 
         Returns
         -------
