@@ -30,6 +30,7 @@ from tactilevision.optics import (
     holdout_presses,
     normals_from_gradients,
 )
+from tactilevision.optics._reconstructor import table_domain
 
 SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "real"
 GELSLIM = Path(os.environ.get("TACTILEVISION_GELSLIM", SHARED / "gelslim3"))
@@ -55,7 +56,8 @@ def angles(gx, gy, tgx, tgy, inside):
 
 
 def main() -> int:
-    print("| sensor | network | engine | median deg | p95 deg | table vs exact median / p95 |")
+    print("| sensor | network (position cells) | engine | median deg | p95 deg "
+          "| table vs exact median / p95 |")
     print("|---|---|---|---|---|---|")
     for name, ps, mm, ball_mm, given in sensors():
         centres, radii = given if given else detect_contact_circles(ps.frames, ps.reference)
@@ -82,7 +84,8 @@ def main() -> int:
                 extra = (f"{np.median(d):.2f} / {np.percentile(d, 95):.2f}" if e == "table"
                          else "")
                 print(f"| {name} ({np.count_nonzero(held)} held out) | {form} "
-                      f"({cal.position_cell_px or 'none'} px) | {label} | {np.median(a):.2f} | "
+                      f"({cal.position_cell_px or 'none'}; table cells {table_domain(cal)[2]} px)"
+                      f" | {label} | {np.median(a):.2f} | "
                       f"{np.percentile(a, 95):.2f} | {extra} |", flush=True)
     return 0
 

@@ -180,8 +180,9 @@ def test_todays_gs_sdk_network_reproduces_gs_sdk_on_a_real_gelsight_mini():
     gives gs_sdk's own gradients (``gs_sdk_reference.npz``, computed by gs_sdk itself on
     six of the folder's presses) to 0.05 deg everywhere (gs_sdk feeds its network the raw
     frame and background, so the import keeps the reference unblurred and the exposure
-    gain off); the default table engine within 2 deg median inside the contact (today's
-    table: 1.2 to 2.0 deg; the issue's target of 1.0 is not met yet)."""
+    gain off); the default table engine within 1.7 deg median inside the contact (20 px
+    position cells at 320 x 240: 1.00 to 1.54 deg; 40 px cells gave 1.2 to 2.0; the
+    issue's target of 1.0 is not met)."""
     import cv2
     from _data import GELSIGHT_MINI, GELSIGHT_MINI_MM_PER_PX, GELSIGHT_MINI_REASON
 
@@ -209,4 +210,4 @@ def test_todays_gs_sdk_network_reproduces_gs_sdk_on_a_real_gelsight_mini():
         contact = np.hypot(G[..., 0], G[..., 1]) > np.tan(np.radians(5.0))
         assert contact.sum() > 5000
         assert angle_deg(G, *exact.gradients(frame)).max() < 0.05
-        assert np.median(angle_deg(G, *table.gradients(frame))[contact]) < 2.0
+        assert np.median(angle_deg(G, *table.gradients(frame))[contact]) < 1.7
