@@ -17,7 +17,7 @@ from ._checks import InputError, ShapeError
 from ._version import __version__
 
 __all__ = ["KNOWN_SENSORS", "InputError", "SessionCalibration", "ShapeError", "__version__",
-           "calibrate_session", "default_calibration_path"]
+           "calibrate_session", "default_calibration_path", "plan"]
 
 
 def __getattr__(name: str):
@@ -26,4 +26,8 @@ def __getattr__(name: str):
         from . import pipeline
 
         return getattr(pipeline, name)
+    if name == "plan":        # tactilevision.plan(design): before the first press
+        from .mechanics import plan
+
+        return plan
     raise AttributeError(f"module 'tactilevision' has no attribute {name!r}")

@@ -23,6 +23,7 @@ from . import (
     _history,
     _live,
     _optics,
+    _plan,
     _reconstruct,
     _validate,
     _view,
@@ -30,8 +31,8 @@ from . import (
 
 __all__ = ["build_parser", "main"]
 
-_COMMANDS = (_calibrate, _reconstruct, _optics, _fit, _diagnose, _validate, _fem, _forces,
-             _history, _batch, _live, _view)
+_COMMANDS = (_calibrate, _reconstruct, _optics, _fit, _diagnose, _validate, _plan, _fem,
+             _forces, _history, _batch, _live, _view)
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -61,6 +61,7 @@ from ._fit_model import fit_model
 from ._kappa import HAYES_1972, KappaTable, kappa
 from ._model import IndentationModel, ModelFit
 from ._neohookean import neo_hookean_constants
+from ._plan import Design, PlanPrediction, plan, plan_session, read_design
 from ._relaxation import (
     RelaxationFit,
     elastic_force,
@@ -82,6 +83,7 @@ __all__ = [
     "PAPER_BETA_RELATION",
     "BetaRelation",
     "CovariateTest",
+    "Design",
     "Diagnosis",
     "Effect",
     "FemLaw",
@@ -92,6 +94,7 @@ __all__ = [
     "ModelFit",
     "NoiseBudget",
     "Param",
+    "PlanPrediction",
     "RelaxationFit",
     "beta",
     "beta_from_nu",
@@ -117,7 +120,10 @@ __all__ = [
     "noise_budget",
     "noise_floor",
     "nu_from_beta",
+    "plan",
+    "plan_session",
     "ramp_factor",
+    "read_design",
     "refine_relaxation",
     "register_effect",
     "relaxed_moduli",

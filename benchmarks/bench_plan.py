@@ -1,0 +1,136 @@
+"""``plan``'s predicted sds of E and nu against the scatter of the fit over generated sessions.
+
+For a grid of designs (a/h 0.5 to 1.5; 4, 6 or 10 depths evenly from 0.04 h to 0.19 h;
+2, 4 or 6 repeats; a mark at 10, 30 or 90 frames/s or a vernier at 3, 5 or 15 degrees),
+draws sessions with the generator's force law (``tactilevision.sim._tables._fem_force``,
+the finite-strain FEM), F/T noise over the window, and each press's certified depth off
+its true depth by the design's random depth sd; fits each with ``fit_indentation`` (the
+depth sds given, as ``calibrate`` fits) and compares the scatter of E and nu over the
+sessions (sd over those with E and nu) with ``plan``'s sigmas. Prints a row per design,
+the share of designs within 20 % on both, and ``plan``'s time against one fit of a
+50-press table in the same run.
+
+Run: ``python benchmarks/bench_plan.py [--sessions 50]`` (about a minute on one core).
+"""
+
+from __future__ import annotations
+
+import argparse
+import itertools
+import os
+import sys
+import time
+import warnings
+
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+
+import numpy as np
+
+from tactilevision import InputError
+from tactilevision.mechanics import Design, fit_indentation, plan
+from tactilevision.mechanics._plan import depth_uncertainty
+from tactilevision.sim._tables import _fem_force
+
+
+def designs() -> list[Design]:
+    out = []
+    methods = [dict(frame_rate_hz=10.0), dict(frame_rate_hz=30.0), dict(frame_rate_hz=90.0),
+               dict(bevel_angle_deg=3.0), dict(bevel_angle_deg=5.0), dict(bevel_angle_deg=15.0)]
+    shapes = [(4, 2), (6, 4), (10, 6), (4, 6), (10, 2)]
+    h = 3.0
+    for k, (ah, (nd, rep)) in enumerate(itertools.product((0.5, 0.7, 0.83, 1.0, 1.2, 1.5),
+                                                           shapes)):
+        depths = tuple(np.round(np.linspace(0.04 * h, 0.19 * h, nd), 4))
+        out.append(Design(thickness_mm=h, radius_mm=round(ah * h, 4), depths_mm=depths,
+                          repeats=rep, E_mpa=0.2, nu=0.45, stage_speed_mm_s=0.1,
+                          **methods[k % len(methods)]))
+    return out
+
+
+def scatter(d: Design, n: int, seed: int) -> tuple[np.ndarray, float]:
+    """(E, nu) of `n` generated sessions of design `d` (rows; NaN where not computed)."""
+    rng = np.random.default_rng(seed)
+    w = np.repeat(np.asarray(d.depths_mm), d.repeats)
+    P = _fem_force(d.E_mpa, d.nu, d.radius_mm, d.thickness_mm, w)
+    sd_um = depth_uncertainty(d)[0]
+    s_P = d.force_noise_n / np.sqrt(d.window_samples)
+    u = np.full(w.size, sd_um * 1e-3)
+    out = np.full((n, 2), np.nan)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for i in range(n):
+            w_cert = w + rng.normal(0.0, sd_um * 1e-3, w.size)
+            try:
+                f = fit_indentation(w_cert, P + rng.normal(0.0, s_P, w.size),
+                                    thickness_mm=d.thickness_mm, radius_mm=d.radius_mm,
+                                    depth_std_mm=u)
+                out[i] = f.E_mpa, f.nu
+            except InputError:
+                pass
+    return out, float(np.mean(~np.isfinite(out[:, 1])))
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--sessions", type=int, default=50)
+    ap.add_argument("--seed", type=int, default=0)
+    args = ap.parse_args(argv)
+    print("| a/h | depths x repeats | depth sd (how) | sigma E % plan / MC | sigma nu plan / MC "
+          "| ratio E, nu | not computed | plan s |")
+    print("|---|---|---|---|---|---|---|---|")
+    ratios, t_plan, unidentified, e_only = [], [], [], []
+    for k, d in enumerate(designs()):
+        t0 = time.perf_counter()
+        p = plan(d)
+        t_plan.append(time.perf_counter() - t0)
+        how = (f"vernier {d.bevel_angle_deg:g} deg" if d.bevel_angle_deg
+               else f"mark {d.frame_rate_hz:g} fps")
+        est, lost = scatter(d, args.sessions, args.seed + k)
+        ok = np.isfinite(est[:, 1])
+        sE = np.std(est[ok, 0], ddof=1) if ok.sum() > 2 else np.nan
+        snu = np.std(est[ok, 1], ddof=1) if ok.sum() > 2 else np.nan
+        if not p.nu_identified:
+            # the sessions agree when nu comes out pinned (no scatter) or mostly not at all
+            agree = lost > 0.5 or snu < 1e-6
+            unidentified.append(agree)
+            rE = p.E_sigma_mpa / sE if np.isfinite(p.E_sigma_mpa) and sE > 0 else np.nan
+            if np.isfinite(rE):
+                e_only.append(rE)
+            print(f"| {d.a_over_h:.2f} | {len(d.depths_mm)} x {d.repeats} | {p.depth_std_um:.2f} "
+                  f"um ({how}) | nu not identified; E {p.E_sigma_pct:.2f} / "
+                  f"{100 * sE / d.E_mpa:.2f} | sessions: nu sd {snu:.4f} | E {rE:.2f} | "
+                  f"{100 * lost:.0f} % | {t_plan[-1]:.2f} |", flush=True)
+            continue
+        r = (p.E_sigma_mpa / sE, p.nu_sigma / snu)
+        ratios.append(r)
+        print(f"| {d.a_over_h:.2f} | {len(d.depths_mm)} x {d.repeats} | {p.depth_std_um:.2f} um "
+              f"({how}) | {p.E_sigma_pct:.2f} / {100 * sE / d.E_mpa:.2f} | {p.nu_sigma:.4f} / "
+              f"{snu:.4f} | {r[0]:.2f}, {r[1]:.2f} | {100 * lost:.0f} % | {t_plan[-1]:.2f} |",
+              flush=True)
+    ratios = np.array(ratios)
+    within = np.all(np.abs(ratios - 1) <= 0.2, axis=1)
+    print(f"\n{within.sum()} of {len(ratios)} designs that identify nu within 20 % on both "
+          f"sigmas ({args.sessions} sessions each); ratio plan / MC: E median "
+          f"{np.median(ratios[:, 0]):.2f} (range {ratios[:, 0].min():.2f} to "
+          f"{ratios[:, 0].max():.2f}), nu median {np.median(ratios[:, 1]):.2f} (range "
+          f"{ratios[:, 1].min():.2f} to {ratios[:, 1].max():.2f})")
+    e_only = np.array(e_only)
+    print(f"{len(unidentified)} designs where plan says nu is not identified: the sessions "
+          f"agree (nu pinned or mostly not computed) on {sum(unidentified)}; E's sigma within "
+          f"20 % on {int(np.sum(np.abs(e_only - 1) <= 0.2))} of the {e_only.size} where plan "
+          "gives one")
+    w = np.repeat(np.linspace(0.12, 0.57, 5), 10)
+    P = _fem_force(0.2, 0.45, 2.5, 3.0, w)
+    t0 = time.perf_counter()
+    for _ in range(20):
+        fit_indentation(w, P * (1 + 1e-3 * np.sin(np.arange(w.size))), thickness_mm=3.0,
+                        radius_mm=2.5, depth_std_mm=np.full(w.size, 1e-3))
+    t_fit = (time.perf_counter() - t0) / 20
+    print(f"plan: median {np.median(t_plan):.2f} s, slowest {max(t_plan):.2f} s per design; one "
+          f"fit of a 50-press table {1e3 * t_fit:.1f} ms in the same run (plan = "
+          f"{max(t_plan) / t_fit:.0f} fits at most); one core")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,75 @@
+"""``tactilevision plan``: what a calibration session's design will measure, before it runs."""
+
+from __future__ import annotations
+
+import argparse
+import math
+from pathlib import Path
+
+from ..mechanics import plan_session, read_design
+from ._fit import _write_json
+
+__all__ = ["add_parser", "run"]
+
+_DESCRIPTION = """\
+Predict, from a design (a session.toml plus a [plan] table: repeats, E_mpa,
+nu, frame_rate_hz, stage_speed_mm_s, force_noise_n, force_zero_n, hold_s,
+depth_std_um), each press's depth uncertainty, the sds of E and nu that
+'tactilevision fit' will give over sessions of this design, the biases its
+shared errors leave, and whether nu is identified at all. Nothing is drawn:
+the fit is differentiated on the design's noise-free table and its E and nu
+integrated over the predicted spread of eq. (5)'s line. Exit status 2 on a bad
+design, with one sentence naming the key."""
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    """Register the ``plan`` sub-command."""
+    p = sub.add_parser("plan", help="predict what a calibration session's design will measure",
+                       description=_DESCRIPTION,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("design", metavar="DESIGN.toml", type=Path)
+    p.add_argument("--json", metavar="FILE", help="write the prediction as JSON ('-': stdout)")
+    p.set_defaults(func=run)
+
+
+def summary(pred) -> str:
+    """The prediction in a few lines of text."""
+    d = pred.design
+    lines = [
+        f"design: h {d.thickness_mm:g} mm, a {d.radius_mm:g} mm (a/h {d.a_over_h:.2f}), "
+        f"{len(d.depths_mm)} depths x {d.repeats} repeats = {pred.n_presses} presses, "
+        f"E {d.E_mpa:g} MPa, nu {d.nu:g}",
+        f"depth per press: sd {pred.depth_std_um:.2f} um random"
+        + (f", up to {pred.depth_shared_um:.1f} um shared" if pred.depth_shared_um else "")
+        + f" ({pred.depth_source}); force per press: sd {1e3 * pred.force_std_n:.2f} mN",
+        f"E: sd {pred.E_sigma_mpa:.4f} MPa ({pred.E_sigma_pct:.1f} %); nu: sd "
+        f"{pred.nu_sigma:.4f}; their correlation {pred.E_nu_corr:+.2f}",
+    ]
+    for name, (e, n) in pred.bias.items():
+        what = {"model": "the fit itself on the design's noise-free FEM forces",
+                "noise": "the noise, through the fit's curvature (mean over sessions)",
+                "depth_shared": f"a depth error of +{pred.depth_shared_um:.1f} um in every press",
+                "depth_shared_minus": f"a depth error of -{pred.depth_shared_um:.1f} um in "
+                                      "every press",
+                "force_zero": f"a force offset of +{d.force_zero_n:g} N in every press",
+                "force_zero_minus": f"a force offset of -{d.force_zero_n:g} N in every press",
+                }[name]
+        if math.isfinite(e) and math.isfinite(n):
+            lines.append(f"bias from {what}: E {e:+.1f} %, nu {n:+.4f}")
+        else:
+            lines.append(f"bias from {what}: no E or nu (beta beyond the beta table)")
+    lines.append("nu identified" if pred.nu_identified else "nu NOT identified")
+    lines += [f"note: {n}" for n in pred.notes]
+    return "\n".join(lines)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run ``plan``; returns 0 (2 through InputError on a bad design)."""
+    pred = plan_session(read_design(args.design))
+    if args.json == "-":
+        _write_json(pred.as_dict(), "-")
+        return 0
+    print(summary(pred))
+    if args.json:
+        _write_json(pred.as_dict(), args.json)
+    return 0

@@ -1,0 +1,520 @@
+"""Before the first press: what a calibration session's design will measure.
+
+A design is a ``session.toml`` (formats.md §1: gel thickness h, indenter radius a, the
+gauge block's depths and bevel, the F/T window) plus a ``[plan]`` table of what a session
+does not hold yet: the expected E and nu, the repeats per depth, the camera's frame rate
+and the stage's speed at the bevel (for a mark), the F/T noise and zero stability, and
+the hold length. :func:`plan_session` predicts, without drawing a single session:
+
+- each press's depth uncertainty, random and shared, from the bevel (a vernier read to
+  :data:`VERNIER_EDGE_PX` on each edge of its band) or the mark (one frame's travel);
+- the standard deviations of E and nu that :func:`fit_indentation` will give over
+  repeated sessions of this design, by propagating every press's force and depth noise
+  through the fit itself (its derivatives taken on the design's noise-free table, the
+  finite-strain FEM's forces), and the biases that the shared errors leave;
+- whether nu is identified at all (a/h where the beta table cannot tell nu, or a
+  sigma of nu as wide as the physical range).
+
+``benchmarks/bench_plan.py`` checks the predicted sigmas against the scatter of the
+fit over generated sessions of each design in a grid.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .._checks import InputError
+from ._fem_tables import kappa_n
+from ._fit import MAX_W_OVER_H, fit_indentation
+
+__all__ = ["VERNIER_EDGE_PX", "Design", "PlanPrediction", "plan", "plan_session",
+           "read_design"]
+
+#: The sd of a vernier band's half-width read on real-like frames, px: the sample
+#: session's certified depths scatter 1.80 um about the truth at a 5 deg bevel and
+#: 0.0295 mm/px (``tactilevision calibrate sample_frames/gelsight_session``, scored
+#: against its truth.json; docs/guide/calibrate.md), 1.80e-3 / (tan 5 deg x 0.0295) =
+#: 0.70 px.
+VERNIER_EDGE_PX = 0.70
+
+#: nu's physical range as this project's beta tables hold it: a sigma of nu beyond a
+#: quarter of it leaves nu "not identified".
+NU_RANGE = (0.30, 0.50)
+
+
+@dataclass(frozen=True)
+class Design:
+    """A calibration session's design (formats.md §1 ``session.toml`` plus ``[plan]``).
+
+    Attributes
+    ----------
+    thickness_mm, radius_mm : float
+        Gel thickness h and indenter radius a, mm.
+    depths_mm : tuple of float
+        The gauge block's depths w0, mm.
+    repeats : int
+        Presses per depth.
+    E_mpa, nu : float
+        The expected Young's modulus (MPa) and Poisson's ratio.
+    bevel_angle_deg : float
+        Flank angle of the bevel ridge, deg; 0 for a mark.
+    mm_per_px : float
+        Image scale, mm per px (the vernier's resolution).
+    frame_rate_hz, stage_speed_mm_s : float
+        Camera rate and the stage's speed as it passes w0 (a mark's depth error is one
+        frame's travel).
+    force_noise_n : float
+        sd of one F/T sample, N.
+    window_samples : int
+        F/T samples averaged per press.
+    force_zero_n : float
+        Zero stability of the F/T sensor: a force offset every press may share, N (a
+        bound).
+    hold_s : float or None
+        Hold length per press, s (checked against the window).
+    rate_hz : float
+        F/T sample rate, Hz.
+    depth_std_um : float or None
+        Overrides the bevel's or the mark's random depth sd, um.
+    beta_table : {'fem', 'paper'}
+    """
+
+    thickness_mm: float
+    radius_mm: float
+    depths_mm: tuple[float, ...]
+    repeats: int = 10
+    E_mpa: float = 0.2
+    nu: float = 0.45
+    bevel_angle_deg: float = 0.0
+    mm_per_px: float = 0.0295
+    frame_rate_hz: float = 30.0
+    stage_speed_mm_s: float = 0.1
+    force_noise_n: float = 0.0125
+    window_samples: int = 200
+    force_zero_n: float = 0.0
+    hold_s: float | None = None
+    rate_hz: float = 1000.0
+    depth_std_um: float | None = None
+    beta_table: str = "fem"
+
+    def __post_init__(self) -> None:
+        check_design(self)
+
+    @property
+    def a_over_h(self) -> float:
+        """a/h."""
+        return self.radius_mm / self.thickness_mm
+
+
+def _positive(value: Any, key: str, *, allow_zero: bool = False) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise InputError(f"{key} must be a number, got {value!r}") from None
+    if not math.isfinite(v) or v < 0 or (v == 0 and not allow_zero):
+        raise InputError(f"{key} must be {'non-negative' if allow_zero else 'positive'}, "
+                         f"got {value!r}")
+    return v
+
+
+def check_design(d: Design) -> None:
+    """Refuse a design that cannot be run, naming the key at fault (one sentence).
+
+    Raises
+    ------
+    InputError
+        A non-positive h or a, no depth or a depth beyond the gel (w0 >= h) or past
+        the FEM beta table's reach (w/h > 0.23), fewer than two distinct depths, a bevel
+        angle of 45 degrees or more, a window longer than the hold, a repeat count
+        below 1, or a nu outside (0, 0.5].
+    """
+    h = _positive(d.thickness_mm, "[sensor] gel_thickness_mm")
+    _positive(d.radius_mm, "[indenter] radius_mm")
+    if len(d.depths_mm) == 0:
+        raise InputError("[gauge_block] depths_mm lists no depth")
+    for w in d.depths_mm:
+        w = _positive(w, "[gauge_block] depths_mm")
+        if w >= h:
+            raise InputError(f"[gauge_block] depths_mm: {w:g} mm is beyond the gel "
+                             f"({h:g} mm thick)")
+        if w / h > 0.23:
+            raise InputError(f"[gauge_block] depths_mm: {w:g} mm is w/h = {w / h:.3f}, past "
+                             f"the FEM beta table's reach (0.23; the linear law (2) fails "
+                             f"beyond {MAX_W_OVER_H:g})")
+    if len(set(d.depths_mm)) < 2:
+        raise InputError("[gauge_block] depths_mm needs at least two distinct depths to "
+                         "fit eq. (5)")
+    angle = _positive(d.bevel_angle_deg, "[gauge_block] bevel_angle_deg", allow_zero=True)
+    if angle >= 45:
+        raise InputError(f"[gauge_block] bevel_angle_deg {angle:g} is 45 degrees or more: "
+                         "the flank would press the gel as the indenter does")
+    if int(d.repeats) != d.repeats or d.repeats < 1:
+        raise InputError(f"[plan] repeats must be a positive integer, got {d.repeats!r}")
+    if int(d.window_samples) != d.window_samples or d.window_samples < 1:
+        raise InputError("[force_sensor] window_samples must be a positive integer, got "
+                         f"{d.window_samples!r}")
+    rate = _positive(d.rate_hz, "[force_sensor] rate_hz")
+    if d.hold_s is not None:
+        hold = _positive(d.hold_s, "[plan] hold_s")
+        if d.window_samples / rate > hold:
+            raise InputError(f"[force_sensor] window_samples {d.window_samples} at "
+                             f"{rate:g} Hz is {d.window_samples / rate:g} s, longer than "
+                             f"the hold ([plan] hold_s = {hold:g} s)")
+    _positive(d.E_mpa, "[plan] E_mpa")
+    nu = float(d.nu)
+    if not 0 < nu <= 0.5:
+        raise InputError(f"[plan] nu must lie in (0, 0.5], got {d.nu!r}")
+    _positive(d.mm_per_px, "[sensor] mm_per_px")
+    _positive(d.frame_rate_hz, "[plan] frame_rate_hz")
+    _positive(d.stage_speed_mm_s, "[plan] stage_speed_mm_s")
+    _positive(d.force_noise_n, "[plan] force_noise_n", allow_zero=True)
+    _positive(d.force_zero_n, "[plan] force_zero_n", allow_zero=True)
+    if d.depth_std_um is not None:
+        _positive(d.depth_std_um, "[plan] depth_std_um", allow_zero=True)
+    if d.beta_table not in ("fem", "paper"):
+        raise InputError(f"[plan] beta_table must be 'fem' or 'paper', got {d.beta_table!r}")
+
+
+def read_design(path: str | Path) -> Design:
+    """Read a design file: a ``session.toml`` with a ``[plan]`` table.
+
+    Parameters
+    ----------
+    path : str or Path
+        The TOML file. Keys: ``[sensor] gel_thickness_mm, mm_per_px``, ``[indenter]
+        radius_mm``, ``[gauge_block] depths_mm, bevel_angle_deg``, ``[force_sensor]
+        rate_hz, window_samples``, ``[plan] repeats, E_mpa, nu, frame_rate_hz,
+        stage_speed_mm_s, force_noise_n, force_zero_n, hold_s, depth_std_um,
+        beta_table`` (every ``[plan]`` key optional; :class:`Design` gives the
+        defaults).
+
+    Returns
+    -------
+    design : Design
+
+    Raises
+    ------
+    InputError
+        A missing or unreadable file, TOML that does not parse, a missing required
+        key, an unknown ``[plan]`` key, or a bad value (:func:`check_design`), each
+        naming the file and the key.
+    """
+    path = Path(path)
+    try:
+        doc = tomllib.loads(path.read_text())
+    except FileNotFoundError:
+        raise InputError(f"design file {path} does not exist") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"design file {path} cannot be read: {exc}") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(f"design file {path} is not valid TOML: {exc}") from None
+
+    def need(table: str, key: str) -> Any:
+        try:
+            return doc[table][key]
+        except (KeyError, TypeError):
+            raise InputError(f"{path}: [{table}] {key} is missing") from None
+
+    plan = doc.get("plan", {})
+    if not isinstance(plan, dict):
+        raise InputError(f"{path}: [plan] must be a table")
+    known = {"repeats", "E_mpa", "nu", "frame_rate_hz", "stage_speed_mm_s", "force_noise_n",
+             "force_zero_n", "hold_s", "depth_std_um", "beta_table"}
+    unknown = sorted(set(plan) - known)
+    if unknown:
+        raise InputError(f"{path}: [plan] {unknown[0]} is not a design key (known: "
+                         f"{', '.join(sorted(known))})")
+    depths = need("gauge_block", "depths_mm")
+    if not isinstance(depths, list):
+        raise InputError(f"{path}: [gauge_block] depths_mm must be a list of depths, mm")
+    gauge = doc.get("gauge_block", {})
+    sensor = doc.get("sensor", {})
+    force = doc.get("force_sensor", {})
+    kw: dict[str, Any] = dict(plan)
+    try:
+        return Design(thickness_mm=need("sensor", "gel_thickness_mm"),
+                      radius_mm=need("indenter", "radius_mm"),
+                      depths_mm=tuple(depths),
+                      bevel_angle_deg=gauge.get("bevel_angle_deg", 0.0),
+                      mm_per_px=sensor.get("mm_per_px", Design.mm_per_px),
+                      rate_hz=force.get("rate_hz", Design.rate_hz),
+                      window_samples=force.get("window_samples", Design.window_samples),
+                      **kw)
+    except InputError as exc:
+        raise InputError(f"{path}: {exc}") from None
+
+
+@dataclass
+class PlanPrediction:
+    """What a design will measure (:func:`plan_session`).
+
+    Attributes
+    ----------
+    design : Design
+    n_presses : int
+    depth_std_um : float
+        Random sd of each press's certified depth, um.
+    depth_shared_um : float
+        Bound of a depth error every press shares, um (a mark's lag: up to one frame's
+        travel; 0 for a vernier).
+    depth_source : str
+        How the depth sd was predicted.
+    force_std_n : float
+        Random sd of each press's force (window mean), N.
+    E_sigma_mpa, nu_sigma : float
+        Predicted sd of E and nu over repeated sessions of the design (random parts).
+    E_sigma_pct : float
+        ``E_sigma_mpa`` as a percentage of E.
+    E_nu_corr : float
+        Correlation of E's and nu's errors.
+    bias : dict of str to (float, float)
+        (E error in %, nu error): ``'model'``, the fit of the noise-free table (the
+        fit's own error on the FEM's forces); ``'noise'``, the mean over sessions
+        less the truth (the noise through the fit's curvature); and each shared
+        error at its bound, either way: ``'depth_shared'`` and
+        ``'depth_shared_minus'`` (every depth off by the shared bound),
+        ``'force_zero'`` and ``'force_zero_minus'`` (every force off by the zero
+        bound). NaN where the fit finds no E or nu.
+    nu_identified : bool
+        False when the beta table cannot tell nu at this a/h, or sigma(nu) exceeds a
+        quarter of nu's range (0.3 to 0.5).
+    notes : list of str
+        Why, in words.
+    """
+
+    design: Design
+    n_presses: int
+    depth_std_um: float
+    depth_shared_um: float
+    depth_source: str
+    force_std_n: float
+    E_sigma_mpa: float
+    nu_sigma: float
+    E_sigma_pct: float
+    E_nu_corr: float
+    bias: dict[str, tuple[float, float]]
+    nu_identified: bool
+    notes: list[str] = field(default_factory=list)
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-ready dict (the ``plan --json`` output)."""
+        d = self.design
+        return {
+            "design": {k: (list(v) if isinstance(v, tuple) else v)
+                       for k, v in d.__dict__.items()} | {"a_over_h": d.a_over_h},
+            "n_presses": self.n_presses,
+            "depth_std_um": self.depth_std_um, "depth_shared_um": self.depth_shared_um,
+            "depth_source": self.depth_source, "force_std_n": self.force_std_n,
+            "E_sigma_mpa": self.E_sigma_mpa, "E_sigma_pct": self.E_sigma_pct,
+            "nu_sigma": self.nu_sigma, "E_nu_corr": self.E_nu_corr,
+            "bias": {k: {"E_pct": v[0], "nu": v[1]} for k, v in self.bias.items()},
+            "nu_identified": self.nu_identified, "notes": list(self.notes),
+        }
+
+
+def depth_uncertainty(d: Design) -> tuple[float, float, str]:
+    """Random sd and shared bound of a press's certified depth, um, and how.
+
+    A vernier (``bevel_angle_deg > 0``) is read on the band's half-width L, w =
+    w0 + L tan(theta) (formats.md §1): ``sd = VERNIER_EDGE_PX x mm_per_px x
+    tan(theta)``. A mark is seen at the first frame past it: the depth past w0 is off
+    by up to one frame's travel ``v / f``, uniformly (sd ``v / (f sqrt 12)``), and
+    the clock that dates the crossing can share up to that much in every press (the
+    bound given as ``depth_shared_um``). ``depth_std_um`` overrides the random part.
+    """
+    if d.bevel_angle_deg > 0:
+        sd = VERNIER_EDGE_PX * d.mm_per_px * math.tan(math.radians(d.bevel_angle_deg)) * 1e3
+        shared, how = 0.0, (f"vernier at {d.bevel_angle_deg:g} deg: {VERNIER_EDGE_PX:g} px "
+                            f"x {d.mm_per_px:g} mm/px x tan(theta)")
+    else:
+        travel = d.stage_speed_mm_s / d.frame_rate_hz * 1e3
+        sd, shared = travel / math.sqrt(12.0), travel
+        how = (f"mark: one frame's travel {travel:.1f} um ({d.stage_speed_mm_s:g} mm/s at "
+               f"{d.frame_rate_hz:g} frames/s) / sqrt(12), shared up to one frame's travel")
+    if d.depth_std_um is not None:
+        sd, how = float(d.depth_std_um), "given ([plan] depth_std_um)"
+    return sd, shared, how
+
+
+def design_table(d: Design) -> tuple[np.ndarray, np.ndarray]:
+    """The design's noise-free presses: depths w (mm) and the finite-strain FEM's forces
+    P = 2 a E w kappa_n(nu, a/h, w/h) / (1 - nu^2) (N), ``repeats`` per depth."""
+    w = np.repeat(np.asarray(d.depths_mm, np.float64), int(d.repeats))
+    kn = {x: kappa_n(d.nu, d.a_over_h, x / d.thickness_mm) for x in set(d.depths_mm)}
+    k = np.array([kn[x] for x in w])
+    return w, 2 * d.radius_mm * d.E_mpa * w * k / (1 - d.nu**2)
+
+
+def _fit(d: Design, w: np.ndarray, P: np.ndarray, u_mm: np.ndarray | None) -> np.ndarray:
+    """(E, nu, c, c beta) of :func:`fit_indentation` on the presses (w, P)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        f = fit_indentation(w, P, thickness_mm=d.thickness_mm, radius_mm=d.radius_mm,
+                            beta_table=d.beta_table, depth_std_mm=u_mm)
+    return np.array([f.E_mpa, f.nu, f.c_n_per_mm, f.c_n_per_mm * f.beta])
+
+
+#: Gauss-Hermite nodes per axis of the (c, c beta) quadrature.
+QUADRATURE_NODES = 9
+
+
+def plan_session(design: Design) -> PlanPrediction:
+    """Predict what a calibration session of this design will measure.
+
+    Parameters
+    ----------
+    design : Design
+
+    Returns
+    -------
+    prediction : PlanPrediction
+
+    Notes
+    -----
+    The fit is :func:`fit_indentation` on each press's (w, P), with each press's
+    depth sd given (errors in both variables), as ``calibrate`` fits. Its outputs
+    (E, nu) are differentiated by central differences in every press's force (step
+    1e-4 P) and depth (step 1e-4 w) on the design's noise-free table
+    (:func:`design_table`); with independent force noise s_P (the F/T sample sd over
+    sqrt(window)) and depth noise s_w per press, ``Cov = J_P s_P^2 J_P^T + J_w s_w^2
+    J_w^T``. That is the first-order (delta-method) sd: where the noise is large
+    against the curvature of nu(beta) near the ends of the table it overstates the
+    scatter of a fit that the table clips. The shared errors are fitted at their
+    bounds: every depth + the shared depth bound, every force + the zero bound.
+
+    Where the fit refuses the design's noise-free table (a/h outside the kappa table,
+    or a bonded punch at an a/h where beta does not increase with nu), the sds are NaN,
+    ``nu_identified`` is False and the note says why.
+    """
+    d = design
+    w, P = design_table(d)
+    sd_um, shared_um, how = depth_uncertainty(d)
+    s_w = sd_um * 1e-3
+    s_P = d.force_noise_n / math.sqrt(d.window_samples)
+    u = np.full(w.size, s_w) if s_w > 0 else None
+    notes: list[str] = []
+    try:
+        base = _fit(d, w, P, u)
+    except InputError as exc:       # the tables cannot fit this a/h: nothing to predict
+        why = str(exc)
+    else:
+        why = None if np.isfinite(base[:2]).all() else (
+            f"the fit of the design's own noise-free presses finds no E or nu: their beta lies "
+            f"outside the FEM beta table at a/h = {d.a_over_h:.2f}")
+    if why is not None:
+        nan = math.nan
+        return PlanPrediction(d, w.size, sd_um, shared_um, how, s_P, nan, nan, nan, nan, {},
+                              False, [f"nu is not identified by this design: {why}"])
+    n = w.size
+    # the fit's intercept c and slope c beta are linear in the presses' P/w: their
+    # covariance by central differences in every press's force and depth
+    J_P = np.empty((2, n))
+    J_w = np.empty((2, n))
+    for i in range(n):
+        for J, arr, step in ((J_P, P, 1e-4 * P[i]), (J_w, w, 1e-4 * w[i])):
+            hi, lo = arr.copy(), arr.copy()
+            hi[i] += step
+            lo[i] -= step
+            args_hi = (w, hi) if arr is P else (hi, P)
+            args_lo = (w, lo) if arr is P else (lo, P)
+            J[:, i] = (_fit(d, *args_hi, u)[2:] - _fit(d, *args_lo, u)[2:]) / (2 * step)
+    cov_cs = s_P**2 * J_P @ J_P.T + s_w**2 * J_w @ J_w.T
+    # E and nu are not linear in (c, c beta): nu(beta) bends and the table clips it.
+    # Their moments by Gauss-Hermite quadrature over the Gaussian of (c, c beta), each
+    # node fitted as a table whose P/w is moved by that node's line (which moves the
+    # fit's line by exactly as much, its residuals unchanged)
+    x = w / d.thickness_mm
+    t, wt = np.polynomial.hermite_e.hermegauss(QUADRATURE_NODES)     # probabilists'
+    wt = wt / wt.sum()
+    L = np.linalg.cholesky(cov_cs + 1e-30 * np.eye(2))
+    vals, weights = [], []
+    for i, ti in enumerate(t):
+        for j, tj in enumerate(t):
+            dc, ds = L @ np.array([ti, tj])
+            vals.append(_fit(d, w, P + w * (dc + ds * x), u)[:2])
+            weights.append(wt[i] * wt[j])
+    vals, weights = np.array(vals), np.array(weights)
+    ok = np.isfinite(vals).all(axis=1)
+    out_of_table = float(weights[~ok].sum())
+    if not ok.any():
+        nan = math.nan
+        return PlanPrediction(d, n, sd_um, shared_um, how, s_P, nan, nan, nan, nan, {}, False,
+                              ["nu is not identified by this design: beta falls outside the "
+                               "FEM beta table over the whole predicted spread"])
+    wk = weights[ok] / weights[ok].sum()
+    mean = wk @ vals[ok]
+    dev = vals[ok] - mean
+    cov = (dev * wk[:, None]).T @ dev
+    sE, snu = (float(math.sqrt(max(v, 0.0))) for v in np.diag(cov))
+    corr = float(cov[0, 1] / (sE * snu)) if sE > 0 and snu > 0 else 0.0
+    if out_of_table > 0.01:
+        notes.append(f"beta falls outside the beta table in {100 * out_of_table:.0f} % of "
+                     "sessions of this design (E and nu not computed there); the sds are "
+                     "over the others")
+
+    def err(est: np.ndarray) -> tuple[float, float]:
+        return (float(100 * (est[0] / d.E_mpa - 1)), float(est[1] - d.nu))
+
+    bias_mean = err(mean)
+
+    bias = {"model": err(base[:2]), "noise": bias_mean}
+    if shared_um > 0:
+        bias["depth_shared"] = err(_fit(d, w + shared_um * 1e-3, P, u)[:2])
+        bias["depth_shared_minus"] = err(_fit(d, w - shared_um * 1e-3, P, u)[:2])
+    if d.force_zero_n > 0:
+        bias["force_zero"] = err(_fit(d, w, P + d.force_zero_n, u)[:2])
+        bias["force_zero_minus"] = err(_fit(d, w, P - d.force_zero_n, u)[:2])
+    beyond = [k for k, v in bias.items() if not np.isfinite(v).all()]
+    if beyond:
+        notes.append(f"{', '.join(beyond)}: the fit finds no E or nu there (beta beyond the "
+                     "beta table): that shared error would leave nu undetermined")
+    pinned = snu < 1e-6 < sE
+    identified = bool(np.isfinite(base).all() and snu <= 0.25 * (NU_RANGE[1] - NU_RANGE[0])
+                      and out_of_table <= 0.05 and not pinned)
+    if pinned:
+        notes.append(f"nu is not identified: the fit puts it at {mean[1]:.3f} whatever the "
+                     f"presses (the beta table cannot tell nu at a/h = {d.a_over_h:.2f}); E's "
+                     "sd is at that nu, and its bias is nu's")
+    elif not identified and snu > 0.25 * (NU_RANGE[1] - NU_RANGE[0]):
+        notes.append(f"nu is not identified: its predicted sd {snu:.3f} exceeds a quarter of "
+                     f"its range {NU_RANGE[0]:g} to {NU_RANGE[1]:g}")
+    elif not identified:
+        notes.append("nu is not identified: beta falls outside the beta table in more than "
+                     "5 % of sessions")
+    return PlanPrediction(d, n, sd_um, shared_um, how, s_P, sE, snu, 100 * sE / d.E_mpa,
+                          corr, bias, identified, notes)
+
+
+def plan(design: Design | str | Path) -> PlanPrediction:
+    """What a calibration session of this design will measure (``tactilevision plan``).
+
+    Parameters
+    ----------
+    design : Design, or str or Path of a design file (:func:`read_design`)
+
+    Returns
+    -------
+    prediction : PlanPrediction
+
+    Raises
+    ------
+    InputError
+        For a bad design file or design (naming the key), or a design whose a/h the
+        tables cannot fit.
+
+    Examples
+    --------
+    >>> from tactilevision.mechanics import Design
+    >>> p = plan(Design(thickness_mm=3.0, radius_mm=2.5,
+    ...                 depths_mm=(0.15, 0.3, 0.4, 0.5, 0.6), bevel_angle_deg=5.0))
+    >>> round(p.depth_std_um, 2)
+    1.81
+    """
+    return plan_session(design if isinstance(design, Design) else read_design(design))
