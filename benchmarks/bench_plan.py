@@ -1,7 +1,8 @@
 """``plan``'s predicted sds of E and nu against the scatter of the fit over generated sessions.
 
-For a grid of designs (a/h 0.5 to 1.5; 4, 6 or 10 depths evenly from 0.04 h to 0.19 h;
-2, 4 or 6 repeats; a mark at 10, 30 or 90 frames/s or a vernier at 3, 5 or 15 degrees),
+For a grid of 50 designs (a/h 0.5 to 1.5; 4, 6 or 10 depths evenly from 0.04 h to
+0.19 h; 2, 4 or 6 repeats; a mark at 10, 30 or 90 frames/s or a vernier at 3, 5 or 15
+degrees; the stage stopping 0 to 50 or 30 to 90 um past w0: :func:`designs`),
 draws sessions with the generator's force law (``tactilevision.sim._tables._fem_force``,
 the finite-strain FEM), F/T noise over the window, and each press's certified depth off
 its true depth by the design's random depth sd; fits each with ``fit_indentation`` (the
@@ -33,17 +34,22 @@ from tactilevision.sim._tables import _fem_force
 
 
 def designs() -> list[Design]:
+    """30 designs over a/h x (depths, repeats), the depth method cycling over three mark
+    frame rates and three vernier angles (the stage stopping 0 to 50 um past w0), then
+    the 20 of a/h 0.83 to 1.5 again with the methods shifted by three and the stage
+    stopping 30 to 90 um past w0 (a vernier's bands then read up to 10 degrees)."""
     out = []
     methods = [dict(frame_rate_hz=10.0), dict(frame_rate_hz=30.0), dict(frame_rate_hz=90.0),
                dict(bevel_angle_deg=3.0), dict(bevel_angle_deg=5.0), dict(bevel_angle_deg=15.0)]
     shapes = [(4, 2), (6, 4), (10, 6), (4, 6), (10, 2)]
     h = 3.0
-    for k, (ah, (nd, rep)) in enumerate(itertools.product((0.5, 0.7, 0.83, 1.0, 1.2, 1.5),
-                                                           shapes)):
-        depths = tuple(np.round(np.linspace(0.04 * h, 0.19 * h, nd), 4))
-        out.append(Design(thickness_mm=h, radius_mm=round(ah * h, 4), depths_mm=depths,
-                          repeats=rep, E_mpa=0.2, nu=0.45, stage_speed_mm_s=0.1,
-                          **methods[k % len(methods)]))
+    for rnd, ahs, overshoot in ((0, (0.5, 0.7, 0.83, 1.0, 1.2, 1.5), (0.0, 50.0)),
+                                (1, (0.83, 1.0, 1.2, 1.5), (30.0, 90.0))):
+        for k, (ah, (nd, rep)) in enumerate(itertools.product(ahs, shapes)):
+            depths = tuple(np.round(np.linspace(0.04 * h, 0.19 * h, nd), 4))
+            out.append(Design(thickness_mm=h, radius_mm=round(ah * h, 4), depths_mm=depths,
+                              repeats=rep, E_mpa=0.2, nu=0.45, stage_speed_mm_s=0.1,
+                              overshoot_um=overshoot, **methods[(k + 3 * rnd) % len(methods)]))
     return out
 
 
@@ -90,8 +96,10 @@ def main(argv: list[str] | None = None) -> int:
         sE = np.std(est[ok, 0], ddof=1) if ok.sum() > 2 else np.nan
         snu = np.std(est[ok, 1], ddof=1) if ok.sum() > 2 else np.nan
         if not p.nu_identified:
-            # the sessions agree when nu comes out pinned (no scatter) or mostly not at all
-            agree = lost > 0.5 or snu < 1e-6
+            # the sessions agree when they too miss nu: beta past the table in over 5 % of
+            # them, nu pinned (no scatter), or nu scattered by more than 0.04 (plan's
+            # bound is a quarter of 0.3 to 0.5, 0.05)
+            agree = lost > 0.05 or snu < 1e-6 or snu > 0.04
             unidentified.append(agree)
             rE = p.E_sigma_mpa / sE if np.isfinite(p.E_sigma_mpa) and sE > 0 else np.nan
             if np.isfinite(rE):
@@ -116,7 +124,8 @@ def main(argv: list[str] | None = None) -> int:
           f"{ratios[:, 1].min():.2f} to {ratios[:, 1].max():.2f})")
     e_only = np.array(e_only)
     print(f"{len(unidentified)} designs where plan says nu is not identified: the sessions "
-          f"agree (nu pinned or mostly not computed) on {sum(unidentified)}; E's sigma within "
+          f"agree (beta past the table in over 5 % of them, nu pinned, or nu's sd over 0.04) "
+          f"on {sum(unidentified)}; E's sigma within "
           f"20 % on {int(np.sum(np.abs(e_only - 1) <= 0.2))} of the {e_only.size} where plan "
           "gives one")
     w = np.repeat(np.linspace(0.12, 0.57, 5), 10)

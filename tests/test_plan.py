@@ -38,9 +38,11 @@ def _sessions(d: Design, n: int, seed: int) -> np.ndarray:
     return out
 
 
-@pytest.mark.parametrize("kw", [dict(radius_mm=3.0, bevel_angle_deg=5.0, repeats=4),
+@pytest.mark.parametrize("kw", [dict(radius_mm=3.0, bevel_angle_deg=5.0, repeats=4,
+                                     overshoot_um=(30.0, 60.0)),
                                 dict(radius_mm=4.5, frame_rate_hz=30.0, repeats=2),
-                                dict(radius_mm=2.5, bevel_angle_deg=15.0, repeats=10)])
+                                dict(radius_mm=4.5, bevel_angle_deg=10.0, repeats=10,
+                                     overshoot_um=(60.0, 100.0))])
 def test_predicted_sigmas_match_the_scatter_of_generated_sessions(kw):
     """300 sessions: the sd of a sample sd is about 4 %, so 15 % is a real bound (the
     benchmark's grid of 30 designs: 20 of 20 within 20 % at 200 sessions)."""
@@ -52,9 +54,6 @@ def test_predicted_sigmas_match_the_scatter_of_generated_sessions(kw):
     assert ok.mean() > 0.95
     assert p.E_sigma_mpa == pytest.approx(np.std(est[ok, 0], ddof=1), rel=0.15)
     assert p.nu_sigma == pytest.approx(np.std(est[ok, 1], ddof=1), rel=0.15)
-    # and the mean over sessions where the noise-curvature bias says it is
-    assert 100 * (np.mean(est[ok, 0]) / d.E_mpa - 1) == pytest.approx(
-        p.bias["noise"][0], abs=3 * 100 * p.E_sigma_mpa / d.E_mpa / np.sqrt(ok.sum()) + 0.5)
 
 
 def test_depth_uncertainty_of_a_mark_and_a_vernier():
@@ -63,10 +62,19 @@ def test_depth_uncertainty_of_a_mark_and_a_vernier():
     sd, shared, _ = depth_uncertainty(mark)
     assert shared == pytest.approx(50.0)                 # 0.5 mm/s over 0.1 s
     assert sd == pytest.approx(50.0 / np.sqrt(12.0))
+    # a vernier reads its band past 10 px (25.8 um of overshoot at 5 deg, 0.0295 mm/px):
+    # every press read when the stage overshoots 30 to 60 um ...
+    um_per_px = 0.0295 * np.tan(np.radians(5.0)) * 1e3
     vern = Design(thickness_mm=3.0, radius_mm=2.5, depths_mm=PAPER_DEPTHS, bevel_angle_deg=5.0,
-                  mm_per_px=0.0295)
+                  mm_per_px=0.0295, overshoot_um=(30.0, 60.0))
     sd, shared, _ = depth_uncertainty(vern)
-    assert shared == 0 and sd == pytest.approx(0.70 * 0.0295 * np.tan(np.radians(5.0)) * 1e3)
+    assert shared == 0 and sd == pytest.approx(0.70 * um_per_px)
+    # ... a share of them only bounded to [w0, w0 + 10 px] over 0 to 50 um
+    half = Design(thickness_mm=3.0, radius_mm=2.5, depths_mm=PAPER_DEPTHS, bevel_angle_deg=5.0,
+                  mm_per_px=0.0295)
+    f = (50.0 - 10 * um_per_px) / 50.0
+    assert depth_uncertainty(half)[0] == pytest.approx(
+        np.sqrt(f * (0.70 * um_per_px) ** 2 + (1 - f) * (10 * um_per_px) ** 2 / 12))
     # the shared lag at its bound biases E: the plan refits it, either way
     p = plan(mark)
     assert not np.isfinite(p.bias["depth_shared"][0])      # beta beyond the table at a/h 0.83
@@ -82,8 +90,9 @@ def test_a_thin_punch_cannot_identify_nu():
     p = plan(Design(thickness_mm=3.0, radius_mm=1.5, depths_mm=PAPER_DEPTHS))
     assert not p.nu_identified and "not identified" in p.notes[0]
     assert np.isnan(p.nu_sigma)
+    assert json.loads(json.dumps(p.as_dict(), allow_nan=False))["nu_sigma"] is None
     wide = plan(Design(thickness_mm=3.0, radius_mm=4.5, depths_mm=PAPER_DEPTHS,
-                       bevel_angle_deg=5.0))
+                       bevel_angle_deg=5.0, overshoot_um=(30.0, 60.0)))
     assert wide.nu_identified and wide.nu_sigma < 0.01
 
 
@@ -100,7 +109,8 @@ repeats = 10\nE_mpa = 0.2\nnu = 0.45\nhold_s = 1.0\n""")
 
 GOOD = {"sensor": "gel_thickness_mm = 3.0", "indenter": "radius_mm = 2.5",
         "gauge_block": "depths_mm = [0.15, 0.30, 0.45]\nbevel_angle_deg = 5.0",
-        "force_sensor": "rate_hz = 1000\nwindow_samples = 200", "plan": "hold_s = 1.0"}
+        "force_sensor": "rate_hz = 1000\nwindow_samples = 200",
+        "plan": "hold_s = 1.0\novershoot_um = [30, 60]"}
 
 
 def _write(tmp_path, **change):
@@ -119,6 +129,7 @@ def _write(tmp_path, **change):
     (dict(plan="colour = 3"), "colour"),
     (dict(indenter=None), "radius_mm"),
     (dict(plan="nu = 0.7"), "nu"),
+    (dict(plan="overshoot_um = [60, 30]"), "overshoot_um"),
 ])
 def test_bad_designs_exit_2_naming_the_key(tmp_path, capsys, change, key):
     path = _write(tmp_path, **change)

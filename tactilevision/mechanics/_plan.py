@@ -31,17 +31,19 @@ from typing import Any
 import numpy as np
 
 from .._checks import InputError
+from ..contact._vernier import RESOLVED_PX
 from ._fem_tables import kappa_n
 from ._fit import MAX_W_OVER_H, fit_indentation
 
 __all__ = ["VERNIER_EDGE_PX", "Design", "PlanPrediction", "plan", "plan_session",
            "read_design"]
 
-#: The sd of a vernier band's half-width read on real-like frames, px: the sample
-#: session's certified depths scatter 1.80 um about the truth at a 5 deg bevel and
-#: 0.0295 mm/px (``tactilevision calibrate sample_frames/gelsight_session``, scored
-#: against its truth.json; docs/guide/calibrate.md), 1.80e-3 / (tan 5 deg x 0.0295) =
-#: 0.70 px.
+#: The sd of a vernier band's half-width read, px: the sample session's certified depths
+#: (``measurements.csv`` of ``tactilevision calibrate sample_frames/gelsight_session``,
+#: 48 presses, scored against the session's ``truth.json``; 2026-11-25) lie -0.47 um off
+#: on average with an sd of 1.8 um at a 5 deg bevel and 0.0295 mm/px:
+#: 1.8e-3 / (tan 5 deg x 0.0295) = 0.70 px. One session's figure, on frames this
+#: project drew.
 VERNIER_EDGE_PX = 0.70
 
 #: nu's physical range as this project's beta tables hold it: a sigma of nu beyond a
@@ -84,6 +86,9 @@ class Design:
     depth_std_um : float or None
         Overrides the bevel's or the mark's random depth sd, um.
     beta_table : {'fem', 'paper'}
+    overshoot_um : (float, float)
+        How far past w0 the stage stops, um, uniform over this range (the vernier reads
+        a band only past :data:`~tactilevision.contact.RESOLVED_PX` of half-width).
     """
 
     thickness_mm: float
@@ -103,6 +108,7 @@ class Design:
     rate_hz: float = 1000.0
     depth_std_um: float | None = None
     beta_table: str = "fem"
+    overshoot_um: tuple[float, float] = (0.0, 50.0)
 
     def __post_init__(self) -> None:
         check_design(self)
@@ -178,6 +184,14 @@ def check_design(d: Design) -> None:
     _positive(d.force_zero_n, "[plan] force_zero_n", allow_zero=True)
     if d.depth_std_um is not None:
         _positive(d.depth_std_um, "[plan] depth_std_um", allow_zero=True)
+    try:
+        lo_o, hi_o = (float(v) for v in d.overshoot_um)
+    except (TypeError, ValueError):
+        raise InputError(f"[plan] overshoot_um must be two numbers [low, high], um, got "
+                         f"{d.overshoot_um!r}") from None
+    if not (math.isfinite(lo_o) and math.isfinite(hi_o) and 0 <= lo_o <= hi_o):
+        raise InputError(f"[plan] overshoot_um must be [low, high] with 0 <= low <= high, got "
+                         f"{d.overshoot_um!r}")
     if d.beta_table not in ("fem", "paper"):
         raise InputError(f"[plan] beta_table must be 'fem' or 'paper', got {d.beta_table!r}")
 
@@ -226,7 +240,7 @@ def read_design(path: str | Path) -> Design:
     if not isinstance(plan, dict):
         raise InputError(f"{path}: [plan] must be a table")
     known = {"repeats", "E_mpa", "nu", "frame_rate_hz", "stage_speed_mm_s", "force_noise_n",
-             "force_zero_n", "hold_s", "depth_std_um", "beta_table"}
+             "force_zero_n", "hold_s", "depth_std_um", "beta_table", "overshoot_um"}
     unknown = sorted(set(plan) - known)
     if unknown:
         raise InputError(f"{path}: [plan] {unknown[0]} is not a design key (known: "
@@ -238,6 +252,8 @@ def read_design(path: str | Path) -> Design:
     sensor = doc.get("sensor", {})
     force = doc.get("force_sensor", {})
     kw: dict[str, Any] = dict(plan)
+    if "overshoot_um" in kw and isinstance(kw["overshoot_um"], list):
+        kw["overshoot_um"] = tuple(kw["overshoot_um"])
     try:
         return Design(thickness_mm=need("sensor", "gel_thickness_mm"),
                       radius_mm=need("indenter", "radius_mm"),
@@ -304,9 +320,9 @@ class PlanPrediction:
     notes: list[str] = field(default_factory=list)
 
     def as_dict(self) -> dict[str, Any]:
-        """JSON-ready dict (the ``plan --json`` output)."""
+        """JSON-ready dict (the ``plan --json`` output; NaN written as None)."""
         d = self.design
-        return {
+        return _no_nan({
             "design": {k: (list(v) if isinstance(v, tuple) else v)
                        for k, v in d.__dict__.items()} | {"a_over_h": d.a_over_h},
             "n_presses": self.n_presses,
@@ -316,23 +332,45 @@ class PlanPrediction:
             "nu_sigma": self.nu_sigma, "E_nu_corr": self.E_nu_corr,
             "bias": {k: {"E_pct": v[0], "nu": v[1]} for k, v in self.bias.items()},
             "nu_identified": self.nu_identified, "notes": list(self.notes),
-        }
+        })
+
+
+def _no_nan(obj: Any) -> Any:
+    """`obj` with every non-finite float replaced by None (JSON has no NaN)."""
+    if isinstance(obj, dict):
+        return {k: _no_nan(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [_no_nan(v) for v in obj]
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    return obj
 
 
 def depth_uncertainty(d: Design) -> tuple[float, float, str]:
     """Random sd and shared bound of a press's certified depth, um, and how.
 
-    A vernier (``bevel_angle_deg > 0``) is read on the band's half-width L, w =
-    w0 + L tan(theta) (formats.md §1): ``sd = VERNIER_EDGE_PX x mm_per_px x
-    tan(theta)``. A mark is seen at the first frame past it: the depth past w0 is off
-    by up to one frame's travel ``v / f``, uniformly (sd ``v / (f sqrt 12)``), and
-    the clock that dates the crossing can share up to that much in every press (the
-    bound given as ``depth_shared_um``). ``depth_std_um`` overrides the random part.
+    A vernier (``bevel_angle_deg > 0``) reads the band's half-width L, w = w0 + L
+    tan(theta) (formats.md §1), to ``VERNIER_EDGE_PX`` px: ``sd_read = VERNIER_EDGE_PX
+    x mm_per_px x tan(theta)``. A band is read only once L reaches ``RESOLVED_PX``
+    (10 px), an overshoot of ``o_r = RESOLVED_PX x mm_per_px x tan(theta)``; below it the
+    depth is only bounded to [w0, w0 + o_r] (sd ``o_r / sqrt 12``, the uniform bound's).
+    With the overshoot uniform over ``overshoot_um``, a share f of presses is read and
+    the sd per press is ``sqrt(f sd_read^2 + (1 - f) o_r^2 / 12)``. A mark is seen at the
+    first frame past it: the depth past w0 is off by up to one frame's travel ``v / f``,
+    uniformly (sd ``v / (f sqrt 12)``), and the clock that dates the crossing can share
+    up to that much in every press (the bound given as ``depth_shared_um``).
+    ``depth_std_um`` overrides the random part.
     """
     if d.bevel_angle_deg > 0:
-        sd = VERNIER_EDGE_PX * d.mm_per_px * math.tan(math.radians(d.bevel_angle_deg)) * 1e3
-        shared, how = 0.0, (f"vernier at {d.bevel_angle_deg:g} deg: {VERNIER_EDGE_PX:g} px "
-                            f"x {d.mm_per_px:g} mm/px x tan(theta)")
+        t = math.tan(math.radians(d.bevel_angle_deg)) * d.mm_per_px * 1e3   # um per px
+        read_sd, o_r = VERNIER_EDGE_PX * t, RESOLVED_PX * t
+        lo, hi = (float(v) for v in d.overshoot_um)
+        f = 1.0 if o_r <= lo else (0.0 if o_r >= hi else (hi - o_r) / (hi - lo))
+        sd = math.sqrt(f * read_sd**2 + (1 - f) * o_r**2 / 12)
+        shared, how = 0.0, (f"vernier at {d.bevel_angle_deg:g} deg: {100 * f:.0f} % of presses "
+                            f"read ({VERNIER_EDGE_PX:g} px x {d.mm_per_px:g} mm/px x "
+                            f"tan(theta) = {read_sd:.2f} um), the rest bounded to "
+                            f"{o_r:.1f} um past w0")
     else:
         travel = d.stage_speed_mm_s / d.frame_rate_hz * 1e3
         sd, shared = travel / math.sqrt(12.0), travel
