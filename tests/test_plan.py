@@ -12,7 +12,13 @@ import pytest
 import tactilevision
 from tactilevision import InputError
 from tactilevision.cli import main
-from tactilevision.mechanics import Design, fit_indentation, plan, read_design
+from tactilevision.mechanics import (
+    Design,
+    design_from_calibration,
+    fit_indentation,
+    plan,
+    read_design,
+)
 from tactilevision.mechanics._plan import depth_uncertainty
 from tactilevision.sim._tables import _fem_force
 
@@ -145,6 +151,11 @@ def test_unparsable_design_is_named(tmp_path, capsys):
     path.write_text("[sensor\n")
     assert main(["plan", str(path)]) == 2
     assert "broken.toml" in capsys.readouterr().err
+    path.write_text("gauge_block = 3\n")
+    assert main(["plan", str(path)]) == 2
+    assert "[gauge_block] must be a table" in capsys.readouterr().err
+    assert main(["plan", str(tmp_path / "absent.toml")]) == 2
+    assert "does not exist" in capsys.readouterr().err
 
 
 def test_cli_prints_and_writes_json(tmp_path, capsys):
@@ -159,3 +170,45 @@ def test_cli_prints_and_writes_json(tmp_path, capsys):
     assert got["nu_sigma"] == pytest.approx(p.nu_sigma)
     assert got["design"]["depths_mm"] == [0.15, 0.30, 0.45]
     assert set(got["bias"]) >= {"model", "noise"}
+
+
+def test_design_from_a_calibration_folder_round_trips(tmp_path, capsys):
+    """The design of a session calibrate ran: w0 = depth - overshoot, repeats, the
+    overshoot range, the F/T sample sd, the zero's drift, and the session's scale, bevel,
+    window and frame rate; written as a design file it reads back the same."""
+    session = tmp_path / "session"
+    session.mkdir()
+    (session / "session.toml").write_text(
+        "[sensor]\nmm_per_px = 0.05\ngel_thickness_mm = 3.0\n[indenter]\nradius_mm = 3.6\n"
+        "[gauge_block]\ndepths_mm = [0.15, 0.3, 0.45]\nbevel_angle_deg = 4.0\n"
+        "[force_sensor]\nrate_hz = 500\nwindow_samples = 100\n")
+    (session / "frames.csv").write_text("frame,t_s\n" + "".join(
+        f"f{i:03d}.png,{i / 20:.4f}\n" for i in range(40)))
+    cal = tmp_path / "cal"
+    cal.mkdir()
+    (cal / "fit.json").write_text(json.dumps({
+        "E_mpa": 0.25, "nu": 0.46, "thickness_mm": 3.0, "radius_mm": 3.6,
+        "ft_zero": {"drift_n": -0.001, "drift_se_n": 0.0005}, "session": str(session)}))
+    rng = np.random.default_rng(0)
+    rows = ["depth_mm,overshoot_mm,force_n,force_std_n"]
+    for w0 in (0.15, 0.30, 0.45):
+        for _ in range(4):
+            o = rng.uniform(0.010, 0.040)
+            rows.append(f"{w0 + o:.6f},{o:.6f},1.0,{rng.uniform(0.009, 0.011):.5f}")
+    (cal / "measurements.csv").write_text("\n".join(rows) + "\n")
+    d = design_from_calibration(cal)
+    assert d.depths_mm == (0.15, 0.3, 0.45) and d.repeats == 4
+    assert (d.E_mpa, d.nu, d.radius_mm) == (0.25, 0.46, 3.6)
+    assert 10.0 <= d.overshoot_um[0] < d.overshoot_um[1] <= 40.0
+    assert 0.009 <= d.force_noise_n <= 0.011
+    assert d.force_zero_n == pytest.approx(0.002)
+    assert (d.mm_per_px, d.bevel_angle_deg, d.rate_hz, d.window_samples) == (0.05, 4.0, 500,
+                                                                               100)
+    assert d.frame_rate_hz == pytest.approx(20.0)
+    out = tmp_path / "next.toml"
+    assert main(["plan", "--from-calibration", str(cal), "--write-design", str(out)]) == 0
+    assert read_design(out) == d
+    assert "E: sd" in capsys.readouterr().out
+    assert main(["plan", "--from-calibration", str(tmp_path)]) == 2
+    assert "fit.json" in capsys.readouterr().err
+    assert main(["plan"]) == 2

@@ -6,7 +6,8 @@ import argparse
 import math
 from pathlib import Path
 
-from ..mechanics import plan_session, read_design
+from .. import InputError
+from ..mechanics import design_from_calibration, design_toml, plan_session, read_design
 from ._fit import _write_json
 
 __all__ = ["add_parser", "run"]
@@ -27,7 +28,17 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("plan", help="predict what a calibration session's design will measure",
                        description=_DESCRIPTION,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("design", metavar="DESIGN.toml", type=Path)
+    p.add_argument("design", metavar="DESIGN.toml", type=Path, nargs="?",
+                   help="the design file (or --from-calibration)")
+    p.add_argument("--from-calibration", metavar="DIR", type=Path,
+                   help="plan from the session a 'calibrate' folder ran: its h, a, depths, "
+                        "repeats, fitted E and nu, overshoots, F/T noise and zero drift (and "
+                        "the session folder's scale, bevel, window and frame rate)")
+    p.add_argument("--session", metavar="DIR", type=Path,
+                   help="with --from-calibration: the session folder (default: the one "
+                        "fit.json names)")
+    p.add_argument("--write-design", metavar="FILE", type=Path,
+                   help="also write the design as a design file (to edit and plan again)")
     p.add_argument("--json", metavar="FILE", help="write the prediction as JSON ('-': stdout)")
     p.set_defaults(func=run)
 
@@ -65,7 +76,19 @@ def summary(pred) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """Run ``plan``; returns 0 (2 through InputError on a bad design)."""
-    pred = plan_session(read_design(args.design))
+    if (args.design is None) == (args.from_calibration is None):
+        raise InputError("give a design file or --from-calibration DIR (one of them)")
+    if args.session is not None and args.from_calibration is None:
+        raise InputError("--session goes with --from-calibration")
+    design = (read_design(args.design) if args.design is not None
+              else design_from_calibration(args.from_calibration, args.session))
+    if args.write_design is not None:
+        try:
+            args.write_design.write_text(design_toml(design), encoding="utf-8")
+        except OSError as exc:
+            raise InputError(f"cannot write the design to {args.write_design}: "
+                             f"{exc.strerror}") from None
+    pred = plan_session(design)
     if args.json == "-":
         _write_json(pred.as_dict(), "-")
         return 0

@@ -61,7 +61,15 @@ from ._fit_model import fit_model
 from ._kappa import HAYES_1972, KappaTable, kappa
 from ._model import IndentationModel, ModelFit
 from ._neohookean import neo_hookean_constants
-from ._plan import Design, PlanPrediction, plan, plan_session, read_design
+from ._plan import (
+    Design,
+    PlanPrediction,
+    design_from_calibration,
+    design_toml,
+    plan,
+    plan_session,
+    read_design,
+)
 from ._relaxation import (
     RelaxationFit,
     elastic_force,
@@ -102,6 +110,8 @@ __all__ = [
     "check_fit_effects",
     "covariate_tests",
     "cross_validated_rmse",
+    "design_from_calibration",
+    "design_toml",
     "diagnose",
     "effect_names",
     "elastic_force",

@@ -35,8 +35,8 @@ from ..contact._vernier import RESOLVED_PX
 from ._fem_tables import kappa_n
 from ._fit import MAX_W_OVER_H, fit_indentation
 
-__all__ = ["VERNIER_EDGE_PX", "Design", "PlanPrediction", "plan", "plan_session",
-           "read_design"]
+__all__ = ["VERNIER_EDGE_PX", "Design", "PlanPrediction", "design_from_calibration",
+           "design_toml", "plan", "plan_session", "read_design"]
 
 #: The sd of a vernier band's half-width read, px: the sample session's certified depths
 #: (``measurements.csv`` of ``tactilevision calibrate sample_frames/gelsight_session``,
@@ -236,9 +236,10 @@ def read_design(path: str | Path) -> Design:
         except (KeyError, TypeError):
             raise InputError(f"{path}: [{table}] {key} is missing") from None
 
+    for table in ("sensor", "indenter", "gauge_block", "force_sensor", "plan"):
+        if not isinstance(doc.get(table, {}), dict):
+            raise InputError(f"{path}: [{table}] must be a table")
     plan = doc.get("plan", {})
-    if not isinstance(plan, dict):
-        raise InputError(f"{path}: [plan] must be a table")
     known = {"repeats", "E_mpa", "nu", "frame_rate_hz", "stage_speed_mm_s", "force_noise_n",
              "force_zero_n", "hold_s", "depth_std_um", "beta_table", "overshoot_um"}
     unknown = sorted(set(plan) - known)
@@ -556,3 +557,122 @@ def plan(design: Design | str | Path) -> PlanPrediction:
     1.81
     """
     return plan_session(design if isinstance(design, Design) else read_design(design))
+
+
+def design_toml(d: Design) -> str:
+    """The design as a design file (``session.toml`` tables plus ``[plan]``), for
+    :func:`read_design`."""
+    def val(v: Any) -> str:
+        if isinstance(v, tuple | list):
+            return "[" + ", ".join(val(x) for x in v) + "]"
+        if isinstance(v, str):
+            return f'"{v}"'
+        return repr(float(v)) if isinstance(v, float) else str(v)
+
+    plan_keys = ["repeats", "E_mpa", "nu", "frame_rate_hz", "stage_speed_mm_s",
+                 "force_noise_n", "force_zero_n", "hold_s", "depth_std_um", "beta_table",
+                 "overshoot_um"]
+    lines = ["[sensor]", f"gel_thickness_mm = {val(d.thickness_mm)}",
+             f"mm_per_px = {val(d.mm_per_px)}", "", "[indenter]",
+             f"radius_mm = {val(d.radius_mm)}", "", "[gauge_block]",
+             f"depths_mm = {val(tuple(d.depths_mm))}",
+             f"bevel_angle_deg = {val(d.bevel_angle_deg)}", "", "[force_sensor]",
+             f"rate_hz = {val(d.rate_hz)}", f"window_samples = {int(d.window_samples)}", "",
+             "[plan]"]
+    for k in plan_keys:
+        v = getattr(d, k)
+        if v is not None:
+            lines.append(f"{k} = {val(v)}")
+    return "\n".join(lines) + "\n"
+
+
+def design_from_calibration(folder: str | Path, session: str | Path | None = None
+                            ) -> Design:
+    """The design of a session that ``calibrate`` has run, to plan the next one from.
+
+    Parameters
+    ----------
+    folder : str or Path
+        The calibration folder (``fit.json``, ``measurements.csv``).
+    session : str or Path, optional
+        The session folder it calibrated (its ``session.toml`` gives the image scale,
+        the bevel, the F/T window and its ``frames.csv`` the frame rate). Default: the
+        one ``fit.json`` names, where it exists.
+
+    Returns
+    -------
+    design : Design
+        h and a, E and nu as fitted; the gauge block's depths w0 (each press's depth
+        less its overshoot); the repeats per depth (presses over depths, rounded); the
+        overshoot range the presses had, um; the F/T sample sd (median of
+        ``force_std_n``); the zero's stability (the drift ``calibrate`` measured plus two
+        of its standard errors). What the folders do not hold keeps :class:`Design`'s
+        default.
+
+    Raises
+    ------
+    InputError
+        A folder without ``fit.json`` or ``measurements.csv``, or a fit without E and nu.
+    """
+    import csv
+    import json
+
+    folder = Path(folder)
+    try:
+        fit = json.loads((folder / "fit.json").read_text())
+        with open(folder / "measurements.csv", newline="") as fh:
+            rows = list(csv.DictReader(fh))
+    except FileNotFoundError as exc:
+        raise InputError(f"{folder} is not a calibration folder: {exc.filename} is "
+                         "missing") from None
+    except (OSError, ValueError) as exc:
+        raise InputError(f"{folder}: cannot read the calibration ({exc})") from None
+    E, nu = fit.get("E_mpa"), fit.get("nu")
+    if not (isinstance(E, int | float) and isinstance(nu, int | float)
+            and math.isfinite(E) and math.isfinite(nu)):
+        raise InputError(f"{folder}/fit.json has no E and nu to plan from")
+
+    def col(name: str) -> np.ndarray:
+        return np.array([float(r[name]) if r.get(name) not in (None, "") else np.nan
+                         for r in rows])
+
+    depth, over = col("depth_mm"), col("overshoot_mm")
+    w0 = np.round(np.where(np.isfinite(over), depth - over, depth), 4)
+    depths = tuple(float(v) for v in np.unique(w0[np.isfinite(w0)]))
+    kw: dict[str, Any] = dict(
+        thickness_mm=float(fit["thickness_mm"]), radius_mm=float(fit["radius_mm"]),
+        depths_mm=depths, repeats=max(1, round(len(rows) / max(len(depths), 1))),
+        E_mpa=float(E), nu=min(float(nu), 0.5))
+    if np.isfinite(over).any():
+        kw["overshoot_um"] = (max(0.0, float(np.nanmin(over)) * 1e3),
+                              max(0.0, float(np.nanmax(over)) * 1e3))
+    f_sd = col("force_std_n") if rows and "force_std_n" in rows[0] else np.array([])
+    if np.isfinite(f_sd).any():
+        kw["force_noise_n"] = float(np.nanmedian(f_sd))
+    zero = fit.get("ft_zero")
+    if isinstance(zero, dict) and isinstance(zero.get("drift_n"), int | float):
+        kw["force_zero_n"] = abs(float(zero["drift_n"])) + 2 * float(zero.get("drift_se_n")
+                                                                      or 0.0)
+    where = Path(session) if session is not None else (
+        Path(fit["session"]) if isinstance(fit.get("session"), str) else None)
+    if where is not None and (where / "session.toml").is_file():
+        try:
+            doc = tomllib.loads((where / "session.toml").read_text())
+        except (OSError, tomllib.TOMLDecodeError) as exc:
+            raise InputError(f"{where / 'session.toml'}: {exc}") from None
+        sensor, gauge = doc.get("sensor", {}), doc.get("gauge_block", {})
+        force = doc.get("force_sensor", {})
+        for key, table, name in (("mm_per_px", sensor, "mm_per_px"),
+                                 ("bevel_angle_deg", gauge, "bevel_angle_deg"),
+                                 ("rate_hz", force, "rate_hz"),
+                                 ("window_samples", force, "window_samples")):
+            if isinstance(table, dict) and isinstance(table.get(name), int | float):
+                kw[key] = table[name]
+        frames = where / "frames.csv"
+        if frames.is_file():
+            with open(frames, newline="") as fh:
+                t = np.array([float(r["t_s"]) for r in csv.DictReader(fh) if r.get("t_s")])
+            dt = np.diff(np.sort(t))
+            if dt.size and np.median(dt) > 0:
+                kw["frame_rate_hz"] = float(1.0 / np.median(dt))
+    return Design(**kw)
