@@ -212,3 +212,10 @@ def test_design_from_a_calibration_folder_round_trips(tmp_path, capsys):
     assert main(["plan", "--from-calibration", str(tmp_path)]) == 2
     assert "fit.json" in capsys.readouterr().err
     assert main(["plan"]) == 2
+
+
+def test_the_vernier_threshold_is_the_contact_packages():
+    from tactilevision.contact._vernier import RESOLVED_PX as contact_px
+    from tactilevision.mechanics._plan import RESOLVED_PX as plan_px
+
+    assert plan_px == contact_px

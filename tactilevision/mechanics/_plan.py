@@ -21,6 +21,8 @@ fit over generated sessions of each design in a grid.
 
 from __future__ import annotations
 
+import csv
+import json
 import math
 import tomllib
 import warnings
@@ -31,7 +33,6 @@ from typing import Any
 import numpy as np
 
 from .._checks import InputError
-from ..contact._vernier import RESOLVED_PX
 from ._fem_tables import kappa_n
 from ._fit import MAX_W_OVER_H, fit_indentation
 
@@ -45,6 +46,11 @@ __all__ = ["VERNIER_EDGE_PX", "Design", "PlanPrediction", "design_from_calibrati
 #: 1.8e-3 / (tan 5 deg x 0.0295) = 0.70 px. One session's figure, on frames this
 #: project drew.
 VERNIER_EDGE_PX = 0.70
+
+#: The band half-width, px, below which a vernier's band is only bounded, not read: the
+#: contact package's ``RESOLVED_PX`` (mechanics does not import contact; a test keeps the
+#: two equal).
+RESOLVED_PX = 10.0
 
 #: nu's physical range as this project's beta tables hold it: a sigma of nu beyond a
 #: quarter of it leaves nu "not identified".
@@ -88,7 +94,7 @@ class Design:
     beta_table : {'fem', 'paper'}
     overshoot_um : (float, float)
         How far past w0 the stage stops, um, uniform over this range (the vernier reads
-        a band only past :data:`~tactilevision.contact.RESOLVED_PX` of half-width).
+        a band only past :data:`RESOLVED_PX` of half-width).
     """
 
     thickness_mm: float
@@ -404,6 +410,76 @@ def _fit(d: Design, w: np.ndarray, P: np.ndarray, u_mm: np.ndarray | None) -> np
 QUADRATURE_NODES = 9
 
 
+def _line_covariance(d: Design, w: np.ndarray, P: np.ndarray, u: np.ndarray | None,
+                     s_P: float, s_w: float) -> np.ndarray:
+    """Covariance (2, 2) of the fit's intercept c and slope c beta (linear in the presses'
+    P/w) from independent force noise `s_P` and depth noise `s_w` per press, by central
+    differences of the fit in every press's force and depth."""
+    n = w.size
+    J_P = np.empty((2, n))
+    J_w = np.empty((2, n))
+    for i in range(n):
+        for J, arr, step in ((J_P, P, 1e-4 * P[i]), (J_w, w, 1e-4 * w[i])):
+            hi, lo = arr.copy(), arr.copy()
+            hi[i] += step
+            lo[i] -= step
+            args_hi = (w, hi) if arr is P else (hi, P)
+            args_lo = (w, lo) if arr is P else (lo, P)
+            J[:, i] = (_fit(d, *args_hi, u)[2:] - _fit(d, *args_lo, u)[2:]) / (2 * step)
+    return s_P**2 * J_P @ J_P.T + s_w**2 * J_w @ J_w.T
+
+
+def _quadrature(d: Design, w: np.ndarray, P: np.ndarray, u: np.ndarray | None,
+                cov_cs: np.ndarray) -> tuple[np.ndarray, float, float, float, float]:
+    """Mean (E, nu), sd of E and nu, their correlation and the weight of the spread where
+    the fit gives none, over the Gaussian of (c, c beta) with covariance `cov_cs`.
+
+    E and nu are not linear in (c, c beta): nu(beta) bends and the table clips it. Gauss-
+    Hermite quadrature, each node fitted as a table whose P/w is moved by that node's
+    line (which moves the fit's line by exactly as much, its residuals unchanged)."""
+    x = w / d.thickness_mm
+    t, wt = np.polynomial.hermite_e.hermegauss(QUADRATURE_NODES)     # probabilists'
+    wt = wt / wt.sum()
+    L = np.linalg.cholesky(cov_cs + 1e-30 * np.eye(2))
+    vals, weights = [], []
+    for i, ti in enumerate(t):
+        for j, tj in enumerate(t):
+            dc, ds = L @ np.array([ti, tj])
+            vals.append(_fit(d, w, P + w * (dc + ds * x), u)[:2])
+            weights.append(wt[i] * wt[j])
+    vals, weights = np.array(vals), np.array(weights)
+    ok = np.isfinite(vals).all(axis=1)
+    out_of_table = float(weights[~ok].sum())
+    if not ok.any():
+        nan = math.nan
+        return np.full(2, nan), nan, nan, nan, 1.0
+    wk = weights[ok] / weights[ok].sum()
+    mean = wk @ vals[ok]
+    dev = vals[ok] - mean
+    cov = (dev * wk[:, None]).T @ dev
+    sE, snu = (float(math.sqrt(max(v, 0.0))) for v in np.diag(cov))
+    corr = float(cov[0, 1] / (sE * snu)) if sE > 0 and snu > 0 else 0.0
+    return mean, sE, snu, corr, out_of_table
+
+
+def _biases(d: Design, w: np.ndarray, P: np.ndarray, u: np.ndarray | None,
+            base: np.ndarray, mean: np.ndarray, shared_um: float
+            ) -> dict[str, tuple[float, float]]:
+    """(E error %, nu error) of the noise-free fit, of the mean over sessions, and of each
+    shared error at its bound, either way (:attr:`PlanPrediction.bias`)."""
+    def err(est: np.ndarray) -> tuple[float, float]:
+        return (float(100 * (est[0] / d.E_mpa - 1)), float(est[1] - d.nu))
+
+    bias = {"model": err(base[:2]), "noise": err(mean)}
+    if shared_um > 0:
+        bias["depth_shared"] = err(_fit(d, w + shared_um * 1e-3, P, u)[:2])
+        bias["depth_shared_minus"] = err(_fit(d, w - shared_um * 1e-3, P, u)[:2])
+    if d.force_zero_n > 0:
+        bias["force_zero"] = err(_fit(d, w, P + d.force_zero_n, u)[:2])
+        bias["force_zero_minus"] = err(_fit(d, w, P - d.force_zero_n, u)[:2])
+    return bias
+
+
 def plan_session(design: Design) -> PlanPrediction:
     """Predict what a calibration session of this design will measure.
 
@@ -418,15 +494,16 @@ def plan_session(design: Design) -> PlanPrediction:
     Notes
     -----
     The fit is :func:`fit_indentation` on each press's (w, P), with each press's
-    depth sd given (errors in both variables), as ``calibrate`` fits. Its outputs
-    (E, nu) are differentiated by central differences in every press's force (step
-    1e-4 P) and depth (step 1e-4 w) on the design's noise-free table
-    (:func:`design_table`); with independent force noise s_P (the F/T sample sd over
-    sqrt(window)) and depth noise s_w per press, ``Cov = J_P s_P^2 J_P^T + J_w s_w^2
-    J_w^T``. That is the first-order (delta-method) sd: where the noise is large
-    against the curvature of nu(beta) near the ends of the table it overstates the
-    scatter of a fit that the table clips. The shared errors are fitted at their
-    bounds: every depth + the shared depth bound, every force + the zero bound.
+    depth sd given (errors in both variables), as ``calibrate`` fits. Its intercept c
+    and slope c beta are linear in the presses' P/w: their covariance is propagated
+    from independent force noise s_P (the F/T sample sd over sqrt(window)) and depth
+    noise s_w per press through central differences of the fit in every press's force
+    (step 1e-4 P) and depth (step 1e-4 w) on the design's noise-free table
+    (:func:`design_table`). E and nu are not linear in (c, c beta), and the beta table
+    clips nu: their mean, sds and correlation are integrated over that Gaussian by
+    Gauss-Hermite quadrature (:data:`QUADRATURE_NODES` per axis), each node a fit of
+    the table moved by the node's line. The shared errors are fitted at their bounds,
+    either way.
 
     Where the fit refuses the design's noise-free table (a/h outside the kappa table,
     or a bonded punch at an a/h where beta does not increase with nu), the sds are NaN,
@@ -452,64 +529,19 @@ def plan_session(design: Design) -> PlanPrediction:
         return PlanPrediction(d, w.size, sd_um, shared_um, how, s_P, nan, nan, nan, nan, {},
                               False, [f"nu is not identified by this design: {why}"])
     n = w.size
-    # the fit's intercept c and slope c beta are linear in the presses' P/w: their
-    # covariance by central differences in every press's force and depth
-    J_P = np.empty((2, n))
-    J_w = np.empty((2, n))
-    for i in range(n):
-        for J, arr, step in ((J_P, P, 1e-4 * P[i]), (J_w, w, 1e-4 * w[i])):
-            hi, lo = arr.copy(), arr.copy()
-            hi[i] += step
-            lo[i] -= step
-            args_hi = (w, hi) if arr is P else (hi, P)
-            args_lo = (w, lo) if arr is P else (lo, P)
-            J[:, i] = (_fit(d, *args_hi, u)[2:] - _fit(d, *args_lo, u)[2:]) / (2 * step)
-    cov_cs = s_P**2 * J_P @ J_P.T + s_w**2 * J_w @ J_w.T
-    # E and nu are not linear in (c, c beta): nu(beta) bends and the table clips it.
-    # Their moments by Gauss-Hermite quadrature over the Gaussian of (c, c beta), each
-    # node fitted as a table whose P/w is moved by that node's line (which moves the
-    # fit's line by exactly as much, its residuals unchanged)
-    x = w / d.thickness_mm
-    t, wt = np.polynomial.hermite_e.hermegauss(QUADRATURE_NODES)     # probabilists'
-    wt = wt / wt.sum()
-    L = np.linalg.cholesky(cov_cs + 1e-30 * np.eye(2))
-    vals, weights = [], []
-    for i, ti in enumerate(t):
-        for j, tj in enumerate(t):
-            dc, ds = L @ np.array([ti, tj])
-            vals.append(_fit(d, w, P + w * (dc + ds * x), u)[:2])
-            weights.append(wt[i] * wt[j])
-    vals, weights = np.array(vals), np.array(weights)
-    ok = np.isfinite(vals).all(axis=1)
-    out_of_table = float(weights[~ok].sum())
-    if not ok.any():
+    cov_cs = _line_covariance(d, w, P, u, s_P, s_w)
+    mean, sE, snu, corr, out_of_table = _quadrature(d, w, P, u, cov_cs)
+    if not np.isfinite(mean).all():
         nan = math.nan
         return PlanPrediction(d, n, sd_um, shared_um, how, s_P, nan, nan, nan, nan, {}, False,
                               ["nu is not identified by this design: beta falls outside the "
                                "FEM beta table over the whole predicted spread"])
-    wk = weights[ok] / weights[ok].sum()
-    mean = wk @ vals[ok]
-    dev = vals[ok] - mean
-    cov = (dev * wk[:, None]).T @ dev
-    sE, snu = (float(math.sqrt(max(v, 0.0))) for v in np.diag(cov))
-    corr = float(cov[0, 1] / (sE * snu)) if sE > 0 and snu > 0 else 0.0
     if out_of_table > 0.01:
         notes.append(f"beta falls outside the beta table in {100 * out_of_table:.0f} % of "
                      "sessions of this design (E and nu not computed there); the sds are "
                      "over the others")
 
-    def err(est: np.ndarray) -> tuple[float, float]:
-        return (float(100 * (est[0] / d.E_mpa - 1)), float(est[1] - d.nu))
-
-    bias_mean = err(mean)
-
-    bias = {"model": err(base[:2]), "noise": bias_mean}
-    if shared_um > 0:
-        bias["depth_shared"] = err(_fit(d, w + shared_um * 1e-3, P, u)[:2])
-        bias["depth_shared_minus"] = err(_fit(d, w - shared_um * 1e-3, P, u)[:2])
-    if d.force_zero_n > 0:
-        bias["force_zero"] = err(_fit(d, w, P + d.force_zero_n, u)[:2])
-        bias["force_zero_minus"] = err(_fit(d, w, P - d.force_zero_n, u)[:2])
+    bias = _biases(d, w, P, u, base, mean, shared_um)
     beyond = [k for k, v in bias.items() if not np.isfinite(v).all()]
     if beyond:
         notes.append(f"{', '.join(beyond)}: the fit finds no E or nu there (beta beyond the "
@@ -552,7 +584,8 @@ def plan(design: Design | str | Path) -> PlanPrediction:
     --------
     >>> from tactilevision.mechanics import Design
     >>> p = plan(Design(thickness_mm=3.0, radius_mm=2.5,
-    ...                 depths_mm=(0.15, 0.3, 0.4, 0.5, 0.6), bevel_angle_deg=5.0))
+    ...                 depths_mm=(0.15, 0.3, 0.4, 0.5, 0.6), bevel_angle_deg=5.0,
+    ...                 overshoot_um=(30.0, 60.0)))
     >>> round(p.depth_std_um, 2)
     1.81
     """
@@ -614,9 +647,6 @@ def design_from_calibration(folder: str | Path, session: str | Path | None = Non
     InputError
         A folder without ``fit.json`` or ``measurements.csv``, or a fit without E and nu.
     """
-    import csv
-    import json
-
     folder = Path(folder)
     try:
         fit = json.loads((folder / "fit.json").read_text())
