@@ -6,12 +6,15 @@ does not hold yet: the expected E and nu, the repeats per depth, the camera's fr
 and the stage's speed at the bevel (for a mark), the F/T noise and zero stability, and
 the hold length. :func:`plan_session` predicts, without drawing a single session:
 
-- each press's depth uncertainty, random and shared, from the bevel (a vernier read to
-  :data:`VERNIER_EDGE_PX` on each edge of its band) or the mark (one frame's travel);
+- each press's depth uncertainty, random and shared, from the bevel (a vernier's band
+  half-width read to :data:`VERNIER_EDGE_PX` once it reaches :data:`RESOLVED_PX`, only
+  bounded before) or the mark (one frame's travel);
 - the standard deviations of E and nu that :func:`fit_indentation` will give over
-  repeated sessions of this design, by propagating every press's force and depth noise
-  through the fit itself (its derivatives taken on the design's noise-free table, the
-  finite-strain FEM's forces), and the biases that the shared errors leave;
+  repeated sessions of this design: every press's force and depth noise propagated
+  through the fit itself to eq. (5)'s line (its derivatives taken on the design's
+  noise-free table, the finite-strain FEM's forces), then E and nu integrated over that
+  line's spread by Gauss-Hermite quadrature; and the biases that the shared errors
+  leave;
 - whether nu is identified at all (a/h where the beta table cannot tell nu, or a
   sigma of nu as wide as the physical range).
 
