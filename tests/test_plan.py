@@ -219,3 +219,28 @@ def test_the_vernier_threshold_is_the_contact_packages():
     from tactilevision.mechanics._plan import RESOLVED_PX as plan_px
 
     assert plan_px == contact_px
+
+
+def test_effects_a_design_cannot_test_are_named_with_why():
+    """Constant holds with the window at the hold's start, one day, one rest length: the
+    effects along hold_s, day and wait_s cannot show (diagnose's own column test); holds
+    of three lengths with the window at the hold's end, three days, varied rests and
+    several positions leave none untested."""
+    base = dict(thickness_mm=3.0, radius_mm=4.5, depths_mm=PAPER_DEPTHS,
+                bevel_angle_deg=5.0, overshoot_um=(30.0, 60.0))
+    p = plan(Design(**base, positions=1))
+    assert set(p.untestable) == {"viscoelastic_relaxation", "incomplete_recovery", "aging",
+                                 "spatial_nonuniformity"}
+    assert "window_at = 'end'" in p.untestable["viscoelastic_relaxation"]
+    assert "day is constant" in p.untestable["aging"]
+    varied = plan(Design(**base, holds_s=(0.5, 1.0, 2.0), window_at="end", days=3,
+                         waits_s=(1.0, 5.0, 20.0), positions=12))
+    assert varied.untestable == {}
+    # the holds only help where the window moves with them
+    start = plan(Design(**base, holds_s=(0.5, 1.0, 2.0), window_at="start", days=3,
+                        waits_s=(1.0, 5.0), positions=12))
+    assert set(start.untestable) == {"viscoelastic_relaxation"}
+    with pytest.raises(InputError, match="holds_s"):
+        Design(**base, holds_s=(0.1, 1.0))          # shorter than the 0.2 s window
+    with pytest.raises(InputError, match="window_at"):
+        Design(**base, window_at="middle")

@@ -70,6 +70,8 @@ def summary(pred) -> str:
         else:
             lines.append(f"bias from {what}: no E or nu (beta beyond the beta table)")
     lines.append("nu identified" if pred.nu_identified else "nu NOT identified")
+    for name, why in pred.untestable.items():
+        lines.append(f"diagnose cannot test {name}: {why}")
     lines += [f"note: {n}" for n in pred.notes]
     return "\n".join(lines)
 

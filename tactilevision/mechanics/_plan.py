@@ -36,11 +36,14 @@ from typing import Any
 import numpy as np
 
 from .._checks import InputError
+from ._catalogue import EFFECTS, make_effect
+from ._diagnose import _usable, _why
 from ._fem_tables import kappa_n
 from ._fit import MAX_W_OVER_H, fit_indentation
 
 __all__ = ["VERNIER_EDGE_PX", "Design", "PlanPrediction", "design_from_calibration",
-           "design_toml", "plan", "plan_session", "read_design"]
+           "design_toml", "plan", "plan_session", "planned_columns", "read_design",
+           "untestable_effects"]
 
 #: The sd of a vernier band's half-width read, px: the sample session's certified depths
 #: (``measurements.csv`` of ``tactilevision calibrate sample_frames/gelsight_session``,
@@ -98,6 +101,16 @@ class Design:
     overshoot_um : (float, float)
         How far past w0 the stage stops, um, uniform over this range (the vernier reads
         a band only past :data:`RESOLVED_PX` of half-width).
+    holds_s : tuple of float or None
+        The hold lengths the presses cycle through, s (None: ``hold_s`` for every press).
+    window_at : {'start', 'end'}
+        Where the F/T window sits in the hold (formats.md §1 ``[force_sensor]``).
+    waits_s : tuple of float
+        The rests between presses the session cycles through, s.
+    days : int
+        Calendar days (sessions) the presses are spread over.
+    positions : int
+        Distinct press positions on the pad.
     """
 
     thickness_mm: float
@@ -118,6 +131,11 @@ class Design:
     depth_std_um: float | None = None
     beta_table: str = "fem"
     overshoot_um: tuple[float, float] = (0.0, 50.0)
+    holds_s: tuple[float, ...] | None = None
+    window_at: str = "start"
+    waits_s: tuple[float, ...] = (2.0,)
+    days: int = 1
+    positions: int = 10
 
     def __post_init__(self) -> None:
         check_design(self)
@@ -201,6 +219,24 @@ def check_design(d: Design) -> None:
     if not (math.isfinite(lo_o) and math.isfinite(hi_o) and 0 <= lo_o <= hi_o):
         raise InputError(f"[plan] overshoot_um must be [low, high] with 0 <= low <= high, got "
                          f"{d.overshoot_um!r}")
+    if d.window_at not in ("start", "end"):
+        raise InputError(f"[force_sensor] window_at must be 'start' or 'end', got "
+                         f"{d.window_at!r}")
+    for key in ("days", "positions"):
+        v = getattr(d, key)
+        if isinstance(v, bool) or not isinstance(v, int | float) or int(v) != v or v < 1:
+            raise InputError(f"[plan] {key} must be a positive integer, got {v!r}")
+    for key in ("holds_s", "waits_s"):
+        v = getattr(d, key)
+        if v is None:
+            continue
+        if not isinstance(v, tuple | list) or not v:
+            raise InputError(f"[plan] {key} must be a list of seconds, got {v!r}")
+        for x in v:
+            _positive(x, f"[plan] {key}", allow_zero=key == "waits_s")
+        if key == "holds_s" and min(v) < d.window_samples / d.rate_hz:
+            raise InputError(f"[plan] holds_s: a hold of {min(v):g} s is shorter than the "
+                             f"window ({d.window_samples / d.rate_hz:g} s)")
     if d.beta_table not in ("fem", "paper"):
         raise InputError(f"[plan] beta_table must be 'fem' or 'paper', got {d.beta_table!r}")
 
@@ -250,7 +286,8 @@ def read_design(path: str | Path) -> Design:
             raise InputError(f"{path}: [{table}] must be a table")
     plan = doc.get("plan", {})
     known = {"repeats", "E_mpa", "nu", "frame_rate_hz", "stage_speed_mm_s", "force_noise_n",
-             "force_zero_n", "hold_s", "depth_std_um", "beta_table", "overshoot_um"}
+             "force_zero_n", "hold_s", "depth_std_um", "beta_table", "overshoot_um",
+             "holds_s", "waits_s", "days", "positions"}
     unknown = sorted(set(plan) - known)
     if unknown:
         raise InputError(f"{path}: [plan] {unknown[0]} is not a design key (known: "
@@ -262,8 +299,11 @@ def read_design(path: str | Path) -> Design:
     sensor = doc.get("sensor", {})
     force = doc.get("force_sensor", {})
     kw: dict[str, Any] = dict(plan)
-    if "overshoot_um" in kw and isinstance(kw["overshoot_um"], list):
-        kw["overshoot_um"] = tuple(kw["overshoot_um"])
+    for key in ("overshoot_um", "holds_s", "waits_s"):
+        if key in kw and isinstance(kw[key], list):
+            kw[key] = tuple(kw[key])
+    if isinstance(force.get("window_at"), str):
+        kw["window_at"] = force["window_at"]
     try:
         return Design(thickness_mm=need("sensor", "gel_thickness_mm"),
                       radius_mm=need("indenter", "radius_mm"),
@@ -313,6 +353,10 @@ class PlanPrediction:
         quarter of nu's range (0.3 to 0.5).
     notes : list of str
         Why, in words.
+    untestable : dict of str to str
+        The catalogue's effects (formats.md §5) that ``diagnose`` cannot test on a
+        session of this design, and why (the column each needs is constant or missing
+        in the design's table: :func:`planned_columns`).
     """
 
     design: Design
@@ -328,6 +372,7 @@ class PlanPrediction:
     bias: dict[str, tuple[float, float]]
     nu_identified: bool
     notes: list[str] = field(default_factory=list)
+    untestable: dict[str, str] = field(default_factory=dict)
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-ready dict (the ``plan --json`` output; NaN written as None)."""
@@ -342,6 +387,7 @@ class PlanPrediction:
             "nu_sigma": self.nu_sigma, "E_nu_corr": self.E_nu_corr,
             "bias": {k: {"E_pct": v[0], "nu": v[1]} for k, v in self.bias.items()},
             "nu_identified": self.nu_identified, "notes": list(self.notes),
+            "untestable": dict(self.untestable),
         })
 
 
@@ -411,6 +457,60 @@ def _fit(d: Design, w: np.ndarray, P: np.ndarray, u_mm: np.ndarray | None) -> np
 
 #: Gauss-Hermite nodes per axis of the (c, c beta) quadrature.
 QUADRATURE_NODES = 9
+
+
+def planned_columns(d: Design) -> dict[str, np.ndarray]:
+    """The measurements table a session of the design will write, but its forces (formats.md
+    §2 columns): the depths in a cycling order, the holds (``hold_s``: half the window
+    with ``window_at = 'start'``, the hold less half the window with ``'end'``), the
+    rests, the press times, the days and the positions on the pad.
+
+    Returns
+    -------
+    columns : dict of str to (N,) float ndarray
+    """
+    w, _ = design_table(d)
+    n = w.size
+    i = np.arange(n)
+    holds = np.asarray(d.holds_s if d.holds_s is not None else
+                       (d.hold_s if d.hold_s is not None else 1.0,), np.float64)
+    hold = holds[i % holds.size]
+    half = 0.5 * d.window_samples / d.rate_hz
+    waits = np.asarray(d.waits_s, np.float64)[i % len(d.waits_s)]
+    k = np.arange(d.positions)
+    ang = 2.39996 * k                   # a golden-angle spiral over a 5 mm disc
+    px, py = 5.0 * np.sqrt((k + 0.5) / d.positions) * np.cos(ang), 5.0 * np.sqrt(
+        (k + 0.5) / d.positions) * np.sin(ang)
+    return {
+        "press": i.astype(np.float64), "depth_mm": w,
+        "hold_s": np.full(n, half) if d.window_at == "start" else hold - half,
+        "wait_s": waits, "time_s": np.cumsum(waits + hold),
+        "day": np.floor(i * d.days / n), "x_mm": px[i % d.positions],
+        "y_mm": py[i % d.positions], "fx_n": np.cos(i), "fy_n": np.sin(i),
+    }
+
+
+def untestable_effects(d: Design) -> dict[str, str]:
+    """The catalogue's effects ``diagnose`` could not test on a session of the design,
+    and why (its column constant or missing in :func:`planned_columns`; the same test
+    ``diagnose`` makes of a table)."""
+    cols = planned_columns(d)
+    out = {}
+    for name in EFFECTS:
+        if name == "large_deformation":
+            continue
+        if _usable(name, cols) is not None:
+            why = _why(make_effect(name).columns, cols)
+            if name == "viscoelastic_relaxation" and d.window_at == "start":
+                why += ("; with the window at the hold's start every press's window sits "
+                        "at the same time of its hold: vary it with window_at = 'end' and "
+                        "holds of different lengths")
+            elif name == "aging":
+                why += "; spread the presses over several days"
+            elif name == "spatial_nonuniformity":
+                why += "; press at several positions of the pad"
+            out[name] = why
+    return out
 
 
 def _line_covariance(d: Design, w: np.ndarray, P: np.ndarray, u: np.ndarray | None,
@@ -519,6 +619,7 @@ def plan_session(design: Design) -> PlanPrediction:
     s_P = d.force_noise_n / math.sqrt(d.window_samples)
     u = np.full(w.size, s_w) if s_w > 0 else None
     notes: list[str] = []
+    untest = untestable_effects(d)
     try:
         base = _fit(d, w, P, u)
     except InputError as exc:       # the tables cannot fit this a/h: nothing to predict
@@ -530,7 +631,8 @@ def plan_session(design: Design) -> PlanPrediction:
     if why is not None:
         nan = math.nan
         return PlanPrediction(d, w.size, sd_um, shared_um, how, s_P, nan, nan, nan, nan, {},
-                              False, [f"nu is not identified by this design: {why}"])
+                              False, [f"nu is not identified by this design: {why}"],
+                              untest)
     n = w.size
     cov_cs = _line_covariance(d, w, P, u, s_P, s_w)
     mean, sE, snu, corr, out_of_table = _quadrature(d, w, P, u, cov_cs)
@@ -538,7 +640,7 @@ def plan_session(design: Design) -> PlanPrediction:
         nan = math.nan
         return PlanPrediction(d, n, sd_um, shared_um, how, s_P, nan, nan, nan, nan, {}, False,
                               ["nu is not identified by this design: beta falls outside the "
-                               "FEM beta table over the whole predicted spread"])
+                               "FEM beta table over the whole predicted spread"], untest)
     if out_of_table > 0.01:
         notes.append(f"beta falls outside the beta table in {100 * out_of_table:.0f} % of "
                      "sessions of this design (E and nu not computed there); the sds are "
@@ -563,7 +665,7 @@ def plan_session(design: Design) -> PlanPrediction:
         notes.append("nu is not identified: beta falls outside the beta table in more than "
                      "5 % of sessions")
     return PlanPrediction(d, n, sd_um, shared_um, how, s_P, sE, snu, 100 * sE / d.E_mpa,
-                          corr, bias, identified, notes)
+                          corr, bias, identified, notes, untest)
 
 
 def plan(design: Design | str | Path) -> PlanPrediction:
@@ -607,13 +709,14 @@ def design_toml(d: Design) -> str:
 
     plan_keys = ["repeats", "E_mpa", "nu", "frame_rate_hz", "stage_speed_mm_s",
                  "force_noise_n", "force_zero_n", "hold_s", "depth_std_um", "beta_table",
-                 "overshoot_um"]
+                 "overshoot_um", "holds_s", "waits_s", "days", "positions"]
     lines = ["[sensor]", f"gel_thickness_mm = {val(d.thickness_mm)}",
              f"mm_per_px = {val(d.mm_per_px)}", "", "[indenter]",
              f"radius_mm = {val(d.radius_mm)}", "", "[gauge_block]",
              f"depths_mm = {val(tuple(d.depths_mm))}",
              f"bevel_angle_deg = {val(d.bevel_angle_deg)}", "", "[force_sensor]",
-             f"rate_hz = {val(d.rate_hz)}", f"window_samples = {int(d.window_samples)}", "",
+             f"rate_hz = {val(d.rate_hz)}", f"window_samples = {int(d.window_samples)}",
+             f"window_at = {val(d.window_at)}", "",
              "[plan]"]
     for k in plan_keys:
         v = getattr(d, k)
