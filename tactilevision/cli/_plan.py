@@ -14,13 +14,15 @@ __all__ = ["add_parser", "run"]
 
 _DESCRIPTION = """\
 Predict, from a design (a session.toml plus a [plan] table: repeats, E_mpa,
-nu, frame_rate_hz, stage_speed_mm_s, force_noise_n, force_zero_n, hold_s,
-depth_std_um), each press's depth uncertainty, the sds of E and nu that
-'tactilevision fit' will give over sessions of this design, the biases its
-shared errors leave, and whether nu is identified at all. Nothing is drawn:
-the fit is differentiated on the design's noise-free table and its E and nu
-integrated over the predicted spread of eq. (5)'s line. Exit status 2 on a bad
-design, with one sentence naming the key."""
+nu, frame_rate_hz, stage_speed_mm_s, overshoot_um, force_noise_n,
+force_zero_n, hold_s or holds_s, waits_s, days, positions, depth_std_um), each
+press's depth uncertainty, the sds of E and nu that 'tactilevision fit' will
+give over sessions of this design, the biases its shared errors leave, whether
+nu is identified at all, and the catalogue effects 'diagnose' could not test
+on such a session. Nothing is drawn: the fit is differentiated on the design's
+noise-free table and its E and nu integrated over the predicted spread of eq.
+(5)'s line. --from-calibration plans a repeat of a session 'calibrate' ran.
+Exit status 2 on a bad design, with one sentence naming the key."""
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
