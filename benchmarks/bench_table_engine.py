@@ -1,6 +1,6 @@
 """The default (table) engine against the exact network on held-out real presses.
 
-For the GelSight Mini (``../shared/real/gelsight_mini``, contact circles detected), the
+For the GelSight Mini (``$TACTILEVISION_GELSIGHT_MINI``, contact circles detected), the
 GelSlim 3.0 (``$TACTILEVISION_GELSLIM``, set_2020_11, detected) and the GelSight of
 ``taxim`` (annotated circles): holds out presses by the accuracy report's own split
 (:func:`holdout_presses`, one in four), trains a network on the rest in both forms (every
