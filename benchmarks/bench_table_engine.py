@@ -28,7 +28,7 @@ from tactilevision.optics import (
     ball_gradients,
     detect_contact_circles,
     holdout_presses,
-    normals_from_gradients,
+    normal_angle_deg,
 )
 from tactilevision.optics._reconstructor import table_domain
 
@@ -50,9 +50,7 @@ def sensors():
 
 
 def angles(gx, gy, tgx, tgy, inside):
-    n1 = normals_from_gradients(gx[inside], gy[inside])
-    n2 = normals_from_gradients(tgx[inside], tgy[inside])
-    return np.degrees(np.arccos(np.clip(np.sum(n1 * n2, axis=-1), -1.0, 1.0)))
+    return normal_angle_deg(gx[inside], gy[inside], tgx[inside], tgy[inside])
 
 
 def main() -> int:

@@ -792,3 +792,20 @@ def test_position_cell_px_is_checked(synth, tmp_path, synth_mlp):
         np.savez(tmp_path / "bad.npz", **data)
         with pytest.raises(InputError, match=f"bad.npz.*{match}"):
             PhotometricCalibration.load(tmp_path / "bad.npz")
+
+
+def test_normal_angle_is_the_slope_angle_against_flat():
+    """A slope tan(theta) against a flat surface is theta; two slopes along x, a and b,
+    are |atan a - atan b| apart; along perpendicular axes the normals' dot product."""
+    from tactilevision.optics import normal_angle_deg
+
+    g = np.tan(np.radians([0.0, 10.0, 30.0, 60.0]))
+    z = np.zeros_like(g)
+    np.testing.assert_allclose(normal_angle_deg(g, z, z, z), [0, 10, 30, 60], atol=1e-4)
+    np.testing.assert_allclose(normal_angle_deg(z, -g, z, z), [0, 10, 30, 60], atol=1e-4)
+    np.testing.assert_allclose(normal_angle_deg(g[2:], z[2:], g[1:3], z[1:3]), [20, 30],
+                               atol=1e-4)
+    t = np.tan(np.radians(45.0))
+    # normals (-1, 0, 1)/sqrt2 and (0, -1, 1)/sqrt2: cos = 1/2, 60 degrees
+    assert float(normal_angle_deg(np.float32(t), 0.0, 0.0, np.float32(t))) == pytest.approx(
+        60.0, abs=1e-3)

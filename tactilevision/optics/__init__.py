@@ -23,6 +23,7 @@ from ._ball import (
     ball_press_metrics,
     fit_ball_centre,
     gradients_from_normals,
+    normal_angle_deg,
     normals_from_gradients,
 )
 from ._calibration import PhotometricCalibration
@@ -89,6 +90,7 @@ __all__ = [
     "marker_mask",
     "max_tilt_deg",
     "mlp_inputs",
+    "normal_angle_deg",
     "normals_from_gradients",
     "reference_inverse",
     "track_markers",

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._checks import InputError
-from ._ball import ball_gradients, ball_press_metrics, normals_from_gradients
+from ._ball import ball_gradients, ball_press_metrics, normal_angle_deg
 from ._reconstructor import DepthReconstructor
 
 __all__ = ["CIRCLE_ERROR", "CircleError", "calibration_accuracy", "edge_cut", "holdout_presses",
@@ -193,9 +193,7 @@ def _inner_scores(gx: np.ndarray, gy: np.ndarray, height_px: np.ndarray, centre:
     tgx, tgy, inside = ball_gradients(gx.shape, centre, 0.8 * radius, ball_px)
     if not inside.any():
         return math.nan, math.nan
-    n1 = normals_from_gradients(gx[inside], gy[inside])
-    n2 = normals_from_gradients(tgx[inside], tgy[inside])
-    angle = float(np.degrees(np.arccos(np.clip(np.sum(n1 * n2, axis=-1), -1.0, 1.0))).mean())
+    angle = float(normal_angle_deg(gx[inside], gy[inside], tgx[inside], tgy[inside]).mean())
     if d is None:
         d = _distances(height_px.shape, centre)
     return angle, _inner_cap(height_px, d, radius, ball_px)

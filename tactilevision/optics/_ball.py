@@ -25,6 +25,7 @@ __all__ = [
     "ball_press_metrics",
     "fit_ball_centre",
     "gradients_from_normals",
+    "normal_angle_deg",
     "normals_from_gradients",
 ]
 
@@ -88,6 +89,26 @@ def normals_from_gradients(gx: np.ndarray, gy: np.ndarray) -> np.ndarray:
     gy = np.asarray(gy, np.float32)
     inv = 1.0 / np.sqrt(1.0 + gx * gx + gy * gy)
     return np.stack([-gx * inv, -gy * inv, inv], axis=-1)
+
+
+def normal_angle_deg(gx: np.ndarray, gy: np.ndarray, gx_ref: np.ndarray, gy_ref: np.ndarray
+                     ) -> np.ndarray:
+    """Angle between the surface normals of two gradient fields, degrees.
+
+    Parameters
+    ----------
+    gx, gy, gx_ref, gy_ref : (...) float ndarray
+        Depth gradients of the two surfaces, unitless, of one shape.
+
+    Returns
+    -------
+    angle : (...) float32 ndarray
+        ``arccos(n . n_ref)`` of their unit normals (:func:`normals_from_gradients`),
+        degrees, in [0, 180].
+    """
+    n1 = normals_from_gradients(gx, gy)
+    n2 = normals_from_gradients(gx_ref, gy_ref)
+    return np.degrees(np.arccos(np.clip(np.sum(n1 * n2, axis=-1), -1.0, 1.0)))
 
 
 def gradients_from_normals(nx: np.ndarray, ny: np.ndarray, *, max_slope: float = 6.0
@@ -173,9 +194,7 @@ def ball_press_metrics(gx: np.ndarray, gy: np.ndarray, height_px: np.ndarray,
     gy = check_array(gy, "gy", [gx.shape], dtype=np.floating)
     height_px = check_array(height_px, "height_px", [gx.shape], dtype=np.floating)
     tgx, tgy, inside = ball_gradients(gx.shape, centre_px, contact_radius_px, ball_radius_px)
-    n1 = normals_from_gradients(gx[inside], gy[inside])
-    n2 = normals_from_gradients(tgx[inside], tgy[inside])
-    angle = np.degrees(np.arccos(np.clip(np.sum(n1 * n2, axis=-1), -1.0, 1.0)))
+    angle = normal_angle_deg(gx[inside], gy[inside], tgx[inside], tgy[inside])
     yy, xx = np.nonzero(inside)
     x = xx.astype(np.float64)
     y = yy.astype(np.float64)
