@@ -461,15 +461,17 @@ QUADRATURE_NODES = 9
 
 def planned_columns(d: Design) -> dict[str, np.ndarray]:
     """The measurements table a session of the design will write, but its forces (formats.md
-    §2 columns): the depths in a cycling order, the holds (``hold_s``: half the window
-    with ``window_at = 'start'``, the hold less half the window with ``'end'``), the
-    rests, the press times, the days and the positions on the pad.
+    §2 columns): each depth's ``repeats`` presses in turn, the holds (``hold_s``: half
+    the window with ``window_at = 'start'``, the hold less half the window with
+    ``'end'``), the rests, the press times, the days and the positions on the pad; the
+    tangential forces ``fx_n``, ``fy_n`` only as varying columns (an F/T sensor always
+    records them).
 
     Returns
     -------
     columns : dict of str to (N,) float ndarray
     """
-    w, _ = design_table(d)
+    w = np.repeat(np.asarray(d.depths_mm, np.float64), int(d.repeats))
     n = w.size
     i = np.arange(n)
     holds = np.asarray(d.holds_s if d.holds_s is not None else
