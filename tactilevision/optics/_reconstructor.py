@@ -60,7 +60,8 @@ class DepthReconstructor:
         ``max(H, W) // 16`` px cells, at least 20, over ``colour_lo,
         colour_hi`` for a network of every pixel's own position). 'onnx':
         the MLP evaluated per pixel by onnxruntime (exact, about 60 times
-        slower).
+        slower: 305 against 4.7 ms at 640 x 480, one thread,
+        ``benchmarks/bench_speed.py``, 2-core x86_64, 2026-11-25).
     boundary : {'neumann', 'dirichlet', 'contact'}, default 'neumann'
         Poisson boundary condition. 'neumann' and 'dirichlet': the
         whole-image transform (:class:`PoissonSolver`), camera rate.
