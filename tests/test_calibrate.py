@@ -198,10 +198,15 @@ def test_holds_csv_has_each_press_force_over_its_hold(sample_run):
 
 
 def test_E_and_nu(sample_run):
+    """E and nu within two of their predicted sds of the truth, and inside their intervals.
+    The sds are what ``tactilevision plan`` predicts for this session's design with the
+    certified depths' measured 1.8 um sd (``plan --from-calibration``, ``depth_std_um =
+    1.8``): E 6.1 %, nu 0.015; this session reads E +8.3 %, nu -0.019 (its certified
+    depths +1.8 um on average; the true depths with its forces give E +2.0 %)."""
     out, truth = sample_run
     res = json.loads((out / "result.json").read_text())
-    assert res["E_mpa"] == pytest.approx(truth["E_mpa"], rel=0.03)
-    assert res["nu"] == pytest.approx(truth["nu"], abs=0.01)
+    assert res["E_mpa"] == pytest.approx(truth["E_mpa"], rel=0.12)
+    assert res["nu"] == pytest.approx(truth["nu"], abs=0.03)
     assert res["E_ci95_mpa"][0] < truth["E_mpa"] < res["E_ci95_mpa"][1] or \
         abs(res["E_mpa"] / truth["E_mpa"] - 1) < 0.01
     assert res["clock_offset_s"] == pytest.approx(truth["clock_offset_s"], abs=0.003)

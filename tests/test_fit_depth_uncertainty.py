@@ -1,8 +1,9 @@
 """fit_indentation with certified depth uncertainties (errors in both variables).
 
 The effective-variance fit (Orear 1982) of eq. (5) in P: known answers in its
-limits, its own defining equations at the fixed point, interval coverage on
-presses whose certified depths carry a known Gaussian error, bad input, and
+limits, its own defining equations, interval coverage on presses whose certified
+depths carry a known Gaussian error, exactness on the FEM's own forces (the beta
+table read with the fit's weights), bad input, and
 the ``depth_std_mm`` / ``overshoot_mm`` columns of measurements.csv through
 ``tactilevision fit``, the reader/writer and ``diagnose``'s covariates.
 """
@@ -131,17 +132,18 @@ def test_exact_forces_interval_is_what_the_depths_imply():
 
 
 @pytest.mark.parametrize("sd_depth, sd_force", [(0.002, 0.001), (0.0002, 0.003)])
-def test_fixed_point_satisfies_its_defining_equations(sd_depth, sd_force):
-    # At convergence: weighted normal equations with var_i = sigma0^2 +
-    # (c + 2 s w_i / h)^2 u_i^2 at the reported (c, s), and chi2 / (n - 2) = 1
-    # when sigma0 > 0 (<= 1 when sigma0 = 0); covariance (X^T W X)^-1.
+def test_fit_satisfies_its_defining_equations(sd_depth, sd_force):
+    # var_i = sigma0^2 + (c0 + 2 s0 w_i / h)^2 u_i^2 at the ordinary fit (c0, s0); the
+    # reported (c, s) solves the weighted normal equations with those variances, with
+    # chi2 / (n - 2) = 1 when sigma0 > 0 (<= 1 when sigma0 = 0); covariance (X^T W X)^-1.
     for seed in range(6):
         w, P = noisy_session(seed, sd_depth, sd_force)
         u = np.full(w.size, sd_depth) * (1 + 0.5 * (np.arange(w.size) % 2))  # unequal u
-        f = fit(w, P, depth_std_mm=u)
+        f, f0 = fit(w, P, depth_std_mm=u), fit(w, P)
         c, s = f.c_n_per_mm, f.slope_n_per_mm
+        c0, s0 = f0.c_n_per_mm, f0.slope_n_per_mm
         X = design(w)
-        var = f.sigma0_n**2 + ((c + 2 * s * w / H) * u) ** 2
+        var = f.sigma0_n**2 + ((c0 + 2 * s0 * w / H) * u) ** 2
         r = P - X @ np.array([c, s])
         grad = X.T @ (r / var)
         assert np.all(np.abs(grad) <= 1e-7 * (np.abs(X).T @ np.abs(P / var)))
@@ -150,6 +152,42 @@ def test_fixed_point_satisfies_its_defining_equations(sd_depth, sd_force):
         cov = np.linalg.inv(X.T @ (X / var[:, None]))
         assert f.c_se_n_per_mm == pytest.approx(math.sqrt(cov[0, 0]), rel=1e-6)
         assert f.slope_se_n_per_mm == pytest.approx(math.sqrt(cov[1, 1]), rel=1e-6)
+
+
+def test_exact_fem_forces_give_the_fem_moduli_with_depth_uncertainties():
+    """Known answer: the finite-strain FEM's own forces at the paper's gauge block (a = 2.5,
+    h = 3 mm, 10 depths x 5 repeats, E 0.20 MPa, nu 0.48). The weighted fit reads the FEM
+    beta table with its own weights, so it returns the FEM's E and nu whatever the stated
+    depth uncertainties; read with equal weights it gave E 9.3 % low as u -> 0 and 7.8 % low
+    at 1.8 um (nu 0.45; the bias found by ``tactilevision plan``). Unequal uncertainties
+    (deep presses worse) change the weights, not the answer."""
+    from tactilevision.mechanics._plan import design_table, read_design
+    d = read_design(Path(__file__).parents[1] / "sample_frames/plan/paper_gauge_block.toml")
+    w, P = design_table(d)
+    for u in (1e-6, 0.0018, 0.001 + 0.01 * w):
+        f = fit_indentation(w, P, thickness_mm=d.thickness_mm, radius_mm=d.radius_mm,
+                            depth_std_mm=np.broadcast_to(u, w.shape))
+        assert f.depth_std_used
+        assert f.E_mpa == pytest.approx(0.20, rel=1e-4)
+        assert f.nu == pytest.approx(0.48, abs=1e-4)
+
+
+def test_beta_table_weights_read_like_repeated_presses():
+    """Known answer: in a least-squares line, weight 2 on a depth is that depth listed twice,
+    and equal weights (any scale) are no weights."""
+    from tactilevision.mechanics._beta import beta_relation
+    x = (0.05, 0.10, 0.15, 0.20)
+    none = beta_relation("fem", a_over_h=1.0, w_over_h=x)
+    equal = beta_relation("fem", a_over_h=1.0, w_over_h=x, weights=(3.0,) * 4)
+    double = beta_relation("fem", a_over_h=1.0, w_over_h=x, weights=(1.0, 1.0, 1.0, 2.0))
+    listed = beta_relation("fem", a_over_h=1.0, w_over_h=(*x, 0.20))
+    np.testing.assert_allclose(equal.beta_grid, none.beta_grid, rtol=1e-12)
+    np.testing.assert_allclose(double.beta_grid, listed.beta_grid, rtol=1e-12)
+    np.testing.assert_allclose(double.kappa_line_grid, listed.kappa_line_grid, rtol=1e-12)
+    assert np.max(np.abs(double.beta_grid - none.beta_grid)) > 1e-4
+    for bad in ((1.0, 1.0, 1.0), (1.0, 1.0, 0.0, 1.0), (1.0, np.nan, 1.0, 1.0)):
+        with pytest.raises(InputError, match="weights must hold one finite positive"):
+            beta_relation("fem", a_over_h=1.0, w_over_h=x, weights=bad)
 
 
 # ------------------------------------------------------------------------ coverage
@@ -176,11 +214,16 @@ def test_interval_coverage_with_depth_errors():
         f = fit(w, P, depth_std_mm=u)
         hit_beta += f.beta_ci95[0] <= BETA0 <= f.beta_ci95[1]
         hit_c += abs(f.c_n_per_mm - C0) <= tq * f.c_se_n_per_mm
-        # never below what the stated depth uncertainties imply
-        floor = beta_se_from_depths_alone(w, u, f.c_n_per_mm, f.slope_n_per_mm)
-        assert f.beta_se >= floor * (1 - 1e-9)
+        # never below what the stated depth uncertainties imply (dP/dw at the
+        # ordinary fit, where the fit evaluates it)
+        f0 = fit(w, P)
+        X = design(w)
+        v = ((f0.c_n_per_mm + 2 * f0.slope_n_per_mm * w / H) * u) ** 2
+        cov = np.linalg.inv(X.T @ (X / v[:, None]))
+        g = np.array([-f.slope_n_per_mm / f.c_n_per_mm**2, 1 / f.c_n_per_mm])
+        assert f.beta_se >= float(np.sqrt(g @ cov @ g)) * (1 - 1e-9)
         beta_with.append(f.beta)
-        beta_without.append(fit(w, P).beta)
+        beta_without.append(f0.beta)
     assert 0.90 <= hit_beta / 400 <= 0.99
     assert 0.90 <= hit_c / 400 <= 0.99
     assert np.std(beta_with) < 0.85 * np.std(beta_without)  # 0.055 against 0.071
@@ -293,9 +336,11 @@ def test_a_press_just_past_the_fem_table_within_its_uncertainty_is_read_at_the_t
     stated uncertainties is within its uncertainty of the table: the fit reads the table at
     its last w/h for that press and says so. Known answer: presses on one exact line of
     eq. (5) give the same c and beta whether the deepest sits at w/h 0.2304 or 0.23, and the
-    table is read at the same depths, so E and nu agree. Past by more than two sd, or with
-    no uncertainty, the press is refused as before (a mark session failed whole on a press
-    at w/h 0.2304 with 23 um stated, benchmarks/bench_mark_coverage.py seed 3026)."""
+    table is read at the same depths, so E and nu agree (to 1e-3: the deepest press's
+    weight w^2 / var, with which the table is read, differs by 0.2304^2 / 0.23^2). Past by
+    more than two sd, or with no uncertainty, the press is refused as before (a mark session
+    failed whole on a press at w/h 0.2304 with 23 um stated, benchmarks/bench_mark_coverage.py
+    seed 3026)."""
     h, a = 3.0, 2.5
     c, beta = 3.75, 0.78
     base = np.array([0.15, 0.30, 0.40, 0.50, 0.60])
@@ -313,8 +358,8 @@ def test_a_press_just_past_the_fem_table_within_its_uncertainty_is_read_at_the_t
     assert f_past.c_n_per_mm == pytest.approx(c, rel=1e-9)
     assert f_past.beta == pytest.approx(beta, rel=1e-9)
     assert np.isfinite(f_past.E_mpa)
-    assert f_past.E_mpa == pytest.approx(f_edge.E_mpa, rel=1e-9)
-    assert f_past.nu == pytest.approx(f_edge.nu, abs=1e-9)
+    assert f_past.E_mpa == pytest.approx(f_edge.E_mpa, rel=1e-3)
+    assert f_past.nu == pytest.approx(f_edge.nu, abs=1e-3)
     assert any("press(es) 5 reach w/h = 0.2304" in n for n in f_past.notes)
     assert not any("reach w/h" in n for n in f_edge.notes)
     for std in (None, np.full(past.size, 0.0001)):          # 0.0012 mm past: > 2 sd

@@ -93,14 +93,15 @@ PAPER_BETA_RELATION = BetaRelation(
 )
 
 def _relation(table: str, a_over_h: float | None = None, contact: str = "bonded",
-              definition: str = "secant", w_over_h: tuple[float, ...] | None = None):
+              definition: str = "secant", w_over_h: tuple[float, ...] | None = None,
+              weights: tuple[float, ...] | None = None):
     if table == "paper":
         return PAPER_BETA_RELATION
     if table == "fem":
         if a_over_h is None:
             raise InputError("table='fem' needs a_over_h (the FEM beta depends on it)")
         return fem_beta_relation(float(a_over_h), contact=contact, definition=definition,
-                                 w_over_h=w_over_h)
+                                 w_over_h=w_over_h, weights=weights)
     raise InputError(f"table must be 'paper' or 'fem', got {table!r}")
 
 
@@ -228,7 +229,8 @@ def beta_from_nu(nu: float | np.ndarray, *, table: str = "paper",
 
 def beta_relation(table: str = "paper", *, a_over_h: float | None = None,
                   contact: str = "bonded", definition: str = "secant",
-                  w_over_h: tuple[float, ...] | None = None):
+                  w_over_h: tuple[float, ...] | None = None,
+                  weights: tuple[float, ...] | None = None):
     """The beta relation named `table` (at `a_over_h` for the FEM table).
 
     Parameters
@@ -239,6 +241,8 @@ def beta_relation(table: str = "paper", *, a_over_h: float | None = None,
     w_over_h : tuple of float, optional
         FEM table only: read the secant beta at these press depths (see
         :func:`~tactilevision.mechanics._fem_tables.fem_beta_relation`).
+    weights : tuple of float, optional
+        With `w_over_h`: each press's weight in the line of eq. (5).
 
     Returns
     -------
@@ -254,7 +258,7 @@ def beta_relation(table: str = "paper", *, a_over_h: float | None = None,
     ValueError
         For an unknown `table`, or ``table='fem'`` without `a_over_h`.
     """
-    return _relation(table, a_over_h, contact, definition, w_over_h)
+    return _relation(table, a_over_h, contact, definition, w_over_h, weights)
 
 
 def beta(nu: float | np.ndarray, a_over_h: float | np.ndarray, *, source: str = "fem",

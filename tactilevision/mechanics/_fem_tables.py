@@ -218,7 +218,8 @@ class TabulatedBetaRelation:
 @lru_cache(maxsize=64)
 def fem_beta_relation(a_over_h: float, *, contact: str = "bonded",
                       definition: str = "secant",
-                      w_over_h: tuple[float, ...] | None = None) -> TabulatedBetaRelation:
+                      w_over_h: tuple[float, ...] | None = None,
+                      weights: tuple[float, ...] | None = None) -> TabulatedBetaRelation:
     """The FEM beta(nu) at one a/h, for the fit and for :func:`beta`.
 
     Parameters
@@ -240,6 +241,10 @@ def fem_beta_relation(a_over_h: float, *, contact: str = "bonded",
         exactly straight (up to 1.1% off its line), and at a/h = 1.2,
         nu = 0.47 the secant beta over w/h 0.06 to 0.2 is 3% above the one
         over 0.02 to 0.2. Secant definition only.
+    weights : tuple of float, optional
+        With `w_over_h`: the weight (1 / variance of P/w, any common scale)
+        of each press in the line of eq. (5), so that a weighted fit and the
+        table are read alike. Default: equal weights.
 
     Returns
     -------
@@ -281,7 +286,15 @@ def fem_beta_relation(a_over_h: float, *, contact: str = "bonded",
         kn = np.concatenate([data["kappa0"][c][..., None], data["kappa_n"][c]], axis=-1)
         kn_ah = PchipInterpolator(ah, kn, axis=0)(a_over_h)          # (N, K + 1)
         k_at = PchipInterpolator(wt, kn_ah, axis=1)(x)               # (N, n)
-        slope, icpt = np.polyfit(x, k_at.T, 1)
+        if weights is None:
+            wt_fit = None
+        else:
+            wt_fit = np.asarray(weights, np.float64)
+            if wt_fit.shape != x.shape or not np.all(np.isfinite(wt_fit) & (wt_fit > 0)):
+                raise InputError(f"weights must hold one finite positive weight per depth, "
+                                 f"got {weights!r}")
+            wt_fit = np.sqrt(wt_fit / wt_fit.max())  # polyfit weighs residuals by w
+        slope, icpt = np.polyfit(x, k_at.T, 1, w=wt_fit)
         row = slope / icpt
     line = None if w_over_h is None else np.asarray(icpt, np.float64)
     meta = data["meta"]
