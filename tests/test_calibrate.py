@@ -594,3 +594,33 @@ def test_the_folder_reads_back(sample_run):
                                                    written["radius_mm"])
     E, nu, obj = read_material(folder)
     assert (E, nu) == (back.E_mpa, back.nu) and obj["depth_rule"] == "vernier"
+
+
+def test_report_says_what_this_session_could_not_test(sample_run):
+    """The report's "What this session could not test": the sample session holds every
+    press 1 s with the window at the hold's start (hold_s 0.1 in every row) and writes no
+    day column, so relaxation and aging cannot be tested; its rests vary (incomplete
+    recovery can) and so do its positions (spatial non-uniformity can). The same answer
+    from measurements.csv through untestable_in_table, and from a copy with the columns
+    made to vary (nothing left)."""
+    import csv as _csv
+
+    from tactilevision.mechanics import untestable_in_table
+
+    out, _ = sample_run
+    html = (out / "report" / "report.html").read_text()
+    assert "What this session could not test" in html
+    section = html[html.index("What this session could not test"):html.index("Rejected presses")]
+    assert "<b>viscoelastic_relaxation</b>: hold_s is constant" in section
+    assert "window_at = &#x27;end&#x27;" in section
+    assert "<b>aging</b>: needs day" in section
+    assert "incomplete_recovery" not in section and "spatial_nonuniformity" not in section
+    with open(out / "report" / "measurements.csv") as fh:
+        rows = list(_csv.DictReader(fh))
+    cols = {k: np.array([float(r[k] or "nan") for r in rows]) for k in rows[0]}
+    assert set(untestable_in_table(cols, window_at="start")) == {"viscoelastic_relaxation",
+                                                                  "aging"}
+    n = len(rows)
+    cols["hold_s"] = np.resize([0.5, 1.0, 2.0], n)
+    cols["day"] = np.arange(n) % 3.0
+    assert untestable_in_table(cols, window_at="end") == {}

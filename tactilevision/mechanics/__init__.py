@@ -69,6 +69,7 @@ from ._plan import (
     plan,
     plan_session,
     read_design,
+    untestable_in_table,
 )
 from ._relaxation import (
     RelaxationFit,
@@ -137,5 +138,6 @@ __all__ = [
     "refine_relaxation",
     "register_effect",
     "relaxed_moduli",
+    "untestable_in_table",
     "validate_indentation",
 ]

@@ -41,9 +41,19 @@ from ._diagnose import _usable, _why
 from ._fem_tables import kappa_n
 from ._fit import MAX_W_OVER_H, fit_indentation
 
-__all__ = ["VERNIER_EDGE_PX", "Design", "PlanPrediction", "design_from_calibration",
-           "design_toml", "plan", "plan_session", "planned_columns", "read_design",
-           "untestable_effects"]
+__all__ = [
+    "VERNIER_EDGE_PX",
+    "Design",
+    "PlanPrediction",
+    "design_from_calibration",
+    "design_toml",
+    "plan",
+    "plan_session",
+    "planned_columns",
+    "read_design",
+    "untestable_effects",
+    "untestable_in_table",
+]
 
 #: The sd of a vernier band's half-width read, px: the sample session's certified depths
 #: (``measurements.csv`` of ``tactilevision calibrate sample_frames/gelsight_session``,
@@ -496,14 +506,36 @@ def untestable_effects(d: Design) -> dict[str, str]:
     """The catalogue's effects ``diagnose`` could not test on a session of the design,
     and why (its column constant or missing in :func:`planned_columns`; the same test
     ``diagnose`` makes of a table)."""
-    cols = planned_columns(d)
+    return untestable_in_table(planned_columns(d), window_at=d.window_at)
+
+
+def untestable_in_table(columns: dict[str, np.ndarray], *, window_at: str | None = None
+                        ) -> dict[str, str]:
+    """The catalogue's effects ``diagnose`` cannot test on a measurements table, and why.
+
+    Parameters
+    ----------
+    columns : dict of str to (N,) ndarray
+        Columns of a measurements table (formats.md section 2), as ``calibrate``
+        writes them or :func:`planned_columns` plans them.
+    window_at : {'start', 'end'}, optional
+        Where the force window sat in each hold (``[force_sensor] window_at``);
+        'start' adds how to make relaxation testable.
+
+    Returns
+    -------
+    why : dict of str to str
+        Effect name to one sentence: the column it needs, constant or missing (the
+        test ``diagnose`` makes before it tries an effect), and the change that would
+        let a session test it.
+    """
     out = {}
     for name in EFFECTS:
         if name == "large_deformation":
             continue
-        if _usable(name, cols) is not None:
-            why = _why(make_effect(name).columns, cols)
-            if name == "viscoelastic_relaxation" and d.window_at == "start":
+        if _usable(name, columns) is not None:
+            why = _why(make_effect(name).columns, columns)
+            if name == "viscoelastic_relaxation" and window_at == "start":
                 why += ("; with the window at the hold's start every press's window sits "
                         "at the same time of its hold: vary it with window_at = 'end' and "
                         "holds of different lengths")

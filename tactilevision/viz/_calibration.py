@@ -8,6 +8,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from ..mechanics import untestable_in_table
 from ._depth import _scale_bar
 
 __all__ = ["bevel_panels", "calibration_figures", "figures_html", "fitted_forces", "html_head",
@@ -360,6 +361,7 @@ def write_calibration_report(cal, out_dir: str | Path, figures: dict[str, Path])
 Clock offset t_force - t_frame = {c.clock_offset_s:.4f} s ({e(c.clock_source)}).
 Camera noise {c.noise_sigma:.2f} grey levels. Took {cal.seconds:.1f} s.</p>
 <h2>Warnings and notes</h2><ul>{warn}</ul>
+{_untestable_html(cal)}
 <h2>Rejected presses</h2>
 <table><tr><th>press</th><th>reason</th><th>detail</th><th>t (s)</th></tr>{rows}</table>
 {table}
@@ -385,6 +387,30 @@ _DEPTH_RULE_TEXT = {
                "half-width L, closes the gap by L tan(theta); less the gel's bulge there "
                "(FEM) when bulge_correction is on",
 }
+
+
+def _untestable_html(cal) -> str:
+    """The report's "What this session could not test" paragraph ('' with no presses).
+
+    The catalogue effects whose column is constant or missing in this session's
+    measurements table (:func:`tactilevision.mechanics.untestable_in_table`, the test
+    ``diagnose`` and ``plan`` make), each with why and what would make it testable.
+    """
+    if not cal.certification.presses:
+        return ""
+    e = html.escape
+    why = untestable_in_table(cal.measurements(), window_at=cal.session.config.window_at)
+    if not why:
+        return ("<h2>What this session could not test</h2><p>Nothing: every effect of the "
+                "catalogue has a column that varies in measurements.csv, so "
+                "<code>tactilevision diagnose</code> can test each.</p>")
+    items = "".join(f"<li><b>{e(k)}</b>: {e(v)}</li>" for k, v in why.items())
+    return ("<h2>What this session could not test</h2><p>"
+            f"<code>tactilevision diagnose</code> cannot test {len(why)} effect(s) of the "
+            "catalogue on this session's measurements.csv: the column each needs does not "
+            "vary. Its verdict says nothing about them. <code>tactilevision plan "
+            "--from-calibration</code> on this folder plans a session that can.</p>"
+            f"<ul>{items}</ul>")
 
 
 def _fit_html(cal) -> tuple[str, str, str]:
