@@ -136,6 +136,9 @@ def _write(tmp_path, **change):
     (dict(indenter=None), "radius_mm"),
     (dict(plan="nu = 0.7"), "nu"),
     (dict(plan="overshoot_um = [60, 30]"), "overshoot_um"),
+    (dict(plan="relaxation_g = 0.2"), "relaxation_g and relaxation_tau_s go together"),
+    (dict(plan="relaxation_g = 1.5\nrelaxation_tau_s = 1"), "relaxation_g"),
+    (dict(plan="relaxation_g = 0.2\nrelaxation_tau_s = -1"), "relaxation_tau_s"),
 ])
 def test_bad_designs_exit_2_naming_the_key(tmp_path, capsys, change, key):
     path = _write(tmp_path, **change)
@@ -244,3 +247,69 @@ def test_effects_a_design_cannot_test_are_named_with_why():
         Design(**base, holds_s=(0.1, 1.0))          # shorter than the 0.2 s window
     with pytest.raises(InputError, match="window_at"):
         Design(**base, window_at="middle")
+
+
+# ----------------------------------------------------- fit_relaxation's identifiability
+
+
+def _relax_design(**kw) -> Design:
+    return Design(thickness_mm=3.0, radius_mm=2.5, depths_mm=PAPER_DEPTHS, repeats=4,
+                  hold_s=1.0, **kw)
+
+
+def test_relaxation_noncentrality_scales_as_the_signal_over_the_noise():
+    """Known answers of the test's noncentrality RSS_line / sigma_b^2: the straight decay's
+    misfit is linear in g for a small g (so lambda goes as g^2) and sigma_b^2 as the
+    F/T noise's variance (lambda as 1 / sd^2, exactly)."""
+    from tactilevision.mechanics import relaxation_identifiability
+    d = _relax_design()
+    lam = relaxation_identifiability(d, 0.002, 0.3).noncentrality
+    assert relaxation_identifiability(d, 0.004, 0.3).noncentrality == pytest.approx(
+        4 * lam, rel=0.02)
+    quiet = _relax_design(force_noise_n=d.force_noise_n / 2)
+    assert relaxation_identifiability(quiet, 0.002, 0.3).noncentrality == pytest.approx(
+        4 * lam, rel=1e-9)
+    far = relaxation_identifiability(d, 0.25, 10.0)                    # tau > 2 x 1 s hold
+    assert far.power == 0 and not far.span_ok and "longer holds would" in far.why
+    fast = relaxation_identifiability(d, 0.25, 0.05)                   # under 0.1 x hold
+    assert fast.power == 0 and not fast.span_ok
+
+
+def test_relaxation_power_against_fit_relaxation_on_drawn_holds():
+    """The prediction against fit_relaxation itself on holds drawn with the design's white
+    F/T noise (benchmarks/bench_plan_relaxation.py draws more): where the plan says 1 %
+    or less, at most 2 of 12 sessions are identified; where it says 99 % or more, at
+    least 11 of 12."""
+    import importlib.util
+    from pathlib import Path
+
+    from tactilevision.mechanics import fit_relaxation, relaxation_identifiability
+    spec = importlib.util.spec_from_file_location(
+        "bench_plan_relaxation",
+        Path(__file__).resolve().parents[1] / "benchmarks" / "bench_plan_relaxation.py")
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    d = _relax_design()
+    for g, tau, low in ((0.002, 0.3, True), (0.06, 0.3, False)):
+        r = relaxation_identifiability(d, g, tau)
+        assert (r.power <= 0.01) if low else (r.power >= 0.99)
+        rng = np.random.default_rng(7)
+        hits = 0
+        for _ in range(12):
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                hits += bool(fit_relaxation(*bench.session(d, g, tau, rng), n_boot=10)
+                             .identified)
+        assert hits <= 2 if low else hits >= 11
+
+
+def test_plan_says_whether_the_relaxation_is_identified(tmp_path, capsys):
+    path = _write(tmp_path, plan="hold_s = 1.0\novershoot_um = [30, 60]\n"
+                                 "relaxation_g = 0.25\nrelaxation_tau_s = 5")
+    assert main(["plan", str(path), "--json", str(tmp_path / "p.json")]) == 0
+    out = capsys.readouterr().out
+    assert "relaxation: tau = 5 s lies outside the span the holds resolve" in out
+    got = json.loads((tmp_path / "p.json").read_text())["relaxation"]
+    assert got["power"] == 0 and got["span_ok"] is False and got["tau_s"] == 5
+    d = read_design(path)
+    assert "relaxation_tau_s = 5\n" in tactilevision.mechanics.design_toml(d)

@@ -66,3 +66,22 @@ def test_diagnose_names_relaxation_from_the_table_alone(calibrated, capsys):
     assert fit["E_mpa"] * (1 - g_fit) == pytest.approx((1 - g) * E0, rel=0.03)
     at_ramp_end = E0 * ((1 - g) + g * float(ramp_factor(0.5, tau)))
     assert fit["E_mpa"] == pytest.approx(at_ramp_end, rel=0.03)
+
+
+def test_plan_from_this_calibration_keeps_its_holds_and_relaxation(calibrated):
+    """``plan --from-calibration`` on the relaxing session plans a repeat of it: the holds
+    in press order (0.5 to 2.8 s, the window at their ends), the rests, and the relaxation
+    the holds gave (g, tau within 5 % of the truth), which the repeat identifies again
+    (its curvature test's power over 95 %); relaxation is then testable by diagnose."""
+    from tactilevision.mechanics import design_from_calibration, plan_session
+
+    out, truth = calibrated
+    d = design_from_calibration(out, SESSION)
+    assert d.window_at == "end"
+    assert d.holds_s is not None and max(d.holds_s) - min(d.holds_s) > 1.5
+    assert d.relaxation_g == pytest.approx(truth["relaxation_g"], rel=0.05)
+    assert d.relaxation_tau_s == pytest.approx(truth["relaxation_tau_s"], rel=0.05)
+    pred = plan_session(d)
+    assert pred.relaxation is not None and pred.relaxation.power > 0.95
+    assert "viscoelastic_relaxation" not in pred.untestable
+    assert "incomplete_recovery" not in pred.untestable

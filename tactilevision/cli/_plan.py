@@ -74,6 +74,8 @@ def summary(pred) -> str:
     lines.append("nu identified" if pred.nu_identified else "nu NOT identified")
     for name, why in pred.untestable.items():
         lines.append(f"diagnose cannot test {name}: {why}")
+    if pred.relaxation is not None:
+        lines.append(f"relaxation: {pred.relaxation.why}")
     lines += [f"note: {n}" for n in pred.notes]
     return "\n".join(lines)
 

@@ -64,11 +64,13 @@ from ._neohookean import neo_hookean_constants
 from ._plan import (
     Design,
     PlanPrediction,
+    RelaxationPlan,
     design_from_calibration,
     design_toml,
     plan,
     plan_session,
     read_design,
+    relaxation_identifiability,
     untestable_in_table,
 )
 from ._relaxation import (
@@ -105,6 +107,7 @@ __all__ = [
     "Param",
     "PlanPrediction",
     "RelaxationFit",
+    "RelaxationPlan",
     "beta",
     "beta_from_nu",
     "beta_relation",
@@ -137,6 +140,7 @@ __all__ = [
     "read_design",
     "refine_relaxation",
     "register_effect",
+    "relaxation_identifiability",
     "relaxed_moduli",
     "untestable_in_table",
     "validate_indentation",

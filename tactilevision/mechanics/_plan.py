@@ -34,12 +34,21 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from scipy import stats
 
 from .._checks import InputError
 from ._catalogue import EFFECTS, make_effect
 from ._diagnose import _usable, _why
 from ._fem_tables import kappa_n
 from ._fit import MAX_W_OVER_H, fit_indentation
+from ._relaxation import (
+    RELAX_ALPHA,
+    TAU_HOLD_RATIO,
+    TAU_MIN_HOLD_FRACTION,
+    _blocks,
+    _straight_decay,
+    ramp_factor,
+)
 
 __all__ = [
     "VERNIER_EDGE_PX",
@@ -121,6 +130,10 @@ class Design:
         Calendar days (sessions) the presses are spread over.
     positions : int
         Distinct press positions on the pad.
+    relaxation_g, relaxation_tau_s : float or None
+        A relaxation to plan for (g in (0, 1), tau in s; both or neither):
+        whether ``fit_relaxation`` identifies it from the planned holds
+        (:func:`relaxation_identifiability`).
     """
 
     thickness_mm: float
@@ -146,6 +159,8 @@ class Design:
     waits_s: tuple[float, ...] = (2.0,)
     days: int = 1
     positions: int = 10
+    relaxation_g: float | None = None
+    relaxation_tau_s: float | None = None
 
     def __post_init__(self) -> None:
         check_design(self)
@@ -249,6 +264,13 @@ def check_design(d: Design) -> None:
                              f"window ({d.window_samples / d.rate_hz:g} s)")
     if d.beta_table not in ("fem", "paper"):
         raise InputError(f"[plan] beta_table must be 'fem' or 'paper', got {d.beta_table!r}")
+    if (d.relaxation_g is None) != (d.relaxation_tau_s is None):
+        raise InputError("[plan] relaxation_g and relaxation_tau_s go together: give both "
+                         "or neither")
+    if d.relaxation_g is not None:
+        if not 0 < float(d.relaxation_g) < 1:
+            raise InputError(f"[plan] relaxation_g must be in (0, 1), got {d.relaxation_g!r}")
+        _positive(d.relaxation_tau_s, "[plan] relaxation_tau_s")
 
 
 def read_design(path: str | Path) -> Design:
@@ -297,7 +319,7 @@ def read_design(path: str | Path) -> Design:
     plan = doc.get("plan", {})
     known = {"repeats", "E_mpa", "nu", "frame_rate_hz", "stage_speed_mm_s", "force_noise_n",
              "force_zero_n", "hold_s", "depth_std_um", "beta_table", "overshoot_um",
-             "holds_s", "waits_s", "days", "positions"}
+             "holds_s", "waits_s", "days", "positions", "relaxation_g", "relaxation_tau_s"}
     unknown = sorted(set(plan) - known)
     if unknown:
         raise InputError(f"{path}: [plan] {unknown[0]} is not a design key (known: "
@@ -363,6 +385,9 @@ class PlanPrediction:
         quarter of nu's range (0.3 to 0.5).
     notes : list of str
         Why, in words.
+    relaxation : RelaxationPlan or None
+        With ``relaxation_g`` and ``relaxation_tau_s`` in the design: whether
+        ``fit_relaxation`` identifies them (:func:`relaxation_identifiability`).
     untestable : dict of str to str
         The catalogue's effects (formats.md §5) that ``diagnose`` cannot test on a
         session of this design, and why (the column each needs is constant or missing
@@ -383,6 +408,7 @@ class PlanPrediction:
     nu_identified: bool
     notes: list[str] = field(default_factory=list)
     untestable: dict[str, str] = field(default_factory=dict)
+    relaxation: RelaxationPlan | None = None
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-ready dict (the ``plan --json`` output; NaN written as None)."""
@@ -398,6 +424,7 @@ class PlanPrediction:
             "bias": {k: {"E_pct": v[0], "nu": v[1]} for k, v in self.bias.items()},
             "nu_identified": self.nu_identified, "notes": list(self.notes),
             "untestable": dict(self.untestable),
+            "relaxation": None if self.relaxation is None else dict(self.relaxation.__dict__),
         })
 
 
@@ -547,6 +574,119 @@ def untestable_in_table(columns: dict[str, np.ndarray], *, window_at: str | None
     return out
 
 
+@dataclass(frozen=True)
+class RelaxationPlan:
+    """Whether ``fit_relaxation`` can identify g and tau from a design's holds.
+
+    Attributes
+    ----------
+    g, tau_s : float
+        The relaxation assumed (fraction, s).
+    power : float
+        Probability that the holds' curvature test rejects a straight decay at
+        ``RELAX_ALPHA`` (noncentral F, 1 and n - P - 2 degrees of freedom), 0
+        when tau lies outside the span the holds resolve.
+    span_ok : bool
+        tau within ``TAU_MIN_HOLD_FRACTION`` of the shortest hold to
+        ``TAU_HOLD_RATIO`` times the longest.
+    noncentrality : float
+        ``RSS_line / sigma_b^2``: the straight decay's misfit to the noise-free
+        holds over the block means' noise variance.
+    why : str
+        One sentence.
+    """
+
+    g: float
+    tau_s: float
+    power: float
+    span_ok: bool
+    noncentrality: float
+    why: str
+
+
+def relaxation_identifiability(d: Design, g: float, tau_s: float, *,
+                               points_per_press: int = 100) -> RelaxationPlan:
+    """Can :func:`~tactilevision.mechanics.fit_relaxation` identify g and tau from the
+    design's holds?
+
+    Parameters
+    ----------
+    d : Design
+    g : float
+        Relaxing fraction of the gel's force, in (0, 1).
+    tau_s : float
+        Relaxation time, s, > 0.
+    points_per_press : int, default 100
+        As in ``fit_relaxation``: each hold is averaged in this many blocks.
+
+    Returns
+    -------
+    RelaxationPlan
+
+    Raises
+    ------
+    InputError
+        For g outside (0, 1) or tau_s not positive.
+
+    Notes
+    -----
+    ``fit_relaxation`` calls g and tau identified when a straight decay
+    ``F_i = A_i (1 + r t)`` (tau -> infinity at fixed g / tau) is rejected
+    against the fitted standard linear solid by an F test at ``RELAX_ALPHA``
+    and tau lies in the span the holds resolve. The holds are planned without
+    noise: each press's force ``F_i(t) = P_i [(1 - g) + g phi(T_i / tau)
+    exp(-t / tau)]`` (P_i the FEM force at its depth, T_i its loading time
+    ``w / stage_speed_mm_s``, phi :func:`ramp_factor`), sampled at ``rate_hz``
+    over its hold and averaged in blocks as the fit does; ``force_noise_n`` per
+    sample, white, gives the block means' variance sigma_b^2. The straight
+    decay's least-squares misfit ``RSS_line`` to these noise-free holds over
+    sigma_b^2 is the noncentrality of the test (the fitted model's own misfit is
+    zero there), and the power is the noncentral F's tail beyond the test's
+    critical value. The F/T noise of a real sensor is coloured: with fewer
+    independent samples than assumed the power is lower.
+    """
+    if not 0 < g < 1:
+        raise InputError(f"relaxation g must be in (0, 1), got {g!r}")
+    tau = _positive(tau_s, "relaxation tau_s")
+    w, P = design_table(d)
+    holds = np.asarray(d.holds_s if d.holds_s is not None else
+                       (d.hold_s if d.hold_s is not None else 1.0,), np.float64)
+    hold = holds[np.arange(w.size) % holds.size]
+    ramp = w / d.stage_speed_mm_s
+    curves, var_b = [], []
+    for Pi, Ti, Hi in zip(P, ramp, hold, strict=True):
+        n = max(round(Hi * d.rate_hz), 5)
+        t = np.arange(n) / d.rate_hz
+        f = Pi * ((1 - g) + g * float(ramp_factor(Ti, tau)) * np.exp(-t / tau))
+        tb, fb = _blocks(t, f, points_per_press)          # as fit_relaxation averages
+        curves.append((tb, fb, float(Ti)))
+        var_b.append(np.full(tb.size, d.force_noise_n**2 / max(1, -(-n // points_per_press))))
+    var_b = np.concatenate(var_b)
+    s2 = float(np.mean(var_b))
+    n_pts = var_b.size
+    dof = max(n_pts - len(curves) - 2, 1)
+    _, rss_line = _straight_decay(curves)
+    lam = rss_line / s2
+    shortest, longest = float(hold.min()), float(hold.max())
+    span_ok = TAU_MIN_HOLD_FRACTION * shortest <= tau <= TAU_HOLD_RATIO * longest
+    crit = float(stats.f.isf(RELAX_ALPHA, 1, dof))
+    power = float(stats.ncf.sf(crit, 1, dof, lam)) if span_ok else 0.0
+    if not span_ok:
+        why = (f"tau = {tau:g} s lies outside the span the holds resolve "
+               f"({TAU_MIN_HOLD_FRACTION:g} of the shortest hold to {TAU_HOLD_RATIO:g} times the "
+               f"longest: {TAU_MIN_HOLD_FRACTION * shortest:.3g} to "
+               f"{TAU_HOLD_RATIO * longest:.3g} s): fit_relaxation will not identify g and tau; "
+               + ("longer holds would" if tau > TAU_HOLD_RATIO * longest else
+                  "a faster F/T window at the hold's start would"))
+    else:
+        why = (f"fit_relaxation identifies g = {g:g} and tau = {tau:g} s in {100 * power:.0f} % "
+               f"of sessions (its curvature test at p < {RELAX_ALPHA:g}; noncentrality "
+               f"{lam:.3g})" + ("" if power >= 0.95 else
+                                ": longer holds, more presses or a quieter F/T would raise it"))
+    return RelaxationPlan(g=float(g), tau_s=tau, power=power, span_ok=bool(span_ok),
+                          noncentrality=float(lam), why=why)
+
+
 def _line_covariance(d: Design, w: np.ndarray, P: np.ndarray, u: np.ndarray | None,
                      s_P: float, s_w: float) -> np.ndarray:
     """Covariance (2, 2) of the fit's intercept c and slope c beta (linear in the presses'
@@ -654,6 +794,8 @@ def plan_session(design: Design) -> PlanPrediction:
     u = np.full(w.size, s_w) if s_w > 0 else None
     notes: list[str] = []
     untest = untestable_effects(d)
+    relax = (None if d.relaxation_g is None else
+             relaxation_identifiability(d, float(d.relaxation_g), float(d.relaxation_tau_s)))
     try:
         base = _fit(d, w, P, u)
     except InputError as exc:       # the tables cannot fit this a/h: nothing to predict
@@ -666,7 +808,7 @@ def plan_session(design: Design) -> PlanPrediction:
         nan = math.nan
         return PlanPrediction(d, w.size, sd_um, shared_um, how, s_P, nan, nan, nan, nan, {},
                               False, [f"nu is not identified by this design: {why}"],
-                              untest)
+                              untest, relax)
     n = w.size
     cov_cs = _line_covariance(d, w, P, u, s_P, s_w)
     mean, sE, snu, corr, out_of_table = _quadrature(d, w, P, u, cov_cs)
@@ -674,7 +816,7 @@ def plan_session(design: Design) -> PlanPrediction:
         nan = math.nan
         return PlanPrediction(d, n, sd_um, shared_um, how, s_P, nan, nan, nan, nan, {}, False,
                               ["nu is not identified by this design: beta falls outside the "
-                               "FEM beta table over the whole predicted spread"], untest)
+                               "FEM beta table over the whole predicted spread"], untest, relax)
     if out_of_table > 0.01:
         notes.append(f"beta falls outside the beta table in {100 * out_of_table:.0f} % of "
                      "sessions of this design (E and nu not computed there); the sds are "
@@ -699,7 +841,7 @@ def plan_session(design: Design) -> PlanPrediction:
         notes.append("nu is not identified: beta falls outside the beta table in more than "
                      "5 % of sessions")
     return PlanPrediction(d, n, sd_um, shared_um, how, s_P, sE, snu, 100 * sE / d.E_mpa,
-                          corr, bias, identified, notes, untest)
+                          corr, bias, identified, notes, untest, relax)
 
 
 def plan(design: Design | str | Path) -> PlanPrediction:
@@ -743,7 +885,8 @@ def design_toml(d: Design) -> str:
 
     plan_keys = ["repeats", "E_mpa", "nu", "frame_rate_hz", "stage_speed_mm_s",
                  "force_noise_n", "force_zero_n", "hold_s", "depth_std_um", "beta_table",
-                 "overshoot_um", "holds_s", "waits_s", "days", "positions"]
+                 "overshoot_um", "holds_s", "waits_s", "days", "positions", "relaxation_g",
+                 "relaxation_tau_s"]
     lines = ["[sensor]", f"gel_thickness_mm = {val(d.thickness_mm)}",
              f"mm_per_px = {val(d.mm_per_px)}", "", "[indenter]",
              f"radius_mm = {val(d.radius_mm)}", "", "[gauge_block]",
@@ -819,6 +962,13 @@ def design_from_calibration(folder: str | Path, session: str | Path | None = Non
     f_sd = col("force_std_n") if rows and "force_std_n" in rows[0] else np.array([])
     if np.isfinite(f_sd).any():
         kw["force_noise_n"] = float(np.nanmedian(f_sd))
+    waits = col("wait_s") if rows and "wait_s" in rows[0] else np.array([])
+    if np.isfinite(waits).any():
+        kw["waits_s"] = tuple(round(float(v), 3) for v in waits[np.isfinite(waits)])
+    relax = fit.get("relaxation")
+    if isinstance(relax, dict) and relax.get("resolved") and 0 < float(relax.get("g") or 0) < 1:
+        kw["relaxation_g"] = float(relax["g"])      # the relaxation it found, to plan for
+        kw["relaxation_tau_s"] = float(relax["tau_s"])
     zero = fit.get("ft_zero")
     if isinstance(zero, dict) and isinstance(zero.get("drift_n"), int | float):
         kw["force_zero_n"] = abs(float(zero["drift_n"])) + 2 * float(zero.get("drift_se_n")
@@ -838,6 +988,12 @@ def design_from_calibration(folder: str | Path, session: str | Path | None = Non
                                  ("window_samples", force, "window_samples")):
             if isinstance(table, dict) and isinstance(table.get(name), int | float):
                 kw[key] = table[name]
+        if force.get("window_at") in ("start", "end"):
+            kw["window_at"] = force["window_at"]
+        hold = col("hold_s")
+        if kw.get("window_at") == "end" and np.isfinite(hold).all() and hold.size:
+            half = 0.5 * kw.get("window_samples", 200) / kw.get("rate_hz", 1000.0)
+            kw["holds_s"] = tuple(round(float(v) + half, 3) for v in hold)  # in press order
         frames = where / "frames.csv"
         if frames.is_file():
             with open(frames, newline="") as fh:
