@@ -23,7 +23,7 @@ import warnings
 import numpy as np
 
 from tactilevision.mechanics import fit_relaxation, ramp_factor, relaxation_identifiability
-from tactilevision.mechanics._plan import design_table, read_design
+from tactilevision.mechanics._plan import design_table, hold_lengths, read_design
 
 CASES = ((0.004, 0.3), (0.006, 0.3), (0.008, 0.3), (0.01, 0.3), (0.012, 0.3), (0.016, 0.3),
          (0.02, 1.0), (0.05, 5.0))
@@ -32,11 +32,10 @@ CASES = ((0.004, 0.3), (0.006, 0.3), (0.008, 0.3), (0.01, 0.3), (0.012, 0.3), (0
 def session(d, g: float, tau: float, rng: np.random.Generator):
     """(press, t, fz, ramp) of one drawn session of holds."""
     w, P = design_table(d)
-    hold = d.hold_s if d.hold_s is not None else 1.0
-    n = round(hold * d.rate_hz)
-    t = np.arange(n) / d.rate_hz
     press, ts, fz, ramp = [], [], [], []
-    for i, (wi, Pi) in enumerate(zip(w, P, strict=True)):
+    for i, (wi, Pi, hold) in enumerate(zip(w, P, hold_lengths(d, w.size), strict=True)):
+        n = round(hold * d.rate_hz)
+        t = np.arange(n) / d.rate_hz
         T = wi / d.stage_speed_mm_s
         f = Pi * ((1 - g) + g * float(ramp_factor(T, tau)) * np.exp(-t / tau))
         press.append(np.full(n, i))

@@ -496,6 +496,14 @@ def _fit(d: Design, w: np.ndarray, P: np.ndarray, u_mm: np.ndarray | None) -> np
 QUADRATURE_NODES = 9
 
 
+def hold_lengths(d: Design, n: int) -> np.ndarray:
+    """(n,) hold length of each press in turn, s: ``holds_s`` cycled, else ``hold_s``,
+    else 1 s."""
+    holds = np.asarray(d.holds_s if d.holds_s is not None else
+                       (d.hold_s if d.hold_s is not None else 1.0,), np.float64)
+    return holds[np.arange(n) % holds.size]
+
+
 def planned_columns(d: Design) -> dict[str, np.ndarray]:
     """The measurements table a session of the design will write, but its forces (formats.md
     §2 columns): each depth's ``repeats`` presses in turn, the holds (``hold_s``: half
@@ -511,9 +519,7 @@ def planned_columns(d: Design) -> dict[str, np.ndarray]:
     w = np.repeat(np.asarray(d.depths_mm, np.float64), int(d.repeats))
     n = w.size
     i = np.arange(n)
-    holds = np.asarray(d.holds_s if d.holds_s is not None else
-                       (d.hold_s if d.hold_s is not None else 1.0,), np.float64)
-    hold = holds[i % holds.size]
+    hold = hold_lengths(d, n)
     half = 0.5 * d.window_samples / d.rate_hz
     waits = np.asarray(d.waits_s, np.float64)[i % len(d.waits_s)]
     k = np.arange(d.positions)
@@ -649,9 +655,7 @@ def relaxation_identifiability(d: Design, g: float, tau_s: float, *,
         raise InputError(f"relaxation g must be in (0, 1), got {g!r}")
     tau = _positive(tau_s, "relaxation tau_s")
     w, P = design_table(d)
-    holds = np.asarray(d.holds_s if d.holds_s is not None else
-                       (d.hold_s if d.hold_s is not None else 1.0,), np.float64)
-    hold = holds[np.arange(w.size) % holds.size]
+    hold = hold_lengths(d, w.size)
     ramp = w / d.stage_speed_mm_s
     curves, var_b = [], []
     for Pi, Ti, Hi in zip(P, ramp, hold, strict=True):
