@@ -29,7 +29,7 @@ import numpy as np
 
 from tactilevision import InputError
 from tactilevision.mechanics import Design, fit_indentation, plan
-from tactilevision.mechanics._plan import depth_uncertainty
+from tactilevision.mechanics._design import depth_uncertainty
 from tactilevision.sim._tables import _fem_force
 
 

@@ -23,7 +23,7 @@ import warnings
 import numpy as np
 
 from tactilevision.mechanics import fit_relaxation, ramp_factor, relaxation_identifiability
-from tactilevision.mechanics._plan import design_table, hold_lengths, read_design
+from tactilevision.mechanics._design import design_table, hold_lengths, read_design
 
 CASES = ((0.004, 0.3), (0.006, 0.3), (0.008, 0.3), (0.01, 0.3), (0.012, 0.3), (0.016, 0.3),
          (0.02, 1.0), (0.05, 5.0))

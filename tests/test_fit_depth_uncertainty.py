@@ -161,7 +161,7 @@ def test_exact_fem_forces_give_the_fem_moduli_with_depth_uncertainties():
     depth uncertainties; read with equal weights it gave E 9.3 % low as u -> 0 and 7.8 % low
     at 1.8 um (nu 0.45; the bias found by ``tactilevision plan``). Unequal uncertainties
     (deep presses worse) change the weights, not the answer."""
-    from tactilevision.mechanics._plan import design_table, read_design
+    from tactilevision.mechanics._design import design_table, read_design
     d = read_design(Path(__file__).parents[1] / "sample_frames/plan/paper_gauge_block.toml")
     w, P = design_table(d)
     for u in (1e-6, 0.0018, 0.001 + 0.01 * w):

@@ -19,7 +19,7 @@ from tactilevision.mechanics import (
     plan,
     read_design,
 )
-from tactilevision.mechanics._plan import depth_uncertainty
+from tactilevision.mechanics._design import depth_uncertainty
 from tactilevision.sim._tables import _fem_force
 
 PAPER_DEPTHS = (0.15, 0.30, 0.40, 0.50, 0.60)
@@ -219,7 +219,7 @@ def test_design_from_a_calibration_folder_round_trips(tmp_path, capsys):
 
 def test_the_vernier_threshold_is_the_contact_packages():
     from tactilevision.contact._vernier import RESOLVED_PX as contact_px
-    from tactilevision.mechanics._plan import RESOLVED_PX as plan_px
+    from tactilevision.mechanics._design import RESOLVED_PX as plan_px
 
     assert plan_px == contact_px
 

@@ -7,7 +7,13 @@ import math
 from pathlib import Path
 
 from .. import InputError
-from ..mechanics import design_from_calibration, design_toml, plan_session, read_design
+from ..mechanics import (
+    EFFECT_SIZE_PARAMS,
+    design_from_calibration,
+    design_toml,
+    plan_session,
+    read_design,
+)
 from ._fit import _write_json
 
 __all__ = ["add_parser", "run"]
@@ -19,10 +25,13 @@ force_zero_n, hold_s or holds_s, waits_s, days, positions, depth_std_um), each
 press's depth uncertainty, the sds of E and nu that 'tactilevision fit' will
 give over sessions of this design, the biases its shared errors leave, whether
 nu is identified at all, and the catalogue effects 'diagnose' could not test
-on such a session. Nothing is drawn: the fit is differentiated on the design's
-noise-free table and its E and nu integrated over the predicted spread of eq.
-(5)'s line. --from-calibration plans a repeat of a session 'calibrate' ran.
-Exit status 2 on a bad design, with one sentence naming the key."""
+on such a session, the smallest size of each it names in 95 % of sessions
+([plan.detect] effect = size: how often it names that size), and whether
+fit_relaxation identifies a planned relaxation. Nothing is drawn for E and
+nu: the fit is differentiated on the design's noise-free table and its E and
+nu integrated over the predicted spread of eq. (5)'s line. --from-calibration
+plans a repeat of a session 'calibrate' ran. Exit status 2 on a bad design,
+with one sentence naming the key."""
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -74,6 +83,21 @@ def summary(pred) -> str:
     lines.append("nu identified" if pred.nu_identified else "nu NOT identified")
     for name, why in pred.untestable.items():
         lines.append(f"diagnose cannot test {name}: {why}")
+    found = [s for s in pred.effect_sizes.values() if math.isfinite(s.size)
+             or math.isinf(s.size)]
+    if found:
+        lines.append("smallest effects diagnose names in 95 % of sessions (catalogue "
+                     "parameter; snr: over the replicate noise):")
+        for s in found:
+            lines.append(f"  {s.effect:24s} " + (
+                f"{s.size:.3g}{' ' + s.unit if s.unit else ''} ({s.parameter} "
+                f"{s.size_param:.3g}; snr {s.snr:.2g})"
+                if math.isfinite(s.size) else "not at any size its parameter allows"))
+    for name, p in pred.detect_power.items():
+        size = dict(d.detect)[name]
+        unit = EFFECT_SIZE_PARAMS[name][1]
+        lines.append(f"{name} of {size:g}{' ' + unit if unit else ''}: named in "
+                     f"{100 * p:.0f} % of sessions")
     if pred.relaxation is not None:
         lines.append(f"relaxation: {pred.relaxation.why}")
     lines += [f"note: {n}" for n in pred.notes]

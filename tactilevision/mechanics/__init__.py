@@ -52,6 +52,7 @@ from ._beta import (
 )
 from ._budget import NoiseBudget, noise_budget
 from ._catalogue import EFFECTS, Effect, FemLaw, Param, make_effect, register_effect
+from ._design import EFFECT_SIZE_PARAMS, planned_columns
 from ._diagnose import Diagnosis, diagnose, noise_floor
 from ._diagnose_stats import CovariateTest, covariate_tests, cross_validated_rmse
 from ._effects import EFFECT_NAMES, FIT_EFFECTS, check_fit_effects, effect_names, model_label
@@ -73,6 +74,7 @@ from ._plan import (
     relaxation_identifiability,
     untestable_in_table,
 )
+from ._plan_effects import EffectSensitivity, effect_power, effect_sensitivity
 from ._relaxation import (
     RelaxationFit,
     elastic_force,
@@ -88,6 +90,7 @@ from ._validate import IndentationValidation, validate_indentation
 __all__ = [
     "EFFECTS",
     "EFFECT_NAMES",
+    "EFFECT_SIZE_PARAMS",
     "FIT_EFFECTS",
     "HAYES_1972",
     "MAX_W_OVER_H",
@@ -97,6 +100,7 @@ __all__ = [
     "Design",
     "Diagnosis",
     "Effect",
+    "EffectSensitivity",
     "FemLaw",
     "IndentationFit",
     "IndentationModel",
@@ -118,6 +122,8 @@ __all__ = [
     "design_toml",
     "diagnose",
     "effect_names",
+    "effect_power",
+    "effect_sensitivity",
     "elastic_force",
     "fem_kappa_table",
     "fem_table_meta",
@@ -136,6 +142,7 @@ __all__ = [
     "nu_from_beta",
     "plan",
     "plan_session",
+    "planned_columns",
     "ramp_factor",
     "read_design",
     "refine_relaxation",

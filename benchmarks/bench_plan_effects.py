@@ -1,0 +1,159 @@
+"""``plan``'s smallest effect sizes found in 95 % of sessions against ``diagnose`` itself.
+
+For each of six designs (:func:`designs`: a/h 0.6 to 1.5, 4 to 8 depths, 3 to 6
+repeats, vernier or mark; holds, rests, days and positions varied so that the
+catalogue's effects can be tested), ``effect_sensitivity`` predicts for every
+catalogue effect the size ``diagnose`` names in 95 % of sessions. This benchmark then
+draws sessions of the design with the effect at 1/1.3, 1 and 1.3 times that size
+(``tactilevision.sim.design_measurement_table``) and runs ``diagnose`` (defaults) on
+each:
+
+- forces from the finite-strain FEM at each press's true depth, so eq. (5)'s own
+  misfit is in every table;
+- the effect applied in the catalogue's own exact (not linearized) form
+  (relaxation at tau 1 s, recovery at 2 s);
+- F/T noise over the window on each force, each press's certified depth off its true
+  depth by the design's random depth sd, tangential forces 2 % of the normal force in a
+  random direction plus F/T noise.
+
+An effect counts as found when ``diagnose`` puts it on its ladder or lists it as
+equivalent to the effect it names (``bench_diagnose_power``'s rule). Prints per design
+and effect the predicted size, the share found at each of the three sizes, and the
+achieved 95 % size (interpolated: probit of the share against log size) over the
+predicted; the target is within a factor 1.3.
+
+The drawn sessions use the plan's own noise model (white, Gaussian) and the catalogue's
+forms, so this checks the replay of ``diagnose``'s rule, not the noise model.
+
+Run: ``python benchmarks/bench_plan_effects.py [--sessions 40] [--jobs 2]
+[--designs 0 1 ...] [--json PATH]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import sys
+import time
+import warnings
+from multiprocessing import Pool
+
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+
+import numpy as np
+from scipy import stats
+
+from tactilevision.mechanics import Design, diagnose, effect_sensitivity
+from tactilevision.sim import design_measurement_table
+
+FACTORS = (1 / 1.3, 1.0, 1.3)
+
+
+def designs() -> list[Design]:
+    """Six designs: a/h, depths, repeats and the depth method vary; each varies holds
+    (window at the hold's end), rests, days and positions."""
+    common = dict(window_at="end", force_noise_n=0.0125, window_samples=200)
+    return [
+        Design(thickness_mm=3.0, radius_mm=2.5, depths_mm=(0.15, 0.3, 0.4, 0.5, 0.6),
+               repeats=6, bevel_angle_deg=5.0, overshoot_um=(30.0, 60.0),
+               holds_s=(0.5, 2.0, 5.0), waits_s=(1.0, 3.0, 10.0), days=3, positions=6,
+               **common),
+        Design(thickness_mm=2.0, radius_mm=3.0, depths_mm=(0.1, 0.15, 0.2, 0.25, 0.3, 0.35),
+               repeats=4, bevel_angle_deg=10.0, overshoot_um=(30.0, 90.0),
+               holds_s=(1.0, 4.0), waits_s=(0.5, 5.0), days=2, positions=8, **common),
+        Design(thickness_mm=4.0, radius_mm=2.4, depths_mm=(0.2, 0.4, 0.6, 0.75),
+               repeats=6, frame_rate_hz=90.0, stage_speed_mm_s=0.1,
+               holds_s=(0.5, 1.0, 3.0), waits_s=(2.0, 6.0), days=4, positions=10, **common),
+        Design(thickness_mm=3.0, radius_mm=3.0,
+               depths_mm=tuple(np.round(np.linspace(0.12, 0.57, 8), 3)), repeats=3,
+               bevel_angle_deg=3.0, overshoot_um=(0.0, 50.0), holds_s=(0.3, 1.0, 3.0, 8.0),
+               waits_s=(1.0, 2.0, 4.0, 8.0), days=2, positions=5, **common),
+        Design(thickness_mm=2.5, radius_mm=3.75, depths_mm=(0.1, 0.2, 0.3, 0.4, 0.45),
+               repeats=5, frame_rate_hz=30.0, stage_speed_mm_s=0.05,
+               holds_s=(1.0, 2.0, 6.0), waits_s=(1.0, 10.0), days=3, positions=4, **common),
+        Design(thickness_mm=3.0, radius_mm=2.0, depths_mm=(0.15, 0.25, 0.35, 0.45, 0.55),
+               repeats=4, bevel_angle_deg=15.0, overshoot_um=(30.0, 90.0),
+               holds_s=(0.5, 5.0), waits_s=(1.0, 4.0, 12.0), days=2, positions=6,
+               force_noise_n=0.02, E_mpa=0.3, nu=0.47, window_at="end", window_samples=100),
+    ]
+
+
+def found(args: tuple) -> bool:
+    i, name, size, seed = args
+    d = designs()[i]
+    cols = design_measurement_table(d, name, size, seed=seed)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        r = diagnose(cols, thickness_mm=d.thickness_mm, radius_mm=d.radius_mm)
+    named = [s.added for s in r.ladder if s.added] + list(r.equivalent_effects)
+    return name in named
+
+
+def achieved_ratio(factors: np.ndarray, shares: np.ndarray, n: int) -> float:
+    """The achieved 95 % size over the predicted: probit of the share (clipped half a
+    session from 0 and 1) against log size, the line through the points, at 0.95."""
+    p = np.clip(shares, 0.5 / n, 1 - 0.5 / n)
+    z = stats.norm.ppf(p)
+    slope, icpt = np.polyfit(np.log(factors), z, 1)
+    if slope <= 0:
+        return math.nan
+    return float(math.exp((stats.norm.ppf(0.95) - icpt) / slope))
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--sessions", type=int, default=40)
+    ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--designs", type=int, nargs="*", default=None)
+    ap.add_argument("--effects", nargs="*", default=None)
+    ap.add_argument("--json", default=None)
+    a = ap.parse_args(argv)
+    ds = designs()
+    which = a.designs if a.designs is not None else range(len(ds))
+    results = []
+    t_all = time.perf_counter()
+    with Pool(a.jobs) as pool:
+        for i in which:
+            d = ds[i]
+            t0 = time.perf_counter()
+            pred = effect_sensitivity(d)
+            t_plan = time.perf_counter() - t0
+            how = (f"vernier {d.bevel_angle_deg:g} deg" if d.bevel_angle_deg
+                   else f"mark {d.frame_rate_hz:g} frames/s")
+            print(f"design {i}: a/h {d.a_over_h:.2f}, {len(d.depths_mm)} depths x "
+                  f"{d.repeats}, {how}; sizes predicted in {t_plan:.2f} s", flush=True)
+            for name, s in pred.items():
+                if a.effects and name not in a.effects:
+                    continue
+                if not math.isfinite(s.size_param):
+                    print(f"  {name:24s} {s.why}")
+                    continue
+                jobs = [(i, name, f * s.size_param, 10_000 * i + 100 * k + j)
+                        for k, f in enumerate(FACTORS) for j in range(a.sessions)]
+                t1 = time.perf_counter()
+                hits = np.array(pool.map(found, jobs)).reshape(len(FACTORS), a.sessions)
+                shares = hits.mean(axis=1)
+                ratio = achieved_ratio(np.array(FACTORS), shares, a.sessions)
+                ok = 1 / 1.3 <= ratio <= 1.3 if math.isfinite(ratio) else False
+                print(f"  {name:24s} predicted {s.size:9.4g} {s.unit:6s} found "
+                      + " / ".join(f"{100 * v:3.0f} %" for v in shares)
+                      + f" at x{FACTORS[0]:.2f}/x1/x{FACTORS[2]:.1f};  achieved/predicted "
+                      f"{ratio:5.2f} {'ok' if ok else 'OUT'}  ({time.perf_counter() - t1:.0f} s)",
+                      flush=True)
+                results.append(dict(design=i, effect=name, predicted=s.size, unit=s.unit,
+                                    predicted_param=s.size_param, snr=s.snr,
+                                    shares=shares.tolist(), ratio=ratio, within=bool(ok),
+                                    sessions=a.sessions))
+    n_ok = sum(r["within"] for r in results)
+    print(f"within a factor 1.3: {n_ok} of {len(results)} (design, effect) pairs; "
+          f"{time.perf_counter() - t_all:.0f} s in all")
+    if a.json:
+        with open(a.json, "w") as fh:
+            json.dump(results, fh, indent=1)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

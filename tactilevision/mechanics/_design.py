@@ -1,0 +1,517 @@
+"""A calibration session's design: what ``plan`` reads and what a session of it writes.
+
+A design is a ``session.toml`` (formats.md §1: gel thickness h, indenter radius a, the
+gauge block's depths and bevel, the F/T window) plus a ``[plan]`` table of what a session
+does not hold yet (:class:`Design`). Here: reading and checking it, writing it back
+(:func:`design_toml`), each press's depth uncertainty (:func:`depth_uncertainty`), the
+noise-free presses (:func:`design_table`) and the measurements table a session of it
+will write (:func:`planned_columns`), and the catalogue effects that table cannot test
+(:func:`untestable_in_table`).
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .._checks import InputError
+from ._catalogue import EFFECTS, make_effect
+from ._diagnose import _usable, _why
+from ._fem_tables import kappa_n
+from ._fit import MAX_W_OVER_H
+
+__all__ = [
+    "EFFECT_SIZE_PARAMS",
+    "RESOLVED_PX",
+    "VERNIER_EDGE_PX",
+    "Design",
+    "check_design",
+    "depth_uncertainty",
+    "design_table",
+    "design_toml",
+    "hold_lengths",
+    "planned_columns",
+    "read_design",
+    "untestable_effects",
+    "untestable_in_table",
+]
+
+#: The parameter that sizes each catalogue effect in a plan (``[plan.detect]``,
+#: :func:`~tactilevision.mechanics.effect_sensitivity`), its display unit and the factor
+#: from the parameter's own unit to it. Two-parameter effects are sized along their
+#: first parameter, the second at zero (``force_drift``'s curvature, the y gradient,
+#: ``ky``).
+EFFECT_SIZE_PARAMS: dict[str, tuple[str, str, float]] = {
+    "depth_offset": ("delta_mm", "um", 1e3),
+    "force_offset": ("offset_n", "mN", 1e3),
+    "force_drift": ("drift_n_per_s", "mN/s", 1e3),
+    "viscoelastic_relaxation": ("g", "", 1.0),
+    "incomplete_recovery": ("r", "", 1.0),
+    "aging": ("k_per_day", "1/day", 1.0),
+    "spatial_nonuniformity": ("gx_per_mm", "1/mm", 1.0),
+    "force_crosstalk": ("kx", "", 1.0),
+}
+
+#: The sd of a vernier band's half-width read, px: the sample session's certified depths
+#: (``measurements.csv`` of ``tactilevision calibrate sample_frames/gelsight_session``,
+#: 48 presses, scored against the session's ``truth.json``; 2026-11-25) lie -0.47 um off
+#: on average with an sd of 1.8 um at a 5 deg bevel and 0.0295 mm/px:
+#: 1.8e-3 / (tan 5 deg x 0.0295) = 0.70 px. One session's figure, on frames this
+#: project drew.
+VERNIER_EDGE_PX = 0.70
+
+#: The band half-width, px, below which a vernier's band is only bounded, not read: the
+#: contact package's ``RESOLVED_PX`` (mechanics does not import contact; a test keeps the
+#: two equal).
+RESOLVED_PX = 10.0
+
+#: nu's physical range as this project's beta tables hold it: a sigma of nu beyond a
+
+@dataclass(frozen=True)
+class Design:
+    """A calibration session's design (formats.md §1 ``session.toml`` plus ``[plan]``).
+
+    Attributes
+    ----------
+    thickness_mm, radius_mm : float
+        Gel thickness h and indenter radius a, mm.
+    depths_mm : tuple of float
+        The gauge block's depths w0, mm.
+    repeats : int
+        Presses per depth.
+    E_mpa, nu : float
+        The expected Young's modulus (MPa) and Poisson's ratio.
+    bevel_angle_deg : float
+        Flank angle of the bevel ridge, deg; 0 for a mark.
+    mm_per_px : float
+        Image scale, mm per px (the vernier's resolution).
+    frame_rate_hz, stage_speed_mm_s : float
+        Camera rate and the stage's speed as it passes w0 (a mark's depth error is one
+        frame's travel).
+    force_noise_n : float
+        sd of one F/T sample, N.
+    window_samples : int
+        F/T samples averaged per press.
+    force_zero_n : float
+        Zero stability of the F/T sensor: a force offset every press may share, N (a
+        bound).
+    hold_s : float or None
+        Hold length per press, s (checked against the window).
+    rate_hz : float
+        F/T sample rate, Hz.
+    depth_std_um : float or None
+        Overrides the bevel's or the mark's random depth sd, um.
+    beta_table : {'fem', 'paper'}
+    overshoot_um : (float, float)
+        How far past w0 the stage stops, um, uniform over this range (the vernier reads
+        a band only past :data:`RESOLVED_PX` of half-width).
+    holds_s : tuple of float or None
+        The hold lengths the presses cycle through, s (None: ``hold_s`` for every press).
+    window_at : {'start', 'end'}
+        Where the F/T window sits in the hold (formats.md §1 ``[force_sensor]``).
+    waits_s : tuple of float
+        The rests between presses the session cycles through, s.
+    days : int
+        Calendar days (sessions) the presses are spread over.
+    positions : int
+        Distinct press positions on the pad.
+    detect : tuple of (str, float)
+        Effect sizes the user wants to be able to see (``[plan.detect]``: a catalogue
+        effect of :data:`EFFECT_SIZE_PARAMS` and its size in that table's unit):
+        ``plan`` gives the share of sessions in which ``diagnose`` names each.
+    relaxation_g, relaxation_tau_s : float or None
+        A relaxation to plan for (g in (0, 1), tau in s; both or neither):
+        whether ``fit_relaxation`` identifies it from the planned holds
+        (:func:`relaxation_identifiability`).
+    """
+
+    thickness_mm: float
+    radius_mm: float
+    depths_mm: tuple[float, ...]
+    repeats: int = 10
+    E_mpa: float = 0.2
+    nu: float = 0.45
+    bevel_angle_deg: float = 0.0
+    mm_per_px: float = 0.0295
+    frame_rate_hz: float = 30.0
+    stage_speed_mm_s: float = 0.1
+    force_noise_n: float = 0.0125
+    window_samples: int = 200
+    force_zero_n: float = 0.0
+    hold_s: float | None = None
+    rate_hz: float = 1000.0
+    depth_std_um: float | None = None
+    beta_table: str = "fem"
+    overshoot_um: tuple[float, float] = (0.0, 50.0)
+    holds_s: tuple[float, ...] | None = None
+    window_at: str = "start"
+    waits_s: tuple[float, ...] = (2.0,)
+    days: int = 1
+    positions: int = 10
+    relaxation_g: float | None = None
+    relaxation_tau_s: float | None = None
+    detect: tuple[tuple[str, float], ...] = ()
+
+    def __post_init__(self) -> None:
+        check_design(self)
+
+    @property
+    def a_over_h(self) -> float:
+        """a/h."""
+        return self.radius_mm / self.thickness_mm
+
+
+def _positive(value: Any, key: str, *, allow_zero: bool = False) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise InputError(f"{key} must be a number, got {value!r}") from None
+    if not math.isfinite(v) or v < 0 or (v == 0 and not allow_zero):
+        raise InputError(f"{key} must be {'non-negative' if allow_zero else 'positive'}, "
+                         f"got {value!r}")
+    return v
+
+
+def check_design(d: Design) -> None:
+    """Refuse a design that cannot be run, naming the key at fault (one sentence).
+
+    Raises
+    ------
+    InputError
+        A non-positive h or a, no depth or a depth beyond the gel (w0 >= h) or past
+        the FEM beta table's reach (w/h > 0.23), fewer than two distinct depths, a bevel
+        angle of 45 degrees or more, a window longer than the hold, a repeat count
+        below 1, or a nu outside (0, 0.5].
+    """
+    h = _positive(d.thickness_mm, "[sensor] gel_thickness_mm")
+    _positive(d.radius_mm, "[indenter] radius_mm")
+    if len(d.depths_mm) == 0:
+        raise InputError("[gauge_block] depths_mm lists no depth")
+    for w in d.depths_mm:
+        w = _positive(w, "[gauge_block] depths_mm")
+        if w >= h:
+            raise InputError(f"[gauge_block] depths_mm: {w:g} mm is beyond the gel "
+                             f"({h:g} mm thick)")
+        if w / h > 0.23:
+            raise InputError(f"[gauge_block] depths_mm: {w:g} mm is w/h = {w / h:.3f}, past "
+                             f"the FEM beta table's reach (0.23; the linear law (2) fails "
+                             f"beyond {MAX_W_OVER_H:g})")
+    if len(set(d.depths_mm)) < 2:
+        raise InputError("[gauge_block] depths_mm needs at least two distinct depths to "
+                         "fit eq. (5)")
+    angle = _positive(d.bevel_angle_deg, "[gauge_block] bevel_angle_deg", allow_zero=True)
+    if angle >= 45:
+        raise InputError(f"[gauge_block] bevel_angle_deg {angle:g} is 45 degrees or more: "
+                         "the flank would press the gel as the indenter does")
+    if int(d.repeats) != d.repeats or d.repeats < 1:
+        raise InputError(f"[plan] repeats must be a positive integer, got {d.repeats!r}")
+    if int(d.window_samples) != d.window_samples or d.window_samples < 1:
+        raise InputError("[force_sensor] window_samples must be a positive integer, got "
+                         f"{d.window_samples!r}")
+    rate = _positive(d.rate_hz, "[force_sensor] rate_hz")
+    if d.hold_s is not None:
+        hold = _positive(d.hold_s, "[plan] hold_s")
+        if d.window_samples / rate > hold:
+            raise InputError(f"[force_sensor] window_samples {d.window_samples} at "
+                             f"{rate:g} Hz is {d.window_samples / rate:g} s, longer than "
+                             f"the hold ([plan] hold_s = {hold:g} s)")
+    _positive(d.E_mpa, "[plan] E_mpa")
+    nu = float(d.nu)
+    if not 0 < nu <= 0.5:
+        raise InputError(f"[plan] nu must lie in (0, 0.5], got {d.nu!r}")
+    _positive(d.mm_per_px, "[sensor] mm_per_px")
+    _positive(d.frame_rate_hz, "[plan] frame_rate_hz")
+    _positive(d.stage_speed_mm_s, "[plan] stage_speed_mm_s")
+    _positive(d.force_noise_n, "[plan] force_noise_n", allow_zero=True)
+    _positive(d.force_zero_n, "[plan] force_zero_n", allow_zero=True)
+    if d.depth_std_um is not None:
+        _positive(d.depth_std_um, "[plan] depth_std_um", allow_zero=True)
+    try:
+        lo_o, hi_o = (float(v) for v in d.overshoot_um)
+    except (TypeError, ValueError):
+        raise InputError(f"[plan] overshoot_um must be two numbers [low, high], um, got "
+                         f"{d.overshoot_um!r}") from None
+    if not (math.isfinite(lo_o) and math.isfinite(hi_o) and 0 <= lo_o <= hi_o):
+        raise InputError(f"[plan] overshoot_um must be [low, high] with 0 <= low <= high, got "
+                         f"{d.overshoot_um!r}")
+    if d.window_at not in ("start", "end"):
+        raise InputError(f"[force_sensor] window_at must be 'start' or 'end', got "
+                         f"{d.window_at!r}")
+    for key in ("days", "positions"):
+        v = getattr(d, key)
+        if isinstance(v, bool) or not isinstance(v, int | float) or int(v) != v or v < 1:
+            raise InputError(f"[plan] {key} must be a positive integer, got {v!r}")
+    for key in ("holds_s", "waits_s"):
+        v = getattr(d, key)
+        if v is None:
+            continue
+        if not isinstance(v, tuple | list) or not v:
+            raise InputError(f"[plan] {key} must be a list of seconds, got {v!r}")
+        for x in v:
+            _positive(x, f"[plan] {key}", allow_zero=key == "waits_s")
+        if key == "holds_s" and min(v) < d.window_samples / d.rate_hz:
+            raise InputError(f"[plan] holds_s: a hold of {min(v):g} s is shorter than the "
+                             f"window ({d.window_samples / d.rate_hz:g} s)")
+    if d.beta_table not in ("fem", "paper"):
+        raise InputError(f"[plan] beta_table must be 'fem' or 'paper', got {d.beta_table!r}")
+    if (d.relaxation_g is None) != (d.relaxation_tau_s is None):
+        raise InputError("[plan] relaxation_g and relaxation_tau_s go together: give both "
+                         "or neither")
+    if d.relaxation_g is not None:
+        if not 0 < float(d.relaxation_g) < 1:
+            raise InputError(f"[plan] relaxation_g must be in (0, 1), got {d.relaxation_g!r}")
+        _positive(d.relaxation_tau_s, "[plan] relaxation_tau_s")
+    for item in d.detect:
+        if not (isinstance(item, tuple | list) and len(item) == 2):
+            raise InputError(f"[plan.detect] entries are effect = size, got {item!r}")
+        name, size = item
+        if name not in EFFECT_SIZE_PARAMS:
+            raise InputError(f"[plan.detect] {name} is not an effect plan can size (known: "
+                             f"{', '.join(EFFECT_SIZE_PARAMS)})")
+        _positive(size, f"[plan.detect] {name}")
+
+
+def read_design(path: str | Path) -> Design:
+    """Read a design file: a ``session.toml`` with a ``[plan]`` table.
+
+    Parameters
+    ----------
+    path : str or Path
+        The TOML file. Keys: ``[sensor] gel_thickness_mm, mm_per_px``, ``[indenter]
+        radius_mm``, ``[gauge_block] depths_mm, bevel_angle_deg``, ``[force_sensor]
+        rate_hz, window_samples, window_at``, ``[plan] repeats, E_mpa, nu,
+        frame_rate_hz, stage_speed_mm_s, force_noise_n, force_zero_n, hold_s,
+        depth_std_um, beta_table, overshoot_um, holds_s, waits_s, days, positions,
+        relaxation_g, relaxation_tau_s`` and ``[plan.detect]`` (effect = size; every
+        ``[plan]`` key optional; :class:`Design` gives the defaults).
+
+    Returns
+    -------
+    design : Design
+
+    Raises
+    ------
+    InputError
+        A missing or unreadable file, TOML that does not parse, a missing required
+        key, an unknown ``[plan]`` key, or a bad value (:func:`check_design`), each
+        naming the file and the key.
+    """
+    path = Path(path)
+    try:
+        doc = tomllib.loads(path.read_text())
+    except FileNotFoundError:
+        raise InputError(f"design file {path} does not exist") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"design file {path} cannot be read: {exc}") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(f"design file {path} is not valid TOML: {exc}") from None
+
+    def need(table: str, key: str) -> Any:
+        try:
+            return doc[table][key]
+        except (KeyError, TypeError):
+            raise InputError(f"{path}: [{table}] {key} is missing") from None
+
+    for table in ("sensor", "indenter", "gauge_block", "force_sensor", "plan"):
+        if not isinstance(doc.get(table, {}), dict):
+            raise InputError(f"{path}: [{table}] must be a table")
+    plan = doc.get("plan", {})
+    known = {"repeats", "E_mpa", "nu", "frame_rate_hz", "stage_speed_mm_s", "force_noise_n",
+             "force_zero_n", "hold_s", "depth_std_um", "beta_table", "overshoot_um",
+             "holds_s", "waits_s", "days", "positions", "relaxation_g", "relaxation_tau_s",
+             "detect"}
+    unknown = sorted(set(plan) - known)
+    if unknown:
+        raise InputError(f"{path}: [plan] {unknown[0]} is not a design key (known: "
+                         f"{', '.join(sorted(known))})")
+    depths = need("gauge_block", "depths_mm")
+    if not isinstance(depths, list):
+        raise InputError(f"{path}: [gauge_block] depths_mm must be a list of depths, mm")
+    gauge = doc.get("gauge_block", {})
+    sensor = doc.get("sensor", {})
+    force = doc.get("force_sensor", {})
+    kw: dict[str, Any] = dict(plan)
+    if "detect" in kw:
+        if not isinstance(kw["detect"], dict):
+            raise InputError(f"{path}: [plan.detect] must be a table of effect = size")
+        kw["detect"] = tuple(kw["detect"].items())
+    for key in ("overshoot_um", "holds_s", "waits_s"):
+        if key in kw and isinstance(kw[key], list):
+            kw[key] = tuple(kw[key])
+    if isinstance(force.get("window_at"), str):
+        kw["window_at"] = force["window_at"]
+    try:
+        return Design(thickness_mm=need("sensor", "gel_thickness_mm"),
+                      radius_mm=need("indenter", "radius_mm"),
+                      depths_mm=tuple(depths),
+                      bevel_angle_deg=gauge.get("bevel_angle_deg", 0.0),
+                      mm_per_px=sensor.get("mm_per_px", Design.mm_per_px),
+                      rate_hz=force.get("rate_hz", Design.rate_hz),
+                      window_samples=force.get("window_samples", Design.window_samples),
+                      **kw)
+    except InputError as exc:
+        raise InputError(f"{path}: {exc}") from None
+
+
+def depth_uncertainty(d: Design) -> tuple[float, float, str]:
+    """Random sd and shared bound of a press's certified depth, um, and how.
+
+    A vernier (``bevel_angle_deg > 0``) reads the band's half-width L, w = w0 + L
+    tan(theta) (formats.md §1), to ``VERNIER_EDGE_PX`` px: ``sd_read = VERNIER_EDGE_PX
+    x mm_per_px x tan(theta)``. A band is read only once L reaches ``RESOLVED_PX``
+    (10 px), an overshoot of ``o_r = RESOLVED_PX x mm_per_px x tan(theta)``; below it the
+    depth is only bounded to [w0, w0 + o_r] (sd ``o_r / sqrt 12``, the uniform bound's).
+    With the overshoot uniform over ``overshoot_um``, a share f of presses is read and
+    the sd per press is ``sqrt(f sd_read^2 + (1 - f) o_r^2 / 12)``. A mark is seen at the
+    first frame past it: the depth past w0 is off by up to one frame's travel ``v / f``,
+    uniformly (sd ``v / (f sqrt 12)``), and the clock that dates the crossing can share
+    up to that much in every press (the bound given as ``depth_shared_um``).
+    ``depth_std_um`` overrides the random part.
+    """
+    if d.bevel_angle_deg > 0:
+        t = math.tan(math.radians(d.bevel_angle_deg)) * d.mm_per_px * 1e3   # um per px
+        read_sd, o_r = VERNIER_EDGE_PX * t, RESOLVED_PX * t
+        lo, hi = (float(v) for v in d.overshoot_um)
+        f = 1.0 if o_r <= lo else (0.0 if o_r >= hi else (hi - o_r) / (hi - lo))
+        sd = math.sqrt(f * read_sd**2 + (1 - f) * o_r**2 / 12)
+        shared, how = 0.0, (f"vernier at {d.bevel_angle_deg:g} deg: {100 * f:.0f} % of presses "
+                            f"read ({VERNIER_EDGE_PX:g} px x {d.mm_per_px:g} mm/px x "
+                            f"tan(theta) = {read_sd:.2f} um), the rest bounded to "
+                            f"{o_r:.1f} um past w0")
+    else:
+        travel = d.stage_speed_mm_s / d.frame_rate_hz * 1e3
+        sd, shared = travel / math.sqrt(12.0), travel
+        how = (f"mark: one frame's travel {travel:.1f} um ({d.stage_speed_mm_s:g} mm/s at "
+               f"{d.frame_rate_hz:g} frames/s) / sqrt(12), shared up to one frame's travel")
+    if d.depth_std_um is not None:
+        sd, how = float(d.depth_std_um), "given ([plan] depth_std_um)"
+    return sd, shared, how
+
+
+def design_table(d: Design) -> tuple[np.ndarray, np.ndarray]:
+    """The design's noise-free presses: depths w (mm) and the finite-strain FEM's forces
+    P = 2 a E w kappa_n(nu, a/h, w/h) / (1 - nu^2) (N), ``repeats`` per depth."""
+    w = np.repeat(np.asarray(d.depths_mm, np.float64), int(d.repeats))
+    kn = {x: kappa_n(d.nu, d.a_over_h, x / d.thickness_mm) for x in set(d.depths_mm)}
+    k = np.array([kn[x] for x in w])
+    return w, 2 * d.radius_mm * d.E_mpa * w * k / (1 - d.nu**2)
+
+
+def hold_lengths(d: Design, n: int) -> np.ndarray:
+    """(n,) hold length of each press in turn, s: ``holds_s`` cycled, else ``hold_s``,
+    else 1 s."""
+    holds = np.asarray(d.holds_s if d.holds_s is not None else
+                       (d.hold_s if d.hold_s is not None else 1.0,), np.float64)
+    return holds[np.arange(n) % holds.size]
+
+
+def planned_columns(d: Design) -> dict[str, np.ndarray]:
+    """The measurements table a session of the design will write, but its forces (formats.md
+    §2 columns): each depth's ``repeats`` presses in turn, the holds (``hold_s``: half
+    the window with ``window_at = 'start'``, the hold less half the window with
+    ``'end'``), the rests, the press times, the days and the positions on the pad; the
+    tangential forces ``fx_n``, ``fy_n`` only as varying columns (an F/T sensor always
+    records them).
+
+    Returns
+    -------
+    columns : dict of str to (N,) float ndarray
+    """
+    w = np.repeat(np.asarray(d.depths_mm, np.float64), int(d.repeats))
+    n = w.size
+    i = np.arange(n)
+    hold = hold_lengths(d, n)
+    half = 0.5 * d.window_samples / d.rate_hz
+    waits = np.asarray(d.waits_s, np.float64)[i % len(d.waits_s)]
+    k = np.arange(d.positions)
+    ang = 2.39996 * k                   # a golden-angle spiral over a 5 mm disc
+    px, py = 5.0 * np.sqrt((k + 0.5) / d.positions) * np.cos(ang), 5.0 * np.sqrt(
+        (k + 0.5) / d.positions) * np.sin(ang)
+    return {
+        "press": i.astype(np.float64), "depth_mm": w,
+        "hold_s": np.full(n, half) if d.window_at == "start" else hold - half,
+        "wait_s": waits, "time_s": np.cumsum(waits + hold),
+        "day": np.floor(i * d.days / n), "x_mm": px[i % d.positions],
+        "y_mm": py[i % d.positions], "fx_n": np.cos(i), "fy_n": np.sin(i),
+    }
+
+
+def untestable_effects(d: Design) -> dict[str, str]:
+    """The catalogue's effects ``diagnose`` could not test on a session of the design,
+    and why (its column constant or missing in :func:`planned_columns`; the same test
+    ``diagnose`` makes of a table)."""
+    return untestable_in_table(planned_columns(d), window_at=d.window_at)
+
+
+def untestable_in_table(columns: dict[str, np.ndarray], *, window_at: str | None = None
+                        ) -> dict[str, str]:
+    """The catalogue's effects ``diagnose`` cannot test on a measurements table, and why.
+
+    Parameters
+    ----------
+    columns : dict of str to (N,) ndarray
+        Columns of a measurements table (formats.md section 2), as ``calibrate``
+        writes them or :func:`planned_columns` plans them.
+    window_at : {'start', 'end'}, optional
+        Where the force window sat in each hold (``[force_sensor] window_at``);
+        'start' adds how to make relaxation testable.
+
+    Returns
+    -------
+    why : dict of str to str
+        Effect name to one sentence: the column it needs, constant or missing (the
+        test ``diagnose`` makes before it tries an effect), and the change that would
+        let a session test it.
+    """
+    out = {}
+    for name in EFFECTS:
+        if name == "large_deformation":
+            continue
+        if _usable(name, columns) is not None:
+            why = _why(make_effect(name).columns, columns)
+            if name == "viscoelastic_relaxation" and window_at == "start":
+                why += ("; with the window at the hold's start every press's window sits "
+                        "at the same time of its hold: vary it with window_at = 'end' and "
+                        "holds of different lengths")
+            elif name == "aging":
+                why += "; spread the presses over several days"
+            elif name == "spatial_nonuniformity":
+                why += "; press at several positions of the pad"
+            out[name] = why
+    return out
+
+
+def design_toml(d: Design) -> str:
+    """The design as a design file (``session.toml`` tables plus ``[plan]``), for
+    :func:`read_design`."""
+    def val(v: Any) -> str:
+        if isinstance(v, tuple | list):
+            return "[" + ", ".join(val(x) for x in v) + "]"
+        if isinstance(v, str):
+            return f'"{v}"'
+        return repr(float(v)) if isinstance(v, float) else str(v)
+
+    plan_keys = ["repeats", "E_mpa", "nu", "frame_rate_hz", "stage_speed_mm_s",
+                 "force_noise_n", "force_zero_n", "hold_s", "depth_std_um", "beta_table",
+                 "overshoot_um", "holds_s", "waits_s", "days", "positions", "relaxation_g",
+                 "relaxation_tau_s"]
+    lines = ["[sensor]", f"gel_thickness_mm = {val(d.thickness_mm)}",
+             f"mm_per_px = {val(d.mm_per_px)}", "", "[indenter]",
+             f"radius_mm = {val(d.radius_mm)}", "", "[gauge_block]",
+             f"depths_mm = {val(tuple(d.depths_mm))}",
+             f"bevel_angle_deg = {val(d.bevel_angle_deg)}", "", "[force_sensor]",
+             f"rate_hz = {val(d.rate_hz)}", f"window_samples = {int(d.window_samples)}",
+             f"window_at = {val(d.window_at)}", "",
+             "[plan]"]
+    for k in plan_keys:
+        v = getattr(d, k)
+        if v is not None:
+            lines.append(f"{k} = {val(v)}")
+    if d.detect:
+        lines += ["", "[plan.detect]"] + [f"{k} = {val(float(v))}" for k, v in d.detect]
+    return "\n".join(lines) + "\n"

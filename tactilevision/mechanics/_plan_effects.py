@@ -1,0 +1,409 @@
+"""Before the first press: the smallest size of each catalogue effect ``diagnose`` will find.
+
+:func:`effect_sensitivity` answers, for a design (:class:`~tactilevision.mechanics.Design`),
+how large each effect of the catalogue (formats.md §5) must be for
+:func:`~tactilevision.mechanics.diagnose` to name it in 95 % of sessions at its
+default thresholds. It does not run ``diagnose``: it draws the noise of many sessions
+of the design and replays ``diagnose``'s decisions on each, linearized:
+
+- the base law is eq. (5), fitted by least squares to the design's finite-strain FEM
+  forces (its own misfit to them is in every drawn session, as in a real one);
+- each candidate effect enters as the columns of its force change at zero size (its
+  derivatives: a depth offset's dP/dw, a stiffness effect's P x its factor's
+  derivative, a force effect's own term); an effect's time constant (relaxation,
+  recovery) is searched over a grid, as ``IndentationModel.fit`` searches it by
+  gradient, and counts in the BIC;
+- a candidate passes with a BIC lower by more than ``DELTA_BIC``; an effect along depth
+  alone (``depth_offset``, ``force_offset``) must also beat the law's own curvature by
+  ``CURVATURE_BIC``; the best passing candidate joins the model (the law's curvature as a
+  rung, not a verdict) and the others within ``EQUIVALENT_BIC`` are its equivalents, for
+  up to ``max_steps`` rungs;
+- the hidden effect is *found* when it joins the model or is listed as equivalent to the
+  one that does (``benchmarks/bench_diagnose_power.py``'s rule).
+
+Left out: the cross-validation check (it passes whenever the BIC does, on tables of
+this size), the robust loss, the stiffness change points (``stiffness_step``) and the
+generic trends, which compete only for effects they mimic.
+``benchmarks/bench_plan_effects.py`` checks the predicted sizes against ``diagnose``
+itself on generated sessions of several designs.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._checks import InputError
+from ._design import (
+    EFFECT_SIZE_PARAMS,
+    Design,
+    depth_uncertainty,
+    design_table,
+    planned_columns,
+    untestable_effects,
+)
+from ._diagnose import CURVATURE_BIC, DELTA_BIC, EQUIVALENT_BIC
+from ._fem_tables import kappa_n
+
+__all__ = ["EFFECT_SIZE_PARAMS", "EffectSensitivity", "effect_power", "effect_sensitivity"]
+
+#: Time constant of relaxation and recovery the sizes are given at, s (the catalogue's
+#: starting values; a design's ``relaxation_tau_s`` replaces relaxation's).
+NOMINAL_TAU_S = {"viscoelastic_relaxation": 1.0, "incomplete_recovery": 2.0}
+
+#: The grid over which a time constant is searched in the replayed fits, s.
+TAU_GRID_S = np.geomspace(1e-2, 1e2, 25)
+
+#: Tangential forces, as a fraction of the normal force (sd, random direction): the
+#: plan's stand-in for ``fx_n`` and ``fy_n``, which a design does not hold
+#: (``tactilevision.sim.make_measurement_table``'s, 2 %).
+TANGENTIAL_FRACTION = 0.02
+
+#: Most rungs replayed (``diagnose``'s ``max_steps``).
+MAX_STEPS = 3
+
+
+@dataclass(frozen=True)
+class EffectSensitivity:
+    """The smallest size of one catalogue effect a design lets ``diagnose`` find.
+
+    Attributes
+    ----------
+    effect : str
+        Catalogue name (formats.md §5).
+    parameter : str
+        The effect's parameter that sizes it (:data:`EFFECT_SIZE_PARAMS`).
+    unit : str
+        Unit of ``size``.
+    size : float
+        The smallest size found in ``power`` of sessions (in ``unit``; NaN where the
+        design cannot test the effect, inf where no size within the parameter's reach
+        is found that often).
+    size_param : float
+        ``size`` in the parameter's own unit (the catalogue's: mm, N, N/s, ...).
+    power : float
+        The power asked for (0.95).
+    snr : float
+        That size as ``bench_diagnose_power``'s signal-to-noise ratio: the RMS over the
+        presses of the force change eq. (5) cannot take up, over the replicate noise.
+    why : str
+        One sentence.
+    """
+
+    effect: str
+    parameter: str
+    unit: str
+    size: float
+    size_param: float
+    power: float
+    snr: float
+    why: str
+
+
+@dataclass
+class _Candidate:
+    name: str
+    k: int                         # parameters counted in the BIC
+    cols: list[np.ndarray]         # one (n, m) column block per grid value of tau
+    fixed: np.ndarray | None = None  # the block once in the model (at the nominal tau)
+    depth_only: bool = False       # along depth alone: must beat the law's curvature
+    rung: bool = False             # the law's own curvature: a rung, never a verdict
+
+
+def _slope(d: Design, w: np.ndarray) -> np.ndarray:
+    """dP/dw of the finite-strain FEM at each depth, N/mm (central difference)."""
+    h, a = d.thickness_mm, d.radius_mm
+    step = 1e-4 * h
+
+    def force(x: np.ndarray) -> np.ndarray:
+        k = np.array([float(kappa_n(d.nu, d.a_over_h, xi / h)) for xi in x])
+        return 2 * a * d.E_mpa * x * k / (1 - d.nu ** 2)
+
+    return (force(w + step) - force(np.maximum(w - step, 0.0))) / (
+        w + step - np.maximum(w - step, 0.0))
+
+
+def _effect_columns(name: str, cols: dict[str, np.ndarray], P: np.ndarray,
+                    dPdw: np.ndarray, tangential: tuple[np.ndarray, np.ndarray],
+                    tau_nominal: float | None) -> tuple[_Candidate, np.ndarray]:
+    """The candidate's linearized columns, and its force change per unit size (at the
+    nominal time constant)."""
+    one = np.ones_like(P)
+    if name == "depth_offset":
+        return _Candidate(name, 1, [dPdw[:, None]], depth_only=True), dPdw
+    if name == "force_offset":
+        return _Candidate(name, 1, [one[:, None]], depth_only=True), one
+    if name == "force_drift":
+        t = cols["time_s"]
+        return _Candidate(name, 2, [np.column_stack([t, t * t])]), t
+    if name == "aging":
+        g = P * cols["day"]
+        return _Candidate(name, 1, [g[:, None]]), g
+    if name == "spatial_nonuniformity":
+        return (_Candidate(name, 2, [np.column_stack([P * cols["x_mm"], P * cols["y_mm"]])]),
+                P * cols["x_mm"])
+    if name == "force_crosstalk":
+        fx, fy = tangential
+        return _Candidate(name, 2, [np.column_stack([fx, fy])]), fx
+    if name == "viscoelastic_relaxation":
+        hold = cols["hold_s"]
+
+        def col(tau: float) -> np.ndarray:
+            return -P * (1 - np.exp(-hold / tau))
+    elif name == "incomplete_recovery":
+        wait = np.nan_to_num(cols["wait_s"], nan=np.inf)
+
+        def col(tau: float) -> np.ndarray:
+            return P * np.exp(-wait / tau)
+    else:
+        raise InputError(f"no plan for effect {name!r}")
+    grid = [col(t)[:, None] for t in TAU_GRID_S]
+    nominal = col(float(tau_nominal))
+    return _Candidate(name, 2, grid, fixed=nominal[:, None]), nominal
+
+
+def _rss(basis: np.ndarray, Y: np.ndarray) -> np.ndarray:
+    """Residual sum of squares of each column of Y (n, M) on the basis (n, p)."""
+    q, _ = np.linalg.qr(basis)
+    R = Y - q @ (q.T @ Y)
+    return np.einsum("ij,ij->j", R, R)
+
+
+class _Replay:
+    """``diagnose``'s decisions, linearized, over many drawn sessions of a design."""
+
+    def __init__(self, d: Design, draws: int, seed: int) -> None:
+        self.d = d
+        w, P = design_table(d)
+        self.n = n = w.size
+        cols = planned_columns(d)
+        sd_um, _, _ = depth_uncertainty(d)
+        self.dPdw = _slope(d, w)
+        s_P = d.force_noise_n / math.sqrt(d.window_samples)
+        self.sigma = np.sqrt(s_P ** 2 + (self.dPdw * sd_um * 1e-3) ** 2)
+        rng = np.random.default_rng(seed)
+        self.noise = self.sigma[:, None] * rng.standard_normal((n, draws))
+        tang = (TANGENTIAL_FRACTION * P * rng.standard_normal(n),
+                TANGENTIAL_FRACTION * P * rng.standard_normal(n))
+        x = w / d.thickness_mm
+        self.X0 = np.column_stack([w, w * x])               # eq. (5): c w + c beta w^2 / h
+        self.P = P
+        self.cols = cols
+        untest = untestable_effects(d)
+        self.untestable = untest
+        self.cands: dict[str, _Candidate] = {}
+        self.signal: dict[str, np.ndarray] = {}
+        tau_relax = d.relaxation_tau_s if d.relaxation_tau_s is not None else \
+            NOMINAL_TAU_S["viscoelastic_relaxation"]
+        for name in EFFECT_SIZE_PARAMS:
+            if name in untest:
+                continue
+            tau = tau_relax if name == "viscoelastic_relaxation" else NOMINAL_TAU_S.get(name)
+            cand, sig = _effect_columns(name, cols, P, self.dPdw, tang, tau)
+            self.cands[name] = cand
+            self.signal[name] = sig
+        self.cands["law_curvature"] = _Candidate("law_curvature", 1, [(P * x * x)[:, None]],
+                                                 rung=True)
+        # the design's own misfit: eq. (5) against the FEM's forces, in every session
+        self.base_y = P
+
+    def _block(self, name: str) -> np.ndarray:
+        c = self.cands[name]
+        return c.fixed if c.fixed is not None else c.cols[0]
+
+    def _bic(self, cur: tuple[str, ...], new: str | None, Y: np.ndarray) -> np.ndarray:
+        """BIC (up to a constant) on each column of Y of eq. (5) plus the effects `cur`
+        (at their nominal time constants) and `new` (its time constant searched)."""
+        n = self.n
+        fixed = [self.X0] + [self._block(a) for a in cur]
+        k = 2 + sum(self.cands[a].k for a in cur)
+        if new is None:
+            rss = _rss(np.column_stack(fixed), Y)
+        else:
+            k += self.cands[new].k
+            rss = np.min([_rss(np.column_stack([*fixed, blk]), Y)
+                          for blk in self.cands[new].cols], axis=0)
+        return n * np.log(np.maximum(rss / n, 1e-300)) + k * math.log(n)
+
+    def found(self, hidden: str, size: float, max_steps: int = MAX_STEPS) -> np.ndarray:
+        """(draws,) bool: sessions in which ``diagnose`` (replayed) names `hidden` at
+        `size` (the parameter's own unit)."""
+        Y = (self.base_y + size * self.signal[hidden])[:, None] + self.noise
+        M = Y.shape[1]
+        hit = np.zeros(M, bool)
+        state: list[tuple[str, ...]] = [()] * M
+        done = np.zeros(M, bool)
+        for _ in range(max_steps):
+            groups: dict[tuple[str, ...], list[int]] = {}
+            for j in np.flatnonzero(~done):
+                groups.setdefault(state[j], []).append(j)
+            if not groups:
+                break
+            for cur, idx in groups.items():
+                idx = np.asarray(idx)
+                Yg = Y[:, idx]
+                b0 = self._bic(cur, None, Yg)
+                names = [c for c in self.cands if c not in cur]
+                if not names:
+                    done[idx] = True
+                    continue
+                dbic = {c: self._bic(cur, c, Yg) - b0 for c in names}
+                curv = dbic.get("law_curvature", np.full(idx.size, np.inf))
+                passing = {}
+                for c, db in dbic.items():
+                    ok = db < -DELTA_BIC
+                    if self.cands[c].depth_only and "law_curvature" in names:
+                        ok &= db < curv - CURVATURE_BIC
+                    passing[c] = np.where(ok, db, np.inf)
+                order = list(passing)
+                table = np.vstack([passing[c] for c in order])          # (C, m)
+                best = np.argmin(table, axis=0)
+                best_val = table[best, np.arange(idx.size)]
+                none = ~np.isfinite(best_val)
+                if hidden in order:
+                    hv = table[order.index(hidden)]
+                    named_best = np.array([not self.cands[order[b]].rung for b in best])
+                    with np.errstate(invalid="ignore"):
+                        close = hv - best_val < EQUIVALENT_BIC
+                    equiv = np.isfinite(hv) & close & named_best
+                    hit[idx] |= equiv & ~none
+                for jj, j in enumerate(idx):
+                    if none[jj]:
+                        done[j] = True
+                    else:
+                        state[j] = (*cur, order[best[jj]])
+        return hit
+
+    def power(self, hidden: str, size: float) -> float:
+        return float(np.mean(self.found(hidden, size)))
+
+    def snr(self, hidden: str, size: float) -> float:
+        """``bench_diagnose_power``'s signal-to-noise ratio of `hidden` at `size`."""
+        g = size * self.signal[hidden]
+        r = _rss(self.X0, g[:, None])[0]
+        return float(math.sqrt(r / self.n) / np.sqrt(np.mean(self.sigma ** 2)))
+
+
+def _size_for_power(rep: _Replay, name: str, target: float, upper: float) -> float:
+    """Smallest size (parameter unit) replayed as found in `target` of sessions: a
+    bracket by doubling from the size at snr 1, then bisection in log size."""
+    unit_snr = rep.snr(name, 1.0)
+    if unit_snr <= 0:
+        return math.inf
+    lo = hi = min(1.0 / unit_snr, upper)
+    if rep.power(name, hi) >= target:
+        while lo > hi / 64:
+            lo /= 2
+            if rep.power(name, lo) < target:
+                break
+        else:
+            return lo
+    else:
+        while rep.power(name, hi) < target:
+            lo, hi = hi, 2 * hi
+            if hi > upper:
+                return math.inf
+    for _ in range(10):
+        mid = math.sqrt(lo * hi)
+        if rep.power(name, mid) >= target:
+            hi = mid
+        else:
+            lo = mid
+        if hi / lo < 1.02:
+            break
+    return hi
+
+
+def effect_power(design: Design, effect: str, size: float, *, draws: int = 2000,
+                 seed: int = 0) -> float:
+    """Share of sessions of the design in which ``diagnose`` (replayed, linearized)
+    names `effect` at `size`.
+
+    Parameters
+    ----------
+    design : Design
+    effect : str
+        A catalogue effect of :data:`EFFECT_SIZE_PARAMS`.
+    size : float
+        The effect's size in its display unit (:data:`EFFECT_SIZE_PARAMS`).
+    draws : int, default 2000
+        Sessions drawn.
+    seed : int, default 0
+
+    Returns
+    -------
+    power : float
+        In [0, 1]; 0 where the design cannot test the effect.
+
+    Raises
+    ------
+    InputError
+        For an effect without a plan.
+    """
+    if effect not in EFFECT_SIZE_PARAMS:
+        raise InputError(f"no plan for effect {effect!r}: choose from "
+                         f"{', '.join(EFFECT_SIZE_PARAMS)}")
+    rep = _Replay(design, draws, seed)
+    if effect not in rep.cands:
+        return 0.0
+    return rep.power(effect, size / EFFECT_SIZE_PARAMS[effect][2])
+
+
+def effect_sensitivity(design: Design, *, power: float = 0.95, draws: int = 1000,
+                       seed: int = 0) -> dict[str, EffectSensitivity]:
+    """The smallest size of each catalogue effect ``diagnose`` names in `power` of the
+    sessions of a design.
+
+    Parameters
+    ----------
+    design : Design
+    power : float, default 0.95
+        In (0, 1).
+    draws : int, default 1000
+        Sessions drawn (the sizes' own Monte Carlo error is about 3 % at 1000).
+    seed : int, default 0
+
+    Returns
+    -------
+    sizes : dict of str to EffectSensitivity
+        For every effect of :data:`EFFECT_SIZE_PARAMS`, in catalogue order.
+
+    Raises
+    ------
+    InputError
+        For `power` outside (0, 1).
+
+    Notes
+    -----
+    See the module's docstring: ``diagnose``'s BIC rule, its curvature gate and its
+    equivalences replayed on the design's drawn noise, each effect linearized at zero
+    size. The noise per press is the F/T window's sd and the certified depth's
+    (:func:`~tactilevision.mechanics.plan_session`'s) through the FEM's dP/dw, white.
+    Relaxation is sized at the design's ``relaxation_tau_s`` (else 1 s), recovery at
+    2 s; tangential forces at 2 % of the normal force, random.
+    """
+    if not 0 < power < 1:
+        raise InputError(f"power must be in (0, 1), got {power!r}")
+    rep = _Replay(design, draws, seed)
+    out = {}
+    for name, (param, unit, scale) in EFFECT_SIZE_PARAMS.items():
+        if name not in rep.cands:
+            why = rep.untestable.get(name, "not testable on this design")
+            out[name] = EffectSensitivity(name, param, unit, math.nan, math.nan, power,
+                                          math.nan, f"cannot be tested: {why}")
+            continue
+        upper = {"viscoelastic_relaxation": 0.9, "incomplete_recovery": 2.0}.get(name, math.inf)
+        s = _size_for_power(rep, name, power, upper)
+        if not math.isfinite(s):
+            out[name] = EffectSensitivity(name, param, unit, math.inf, math.inf, power,
+                                          math.inf, f"not found in {100 * power:.0f} % of "
+                                          "sessions at any size the parameter allows")
+            continue
+        snr = rep.snr(name, s)
+        out[name] = EffectSensitivity(
+            name, param, unit, s * scale, s, power, snr,
+            f"found in {100 * power:.0f} % of sessions from {param} = {s * scale:.3g}"
+            f"{' ' + unit if unit else ''} (snr {snr:.2g})")
+    return out
