@@ -624,3 +624,20 @@ def test_report_says_what_this_session_could_not_test(sample_run):
     cols["hold_s"] = np.resize([0.5, 1.0, 2.0], n)
     cols["day"] = np.arange(n) % 3.0
     assert untestable_in_table(cols, window_at="end") == {}
+
+
+def test_calibrate_writes_the_sessions_design(sample_run):
+    """design.toml: the session's design (design_from_calibration of the folder), read
+    back equal; its depths the gauge block's, its repeats the presses per depth, its E and
+    nu the fit's; plan reads it."""
+    from tactilevision.mechanics import design_from_calibration, plan, read_design
+
+    out, _ = sample_run
+    folder = out / "report"
+    d = read_design(folder / "design.toml")
+    assert d == design_from_calibration(folder)
+    fit = json.loads((folder / "fit.json").read_text())
+    assert d.depths_mm == (0.15, 0.3, 0.4, 0.5, 0.6)
+    assert d.repeats == 10 and d.bevel_angle_deg == 5.0
+    assert (d.E_mpa, d.nu) == (fit["E_mpa"], fit["nu"])
+    assert plan(d).nu_identified

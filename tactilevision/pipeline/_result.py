@@ -1,8 +1,9 @@
 """The calibration folder: :class:`CalibrationResult` writes and reads it (I/O edge).
 
 ``calibrate`` writes ``fit.json`` (the ``fit --json`` keys, then the session's),
-``measurements.csv`` with its ``session.toml``, ``holds.csv`` and
-``rejected.csv`` (formats.md section 3). Every reader of such a folder (``history``,
+``measurements.csv`` with its ``session.toml``, ``holds.csv``, ``rejected.csv``
+and ``design.toml`` (the session's design, to plan the next from: formats.md
+section 3). Every reader of such a folder (``history``,
 ``forces --fit``, ``view --fit``, ``batch calibrate``) goes through
 :meth:`CalibrationResult.load`; :func:`write_calibration` writes the folder whole,
 with its figures and ``report.html``, or changes nothing.
@@ -13,6 +14,7 @@ from __future__ import annotations
 import csv
 import json
 import math
+import warnings
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -21,6 +23,7 @@ import numpy as np
 from .._assets import KNOWN_SENSORS, default_calibration_path
 from .._checks import InputError
 from ..io import Session, StagedOutput, read_holds, read_measurements, write_measurements
+from ..mechanics import design_from_calibration, design_toml
 from ..optics import DepthReconstructor, PhotometricCalibration
 from ..viz import calibration_figures, write_calibration_report
 from ._calibration import SessionCalibration
@@ -30,10 +33,16 @@ __all__ = ["CALIBRATION_FILES", "CalibrationResult", "read_material", "result_di
 
 #: The files a calibration folder holds (the figures and report.html unless ``report=False``).
 CALIBRATION_FILES = ("rejected.csv", "measurements.csv", "session.toml", "holds.csv", "fit.json",
-                     "report.html", "force_depth.png", "stiffness_line.png", "residuals.png",
-                     "mosaic.png", "bevel.png")
+                     "design.toml", "report.html", "force_depth.png", "stiffness_line.png",
+                     "residuals.png", "mosaic.png", "bevel.png")
 
 _REJECTED = ("press", "reason", "detail", "t_frame_s", "bevel_snr")
+
+
+def _has_material(fit: dict) -> bool:
+    """fit.json's E and nu are finite numbers (a design can be planned from them)."""
+    return all(isinstance(fit.get(k), int | float) and math.isfinite(fit[k])
+               for k in ("E_mpa", "nu"))
 
 
 def result_dict(cal: SessionCalibration) -> dict:
@@ -207,7 +216,9 @@ class CalibrationResult:
     # -- the folder ------------------------------------------------------------------------
     def save(self, folder: str | Path) -> list[str]:
         """Write ``rejected.csv``, ``measurements.csv`` (with its ``session.toml``),
-        ``holds.csv`` and ``fit.json`` into `folder` (those this result has).
+        ``holds.csv``, ``fit.json`` and ``design.toml`` (the session's design, for
+        ``tactilevision plan``, where the fit has E and nu) into `folder` (those this
+        result has).
 
         Writes in place: use :func:`write_calibration` (or
         :class:`~tactilevision.io.StagedOutput`) for a folder written whole or
@@ -250,6 +261,15 @@ class CalibrationResult:
                 (folder / "fit.json").write_text(json.dumps(self.fit, indent=2, allow_nan=False)
                                                  + "\n", encoding="utf-8")
                 written.append("fit.json")
+                if self.measurements is not None and _has_material(self.fit):
+                    # the session's design, to plan the next one from (tactilevision plan)
+                    try:
+                        design = design_toml(design_from_calibration(folder))
+                    except InputError as exc:       # the calibration itself stands
+                        warnings.warn(f"no design.toml: {exc}", stacklevel=2)
+                    else:
+                        (folder / "design.toml").write_text(design, encoding="utf-8")
+                        written.append("design.toml")
         except OSError as exc:
             raise InputError(f"cannot write the calibration into {folder}: {exc}") from None
         return written
