@@ -9,11 +9,15 @@ from pathlib import Path
 from .. import InputError
 from ..mechanics import (
     EFFECT_SIZE_PARAMS,
+    Recommendation,
     design_from_calibration,
     design_toml,
     plan_session,
     read_design,
+    recommend,
 )
+from ..mechanics._plan import _no_nan
+from ..mechanics._plan_recommend import MIN_GAIN
 from ._fit import _write_json
 
 __all__ = ["add_parser", "run"]
@@ -50,6 +54,16 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                         "fit.json names)")
     p.add_argument("--write-design", metavar="FILE", type=Path,
                    help="also write the design as a design file (to edit and plan again)")
+    p.add_argument("--recommend", action="store_true",
+                   help="also rank the changes of the design by predicted gain (each planned "
+                        "again: a few seconds)")
+    p.add_argument("--target-E-pct", type=float, metavar="PCT",
+                   help="find the cheapest design whose total error of E (random and "
+                        "systematic, %% of E) is at most PCT (implies --recommend)")
+    p.add_argument("--target-nu", type=float, metavar="ERR",
+                   help="... and whose total error of nu is at most ERR (implies --recommend)")
+    p.add_argument("--write-recommended", metavar="FILE", type=Path,
+                   help="write the cheapest design meeting the targets as a design file")
     p.add_argument("--json", metavar="FILE", help="write the prediction as JSON ('-': stdout)")
     p.set_defaults(func=run)
 
@@ -118,11 +132,61 @@ def run(args: argparse.Namespace) -> int:
         except OSError as exc:
             raise InputError(f"cannot write the design to {args.write_design}: "
                              f"{exc.strerror}") from None
+    targets = args.target_E_pct is not None or args.target_nu is not None
+    if args.write_recommended is not None and not targets:
+        raise InputError("--write-recommended needs a target: --target-E-pct or --target-nu")
     pred = plan_session(design)
+    rec = (recommend(design, target_E_pct=args.target_E_pct, target_nu=args.target_nu)
+           if args.recommend or targets else None)
+    doc = pred.as_dict()
+    if rec is not None:
+        doc["recommendation"] = _no_nan(rec.as_dict())
+    if rec is not None and args.write_recommended is not None:
+        if rec.cheapest is None:
+            raise InputError(f"no design file written to {args.write_recommended}: {rec.why}")
+        try:
+            args.write_recommended.write_text(design_toml(rec.cheapest.design),
+                                              encoding="utf-8")
+        except OSError as exc:
+            raise InputError(f"cannot write the design to {args.write_recommended}: "
+                             f"{exc.strerror}") from None
     if args.json == "-":
-        _write_json(pred.as_dict(), "-")
+        _write_json(doc, "-")
         return 0
     print(summary(pred))
+    if rec is not None:
+        print(recommendation_summary(rec))
     if args.json:
-        _write_json(pred.as_dict(), args.json)
+        _write_json(doc, args.json)
     return 0
+
+
+def _total(e: float, n: float) -> str:
+    return ("nu not identified" if not math.isfinite(n) else
+            f"E {e:.1f} %, nu {n:.4f}")
+
+
+def recommendation_summary(rec: Recommendation) -> str:
+    """The ranked changes and the cheapest design, in lines of text."""
+    lines = [f"total error now (random and systematic): {_total(rec.E_total_pct, rec.nu_total)}"]
+    if rec.changes:
+        lines.append("changes, by predicted gain (the binding error's fall):")
+    for c in rec.changes:
+        if c.gain >= MIN_GAIN:
+            lines.append(f"  {100 * c.gain:+4.0f} %  {c.what}: {_total(c.E_total_pct, c.nu_total)}"
+                         f", {c.n_presses} presses")
+        else:
+            lines.append(f"  lets diagnose test {', '.join(c.opens)}: {c.what}")
+    if not rec.changes:
+        lines.append("no single change lowers the error by 2 % or more")
+    if rec.target_E_pct is not None or rec.target_nu is not None:
+        want = ", ".join(x for x in (
+            f"E within {rec.target_E_pct:g} %" if rec.target_E_pct is not None else "",
+            f"nu within {rec.target_nu:g}" if rec.target_nu is not None else "") if x)
+        if rec.cheapest is None:
+            lines.append(f"targets ({want}): {rec.why}")
+        else:
+            c = rec.cheapest
+            lines.append(f"cheapest design meeting the targets ({want}): {c.what or 'as it is'}"
+                         f" -> {c.n_presses} presses, {_total(c.E_total_pct, c.nu_total)}")
+    return "\n".join(lines)

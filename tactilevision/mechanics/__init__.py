@@ -75,6 +75,7 @@ from ._plan import (
     untestable_in_table,
 )
 from ._plan_effects import EffectSensitivity, effect_power, effect_sensitivity
+from ._plan_recommend import DesignChange, Recommendation, error_totals, recommend
 from ._relaxation import (
     RelaxationFit,
     elastic_force,
@@ -98,6 +99,7 @@ __all__ = [
     "BetaRelation",
     "CovariateTest",
     "Design",
+    "DesignChange",
     "Diagnosis",
     "Effect",
     "EffectSensitivity",
@@ -110,6 +112,7 @@ __all__ = [
     "NoiseBudget",
     "Param",
     "PlanPrediction",
+    "Recommendation",
     "RelaxationFit",
     "RelaxationPlan",
     "beta",
@@ -125,6 +128,7 @@ __all__ = [
     "effect_power",
     "effect_sensitivity",
     "elastic_force",
+    "error_totals",
     "fem_kappa_table",
     "fem_table_meta",
     "fit_indentation",
@@ -145,6 +149,7 @@ __all__ = [
     "planned_columns",
     "ramp_factor",
     "read_design",
+    "recommend",
     "refine_relaxation",
     "register_effect",
     "relaxation_identifiability",

@@ -308,18 +308,25 @@ def _line_covariance(d: Design, w: np.ndarray, P: np.ndarray, u: np.ndarray | No
                      s_P: float, s_w: float) -> np.ndarray:
     """Covariance (2, 2) of the fit's intercept c and slope c beta (linear in the presses'
     P/w) from independent force noise `s_P` and depth noise `s_w` per press, by central
-    differences of the fit in every press's force and depth."""
+    differences of the fit in every press's force and depth.
+
+    The noise-free table's repeats of a depth are the same press: the fit is symmetric
+    in its presses, so its derivatives in each are equal, and one press per depth is
+    differentiated."""
     n = w.size
     J_P = np.empty((2, n))
     J_w = np.empty((2, n))
-    for i in range(n):
+    for x in np.unique(w):
+        same = w == x
+        i = int(np.flatnonzero(same)[0])
         for J, arr, step in ((J_P, P, 1e-4 * P[i]), (J_w, w, 1e-4 * w[i])):
             hi, lo = arr.copy(), arr.copy()
             hi[i] += step
             lo[i] -= step
             args_hi = (w, hi) if arr is P else (hi, P)
             args_lo = (w, lo) if arr is P else (lo, P)
-            J[:, i] = (_fit(d, *args_hi, u)[2:] - _fit(d, *args_lo, u)[2:]) / (2 * step)
+            J[:, same] = ((_fit(d, *args_hi, u)[2:] - _fit(d, *args_lo, u)[2:])
+                          / (2 * step))[:, None]
     return s_P**2 * J_P @ J_P.T + s_w**2 * J_w @ J_w.T
 
 
@@ -374,12 +381,15 @@ def _biases(d: Design, w: np.ndarray, P: np.ndarray, u: np.ndarray | None,
     return bias
 
 
-def plan_session(design: Design) -> PlanPrediction:
+def plan_session(design: Design, *, effect_sizes: bool = True) -> PlanPrediction:
     """Predict what a calibration session of this design will measure.
 
     Parameters
     ----------
     design : Design
+    effect_sizes : bool, default True
+        Also the smallest size of each catalogue effect ``diagnose`` names
+        (:func:`effect_sensitivity`, about a second) and the ``detect`` sizes' power.
 
     Returns
     -------
@@ -415,8 +425,9 @@ def plan_session(design: Design) -> PlanPrediction:
     notes: list[str] = []
     untest = untestable_effects(d)
     try:
-        sizes = effect_sensitivity(d)
-        seen = {name: effect_power(d, name, float(size)) for name, size in d.detect}
+        sizes = effect_sensitivity(d) if effect_sizes else {}
+        seen = ({name: effect_power(d, name, float(size)) for name, size in d.detect}
+                if effect_sizes else {})
     except InputError as exc:           # the FEM table cannot give this design's forces
         sizes, seen = {}, {}
         notes.append(f"no effect sizes: {exc}")
