@@ -59,7 +59,8 @@ def test_error_totals_add_the_systematic_part_in_quadrature():
 
 
 def test_the_cheapest_design_meets_the_targets_on_generated_sessions():
-    """The recommended design: its plan meets the targets, one repeat fewer does not, and
+    """The recommended design: its plan meets the targets, one repeat fewer does not (above
+    the search's floor of two), and
     300 sessions drawn of it (the FEM's forces, the design's noise) have an RMS error of E
     and nu within 20 % of the targets (the plan's sds are within 20 % of the scatter:
     benchmarks/bench_plan.py)."""
@@ -69,9 +70,11 @@ def test_the_cheapest_design_meets_the_targets_on_generated_sessions():
     c = rec.cheapest
     assert c is not None
     assert c.E_total_pct <= 4.0 and c.nu_total <= 0.01
-    fewer = plan_session(replace(c.design, repeats=c.design.repeats - 1), effect_sizes=False)
-    e, n, _, _ = error_totals(fewer)
-    assert e > 4.0 or n > 0.01
+    if c.design.repeats > 2:                    # the search's floor: two per depth
+        fewer = plan_session(replace(c.design, repeats=c.design.repeats - 1),
+                             effect_sizes=False)
+        e, n, _, _ = error_totals(fewer)
+        assert e > 4.0 or n > 0.01
     err = _session_errors(c.design, 300, seed=5)
     ok = np.isfinite(err).all(axis=1)
     assert ok.mean() > 0.97

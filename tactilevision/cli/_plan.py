@@ -173,7 +173,8 @@ def recommendation_summary(rec: Recommendation) -> str:
         lines.append("changes, by predicted gain (the binding error's fall):")
     for c in rec.changes:
         if c.gain >= MIN_GAIN:
-            lines.append(f"  {100 * c.gain:+4.0f} %  {c.what}: {_total(c.E_total_pct, c.nu_total)}"
+            gain = "nu identified" if math.isinf(c.gain) else f"{100 * c.gain:+4.0f} %"
+            lines.append(f"  {gain}  {c.what}: {_total(c.E_total_pct, c.nu_total)}"
                          f", {c.n_presses} presses")
         else:
             lines.append(f"  lets diagnose test {', '.join(c.opens)}: {c.what}")

@@ -17,13 +17,22 @@ import math
 from dataclasses import dataclass, field, replace
 
 from .._checks import InputError
-from ._design import Design
+from ._design import RESOLVED_PX, Design
 from ._plan import PlanPrediction, plan_session
 
 __all__ = ["DesignChange", "Recommendation", "error_totals", "recommend"]
 
 #: Most repeats per depth the cheapest-design search tries.
 MAX_REPEATS = 30
+
+#: Bevel angles a change proposes, deg: the range over which the vernier's depth model
+#: was compared with frames Taxim rendered (docs/guide/plan.md, "How far to trust it").
+#: A shallower bevel reads finer but its band runs longer (an overshoot over tan theta),
+#: and the pad and the camera's view bound it: the design does not hold them.
+BEVEL_RANGE_DEG = (3.0, 15.0)
+
+#: Most changes the cheapest-design search chains (:func:`_greedy_path`).
+GREEDY_STEPS = 4
 
 #: Smallest gain (fall of the binding error) for which a change is recommended.
 MIN_GAIN = 0.02
@@ -167,8 +176,17 @@ def _changes(d: Design) -> list[tuple[str, Design, bool]]:
         out.append((f"an indenter of radius {a:g} mm (a/h {NU_A_OVER_H:g}, was "
                     f"{d.a_over_h:.2f}) for nu", replace(d, radius_mm=a), True))
     if d.bevel_angle_deg > 0:
-        steep = min(2 * d.bevel_angle_deg, 30.0)
-        shallow = max(d.bevel_angle_deg / 2, 1.0)
+        # a band is read once RESOLVED_PX long: the stage stopping past that reads them all
+        o_r = RESOLVED_PX * d.mm_per_px * math.tan(math.radians(d.bevel_angle_deg)) * 1e3
+        lo, hi = d.overshoot_um
+        if lo < o_r:
+            span = max(hi - lo, 10.0)
+            new = (math.ceil(o_r + 5.0), math.ceil(o_r + 5.0 + span))
+            out.append((f"the stage stopping {new[0]:g} to {new[1]:g} um past w0 (was {lo:g} "
+                        f"to {hi:g}), every band long enough to read",
+                        replace(d, overshoot_um=(float(new[0]), float(new[1]))), True))
+        steep = min(2 * d.bevel_angle_deg, BEVEL_RANGE_DEG[1])
+        shallow = max(d.bevel_angle_deg / 2, BEVEL_RANGE_DEG[0])
         if steep > d.bevel_angle_deg:
             out.append((f"a steeper bevel, {steep:g} deg (was {d.bevel_angle_deg:g})",
                         replace(d, bevel_angle_deg=steep), True))
@@ -281,9 +299,10 @@ def recommend(design: Design, *, target_E_pct: float | None = None,
     Each change is planned with :func:`plan_session` (no effect sizes), and ranked by
     its gain (:class:`DesignChange`). The cheapest design is searched, with both
     targets given (one alone: the other is not constrained), among the design as
-    given, each single change of the gauge block or its reading, and all the changes
-    that gained at once; each at the fewest repeats per depth (up to
-    :data:`MAX_REPEATS`) whose plan meets the targets. Cheapest: fewest presses, then
+    given, each single change of the gauge block or its reading, and the designs
+    reached by chaining the best such change up to :data:`GREEDY_STEPS` times; each
+    at the fewest repeats per depth (up to :data:`MAX_REPEATS`) whose plan meets the
+    targets. Cheapest: fewest presses, then
     the smaller total error of E. A design whose systematic part alone exceeds a
     target (a mark's shared lag, an F/T zero's drift) meets it at no number of repeats.
     """
@@ -318,12 +337,7 @@ def recommend(design: Design, *, target_E_pct: float | None = None,
         return rec
     pool: list[tuple[str, Design]] = [("", design)]
     pool += [(what, d) for what, d, block in _changes(design) if block]
-    gained = [c for c in better if c.design.repeats == design.repeats]
-    if len(gained) > 1:
-        combo = design
-        for c in gained:
-            combo = _merge(combo, design, c.design)
-        pool.append(("; ".join(c.what for c in gained), combo))
+    pool += _greedy_path(design, ref, base.untestable)
     found = []
     for what, d in pool:
         try:
@@ -343,15 +357,31 @@ def recommend(design: Design, *, target_E_pct: float | None = None,
     return rec
 
 
-def _merge(acc: Design, base: Design, changed: Design) -> Design:
-    """`acc` with the fields in which `changed` differs from `base` (depths: the union; a
-    field `acc` has changed already is kept: the better-ranked change's)."""
-    kw = {}
-    for k, v in changed.__dict__.items():
-        if v != getattr(base, k):
-            if k == "depths_mm":
-                v = tuple(sorted(set(acc.depths_mm) | set(v)))
-            elif getattr(acc, k) != getattr(base, k):
+def _greedy_path(design: Design, ref: tuple[float, float], base_untestable: dict[str, str],
+                 steps: int = GREEDY_STEPS) -> list[tuple[str, Design]]:
+    """Designs reached by taking, again and again, the change of the gauge block or its
+    reading with the largest gain on the design reached so far (while it gains
+    :data:`MIN_GAIN`): a mark's lag may hide what a wider punch gains until a vernier
+    replaces the mark."""
+    out: list[tuple[str, Design]] = []
+    cur, label = design, []
+    cur_p = plan_session(design, effect_sizes=False)
+    cur_r = _ratio(*error_totals(cur_p)[:2], ref)
+    for _ in range(steps):
+        best = None
+        for what, d, block in _changes(cur):
+            if not block:
                 continue
-            kw[k] = v
-    return replace(acc, **kw)
+            try:
+                c = _change(what, d, ref, base_untestable, cur_r)
+            except InputError:
+                continue
+            if c.gain >= MIN_GAIN and (best is None or c.gain > best.gain):
+                best = c
+        if best is None:
+            break
+        label.append(best.what)
+        cur = best.design
+        cur_r = _ratio(best.E_total_pct, best.nu_total, ref)
+        out.append(("; ".join(label), cur))
+    return out
