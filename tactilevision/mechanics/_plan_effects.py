@@ -36,6 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._checks import InputError
+from ._catalogue import make_effect
 from ._design import (
     EFFECT_SIZE_PARAMS,
     Design,
@@ -83,6 +84,9 @@ class EffectSensitivity:
         is found that often).
     size_param : float
         ``size`` in the parameter's own unit (the catalogue's: mm, N, N/s, ...).
+        inf where the size would pass the parameter's bound in the catalogue (which
+        ``diagnose``'s fit keeps to) or, for a depth offset, take the deepest press
+        past the FEM table (w/h 0.23).
     power : float
         The power asked for (0.95).
     snr : float
@@ -286,11 +290,22 @@ class _Replay:
         return float(math.sqrt(r / self.n) / np.sqrt(np.mean(self.sigma ** 2)))
 
 
+def _reach(d: Design, name: str) -> float:
+    """The largest size of the effect ``diagnose`` can fit: its parameter's upper bound in
+    the catalogue (``IndentationModel.fit`` stays within it) and, for a depth offset,
+    the FEM table's reach past the deepest press (w/h 0.23)."""
+    param = EFFECT_SIZE_PARAMS[name][0]
+    bound = next(q.upper for q in make_effect(name).params if q.name == param)
+    if name == "depth_offset":
+        bound = min(bound, 0.23 * d.thickness_mm - max(d.depths_mm))
+    return float(bound)
+
+
 def _size_for_power(rep: _Replay, name: str, target: float, upper: float) -> float:
     """Smallest size (parameter unit) replayed as found in `target` of sessions: a
     bracket by doubling from the size at snr 1, then bisection in log size."""
     unit_snr = rep.snr(name, 1.0)
-    if unit_snr <= 0:
+    if unit_snr <= 0 or upper <= 0:
         return math.inf
     lo = hi = min(1.0 / unit_snr, upper)
     if rep.power(name, hi) >= target:
@@ -302,9 +317,9 @@ def _size_for_power(rep: _Replay, name: str, target: float, upper: float) -> flo
             return lo
     else:
         while rep.power(name, hi) < target:
-            lo, hi = hi, 2 * hi
-            if hi > upper:
+            if hi >= upper:
                 return math.inf
+            lo, hi = hi, min(2 * hi, upper)
     for _ in range(10):
         mid = math.sqrt(lo * hi)
         if rep.power(name, mid) >= target:
@@ -394,12 +409,14 @@ def effect_sensitivity(design: Design, *, power: float = 0.95, draws: int = 1000
             out[name] = EffectSensitivity(name, param, unit, math.nan, math.nan, power,
                                           math.nan, f"cannot be tested: {why}")
             continue
-        upper = {"viscoelastic_relaxation": 0.9, "incomplete_recovery": 2.0}.get(name, math.inf)
+        upper = _reach(design, name)
         s = _size_for_power(rep, name, power, upper)
         if not math.isfinite(s):
             out[name] = EffectSensitivity(name, param, unit, math.inf, math.inf, power,
                                           math.inf, f"not found in {100 * power:.0f} % of "
-                                          "sessions at any size the parameter allows")
+                                          "sessions at any size the parameter allows (up "
+                                          f"to {_reach(design, name) * scale:.3g}"
+                                          f"{' ' + unit if unit else ''})")
             continue
         snr = rep.snr(name, s)
         out[name] = EffectSensitivity(
