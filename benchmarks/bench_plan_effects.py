@@ -25,8 +25,12 @@ predicted; the target is within a factor 1.3.
 The drawn sessions use the plan's own noise model (white, Gaussian) and the catalogue's
 forms, so this checks the replay of ``diagnose``'s rule, not the noise model.
 
+Then the replayed power (``effect_power``) at each drawn size against the share
+``diagnose`` named (the issue's target: within 10 points).
+
 Run: ``python benchmarks/bench_plan_effects.py [--sessions 40] [--jobs 2]
-[--designs 0 1 ...] [--json PATH]``.
+[--designs 0 1 ...] [--json PATH] [--figure PATH]``, or ``--from-json PATH`` to
+summarize (and draw) a previous run.
 """
 
 from __future__ import annotations
@@ -42,11 +46,15 @@ from multiprocessing import Pool
 
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
 import numpy as np
 from scipy import stats
 
 from tactilevision import InputError
-from tactilevision.mechanics import Design, diagnose, effect_sensitivity
+from tactilevision.mechanics import Design, diagnose, effect_power, effect_sensitivity
 from tactilevision.sim import design_measurement_table
 
 FACTORS = (1 / 1.3, 1.0, 1.3)
@@ -115,7 +123,16 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--designs", type=int, nargs="*", default=None)
     ap.add_argument("--effects", nargs="*", default=None)
     ap.add_argument("--json", default=None)
+    ap.add_argument("--from-json", default=None,
+                    help="no sessions: read a previous run's JSON and print its summary")
+    ap.add_argument("--figure", default=None,
+                    help="draw achieved against predicted (with --from-json or after the run)")
     a = ap.parse_args(argv)
+    if a.from_json:
+        with open(a.from_json) as fh:
+            results = json.load(fh)
+        report(results, a.figure)
+        return 0
     ds = designs()
     which = a.designs if a.designs is not None else range(len(ds))
     results = []
@@ -160,10 +177,62 @@ def main(argv: list[str] | None = None) -> int:
                 if a.json:                     # after every effect: a stop loses nothing
                     with open(a.json, "w") as fh:
                         json.dump(results, fh, indent=1)
-    n_ok = sum(r["within"] for r in results)
-    print(f"within a factor 1.3: {n_ok} of {len(results)} (design, effect) pairs; "
-          f"{time.perf_counter() - t_all:.0f} s in all")
+    print(f"{time.perf_counter() - t_all:.0f} s in all")
+    report(results, a.figure)
     return 0
+
+
+def report(results: list[dict], figure: str | None) -> None:
+    """The summary: pairs within a factor 1.3, effects within it on how many designs, and
+    the replayed power at each drawn size against the share diagnose named (``effect_power``
+    at 2000 draws); ``figure``: both, drawn."""
+    ds = designs()
+    n_ok = sum(r["within"] for r in results)
+    print(f"within a factor 1.3: {n_ok} of {len(results)} (design, effect) pairs")
+    by_effect: dict[str, list[bool]] = {}
+    for r in results:
+        by_effect.setdefault(r["effect"], []).append(r["within"])
+    for name, oks in by_effect.items():
+        print(f"  {name:24s} within on {sum(oks)} of {len(oks)} designs")
+    pred, got = [], []
+    for r in results:
+        for f, share in zip(r["factors"], r["shares"], strict=True):
+            pred.append(effect_power(ds[r["design"]], r["effect"], f * r["predicted"]))
+            got.append(share)
+    pred, got = np.array(pred), np.array(got)
+    close = np.abs(pred - got) <= 0.10
+    print(f"replayed power within 10 points of diagnose's share: {close.sum()} of {close.size} "
+          f"(design, effect, size) points; median |difference| "
+          f"{100 * np.median(np.abs(pred - got)):.0f} points")
+    if figure:
+        _figure(results, pred, got, figure)
+
+
+def _figure(results: list[dict], pred: np.ndarray, got: np.ndarray, path: str) -> None:
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4.2))
+    names = list(dict.fromkeys(r["effect"] for r in results))
+    for k in sorted({r["design"] for r in results}):
+        rows = [r for r in results if r["design"] == k]
+        ax1.plot([names.index(r["effect"]) + 0.08 * (k - 2.5) for r in rows],
+                 [r["ratio"] for r in rows], "o", label=f"design {k}")
+    ax1.axhspan(1 / 1.3, 1.3, color="0.9", zorder=0)
+    ax1.axhline(1.0, color="0.5", lw=0.8)
+    ax1.set_xticks(range(len(names)), [n.replace("_", " ") for n in names], rotation=35,
+                   ha="right", fontsize=8)
+    ax1.set_ylabel("achieved / predicted 95 % size")
+    ax1.set_title("smallest size diagnose names in 95 % of sessions")
+    ax1.legend(fontsize=7, ncol=2)
+    ax2.plot(100 * pred, 100 * got, "o", ms=4, alpha=0.7)
+    ax2.plot([0, 100], [0, 100], color="0.3", lw=0.8)
+    ax2.fill_between([0, 100], [-10, 90], [10, 110], color="0.9", zorder=0)
+    ax2.set_xlim(0, 102)
+    ax2.set_ylim(0, 102)
+    ax2.set_xlabel("plan's replayed power (%)")
+    ax2.set_ylabel("share diagnose named (%)")
+    ax2.set_title("at 1/1.3, 1 and 1.3 times the predicted size")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    print(f"figure: {path}")
 
 
 if __name__ == "__main__":
