@@ -16,8 +16,6 @@ from ..mechanics import (
     read_design,
     recommend,
 )
-from ..mechanics._plan import _no_nan
-from ..mechanics._plan_recommend import MIN_GAIN
 from ._fit import _write_json
 
 __all__ = ["add_parser", "run"]
@@ -140,7 +138,7 @@ def run(args: argparse.Namespace) -> int:
            if args.recommend or targets else None)
     doc = pred.as_dict()
     if rec is not None:
-        doc["recommendation"] = _no_nan(rec.as_dict())
+        doc["recommendation"] = rec.as_dict()
     if rec is not None and args.write_recommended is not None:
         if rec.cheapest is None:
             raise InputError(f"no design file written to {args.write_recommended}: {rec.why}")
@@ -172,7 +170,7 @@ def recommendation_summary(rec: Recommendation) -> str:
     if rec.changes:
         lines.append("changes, by predicted gain (the binding error's fall):")
     for c in rec.changes:
-        if c.gain >= MIN_GAIN:
+        if c.gains:
             gain = "nu identified" if math.isinf(c.gain) else f"{100 * c.gain:+4.0f} %"
             lines.append(f"  {gain}  {c.what}: {_total(c.E_total_pct, c.nu_total)}"
                          f", {c.n_presses} presses")

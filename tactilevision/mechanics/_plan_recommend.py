@@ -18,7 +18,7 @@ from dataclasses import dataclass, field, replace
 
 from .._checks import InputError
 from ._design import RESOLVED_PX, Design
-from ._plan import PlanPrediction, plan_session
+from ._plan import PlanPrediction, _no_nan, plan_session
 
 __all__ = ["DesignChange", "Recommendation", "error_totals", "recommend"]
 
@@ -81,6 +81,11 @@ class DesignChange:
     opens: tuple[str, ...]
     prediction: PlanPrediction
 
+    @property
+    def gains(self) -> bool:
+        """Recommended for its gain (:data:`MIN_GAIN` or more), not only for what it opens."""
+        return self.gain >= MIN_GAIN
+
 
 @dataclass
 class Recommendation:
@@ -113,21 +118,21 @@ class Recommendation:
     why: str = ""
 
     def as_dict(self) -> dict:
-        """JSON-ready dict (``plan --json``'s ``recommendation``)."""
+        """JSON-ready dict (``plan --json``'s ``recommendation``; NaN and inf as None)."""
         def ch(c: DesignChange) -> dict:
             return {"what": c.what, "n_presses": c.n_presses, "E_total_pct": c.E_total_pct,
                     "nu_total": c.nu_total, "gain": c.gain, "opens": list(c.opens),
                     "E_sigma_pct": c.prediction.E_sigma_pct, "nu_sigma": c.prediction.nu_sigma,
                     "nu_identified": c.prediction.nu_identified}
 
-        return {"E_total_pct": self.E_total_pct, "nu_total": self.nu_total,
+        return _no_nan({"E_total_pct": self.E_total_pct, "nu_total": self.nu_total,
                 "target_E_pct": self.target_E_pct, "target_nu": self.target_nu,
                 "changes": [ch(c) for c in self.changes],
                 "cheapest": None if self.cheapest is None else
                 ch(self.cheapest) | {"design": {
                     k: (list(v) if isinstance(v, tuple) else v)
                     for k, v in self.cheapest.design.__dict__.items()}},
-                "why": self.why}
+                "why": self.why})
 
 
 def error_totals(p: PlanPrediction) -> tuple[float, float, float, float]:
