@@ -42,11 +42,14 @@ def test_replayed_power_is_the_noncentral_F_of_the_bic_rule():
     rep.base_y = rep.X0 @ np.linalg.lstsq(rep.X0, rep.P, rcond=None)[0]
     n, p, k = rep.n, 2, 1
     crit = (n - p - k) / k * (math.exp((10 + k * math.log(n)) / n) - 1)
-    g = rep.signal["aging"]
-    r = g - rep.X0 @ np.linalg.lstsq(rep.X0, g, rcond=None)[0]
+    def off_law(v):
+        return v - rep.X0 @ np.linalg.lstsq(rep.X0, v, rcond=None)[0]
+
+    r = off_law(rep.signal["aging"])                    # the signal, on the FEM's forces
+    c = off_law(rep.cands["aging"].cols[0][:, 0])       # the fitted column, on the law's
     sigma = float(rep.sigma[0])
     for size in (0.006, 0.01, 0.015):
-        lam = size**2 * float(r @ r) / sigma**2
+        lam = size**2 * float(r @ c) ** 2 / float(c @ c) / sigma**2
         want = float(stats.ncf.sf(crit, k, n - p - k, lam))
         got = rep.power("aging", size)
         assert abs(got - want) < 0.025, (size, got, want)       # 6000 draws: sd <= 0.007

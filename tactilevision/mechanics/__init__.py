@@ -52,7 +52,7 @@ from ._beta import (
 )
 from ._budget import NoiseBudget, noise_budget
 from ._catalogue import EFFECTS, Effect, FemLaw, Param, make_effect, register_effect
-from ._design import EFFECT_SIZE_PARAMS, planned_columns
+from ._design import EFFECT_SIZE_PARAMS, depth_uncertainty, planned_columns
 from ._diagnose import Diagnosis, diagnose, noise_floor
 from ._diagnose_stats import CovariateTest, covariate_tests, cross_validated_rmse
 from ._effects import EFFECT_NAMES, FIT_EFFECTS, check_fit_effects, effect_names, model_label
@@ -74,7 +74,13 @@ from ._plan import (
     relaxation_identifiability,
     untestable_in_table,
 )
-from ._plan_effects import EffectSensitivity, effect_power, effect_sensitivity
+from ._plan_effects import (
+    NOMINAL_TAU_S,
+    TANGENTIAL_FRACTION,
+    EffectSensitivity,
+    effect_power,
+    effect_sensitivity,
+)
 from ._plan_recommend import DesignChange, Recommendation, error_totals, recommend
 from ._relaxation import (
     RelaxationFit,
@@ -95,7 +101,9 @@ __all__ = [
     "FIT_EFFECTS",
     "HAYES_1972",
     "MAX_W_OVER_H",
+    "NOMINAL_TAU_S",
     "PAPER_BETA_RELATION",
+    "TANGENTIAL_FRACTION",
     "BetaRelation",
     "CovariateTest",
     "Design",
@@ -121,6 +129,7 @@ __all__ = [
     "check_fit_effects",
     "covariate_tests",
     "cross_validated_rmse",
+    "depth_uncertainty",
     "design_from_calibration",
     "design_toml",
     "diagnose",

@@ -188,6 +188,12 @@ def check_design(d: Design) -> None:
         angle of 45 degrees or more, a window longer than the hold, a repeat count
         below 1, or a nu outside (0, 0.5].
     """
+    _check_block(d)
+    _check_schedule(d)
+
+
+def _check_block(d: Design) -> None:
+    """The gel, indenter, depths, bevel, sensor and noise keys of a design."""
     h = _positive(d.thickness_mm, "[sensor] gel_thickness_mm")
     _positive(d.radius_mm, "[indenter] radius_mm")
     if len(d.depths_mm) == 0:
@@ -242,6 +248,10 @@ def check_design(d: Design) -> None:
     if d.window_at not in ("start", "end"):
         raise InputError(f"[force_sensor] window_at must be 'start' or 'end', got "
                          f"{d.window_at!r}")
+
+
+def _check_schedule(d: Design) -> None:
+    """The days, positions, holds, waits, relaxation and detect keys of a design."""
     for key in ("days", "positions"):
         v = getattr(d, key)
         if isinstance(v, bool) or not isinstance(v, int | float) or int(v) != v or v < 1:

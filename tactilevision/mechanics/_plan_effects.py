@@ -8,11 +8,13 @@ of the design and replays ``diagnose``'s decisions on each, linearized:
 
 - the base law is eq. (5), fitted by least squares to the design's finite-strain FEM
   forces (its own misfit to them is in every drawn session, as in a real one);
-- each candidate effect enters as the columns of its force change at zero size (its
-  derivatives: a depth offset's dP/dw, a stiffness effect's P x its factor's
-  derivative, a force effect's own term); an effect's time constant (relaxation,
-  recovery) is searched over a grid, as ``IndentationModel.fit`` searches it by
-  gradient, and counts in the BIC;
+- each candidate effect enters as the columns of its force change at zero size, taken
+  on the fitted eq.-5 law as ``diagnose`` takes it (a depth offset's dP/dw of the law,
+  a stiffness effect's law x its factor's derivative, a force effect's own term); an
+  effect's time constant (relaxation, recovery) is searched over a grid, as
+  ``IndentationModel.fit`` searches it by gradient, and counts in the BIC;
+- the hidden effect's signal is its force change on the FEM's forces (a depth offset's
+  exactly, P(w + delta) - P(w));
 - a candidate passes with a BIC lower by more than ``DELTA_BIC``; an effect along depth
   alone (``depth_offset``, ``force_offset``) must also beat the law's own curvature by
   ``CURVATURE_BIC``; the best passing candidate joins the model (the law's curvature as a
@@ -116,56 +118,73 @@ class _Candidate:
     rung: bool = False             # the law's own curvature: a rung, never a verdict
 
 
+def _fem_force(d: Design, w: np.ndarray) -> np.ndarray:
+    """The finite-strain FEM's force at each depth, N (eq. 3 with the kappa table)."""
+    h, a = d.thickness_mm, d.radius_mm
+    k = np.array([float(kappa_n(d.nu, d.a_over_h, xi / h)) for xi in np.atleast_1d(w)])
+    return 2 * a * d.E_mpa * np.atleast_1d(w) * k / (1 - d.nu ** 2)
+
+
 def _slope(d: Design, w: np.ndarray) -> np.ndarray:
     """dP/dw of the finite-strain FEM at each depth, N/mm (central difference)."""
-    h, a = d.thickness_mm, d.radius_mm
-    step = 1e-4 * h
-
-    def force(x: np.ndarray) -> np.ndarray:
-        k = np.array([float(kappa_n(d.nu, d.a_over_h, xi / h)) for xi in x])
-        return 2 * a * d.E_mpa * x * k / (1 - d.nu ** 2)
-
-    return (force(w + step) - force(np.maximum(w - step, 0.0))) / (
-        w + step - np.maximum(w - step, 0.0))
+    step = 1e-4 * d.thickness_mm
+    lo = np.maximum(w - step, 0.0)
+    return (_fem_force(d, w + step) - _fem_force(d, lo)) / (w + step - lo)
 
 
-def _effect_columns(name: str, cols: dict[str, np.ndarray], P: np.ndarray,
-                    dPdw: np.ndarray, tangential: tuple[np.ndarray, np.ndarray],
-                    tau_nominal: float | None) -> tuple[_Candidate, np.ndarray]:
-    """The candidate's linearized columns, and its force change per unit size (at the
-    nominal time constant)."""
-    one = np.ones_like(P)
+def _effect_columns(name: str, cols: dict[str, np.ndarray], law: np.ndarray,
+                    dlaw: np.ndarray, tangential: tuple[np.ndarray, np.ndarray],
+                    tau_nominal: float | None) -> _Candidate:
+    """The candidate's linearized columns: its force change at zero size as ``diagnose``
+    fits it, on the fitted eq.-5 law (`law`, N; its slope `dlaw`, N/mm)."""
+    one = np.ones_like(law)
     if name == "depth_offset":
-        return _Candidate(name, 1, [dPdw[:, None]], depth_only=True), dPdw
+        return _Candidate(name, 1, [dlaw[:, None]], depth_only=True)
     if name == "force_offset":
-        return _Candidate(name, 1, [one[:, None]], depth_only=True), one
+        return _Candidate(name, 1, [one[:, None]], depth_only=True)
     if name == "force_drift":
         t = cols["time_s"]
-        return _Candidate(name, 2, [np.column_stack([t, t * t])]), t
+        return _Candidate(name, 2, [np.column_stack([t, t * t])])
     if name == "aging":
-        g = P * cols["day"]
-        return _Candidate(name, 1, [g[:, None]]), g
+        return _Candidate(name, 1, [(law * cols["day"])[:, None]])
     if name == "spatial_nonuniformity":
-        return (_Candidate(name, 2, [np.column_stack([P * cols["x_mm"], P * cols["y_mm"]])]),
-                P * cols["x_mm"])
+        return _Candidate(name, 2, [np.column_stack([law * cols["x_mm"],
+                                                     law * cols["y_mm"]])])
     if name == "force_crosstalk":
-        fx, fy = tangential
-        return _Candidate(name, 2, [np.column_stack([fx, fy])]), fx
+        return _Candidate(name, 2, [np.column_stack(tangential)])
+    grid = [_timed(name, cols, law, t)[:, None] for t in TAU_GRID_S]
+    return _Candidate(name, 2, grid, fixed=_timed(name, cols, law, tau_nominal)[:, None])
+
+
+def _timed(name: str, cols: dict[str, np.ndarray], P: np.ndarray,
+           tau: float | None) -> np.ndarray:
+    """Force change per unit size of relaxation or recovery at time constant `tau`, N."""
     if name == "viscoelastic_relaxation":
-        hold = cols["hold_s"]
-
-        def col(tau: float) -> np.ndarray:
-            return -P * (1 - np.exp(-hold / tau))
-    elif name == "incomplete_recovery":
+        return -P * (1 - np.exp(-cols["hold_s"] / float(tau)))
+    if name == "incomplete_recovery":
         wait = np.nan_to_num(cols["wait_s"], nan=np.inf)
+        return P * np.exp(-wait / float(tau))
+    raise InputError(f"no plan for effect {name!r}")
 
-        def col(tau: float) -> np.ndarray:
-            return P * np.exp(-wait / tau)
-    else:
-        raise InputError(f"no plan for effect {name!r}")
-    grid = [col(t)[:, None] for t in TAU_GRID_S]
-    nominal = col(float(tau_nominal))
-    return _Candidate(name, 2, grid, fixed=nominal[:, None]), nominal
+
+def _effect_signal(name: str, cols: dict[str, np.ndarray], P: np.ndarray,
+                   dPdw: np.ndarray, tangential: tuple[np.ndarray, np.ndarray],
+                   tau_nominal: float | None) -> np.ndarray:
+    """The effect's force change per unit size in a session (on the FEM's forces `P`, N;
+    a depth offset's linearized, ``_Replay.found`` takes it exactly)."""
+    if name == "depth_offset":
+        return dPdw
+    if name == "force_offset":
+        return np.ones_like(P)
+    if name == "force_drift":
+        return cols["time_s"]
+    if name == "aging":
+        return P * cols["day"]
+    if name == "spatial_nonuniformity":
+        return P * cols["x_mm"]
+    if name == "force_crosstalk":
+        return tangential[0]
+    return _timed(name, cols, P, tau_nominal)
 
 
 def _rss(basis: np.ndarray, Y: np.ndarray) -> np.ndarray:
@@ -194,6 +213,11 @@ class _Replay:
         x = w / d.thickness_mm
         self.X0 = np.column_stack([w, w * x])               # eq. (5): c w + c beta w^2 / h
         self.P = P
+        self.w = w
+        # diagnose fits its candidates on its own fitted law, not on the FEM's forces
+        coef = np.linalg.lstsq(self.X0, P, rcond=None)[0]
+        law = self.X0 @ coef
+        dlaw = coef[0] + 2 * coef[1] * x
         self.cols = cols
         untest = untestable_effects(d)
         self.untestable = untest
@@ -205,11 +229,10 @@ class _Replay:
             if name in untest:
                 continue
             tau = tau_relax if name == "viscoelastic_relaxation" else NOMINAL_TAU_S.get(name)
-            cand, sig = _effect_columns(name, cols, P, self.dPdw, tang, tau)
-            self.cands[name] = cand
-            self.signal[name] = sig
-        self.cands["law_curvature"] = _Candidate("law_curvature", 1, [(P * x * x)[:, None]],
-                                                 rung=True)
+            self.cands[name] = _effect_columns(name, cols, law, dlaw, tang, tau)
+            self.signal[name] = _effect_signal(name, cols, P, self.dPdw, tang, tau)
+        self.cands["law_curvature"] = _Candidate("law_curvature", 1,
+                                                 [(law * x * x)[:, None]], rung=True)
         # the design's own misfit: eq. (5) against the FEM's forces, in every session
         self.base_y = P
 
@@ -234,7 +257,11 @@ class _Replay:
     def found(self, hidden: str, size: float, max_steps: int = MAX_STEPS) -> np.ndarray:
         """(draws,) bool: sessions in which ``diagnose`` (replayed) names `hidden` at
         `size` (the parameter's own unit)."""
-        Y = (self.base_y + size * self.signal[hidden])[:, None] + self.noise
+        if hidden == "depth_offset":                        # exact: P(w + delta) - P(w)
+            change = _fem_force(self.d, self.w + size) - self.P
+        else:
+            change = size * self.signal[hidden]
+        Y = (self.base_y + change)[:, None] + self.noise
         M = Y.shape[1]
         hit = np.zeros(M, bool)
         state: list[tuple[str, ...]] = [()] * M

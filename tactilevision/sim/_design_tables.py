@@ -7,9 +7,15 @@ import math
 import numpy as np
 
 from .._checks import InputError
-from ..mechanics import EFFECT_SIZE_PARAMS, Design, make_effect, planned_columns
-from ..mechanics._design import depth_uncertainty
-from ..mechanics._plan_effects import NOMINAL_TAU_S, TANGENTIAL_FRACTION
+from ..mechanics import (
+    EFFECT_SIZE_PARAMS,
+    NOMINAL_TAU_S,
+    TANGENTIAL_FRACTION,
+    Design,
+    depth_uncertainty,
+    make_effect,
+    planned_columns,
+)
 from ._tables import _fem_force
 
 __all__ = ["design_measurement_table"]
