@@ -116,6 +116,13 @@ class _Candidate:
     fixed: np.ndarray | None = None  # the block once in the model (at the nominal tau)
     depth_only: bool = False       # along depth alone: must beat the law's curvature
     rung: bool = False             # the law's own curvature: a rung, never a verdict
+    bounds: np.ndarray | None = None  # (m, 2): each column's parameter bounds
+
+    def __post_init__(self) -> None:
+        # each column's coefficient is one catalogue parameter (not tau_s, which is
+        # searched over the grid): diagnose's fit keeps it within the parameter's bounds
+        qs = [q for q in make_effect(self.name).params if q.name != "tau_s"]
+        self.bounds = np.array([(q.lower, q.upper) for q in qs], np.float64)
 
 
 def _fem_force(d: Design, w: np.ndarray) -> np.ndarray:
@@ -194,6 +201,59 @@ def _rss(basis: np.ndarray, Y: np.ndarray) -> np.ndarray:
     return np.einsum("ij,ij->j", R, R)
 
 
+def _rss_bounded(bases: np.ndarray, lo: np.ndarray, hi: np.ndarray,
+                 Y: np.ndarray) -> np.ndarray:
+    """As :func:`_rss` on each basis of `bases` (G, n, p), each coefficient kept within
+    [lo, hi] (p,) as ``diagnose``'s bounded fit keeps its parameters: a coefficient
+    past its bound is held there and the others refitted, until none is past (an
+    active set that only grows). Returns (G, M).
+
+    Held at v, the coefficients S cost (b_S - v)' [C_SS]^-1 (b_S - v) more than the
+    unbounded fit b, C = (X'X)^-1, and move the others by -C_FS [C_SS]^-1 (b_S - v)."""
+    p = bases.shape[2]
+    norm = np.linalg.norm(bases, axis=1)                    # (G, p): unit columns
+    norm[norm == 0] = 1.0
+    q, r = np.linalg.qr(bases / norm[:, None, :])
+    qty = np.swapaxes(q, 1, 2) @ Y                          # (G, p, M)
+    rss = np.einsum("nm,nm->m", Y, Y)[None] - np.einsum("gpm,gpm->gm", qty, qty)
+    if not (np.isfinite(lo) | np.isfinite(hi)).any():
+        return rss
+    diag = np.abs(np.diagonal(r, axis1=1, axis2=2))
+    ok = diag.min(axis=1) > 1e-10 * diag.max(axis=1)        # a degenerate basis: as is
+    eye = np.eye(p)
+    rinv = np.linalg.inv(np.where(ok[:, None, None], r, eye))
+    b = rinv @ qty
+    LO, HI = lo[None] * norm, hi[None] * norm
+    past = ((b < LO[:, :, None]) | (b > HI[:, :, None])).any(axis=1) & ok[:, None]
+    gi, mi = np.nonzero(past)
+    if gi.size == 0:
+        return rss
+    C = (rinv @ np.swapaxes(rinv, 1, 2))[gi]                # (K, p, p)
+    bk, LOk, HIk = b[gi, :, mi], LO[gi], HI[gi]
+    held = np.zeros(bk.shape, bool)
+    value = np.zeros(bk.shape)
+    coef = bk.copy()
+    extra = np.zeros(gi.size)
+    for _ in range(p):
+        new = ~held & ((coef < LOk) | (coef > HIk))
+        if not new.any():
+            break
+        held |= new
+        value = np.where(new, np.clip(coef, LOk, HIk), value)
+        dv = np.where(held, bk - value, 0.0)
+        Adv = dv / np.diagonal(C, axis1=1, axis2=2)          # one held: [C_SS]^-1 = 1/C_jj
+        many = held.sum(axis=1) > 1
+        if many.any():
+            both = held[many, :, None] & held[many, None, :]
+            A = np.linalg.pinv(np.where(both, C[many], eye * ~held[many, :, None]))
+            Adv[many] = np.einsum("kij,kj->ki", A, dv[many])
+        Adv = np.where(held, Adv, 0.0)
+        extra = np.einsum("ki,ki->k", dv, Adv)
+        coef = np.where(held, value, bk - np.einsum("kij,kj->ki", C, Adv))
+    rss[gi, mi] += extra
+    return rss
+
+
 class _Replay:
     """``diagnose``'s decisions, linearized, over many drawn sessions of a design."""
 
@@ -231,6 +291,9 @@ class _Replay:
             tau = tau_relax if name == "viscoelastic_relaxation" else NOMINAL_TAU_S.get(name)
             self.cands[name] = _effect_columns(name, cols, law, dlaw, tang, tau)
             self.signal[name] = _effect_signal(name, cols, P, self.dPdw, tang, tau)
+        self.x2 = x * x
+        self.gamma_bounds = tuple(_Candidate("law_curvature", 1, []).bounds[0])
+        # the law's curvature: its columns are the law's own (``_law``), not a block
         self.cands["law_curvature"] = _Candidate("law_curvature", 1,
                                                  [(law * x * x)[:, None]], rung=True)
         # the design's own misfit: eq. (5) against the FEM's forces, in every session
@@ -240,19 +303,75 @@ class _Replay:
         c = self.cands[name]
         return c.fixed if c.fixed is not None else c.cols[0]
 
-    def _bic(self, cur: tuple[str, ...], new: str | None, Y: np.ndarray) -> np.ndarray:
+    def _bic(self, cur: tuple[str, ...], new: str | None, Y: np.ndarray,
+             at: tuple[float, np.ndarray] | None = None) -> np.ndarray:
         """BIC (up to a constant) on each column of Y of eq. (5) plus the effects `cur`
-        (at their nominal time constants) and `new` (its time constant searched)."""
+        (at their nominal time constants) and `new` (its time constant searched), each
+        effect's parameters within their catalogue bounds. The law's curvature, where
+        it is in the model, is eq. (5) times (1 + gamma x^2) linearized at `at` (gamma
+        and the law there, :meth:`_curvature_at`)."""
         n = self.n
-        fixed = [self.X0] + [self._block(a) for a in cur]
+        others = [a for a in cur if a != "law_curvature"]
+        curved = "law_curvature" in (*cur, new)
+        base, base_bounds = self._law(at if curved else None)
+        fixed = [base] + [self._block(a) for a in others]
+        bounds = [base_bounds] + [self.cands[a].bounds for a in others]
         k = 2 + sum(self.cands[a].k for a in cur)
-        if new is None:
-            rss = _rss(np.column_stack(fixed), Y)
-        else:
+        if new is not None:
             k += self.cands[new].k
-            rss = np.min([_rss(np.column_stack([*fixed, blk]), Y)
-                          for blk in self.cands[new].cols], axis=0)
+        if new is None or new == "law_curvature":
+            rss = self._rss([fixed], bounds, Y)[0]
+        else:
+            bounds = [*bounds, self.cands[new].bounds]
+            rss = self._rss([[*fixed, blk] for blk in self.cands[new].cols], bounds,
+                            Y).min(axis=0)
         return n * np.log(np.maximum(rss / n, 1e-300)) + k * math.log(n)
+
+    def _law(self, at: tuple[float, np.ndarray] | None) -> tuple[np.ndarray, np.ndarray]:
+        """The law's columns and their coefficients' bounds: eq. (5), or eq. (5) times
+        (1 + gamma x^2) linearized at `at` = (gamma0, the law there, N): its columns at
+        gamma0 and the law's change per unit gamma, whose coefficient gamma - gamma0
+        keeps gamma within its bounds."""
+        if at is None:
+            return self.X0, np.array([[-np.inf, np.inf]] * 2)
+        gamma0, law = at
+        B = self.X0 * (1 + gamma0 * self.x2)[:, None]
+        lo, hi = self.gamma_bounds
+        return (np.column_stack([B, law * self.x2]),
+                np.array([[-np.inf, np.inf]] * 2 + [[lo - gamma0, hi - gamma0]]))
+
+    def _curvature_at(self, cur: tuple[str, ...], Y: np.ndarray
+                      ) -> tuple[float, np.ndarray]:
+        """The law's curvature gamma fitted to the mean of the sessions Y (n, m) with the
+        effects `cur` (a grid within the bounds, refined by a parabola), and the law
+        there, N (n,)."""
+        y = Y.mean(axis=1)
+        lo, hi = self.gamma_bounds
+        grid = np.linspace(lo, hi, 201)
+        other = [self._block(a) for a in cur if a != "law_curvature"]
+        C = np.column_stack(other) if other else np.zeros((self.n, 0))
+        B = np.concatenate([self.X0[None] * (1 + grid[:, None, None] * self.x2[None, :, None]),
+                            np.broadcast_to(C, (grid.size, *C.shape))], axis=2)
+        q, _ = np.linalg.qr(B)                              # (grid, n, p), stacked
+        rss = y @ y - np.sum(np.einsum("gni,n->gi", q, y) ** 2, axis=1)
+        i = int(np.argmin(rss))
+        g0 = float(grid[i])
+        if 0 < i < grid.size - 1:
+            r0, r1, r2 = rss[i - 1], rss[i], rss[i + 1]
+            den = r0 - 2 * r1 + r2
+            if den > 0:
+                g0 += 0.5 * (grid[1] - grid[0]) * (r0 - r2) / den
+        B = np.column_stack([self.X0 * (1 + g0 * self.x2)[:, None], C])
+        coef = np.linalg.lstsq(B, y, rcond=None)[0]
+        return g0, self.X0 @ coef[:2]
+
+    @staticmethod
+    def _rss(bases: list[list[np.ndarray]], bounds: list[np.ndarray], Y: np.ndarray
+             ) -> np.ndarray:
+        """(G, M) bounded RSS on each basis (a list of column blocks) of `bases`."""
+        b = np.vstack(bounds)
+        return _rss_bounded(np.stack([np.column_stack(x) for x in bases]), b[:, 0], b[:, 1],
+                            Y)
 
     def found(self, hidden: str, size: float, max_steps: int = MAX_STEPS) -> np.ndarray:
         """(draws,) bool: sessions in which ``diagnose`` (replayed) names `hidden` at
@@ -275,12 +394,14 @@ class _Replay:
             for cur, idx in groups.items():
                 idx = np.asarray(idx)
                 Yg = Y[:, idx]
-                b0 = self._bic(cur, None, Yg)
+                at = (self._curvature_at(cur, Yg) if "law_curvature" in self.cands
+                      else None)
+                b0 = self._bic(cur, None, Yg, at)
                 names = [c for c in self.cands if c not in cur]
                 if not names:
                     done[idx] = True
                     continue
-                dbic = {c: self._bic(cur, c, Yg) - b0 for c in names}
+                dbic = {c: self._bic(cur, c, Yg, at) - b0 for c in names}
                 curv = dbic.get("law_curvature", np.full(idx.size, np.inf))
                 passing = {}
                 for c, db in dbic.items():
@@ -329,8 +450,10 @@ def _reach(d: Design, name: str) -> float:
 
 
 def _size_for_power(rep: _Replay, name: str, target: float, upper: float) -> float:
-    """Smallest size (parameter unit) replayed as found in `target` of sessions: a
-    bracket by doubling from the size at snr 1, then bisection in log size."""
+    """Smallest size (parameter unit) replayed as found in `target` of sessions: from
+    the size at snr 1, down by halving or up in steps of 1.5 to the first size found
+    (up to `upper`: the power falls again near a bound, where the fit is held), then
+    bisection in log size."""
     unit_snr = rep.snr(name, 1.0)
     if unit_snr <= 0 or upper <= 0:
         return math.inf
@@ -342,11 +465,14 @@ def _size_for_power(rep: _Replay, name: str, target: float, upper: float) -> flo
                 break
         else:
             return lo
+        hi = 2 * lo
     else:
-        while rep.power(name, hi) < target:
+        while True:
             if hi >= upper:
                 return math.inf
-            lo, hi = hi, min(2 * hi, upper)
+            lo, hi = hi, min(1.5 * hi, upper)
+            if rep.power(name, hi) >= target:
+                break
     for _ in range(10):
         mid = math.sqrt(lo * hi)
         if rep.power(name, mid) >= target:
