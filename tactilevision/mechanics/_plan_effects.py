@@ -15,6 +15,14 @@ of the design and replays ``diagnose``'s decisions on each, linearized:
   ``IndentationModel.fit`` searches it by gradient, and counts in the BIC;
 - the hidden effect's signal is its force change on the FEM's forces (a depth offset's
   exactly, P(w + delta) - P(w));
+- every coefficient is kept within its catalogue parameter's bounds, as
+  ``IndentationModel.fit`` keeps it (an active set: a coefficient past its bound is held
+  there and the others refitted), so that, e.g., relaxation's g cannot turn negative
+  and an offset at its bound fits worse than one inside;
+- the law's own curvature, eq. (5) times (1 + gamma (w/h)^2), is linearized at the
+  gamma fitted to the mean session, not at gamma = 0: beside a force offset gamma
+  reaches 10 or more, where its linearization at 0 fits far better than the real
+  curvature does;
 - a candidate passes with a BIC lower by more than ``DELTA_BIC``; an effect along depth
   alone (``depth_offset``, ``force_offset``) must also beat the law's own curvature by
   ``CURVATURE_BIC``; the best passing candidate joins the model (the law's curvature as a
@@ -343,8 +351,8 @@ class _Replay:
     def _curvature_at(self, cur: tuple[str, ...], Y: np.ndarray
                       ) -> tuple[float, np.ndarray]:
         """The law's curvature gamma fitted to the mean of the sessions Y (n, m) with the
-        effects `cur` (a grid within the bounds, refined by a parabola), and the law
-        there, N (n,)."""
+        effects `cur` (on a grid within the bounds, the minimum reached downhill from
+        gamma = 0, refined by a parabola), and the law there, N (n,)."""
         y = Y.mean(axis=1)
         lo, hi = self.gamma_bounds
         grid = np.linspace(lo, hi, 201)
@@ -354,7 +362,12 @@ class _Replay:
                             np.broadcast_to(C, (grid.size, *C.shape))], axis=2)
         q, _ = np.linalg.qr(B)                              # (grid, n, p), stacked
         rss = y @ y - np.sum(np.einsum("gni,n->gi", q, y) ** 2, axis=1)
-        i = int(np.argmin(rss))
+        # as the fit descends from gamma = 0 (the catalogue's start): the nearest minimum
+        # downhill, not the grid's lowest (beside an offset there can be two)
+        i = int(np.argmin(np.abs(grid)))
+        step = 1 if rss[min(i + 1, grid.size - 1)] < rss[i] else -1
+        while 0 < i + step < grid.size and rss[i + step] < rss[i]:
+            i += step
         g0 = float(grid[i])
         if 0 < i < grid.size - 1:
             r0, r1, r2 = rss[i - 1], rss[i], rss[i + 1]
