@@ -9,7 +9,8 @@ its true depth by the design's random depth sd; fits each with ``fit_indentation
 depth sds given, as ``calibrate`` fits) and compares the scatter of E and nu over the
 sessions (sd over those with E and nu) with ``plan``'s sigmas. Prints a row per design,
 the share of designs within 20 % on both, and ``plan``'s time against one fit of a
-50-press table in the same run.
+50-press table in the same run, also on ten designs whose holds, rests, days and
+positions vary (every effect sized).
 
 Run: ``python benchmarks/bench_plan.py [--sessions 50]`` (about a minute on one core).
 """
@@ -22,6 +23,7 @@ import os
 import sys
 import time
 import warnings
+from dataclasses import replace
 
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
@@ -50,6 +52,18 @@ def designs() -> list[Design]:
             out.append(Design(thickness_mm=h, radius_mm=round(ah * h, 4), depths_mm=depths,
                               repeats=rep, E_mpa=0.2, nu=0.45, stage_speed_mm_s=0.1,
                               overshoot_um=overshoot, **methods[(k + 3 * rnd) % len(methods)]))
+    return out
+
+
+def varied_designs() -> list[Design]:
+    """The grid's designs at a/h 0.83 and 1.5, their holds, rests, days and positions
+    varied so that every catalogue effect can be tested: the most effects to size, the
+    slowest plans."""
+    varied = dict(holds_s=(0.5, 2.0, 5.0), window_at="end", waits_s=(1.0, 3.0, 10.0),
+                  days=3, positions=6)
+    out = []
+    for ah in (0.83, 1.5):
+        out += [replace(d, **varied) for d in designs() if abs(d.a_over_h - ah) < 1e-3][:5]
     return out
 
 
@@ -128,6 +142,11 @@ def main(argv: list[str] | None = None) -> int:
           f"on {sum(unidentified)}; E's sigma within "
           f"20 % on {int(np.sum(np.abs(e_only - 1) <= 0.2))} of the {e_only.size} where plan "
           "gives one")
+    t_varied = []
+    for d in varied_designs():
+        t0 = time.perf_counter()
+        plan(d)
+        t_varied.append(time.perf_counter() - t0)
     w = np.repeat(np.linspace(0.12, 0.57, 5), 10)
     P = _fem_force(0.2, 0.45, 2.5, 3.0, w)
     t0 = time.perf_counter()
@@ -138,6 +157,9 @@ def main(argv: list[str] | None = None) -> int:
     print(f"plan: median {np.median(t_plan):.2f} s, slowest {max(t_plan):.2f} s per design; one "
           f"fit of a 50-press table {1e3 * t_fit:.1f} ms in the same run (plan = "
           f"{max(t_plan) / t_fit:.0f} fits at most); one core")
+    print(f"plan of the designs on which diagnose can test every effect (holds, rests, days, "
+          f"positions varied; {len(t_varied)} designs): median {np.median(t_varied):.2f} s, "
+          f"slowest {max(t_varied):.2f} s ({max(t_varied) / t_fit:.0f} fits)")
     return 0
 
 

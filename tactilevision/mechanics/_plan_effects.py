@@ -386,14 +386,15 @@ class _Replay:
         return _rss_bounded(np.stack([np.column_stack(x) for x in bases]), b[:, 0], b[:, 1],
                             Y)
 
-    def found(self, hidden: str, size: float, max_steps: int = MAX_STEPS) -> np.ndarray:
+    def found(self, hidden: str, size: float, max_steps: int = MAX_STEPS,
+              draws: int | None = None) -> np.ndarray:
         """(draws,) bool: sessions in which ``diagnose`` (replayed) names `hidden` at
         `size` (the parameter's own unit)."""
         if hidden == "depth_offset":                        # exact: P(w + delta) - P(w)
             change = _fem_force(self.d, self.w + size) - self.P
         else:
             change = size * self.signal[hidden]
-        Y = (self.base_y + change)[:, None] + self.noise
+        Y = (self.base_y + change)[:, None] + self.noise[:, :draws]
         M = Y.shape[1]
         hit = np.zeros(M, bool)
         state: list[tuple[str, ...]] = [()] * M
@@ -434,15 +435,16 @@ class _Replay:
                         close = hv - best_val < EQUIVALENT_BIC
                     equiv = np.isfinite(hv) & close & named_best
                     hit[idx] |= equiv & ~none
+                # found, or nothing passes: the climb ends for that session
+                done[idx] |= none | hit[idx]
                 for jj, j in enumerate(idx):
-                    if none[jj]:
-                        done[j] = True
-                    else:
+                    if not done[j]:
                         state[j] = (*cur, order[best[jj]])
         return hit
 
-    def power(self, hidden: str, size: float) -> float:
-        return float(np.mean(self.found(hidden, size)))
+    def power(self, hidden: str, size: float, draws: int | None = None) -> float:
+        """Share of the sessions (the first `draws`, default all) that find `hidden`."""
+        return float(np.mean(self.found(hidden, size, draws=draws)))
 
     def snr(self, hidden: str, size: float) -> float:
         """``bench_diagnose_power``'s signal-to-noise ratio of `hidden` at `size`."""
@@ -584,9 +586,61 @@ def effect_sensitivity(design: Design, *, power: float = 0.95, draws: int = 1000
                                           f"to {_reach(design, name) * scale:.3g}"
                                           f"{' ' + unit if unit else ''})")
             continue
+        u = f" {unit}" if unit else ""
+        dip = _dip(rep, name, s, power, upper) if rep.cands[name].depth_only else None
+        note = ""
+        if dip is not None:
+            s_first, (s_low, p_low) = s, dip[1]
+            s = dip[0]
+            note = (f"; already {100 * power:.0f} % at {s_first * scale:.3g}{u}, but only "
+                    f"{100 * p_low:.0f} % at {s_low * scale:.3g}{u}, where the law's "
+                    "curvature mimics it")
+        if not math.isfinite(s):
+            out[name] = EffectSensitivity(name, param, unit, math.inf, math.inf, power,
+                                          math.inf, f"not found in {100 * power:.0f} % of "
+                                          f"sessions at every size up to the reach "
+                                          f"{upper * scale:.3g}{u}{note}")
+            continue
         snr = rep.snr(name, s)
         out[name] = EffectSensitivity(
             name, param, unit, s * scale, s, power, snr,
-            f"found in {100 * power:.0f} % of sessions from {param} = {s * scale:.3g}"
-            f"{' ' + unit if unit else ''} (snr {snr:.2g})")
+            f"found in {100 * power:.0f} % of sessions from {param} = {s * scale:.3g}{u} "
+            f"(snr {snr:.2g}){note}")
     return out
+
+
+#: Multiples of the first size found at which an offset's power is checked again.
+_DIP_FACTORS = (1.15, 1.3, 1.5, 1.75, 2.0, 2.5, 3.0, 4.0)
+
+#: Sessions of the first look for a dip (a fall below the target by more than 0.05,
+#: over 3 sd of a share near 0.95 over 300 sessions).
+_DIP_DRAWS = 300
+
+
+def _dip(rep: _Replay, name: str, s: float, target: float, upper: float
+         ) -> tuple[float, tuple[float, float]] | None:
+    """An offset's power need not grow with its size: beside a large offset the law's
+    curvature has a second minimum, which the fit reaches from gamma = 0 and which
+    mimics the offset. Past the first size `s` found in `target` of sessions, the
+    power is checked at :data:`_DIP_FACTORS` times it (up to `upper`); where it falls
+    below, returns the size from which it holds again (bisected past the last size
+    that falls; inf where none up to `upper` holds) and (that size, its power).
+    None where it holds at every multiple."""
+    sizes = [s * f for f in _DIP_FACTORS if s * f <= upper]
+    # a first look on a third of the sessions; a dip is a fall well below the target
+    powers = [rep.power(name, x, draws=_DIP_DRAWS) for x in sizes]
+    low = [i for i, pw in enumerate(powers) if pw < target - 0.05]
+    if not low:
+        return None
+    i = low[-1]
+    worst = min(low, key=lambda k: powers[k])
+    if i + 1 == len(sizes):
+        return math.inf, (sizes[worst], powers[worst])
+    lo, hi = sizes[i], sizes[i + 1]
+    for _ in range(6):
+        mid = math.sqrt(lo * hi)
+        if rep.power(name, mid) >= target:
+            hi = mid
+        else:
+            lo = mid
+    return hi, (sizes[worst], powers[worst])
