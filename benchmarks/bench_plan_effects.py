@@ -194,16 +194,26 @@ def report(results: list[dict], figure: str | None) -> None:
         by_effect.setdefault(r["effect"], []).append(r["within"])
     for name, oks in by_effect.items():
         print(f"  {name:24s} within on {sum(oks)} of {len(oks)} designs")
-    pred, got = [], []
+    pred, got, where, n_s = [], [], [], []
     for r in results:
         for f, share in zip(r["factors"], r["shares"], strict=True):
             pred.append(effect_power(ds[r["design"]], r["effect"], f * r["predicted"]))
             got.append(share)
-    pred, got = np.array(pred), np.array(got)
+            where.append((r["design"], r["effect"], f))
+            n_s.append(r["sessions"])
+    pred, got, n_s = np.array(pred), np.array(got), np.array(n_s)
     close = np.abs(pred - got) <= 0.10
+    # the share's own sampling sd over the sessions drawn, at the replayed power
+    sd = np.sqrt(np.clip(pred * (1 - pred), 0.0025, None) / n_s)
     print(f"replayed power within 10 points of diagnose's share: {close.sum()} of {close.size} "
           f"(design, effect, size) points; median |difference| "
-          f"{100 * np.median(np.abs(pred - got)):.0f} points")
+          f"{100 * np.median(np.abs(pred - got)):.0f} points; within 10 points or 2 sd of the "
+          f"share's sampling error: {int(np.sum(close | (np.abs(pred - got) <= 2 * sd)))}")
+    for k in np.flatnonzero(~close):
+        i, name, f = where[k]
+        print(f"  off by more than 10 points: design {i} {name} x{f:.2f}: replayed "
+              f"{100 * pred[k]:.0f} %, diagnose {100 * got[k]:.0f} % of {n_s[k]} sessions "
+              f"(sd {100 * sd[k]:.0f} points)")
     if figure:
         _figure(results, pred, got, figure)
 
