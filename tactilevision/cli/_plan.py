@@ -105,6 +105,8 @@ def summary(pred) -> str:
                 f"{s.size:.3g}{' ' + s.unit if s.unit else ''} ({s.parameter} "
                 f"{s.size_param:.3g}; snr {s.snr:.2g})"
                 if math.isfinite(s.size) else "not at any size its parameter allows"))
+            if s.dip:
+                lines.append(f"    ({s.dip})")
     for name, p in pred.detect_power.items():
         size = dict(d.detect)[name]
         unit = EFFECT_SIZE_PARAMS[name][1]

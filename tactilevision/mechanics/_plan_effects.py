@@ -104,6 +104,9 @@ class EffectSensitivity:
         presses of the force change eq. (5) cannot take up, over the replicate noise.
     why : str
         One sentence.
+    dip : str
+        Where the power falls again past a smaller size already found (an offset the
+        law's curvature mimics there), what it is there; '' where it does not.
     """
 
     effect: str
@@ -114,6 +117,7 @@ class EffectSensitivity:
     power: float
     snr: float
     why: str
+    dip: str = ""
 
 
 @dataclass
@@ -592,20 +596,21 @@ def effect_sensitivity(design: Design, *, power: float = 0.95, draws: int = 1000
         if dip is not None:
             s_first, (s_low, p_low) = s, dip[1]
             s = dip[0]
-            note = (f"; already {100 * power:.0f} % at {s_first * scale:.3g}{u}, but only "
+            note = (f"already {100 * power:.0f} % at {s_first * scale:.3g}{u}, but only "
                     f"{100 * p_low:.0f} % at {s_low * scale:.3g}{u}, where the law's "
                     "curvature mimics it")
         if not math.isfinite(s):
             out[name] = EffectSensitivity(name, param, unit, math.inf, math.inf, power,
                                           math.inf, f"not found in {100 * power:.0f} % of "
                                           f"sessions at every size up to the reach "
-                                          f"{upper * scale:.3g}{u}{note}")
+                                          f"{upper * scale:.3g}{u}"
+                                          + (f"; {note}" if note else ""), note)
             continue
         snr = rep.snr(name, s)
         out[name] = EffectSensitivity(
             name, param, unit, s * scale, s, power, snr,
             f"found in {100 * power:.0f} % of sessions from {param} = {s * scale:.3g}{u} "
-            f"(snr {snr:.2g}){note}")
+            f"(snr {snr:.2g})" + (f"; {note}" if note else ""), note)
     return out
 
 
