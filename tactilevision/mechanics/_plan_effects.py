@@ -20,9 +20,12 @@ of the design and replays ``diagnose``'s decisions on each, linearized:
   there and the others refitted), so that, e.g., relaxation's g cannot turn negative
   and an offset at its bound fits worse than one inside;
 - the law's own curvature, eq. (5) times (1 + gamma (w/h)^2), is linearized at the
-  gamma fitted to the mean session, not at gamma = 0: beside a force offset gamma
-  reaches 10 or more, where its linearization at 0 fits far better than the real
-  curvature does;
+  gamma the fit of the mean session reaches downhill from gamma = 0 (the fit's start),
+  not at gamma = 0: beside a force offset gamma reaches 10 or more, where its
+  linearization at 0 fits far better than the real curvature does, and there can be
+  two minima, the farther one mimicking the offset (an offset's power then falls
+  again past the first size found: :func:`effect_sensitivity` reports the size from
+  which it holds, and the dip);
 - a candidate passes with a BIC lower by more than ``DELTA_BIC``; an effect along depth
   alone (``depth_offset``, ``force_offset``) must also beat the law's own curvature by
   ``CURVATURE_BIC``; the best passing candidate joins the model (the law's curvature as a
