@@ -153,7 +153,7 @@ def test_detect_sizes_read_written_and_planned(tmp_path, capsys):
     assert read_design(path).detect == d.detect
     p = plan(path)
     assert p.detect_power["aging"] > 0.99                  # 3 times the 95 % size
-    assert p.detect_power["depth_offset"] < 0.2             # a 15th of it
+    assert p.detect_power["depth_offset"] < 0.2             # a 13th of it
     assert p.detect_power["aging"] == effect_power(d, "aging", 0.05)
     assert main(["plan", str(path), "--json", str(tmp_path / "p.json")]) == 0
     out = capsys.readouterr().out
