@@ -247,3 +247,29 @@ def flat_gel_taxim():
         np.save(flat / "gelmap.npy", np.full_like(gel, gel.max()))
         yield taxim.Taxim(calib_folder=flat, backend="jax",
                           params={"simulator": {"contact_scale": 0.0}})
+
+
+def plan_sessions(d, n: int, seed: int) -> np.ndarray:
+    """(E, nu) rows of `n` sessions of a ``tactilevision.mechanics.Design``: the
+    generator's finite-strain FEM forces at the planned depths, the design's random
+    noise (F/T over the window; each certified depth off by the design's depth sd), each
+    fitted as ``calibrate`` fits (the depth sds given). The truth is the design's E, nu."""
+    import warnings
+
+    from tactilevision.mechanics import depth_uncertainty, fit_indentation
+    from tactilevision.sim._tables import _fem_force
+
+    rng = np.random.default_rng(seed)
+    w = np.repeat(np.asarray(d.depths_mm), d.repeats)
+    P = _fem_force(d.E_mpa, d.nu, d.radius_mm, d.thickness_mm, w)
+    sd = depth_uncertainty(d)[0] * 1e-3
+    s_P = d.force_noise_n / np.sqrt(d.window_samples)
+    out = np.full((n, 2), np.nan)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for i in range(n):
+            f = fit_indentation(w + rng.normal(0, sd, w.size), P + rng.normal(0, s_P, w.size),
+                                thickness_mm=d.thickness_mm, radius_mm=d.radius_mm,
+                                depth_std_mm=np.full(w.size, sd))
+            out[i] = f.E_mpa, f.nu
+    return out

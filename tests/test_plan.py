@@ -8,40 +8,20 @@ import warnings
 
 import numpy as np
 import pytest
+from _data import plan_sessions
 
 import tactilevision
 from tactilevision import InputError
 from tactilevision.cli import main
 from tactilevision.mechanics import (
     Design,
+    depth_uncertainty,
     design_from_calibration,
-    fit_indentation,
     plan,
     read_design,
 )
-from tactilevision.mechanics._design import depth_uncertainty
-from tactilevision.sim._tables import _fem_force
 
 PAPER_DEPTHS = (0.15, 0.30, 0.40, 0.50, 0.60)
-
-
-def _sessions(d: Design, n: int, seed: int) -> np.ndarray:
-    """(E, nu) of n sessions drawn with the generator's FEM force law and the design's
-    noise, fitted as calibrate fits (the depth sds given)."""
-    rng = np.random.default_rng(seed)
-    w = np.repeat(np.asarray(d.depths_mm), d.repeats)
-    P = _fem_force(d.E_mpa, d.nu, d.radius_mm, d.thickness_mm, w)
-    sd = depth_uncertainty(d)[0] * 1e-3
-    s_P = d.force_noise_n / np.sqrt(d.window_samples)
-    out = np.full((n, 2), np.nan)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        for i in range(n):
-            f = fit_indentation(w + rng.normal(0, sd, w.size), P + rng.normal(0, s_P, w.size),
-                                thickness_mm=d.thickness_mm, radius_mm=d.radius_mm,
-                                depth_std_mm=np.full(w.size, sd))
-            out[i] = f.E_mpa, f.nu
-    return out
 
 
 @pytest.mark.parametrize("kw", [dict(radius_mm=3.0, bevel_angle_deg=5.0, repeats=4,
@@ -55,7 +35,7 @@ def test_predicted_sigmas_match_the_scatter_of_generated_sessions(kw):
     d = Design(thickness_mm=3.0, depths_mm=PAPER_DEPTHS, **kw)
     p = plan(d)
     assert p.nu_identified
-    est = _sessions(d, 300, seed=1)
+    est = plan_sessions(d, 300, seed=1)
     ok = np.isfinite(est).all(axis=1)
     assert ok.mean() > 0.95
     assert p.E_sigma_mpa == pytest.approx(np.std(est[ok, 0], ddof=1), rel=0.15)

@@ -4,11 +4,11 @@ cheapest design meeting the targets, checked against generated sessions of it.""
 from __future__ import annotations
 
 import math
-import warnings
 from dataclasses import replace
 
 import numpy as np
 import pytest
+from _data import plan_sessions
 
 from tactilevision import InputError
 from tactilevision.cli import main
@@ -16,34 +16,12 @@ from tactilevision.mechanics import (
     Design,
     design_toml,
     error_totals,
-    fit_indentation,
     plan_session,
     read_design,
     recommend,
 )
-from tactilevision.mechanics._design import depth_uncertainty
-from tactilevision.sim._tables import _fem_force
 
 PAPER_DEPTHS = (0.15, 0.30, 0.40, 0.50, 0.60)
-
-
-def _session_errors(d: Design, n: int, seed: int) -> np.ndarray:
-    """(E error %, nu error) of n sessions drawn with the generator's FEM forces and the
-    design's random noise, fitted as calibrate fits."""
-    rng = np.random.default_rng(seed)
-    w = np.repeat(np.asarray(d.depths_mm), d.repeats)
-    P = _fem_force(d.E_mpa, d.nu, d.radius_mm, d.thickness_mm, w)
-    sd = depth_uncertainty(d)[0] * 1e-3
-    s_P = d.force_noise_n / np.sqrt(d.window_samples)
-    out = np.full((n, 2), np.nan)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        for i in range(n):
-            f = fit_indentation(w + rng.normal(0, sd, w.size), P + rng.normal(0, s_P, w.size),
-                                thickness_mm=d.thickness_mm, radius_mm=d.radius_mm,
-                                depth_std_mm=np.full(w.size, sd))
-            out[i] = 100 * (f.E_mpa / d.E_mpa - 1), f.nu - d.nu
-    return out
 
 
 def test_error_totals_add_the_systematic_part_in_quadrature():
@@ -75,7 +53,8 @@ def test_the_cheapest_design_meets_the_targets_on_generated_sessions():
                              effect_sizes=False)
         e, n, _, _ = error_totals(fewer)
         assert e > 4.0 or n > 0.01
-    err = _session_errors(c.design, 300, seed=5)
+    est = plan_sessions(c.design, 300, seed=5)
+    err = np.column_stack([100 * (est[:, 0] / c.design.E_mpa - 1), est[:, 1] - c.design.nu])
     ok = np.isfinite(err).all(axis=1)
     assert ok.mean() > 0.97
     rms = np.sqrt(np.mean(err[ok] ** 2, axis=0))

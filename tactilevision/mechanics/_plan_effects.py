@@ -520,13 +520,21 @@ def _size_for_power(rep: _Replay, name: str, target: float, upper: float) -> flo
             lo, hi = hi, min(1.5 * hi, upper)
             if rep.power(name, hi) >= target:
                 break
-    for _ in range(10):
+    return _bisect(rep, name, target, lo, hi)
+
+
+def _bisect(rep: _Replay, name: str, target: float, lo: float, hi: float,
+            steps: int = 10, ratio: float = 1.02) -> float:
+    """Bisection in log size between `lo` (found in less than `target` of sessions) and
+    `hi` (in `target` or more), at most `steps` halvings, until hi / lo < `ratio`;
+    returns the upper end."""
+    for _ in range(steps):
         mid = math.sqrt(lo * hi)
         if rep.power(name, mid) >= target:
             hi = mid
         else:
             lo = mid
-        if hi / lo < 1.02:
+        if hi / lo < ratio:
             break
     return hi
 
@@ -669,11 +677,6 @@ def _dip(rep: _Replay, name: str, s: float, target: float, upper: float
     worst = min(low, key=lambda k: powers[k])
     if i + 1 == len(sizes):
         return math.inf, (sizes[worst], powers[worst])
-    lo, hi = sizes[i], sizes[i + 1]
-    for _ in range(6):
-        mid = math.sqrt(lo * hi)
-        if rep.power(name, mid) >= target:
-            hi = mid
-        else:
-            lo = mid
-    return hi, (sizes[worst], powers[worst])
+    return (_bisect(rep, name, target, sizes[i], sizes[i + 1], steps=6,
+                    ratio=1.0),
+            (sizes[worst], powers[worst]))

@@ -236,9 +236,17 @@ def _ratio(e_t: float, n_t: float, ref: tuple[float, float]) -> float:
     return max(e_t / ref[0], n_t / ref[1])
 
 
+def _planned(d: Design, plans: dict[Design, PlanPrediction]) -> PlanPrediction:
+    """The plan of `d` (no effect sizes), once per :func:`recommend` call: the ranking,
+    the greedy path and the repeats search meet the same designs."""
+    if d not in plans:
+        plans[d] = plan_session(d, effect_sizes=False)
+    return plans[d]
+
+
 def _change(what: str, d: Design, ref: tuple[float, float], base_untestable: dict[str, str],
-            r0: float) -> DesignChange:
-    p = plan_session(d, effect_sizes=False)
+            r0: float, plans: dict[Design, PlanPrediction]) -> DesignChange:
+    p = _planned(d, plans)
     e_t, n_t, _, _ = error_totals(p)
     ratio = _ratio(e_t, n_t, ref)
     if not math.isfinite(ratio):
@@ -254,12 +262,12 @@ def _meets(c: DesignChange, tE: float, tnu: float) -> bool:
 
 
 def _cheapest_repeats(what: str, d: Design, tE: float, tnu: float,
-                      base_untestable: dict[str, str], ref: tuple[float, float], r0: float
-                      ) -> DesignChange | None:
+                      base_untestable: dict[str, str], ref: tuple[float, float], r0: float,
+                      plans: dict[Design, PlanPrediction]) -> DesignChange | None:
     """The fewest repeats of the design meeting the targets: the random sds fall as
     1/sqrt(repeats) and the systematic parts stay, which gives the repeats to try; the
     plan at those repeats confirms (one more repeat at a time, up to three)."""
-    p = plan_session(d, effect_sizes=False)
+    p = _planned(d, plans)
     _, _, e_sys, n_sys = error_totals(p)
     if not (math.isfinite(e_sys) and e_sys < tE and n_sys < tnu):
         return None
@@ -270,7 +278,7 @@ def _cheapest_repeats(what: str, d: Design, tE: float, tnu: float,
         if r > MAX_REPEATS:
             return None
         label = f"{what}, {r} repeats per depth" if what else f"{r} repeats per depth"
-        c = _change(label, replace(d, repeats=r), ref, base_untestable, r0)
+        c = _change(label, replace(d, repeats=r), ref, base_untestable, r0, plans)
         if _meets(c, tE, tnu):
             return c
         r += 1
@@ -314,7 +322,8 @@ def recommend(design: Design, *, target_E_pct: float | None = None,
     for key, v in (("target_E_pct", target_E_pct), ("target_nu", target_nu)):
         if v is not None and not (isinstance(v, int | float) and math.isfinite(v) and v > 0):
             raise InputError(f"{key} must be a positive number, got {v!r}")
-    base = plan_session(design, effect_sizes=False)
+    plans: dict[Design, PlanPrediction] = {}
+    base = _planned(design, plans)
     e0, n0, _, _ = error_totals(base)
     tE = float(target_E_pct) if target_E_pct is not None else math.inf
     tnu = float(target_nu) if target_nu is not None else math.inf
@@ -325,12 +334,12 @@ def recommend(design: Design, *, target_E_pct: float | None = None,
     precision, opening = [], []
     for what, d, _ in _changes(design):
         try:
-            precision.append(_change(what, d, ref, base.untestable, r0))
+            precision.append(_change(what, d, ref, base.untestable, r0, plans))
         except InputError:
             continue                                   # a change the tables cannot plan
     for what, d in _opening_changes(design, base.untestable):
         try:
-            opening.append(_change(what, d, ref, base.untestable, r0))
+            opening.append(_change(what, d, ref, base.untestable, r0, plans))
         except InputError:
             continue
     # a gain of at least MIN_GAIN: less is within the plan's own approximations
@@ -342,11 +351,11 @@ def recommend(design: Design, *, target_E_pct: float | None = None,
         return rec
     pool: list[tuple[str, Design]] = [("", design)]
     pool += [(what, d) for what, d, block in _changes(design) if block]
-    pool += _greedy_path(design, ref, base.untestable)
+    pool += _greedy_path(design, ref, base.untestable, plans)
     found = []
     for what, d in pool:
         try:
-            c = _cheapest_repeats(what, d, tE, tnu, base.untestable, ref, r0)
+            c = _cheapest_repeats(what, d, tE, tnu, base.untestable, ref, r0, plans)
         except InputError:
             continue
         if c is not None:
@@ -363,22 +372,22 @@ def recommend(design: Design, *, target_E_pct: float | None = None,
 
 
 def _greedy_path(design: Design, ref: tuple[float, float], base_untestable: dict[str, str],
-                 steps: int = GREEDY_STEPS) -> list[tuple[str, Design]]:
+                 plans: dict[Design, PlanPrediction], steps: int = GREEDY_STEPS
+                 ) -> list[tuple[str, Design]]:
     """Designs reached by taking, again and again, the change of the gauge block or its
     reading with the largest gain on the design reached so far (while it gains
     :data:`MIN_GAIN`): a mark's lag may hide what a wider punch gains until a vernier
     replaces the mark."""
     out: list[tuple[str, Design]] = []
     cur, label = design, []
-    cur_p = plan_session(design, effect_sizes=False)
-    cur_r = _ratio(*error_totals(cur_p)[:2], ref)
+    cur_r = _ratio(*error_totals(_planned(design, plans))[:2], ref)
     for _ in range(steps):
         best = None
         for what, d, block in _changes(cur):
             if not block:
                 continue
             try:
-                c = _change(what, d, ref, base_untestable, cur_r)
+                c = _change(what, d, ref, base_untestable, cur_r, plans)
             except InputError:
                 continue
             if c.gain >= MIN_GAIN and (best is None or c.gain > best.gain):
