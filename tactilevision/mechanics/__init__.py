@@ -56,7 +56,7 @@ from ._design import EFFECT_SIZE_PARAMS, depth_uncertainty, planned_columns
 from ._diagnose import Diagnosis, diagnose, noise_floor
 from ._diagnose_stats import CovariateTest, covariate_tests, cross_validated_rmse
 from ._effects import EFFECT_NAMES, FIT_EFFECTS, check_fit_effects, effect_names, model_label
-from ._fem_tables import fem_kappa_table, fem_table_meta, kappa_n, kappa_n_grid
+from ._fem_tables import fem_force, fem_kappa_table, fem_table_meta, kappa_n, kappa_n_grid
 from ._fit import MAX_W_OVER_H, fit_indentation
 from ._fit_model import fit_model
 from ._kappa import HAYES_1972, KappaTable, kappa
@@ -138,6 +138,7 @@ __all__ = [
     "effect_sensitivity",
     "elastic_force",
     "error_totals",
+    "fem_force",
     "fem_kappa_table",
     "fem_table_meta",
     "fit_indentation",

@@ -22,7 +22,7 @@ import numpy as np
 from .._checks import InputError
 from ._catalogue import EFFECTS, make_effect
 from ._diagnose import _usable, _why
-from ._fem_tables import kappa_n
+from ._fem_tables import fem_force
 from ._fit import MAX_W_OVER_H
 
 __all__ = [
@@ -407,9 +407,7 @@ def design_table(d: Design) -> tuple[np.ndarray, np.ndarray]:
     """The design's noise-free presses: depths w (mm) and the finite-strain FEM's forces
     P = 2 a E w kappa_n(nu, a/h, w/h) / (1 - nu^2) (N), ``repeats`` per depth."""
     w = np.repeat(np.asarray(d.depths_mm, np.float64), int(d.repeats))
-    kn = {x: kappa_n(d.nu, d.a_over_h, x / d.thickness_mm) for x in set(d.depths_mm)}
-    k = np.array([kn[x] for x in w])
-    return w, 2 * d.radius_mm * d.E_mpa * w * k / (1 - d.nu**2)
+    return w, fem_force(d.E_mpa, d.nu, d.radius_mm, d.thickness_mm, w)
 
 
 def hold_lengths(d: Design, n: int) -> np.ndarray:

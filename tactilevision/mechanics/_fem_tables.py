@@ -17,7 +17,7 @@ from .._assets import asset_dir
 from .._checks import InputError
 from ._kappa_table import KappaTable
 
-__all__ = ["TABLE_EXTRAPOLATION", "TabulatedBetaRelation", "fem_beta_relation",
+__all__ = ["TABLE_EXTRAPOLATION", "TabulatedBetaRelation", "fem_beta_relation", "fem_force",
            "fem_kappa_table", "fem_table_meta", "kappa_n", "kappa_n_grid"]
 
 #: The FEM's kappa_n(w/h) is read (PCHIP) up to this factor beyond the table's deepest w/h
@@ -350,6 +350,31 @@ def kappa_n(nu: float | np.ndarray, a_over_h: float | np.ndarray,
         k_nu = PchipInterpolator(data["nu"], k_w, axis=1)(n[idx])  # (A,)
         out[idx] = PchipInterpolator(data["a_over_h"], k_nu)(r[idx])
     return float(out) if out.ndim == 0 else out
+
+
+def fem_force(E_mpa: float, nu: float, radius_mm: float, thickness_mm: float,
+              depth_mm: float | np.ndarray) -> np.ndarray:
+    """Force of a flat punch pressed into the bonded layer, from the finite-strain FEM.
+
+    P = 2 a E w kappa_n(nu, a/h, w/h) / (1 - nu^2), eq. (1) with :func:`kappa_n`.
+
+    Parameters
+    ----------
+    E_mpa, nu : float
+        Young's modulus (MPa) and Poisson's ratio.
+    radius_mm, thickness_mm : float
+        Indenter radius a and layer thickness h, mm.
+    depth_mm : float or (N,) array_like
+        Indentation depths w, mm (w/h up to the table's reach, :func:`kappa_n`).
+
+    Returns
+    -------
+    P : float64 ndarray, shape of `depth_mm`
+        Forces, N.
+    """
+    w = np.asarray(depth_mm, np.float64)
+    k = np.asarray(kappa_n(nu, radius_mm / thickness_mm, w / thickness_mm), np.float64)
+    return 2 * radius_mm * E_mpa * w * k / (1 - nu**2)
 
 
 def kappa_n_grid(nu: np.ndarray, a_over_h: float, w_over_h: np.ndarray, *,

@@ -59,7 +59,7 @@ from ._design import (
     untestable_effects,
 )
 from ._diagnose import CURVATURE_BIC, DELTA_BIC, EQUIVALENT_BIC
-from ._fem_tables import kappa_n
+from ._fem_tables import fem_force
 
 __all__ = ["EFFECT_SIZE_PARAMS", "EffectSensitivity", "effect_power", "effect_sensitivity"]
 
@@ -144,10 +144,8 @@ class _Candidate:
 
 
 def _fem_force(d: Design, w: np.ndarray) -> np.ndarray:
-    """The finite-strain FEM's force at each depth, N (eq. 3 with the kappa table)."""
-    h, a = d.thickness_mm, d.radius_mm
-    k = np.array([float(kappa_n(d.nu, d.a_over_h, xi / h)) for xi in np.atleast_1d(w)])
-    return 2 * a * d.E_mpa * np.atleast_1d(w) * k / (1 - d.nu ** 2)
+    """The design's finite-strain FEM force at each depth w (mm), N."""
+    return fem_force(d.E_mpa, d.nu, d.radius_mm, d.thickness_mm, w)
 
 
 def _slope(d: Design, w: np.ndarray) -> np.ndarray:

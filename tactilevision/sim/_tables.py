@@ -49,7 +49,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._checks import InputError
-from ..mechanics import kappa_n
+from ..mechanics import fem_force as _fem_force
 
 __all__ = ["HIDDEN_EFFECTS", "HiddenTable", "make_measurement_table"]
 
@@ -97,14 +97,6 @@ class HiddenTable:
     radius_mm: float
     hidden: str | None
     truth: dict
-
-
-def _fem_force(E: float, nu: float, a: float, h: float, w: np.ndarray) -> np.ndarray:
-    """P = 2 a E w kappa_n(nu, a/h, w/h) / (1 - nu^2), the FEM's finite-strain force, N."""
-    ws = np.unique(w)
-    kn = np.array([kappa_n(nu, a / h, x / h) for x in ws])
-    k = kn[np.searchsorted(ws, w)]
-    return 2 * a * E * w * k / (1 - nu**2)
 
 
 def _hidden_names(hidden: str | None) -> tuple[str, ...]:
