@@ -27,6 +27,8 @@ from ..mechanics import (
     model_label,
     relaxed_moduli,
 )
+from ._fit_indenter import add_arguments as add_indenter_arguments
+from ._fit_indenter import run_indenter
 
 _DESCRIPTION = """\
 Fit the paper's law P/w = c beta (w/h) + c (eq. 5) to a measurements table
@@ -42,7 +44,14 @@ variables, effective variance); if any of its cells is empty, the fit goes on
 without it and says so on stderr. --ignore-depth-std fits without it.
 Exit status 2 on bad input; 3 when the model's parameters are not all identified
 by the table (e.g. viscoelastic_relaxation on a constant hold_s): the fit is
-printed and written, with "identified": false in the JSON."""
+printed and written, with "identified": false in the JSON.
+
+A ball ([indenter] shape = "sphere" in session.toml, or --shape sphere; radius_mm
+its radius R): the force of our FEM's sphere table (or, with a pad radius, one FEM
+sweep per nu), E at the nu the presses identify or at a stated nu (--nu, default
+0.5) with "nu not identified", each material law fitted (--law auto) and the
+apparent E of every press (flat when the law fits, drifting with depth when an
+effect is missing)."""
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -86,6 +95,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                         "(needs the table's hold_s; press matches rows to holds)")
     p.add_argument("--json", metavar="FILE",
                    help="write the result as JSON to FILE ('-' for standard output)")
+    add_indenter_arguments(p)
     p.set_defaults(func=run)
 
 
@@ -283,6 +293,30 @@ def _write_json(obj: dict, dest: str) -> None:
         raise InputError(f"cannot write the JSON result to {dest}: {exc.strerror}") from None
 
 
+def _run_indenter(args: argparse.Namespace, table: Measurements, path: Path,
+                  effects: tuple[str, ...]) -> int:
+    """``fit`` of a ball (any indenter but the flat punch)."""
+    if effects != ("large_deformation",) or args.holds is not None:
+        raise InputError(f"{path}: --effects and --holds fit the flat punch's eq. (5); a "
+                         f"{args.shape or table.indenter.get('shape')}'s presses take --law "
+                         "(finite strain: neo_hookean) and --nu")
+    depth_std, std_message = depth_uncertainty(table, ignore=args.ignore_depth_std,
+                                               effects=effects)
+    obj, lines = run_indenter(args, table, path, depth_std)
+    for note in table.notes:
+        print(f"tactilevision fit: warning: {note}", file=sys.stderr)
+    if std_message is not None:
+        print(f"tactilevision fit: warning: {path}: {std_message}", file=sys.stderr)
+    obj["measurements"] = str(path)
+    obj["thickness_source"] = table.thickness_source
+    obj["radius_source"] = table.radius_source
+    if args.json is not None:
+        _write_json(obj, args.json)
+    if args.json != "-":
+        print("\n".join(lines))
+    return 0
+
+
 def run(args: argparse.Namespace) -> int:
     """Run ``fit``: read, fit, print a summary or the JSON, write ``--json FILE``.
 
@@ -308,6 +342,9 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"--a-over-h must be a finite number, got {args.a_over_h}")
     path = args.measurements
     table = read_measurements(path, thickness_mm=args.thickness_mm, radius_mm=args.radius_mm)
+    shape = args.shape or table.indenter.get("shape", "flat_punch")
+    if shape != "flat_punch":
+        return _run_indenter(args, table, path, effects)
     relax, corrected = None, False
     if args.holds is not None:
         table, relax, corrected = _relax_table(table, args.holds, effects)

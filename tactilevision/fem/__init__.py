@@ -35,3 +35,19 @@ __all__ += ["PressProfile", "press_profile"]
 from ._tables import build_beta_table, build_kappa_table, write_table  # noqa: E402
 
 __all__ += ["build_beta_table", "build_kappa_table", "write_table"]
+
+# a rigid sphere (a ball) on the bonded layer: P(w) and a(w), linear and Neo-Hookean,
+# frictionless and tied; its table (models/sphere_fem.npz) rebuilt by ``fem tables``
+from ._sphere import (  # noqa: E402
+    SPHERE_CONTACTS,
+    SPHERE_MODELS,
+    SphereIndentation,
+    hertz_force,
+    sphere_indentation,
+    sphere_mesh,
+)
+from ._sphere_tables import SPHERE_W_GRID, build_sphere_table, sphere_reach  # noqa: E402
+
+__all__ += ["SPHERE_CONTACTS", "SPHERE_MODELS", "SPHERE_W_GRID", "SphereIndentation",
+            "build_sphere_table", "hertz_force", "sphere_indentation", "sphere_mesh",
+            "sphere_reach"]

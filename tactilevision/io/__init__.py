@@ -61,3 +61,8 @@ __all__ += ["MANIFEST", "StagedOutput", "check_output_folder", "check_overwrite"
 from ._source import FrameSource, open_source  # noqa: E402
 
 __all__ += ["FrameSource", "open_source"]
+
+# force-depth ramps (mechanics.fit_ramp): names appended below
+from ._ramp import Ramp, read_ramp  # noqa: E402
+
+__all__ += ["Ramp", "read_ramp"]

@@ -66,6 +66,11 @@ class Measurements:
     notes : tuple of str
         Warnings on the values read (non-positive forces), each naming the
         file, line and column.
+    indenter : dict of str to object
+        The sidecar ``session.toml``'s ``[indenter]`` keys beside ``radius_mm``
+        (``shape``, ``contact``) and its ``[sensor] gel_radius_mm`` (as
+        ``pad_radius_mm``), where it has them; empty without a sidecar. A
+        flat punch is ``shape = "flat_punch"`` or no ``shape``.
     """
 
     path: Path
@@ -77,6 +82,7 @@ class Measurements:
     thickness_source: str
     radius_source: str
     notes: tuple[str, ...] = ()
+    indenter: dict[str, object] = field(default_factory=dict, hash=False)
 
     @property
     def depth_mm(self) -> np.ndarray:
@@ -305,8 +311,39 @@ def read_measurements(path: str | Path, *, thickness_mm: float | None = None,
         line_numbers=np.array(lines, dtype=np.int64),
         thickness_mm=geo["thickness_mm"], radius_mm=geo["radius_mm"],
         thickness_source=src["thickness_mm"], radius_source=src["radius_mm"],
-        notes=tuple(notes),
+        notes=tuple(notes), indenter=_indenter_keys(path),
     )
+
+
+def _indenter_keys(path: Path) -> dict[str, object]:
+    """``[indenter] shape, contact`` and ``[sensor] gel_radius_mm`` of the sidecar, if any.
+
+    Raises
+    ------
+    InputError
+        For a sidecar that is not valid TOML, or a ``shape`` or ``contact`` that is not a
+        string (naming the file and key).
+    """
+    toml = path.parent / "session.toml"
+    if not toml.is_file():
+        return {}
+    try:
+        with toml.open("rb") as fh:
+            doc = tomllib.load(fh)
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise InputError(f"{toml} is not valid TOML: {exc}") from None
+    out: dict[str, object] = {}
+    section = doc.get("indenter", {})
+    for key in ("shape", "contact"):
+        if isinstance(section, dict) and key in section:
+            if not isinstance(section[key], str):
+                raise InputError(f"{toml}: [indenter] {key} must be a string, got "
+                                 f"{section[key]!r}")
+            out[key] = section[key]
+    sensor = doc.get("sensor", {})
+    if isinstance(sensor, dict) and "gel_radius_mm" in sensor:
+        out["pad_radius_mm"] = sensor["gel_radius_mm"]
+    return out
 
 
 #: Column order of :func:`write_measurements` (formats.md section 2); other

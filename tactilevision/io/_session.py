@@ -193,7 +193,7 @@ def _toml_number(doc: dict, toml: Path, table: str, key: str, *, positive: bool 
 #: The keys of session.toml this version reads, per table (formats.md section 1).
 KNOWN_KEYS: dict[str, tuple[str, ...]] = {
     "sensor": ("name", "mm_per_px", "gel_thickness_mm", "gel_radius_mm"),
-    "indenter": ("radius_mm",),
+    "indenter": ("radius_mm", "shape", "contact"),
     "gauge_block": ("depths_mm", "bevel_offset_mm", "bevel_direction_deg", "bevel_angle_deg",
                     "bevel_length_mm", "bulge_correction", "bevel_force_correction"),
     "force_sensor": ("rate_hz", "clock_offset_s", "window_samples", "window_at"),
@@ -265,6 +265,13 @@ def _read_config(folder: Path) -> SessionConfig:
             raise InputError(f"{toml}: [optics] calibration {cal_path} does not exist")
     name = doc.get("sensor", {}).get("name", "") if isinstance(doc.get("sensor"), dict) else ""
     h = _toml_number(doc, toml, "sensor", "gel_thickness_mm")
+    shape = doc.get("indenter", {}).get("shape", "flat_punch") if isinstance(
+        doc.get("indenter"), dict) else "flat_punch"
+    if shape != "flat_punch":
+        raise InputError(f"{toml}: [indenter] shape = {shape!r}: calibrate certifies gauge-block "
+                         "sessions of a flat punch (shape = \"flat_punch\"); fit the presses of "
+                         "a ball with 'tactilevision fit MEASUREMENTS.csv' "
+                         "(docs/guide/ball.md)")
     return SessionConfig(
         sensor_name=str(name),
         mm_per_px=_toml_number(doc, toml, "sensor", "mm_per_px"),

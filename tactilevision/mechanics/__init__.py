@@ -32,6 +32,12 @@ Fit:
   the class to :class:`IndentationModel`, :func:`fit_model`, :func:`diagnose`
   or ``--effects package.module:ClassName``; :func:`register_effect` checks
   it and gives its name (``docs/custom_effects.md``).
+- Indenters (one concept, :class:`Indenter`): :class:`FlatPunch` (the
+  paper's) and :class:`Sphere` (a ball: the FEM table ``models/sphere_fem.npz``,
+  :func:`sphere_force_ratio`, :func:`sphere_contact_ratio`), made from
+  ``[indenter]`` by :func:`indenter_from_config`; :func:`fit_indenter` fits E
+  (and nu where the presses pin it) to any indenter's presses ->
+  :class:`IndenterFit`.
 - :func:`neo_hookean_constants` -- Abaqus C10, D1 from E, nu.
 - :func:`fit_relaxation` -- a standard linear solid fitted to the force over
   each press's hold (``holds.csv``) -> :class:`RelaxationFit`: g and tau,
@@ -59,6 +65,8 @@ from ._effects import EFFECT_NAMES, FIT_EFFECTS, check_fit_effects, effect_names
 from ._fem_tables import fem_force, fem_kappa_table, fem_table_meta, kappa_n, kappa_n_grid
 from ._fit import MAX_W_OVER_H, fit_indentation
 from ._fit_model import fit_model
+from ._indenter import INDENTERS, FlatPunch, Indenter, Sphere, indenter_from_config
+from ._indenter_fit import IndenterFit, apparent_modulus, fit_indenter
 from ._kappa import HAYES_1972, KappaTable, kappa
 from ._model import IndentationModel, ModelFit
 from ._neohookean import neo_hookean_constants
@@ -82,6 +90,7 @@ from ._plan_effects import (
     effect_sensitivity,
 )
 from ._plan_recommend import DesignChange, Recommendation, error_totals, recommend
+from ._ramp import RampFit, fit_ramp
 from ._relaxation import (
     RelaxationFit,
     elastic_force,
@@ -92,6 +101,13 @@ from ._relaxation import (
 )
 from ._relaxation_log import refine_relaxation
 from ._result import IndentationFit
+from ._sphere_table import (
+    hertz_force_n,
+    sphere_contact_ratio,
+    sphere_force_ratio,
+    sphere_reach,
+    sphere_table_meta,
+)
 from ._validate import IndentationValidation, validate_indentation
 
 __all__ = [
@@ -100,6 +116,7 @@ __all__ = [
     "EFFECT_SIZE_PARAMS",
     "FIT_EFFECTS",
     "HAYES_1972",
+    "INDENTERS",
     "MAX_W_OVER_H",
     "NOMINAL_TAU_S",
     "PAPER_BETA_RELATION",
@@ -112,17 +129,23 @@ __all__ = [
     "Effect",
     "EffectSensitivity",
     "FemLaw",
+    "FlatPunch",
     "IndentationFit",
     "IndentationModel",
     "IndentationValidation",
+    "Indenter",
+    "IndenterFit",
     "KappaTable",
     "ModelFit",
     "NoiseBudget",
     "Param",
     "PlanPrediction",
+    "RampFit",
     "Recommendation",
     "RelaxationFit",
     "RelaxationPlan",
+    "Sphere",
+    "apparent_modulus",
     "beta",
     "beta_from_nu",
     "beta_relation",
@@ -142,8 +165,12 @@ __all__ = [
     "fem_kappa_table",
     "fem_table_meta",
     "fit_indentation",
+    "fit_indenter",
     "fit_model",
+    "fit_ramp",
     "fit_relaxation",
+    "hertz_force_n",
+    "indenter_from_config",
     "instantaneous_forces",
     "kappa",
     "kappa_n",
@@ -164,6 +191,10 @@ __all__ = [
     "register_effect",
     "relaxation_identifiability",
     "relaxed_moduli",
+    "sphere_contact_ratio",
+    "sphere_force_ratio",
+    "sphere_reach",
+    "sphere_table_meta",
     "untestable_in_table",
     "validate_indentation",
 ]

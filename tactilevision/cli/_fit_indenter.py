@@ -1,0 +1,133 @@
+"""``tactilevision fit`` for an indenter other than the flat punch (a ball): E at a stated
+or fitted nu, each material law's fit and the apparent E of every press."""
+
+from __future__ import annotations
+
+import argparse
+import math
+from pathlib import Path
+
+import numpy as np
+
+from .. import InputError
+from ..io import Measurements
+from ..mechanics import IndenterFit, fit_indenter, indenter_from_config
+
+__all__ = ["LAW_CHOICES", "add_arguments", "fit_laws", "run_indenter", "summary_lines"]
+
+#: ``--law`` choices: a material law, or ``auto`` (both fitted, the better one reported).
+LAW_CHOICES = ("auto", "neo_hookean", "linear")
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """The options of ``fit`` that an indenter other than the flat punch reads."""
+    g = p.add_argument_group("indenter (a ball: [indenter] shape = \"sphere\")")
+    g.add_argument("--shape", choices=("flat_punch", "sphere"),
+                   help="indenter shape (default: session.toml [indenter] shape, else "
+                        "flat_punch)")
+    g.add_argument("--contact", choices=("frictionless", "tied"),
+                   help="ball-gel contact (default: session.toml [indenter] contact, else "
+                        "frictionless)")
+    g.add_argument("--law", choices=LAW_CHOICES, default="auto",
+                   help="material law of a ball's force: auto (default: both fitted, the one "
+                        "with the smaller residuals reported, the other beside it), "
+                        "neo_hookean (finite strain) or linear")
+    g.add_argument("--nu", type=float, metavar="NU",
+                   help="Poisson's ratio at which E is reported when the presses do not "
+                        "identify nu (default 0.5)")
+    g.add_argument("--pad-radius-mm", type=float, metavar="R",
+                   help="lateral radius of the gel pad, mm, when it is small enough to "
+                        "matter (default: session.toml [sensor] gel_radius_mm, else the "
+                        "infinite layer); each nu is then one FEM sweep")
+
+
+def _indenter(table: Measurements, args: argparse.Namespace):
+    keys = dict(table.indenter)
+    cfg = {"shape": args.shape or keys.get("shape", "flat_punch"),
+           "radius_mm": table.radius_mm}
+    ind = indenter_from_config(cfg, where=f"{table.path}: indenter")
+    pad = args.pad_radius_mm if args.pad_radius_mm is not None else keys.get("pad_radius_mm")
+    if pad is not None and ind.shape == "sphere":
+        if isinstance(pad, bool) or not isinstance(pad, int | float) or not (
+                math.isfinite(pad) and pad > 0):
+            raise InputError(f"{table.path}: the pad radius must be a positive number of mm, "
+                             f"got {pad!r}")
+        ind = type(ind)(ind.radius_mm, pad_radius_mm=float(pad))
+    contact = args.contact or keys.get("contact")
+    if contact is not None and contact not in ind.contacts:
+        raise InputError(f"{table.path}: contact {contact!r} must be one of {ind.contacts} "
+                         f"for a {ind.shape}")
+    return ind, contact
+
+
+def fit_laws(table: Measurements, args: argparse.Namespace,
+             depth_std: np.ndarray | None) -> tuple[IndenterFit, dict[str, IndenterFit], str]:
+    """Fit each law asked for; the one reported, all fits by law, and why it was chosen."""
+    ind, contact = _indenter(table, args)
+    laws = ("linear", "neo_hookean") if args.law == "auto" else (args.law,)
+    fits = {}
+    for law in laws:
+        try:
+            fits[law] = fit_indenter(table.depth_mm, table.force_n, ind,
+                                     thickness_mm=table.thickness_mm, law=law, contact=contact,
+                                     nu=args.nu, depth_std_mm=depth_std)
+        except InputError as exc:
+            raise InputError(f"{table.path}: {exc}") from None
+    if len(fits) == 1:
+        return fits[laws[0]], fits, f"--law {laws[0]}"
+    best = min(fits, key=lambda k: fits[k].chi2)
+    other = next(k for k in fits if k != best)
+    why = (f"selected: {best} (rmse {fits[best].rmse_n * 1e3:.4g} mN against "
+           f"{fits[other].rmse_n * 1e3:.4g} mN for {other}; the same parameters, so the "
+           "smaller residuals)")
+    return fits[best], fits, why
+
+
+def _drift(fit: IndenterFit, depth: np.ndarray) -> str:
+    """The apparent E's change from the shallowest to the deepest presses, in words."""
+    order = np.argsort(depth)
+    e = fit.apparent_E_mpa[order]
+    k = max(1, e.size // 4)
+    lo, hi = float(np.mean(e[:k])), float(np.mean(e[-k:]))
+    return (f"apparent E {lo:.4f} MPa at the shallowest presses, {hi:.4f} MPa at the deepest "
+            f"({100 * (hi / lo - 1):+.1f} %)")
+
+
+def summary_lines(fit: IndenterFit, fits: dict[str, IndenterFit], why: str,
+                  table: Measurements) -> list[str]:
+    """The printed summary of an indenter fit."""
+    pct = f"{fit.confidence:.0%}"
+    pad = table.indenter.get("pad_radius_mm")
+    lines = [f"{table.path}: {fit.n_presses} presses of a {fit.shape} of radius "
+             f"{fit.radius_mm:g} mm on h = {fit.thickness_mm:g} mm"
+             + (f" (pad radius {pad:g} mm)" if pad is not None else "")
+             + f", {fit.contact} contact",
+             f"  law: {fit.law} ({why})",
+             f"  E  = {fit.E_mpa:.4f} MPa  {pct} CI [{fit.E_ci95_mpa[0]:.4f}, "
+             f"{fit.E_ci95_mpa[1]:.4f}] MPa at nu = {fit.nu:.4g}"
+             + ("" if fit.nu_identified else " (stated: nu not identified)"),
+             f"  rmse = {fit.rmse_n * 1e3:.4g} mN; {_drift(fit, table.depth_mm)}"]
+    if fit.nu_identified:
+        lines.insert(3, f"  nu = {fit.nu:.4f}      {pct} CI [{fit.nu_ci95[0]:.4f}, "
+                        f"{fit.nu_ci95[1]:.4f}]")
+    for law, other in fits.items():
+        if other is not fit:
+            lines.append(f"  {law} law: E = {other.E_mpa:.4f} MPa [{other.E_ci95_mpa[0]:.4f}, "
+                         f"{other.E_ci95_mpa[1]:.4f}], rmse = {other.rmse_n * 1e3:.4g} mN; "
+                         f"{_drift(other, table.depth_mm)}")
+    order = np.argsort(table.depth_mm)
+    lines.append("  apparent E per press (depth mm: MPa): " + ", ".join(
+        f"{table.depth_mm[i]:.4g}: {fit.apparent_E_mpa[i]:.4f}" for i in order[:12])
+        + (" ..." if order.size > 12 else ""))
+    lines += [f"  note: {n}" for n in fit.notes]
+    return lines
+
+
+def run_indenter(args: argparse.Namespace, table: Measurements, path: Path,
+                 depth_std: np.ndarray | None) -> tuple[dict, list[str]]:
+    """Fit, and the JSON object and summary lines (the caller writes and prints them)."""
+    fit, fits, why = fit_laws(table, args, depth_std)
+    obj = fit.to_json_dict()
+    obj["law_selection"] = why
+    obj["laws"] = {law: f.to_json_dict() for law, f in fits.items()}
+    return obj, summary_lines(fit, fits, why, table)

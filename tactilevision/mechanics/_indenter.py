@@ -1,0 +1,339 @@
+"""An indenter is one concept: its force law, contact radius, tables and what it observes.
+
+:class:`Indenter` is the small interface every indenter shape implements;
+:class:`FlatPunch` (the gauge block's flat-ended cylinder, the paper's) and
+:class:`Sphere` (a ball) are its two shapes today. A third shape (a cylinder
+lying on its side, a ring) is one new class registered in :data:`INDENTERS`:
+the fit, the ramp reader and the depth from a contact circle read only this
+interface.
+
+Every force law is linear in E at a fixed nu (the Neo-Hookean law scales with
+its moduli), so an indenter gives its force as ``E * shape_function``:
+:meth:`Indenter.force` at ``E_mpa = 1`` is the design column of a fit of E.
+"""
+
+from __future__ import annotations
+
+import warnings
+from abc import ABC, abstractmethod
+from collections.abc import Mapping
+from dataclasses import dataclass
+from functools import lru_cache
+from typing import ClassVar
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+from scipy.optimize import brentq
+
+from .._checks import InputError
+from ..fem import SPHERE_W_GRID, sphere_indentation
+from ._fem_tables import TABLE_EXTRAPOLATION, fem_force, kappa_n
+from ._kappa import kappa
+from ._sphere_table import (
+    hertz_force_n,
+    sphere_contact_ratio,
+    sphere_force_ratio,
+    sphere_reach,
+)
+
+__all__ = ["INDENTERS", "FlatPunch", "Indenter", "Sphere", "indenter_from_config"]
+
+#: Material laws an indenter's force follows.
+LAWS = ("linear", "neo_hookean")
+
+
+def _positive(value: object, name: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float | np.floating | np.integer):
+        raise InputError(f"{name} must be a number, got {value!r}")
+    v = float(value)
+    if not (np.isfinite(v) and v > 0):
+        raise InputError(f"{name} must be positive, got {value!r}")
+    return v
+
+
+class Indenter(ABC):
+    """What every indenter shape provides.
+
+    Attributes
+    ----------
+    shape : str
+        Its name in ``session.toml`` (``[indenter] shape``).
+    radius_mm : float
+        Its characteristic radius (the punch's a, the ball's R), mm.
+    contacts : tuple of str
+        Contact conditions its tables hold; the first is the default.
+    observes : str
+        What a session's frames certify its depth by, in words.
+    """
+
+    shape: ClassVar[str]
+    contacts: ClassVar[tuple[str, ...]]
+    observes: ClassVar[str]
+    radius_mm: float
+
+    @abstractmethod
+    def force(self, depth_mm: np.ndarray, *, E_mpa: float, nu: float, thickness_mm: float,
+              law: str = "neo_hookean", contact: str | None = None) -> np.ndarray:
+        """Force P (N) at depths w (mm) on a layer of thickness h bonded to a rigid base.
+
+        Raises
+        ------
+        InputError
+            For a depth past :meth:`reach_mm`, or geometry outside the tables.
+        """
+
+    @abstractmethod
+    def contact_radius(self, depth_mm: np.ndarray, *, nu: float, thickness_mm: float,
+                       law: str = "neo_hookean", contact: str | None = None) -> np.ndarray:
+        """Contact radius a (mm) at depths w (mm)."""
+
+    @abstractmethod
+    def reach_mm(self, thickness_mm: float, law: str = "neo_hookean") -> float:
+        """The deepest press its tables hold, mm."""
+
+    def depth_from_contact_radius(self, contact_radius_mm: np.ndarray, *, nu: float,
+                                  thickness_mm: float, law: str = "neo_hookean",
+                                  contact: str | None = None) -> np.ndarray:
+        """Depth w (mm) whose contact radius is a (mm): the inverse of :meth:`contact_radius`.
+
+        Raises
+        ------
+        InputError
+            When the shape's contact radius does not grow with depth (a flat
+            punch), or for a radius outside what the tables reach.
+        """
+        raise InputError(f"a {self.shape}'s contact radius does not change with depth: its "
+                         "depth cannot be read from its contact circle")
+
+    def config(self) -> dict:
+        """Its ``[indenter]`` keys of ``session.toml``."""
+        return {"shape": self.shape, "radius_mm": self.radius_mm}
+
+    @property
+    def costly_in_nu(self) -> bool:
+        """True when each nu costs a FEM sweep: a fit then does not profile nu."""
+        return False
+
+    def _contact(self, contact: str | None) -> str:
+        c = self.contacts[0] if contact is None else contact
+        if c not in self.contacts:
+            raise InputError(f"contact must be one of {self.contacts} for a {self.shape}, "
+                             f"got {contact!r}")
+        return c
+
+
+@dataclass(frozen=True)
+class FlatPunch(Indenter):
+    """A rigid flat-ended cylinder of radius a: the paper's gauge-block indenter.
+
+    Its force is eq. (1), P = 2 a E kappa_n w / (1 - nu^2): kappa_n of the
+    finite-strain FEM table for ``law='neo_hookean'`` (bonded face), Hayes'
+    small-strain kappa (frictionless) or the FEM's for ``law='linear'``. Its
+    contact radius is a at every depth.
+    """
+
+    radius_mm: float
+    shape: ClassVar[str] = "flat_punch"
+    contacts: ClassVar[tuple[str, ...]] = ("bonded", "frictionless")
+    observes: ClassVar[str] = ("the footprint of the punch and the bevel beside it (a vernier "
+                               "or a mark)")
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "radius_mm", _positive(self.radius_mm, "radius_mm"))
+
+    def reach_mm(self, thickness_mm: float, law: str = "neo_hookean") -> float:
+        return 0.2 * TABLE_EXTRAPOLATION * thickness_mm if law == "neo_hookean" else np.inf
+
+    def force(self, depth_mm, *, E_mpa, nu, thickness_mm, law="neo_hookean", contact=None):
+        c = self._contact(contact)
+        w = np.asarray(depth_mm, np.float64)
+        if law == "neo_hookean":
+            if c != "bonded":
+                raise InputError("the finite-strain flat-punch table holds the bonded punch "
+                                 "only")
+            return fem_force(E_mpa, nu, self.radius_mm, thickness_mm, w)
+        if law != "linear":
+            raise InputError(f"law must be one of {LAWS}, got {law!r}")
+        k = float(kappa(nu, self.radius_mm / thickness_mm, source="fem", contact=c))
+        return 2 * self.radius_mm * E_mpa * k * w / (1 - nu**2)
+
+    def contact_radius(self, depth_mm, *, nu, thickness_mm, law="neo_hookean", contact=None):
+        return np.full(np.shape(depth_mm), self.radius_mm)
+
+    def kappa_n(self, depth_mm, *, nu, thickness_mm):
+        """kappa_n(nu, a/h, w/h) of the finite-strain table (eq. 1-2)."""
+        return kappa_n(nu, self.radius_mm / thickness_mm, np.asarray(depth_mm) / thickness_mm)
+
+
+@dataclass(frozen=True)
+class Sphere(Indenter):
+    """A rigid sphere (a ball) of radius R.
+
+    Its force and contact radius come from the project's FEM: P = P_Hertz(w)
+    * force_ratio and a = sqrt(R w) * contact_ratio, linear or Neo-Hookean,
+    frictionless or tied (no slip) between ball and gel, for R/h from 0.5 to
+    20, nu 0.30 to 0.50 and w/h up to min(0.5, 0.6 R/h). On the infinite layer
+    (``pad_radius_mm=None``) they are read from the table
+    ``models/sphere_fem.npz`` (:func:`sphere_force_ratio`,
+    :func:`sphere_contact_ratio`); on a pad of finite radius each (nu, law,
+    contact) is one FEM sweep (:func:`tactilevision.fem.sphere_indentation`,
+    minutes at finite strain, then kept in the disk cache). Both tend to
+    Hertz's half-space (ratio 1) on a thick layer.
+
+    Parameters
+    ----------
+    radius_mm : float
+        R, mm, > 0.
+    pad_radius_mm : float, optional
+        Lateral radius of the gel pad (free sides, bonded base), mm; None for
+        the infinite layer. A rectangular pad is not axisymmetric: its
+        equal-area radius is a fair stand-in, its inscribed and circumscribed
+        radii bracket it.
+    """
+
+    radius_mm: float
+    pad_radius_mm: float | None = None
+    shape: ClassVar[str] = "sphere"
+    contacts: ClassVar[tuple[str, ...]] = ("frictionless", "tied")
+    observes: ClassVar[str] = "the contact circle, whose radius grows with depth (a^2 ~ R w)"
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "radius_mm", _positive(self.radius_mm, "radius_mm"))
+        if self.pad_radius_mm is not None:
+            object.__setattr__(self, "pad_radius_mm",
+                               _positive(self.pad_radius_mm, "pad_radius_mm"))
+
+    @property
+    def costly_in_nu(self) -> bool:
+        """True when each nu is a FEM sweep (a finite pad): a fit does not profile nu."""
+        return self.pad_radius_mm is not None
+
+    def reach_mm(self, thickness_mm: float, law: str = "neo_hookean") -> float:
+        return sphere_reach(self.radius_mm / thickness_mm) * thickness_mm
+
+    def _law(self, law: str) -> str:
+        if law not in LAWS:
+            raise InputError(f"law must be one of {LAWS}, got {law!r}")
+        return law
+
+    def _ratio(self, kind: str, w: np.ndarray, nu: float, h: float, law: str,
+               contact: str | None) -> np.ndarray:
+        if self.pad_radius_mm is None:
+            look = sphere_force_ratio if kind == "force" else sphere_contact_ratio
+            return look(self.radius_mm / h, nu, w / h, model=self._law(law),
+                        contact=self._contact(contact))
+        sweep = _pad_sweep(self.radius_mm / h, float(nu), self.pad_radius_mm / h,
+                           self._law(law), self._contact(contact))
+        x = w / h
+        reach = sphere_reach(self.radius_mm / h)
+        if np.any(x < 0) or np.any(x > reach * (1 + 1e-9)):
+            raise InputError(f"w/h = {float(np.max(x)):.4g} is outside the sphere's 0 to "
+                             f"{reach:.4g}")
+        return sweep[0 if kind == "force" else 1](np.sqrt(np.minimum(x, reach)))
+
+    def force(self, depth_mm, *, E_mpa, nu, thickness_mm, law="neo_hookean", contact=None):
+        w = np.asarray(depth_mm, np.float64)
+        h = _positive(thickness_mm, "thickness_mm")
+        ratio = self._ratio("force", w, nu, h, law, contact)
+        return hertz_force_n(w, E_mpa=E_mpa, nu=nu, radius_mm=self.radius_mm) * ratio
+
+    def contact_radius(self, depth_mm, *, nu, thickness_mm, law="neo_hookean", contact=None):
+        w = np.asarray(depth_mm, np.float64)
+        h = _positive(thickness_mm, "thickness_mm")
+        ratio = self._ratio("contact", w, nu, h, law, contact)
+        return np.sqrt(self.radius_mm * np.maximum(w, 0.0)) * ratio
+
+    def depth_from_contact_radius(self, contact_radius_mm, *, nu, thickness_mm,
+                                  law="neo_hookean", contact=None):
+        a = np.atleast_1d(np.asarray(contact_radius_mm, np.float64))
+        h = _positive(thickness_mm, "thickness_mm")
+        top = self.reach_mm(h, law)
+        kw = {"nu": nu, "thickness_mm": h, "law": law, "contact": contact}
+        a_top = float(self.contact_radius(np.array([top]), **kw)[0])
+        out = np.empty(a.size)
+        for i, ai in enumerate(a.ravel()):
+            if not (np.isfinite(ai) and ai >= 0):
+                raise InputError(f"contact radius {ai!r} mm: must be finite and >= 0")
+            if ai >= self.radius_mm:
+                raise InputError(f"contact radius {ai:.4g} mm is not smaller than the ball's "
+                                 f"radius {self.radius_mm:.4g} mm")
+            if ai > a_top:
+                raise InputError(f"contact radius {ai:.4g} mm is past the sphere table's "
+                                 f"{a_top:.4g} mm (w = {top:.4g} mm on h = {h:g} mm)")
+            if ai == 0:
+                out[i] = 0.0
+                continue
+            out[i] = brentq(lambda w, ai=ai: float(self.contact_radius(np.array([w]), **kw)[0])
+                            - ai, 0.0, top, xtol=1e-12, rtol=1e-10)
+        return out.reshape(np.shape(contact_radius_mm))
+
+    def config(self) -> dict:
+        out = super().config()
+        if self.pad_radius_mm is not None:
+            out["pad_radius_mm"] = self.pad_radius_mm
+        return out
+
+
+@lru_cache(maxsize=32)
+def _pad_sweep(radius_over_h: float, nu: float, pad_over_h: float, law: str, contact: str
+               ) -> tuple[CubicSpline, CubicSpline]:
+    """Force and contact ratios of one FEM sweep on a finite pad, as splines of sqrt(w/h)
+    (through 1 at w = 0, Hertz's limit), over the sphere table's depth grid."""
+    reach = sphere_reach(radius_over_h)
+    grid = SPHERE_W_GRID[SPHERE_W_GRID <= reach + 1e-12]
+    if grid[-1] < reach - 1e-12:
+        grid = np.append(grid, reach)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        try:
+            res = sphere_indentation(radius_over_h, nu, grid, model=law, contact=contact,
+                                     pad_radius_over_h=pad_over_h)
+        except RuntimeWarning as exc:
+            raise InputError(f"the FEM sweep of the sphere on the pad did not converge: "
+                             f"{exc}") from None
+    s = np.concatenate([[0.0], np.sqrt(res.w_over_h)])
+    force = np.concatenate([[1.0], res.hertz_ratio])
+    radius = np.concatenate([[1.0], res.contact_radius / np.sqrt(radius_over_h
+                                                                  * res.w_over_h)])
+    return CubicSpline(s, force), CubicSpline(s, radius)
+
+
+#: Indenter shapes by their ``[indenter] shape`` name.
+INDENTERS: dict[str, type[Indenter]] = {c.shape: c for c in (FlatPunch, Sphere)}
+
+
+def indenter_from_config(section: Mapping[str, object], *, where: str = "[indenter]"
+                         ) -> Indenter:
+    """The indenter a ``session.toml`` ``[indenter]`` table describes.
+
+    Parameters
+    ----------
+    section : mapping
+        ``shape`` (default ``'flat_punch'``) and ``radius_mm``.
+    where : str, default '[indenter]'
+        Where the table came from, for messages (a file and table).
+
+    Returns
+    -------
+    Indenter
+
+    Raises
+    ------
+    InputError
+        Naming `where` and the key: an unknown shape, a missing, non-numeric or
+        non-positive ``radius_mm``.
+
+    Examples
+    --------
+    >>> indenter_from_config({"shape": "sphere", "radius_mm": 3.75})
+    Sphere(radius_mm=3.75)
+    """
+    shape = section.get("shape", "flat_punch")
+    if shape not in INDENTERS:
+        raise InputError(f"{where} shape = {shape!r}: must be one of {sorted(INDENTERS)}")
+    if "radius_mm" not in section:
+        raise InputError(f"{where} has no radius_mm (the {shape}'s radius, mm)")
+    try:
+        return INDENTERS[str(shape)](section["radius_mm"])
+    except InputError as err:
+        raise InputError(f"{where} {err}") from None

@@ -1,0 +1,424 @@
+"""E (and nu where the presses pin it) from presses of any indenter: the ball's fit.
+
+Every indenter's force is linear in E at a fixed nu (:mod:`._indenter`), so the
+fit profiles nu: at each nu of a fine grid E is the weighted least-squares
+slope of P on the indenter's force at E = 1, and the residual sum of squares
+against nu is the profile whose minimum gives nu and whose rise gives its
+interval. A profile that stays within the interval's threshold up to an end of
+the table does not identify nu: E is then reported at a stated nu, with what it
+would be over the nu the data allow beside it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from scipy import optimize, stats
+
+from .._checks import InputError, check_array
+from ._indenter import Indenter
+
+__all__ = ["IndenterFit", "apparent_modulus", "fit_indenter"]
+
+#: Default nu at which E is reported when the presses do not identify nu: a silicone gel
+#: is nearly incompressible (the FEATS authors' fit of a GelSight Mini gel assumed 0.5).
+NU_STATED = 0.5
+#: Widest nu interval still called identified.
+_NU_IDENTIFIED_WIDTH = 0.10
+
+
+@dataclass(frozen=True)
+class IndenterFit:
+    """Result of :func:`fit_indenter`. Units are in the names.
+
+    Attributes
+    ----------
+    E_mpa : float
+        Young's modulus at `nu`, MPa.
+    E_ci95_mpa : (float, float)
+        Its interval at `confidence` (the profile likelihood over nu when nu is
+        identified; at the stated nu otherwise), widened to the fits at the
+        bounds of `depth_shared_mm` when given.
+    nu : float
+        The fitted nu when `nu_identified`, else the stated one.
+    nu_ci95 : (float, float)
+        The profile interval of nu over the table's range (whether identified
+        or not: it says what the presses allow).
+    nu_identified : bool
+        The interval lies inside the table's range, away from its lower end,
+        and is at most 0.10 wide.
+    E_over_nu_ci_mpa : (float, float)
+        E fitted at the ends of `nu_ci95`: what E would be over the nu the
+        presses allow (the sensitivity to a stated nu).
+    E_se_mpa : float
+    shape, radius_mm, thickness_mm : str, float, float
+        The indenter and the layer.
+    law, contact : str
+        Material law (``'linear'``, ``'neo_hookean'``) and contact condition.
+    n_presses : int
+    rmse_n : float
+        Root mean square of P - P_fit, N.
+    residuals_n, predicted_n : (N,) float64 ndarray
+    apparent_E_mpa : (N,) float64 ndarray
+        Each press's own E, P_i / P(w_i; E = 1) at `nu`: flat when the law is
+        right, drifting with depth when an effect is missing.
+    sigma0_n : float
+        Force scatter the depth uncertainties do not explain (Paule-Mandel),
+        N; the residual sd when no depth uncertainties are given.
+    chi2, dof : float, int
+        Weighted residual sum of squares at the optimum and its degrees of
+        freedom.
+    confidence : float
+    notes : tuple of str
+    """
+
+    E_mpa: float
+    E_ci95_mpa: tuple[float, float]
+    nu: float
+    nu_ci95: tuple[float, float]
+    nu_identified: bool
+    E_over_nu_ci_mpa: tuple[float, float]
+    E_se_mpa: float
+    shape: str
+    radius_mm: float
+    thickness_mm: float
+    law: str
+    contact: str
+    n_presses: int
+    rmse_n: float
+    residuals_n: np.ndarray = field(repr=False)
+    predicted_n: np.ndarray = field(repr=False)
+    apparent_E_mpa: np.ndarray = field(repr=False)
+    sigma0_n: float = math.nan
+    chi2: float = math.nan
+    dof: int = 0
+    confidence: float = 0.95
+    notes: tuple[str, ...] = ()
+
+    def to_json_dict(self) -> dict[str, Any]:
+        """JSON-ready dict (arrays as lists, NaN as None)."""
+        def clean(v: Any) -> Any:
+            if isinstance(v, np.ndarray):
+                return [clean(x) for x in v.tolist()]
+            if isinstance(v, float | np.floating):
+                return float(v) if math.isfinite(v) else None
+            if isinstance(v, tuple | list):
+                return [clean(x) for x in v]
+            if isinstance(v, np.bool_ | bool):
+                return bool(v)
+            return v
+
+        return {k: clean(getattr(self, k)) for k in self.__dataclass_fields__}
+
+
+def apparent_modulus(depth_mm: np.ndarray, force_n: np.ndarray, indenter: Indenter, *,
+                     thickness_mm: float, nu: float, law: str = "neo_hookean",
+                     contact: str | None = None) -> np.ndarray:
+    """Each press's own E: P_i over the indenter's force at (w_i, E = 1, nu), MPa.
+
+    Flat over depth when the law fits the gel; a drift with depth is the
+    signature of a missing effect (finite strain, a force offset, a depth
+    offset).
+
+    Parameters
+    ----------
+    depth_mm, force_n : (N,) array_like of float
+    indenter : Indenter
+    thickness_mm, nu : float
+    law : {'neo_hookean', 'linear'}
+    contact : str, optional
+        The indenter's default when None.
+
+    Returns
+    -------
+    (N,) float64 ndarray, MPa
+    """
+    w = np.asarray(depth_mm, np.float64)
+    g = indenter.force(w, E_mpa=1.0, nu=nu, thickness_mm=thickness_mm, law=law,
+                       contact=contact)
+    return np.asarray(force_n, np.float64) / g
+
+
+def _slope(g: np.ndarray, P: np.ndarray, var: np.ndarray) -> tuple[float, float, float]:
+    """Weighted least squares of P = E g with variances `var`: (E, (sum g^2/var)^-1, chi2)."""
+    wt = 1.0 / var
+    sgg = float(np.sum(wt * g * g))
+    E = float(np.sum(wt * g * P)) / sgg
+    r = P - E * g
+    return E, 1.0 / sgg, float(np.sum(wt * r * r))
+
+
+def _paule_mandel(g: np.ndarray, P: np.ndarray, D: np.ndarray, dof: int) -> float:
+    """Smallest t >= 0 with chi2(t) / dof <= 1 for variances t + D (Paule and Mandel 1982)."""
+    floor = max((1e-12 * float(np.max(np.abs(P)))) ** 2, np.finfo(float).tiny)
+
+    def excess(t: float) -> float:
+        return _slope(g, P, np.maximum(t + D, floor))[2] / dof - 1.0
+
+    E0 = _slope(g, P, np.ones_like(P))[0]
+    upper = float(np.sum((P - E0 * g) ** 2)) / dof
+    if dof <= 0 or upper <= 0 or excess(0.0) <= 0:
+        return 0.0
+    return float(optimize.brentq(excess, 0.0, upper, xtol=1e-14 * upper, rtol=1e-12))
+
+
+def _profile(grid: np.ndarray, cols: list, P: np.ndarray, u: np.ndarray | None
+             ) -> tuple[np.ndarray, np.ndarray, float, bool]:
+    """E(nu), var_E(nu) and chi2(nu) over `grid` with one noise model for every nu.
+
+    The noise model is fixed at the unweighted best nu: unit variances without depth
+    uncertainties, else s0^2 + (E g' u)^2 with s0 by Paule and Mandel.
+
+    Returns
+    -------
+    prof : (K, 4) ndarray
+        nu, E, (sum g^2 / var)^-1, chi2.
+    var : (N,) ndarray
+    sigma0 : float
+    weighted : bool
+    """
+    n = P.size
+    dof = n - 2
+    rss = np.array([_slope(g, P, np.ones(n))[2] for g, _ in cols])
+    k0 = int(np.argmin(rss))
+    weighted = u is not None and bool(np.any(u > 0))
+    if weighted:
+        g0, dg0 = cols[k0]
+        D = (_slope(g0, P, np.ones(n))[0] * dg0 * u) ** 2
+        t = _paule_mandel(g0, P, D, max(dof, 1))
+        var = np.maximum(t + D, max((1e-12 * float(np.max(P))) ** 2, np.finfo(float).tiny))
+        sigma0 = math.sqrt(t)
+    else:
+        var = np.ones(n)
+        sigma0 = math.sqrt(float(rss[k0]) / dof) if dof > 0 else math.nan
+    prof = np.array([(v, *_slope(g, P, var)) for v, (g, _) in zip(grid, cols, strict=True)])
+    return prof, var, sigma0, weighted
+
+
+def _read_profile(prof: np.ndarray, n: int, weighted: bool, confidence: float,
+                  nu_range: tuple[float, float], nu: float | None, nu_stated: float,
+                  notes: list[str]) -> tuple:
+    """E, var_E, E's interval, nu, nu's interval and whether it is identified (module
+    docstring of :func:`fit_indenter`, Notes); notes appended to `notes`."""
+    lo, hi = nu_range
+    dof = n - 2
+    k_best = int(np.argmin(prof[:, 3]))
+    chi2_min = float(prof[k_best, 3])
+    s2 = chi2_min / dof if dof > 0 else math.nan
+    if weighted and dof > 0:
+        s2 = max(s2, 1.0)        # the stated depth uncertainties explain the scatter
+    if dof > 0 and s2 > 0:
+        thr = float(stats.f.ppf(confidence, 1, dof)) * s2
+        inside = prof[:, 3] - chi2_min <= thr
+        nu_ci = (float(prof[inside, 0].min()), float(prof[inside, 0].max()))
+    else:
+        thr, inside, nu_ci = math.nan, np.ones(prof.shape[0], bool), (lo, hi)
+        notes.append(f"{n} presses leave no degree of freedom to test nu: it is not identified")
+    # identified: inside the table's range, off its lower end, and narrow
+    nu_identified = bool(dof > 0 and nu_ci[0] > lo + 1e-9
+                         and nu_ci[1] - nu_ci[0] <= _NU_IDENTIFIED_WIDTH)
+    if nu_identified:
+        nu_fit = float(prof[k_best, 0])
+        sel = prof[inside]
+        half = np.sqrt(np.maximum(thr - (sel[:, 3] - chi2_min), 0.0) * sel[:, 2])
+        E_ci = (float(np.min(sel[:, 1] - half)), float(np.max(sel[:, 1] + half)))
+        E_fit, E_var = float(prof[k_best, 1]), float(prof[k_best, 2]) * s2
+        if nu is not None and abs(nu - nu_fit) > 1e-9:
+            notes.append(f"nu stated {nu:g}; the presses identify nu = {nu_fit:.3f} "
+                         f"[{nu_ci[0]:.3f}, {nu_ci[1]:.3f}]: E is reported at the fitted nu")
+        return E_fit, E_var, E_ci, nu_fit, nu_ci, nu_identified
+    k = int(np.argmin(np.abs(prof[:, 0] - nu_stated)))
+    # one parameter (E) at the stated nu: its own scale, n - 1 degrees of freedom
+    s2_1 = float(prof[k, 3]) / (n - 1)
+    if weighted:
+        s2_1 = max(s2_1, 1.0)
+    E_fit, E_var = float(prof[k, 1]), float(prof[k, 2]) * s2_1
+    half = float(stats.t.ppf(0.5 + confidence / 2, n - 1)) * math.sqrt(E_var)
+    notes.append(f"nu not identified: the presses allow nu from {nu_ci[0]:.3f} to "
+                 f"{nu_ci[1]:.3f} ({confidence:.0%} profile interval); E is reported at "
+                 f"the stated nu = {nu_stated:g}")
+    return E_fit, E_var, (E_fit - half, E_fit + half), nu_stated, nu_ci, False
+
+
+def _checked(depth_mm, force_n, indenter: Indenter, thickness_mm: float, law: str,
+             contact: str | None, nu: float | None, nu_range: tuple[float, float],
+             depth_std_mm, depth_shared_mm: float, confidence: float) -> tuple:
+    """:func:`fit_indenter`'s arguments checked: (w, P, u, h, reach, contact, nu stated)."""
+    w = check_array(depth_mm, "depth_mm", [("N",)], dtype=np.number, finite=True)
+    P = check_array(force_n, "force_n", [(w.shape[0],)], dtype=np.number, finite=True)
+    w, P = w.astype(np.float64), P.astype(np.float64)
+    h = float(thickness_mm)
+    if not (math.isfinite(h) and h > 0):
+        raise InputError(f"thickness_mm must be positive, got {thickness_mm!r}")
+    if not 0 < confidence < 1:
+        raise InputError(f"confidence must be in (0, 1), got {confidence!r}")
+    n = w.size
+    if n < 2:
+        raise InputError(f"{n} press(es): the fit of E needs two or more")
+    bad = np.flatnonzero(w <= 0)
+    if bad.size:
+        raise InputError(f"press {int(bad[0])}: depth_mm = {w[bad[0]]:g} must be positive")
+    reach = indenter.reach_mm(h, law)
+    bad = np.flatnonzero(w > reach * (1 + 1e-9))
+    if bad.size:
+        raise InputError(f"press {int(bad[0])}: depth {w[bad[0]]:.4g} mm is past the "
+                         f"{indenter.shape} table's reach, {reach:.4g} mm on h = {h:g} mm")
+    bad = np.flatnonzero(P <= 0)
+    if bad.size:
+        raise InputError(f"press {int(bad[0])}: force_n = {P[bad[0]]:g} must be positive "
+                         "(a press pushes into the gel)")
+    lo, hi = map(float, nu_range)
+    if not 0.0 <= lo < hi <= 0.5:
+        raise InputError(f"nu_range must satisfy 0 <= lo < hi <= 0.5, got {nu_range!r}")
+    nu_stated = NU_STATED if nu is None else float(nu)
+    if not lo <= nu_stated <= hi:
+        raise InputError(f"nu = {nu_stated!r} is outside nu_range {nu_range!r}")
+    u = None
+    if depth_std_mm is not None:
+        u = check_array(depth_std_mm, "depth_std_mm", [(n,)], dtype=np.number,
+                        finite=True).astype(np.float64)
+        if np.any(u < 0):
+            i = int(np.argmax(u < 0))
+            raise InputError(f"press {i}: depth_std_mm = {u[i]:g} must be >= 0")
+    if not (math.isfinite(depth_shared_mm) and depth_shared_mm >= 0):
+        raise InputError(f"depth_shared_mm must be >= 0, got {depth_shared_mm!r}")
+    return w, P, u, h, reach, indenter._contact(contact), nu_stated
+
+
+
+def fit_indenter(depth_mm: np.ndarray, force_n: np.ndarray, indenter: Indenter, *,
+                 thickness_mm: float, law: str = "neo_hookean", contact: str | None = None,
+                 nu: float | None = None, nu_range: tuple[float, float] = (0.30, 0.50),
+                 depth_std_mm: np.ndarray | None = None, depth_shared_mm: float = 0.0,
+                 confidence: float = 0.95) -> IndenterFit:
+    """Fit E (and nu, where the presses identify it) to presses of an indenter.
+
+    Parameters
+    ----------
+    depth_mm : (N,) array_like of float
+        Indentation depths w, mm, > 0, within the indenter's reach
+        (:meth:`Indenter.reach_mm`).
+    force_n : (N,) array_like of float
+        Forces P, N.
+    indenter : Indenter
+        :class:`~tactilevision.mechanics.Sphere` or
+        :class:`~tactilevision.mechanics.FlatPunch`.
+    thickness_mm : float
+        Layer thickness h, mm.
+    law : {'neo_hookean', 'linear'}, default 'neo_hookean'
+        Finite-strain or small-strain force law.
+    contact : str, optional
+        The indenter's contact condition (a sphere: ``'frictionless'``, the
+        default, or ``'tied'``).
+    nu : float, optional
+        Poisson's ratio to report E at when the presses do not identify it;
+        default 0.5. Given and the presses do identify nu, E is still the
+        profile's (the fitted nu), and a note says how far the stated one is.
+    nu_range : (float, float), default (0.30, 0.50)
+        The nu profiled (within the indenter's tables).
+    depth_std_mm : (N,) array_like of float, optional
+        Standard uncertainty of each depth, mm, >= 0: errors in both variables
+        (effective variance, each press's force variance s0^2 + (dP/dw u)^2,
+        s0 by the Paule-Mandel rule, as :func:`fit_indentation`).
+    depth_shared_mm : float, default 0.0
+        A depth error every press shares (a ramp's contact point, a ball
+        session's circle bias), mm, >= 0 (a bound, not an sd): the fit is
+        repeated with every depth moved by + and - this, and the intervals of
+        E and nu are widened to the hull of the three fits' intervals.
+    confidence : float, default 0.95
+
+    Returns
+    -------
+    IndenterFit
+
+    Raises
+    ------
+    ShapeError
+        For arrays that are not 1-D, finite and of one length.
+    InputError
+        For a depth <= 0 or past the indenter's reach (naming the press), a
+        force <= 0, fewer than two presses, a bad nu or nu_range, or a bad
+        `confidence`.
+
+    Notes
+    -----
+    The profile: for nu on a grid of 0.0025 over `nu_range`, E(nu) and the
+    weighted residual sum chi2(nu) (variances at that nu); the interval of nu
+    is where chi2(nu) - min chi2 <= F(1, n - 2) s^2, with s^2 = min chi2 / (n
+    - 2) floored at 1 where depth uncertainties were given (a likelihood
+    ratio with the scale estimated, as a Student t interval). E's interval at a
+    fixed nu is E +- t(n - 1) se; with nu identified it is the union over
+    the nu of the profile of E(nu) +- sqrt((threshold - excess(nu)) var_E(nu))
+    (the exact profile-likelihood interval of E).
+    """
+    w, P, u, h, reach, contact, nu_stated = _checked(
+        depth_mm, force_n, indenter, thickness_mm, law, contact, nu, nu_range, depth_std_mm,
+        depth_shared_mm, confidence)
+    n, (lo, hi) = w.size, map(float, nu_range)
+
+    def columns(wd: np.ndarray, v: float) -> tuple[np.ndarray, np.ndarray]:
+        """The force at E = 1 and its slope dP/dw (centred differences), at nu = v."""
+        kw = {"nu": float(v), "thickness_mm": h, "law": law, "contact": contact}
+        eps = 1e-6 * h
+        up, dn = np.minimum(wd + eps, reach), np.maximum(wd - eps, 1e-12)
+        g = indenter.force(wd, E_mpa=1.0, **kw)
+        dg = (indenter.force(up, E_mpa=1.0, **kw) - indenter.force(dn, E_mpa=1.0, **kw)) / (
+            up - dn)
+        return g, dg
+
+    costly = bool(getattr(indenter, "costly_in_nu", False))
+    grid = (np.array([nu_stated]) if costly else
+            np.unique(np.append(np.round(np.arange(lo, hi + 1e-9, 0.0025), 6), nu_stated)))
+    prof, _, sigma0, weighted = _profile(grid, [columns(w, v) for v in grid], P, u)
+    notes: list[str] = []
+    if costly:     # one parameter at the stated nu; nu not profiled
+        nu_fit, nu_ci, nu_identified = nu_stated, (lo, hi), False
+        s2_1 = float(prof[0, 3]) / (n - 1)
+        E_fit, E_var = float(prof[0, 1]), float(prof[0, 2]) * (max(s2_1, 1.0) if weighted
+                                                                  else s2_1)
+        half = float(stats.t.ppf(0.5 + confidence / 2, n - 1)) * math.sqrt(E_var)
+        E_ci, E_over = (E_fit - half, E_fit + half), (math.nan, math.nan)
+        notes.append(f"nu not profiled: each nu is a FEM sweep of this {indenter.shape} "
+                     f"(a finite pad); E is reported at the stated nu = {nu_stated:g}")
+    else:
+        E_fit, E_var, E_ci, nu_fit, nu_ci, nu_identified = _read_profile(
+            prof, n, weighted, confidence, (lo, hi), nu, nu_stated, notes)
+        ends = [int(np.argmin(np.abs(prof[:, 0] - v))) for v in nu_ci]
+        E_over = (float(min(prof[ends, 1])), float(max(prof[ends, 1])))
+    dof = n - 2
+    if depth_shared_mm > 0:
+        E_hull, nu_hull = list(E_ci), list(nu_ci)
+        for sgn in (-1.0, 1.0):
+            ws = w + sgn * depth_shared_mm
+            if np.any(ws <= 0) or np.any(ws > reach):
+                notes.append(f"the depths moved by {sgn * depth_shared_mm * 1e3:+.3g} um (the "
+                             "shared error) leave the table: that side is not carried")
+                continue
+            other = fit_indenter(ws, P, indenter, thickness_mm=h, law=law, contact=contact,
+                                 nu=nu, nu_range=nu_range, depth_std_mm=u,
+                                 confidence=confidence)
+            E_hull = [min(E_hull[0], other.E_ci95_mpa[0]), max(E_hull[1], other.E_ci95_mpa[1])]
+            nu_hull = [min(nu_hull[0], other.nu_ci95[0]), max(nu_hull[1], other.nu_ci95[1])]
+        notes.append(f"a depth error of {depth_shared_mm * 1e3:.3g} um shared by every press: "
+                     "the intervals are the hull of the fits with every depth moved to its "
+                     "bounds")
+        E_ci, nu_ci = (E_hull[0], E_hull[1]), (nu_hull[0], nu_hull[1])
+    kw = {"nu": nu_fit, "thickness_mm": h, "law": law, "contact": contact}
+    g = indenter.force(w, E_mpa=1.0, **kw)
+    pred = E_fit * g
+    resid = P - pred
+    k_nu = int(np.argmin(np.abs(prof[:, 0] - nu_fit)))
+    if weighted:
+        notes.append("errors in both variables: effective variance with the depth "
+                     f"uncertainties, extra force scatter sigma0 = {sigma0 * 1e3:.3g} mN")
+    return IndenterFit(
+        E_mpa=E_fit, E_ci95_mpa=E_ci, nu=nu_fit, nu_ci95=nu_ci, nu_identified=nu_identified,
+        E_over_nu_ci_mpa=E_over, E_se_mpa=math.sqrt(E_var) if E_var >= 0 else math.nan,
+        shape=indenter.shape, radius_mm=indenter.radius_mm, thickness_mm=h, law=law,
+        contact=contact, n_presses=n, rmse_n=float(np.sqrt(np.mean(resid ** 2))),
+        residuals_n=resid, predicted_n=pred, apparent_E_mpa=P / g,
+        sigma0_n=sigma0, chi2=float(prof[k_nu, 3]), dof=dof,
+        confidence=confidence, notes=tuple(notes))

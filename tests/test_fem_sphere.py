@@ -1,0 +1,87 @@
+"""A rigid sphere on the bonded layer (tactilevision.fem.sphere_indentation) against truth
+that is not our code: Hertz's half-space, Dimitriadis et al.'s bonded-layer series, and the
+FEM's own mesh convergence."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from tactilevision import InputError
+from tactilevision.fem import sphere_indentation, sphere_mesh
+
+# Dimitriadis, Horkay, Maresca, Kachar, Chadwick, Biophys. J. 82:2798-2810 (2002), eq. (12):
+# a paraboloid on an incompressible layer bonded to a rigid substrate, chi = sqrt(R w) / h,
+# P = 16/9 E R^(1/2) w^(3/2) (1 + 1.133 chi + 1.283 chi^2 + 0.769 chi^3 + 0.0975 chi^4).
+DIMITRIADIS_12 = (1.133, 1.283, 0.769, 0.0975)
+
+
+def dimitriadis(chi: np.ndarray) -> np.ndarray:
+    c1, c2, c3, c4 = DIMITRIADIS_12
+    return 1 + c1 * chi + c2 * chi**2 + c3 * chi**3 + c4 * chi**4
+
+
+def test_thick_layer_is_hertz():
+    """R/h = 0.1 at w/h = 1e-4 and 2.5e-4 (chi = sqrt(R w)/h = 0.003, 0.005): force and
+    contact radius within 1 % of Hertz's P = 4/3 E* R^1/2 w^3/2, a = sqrt(R w), once the
+    layer's first-order term (1.133 chi, 0.6 % here) is taken off."""
+    R, w = 0.1, np.array([1e-4, 2.5e-4])
+    res = sphere_indentation(R, 0.5, w, model="linear", profile="paraboloid", cache=False)
+    chi = np.sqrt(R * w)
+    assert res.complete
+    assert res.hertz_ratio / (1 + DIMITRIADIS_12[0] * chi) == pytest.approx([1, 1], abs=0.01)
+    assert res.hertz_ratio == pytest.approx([1, 1], abs=0.01)       # Hertz itself
+    assert res.contact_radius / np.sqrt(R * w) == pytest.approx([1, 1], abs=0.01)
+
+
+def test_bonded_layer_follows_dimitriadis_in_its_range():
+    """Incompressible bonded layer, paraboloid (eq. 12's assumptions): within 2 % of the
+    series for chi = sqrt(R w)/h up to 0.25; past it the series' truncation falls behind
+    (measured: +2.8 % at chi = 0.3, +8.4 % at 0.5; benchmarks/bench_fem_sphere.py)."""
+    chi = np.array([0.1, 0.15, 0.2, 0.25])
+    res = sphere_indentation(1.0, 0.5, chi**2, model="linear", profile="paraboloid")
+    ratio = res.hertz_ratio / dimitriadis(chi)
+    assert np.all(np.abs(ratio - 1) < 0.02), ratio
+    # and the FEM does rise above the truncated series with chi, not below
+    assert ratio[-1] > ratio[0]
+
+
+def test_incompressible_tied_equals_frictionless_and_finite_strain_converges():
+    """At nu = 0.5 a rigid sphere's shear traction does no work on the normal problem of a
+    half-space (Dundurs' second constant is 0): tied and frictionless agree at small w/R.
+    Two meshes of the Neo-Hookean sweep agree within 0.5 % in force."""
+    w = np.array([0.0025, 0.01])
+    fr = sphere_indentation(1.0, 0.5, w, model="neo_hookean", contact="frictionless")
+    ti = sphere_indentation(1.0, 0.5, w, model="neo_hookean", contact="tied")
+    assert ti.force / fr.force == pytest.approx([1, 1], abs=0.003)
+    fine = sphere_indentation(1.0, 0.5, w, model="neo_hookean", contact="frictionless",
+                              surface_cell=0.5 * fr.surface_cell)
+    assert fine.force / fr.force == pytest.approx([1, 1], abs=0.005)
+
+
+def test_finite_strain_and_the_sphere_soften_against_the_linear_paraboloid():
+    """The exact sphere sits above its paraboloid (R - sqrt(R^2 - r^2) >= r^2 / 2R): less
+    force at the same depth; the Neo-Hookean layer at w/R = 0.1 is softer than linear."""
+    w = np.array([0.1])
+    par = sphere_indentation(1.0, 0.5, w, model="linear", profile="paraboloid")
+    sph = sphere_indentation(1.0, 0.5, w, model="linear")
+    nh = sphere_indentation(1.0, 0.5, w, model="neo_hookean")
+    assert sph.force[0] < par.force[0]
+    assert nh.force[0] < sph.force[0]
+
+
+def test_bad_arguments_are_named():
+    with pytest.raises(InputError, match="radius_over_h"):
+        sphere_indentation(-1.0, 0.5, [0.1])
+    with pytest.raises(InputError, match="nu"):
+        sphere_indentation(1.0, 0.7, [0.1])
+    with pytest.raises(InputError, match="w_over_h"):
+        sphere_indentation(1.0, 0.5, [0.2, 0.1])
+    with pytest.raises(InputError, match="equator"):
+        sphere_indentation(0.5, 0.5, [0.55])
+    with pytest.raises(InputError, match="contact"):
+        sphere_indentation(1.0, 0.5, [0.1], contact="glued")
+    with pytest.raises(InputError, match="profile"):
+        sphere_indentation(1.0, 0.5, [0.1], model="neo_hookean", profile="paraboloid")
+    with pytest.raises(InputError, match="pad radius"):
+        sphere_mesh(5.0, 0.05, pad_radius_over_h=6.0)
