@@ -132,3 +132,17 @@ def test_indenter_from_config():
         indenter_from_config({"shape": "sphere", "radius_mm": 0})
     with pytest.raises(InputError, match="radius_mm must be a number"):
         indenter_from_config({"shape": "sphere", "radius_mm": "3"})
+
+
+def test_flat_punch_through_the_same_fit():
+    """The flat punch behind the same interface: presses of the FEM's finite-strain law
+    (eq. 1 with kappa_n) give back its E at the stated nu; its table stops at nu = 0.499."""
+    from tactilevision.mechanics import FlatPunch, fem_force
+
+    punch = FlatPunch(2.5)
+    assert punch.nu_limits("neo_hookean") == (0.30, 0.499)
+    w = np.repeat([0.15, 0.3, 0.45, 0.6], 3)
+    P = fem_force(0.2, 0.48, 2.5, 3.0, w)
+    fit = fit_indenter(w, P, punch, thickness_mm=3.0, nu=0.48)
+    assert fit.E_mpa == pytest.approx(0.2, rel=1e-3)
+    assert fit.contact == "bonded"

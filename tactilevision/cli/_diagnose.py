@@ -9,9 +9,15 @@ from pathlib import Path
 
 from .. import InputError
 from ..io import read_measurements
-from ..mechanics import diagnose, effect_names, model_label
-from ..viz import diagnosis_figures, write_diagnosis_report
+from ..mechanics import diagnose, diagnose_indenter, effect_names, model_label
+from ..viz import (
+    diagnosis_figures,
+    indenter_figure,
+    write_diagnosis_report,
+    write_indenter_report,
+)
 from ._fit import _write_json
+from ._fit_indenter import indenter_of
 from ._out import StagedOutput, add_overwrite_argument, check_output_folder, check_overwrite
 
 __all__ = ["add_parser", "run"]
@@ -23,7 +29,13 @@ variance explained), the replicate noise floor, the model plus each
 applicable catalogue effect compared by BIC and cross-validated RMSE, the
 verdict (missing effect, equivalent effects, unexplained covariate) and the
 error ladder with E and nu at each step. --report DIR writes the figures and
-report.html. Exit status 2 on bad input."""
+report.html. Exit status 2 on bad input.
+
+A ball's table ([indenter] shape = "sphere"): the ladder starts from the
+small-strain law with the stated contact and tries large_deformation (finite
+strain), contact_slip (the other contact condition), force_offset and
+depth_offset, taking the change that lowers the BIC most until none does; each
+rung shows every press's apparent E (flat when the model is right)."""
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -57,8 +69,47 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--report", metavar="DIR", type=Path,
                    help="write residuals_by_covariate.png, error_ladder.png, report.html")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--shape", choices=("flat_punch", "sphere"),
+                   help="indenter shape (default: session.toml [indenter] shape)")
+    p.add_argument("--contact", choices=("frictionless", "tied"),
+                   help="a ball's stated contact (default: session.toml [indenter] contact)")
+    p.add_argument("--nu", type=float, default=0.5, metavar="NU",
+                   help="a ball's models are fitted at this nu (default 0.5)")
+    p.add_argument("--pad-radius-mm", type=float, metavar="R",
+                   help="a ball's gel pad radius (default: session.toml [sensor] "
+                        "gel_radius_mm, else the infinite layer)")
     add_overwrite_argument(p, "report folder")
     p.set_defaults(func=run)
+
+
+def _run_indenter(args: argparse.Namespace, table, path: Path) -> int:
+    """``diagnose`` of a ball's table: the ladder of :func:`diagnose_indenter`."""
+    ind, contact = indenter_of(table, args)
+    try:
+        diag = diagnose_indenter(table.depth_mm, table.force_n, ind,
+                                 thickness_mm=table.thickness_mm, contact=contact, nu=args.nu)
+    except InputError as exc:
+        raise InputError(f"{path}: {exc}") from None
+    obj = diag.to_json_dict()
+    obj["measurements"] = str(path)
+    if args.json is not None:
+        _write_json(obj, args.json)
+    if args.report is not None:
+        with StagedOutput(args.report, overwrite=args.overwrite, what="report folder") as stage:
+            fig = indenter_figure(diag, stage.path / "error_ladder.png", title=str(path))
+            write_indenter_report(diag, stage.path, {"error ladder": fig}, source=str(path))
+            stage.commit()
+    if args.json != "-":
+        lines = [f"{path}: {diag.depth_mm.size} presses of a {ind.shape} (R = "
+                 f"{ind.radius_mm:g} mm, h = {table.thickness_mm:g} mm), models at nu = "
+                 f"{diag.nu:g}", "  model                             law          contact"
+                 "        E (MPa)  RMSE (mN)   drift"]
+        for r in diag.ladder:
+            lines.append(f"  {' + '.join(('base', *r.effects)):33s} {r.law:12s} {r.contact:13s}"
+                         f"  {r.E_mpa:7.4f}  {r.rmse_n * 1e3:9.4g}  {100 * r.drift:+6.1f} %")
+        lines.append(f"  {diag.message}")
+        print("\n".join(lines))
+    return 0
 
 
 def _summary(diag, path: Path) -> str:
@@ -103,6 +154,8 @@ def run(args: argparse.Namespace) -> int:
     table = read_measurements(path, thickness_mm=args.thickness_mm, radius_mm=args.radius_mm)
     for note in table.notes:
         print(f"tactilevision diagnose: warning: {note}", file=sys.stderr)
+    if (args.shape or table.indenter.get("shape", "flat_punch")) != "flat_punch":
+        return _run_indenter(args, table, path)
     try:
         diag = diagnose(table.columns, thickness_mm=table.thickness_mm,
                         radius_mm=table.radius_mm, base=args.base, effects=effects,

@@ -13,7 +13,8 @@ from .. import InputError
 from ..io import Measurements
 from ..mechanics import IndenterFit, fit_indenter, indenter_from_config
 
-__all__ = ["LAW_CHOICES", "add_arguments", "fit_laws", "run_indenter", "summary_lines"]
+__all__ = ["LAW_CHOICES", "add_arguments", "fit_laws", "indenter_of", "run_indenter",
+           "summary_lines"]
 
 #: ``--law`` choices: a material law, or ``auto`` (both fitted, the better one reported).
 LAW_CHOICES = ("auto", "neo_hookean", "linear")
@@ -41,7 +42,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "infinite layer); each nu is then one FEM sweep")
 
 
-def _indenter(table: Measurements, args: argparse.Namespace):
+def indenter_of(table: Measurements, args: argparse.Namespace):
+    """The indenter and stated contact of a table: its sidecar's keys, overridden by
+    ``--shape``, ``--contact``, ``--pad-radius-mm``."""
     keys = dict(table.indenter)
     cfg = {"shape": args.shape or keys.get("shape", "flat_punch"),
            "radius_mm": table.radius_mm}
@@ -63,7 +66,7 @@ def _indenter(table: Measurements, args: argparse.Namespace):
 def fit_laws(table: Measurements, args: argparse.Namespace,
              depth_std: np.ndarray | None) -> tuple[IndenterFit, dict[str, IndenterFit], str]:
     """Fit each law asked for; the one reported, all fits by law, and why it was chosen."""
-    ind, contact = _indenter(table, args)
+    ind, contact = indenter_of(table, args)
     laws = ("linear", "neo_hookean") if args.law == "auto" else (args.law,)
     fits = {}
     for law in laws:

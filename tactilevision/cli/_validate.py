@@ -11,9 +11,10 @@ from pathlib import Path
 
 from .. import InputError
 from ..io import read_measurements
-from ..mechanics import fit_indentation, validate_indentation
+from ..mechanics import fit_indentation, validate_indentation, validate_indenter
 from ..viz import save_validation_figure
 from ._fit import _write_json
+from ._fit_indenter import fit_laws, indenter_of
 from ._out import StagedOutput, add_overwrite_argument, check_output_folder, check_overwrite
 
 __all__ = ["add_parser", "run"]
@@ -42,9 +43,15 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--radius-mm", type=float, metavar="A")
     p.add_argument("--pad-radius-mm", type=float, metavar="R",
                    help="gel pad radius, mm (default: session.toml, else 20 h)")
-    p.add_argument("--contact", choices=("bonded", "frictionless"), default="bonded",
+    p.add_argument("--contact", choices=("bonded", "frictionless", "tied"),
                    help="punch condition of the simulation (default bonded, as the FEM tables; "
-                        "a frictionless sharp punch often stops converging before w/h = 0.1)")
+                        "a frictionless sharp punch often stops converging before w/h = 0.1); "
+                        "a ball's: frictionless or tied (default: session.toml [indenter] "
+                        "contact, else frictionless)")
+    p.add_argument("--shape", choices=("flat_punch", "sphere"),
+                   help="indenter shape (default: session.toml [indenter] shape)")
+    p.add_argument("--law", choices=("auto", "neo_hookean", "linear"), default="auto",
+                   help="a ball's material law (default auto: the one fit selects)")
     p.add_argument("--json", metavar="FILE", help="write the result as JSON ('-': stdout)")
     p.add_argument("--report", metavar="DIR", type=Path,
                    help="write validation.png (force against depth) and validation.csv")
@@ -68,6 +75,48 @@ def _pad_radius(path: Path) -> float | None:
     return float(value)
 
 
+def _run_indenter(args: argparse.Namespace, table, path: Path) -> int:
+    """``validate`` of a ball's table: the depth its law needs at each measured force."""
+    if args.contact == "bonded":
+        raise InputError("--contact bonded is a flat punch's; a ball is frictionless or tied")
+    ind, contact = indenter_of(table, args)
+    if args.E_mpa is None:
+        fit, _, why = fit_laws(table, args, None)
+        E, nu, law, source = fit.E_mpa, fit.nu, fit.law, f"fit ({why})"
+    else:
+        law = "neo_hookean" if args.law == "auto" else args.law
+        E, nu, source = args.E_mpa, args.nu, "given"
+    try:
+        res = validate_indenter(table.depth_mm, table.force_n, ind,
+                                thickness_mm=table.thickness_mm, E_mpa=E, nu=nu, law=law,
+                                contact=contact)
+    except InputError as exc:
+        raise InputError(f"{path}: {exc}") from None
+    obj = {"measurements": str(path), "E_nu_source": source, "E_mpa": E, "nu": nu, "law": law,
+           "contact": res.contact, "depth_mm": res.depth_mm.tolist(),
+           "force_n": res.force_n.tolist(),
+           "simulated_depth_mm": [None if v != v else v for v in res.simulated_depth_mm],
+           "rel_error": [None if v != v else v for v in res.depth_error],
+           "max_abs_rel_error": res.max_abs_error, "mean_abs_rel_error": res.mean_abs_error}
+    if args.json is not None:
+        _write_json(obj, args.json)
+    if args.report is not None:
+        with StagedOutput(args.report, overwrite=args.overwrite, what="report folder") as stage:
+            save_validation_figure(stage.path / "validation.png", res, title=str(path))
+            stage.commit()
+    if args.json != "-":
+        print(f"{path}: {res.depth_mm.size} presses of a {ind.shape} simulated at E = {E:.4f} "
+              f"MPa, nu = {nu:.4g} ({source}); {law} law, {res.contact} contact")
+        print("  depth_mm  force_n  simulated_mm  error")
+        for d, f, sim, e in zip(res.depth_mm, res.force_n, res.simulated_depth_mm,
+                                res.depth_error, strict=True):
+            print(f"  {d:8.4f} {f:8.4f} {sim:12.4f} {100 * e:+6.2f}%")
+        print(f"  max |error| {100 * res.max_abs_error:.2f}%, mean "
+              f"{100 * res.mean_abs_error:.2f}%; a trend of the error with depth is the "
+              "missing effect (diagnose)")
+    return 0
+
+
 def run(args: argparse.Namespace) -> int:
     """Run ``validate``; returns 0 (2 through InputError on bad input)."""
     if (args.E_mpa is None) != (args.nu is None):
@@ -78,6 +127,11 @@ def run(args: argparse.Namespace) -> int:
         check_overwrite(args.report, ("validation.png", "validation.csv"), overwrite=overwrite)
     path = args.measurements
     table = read_measurements(path, thickness_mm=args.thickness_mm, radius_mm=args.radius_mm)
+    if (args.shape or table.indenter.get("shape", "flat_punch")) != "flat_punch":
+        return _run_indenter(args, table, path)
+    args.contact = args.contact or "bonded"
+    if args.contact == "tied":
+        raise InputError("--contact tied is a ball's; a flat punch is bonded or frictionless")
     if args.E_mpa is None:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")

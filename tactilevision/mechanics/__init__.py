@@ -66,6 +66,14 @@ from ._fem_tables import fem_force, fem_kappa_table, fem_table_meta, kappa_n, ka
 from ._fit import MAX_W_OVER_H, fit_indentation
 from ._fit_model import fit_model
 from ._indenter import INDENTERS, FlatPunch, Indenter, Sphere, indenter_from_config
+from ._indenter_diagnose import (
+    INDENTER_EFFECTS,
+    IndenterDiagnosis,
+    IndenterRung,
+    IndenterValidation,
+    diagnose_indenter,
+    validate_indenter,
+)
 from ._indenter_fit import IndenterFit, apparent_modulus, fit_indenter
 from ._kappa import HAYES_1972, KappaTable, kappa
 from ._model import IndentationModel, ModelFit
@@ -117,6 +125,7 @@ __all__ = [
     "FIT_EFFECTS",
     "HAYES_1972",
     "INDENTERS",
+    "INDENTER_EFFECTS",
     "MAX_W_OVER_H",
     "NOMINAL_TAU_S",
     "PAPER_BETA_RELATION",
@@ -134,7 +143,10 @@ __all__ = [
     "IndentationModel",
     "IndentationValidation",
     "Indenter",
+    "IndenterDiagnosis",
     "IndenterFit",
+    "IndenterRung",
+    "IndenterValidation",
     "KappaTable",
     "ModelFit",
     "NoiseBudget",
@@ -156,6 +168,7 @@ __all__ = [
     "design_from_calibration",
     "design_toml",
     "diagnose",
+    "diagnose_indenter",
     "effect_names",
     "effect_power",
     "effect_sensitivity",
@@ -197,4 +210,5 @@ __all__ = [
     "sphere_table_meta",
     "untestable_in_table",
     "validate_indentation",
+    "validate_indenter",
 ]

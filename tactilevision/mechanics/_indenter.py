@@ -38,6 +38,9 @@ from ._sphere_table import (
 
 __all__ = ["INDENTERS", "FlatPunch", "Indenter", "Sphere", "indenter_from_config"]
 
+#: Where a finite pad's FEM sweep may start (w/h): the largest below half the shallowest
+#: press (:meth:`Sphere._ratio`).
+_PAD_STARTS = (0.01, 0.04, 0.10)
 #: Material laws an indenter's force follows.
 LAWS = ("linear", "neo_hookean")
 
@@ -114,6 +117,10 @@ class Indenter(ABC):
         """True when each nu costs a FEM sweep: a fit then does not profile nu."""
         return False
 
+    def nu_limits(self, law: str = "neo_hookean") -> tuple[float, float]:
+        """The range of nu its tables hold for `law`."""
+        return 0.30, 0.50
+
     def _contact(self, contact: str | None) -> str:
         c = self.contacts[0] if contact is None else contact
         if c not in self.contacts:
@@ -159,6 +166,10 @@ class FlatPunch(Indenter):
 
     def contact_radius(self, depth_mm, *, nu, thickness_mm, law="neo_hookean", contact=None):
         return np.full(np.shape(depth_mm), self.radius_mm)
+
+    def nu_limits(self, law: str = "neo_hookean") -> tuple[float, float]:
+        """The finite-strain table stops at nu = 0.499; the small-strain kappa reaches 0.5."""
+        return (0.30, 0.499) if law == "neo_hookean" else (0.30, 0.50)
 
     def kappa_n(self, depth_mm, *, nu, thickness_mm):
         """kappa_n(nu, a/h, w/h) of the finite-strain table (eq. 1-2)."""
@@ -222,13 +233,19 @@ class Sphere(Indenter):
             look = sphere_force_ratio if kind == "force" else sphere_contact_ratio
             return look(self.radius_mm / h, nu, w / h, model=self._law(law),
                         contact=self._contact(contact))
-        sweep = _pad_sweep(self.radius_mm / h, float(nu), self.pad_radius_mm / h,
-                           self._law(law), self._contact(contact))
         x = w / h
         reach = sphere_reach(self.radius_mm / h)
         if np.any(x < 0) or np.any(x > reach * (1 + 1e-9)):
             raise InputError(f"w/h = {float(np.max(x)):.4g} is outside the sphere's 0 to "
                              f"{reach:.4g}")
+        # the sweep starts below half the shallowest press, at one of a few depths (so that
+        # nearby queries share it): its surface cell (1/12 of the first contact radius) is
+        # no finer than the presses need
+        pos = x[x > 0]
+        low = 0.5 * float(pos.min()) if pos.size else reach
+        start = max((v for v in _PAD_STARTS if v <= low), default=_PAD_STARTS[0])
+        sweep = _pad_sweep(self.radius_mm / h, float(nu), self.pad_radius_mm / h,
+                           self._law(law), self._contact(contact), start)
         return sweep[0 if kind == "force" else 1](np.sqrt(np.minimum(x, reach)))
 
     def force(self, depth_mm, *, E_mpa, nu, thickness_mm, law="neo_hookean", contact=None):
@@ -275,12 +292,13 @@ class Sphere(Indenter):
 
 
 @lru_cache(maxsize=32)
-def _pad_sweep(radius_over_h: float, nu: float, pad_over_h: float, law: str, contact: str
-               ) -> tuple[CubicSpline, CubicSpline]:
+def _pad_sweep(radius_over_h: float, nu: float, pad_over_h: float, law: str, contact: str,
+               start: float) -> tuple[CubicSpline, CubicSpline]:
     """Force and contact ratios of one FEM sweep on a finite pad, as splines of sqrt(w/h)
-    (through 1 at w = 0, Hertz's limit), over the sphere table's depth grid."""
+    (through 1 at w = 0, Hertz's limit), over the sphere table's depths from `start` to the
+    reach."""
     reach = sphere_reach(radius_over_h)
-    grid = SPHERE_W_GRID[SPHERE_W_GRID <= reach + 1e-12]
+    grid = SPHERE_W_GRID[(SPHERE_W_GRID <= reach + 1e-12) & (SPHERE_W_GRID >= start - 1e-12)]
     if grid[-1] < reach - 1e-12:
         grid = np.append(grid, reach)
     with warnings.catch_warnings():

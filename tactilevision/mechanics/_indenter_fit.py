@@ -273,7 +273,7 @@ def _checked(depth_mm, force_n, indenter: Indenter, thickness_mm: float, law: st
     lo, hi = map(float, nu_range)
     if not 0.0 <= lo < hi <= 0.5:
         raise InputError(f"nu_range must satisfy 0 <= lo < hi <= 0.5, got {nu_range!r}")
-    nu_stated = NU_STATED if nu is None else float(nu)
+    nu_stated = min(NU_STATED, hi) if nu is None else float(nu)
     if not lo <= nu_stated <= hi:
         raise InputError(f"nu = {nu_stated!r} is outside nu_range {nu_range!r}")
     u = None
@@ -291,7 +291,7 @@ def _checked(depth_mm, force_n, indenter: Indenter, thickness_mm: float, law: st
 
 def fit_indenter(depth_mm: np.ndarray, force_n: np.ndarray, indenter: Indenter, *,
                  thickness_mm: float, law: str = "neo_hookean", contact: str | None = None,
-                 nu: float | None = None, nu_range: tuple[float, float] = (0.30, 0.50),
+                 nu: float | None = None, nu_range: tuple[float, float] | None = None,
                  depth_std_mm: np.ndarray | None = None, depth_shared_mm: float = 0.0,
                  confidence: float = 0.95) -> IndenterFit:
     """Fit E (and nu, where the presses identify it) to presses of an indenter.
@@ -317,8 +317,10 @@ def fit_indenter(depth_mm: np.ndarray, force_n: np.ndarray, indenter: Indenter, 
         Poisson's ratio to report E at when the presses do not identify it;
         default 0.5. Given and the presses do identify nu, E is still the
         profile's (the fitted nu), and a note says how far the stated one is.
-    nu_range : (float, float), default (0.30, 0.50)
-        The nu profiled (within the indenter's tables).
+    nu_range : (float, float), optional
+        The nu profiled; default the indenter's tables' range
+        (:meth:`Indenter.nu_limits`: 0.30 to 0.50; a flat punch's finite-strain
+        table stops at 0.499).
     depth_std_mm : (N,) array_like of float, optional
         Standard uncertainty of each depth, mm, >= 0: errors in both variables
         (effective variance, each press's force variance s0^2 + (dP/dw u)^2,
@@ -354,6 +356,8 @@ def fit_indenter(depth_mm: np.ndarray, force_n: np.ndarray, indenter: Indenter, 
     the nu of the profile of E(nu) +- sqrt((threshold - excess(nu)) var_E(nu))
     (the exact profile-likelihood interval of E).
     """
+    if nu_range is None:
+        nu_range = indenter.nu_limits(law)
     w, P, u, h, reach, contact, nu_stated = _checked(
         depth_mm, force_n, indenter, thickness_mm, law, contact, nu, nu_range, depth_std_mm,
         depth_shared_mm, confidence)

@@ -47,10 +47,6 @@ _MIN_CONTACT = 5
 _MIN_LOADING = 10
 #: Nodes of the z0 grid and of the force table g(w) the profile interpolates.
 _GRID, _TABLE = 401, 4001
-#: The nu profiled when the ramp identifies nu (fit_indenter's default nu_range).
-_NU_RANGE = (0.30, 0.50)
-#: Its coarse grid, where the ramp's nu is first looked for.
-_NU_COARSE = np.round(np.linspace(*_NU_RANGE, 21), 6)
 #: How many sds of its scatter the force must rise by to count as a contact.
 _RISE_SDS = 10.0
 
@@ -305,7 +301,7 @@ def _nu_window(z: np.ndarray, P: np.ndarray, L: float, U: float, tab: _Tables,
     dof = z.size - 4
     thr = float(stats.f.ppf(confidence, 1, dof)) * best.min() / dof
     inside = tab.nu[best - best.min() <= thr]
-    lo, hi = max(_NU_RANGE[0], inside.min() - 0.01), min(_NU_RANGE[1], inside.max() + 0.01)
+    lo, hi = max(tab.nu[0], inside.min() - 0.01), min(tab.nu[-1], inside.max() + 0.01)
     return np.round(np.arange(lo, hi + 1e-9, 0.0025), 6)
 
 
@@ -508,7 +504,8 @@ def fit_ramp(displacement_mm: np.ndarray, force_n: np.ndarray, indenter: Indente
     tab = _tables(indenter, wmax, [NU_STATED if nu is None else float(nu)], h, law, contact)
     keep, prof, L, U, w, F, fit, notes = _fit_pass(zl, Pl, indenter, tab, **kw)
     if fit.nu_identified:   # z0 and nu together: the contact point profiled over nu too
-        coarse = _tables(indenter, wmax, _NU_COARSE, h, law, contact)
+        coarse = _tables(indenter, wmax, np.round(np.linspace(*indenter.nu_limits(law), 21), 6),
+                         h, law, contact)
         window = _nu_window(zl[keep], Pl[keep], L, U, coarse, confidence)
         tab = _tables(indenter, wmax, window, h, law, contact)
         keep, prof, L, U, w, F, fit, notes = _fit_pass(zl, Pl, indenter, tab, **kw)

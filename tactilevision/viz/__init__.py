@@ -22,3 +22,8 @@ __all__ = ["bevel_panels", "calibration_figures", "depth_figure", "diagnosis_fig
 from ._viewer import downsample_map, viewer_figure, write_viewer
 
 __all__ += ["downsample_map", "viewer_figure", "write_viewer"]
+
+# a ball's diagnosis (diagnose of a sphere's table)
+from ._indenter import indenter_figure, write_indenter_report  # noqa: E402
+
+__all__ += ["indenter_figure", "write_indenter_report"]

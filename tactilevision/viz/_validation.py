@@ -12,7 +12,7 @@ def validation_figure(result, *, title: str | None = None):
 
     Parameters
     ----------
-    result : IndentationValidation
+    result : IndentationValidation or IndenterValidation
     title : str, optional
 
     Returns
@@ -28,8 +28,10 @@ def validation_figure(result, *, title: str | None = None):
     import matplotlib.pyplot as plt
 
     fig, (ax, ax2) = plt.subplots(1, 2, figsize=(10, 4), layout="constrained")
+    law = {"neo_hookean": "Neo-Hookean", "linear": "small strain"}[getattr(result, "law",
+                                                                          "neo_hookean")]
     ax.plot(result.curve_depth_mm, result.curve_force_n, "-", color="C0",
-            label=f"FEM, Neo-Hookean (E = {result.E_mpa:.4g} MPa, nu = {result.nu:.4f})")
+            label=f"FEM, {law} (E = {result.E_mpa:.4g} MPa, nu = {result.nu:.4f})")
     ax.plot(result.depth_mm, result.force_n, "o", color="C1", ms=4, label="measured")
     ax.set_xlabel("indentation depth w (mm)")
     ax.set_ylabel("force P (N)")
