@@ -1,0 +1,96 @@
+"""A ball's fit: its time beside the flat punch's, and the FEATS gel's error ladder.
+
+Prints:
+
+1. The time of ``fit_indenter`` on 50 presses of a ball (the sphere table,
+   nu profiled) beside ``fit_indentation`` on 50 flat-punch presses in the same run.
+2. The real FEATS gel (sample_frames/feats): every law x contact at nu = 0.5 on the
+   pad of finite size (equal-area radius, and the inscribed one beside it), each with
+   its E and its apparent E per press, then diagnose_indenter's ladder.
+
+Usage: python benchmarks/bench_ball.py [--figure docs/feats_ladder.png]
+"""
+
+from __future__ import annotations
+
+import argparse
+import platform
+import time
+from pathlib import Path
+
+import numpy as np
+
+from tactilevision.mechanics import (
+    Sphere,
+    diagnose_indenter,
+    fem_force,
+    fit_indentation,
+    fit_indenter,
+)
+from tactilevision.viz import indenter_figure
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def timing() -> None:
+    rng = np.random.default_rng(1)
+    ball = Sphere(2.0)
+    w = np.repeat(np.linspace(0.1, 0.9, 10), 5)
+    P = ball.force(w, E_mpa=0.2, nu=0.48, thickness_mm=3.0, law="neo_hookean", contact="tied")
+    P = P + 0.002 * rng.standard_normal(w.size)
+    wf = np.repeat(np.linspace(0.15, 0.6, 10), 5)
+    Pf = fem_force(0.2, 0.48, 2.5, 3.0, wf) + 0.002 * rng.standard_normal(wf.size)
+    fit_indenter(w, P, ball, thickness_mm=3.0, contact="tied")       # tables loaded
+    fit_indentation(wf, Pf, thickness_mm=3.0, radius_mm=2.5)
+    t0 = time.perf_counter()
+    for _ in range(3):
+        fit = fit_indenter(w, P, ball, thickness_mm=3.0, contact="tied")
+    t_ball = (time.perf_counter() - t0) / 3
+    t0 = time.perf_counter()
+    for _ in range(3):
+        fit_indentation(wf, Pf, thickness_mm=3.0, radius_mm=2.5)
+    t_flat = (time.perf_counter() - t0) / 3
+    print(f"1. fit of 50 ball presses: {t_ball:.3f} s (E {fit.E_mpa:.4f}, nu {fit.nu:.3f} "
+          f"identified {fit.nu_identified}); flat punch, 50 presses: {t_flat:.3f} s; ratio "
+          f"{t_ball / t_flat:.1f}")
+
+
+def feats(figure: Path | None) -> None:
+    data = np.loadtxt(ROOT / "sample_frames" / "feats" / "force_depth.csv", delimiter=",",
+                      skiprows=1)
+    w, P = data[:, 0], data[:, 1]
+    print("2. FEATS (R 7.5 mm, h 4 mm, nu 0.5): E by least squares, apparent E per press")
+    for pad in (12.92, 10.375):
+        ball = Sphere(7.5, pad_radius_mm=pad)
+        for law in ("linear", "neo_hookean"):
+            for contact in ("tied", "frictionless"):
+                t0 = time.perf_counter()
+                f = fit_indenter(w, P, ball, thickness_mm=4.0, law=law, contact=contact)
+                print(f"   pad {pad:6.3f} mm {law:11s} {contact:12s} E {f.E_mpa:.4f} MPa "
+                      f"[{f.E_ci95_mpa[0]:.3f}, {f.E_ci95_mpa[1]:.3f}], rmse "
+                      f"{f.rmse_n * 1e3:6.1f} mN, apparent E "
+                      + " ".join(f"{v:.3f}" for v in f.apparent_E_mpa)
+                      + f"  ({time.perf_counter() - t0:.0f} s)")
+    d = diagnose_indenter(w, P, Sphere(7.5, pad_radius_mm=12.92), thickness_mm=4.0,
+                          contact="tied")
+    print("   " + d.message)
+    if figure is not None:
+        indenter_figure(d, figure, title="FEATS GelSight Mini gel (Helmut et al., "
+                        "arXiv:2411.03315; MIT): R = 7.5 mm, h = 4 mm, pad 12.92 mm")
+        print(f"   wrote {figure}")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--figure", type=Path, help="write the FEATS ladder figure here")
+    ap.add_argument("--no-feats", action="store_true")
+    args = ap.parse_args()
+    print(f"machine: {platform.machine()}, {platform.processor() or '?'}; "
+          f"python {platform.python_version()}")
+    timing()
+    if not args.no_feats:
+        feats(args.figure)
+
+
+if __name__ == "__main__":
+    main()
