@@ -5,6 +5,8 @@ punch's small-strain law (the shipped kappa table)."""
 from __future__ import annotations
 
 import json
+import subprocess
+import sys
 from dataclasses import dataclass
 from typing import ClassVar
 
@@ -261,3 +263,25 @@ def test_fit_ramp_checks_its_arguments():
         fit_ramp(z, P, BALL, thickness_mm=H_BALL, max_depth_mm=-1)
     with pytest.raises(InputError, match="confidence"):
         fit_ramp(z, P, BALL, thickness_mm=H_BALL, confidence=1.5)
+
+
+def test_fit_ramp_on_the_command_line(tmp_path):
+    """``tactilevision fit RAMP.csv --ramp`` with the geometry in the sidecar: the contact
+    point and E of a flat-punch ramp (small-strain law, kappa of the FEM table); without the
+    sidecar, one sentence naming what is missing, exit 2."""
+    z, P, z0 = draw("punch", seed=3)
+    rows = [f"{float(a)!r},{float(b)!r}" for a, b in zip(z, P, strict=True)]
+    path = _write(tmp_path / "ramp.csv", "displacement_mm,force_n", rows)
+    cmd = [sys.executable, "-m", "tactilevision", "fit", str(path), "--ramp", "--law", "linear"]
+    r = subprocess.run(cmd, capture_output=True, text=True)
+    assert r.returncode == 2
+    assert "thickness_mm not given and no session.toml next to it" in r.stderr
+    (tmp_path / "session.toml").write_text("[sensor]\ngel_thickness_mm = 3.0\n"
+                                           "[indenter]\nradius_mm = 2.5\n")
+    r = subprocess.run([*cmd, "--json", str(tmp_path / "ramp.json")], capture_output=True,
+                       text=True)
+    assert r.returncode == 0, r.stderr
+    obj = json.loads((tmp_path / "ramp.json").read_text())
+    assert obj["contact_point_mm"] == pytest.approx(z0, abs=0.005)
+    assert obj["E_mpa"] == pytest.approx(0.2, rel=0.03)
+    assert "contact point z0" in r.stdout

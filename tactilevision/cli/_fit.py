@@ -28,7 +28,7 @@ from ..mechanics import (
     relaxed_moduli,
 )
 from ._fit_indenter import add_arguments as add_indenter_arguments
-from ._fit_indenter import run_indenter
+from ._fit_indenter import run_indenter, run_ramp
 
 _DESCRIPTION = """\
 Fit the paper's law P/w = c beta (w/h) + c (eq. 5) to a measurements table
@@ -341,6 +341,17 @@ def run(args: argparse.Namespace) -> int:
     if args.a_over_h is not None and not math.isfinite(args.a_over_h):
         raise InputError(f"--a-over-h must be a finite number, got {args.a_over_h}")
     path = args.measurements
+    if args.ramp:
+        if effects != ("large_deformation",) or args.holds is not None:
+            raise InputError(f"{path}: --ramp fits the indenter's own law; --effects and "
+                             "--holds are for a measurements table")
+        obj, lines = run_ramp(args, path)
+        obj["ramp"] = str(path)
+        if args.json is not None:
+            _write_json(obj, args.json)
+        if args.json != "-":
+            print("\n".join(lines))
+        return 0
     table = read_measurements(path, thickness_mm=args.thickness_mm, radius_mm=args.radius_mm)
     shape = args.shape or table.indenter.get("shape", "flat_punch")
     if shape != "flat_punch":

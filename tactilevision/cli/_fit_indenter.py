@@ -10,11 +10,11 @@ from pathlib import Path
 import numpy as np
 
 from .. import InputError
-from ..io import Measurements
-from ..mechanics import IndenterFit, fit_indenter, indenter_from_config
+from ..io import Measurements, read_ramp, sidecar_geometry
+from ..mechanics import IndenterFit, fit_indenter, fit_ramp, indenter_from_config
 
 __all__ = ["LAW_CHOICES", "add_arguments", "fit_laws", "indenter_of", "run_indenter",
-           "summary_lines"]
+           "run_ramp", "summary_lines"]
 
 #: ``--law`` choices: a material law, or ``auto`` (both fitted, the better one reported).
 LAW_CHOICES = ("auto", "neo_hookean", "linear")
@@ -36,6 +36,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     g.add_argument("--nu", type=float, metavar="NU",
                    help="Poisson's ratio at which E is reported when the presses do not "
                         "identify nu (default 0.5)")
+    g.add_argument("--ramp", action="store_true",
+                   help="the table is a force-depth ramp (displacement_mm, force_n[, time_s]: "
+                        "an Instron's or a robot's loading curve, the contact point not "
+                        "marked): fit its contact point, baseline and E (docs/guide/ramps.md)")
     g.add_argument("--pad-radius-mm", type=float, metavar="R",
                    help="lateral radius of the gel pad, mm, when it is small enough to "
                         "matter (default: session.toml [sensor] gel_radius_mm, else the "
@@ -134,3 +138,37 @@ def run_indenter(args: argparse.Namespace, table: Measurements, path: Path,
     obj["law_selection"] = why
     obj["laws"] = {law: f.to_json_dict() for law, f in fits.items()}
     return obj, summary_lines(fit, fits, why, table)
+
+
+def run_ramp(args: argparse.Namespace, path: Path) -> tuple[dict, list[str]]:
+    """``fit --ramp``: the contact point, baseline and E of a force-depth ramp.
+
+    Raises
+    ------
+    InputError
+        For a bad ramp file, missing geometry (one sentence naming the value, the option
+        and the sidecar key), or a fit that cannot be made (no loading part, ...).
+    """
+    ramp = read_ramp(path)
+    h, a, _, keys = sidecar_geometry(path, thickness_mm=args.thickness_mm,
+                                     radius_mm=args.radius_mm)
+    table = Measurements(path=path, columns={"depth_mm": np.ones(1), "force_n": np.ones(1)},
+                         labels={}, line_numbers=np.ones(1, np.int64), thickness_mm=h,
+                         radius_mm=a, thickness_source="", radius_source="", indenter=keys)
+    ind, contact = indenter_of(table, args)
+    law = "neo_hookean" if args.law == "auto" else args.law
+    fit = fit_ramp(ramp.displacement_mm, ramp.force_n, ind, thickness_mm=h, law=law,
+                   contact=contact, nu=args.nu, source=path)
+    pct = f"{fit.confidence:.0%}"
+    lo, hi = fit.contact_point_ci_mm
+    lines = [f"{path}: a ramp of {len(ramp)} rows, {fit.n_points} presses read from its "
+             f"loading part; a {ind.shape} of radius {ind.radius_mm:g} mm on h = {h:g} mm, "
+             f"{fit.law} law, {fit.contact} contact",
+             f"  contact point z0 = {fit.contact_point_mm:.5f} mm  {pct} CI [{lo:.5f}, "
+             f"{hi:.5f}] mm; baseline {fit.baseline_n * 1e3:.4g} mN",
+             f"  E  = {fit.E_mpa:.4f} MPa  {pct} CI [{fit.E_ci95_mpa[0]:.4f}, "
+             f"{fit.E_ci95_mpa[1]:.4f}] MPa at nu = {fit.nu:.4g}"
+             + ("" if fit.nu_identified else " (stated: nu not identified)"),
+             f"  rmse = {fit.rmse_n * 1e3:.4g} mN"]
+    lines += [f"  note: {n}" for n in fit.notes]
+    return fit.to_json_dict(), lines

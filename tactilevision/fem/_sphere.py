@@ -20,22 +20,25 @@ conditions:
   contact of :class:`._finite_solver.RigidPunch` with a punch whose flat face
   has shrunk to a point and whose edge radius is R, i.e. a sphere (its upper
   half replaced by a cylinder, which no press below the equator touches).
-- ``contact='tied'``: no slip (CalculiX's ``TIED`` overclosure, FEATS): a
-  surface node that meets the sphere is tied to it from then on and moves
-  with it (Dirichlet on both components; never released).
+- ``contact='tied'``: no slip, full stick: a surface node that meets the
+  sphere is tied to it from then on and moves with it (Dirichlet on both
+  components; never released). Coulomb friction (CalculiX's ``TIED``
+  overclosure with a friction coefficient, as in the FEATS model) lets the
+  gel slip where the shear exceeds the friction: it lies between the two.
 
 The depth is stepped on a grid uniform in sqrt(w) (the contact radius grows
-like sqrt(R w)), so that each step adds about the same number of nodes to the
-contact; the requested depths are among the steps.
+like sqrt(R w)); tied contact depends on the path, and its steps move the
+contact edge by at most one surface cell; the requested depths are among the
+steps.
 
 Contact radius. The node-wise contact set resolves a only to a surface cell.
-Outside the contact edge of a smooth indenter the gap opens as (r - a)^(3/2)
-(Johnson, Contact Mechanics, eq. 3.42); from the gaps g1 < g2 of the first two
-free nodes at r1 < r2 the edge is a = (r1 - q r2) / (1 - q), q = (g1 / g2)^(2/3),
-kept between the last node in contact and r1. This sub-cell estimate is what
-`contact_radius` holds (radius in the current configuration for
-``'neo_hookean'``, reference for ``'linear'``); `contact_radius_nodes` is the
-plain node-wise one.
+Just outside the edge of a smooth contact the gap opens as (r - a)^(3/2)
+(Hertz's solution; K. L. Johnson, Contact Mechanics, 1985, ch. 4): g^(2/3)
+is a straight line in r through zero at a, fitted to the first four free
+nodes and kept between the last node in contact and the first free one. This
+sub-cell estimate is what `contact_radius` holds (radius in the current
+configuration for ``'neo_hookean'``, reference for ``'linear'``);
+`contact_radius_nodes` is the plain node-wise one.
 """
 
 from __future__ import annotations

@@ -29,11 +29,12 @@ from ._measurements import (
     Measurements,
     read_holds,
     read_measurements,
+    sidecar_geometry,
     write_measurements,
 )
 
 __all__ += ["COLUMN_ORDER", "REQUIRED_COLUMNS", "Measurements", "read_holds",
-            "read_measurements", "write_measurements"]
+            "read_measurements", "sidecar_geometry", "write_measurements"]
 
 # indentation session folders (calibrate): names appended below
 from ._session import Session, SessionConfig, read_session  # noqa: E402

@@ -315,6 +315,37 @@ def read_measurements(path: str | Path, *, thickness_mm: float | None = None,
     )
 
 
+def sidecar_geometry(path: str | Path, *, thickness_mm: float | None = None,
+                     radius_mm: float | None = None) -> tuple[float, float, dict, dict]:
+    """h and the indenter's radius of a table (a measurements table, a ramp) from the options
+    or the ``session.toml`` beside it, with its ``[indenter]`` keys.
+
+    Parameters
+    ----------
+    path : str or Path
+        The table; its sidecar is ``session.toml`` in the same folder.
+    thickness_mm, radius_mm : float, optional
+        Given values (mm) win over the sidecar's.
+
+    Returns
+    -------
+    thickness_mm, radius_mm : float
+    sources : dict of str to str
+        Where each came from (``'argument'`` or the sidecar's key).
+    indenter : dict
+        As :attr:`Measurements.indenter`.
+
+    Raises
+    ------
+    InputError
+        One sentence naming what is missing (the value, and the option and sidecar key
+        that give it) or bad (not a positive number, invalid TOML).
+    """
+    path = Path(path)
+    geo, src = _geometry(path, {"thickness_mm": thickness_mm, "radius_mm": radius_mm})
+    return geo["thickness_mm"], geo["radius_mm"], src, _indenter_keys(path)
+
+
 def _indenter_keys(path: Path) -> dict[str, object]:
     """``[indenter] shape, contact`` and ``[sensor] gel_radius_mm`` of the sidecar, if any.
 
