@@ -34,6 +34,7 @@ from ._sphere_table import (
     sphere_contact_ratio,
     sphere_force_ratio,
     sphere_reach,
+    table_reach,
 )
 
 __all__ = ["INDENTERS", "FlatPunch", "Indenter", "Sphere", "indenter_from_config"]
@@ -219,8 +220,12 @@ class Sphere(Indenter):
         """True when each nu is a FEM sweep (a finite pad): a fit does not profile nu."""
         return self.pad_radius_mm is not None
 
-    def reach_mm(self, thickness_mm: float, law: str = "neo_hookean") -> float:
-        return sphere_reach(self.radius_mm / thickness_mm) * thickness_mm
+    def reach_mm(self, thickness_mm: float, law: str = "neo_hookean",
+                 contact: str | None = None) -> float:
+        ratio = self.radius_mm / thickness_mm
+        if self.pad_radius_mm is not None:
+            return sphere_reach(ratio) * thickness_mm
+        return table_reach(ratio, self._law(law), self._contact(contact)) * thickness_mm
 
     def _law(self, law: str) -> str:
         if law not in LAWS:
@@ -264,7 +269,7 @@ class Sphere(Indenter):
                                   law="neo_hookean", contact=None):
         a = np.atleast_1d(np.asarray(contact_radius_mm, np.float64))
         h = _positive(thickness_mm, "thickness_mm")
-        top = self.reach_mm(h, law)
+        top = self.reach_mm(h, law, contact)
         kw = {"nu": nu, "thickness_mm": h, "law": law, "contact": contact}
         a_top = float(self.contact_radius(np.array([top]), **kw)[0])
         out = np.empty(a.size)
@@ -354,7 +359,7 @@ def indenter_from_config(section: Mapping[str, object], *, where: str = "[indent
     Examples
     --------
     >>> indenter_from_config({"shape": "sphere", "radius_mm": 3.75})
-    Sphere(radius_mm=3.75)
+    Sphere(radius_mm=3.75, pad_radius_mm=None)
     """
     shape = section.get("shape", "flat_punch")
     if shape not in INDENTERS:

@@ -27,7 +27,7 @@ from .._assets import asset_dir
 from .._checks import InputError
 
 __all__ = ["SPHERE_TABLE", "hertz_force_n", "sphere_contact_ratio", "sphere_force_ratio",
-           "sphere_reach", "sphere_table_meta"]
+           "sphere_reach", "sphere_table_meta", "table_reach"]
 
 #: File name of the sphere table in the package's ``models`` folder.
 SPHERE_TABLE = "sphere_fem.npz"
@@ -124,6 +124,35 @@ def _interpolant(kind: str, model: str, contact: str) -> RegularGridInterpolator
     return RegularGridInterpolator(grid, vals, method="cubic", bounds_error=True)
 
 
+@lru_cache(maxsize=8)
+def _reached(model: str, contact: str) -> np.ndarray:
+    """(A,) deepest w/h every nu of the table's sweeps reached at each R/h (a sweep whose
+    Newton failed stops early; the table holds NaN past it)."""
+    data = _load()
+    m, c = _index(data, "models", model), _index(data, "contacts", contact)
+    vals = data["force_ratio"][m, c]                      # (A, N, K)
+    w = data["w_over_h"].astype(np.float64)
+    last = np.where(np.isfinite(vals), w, 0.0).max(axis=-1)   # (A, N)
+    return last.min(axis=-1)
+
+
+def table_reach(radius_over_h: float, model: str = "neo_hookean",
+                contact: str = "frictionless") -> float:
+    """Deepest w/h the table answers at R/h: :func:`sphere_reach`, or less where a sweep of
+    a neighbouring R/h stopped early.
+
+    Raises
+    ------
+    InputError
+        If the table is missing, or for an unknown model or contact.
+    """
+    data = _load()
+    rg = data["radius_over_h"].astype(np.float64)
+    reached = _reached(model, contact)
+    i = int(np.clip(np.searchsorted(rg, float(radius_over_h)) - 1, 0, rg.size - 2))
+    return float(min(sphere_reach(radius_over_h), reached[i], reached[i + 1]))
+
+
 def _lookup(kind: str, model: str, contact: str, radius_over_h: float, nu: float,
             w_over_h: np.ndarray) -> np.ndarray:
     data = _load()
@@ -136,11 +165,12 @@ def _lookup(kind: str, model: str, contact: str, radius_over_h: float, nu: float
         raise InputError(f"nu = {float(nu):.4g} is outside the sphere table's {float(ng[0]):g} "
                          f"to {float(ng[-1]):g}")
     x = np.asarray(w_over_h, np.float64)
-    reach = sphere_reach(ratio)
+    reach = table_reach(ratio, model, contact)
     if np.any(x < 0) or np.any(x > reach * (1 + 1e-9)):
         worst = float(x.max()) if np.any(x > reach) else float(x.min())
         raise InputError(f"w/h = {worst:.4g} is outside the sphere table's 0 to {reach:.4g} "
-                         f"at R/h = {ratio:.4g} (w/h <= min(0.5, 0.6 R/h))")
+                         f"at R/h = {ratio:.4g} ({model}, {contact}; w/h <= min(0.5, "
+                         "0.6 R/h), less where a sweep stopped early)")
     pts = np.column_stack([np.full(x.size, np.log(np.clip(ratio, rg[0], rg[-1]))),
                            np.full(x.size, np.clip(float(nu), ng[0], ng[-1])),
                            np.sqrt(np.minimum(x.ravel(), reach))])
