@@ -8,9 +8,17 @@ from typing import ClassVar
 
 import numpy as np
 import pytest
+from scipy.optimize import brentq
 
 from tactilevision import InputError
-from tactilevision.mechanics import Indenter, fit_indenter, indenter_from_config
+from tactilevision.io import STANDARD_GRAVITY, read_measurements
+from tactilevision.mechanics import (
+    FlatPunch,
+    Indenter,
+    fem_force,
+    fit_indenter,
+    indenter_from_config,
+)
 
 
 @dataclass(frozen=True)
@@ -137,8 +145,6 @@ def test_indenter_from_config():
 def test_flat_punch_through_the_same_fit():
     """The flat punch behind the same interface: presses of the FEM's finite-strain law
     (eq. 1 with kappa_n) give back its E at the stated nu; its table stops at nu = 0.499."""
-    from tactilevision.mechanics import FlatPunch, fem_force
-
     punch = FlatPunch(2.5)
     assert punch.nu_limits("neo_hookean") == (0.30, 0.499)
     w = np.repeat([0.15, 0.3, 0.45, 0.6], 3)
@@ -146,3 +152,41 @@ def test_flat_punch_through_the_same_fit():
     fit = fit_indenter(w, P, punch, thickness_mm=3.0, nu=0.48)
     assert fit.E_mpa == pytest.approx(0.2, rel=1e-3)
     assert fit.contact == "bonded"
+
+
+def test_dead_weights_give_E_with_an_interval(tmp_path):
+    """No F/T sensor: five masses x three repeats resting on the gel, P = m g (standard
+    gravity), depths with 5 um of stated noise: E within 5 % and its interval holding the
+    truth over 20 seeds (at least 18); the masses' uncertainty enters as force_sem_n."""
+    masses = np.repeat([0.005, 0.01, 0.02, 0.05, 0.1], 3)         # kg
+    P = masses * STANDARD_GRAVITY
+    w_true = np.array([brentq(lambda x, p=p: float(BALL.force(np.array([x]), E_mpa=0.2, nu=0.5,
+                                                                thickness_mm=H)[0]) - p,
+                              1e-6, 1.0) for p in P])
+    held = 0
+    for seed in range(20):
+        rng = np.random.default_rng(seed)
+        w = w_true + 0.005 * rng.standard_normal(w_true.size)
+        path = tmp_path / f"weights{seed}.csv"
+        path.write_text("mass_kg,mass_std_kg,depth_mm,depth_std_mm\n" + "".join(
+            f"{m},{1e-4},{d:.6f},0.005\n" for m, d in zip(masses, w, strict=True)))
+        t = read_measurements(path, thickness_mm=H, radius_mm=3.0)
+        assert t.force_n == pytest.approx(P)
+        assert t.columns["force_sem_n"] == pytest.approx(np.full(15, 1e-4 * STANDARD_GRAVITY))
+        assert any("dead weights" in n for n in t.notes)
+        fit = fit_indenter(t.depth_mm, t.force_n, BALL, thickness_mm=H, nu=0.5,
+                           depth_std_mm=t.columns["depth_std_mm"],
+                           force_std_n=t.columns["force_sem_n"])
+        assert fit.E_mpa == pytest.approx(0.2, rel=0.05)
+        held += fit.E_ci95_mpa[0] <= 0.2 <= fit.E_ci95_mpa[1]
+    assert held >= 18
+
+
+@pytest.mark.parametrize(("cell", "match"), [("0", "'0' is not a mass"),
+                                             ("-0.1", "'-0.1' is not a mass"),
+                                             ("ten", "'ten' is not a mass")])
+def test_a_bad_mass_is_named(tmp_path, cell, match):
+    path = tmp_path / "weights.csv"
+    path.write_text(f"mass_kg,depth_mm\n0.1,0.2\n{cell},0.3\n")
+    with pytest.raises(InputError, match=f"line 3, column mass_kg: {match}"):
+        read_measurements(path, thickness_mm=2.0, radius_mm=3.0)

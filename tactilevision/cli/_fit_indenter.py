@@ -77,7 +77,8 @@ def fit_laws(table: Measurements, args: argparse.Namespace,
         try:
             fits[law] = fit_indenter(table.depth_mm, table.force_n, ind,
                                      thickness_mm=table.thickness_mm, law=law, contact=contact,
-                                     nu=args.nu, depth_std_mm=depth_std)
+                                     nu=args.nu, depth_std_mm=depth_std,
+                                     force_std_n=_force_sd(table))
         except InputError as exc:
             raise InputError(f"{table.path}: {exc}") from None
     if len(fits) == 1:
@@ -88,6 +89,13 @@ def fit_laws(table: Measurements, args: argparse.Namespace,
            f"{fits[other].rmse_n * 1e3:.4g} mN for {other}; the same parameters, so the "
            "smaller residuals)")
     return fits[best], fits, why
+
+
+def _force_sd(table: Measurements) -> np.ndarray | None:
+    """The forces' stated standard uncertainty (``force_sem_n``: an F/T window's standard
+    error, a dead weight's mass uncertainty times g) where every row has one."""
+    sem = table.columns.get("force_sem_n")
+    return sem if sem is not None and np.all(np.isfinite(sem)) else None
 
 
 def _drift(fit: IndenterFit, depth: np.ndarray) -> str:

@@ -26,6 +26,7 @@ __all__ = ["MAX_IMAGE_PIXELS", "BallPressSet", "find_reference", "list_frames",
 from ._measurements import (
     COLUMN_ORDER,
     REQUIRED_COLUMNS,
+    STANDARD_GRAVITY,
     Measurements,
     read_holds,
     read_measurements,
@@ -33,7 +34,7 @@ from ._measurements import (
     write_measurements,
 )
 
-__all__ += ["COLUMN_ORDER", "REQUIRED_COLUMNS", "Measurements", "read_holds",
+__all__ += ["COLUMN_ORDER", "REQUIRED_COLUMNS", "STANDARD_GRAVITY", "Measurements", "read_holds",
             "read_measurements", "sidecar_geometry", "write_measurements"]
 
 # indentation session folders (calibrate): names appended below

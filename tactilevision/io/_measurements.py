@@ -13,11 +13,13 @@ import numpy as np
 
 from .._checks import InputError
 
-__all__ = ["COLUMN_ORDER", "REQUIRED_COLUMNS", "Measurements", "read_holds",
-           "read_measurements", "write_measurements"]
+__all__ = ["COLUMN_ORDER", "REQUIRED_COLUMNS", "STANDARD_GRAVITY", "Measurements", "read_holds",
+           "read_measurements", "sidecar_geometry", "write_measurements"]
 
 #: Columns every measurements table must have (formats.md §2).
 REQUIRED_COLUMNS = ("depth_mm", "force_n")
+#: Standard gravity, m/s^2 (CGPM 1901): the force of a dead weight of mass m is m g.
+STANDARD_GRAVITY = 9.80665
 
 #: Plausibility bounds of a measurements row: a tactile gel a few mm thick pressed by
 #: a stage (values beyond are unit errors or corrupt cells, and overflow the fits).
@@ -151,6 +153,39 @@ def _read_table(path: Path, what: str = "measurements table"
     return names, rows, lines
 
 
+def _weights_to_forces(path: Path, names: list[str], rows: list[list[str]], lines: list[int]
+                       ) -> tuple[list[str], list[list[str]]]:
+    """A dead-weight table's ``mass_kg`` (and ``mass_std_kg``) as ``force_n`` (and
+    ``force_sem_n``, the force's standard uncertainty): P = m g, g standard gravity.
+
+    Raises
+    ------
+    InputError
+        Naming the file, line and column of a mass that is not a number > 0, or a mass
+        uncertainty that is not a number >= 0.
+    """
+    out_names = list(names)
+    j = names.index("mass_kg")
+    k = names.index("mass_std_kg") if "mass_std_kg" in names else None
+    out_rows = [list(r) for r in rows]
+    for row, line, new in zip(rows, lines, out_rows, strict=True):
+        m = _number(row[j])
+        if m is None or not (math.isfinite(m) and m > 0):
+            raise InputError(f"{path} line {line}, column mass_kg: '{row[j].strip()}' is not a "
+                             "mass (a number of kg > 0: a dead weight resting on the gel)")
+        new[j] = repr(m * STANDARD_GRAVITY)
+        if k is not None:
+            sd = _number(row[k])
+            if sd is not None and (not math.isfinite(sd) or sd < 0):
+                raise InputError(f"{path} line {line}, column mass_std_kg: '{row[k].strip()}' "
+                                 "is not a standard uncertainty (a number >= 0, or empty)")
+            new[k] = "" if sd is None else repr(sd * STANDARD_GRAVITY)
+    out_names[j] = "force_n"
+    if k is not None:
+        out_names[k] = "force_sem_n"
+    return out_names, out_rows
+
+
 def _parse_columns(path: Path, names: list[str], rows: list[list[str]], lines: list[int]
                    ) -> tuple[dict[str, np.ndarray], dict[str, tuple[str, ...]]]:
     columns: dict[str, np.ndarray] = {}
@@ -267,6 +302,11 @@ def read_measurements(path: str | Path, *, thickness_mm: float | None = None,
 
     Notes
     -----
+    Dead weights: a table with ``mass_kg`` (each weight's mass, kg, > 0) and no
+    ``force_n`` is read with ``force_n = mass_kg * 9.80665`` (standard gravity),
+    and ``mass_std_kg`` (the masses' standard uncertainty) as ``force_sem_n``; a
+    note says so.
+
     ``depth_std_mm`` (standard uncertainty of ``depth_mm``, mm, >= 0) and
     ``overshoot_mm`` (certified depth minus the gauge block's nominal depth,
     mm) are optional numeric columns; ``depth_std_mm`` is not a covariate.
@@ -276,6 +316,9 @@ def read_measurements(path: str | Path, *, thickness_mm: float | None = None,
     """
     path = Path(path)
     names, rows, lines = _read_table(path)
+    dead_weights = "force_n" not in names and "mass_kg" in names
+    if dead_weights:
+        names, rows = _weights_to_forces(path, names, rows, lines)
     missing = [c for c in REQUIRED_COLUMNS if c not in names]
     if missing:
         raise InputError(f"{path} line 1: missing required column(s) {', '.join(missing)} "
@@ -305,6 +348,9 @@ def read_measurements(path: str | Path, *, thickness_mm: float | None = None,
                              f"is beyond any elastomer press (at most {limit:g} {unit}); check "
                              "the column's units")
     _check_uncertainties(path, names, rows, lines, columns)
+    if dead_weights:
+        notes.append(f"{path}: dead weights: force_n = mass_kg x {STANDARD_GRAVITY} m/s^2 "
+                     "(standard gravity)")
     geo, src = _geometry(path, {"thickness_mm": thickness_mm, "radius_mm": radius_mm})
     return Measurements(
         path=path, columns=columns, labels=labels,

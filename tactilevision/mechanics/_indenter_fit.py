@@ -165,8 +165,8 @@ def _paule_mandel(g: np.ndarray, P: np.ndarray, D: np.ndarray, dof: int) -> floa
     return float(optimize.brentq(excess, 0.0, upper, xtol=1e-14 * upper, rtol=1e-12))
 
 
-def _profile(grid: np.ndarray, cols: list, P: np.ndarray, u: np.ndarray | None
-             ) -> tuple[np.ndarray, np.ndarray, float, bool]:
+def _profile(grid: np.ndarray, cols: list, P: np.ndarray, u: np.ndarray | None,
+             f_sd: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, float, bool]:
     """E(nu), var_E(nu) and chi2(nu) over `grid` with one noise model for every nu.
 
     The noise model is fixed at the unweighted best nu: unit variances without depth
@@ -184,10 +184,13 @@ def _profile(grid: np.ndarray, cols: list, P: np.ndarray, u: np.ndarray | None
     dof = n - 2
     rss = np.array([_slope(g, P, np.ones(n))[2] for g, _ in cols])
     k0 = int(np.argmin(rss))
-    weighted = u is not None and bool(np.any(u > 0))
+    weighted = (u is not None and bool(np.any(u > 0))) or (
+        f_sd is not None and bool(np.any(f_sd > 0)))
     if weighted:
         g0, dg0 = cols[k0]
-        D = (_slope(g0, P, np.ones(n))[0] * dg0 * u) ** 2
+        D = (_slope(g0, P, np.ones(n))[0] * dg0 * (0.0 if u is None else u)) ** 2
+        if f_sd is not None:
+            D = D + f_sd ** 2
         t = _paule_mandel(g0, P, D, max(dof, 1))
         var = np.maximum(t + D, max((1e-12 * float(np.max(P))) ** 2, np.finfo(float).tiny))
         sigma0 = math.sqrt(t)
@@ -293,7 +296,8 @@ def fit_indenter(depth_mm: np.ndarray, force_n: np.ndarray, indenter: Indenter, 
                  thickness_mm: float, law: str = "neo_hookean", contact: str | None = None,
                  nu: float | None = None, nu_range: tuple[float, float] | None = None,
                  depth_std_mm: np.ndarray | None = None, depth_shared_mm: float = 0.0,
-                 confidence: float = 0.95) -> IndenterFit:
+                 confidence: float = 0.95,
+                 force_std_n: np.ndarray | None = None) -> IndenterFit:
     """Fit E (and nu, where the presses identify it) to presses of an indenter.
 
     Parameters
@@ -331,6 +335,11 @@ def fit_indenter(depth_mm: np.ndarray, force_n: np.ndarray, indenter: Indenter, 
         repeated with every depth moved by + and - this, and the intervals of
         E and nu are widened to the hull of the three fits' intervals.
     confidence : float, default 0.95
+    force_std_n : (N,) array_like of float, optional
+        Known standard uncertainty of each force, N, >= 0 (a dead weight's mass
+        uncertainty times g; an F/T window's standard error): added to each
+        press's force variance beside the depth's, s0 still fitted for what
+        they leave unexplained.
 
     Returns
     -------
@@ -376,7 +385,14 @@ def fit_indenter(depth_mm: np.ndarray, force_n: np.ndarray, indenter: Indenter, 
     costly = bool(getattr(indenter, "costly_in_nu", False))
     grid = (np.array([nu_stated]) if costly else
             np.unique(np.append(np.round(np.arange(lo, hi + 1e-9, 0.0025), 6), nu_stated)))
-    prof, _, sigma0, weighted = _profile(grid, [columns(w, v) for v in grid], P, u)
+    f_sd = None
+    if force_std_n is not None:
+        f_sd = check_array(force_std_n, "force_std_n", [(n,)], dtype=np.number,
+                           finite=True).astype(np.float64)
+        if np.any(f_sd < 0):
+            i = int(np.argmax(f_sd < 0))
+            raise InputError(f"press {i}: force_std_n = {f_sd[i]:g} must be >= 0")
+    prof, _, sigma0, weighted = _profile(grid, [columns(w, v) for v in grid], P, u, f_sd)
     notes: list[str] = []
     if costly:     # one parameter at the stated nu; nu not profiled
         nu_fit, nu_ci, nu_identified = nu_stated, (lo, hi), False
@@ -403,7 +419,7 @@ def fit_indenter(depth_mm: np.ndarray, force_n: np.ndarray, indenter: Indenter, 
                 continue
             other = fit_indenter(ws, P, indenter, thickness_mm=h, law=law, contact=contact,
                                  nu=nu, nu_range=nu_range, depth_std_mm=u,
-                                 confidence=confidence)
+                                 confidence=confidence, force_std_n=f_sd)
             E_hull = [min(E_hull[0], other.E_ci95_mpa[0]), max(E_hull[1], other.E_ci95_mpa[1])]
             nu_hull = [min(nu_hull[0], other.nu_ci95[0]), max(nu_hull[1], other.nu_ci95[1])]
         notes.append(f"a depth error of {depth_shared_mm * 1e3:.3g} um shared by every press: "
@@ -416,8 +432,9 @@ def fit_indenter(depth_mm: np.ndarray, force_n: np.ndarray, indenter: Indenter, 
     resid = P - pred
     k_nu = int(np.argmin(np.abs(prof[:, 0] - nu_fit)))
     if weighted:
-        notes.append("errors in both variables: effective variance with the depth "
-                     f"uncertainties, extra force scatter sigma0 = {sigma0 * 1e3:.3g} mN")
+        notes.append("errors in both variables: effective variance with the stated depth "
+                     f"and force uncertainties, extra force scatter sigma0 = "
+                     f"{sigma0 * 1e3:.3g} mN")
     return IndenterFit(
         E_mpa=E_fit, E_ci95_mpa=E_ci, nu=nu_fit, nu_ci95=nu_ci, nu_identified=nu_identified,
         E_over_nu_ci_mpa=E_over, E_se_mpa=math.sqrt(E_var) if E_var >= 0 else math.nan,
