@@ -41,7 +41,7 @@ __all__ = ["INDENTERS", "FlatPunch", "Indenter", "Sphere", "indenter_from_config
 
 #: Where a finite pad's FEM sweep may start (w/h): the largest below half the shallowest
 #: press (:meth:`Sphere._ratio`).
-_PAD_STARTS = (0.01, 0.04, 0.10)
+_PAD_STARTS = (0.0005, 0.002, 0.01, 0.04, 0.10)
 #: Material laws an indenter's force follows.
 LAWS = ("linear", "neo_hookean")
 
@@ -301,9 +301,11 @@ def _pad_sweep(radius_over_h: float, nu: float, pad_over_h: float, law: str, con
                start: float) -> tuple[CubicSpline, CubicSpline]:
     """Force and contact ratios of one FEM sweep on a finite pad, as splines of sqrt(w/h)
     (through 1 at w = 0, Hertz's limit), over the sphere table's depths from `start` to the
-    reach."""
+    reach (below the table's first depth, 0.01, doubling from `start`)."""
     reach = sphere_reach(radius_over_h)
     grid = SPHERE_W_GRID[(SPHERE_W_GRID <= reach + 1e-12) & (SPHERE_W_GRID >= start - 1e-12)]
+    below = start * 2.0 ** np.arange(8)                 # a thick gel's shallow presses
+    grid = np.union1d(below[below < min(float(SPHERE_W_GRID[0]), reach) - 1e-12], grid)
     if grid[-1] < reach - 1e-12:
         grid = np.append(grid, reach)
     # at large depth (the gel wraps round the ball) Newton may fail: the sweep is run again

@@ -286,8 +286,11 @@ def _checked(depth_mm, force_n, indenter: Indenter, thickness_mm: float, law: st
         if np.any(u < 0):
             i = int(np.argmax(u < 0))
             raise InputError(f"press {i}: depth_std_mm = {u[i]:g} must be >= 0")
-    if not (math.isfinite(depth_shared_mm) and depth_shared_mm >= 0):
-        raise InputError(f"depth_shared_mm must be >= 0, got {depth_shared_mm!r}")
+    shared = np.asarray(depth_shared_mm, np.float64)
+    if shared.ndim > 1 or (shared.ndim == 1 and shared.size != w.size) or not (
+            np.all(np.isfinite(shared)) and np.all(shared >= 0)):
+        raise InputError("depth_shared_mm must be a number >= 0 or one per press, got "
+                         f"{depth_shared_mm!r}")
     return w, P, u, h, reach, indenter._contact(contact), nu_stated
 
 
@@ -295,9 +298,11 @@ def _checked(depth_mm, force_n, indenter: Indenter, thickness_mm: float, law: st
 def fit_indenter(depth_mm: np.ndarray, force_n: np.ndarray, indenter: Indenter, *,
                  thickness_mm: float, law: str = "neo_hookean", contact: str | None = None,
                  nu: float | None = None, nu_range: tuple[float, float] | None = None,
-                 depth_std_mm: np.ndarray | None = None, depth_shared_mm: float = 0.0,
+                 depth_std_mm: np.ndarray | None = None,
+                 depth_shared_mm: float | np.ndarray = 0.0,
                  confidence: float = 0.95,
-                 force_std_n: np.ndarray | None = None) -> IndenterFit:
+                 force_std_n: np.ndarray | None = None,
+                 depth_shared_rel: float = 0.0) -> IndenterFit:
     """Fit E (and nu, where the presses identify it) to presses of an indenter.
 
     Parameters
@@ -329,17 +334,24 @@ def fit_indenter(depth_mm: np.ndarray, force_n: np.ndarray, indenter: Indenter, 
         Standard uncertainty of each depth, mm, >= 0: errors in both variables
         (effective variance, each press's force variance s0^2 + (dP/dw u)^2,
         s0 by the Paule-Mandel rule, as :func:`fit_indentation`).
-    depth_shared_mm : float, default 0.0
-        A depth error every press shares (a ramp's contact point, a ball
-        session's circle bias), mm, >= 0 (a bound, not an sd): the fit is
-        repeated with every depth moved by + and - this, and the intervals of
-        E and nu are widened to the hull of the three fits' intervals.
+    depth_shared_mm : float or (N,) array_like of float, default 0.0
+        A depth error every press shares (a ramp's contact point), mm, >= 0 (a
+        bound, not an sd), or, one per press, how far each depth moves when
+        the shared error is at its bound (a ball's circles all too large by
+        the detector's bias: each depth by its own dw/da): the fit is repeated
+        with every depth moved by + and - this, and the intervals of E and nu
+        are widened to the hull of the three fits' intervals.
     confidence : float, default 0.95
     force_std_n : (N,) array_like of float, optional
         Known standard uncertainty of each force, N, >= 0 (a dead weight's mass
         uncertainty times g; an F/T window's standard error): added to each
         press's force variance beside the depth's, s0 still fitted for what
         they leave unexplained.
+    depth_shared_rel : float, default 0.0
+        A depth error every press shares in proportion to its depth (a ball's
+        contact circles all too large or too small by one fraction), a bound
+        as a fraction, >= 0: the fit is repeated with every depth scaled by
+        1 +- this and the intervals widened to the hull, as `depth_shared_mm`.
 
     Returns
     -------
@@ -409,22 +421,30 @@ def fit_indenter(depth_mm: np.ndarray, force_n: np.ndarray, indenter: Indenter, 
         ends = [int(np.argmin(np.abs(prof[:, 0] - v))) for v in nu_ci]
         E_over = (float(min(prof[ends, 1])), float(max(prof[ends, 1])))
     dof = n - 2
-    if depth_shared_mm > 0:
+    if not (np.isfinite(depth_shared_rel) and 0 <= depth_shared_rel < 1):
+        raise InputError(f"depth_shared_rel must be within [0, 1), got {depth_shared_rel!r}")
+    shared = np.asarray(depth_shared_mm, np.float64)
+    if np.any(shared > 0) or depth_shared_rel > 0:
         E_hull, nu_hull = list(E_ci), list(nu_ci)
         for sgn in (-1.0, 1.0):
-            ws = w + sgn * depth_shared_mm
+            ws = (w + sgn * shared) * (1.0 + sgn * depth_shared_rel)
             if np.any(ws <= 0) or np.any(ws > reach):
-                notes.append(f"the depths moved by {sgn * depth_shared_mm * 1e3:+.3g} um (the "
-                             "shared error) leave the table: that side is not carried")
+                notes.append(f"the depths moved by the shared error ({sgn:+.0f}) leave the "
+                             "table: that side is not carried")
                 continue
             other = fit_indenter(ws, P, indenter, thickness_mm=h, law=law, contact=contact,
                                  nu=nu, nu_range=nu_range, depth_std_mm=u,
                                  confidence=confidence, force_std_n=f_sd)
             E_hull = [min(E_hull[0], other.E_ci95_mpa[0]), max(E_hull[1], other.E_ci95_mpa[1])]
             nu_hull = [min(nu_hull[0], other.nu_ci95[0]), max(nu_hull[1], other.nu_ci95[1])]
-        notes.append(f"a depth error of {depth_shared_mm * 1e3:.3g} um shared by every press: "
-                     "the intervals are the hull of the fits with every depth moved to its "
-                     "bounds")
+        what = " and ".join(x for x in (
+            (f"{float(shared) * 1e3:.3g} um" if shared.ndim == 0 else
+             f"{float(shared.min()) * 1e3:.3g} to {float(shared.max()) * 1e3:.3g} um")
+            if np.any(shared > 0) else "",
+            f"{100 * depth_shared_rel:.3g} % of each depth" if depth_shared_rel > 0 else "")
+            if x)
+        notes.append(f"a depth error of {what} shared by every press: the intervals are the "
+                     "hull of the fits with every depth moved to its bounds")
         E_ci, nu_ci = (E_hull[0], E_hull[1]), (nu_hull[0], nu_hull[1])
     kw = {"nu": nu_fit, "thickness_mm": h, "law": law, "contact": contact}
     g = indenter.force(w, E_mpa=1.0, **kw)

@@ -36,3 +36,8 @@ from ._result import (
 
 __all__ += ["CALIBRATION_FILES", "CalibrationResult", "read_material", "result_dict",
             "session_reconstructor", "write_calibration"]
+
+# a ball as its own gauge: depth from the contact circle
+from ._ball import BallDepths, ball_press_depths  # noqa: E402
+
+__all__ += ["BallDepths", "ball_press_depths"]
