@@ -295,6 +295,30 @@ def _checked(depth_mm, force_n, indenter: Indenter, thickness_mm: float, law: st
 
 
 
+def _shared_hull(refit, w: np.ndarray, shared: np.ndarray, rel: float, reach: float,
+                 E_ci: tuple, nu_ci: tuple, notes: list[str]) -> tuple[tuple, tuple]:
+    """The intervals of E and nu widened to the hull of the fits with every depth moved to
+    the bounds of a shared error (`shared` mm, one or per press; `rel` of each depth)."""
+    E_hull, nu_hull = list(E_ci), list(nu_ci)
+    for sgn in (-1.0, 1.0):
+        ws = (w + sgn * shared) * (1.0 + sgn * rel)
+        if np.any(ws <= 0) or np.any(ws > reach):
+            notes.append(f"the depths moved by the shared error ({sgn:+.0f}) leave the "
+                         "table: that side is not carried")
+            continue
+        other = refit(ws)
+        E_hull = [min(E_hull[0], other.E_ci95_mpa[0]), max(E_hull[1], other.E_ci95_mpa[1])]
+        nu_hull = [min(nu_hull[0], other.nu_ci95[0]), max(nu_hull[1], other.nu_ci95[1])]
+    what = " and ".join(x for x in (
+        (f"{float(shared) * 1e3:.3g} um" if shared.ndim == 0 else
+         f"{float(shared.min()) * 1e3:.3g} to {float(shared.max()) * 1e3:.3g} um")
+        if np.any(shared > 0) else "",
+        f"{100 * rel:.3g} % of each depth" if rel > 0 else "") if x)
+    notes.append(f"a depth error of {what} shared by every press: the intervals are the "
+                 "hull of the fits with every depth moved to its bounds")
+    return (E_hull[0], E_hull[1]), (nu_hull[0], nu_hull[1])
+
+
 def fit_indenter(depth_mm: np.ndarray, force_n: np.ndarray, indenter: Indenter, *,
                  thickness_mm: float, law: str = "neo_hookean", contact: str | None = None,
                  nu: float | None = None, nu_range: tuple[float, float] | None = None,
@@ -425,27 +449,13 @@ def fit_indenter(depth_mm: np.ndarray, force_n: np.ndarray, indenter: Indenter, 
         raise InputError(f"depth_shared_rel must be within [0, 1), got {depth_shared_rel!r}")
     shared = np.asarray(depth_shared_mm, np.float64)
     if np.any(shared > 0) or depth_shared_rel > 0:
-        E_hull, nu_hull = list(E_ci), list(nu_ci)
-        for sgn in (-1.0, 1.0):
-            ws = (w + sgn * shared) * (1.0 + sgn * depth_shared_rel)
-            if np.any(ws <= 0) or np.any(ws > reach):
-                notes.append(f"the depths moved by the shared error ({sgn:+.0f}) leave the "
-                             "table: that side is not carried")
-                continue
-            other = fit_indenter(ws, P, indenter, thickness_mm=h, law=law, contact=contact,
-                                 nu=nu, nu_range=nu_range, depth_std_mm=u,
-                                 confidence=confidence, force_std_n=f_sd)
-            E_hull = [min(E_hull[0], other.E_ci95_mpa[0]), max(E_hull[1], other.E_ci95_mpa[1])]
-            nu_hull = [min(nu_hull[0], other.nu_ci95[0]), max(nu_hull[1], other.nu_ci95[1])]
-        what = " and ".join(x for x in (
-            (f"{float(shared) * 1e3:.3g} um" if shared.ndim == 0 else
-             f"{float(shared.min()) * 1e3:.3g} to {float(shared.max()) * 1e3:.3g} um")
-            if np.any(shared > 0) else "",
-            f"{100 * depth_shared_rel:.3g} % of each depth" if depth_shared_rel > 0 else "")
-            if x)
-        notes.append(f"a depth error of {what} shared by every press: the intervals are the "
-                     "hull of the fits with every depth moved to its bounds")
-        E_ci, nu_ci = (E_hull[0], E_hull[1]), (nu_hull[0], nu_hull[1])
+        def refit(ws: np.ndarray) -> IndenterFit:
+            return fit_indenter(ws, P, indenter, thickness_mm=h, law=law, contact=contact,
+                                nu=nu, nu_range=nu_range, depth_std_mm=u,
+                                confidence=confidence, force_std_n=f_sd)
+
+        E_ci, nu_ci = _shared_hull(refit, w, shared, depth_shared_rel, reach, E_ci, nu_ci,
+                                   notes)
     kw = {"nu": nu_fit, "thickness_mm": h, "law": law, "contact": contact}
     g = indenter.force(w, E_mpa=1.0, **kw)
     pred = E_fit * g
