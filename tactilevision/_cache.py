@@ -8,13 +8,15 @@ MLP tabulations; docs/install.md, "The cache").
 
 from __future__ import annotations
 
+import ast
+import hashlib
 import os
 import tempfile
 from pathlib import Path
 
 import numpy as np
 
-__all__ = ["ENV_VAR", "cache_root", "savez_atomic"]
+__all__ = ["ENV_VAR", "cache_root", "code_digest", "savez_atomic"]
 
 #: Environment variable naming the package's cache root.
 ENV_VAR = "TACTILEVISION_CACHE"
@@ -24,6 +26,41 @@ def cache_root() -> Path:
     """``$TACTILEVISION_CACHE``, else ``~/.cache/tactilevision``."""
     root = os.environ.get(ENV_VAR)
     return Path(root).expanduser() if root else Path.home() / ".cache" / "tactilevision"
+
+
+def _strip_docstrings(tree: ast.AST) -> ast.AST:
+    """`tree` without the docstrings of its module, classes and functions."""
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Module | ast.ClassDef | ast.FunctionDef | ast.AsyncFunctionDef):
+            body = node.body
+            if body and isinstance(body[0], ast.Expr) and isinstance(body[0].value, ast.Constant) \
+                    and isinstance(body[0].value.value, str):
+                node.body = body[1:] or [ast.Pass()]
+    return tree
+
+
+def code_digest(*paths: Path) -> str:
+    """SHA-256 of the code of Python source files, docstrings and comments left out.
+
+    A cache keyed on it misses when a statement changes, not when the text that
+    explains it does (the syntax tree, ``ast.dump`` without positions, is hashed).
+
+    Parameters
+    ----------
+    *paths : Path
+        Source files, hashed in the order given (each one's name enters the hash).
+
+    Returns
+    -------
+    str
+        64 hex digits.
+    """
+    h = hashlib.sha256()
+    for path in paths:
+        tree = _strip_docstrings(ast.parse(Path(path).read_text(encoding="utf-8")))
+        h.update(Path(path).name.encode())
+        h.update(ast.dump(tree, include_attributes=False).encode())
+    return h.hexdigest()
 
 
 def savez_atomic(path: Path, **arrays: np.ndarray) -> bool:

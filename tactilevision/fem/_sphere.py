@@ -44,7 +44,6 @@ configuration for ``'neo_hookean'``, reference for ``'linear'``);
 from __future__ import annotations
 
 import functools
-import hashlib
 import os
 import time
 import warnings
@@ -55,6 +54,7 @@ import numpy as np
 import scipy.sparse as sp
 from skfem import MeshTri
 
+from .._cache import code_digest
 from .._checks import InputError
 from ._finite_solver import ConstrainedNewton, IndentationProblem, RigidPunch
 from ._neohookean_forms import AxisymmetricNeoHookean
@@ -448,9 +448,10 @@ def sphere_indentation(radius_over_h: float, nu: float, w_over_h: np.ndarray, *,
 
 @functools.lru_cache(maxsize=1)
 def _source_digest() -> str:
-    """SHA-256 of this module's source: a cached sphere sweep misses when it changes (the
-    flat punch's sweeps, keyed on their own modules, are not touched)."""
-    return hashlib.sha256(Path(__file__).read_bytes()).hexdigest()
+    """SHA-256 of this module's code (docstrings and comments left out): a cached sphere
+    sweep misses when it changes (the flat punch's sweeps, keyed on their own modules,
+    are not touched)."""
+    return code_digest(Path(__file__))
 
 
 def _load_steps(w_req: np.ndarray, per: int, ds_max: float = np.inf) -> np.ndarray:

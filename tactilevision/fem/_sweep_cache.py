@@ -3,10 +3,10 @@
 One ``.npz`` per key, ``sweep_<key>.npz``, in the folder of the pad cache
 (:func:`._pad_cache.cache_directory`). The key is the SHA-256 of the sweep's
 resolved inputs, :data:`FORMAT_VERSION`, the library versions (numpy, scipy,
-scikit-fem, Python) and a digest of the source of the solver's own modules
-(:data:`SOURCES`): a change to the solver, the mesh or the material forms
-misses every old entry, so a cached sweep is always the one this code computes.
-Only complete sweeps are stored. Written to a temporary file, then
+scikit-fem, Python) and a digest of the code of the solver's own modules
+(:data:`SOURCES`; docstrings and comments left out): a change to the solver, the
+mesh or the material forms misses every old entry, so a cached sweep is always the
+one this code computes. Only complete sweeps are stored. Written to a temporary file, then
 ``os.replace``-d into place; on reading, the format, the key, the inputs and
 the finiteness of every array are checked, and any failure is a plain miss
 (the sweep is run again and the entry rewritten).
@@ -26,7 +26,7 @@ import numpy as np
 import scipy
 import skfem
 
-from .._cache import savez_atomic
+from .._cache import code_digest, savez_atomic
 from ._pad_cache import cache_directory
 
 __all__ = ["FORMAT_VERSION", "SOURCES", "read_sweep", "sweep_key", "write_sweep"]
@@ -34,18 +34,15 @@ __all__ = ["FORMAT_VERSION", "SOURCES", "read_sweep", "sweep_key", "write_sweep"
 #: Bump when the stored fields or their meaning change: old files then miss.
 FORMAT_VERSION = 1
 
-#: The modules whose source decides a sweep's numbers (their bytes enter the key).
+#: The modules whose code decides a sweep's numbers (their syntax trees, docstrings and
+#: comments left out, enter the key: :func:`tactilevision._cache.code_digest`).
 SOURCES = ("_finite.py", "_finite_solver.py", "_mesh.py", "_neohookean_forms.py")
 
 
 @functools.lru_cache(maxsize=1)
 def _source_digest() -> str:
-    h = hashlib.sha256()
     here = Path(__file__).resolve().parent
-    for name in SOURCES:
-        h.update(name.encode())
-        h.update((here / name).read_bytes())
-    return h.hexdigest()
+    return code_digest(*(here / name for name in SOURCES))
 
 
 @functools.lru_cache(maxsize=1)
