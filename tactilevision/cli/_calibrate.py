@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 from pathlib import Path
 
@@ -10,9 +11,17 @@ import numpy as np
 from tqdm import tqdm
 
 from .. import InputError
-from ..io import check_output_folder, check_overwrite, read_session
-from ..pipeline import CALIBRATION_FILES, calibrate_session, write_calibration
+from ..io import check_output_folder, check_overwrite, read_measurements, read_session
+from ..pipeline import (
+    BALL_CALIBRATION_FILES,
+    CALIBRATION_FILES,
+    calibrate_ball_session,
+    calibrate_session,
+    write_ball_calibration,
+    write_calibration,
+)
 from ._fit import _write_json, relaxation_lines, summary
+from ._fit_indenter import summary_lines
 from ._out import add_overwrite_argument
 
 #: The files ``calibrate`` writes into its output folder (figures and report unless
@@ -27,7 +36,14 @@ every press in the frames, synchronises the F/T clock, certifies each press
 window_samples F/T samples from that instant, |Fxy| << Fz), lists the
 rejected presses with their reasons, fits E and nu (eq. 5 with the FEM beta
 and kappa tables) and writes a report folder: measurements.csv, fit.json,
-rejected.csv, figures and report.html. Exit status 2 on bad input."""
+rejected.csv, figures and report.html. Exit status 2 on bad input.
+
+A ball ([indenter] shape = "sphere", no [gauge_block]): each press's depth is
+read from the ball's contact circle through the sphere's a(w) at --nu and
+--law, its force from the F/T log over the hold; E (nu where the presses
+identify it) is fitted by the sphere's force law and the folder holds
+measurements.csv with its sidecar session.toml, circles.csv, rejected.csv and
+fit.json (docs/guide/ball.md)."""
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -76,6 +92,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                         "line over the session at each sample; auto (default): drift when the "
                         "zero is seen to drift, else constant; off keeps the forces as the F/T "
                         "read them. fit.json's ft_zero reports it either way")
+    b = p.add_argument_group("a ball session ([indenter] shape = \"sphere\")")
+    b.add_argument("--nu", type=float, default=0.5,
+                   help="nu of the ball's a(w), and E's nu when the presses do not identify "
+                        "it (default 0.5)")
+    b.add_argument("--law", choices=("neo_hookean", "linear"), default="neo_hookean",
+                   help="the sphere's force law and a(w): finite strain (default) or small "
+                        "strain")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--no-report", action="store_true",
                    help="write measurements.csv, fit.json and rejected.csv only")
@@ -114,11 +137,15 @@ def run(args: argparse.Namespace) -> int:
     session = read_session(args.session)
     out = args.out if args.out is not None else session.path / "calibration"
     check_output_folder(out)               # before the minute of work, not after
-    check_overwrite(out, CALIBRATE_FILES, overwrite=args.overwrite)
+    ball = session.config.indenter_shape == "sphere"
+    check_overwrite(out, BALL_CALIBRATION_FILES if ball else CALIBRATE_FILES,
+                    overwrite=args.overwrite)
     progress = None
     if not args.no_progress:
         def progress(it):
             return tqdm(it, desc="frames", unit="frame", file=sys.stderr, mininterval=1.0)
+    if ball:
+        return _run_ball(session, out, args, progress)
     cal = calibrate_session(session, depth_rule=args.depth_rule, beta_table=args.beta_table,
                             progress=progress, allow_failure=True,
                             relaxation=args.relaxation, bevel_threshold=args.bevel_threshold,
@@ -131,6 +158,32 @@ def run(args: argparse.Namespace) -> int:
                          + ("" if args.no_report else ", the bevel panels and report.html")
                          + f" in {out} say why")
     _print_summary(cal, result, out, args)
+    return 0
+
+
+def _run_ball(session, out: Path, args: argparse.Namespace, progress) -> int:
+    """``calibrate`` of a ball's session: depths from the contact circles."""
+    cal = calibrate_ball_session(session, nu=args.nu, law=args.law, progress=progress)
+    paths = write_ball_calibration(cal, out)
+    obj = json.loads(paths["fit.json"].read_text())
+    if args.json is not None:
+        _write_json(obj, args.json)
+    if args.json != "-":
+        table = read_measurements(paths["measurements.csv"])
+        lines = summary_lines(cal.fit, {cal.law: cal.fit}, f"--law {cal.law}", table)
+        d = cal.depths
+        lines.insert(1, f"  depths from {len(cal.used)} contact circles through a(w): "
+                        f"{1e3 * d.depth_mm.min():.1f} to {1e3 * d.depth_mm.max():.1f} um, "
+                        f"random error median {1e3 * float(np.median(d.depth_std_mm)):.2f} um,"
+                        f" shared up to {1e3 * float(d.depth_shared_mm.max()):.2f} um")
+        lines.append(f"  {len(cal.used)} presses fitted, {len(cal.rejected)} rejected"
+                     + "".join(f"\n    press {r.press}: {r.reason} ({r.detail})"
+                               for r in cal.rejected))
+        lines.append(f"  clock offset {cal.presses.clock_offset_s:.4f} s "
+                     f"({cal.presses.clock_source}); {cal.seconds:.1f} s")
+        lines += [f"  warning: {w}" for w in cal.warnings]
+        lines.append(f"  wrote {', '.join(p.name for p in paths.values())} in {out}")
+        print("\n".join(lines))
     return 0
 
 

@@ -78,6 +78,7 @@ def fit_laws(table: Measurements, args: argparse.Namespace,
             fits[law] = fit_indenter(table.depth_mm, table.force_n, ind,
                                      thickness_mm=table.thickness_mm, law=law, contact=contact,
                                      nu=args.nu, depth_std_mm=depth_std,
+                                     depth_shared_mm=_depth_shared(table, depth_std),
                                      force_std_n=_force_sd(table))
         except InputError as exc:
             raise InputError(f"{table.path}: {exc}") from None
@@ -89,6 +90,15 @@ def fit_laws(table: Measurements, args: argparse.Namespace,
            f"{fits[other].rmse_n * 1e3:.4g} mN for {other}; the same parameters, so the "
            "smaller residuals)")
     return fits[best], fits, why
+
+
+def _depth_shared(table: Measurements, depth_std: np.ndarray | None) -> np.ndarray | float:
+    """The depths' shared error (``depth_shared_mm``: a ball's contact circles all off by
+    the detector's bias) where every row has one and the depths' errors are used."""
+    shared = table.columns.get("depth_shared_mm")
+    if depth_std is None or shared is None or not np.all(np.isfinite(shared) & (shared >= 0)):
+        return 0.0
+    return shared
 
 
 def _force_sd(table: Measurements) -> np.ndarray | None:

@@ -4,6 +4,7 @@ Pure functions on arrays, plus :func:`certify_session`, which runs them over a
 session read by :mod:`tactilevision.io`.
 """
 
+from ._ball_presses import BallPress, BallPresses, find_ball_presses
 from ._bevel import bevel_score, footprint_from_frame
 from ._certify import certified_depths, certify_session
 from ._footprint import Footprint, fit_footprint, nearest_indenter
@@ -38,13 +39,52 @@ from ._vernier_presses import (
 )
 from ._zero import ForceZero, force_zero
 
-__all__ = ["CREST_CHECK_P", "EDGE_SHARED_FRACTION", "RESOLVED_PX", "BevelGeometry", "BevelProfile",
-           "BevelReading", "Certification", "CertifiedPress", "ClockSync", "Footprint",
-           "ForceWindow", "ForceZero", "Rejection", "approach_start", "bevel_force",
-           "bevel_profile", "bevel_score", "bulge_at", "bulge_height", "certified_depths",
-           "certify_session", "contact_mask", "contact_onsets", "crest_consistency",
-           "crossing_forces", "estimate_clock_offset", "fit_footprint", "footprint_from_frame",
-           "force_onsets", "force_window", "force_zero", "hold_end", "hold_start",
-           "land_contact_depth", "land_contact_depths_mm", "mark_depths", "mark_shared_mm",
-           "nearest_indenter", "noise_level", "read_bevel", "refine_clock_offset",
-           "unresolved_closure", "vernier_shared_mm", "window_standard_error"]
+__all__ = [
+    "CREST_CHECK_P",
+    "EDGE_SHARED_FRACTION",
+    "RESOLVED_PX",
+    "BallPress",
+    "BallPresses",
+    "BevelGeometry",
+    "BevelProfile",
+    "BevelReading",
+    "Certification",
+    "CertifiedPress",
+    "ClockSync",
+    "Footprint",
+    "ForceWindow",
+    "ForceZero",
+    "Rejection",
+    "approach_start",
+    "bevel_force",
+    "bevel_profile",
+    "bevel_score",
+    "bulge_at",
+    "bulge_height",
+    "certified_depths",
+    "certify_session",
+    "contact_mask",
+    "contact_onsets",
+    "crest_consistency",
+    "crossing_forces",
+    "estimate_clock_offset",
+    "find_ball_presses",
+    "fit_footprint",
+    "footprint_from_frame",
+    "force_onsets",
+    "force_window",
+    "force_zero",
+    "hold_end",
+    "hold_start",
+    "land_contact_depth",
+    "land_contact_depths_mm",
+    "mark_depths",
+    "mark_shared_mm",
+    "nearest_indenter",
+    "noise_level",
+    "read_bevel",
+    "refine_clock_offset",
+    "unresolved_closure",
+    "vernier_shared_mm",
+    "window_standard_error",
+]

@@ -80,6 +80,12 @@ class SessionConfig:
     bevel_force_correction : bool
         Whether the force of the bevel's own band of contact is taken off the
         F/T force (default true; only with a vernier).
+    indenter_shape : {'flat_punch', 'sphere'}
+        ``[indenter] shape`` (default 'flat_punch'). A ball (``'sphere'``)
+        needs no ``[gauge_block]``: its depths come from its contact circles
+        (``depths_mm`` is then empty unless given).
+    indenter_contact : {'frictionless', 'tied'} or None
+        ``[indenter] contact`` of a ball (None: the indenter's default).
     """
 
     sensor_name: str
@@ -100,6 +106,8 @@ class SessionConfig:
     bevel_force_correction: bool = True
     window_at: str = "start"
     date: datetime.date | None = None
+    indenter_shape: str = "flat_punch"
+    indenter_contact: str | None = None
 
 
 #: The places of the force window in a hold (``[force_sensor] window_at``).
@@ -226,6 +234,20 @@ def _unknown_keys(folder: Path) -> list[str]:
     return notes
 
 
+def _indenter_shape(doc: dict, toml: Path) -> tuple[str, str | None]:
+    """``[indenter] shape`` and ``contact``, checked (formats.md section 1)."""
+    section = doc.get("indenter") if isinstance(doc.get("indenter"), dict) else {}
+    shape = section.get("shape", "flat_punch")
+    if shape not in ("flat_punch", "sphere"):
+        raise InputError(f"{toml}: [indenter] shape must be \"flat_punch\" or \"sphere\", got "
+                         f"{shape!r}")
+    contact = section.get("contact")
+    if contact is not None and contact not in ("frictionless", "tied"):
+        raise InputError(f"{toml}: [indenter] contact must be \"frictionless\" or \"tied\", "
+                         f"got {contact!r}")
+    return shape, contact
+
+
 def _read_config(folder: Path) -> SessionConfig:
     toml = folder / "session.toml"
     if not toml.is_file():
@@ -235,11 +257,14 @@ def _read_config(folder: Path) -> SessionConfig:
             doc = tomllib.load(fh)
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise InputError(f"{toml} is not valid TOML: {exc}") from None
+    shape, contact = _indenter_shape(doc, toml)
     depths = doc.get("gauge_block", {}).get("depths_mm") if isinstance(
         doc.get("gauge_block"), dict) else None
-    if depths is None:
+    if depths is None and shape == "sphere":
+        depths = []                      # a ball's depths are read from its contact circles
+    elif depths is None:
         raise InputError(f"{toml}: missing key [gauge_block] depths_mm")
-    if not isinstance(depths, list) or not depths or not all(
+    if not isinstance(depths, list) or (not depths and shape != "sphere") or not all(
             isinstance(d, int | float) and not isinstance(d, bool) and math.isfinite(d) and d > 0
             for d in depths):
         raise InputError(f"{toml}: [gauge_block] depths_mm must be a list of positive numbers, "
@@ -265,13 +290,6 @@ def _read_config(folder: Path) -> SessionConfig:
             raise InputError(f"{toml}: [optics] calibration {cal_path} does not exist")
     name = doc.get("sensor", {}).get("name", "") if isinstance(doc.get("sensor"), dict) else ""
     h = _toml_number(doc, toml, "sensor", "gel_thickness_mm")
-    shape = doc.get("indenter", {}).get("shape", "flat_punch") if isinstance(
-        doc.get("indenter"), dict) else "flat_punch"
-    if shape != "flat_punch":
-        raise InputError(f"{toml}: [indenter] shape = {shape!r}: calibrate certifies gauge-block "
-                         "sessions of a flat punch (shape = \"flat_punch\"); fit the presses of "
-                         "a ball with 'tactilevision fit MEASUREMENTS.csv' "
-                         "(docs/guide/ball.md)")
     return SessionConfig(
         sensor_name=str(name),
         mm_per_px=_toml_number(doc, toml, "sensor", "mm_per_px"),
@@ -279,6 +297,8 @@ def _read_config(folder: Path) -> SessionConfig:
         gel_radius_mm=_toml_number(doc, toml, "sensor", "gel_radius_mm", default=20.0 * h),
         indenter_radius_mm=_toml_number(doc, toml, "indenter", "radius_mm"),
         depths_mm=tuple(float(d) for d in depths),
+        indenter_shape=shape,
+        indenter_contact=contact,
         rate_hz=_rate(doc, toml),
         clock_offset_s=_toml_number(doc, toml, "force_sensor", "clock_offset_s", positive=False,
                                     required=False),

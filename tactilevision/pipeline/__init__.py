@@ -41,3 +41,15 @@ __all__ += ["CALIBRATION_FILES", "CalibrationResult", "read_material", "result_d
 from ._ball import BallDepths, ball_press_depths  # noqa: E402
 
 __all__ += ["BallDepths", "ball_press_depths"]
+
+# a ball session: presses found in the frames and the F/T log, depths from the circles
+from ._ball_session import (  # noqa: E402
+    BALL_CALIBRATION_FILES,
+    BallCalibration,
+    ball_indenter,
+    calibrate_ball_session,
+    write_ball_calibration,
+)
+
+__all__ += ["BALL_CALIBRATION_FILES", "BallCalibration", "ball_indenter",
+            "calibrate_ball_session", "write_ball_calibration"]

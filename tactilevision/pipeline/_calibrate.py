@@ -124,9 +124,10 @@ def calibrate_session(session: Session | str | Path, *, depth_rule: str = "auto"
     Raises
     ------
     InputError
-        For a broken session (see :func:`~tactilevision.io.read_session`), no
-        press found, a fit that fails, or (unless `allow_failure`) fewer than
-        two certified presses at distinct depths; for ``'vernier'`` on a
+        For a broken session (see :func:`~tactilevision.io.read_session`), a
+        ball's session (:func:`calibrate_ball_session`), no press found, a fit
+        that fails, or (unless `allow_failure`) fewer than two certified
+        presses at distinct depths; for ``'vernier'`` on a
         session whose bevel has no vernier.
     """
     t0 = time.perf_counter()
@@ -134,6 +135,10 @@ def calibrate_session(session: Session | str | Path, *, depth_rule: str = "auto"
     if not isinstance(session, Session):
         session = read_session(session)
     cfg = session.config
+    if cfg.indenter_shape != "flat_punch":
+        raise InputError(f"{session.path / 'session.toml'}: [indenter] shape = "
+                         f"{cfg.indenter_shape!r}: calibrate_session certifies a gauge block's "
+                         "flat punches; a ball's session is calibrate_ball_session's")
     depth_rule = _resolve_rule(depth_rule, cfg, session.path)
     cert = certify_session(session, progress=progress, bevel_threshold=bevel_threshold)
     session, cert, zero, zero_notes = take_off_zero(session, cert, ft_zero)

@@ -1,0 +1,250 @@
+"""The main job for a ball: a session of frames and F/T forces in, E (and nu) out.
+
+A session whose ``[indenter] shape`` is ``"sphere"`` has no gauge block: each
+press's depth is read from the ball's contact circle through the sphere's a(w)
+(:func:`ball_press_depths`), its force from the F/T log over the hold
+(:func:`tactilevision.contact.find_ball_presses`), and E is fitted to the presses
+by the sphere's force law (:func:`tactilevision.mechanics.fit_indenter`), the
+circles' shared error carried into its interval. :func:`write_ball_calibration`
+writes the output folder (formats.md section 3, "A ball session").
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .._checks import InputError
+from ..contact import BallPresses, Rejection, find_ball_presses
+from ..io import Session, read_session, write_measurements
+from ..mechanics import IndenterFit, Sphere, fit_indenter
+from ._ball import BallDepths, ball_press_depths
+
+__all__ = ["BALL_CALIBRATION_FILES", "BallCalibration", "ball_indenter", "calibrate_ball_session",
+           "write_ball_calibration"]
+
+#: The files :func:`write_ball_calibration` writes.
+BALL_CALIBRATION_FILES = ("measurements.csv", "session.toml", "circles.csv", "rejected.csv",
+                          "fit.json")
+
+
+@dataclass(frozen=True)
+class BallCalibration:
+    """What :func:`calibrate_ball_session` found.
+
+    Attributes
+    ----------
+    session : tactilevision.io.Session
+    indenter : Sphere
+    presses : tactilevision.contact.BallPresses
+        The presses found in the frames and their force windows.
+    used : (N,) int64 ndarray
+        Index into ``presses.presses`` of each fitted press (those whose circle
+        gave a depth).
+    depths : BallDepths
+        The fitted presses' depths from their contact circles.
+    rejected : list of Rejection
+        Presses rejected by the force log or by their circle.
+    fit : IndenterFit
+    nu, law, contact : the a(w) the depths were read through
+    warnings : list of str
+    seconds : float
+        Wall time of :func:`calibrate_ball_session`, s.
+    """
+
+    session: Session
+    indenter: Sphere
+    presses: BallPresses
+    used: np.ndarray
+    depths: BallDepths
+    rejected: list[Rejection]
+    fit: IndenterFit
+    nu: float
+    law: str
+    contact: str
+    warnings: list[str] = field(default_factory=list)
+    seconds: float = 0.0
+
+    @property
+    def force_n(self) -> np.ndarray:
+        """(N,) float64 ndarray: each fitted press's force, N."""
+        return np.array([self.presses.presses[i].force_n for i in self.used], np.float64)
+
+    @property
+    def force_sem_n(self) -> np.ndarray:
+        """(N,) float64 ndarray: the standard error of each fitted press's force, N."""
+        return np.array([self.presses.presses[i].force_sem_n for i in self.used], np.float64)
+
+
+def ball_indenter(session: Session) -> Sphere:
+    """The session's ball: ``[indenter] radius_mm``, on the pad of ``[sensor]
+    gel_radius_mm`` when it is given (the infinite layer, the sphere table, when it is
+    the default 20 h)."""
+    cfg = session.config
+    pad = cfg.gel_radius_mm
+    infinite = abs(pad - 20.0 * cfg.gel_thickness_mm) <= 1e-9 * pad
+    return Sphere(cfg.indenter_radius_mm, pad_radius_mm=None if infinite else pad)
+
+
+def calibrate_ball_session(session: Session | str | Path, *, nu: float = 0.5,
+                           law: str = "neo_hookean", progress: Callable | None = None,
+                           min_contact_px: int = 200) -> BallCalibration:
+    """Find every press of a ball session, read its depth from its contact circle, fit E.
+
+    Parameters
+    ----------
+    session : Session or path
+        A session (or its folder) whose ``[indenter] shape`` is ``"sphere"``.
+    nu : float, default 0.5
+        Poisson's ratio of a(w) and the nu E is reported at when the presses do not
+        identify it (:func:`~tactilevision.mechanics.fit_indenter`).
+    law : {'neo_hookean', 'linear'}, default 'neo_hookean'
+        The force law and a(w): finite strain, or small strain.
+    progress : callable, optional
+        Wraps the frame iterator (e.g. ``tqdm``).
+    min_contact_px : int, default 200
+        Pixels of contact that make a frame part of a press.
+
+    Returns
+    -------
+    BallCalibration
+
+    Raises
+    ------
+    InputError
+        For a session that is not a ball's, no press found, a clock that cannot be
+        synchronised, or fewer than two presses with a depth and a force.
+
+    Notes
+    -----
+    The contact condition is ``[indenter] contact`` (default frictionless). Each
+    press's depth is w = a^-1(r s), r the contact circle's radius at the frame in the
+    middle of the force window, s = ``mm_per_px``; its random and shared errors
+    (:class:`BallDepths`) enter the fit as errors in the depths and a shared depth
+    error (``depth_shared_mm``), and the F/T window's standard error as the force's.
+    """
+    t0 = time.perf_counter()
+    if not isinstance(session, Session):
+        session = read_session(session)
+    cfg = session.config
+    if cfg.indenter_shape != "sphere":
+        raise InputError(f"{session.path / 'session.toml'}: [indenter] shape is "
+                         f"{cfg.indenter_shape!r}: calibrate_ball_session reads a ball's "
+                         "session (shape = \"sphere\"); a gauge block's is calibrate_session's")
+    ball = ball_indenter(session)
+    found = find_ball_presses(session, min_contact_px=min_contact_px, progress=progress)
+    kw = dict(mm_per_px=cfg.mm_per_px, thickness_mm=cfg.gel_thickness_mm, nu=nu, law=law,
+              contact=cfg.indenter_contact)
+    used, parts, rejected = [], [], list(found.rejected)
+    for i, p in enumerate(found.presses):
+        name = f"press {p.press} (frame {p.frame}, {session.frame_paths[p.frame].name})"
+        try:
+            parts.append(ball_press_depths(session.frame(p.frame)[None], session.reference,
+                                           ball, names=[name], **kw))
+        except InputError as exc:
+            rejected.append(Rejection(press=p.press, reason="no depth from the circle",
+                                      detail=str(exc), t_frame_s=p.t_frame_s, frame=p.frame))
+            continue
+        used.append(i)
+    rejected.sort(key=lambda r: r.press)
+    if len(used) < 2:
+        reasons = "; ".join(f"press {r.press}: {r.reason} ({r.detail})" for r in rejected[:4])
+        raise InputError(f"{session.path}: {len(used)} of {len(used) + len(rejected)} presses "
+                         f"have a depth and a force, too few to fit E"
+                         + (f" ({reasons})" if reasons else ""))
+    depths = _stack(parts)
+    P = np.array([found.presses[i].force_n for i in used])
+    sem = np.array([found.presses[i].force_sem_n for i in used])
+    fit = fit_indenter(depths.depth_mm, P, ball, thickness_mm=cfg.gel_thickness_mm, law=law,
+                       contact=cfg.indenter_contact, nu=nu,
+                       depth_std_mm=depths.depth_std_mm,
+                       depth_shared_mm=depths.depth_shared_mm,
+                       force_std_n=sem if np.all(np.isfinite(sem)) else None)
+    notes = list(session.notes) + list(found.warnings)
+    return BallCalibration(session=session, indenter=ball, presses=found,
+                           used=np.array(used, np.int64), depths=depths, rejected=rejected,
+                           fit=fit, nu=float(nu), law=law, contact=ball._contact(
+                               cfg.indenter_contact), warnings=notes,
+                           seconds=time.perf_counter() - t0)
+
+
+def _stack(parts: list[BallDepths]) -> BallDepths:
+    """One :class:`BallDepths` of the presses' own (each read alone)."""
+    cat = {name: np.concatenate([getattr(p, name) for p in parts])
+           for name in ("depth_mm", "depth_std_mm", "depth_shared_mm", "contact_radius_mm",
+                        "centres_px", "radii_px", "dw_da")}
+    return BallDepths(**cat, radius_sd_px=parts[0].radius_sd_px,
+                      radius_bias_px=parts[0].radius_bias_px, notes=parts[0].notes)
+
+
+def write_ball_calibration(cal: BallCalibration, out: str | Path) -> dict[str, Path]:
+    """Write a ball session's calibration folder.
+
+    Parameters
+    ----------
+    cal : BallCalibration
+    out : str or Path
+        The folder (created; files of :data:`BALL_CALIBRATION_FILES` in it are replaced).
+
+    Returns
+    -------
+    dict of str to Path
+        Each file written.
+
+    Notes
+    -----
+    ``measurements.csv`` (formats.md section 2: ``depth_mm``, ``force_n``,
+    ``depth_std_mm``, ``depth_shared_mm``, ``force_sem_n``, ``press``, ``time_s``,
+    ``hold_s``, ``fx_n``, ``fy_n``) with its sidecar ``session.toml`` (the ball: shape,
+    radius, contact, pad), so that ``fit``, ``diagnose`` and ``validate`` read it
+    again with the same noise model; ``circles.csv`` (each press's frame, circle and
+    depth); ``rejected.csv``; ``fit.json`` (``fit --json``'s object of a ball, with
+    ``source``, ``n_rejected`` and ``clock_offset_s``).
+    """
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    cfg = cal.session.config
+    pr = [cal.presses.presses[i] for i in cal.used]
+    d = cal.depths
+    paths = {name: out / name for name in BALL_CALIBRATION_FILES}
+    ind = {"radius_mm": cfg.indenter_radius_mm, "shape": "sphere", "contact": cal.contact}
+    sensor = {"gel_thickness_mm": cfg.gel_thickness_mm, "mm_per_px": cfg.mm_per_px}
+    if cal.indenter.pad_radius_mm is not None:
+        sensor["gel_radius_mm"] = cal.indenter.pad_radius_mm
+    paths["session.toml"].write_text(
+        "# written by tactilevision calibrate: the ball of the session's presses\n"
+        "[sensor]\n" + "".join(f"{k} = {v!r}\n" for k, v in sensor.items())
+        + "\n[indenter]\n" + "".join(f"{k} = {json.dumps(v)}\n" for k, v in ind.items()))
+    write_measurements(paths["measurements.csv"], {
+        "depth_mm": d.depth_mm, "force_n": cal.force_n, "depth_std_mm": d.depth_std_mm,
+        "depth_shared_mm": d.depth_shared_mm, "force_sem_n": cal.force_sem_n,
+        "press": [p.press for p in pr], "time_s": [p.t_frame_s for p in pr],
+        "hold_s": [p.hold_s for p in pr], "fx_n": [p.fx_n for p in pr],
+        "fy_n": [p.fy_n for p in pr]},
+        thickness_mm=cfg.gel_thickness_mm, radius_mm=cfg.indenter_radius_mm)
+    names = [cal.session.frame_paths[p.frame].name for p in pr]
+    rows = ["press,frame,frame_file,x_px,y_px,radius_px,contact_radius_mm,depth_mm,"
+            "depth_std_mm,depth_shared_mm"]
+    rows += [f"{p.press},{p.frame},{n},{c[0]:.3f},{c[1]:.3f},{r:.3f},{a:.6g},{w:.6g},{s:.3g},"
+             f"{b:.3g}" for p, n, c, r, a, w, s, b in zip(
+                 pr, names, d.centres_px, d.radii_px, d.contact_radius_mm, d.depth_mm,
+                 d.depth_std_mm, d.depth_shared_mm, strict=True)]
+    paths["circles.csv"].write_text("\n".join(rows) + "\n")
+    paths["rejected.csv"].write_text("press,reason,detail,t_frame_s,frame\n" + "".join(
+        f"{r.press},{r.reason},\"{r.detail.replace(chr(34), chr(39))}\",{r.t_frame_s:.4f},"
+        f"{r.frame}\n" for r in cal.rejected))
+    obj = cal.fit.to_json_dict()
+    obj.update({"source": "ball session: depths from the contact circles through a(w) "
+                          f"({cal.law}, {cal.contact}, nu = {cal.nu:g}), forces from the F/T "
+                          "log over each hold",
+                "session": str(cal.session.path), "n_rejected": len(cal.rejected),
+                "clock_offset_s": cal.presses.clock_offset_s,
+                "clock_source": cal.presses.clock_source, "warnings": cal.warnings,
+                "seconds": round(cal.seconds, 2)})
+    paths["fit.json"].write_text(json.dumps(obj, indent=2, allow_nan=False) + "\n")
+    return paths
