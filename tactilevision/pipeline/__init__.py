@@ -12,6 +12,13 @@ them one by one and look at what each returns:
    shared depth error by :func:`with_shared_depth`;
 6. report: :class:`CalibrationResult` (``save`` and ``load`` of the output folder)
    and :func:`write_calibration` (the folder with its figures and report).
+
+A ball's session (``[indenter] shape = "sphere"``, no gauge block) is
+:func:`calibrate_ball_session`'s: its presses from
+:func:`tactilevision.contact.find_ball_presses`, each depth from the contact
+circle (:func:`ball_press_depths`), E by
+:func:`tactilevision.mechanics.fit_indenter`; :func:`write_ball_calibration`
+writes its folder.
 """
 
 from ._calibrate import calibrate_session
