@@ -15,35 +15,20 @@ import pytest
 from tactilevision import InputError
 from tactilevision.mechanics import Sphere, fit_indenter
 from tactilevision.pipeline import ball_press_depths
-from tactilevision.sim import taxim_shading
+from tactilevision.sim import sneddon_sphere, sphere_press_surface, taxim_shading
 
 R, H, PAD, E = 2.0, 100.0, 1000.0, 0.2       # ball, thick gel, its pad (mm), modulus (MPa)
 
 
 def sneddon(a):
-    """Depth (mm) and force (N) of a rigid sphere at contact radius a on the half-space,
-    nu = 0.5, times the layer's first-order term 1 + 1.133 sqrt(R w)/h in the force."""
-    lg = np.log((R + a) / (R - a))
-    w = 0.5 * a * lg
-    P = 0.5 * E / 0.75 * ((a * a + R * R) * lg - 2 * a * R)
-    return w, P * (1 + 1.133 * np.sqrt(R * w) / H)
+    """Depth (mm) and force (N) at contact radius a: :func:`tactilevision.sim.sneddon_sphere`
+    (the half-space, nu = 0.5, the layer's first-order term in the force)."""
+    return sneddon_sphere(a, radius_mm=R, E_mpa=E, thickness_mm=H)
 
 
 def surface(shape, centre, a, mm_per_px):
-    """Depth of the gel's surface (mm, into the gel): the sphere's cap inside a (at Sneddon's
-    w), Hertz's sink-in outside, (w_edge / (pi a^2 / 2)) ((2 a^2 - r^2) asin(a/r) +
-    a sqrt(r^2 - a^2)), scaled to meet the cap at a."""
-    rows, cols = np.indices(shape, dtype=np.float64)
-    r = np.hypot(cols - centre[0], rows - centre[1]) * mm_per_px
-    w = sneddon(a)[0]
-    edge = w - (R - np.sqrt(R * R - a * a))          # the cap's depth at r = a
-    out = np.empty(shape)
-    inside = r < a
-    out[inside] = w - (R - np.sqrt(R * R - r[inside] ** 2))
-    ro = r[~inside]
-    out[~inside] = edge * ((2 * a * a - ro ** 2) * np.arcsin(a / ro)
-                           + a * np.sqrt(ro ** 2 - a * a)) / (np.pi * a * a / 2)
-    return out
+    """The gel's surface: the cap inside a, Hertz's sink-in outside."""
+    return sphere_press_surface(shape, centre, a, radius_mm=R, mm_per_px=mm_per_px)
 
 
 @pytest.fixture(scope="module")
