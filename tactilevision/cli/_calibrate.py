@@ -11,11 +11,18 @@ import numpy as np
 from tqdm import tqdm
 
 from .. import InputError
-from ..io import check_output_folder, check_overwrite, read_measurements, read_session
+from ..io import (
+    check_output_folder,
+    check_overwrite,
+    read_dead_weights,
+    read_measurements,
+    read_session,
+)
 from ..pipeline import (
     BALL_CALIBRATION_FILES,
     CALIBRATION_FILES,
     calibrate_ball_session,
+    calibrate_dead_weights,
     calibrate_session,
     write_ball_calibration,
     write_calibration,
@@ -43,7 +50,9 @@ read from the ball's contact circle through the sphere's a(w) at --nu and
 --law, its force from the F/T log over the hold; E (nu where the presses
 identify it) is fitted by the sphere's force law and the folder holds
 measurements.csv with its sidecar session.toml, circles.csv, rejected.csv and
-fit.json (docs/guide/ball.md)."""
+fit.json (docs/guide/ball.md). A folder with weights.csv (frame,mass_kg[,
+mass_std_kg]) and no forces.csv holds dead weights: one frame of the ball at
+rest under each mass, P = m g."""
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -134,6 +143,8 @@ def run(args: argparse.Namespace) -> int:
         (rejected.csv, the certified presses' measurements.csv, the figures
         and report.html are written first, saying why).
     """
+    if _dead_weights(args.session):
+        return _run_dead_weights(args)
     session = read_session(args.session)
     out = args.out if args.out is not None else session.path / "calibration"
     check_output_folder(out)               # before the minute of work, not after
@@ -161,10 +172,29 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _dead_weights(folder: Path) -> bool:
+    """A dead-weight folder: weights.csv and no F/T log."""
+    return (folder / "weights.csv").is_file() and not (folder / "forces.csv").exists()
+
+
+def _run_dead_weights(args: argparse.Namespace) -> int:
+    """``calibrate`` of a dead-weight folder: P = m g, depths from the contact circles."""
+    session = read_dead_weights(args.session)
+    out = args.out if args.out is not None else session.path / "calibration"
+    check_output_folder(out)
+    check_overwrite(out, BALL_CALIBRATION_FILES, overwrite=args.overwrite)
+    cal = calibrate_dead_weights(session, nu=args.nu, law=args.law)
+    return _report_ball(cal, write_ball_calibration(cal, out), out, args)
+
+
 def _run_ball(session, out: Path, args: argparse.Namespace, progress) -> int:
     """``calibrate`` of a ball's session: depths from the contact circles."""
     cal = calibrate_ball_session(session, nu=args.nu, law=args.law, progress=progress)
-    paths = write_ball_calibration(cal, out)
+    return _report_ball(cal, write_ball_calibration(cal, out), out, args)
+
+
+def _report_ball(cal, paths: dict, out: Path, args: argparse.Namespace) -> int:
+    """The summary of a ball's calibration on standard output (and fit.json to --json)."""
     obj = json.loads(paths["fit.json"].read_text())
     if args.json is not None:
         _write_json(obj, args.json)
@@ -179,8 +209,9 @@ def _run_ball(session, out: Path, args: argparse.Namespace, progress) -> int:
         lines.append(f"  {len(cal.used)} presses fitted, {len(cal.rejected)} rejected"
                      + "".join(f"\n    press {r.press}: {r.reason} ({r.detail})"
                                for r in cal.rejected))
-        lines.append(f"  clock offset {cal.presses.clock_offset_s:.4f} s "
-                     f"({cal.presses.clock_source}); {cal.seconds:.1f} s")
+        lines.append((f"  clock offset {cal.presses.clock_offset_s:.4f} s "
+                      f"({cal.presses.clock_source}); " if cal.presses is not None else
+                      "  dead weights: P = m g; ") + f"{cal.seconds:.1f} s")
         lines += [f"  warning: {w}" for w in cal.warnings]
         lines.append(f"  wrote {', '.join(p.name for p in paths.values())} in {out}")
         print("\n".join(lines))

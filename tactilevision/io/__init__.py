@@ -68,3 +68,8 @@ __all__ += ["FrameSource", "open_source"]
 from ._ramp import Ramp, read_ramp  # noqa: E402
 
 __all__ += ["Ramp", "read_ramp"]
+
+# dead weights: frames of a ball at rest under known masses
+from ._dead_weights import DeadWeightSession, read_dead_weights  # noqa: E402
+
+__all__ += ["DeadWeightSession", "read_dead_weights"]

@@ -55,8 +55,9 @@ from ._ball_session import (  # noqa: E402
     BallCalibration,
     ball_indenter,
     calibrate_ball_session,
+    calibrate_dead_weights,
     write_ball_calibration,
 )
 
 __all__ += ["BALL_CALIBRATION_FILES", "BallCalibration", "ball_indenter",
-            "calibrate_ball_session", "write_ball_calibration"]
+            "calibrate_ball_session", "calibrate_dead_weights", "write_ball_calibration"]

@@ -21,11 +21,12 @@ import numpy as np
 
 from .._checks import InputError
 from ..contact import BallPresses, Rejection, find_ball_presses
-from ..io import Session, read_session, write_measurements
+from ..io import DeadWeightSession, Session, read_dead_weights, read_session, write_measurements
 from ..mechanics import IndenterFit, Sphere, fit_indenter
 from ._ball import BallDepths, ball_press_depths
 
 __all__ = ["BALL_CALIBRATION_FILES", "BallCalibration", "ball_indenter", "calibrate_ball_session",
+           "calibrate_dead_weights",
            "write_ball_calibration"]
 
 #: The files :func:`write_ball_calibration` writes.
@@ -39,15 +40,19 @@ class BallCalibration:
 
     Attributes
     ----------
-    session : tactilevision.io.Session
+    session : tactilevision.io.Session or tactilevision.io.DeadWeightSession
     indenter : Sphere
-    presses : tactilevision.contact.BallPresses
-        The presses found in the frames and their force windows.
+    presses : tactilevision.contact.BallPresses or None
+        The presses found in the frames and their force windows (None for dead
+        weights).
     used : (N,) int64 ndarray
-        Index into ``presses.presses`` of each fitted press (those whose circle
-        gave a depth).
+        Index into ``presses.presses`` (dead weights: into the frames) of each fitted
+        press (those whose circle gave a depth).
     depths : BallDepths
         The fitted presses' depths from their contact circles.
+    force_n, force_sem_n : (N,) float64 ndarray
+        Each fitted press's force and its standard uncertainty, N (the F/T window's
+        mean and standard error; dead weights: m g and the mass's uncertainty times g).
     rejected : list of Rejection
         Presses rejected by the force log or by their circle.
     fit : IndenterFit
@@ -57,11 +62,13 @@ class BallCalibration:
         Wall time of :func:`calibrate_ball_session`, s.
     """
 
-    session: Session
+    session: Session | DeadWeightSession
     indenter: Sphere
-    presses: BallPresses
+    presses: BallPresses | None
     used: np.ndarray
     depths: BallDepths
+    force_n: np.ndarray
+    force_sem_n: np.ndarray
     rejected: list[Rejection]
     fit: IndenterFit
     nu: float
@@ -71,17 +78,14 @@ class BallCalibration:
     seconds: float = 0.0
 
     @property
-    def force_n(self) -> np.ndarray:
-        """(N,) float64 ndarray: each fitted press's force, N."""
-        return np.array([self.presses.presses[i].force_n for i in self.used], np.float64)
-
-    @property
-    def force_sem_n(self) -> np.ndarray:
-        """(N,) float64 ndarray: the standard error of each fitted press's force, N."""
-        return np.array([self.presses.presses[i].force_sem_n for i in self.used], np.float64)
+    def frames(self) -> np.ndarray:
+        """(N,) int64 ndarray: the frame of each fitted press."""
+        if self.presses is None:
+            return self.used
+        return np.array([self.presses.presses[i].frame for i in self.used], np.int64)
 
 
-def ball_indenter(session: Session) -> Sphere:
+def ball_indenter(session: Session | DeadWeightSession) -> Sphere:
     """The session's ball: ``[indenter] radius_mm``, on the pad of ``[sensor]
     gel_radius_mm`` when it is given (the infinite layer, the sphere table, when it is
     the default 20 h)."""
@@ -138,38 +142,96 @@ def calibrate_ball_session(session: Session | str | Path, *, nu: float = 0.5,
                          "session (shape = \"sphere\"); a gauge block's is calibrate_session's")
     ball = ball_indenter(session)
     found = find_ball_presses(session, min_contact_px=min_contact_px, progress=progress)
+    frames = [(p.press, p.frame, p.t_frame_s) for p in found.presses]
+    used, depths, rejected = _circle_depths(session, ball, frames, nu, law, session.frame)
+    rejected = sorted(rejected + list(found.rejected), key=lambda r: r.press)
+    force = np.array([found.presses[i].force_n for i in used])
+    sem = np.array([found.presses[i].force_sem_n for i in used])
+    return _fit(session, ball, found, used, depths, force, sem, rejected, nu, law,
+                list(session.notes) + list(found.warnings), t0)
+
+
+def calibrate_dead_weights(session: DeadWeightSession | str | Path, *, nu: float = 0.5,
+                           law: str = "neo_hookean") -> BallCalibration:
+    """E from a ball at rest under known masses: P = m g, the depth from its contact circle.
+
+    The route for a lab without an F/T sensor (formats.md section 1, "Dead weights").
+
+    Parameters
+    ----------
+    session : DeadWeightSession or path
+        Read by :func:`~tactilevision.io.read_dead_weights`, or its folder.
+    nu : float, default 0.5
+        Poisson's ratio of a(w), and E's nu when the weights do not identify it.
+    law : {'neo_hookean', 'linear'}, default 'neo_hookean'
+
+    Returns
+    -------
+    BallCalibration
+        ``presses`` None; ``force_sem_n`` the masses' uncertainties times g.
+
+    Raises
+    ------
+    InputError
+        For a broken folder (:func:`~tactilevision.io.read_dead_weights`) or fewer than
+        two frames whose circle gives a depth.
+    """
+    t0 = time.perf_counter()
+    if not isinstance(session, DeadWeightSession):
+        session = read_dead_weights(session)
+    ball = ball_indenter(session)
+    frames = [(i, i, float("nan")) for i in range(len(session.frame_paths))]
+    stack = session.frames()
+    used, depths, rejected = _circle_depths(session, ball, frames, nu, law,
+                                            lambda i: stack[i])
+    return _fit(session, ball, None, used, depths, session.force_n[used],
+                session.force_std_n[used], rejected, nu, law, list(session.notes), t0)
+
+
+def _circle_depths(session, ball: Sphere, frames: list[tuple[int, int, float]], nu: float,
+                   law: str, frame_of: Callable[[int], np.ndarray]
+                   ) -> tuple[list[int], BallDepths | None, list[Rejection]]:
+    """Each press's depth from its frame's circle, read alone so that one bad circle
+    rejects its press only: (indices of those read, their depths, the rejections)."""
+    cfg = session.config
     kw = dict(mm_per_px=cfg.mm_per_px, thickness_mm=cfg.gel_thickness_mm, nu=nu, law=law,
               contact=cfg.indenter_contact)
-    used, parts, rejected = [], [], list(found.rejected)
-    for i, p in enumerate(found.presses):
-        name = f"press {p.press} (frame {p.frame}, {session.frame_paths[p.frame].name})"
+    used, parts, rejected = [], [], []
+    for i, (press, frame, t) in enumerate(frames):
+        name = f"press {press} (frame {frame}, {session.frame_paths[frame].name})"
         try:
-            parts.append(ball_press_depths(session.frame(p.frame)[None], session.reference,
-                                           ball, names=[name], **kw))
+            parts.append(ball_press_depths(frame_of(frame)[None], session.reference, ball,
+                                           names=[name], **kw))
         except InputError as exc:
-            rejected.append(Rejection(press=p.press, reason="no depth from the circle",
-                                      detail=str(exc), t_frame_s=p.t_frame_s, frame=p.frame))
+            rejected.append(Rejection(press=press, reason="no depth from the circle",
+                                      detail=str(exc), t_frame_s=t, frame=frame))
             continue
         used.append(i)
-    rejected.sort(key=lambda r: r.press)
+    return used, (_stack(parts) if parts else None), rejected
+
+
+def _fit(session, ball: Sphere, found: BallPresses | None, used: list[int],
+         depths: BallDepths | None, force: np.ndarray, sem: np.ndarray,
+         rejected: list[Rejection], nu: float, law: str, notes: list[str], t0: float
+         ) -> BallCalibration:
+    """E fitted to the presses with a depth and a force (two or more, else refused)."""
+    cfg = session.config
     if len(used) < 2:
         reasons = "; ".join(f"press {r.press}: {r.reason} ({r.detail})" for r in rejected[:4])
         raise InputError(f"{session.path}: {len(used)} of {len(used) + len(rejected)} presses "
                          f"have a depth and a force, too few to fit E"
                          + (f" ({reasons})" if reasons else ""))
-    depths = _stack(parts)
-    P = np.array([found.presses[i].force_n for i in used])
-    sem = np.array([found.presses[i].force_sem_n for i in used])
-    fit = fit_indenter(depths.depth_mm, P, ball, thickness_mm=cfg.gel_thickness_mm, law=law,
-                       contact=cfg.indenter_contact, nu=nu,
+    fit = fit_indenter(depths.depth_mm, force, ball, thickness_mm=cfg.gel_thickness_mm,
+                       law=law, contact=cfg.indenter_contact, nu=nu,
                        depth_std_mm=depths.depth_std_mm,
                        depth_shared_mm=depths.depth_shared_mm,
                        force_std_n=sem if np.all(np.isfinite(sem)) else None)
-    notes = list(session.notes) + list(found.warnings)
     return BallCalibration(session=session, indenter=ball, presses=found,
-                           used=np.array(used, np.int64), depths=depths, rejected=rejected,
-                           fit=fit, nu=float(nu), law=law, contact=ball._contact(
-                               cfg.indenter_contact), warnings=notes,
+                           used=np.array(used, np.int64), depths=depths,
+                           force_n=np.asarray(force, np.float64),
+                           force_sem_n=np.asarray(sem, np.float64), rejected=rejected,
+                           fit=fit, nu=float(nu), law=law,
+                           contact=ball._contact(cfg.indenter_contact), warnings=notes,
                            seconds=time.perf_counter() - t0)
 
 
@@ -209,7 +271,6 @@ def write_ball_calibration(cal: BallCalibration, out: str | Path) -> dict[str, P
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     cfg = cal.session.config
-    pr = [cal.presses.presses[i] for i in cal.used]
     d = cal.depths
     paths = {name: out / name for name in BALL_CALIBRATION_FILES}
     ind = {"radius_mm": cfg.indenter_radius_mm, "shape": "sphere", "contact": cal.contact}
@@ -220,31 +281,42 @@ def write_ball_calibration(cal: BallCalibration, out: str | Path) -> dict[str, P
         "# written by tactilevision calibrate: the ball of the session's presses\n"
         "[sensor]\n" + "".join(f"{k} = {v!r}\n" for k, v in sensor.items())
         + "\n[indenter]\n" + "".join(f"{k} = {json.dumps(v)}\n" for k, v in ind.items()))
-    write_measurements(paths["measurements.csv"], {
-        "depth_mm": d.depth_mm, "force_n": cal.force_n, "depth_std_mm": d.depth_std_mm,
-        "depth_shared_mm": d.depth_shared_mm, "force_sem_n": cal.force_sem_n,
-        "press": [p.press for p in pr], "time_s": [p.t_frame_s for p in pr],
-        "hold_s": [p.hold_s for p in pr], "fx_n": [p.fx_n for p in pr],
-        "fy_n": [p.fy_n for p in pr]},
-        thickness_mm=cfg.gel_thickness_mm, radius_mm=cfg.indenter_radius_mm)
-    names = [cal.session.frame_paths[p.frame].name for p in pr]
+    columns = {"depth_mm": d.depth_mm, "force_n": cal.force_n, "depth_std_mm": d.depth_std_mm,
+               "depth_shared_mm": d.depth_shared_mm, "force_sem_n": cal.force_sem_n}
+    if cal.presses is not None:
+        pr = [cal.presses.presses[i] for i in cal.used]
+        columns.update({"press": [p.press for p in pr], "time_s": [p.t_frame_s for p in pr],
+                        "hold_s": [p.hold_s for p in pr], "fx_n": [p.fx_n for p in pr],
+                        "fy_n": [p.fy_n for p in pr]})
+        press = [p.press for p in pr]
+    else:
+        columns["press"] = press = cal.used
+    write_measurements(paths["measurements.csv"], columns, thickness_mm=cfg.gel_thickness_mm,
+                       radius_mm=cfg.indenter_radius_mm)
+    names = [cal.session.frame_paths[f].name for f in cal.frames]
     rows = ["press,frame,frame_file,x_px,y_px,radius_px,contact_radius_mm,depth_mm,"
             "depth_std_mm,depth_shared_mm"]
-    rows += [f"{p.press},{p.frame},{n},{c[0]:.3f},{c[1]:.3f},{r:.3f},{a:.6g},{w:.6g},{s:.3g},"
-             f"{b:.3g}" for p, n, c, r, a, w, s, b in zip(
-                 pr, names, d.centres_px, d.radii_px, d.contact_radius_mm, d.depth_mm,
-                 d.depth_std_mm, d.depth_shared_mm, strict=True)]
+    rows += [f"{k},{f},{n},{c[0]:.3f},{c[1]:.3f},{r:.3f},{a:.6g},{w:.6g},{s:.3g},{b:.3g}"
+             for k, f, n, c, r, a, w, s, b in zip(
+                 press, cal.frames, names, d.centres_px, d.radii_px, d.contact_radius_mm,
+                 d.depth_mm, d.depth_std_mm, d.depth_shared_mm, strict=True)]
     paths["circles.csv"].write_text("\n".join(rows) + "\n")
     paths["rejected.csv"].write_text("press,reason,detail,t_frame_s,frame\n" + "".join(
-        f"{r.press},{r.reason},\"{r.detail.replace(chr(34), chr(39))}\",{r.t_frame_s:.4f},"
-        f"{r.frame}\n" for r in cal.rejected))
+        f"{r.press},{r.reason},\"{r.detail.replace(chr(34), chr(39))}\","
+        f"{_cell(r.t_frame_s)},{r.frame}\n" for r in cal.rejected))
     obj = cal.fit.to_json_dict()
-    obj.update({"source": "ball session: depths from the contact circles through a(w) "
-                          f"({cal.law}, {cal.contact}, nu = {cal.nu:g}), forces from the F/T "
-                          "log over each hold",
+    src = ("forces from the F/T log over each hold" if cal.presses is not None
+           else "forces m g of the dead weights")
+    obj.update({"source": "depths from the ball's contact circles through a(w) "
+                          f"({cal.law}, {cal.contact}, nu = {cal.nu:g}), {src}",
                 "session": str(cal.session.path), "n_rejected": len(cal.rejected),
-                "clock_offset_s": cal.presses.clock_offset_s,
-                "clock_source": cal.presses.clock_source, "warnings": cal.warnings,
-                "seconds": round(cal.seconds, 2)})
+                "clock_offset_s": None if cal.presses is None else cal.presses.clock_offset_s,
+                "clock_source": None if cal.presses is None else cal.presses.clock_source,
+                "warnings": cal.warnings, "seconds": round(cal.seconds, 2)})
     paths["fit.json"].write_text(json.dumps(obj, indent=2, allow_nan=False) + "\n")
     return paths
+
+
+def _cell(x: float) -> str:
+    """A time for a CSV cell: empty where there is none (dead weights)."""
+    return f"{x:.4f}" if np.isfinite(x) else ""

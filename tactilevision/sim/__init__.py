@@ -9,6 +9,7 @@ form (:func:`make_ball_session`)."""
 from ..fem import PressProfile, press_profile
 from ._ball_session import (
     make_ball_session,
+    make_dead_weight_session,
     sneddon_sphere,
     sneddon_sphere_radius,
     sphere_press_surface,
@@ -34,6 +35,7 @@ __all__ = [
     "fit_shading_table",
     "ft_log",
     "make_ball_session",
+    "make_dead_weight_session",
     "make_measurement_table",
     "make_session",
     "press_profile",

@@ -24,11 +24,12 @@ from scipy.optimize import brentq
 from tqdm import tqdm
 
 from .._checks import InputError, check_positive
+from ..io import STANDARD_GRAVITY
 from ._render import ShadingTable, taxim_shading
 from ._schedule import PressSchedule, depth_trajectory, ft_log, press_schedule
 
-__all__ = ["make_ball_session", "sneddon_sphere", "sneddon_sphere_radius",
-           "sphere_press_surface"]
+__all__ = ["make_ball_session", "make_dead_weight_session", "sneddon_sphere",
+           "sneddon_sphere_radius", "sphere_press_surface"]
 
 
 def sneddon_sphere(a_mm: np.ndarray, *, radius_mm: float, E_mpa: float, nu: float = 0.5,
@@ -180,3 +181,74 @@ def make_ball_session(folder: str | Path, *, radius_mm: float = 2.0, E_mpa: floa
         'shape = "sphere"\ncontact = "frictionless"\n\n[force_sensor]\nrate_hz = 1000\n'
         'window_samples = 200\n')
     return sched
+
+
+def make_dead_weight_session(folder: str | Path, masses_kg: tuple[float, ...], *,
+                             repeats: int = 3, radius_mm: float = 2.0, E_mpa: float = 1.0,
+                             thickness_mm: float = 100.0, pad_radius_mm: float = 1000.0,
+                             mass_std_kg: float = 1e-4, seed: int = 0) -> np.ndarray:
+    """Write a dead-weight folder (:func:`tactilevision.io.read_dead_weights`): one frame of
+    the ball at rest under each mass, its depth where Sneddon's force is m g.
+
+    Parameters
+    ----------
+    folder : str or Path
+        Created; must not hold a session already.
+    masses_kg : tuple of float
+        The masses on the gel, kg, > 0; each pressed `repeats` times at a random position.
+    repeats : int, default 3
+    radius_mm, E_mpa, thickness_mm, pad_radius_mm : float
+        As :func:`make_ball_session` (nu = 0.5).
+    mass_std_kg : float, default 1e-4
+        The stated uncertainty of each mass (written to ``mass_std_kg``; the masses are
+        exact).
+    seed : int, default 0
+
+    Returns
+    -------
+    depth_mm : (N,) float64 ndarray
+        Each frame's true depth, in the order of ``weights.csv``.
+
+    Raises
+    ------
+    InputError
+        For a folder that holds a session already, or a mass the ball cannot carry
+        within its equator.
+    """
+    folder = Path(folder)
+    if (folder / "session.toml").exists():
+        raise InputError(f"{folder} holds a session already")
+    table, reference = taxim_shading("gelsight")
+    s = table.mm_per_px
+    rng = np.random.default_rng(seed)
+    masses = np.repeat(np.asarray(masses_kg, np.float64), int(repeats))
+    P = masses * STANDARD_GRAVITY
+
+    def force_at(a: float) -> float:
+        return float(sneddon_sphere(a, radius_mm=radius_mm, E_mpa=E_mpa,
+                                    thickness_mm=thickness_mm)[1])
+
+    top = 0.95 * radius_mm
+    if np.any(masses <= 0) or np.any(P >= force_at(top)):
+        most = force_at(top) / STANDARD_GRAVITY
+        raise InputError(f"masses_kg must be positive and below {most:.4g} kg (the ball's "
+                         "contact past 0.95 R)")
+    (folder / "frames").mkdir(parents=True, exist_ok=True)
+    depth = np.empty(masses.size)
+    rows = ["frame,mass_kg,mass_std_kg"]
+    for i, p in enumerate(P):
+        a = brentq(lambda x, p=p: force_at(x) - p, 1e-9, top, xtol=1e-13)
+        depth[i] = float(sneddon_sphere(a, radius_mm=radius_mm, E_mpa=E_mpa)[0])
+        centre = (table.shape[1] / 2 + rng.uniform(-80, 80), table.shape[0] / 2
+                  + rng.uniform(-60, 60))
+        height = sphere_press_surface(table.shape, centre, a, radius_mm=radius_mm, mm_per_px=s)
+        cv2.imwrite(str(folder / "frames" / f"{i:03d}.png"),
+                    table.render(height, reference, noise_dn=2.0, rng=rng))
+        rows.append(f"{i:03d}.png,{masses[i]:.6g},{mass_std_kg:.3g}")
+    cv2.imwrite(str(folder / "reference.png"), reference)
+    (folder / "weights.csv").write_text("\n".join(rows) + "\n")
+    (folder / "session.toml").write_text(
+        f'[sensor]\nname = "gelsight"\nmm_per_px = {s}\ngel_thickness_mm = {thickness_mm}\n'
+        f'gel_radius_mm = {pad_radius_mm}\n\n[indenter]\nradius_mm = {radius_mm}\n'
+        'shape = "sphere"\ncontact = "frictionless"\n')
+    return depth
