@@ -74,6 +74,9 @@ class BallPresses:
         The frames' noise against the reference (:func:`.noise_level`).
     contact_area_px : (F,) int64 ndarray
         Pixels in contact in each frame.
+    press_spans_s : (P, 2) float64 ndarray
+        First and last frame in contact of every run of frames (presses and rejected
+        ones), camera clock, s.
     warnings : list of str
     """
 
@@ -83,6 +86,7 @@ class BallPresses:
     clock_source: str
     noise_sigma: float
     contact_area_px: np.ndarray = field(repr=False)
+    press_spans_s: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)), repr=False)
     warnings: list[str] = field(default_factory=list)
 
 
@@ -140,6 +144,8 @@ def find_ball_presses(session, *, min_contact_px: int = 200,
         (rejected if isinstance(got, Rejection) else presses).append(got)
     return BallPresses(presses=presses, rejected=rejected, clock_offset_s=offset,
                        clock_source=source, noise_sigma=sigma, contact_area_px=area,
+                       press_spans_s=np.array([(times[r[0]], times[r[-1]]) for r in runs],
+                                              np.float64).reshape(-1, 2),
                        warnings=list(warnings))
 
 

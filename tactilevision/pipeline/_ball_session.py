@@ -14,13 +14,13 @@ from __future__ import annotations
 import json
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 
 from .._checks import InputError
-from ..contact import BallPresses, Rejection, find_ball_presses
+from ..contact import BallPresses, Rejection, find_ball_presses, force_zero
 from ..io import DeadWeightSession, Session, read_dead_weights, read_session, write_measurements
 from ..mechanics import IndenterFit, Sphere, fit_indenter
 from ._ball import BallDepths, ball_press_depths
@@ -131,6 +131,9 @@ def calibrate_ball_session(session: Session | str | Path, *, nu: float = 0.5,
     middle of the force window, s = ``mm_per_px``; its random and shared errors
     (:class:`BallDepths`) enter the fit as errors in the depths and a shared depth
     error (``depth_shared_mm``), and the F/T window's standard error as the force's.
+    The F/T's zero is read from the rests between the presses and taken off the forces
+    (its line over the session where it drifts, else its mean; as ``calibrate_session``'s
+    ``ft_zero='auto'``).
     """
     t0 = time.perf_counter()
     if not isinstance(session, Session):
@@ -147,8 +150,28 @@ def calibrate_ball_session(session: Session | str | Path, *, nu: float = 0.5,
     rejected = sorted(rejected + list(found.rejected), key=lambda r: r.press)
     force = np.array([found.presses[i].force_n for i in used])
     sem = np.array([found.presses[i].force_sem_n for i in used])
+    force, zero_note = _take_off_zero(session, found, used, force)
     return _fit(session, ball, found, used, depths, force, sem, rejected, nu, law,
-                list(session.notes) + list(found.warnings), t0)
+                list(session.notes) + list(found.warnings) + [zero_note], t0)
+
+
+def _take_off_zero(session: Session, found: BallPresses, used: list[int],
+                   force: np.ndarray) -> tuple[np.ndarray, str]:
+    """The F/T's zero, read between the presses (:func:`~tactilevision.contact.force_zero`:
+    its line where it drifts, else its mean), taken off each press's force; and the note
+    saying so."""
+    times = session.frame_times_s
+    period = float(np.median(np.diff(times))) if times.size > 1 else 0.0
+    off = found.clock_offset_s
+    contact = found.press_spans_s + off + np.array([-period, period])
+    zero = force_zero(session.force_times_s, session.forces_n[:, 2], contact)
+    if zero is None:
+        return force, ("the F/T's zero could not be read: no settled rest between the "
+                       "presses; the forces are as the F/T read them")
+    if zero.drifts:
+        zero = replace(zero, subtracted="drift")
+    at = np.array([found.presses[i].t_frame_s + off for i in used])
+    return force - np.asarray(zero.taken_off(at), np.float64), zero.sentence()
 
 
 def calibrate_dead_weights(session: DeadWeightSession | str | Path, *, nu: float = 0.5,

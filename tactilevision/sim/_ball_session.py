@@ -99,7 +99,8 @@ def make_ball_session(folder: str | Path, *, radius_mm: float = 2.0, E_mpa: floa
                       contact_radii_mm: tuple[float, ...] = (0.6, 0.8, 1.0, 1.2),
                       repeats: int = 2, fps: float = 20.0, clock_offset_s: float = 0.05,
                       table: ShadingTable | None = None, reference: np.ndarray | None = None,
-                      seed: int = 3, progress: bool = False) -> PressSchedule:
+                      ft_bias_n: float = 0.0, seed: int = 3,
+                      progress: bool = False) -> PressSchedule:
     """Write a ball's session folder (formats.md section 1, ``[indenter] shape = "sphere"``).
 
     Parameters
@@ -119,6 +120,8 @@ def make_ball_session(folder: str | Path, *, radius_mm: float = 2.0, E_mpa: floa
         F/T clock minus camera clock (not written to session.toml: calibrate finds it).
     table, reference : optional
         The shading table and no-contact frame (default :func:`taxim_shading`).
+    ft_bias_n : float, default 0.0
+        A constant offset of the F/T's fz, N (a sensor tared with something else on it).
     seed : int, default 3
     progress : bool, default False
 
@@ -172,7 +175,7 @@ def make_ball_session(folder: str | Path, *, radius_mm: float = 2.0, E_mpa: floa
                               thickness_mm=thickness_mm)[1]
 
     t_ft, f = ft_log(sched, force, duration_s=duration, clock_offset_s=clock_offset_s,
-                     seed=seed)
+                     bias_n=(0.0, 0.0, float(ft_bias_n)), seed=seed)
     np.savetxt(folder / "forces.csv", np.column_stack([t_ft, f]), delimiter=",", fmt="%.6f",
                header="t_s,fx_n,fy_n,fz_n", comments="")
     (folder / "session.toml").write_text(
