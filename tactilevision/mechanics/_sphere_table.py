@@ -139,7 +139,7 @@ def _reached(model: str, contact: str) -> np.ndarray:
 def table_reach(radius_over_h: float, model: str = "neo_hookean",
                 contact: str = "frictionless") -> float:
     """Deepest w/h the table answers at R/h: :func:`sphere_reach`, or less where a sweep of
-    a neighbouring R/h stopped early.
+    a neighbouring R/h stopped early (between two nodes both bound it; on a node, its own).
 
     Raises
     ------
@@ -149,8 +149,12 @@ def table_reach(radius_over_h: float, model: str = "neo_hookean",
     data = _load()
     rg = data["radius_over_h"].astype(np.float64)
     reached = _reached(model, contact)
-    i = int(np.clip(np.searchsorted(rg, float(radius_over_h)) - 1, 0, rg.size - 2))
-    return float(min(sphere_reach(radius_over_h), reached[i], reached[i + 1]))
+    ratio = float(radius_over_h)
+    node = np.flatnonzero(np.abs(rg / ratio - 1.0) <= 1e-9)
+    if node.size:                      # on a node the interpolant is that node's values
+        return float(min(sphere_reach(ratio), reached[node[0]]))
+    i = int(np.clip(np.searchsorted(rg, ratio) - 1, 0, rg.size - 2))
+    return float(min(sphere_reach(ratio), reached[i], reached[i + 1]))
 
 
 def _lookup(kind: str, model: str, contact: str, radius_over_h: float, nu: float,
