@@ -46,8 +46,11 @@ def test_depths_and_E_from_the_frames(weights):
 def test_cli_calibrate_reads_a_dead_weight_folder(weights, tmp_path, capsys):
     folder, _ = weights
     out = tmp_path / "cal"
-    assert main(["calibrate", str(folder), "--out", str(out), "--law", "linear"]) == 0
-    assert "dead weights: P = m g" in capsys.readouterr().out
+    assert main(["calibrate", str(folder), "--out", str(out), "--law", "linear",
+                 "--depth-rule", "nominal"]) == 0
+    text = capsys.readouterr().out
+    assert "dead weights: P = m g" in text
+    assert "--depth-rule nominal is a gauge block's option" in text
     obj = json.loads((out / "fit.json").read_text())
     assert obj["clock_offset_s"] is None and obj["n_presses"] == 15
     assert "dead weights" in obj["source"]

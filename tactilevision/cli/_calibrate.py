@@ -172,6 +172,15 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _unused_options(args: argparse.Namespace) -> list[str]:
+    """Warnings for the gauge-block options a ball's calibration does not use."""
+    defaults = {"depth_rule": "auto", "beta_table": "fem", "relaxation": "auto",
+                "bevel_threshold": "auto", "ft_zero": "auto"}
+    return [f"--{k.replace('_', '-')} {getattr(args, k)} is a gauge block's option; a ball's "
+            "calibration does not use it" for k, v in defaults.items()
+            if getattr(args, k, v) != v]
+
+
 def _dead_weights(folder: Path) -> bool:
     """A dead-weight folder: weights.csv and no F/T log."""
     return (folder / "weights.csv").is_file() and not (folder / "forces.csv").exists()
@@ -212,7 +221,7 @@ def _report_ball(cal, paths: dict, out: Path, args: argparse.Namespace) -> int:
         lines.append((f"  clock offset {cal.presses.clock_offset_s:.4f} s "
                       f"({cal.presses.clock_source}); " if cal.presses is not None else
                       "  dead weights: P = m g; ") + f"{cal.seconds:.1f} s")
-        lines += [f"  warning: {w}" for w in cal.warnings]
+        lines += [f"  warning: {w}" for w in cal.warnings + _unused_options(args)]
         lines.append(f"  wrote {', '.join(p.name for p in paths.values())} in {out}")
         print("\n".join(lines))
     return 0
