@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from tactilevision import InputError
 from tactilevision.mechanics import (
     Sphere,
     diagnose_indenter,
@@ -65,7 +66,11 @@ def feats(figure: Path | None) -> None:
         for law in ("linear", "neo_hookean"):
             for contact in ("tied", "frictionless"):
                 t0 = time.perf_counter()
-                f = fit_indenter(w, P, ball, thickness_mm=4.0, law=law, contact=contact)
+                try:
+                    f = fit_indenter(w, P, ball, thickness_mm=4.0, law=law, contact=contact)
+                except InputError as exc:        # a pad sweep whose Newton fails: said so
+                    print(f"   pad {pad:6.3f} mm {law:11s} {contact:12s} not computed: {exc}")
+                    continue
                 print(f"   pad {pad:6.3f} mm {law:11s} {contact:12s} E {f.E_mpa:.4f} MPa "
                       f"[{f.E_ci95_mpa[0]:.3f}, {f.E_ci95_mpa[1]:.3f}], rmse "
                       f"{f.rmse_n * 1e3:6.1f} mN, apparent E "
