@@ -122,6 +122,11 @@ def test_bad_ball_sessions_refused_naming_the_key(ball_session, tmp_path):
     (bad / "session.toml").write_text(toml.replace("radius_mm = 2.0", "radius_mm = -2.0"))
     with pytest.raises(InputError, match="radius_mm"):
         calibrate_ball_session(bad)
+    # a force window longer than the holds: every press rejected, each saying why
+    (bad / "session.toml").write_text(toml.replace("window_samples = 200",
+                                                   "window_samples = 2000"))
+    with pytest.raises(InputError, match=r"too few to fit E \(press 0: hold too short"):
+        calibrate_ball_session(bad, law="linear")
     # a ball smaller than its circles: every press refused by its circle, nothing to fit
     (bad / "session.toml").write_text(toml.replace("radius_mm = 2.0", "radius_mm = 0.5"))
     with pytest.raises(InputError, match="too few to fit"):
