@@ -24,54 +24,14 @@ import sys
 import tempfile
 from pathlib import Path
 
-import cv2
 import numpy as np
-from scipy.optimize import brentq
 
-from tactilevision.io import STANDARD_GRAVITY
 from tactilevision.pipeline import calibrate_dead_weights
-from tactilevision.sim import sneddon_sphere, sphere_press_surface
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-from _data import flat_gel_taxim
+from _data import flat_gel_taxim, taxim_dead_weights
 
-R, H, PAD, E = 2.0, 100.0, 1000.0, 1.0
-MASSES = (0.02, 0.05, 0.1, 0.15, 0.2)
-S, SHAPE = 0.0295, (480, 640)
-
-
-def to8(rgb: np.ndarray) -> np.ndarray:
-    return cv2.cvtColor((np.clip(rgb, 0, 1) * 255).round().astype(np.uint8),
-                        cv2.COLOR_RGB2BGR)
-
-
-def write_folder(sim, folder: Path, repeats: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
-    """A dead-weight folder rendered by Taxim; the true depths and contact radii."""
-    rng = np.random.default_rng(seed)
-    (folder / "frames").mkdir(parents=True)
-    ref = to8(sim.render(np.full(SHAPE, 5.0), press_depth=None))
-    cv2.imwrite(str(folder / "reference.png"), ref)
-    masses = np.repeat(MASSES, repeats)
-    w_true, a_true, rows = [], [], ["frame,mass_kg,mass_std_kg"]
-    for i, m in enumerate(masses):
-        a = brentq(lambda x, m=m: float(sneddon_sphere(x, radius_mm=R, E_mpa=E,
-                                                       thickness_mm=H)[1])
-                   - m * STANDARD_GRAVITY, 1e-6, 0.95 * R, xtol=1e-13)
-        w = float(sneddon_sphere(a, radius_mm=R, E_mpa=E)[0])
-        centre = (SHAPE[1] / 2 + rng.uniform(-80, 80), SHAPE[0] / 2 + rng.uniform(-60, 60))
-        u = sphere_press_surface(SHAPE, centre, a, radius_mm=R, mm_per_px=S)
-        frame = to8(sim.render(w - u, press_depth=w))
-        noise = rng.normal(0.0, 1.5, frame.shape)
-        frame = np.clip(frame + noise, 0, 255).round().astype(np.uint8)
-        cv2.imwrite(str(folder / "frames" / f"{i:03d}.png"), frame)
-        rows.append(f"{i:03d}.png,{m:.6g},0.0001")
-        w_true.append(w)
-        a_true.append(a)
-    (folder / "weights.csv").write_text("\n".join(rows) + "\n")
-    (folder / "session.toml").write_text(
-        f"[sensor]\nmm_per_px = {S}\ngel_thickness_mm = {H}\ngel_radius_mm = {PAD}\n\n"
-        f'[indenter]\nradius_mm = {R}\nshape = "sphere"\ncontact = "frictionless"\n')
-    return np.array(w_true), np.array(a_true)
+E = 1.0
 
 
 def main() -> None:
@@ -83,7 +43,7 @@ def main() -> None:
     with flat_gel_taxim() as sim, tempfile.TemporaryDirectory() as tmp:
         for seed in range(args.seeds):
             folder = Path(tmp) / f"w{seed}"
-            w, a = write_folder(sim, folder, args.repeats, seed)
+            w, a = taxim_dead_weights(sim, folder, E_mpa=E, repeats=args.repeats, seed=seed)
             cal = calibrate_dead_weights(folder, nu=0.5, law="linear")
             d = cal.depths
             err = d.depth_mm - w[cal.used]
@@ -93,7 +53,8 @@ def main() -> None:
             covered += inside
             print(f"seed {seed}: {len(cal.used)} of {w.size} frames read")
             for i, k in enumerate(cal.used):
-                print(f"   a {a[k]:.3f} mm ({a[k] / S:5.1f} px): circle {d.radii_px[i]:5.1f} px "
+                print(f"   a {a[k]:.3f} mm ({a[k] / 0.0295:5.1f} px): circle "
+                      f"{d.radii_px[i]:5.1f} px "
                       f"({100 * (d.contact_radius_mm[i] / a[k] - 1):+5.1f} %), depth "
                       f"{1e3 * w[k]:6.1f} um, error {1e3 * err[i]:+6.1f} um "
                       f"(stated sd {1e3 * d.depth_std_mm[i]:.1f}, shared "

@@ -273,3 +273,50 @@ def plan_sessions(d, n: int, seed: int) -> np.ndarray:
                                 depth_std_mm=np.full(w.size, sd))
             out[i] = f.E_mpa, f.nu
     return out
+
+
+def taxim_dead_weights(sim, folder: Path, *, E_mpa: float = 1.0,
+                       masses_kg: tuple[float, ...] = (0.02, 0.05, 0.1, 0.15, 0.2),
+                       repeats: int = 3, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """A dead-weight folder (``tactilevision.io.read_dead_weights``) drawn by Taxim's own
+    renderer `sim` (:func:`flat_gel_taxim`): a 2 mm ball on a 100 mm gel, for each mass
+    Sneddon's contact radius a where the force is m g, its depth w and the gel's surface u
+    (``tactilevision.sim.sphere_press_surface``); Taxim renders an indenter whose lower
+    face is that surface pressed to w, so its gel takes u (none of our shading), plus 1.5
+    grey levels of noise. Returns the true depths and contact radii, mm."""
+    import cv2
+    from scipy.optimize import brentq
+
+    from tactilevision.io import STANDARD_GRAVITY
+    from tactilevision.sim import sneddon_sphere, sphere_press_surface
+
+    R, H, s, shape = 2.0, 100.0, 0.0295, (480, 640)
+
+    def to8(rgb):
+        return cv2.cvtColor((np.clip(rgb, 0, 1) * 255).round().astype(np.uint8),
+                            cv2.COLOR_RGB2BGR)
+
+    rng = np.random.default_rng(seed)
+    (folder / "frames").mkdir(parents=True)
+    cv2.imwrite(str(folder / "reference.png"),
+                to8(sim.render(np.full(shape, 5.0), press_depth=None)))
+    masses = np.repeat(np.asarray(masses_kg, np.float64), repeats)
+    w_true, a_true, rows = [], [], ["frame,mass_kg,mass_std_kg"]
+    for i, m in enumerate(masses):
+        a = brentq(lambda x, m=m: float(sneddon_sphere(x, radius_mm=R, E_mpa=E_mpa,
+                                                       thickness_mm=H)[1])
+                   - m * STANDARD_GRAVITY, 1e-6, 0.95 * R, xtol=1e-13)
+        w = float(sneddon_sphere(a, radius_mm=R, E_mpa=E_mpa)[0])
+        centre = (shape[1] / 2 + rng.uniform(-80, 80), shape[0] / 2 + rng.uniform(-60, 60))
+        u = sphere_press_surface(shape, centre, a, radius_mm=R, mm_per_px=s)
+        frame = to8(sim.render(w - u, press_depth=w)) + rng.normal(0.0, 1.5, (*shape, 3))
+        cv2.imwrite(str(folder / "frames" / f"{i:03d}.png"),
+                    np.clip(frame, 0, 255).round().astype(np.uint8))
+        rows.append(f"{i:03d}.png,{m:.6g},0.0001")
+        w_true.append(w)
+        a_true.append(a)
+    (folder / "weights.csv").write_text("\n".join(rows) + "\n")
+    (folder / "session.toml").write_text(
+        f"[sensor]\nmm_per_px = {s}\ngel_thickness_mm = {H}\ngel_radius_mm = 1000.0\n\n"
+        f'[indenter]\nradius_mm = {R}\nshape = "sphere"\ncontact = "frictionless"\n')
+    return np.array(w_true), np.array(a_true)
