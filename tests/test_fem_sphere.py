@@ -32,6 +32,11 @@ def test_thick_layer_is_hertz():
     assert res.hertz_ratio / (1 + DIMITRIADIS_12[0] * chi) == pytest.approx([1, 1], abs=0.01)
     assert res.hertz_ratio == pytest.approx([1, 1], abs=0.01)       # Hertz itself
     assert res.contact_radius / np.sqrt(R * w) == pytest.approx([1, 1], abs=0.01)
+    # the disk cache alone: this sweep back, another one not computed
+    hit = sphere_indentation(R, 0.5, w, model="linear", profile="paraboloid", cache="only")
+    assert hit is not None and np.array_equal(hit.hertz_ratio, res.hertz_ratio)
+    assert sphere_indentation(R, 0.5, w * 1.5, model="linear", profile="paraboloid",
+                              cache="only") is None
 
 
 def test_bonded_layer_follows_dimitriadis_in_its_range():

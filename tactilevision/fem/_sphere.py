@@ -359,8 +359,8 @@ def sphere_indentation(radius_over_h: float, nu: float, w_over_h: np.ndarray, *,
                        model: str = "neo_hookean", contact: str = "frictionless",
                        pad_radius_over_h: float = 20.0, surface_cell: float | None = None,
                        steps_per_depth: int = 2, penalty: float = 1e3,
-                       profile: str = "sphere", cache: bool = True,
-                       cache_dir: str | os.PathLike | None = None) -> SphereIndentation:
+                       profile: str = "sphere", cache: bool | str = True,
+                       cache_dir: str | os.PathLike | None = None) -> SphereIndentation | None:
     """P(w) and a(w) of a rigid sphere pressed into a bonded layer, linear or Neo-Hookean.
 
     Parameters
@@ -391,9 +391,10 @@ def sphere_indentation(radius_over_h: float, nu: float, w_over_h: np.ndarray, *,
         The indenter's shape; 'paraboloid' (z = r^2 / 2R, Hertz's
         approximation, ``model='linear'`` only) is for checks against
         closed forms built on it (Hertz, Dimitriadis et al. 2002).
-    cache : bool, default True
+    cache : bool or 'only', default True
         Read and write complete sweeps in the disk cache (as
-        :func:`~tactilevision.fem.neo_hookean_indentation`).
+        :func:`~tactilevision.fem.neo_hookean_indentation`); ``'only'``: the
+        cached sweep, or None without computing one.
     cache_dir : path-like, optional
 
     Returns
@@ -436,7 +437,7 @@ def sphere_indentation(radius_over_h: float, nu: float, w_over_h: np.ndarray, *,
                          f"(Hertz's approximation, for checks), got {profile!r}")
     if cache:
         hit = read_sweep(inputs, SphereIndentation, cache_dir)
-        if hit is not None:
+        if hit is not None or cache == "only":
             return hit
     res = _sweep(float(radius_over_h), float(nu), w_req, model, contact,
                  float(pad_radius_over_h), float(surface_cell), int(steps_per_depth),

@@ -313,17 +313,22 @@ def _pad_sweep(radius_over_h: float, nu: float, pad_over_h: float, law: str, con
     # folds first). R/h = 1.875, nu = 0.5, frictionless, pad 3.23 h: the first failed at
     # w/h = 0.49, the second reached 0.5.
     cell = min(0.0625, float(np.sqrt(radius_over_h * grid[0])) / 12.0)
-    for factor, steps in ((1.0, 2), (1.0, 4), (1.6, 4)):
+    attempts = [dict(model=law, contact=contact, pad_radius_over_h=pad_over_h,
+                     steps_per_depth=steps, surface_cell=min(0.125, factor * cell))
+                for factor, steps in ((1.0, 2), (1.0, 4), (1.6, 4))]
+    # a retry that converged before is in the disk cache; the attempts that failed before
+    # it are not (only complete sweeps are kept), so it is looked for first
+    res = next((hit for kw in attempts if (hit := sphere_indentation(
+        radius_over_h, nu, grid, cache="only", **kw)) is not None), None)
+    for kw in attempts if res is None else ():
         with warnings.catch_warnings():
             warnings.simplefilter("error", RuntimeWarning)
             try:
-                res = sphere_indentation(radius_over_h, nu, grid, model=law, contact=contact,
-                                         pad_radius_over_h=pad_over_h, steps_per_depth=steps,
-                                         surface_cell=min(0.125, factor * cell))
+                res = sphere_indentation(radius_over_h, nu, grid, **kw)
                 break
             except RuntimeWarning as exc:
                 why = str(exc)
-    else:
+    if res is None:
         raise InputError(f"the FEM sweep of the sphere on the pad did not converge on three "
                          f"meshes: {why}")
     s = np.concatenate([[0.0], np.sqrt(res.w_over_h)])
