@@ -26,8 +26,7 @@ from ..mechanics import IndenterFit, Sphere, fit_indenter
 from ._ball import BallDepths, ball_press_depths
 
 __all__ = ["BALL_CALIBRATION_FILES", "BallCalibration", "ball_indenter", "calibrate_ball_session",
-           "calibrate_dead_weights",
-           "write_ball_calibration"]
+           "calibrate_dead_weights", "write_ball_calibration"]
 
 #: The files :func:`write_ball_calibration` writes.
 BALL_CALIBRATION_FILES = ("measurements.csv", "session.toml", "circles.csv", "rejected.csv",
