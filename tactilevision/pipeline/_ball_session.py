@@ -35,7 +35,7 @@ BALL_CALIBRATION_FILES = ("measurements.csv", "session.toml", "circles.csv", "re
 
 @dataclass(frozen=True)
 class BallCalibration:
-    """What :func:`calibrate_ball_session` found.
+    """What :func:`calibrate_ball_session` (or :func:`calibrate_dead_weights`) found.
 
     Attributes
     ----------
