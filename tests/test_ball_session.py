@@ -86,6 +86,7 @@ def test_cli_calibrate_writes_a_table_fit_reads_back(ball_session, tmp_path, cap
     table = read_measurements(out / "measurements.csv")
     assert table.indenter["shape"] == "sphere" and "depth_shared_mm" not in table.covariates
     assert len(table) == 8 and (out / "circles.csv").read_text().count("\n") == 9
+    assert (out / "calibration.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert main(["fit", str(out / "measurements.csv"), "--law", "linear", "--nu", "0.5",
                  "--json", str(tmp_path / "refit.json")]) == 0
     refit = json.loads((tmp_path / "refit.json").read_text())

@@ -47,7 +47,8 @@ def test_cli_calibrate_reads_a_dead_weight_folder(weights, tmp_path, capsys):
     folder, _ = weights
     out = tmp_path / "cal"
     assert main(["calibrate", str(folder), "--out", str(out), "--law", "linear",
-                 "--depth-rule", "nominal"]) == 0
+                 "--depth-rule", "nominal", "--no-report"]) == 0
+    assert (out / "fit.json").is_file() and not (out / "calibration.png").exists()
     text = capsys.readouterr().out
     assert "dead weights: P = m g" in text
     assert "--depth-rule nominal is a gauge block's option" in text

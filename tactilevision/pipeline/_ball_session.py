@@ -23,6 +23,7 @@ from .._checks import InputError
 from ..contact import BallPresses, Rejection, find_ball_presses, force_zero
 from ..io import DeadWeightSession, Session, read_dead_weights, read_session, write_measurements
 from ..mechanics import IndenterFit, Sphere, fit_indenter
+from ..viz import ball_calibration_figure
 from ._ball import BallDepths, ball_press_depths
 
 __all__ = ["BALL_CALIBRATION_FILES", "BallCalibration", "ball_indenter", "calibrate_ball_session",
@@ -30,7 +31,7 @@ __all__ = ["BALL_CALIBRATION_FILES", "BallCalibration", "ball_indenter", "calibr
 
 #: The files :func:`write_ball_calibration` writes.
 BALL_CALIBRATION_FILES = ("measurements.csv", "session.toml", "circles.csv", "rejected.csv",
-                          "fit.json")
+                          "fit.json", "calibration.png")
 
 
 @dataclass(frozen=True)
@@ -266,7 +267,8 @@ def _stack(parts: list[BallDepths]) -> BallDepths:
                       radius_bias_px=parts[0].radius_bias_px, notes=parts[0].notes)
 
 
-def write_ball_calibration(cal: BallCalibration, out: str | Path) -> dict[str, Path]:
+def write_ball_calibration(cal: BallCalibration, out: str | Path, *,
+                           figure: bool = True) -> dict[str, Path]:
     """Write a ball session's calibration folder.
 
     Parameters
@@ -274,6 +276,9 @@ def write_ball_calibration(cal: BallCalibration, out: str | Path) -> dict[str, P
     cal : BallCalibration
     out : str or Path
         The folder (created; files of :data:`BALL_CALIBRATION_FILES` in it are replaced).
+    figure : bool, default True
+        Also draw ``calibration.png``
+        (:func:`tactilevision.viz.ball_calibration_figure`).
 
     Returns
     -------
@@ -288,7 +293,8 @@ def write_ball_calibration(cal: BallCalibration, out: str | Path) -> dict[str, P
     radius, contact, pad), so that ``fit``, ``diagnose`` and ``validate`` read it
     again with the same noise model; ``circles.csv`` (each press's frame, circle and
     depth); ``rejected.csv``; ``fit.json`` (``fit --json``'s object of a ball, with
-    ``source``, ``n_rejected`` and ``clock_offset_s``).
+    ``source``, ``n_rejected`` and ``clock_offset_s``); ``calibration.png`` (force
+    against depth with the fitted law, each press's apparent E).
     """
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -336,6 +342,10 @@ def write_ball_calibration(cal: BallCalibration, out: str | Path) -> dict[str, P
                 "clock_source": None if cal.presses is None else cal.presses.clock_source,
                 "warnings": cal.warnings, "seconds": round(cal.seconds, 2)})
     paths["fit.json"].write_text(json.dumps(obj, indent=2, allow_nan=False) + "\n")
+    if figure:
+        ball_calibration_figure(cal, paths["calibration.png"])
+    else:
+        del paths["calibration.png"]
     return paths
 
 

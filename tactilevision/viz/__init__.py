@@ -24,6 +24,10 @@ from ._viewer import downsample_map, viewer_figure, write_viewer
 __all__ += ["downsample_map", "viewer_figure", "write_viewer"]
 
 # a ball's diagnosis (diagnose of a sphere's table)
-from ._indenter import indenter_figure, write_indenter_report  # noqa: E402
+from ._indenter import (  # noqa: E402
+    ball_calibration_figure,
+    indenter_figure,
+    write_indenter_report,
+)
 
-__all__ += ["indenter_figure", "write_indenter_report"]
+__all__ += ["ball_calibration_figure", "indenter_figure", "write_indenter_report"]
