@@ -82,7 +82,14 @@ def test_cli_calibrate_writes_a_table_fit_reads_back(ball_session, tmp_path, cap
                  "--no-progress", "--json", str(tmp_path / "fit.json")]) == 0
     text = capsys.readouterr().out
     assert "contact circles" in text and "8 presses fitted" in text
+    # a rerun replaces its own files without --overwrite
+    assert main(["calibrate", str(folder), "--out", str(out), "--law", "linear",
+                 "--no-progress"]) == 0
+    capsys.readouterr()
     obj = json.loads((out / "fit.json").read_text())
+    contract = ("E_mpa", "nu", "c_n_per_mm", "beta", "E_ci95_mpa", "nu_ci95", "rmse_n",
+                "n_presses", "effects", "effect_params")
+    assert all(k in obj for k in contract) and obj["effects"] == [] and obj["beta"] is None
     table = read_measurements(out / "measurements.csv")
     assert table.indenter["shape"] == "sphere" and "depth_shared_mm" not in table.covariates
     assert len(table) == 8 and (out / "circles.csv").read_text().count("\n") == 9
@@ -117,6 +124,8 @@ def test_bad_ball_sessions_refused_naming_the_key(ball_session, tmp_path):
     bad = tmp_path / "bad"
     shutil.copytree(folder, bad)
     toml = (bad / "session.toml").read_text()
+    (bad / "session.toml").write_text(toml + "\n[gauge_block]\ndepths_mm = [0.2]\n")
+    assert any("[gauge_block] is not used for a ball" in n for n in read_session(bad).notes)
     (bad / "session.toml").write_text(toml.replace('shape = "sphere"', 'shape = "ball"'))
     with pytest.raises(InputError, match=r"\[indenter\] shape must be"):
         read_session(bad)

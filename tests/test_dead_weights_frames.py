@@ -6,6 +6,7 @@ authors' GelSight table; none of it is our FEM."""
 from __future__ import annotations
 
 import json
+import shutil
 
 import numpy as np
 import pytest
@@ -45,6 +46,12 @@ def test_depths_and_E_from_the_frames(weights):
 
 def test_cli_calibrate_reads_a_dead_weight_folder(weights, tmp_path, capsys):
     folder, _ = weights
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "fit.json").write_text("my own notes")
+    # a file tactilevision did not write is not replaced without --overwrite
+    assert main(["calibrate", str(folder), "--out", str(mine), "--law", "linear"]) == 2
+    assert (mine / "fit.json").read_text() == "my own notes"
     out = tmp_path / "cal"
     assert main(["calibrate", str(folder), "--out", str(out), "--law", "linear",
                  "--depth-rule", "nominal", "--no-report"]) == 0
@@ -76,6 +83,16 @@ def test_bad_weights_named_by_line(weights, tmp_path, row, message):
     # the CLI: exit 2, one sentence, nothing written
     assert main(["calibrate", str(bad), "--out", str(tmp_path / "out")]) == 2
     assert not (tmp_path / "out").exists()
+
+
+def test_an_unknown_column_is_warned(weights, tmp_path):
+    folder, _ = weights
+    odd = tmp_path / "odd"
+    shutil.copytree(folder, odd)
+    text = (odd / "weights.csv").read_text().splitlines()
+    (odd / "weights.csv").write_text("\n".join([text[0] + ",colour"]
+                                               + [r + ",red" for r in text[1:]]) + "\n")
+    assert any("column colour is not read" in n for n in read_dead_weights(odd).notes)
 
 
 def test_a_flat_punch_is_not_a_dead_weight(weights, tmp_path):

@@ -193,14 +193,16 @@ def _run_dead_weights(args: argparse.Namespace) -> int:
     check_output_folder(out)
     check_overwrite(out, BALL_CALIBRATION_FILES, overwrite=args.overwrite)
     cal = calibrate_dead_weights(session, nu=args.nu, law=args.law)
-    return _report_ball(cal, write_ball_calibration(cal, out, figure=not args.no_report),
+    return _report_ball(cal, write_ball_calibration(cal, out, figure=not args.no_report,
+                                                   overwrite=args.overwrite),
                         out, args)
 
 
 def _run_ball(session, out: Path, args: argparse.Namespace, progress) -> int:
     """``calibrate`` of a ball's session: depths from the contact circles."""
     cal = calibrate_ball_session(session, nu=args.nu, law=args.law, progress=progress)
-    return _report_ball(cal, write_ball_calibration(cal, out, figure=not args.no_report),
+    return _report_ball(cal, write_ball_calibration(cal, out, figure=not args.no_report,
+                                                   overwrite=args.overwrite),
                         out, args)
 
 

@@ -130,6 +130,9 @@ def read_dead_weights(path: str | Path) -> DeadWeightSession:
             raise InputError(f"frame {p} is {size[0]} x {size[1]} px, the reference "
                              f"{reference.shape[1]} x {reference.shape[0]} px")
         paths.append(p)
+    notes = _unknown_keys(folder) + [
+        f"{table} line 1: column {c} is not read (weights.csv: frame, mass_kg, mass_std_kg)"
+        for c in header if c not in ("frame", "mass_kg", "mass_std_kg")]
     return DeadWeightSession(path=folder, config=config, reference=reference,
                              frame_paths=tuple(paths), mass_kg=mass, mass_std_kg=std,
-                             notes=tuple(_unknown_keys(folder)))
+                             notes=tuple(notes))

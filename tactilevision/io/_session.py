@@ -575,6 +575,10 @@ def read_session(path: str | Path) -> Session:
                        f"window_samples = {config.window_samples} is more than the {t.size} "
                        f"samples of {folder / 'forces.csv'}: no press can be certified"]
     presses = _read_presses(folder, len(config.depths_mm))
+    if config.indenter_shape == "sphere" and config.depths_mm:
+        force_notes = [*force_notes, f"{folder / 'session.toml'}: [gauge_block] is not used "
+                       "for a ball ([indenter] shape = \"sphere\"): each depth is read from "
+                       "the ball's contact circle"]
     return Session(path=folder, config=config, reference=reference, frame_paths=frame_paths,
                    frame_times_s=frame_times, force_times_s=t, forces_n=f, torques_nmm=torques,
                    presses=presses, notes=tuple(_unknown_keys(folder) + notes + force_notes))

@@ -99,7 +99,10 @@ class IndenterFit:
     notes: tuple[str, ...] = ()
 
     def to_json_dict(self) -> dict[str, Any]:
-        """JSON-ready dict (arrays as lists, NaN as None)."""
+        """JSON-ready dict (arrays as lists, NaN as None), with the keys every ``fit
+        --json`` object carries (formats.md section 3): ``effects`` (none: a ball's
+        fit has no catalogue effects), ``effect_params``, and ``c_n_per_mm`` and
+        ``beta`` (eq. 5's intercept and stiffening, a flat punch's: null here)."""
         def clean(v: Any) -> Any:
             if isinstance(v, np.ndarray):
                 return [clean(x) for x in v.tolist()]
@@ -111,7 +114,9 @@ class IndenterFit:
                 return bool(v)
             return v
 
-        return {k: clean(getattr(self, k)) for k in self.__dataclass_fields__}
+        out = {k: clean(getattr(self, k)) for k in self.__dataclass_fields__}
+        out.update(c_n_per_mm=None, beta=None, effects=[], effect_params={})
+        return out
 
 
 def apparent_modulus(depth_mm: np.ndarray, force_n: np.ndarray, indenter: Indenter, *,

@@ -21,7 +21,14 @@ import numpy as np
 
 from .._checks import InputError
 from ..contact import BallPresses, Rejection, find_ball_presses, force_zero
-from ..io import DeadWeightSession, Session, read_dead_weights, read_session, write_measurements
+from ..io import (
+    DeadWeightSession,
+    Session,
+    StagedOutput,
+    read_dead_weights,
+    read_session,
+    write_measurements,
+)
 from ..mechanics import IndenterFit, Sphere, fit_indenter
 from ..viz import ball_calibration_figure
 from ._ball import BallDepths, ball_press_depths
@@ -267,18 +274,22 @@ def _stack(parts: list[BallDepths]) -> BallDepths:
                       radius_bias_px=parts[0].radius_bias_px, notes=parts[0].notes)
 
 
-def write_ball_calibration(cal: BallCalibration, out: str | Path, *,
-                           figure: bool = True) -> dict[str, Path]:
+def write_ball_calibration(cal: BallCalibration, out: str | Path, *, figure: bool = True,
+                           overwrite: bool = False) -> dict[str, Path]:
     """Write a ball session's calibration folder.
 
     Parameters
     ----------
     cal : BallCalibration
     out : str or Path
-        The folder (created; files of :data:`BALL_CALIBRATION_FILES` in it are replaced).
+        The folder (created). The files are written whole into a hidden folder in it and
+        moved into place at the end (:class:`~tactilevision.io.StagedOutput`): a rerun
+        replaces its own files; others stay unless `overwrite`.
     figure : bool, default True
         Also draw ``calibration.png``
         (:func:`tactilevision.viz.ball_calibration_figure`).
+    overwrite : bool, default False
+        Replace files in `out` that tactilevision did not write there.
 
     Returns
     -------
@@ -288,16 +299,24 @@ def write_ball_calibration(cal: BallCalibration, out: str | Path, *,
     Notes
     -----
     ``measurements.csv`` (formats.md section 2: ``depth_mm``, ``force_n``,
-    ``depth_std_mm``, ``depth_shared_mm``, ``force_sem_n``, ``press``, ``time_s``,
-    ``hold_s``, ``fx_n``, ``fy_n``) with its sidecar ``session.toml`` (the ball: shape,
-    radius, contact, pad), so that ``fit``, ``diagnose`` and ``validate`` read it
-    again with the same noise model; ``circles.csv`` (each press's frame, circle and
-    depth); ``rejected.csv``; ``fit.json`` (``fit --json``'s object of a ball, with
-    ``source``, ``n_rejected`` and ``clock_offset_s``); ``calibration.png`` (force
-    against depth with the fitted law, each press's apparent E).
+    ``depth_std_mm``, ``depth_shared_mm``, ``force_sem_n``, ``press``, ``time_s``
+    (since the first frame), ``hold_s``, ``force_std_n``, ``fx_n``, ``fy_n``) with its
+    sidecar ``session.toml`` (the ball: shape, radius, contact, pad), so that ``fit``,
+    ``diagnose`` and ``validate`` read it again with the same noise model;
+    ``circles.csv`` (each press's frame, circle and depth); ``rejected.csv``;
+    ``fit.json`` (``fit --json``'s object of a ball, with ``source``, ``n_rejected``
+    and ``clock_offset_s``); ``calibration.png`` (force against depth with the fitted
+    law, each press's apparent E).
     """
     out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
+    with StagedOutput(out, overwrite=overwrite) as stage:
+        names = _write_files(cal, stage.path, figure)
+        stage.commit()
+    return {name: out / name for name in names}
+
+
+def _write_files(cal: BallCalibration, out: Path, figure: bool) -> list[str]:
+    """Write the calibration's files into `out`; their names."""
     cfg = cal.session.config
     d = cal.depths
     paths = {name: out / name for name in BALL_CALIBRATION_FILES}
@@ -313,9 +332,12 @@ def write_ball_calibration(cal: BallCalibration, out: str | Path, *,
                "depth_shared_mm": d.depth_shared_mm, "force_sem_n": cal.force_sem_n}
     if cal.presses is not None:
         pr = [cal.presses.presses[i] for i in cal.used]
-        columns.update({"press": [p.press for p in pr], "time_s": [p.t_frame_s for p in pr],
-                        "hold_s": [p.hold_s for p in pr], "fx_n": [p.fx_n for p in pr],
-                        "fy_n": [p.fy_n for p in pr]})
+        t0 = float(cal.session.frame_times_s[0])          # time_s: since the session's start
+        columns.update({"press": [p.press for p in pr],
+                        "time_s": [p.t_frame_s - t0 for p in pr],
+                        "hold_s": [p.hold_s for p in pr],
+                        "force_std_n": [p.force_std_n for p in pr],
+                        "fx_n": [p.fx_n for p in pr], "fy_n": [p.fy_n for p in pr]})
         press = [p.press for p in pr]
     else:
         columns["press"] = press = cal.used
@@ -346,7 +368,7 @@ def write_ball_calibration(cal: BallCalibration, out: str | Path, *,
         ball_calibration_figure(cal, paths["calibration.png"])
     else:
         del paths["calibration.png"]
-    return paths
+    return list(paths)
 
 
 def _cell(x: float) -> str:
