@@ -14,13 +14,13 @@ from __future__ import annotations
 import json
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from .._checks import InputError
-from ..contact import BallPresses, Rejection, find_ball_presses, force_zero
+from ..contact import BallPresses, Rejection, find_ball_presses
 from ..io import (
     DeadWeightSession,
     Session,
@@ -32,6 +32,7 @@ from ..io import (
 from ..mechanics import IndenterFit, Sphere, fit_indenter
 from ..viz import ball_calibration_figure
 from ._ball import BallDepths, ball_press_depths
+from ._steps import read_force_zero
 
 __all__ = ["BALL_CALIBRATION_FILES", "BallCalibration", "ball_indenter", "calibrate_ball_session",
            "calibrate_dead_weights", "write_ball_calibration"]
@@ -164,19 +165,13 @@ def calibrate_ball_session(session: Session | str | Path, *, nu: float = 0.5,
 
 def _take_off_zero(session: Session, found: BallPresses, used: list[int],
                    force: np.ndarray) -> tuple[np.ndarray, str]:
-    """The F/T's zero, read between the presses (:func:`~tactilevision.contact.force_zero`:
-    its line where it drifts, else its mean), taken off each press's force; and the note
-    saying so."""
-    times = session.frame_times_s
-    period = float(np.median(np.diff(times))) if times.size > 1 else 0.0
+    """The F/T's zero, read between the presses (:func:`read_force_zero`: its line where
+    it drifts, else its mean), taken off each press's force; and the note saying so."""
     off = found.clock_offset_s
-    contact = found.press_spans_s + off + np.array([-period, period])
-    zero = force_zero(session.force_times_s, session.forces_n[:, 2], contact)
+    zero = read_force_zero(session, found.press_spans_s, off)
     if zero is None:
         return force, ("the F/T's zero could not be read: no settled rest between the "
                        "presses; the forces are as the F/T read them")
-    if zero.drifts:
-        zero = replace(zero, subtracted="drift")
     at = np.array([found.presses[i].t_frame_s + off for i in used])
     return force - np.asarray(zero.taken_off(at), np.float64), zero.sentence()
 

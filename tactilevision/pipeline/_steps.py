@@ -22,7 +22,7 @@ from ..mechanics import (
 )
 from ._calibration import hold_curves, hold_spans
 
-__all__ = ["Fitter", "frame_period", "relaxation_step", "take_off_zero"]
+__all__ = ["Fitter", "frame_period", "read_force_zero", "relaxation_step", "take_off_zero"]
 
 
 class Fitter:
@@ -66,6 +66,37 @@ def frame_period(session: Session) -> float:
 
 
 
+def read_force_zero(session: Session, spans_s: np.ndarray, clock_offset_s: float,
+                    mode: str = "auto") -> ForceZero | None:
+    """The F/T's zero read in the rests between the presses
+    (:func:`~tactilevision.contact.force_zero`), its ``subtracted`` set by `mode` ('auto':
+    'drift' when the zero is seen to drift, else 'constant').
+
+    Parameters
+    ----------
+    session : Session
+    spans_s : (P, 2) float64 ndarray
+        First and last frame in contact of each press, camera clock, s.
+    clock_offset_s : float
+        F/T clock minus camera clock, s.
+    mode : {'auto', 'constant', 'drift', 'off'}, default 'auto'
+
+    Returns
+    -------
+    ForceZero or None
+        None when no settled rest was found.
+    """
+    period = (float(np.median(np.diff(session.frame_times_s))) if session.n_frames > 1
+              else 0.0)
+    # a press touches the gel from before its first frame in contact to after its last
+    contact = spans_s + clock_offset_s + np.array([-period, period])
+    zero = force_zero(session.force_times_s, session.forces_n[:, 2], contact,
+                      subtracted="constant" if mode == "auto" else mode)
+    if zero is not None and mode == "auto" and zero.drifts:
+        zero = replace(zero, subtracted="drift")
+    return zero
+
+
 def take_off_zero(session: Session, cert: Certification, mode: str
                    ) -> tuple[Session, Certification, ForceZero | None, list[str]]:
     """Read the F/T's zero between the presses and take it off the log and the presses'
@@ -93,14 +124,7 @@ def take_off_zero(session: Session, cert: Certification, mode: str
     spans = cert.press_spans_s
     if spans.shape[0] == 0:
         return session, cert, None, []
-    period = (float(np.median(np.diff(session.frame_times_s))) if session.n_frames > 1
-              else 0.0)
-    # a press touches the gel from before its first frame in contact to after its last
-    contact = spans + cert.clock_offset_s + np.array([-period, period])
-    zero = force_zero(session.force_times_s, session.forces_n[:, 2], contact,
-                      subtracted="constant" if mode == "auto" else mode)
-    if zero is not None and mode == "auto" and zero.drifts:
-        zero = replace(zero, subtracted="drift")
+    zero = read_force_zero(session, spans, cert.clock_offset_s, mode)
     if zero is None:
         return session, cert, None, ["the F/T's zero could not be read: no settled rest between "
                                      "the presses; the forces are as the F/T read them"]
