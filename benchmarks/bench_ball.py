@@ -7,14 +7,21 @@ Prints:
 2. The real FEATS gel (sample_frames/feats): every law x contact at nu = 0.5 on the
    pad of finite size (equal-area radius, and the inscribed one beside it), each with
    its E and its apparent E per press, then diagnose_indenter's ladder.
+3. The ladder on circles with a shared error (``--seeds N``, default 10): presses drawn
+   from the small-strain law (nothing missing), depths read through contact circles
+   off by a shared bias (0, -1, -1.5 px; the stated bound 1.5 px) and 0.5 px at random
+   (``tests/test_ball_diagnose_noise.py``): how often an effect is named with the
+   depths read as exact, and with the fit's noise model (the stated uncertainties and
+   the shared error fitted within its bound), and the ladder's time.
 
-Usage: python benchmarks/bench_ball.py [--figure docs/feats_ladder.png]
+Usage: python benchmarks/bench_ball.py [--figure docs/feats_ladder.png] [--seeds 10]
 """
 
 from __future__ import annotations
 
 import argparse
 import platform
+import sys
 import time
 from pathlib import Path
 
@@ -85,16 +92,42 @@ def feats(figure: Path | None) -> None:
         print(f"   wrote {figure}")
 
 
+def shared_circles(seeds: int) -> None:
+    sys.path.insert(0, str(ROOT / "tests"))
+    from test_ball_diagnose_noise import BALL, H, _circle_presses
+
+    print(f"3. false alarms on {seeds} seeds of presses with nothing missing "
+          "(circles' shared bias; stated bound 1.5 px, random 0.5 px):")
+    for bias in (0.0, -1.0, -1.5):
+        plain, noise, names, took = 0, 0, {}, 0.0
+        for seed in range(seeds):
+            w, P, sd, shared = _circle_presses(seed, bias)
+            a = diagnose_indenter(w, P, BALL, thickness_mm=H, contact="frictionless")
+            t = time.perf_counter()
+            b = diagnose_indenter(w, P, BALL, thickness_mm=H, contact="frictionless",
+                                  depth_std_mm=sd, depth_shared_mm=shared)
+            took += time.perf_counter() - t
+            plain += a.missing_effects != ()
+            noise += b.missing_effects != ()
+            for e in a.missing_effects:
+                names[e] = names.get(e, 0) + 1
+        print(f"   bias {bias:+.1f} px: read as exact, an effect named on {plain} of {seeds} "
+              f"{names or ''}; with the noise model on {noise} of {seeds} "
+              f"(ladder {took / seeds:.2f} s per session of 24 presses)")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--figure", type=Path, help="write the FEATS ladder figure here")
     ap.add_argument("--no-feats", action="store_true")
+    ap.add_argument("--seeds", type=int, default=10)
     args = ap.parse_args()
     print(f"machine: {platform.machine()}, {platform.processor() or '?'}; "
           f"python {platform.python_version()}")
     timing()
     if not args.no_feats:
         feats(args.figure)
+    shared_circles(args.seeds)
 
 
 if __name__ == "__main__":

@@ -16,8 +16,8 @@ from ..viz import (
     write_diagnosis_report,
     write_indenter_report,
 )
-from ._fit import _write_json
-from ._fit_indenter import indenter_of
+from ._fit import _write_json, depth_uncertainty
+from ._fit_indenter import depth_shared, force_sd, indenter_of
 from ._out import StagedOutput, add_overwrite_argument, check_output_folder, check_overwrite
 
 __all__ = ["add_parser", "run"]
@@ -85,9 +85,15 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 def _run_indenter(args: argparse.Namespace, table, path: Path) -> int:
     """``diagnose`` of a ball's table: the ladder of :func:`diagnose_indenter`."""
     ind, contact = indenter_of(table, args)
+    depth_std, std_message = depth_uncertainty(table, ignore=False,
+                                               effects=("large_deformation",))
+    if std_message is not None:
+        print(f"tactilevision diagnose: warning: {path}: {std_message}", file=sys.stderr)
     try:
         diag = diagnose_indenter(table.depth_mm, table.force_n, ind,
-                                 thickness_mm=table.thickness_mm, contact=contact, nu=args.nu)
+                                 thickness_mm=table.thickness_mm, contact=contact, nu=args.nu,
+                                 depth_std_mm=depth_std, force_std_n=force_sd(table),
+                                 depth_shared_mm=depth_shared(table, depth_std))
     except InputError as exc:
         raise InputError(f"{path}: {exc}") from None
     obj = diag.to_json_dict()

@@ -13,8 +13,8 @@ from .. import InputError
 from ..io import Measurements, read_ramp, sidecar_geometry
 from ..mechanics import IndenterFit, fit_indenter, fit_ramp, indenter_from_config
 
-__all__ = ["LAW_CHOICES", "add_arguments", "fit_laws", "indenter_of", "run_indenter",
-           "run_ramp", "summary_lines"]
+__all__ = ["LAW_CHOICES", "add_arguments", "depth_shared", "fit_laws", "force_sd",
+           "indenter_of", "run_indenter", "run_ramp", "summary_lines"]
 
 #: ``--law`` choices: a material law, or ``auto`` (both fitted, the better one reported).
 LAW_CHOICES = ("auto", "neo_hookean", "linear")
@@ -78,8 +78,8 @@ def fit_laws(table: Measurements, args: argparse.Namespace,
             fits[law] = fit_indenter(table.depth_mm, table.force_n, ind,
                                      thickness_mm=table.thickness_mm, law=law, contact=contact,
                                      nu=args.nu, depth_std_mm=depth_std,
-                                     depth_shared_mm=_depth_shared(table, depth_std),
-                                     force_std_n=_force_sd(table))
+                                     depth_shared_mm=depth_shared(table, depth_std),
+                                     force_std_n=force_sd(table))
         except InputError as exc:
             raise InputError(f"{table.path}: {exc}") from None
     if len(fits) == 1:
@@ -92,7 +92,7 @@ def fit_laws(table: Measurements, args: argparse.Namespace,
     return fits[best], fits, why
 
 
-def _depth_shared(table: Measurements, depth_std: np.ndarray | None) -> np.ndarray | float:
+def depth_shared(table: Measurements, depth_std: np.ndarray | None) -> np.ndarray | float:
     """The depths' shared error (``depth_shared_mm``: a ball's contact circles all off by
     the detector's bias) where every row has one and the depths' errors are used."""
     shared = table.columns.get("depth_shared_mm")
@@ -101,7 +101,7 @@ def _depth_shared(table: Measurements, depth_std: np.ndarray | None) -> np.ndarr
     return shared
 
 
-def _force_sd(table: Measurements) -> np.ndarray | None:
+def force_sd(table: Measurements) -> np.ndarray | None:
     """The forces' stated standard uncertainty (``force_sem_n``: an F/T window's standard
     error, a dead weight's mass uncertainty times g) where every row has one."""
     sem = table.columns.get("force_sem_n")

@@ -31,6 +31,7 @@ from scipy import optimize, stats
 
 from .._checks import InputError, check_array
 from ._indenter import Indenter
+from ._indenter_noise import PressNoise, best_shift, press_noise, weighted_linear
 
 __all__ = ["INDENTER_EFFECTS", "IndenterDiagnosis", "IndenterRung", "IndenterValidation",
            "diagnose_indenter", "validate_indenter"]
@@ -67,6 +68,12 @@ class IndenterRung:
         Relative change of the apparent E from the shallowest quarter of the presses to
         the deepest (0 for a flat profile).
     predicted_n : (N,) float64 ndarray
+    shared_shift : float
+        Where the depths' shared error was fitted, as a fraction of its bound (-1 to 1;
+        0 without one): every depth at (w + shared_shift s)(1 + shared_shift r).
+    chi2 : float
+        The weighted residual sum (variances of :attr:`IndenterDiagnosis.noise`; the
+        plain sum of squares, N^2, when no uncertainty is stated).
     """
 
     effects: tuple[str, ...]
@@ -81,6 +88,8 @@ class IndenterRung:
     apparent_E_mpa: np.ndarray = field(repr=False)
     drift: float = 0.0
     predicted_n: np.ndarray = field(default=None, repr=False)
+    shared_shift: float = 0.0
+    chi2: float = math.nan
 
 
 @dataclass(frozen=True)
@@ -102,14 +111,24 @@ class IndenterDiagnosis:
         Replicate scatter (pooled sd of presses at one depth), N; None without
         repeated depths.
     floor_test : dict or None
-        ``chi2``, ``dof``, ``p_value`` of the final model's residuals against the
-        replicate scatter (an F test of lack of fit); None without replicates.
+        ``F``, ``dof``, ``p_value`` of the final model's residuals (weighted by the
+        noise model) against the replicate scatter (an F test of lack of fit); None
+        without replicates.
     message : str
     depth_mm, force_n : (N,) float64 ndarray
         The presses.
     not_tried : dict of str to str
         Changes that could not be fitted from the final model, and why (a FEM sweep
         that did not converge, an offset that leaves the table).
+    noise : dict
+        The noise model every rung was fitted with: ``stated`` (uncertainties given),
+        ``sigma0_n`` (the force scatter they leave unexplained, Paule-Mandel, N),
+        ``shared`` (a shared depth error fitted within its bound), ``shared_shift``
+        (where the final model put it, -1 to 1), ``test`` (the final model's chi2
+        against the stated uncertainties alone: ``chi2``, ``dof``, ``p_value`` of too
+        much scatter, ``p_low`` of too little; None without them).
+    not_testable : dict of str to str
+        Changes the presses cannot tell from the depths' shared error, and why.
     """
 
     ladder: tuple[IndenterRung, ...]
@@ -122,6 +141,8 @@ class IndenterDiagnosis:
     depth_mm: np.ndarray = field(repr=False)
     force_n: np.ndarray = field(repr=False)
     not_tried: dict = field(default_factory=dict)
+    noise: dict = field(default_factory=dict)
+    not_testable: dict = field(default_factory=dict)
 
     def to_json_dict(self) -> dict:
         """JSON-ready: arrays as lists, NaN as None."""
@@ -141,7 +162,8 @@ class IndenterDiagnosis:
                 "candidates": clean(self.candidates), "nu": self.nu,
                 "floor_n": clean(self.floor_n), "floor_test": clean(self.floor_test),
                 "message": self.message, "depth_mm": clean(self.depth_mm),
-                "force_n": clean(self.force_n), "not_tried": dict(self.not_tried)}
+                "force_n": clean(self.force_n), "not_tried": dict(self.not_tried),
+                "noise": clean(self.noise), "not_testable": dict(self.not_testable)}
 
 
 def _drift(depth: np.ndarray, apparent: np.ndarray) -> float:
@@ -152,55 +174,68 @@ def _drift(depth: np.ndarray, apparent: np.ndarray) -> float:
 
 
 class _Models:
-    """The force columns of one indenter at one nu, by (law, contact), and the fits."""
+    """The force columns of one indenter at one nu, by (law, contact), and the fits, all
+    against one noise model (:class:`PressNoise`)."""
 
     def __init__(self, indenter: Indenter, w: np.ndarray, P: np.ndarray, h: float,
-                 nu: float) -> None:
+                 nu: float, noise: PressNoise) -> None:
         self.indenter, self.w, self.P, self.h, self.nu = indenter, w, P, h, nu
+        self.noise = noise
         self.reach = indenter.reach_mm(h)
 
     def g(self, law: str, contact: str, w: np.ndarray) -> np.ndarray:
         return self.indenter.force(w, E_mpa=1.0, nu=self.nu, thickness_mm=self.h, law=law,
                                    contact=contact)
 
-    def fit(self, effects: tuple[str, ...], law: str, contact: str) -> IndenterRung:
-        w, P, n = self.w, self.P, self.w.size
-        delta = 0.0
-        if "depth_offset" in effects:
-            lo = -0.25 * float(w.min())     # a contact point off by a quarter of the first
-            hi = min(self.reach - float(w.max()), 0.25 * float(w.min()))
-            if not hi > lo:
-                raise InputError("no depth offset keeps every press within the table")
-            grid = np.linspace(lo, hi, 41)
-            cost = [self._linear(self.g(law, contact, w + d), P, effects)[2] for d in grid]
-            k = int(np.argmin(cost))
-            a, b = grid[max(k - 1, 0)], grid[min(k + 1, grid.size - 1)]
-            res = optimize.minimize_scalar(
-                lambda d: self._linear(self.g(law, contact, w + d), P, effects)[2],
-                bounds=(a, b), method="bounded", options={"xatol": 1e-7 * self.h})
-            delta = float(res.x)
-        g = self.g(law, contact, w + delta)
-        E, F0, rss = self._linear(g, P, effects)
-        k = 1 + ("force_offset" in effects) + ("depth_offset" in effects)
+    def _chi2(self, law: str, contact: str, w: np.ndarray, offset: bool) -> float:
+        if np.any(w <= 0) or np.any(w > self.reach):
+            return math.inf
+        return weighted_linear(self.g(law, contact, w), self.P, self.noise.var, offset)[2]
+
+    def _offset(self, law: str, contact: str, ws: np.ndarray, offset: bool) -> float:
+        """The depth offset delta of the smallest chi2 for depths `ws` (a contact point off
+        by at most a quarter of the first depth, every press within the table)."""
+        lo = -0.25 * float(self.w.min())
+        hi = min(self.reach - float(ws.max()), 0.25 * float(self.w.min()))
+        if not hi > lo:
+            raise InputError("no depth offset keeps every press within the table")
+        return best_shift(lambda d: self._chi2(law, contact, ws + d, offset), lo, hi, 41)
+
+    def fit(self, effects: tuple[str, ...], law: str, contact: str, *,
+            shared: bool = True) -> IndenterRung:
+        """One rung: E (and the effects' offsets) by weighted least squares, the shared
+        depth error fitted within its bound where one is stated and `shared`."""
+        w, P, n, noise = self.w, self.P, self.w.size, self.noise
+        offset = "force_offset" in effects
+        moved = "depth_offset" in effects
+
+        def delta_at(lam: float) -> float:
+            return self._offset(law, contact, noise.depths(w, lam), offset) if moved else 0.0
+
+        def cost(lam: float) -> float:
+            ws = noise.depths(w, lam)
+            try:
+                return self._chi2(law, contact, ws + delta_at(lam), offset)
+            except InputError:
+                return math.inf
+
+        lam = best_shift(cost, -1.0, 1.0, 11) if shared and noise.has_shared else 0.0
+        ws = noise.depths(w, lam)
+        delta = delta_at(lam)
+        if not math.isfinite(self._chi2(law, contact, ws + delta, offset)):
+            raise InputError("the shared depth error leaves no depth within the table")
+        g = self.g(law, contact, ws + delta)
+        E, F0, chi2 = weighted_linear(g, P, noise.var, offset)
+        k = 1 + offset + moved
         pred = E * g + F0
         apparent = (P - F0) / g
+        r = P - pred
         return IndenterRung(
             effects=effects, law=law, contact=contact, E_mpa=E, force_offset_n=F0,
-            depth_offset_mm=delta, rmse_n=math.sqrt(rss / n),
-            bic=n * math.log(max(rss / n, 1e-300)) + k * math.log(n), n_params=k,
-            apparent_E_mpa=apparent, drift=_drift(w, apparent), predicted_n=pred)
-
-    @staticmethod
-    def _linear(g: np.ndarray, P: np.ndarray, effects: tuple[str, ...]
-                ) -> tuple[float, float, float]:
-        """Least squares of P = E g (+ F0): (E, F0, RSS)."""
-        if "force_offset" in effects:
-            X = np.column_stack([g, np.ones_like(g)])
-            (E, F0), *_ = np.linalg.lstsq(X, P, rcond=None)
-        else:
-            E, F0 = float(g @ P / (g @ g)), 0.0
-        r = P - E * g - F0
-        return float(E), float(F0), float(r @ r)
+            depth_offset_mm=delta, rmse_n=math.sqrt(float(r @ r) / n),
+            bic=n * math.log(max(chi2 / n, 1e-300)) + k * math.log(n), n_params=k,
+            apparent_E_mpa=apparent, drift=_drift(w, apparent), predicted_n=pred,
+            shared_shift=lam, chi2=chi2)
 
 
 def _floor(w: np.ndarray, resid: np.ndarray, n_params: int) -> tuple[float | None, dict | None]:
@@ -223,7 +258,10 @@ def _floor(w: np.ndarray, resid: np.ndarray, n_params: int) -> tuple[float | Non
 
 def diagnose_indenter(depth_mm: np.ndarray, force_n: np.ndarray, indenter: Indenter, *,
                       thickness_mm: float, contact: str | None = None,
-                      nu: float = 0.5) -> IndenterDiagnosis:
+                      nu: float = 0.5, depth_std_mm: np.ndarray | None = None,
+                      force_std_n: np.ndarray | None = None,
+                      depth_shared_mm: float | np.ndarray = 0.0,
+                      depth_shared_rel: float = 0.0) -> IndenterDiagnosis:
     """The error ladder of an indenter's presses: which effect its law misses.
 
     Parameters
@@ -240,6 +278,16 @@ def diagnose_indenter(depth_mm: np.ndarray, force_n: np.ndarray, indenter: Inden
     nu : float, default 0.5
         The nu every model is fitted at (E is linear at a fixed nu; a ball's presses
         rarely identify nu, :func:`fit_indenter`).
+    depth_std_mm, force_std_n : (N,) array_like of float, optional
+        Each press's stated depth and force standard uncertainties, mm and N, >= 0
+        (the ``depth_std_mm`` and ``force_sem_n`` columns): the noise model of
+        :func:`fit_indenter`, each press weighted by its effective variance
+        s0^2 + (dP/dw u)^2 + s_P^2, s0 by the Paule-Mandel rule at the base model.
+    depth_shared_mm : float or (N,) array_like of float, default 0.0
+        A depth error every press shares, its bound (one, or how far each depth moves at
+        the bound: the ``depth_shared_mm`` column of a ball's circles), mm, >= 0.
+    depth_shared_rel : float, default 0.0
+        A shared depth error in proportion to each depth, its bound as a fraction.
 
     Returns
     -------
@@ -249,18 +297,52 @@ def diagnose_indenter(depth_mm: np.ndarray, force_n: np.ndarray, indenter: Inden
     ------
     InputError
         For fewer than three presses, a depth <= 0 or past the reach (naming the
-        press), a force <= 0, or a bad h.
+        press), a force <= 0, an uncertainty < 0 (naming the press), or a bad h.
 
     Notes
     -----
-    BIC = n ln(RSS / n) + k ln n (Schwarz 1978) with k the model's parameters
-    (E, and an offset's). A change of the law or the contact adds no parameter:
-    it is taken when it lowers the residual sum of squares by a factor
-    exp(2 / n) or more. Without repeated depths the presses' noise is not
-    measured apart from the model, and the ladder ranks models by their
-    residuals; with them, an F test of lack of fit (the final model's
-    residuals against the replicate scatter) says whether structure is left.
+    BIC = n ln(chi2 / n) + k ln n (Schwarz 1978) with chi2 the weighted residual
+    sum and k the model's parameters (E, and an offset's). A change of the law or
+    the contact adds no parameter: it is taken when it lowers chi2 by a factor
+    exp(2 / n) or more. A shared depth error is fitted within its bound in every
+    rung (a nuisance common to all, so it adds to no k); a change that would be
+    taken with the depths as read but not once the shared error is fitted is
+    listed in ``not_testable``: on these presses it cannot be told from the
+    certification's own error. With stated uncertainties the final model's chi2
+    against them alone (s0 left out) is tested; with repeated depths, an F test of
+    lack of fit against the replicate scatter says whether structure is left.
     """
+    w, P, h = _checked(depth_mm, force_n, thickness_mm)
+    base_contact = indenter._contact(contact)
+    reach = indenter.reach_mm(h)
+    bad = np.flatnonzero(w > reach * (1 + 1e-9))
+    if bad.size:
+        raise InputError(f"press {int(bad[0])}: depth {w[bad[0]]:.4g} mm is past the "
+                         f"{indenter.shape}'s reach, {reach:.4g} mm on h = {h:g} mm")
+    noise = press_noise(
+        w, P, lambda x: indenter.force(x, E_mpa=1.0, nu=float(nu), thickness_mm=h,
+                                       law="linear", contact=base_contact),
+        depth_std_mm=depth_std_mm, force_std_n=force_std_n,
+        depth_shared_mm=depth_shared_mm, depth_shared_rel=depth_shared_rel)
+    models = _Models(indenter, w, P, h, float(nu), noise)
+    ladder, state, tried, not_tried = _climb(models, base_contact)
+    rung = ladder[-1]
+    not_testable = (_confounded(models, state, base_contact, tried) if noise.has_shared
+                    else {})
+    resid = P - rung.predicted_n
+    floor, _ = _floor(w, resid, rung.n_params)
+    _, test = _floor(w, resid / np.sqrt(noise.var), rung.n_params)
+    candidates = {k: {"rmse_n": v[0].rmse_n, "bic": v[0].bic, "E_mpa": v[0].E_mpa}
+                  for k, v in tried.items()}
+    diag = IndenterDiagnosis(
+        ladder=tuple(ladder), missing_effects=tuple(state["effects"]), candidates=candidates,
+        nu=float(nu), floor_n=floor, floor_test=test, message="", depth_mm=w, force_n=P,
+        not_tried=not_tried, noise=_noise_summary(noise, resid, rung),
+        not_testable=not_testable)
+    return _with_message(diag)
+
+
+def _checked(depth_mm, force_n, thickness_mm) -> tuple[np.ndarray, np.ndarray, float]:
     w = check_array(depth_mm, "depth_mm", [("N",)], dtype=np.number, finite=True)
     P = check_array(force_n, "force_n", [(w.shape[0],)], dtype=np.number, finite=True)
     w, P = w.astype(np.float64), P.astype(np.float64)
@@ -273,33 +355,39 @@ def diagnose_indenter(depth_mm: np.ndarray, force_n: np.ndarray, indenter: Inden
         bad = np.flatnonzero(arr <= 0)
         if bad.size:
             raise InputError(f"press {int(bad[0])}: {name} = {arr[bad[0]]:g} must be positive")
-    base_contact = indenter._contact(contact)
-    reach = indenter.reach_mm(h)
-    bad = np.flatnonzero(w > reach * (1 + 1e-9))
-    if bad.size:
-        raise InputError(f"press {int(bad[0])}: depth {w[bad[0]]:.4g} mm is past the "
-                         f"{indenter.shape}'s reach, {reach:.4g} mm on h = {h:g} mm")
-    other = next((c for c in indenter.contacts if c != base_contact), None)
-    models = _Models(indenter, w, P, h, float(nu))
+    return w, P, h
+
+
+def _step(models: _Models, state: dict, base_contact: str, *, shared: bool = True
+          ) -> tuple[dict, dict]:
+    """Every change not yet taken, fitted from `state`: {name: (rung, law, contact)}, and
+    {name: why} for those that could not be fitted."""
+    other = next((c for c in models.indenter.contacts if c != base_contact), None)
+    tried, not_tried = {}, {}
+    for name in INDENTER_EFFECTS:
+        if name in state["effects"] or (name == "contact_slip" and other is None):
+            continue
+        law = "neo_hookean" if name == "large_deformation" else state["law"]
+        con = state["contact"]
+        if name == "contact_slip":
+            con = other if con == base_contact else base_contact
+        eff = tuple(e for e in (*state["effects"], name)
+                    if e in ("force_offset", "depth_offset"))
+        try:
+            tried[name] = (models.fit(eff, law, con, shared=shared), law, con)
+        except InputError as exc:
+            not_tried[name] = str(exc)
+    return tried, not_tried
+
+
+def _climb(models: _Models, base_contact: str) -> tuple[list, dict, dict, dict]:
+    """The ladder: take the change that lowers the BIC most (by more than BIC_STEP) until
+    none does. Returns the rungs, the final state, the last round's fits and failures."""
     state = {"effects": (), "law": "linear", "contact": base_contact}
     rung = models.fit((), "linear", base_contact)
     ladder = [rung]
-    tried: dict = {}
     while True:
-        tried, not_tried = {}, {}
-        for name in INDENTER_EFFECTS:
-            if name in state["effects"] or (name == "contact_slip" and other is None):
-                continue
-            law = "neo_hookean" if name == "large_deformation" else state["law"]
-            con = state["contact"]
-            if name == "contact_slip":
-                con = other if con == base_contact else base_contact
-            eff = tuple(e for e in (*state["effects"], name)
-                        if e in ("force_offset", "depth_offset"))
-            try:
-                tried[name] = (models.fit(eff, law, con), law, con)
-            except InputError as exc:
-                not_tried[name] = str(exc)
+        tried, not_tried = _step(models, state, base_contact)
         if not tried:
             break
         best = min(tried, key=lambda k: tried[k][0].bic)
@@ -310,22 +398,49 @@ def diagnose_indenter(depth_mm: np.ndarray, force_n: np.ndarray, indenter: Inden
         rung = IndenterRung(**{**{k: getattr(cand, k) for k in cand.__dataclass_fields__},
                                "effects": state["effects"]})
         ladder.append(rung)
-    floor, test = _floor(w, P - rung.predicted_n, rung.n_params)
-    candidates = {k: {"rmse_n": v[0].rmse_n, "bic": v[0].bic, "E_mpa": v[0].E_mpa}
-                  for k, v in tried.items()}
-    diag = IndenterDiagnosis(
-        ladder=tuple(ladder), missing_effects=tuple(state["effects"]), candidates=candidates,
-        nu=float(nu), floor_n=floor, floor_test=test, message="", depth_mm=w, force_n=P,
-        not_tried=not_tried)
-    return _with_message(diag)
+    return ladder, state, tried, not_tried
+
+
+def _confounded(models: _Models, state: dict, base_contact: str, free: dict) -> dict:
+    """Changes the final model would take with the depths as read (the shared error held
+    at 0) but not once the shared error is fitted within its bound (`free`, the last
+    round of the ladder, where none was taken): not testable on these presses."""
+    base = models.fit(tuple(e for e in state["effects"]
+                            if e in ("force_offset", "depth_offset")),
+                      state["law"], state["contact"], shared=False)
+    fixed, _ = _step(models, state, base_contact, shared=False)
+    out = {}
+    for name, (cand, *_) in fixed.items():
+        step = base.bic - cand.bic
+        if step > BIC_STEP and name in free:
+            out[name] = (f"the depths' shared error (within its stated bound) explains as "
+                         f"much: the BIC falls by {step:.1f} with the depths as read, but "
+                         "by no more than 2 once the shared error is fitted")
+    return out
+
+
+def _noise_summary(noise: PressNoise, resid: np.ndarray, rung: IndenterRung) -> dict:
+    """What the diagnosis weighed the presses with, and the final model's chi2 against the
+    stated uncertainties alone (``test``: chi2, dof, p of too much scatter, p of too
+    little; None where nothing, or a zero uncertainty, was stated)."""
+    out = {"stated": noise.stated is not None, "sigma0_n": noise.sigma0_n,
+           "shared": noise.has_shared, "shared_shift": rung.shared_shift, "test": None}
+    if noise.stated is not None and np.all(noise.stated > 0):
+        dof = resid.size - rung.n_params - int(noise.has_shared)
+        if dof >= 1:
+            chi2 = float(np.sum(resid ** 2 / noise.stated))
+            out["test"] = {"chi2": chi2, "dof": dof, "p_value": float(stats.chi2.sf(chi2, dof)),
+                           "p_low": float(stats.chi2.cdf(chi2, dof))}
+    return out
 
 
 def _with_message(d: IndenterDiagnosis) -> IndenterDiagnosis:
-    base, last = d.ladder[0], d.ladder[-1]
+    base = d.ladder[0]
     s = [f"The small-strain law with {base.contact} contact leaves an RMSE of "
          f"{base.rmse_n * 1e3:.4g} mN; its apparent E changes by {100 * base.drift:+.1f} % "
          f"from the shallowest presses to the deepest (E = {base.E_mpa:.4g} MPa at "
          f"nu = {d.nu:g})."]
+    s += _noise_sentences(d.noise)
     for r in d.ladder[1:]:
         s.append(f"Adding {r.effects[-1]} ({INDENTER_EFFECTS[r.effects[-1]]}): RMSE "
                  f"{r.rmse_n * 1e3:.4g} mN, apparent E drift {100 * r.drift:+.1f} %, "
@@ -337,20 +452,59 @@ def _with_message(d: IndenterDiagnosis) -> IndenterDiagnosis:
         s.append(f"Missing: {', '.join(d.missing_effects)}.")
     for name, why in d.not_tried.items():
         s.append(f"Not tried: {name} ({why}).")
-    if d.floor_test is None:
-        s.append("No depth is repeated: the presses' noise is not measured apart from the "
-                 "model, so the ladder ranks models by their residuals; it does not test "
-                 f"that the final model is complete (its apparent E still drifts "
-                 f"{100 * last.drift:+.1f} %).")
-    elif d.floor_test["p_value"] < 0.001:
-        s.append(f"The final model still misses something: its residuals exceed the replicate "
-                 f"scatter ({d.floor_n * 1e3:.3g} mN; lack of fit p = "
-                 f"{d.floor_test['p_value']:.2g}).")
-    else:
-        s.append(f"The final model's residuals are within the replicate scatter "
-                 f"({d.floor_n * 1e3:.3g} mN; lack of fit p = {d.floor_test['p_value']:.2g}).")
+    for name, why in d.not_testable.items():
+        s.append(f"Not testable on these presses: {name} ({why}).")
+    s += _completeness(d)
     return IndenterDiagnosis(**{**{k: getattr(d, k) for k in d.__dataclass_fields__},
                                 "message": " ".join(s)})
+
+
+def _noise_sentences(noise: dict) -> list[str]:
+    out = []
+    if noise.get("stated"):
+        out.append(f"Every model weighs each press by its stated uncertainties, as the fit "
+                   f"does (force scatter they leave unexplained: "
+                   f"{1e3 * noise['sigma0_n']:.3g} mN).")
+    if noise.get("shared"):
+        lam = noise["shared_shift"]
+        out.append(f"The depths' shared error is fitted within its stated bound in every "
+                   f"model (the final model puts it at {lam:+.2f} of the bound"
+                   + (", at the bound)." if abs(lam) > 0.99 else ")."))
+    return out
+
+
+def _completeness(d: IndenterDiagnosis) -> list[str]:
+    """Whether the final model leaves structure: against the stated uncertainties, against
+    the replicate scatter, or neither (then said)."""
+    out, test, last = [], d.noise.get("test"), d.ladder[-1]
+    if test is not None:
+        red = f"chi2/dof = {test['chi2'] / test['dof']:.3g}"
+        if test["p_value"] < 0.001:
+            out.append(f"The final model's residuals exceed what the stated uncertainties "
+                       f"explain ({red}, p = {test['p_value']:.2g}): something is still "
+                       "missing, or the uncertainties are understated.")
+        elif test["p_low"] < 0.001:
+            out.append(f"The stated uncertainties are larger than the presses' scatter "
+                       f"({red}; p = {test['p_low']:.2g} of so little): an effect of their "
+                       "size would hide in them, so the ladder ranked the models by the "
+                       "presses' own scatter.")
+        else:
+            out.append(f"The final model's residuals are what the stated uncertainties "
+                       f"explain ({red}, p = {test['p_value']:.2g}).")
+    if d.floor_test is not None and d.floor_test["p_value"] < 0.001:
+        out.append(f"The final model still misses something: its residuals exceed the "
+                   f"replicate scatter ({d.floor_n * 1e3:.3g} mN; lack of fit p = "
+                   f"{d.floor_test['p_value']:.2g}).")
+    elif d.floor_test is not None:
+        out.append(f"The final model's residuals are within the replicate scatter "
+                   f"({d.floor_n * 1e3:.3g} mN; lack of fit p = "
+                   f"{d.floor_test['p_value']:.2g}).")
+    elif test is None:
+        out.append("No depth is repeated and no uncertainty is stated: the presses' noise is "
+                   "not measured apart from the model, so the ladder ranks models by their "
+                   "residuals; it does not test that the final model is complete (its "
+                   f"apparent E still drifts {100 * last.drift:+.1f} %).")
+    return out
 
 
 @dataclass(frozen=True)
