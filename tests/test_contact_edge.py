@@ -76,6 +76,19 @@ def test_contact_edge_on_a_press_with_a_skirt():
     assert r2 == r1
 
 
+def test_a_small_contact_beside_a_wide_faint_change():
+    """A reference a few grey levels off over a wide patch (lighting drift; Taxim's
+    renderer differs from its own reference by up to 14 levels) beside a small strong
+    contact: the contact is the region of strongest change, not the widest."""
+    ref, frame = _skirt_press(shape=(240, 320), centre=(250.4, 170.2), a=14.0, ball=30.0)
+    patch = np.zeros(frame.shape, np.int16)
+    patch[20:140, 20:180] = 11                   # 120 x 160 px, 11 levels: 90 times the area
+    drifted = np.clip(frame.astype(np.int16) + patch, 0, 255).astype(np.uint8)
+    c, r = detect_contact_circle(drifted, ref, edge="contact")
+    assert np.hypot(c[0] - 250.4, c[1] - 170.2) < 1.0
+    assert r == pytest.approx(14.0, rel=0.05)
+
+
 def test_contact_edge_floor_bounds_a_blurred_shoulder():
     # a blur of 6 px on a 24 px contact moves the colour's peak, and the shoulder, in
     # (measured: 21.1 px, 0.75 of the colour edge, as on GelSlim 3.0's frames); the floor

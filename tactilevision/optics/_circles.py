@@ -82,7 +82,10 @@ def detect_contact_circle(frame: np.ndarray, reference: np.ndarray, *,
         centroid and equivalent radius.
     blob_fraction : float, default 0.2
         The rough blob is where the colour difference exceeds this fraction
-        of its 99.9th percentile (and 6 noise sigmas).
+        of its 99.9th percentile (and 6 noise sigmas); of several such regions,
+        the one of strongest change (the sum of the squared excess over that
+        threshold), so that a wide faint change (a reference a few levels off)
+        is not taken for a small contact.
     min_change : float, default 12.0
         A frame whose 99.9th-percentile colour difference (8-bit counts)
         is below this, or below 4 noise sigmas, has no contact.
@@ -125,10 +128,16 @@ def detect_contact_circle(frame: np.ndarray, reference: np.ndarray, *,
     bw = (mag > max(blob_fraction * peak, 6.0 * noise)).astype(np.uint8)
     k = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (9, 9))
     bw = cv2.morphologyEx(bw, cv2.MORPH_CLOSE, k)
-    n, labels, stats, _ = cv2.connectedComponentsWithStats(bw)
+    n, labels = cv2.connectedComponents(bw)
     if n < 2 or peak <= 0:
         raise InputError("no contact found in frame (no colour change against the reference)")
-    k = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
+    # the contact is the region of strongest change, not the widest: a reference a few
+    # levels off over wide patches (lighting drift; Taxim's renderer, up to 14 levels)
+    # makes large faint regions, a contact a compact strong one
+    thr = max(blob_fraction * peak, 6.0 * noise)
+    excess = np.bincount(labels.ravel(), np.maximum(mag - thr, 0.0).ravel() ** 2,
+                         minlength=n)
+    k = 1 + int(np.argmax(excess[1:]))
     blob = _fill_holes((labels == k).astype(np.uint8))
     ys, xs = np.nonzero(blob)
     cx, cy = float(xs.mean()), float(ys.mean())
