@@ -13,8 +13,15 @@ import pytest
 from tactilevision import InputError
 from tactilevision.cli import main
 from tactilevision.io import write_measurements
-from tactilevision.mechanics import covariate_tests, diagnose, fit_model, noise_floor
+from tactilevision.mechanics import (
+    certification_tests,
+    covariate_tests,
+    diagnose,
+    fit_model,
+    noise_floor,
+)
 from tactilevision.sim import HIDDEN_EFFECTS, make_measurement_table
+from tactilevision.sim._tables import _fem_force
 
 SEEDS = range(4)
 CATALOGUE = [k for k in HIDDEN_EFFECTS if k != "temperature"]
@@ -149,6 +156,48 @@ def test_responses_are_not_scanned_unless_asked():
         assert dx.missing_effect == "force_crosstalk", dx.message
         k = dx.fits[-1].params["force_crosstalk.kx"]
         assert k == pytest.approx(x.truth["chi"], rel=0.2)
+
+
+def test_certification_products_are_not_covariates():
+    """overshoot_mm is computed by the depth rule (the certified depth less the indenter's
+    w0), not a condition of the press (issue 53). Ground truth: generator tables with
+    nothing missing whose certified depths carry an overshoot the press never made (the
+    rule read it; the force is the nominal depth's). Taken as a covariate, it raised
+    'unexplained covariate overshoot_mm'; now no verdict names it or a trend along it, the
+    certification test finds it with its size (the forces' spread it explains), and the
+    message does not say the model is complete."""
+    for seed in range(2):
+        t = make_measurement_table(None, seed)
+        c = {k: np.asarray(v, np.float64) for k, v in t.columns.items()}
+        over = np.random.default_rng(seed).uniform(0.0, 0.04, c["depth_mm"].size)
+        c["overshoot_mm"] = over
+        c["depth_mm"] = c["depth_mm"] + over
+        d = _diag(type(t)(**{**t.__dict__, "columns": c}))
+        assert d.unexplained_covariate is None and d.missing_effect is None, d.message
+        assert "overshoot_mm" not in d.scanned_columns
+        assert not any("overshoot_mm" in x.effect for x in d.candidates)
+        (cert,) = d.certification
+        assert cert.name == "overshoot_mm" and cert.significant
+        # the structure's size: the forces' spread an overshoot of U(0, 40 um) read into
+        # the depths explains, dP/dw x 11.5 um (its sd), within a factor 2
+        fit = d.fits[0]
+        slope = np.median(np.gradient(fit.predicted_n[np.argsort(c["depth_mm"])],
+                                      np.sort(c["depth_mm"])))
+        assert 0.5 < cert.size_n / (slope * 0.04 / np.sqrt(12)) < 2.0
+        assert "certification problem" in d.message and "Nothing is missing" not in d.message
+        assert d.to_json_dict()["certification"][0]["size_n"] == pytest.approx(cert.size_n)
+    # the overshoot the press did make: forces drawn (the generator's FEM law, its noise)
+    # at the nominal depth plus the overshoot, both read right: no certification alarm
+    tr = t.truth
+    w = c["depth_mm"]                      # nominal + overshoot, the depth the press made
+    P = _fem_force(tr["E_mpa"], tr["nu"], t.radius_mm, t.thickness_mm, w) + np.random.\
+        default_rng(4).normal(0.0, tr["replicate_sd_n"], w.size)
+    good = {**c, "force_n": P}
+    _, fit = fit_model(good, thickness_mm=t.thickness_mm, radius_mm=t.radius_mm)
+    (cert,) = certification_tests(fit.residuals_n, fit.predicted_n, good)
+    assert not cert.significant, cert
+    with pytest.raises(InputError, match="overshoot_mm: computed by the depth rule"):
+        diagnose(c, thickness_mm=t.thickness_mm, radius_mm=t.radius_mm, scan=["overshoot_mm"])
 
 
 def test_covariate_tests_and_noise_floor_on_known_answers():

@@ -128,6 +128,11 @@ def _summary(diag, path: Path) -> str:
     for t in diag.covariates:
         flag = "  <- structure" if t.significant else ""
         lines.append(f"  {t.name:16s} {t.p_value:9.2g}   {t.explained_fraction:6.1%}{flag}")
+    for t in diag.certification:
+        flag = "  <- certification problem" if t.significant else ""
+        lines.append(f"  {t.name:16s} {t.p_value:9.2g}   {t.explained_fraction:6.1%}  (the depth "
+                     f"rule's product, not scanned as physics; {t.size_n * 1e3:.2f} mN RMS)"
+                     f"{flag}")
     lines.append("  candidate                       delta BIC   CV RMSE")
     for c in diag.candidates:
         lines.append(f"  {c.effect:30s} {c.delta_bic:9.1f}   {mn(c.cv_rmse_n)}")

@@ -60,7 +60,13 @@ from ._budget import NoiseBudget, noise_budget
 from ._catalogue import EFFECTS, Effect, FemLaw, Param, make_effect, register_effect
 from ._design import EFFECT_SIZE_PARAMS, depth_uncertainty, planned_columns
 from ._diagnose import Diagnosis, diagnose, noise_floor
-from ._diagnose_stats import CovariateTest, covariate_tests, cross_validated_rmse
+from ._diagnose_stats import (
+    CertificationTest,
+    CovariateTest,
+    certification_tests,
+    covariate_tests,
+    cross_validated_rmse,
+)
 from ._effects import EFFECT_NAMES, FIT_EFFECTS, check_fit_effects, effect_names, model_label
 from ._fem_tables import fem_force, fem_kappa_table, fem_table_meta, kappa_n, kappa_n_grid
 from ._fit import MAX_W_OVER_H, fit_indentation
@@ -131,6 +137,7 @@ __all__ = [
     "PAPER_BETA_RELATION",
     "TANGENTIAL_FRACTION",
     "BetaRelation",
+    "CertificationTest",
     "CovariateTest",
     "Design",
     "DesignChange",
@@ -161,6 +168,7 @@ __all__ = [
     "beta",
     "beta_from_nu",
     "beta_relation",
+    "certification_tests",
     "check_fit_effects",
     "covariate_tests",
     "cross_validated_rmse",

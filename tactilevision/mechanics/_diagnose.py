@@ -31,12 +31,15 @@ from ._catalogue import EFFECTS, Effect, effect_name, make_effect
 from ._diagnose_stats import (  # noqa: F401  (the statistics' names, also read from here)
     _NOT_COVARIATES,
     ALPHA,
+    CERTIFICATION_COLUMNS,
     RESPONSE_COLUMNS,
+    CertificationTest,
     CovariateTest,
     _covariate_names,
     _folds,
     _group_means,
     _groups,
+    certification_tests,
     covariate_tests,
     cross_validated_rmse,
     noise_floor,
@@ -49,9 +52,11 @@ from ._model import IndentationModel, ModelFit
 
 __all__ = [
     "Candidate",
+    "CertificationTest",
     "CovariateTest",
     "Diagnosis",
     "LadderStep",
+    "certification_tests",
     "covariate_tests",
     "cross_validated_rmse",
     "diagnose",
@@ -188,6 +193,11 @@ class Diagnosis:
     responses_not_scanned : tuple of str
         Response columns of the table left out of the scan
         (:data:`RESPONSE_COLUMNS`; ``scan`` adds them).
+    certification : tuple of CertificationTest
+        The base model's residual structure along the columns the depth rule
+        computed (:data:`CERTIFICATION_COLUMNS`: ``overshoot_mm``), never scanned
+        as covariates nor offered as physics: a significant one is a certification
+        problem, reported with its size.
     """
 
     model: tuple[str, ...]
@@ -215,6 +225,7 @@ class Diagnosis:
     noise_budget_missing: str = ""
     scanned_columns: tuple[str, ...] = ()
     responses_not_scanned: tuple[str, ...] = ()
+    certification: tuple[CertificationTest, ...] = ()
 
     @property
     def depth_link_coarse(self) -> bool:
@@ -268,6 +279,10 @@ class Diagnosis:
             "depth_link_coarse": self.depth_link_coarse,
             "scanned_columns": list(self.scanned_columns),
             "responses_not_scanned": list(self.responses_not_scanned),
+            "certification": [{"name": t.name, "p_value": num(t.p_value),
+                               "explained_fraction": num(t.explained_fraction),
+                               "significant": t.significant, "n": t.n,
+                               "size_n": num(t.size_n)} for t in self.certification],
         }
 
 
@@ -551,7 +566,10 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
         fit_rows=tuple(climb.fit_rows), columns=cols, noise_budget=budget,
         noise_budget_missing=budget_missing,
         scanned_columns=tuple(t.name for t in cov0),
-        responses_not_scanned=tuple(c for c in RESPONSE_COLUMNS if c in cols and c not in scan))
+        responses_not_scanned=tuple(c for c in RESPONSE_COLUMNS if c in cols and c not in scan),
+        certification=certification_tests(
+            climb.fits[0].residuals_n, climb.fits[0].predicted_n,
+            climb.table.sub(climb.fit_rows[0])))
     return _with_message(diag)
 
 
@@ -826,6 +844,11 @@ def _candidate_pool(cols: Mapping[str, np.ndarray], base: str, model: Indentatio
     bad = [c for c in scan if c not in cols]
     if bad:
         raise InputError(f"scan names columns the table does not have: {', '.join(bad)}")
+    bad = [c for c in scan if c in CERTIFICATION_COLUMNS]
+    if bad:
+        raise InputError(f"scan names {', '.join(bad)}: computed by the depth rule, not a "
+                         "condition of the press, it is never scanned as physics (structure "
+                         "along it is reported as a certification problem)")
     trend_cols = [c for c in _covariate_names(cols, scan)
                   if c not in read_by_named and c not in ("press", "indenter", "force_std_n")
                   and _usable(f"stiffness_trend:{c}", cols) is None]
@@ -992,6 +1015,29 @@ def _with_message(d: Diagnosis) -> Diagnosis:
     if d.unexplained_covariate:
         s.append(f"Structure along {d.unexplained_covariate} is explained by no named effect; "
                  f"{d.offered_effect} is offered.")
+    s += _closing(d)
+    b = d.noise_budget
+    if b is not None and not b.exceeds:
+        s.append(_budget_sentence(b))
+    if d.untestable:
+        s.append("Not testable on this table: " + "; ".join(
+            f"{k} ({d.untestable_reasons.get(k) or 'needs ' + ', '.join(v)})"
+            for k, v in d.untestable.items()) + ".")
+    return replace(d, message=" ".join(s))
+
+
+def _closing(d: Diagnosis) -> list[str]:
+    """The certification problems, then how to read the verdict: nothing missing, or not
+    to be read so (a certification problem, a measurement chain adding noise, a coarse
+    depth link)."""
+    s: list[str] = []
+    for t in d.certification:
+        if t.significant:
+            s.append(f"The base model's residuals also follow {t.name}, a product of the "
+                     f"depth rule, not a condition of the press (p = {t.p_value:.1g}, "
+                     f"{t.explained_fraction:.0%} of the residual variance, "
+                     f"{t.size_n * 1e3:.2f} mN RMS): a certification problem (the depths "
+                     "are off together with what certified them), not physics.")
     b = d.noise_budget
     chain = (f"the replicate scatter ({b.floor_n * 1e3:.2f} mN) is {b.ratio:.1f} times what "
              f"the instruments explain ({b.budget_n * 1e3:.2f} mN: F/T window "
@@ -1001,8 +1047,13 @@ def _with_message(d: Diagnosis) -> Diagnosis:
              "scatter of the certified depth), the clock offset and the force window."
              ) if b is not None and b.exceeds else ""
     coarse = _coarse_depth_link(d)
+    cert = max((t.size_n for t in d.certification if t.significant), default=0.0)
     if not d.missing_effect and not d.unexplained_covariate:
-        if chain:
+        if cert > 0:
+            s.append(f"No effect of the gel's model is named, but that certification problem "
+                     f"({cert * 1e3:.2f} mN RMS) is not the model's noise: an effect of that "
+                     "size would hide in it. Check the depth rule before reading this verdict.")
+        elif chain:
             s.append("No effect of the gel's model is missing, but " + chain)
         elif coarse:
             s.append("Nothing shows above the noise, but " + coarse)
@@ -1012,10 +1063,4 @@ def _with_message(d: Diagnosis) -> Diagnosis:
         s.append("Also, " + coarse)
     elif chain:
         s.append("Also, " + chain)
-    if b is not None and not b.exceeds:
-        s.append(_budget_sentence(b))
-    if d.untestable:
-        s.append("Not testable on this table: " + "; ".join(
-            f"{k} ({d.untestable_reasons.get(k) or 'needs ' + ', '.join(v)})"
-            for k, v in d.untestable.items()) + ".")
-    return replace(d, message=" ".join(s))
+    return s

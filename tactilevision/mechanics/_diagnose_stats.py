@@ -27,6 +27,10 @@ _NOT_COVARIATES = ("force_n", "depth_std_mm", "force_sem_n", "bevel_force_n", "f
 #: is the force itself. Not scanned as covariates unless asked (``scan``); ``fx_n`` and
 #: ``fy_n`` are read by ``force_crosstalk``, the F/T sensor's physics.
 RESPONSE_COLUMNS = ("fx_n", "fy_n", "force_std_n")
+#: Columns the depth rule computed (products of the certification, not conditions of the
+#: press): never covariates, never offered as physics; structure along them is tested
+#: apart (:func:`certification_tests`) and reported as a certification problem.
+CERTIFICATION_COLUMNS = ("overshoot_mm",)
 
 
 @dataclass(frozen=True)
@@ -110,7 +114,7 @@ def noise_floor(residuals_n: np.ndarray, columns: Mapping[str, np.ndarray]) -> f
 
 def _covariate_names(columns: Mapping[str, np.ndarray], scan: Sequence[str] = ()
                      ) -> list[str]:
-    return [k for k in columns if k not in _NOT_COVARIATES
+    return [k for k in columns if k not in _NOT_COVARIATES and k not in CERTIFICATION_COLUMNS
             and (k not in RESPONSE_COLUMNS or k in scan)]
 
 
@@ -155,49 +159,123 @@ def covariate_tests(residuals_n: np.ndarray, predicted_n: np.ndarray,
     """
     r_all = np.asarray(residuals_n, np.float64)
     p_all = np.asarray(predicted_n, np.float64)
-    out = []
-    names = []
-    for name in _covariate_names(columns, scan):
-        x = np.asarray(columns[name], np.float64)
-        ok = np.isfinite(x) & np.isfinite(r_all)
-        if ok.sum() < 8 or np.ptp(x[ok]) == 0:
-            continue
-        names.append(name)
+    names = _testable(_covariate_names(columns, scan), r_all, columns)
     m = max(len(names), 1)
+    out = []
+    for name in names:
+        pv, frac, n, _ = _structure(name, r_all, p_all, columns, n_depth_params)
+        out.append(CovariateTest(name, pv, frac, pv < alpha / m, n))
+    return tuple(out)
+
+
+def _testable(names: Sequence[str], r_all: np.ndarray, columns: Mapping[str, np.ndarray]
+              ) -> list[str]:
+    """The columns of `names` with 8 or more values beside a residual, not constant."""
+    out = []
     for name in names:
         x = np.asarray(columns[name], np.float64)
         ok = np.isfinite(x) & np.isfinite(r_all)
-        r, xs, p = r_all[ok], x[ok], p_all[ok]
-        n = r.size
-        values, g = np.unique(xs, return_inverse=True)
-        rss0 = float(np.sum((r - r.mean()) ** 2))
-        if values.size <= 8:
-            G = values.size
-            rss1 = float(np.sum((r - _group_means(r, g)) ** 2))
-            df1 = G - 1 - (n_depth_params if name == "depth_mm" else 0)
-            df2 = n - G
-        else:
-            # within replicate groups: structure along depth (the law's own) is taken out
-            grp = _groups({k: np.asarray(v)[ok] for k, v in columns.items()
-                           if k in ("depth_mm", "indenter", "overshoot_mm")})
-            G = int(grp.max()) + 1
-            r = r - _group_means(r, grp)
-            rss0 = float(np.sum(r ** 2))
-            z = (xs - xs.mean()) / xs.std()
-            q = (p - p.mean()) / (p.std() or 1.0)
-            X = np.column_stack([z, z**2, q * z, q * z**2])
-            X = X - _group_means(X, grp)
-            coef, *_ = np.linalg.lstsq(X, r, rcond=None)
-            rss1 = float(np.sum((r - X @ coef) ** 2))
-            df1 = int(np.linalg.matrix_rank(X))
-            df2 = n - G - df1
-        if df1 < 1 or df2 < 1 or rss0 <= 0:
-            pv, frac = 1.0, 0.0
-        else:
-            F = ((rss0 - rss1) / df1) / (rss1 / df2) if rss1 > 0 else math.inf
-            pv = float(stats.f.sf(F, df1, df2))
-            frac = float(max(0.0, 1 - rss1 / rss0))
-        out.append(CovariateTest(name, pv, frac, pv < alpha / m, n))
+        if ok.sum() >= 8 and np.ptp(x[ok]) > 0:
+            out.append(name)
+    return out
+
+
+def _structure(name: str, r_all: np.ndarray, p_all: np.ndarray,
+               columns: Mapping[str, np.ndarray], n_depth_params: int
+               ) -> tuple[float, float, int, float]:
+    """One column's test (:func:`covariate_tests`' notes): p-value, the fraction of the
+    residual variance explained, the presses tested, and the RMS of the structure found
+    (the residual's sum of squares it explains, per press, square-rooted), N."""
+    x = np.asarray(columns[name], np.float64)
+    ok = np.isfinite(x) & np.isfinite(r_all)
+    r, xs, p = r_all[ok], x[ok], p_all[ok]
+    n = r.size
+    values, g = np.unique(xs, return_inverse=True)
+    rss0 = float(np.sum((r - r.mean()) ** 2))
+    if values.size <= 8:
+        G = values.size
+        rss1 = float(np.sum((r - _group_means(r, g)) ** 2))
+        df1 = G - 1 - (n_depth_params if name == "depth_mm" else 0)
+        df2 = n - G
+    else:
+        # within replicate groups: structure along depth (the law's own) is taken out
+        grp = _groups({k: np.asarray(v)[ok] for k, v in columns.items()
+                       if k in ("depth_mm", "indenter", "overshoot_mm")})
+        G = int(grp.max()) + 1
+        r = r - _group_means(r, grp)
+        rss0 = float(np.sum(r ** 2))
+        z = (xs - xs.mean()) / xs.std()
+        q = (p - p.mean()) / (p.std() or 1.0)
+        X = np.column_stack([z, z**2, q * z, q * z**2])
+        X = X - _group_means(X, grp)
+        coef, *_ = np.linalg.lstsq(X, r, rcond=None)
+        rss1 = float(np.sum((r - X @ coef) ** 2))
+        df1 = int(np.linalg.matrix_rank(X))
+        df2 = n - G - df1
+    if df1 < 1 or df2 < 1 or rss0 <= 0:
+        return 1.0, 0.0, n, 0.0
+    F = ((rss0 - rss1) / df1) / (rss1 / df2) if rss1 > 0 else math.inf
+    return (float(stats.f.sf(F, df1, df2)), float(max(0.0, 1 - rss1 / rss0)), n,
+            math.sqrt(max(rss0 - rss1, 0.0) / n))
+
+
+@dataclass(frozen=True)
+class CertificationTest:
+    """Residual structure along a column the depth rule computed (a certification
+    problem, not physics).
+
+    Attributes
+    ----------
+    name : str
+        The column (:data:`CERTIFICATION_COLUMNS`).
+    p_value, explained_fraction : float
+        As :class:`CovariateTest`'s (the same test).
+    significant : bool
+        ``p_value`` below ALPHA / the number of certification columns tested.
+    n : int
+    size_n : float
+        RMS of the structure found along the column, N: how far the forces stray
+        with it, the size of the certification problem in force.
+    """
+
+    name: str
+    p_value: float
+    explained_fraction: float
+    significant: bool
+    n: int
+    size_n: float
+
+
+def certification_tests(residuals_n: np.ndarray, predicted_n: np.ndarray,
+                        columns: Mapping[str, np.ndarray], *, alpha: float = ALPHA
+                        ) -> tuple[CertificationTest, ...]:
+    """Does the residual carry structure along a column the depth rule computed?
+
+    The test of :func:`covariate_tests` on :data:`CERTIFICATION_COLUMNS`
+    (``overshoot_mm``: the certified depth less the indenter's w0). Along such a
+    column structure is not physics: the depths are off together with what
+    certified them (the mark rule's P(w0) crossing, a vernier's unread bands).
+
+    Parameters
+    ----------
+    residuals_n, predicted_n : (N,) ndarray
+        A model's residuals and predictions, N.
+    columns : mapping of str to (N,) ndarray
+    alpha : float, default ALPHA
+
+    Returns
+    -------
+    tests : tuple of CertificationTest
+        One per certification column the table has (8 values or more, not constant).
+    """
+    r_all = np.asarray(residuals_n, np.float64)
+    p_all = np.asarray(predicted_n, np.float64)
+    names = _testable([c for c in CERTIFICATION_COLUMNS if c in columns], r_all, columns)
+    m = max(len(names), 1)
+    out = []
+    for name in names:
+        pv, frac, n, size = _structure(name, r_all, p_all, columns, 0)
+        out.append(CertificationTest(name, pv, frac, pv < alpha / m, n, size))
     return tuple(out)
 
 
