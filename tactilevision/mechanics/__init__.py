@@ -59,7 +59,7 @@ from ._beta import (
 from ._budget import NoiseBudget, noise_budget
 from ._catalogue import EFFECTS, Effect, FemLaw, Param, make_effect, register_effect
 from ._design import EFFECT_SIZE_PARAMS, depth_uncertainty, planned_columns
-from ._diagnose import Diagnosis, diagnose, noise_floor
+from ._diagnose import Diagnosis, noise_floor
 from ._diagnose_stats import (
     CertificationTest,
     CovariateTest,
@@ -67,6 +67,7 @@ from ._diagnose_stats import (
     covariate_tests,
     cross_validated_rmse,
 )
+from ._diagnose_verdict import diagnose
 from ._effects import EFFECT_NAMES, FIT_EFFECTS, check_fit_effects, effect_names, model_label
 from ._fem_tables import fem_force, fem_kappa_table, fem_table_meta, kappa_n, kappa_n_grid
 from ._fit import MAX_W_OVER_H, fit_indentation
@@ -102,6 +103,7 @@ from ._plan_effects import (
     EffectSensitivity,
     effect_power,
     effect_sensitivity,
+    table_sensitivity,
 )
 from ._plan_recommend import DesignChange, Recommendation, error_totals, recommend
 from ._ramp import RampFit, fit_ramp
@@ -216,6 +218,7 @@ __all__ = [
     "sphere_force_ratio",
     "sphere_reach",
     "sphere_table_meta",
+    "table_sensitivity",
     "untestable_in_table",
     "validate_indentation",
     "validate_indenter",

@@ -59,7 +59,7 @@ __all__ = [
     "certification_tests",
     "covariate_tests",
     "cross_validated_rmse",
-    "diagnose",
+    "diagnose_core",
     "noise_floor",
 ]
 
@@ -193,6 +193,14 @@ class Diagnosis:
     responses_not_scanned : tuple of str
         Response columns of the table left out of the scan
         (:data:`RESPONSE_COLUMNS`; ``scan`` adds them).
+    rules_out : dict of str to EffectSensitivity
+        With no missing effect and no unexplained covariate: for each catalogue
+        effect, the smallest size this very table would have named in 95 % of
+        replays at the noise the diagnosis tested against (``size`` in its
+        ``unit``; NaN where the table cannot test it, inf where no size the
+        parameter allows would be named; ``why`` says which). Empty otherwise.
+    rules_out_note : str
+        How those sizes were found, or why there are none.
     certification : tuple of CertificationTest
         The base model's residual structure along the columns the depth rule
         computed (:data:`CERTIFICATION_COLUMNS`: ``overshoot_mm``), never scanned
@@ -226,6 +234,8 @@ class Diagnosis:
     scanned_columns: tuple[str, ...] = ()
     responses_not_scanned: tuple[str, ...] = ()
     certification: tuple[CertificationTest, ...] = ()
+    rules_out: dict[str, Any] = field(default_factory=dict, hash=False)
+    rules_out_note: str = ""
 
     @property
     def depth_link_coarse(self) -> bool:
@@ -283,6 +293,10 @@ class Diagnosis:
                                "explained_fraction": num(t.explained_fraction),
                                "significant": t.significant, "n": t.n,
                                "size_n": num(t.size_n)} for t in self.certification],
+            "rules_out": {k: {"parameter": v.parameter, "unit": v.unit,
+                              "size": num(v.size), "power": v.power, "why": v.why}
+                          for k, v in self.rules_out.items()},
+            "rules_out_note": self.rules_out_note or None,
         }
 
 
@@ -422,115 +436,13 @@ def _why(needed: Sequence[str], columns: Mapping[str, np.ndarray]) -> str:
 # ----------------------------------------------------------------- diagnose
 
 
-def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_mm: float,
-             base: str = "paper", effects: Sequence[str] = (), beta_table: str = "fem",
-             max_steps: int = 3, cv_folds: int = 10, seed: int = 0,
-             progress: bool = False, curvature: str = CURVATURE,
-             candidates: Sequence = (), scan: Sequence[str] = ()) -> Diagnosis:
-    """Compare a model with the measurements and find the missing effect.
-
-    Parameters
-    ----------
-    columns : mapping of str to (N,) array_like
-        A measurements table (formats.md §2): ``depth_mm``, ``force_n`` and
-        any covariates. Text columns must be left out.
-    thickness_mm, radius_mm : float
-        h and a, mm.
-    base : {'paper', 'layer', 'fem'}, default 'paper'
-        The paper's eq. (5), the small-strain layer alone, or the FEM's
-        finite-strain law (:class:`~tactilevision.mechanics.FemLaw`, read at
-        a/h; E and nu are its c and nu). With 'fem' the law's departures, a
-        ``(w/h)^2`` curvature and eq. (5)'s own ``large_deformation`` (a gel
-        that follows eq. 5 rather than the FEM), are rungs of the ladder,
-        never verdicts, and depth effects must beat the better of them
-        (`curvature`). See docs/diagnose_power.md for what it gains and
-        costs.
-    effects : sequence of str
-        Effects already in the model diagnosed.
-    beta_table : {'fem', 'paper'}, default 'fem'
-        For E and nu at each step only: the residuals do not depend on it.
-    max_steps : int, default 3
-        Most effects added, greedily.
-    cv_folds : int, default 10
-    seed : int, default 0
-        Seeds the cross-validation folds.
-    progress : bool, default False
-        A progress bar over the candidate fits.
-    candidates : sequence of str, Effect subclass or Effect instance
-        Effects of your own tried at every step beside the catalogue's, as
-        named physics: each can be the verdict, is tested
-        against its counterpart of the other kind along its columns, and is
-        reported untestable when its columns are missing or constant. Specs
-        as for :class:`IndentationModel` (``'package.module:ClassName'``,
-        ``'path/to/file.py:ClassName'``, a registered name, a class or an
-        instance; docs/custom_effects.md).
-    scan : sequence of str, default ()
-        Response columns (:data:`RESPONSE_COLUMNS`: ``fx_n``, ``fy_n``,
-        ``force_std_n``) to scan as covariates all the same. By default they
-        are not: they follow the force, so a trend along them is the force
-        itself (a stiffness trend along ``fx_n`` is the normal force's).
-        ``fx_n`` and ``fy_n`` are still read by ``force_crosstalk``. The
-        columns scanned are in :attr:`Diagnosis.scanned_columns`.
-    curvature : {'gate', 'nuisance'}, default :data:`CURVATURE`
-        How eq. (5)'s own misfit to the finite-strain law (a ``(w/h)^2``
-        curvature of P/w, :class:`LawCurvature`) is kept from being read as
-        an effect. 'gate': the curvature is a candidate like the effects (a
-        rung of the ladder, never a verdict) and a depth effect
-        (``depth_offset``, ``force_offset``) must beat it by
-        ``CURVATURE_BIC``. 'nuisance': the curvature enters the model before
-        any effect is tried when it lowers the BIC by more than
-        ``NUISANCE_BIC`` (with 4 or more distinct depths), and every effect
-        is then judged against that model alike.
-
-    Returns
-    -------
-    Diagnosis
-
-    Raises
-    ------
-    InputError
-        For a missing column of the model, an unknown effect, bad h, a, or
-        fewer than two distinct depths.
-
-    Notes
-    -----
-    At each step every applicable catalogue effect not yet in the model is
-    added in turn and the extended model fitted (robust soft_l1 least
-    squares, :meth:`IndentationModel.fit`); so are ``stiffness_step:<col>``
-    (a change point in stiffness) along ``press``, ``day`` and ``time_s``
-    (:data:`STEP_COLUMNS`), ``stiffness_trend:<col>`` for each covariate
-    that no named effect reads, and, for each named effect along a column,
-    its counterpart of the other kind along the same column
-    (``stiffness_trend:time_s`` for ``force_drift``, ``force_trend:day``
-    for ``aging``, ...): a stiffness change scales P(w), so its force
-    grows with depth, where a force effect adds the same force at every
-    depth, and the two compete on the same footing. The best candidate by BIC
-    is accepted when its BIC is lower by more than ``DELTA_BIC`` = 10 and its
-    10-fold cross-validated RMSE is lower too; an effect seen along depth
-    alone (``depth_offset``, ``force_offset``) must also beat, by
-    ``CURVATURE_BIC`` = 6, the base law's own curvature (a ``(w/h)^2`` term,
-    :class:`LawCurvature`: the FEM's P(w) is not exactly eq. 5, and
-    repeatable presses resolve the difference; see `curvature`). Other
-    candidates that also pass and come within ``EQUIVALENT_BIC`` = 6 of it,
-    or leave an RMSE within ``EQUIVALENT_RMSE`` = 1 % of its, are
-    equivalent. A generic trend (``stiffness_trend``, ``force_trend``)
-    wins a step only by beating every named effect that passes by
-    ``EQUIVALENT_BIC``; else the named effect is taken and the trend is
-    listed as its equivalent. A
-    ``stiffness_trend`` or ``force_trend`` winner is not a named effect: its
-    column is reported as ``unexplained_covariate`` and the trend as
-    ``offered_effect``. After
-    the last step, a covariate whose residual structure is still
-    significant (:func:`covariate_tests`), explains more than 10 % of the
-    residual variance and along which an effect (the named one that reads
-    the column, else a stiffness or force trend) lowers the BIC by more
-    than ``DELTA_BIC`` is reported as unexplained too. A
-    counterpart competes only when its named effect passes: alone, it
-    raises no alarm. When the base law's
-    own curvature wins a step it is added to the ladder as ``law_curvature``
-    (eq. 5's limit, not a missing physical effect; no verdict). The noise
-    floor is :func:`noise_floor` of the final model's residuals.
-    """
+def diagnose_core(columns: Mapping[str, np.ndarray], *, thickness_mm: float,
+                  radius_mm: float, base: str = "paper", effects: Sequence[str] = (),
+                  beta_table: str = "fem", max_steps: int = 3, cv_folds: int = 10,
+                  seed: int = 0, progress: bool = False, curvature: str = CURVATURE,
+                  candidates: Sequence = (), scan: Sequence[str] = ()) -> Diagnosis:
+    """:func:`tactilevision.mechanics.diagnose` without what its verdict rules out (the
+    effect-size replay on the table): the ladder, the verdicts, the message."""
     cols = {k: np.asarray(v, np.float64) for k, v in columns.items()}
     h, a = float(thickness_mm), float(radius_mm)
     model = _model_to_diagnose(cols, h, a, base, effects)

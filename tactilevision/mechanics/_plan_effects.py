@@ -61,7 +61,8 @@ from ._design import (
 from ._diagnose import CURVATURE_BIC, DELTA_BIC, EQUIVALENT_BIC
 from ._fem_tables import fem_force
 
-__all__ = ["EFFECT_SIZE_PARAMS", "EffectSensitivity", "effect_power", "effect_sensitivity"]
+__all__ = ["EFFECT_SIZE_PARAMS", "EffectSensitivity", "effect_power", "effect_sensitivity",
+           "table_sensitivity"]
 
 #: Time constant of relaxation and recovery the sizes are given at, s (the catalogue's
 #: starting values; a design's ``relaxation_tau_s`` replaces relaxation's).
@@ -270,18 +271,42 @@ def _rss_bounded(bases: np.ndarray, lo: np.ndarray, hi: np.ndarray,
     return rss
 
 
-class _Replay:
-    """``diagnose``'s decisions, linearized, over many drawn sessions of a design."""
+@dataclass(frozen=True)
+class _TableSetup:
+    """A measured table as the replay's session: its presses, columns and noise, and the
+    gel (E, nu) its base fit found, in place of a design's."""
 
-    def __init__(self, d: Design, draws: int, seed: int) -> None:
+    E_mpa: float
+    nu: float
+    radius_mm: float
+    thickness_mm: float
+    depths_mm: tuple[float, ...]
+    w: np.ndarray
+    cols: dict
+    sigma: np.ndarray
+    untestable: dict
+    relaxation_tau_s: float | None = None
+
+
+class _Replay:
+    """``diagnose``'s decisions, linearized, over many drawn sessions of a design (or of
+    one measured table, :class:`_TableSetup`: its own presses and noise)."""
+
+    def __init__(self, d: Design | _TableSetup, draws: int, seed: int) -> None:
         self.d = d
-        w, P = design_table(d)
+        if isinstance(d, _TableSetup):
+            w, cols, untest = d.w, d.cols, d.untestable
+            P = _fem_force(d, w)
+            self.dPdw = _slope(d, w)
+            self.sigma = np.asarray(d.sigma, np.float64)
+        else:
+            w, P = design_table(d)
+            cols, untest = planned_columns(d), untestable_effects(d)
+            sd_um, _, _ = depth_uncertainty(d)
+            self.dPdw = _slope(d, w)
+            s_P = d.force_noise_n / math.sqrt(d.window_samples)
+            self.sigma = np.sqrt(s_P ** 2 + (self.dPdw * sd_um * 1e-3) ** 2)
         self.n = n = w.size
-        cols = planned_columns(d)
-        sd_um, _, _ = depth_uncertainty(d)
-        self.dPdw = _slope(d, w)
-        s_P = d.force_noise_n / math.sqrt(d.window_samples)
-        self.sigma = np.sqrt(s_P ** 2 + (self.dPdw * sd_um * 1e-3) ** 2)
         rng = np.random.default_rng(seed)
         self.noise = self.sigma[:, None] * rng.standard_normal((n, draws))
         # each session has its own tangential forces: the crosstalk's own power is
@@ -291,6 +316,10 @@ class _Replay:
         self.tangential = [(TANGENTIAL_FRACTION * P * rng_t.standard_normal(n),
                             TANGENTIAL_FRACTION * P * rng_t.standard_normal(n))
                            for _ in range(TANGENTIAL_DRAWS)]
+        if isinstance(d, _TableSetup) and {"fx_n", "fy_n"} <= set(cols):
+            # a measured table's own tangential forces, in every drawn session
+            self.tangential = [(np.asarray(cols["fx_n"], np.float64),
+                                np.asarray(cols["fy_n"], np.float64))] * TANGENTIAL_DRAWS
         tang = self.tangential[0]
         x = w / d.thickness_mm
         self.X0 = np.column_stack([w, w * x])               # eq. (5): c w + c beta w^2 / h
@@ -301,7 +330,6 @@ class _Replay:
         law = self.X0 @ coef
         dlaw = coef[0] + 2 * coef[1] * x
         self.cols = cols
-        untest = untestable_effects(d)
         self.untestable = untest
         self.cands: dict[str, _Candidate] = {}
         self.signal: dict[str, np.ndarray] = {}
@@ -490,7 +518,8 @@ def _reach(d: Design, name: str) -> float:
     param = EFFECT_SIZE_PARAMS[name][0]
     bound = next(q.upper for q in make_effect(name).params if q.name == param)
     if name == "depth_offset":
-        bound = min(bound, 0.23 * d.thickness_mm - max(d.depths_mm))
+        # a hair inside the table's edge: w + bound / h would round past 0.23 (an error)
+        bound = min(bound, 0.23 * (1 - 1e-9) * d.thickness_mm - max(d.depths_mm))
     return float(bound)
 
 
@@ -607,7 +636,61 @@ def effect_sensitivity(design: Design, *, power: float = 0.95, draws: int = 1000
     """
     if not 0 < power < 1:
         raise InputError(f"power must be in (0, 1), got {power!r}")
-    rep = _Replay(design, draws, seed)
+    return _sizes(_Replay(design, draws, seed), design, power)
+
+
+def table_sensitivity(columns: dict, *, thickness_mm: float, radius_mm: float,
+                      E_mpa: float, nu: float, sigma_n: np.ndarray,
+                      untestable: dict[str, str], power: float = 0.95, draws: int = 1000,
+                      seed: int = 0, relaxation_tau_s: float | None = None
+                      ) -> dict[str, EffectSensitivity]:
+    """The smallest size of each catalogue effect ``diagnose`` would have named on this
+    very table: :func:`effect_sensitivity`'s replay on the measured presses.
+
+    Parameters
+    ----------
+    columns : dict of str to (N,) ndarray
+        The table (formats.md section 2): its depths, and the columns the effects read.
+    thickness_mm, radius_mm : float
+        h and a, mm.
+    E_mpa, nu : float
+        The gel the table's base fit found (the replay's noise-free forces are the FEM's
+        at these, at the table's depths).
+    sigma_n : (N,) float ndarray
+        Each press's force noise, N: the noise ``diagnose`` tested against.
+    untestable : dict of str to str
+        Effects the table cannot test, and why (``diagnose``'s own list).
+    power, draws, seed :
+        As :func:`effect_sensitivity`.
+    relaxation_tau_s : float, optional
+        Relaxation's time constant the size is given at (default 1 s).
+
+    Returns
+    -------
+    sizes : dict of str to EffectSensitivity
+
+    Raises
+    ------
+    InputError
+        For `power` outside (0, 1) or a `sigma_n` not one positive number per press.
+    """
+    if not 0 < power < 1:
+        raise InputError(f"power must be in (0, 1), got {power!r}")
+    w = np.asarray(columns["depth_mm"], np.float64)
+    sig = np.asarray(sigma_n, np.float64)
+    if sig.shape != w.shape or not np.all(np.isfinite(sig) & (sig > 0)):
+        raise InputError("sigma_n must hold one positive force noise per press")
+    setup = _TableSetup(E_mpa=float(E_mpa), nu=float(nu), radius_mm=float(radius_mm),
+                        thickness_mm=float(thickness_mm), depths_mm=(float(w.max()),),
+                        w=w, cols={k: np.asarray(v, np.float64) for k, v in columns.items()},
+                        sigma=sig, untestable=dict(untestable),
+                        relaxation_tau_s=relaxation_tau_s)
+    return _sizes(_Replay(setup, draws, seed), setup, power)
+
+
+def _sizes(rep: _Replay, design: Design | _TableSetup, power: float
+           ) -> dict[str, EffectSensitivity]:
+    """:func:`effect_sensitivity`'s answer from a replay."""
     out = {}
     for name, (param, unit, scale) in EFFECT_SIZE_PARAMS.items():
         if name not in rep.cands:

@@ -1,0 +1,77 @@
+"""What a "nothing missing" verdict rules out, checked: an effect of 1.5 times the stated
+size is named.
+
+    python benchmarks/bench_rules_out.py [--seeds 10] [--factor 1.5]
+
+For each seed, the generator's null table (``tactilevision.sim.make_measurement_table``:
+the finite-strain FEM law and its noise, nothing hidden) is diagnosed; its verdict names
+nothing and states, per catalogue effect, the smallest size this very table would have
+named (``Diagnosis.rules_out``, the plan's replay on the measured presses). Then the same
+seed's table is drawn again with one effect hidden at `factor` times that size (the
+generator's draws do not depend on the effect's strength, so presses, design and noise are
+the same) and diagnosed: the effect is *named* when it is the missing effect or listed as
+equivalent to it (the replay's rule). Effects whose generator parameter is the catalogue's
+own: depth_offset (delta_mm), force_offset (offset_n), force_crosstalk (kx = chi).
+Printed: per effect, the share of seeds that named it, and the sizes.
+"""
+
+from __future__ import annotations
+
+import argparse
+import platform
+import time
+import warnings
+
+from tactilevision.mechanics import diagnose
+from tactilevision.sim import make_measurement_table
+
+#: catalogue effect -> (generator's hidden name, its truth key of the same parameter)
+EFFECTS = {"depth_offset": ("depth_offset", "delta_mm"),
+           "force_offset": ("force_offset", "offset_n"),
+           "force_crosstalk": ("crosstalk", "chi")}
+
+
+def _diag(t):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return diagnose(t.columns, thickness_mm=t.thickness_mm, radius_mm=t.radius_mm)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--seeds", type=int, default=10)
+    ap.add_argument("--factor", type=float, default=1.5)
+    args = ap.parse_args()
+    print(f"machine: {platform.machine()}, python {platform.python_version()}; "
+          f"{args.seeds} seeds, effects at {args.factor:g} x the size ruled out")
+    named = {k: 0 for k in EFFECTS}
+    tried = {k: 0 for k in EFFECTS}
+    took = []
+    for seed in range(args.seeds):
+        t0 = time.perf_counter()
+        d0 = _diag(make_measurement_table(None, seed))
+        took.append(time.perf_counter() - t0)
+        if d0.missing_effect or d0.unexplained_covariate:
+            print(f"seed {seed}: the null table named {d0.missing_effect or d0.offered_effect}")
+            continue
+        for eff, (hidden, key) in EFFECTS.items():
+            size = d0.rules_out[eff].size_param
+            if not 0 < size < float("inf"):
+                continue
+            unit = make_measurement_table(hidden, seed).truth[key]
+            t = make_measurement_table(hidden, seed, strength=args.factor * size / unit)
+            d = _diag(t)
+            hit = d.missing_effect == eff or eff in d.equivalent_effects
+            tried[eff] += 1
+            named[eff] += hit
+            print(f"seed {seed}: {eff} ruled out above {d0.rules_out[eff].size:.3g} "
+                  f"{d0.rules_out[eff].unit}; hidden at {args.factor:g} x: "
+                  f"{'named' if hit else 'missed'} (verdict {d.missing_effect}, "
+                  f"equivalent {list(d.equivalent_effects)})")
+    for eff in EFFECTS:
+        print(f"{eff}: named in {named[eff]} of {tried[eff]}")
+    print(f"diagnose of a null table with its replay: median {sorted(took)[len(took) // 2]:.2f} s")
+
+
+if __name__ == "__main__":
+    main()

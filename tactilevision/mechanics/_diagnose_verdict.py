@@ -1,0 +1,217 @@
+"""``diagnose``, and what its verdict rules out.
+
+:func:`diagnose` runs the ladder (:func:`~tactilevision.mechanics._diagnose.diagnose_core`)
+and, when it names nothing, says what that rules out: the smallest size of each catalogue
+effect that this very table would have named (the plan's effect-size replay,
+:func:`~tactilevision.mechanics.table_sensitivity`, on the measured presses at the noise
+the diagnosis tested against), so that "none" reads "none larger than ...".
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import replace
+
+import numpy as np
+
+from .._checks import InputError
+from ._diagnose import CURVATURE, Diagnosis, diagnose_core
+from ._plan_effects import table_sensitivity
+
+__all__ = ["RULES_OUT_DRAWS", "diagnose"]
+
+#: Sessions replayed to find what a verdict rules out (the sizes' Monte Carlo error is
+#: about 5 % at 400; :func:`effect_sensitivity` plans with 1000).
+RULES_OUT_DRAWS = 400
+
+
+def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_mm: float,
+             base: str = "paper", effects: Sequence[str] = (), beta_table: str = "fem",
+             max_steps: int = 3, cv_folds: int = 10, seed: int = 0,
+             progress: bool = False, curvature: str = CURVATURE,
+             candidates: Sequence = (), scan: Sequence[str] = (),
+             rules_out: bool = True) -> Diagnosis:
+    """Compare a model with the measurements and find the missing effect.
+
+    Parameters
+    ----------
+    columns : mapping of str to (N,) array_like
+        A measurements table (formats.md §2): ``depth_mm``, ``force_n`` and
+        any covariates. Text columns must be left out.
+    thickness_mm, radius_mm : float
+        h and a, mm.
+    base : {'paper', 'layer', 'fem'}, default 'paper'
+        The paper's eq. (5), the small-strain layer alone, or the FEM's
+        finite-strain law (:class:`~tactilevision.mechanics.FemLaw`, read at
+        a/h; E and nu are its c and nu). With 'fem' the law's departures, a
+        ``(w/h)^2`` curvature and eq. (5)'s own ``large_deformation`` (a gel
+        that follows eq. 5 rather than the FEM), are rungs of the ladder,
+        never verdicts, and depth effects must beat the better of them
+        (`curvature`). See docs/diagnose_power.md for what it gains and
+        costs.
+    effects : sequence of str
+        Effects already in the model diagnosed.
+    beta_table : {'fem', 'paper'}, default 'fem'
+        For E and nu at each step only: the residuals do not depend on it.
+    max_steps : int, default 3
+        Most effects added, greedily.
+    cv_folds : int, default 10
+    seed : int, default 0
+        Seeds the cross-validation folds.
+    progress : bool, default False
+        A progress bar over the candidate fits.
+    candidates : sequence of str, Effect subclass or Effect instance
+        Effects of your own tried at every step beside the catalogue's, as
+        named physics: each can be the verdict, is tested
+        against its counterpart of the other kind along its columns, and is
+        reported untestable when its columns are missing or constant. Specs
+        as for :class:`IndentationModel` (``'package.module:ClassName'``,
+        ``'path/to/file.py:ClassName'``, a registered name, a class or an
+        instance; docs/custom_effects.md).
+    scan : sequence of str, default ()
+        Response columns (:data:`RESPONSE_COLUMNS`: ``fx_n``, ``fy_n``,
+        ``force_std_n``) to scan as covariates all the same. By default they
+        are not: they follow the force, so a trend along them is the force
+        itself (a stiffness trend along ``fx_n`` is the normal force's).
+        ``fx_n`` and ``fy_n`` are still read by ``force_crosstalk``. The
+        columns scanned are in :attr:`Diagnosis.scanned_columns`.
+    curvature : {'gate', 'nuisance'}, default :data:`CURVATURE`
+        How eq. (5)'s own misfit to the finite-strain law (a ``(w/h)^2``
+        curvature of P/w, :class:`LawCurvature`) is kept from being read as
+        an effect. 'gate': the curvature is a candidate like the effects (a
+        rung of the ladder, never a verdict) and a depth effect
+        (``depth_offset``, ``force_offset``) must beat it by
+        ``CURVATURE_BIC``. 'nuisance': the curvature enters the model before
+        any effect is tried when it lowers the BIC by more than
+        ``NUISANCE_BIC`` (with 4 or more distinct depths), and every effect
+        is then judged against that model alike.
+
+    rules_out : bool, default True
+        With no missing effect and no unexplained covariate, replay the
+        decisions on this table at its noise (:func:`table_sensitivity`) to
+        say what the verdict rules out: for each catalogue effect, the
+        smallest size the table would have named (``Diagnosis.rules_out``).
+        On the paper's base only.
+
+    Returns
+    -------
+    Diagnosis
+
+    Raises
+    ------
+    InputError
+        For a missing column of the model, an unknown effect, bad h, a, or
+        fewer than two distinct depths.
+
+    Notes
+    -----
+    At each step every applicable catalogue effect not yet in the model is
+    added in turn and the extended model fitted (robust soft_l1 least
+    squares, :meth:`IndentationModel.fit`); so are ``stiffness_step:<col>``
+    (a change point in stiffness) along ``press``, ``day`` and ``time_s``
+    (:data:`STEP_COLUMNS`), ``stiffness_trend:<col>`` for each covariate
+    that no named effect reads, and, for each named effect along a column,
+    its counterpart of the other kind along the same column
+    (``stiffness_trend:time_s`` for ``force_drift``, ``force_trend:day``
+    for ``aging``, ...): a stiffness change scales P(w), so its force
+    grows with depth, where a force effect adds the same force at every
+    depth, and the two compete on the same footing. The best candidate by BIC
+    is accepted when its BIC is lower by more than ``DELTA_BIC`` = 10 and its
+    10-fold cross-validated RMSE is lower too; an effect seen along depth
+    alone (``depth_offset``, ``force_offset``) must also beat, by
+    ``CURVATURE_BIC`` = 6, the base law's own curvature (a ``(w/h)^2`` term,
+    :class:`LawCurvature`: the FEM's P(w) is not exactly eq. 5, and
+    repeatable presses resolve the difference; see `curvature`). Other
+    candidates that also pass and come within ``EQUIVALENT_BIC`` = 6 of it,
+    or leave an RMSE within ``EQUIVALENT_RMSE`` = 1 % of its, are
+    equivalent. A generic trend (``stiffness_trend``, ``force_trend``)
+    wins a step only by beating every named effect that passes by
+    ``EQUIVALENT_BIC``; else the named effect is taken and the trend is
+    listed as its equivalent. A
+    ``stiffness_trend`` or ``force_trend`` winner is not a named effect: its
+    column is reported as ``unexplained_covariate`` and the trend as
+    ``offered_effect``. After
+    the last step, a covariate whose residual structure is still
+    significant (:func:`covariate_tests`), explains more than 10 % of the
+    residual variance and along which an effect (the named one that reads
+    the column, else a stiffness or force trend) lowers the BIC by more
+    than ``DELTA_BIC`` is reported as unexplained too. A
+    counterpart competes only when its named effect passes: alone, it
+    raises no alarm. When the base law's
+    own curvature wins a step it is added to the ladder as ``law_curvature``
+    (eq. 5's limit, not a missing physical effect; no verdict). The noise
+    floor is :func:`noise_floor` of the final model's residuals.
+    """
+    d = diagnose_core(columns, thickness_mm=thickness_mm, radius_mm=radius_mm, base=base,
+                      effects=effects, beta_table=beta_table, max_steps=max_steps,
+                      cv_folds=cv_folds, seed=seed, progress=progress, curvature=curvature,
+                      candidates=candidates, scan=scan)
+    if not rules_out or d.missing_effect or d.unexplained_covariate:
+        return d
+    if base != "paper":
+        return replace(d, rules_out_note=f"what the verdict rules out is replayed on the "
+                                         f"paper's base only, not on base {base!r}")
+    return _with_rules_out(d, float(thickness_mm), float(radius_mm))
+
+
+def _press_noise(d: Diagnosis) -> tuple[np.ndarray, str]:
+    """Each press's force noise, N, as the diagnosis tested against it: the stated part
+    (the F/T window's standard error and the certified depth's uncertainty times dP/dw),
+    scaled up to the final model's residual RMS where the presses scatter more than it
+    says; that RMS alone where nothing is stated."""
+    fit, rows = d.fits[-1], d.fit_rows[-1]
+    r = np.asarray(fit.residuals_n, np.float64)
+    rms = float(np.sqrt(np.mean(r ** 2)))
+    cols = {k: np.asarray(v, np.float64)[rows] for k, v in d.columns.items()}
+    sem = cols.get("force_sem_n")
+    u = cols.get("depth_std_mm")
+    parts = []
+    stated = np.zeros(r.size)
+    if sem is not None and np.all(np.isfinite(sem)):
+        stated = stated + sem ** 2
+        parts.append("the F/T window's standard error")
+    if u is not None and np.all(np.isfinite(u)):
+        w = cols["depth_mm"]
+        pred = np.asarray(fit.predicted_n, np.float64)
+        order = np.argsort(w)
+        slope = np.interp(w, w[order], np.gradient(pred[order], w[order] + 1e-12 * order))
+        stated = stated + (slope * u) ** 2
+        parts.append("the certified depth's uncertainty x dP/dw")
+    if parts and np.all(stated > 0):
+        sig = np.sqrt(stated)
+        k = max(1.0, rms / float(np.sqrt(np.mean(stated))))
+        how = (f"{' and '.join(parts)}" + (f", scaled by {k:.3g} to the final model's "
+                                           f"residual RMS ({rms * 1e3:.3g} mN)" if k > 1
+                                           else ""))
+        return sig * k, how
+    return np.full(r.size, rms), f"the final model's residual RMS ({rms * 1e3:.3g} mN)"
+
+
+def _with_rules_out(d: Diagnosis, h: float, a: float) -> Diagnosis:
+    """The diagnosis with :attr:`Diagnosis.rules_out` and a sentence under its verdict."""
+    cols = {k: np.asarray(v, np.float64)[d.fit_rows[-1]] for k, v in d.columns.items()}
+    sigma, how = _press_noise(d)
+    E, nu = d.ladder[-1].E_mpa, d.ladder[-1].nu
+    if not (math.isfinite(E) and math.isfinite(nu)):
+        E, nu = d.E_mpa, d.nu
+    untestable = {k: d.untestable_reasons.get(k) or "needs " + ", ".join(v)
+                  for k, v in d.untestable.items()}
+    try:
+        sizes = table_sensitivity(cols, thickness_mm=h, radius_mm=a, E_mpa=E, nu=nu,
+                                  sigma_n=sigma, untestable=untestable, draws=RULES_OUT_DRAWS)
+    except (InputError, ValueError) as exc:
+        return replace(d, rules_out_note=f"what the verdict rules out was not replayed: {exc}")
+    note = (f"the smallest size of each effect this table would have named in 95 % of "
+            f"{RULES_OUT_DRAWS} replays of its presses (the FEM's forces at E = {E:.4g} MPa, nu = "
+            f"{nu:.4g}) with each press's noise from {how}")
+    found = [f"{k} {v.size:.3g}{' ' + v.unit if v.unit else ''}" for k, v in sizes.items()
+             if math.isfinite(v.size)]
+    never = [k for k, v in sizes.items() if v.size == math.inf]
+    s = []
+    if found:
+        s.append("None larger than: " + ", ".join(found) + f" ({note}).")
+    if never:
+        s.append("Not ruled out at any size the parameter allows: " + ", ".join(never) + ".")
+    return replace(d, rules_out=sizes, rules_out_note=note,
+                   message=d.message + (" " + " ".join(s) if s else ""))
