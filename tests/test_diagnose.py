@@ -5,6 +5,7 @@ tests and the noise floor on known answers; the command line and its JSON."""
 from __future__ import annotations
 
 import json
+import math
 import warnings
 
 import numpy as np
@@ -198,6 +199,39 @@ def test_certification_products_are_not_covariates():
     assert not cert.significant, cert
     with pytest.raises(InputError, match="overshoot_mm: computed by the depth rule"):
         diagnose(c, thickness_mm=t.thickness_mm, radius_mm=t.radius_mm, scan=["overshoot_mm"])
+
+
+def test_nothing_missing_says_what_it_rules_out():
+    """A null verdict states, per catalogue effect, the smallest size this very table would
+    have named (issue 53). Ground truth: the same seed's table drawn again with a force
+    offset (the generator's parameter is the catalogue's) at 1.5 times that size is named;
+    at 0.3 times it is not. Effects the table cannot test say why; a verdict that names
+    an effect states no sizes."""
+    t = make_measurement_table(None, 0)
+    d = _diag(t)
+    assert d.missing_effect is None and d.unexplained_covariate is None, d.message
+    sizes = d.rules_out
+    assert set(sizes) >= {"depth_offset", "force_offset", "spatial_nonuniformity"}
+    size = sizes["force_offset"].size_param
+    assert 0 < size < 1.0
+    assert "None larger than: " in d.message and "force_offset" in d.message.split(
+        "None larger than: ")[1]
+    obj = d.to_json_dict()
+    assert obj["rules_out"]["force_offset"]["size"] == pytest.approx(
+        sizes["force_offset"].size)
+    assert "replays" in obj["rules_out_note"]
+    unit = make_measurement_table("force_offset", 0).truth["offset_n"]
+    big = _diag(make_measurement_table("force_offset", 0, strength=1.5 * size / unit))
+    assert "force_offset" in (big.missing_effect, *big.equivalent_effects), big.message
+    assert big.rules_out == {}
+    small = _diag(make_measurement_table("force_offset", 0, strength=0.3 * size / unit))
+    assert small.missing_effect is None
+    # the table's untestable effects keep their reason (this generator varies every column)
+    for v in sizes.values():
+        assert math.isfinite(v.size) or v.why
+    plain = diagnose(t.columns, thickness_mm=t.thickness_mm, radius_mm=t.radius_mm,
+                     rules_out=False)
+    assert plain.rules_out == {} and "None larger than" not in plain.message
 
 
 def test_covariate_tests_and_noise_floor_on_known_answers():

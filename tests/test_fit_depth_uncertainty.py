@@ -22,7 +22,7 @@ from scipy import stats
 from tactilevision import InputError, ShapeError
 from tactilevision.cli import main
 from tactilevision.io import read_measurements, write_measurements
-from tactilevision.mechanics import covariate_tests, fit_indentation
+from tactilevision.mechanics import certification_tests, covariate_tests, fit_indentation
 
 # The synthetic law of the brief: P = c w (1 + beta w / h), paper's geometry.
 C0, BETA0, H, A = 3.5, 0.8, 3.0, 2.5
@@ -324,11 +324,14 @@ def test_columns_round_trip_and_covariates(tmp_path):
     t = read_measurements(path)
     np.testing.assert_allclose(t.columns["overshoot_mm"], cols["overshoot_mm"], rtol=1e-5)
     np.testing.assert_array_equal(t.columns["depth_std_mm"], cols["depth_std_mm"])
-    assert t.covariates == ("overshoot_mm",)
-    # diagnose: overshoot_mm is a covariate, depth_std_mm is not
+    assert t.covariates == ()           # overshoot_mm is the depth rule's product
+    # diagnose: neither overshoot_mm (the depth rule's product: certification_tests) nor
+    # depth_std_mm is a covariate
     cols["depth_std_mm"] = rng.uniform(0.001, 0.002, n)
     tests = covariate_tests(rng.standard_normal(n) * 1e-3, law(w), cols)
-    assert {x.name for x in tests} == {"depth_mm", "overshoot_mm"}
+    assert {x.name for x in tests} == {"depth_mm"}
+    assert [x.name for x in certification_tests(rng.standard_normal(n) * 1e-3, law(w),
+                                                cols)] == ["overshoot_mm"]
 
 
 def test_a_press_just_past_the_fem_table_within_its_uncertainty_is_read_at_the_table_edge():

@@ -40,6 +40,8 @@ _NUMERIC_COLUMNS = frozenset({
 _UNCERTAINTY_COLUMNS = ("depth_std_mm", "depth_shared_mm", "force_sem_n", "force0_n")
 # Columns that say what was done to the force (the F/T's zero taken off), not covariates.
 _FORCE_COLUMNS = ("ft_zero_n",)
+# Columns the depth rule computed (a product of the certification), not covariates.
+_CERTIFICATION_COLUMNS = ("overshoot_mm",)
 
 # (table, key, argument name) of the sidecar values.
 _SIDECAR = {"thickness_mm": ("sensor", "gel_thickness_mm"),
@@ -99,9 +101,11 @@ class Measurements:
     @property
     def covariates(self) -> tuple[str, ...]:
         """Names of the numeric columns but ``depth_mm``, ``force_n``, the uncertainties
-        (``depth_std_mm``, ``force_sem_n``), ``force0_n`` and ``ft_zero_n``."""
+        (``depth_std_mm``, ``depth_shared_mm``, ``force_sem_n``), ``force0_n``,
+        ``ft_zero_n`` and the depth rule's ``overshoot_mm``."""
         return tuple(k for k in self.columns if k not in REQUIRED_COLUMNS
-                     and k not in _UNCERTAINTY_COLUMNS and k not in _FORCE_COLUMNS)
+                     and k not in _UNCERTAINTY_COLUMNS and k not in _FORCE_COLUMNS
+                     and k not in _CERTIFICATION_COLUMNS)
 
     def __len__(self) -> int:
         return int(self.depth_mm.shape[0])

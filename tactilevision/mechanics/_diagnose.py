@@ -965,6 +965,8 @@ def _closing(d: Diagnosis) -> list[str]:
             s.append(f"No effect of the gel's model is named, but that certification problem "
                      f"({cert * 1e3:.2f} mN RMS) is not the model's noise: an effect of that "
                      "size would hide in it. Check the depth rule before reading this verdict.")
+            if chain or coarse:
+                s.append("Also, " + (chain or coarse))
         elif chain:
             s.append("No effect of the gel's model is missing, but " + chain)
         elif coarse:

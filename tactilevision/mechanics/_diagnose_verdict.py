@@ -195,6 +195,10 @@ def _with_rules_out(d: Diagnosis, h: float, a: float) -> Diagnosis:
     E, nu = d.ladder[-1].E_mpa, d.ladder[-1].nu
     if not (math.isfinite(E) and math.isfinite(nu)):
         E, nu = d.E_mpa, d.nu
+    if not (math.isfinite(E) and math.isfinite(nu)):
+        return replace(d, rules_out_note="what the verdict rules out was not replayed: the "
+                                         "table's E and nu were not derived (the replay's "
+                                         "forces are the FEM's at them)")
     untestable = {k: d.untestable_reasons.get(k) or "needs " + ", ".join(v)
                   for k, v in d.untestable.items()}
     try:
