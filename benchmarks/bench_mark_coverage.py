@@ -12,10 +12,15 @@ the stage overshooting w0 by 5 to 60 um, 0.5 s approaches) and calibrated with t
 defaults (the ``'mark'`` depth rule) and with ``depth_rule='nominal'`` (the paper's
 w = w0, its overshoot carried as a shared one-sided error). Printed per session: the
 presses certified, E and nu with their intervals, and whether each covers the truth;
-then the coverage and the certified share per design.
+then the coverage and the certified share per design. beta's interval is scored too,
+against the eq. (5) beta of the FEM table at the true nu (``beta_from_nu(nu,
+table='fem', a_over_h=a/h)``): issue 53 found it printed 3.6 sd off the truth on a
+vernier session with most bands unread, before the shared depth error was carried
+into it. ``--theta 8 --fps 15 --rules auto`` is that vernier design.
 
     python benchmarks/bench_mark_coverage.py [--sessions 100] [--fps 10 30]
-                                             [--first-seed 3000]
+                                             [--first-seed 3000] [--theta 0]
+                                             [--rules mark nominal]
 """
 
 from __future__ import annotations
@@ -30,6 +35,7 @@ import numpy as np
 
 from tactilevision import calibrate_session
 from tactilevision.fem import press_profile
+from tactilevision.mechanics import beta_from_nu
 from tactilevision.sim import GaugeBlock, SessionSpec, make_session, taxim_shading
 
 
@@ -40,14 +46,19 @@ def main() -> None:
     ap.add_argument("--fps", type=float, nargs="+", default=[10.0, 30.0])
     ap.add_argument("--first-seed", type=int, default=3000)
     ap.add_argument("--rules", nargs="+", default=["mark", "nominal"])
+    ap.add_argument("--theta", type=float, default=0.0,
+                    help="bevel flank angle, deg (0: a drawn mark)")
     args = ap.parse_args()
     shading = taxim_shading()
-    block = GaugeBlock(bevel_angle_deg=0.0)
+    block = GaugeBlock(bevel_angle_deg=args.theta)
     E, nu, h = 0.20, 0.48, 3.0
+    beta = float(beta_from_nu(nu, table="fem", a_over_h=block.radius_mm / h))
     profile = press_profile(block.radius_mm / h, nu, w_over_h_max=max(
         0.22, (max(block.depths_mm) + 0.06) / h * 1.05))
-    print("| fps | seed | rule | certified | E (MPa) [95 %] | covers | nu [95 %] | covers |")
-    print("|---|---|---|---|---|---|---|---|")
+    print(f"truth: E {E}, nu {nu}, beta {beta:.4f} (FEM table, a/h {block.radius_mm / h:.3g})")
+    print("| fps | seed | rule | certified | E (MPa) [95 %] | covers | nu [95 %] | covers | "
+          "beta [95 %] | covers |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     tally = {}
     t_all = time.perf_counter()
     for k in range(args.sessions):          # the designs interleaved: a partial run has both
@@ -65,13 +76,17 @@ def main() -> None:
                     n = len(cal.certification.presses)
                     f = cal.fit
                     row = tally.setdefault((fps, rule), {"E": [], "nu": [], "cert": [],
-                                                         "err": []})
+                                                         "err": [], "beta": []})
                     row["cert"].append(n / in_view)
+                    cb = bool(f is not None and f.beta_ci95[0] <= beta <= f.beta_ci95[1])
+                    bcell = ("-" if f is None else f"{f.beta:.3f} [{f.beta_ci95[0]:.3f}, "
+                             f"{f.beta_ci95[1]:.3f}] | {'yes' if cb else 'NO'}")
+                    row["beta"].append(cb)
                     if f is None or not np.isfinite(f.E_mpa):
                         row["E"].append(False)
                         row["nu"].append(False)
                         print(f"| {fps:g} | {seed} | {rule} | {n}/{in_view} | not computed | "
-                              f"no | - | no |", flush=True)
+                              f"no | - | no | {bcell} |", flush=True)
                         continue
                     ce = bool(f.E_ci95_mpa[0] <= E <= f.E_ci95_mpa[1])
                     cn = bool(f.nu_ci95[0] <= nu <= f.nu_ci95[1])
@@ -81,14 +96,16 @@ def main() -> None:
                     print(f"| {fps:g} | {seed} | {rule} | {n}/{in_view} | {f.E_mpa:.4f} "
                           f"[{f.E_ci95_mpa[0]:.4f}, {f.E_ci95_mpa[1]:.4f}] | "
                           f"{'yes' if ce else 'NO'} | {f.nu:.4f} [{f.nu_ci95[0]:.4f}, "
-                          f"{f.nu_ci95[1]:.4f}] | {'yes' if cn else 'NO'} |", flush=True)
+                          f"{f.nu_ci95[1]:.4f}] | {'yes' if cn else 'NO'} | {bcell} |",
+                          flush=True)
             finally:
                 shutil.rmtree(tmp, ignore_errors=True)
     print()
     for (fps, rule), row in tally.items():
         err = np.array(row["err"])
         print(f"{fps:g} frames/s, rule {rule}: E's interval covers the truth in "
-              f"{sum(row['E'])} of {len(row['E'])} sessions, nu's in {sum(row['nu'])}; "
+              f"{sum(row['E'])} of {len(row['E'])} sessions, nu's in {sum(row['nu'])}, "
+              f"beta's in {sum(row['beta'])}; "
               f"presses certified {100 * np.mean(row['cert']):.1f} % (least "
               f"{100 * np.min(row['cert']):.0f} %); E error median "
               f"{100 * np.median(err) if err.size else float('nan'):+.1f} %, "
