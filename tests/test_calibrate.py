@@ -669,3 +669,18 @@ def test_beta_interval_carries_the_shared_depth_error(delta_mm):
     assert carried.beta_ci95[0] <= beta <= carried.beta_ci95[1]
     assert carried.beta_ci95[0] <= raw.beta_ci95[0] and carried.beta_ci95[1] >= raw.beta_ci95[1]
     assert any("beta's interval carries the shared depth error" in n for n in carried.notes)
+
+
+def test_the_tables_sidecar_says_how_its_depths_were_certified(sample_run, tmp_path):
+    """calibrate writes [certification] depth_rule beside measurements.csv, so that
+    diagnose knows whether the depths were read from the force (the mark rule)."""
+    out, _ = sample_run
+    table = read_measurements(out / "report" / "measurements.csv")
+    assert table.certification == {"depth_rule": "vernier"}
+    bad = tmp_path / "t"
+    bad.mkdir()
+    (bad / "measurements.csv").write_text("depth_mm,force_n\n0.1,0.2\n0.2,0.5\n")
+    (bad / "session.toml").write_text("[sensor]\ngel_thickness_mm = 3.0\n[indenter]\n"
+                                      "radius_mm = 2.5\n[certification]\ndepth_rule = 3\n")
+    with pytest.raises(InputError, match=r"\[certification\] depth_rule must be a string"):
+        read_measurements(bad / "measurements.csv")

@@ -234,6 +234,27 @@ def test_nothing_missing_says_what_it_rules_out():
     assert plain.rules_out == {} and "None larger than" not in plain.message
 
 
+def test_a_mark_certified_table_does_not_rule_out_what_the_rule_absorbs():
+    """Under the mark rule the depth past w0 is read from the force (w = w0 + (P -
+    P(w0)) / (dP/dw)): an effect that changes the force between an indenter's presses is
+    read as depth. The verdict says so and rules none of them out; an offset keeps its
+    size (it moves the crossing force too)."""
+    t = make_measurement_table(None, 0)
+    plain = _diag(t)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        d = diagnose(t.columns, thickness_mm=t.thickness_mm, radius_mm=t.radius_mm,
+                     depth_rule="mark")
+    assert "certified by the mark rule" in d.message
+    assert "certified by the mark rule" not in plain.message
+    for name in ("force_drift", "spatial_nonuniformity", "force_crosstalk"):
+        assert math.isfinite(plain.rules_out[name].size)
+        assert math.isnan(d.rules_out[name].size) and "absorbed" in d.rules_out[name].why
+    assert d.rules_out["depth_offset"].size == pytest.approx(
+        plain.rules_out["depth_offset"].size)
+    assert "the depth rule absorbing them: force_drift" in d.message
+
+
 def test_covariate_tests_and_noise_floor_on_known_answers():
     rng = np.random.default_rng(0)
     n = 200

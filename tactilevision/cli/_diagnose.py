@@ -172,11 +172,13 @@ def run(args: argparse.Namespace) -> int:
                         radius_mm=table.radius_mm, base=args.base, effects=effects,
                         candidates=candidates, beta_table=args.beta_table,
                         scan=[c.strip() for c in args.scan.split(",") if c.strip()],
+                        depth_rule=table.certification.get("depth_rule"),
                         progress=not args.no_progress and args.json != "-")
     except InputError as exc:
         raise InputError(f"{path}: {exc}") from None
     obj = diag.to_json_dict()
     obj["measurements"] = str(path)
+    obj["depth_rule"] = table.certification.get("depth_rule")
     if args.json is not None:
         _write_json(obj, args.json)
     if args.report is not None:

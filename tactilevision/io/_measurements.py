@@ -75,6 +75,10 @@ class Measurements:
         (``shape``, ``contact``) and its ``[sensor] gel_radius_mm`` (as
         ``pad_radius_mm``), where it has them; empty without a sidecar. A
         flat punch is ``shape = "flat_punch"`` or no ``shape``.
+    certification : dict of str to object
+        The sidecar's ``[certification]`` keys (``depth_rule``: how ``calibrate``
+        certified the depths, e.g. ``'mark'``, whose depths past w0 are read from
+        the force); empty without them.
     """
 
     path: Path
@@ -87,6 +91,7 @@ class Measurements:
     radius_source: str
     notes: tuple[str, ...] = ()
     indenter: dict[str, object] = field(default_factory=dict, hash=False)
+    certification: dict[str, object] = field(default_factory=dict, hash=False)
 
     @property
     def depth_mm(self) -> np.ndarray:
@@ -362,6 +367,7 @@ def read_measurements(path: str | Path, *, thickness_mm: float | None = None,
         thickness_mm=geo["thickness_mm"], radius_mm=geo["radius_mm"],
         thickness_source=src["thickness_mm"], radius_source=src["radius_mm"],
         notes=tuple(notes), indenter=_indenter_keys(path),
+        certification=_certification_keys(path),
     )
 
 
@@ -427,6 +433,30 @@ def _indenter_keys(path: Path) -> dict[str, object]:
     return out
 
 
+def _certification_keys(path: Path) -> dict[str, object]:
+    """``[certification]`` of the sidecar, if any (its ``depth_rule`` a string).
+
+    Raises
+    ------
+    InputError
+        For a ``depth_rule`` that is not a string (naming the file and key).
+    """
+    toml = path.parent / "session.toml"
+    if not toml.is_file():
+        return {}
+    try:
+        with toml.open("rb") as fh:
+            section = tomllib.load(fh).get("certification", {})
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise InputError(f"{toml} is not valid TOML: {exc}") from None
+    if not isinstance(section, dict):
+        return {}
+    rule = section.get("depth_rule")
+    if rule is not None and not isinstance(rule, str):
+        raise InputError(f"{toml}: [certification] depth_rule must be a string, got {rule!r}")
+    return dict(section)
+
+
 #: Column order of :func:`write_measurements` (formats.md section 2); other
 #: columns follow in the order given.
 COLUMN_ORDER = ("press", "indenter", "depth_mm", "depth_std_mm", "overshoot_mm", "force_n",
@@ -436,7 +466,8 @@ COLUMN_ORDER = ("press", "indenter", "depth_mm", "depth_std_mm", "overshoot_mm",
 
 
 def write_measurements(path: str | Path, columns: dict[str, np.ndarray], *, thickness_mm: float,
-                       radius_mm: float, digits: int = 6) -> Path:
+                       radius_mm: float, digits: int = 6, depth_rule: str | None = None
+                       ) -> Path:
     """Write a measurements table and its sidecar ``session.toml`` (formats.md section 2).
 
     Parameters
@@ -453,6 +484,9 @@ def write_measurements(path: str | Path, columns: dict[str, np.ndarray], *, thic
         h and a, mm.
     digits : int, default 6
         Significant digits of the numbers.
+    depth_rule : str, optional
+        How the depths were certified (``calibrate``'s rule), written to a new
+        sidecar as ``[certification] depth_rule``.
 
     Returns
     -------
@@ -495,6 +529,9 @@ def write_measurements(path: str | Path, columns: dict[str, np.ndarray], *, thic
                                  for i in range(n)]
     toml = (f"[sensor]\ngel_thickness_mm = {float(thickness_mm)!r}\n\n"
             f"[indenter]\nradius_mm = {float(radius_mm)!r}\n")
+    if depth_rule is not None:
+        toml += f'\n[certification]\ndepth_rule = "{depth_rule}"\n'
+
     side = path.parent / "session.toml"
     outputs = [(path, "\n".join(lines) + "\n")]
     if side.is_file():  # keep an existing sidecar (a session's own) when it agrees

@@ -19,7 +19,22 @@ from .._checks import InputError
 from ._diagnose import CURVATURE, Diagnosis, diagnose_core
 from ._plan_effects import table_sensitivity
 
-__all__ = ["RULES_OUT_DRAWS", "diagnose"]
+__all__ = ["ABSORBED_BY_MARK", "RULES_OUT_DRAWS", "diagnose"]
+
+#: Effects that change the force between the presses of one indenter: under the mark
+#: rule (w = w0 + (P - P(w0)) / (dP/dw)) such a change is read as depth, so a table of
+#: mark-certified presses cannot show them, whatever their size.
+ABSORBED_BY_MARK = ("force_drift", "viscoelastic_relaxation", "incomplete_recovery",
+                    "aging", "spatial_nonuniformity", "force_crosstalk")
+
+#: What the message says of a table certified by the mark rule.
+MARK_SENTENCE = (
+    "These depths were certified by the mark rule: each depth past w0 is read from the "
+    "press's own force (w = w0 + (P - P(w0)) / (dP/dw)), so a force effect that changes "
+    "the force between one indenter's presses (along time, press, position, hold, wait, "
+    "the tangential forces) is read as depth and largely absorbed; this table shows "
+    "mainly what moves each indenter's crossing force P(w0) (a force or depth offset, the law's "
+    "shape). A bevel read as a vernier certifies depth apart from the force.")
 
 #: Sessions replayed to find what a verdict rules out (the sizes' Monte Carlo error is
 #: about 5 % at 400; :func:`effect_sensitivity` plans with 1000).
@@ -31,7 +46,7 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
              max_steps: int = 3, cv_folds: int = 10, seed: int = 0,
              progress: bool = False, curvature: str = CURVATURE,
              candidates: Sequence = (), scan: Sequence[str] = (),
-             rules_out: bool = True) -> Diagnosis:
+             rules_out: bool = True, depth_rule: str | None = None) -> Diagnosis:
     """Compare a model with the measurements and find the missing effect.
 
     Parameters
@@ -93,6 +108,12 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
         say what the verdict rules out: for each catalogue effect, the
         smallest size the table would have named (``Diagnosis.rules_out``).
         On the paper's base only.
+    depth_rule : str, optional
+        How the depths were certified (``calibrate``'s rule; the table's sidecar
+        ``[certification] depth_rule``). ``'mark'``: the depth past w0 is read
+        from each press's force, so a force effect that varies between an
+        indenter's presses is read as depth and absorbed; the message says so and
+        such effects are not ruled out (:data:`ABSORBED_BY_MARK`).
 
     Returns
     -------
@@ -147,12 +168,15 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
                       effects=effects, beta_table=beta_table, max_steps=max_steps,
                       cv_folds=cv_folds, seed=seed, progress=progress, curvature=curvature,
                       candidates=candidates, scan=scan)
+    if depth_rule == "mark":
+        d = replace(d, message=d.message + " " + MARK_SENTENCE)
     if not rules_out or d.missing_effect or d.unexplained_covariate:
         return d
     if base != "paper":
         return replace(d, rules_out_note=f"what the verdict rules out is replayed on the "
                                          f"paper's base only, not on base {base!r}")
-    return _with_rules_out(d, float(thickness_mm), float(radius_mm))
+    return _with_rules_out(d, float(thickness_mm), float(radius_mm),
+                           ABSORBED_BY_MARK if depth_rule == "mark" else ())
 
 
 def _press_noise(d: Diagnosis) -> tuple[np.ndarray, str]:
@@ -188,7 +212,8 @@ def _press_noise(d: Diagnosis) -> tuple[np.ndarray, str]:
     return np.full(r.size, rms), f"the final model's residual RMS ({rms * 1e3:.3g} mN)"
 
 
-def _with_rules_out(d: Diagnosis, h: float, a: float) -> Diagnosis:
+def _with_rules_out(d: Diagnosis, h: float, a: float, absorbed: tuple[str, ...] = ()
+                    ) -> Diagnosis:
     """The diagnosis with :attr:`Diagnosis.rules_out` and a sentence under its verdict."""
     cols = {k: np.asarray(v, np.float64)[d.fit_rows[-1]] for k, v in d.columns.items()}
     sigma, how = _press_noise(d)
@@ -209,6 +234,13 @@ def _with_rules_out(d: Diagnosis, h: float, a: float) -> Diagnosis:
     note = (f"the smallest size of each effect this table would have named in 95 % of "
             f"{RULES_OUT_DRAWS} replays of its presses (the FEM's forces at E = {E:.4g} MPa, nu = "
             f"{nu:.4g}) with each press's noise from {how}")
+    for name in absorbed:          # the depth rule reads these into the depths
+        if name in sizes:
+            sizes[name] = replace(sizes[name], size=math.nan, size_param=math.nan,
+                                  why="not ruled out: the mark rule reads the depth past w0 "
+                                      "from the force, so this effect, which changes the "
+                                      "force between an indenter's presses, is largely "
+                                      "absorbed")
     found = [f"{k} {v.size:.3g}{' ' + v.unit if v.unit else ''}" for k, v in sizes.items()
              if math.isfinite(v.size)]
     never = [k for k, v in sizes.items() if v.size == math.inf]
@@ -217,5 +249,8 @@ def _with_rules_out(d: Diagnosis, h: float, a: float) -> Diagnosis:
         s.append("None larger than: " + ", ".join(found) + f" ({note}).")
     if never:
         s.append("Not ruled out at any size the parameter allows: " + ", ".join(never) + ".")
+    if absorbed:
+        s.append("Not ruled out, the depth rule absorbing them: "
+                 + ", ".join(k for k in absorbed if k in sizes) + ".")
     return replace(d, rules_out=sizes, rules_out_note=note,
                    message=d.message + (" " + " ".join(s) if s else ""))

@@ -252,7 +252,8 @@ class CalibrationResult:
             written.append("rejected.csv")
             if self.measurements is not None:
                 write_measurements(folder / "measurements.csv", self.measurements,
-                                   thickness_mm=self.thickness_mm, radius_mm=self.radius_mm)
+                                   thickness_mm=self.thickness_mm, radius_mm=self.radius_mm,
+                                   depth_rule=(self.fit or {}).get("depth_rule"))
                 written += ["measurements.csv", "session.toml"]
             if self.holds is not None:
                 _write_holds(folder / "holds.csv", self.holds)
