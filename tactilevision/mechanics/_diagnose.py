@@ -943,14 +943,18 @@ def _closing(d: Diagnosis) -> list[str]:
     to be read so (a certification problem, a measurement chain adding noise, a coarse
     depth link)."""
     s: list[str] = []
+    b = d.noise_budget
     for t in d.certification:
         if t.significant:
+            stated = b is not None and b.depth_n >= t.size_n
             s.append(f"The base model's residuals also follow {t.name}, a product of the "
                      f"depth rule, not a condition of the press (p = {t.p_value:.1g}, "
                      f"{t.explained_fraction:.0%} of the residual variance, "
-                     f"{t.size_n * 1e3:.2f} mN RMS): a certification problem (the depths "
-                     "are off together with what certified them), not physics.")
-    b = d.noise_budget
+                     f"{t.size_n * 1e3:.2f} mN RMS): "
+                     + (f"the depth rule's own error, within what its stated depth "
+                        f"uncertainty explains ({b.depth_n * 1e3:.2f} mN), not physics."
+                        if stated else "a certification problem (the depths are off "
+                        "together with what certified them), not physics."))
     chain = (f"the replicate scatter ({b.floor_n * 1e3:.2f} mN) is {b.ratio:.1f} times what "
              f"the instruments explain ({b.budget_n * 1e3:.2f} mN: F/T window "
              f"{b.force_window_n * 1e3:.2f} mN, certified depth x dP/dw "
@@ -961,7 +965,11 @@ def _closing(d: Diagnosis) -> list[str]:
     coarse = _coarse_depth_link(d)
     cert = max((t.size_n for t in d.certification if t.significant), default=0.0)
     if not d.missing_effect and not d.unexplained_covariate:
-        if cert > 0:
+        if cert > 0 and b is not None and b.depth_n >= cert:
+            s.append(f"No effect of the gel's model is named; the certified depths' stated "
+                     f"error ({cert * 1e3:.2f} mN RMS along the depth rule's products) would "
+                     "hide an effect of that size.")
+        elif cert > 0:
             s.append(f"No effect of the gel's model is named, but that certification problem "
                      f"({cert * 1e3:.2f} mN RMS) is not the model's noise: an effect of that "
                      "size would hide in it. Check the depth rule before reading this verdict.")
