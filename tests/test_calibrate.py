@@ -484,6 +484,11 @@ def test_mark_overshoot_read_from_the_force(tmp_path):
         z.append((d - float(w_of_p(p.force_n))) / (sd / np.sqrt(n_of[p.indenter])))
     z = np.array(z)
     assert np.all(np.abs(z) < 3) and 0.3 < np.std(z) < 1.6, z
+    # the shared part is written apart (the noise budget leaves it out of the scatter
+    # within an indenter's presses): part of each depth's sd, positive where read
+    cols = cal.measurements()
+    shared = np.array(cols["depth_indenter_std_mm"])
+    assert np.all(shared > 0) and np.all(shared <= np.array(cols["depth_std_mm"]) + 1e-12)
     f = cal.fit
     assert f.E_ci95_mpa[0] <= truth["E_mpa"] <= f.E_ci95_mpa[1]
     assert f.nu_ci95[0] <= truth["nu"] <= f.nu_ci95[1]

@@ -208,3 +208,29 @@ def test_diagnose_says_consistent_only_at_p_not_small(sem_scale, p_range, words)
     if b.p_value < 0.05:
         assert "consistent" not in d.message
         assert "below the threshold this diagnosis acts on (p < 0.001" in d.message
+
+
+def test_the_part_an_indenter_shares_is_not_in_its_scatter():
+    """depth_indenter_std_mm: the part of depth_std_mm that one indenter's presses share
+    (the mark rule's P(w0), Kish-inflated) moves a group together, so it is left out of
+    the budget of the scatter within groups. Known answer: depth_std_mm made of the stage
+    jitter and a shared part 20 times larger, with the shared part stated, gives the same
+    budget as the jitter alone."""
+    t = make_measurement_table(None, seed=311)
+    c = {k: np.asarray(v, np.float64) for k, v in t.columns.items()}
+    n = c["depth_mm"].size
+    c["force_sem_n"] = np.full(n, t.truth["noise_n"])
+    jitter = np.full(n, t.truth["depth_jitter_mm"])
+    shared = 20 * jitter
+    alone = diagnose({**c, "depth_std_mm": jitter}, thickness_mm=t.thickness_mm,
+                     radius_mm=t.radius_mm, rules_out=False).noise_budget
+    inflated = diagnose({**c, "depth_std_mm": np.hypot(jitter, shared)},
+                        thickness_mm=t.thickness_mm, radius_mm=t.radius_mm,
+                        rules_out=False).noise_budget
+    told = diagnose({**c, "depth_std_mm": np.hypot(jitter, shared),
+                     "depth_indenter_std_mm": shared}, thickness_mm=t.thickness_mm,
+                    radius_mm=t.radius_mm, rules_out=False).noise_budget
+    assert inflated.budget_n > 5 * alone.budget_n
+    assert told.budget_n == pytest.approx(alone.budget_n, rel=1e-9)
+    assert told.ratio == pytest.approx(alone.ratio, rel=1e-9)
+

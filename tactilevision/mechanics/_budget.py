@@ -90,7 +90,8 @@ def noise_budget(residuals_n: np.ndarray, predicted_n: np.ndarray,
         ``depth_mm`` and ``force_sem_n`` (standard error of each press's F/T
         window mean, N: :func:`tactilevision.contact.window_standard_error`,
         which ``tactilevision calibrate`` writes), optionally
-        ``depth_std_mm``.
+        ``depth_std_mm`` and ``depth_indenter_std_mm`` (the part of it an
+        indenter's presses share, left out: it moves a group together).
     groups : (N,) int ndarray
         Groups of repeated presses (0 .. G-1).
 
@@ -118,6 +119,14 @@ def noise_budget(residuals_n: np.ndarray, predicted_n: np.ndarray,
         u = np.asarray(u, np.float64)
         ok &= np.isfinite(u)
         note += " and certified depth uncertainty (depth_std_mm) x dP/dw"
+        shared = columns.get("depth_indenter_std_mm")
+        if shared is not None:
+            # the part an indenter's presses share moves them together: it is not in the
+            # scatter within a group of one indenter's presses
+            shared = np.nan_to_num(np.asarray(shared, np.float64))
+            u = np.sqrt(np.maximum(u * u - shared * shared, 0.0))
+            note += (" (less the part each indenter's presses share, "
+                     "depth_indenter_std_mm)")
     else:
         u = np.zeros_like(w)
         note += "; no depth_std_mm: the depth's share counted as 0"

@@ -167,11 +167,12 @@ def calibrate_session(session: Session | str | Path, *, depth_rule: str = "auto"
     st = DepthState(depth=w0 + closure, std=np.array([p.closure_std_mm for p in presses]),
                     bulge=np.zeros_like(w0), bevel_n=np.zeros_like(w0), notes=notes)
     rounds = dict(nu_start=float(nu_start), max_rounds=max_rounds, nu_tol=nu_tol)
+    std_indenter = np.zeros(0)
     try:
         if depth_rule == "vernier":
             vernier_rule(st, presses, cert, cfg, fit_at, force, **rounds)
         elif depth_rule == "mark":
-            st.depth, st.std, st.fit, st.shared, mark_notes = mark_rule(
+            st.depth, st.std, st.fit, st.shared, mark_notes, std_indenter = mark_rule(
                 presses, force, fit_at, cfg, frame_period(session))
             notes.extend(mark_notes)
         elif depth_rule == "nominal":
@@ -201,7 +202,8 @@ def calibrate_session(session: Session | str | Path, *, depth_rule: str = "auto"
                               bulge_mm=st.bulge, bevel_force_n=st.bevel_n, relaxation=relax,
                               moduli=moduli,
                               force0_n=force0 if force0 is not None else np.zeros(0),
-                              force_fit_n=force - st.bevel_n, **common)
+                              force_fit_n=force - st.bevel_n,
+                              depth_indenter_std_mm=std_indenter, **common)
 
 
 def _check_options(bevel_threshold, relaxation: str, ft_zero: str) -> None:

@@ -30,6 +30,9 @@ class SessionCalibration:
     depth_std_mm : (N,) float64 ndarray
         Its standard uncertainty, mm (the vernier reading's, or the onset
         frame's for ``'nominal'``; 0 for ``'land'``).
+    depth_indenter_std_mm : (N,) float64 ndarray
+        For ``'mark'``: the part of `depth_std_mm` an indenter's presses share (the
+        error of its P(w0), counted n times over as there), mm; empty otherwise.
     bulge_mm : (N,) float64 ndarray
         The bulge subtracted from each vernier depth, mm (0 otherwise).
     bevel_force_n : (N,) float64 ndarray
@@ -79,6 +82,7 @@ class SessionCalibration:
     seconds: float
     warnings: list[str] = field(default_factory=list)
     depth_std_mm: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    depth_indenter_std_mm: np.ndarray = field(default_factory=lambda: np.zeros(0))
     bulge_mm: np.ndarray = field(default_factory=lambda: np.zeros(0))
     bevel_force_n: np.ndarray = field(default_factory=lambda: np.zeros(0))
     failure: str | None = None
@@ -155,6 +159,8 @@ class SessionCalibration:
             "hold_s": [p.hold_s for p in ps], "wait_s": [p.wait_s for p in ps],
             "x_mm": [p.x_mm for p in ps], "y_mm": [p.y_mm for p in ps],
         }
+        if len(self.depth_indenter_std_mm) == len(ps):
+            col["depth_indenter_std_mm"] = list(self.depth_indenter_std_mm)
         if len(self.force0_n) == len(ps):
             col["force0_n"] = list(self.force0_n - self._bevel())
         z = self.ft_zero

@@ -96,6 +96,9 @@ def mark_rule(presses, force: np.ndarray, fit_at, cfg, period: float):
     shared : tuple of two (N,) float64 ndarrays
         The depth error every press shares, its bounds (low, high), mm.
     notes : list of str
+    std_indenter : (N,) float64 ndarray
+        The part of `std` an indenter's presses share (its P(w0)'s error through
+        dP/dw, counted n times over as in `std`), mm; 0 where the crossing was not read.
 
     Raises
     ------
@@ -158,7 +161,8 @@ def mark_rule(presses, force: np.ndarray, fit_at, cfg, period: float):
                 "travel" if unread else "")
              + (f"; the presses of {disjoint} indenter(s) do not agree on P(w0) (their mean is "
                 "used): a gel not uniform, or a drifting force?" if disjoint else "")]
-    return depth, std, fit, (-half, half), notes
+    std_indenter = np.where(np.isfinite(f_on), sd_group / k, 0.0)
+    return depth, std, fit, (-half, half), notes, std_indenter
 
 
 
