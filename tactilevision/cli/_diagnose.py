@@ -28,14 +28,21 @@ every covariate column (a test with a p-value and the fraction of residual
 variance explained), the replicate noise floor, the model plus each
 applicable catalogue effect compared by BIC and cross-validated RMSE, the
 verdict (missing effect, equivalent effects, unexplained covariate) and the
-error ladder with E and nu at each step. --report DIR writes the figures and
-report.html. Exit status 2 on bad input.
+error ladder with E and nu at each step. Columns the depth rule computed
+(overshoot_mm) are tested apart as the certification's, never as physics. A
+verdict that names nothing says what it rules out: per catalogue effect, the
+smallest size this table would have named (its presses replayed at its noise).
+A table certified by the mark rule ([certification] depth_rule in its
+session.toml) is told to read force effects within an indenter as depth.
+--report DIR writes the figures and report.html. Exit status 2 on bad input.
 
 A ball's table ([indenter] shape = "sphere"): the ladder starts from the
 small-strain law with the stated contact and tries large_deformation (finite
 strain), contact_slip (the other contact condition), force_offset and
 depth_offset, taking the change that lowers the BIC most until none does; each
-rung shows every press's apparent E (flat when the model is right)."""
+rung shows every press's apparent E (flat when the model is right). As fit does,
+it weighs the presses by depth_std_mm and force_sem_n and fits the circles'
+shared error (depth_shared_mm) within its bound in every rung."""
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
