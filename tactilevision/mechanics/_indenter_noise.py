@@ -20,6 +20,7 @@ import numpy as np
 from scipy import optimize
 
 from .._checks import InputError, check_array
+from ._indenter_fit import _paule_mandel
 
 __all__: list[str] = []
 
@@ -100,24 +101,6 @@ def press_noise(w: np.ndarray, P: np.ndarray, g_of, *, depth_std_mm=None, force_
         floor = max((1e-12 * float(np.max(P))) ** 2, np.finfo(float).tiny)
         return PressNoise(np.maximum(t + stated, floor), stated, math.sqrt(t), shared, rel)
     return PressNoise(np.ones(n), None, math.nan, shared, rel)
-
-
-def _paule_mandel(g: np.ndarray, P: np.ndarray, D: np.ndarray, dof: int) -> float:
-    """Smallest t >= 0 with chi2(t) / dof <= 1 for variances t + D (Paule and Mandel 1982),
-    the rule :func:`fit_indenter` uses."""
-    floor = max((1e-12 * float(np.max(np.abs(P)))) ** 2, np.finfo(float).tiny)
-
-    def chi2(t: float) -> float:
-        wt = 1.0 / np.maximum(t + D, floor)
-        E = float(np.sum(wt * g * P) / np.sum(wt * g * g))
-        return float(np.sum(wt * (P - E * g) ** 2))
-
-    E0 = float(g @ P / (g @ g))
-    upper = float(np.sum((P - E0 * g) ** 2)) / dof
-    if upper <= 0 or chi2(0.0) / dof <= 1.0:
-        return 0.0
-    return float(optimize.brentq(lambda t: chi2(t) / dof - 1.0, 0.0, upper,
-                                 xtol=1e-14 * upper, rtol=1e-12))
 
 
 def weighted_linear(g: np.ndarray, P: np.ndarray, var: np.ndarray, offset: bool
