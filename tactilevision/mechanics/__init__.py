@@ -67,7 +67,7 @@ from ._diagnose_stats import (
     covariate_tests,
     cross_validated_rmse,
 )
-from ._diagnose_verdict import diagnose
+from ._diagnose_verdict import diagnose, indenter_shared
 from ._effects import EFFECT_NAMES, FIT_EFFECTS, check_fit_effects, effect_names, model_label
 from ._fem_tables import fem_force, fem_kappa_table, fem_table_meta, kappa_n, kappa_n_grid
 from ._fit import MAX_W_OVER_H, fit_indentation
@@ -194,6 +194,7 @@ __all__ = [
     "fit_relaxation",
     "hertz_force_n",
     "indenter_from_config",
+    "indenter_shared",
     "instantaneous_forces",
     "kappa",
     "kappa_n",

@@ -201,6 +201,12 @@ class Diagnosis:
         parameter allows would be named; ``why`` says which). Empty otherwise.
     rules_out_note : str
         How those sizes were found, or why there are none.
+    shared_depth : dict
+        Where the table states the depth error each indenter's presses share
+        (``depth_indenter_std_mm``): the fits' generalized least squares under it
+        (``theta_min``, ``theta_max`` of the quasi-demeaning) and ``not_testable``,
+        the effects named with the depths taken as independent but not under it,
+        with the reason. Empty otherwise.
     certification : tuple of CertificationTest
         The base model's residual structure along the columns the depth rule
         computed (:data:`CERTIFICATION_COLUMNS`: ``overshoot_mm``), never scanned
@@ -236,6 +242,7 @@ class Diagnosis:
     certification: tuple[CertificationTest, ...] = ()
     rules_out: dict[str, Any] = field(default_factory=dict, hash=False)
     rules_out_note: str = ""
+    shared_depth: dict[str, Any] = field(default_factory=dict, hash=False)
 
     @property
     def depth_link_coarse(self) -> bool:
@@ -297,6 +304,7 @@ class Diagnosis:
                               "size": num(v.size), "power": v.power, "why": v.why}
                           for k, v in self.rules_out.items()},
             "rules_out_note": self.rules_out_note or None,
+            "shared_depth": self.shared_depth or None,
         }
 
 
@@ -480,9 +488,24 @@ def diagnose_core(columns: Mapping[str, np.ndarray], *, thickness_mm: float,
         scanned_columns=tuple(t.name for t in cov0),
         responses_not_scanned=tuple(c for c in RESPONSE_COLUMNS if c in cols and c not in scan),
         certification=certification_tests(
-            climb.fits[0].residuals_n, climb.fits[0].predicted_n,
+            _gls(climb.fits[0].residuals_n, climb.table.sub(climb.fit_rows[0])),
+            climb.fits[0].predicted_n,
             climb.table.sub(climb.fit_rows[0])))
     return _with_message(diag)
+
+
+def _gls(residuals_n: np.ndarray, d: Mapping[str, np.ndarray]) -> np.ndarray:
+    """A fit's residuals as its generalized least squares sees them: quasi-demeaned within
+    the groups that share a depth error (``_group``, ``_theta``: :func:`diagnose` sets
+    them from ``depth_indenter_std_mm``), so that the covariate tests use the noise model
+    the fits use; the residuals themselves without groups."""
+    r = np.asarray(residuals_n, np.float64)
+    if "_group" not in d or "_theta" not in d:
+        return r
+    g = np.asarray(d["_group"], np.float64)
+    _, gi = np.unique(g, return_inverse=True)
+    means = np.bincount(gi, r) / np.bincount(gi)
+    return r - np.asarray(d["_theta"], np.float64) * means[gi]
 
 
 def _model_to_diagnose(cols: Mapping[str, np.ndarray], h: float, a: float, base: str,
@@ -551,7 +574,8 @@ def _first_rungs(c: _Climb, model: IndentationModel
                                start=fit0.params)
     n_depth = 2 if {"large_deformation", "fem_law"} & set(model.names) else 1
     step0 = c.add_rung(model, fit0, cv0, ok0, d0, None)
-    cov0 = covariate_tests(fit0.residuals_n, fit0.predicted_n, d0, n_depth_params=n_depth,
+    cov0 = covariate_tests(_gls(fit0.residuals_n, d0), fit0.predicted_n, d0,
+                           n_depth_params=n_depth,
                            scan=c.pool.scan)
     if (c.curvature == "nuisance" and "large_deformation" in model.names
             and "law_curvature" not in model.names
@@ -620,7 +644,7 @@ def _left_over(c: _Climb) -> tuple[tuple[CovariateTest, ...], dict[str, np.ndarr
     current, cur_fit = c.current, c.cur_fit
     d_final = c.table.sub(c.table.rows_for(current))
     n_depth = 2 if {"large_deformation", "fem_law"} & set(current.names) else 1
-    cov_after = covariate_tests(cur_fit.residuals_n, cur_fit.predicted_n, d_final,
+    cov_after = covariate_tests(_gls(cur_fit.residuals_n, d_final), cur_fit.predicted_n, d_final,
                                 n_depth_params=n_depth, scan=c.pool.scan)
     if c.unexplained is None:
         # along depth_mm, eq. (5) itself is not the FEM's exact P(w): depth structure

@@ -115,7 +115,7 @@ def noise_floor(residuals_n: np.ndarray, columns: Mapping[str, np.ndarray]) -> f
 def _covariate_names(columns: Mapping[str, np.ndarray], scan: Sequence[str] = ()
                      ) -> list[str]:
     return [k for k in columns if k not in _NOT_COVARIATES and k not in CERTIFICATION_COLUMNS
-            and (k not in RESPONSE_COLUMNS or k in scan)]
+            and not k.startswith("_") and (k not in RESPONSE_COLUMNS or k in scan)]
 
 
 def covariate_tests(residuals_n: np.ndarray, predicted_n: np.ndarray,

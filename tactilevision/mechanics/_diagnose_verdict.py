@@ -19,7 +19,7 @@ from .._checks import InputError
 from ._diagnose import CURVATURE, Diagnosis, diagnose_core
 from ._plan_effects import table_sensitivity
 
-__all__ = ["ABSORBED_BY_MARK", "RULES_OUT_DRAWS", "diagnose"]
+__all__ = ["ABSORBED_BY_MARK", "RULES_OUT_DRAWS", "diagnose", "indenter_shared"]
 
 #: Effects that change the force between the presses of one indenter: under the mark
 #: rule (w = w0 + (P - P(w0)) / (dP/dw)) such a change is read as depth, so a table of
@@ -163,10 +163,16 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
     (eq. 5's limit, not a missing physical effect; no verdict). The noise
     floor is :func:`noise_floor` of the final model's residuals.
     """
-    d = diagnose_core(columns, thickness_mm=thickness_mm, radius_mm=radius_mm, base=base,
-                      effects=effects, beta_table=beta_table, max_steps=max_steps,
-                      cv_folds=cv_folds, seed=seed, progress=progress, curvature=curvature,
-                      candidates=candidates, scan=scan)
+    kw = dict(thickness_mm=thickness_mm, radius_mm=radius_mm, base=base, effects=effects,
+              beta_table=beta_table, max_steps=max_steps, cv_folds=cv_folds, seed=seed,
+              progress=progress, curvature=curvature, candidates=candidates, scan=scan)
+    shared = indenter_shared(columns)
+    if shared is None:
+        d = diagnose_core(columns, **kw)
+    else:
+        d = diagnose_core({**columns, "_group": shared[0], "_theta": shared[1]}, **kw)
+        d = _with_shared_depth(d, diagnose_core(columns, **{**kw, "progress": False}),
+                               shared[1])
     if depth_rule == "mark":
         d = replace(d, message=d.message + " " + MARK_SENTENCE)
     if not rules_out or d.missing_effect or d.unexplained_covariate:
@@ -176,6 +182,69 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
                                          f"paper's base only, not on base {base!r}")
     return _with_rules_out(d, float(thickness_mm), float(radius_mm),
                            ABSORBED_BY_MARK if depth_rule == "mark" else ())
+
+
+def indenter_shared(columns: Mapping[str, np.ndarray]
+                    ) -> tuple[np.ndarray, np.ndarray] | None:
+    """Each press's group and theta for generalized least squares under the depth error
+    each indenter's presses share, from what the table states.
+
+    With ``indenter``, ``depth_indenter_std_mm`` (the shared part u_I of each depth's sd
+    u, counted n times over as ``depth_std_mm`` counts it), ``depth_std_mm`` and
+    ``force_sem_n`` (s_P) in every row: the presses' own noise s^2 is the mean of
+    ``s_P^2 + k^2 (u^2 - u_I^2)``, a group's shared error n_g t_g^2 the mean over its
+    presses of ``(k u_I)^2`` (k = dP/dw, a quadratic through the table's P(w)), and
+    theta_g = 1 - sqrt(s^2 / (s^2 + n_g t_g^2)): the quasi-demeaning of Fuller and
+    Battese (J. Econometrics 2, 67, 1974), under which least squares is generalized
+    least squares for a random error per group.
+
+    Returns
+    -------
+    (group, theta) : two (N,) float64 ndarrays, or None
+        None where the table does not state the shared part (or states none), or
+        has fewer than two indenters or three depths.
+    """
+    need = ("indenter", "depth_indenter_std_mm", "depth_std_mm", "force_sem_n")
+    if any(c not in columns for c in need):
+        return None
+    c = {k: np.asarray(columns[k], np.float64) for k in (*need, "depth_mm", "force_n")}
+    if not all(np.all(np.isfinite(v)) for v in c.values()) or not np.any(
+            c["depth_indenter_std_mm"] > 0):
+        return None
+    ids, gi = np.unique(c["indenter"], return_inverse=True)
+    w = c["depth_mm"]
+    if ids.size < 2 or np.unique(w).size < 3:
+        return None
+    k = np.polyval(np.polyder(np.polyfit(w, c["force_n"], 2)), w)
+    u, ui = c["depth_std_mm"], c["depth_indenter_std_mm"]
+    s2 = float(np.mean(c["force_sem_n"] ** 2 + k * k * np.maximum(u * u - ui * ui, 0.0)))
+    if not s2 > 0:
+        return None
+    nt2 = np.bincount(gi, (k * ui) ** 2) / np.bincount(gi)
+    theta = 1.0 - np.sqrt(s2 / (s2 + nt2))
+    return gi.astype(np.float64), theta[gi]
+
+
+def _with_shared_depth(d: Diagnosis, plain: Diagnosis, theta: np.ndarray) -> Diagnosis:
+    """The diagnosis under the indenters' shared depth error, with what it leaves
+    untestable: effects the ladder names with the depths taken as independent but not
+    under it."""
+    def named(x: Diagnosis) -> set[str]:
+        return {e for e in (x.missing_effect, *x.equivalent_effects, x.offered_effect) if e}
+
+    lost = sorted(named(plain) - named(d))
+    why = ("the depth error each indenter's presses share (depth_indenter_std_mm) explains "
+           "it as well: named with the depths taken as independent, not under that error")
+    info = {"theta_min": float(theta.min()), "theta_max": float(theta.max()),
+            "not_testable": {e: why for e in lost}}
+    s = (f" Every fit weighs the presses by generalized least squares under the depth error "
+         f"each indenter's presses share (depth_indenter_std_mm; quasi-demeaning theta "
+         f"{theta.min():.2f} to {theta.max():.2f}), so effects that vary within an "
+         "indenter keep their power.")
+    if lost:
+        s += (" Not testable on this table, that shared error explaining as much: "
+              + ", ".join(lost) + ".")
+    return replace(d, shared_depth=info, message=d.message + s)
 
 
 def _press_noise(d: Diagnosis) -> tuple[np.ndarray, str]:

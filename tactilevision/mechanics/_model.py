@@ -370,7 +370,8 @@ class IndentationModel:
         x0_f = np.clip(np.array(x0)[free], lo_f + 1e-12, hi_f - 1e-12)
         fixed = np.array(x0, np.float64)
 
-        resid = _Residuals(effects, fixed, free, dh, sw, P, lo_f, hi_f)
+        resid = _Residuals(effects, fixed, free, dh, sw, P, lo_f, hi_f,
+                           shared=_shared_groups(data, n))
 
         near: dict[int, float] = {}
         if start is not None:
@@ -410,7 +411,7 @@ class IndentationModel:
         params = dict(zip(names, map(float, x_full), strict=True))
         pred = self.predict(params, d, thickness_mm)
         res = P - pred
-        rss = float(np.sum(sw ** 2 * res ** 2))
+        rss = float(np.sum(resid.transform(sw * res) ** 2))
         ll_term = n * math.log(max(rss / n, 1e-300))
         return ModelFit(
             model=self, params=params, stderr=dict(zip(names, map(float, se), strict=True)),
@@ -442,6 +443,23 @@ class IndentationModel:
         if wts.shape != (n,) or not np.all(np.isfinite(wts) & (wts > 0)):
             raise InputError("weights must be positive and finite, one per press")
         return d, np.sqrt(wts / wts.mean()), wts
+
+
+def _shared_groups(data: Mapping[str, np.ndarray], n: int) -> np.ndarray | None:
+    """The operator of the quasi-demeaning (Fuller and Battese, J. Econometrics 2, 67,
+    1974) that makes least squares on the transformed residuals generalized least squares
+    under an error shared within groups of presses: ``data['_group']`` (each press's
+    group) and ``data['_theta']`` (its group's theta = 1 - sqrt(s^2 / (s^2 + n_g t_g^2)),
+    s the presses' own noise, t_g the error the group shares, in force), which
+    ``diagnose`` sets. The (N, N) matrix S with ``S f = theta_g mean_g(f)``, or None."""
+    if "_group" not in data or "_theta" not in data:
+        return None
+    g = np.asarray(data["_group"], np.float64)
+    th = np.asarray(data["_theta"], np.float64)
+    if g.shape != (n,) or th.shape != (n,) or not np.any(th > 0):
+        return None
+    same = (g[:, None] == g[None, :]).astype(np.float64)
+    return th[:, None] * same / same.sum(axis=1, keepdims=True)
 
 
 def _solve(resid: _Residuals, x0: np.ndarray, bounds: tuple[np.ndarray, np.ndarray], *,
@@ -622,7 +640,9 @@ class _Residuals:
 
     def __init__(self, effects: Sequence[Effect], fixed: np.ndarray, free: np.ndarray,
                  data: Mapping[str, np.ndarray], sw: np.ndarray, force_n: np.ndarray,
-                 lower: np.ndarray, upper: np.ndarray) -> None:
+                 lower: np.ndarray, upper: np.ndarray,
+                 shared: np.ndarray | None = None) -> None:
+        self.shared = shared          # (N, N): theta times each press's group mean, or None
         self.plan = _plan(effects)
         self.fixed, self.free = fixed, free
         self.data = dict(data)
@@ -647,6 +667,11 @@ class _Residuals:
         other._x = other._f = None
         return other
 
+    def transform(self, f: np.ndarray) -> np.ndarray:
+        """The residuals quasi-demeaned within the groups that share an error
+        (:func:`_shared_groups`): ``f - theta_g mean_g(f)``; `f` itself without groups."""
+        return f if self.shared is None else f - f @ self.shared.T
+
     def _full(self, x: np.ndarray) -> np.ndarray:
         full = self.fixed.copy()
         full[self.free] = x
@@ -654,7 +679,8 @@ class _Residuals:
 
     def __call__(self, x: np.ndarray) -> np.ndarray:
         full = self._full(x)
-        f = self.sw * (_forward(self.plan, full.tolist(), dict(self.data)) - self.force_n)
+        f = self.transform(
+            self.sw * (_forward(self.plan, full.tolist(), dict(self.data)) - self.force_n))
         # the last point, all parameters (a search changes the fixed ones between solves)
         self._x, self._f = full, f
         return f
@@ -688,7 +714,8 @@ class _Residuals:
             else:
                 p = base.copy()
                 p[k] = xi + h
-                f = self.sw * (_forward(self.plan, p, dict(self.data)) - self.force_n)
+                f = self.transform(
+                    self.sw * (_forward(self.plan, p, dict(self.data)) - self.force_n))
                 jt[i] = (f - f0) / ((xi + h) - xi)
         if self.batch:
             # all the shifted points in one evaluation: parameter j is a column holding
@@ -699,7 +726,8 @@ class _Residuals:
                 col = np.full((x0.size, 1), base[k])
                 col[i, 0] = steps[i]
                 p[k] = col
-            f = self.sw * (_forward(self.plan, p, dict(self.data)) - self.force_n)
+            f = self.transform(np.broadcast_to(
+                self.sw * (_forward(self.plan, p, dict(self.data)) - self.force_n), jt.shape))
             dx = (np.array(steps) - x0)[:, None]
             jt[:] = (np.broadcast_to(f, jt.shape) - f0) / dx
         return jt.T
