@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats
 
-__all__ = ["NoiseBudget", "noise_budget"]
+__all__ = ["NoiseBudget", "law_slope", "noise_budget"]
 
 #: Significance of the budget test (chi-square on the within-group scatter).
 BUDGET_ALPHA = 1e-3
@@ -75,6 +75,15 @@ class NoiseBudget:
                 "force_window_n": num(self.force_window_n), "depth_n": num(self.depth_n),
                 "ratio": num(self.ratio), "chi2": num(self.chi2), "dof": self.dof,
                 "p_value": num(self.p_value), "exceeds": self.exceeds, "note": self.note}
+
+
+def law_slope(depth_mm: np.ndarray, force_n: np.ndarray) -> np.ndarray:
+    """dP/dw at each depth, N/mm: the slope of a quadratic through P(w) (a line with two
+    distinct depths), so that repeated depths, which have no slope of their own, share
+    one. Two distinct depths or more."""
+    w = np.asarray(depth_mm, np.float64)
+    deg = min(2, np.unique(w).size - 1)
+    return np.polyval(np.polyder(np.polyfit(w, np.asarray(force_n, np.float64), deg)), w)
 
 
 def noise_budget(residuals_n: np.ndarray, predicted_n: np.ndarray,
@@ -138,15 +147,9 @@ def noise_budget(residuals_n: np.ndarray, predicted_n: np.ndarray,
     if dof < 2:
         return None, "needs repeated presses at a depth"
     # local stiffness from the model's own P(w): a quadratic through its predictions
-    p = np.asarray(predicted_n, np.float64)[ok]
-    n_depths = np.unique(w).size
-    if n_depths >= 3:
-        c2, c1, _ = np.polyfit(w, p, 2)
-    elif n_depths == 2:
-        c2, (c1, _) = 0.0, np.polyfit(w, p, 1)
-    else:
+    if np.unique(w).size < 2:
         return None, "needs presses at two depths or more (for dP/dw)"
-    dpdw = 2 * c2 * w + c1
+    dpdw = law_slope(w, np.asarray(predicted_n, np.float64)[ok])
     var_f, var_w = sem ** 2, (dpdw * u) ** 2
     var = np.maximum(var_f + var_w, 1e-30)
     means = np.bincount(g, weights=r) / np.bincount(g)

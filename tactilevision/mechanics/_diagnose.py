@@ -48,7 +48,7 @@ from ._effects import model_label
 from ._fem_tables import kappa_n
 from ._fit import fit_indentation
 from ._fit_model import fit_model
-from ._model import IndentationModel, ModelFit
+from ._model import IndentationModel, ModelFit, _shared_groups
 
 __all__ = [
     "Candidate",
@@ -496,16 +496,12 @@ def diagnose_core(columns: Mapping[str, np.ndarray], *, thickness_mm: float,
 
 def _gls(residuals_n: np.ndarray, d: Mapping[str, np.ndarray]) -> np.ndarray:
     """A fit's residuals as its generalized least squares sees them: quasi-demeaned within
-    the groups that share a depth error (``_group``, ``_theta``: :func:`diagnose` sets
-    them from ``depth_indenter_std_mm``), so that the covariate tests use the noise model
-    the fits use; the residuals themselves without groups."""
+    the groups that share a depth error (``_group``, ``_theta``, the operator the fits use:
+    :func:`~tactilevision.mechanics._model._shared_groups`), so that the covariate tests
+    use the fits' noise model; the residuals themselves without groups."""
     r = np.asarray(residuals_n, np.float64)
-    if "_group" not in d or "_theta" not in d:
-        return r
-    g = np.asarray(d["_group"], np.float64)
-    _, gi = np.unique(g, return_inverse=True)
-    means = np.bincount(gi, r) / np.bincount(gi)
-    return r - np.asarray(d["_theta"], np.float64) * means[gi]
+    S = _shared_groups(d, r.size)
+    return r if S is None else r - S @ r
 
 
 def _model_to_diagnose(cols: Mapping[str, np.ndarray], h: float, a: float, base: str,

@@ -16,6 +16,7 @@ from dataclasses import replace
 import numpy as np
 
 from .._checks import InputError
+from ._budget import law_slope
 from ._diagnose import CURVATURE, Diagnosis, diagnose_core
 from ._plan_effects import table_sensitivity
 
@@ -215,7 +216,7 @@ def indenter_shared(columns: Mapping[str, np.ndarray]
     w = c["depth_mm"]
     if ids.size < 2 or np.unique(w).size < 3:
         return None
-    k = np.polyval(np.polyder(np.polyfit(w, c["force_n"], 2)), w)
+    k = law_slope(w, c["force_n"])
     u, ui = c["depth_std_mm"], c["depth_indenter_std_mm"]
     s2 = float(np.mean(c["force_sem_n"] ** 2 + k * k * np.maximum(u * u - ui * ui, 0.0)))
     if not s2 > 0:
@@ -264,13 +265,8 @@ def _press_noise(d: Diagnosis) -> tuple[np.ndarray, str]:
         stated = stated + sem ** 2
         parts.append("the F/T window's standard error")
     if u is not None and np.all(np.isfinite(u)):
-        w = cols["depth_mm"]
-        pred = np.asarray(fit.predicted_n, np.float64)
-        # local stiffness from the model's own P(w): a quadratic through its predictions,
-        # as the noise budget takes it (repeated depths have no slope of their own)
-        deg = min(2, np.unique(w).size - 1)
-        coef = np.polyfit(w, pred, deg)
-        slope = np.polyval(np.polyder(coef), w)
+        # local stiffness from the model's own P(w), as the noise budget takes it
+        slope = law_slope(cols["depth_mm"], fit.predicted_n)
         stated = stated + (slope * u) ** 2
         parts.append("the certified depth's uncertainty x dP/dw")
     if parts and np.all(stated > 0):
