@@ -687,5 +687,12 @@ def test_the_tables_sidecar_says_how_its_depths_were_certified(sample_run, tmp_p
     (bad / "measurements.csv").write_text("depth_mm,force_n\n0.1,0.2\n0.2,0.5\n")
     (bad / "session.toml").write_text("[sensor]\ngel_thickness_mm = 3.0\n[indenter]\n"
                                       "radius_mm = 2.5\n[certification]\ndepth_rule = 3\n")
-    with pytest.raises(InputError, match=r"\[certification\] depth_rule must be a string"):
+    with pytest.raises(InputError, match=r"\[certification\] depth_rule must be one of "
+                                         r"vernier, mark, nominal, land, got 3"):
         read_measurements(bad / "measurements.csv")
+    (bad / "session.toml").write_text("[sensor]\ngel_thickness_mm = 3.0\n[indenter]\n"
+                                      "radius_mm = 2.5\n[certification]\ndepth_rule = "
+                                      "\"mark\"\ndepth_rules = \"x\"\n")
+    t = read_measurements(bad / "measurements.csv")
+    assert t.certification == {"depth_rule": "mark"}
+    assert any("[certification] key 'depth_rules' is not known" in n for n in t.notes)

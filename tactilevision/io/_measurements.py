@@ -362,13 +362,14 @@ def read_measurements(path: str | Path, *, thickness_mm: float | None = None,
         notes.append(f"{path}: dead weights: force_n = mass_kg x {STANDARD_GRAVITY} m/s^2 "
                      "(standard gravity)")
     geo, src = _geometry(path, {"thickness_mm": thickness_mm, "radius_mm": radius_mm})
+    certification, cert_notes = _certification_keys(path)
     return Measurements(
         path=path, columns=columns, labels=labels,
         line_numbers=np.array(lines, dtype=np.int64),
         thickness_mm=geo["thickness_mm"], radius_mm=geo["radius_mm"],
         thickness_source=src["thickness_mm"], radius_source=src["radius_mm"],
-        notes=tuple(notes), indenter=_indenter_keys(path),
-        certification=_certification_keys(path),
+        notes=tuple(notes + cert_notes), indenter=_indenter_keys(path),
+        certification=certification,
     )
 
 
@@ -403,6 +404,24 @@ def sidecar_geometry(path: str | Path, *, thickness_mm: float | None = None,
     return geo["thickness_mm"], geo["radius_mm"], src, _indenter_keys(path)
 
 
+def _sidecar(path: Path) -> tuple[Path, dict]:
+    """The sidecar ``session.toml`` beside `path` and its contents ({} when absent).
+
+    Raises
+    ------
+    InputError
+        For a sidecar that is not valid TOML (naming the file).
+    """
+    toml = path.parent / "session.toml"
+    if not toml.is_file():
+        return toml, {}
+    try:
+        with toml.open("rb") as fh:
+            return toml, tomllib.load(fh)
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise InputError(f"{toml} is not valid TOML: {exc}") from None
+
+
 def _indenter_keys(path: Path) -> dict[str, object]:
     """``[indenter] shape, contact`` and ``[sensor] gel_radius_mm`` of the sidecar, if any.
 
@@ -412,14 +431,7 @@ def _indenter_keys(path: Path) -> dict[str, object]:
         For a sidecar that is not valid TOML, or a ``shape`` or ``contact`` that is not a
         string (naming the file and key).
     """
-    toml = path.parent / "session.toml"
-    if not toml.is_file():
-        return {}
-    try:
-        with toml.open("rb") as fh:
-            doc = tomllib.load(fh)
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise InputError(f"{toml} is not valid TOML: {exc}") from None
+    toml, doc = _sidecar(path)
     out: dict[str, object] = {}
     section = doc.get("indenter", {})
     for key in ("shape", "contact"):
@@ -434,28 +446,31 @@ def _indenter_keys(path: Path) -> dict[str, object]:
     return out
 
 
-def _certification_keys(path: Path) -> dict[str, object]:
-    """``[certification]`` of the sidecar, if any (its ``depth_rule`` a string).
+#: ``calibrate``'s depth rules, the values ``[certification] depth_rule`` takes.
+DEPTH_RULES = ("vernier", "mark", "nominal", "land")
+
+
+def _certification_keys(path: Path) -> tuple[dict[str, object], list[str]]:
+    """``[certification]`` of the sidecar, if any, and a note for each key it does not know.
 
     Raises
     ------
     InputError
-        For a ``depth_rule`` that is not a string (naming the file and key).
+        For a ``depth_rule`` that is not one of :data:`DEPTH_RULES` (naming the file and
+        key).
     """
-    toml = path.parent / "session.toml"
-    if not toml.is_file():
-        return {}
-    try:
-        with toml.open("rb") as fh:
-            section = tomllib.load(fh).get("certification", {})
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise InputError(f"{toml} is not valid TOML: {exc}") from None
+    toml, doc = _sidecar(path)
+    section = doc.get("certification", {})
     if not isinstance(section, dict):
-        return {}
+        return {}, [f"{toml}: [certification] is not a table; ignored"]
     rule = section.get("depth_rule")
-    if rule is not None and not isinstance(rule, str):
-        raise InputError(f"{toml}: [certification] depth_rule must be a string, got {rule!r}")
-    return dict(section)
+    if rule is not None and rule not in DEPTH_RULES:
+        raise InputError(f"{toml}: [certification] depth_rule must be one of "
+                         f"{', '.join(DEPTH_RULES)}, got {rule!r}")
+    unknown = [k for k in section if k != "depth_rule"]
+    notes = [f"{toml}: [certification] key {k!r} is not known (known: depth_rule); ignored"
+             for k in unknown]
+    return {k: v for k, v in section.items() if k == "depth_rule"}, notes
 
 
 #: Column order of :func:`write_measurements` (formats.md section 2); other
@@ -517,6 +532,9 @@ def write_measurements(path: str | Path, columns: dict[str, np.ndarray], *, thic
     for name, v in (("thickness_mm", thickness_mm), ("radius_mm", radius_mm)):
         if not (math.isfinite(v) and v > 0):
             raise InputError(f"write_measurements: {name} must be positive, got {v!r}")
+    if depth_rule is not None and depth_rule not in DEPTH_RULES:
+        raise InputError(f"write_measurements: depth_rule must be one of "
+                         f"{', '.join(DEPTH_RULES)}, got {depth_rule!r}")
     names = [c for c in COLUMN_ORDER if c in arrays] + [c for c in arrays if c not in COLUMN_ORDER]
 
     def cell(name: str, x: float) -> str:
