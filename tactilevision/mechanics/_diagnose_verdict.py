@@ -37,6 +37,16 @@ MARK_SENTENCE = (
     "mainly what moves each indenter's crossing force P(w0) (a force or depth offset, the law's "
     "shape). A bevel read as a vernier certifies depth apart from the force.")
 
+#: Why an effect the mark rule absorbs is not ruled out.
+MARK_WHY = ("not ruled out: the mark rule reads the depth past w0 from the force, so this "
+            "effect, which changes the force between an indenter's presses, is largely "
+            "absorbed")
+#: Why an effect along depth alone is not ruled out where each indenter's depths share an
+#: error: the replay draws independent presses, and such an effect is what that error
+#: looks like from indenter to indenter.
+SHARED_WHY = ("not ruled out: along depth alone it is what the depth error each indenter's "
+              "presses share looks like, which the replay of independent presses leaves out")
+
 #: Sessions replayed to find what a verdict rules out (the sizes' Monte Carlo error is
 #: about 5 % at 400; :func:`effect_sensitivity` plans with 1000).
 RULES_OUT_DRAWS = 400
@@ -181,8 +191,10 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
     if base != "paper":
         return replace(d, rules_out_note=f"what the verdict rules out is replayed on the "
                                          f"paper's base only, not on base {base!r}")
-    return _with_rules_out(d, float(thickness_mm), float(radius_mm),
-                           ABSORBED_BY_MARK if depth_rule == "mark" else ())
+    hidden = {e: MARK_WHY for e in ABSORBED_BY_MARK} if depth_rule == "mark" else {}
+    if shared is not None:
+        hidden.update({e: SHARED_WHY for e in ("depth_offset", "force_offset")})
+    return _with_rules_out(d, float(thickness_mm), float(radius_mm), hidden)
 
 
 def indenter_shared(columns: Mapping[str, np.ndarray]
@@ -279,7 +291,7 @@ def _press_noise(d: Diagnosis) -> tuple[np.ndarray, str]:
     return np.full(r.size, rms), f"the final model's residual RMS ({rms * 1e3:.3g} mN)"
 
 
-def _with_rules_out(d: Diagnosis, h: float, a: float, absorbed: tuple[str, ...] = ()
+def _with_rules_out(d: Diagnosis, h: float, a: float, hidden: dict[str, str] | None = None
                     ) -> Diagnosis:
     """The diagnosis with :attr:`Diagnosis.rules_out` and a sentence under its verdict."""
     cols = {k: np.asarray(v, np.float64)[d.fit_rows[-1]] for k, v in d.columns.items()}
@@ -301,13 +313,9 @@ def _with_rules_out(d: Diagnosis, h: float, a: float, absorbed: tuple[str, ...] 
     note = (f"the smallest size of each effect this table would have named in 95 % of "
             f"{RULES_OUT_DRAWS} replays of its presses (the FEM's forces at E = {E:.4g} MPa, nu = "
             f"{nu:.4g}) with each press's noise from {how}")
-    for name in absorbed:          # the depth rule reads these into the depths
-        if name in sizes:
-            sizes[name] = replace(sizes[name], size=math.nan, size_param=math.nan,
-                                  why="not ruled out: the mark rule reads the depth past w0 "
-                                      "from the force, so this effect, which changes the "
-                                      "force between an indenter's presses, is largely "
-                                      "absorbed")
+    hidden = {k: v for k, v in (hidden or {}).items() if k in sizes}
+    for name, why in hidden.items():     # what the table's certification hides
+        sizes[name] = replace(sizes[name], size=math.nan, size_param=math.nan, why=why)
     found = [f"{k} {v.size:.3g}{' ' + v.unit if v.unit else ''}" for k, v in sizes.items()
              if math.isfinite(v.size)]
     never = [k for k, v in sizes.items() if v.size == math.inf]
@@ -316,8 +324,8 @@ def _with_rules_out(d: Diagnosis, h: float, a: float, absorbed: tuple[str, ...] 
         s.append("None larger than: " + ", ".join(found) + f" ({note}).")
     if never:
         s.append("Not ruled out at any size the parameter allows: " + ", ".join(never) + ".")
-    if absorbed:
-        s.append("Not ruled out, the depth rule absorbing them: "
-                 + ", ".join(k for k in absorbed if k in sizes) + ".")
+    for why in dict.fromkeys(hidden.values()):
+        names = ", ".join(k for k, v in hidden.items() if v == why)
+        s.append(f"Not ruled out ({why.removeprefix('not ruled out: ')}): {names}.")
     return replace(d, rules_out=sizes, rules_out_note=note,
                    message=d.message + (" " + " ".join(s) if s else ""))
