@@ -276,6 +276,11 @@ def _press_noise(d: Diagnosis) -> tuple[np.ndarray, str]:
     if sem is not None and np.all(np.isfinite(sem)):
         stated = stated + sem ** 2
         parts.append("the F/T window's standard error")
+    ui = cols.get("depth_indenter_std_mm")
+    if u is not None and ui is not None and np.all(np.isfinite(ui)):
+        # the part each indenter's presses share moves them together, not press by press
+        # (as the noise budget leaves it out)
+        u = np.sqrt(np.maximum(u * u - ui * ui, 0.0))
     if u is not None and np.all(np.isfinite(u)):
         # local stiffness from the model's own P(w), as the noise budget takes it
         slope = law_slope(cols["depth_mm"], fit.predicted_n)
