@@ -7,6 +7,10 @@ Prints:
 2. The real FEATS gel (sample_frames/feats): every law x contact at nu = 0.5 on the
    pad of finite size (equal-area radius, and the inscribed one beside it), each with
    its E and its apparent E per press, then diagnose_indenter's ladder.
+2b. Friction (``--friction``): the small-strain law with Coulomb friction mu between
+   ball and gel (their model's 1.0, and 0.5, 0.2, 0.1) on the equal-area pad, E and
+   the apparent E per press beside the tied and frictionless limits, and the FEM's force
+   at w/h = 0.5 on two surface cells (mesh convergence of the node-wise friction).
 3. The ladder on circles with a shared error (``--seeds N``, default 10): presses drawn
    from the small-strain law (nothing missing), depths read through contact circles
    off by a shared bias (0, -1, -1.5 px; the stated bound 1.5 px) and 0.5 px at random
@@ -15,6 +19,7 @@ Prints:
    the shared error fitted within its bound), and the ladder's time.
 
 Usage: python benchmarks/bench_ball.py [--figure docs/feats_ladder.png] [--seeds 10]
+       [--friction]
 """
 
 from __future__ import annotations
@@ -28,6 +33,7 @@ from pathlib import Path
 import numpy as np
 
 from tactilevision import InputError
+from tactilevision.fem import sphere_indentation
 from tactilevision.mechanics import (
     Sphere,
     diagnose_indenter,
@@ -92,6 +98,31 @@ def feats(figure: Path | None) -> None:
         print(f"   wrote {figure}")
 
 
+def friction() -> None:
+    data = np.loadtxt(ROOT / "sample_frames" / "feats" / "force_depth.csv", delimiter=",",
+                      skiprows=1)
+    w, P = data[:, 0], data[:, 1]
+    print("2b. FEATS with Coulomb friction (small strain, nu 0.5, pad 12.92 mm)")
+    for contact, mu in (("tied", None), ("coulomb", 1.0), ("coulomb", 0.5), ("coulomb", 0.2),
+                        ("coulomb", 0.1), ("frictionless", None)):
+        t0 = time.perf_counter()
+        f = fit_indenter(w, P, Sphere(7.5, pad_radius_mm=12.92, friction=mu),
+                         thickness_mm=4.0, law="linear", contact=contact, nu=0.5)
+        print(f"   {contact:12s} mu {'-' if mu is None else f'{mu:.1f}':>3s} E {f.E_mpa:.4f} "
+              f"MPa, rmse {f.rmse_n * 1e3:5.0f} mN, apparent E "
+              + " ".join(f"{v:.3f}" for v in f.apparent_E_mpa)
+              + f"  ({time.perf_counter() - t0:.0f} s)")
+    for mu in (1.0, 0.2):
+        forces = []
+        for cell in (0.0625, 0.03125):
+            res = sphere_indentation(1.875, 0.5, np.array([0.125, 0.5]), model="linear",
+                                     contact="coulomb", friction=mu, pad_radius_over_h=3.23,
+                                     surface_cell=cell, cache=False)
+            forces.append(res.force[-1])
+        print(f"   mesh: mu {mu:.1f}, P/(E h^2) at w/h 0.5 on surface cells h/16 and h/32: "
+              f"{forces[0]:.5f}, {forces[1]:.5f} ({100 * (forces[0] / forces[1] - 1):+.2f} %)")
+
+
 def shared_circles(seeds: int) -> None:
     sys.path.insert(0, str(ROOT / "tests"))
     from test_ball_diagnose_noise import BALL, H, _circle_presses
@@ -124,9 +155,13 @@ def main() -> None:
     ap.add_argument("--figure", type=Path, help="write the FEATS ladder figure here")
     ap.add_argument("--no-feats", action="store_true")
     ap.add_argument("--seeds", type=int, default=10)
+    ap.add_argument("--friction", action="store_true", help="only part 2b (minutes)")
     args = ap.parse_args()
     print(f"machine: {platform.machine()}, {platform.processor() or '?'}; "
           f"python {platform.python_version()}")
+    if args.friction:
+        friction()
+        return
     timing()
     if not args.no_feats:
         feats(args.figure)

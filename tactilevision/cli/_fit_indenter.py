@@ -26,9 +26,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     g.add_argument("--shape", choices=("flat_punch", "sphere"),
                    help="indenter shape (default: session.toml [indenter] shape, else "
                         "flat_punch)")
-    g.add_argument("--contact", choices=("frictionless", "tied"),
+    g.add_argument("--contact", choices=("frictionless", "tied", "coulomb"),
                    help="ball-gel contact (default: session.toml [indenter] contact, else "
-                        "frictionless)")
+                        "frictionless); coulomb: friction --friction between them (the "
+                        "small-strain law only, one FEM sweep per nu)")
+    g.add_argument("--friction", type=float, metavar="MU",
+                   help="Coulomb's friction coefficient between ball and gel, with "
+                        "--contact coulomb")
     g.add_argument("--law", choices=LAW_CHOICES, default="auto",
                    help="material law of a ball's force: auto (default: both fitted, the one "
                         "with the smaller residuals reported, the other beside it), "
@@ -61,6 +65,18 @@ def indenter_of(table: Measurements, args: argparse.Namespace):
                              f"got {pad!r}")
         ind = type(ind)(ind.radius_mm, pad_radius_mm=float(pad))
     contact = args.contact or keys.get("contact")
+    mu = getattr(args, "friction", None)
+    if (contact == "coulomb") != (mu is not None):
+        raise InputError("--contact coulomb and --friction MU go together (Coulomb's "
+                         "friction between ball and gel)")
+    if mu is not None:
+        if ind.shape != "sphere":
+            raise InputError("--friction is for a ball (--shape sphere)")
+        try:
+            ind = type(ind)(ind.radius_mm, pad_radius_mm=ind.pad_radius_mm, friction=mu)
+        except InputError as exc:
+            raise InputError(f"--friction: {exc}") from None
+        return ind, contact
     if contact is not None and contact not in ind.contacts:
         raise InputError(f"{table.path}: contact {contact!r} must be one of {ind.contacts} "
                          f"for a {ind.shape}")
@@ -72,6 +88,10 @@ def fit_laws(table: Measurements, args: argparse.Namespace,
     """Fit each law asked for; the one reported, all fits by law, and why it was chosen."""
     ind, contact = indenter_of(table, args)
     laws = ("linear", "neo_hookean") if args.law == "auto" else (args.law,)
+    if contact == "coulomb":                          # built for the small-strain law only
+        if args.law == "neo_hookean":
+            raise InputError("--contact coulomb is computed for --law linear only")
+        laws = ("linear",)
     fits = {}
     for law in laws:
         try:

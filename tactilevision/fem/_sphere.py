@@ -22,9 +22,18 @@ conditions:
   half replaced by a cylinder, which no press below the equator touches).
 - ``contact='tied'``: no slip, full stick: a surface node that meets the
   sphere is tied to it from then on and moves with it (Dirichlet on both
-  components; never released). Coulomb friction (CalculiX's ``TIED``
-  overclosure with a friction coefficient, as in the FEATS model) lets the
-  gel slip where the shear exceeds the friction: it lies between the two.
+  components; never released).
+- ``contact='coulomb'`` (``model='linear'`` only): Coulomb friction of
+  coefficient mu between the two, as in the FEATS authors' CalculiX model
+  (friction 1.0). A node that meets the sphere sticks where it touches; where
+  its shear reaction exceeds mu times its normal reaction it slips, held
+  by a shear force mu p against its slip (a node-wise active set, the slip
+  forces' normal reactions iterated to a fixed point), and sticks again where
+  it would slide with its friction force. In the normal direction it is the
+  tied contact (a node that touches stays on the sphere, as CalculiX's TIED
+  overclosure), the shear bounded by mu |p|: a large mu is the tied contact,
+  mu = 0 the frictionless one but for the rare node that would pull away.
+  The load path matters: the steps are those of tied contact.
 
 The depth is stepped on a grid uniform in sqrt(w) (the contact radius grows
 like sqrt(R w)); tied contact depends on the path, and its steps move the
@@ -65,6 +74,8 @@ __all__ = ["SPHERE_CONTACTS", "SPHERE_MODELS", "SphereIndentation", "hertz_force
 
 SPHERE_MODELS = ("linear", "neo_hookean")
 SPHERE_CONTACTS = ("frictionless", "tied")
+#: Contact conditions of :func:`sphere_indentation`: the tables' two and Coulomb friction.
+CONTACTS = (*SPHERE_CONTACTS, "coulomb")
 _TOL = 1e-9          # h: engage / release tolerance of the linear active set
 _MAX_SET_UPDATES = 40
 _MAX_BISECTIONS = 3
@@ -168,7 +179,7 @@ class SphereIndentation:
     radius_over_h, nu : float
         Sphere radius R / h; small-strain Poisson's ratio.
     model : {'linear', 'neo_hookean'}
-    contact : {'frictionless', 'tied'}
+    contact : {'frictionless', 'tied', 'coulomb'}
     pad_radius_over_h : float
     w_over_h : (K,) float64 ndarray
         The requested depths reached, increasing.
@@ -196,6 +207,15 @@ class SphereIndentation:
     surface_ur, surface_uz : (K, M) float64 ndarray
         Their displacements at each depth (u_z < 0 into the gel).
     from_cache : bool
+    friction : float
+        Coulomb's mu (``contact='coulomb'``; 0 otherwise).
+    slip_radius : (K,) float64 ndarray or None
+        Coulomb contact: radius of the innermost slipping node in contact, units
+        of h (the stick zone's edge; the contact radius where none slips).
+    surface_fz, surface_fr : (K, M) float64 ndarray or None
+        Coulomb contact: the nodal forces of the sphere on each top-surface node
+        (normal, < 0 pressing; shear), per radian, units of E h^2; zero off the
+        contact.
     """
 
     radius_over_h: float
@@ -219,6 +239,10 @@ class SphereIndentation:
     surface_ur: np.ndarray | None = None
     surface_uz: np.ndarray | None = None
     from_cache: bool = False
+    friction: float = 0.0
+    slip_radius: np.ndarray | None = None
+    surface_fz: np.ndarray | None = None
+    surface_fr: np.ndarray | None = None
 
 
 class _RigidSphere(RigidPunch):
@@ -245,15 +269,17 @@ class _RigidSphere(RigidPunch):
 
 
 class _LinearSolid:
-    """K0 x: the Neo-Hookean tangent at the undeformed state (linear elasticity)."""
+    """K0 x - f: the Neo-Hookean tangent at the undeformed state (linear elasticity),
+    less the nodal forces f (Coulomb contact's slip forces)."""
 
     def __init__(self, solid: AxisymmetricNeoHookean) -> None:
         self.k0 = solid.tangent(np.zeros(solid.n_dofs)).tocsr()
         self.n_dofs = solid.n_dofs
         self.ubasis = solid.ubasis
+        self.f_ext = np.zeros(solid.n_dofs)
 
     def residual(self, x: np.ndarray) -> np.ndarray:
-        return self.k0 @ x
+        return self.k0 @ x - self.f_ext
 
     def tangent(self, x: np.ndarray) -> sp.csr_matrix:
         return self.k0
@@ -327,15 +353,22 @@ def _edge(radii: np.ndarray, gaps: np.ndarray, held: np.ndarray, n_fit: int = 4
 
 def _check(radius_over_h: float, nu: float, model: str, contact: str,
            w_over_h: np.ndarray, pad_radius_over_h: float, surface_cell: float,
-           penalty: float) -> None:
+           penalty: float, friction: float | None) -> None:
     if not (np.isfinite(radius_over_h) and radius_over_h > 0):
         raise InputError(f"radius_over_h must be positive and finite, got {radius_over_h!r}")
     if not (np.isfinite(nu) and 0.0 <= nu <= 0.5):
         raise InputError(f"nu must be within [0, 0.5], got {nu!r}")
     if model not in SPHERE_MODELS:
         raise InputError(f"model must be one of {SPHERE_MODELS}, got {model!r}")
-    if contact not in SPHERE_CONTACTS:
-        raise InputError(f"contact must be one of {SPHERE_CONTACTS}, got {contact!r}")
+    if contact not in CONTACTS:
+        raise InputError(f"contact must be one of {CONTACTS}, got {contact!r}")
+    if contact == "coulomb" and model != "linear":
+        raise InputError("contact='coulomb' is built for model='linear' only")
+    if (contact == "coulomb") != (friction is not None):
+        raise InputError("friction (Coulomb's mu) is given with contact='coulomb', and only "
+                         f"then; got contact={contact!r}, friction={friction!r}")
+    if friction is not None and not (np.isfinite(friction) and friction >= 0):
+        raise InputError(f"friction must be finite and >= 0, got {friction!r}")
     if w_over_h.size == 0 or not np.all(np.isfinite(w_over_h)) or np.any(w_over_h <= 0) \
             or np.any(np.diff(w_over_h) <= 0):
         raise InputError("w_over_h must be positive, finite and increasing")
@@ -359,7 +392,8 @@ def sphere_indentation(radius_over_h: float, nu: float, w_over_h: np.ndarray, *,
                        model: str = "neo_hookean", contact: str = "frictionless",
                        pad_radius_over_h: float = 20.0, surface_cell: float | None = None,
                        steps_per_depth: int = 2, penalty: float = 1e3,
-                       profile: str = "sphere", cache: bool | str = True,
+                       profile: str = "sphere", friction: float | None = None,
+                       cache: bool | str = True,
                        cache_dir: str | os.PathLike | None = None) -> SphereIndentation | None:
     """P(w) and a(w) of a rigid sphere pressed into a bonded layer, linear or Neo-Hookean.
 
@@ -372,7 +406,8 @@ def sphere_indentation(radius_over_h: float, nu: float, w_over_h: np.ndarray, *,
     w_over_h : (K,) array_like of float
         Depths w / h, increasing, positive, at most min(0.6, R / h).
     model : {'neo_hookean', 'linear'}, default 'neo_hookean'
-    contact : {'frictionless', 'tied'}, default 'frictionless'
+    contact : {'frictionless', 'tied', 'coulomb'}, default 'frictionless'
+        'coulomb' (with `friction`) for ``model='linear'`` only.
     pad_radius_over_h : float, default 20.0
         R_pad / h (20: the infinite layer).
     surface_cell : float, optional
@@ -391,6 +426,8 @@ def sphere_indentation(radius_over_h: float, nu: float, w_over_h: np.ndarray, *,
         The indenter's shape; 'paraboloid' (z = r^2 / 2R, Hertz's
         approximation, ``model='linear'`` only) is for checks against
         closed forms built on it (Hertz, Dimitriadis et al. 2002).
+    friction : float, optional
+        Coulomb's coefficient mu >= 0, with ``contact='coulomb'`` and only then.
     cache : bool or 'only', default True
         Read and write complete sweeps in the disk cache (as
         :func:`~tactilevision.fem.neo_hookean_indentation`); ``'only'``: the
@@ -423,7 +460,7 @@ def sphere_indentation(radius_over_h: float, nu: float, w_over_h: np.ndarray, *,
     """
     w_req = np.atleast_1d(np.asarray(w_over_h, dtype=np.float64))
     _check(radius_over_h, nu, model, contact, w_req, pad_radius_over_h,
-           0.125 if surface_cell is None else surface_cell, penalty)
+           0.125 if surface_cell is None else surface_cell, penalty, friction)
     if surface_cell is None:
         surface_cell = default_surface_cell(radius_over_h, float(w_req[0]))
     inputs = {"kind": "sphere", "source": _source_digest(),
@@ -432,6 +469,8 @@ def sphere_indentation(radius_over_h: float, nu: float, w_over_h: np.ndarray, *,
               "pad_radius_over_h": float(pad_radius_over_h),
               "surface_cell": float(surface_cell), "steps_per_depth": int(steps_per_depth),
               "penalty": float(penalty), "profile": profile}
+    if friction is not None:
+        inputs["friction"] = float(friction)
     if profile not in ("sphere", "paraboloid") or (profile == "paraboloid" and model != "linear"):
         raise InputError(f"profile must be 'sphere', or 'paraboloid' with model='linear' "
                          f"(Hertz's approximation, for checks), got {profile!r}")
@@ -441,7 +480,7 @@ def sphere_indentation(radius_over_h: float, nu: float, w_over_h: np.ndarray, *,
             return hit
     res = _sweep(float(radius_over_h), float(nu), w_req, model, contact,
                  float(pad_radius_over_h), float(surface_cell), int(steps_per_depth),
-                 float(penalty), profile)
+                 float(penalty), profile, 0.0 if friction is None else float(friction))
     if cache and res.complete:
         write_sweep(inputs, res, cache_dir)
     return res
@@ -468,12 +507,14 @@ class _Sweep:
     """One depth sweep: the mesh, the solid, the contact set and the Newton solver."""
 
     def __init__(self, R: float, nu: float, w_max: float, model: str, contact: str,
-                 pad: float, surface_cell: float, penalty: float, profile: str) -> None:
+                 pad: float, surface_cell: float, penalty: float, profile: str,
+                 friction: float = 0.0) -> None:
         a_max = float(np.sqrt(max(2 * R * w_max - w_max**2, 0.0)))   # geometric, > elastic
         mesh = sphere_mesh(a_max, surface_cell, pad_radius_over_h=pad)
         bulk = np.inf if nu == 0.5 else 1.0 / (3.0 * (1.0 - 2.0 * nu))
         self.solid = solid = AxisymmetricNeoHookean(mesh, 1.0 / (4.0 * (1.0 + nu)), bulk)
         self.R, self.linear, self.tied = R, model == "linear", contact == "tied"
+        self.coulomb, self.mu = contact == "coulomb", float(friction)
         self.surf = _Surface(solid.ubasis, R, paraboloid=profile == "paraboloid")
         self.base = np.concatenate([solid.ubasis.get_dofs("bottom").all(),
                                     solid.ubasis.get_dofs("axis").all("u^1")])
@@ -489,6 +530,9 @@ class _Sweep:
         self.held[0] = True                          # the apex touches first
         self.target_ur = np.zeros(m)                 # tied: u_r where each node stuck
         self.offset_z = np.zeros(m)                  # tied NH: z on sphere + w at sticking
+        self.stick = np.zeros(m, dtype=bool)         # Coulomb: held nodes that stick
+        self.stick[0] = True
+        self.slip_force = np.zeros(m)                # Coulomb: +-mu p on slipping nodes
         self.newton = ConstrainedNewton(self.problem, self.fixed_and_target(0.0)[0])
 
     def fixed_and_target(self, w: float) -> tuple[np.ndarray, np.ndarray]:
@@ -498,7 +542,8 @@ class _Sweep:
         surf, idx = self.surf, np.flatnonzero(self.held)
         vz = (surf.sphere_z(surf.R[idx], w) - 1.0) if self.linear else self.offset_z[idx] - w
         dofs, vals = [self.base, surf.uz[idx]], [np.zeros(self.base.size), vz]
-        if self.tied:
+        if self.tied or self.coulomb:
+            idx = idx[self.stick[idx]] if self.coulomb else idx
             dofs.append(surf.ur[idx])
             vals.append(self.target_ur[idx])
         d, v = np.concatenate(dofs), np.concatenate(vals)
@@ -507,25 +552,68 @@ class _Sweep:
 
     def state(self) -> tuple:
         return (self.held.copy(), self.target_ur.copy(), self.offset_z.copy(),
+                self.stick.copy(), self.slip_force.copy(),
                 None if self.punch is None else self.punch.engaged.copy())
 
     def restore(self, saved: tuple) -> None:
         self.held[:], self.target_ur[:], self.offset_z[:] = saved[:3]
+        self.stick[:], self.slip_force[:] = saved[3:5]
         if self.punch is not None:
-            self.punch.engaged = saved[3]
+            self.punch.engaged = saved[5]
+
+    def _solve(self, x: np.ndarray, w: float) -> tuple[np.ndarray, int, bool]:
+        """One solve at depth w with the current contact set (and slip forces)."""
+        fixed, target = self.fixed_and_target(w)
+        self.newton.set_fixed(fixed)
+        if self.punch is not None:
+            self.problem.w = w
+        if self.coulomb:
+            self.problem.f_ext[:] = 0.0
+            self.problem.f_ext[self.surf.ur] = self.slip_force
+        self.newton.cache = None
+        full = np.zeros(self.solid.n_dofs)
+        full[fixed] = target                           # set_fixed drops repeated dofs
+        return self.newton.solve(x, full[self.newton.fixed])
+
+    def settle_coulomb(self, x: np.ndarray, w: float) -> tuple[np.ndarray, int, bool]:
+        """Solve at depth w under Coulomb friction: contact, stick and slip sets and the
+        slip forces +-mu p updated until they settle (p to 1e-6 of the largest)."""
+        n_it, surf, mu = 0, self.surf, self.mu
+        for _ in range(4 * _MAX_SET_UPDATES):
+            x, n, ok = self._solve(x, w)
+            n_it += n
+            if not ok:
+                return x, n_it, False
+            reac = self.problem.residual(x)
+            p, q = -reac[surf.uz], reac[surf.ur]       # the sphere's push and shear on the gel
+            scale = max(float(np.max(np.abs(p))), 1e-300)
+            first = np.arange(self.held.size) > 0
+            enter = (~self.held) & (surf.gap(x, w, True) < -_TOL) & (surf.R < self.R)
+            stuck, sliding = self.held & self.stick, self.held & ~self.stick
+            slip = stuck & (np.abs(q) > mu * np.abs(p) + 1e-9 * scale) & first
+            drift = x[surf.ur] - self.target_ur
+            back = sliding & (self.slip_force * drift > 0) & (np.abs(drift) > 1e-12 * w)
+            force = np.where(sliding, np.sign(self.slip_force) * mu * np.abs(p), 0.0)
+            moved = np.abs(force - self.slip_force) > 1e-6 * scale
+            if not (enter.any() or slip.any() or back.any() or moved.any()):
+                self.target_ur[sliding] = x[surf.ur][sliding]   # a slipped node's new anchor
+                return x, n_it, True
+            self.slip_force = force
+            self.slip_force[slip] = np.sign(q[slip]) * mu * np.abs(p[slip])
+            self.stick[slip] = False
+            self.stick[back] = True
+            self.target_ur[back | enter] = x[surf.ur][back | enter]
+            self.slip_force[back] = 0.0
+            self.held[enter], self.stick[enter] = True, True
+        return x, n_it, False
 
     def settle(self, x: np.ndarray, w: float) -> tuple[np.ndarray, int, bool]:
         """Solve at depth w, updating the contact set until it settles."""
+        if self.coulomb:
+            return self.settle_coulomb(x, w)
         n_it, surf = 0, self.surf
         for _ in range(_MAX_SET_UPDATES):
-            fixed, target = self.fixed_and_target(w)
-            self.newton.set_fixed(fixed)
-            if self.punch is not None:
-                self.problem.w = w
-            self.newton.cache = None
-            full = np.zeros(self.solid.n_dofs)
-            full[fixed] = target                       # set_fixed drops repeated dofs
-            x, n, ok = self.newton.solve(x, full[self.newton.fixed])
+            x, n, ok = self._solve(x, w)
             n_it += n
             if not ok:
                 return x, n_it, False
@@ -551,7 +639,8 @@ class _Sweep:
         return x, n_it, False
 
     def record(self, x: np.ndarray, w: float) -> tuple[float, ...]:
-        """(w, force, a sub-cell, a node-wise, -, min J, penetration) at a converged depth."""
+        """(w, force, a sub-cell, a node-wise, min J, penetration, slip radius) at a
+        converged depth."""
         surf = self.surf
         e_z = np.zeros(self.solid.n_dofs)
         e_z[surf.uz] = 1.0
@@ -560,22 +649,26 @@ class _Sweep:
         inside = self.held if self.punch is None else self.punch.engaged
         radii = surf.R if self.linear else surf.R + x[surf.ur]
         a_sub, a_node = _edge(radii, g, inside)
+        sliding = inside & ~self.stick if self.coulomb else np.zeros_like(inside)
         return (w, -2.0 * np.pi * float(e_z @ res), a_sub, a_node,
                 1.0 if self.linear else self.solid.min_jacobian(x),
-                float(np.max(-g[inside], initial=0.0)))
+                float(np.max(-g[inside], initial=0.0)),
+                float(surf.R[sliding].min()) if sliding.any() else a_node)
 
 
 def _sweep(R: float, nu: float, w_req: np.ndarray, model: str, contact: str,
            pad: float, surface_cell: float, per: int, penalty: float,
-           profile: str) -> SphereIndentation:
+           profile: str, friction: float = 0.0) -> SphereIndentation:
     t0 = time.perf_counter()
-    sw = _Sweep(R, nu, float(w_req[-1]), model, contact, pad, surface_cell, penalty, profile)
+    sw = _Sweep(R, nu, float(w_req[-1]), model, contact, pad, surface_cell, penalty, profile,
+                friction)
     x = np.zeros(sw.solid.n_dofs)
     x_prev, w_prev, w_pp = x.copy(), 0.0, 0.0
     # tied contact depends on the path: each step moves the edge by at most a surface cell
     # (Hertz's a = sqrt(R w)); frictionless contact does not (per requested depth only)
-    steps = _load_steps(w_req, per, surface_cell / np.sqrt(R) if sw.tied else np.inf)
-    rows, its_list, surf_ur, surf_uz = [], [], [], []
+    steps = _load_steps(w_req, per, surface_cell / np.sqrt(R) if contact != 'frictionless'
+                         else np.inf)
+    rows, its_list, surf_ur, surf_uz, forces = [], [], [], [], []
     its, complete = 0, True
     for w_next in steps:
         stack = [float(w_next)]
@@ -608,8 +701,12 @@ def _sweep(R: float, nu: float, w_req: np.ndarray, model: str, contact: str,
             its_list.append(its)
             surf_ur.append(x[sw.surf.ur].copy())
             surf_uz.append(x[sw.surf.uz].copy())
+            if sw.coulomb:
+                reac = sw.problem.residual(x)
+                forces.append(np.where(sw.held, reac[sw.surf.uz], 0.0))
+                forces.append(np.where(sw.held, reac[sw.surf.ur] + sw.slip_force, 0.0))
             its = 0
-    res = np.array(rows, dtype=np.float64).reshape(-1, 6)
+    res = np.array(rows, dtype=np.float64).reshape(-1, 7)
     w = res[:, 0]
     m = sw.surf.R.size
     return SphereIndentation(
@@ -619,4 +716,7 @@ def _sweep(R: float, nu: float, w_req: np.ndarray, model: str, contact: str,
         n_dofs=int(sw.solid.n_dofs), surface_cell=surface_cell,
         seconds=time.perf_counter() - t0, newton_iterations=np.array(its_list, dtype=int),
         min_jacobian=res[:, 4], penetration=res[:, 5], surface_r=sw.surf.R.copy(),
-        surface_ur=np.array(surf_ur).reshape(-1, m), surface_uz=np.array(surf_uz).reshape(-1, m))
+        surface_ur=np.array(surf_ur).reshape(-1, m), surface_uz=np.array(surf_uz).reshape(-1, m),
+        friction=friction, slip_radius=res[:, 6] if contact == "coulomb" else None,
+        surface_fz=np.array(forces[0::2]).reshape(-1, m) if sw.coulomb else None,
+        surface_fr=np.array(forces[1::2]).reshape(-1, m) if sw.coulomb else None)

@@ -201,10 +201,16 @@ class Sphere(Indenter):
         the infinite layer. A rectangular pad is not axisymmetric: its
         equal-area radius is a fair stand-in, its inscribed and circumscribed
         radii bracket it.
+    friction : float, optional
+        Coulomb's mu between ball and gel, >= 0: ``contact='coulomb'`` becomes
+        available (``law='linear'`` only; the shear bounded by mu |p|, the
+        normal contact tied, as in the FEATS authors' CalculiX model), one FEM
+        sweep per nu as on a finite pad (:func:`tactilevision.fem.sphere_indentation`).
     """
 
     radius_mm: float
     pad_radius_mm: float | None = None
+    friction: float | None = None
     shape: ClassVar[str] = "sphere"
     contacts: ClassVar[tuple[str, ...]] = ("frictionless", "tied")
     observes: ClassVar[str] = "the contact circle, whose radius grows with depth (a^2 ~ R w)"
@@ -214,16 +220,31 @@ class Sphere(Indenter):
         if self.pad_radius_mm is not None:
             object.__setattr__(self, "pad_radius_mm",
                                _positive(self.pad_radius_mm, "pad_radius_mm"))
+        if self.friction is not None:
+            mu = self.friction
+            if isinstance(mu, bool) or not isinstance(mu, int | float | np.floating) \
+                    or not (np.isfinite(mu) and mu >= 0):
+                raise InputError(f"friction must be a number >= 0, got {mu!r}")
+            object.__setattr__(self, "friction", float(mu))
 
     @property
     def costly_in_nu(self) -> bool:
-        """True when each nu is a FEM sweep (a finite pad): a fit does not profile nu."""
-        return self.pad_radius_mm is not None
+        """True when each nu is a FEM sweep (a finite pad, or friction): a fit does not
+        profile nu."""
+        return self.pad_radius_mm is not None or self.friction is not None
+
+    def _contact(self, contact: str | None) -> str:
+        if contact == "coulomb":
+            if self.friction is None:
+                raise InputError("contact='coulomb' needs the ball's friction coefficient "
+                                 "(Sphere(..., friction=mu))")
+            return contact
+        return super()._contact(contact)
 
     def reach_mm(self, thickness_mm: float, law: str = "neo_hookean",
                  contact: str | None = None) -> float:
         ratio = self.radius_mm / thickness_mm
-        if self.pad_radius_mm is not None:
+        if self.pad_radius_mm is not None or contact == "coulomb":
             return sphere_reach(ratio) * thickness_mm
         return table_reach(ratio, self._law(law), self._contact(contact)) * thickness_mm
 
@@ -234,7 +255,9 @@ class Sphere(Indenter):
 
     def _ratio(self, kind: str, w: np.ndarray, nu: float, h: float, law: str,
                contact: str | None) -> np.ndarray:
-        if self.pad_radius_mm is None:
+        if contact == "coulomb" and self._law(law) != "linear":
+            raise InputError("contact='coulomb' is computed for law='linear' only")
+        if self.pad_radius_mm is None and contact != "coulomb":
             look = sphere_force_ratio if kind == "force" else sphere_contact_ratio
             return look(self.radius_mm / h, nu, w / h, model=self._law(law),
                         contact=self._contact(contact))
@@ -249,8 +272,10 @@ class Sphere(Indenter):
         pos = x[x > 0]
         low = 0.5 * float(pos.min()) if pos.size else reach
         start = max((v for v in _PAD_STARTS if v <= low), default=_PAD_STARTS[0])
-        sweep = _pad_sweep(self.radius_mm / h, float(nu), self.pad_radius_mm / h,
-                           self._law(law), self._contact(contact), start)
+        pad = 20.0 * h if self.pad_radius_mm is None else self.pad_radius_mm
+        c = self._contact(contact)
+        sweep = _pad_sweep(self.radius_mm / h, float(nu), pad / h, self._law(law), c, start,
+                           self.friction if c == "coulomb" else None)
         return sweep[0 if kind == "force" else 1](np.sqrt(np.minimum(x, reach)))
 
     def force(self, depth_mm, *, E_mpa, nu, thickness_mm, law="neo_hookean", contact=None):
@@ -293,13 +318,16 @@ class Sphere(Indenter):
         out = super().config()
         if self.pad_radius_mm is not None:
             out["pad_radius_mm"] = self.pad_radius_mm
+        if self.friction is not None:
+            out["friction"] = self.friction
         return out
 
 
 @lru_cache(maxsize=32)
 def _pad_sweep(radius_over_h: float, nu: float, pad_over_h: float, law: str, contact: str,
-               start: float) -> tuple[CubicSpline, CubicSpline]:
-    """Force and contact ratios of one FEM sweep on a finite pad, as splines of sqrt(w/h)
+               start: float, friction: float | None = None) -> tuple[CubicSpline, CubicSpline]:
+    """Force and contact ratios of one FEM sweep on a finite pad (or with Coulomb
+    friction, `friction`), as splines of sqrt(w/h)
     (through 1 at w = 0, Hertz's limit), over the sphere table's depths from `start` to the
     reach (below the table's first depth, 0.01, doubling from `start`)."""
     reach = sphere_reach(radius_over_h)
@@ -314,7 +342,8 @@ def _pad_sweep(radius_over_h: float, nu: float, pad_over_h: float, law: str, con
     # w/h = 0.49, the second reached 0.5.
     cell = min(0.0625, float(np.sqrt(radius_over_h * grid[0])) / 12.0)
     attempts = [dict(model=law, contact=contact, pad_radius_over_h=pad_over_h,
-                     steps_per_depth=steps, surface_cell=min(0.125, factor * cell))
+                     steps_per_depth=steps, surface_cell=min(0.125, factor * cell),
+                     friction=friction)
                 for factor, steps in ((1.0, 2), (1.0, 4), (1.6, 4))]
     # a retry that converged before is in the disk cache; the attempts that failed before
     # it are not (only complete sweeps are kept), so it is looked for first
