@@ -33,14 +33,9 @@ from pathlib import Path
 import numpy as np
 
 from tactilevision import InputError
+from tactilevision.diagnosis import diagnose_indenter
 from tactilevision.fem import sphere_indentation
-from tactilevision.mechanics import (
-    Sphere,
-    diagnose_indenter,
-    fem_force,
-    fit_indentation,
-    fit_indenter,
-)
+from tactilevision.mechanics import Sphere, fem_force, fit_indentation, fit_indenter
 from tactilevision.viz import indenter_figure
 
 ROOT = Path(__file__).resolve().parents[1]

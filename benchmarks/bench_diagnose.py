@@ -25,7 +25,8 @@ from multiprocessing import Pool
 
 import numpy as np
 
-from tactilevision.mechanics import IndentationModel, diagnose, fit_model
+from tactilevision.diagnosis import diagnose
+from tactilevision.mechanics import IndentationModel, fit_model
 from tactilevision.sim import HIDDEN_EFFECTS, make_measurement_table
 
 OUT_OF_CATALOGUE = ("temperature",)

@@ -36,7 +36,8 @@ from pathlib import Path
 
 import numpy as np
 
-from tactilevision.mechanics import IndentationModel, diagnose, fit_model
+from tactilevision.diagnosis import diagnose
+from tactilevision.mechanics import IndentationModel, fit_model
 from tactilevision.sim import HIDDEN_EFFECTS, make_measurement_table
 
 OUT_OF_CATALOGUE = ("temperature",)
@@ -217,7 +218,7 @@ def main() -> None:
     global LAW
     LAW = a.law      # before the pool: its processes are forked with it
     if a.delta_bic is not None:
-        from tactilevision.mechanics import _diagnose
+        from tactilevision.diagnosis import _diagnose
 
         _diagnose.DELTA_BIC = a.delta_bic
         print(f"DELTA_BIC = {a.delta_bic:g} (diagnose's default: 10)")

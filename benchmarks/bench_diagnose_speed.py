@@ -23,7 +23,7 @@ import warnings
 import numpy as np
 from scipy.optimize import least_squares
 
-from tactilevision.mechanics import diagnose
+from tactilevision.diagnosis import diagnose
 from tactilevision.sim import HIDDEN_EFFECTS, make_measurement_table
 
 

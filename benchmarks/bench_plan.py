@@ -30,8 +30,9 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 import numpy as np
 
 from tactilevision import InputError
-from tactilevision.mechanics import Design, fit_indentation, plan
-from tactilevision.mechanics._design import depth_uncertainty
+from tactilevision.mechanics import fit_indentation
+from tactilevision.planning import Design, plan
+from tactilevision.planning._design import depth_uncertainty
 from tactilevision.sim._tables import _fem_force
 
 

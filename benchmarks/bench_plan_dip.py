@@ -20,7 +20,8 @@ from pathlib import Path
 
 from bench_plan_effects import designs
 
-from tactilevision.mechanics import diagnose, effect_power, read_design
+from tactilevision.diagnosis import diagnose
+from tactilevision.planning import effect_power, read_design
 from tactilevision.sim import design_measurement_table
 
 PAPER = Path(__file__).resolve().parents[1] / "sample_frames" / "plan" / "paper_gauge_block.toml"

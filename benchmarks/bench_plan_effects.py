@@ -54,7 +54,8 @@ import numpy as np
 from scipy import stats
 
 from tactilevision import InputError
-from tactilevision.mechanics import Design, diagnose, effect_power, effect_sensitivity
+from tactilevision.diagnosis import diagnose
+from tactilevision.planning import Design, effect_power, effect_sensitivity
 from tactilevision.sim import design_measurement_table
 
 FACTORS = (1 / 1.3, 1.0, 1.3)

@@ -19,7 +19,8 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 import numpy as np
 
-from tactilevision.mechanics import fem_force, fit_indentation, read_design, recommend
+from tactilevision.mechanics import fem_force, fit_indentation
+from tactilevision.planning import read_design, recommend
 
 PAPER = Path(__file__).resolve().parents[1] / "sample_frames" / "plan" / "paper_gauge_block.toml"
 

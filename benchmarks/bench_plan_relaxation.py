@@ -6,7 +6,7 @@ the predicted power spans 0 to 1, draws sessions of holds (each press's force ``
 + g phi(T_i / tau) exp(-t / tau)]`` at its FEM force, loaded over ``w / stage speed``, plus
 white noise of the design's ``force_noise_n``), fits them with ``fit_relaxation`` and
 counts how often it calls g and tau identified (``identified``), against
-:func:`tactilevision.mechanics.relaxation_identifiability`'s power. The sessions use the
+:func:`tactilevision.planning.relaxation_identifiability`'s power. The sessions use the
 plan's own hold model and noise: this checks the power calculation, not the noise model
 (a real F/T's noise is coloured).
 
@@ -22,8 +22,9 @@ import warnings
 
 import numpy as np
 
-from tactilevision.mechanics import fit_relaxation, ramp_factor, relaxation_identifiability
-from tactilevision.mechanics._design import design_table, hold_lengths, read_design
+from tactilevision.mechanics import fit_relaxation, ramp_factor
+from tactilevision.planning import relaxation_identifiability
+from tactilevision.planning._design import design_table, hold_lengths, read_design
 
 CASES = ((0.004, 0.3), (0.006, 0.3), (0.008, 0.3), (0.01, 0.3), (0.012, 0.3), (0.016, 0.3),
          (0.02, 1.0), (0.05, 5.0))

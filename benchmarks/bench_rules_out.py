@@ -23,7 +23,7 @@ import platform
 import time
 import warnings
 
-from tactilevision.mechanics import diagnose
+from tactilevision.diagnosis import diagnose
 from tactilevision.sim import make_measurement_table
 
 #: catalogue effect -> (generator's hidden name, its truth key of the same parameter)

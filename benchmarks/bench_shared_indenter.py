@@ -24,8 +24,8 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from test_diagnose import _shared_by_indenter
 
-from tactilevision.mechanics import diagnose
-from tactilevision.mechanics._diagnose import diagnose_core
+from tactilevision.diagnosis import diagnose
+from tactilevision.diagnosis._diagnose import diagnose_core
 
 #: hidden effect -> what counts as naming it
 RIGHT = {None: (None,), "stiffness_step": ("stiffness_step:press",),

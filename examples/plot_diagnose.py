@@ -10,7 +10,7 @@ to the noise floor once it is added.
 
 import matplotlib.pyplot as plt
 
-from tactilevision.mechanics import diagnose
+from tactilevision.diagnosis import diagnose
 from tactilevision.sim import make_measurement_table
 
 t = make_measurement_table("incomplete_recovery", seed=3)

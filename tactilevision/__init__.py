@@ -27,7 +27,7 @@ def __getattr__(name: str):
 
         return getattr(pipeline, name)
     if name == "plan":        # tactilevision.plan(design): before the first press
-        from .mechanics import plan
+        from .planning import plan
 
         return plan
     raise AttributeError(f"module 'tactilevision' has no attribute {name!r}")

@@ -250,13 +250,14 @@ def flat_gel_taxim():
 
 
 def plan_sessions(d, n: int, seed: int) -> np.ndarray:
-    """(E, nu) rows of `n` sessions of a ``tactilevision.mechanics.Design``: the
+    """(E, nu) rows of `n` sessions of a ``tactilevision.planning.Design``: the
     generator's finite-strain FEM forces at the planned depths, the design's random
     noise (F/T over the window; each certified depth off by the design's depth sd), each
     fitted as ``calibrate`` fits (the depth sds given). The truth is the design's E, nu."""
     import warnings
 
-    from tactilevision.mechanics import depth_uncertainty, fit_indentation
+    from tactilevision.mechanics import fit_indentation
+    from tactilevision.planning import depth_uncertainty
     from tactilevision.sim._tables import _fem_force
 
     rng = np.random.default_rng(seed)

@@ -14,7 +14,8 @@ import numpy as np
 import pytest
 
 from tactilevision import InputError
-from tactilevision.mechanics import Sphere, diagnose_indenter
+from tactilevision.diagnosis import diagnose_indenter
+from tactilevision.mechanics import Sphere
 
 PX = 0.0295          # mm per pixel
 BALL, H, E = Sphere(2.0), 2.0, 0.25

@@ -12,12 +12,8 @@ import numpy as np
 import pytest
 
 from tactilevision import InputError
-from tactilevision.mechanics import (
-    Sphere,
-    diagnose_indenter,
-    fit_indenter,
-    validate_indenter,
-)
+from tactilevision.diagnosis import diagnose_indenter, validate_indenter
+from tactilevision.mechanics import Sphere, fit_indenter
 
 ROOT = Path(__file__).resolve().parents[1]
 FEATS = ROOT / "sample_frames" / "feats"

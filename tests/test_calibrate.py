@@ -612,7 +612,7 @@ def test_report_says_what_this_session_could_not_test(sample_run):
     made to vary (nothing left)."""
     import csv as _csv
 
-    from tactilevision.mechanics import untestable_in_table
+    from tactilevision.planning import untestable_in_table
 
     out, _ = sample_run
     html = (out / "report" / "report.html").read_text()
@@ -637,7 +637,7 @@ def test_calibrate_writes_the_sessions_design(sample_run):
     """design.toml: the session's design (design_from_calibration of the folder), read
     back equal; its depths the gauge block's, its repeats the presses per depth, its E and
     nu the fit's; plan reads it."""
-    from tactilevision.mechanics import design_from_calibration, plan, read_design
+    from tactilevision.planning import design_from_calibration, plan, read_design
 
     out, _ = sample_run
     folder = out / "report"

@@ -20,6 +20,7 @@ import pytest
 
 from tactilevision import InputError
 from tactilevision.cli import main
+from tactilevision.diagnosis import diagnose, noise_floor
 from tactilevision.io import write_measurements
 from tactilevision.mechanics import (
     Effect,
@@ -27,11 +28,9 @@ from tactilevision.mechanics import (
     Param,
     _catalogue,
     check_fit_effects,
-    diagnose,
     fit_indentation,
     fit_model,
     make_effect,
-    noise_floor,
     register_effect,
 )
 from tactilevision.sim import make_measurement_table

@@ -13,16 +13,16 @@ import pytest
 
 from tactilevision import InputError
 from tactilevision.cli import main
-from tactilevision.io import write_measurements
-from tactilevision.mechanics import (
+from tactilevision.diagnosis import (
     certification_tests,
     covariate_tests,
     diagnose,
-    fit_model,
     indenter_shared,
     noise_floor,
 )
-from tactilevision.mechanics._diagnose import diagnose_core
+from tactilevision.diagnosis._diagnose import diagnose_core
+from tactilevision.io import write_measurements
+from tactilevision.mechanics import fit_model
 from tactilevision.sim import HIDDEN_EFFECTS, make_measurement_table
 from tactilevision.sim._tables import _fem_force
 

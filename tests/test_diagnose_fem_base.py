@@ -18,11 +18,11 @@ import pytest
 
 from tactilevision import InputError
 from tactilevision.cli import main
+from tactilevision.diagnosis import diagnose
 from tactilevision.io import write_measurements
 from tactilevision.mechanics import (
     FemLaw,
     IndentationModel,
-    diagnose,
     fit_model,
     kappa_n,
     kappa_n_grid,

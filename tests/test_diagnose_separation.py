@@ -16,7 +16,8 @@ import numpy as np
 import pytest
 
 from tactilevision import InputError
-from tactilevision.mechanics import IndentationModel, diagnose, fit_model
+from tactilevision.diagnosis import diagnose
+from tactilevision.mechanics import IndentationModel, fit_model
 from tactilevision.sim import make_measurement_table
 
 

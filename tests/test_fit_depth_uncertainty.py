@@ -21,8 +21,9 @@ from scipy import stats
 
 from tactilevision import InputError, ShapeError
 from tactilevision.cli import main
+from tactilevision.diagnosis import certification_tests, covariate_tests
 from tactilevision.io import read_measurements, write_measurements
-from tactilevision.mechanics import certification_tests, covariate_tests, fit_indentation
+from tactilevision.mechanics import fit_indentation
 
 # The synthetic law of the brief: P = c w (1 + beta w / h), paper's geometry.
 C0, BETA0, H, A = 3.5, 0.8, 3.0, 2.5
@@ -161,7 +162,7 @@ def test_exact_fem_forces_give_the_fem_moduli_with_depth_uncertainties():
     depth uncertainties; read with equal weights it gave E 9.3 % low as u -> 0 and 7.8 % low
     at 1.8 um (nu 0.45; the bias found by ``tactilevision plan``). Unequal uncertainties
     (deep presses worse) change the weights, not the answer."""
-    from tactilevision.mechanics._design import design_table, read_design
+    from tactilevision.planning._design import design_table, read_design
     d = read_design(Path(__file__).parents[1] / "sample_frames/plan/paper_gauge_block.toml")
     w, P = design_table(d)
     for u in (1e-6, 0.0018, 0.001 + 0.01 * w):

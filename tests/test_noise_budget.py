@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from tactilevision.contact import window_standard_error
-from tactilevision.mechanics import NoiseBudget, diagnose
-from tactilevision.mechanics._budget import BUDGET_ALPHA, BUDGET_RATIO
-from tactilevision.mechanics._diagnose import _budget_sentence, diagnose_core
+from tactilevision.diagnosis import NoiseBudget, diagnose
+from tactilevision.diagnosis._budget import BUDGET_ALPHA, BUDGET_RATIO
+from tactilevision.diagnosis._diagnose import _budget_sentence, diagnose_core
 from tactilevision.sim import make_measurement_table
 
 
@@ -119,7 +119,7 @@ def test_without_window_standard_errors_there_is_no_budget_and_it_says_why():
 def test_noise_budget_on_known_scatter():
     """Residuals of known sd against a stated budget: equal sds pass, three times fail;
     one depth gives no dP/dw and no budget."""
-    from tactilevision.mechanics import noise_budget
+    from tactilevision.diagnosis import noise_budget
 
     rng = np.random.default_rng(0)
     w = np.repeat([0.2, 0.4, 0.6], 20)

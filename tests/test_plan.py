@@ -13,7 +13,7 @@ from _data import plan_sessions
 import tactilevision
 from tactilevision import InputError
 from tactilevision.cli import main
-from tactilevision.mechanics import (
+from tactilevision.planning import (
     Design,
     depth_uncertainty,
     design_from_calibration,
@@ -199,7 +199,7 @@ def test_design_from_a_calibration_folder_round_trips(tmp_path, capsys):
 
 def test_the_vernier_threshold_is_the_contact_packages():
     from tactilevision.contact._vernier import RESOLVED_PX as contact_px
-    from tactilevision.mechanics._design import RESOLVED_PX as plan_px
+    from tactilevision.planning._design import RESOLVED_PX as plan_px
 
     assert plan_px == contact_px
 
@@ -241,7 +241,7 @@ def test_relaxation_noncentrality_scales_as_the_signal_over_the_noise():
     """Known answers of the test's noncentrality RSS_line / sigma_b^2: the straight decay's
     misfit is linear in g for a small g (so lambda goes as g^2) and sigma_b^2 as the
     F/T noise's variance (lambda as 1 / sd^2, exactly)."""
-    from tactilevision.mechanics import relaxation_identifiability
+    from tactilevision.planning import relaxation_identifiability
     d = _relax_design()
     lam = relaxation_identifiability(d, 0.002, 0.3).noncentrality
     assert relaxation_identifiability(d, 0.004, 0.3).noncentrality == pytest.approx(
@@ -263,7 +263,8 @@ def test_relaxation_power_against_fit_relaxation_on_drawn_holds():
     import importlib.util
     from pathlib import Path
 
-    from tactilevision.mechanics import fit_relaxation, relaxation_identifiability
+    from tactilevision.mechanics import fit_relaxation
+    from tactilevision.planning import relaxation_identifiability
     spec = importlib.util.spec_from_file_location(
         "bench_plan_relaxation",
         Path(__file__).resolve().parents[1] / "benchmarks" / "bench_plan_relaxation.py")
@@ -292,4 +293,4 @@ def test_plan_says_whether_the_relaxation_is_identified(tmp_path, capsys):
     got = json.loads((tmp_path / "p.json").read_text())["relaxation"]
     assert got["power"] == 0 and got["span_ok"] is False and got["tau_s"] == 5
     d = read_design(path)
-    assert "relaxation_tau_s = 5\n" in tactilevision.mechanics.design_toml(d)
+    assert "relaxation_tau_s = 5\n" in tactilevision.planning.design_toml(d)

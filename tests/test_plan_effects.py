@@ -14,17 +14,18 @@ from scipy import stats
 
 from tactilevision import InputError
 from tactilevision.cli import main
-from tactilevision.mechanics import (
-    EFFECT_SIZE_PARAMS,
+from tactilevision.diagnosis import diagnose
+from tactilevision.diagnosis._replay import _Replay
+from tactilevision.mechanics import EFFECT_SIZE_PARAMS
+from tactilevision.planning import (
     Design,
+    design_setup,
     design_toml,
-    diagnose,
     effect_power,
     effect_sensitivity,
     plan,
     read_design,
 )
-from tactilevision.mechanics._plan_effects import _Replay
 from tactilevision.sim import design_measurement_table
 from tactilevision.sim._tables import _fem_force
 
@@ -38,7 +39,7 @@ def test_replayed_power_is_the_noncentral_F_of_the_bic_rule():
     """One candidate, constant noise, no law misfit: the BIC rule (lower by more than 10,
     k ln n the penalty) is an F test, and its power the noncentral F's tail."""
     d = Design(**{**VARIED, "depth_std_um": 0.0})
-    rep = _Replay(d, 6000, seed=1)
+    rep = _Replay(design_setup(d), 6000, seed=1)
     rep.cands = {"aging": rep.cands["aging"]}
     rep.base_y = rep.X0 @ np.linalg.lstsq(rep.X0, rep.P, rcond=None)[0]
     n, p, k = rep.n, 2, 1

@@ -12,7 +12,7 @@ from _data import plan_sessions
 
 from tactilevision import InputError
 from tactilevision.cli import main
-from tactilevision.mechanics import (
+from tactilevision.planning import (
     Design,
     design_toml,
     error_totals,

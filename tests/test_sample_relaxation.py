@@ -73,7 +73,7 @@ def test_plan_from_this_calibration_keeps_its_holds_and_relaxation(calibrated):
     in press order (0.5 to 2.8 s, the window at their ends), the rests, and the relaxation
     the holds gave (g, tau within 5 % of the truth), which the repeat identifies again
     (its curvature test's power over 95 %); relaxation is then testable by diagnose."""
-    from tactilevision.mechanics import design_from_calibration, plan_session
+    from tactilevision.planning import design_from_calibration, plan_session
 
     out, truth = calibrated
     d = design_from_calibration(out, SESSION)

@@ -208,7 +208,8 @@ def test_structure_page_names_only_what_exists():
     for path in set(re.findall(r"`(tactilevision/[\w/]+\.py)`", text)):
         assert (ROOT / path).is_file(), path
     for dotted in set(re.findall(r"`(?:tactilevision\.)?((?:io|fem|optics|contact|mechanics|"
-                                 r"viz|sim|pipeline|history|live|batch)\.\w+(?:\.\w+)?)`",
+                                 r"diagnosis|planning|viz|sim|pipeline|history|live|batch)"
+                                 r"\.\w+(?:\.\w+)?)`",
                                  text)):
         pkg, *names = dotted.split(".")
         obj = importlib.import_module(f"tactilevision.{pkg}")

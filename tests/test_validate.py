@@ -20,8 +20,9 @@ import pytest
 
 from tactilevision import InputError, ShapeError
 from tactilevision.cli import main
+from tactilevision.diagnosis import validate_indentation
 from tactilevision.fem import neo_hookean_indentation
-from tactilevision.mechanics import fit_indentation, validate_indentation
+from tactilevision.mechanics import fit_indentation
 
 H, A = 2.5, 3.0             # mm: a/h = 1.2, where beta depends on nu strongly enough
 E_TRUE, NU_TRUE = 0.15, 0.47

@@ -8,8 +8,9 @@ import sys
 from pathlib import Path
 
 from .. import InputError
+from ..diagnosis import diagnose, diagnose_indenter
 from ..io import read_measurements
-from ..mechanics import diagnose, diagnose_indenter, effect_names, model_label
+from ..mechanics import effect_names, model_label
 from ..viz import (
     diagnosis_figures,
     indenter_figure,

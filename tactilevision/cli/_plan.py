@@ -7,8 +7,8 @@ import math
 from pathlib import Path
 
 from .. import InputError
-from ..mechanics import (
-    EFFECT_SIZE_PARAMS,
+from ..mechanics import EFFECT_SIZE_PARAMS
+from ..planning import (
     Recommendation,
     design_from_calibration,
     design_toml,

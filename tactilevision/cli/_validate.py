@@ -10,8 +10,9 @@ import warnings
 from pathlib import Path
 
 from .. import InputError
+from ..diagnosis import validate_indentation, validate_indenter
 from ..io import read_measurements
-from ..mechanics import fit_indentation, validate_indentation, validate_indenter
+from ..mechanics import fit_indentation
 from ..viz import save_validation_figure
 from ._fit import _write_json
 from ._fit_indenter import fit_laws, indenter_of

@@ -3,7 +3,7 @@
 The weighted line of :mod:`._trend` reads each calibration's E; this pools the
 presses themselves (each calibration's ``measurements.csv`` with a ``day``
 column, days since the first) and hands them to the diagnosis machinery
-(:func:`tactilevision.mechanics.diagnose`), which tells a gradual change
+(:func:`tactilevision.diagnosis.diagnose`), which tells a gradual change
 (``aging``, P (1 + k day)) from a sudden one (``stiffness_step:day``) or none,
 and fits the named effect: a rate k with its interval from all the presses at
 once, with one nu for the gel.
@@ -19,8 +19,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._checks import InputError
+from ..diagnosis import diagnose
 from ..io import read_measurements
-from ..mechanics import diagnose, fit_model
+from ..mechanics import fit_model
 from ..pipeline import CalibrationResult
 from ._read import CalibrationRecord
 

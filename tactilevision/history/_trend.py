@@ -5,7 +5,7 @@ of E against days (:func:`weighted_line`), each calibration weighted by its
 own interval; the verdict (:func:`assess`) compares the latest calibration
 with the first.
 
-Why a weighted line and not :func:`tactilevision.mechanics.diagnose` with the
+Why a weighted line and not :func:`tactilevision.diagnosis.diagnose` with the
 ``aging`` effect on the pooled presses: ``aging`` (P (1 + k day)) scales the
 stiffness c of eq. (5) at one nu for all presses, and pooling assumes the
 calibrations share a depth rule, a clock and a press quality. Each

@@ -1,4 +1,4 @@
-"""Mechanics of the gel pad: kappa and beta tables, the in-situ fit of E and nu.
+"""Mechanics of the gel pad: the contact laws, the models of effects and the fit of E and nu.
 
 The method is C. Zhao, J. Ren, H. Yu and D. Ma's, "In-situ Mechanical
 Calibration for Vision-based Tactile Sensors" (IEEE ICRA 2023,
@@ -23,15 +23,16 @@ Tables (every literature number lives in one table with its source):
 Fit:
 
 - :func:`fit_indentation` -> :class:`IndentationFit`.
-- Models of effects (formats.md §4): :class:`IndentationModel`, one
+- Models of effects (formats.md §5): :class:`IndentationModel`, one
   :class:`Effect` class per catalogue name (:data:`EFFECTS`), fitted robustly
-  (:class:`ModelFit`); :func:`fit_model` adds E and nu; :func:`diagnose`
-  finds where a model fails and which effect is missing (:class:`Diagnosis`).
+  (:class:`ModelFit`); :func:`fit_model` adds E and nu. Where a model fails and
+  which effect is missing is :mod:`tactilevision.diagnosis`; what a session can
+  show before it is pressed, :mod:`tactilevision.planning`.
 - Effects of your own: subclass :class:`Effect` (parameters as :class:`Param`
   with bounds and units, the columns read, the physics in ``apply``) and pass
-  the class to :class:`IndentationModel`, :func:`fit_model`, :func:`diagnose`
-  or ``--effects package.module:ClassName``; :func:`register_effect` checks
-  it and gives its name (``docs/custom_effects.md``).
+  the class to :class:`IndentationModel`, :func:`fit_model`,
+  :func:`tactilevision.diagnosis.diagnose` or ``--effects package.module:ClassName``;
+  :func:`register_effect` checks it and gives its name (``docs/custom_effects.md``).
 - Indenters (one concept, :class:`Indenter`): :class:`FlatPunch` (the
   paper's) and :class:`Sphere` (a ball: the FEM table ``models/sphere_fem.npz``,
   :func:`sphere_force_ratio`, :func:`sphere_contact_ratio`), made from
@@ -42,10 +43,8 @@ Fit:
 - :func:`fit_relaxation` -- a standard linear solid fitted to the force over
   each press's hold (``holds.csv``) -> :class:`RelaxationFit`: g and tau,
   hence E_0 and the relaxed E_inf = (1 - g) E_0.
-
-Validation (the paper's FEA check):
-
-- :func:`validate_indentation` -> :class:`IndentationValidation`.
+- :class:`Sphere` with ``friction`` takes Coulomb friction between ball and gel
+  (``contact='coulomb'``, small strain).
 """
 
 from ._beta import (
@@ -56,64 +55,36 @@ from ._beta import (
     beta_relation,
     nu_from_beta,
 )
-from ._budget import NoiseBudget, noise_budget
-from ._catalogue import EFFECTS, Effect, FemLaw, Param, make_effect, register_effect
-from ._design import EFFECT_SIZE_PARAMS, depth_uncertainty, planned_columns
-from ._diagnose import Diagnosis, noise_floor
-from ._diagnose_stats import (
-    CertificationTest,
-    CovariateTest,
-    certification_tests,
-    covariate_tests,
-    cross_validated_rmse,
+from ._catalogue import EFFECTS, Effect, FemLaw, Param, effect_name, make_effect, register_effect
+from ._effects import (
+    EFFECT_NAMES,
+    EFFECT_SIZE_PARAMS,
+    FIT_EFFECTS,
+    check_fit_effects,
+    effect_names,
+    model_label,
 )
-from ._diagnose_verdict import diagnose, indenter_shared
-from ._effects import EFFECT_NAMES, FIT_EFFECTS, check_fit_effects, effect_names, model_label
 from ._fem_tables import fem_force, fem_kappa_table, fem_table_meta, kappa_n, kappa_n_grid
 from ._fit import MAX_W_OVER_H, fit_indentation
 from ._fit_model import fit_model
 from ._indenter import INDENTERS, FlatPunch, Indenter, Sphere, indenter_from_config
-from ._indenter_diagnose import (
-    INDENTER_EFFECTS,
-    IndenterDiagnosis,
-    IndenterRung,
-    IndenterValidation,
-    diagnose_indenter,
-    validate_indenter,
-)
-from ._indenter_fit import IndenterFit, apparent_modulus, fit_indenter
+from ._indenter_fit import IndenterFit, apparent_modulus, fit_indenter, paule_mandel
 from ._kappa import HAYES_1972, KappaTable, kappa
-from ._model import IndentationModel, ModelFit
+from ._model import IndentationModel, ModelFit, shared_groups
 from ._neohookean import neo_hookean_constants
-from ._plan import (
-    Design,
-    PlanPrediction,
-    RelaxationPlan,
-    design_from_calibration,
-    design_toml,
-    plan,
-    plan_session,
-    read_design,
-    relaxation_identifiability,
-    untestable_in_table,
-)
-from ._plan_effects import (
-    NOMINAL_TAU_S,
-    TANGENTIAL_FRACTION,
-    EffectSensitivity,
-    effect_power,
-    effect_sensitivity,
-    table_sensitivity,
-)
-from ._plan_recommend import DesignChange, Recommendation, error_totals, recommend
 from ._ramp import RampFit, fit_ramp
 from ._relaxation import (
+    RELAX_ALPHA,
+    TAU_HOLD_RATIO,
+    TAU_MIN_HOLD_FRACTION,
     RelaxationFit,
     elastic_force,
     fit_relaxation,
+    hold_blocks,
     instantaneous_forces,
     ramp_factor,
     relaxed_moduli,
+    straight_decay,
 )
 from ._relaxation_log import refine_relaxation
 from ._result import IndentationFit
@@ -123,8 +94,8 @@ from ._sphere_table import (
     sphere_force_ratio,
     sphere_reach,
     sphere_table_meta,
+    table_reach,
 )
-from ._validate import IndentationValidation, validate_indentation
 
 __all__ = [
     "EFFECTS",
@@ -133,57 +104,33 @@ __all__ = [
     "FIT_EFFECTS",
     "HAYES_1972",
     "INDENTERS",
-    "INDENTER_EFFECTS",
     "MAX_W_OVER_H",
-    "NOMINAL_TAU_S",
     "PAPER_BETA_RELATION",
-    "TANGENTIAL_FRACTION",
+    "RELAX_ALPHA",
+    "TAU_HOLD_RATIO",
+    "TAU_MIN_HOLD_FRACTION",
     "BetaRelation",
-    "CertificationTest",
-    "CovariateTest",
-    "Design",
-    "DesignChange",
-    "Diagnosis",
     "Effect",
-    "EffectSensitivity",
     "FemLaw",
     "FlatPunch",
     "IndentationFit",
     "IndentationModel",
-    "IndentationValidation",
     "Indenter",
-    "IndenterDiagnosis",
     "IndenterFit",
-    "IndenterRung",
-    "IndenterValidation",
     "KappaTable",
     "ModelFit",
-    "NoiseBudget",
     "Param",
-    "PlanPrediction",
     "RampFit",
-    "Recommendation",
     "RelaxationFit",
-    "RelaxationPlan",
     "Sphere",
     "apparent_modulus",
     "beta",
     "beta_from_nu",
     "beta_relation",
-    "certification_tests",
     "check_fit_effects",
-    "covariate_tests",
-    "cross_validated_rmse",
-    "depth_uncertainty",
-    "design_from_calibration",
-    "design_toml",
-    "diagnose",
-    "diagnose_indenter",
+    "effect_name",
     "effect_names",
-    "effect_power",
-    "effect_sensitivity",
     "elastic_force",
-    "error_totals",
     "fem_force",
     "fem_kappa_table",
     "fem_table_meta",
@@ -193,8 +140,8 @@ __all__ = [
     "fit_ramp",
     "fit_relaxation",
     "hertz_force_n",
+    "hold_blocks",
     "indenter_from_config",
-    "indenter_shared",
     "instantaneous_forces",
     "kappa",
     "kappa_n",
@@ -202,25 +149,41 @@ __all__ = [
     "make_effect",
     "model_label",
     "neo_hookean_constants",
-    "noise_budget",
-    "noise_floor",
     "nu_from_beta",
-    "plan",
-    "plan_session",
-    "planned_columns",
+    "paule_mandel",
     "ramp_factor",
-    "read_design",
-    "recommend",
     "refine_relaxation",
     "register_effect",
-    "relaxation_identifiability",
     "relaxed_moduli",
+    "shared_groups",
     "sphere_contact_ratio",
     "sphere_force_ratio",
     "sphere_reach",
     "sphere_table_meta",
-    "table_sensitivity",
-    "untestable_in_table",
-    "validate_indentation",
-    "validate_indenter",
+    "straight_decay",
+    "table_reach",
 ]
+
+#: Names that moved to :mod:`tactilevision.diagnosis` and :mod:`tactilevision.planning`
+#: (2026-11-26): an import of one from here says where it went.
+MOVED = {name: "tactilevision.diagnosis" for name in (
+    "CertificationTest", "CovariateTest", "Diagnosis", "EffectSensitivity",
+    "INDENTER_EFFECTS", "IndentationValidation", "IndenterDiagnosis", "IndenterRung",
+    "IndenterValidation", "NOMINAL_TAU_S", "NoiseBudget", "TANGENTIAL_FRACTION",
+    "certification_tests", "covariate_tests", "cross_validated_rmse", "diagnose",
+    "diagnose_indenter", "indenter_shared", "noise_budget", "noise_floor",
+    "table_sensitivity", "validate_indentation", "validate_indenter")}
+MOVED.update({name: "tactilevision.planning" for name in (
+    "Design", "DesignChange", "PlanPrediction", "Recommendation", "RelaxationPlan",
+    "depth_uncertainty", "design_from_calibration", "design_toml", "effect_power",
+    "effect_sensitivity", "error_totals", "plan", "plan_session", "planned_columns",
+    "read_design", "recommend", "relaxation_identifiability", "untestable_in_table")})
+
+
+def __getattr__(name: str):
+    """``tactilevision.mechanics.diagnose`` and the like: an AttributeError naming the
+    package the name moved to (mechanics does not import the packages above it)."""
+    if name in MOVED:
+        raise AttributeError(f"tactilevision.mechanics.{name} moved to {MOVED[name]}.{name} "
+                             f"(from {MOVED[name]} import {name})")
+    raise AttributeError(f"module 'tactilevision.mechanics' has no attribute {name!r}")

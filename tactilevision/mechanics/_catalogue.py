@@ -320,7 +320,7 @@ class LawCurvature(Effect):
     Not a physical effect of the catalogue but the known limit of the base
     law: the FEM's finite-strain P/w is not exactly linear in w/h (its
     misfit to eq. 5 is about 0.1 % of the deepest press's force, which
-    repeatable presses resolve). :func:`~tactilevision.mechanics.diagnose`
+    repeatable presses resolve). :func:`~tactilevision.diagnosis.diagnose`
     uses it as the alternative a depth effect must beat, so that the law's
     own curvature is not reported as a depth or force offset.
     """

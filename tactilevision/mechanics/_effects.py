@@ -15,7 +15,8 @@ from collections.abc import Sequence
 from .._checks import InputError
 from ._catalogue import COLUMN_EFFECTS, EFFECTS, effect_name, is_registered
 
-__all__ = ["EFFECT_NAMES", "FIT_EFFECTS", "check_fit_effects", "effect_names", "model_label"]
+__all__ = ["EFFECT_NAMES", "EFFECT_SIZE_PARAMS", "FIT_EFFECTS", "check_fit_effects",
+           "effect_names", "model_label"]
 
 #: Catalogue names, part of the public contract (docs/formats.md §5): the classes of
 #: :data:`~tactilevision.mechanics.EFFECTS` in their order, then
@@ -31,6 +32,23 @@ COLUMN_KINDS = tuple(COLUMN_EFFECTS)
 #: :func:`~tactilevision.mechanics.fit_indentation` fits.
 FIT_EFFECTS = ("large_deformation",)
 
+
+#: The parameter that sizes each catalogue effect in a plan and in what a table rules out
+#: (``[plan.detect]``, :func:`~tactilevision.planning.effect_sensitivity`,
+#: :func:`~tactilevision.diagnosis.table_sensitivity`), its display unit and the factor
+#: from the parameter's own unit to it. Two-parameter effects are sized along their
+#: first parameter, the second at zero (``force_drift``'s curvature, the y gradient,
+#: ``ky``).
+EFFECT_SIZE_PARAMS: dict[str, tuple[str, str, float]] = {
+    "depth_offset": ("delta_mm", "um", 1e3),
+    "force_offset": ("offset_n", "mN", 1e3),
+    "force_drift": ("drift_n_per_s", "mN/s", 1e3),
+    "viscoelastic_relaxation": ("g", "", 1.0),
+    "incomplete_recovery": ("r", "", 1.0),
+    "aging": ("k_per_day", "1/day", 1.0),
+    "spatial_nonuniformity": ("gx_per_mm", "1/mm", 1.0),
+    "force_crosstalk": ("kx", "", 1.0),
+}
 
 def _in_catalogue(name: str) -> bool:
     kind, colon, column = name.partition(":")

@@ -156,7 +156,7 @@ def _slope(g: np.ndarray, P: np.ndarray, var: np.ndarray) -> tuple[float, float,
     return E, 1.0 / sgg, float(np.sum(wt * r * r))
 
 
-def _paule_mandel(g: np.ndarray, P: np.ndarray, D: np.ndarray, dof: int) -> float:
+def paule_mandel(g: np.ndarray, P: np.ndarray, D: np.ndarray, dof: int) -> float:
     """Smallest t >= 0 with chi2(t) / dof <= 1 for variances t + D (Paule and Mandel 1982)."""
     floor = max((1e-12 * float(np.max(np.abs(P)))) ** 2, np.finfo(float).tiny)
 
@@ -196,7 +196,7 @@ def _profile(grid: np.ndarray, cols: list, P: np.ndarray, u: np.ndarray | None,
         D = (_slope(g0, P, np.ones(n))[0] * dg0 * (0.0 if u is None else u)) ** 2
         if f_sd is not None:
             D = D + f_sd ** 2
-        t = _paule_mandel(g0, P, D, max(dof, 1))
+        t = paule_mandel(g0, P, D, max(dof, 1))
         var = np.maximum(t + D, max((1e-12 * float(np.max(P))) ** 2, np.finfo(float).tiny))
         sigma0 = math.sqrt(t)
     else:

@@ -371,7 +371,7 @@ class IndentationModel:
         fixed = np.array(x0, np.float64)
 
         resid = _Residuals(effects, fixed, free, dh, sw, P, lo_f, hi_f,
-                           shared=_shared_groups(data, n))
+                           shared=shared_groups(data, n))
 
         near: dict[int, float] = {}
         if start is not None:
@@ -445,7 +445,7 @@ class IndentationModel:
         return d, np.sqrt(wts / wts.mean()), wts
 
 
-def _shared_groups(data: Mapping[str, np.ndarray], n: int) -> np.ndarray | None:
+def shared_groups(data: Mapping[str, np.ndarray], n: int) -> np.ndarray | None:
     """The operator of the quasi-demeaning (Fuller and Battese, J. Econometrics 2, 67,
     1974) that makes least squares on the transformed residuals generalized least squares
     under an error shared within groups of presses: ``data['_group']`` (each press's
@@ -669,7 +669,7 @@ class _Residuals:
 
     def transform(self, f: np.ndarray) -> np.ndarray:
         """The residuals quasi-demeaned within the groups that share an error
-        (:func:`_shared_groups`): ``f - theta_g mean_g(f)``; `f` itself without groups."""
+        (:func:`shared_groups`): ``f - theta_g mean_g(f)``; `f` itself without groups."""
         return f if self.shared is None else f - f @ self.shared.T
 
     def _full(self, x: np.ndarray) -> np.ndarray:

@@ -271,7 +271,9 @@ def elastic_force(force_times_s: np.ndarray, forces_n: np.ndarray, g: float, tau
     return lfilter([1.0, -a], [1.0, -b], f - rest, axis=0) + rest
 
 
-def _blocks(t: np.ndarray, f: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
+def hold_blocks(t: np.ndarray, f: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """A hold's samples averaged in consecutive blocks to about `n` points, as
+    :func:`fit_relaxation` averages them: (times (m,), forces (m,)), m <= n."""
     k = max(1, -(-t.size // n))
     m = t.size // k
     return t[: m * k].reshape(m, k).mean(1), f[: m * k].reshape(m, k).mean(1)
@@ -468,7 +470,7 @@ def _hold_curves(press: np.ndarray, t: np.ndarray, f: np.ndarray, ramp: np.ndarr
                              f"{np.mean(fi):.3g} N: a press pushes into the gel (fz_n > 0)")
         r = known.get(int(i), fill)
         ramps[int(i)] = r
-        curves.append((*_blocks(ti, fi, points_per_press), r))
+        curves.append((*hold_blocks(ti, fi, points_per_press), r))
     return curves, ramps
 
 
@@ -512,7 +514,7 @@ def _hold_tests(curves: list[tuple[np.ndarray, np.ndarray, float]], tau: float, 
     # the decay's curvature is what pins tau; then the profile of tau at `confidence`
     longest = float(max(c[0][-1] for c in curves))
     shortest = float(min(c[0][-1] for c in curves))
-    _, rss_line = _straight_decay(curves)
+    _, rss_line = straight_decay(curves)
     curv_p = float(stats.f.sf(max(rss_line - rss1, 0.0) / s2, 1, dof))
     crit = s2 * float(stats.f.ppf(confidence, 1, dof))
     profile_ci = _tau_profile(curves, tau, rss1, crit, rss_line, rss0, longest)
@@ -603,7 +605,7 @@ def _not_identified_why(curv_p: float, tau: float, shortest: float, longest: flo
                   else "") + ")"))
 
 
-def _straight_decay(curves: list[tuple[np.ndarray, np.ndarray, float]]) -> tuple[float, float]:
+def straight_decay(curves: list[tuple[np.ndarray, np.ndarray, float]]) -> tuple[float, float]:
     """F_i(t) = A_i (1 + r t), r shared: the limit of the model as tau -> infinity at a
     fixed g / tau (``r = -g phi / tau``). Returns r (1/s) and the residual sum of squares
     (the A_i profiled out in closed form)."""

@@ -23,8 +23,8 @@ import numpy as np
 from .._assets import KNOWN_SENSORS, default_calibration_path
 from .._checks import InputError
 from ..io import Session, StagedOutput, read_holds, read_measurements, write_measurements
-from ..mechanics import design_from_calibration, design_toml
 from ..optics import DepthReconstructor, PhotometricCalibration
+from ..planning import design_from_calibration, design_toml
 from ..viz import calibration_figures, write_calibration_report
 from ._calibration import SessionCalibration
 

@@ -7,15 +7,9 @@ import math
 import numpy as np
 
 from .._checks import InputError
-from ..mechanics import (
-    EFFECT_SIZE_PARAMS,
-    NOMINAL_TAU_S,
-    TANGENTIAL_FRACTION,
-    Design,
-    depth_uncertainty,
-    make_effect,
-    planned_columns,
-)
+from ..diagnosis import NOMINAL_TAU_S, TANGENTIAL_FRACTION
+from ..mechanics import EFFECT_SIZE_PARAMS, make_effect
+from ..planning import Design, depth_uncertainty, planned_columns
 from ._tables import _fem_force
 
 __all__ = ["design_measurement_table"]
@@ -28,7 +22,7 @@ def design_measurement_table(design: Design, effect: str | None = None, size: fl
     Parameters
     ----------
     design : Design
-        The session's design (:class:`~tactilevision.mechanics.Design`).
+        The session's design (:class:`~tactilevision.planning.Design`).
     effect : str, optional
         A catalogue effect of ``EFFECT_SIZE_PARAMS`` (formats.md §5); None: none.
     size : float, default 0
@@ -40,7 +34,7 @@ def design_measurement_table(design: Design, effect: str | None = None, size: fl
     Returns
     -------
     columns : dict of str to (N,) float64 ndarray
-        The columns of :func:`~tactilevision.mechanics.planned_columns` (formats.md §2)
+        The columns of :func:`~tactilevision.planning.planned_columns` (formats.md §2)
         with ``force_n`` and the tangential ``fx_n``, ``fy_n`` drawn: each press goes to
         its depth w0 (a depth offset moves it to w0 + delta), its force is the
         finite-strain FEM's there, changed by the effect in the catalogue's exact form,

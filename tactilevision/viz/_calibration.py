@@ -8,7 +8,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from ..mechanics import untestable_in_table
+from ..planning import untestable_in_table
 from ._depth import _scale_bar
 
 __all__ = ["bevel_panels", "calibration_figures", "figures_html", "fitted_forces", "html_head",
@@ -393,7 +393,7 @@ def _untestable_html(cal) -> str:
     """The report's "What this session could not test" paragraph ('' with no presses).
 
     The catalogue effects whose column is constant or missing in this session's
-    measurements table (:func:`tactilevision.mechanics.untestable_in_table`, the test
+    measurements table (:func:`tactilevision.planning.untestable_in_table`, the test
     ``diagnose`` and ``plan`` make), each with why and what would make it testable.
     """
     if not cal.certification.presses:

@@ -8,7 +8,7 @@ __all__ = ["save_validation_figure", "validation_figure"]
 
 
 def validation_figure(result, *, title: str | None = None):
-    """Force-depth figure of a :class:`~tactilevision.mechanics.IndentationValidation`.
+    """Force-depth figure of a :class:`~tactilevision.diagnosis.IndentationValidation`.
 
     Parameters
     ----------

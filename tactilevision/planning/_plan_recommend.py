@@ -4,7 +4,7 @@ target (``tactilevision plan --recommend``, ``--target-E-pct``, ``--target-nu``)
 Each change is one edit of the design (more repeats, depths added deeper or shallower,
 a wider indenter for nu, a steeper or shallower bevel, a vernier instead of a mark, a
 faster camera or a slower stage, a longer F/T window, a tare, varied holds, rests,
-days or positions), planned again with :func:`~tactilevision.mechanics.plan_session`.
+days or positions), planned again with :func:`~tactilevision.planning.plan_session`.
 Its gain is the fall of the total error of E and of nu: the random sd and the
 systematic part (the noise's bias plus the largest shared error's, at its bound) added
 in quadrature. Changes that only let ``diagnose`` test more effects are listed after,

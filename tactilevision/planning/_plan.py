@@ -37,6 +37,16 @@ import numpy as np
 from scipy import stats
 
 from .._checks import InputError
+from ..diagnosis import EffectSensitivity
+from ..mechanics import (
+    RELAX_ALPHA,
+    TAU_HOLD_RATIO,
+    TAU_MIN_HOLD_FRACTION,
+    fit_indentation,
+    hold_blocks,
+    ramp_factor,
+    straight_decay,
+)
 from ._design import (
     VERNIER_EDGE_PX,
     Design,
@@ -50,16 +60,7 @@ from ._design import (
     untestable_effects,
     untestable_in_table,
 )
-from ._fit import fit_indentation
-from ._plan_effects import EffectSensitivity, effect_power, effect_sensitivity
-from ._relaxation import (
-    RELAX_ALPHA,
-    TAU_HOLD_RATIO,
-    TAU_MIN_HOLD_FRACTION,
-    _blocks,
-    _straight_decay,
-    ramp_factor,
-)
+from ._plan_effects import effect_power, effect_sensitivity
 
 __all__ = [
     "VERNIER_EDGE_PX",
@@ -275,14 +276,14 @@ def relaxation_identifiability(d: Design, g: float, tau_s: float, *,
         n = max(round(Hi * d.rate_hz), 5)
         t = np.arange(n) / d.rate_hz
         f = Pi * ((1 - g) + g * float(ramp_factor(Ti, tau)) * np.exp(-t / tau))
-        tb, fb = _blocks(t, f, points_per_press)          # as fit_relaxation averages
+        tb, fb = hold_blocks(t, f, points_per_press)          # as fit_relaxation averages
         curves.append((tb, fb, float(Ti)))
         var_b.append(np.full(tb.size, d.force_noise_n**2 / max(1, -(-n // points_per_press))))
     var_b = np.concatenate(var_b)
     s2 = float(np.mean(var_b))
     n_pts = var_b.size
     dof = max(n_pts - len(curves) - 2, 1)
-    _, rss_line = _straight_decay(curves)
+    _, rss_line = straight_decay(curves)
     lam = rss_line / s2
     shortest, longest = float(hold.min()), float(hold.max())
     span_ok = TAU_MIN_HOLD_FRACTION * shortest <= tau <= TAU_HOLD_RATIO * longest
@@ -501,7 +502,7 @@ def plan(design: Design | str | Path) -> PlanPrediction:
 
     Examples
     --------
-    >>> from tactilevision.mechanics import Design
+    >>> from tactilevision.planning import Design
     >>> p = plan(Design(thickness_mm=3.0, radius_mm=2.5,
     ...                 depths_mm=(0.15, 0.3, 0.4, 0.5, 0.6), bevel_angle_deg=5.0,
     ...                 overshoot_um=(30.0, 60.0)))

@@ -5,7 +5,7 @@ along every covariate column, fits the model plus each applicable catalogue
 effect, compares them by BIC and by cross-validated RMSE, and decides. The
 greedy steps form the error ladder. The replicate noise floor is the error no
 model of these columns can beat. The statistical tests themselves are in
-:mod:`tactilevision.mechanics._diagnose_stats`.
+:mod:`tactilevision.diagnosis._diagnose_stats`.
 """
 
 from __future__ import annotations
@@ -20,6 +20,19 @@ import numpy as np
 from tqdm import tqdm
 
 from .._checks import InputError
+from ..mechanics import (
+    EFFECTS,
+    Effect,
+    IndentationModel,
+    ModelFit,
+    effect_name,
+    fit_indentation,
+    fit_model,
+    kappa_n,
+    make_effect,
+    model_label,
+    shared_groups,
+)
 from ._budget import (
     BUDGET_ALPHA,
     BUDGET_CONSISTENT_P,
@@ -27,7 +40,6 @@ from ._budget import (
     NoiseBudget,
     noise_budget,
 )
-from ._catalogue import EFFECTS, Effect, effect_name, make_effect
 from ._diagnose_stats import (  # noqa: F401  (the statistics' names, also read from here)
     _NOT_COVARIATES,
     ALPHA,
@@ -44,13 +56,11 @@ from ._diagnose_stats import (  # noqa: F401  (the statistics' names, also read 
     cross_validated_rmse,
     noise_floor,
 )
-from ._effects import model_label
-from ._fem_tables import kappa_n
-from ._fit import fit_indentation
-from ._fit_model import fit_model
-from ._model import IndentationModel, ModelFit, _shared_groups
 
 __all__ = [
+    "CURVATURE_BIC",
+    "DELTA_BIC",
+    "EQUIVALENT_BIC",
     "Candidate",
     "CertificationTest",
     "CovariateTest",
@@ -61,6 +71,7 @@ __all__ = [
     "cross_validated_rmse",
     "diagnose_core",
     "noise_floor",
+    "untestable_reason",
 ]
 
 #: Evidence a candidate effect must bring: BIC lower by more than this
@@ -183,7 +194,7 @@ class Diagnosis:
         The story in a few sentences.
     noise_budget : NoiseBudget or None
         The final model's replicate scatter against what the instruments
-        explain (:func:`~tactilevision.mechanics.noise_budget`); None when
+        explain (:func:`~tactilevision.diagnosis.noise_budget`); None when
         the table cannot say.
     noise_budget_missing : str
         Why there is no budget (empty when there is one).
@@ -422,6 +433,28 @@ def _trend_passes(model: IndentationModel, column: str, d: Mapping[str, np.ndarr
     return False
 
 
+def untestable_reason(name: str, columns: Mapping[str, np.ndarray]) -> str | None:
+    """Why a table's columns cannot carry a catalogue effect, in words (None: they can).
+
+    Parameters
+    ----------
+    name : str
+        A catalogue effect (formats.md §5).
+    columns : mapping of str to (N,) array_like
+        The table's columns.
+
+    Returns
+    -------
+    str or None
+        The columns the effect needs that are missing, hold empty cells, fewer than 3
+        values, or one value in every row: the test ``diagnose`` makes before it tries
+        an effect.
+    """
+    if _usable(name, columns) is None:
+        return None
+    return _why(make_effect(name).columns, columns)
+
+
 def _why(needed: Sequence[str], columns: Mapping[str, np.ndarray]) -> str:
     """Why columns cannot carry an effect, in words: missing, empty cells, or constant."""
     out = []
@@ -449,7 +482,7 @@ def diagnose_core(columns: Mapping[str, np.ndarray], *, thickness_mm: float,
                   beta_table: str = "fem", max_steps: int = 3, cv_folds: int = 10,
                   seed: int = 0, progress: bool = False, curvature: str = CURVATURE,
                   candidates: Sequence = (), scan: Sequence[str] = ()) -> Diagnosis:
-    """:func:`tactilevision.mechanics.diagnose` without what its verdict rules out (the
+    """:func:`tactilevision.diagnosis.diagnose` without what its verdict rules out (the
     effect-size replay on the table): the ladder, the verdicts, the message."""
     cols = {k: np.asarray(v, np.float64) for k, v in columns.items()}
     h, a = float(thickness_mm), float(radius_mm)
@@ -497,10 +530,10 @@ def diagnose_core(columns: Mapping[str, np.ndarray], *, thickness_mm: float,
 def _gls(residuals_n: np.ndarray, d: Mapping[str, np.ndarray]) -> np.ndarray:
     """A fit's residuals as its generalized least squares sees them: quasi-demeaned within
     the groups that share a depth error (``_group``, ``_theta``, the operator the fits use:
-    :func:`~tactilevision.mechanics._model._shared_groups`), so that the covariate tests
+    :func:`~tactilevision.mechanics.shared_groups`), so that the covariate tests
     use the fits' noise model; the residuals themselves without groups."""
     r = np.asarray(residuals_n, np.float64)
-    S = _shared_groups(d, r.size)
+    S = shared_groups(d, r.size)
     return r if S is None else r - S @ r
 
 

@@ -20,7 +20,7 @@ import numpy as np
 from scipy import optimize
 
 from .._checks import InputError, check_array
-from ._indenter_fit import _paule_mandel
+from ..mechanics import paule_mandel
 
 __all__: list[str] = []
 
@@ -97,7 +97,7 @@ def press_noise(w: np.ndarray, P: np.ndarray, g_of, *, depth_std_mm=None, force_
         dg = (g_of(w + eps) - g_of(np.maximum(w - eps, 1e-12))) / (
             w + eps - np.maximum(w - eps, 1e-12))
         stated = (E0 * dg * (0.0 if u is None else u)) ** 2 + (0.0 if f is None else f ** 2)
-        t = _paule_mandel(g, P, stated, max(n - 1, 1))
+        t = paule_mandel(g, P, stated, max(n - 1, 1))
         floor = max((1e-12 * float(np.max(P))) ** 2, np.finfo(float).tiny)
         return PressNoise(np.maximum(t + stated, floor), stated, math.sqrt(t), shared, rel)
     return PressNoise(np.ones(n), None, math.nan, shared, rel)

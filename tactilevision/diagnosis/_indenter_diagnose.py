@@ -30,7 +30,7 @@ import numpy as np
 from scipy import optimize, stats
 
 from .._checks import InputError, check_array
-from ._indenter import Indenter
+from ..mechanics import Indenter
 from ._indenter_noise import PressNoise, best_shift, press_noise, weighted_linear
 
 __all__ = ["INDENTER_EFFECTS", "IndenterDiagnosis", "IndenterRung", "IndenterValidation",

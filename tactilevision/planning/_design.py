@@ -20,13 +20,10 @@ from typing import Any
 import numpy as np
 
 from .._checks import InputError
-from ._catalogue import EFFECTS, make_effect
-from ._diagnose import _usable, _why
-from ._fem_tables import fem_force
-from ._fit import MAX_W_OVER_H
+from ..diagnosis import untestable_reason
+from ..mechanics import EFFECT_SIZE_PARAMS, EFFECTS, MAX_W_OVER_H, fem_force
 
 __all__ = [
-    "EFFECT_SIZE_PARAMS",
     "RESOLVED_PX",
     "VERNIER_EDGE_PX",
     "Design",
@@ -41,22 +38,6 @@ __all__ = [
     "untestable_in_table",
 ]
 
-#: The parameter that sizes each catalogue effect in a plan (``[plan.detect]``,
-#: :func:`~tactilevision.mechanics.effect_sensitivity`), its display unit and the factor
-#: from the parameter's own unit to it. Two-parameter effects are sized along their
-#: first parameter, the second at zero (``force_drift``'s curvature, the y gradient,
-#: ``ky``).
-EFFECT_SIZE_PARAMS: dict[str, tuple[str, str, float]] = {
-    "depth_offset": ("delta_mm", "um", 1e3),
-    "force_offset": ("offset_n", "mN", 1e3),
-    "force_drift": ("drift_n_per_s", "mN/s", 1e3),
-    "viscoelastic_relaxation": ("g", "", 1.0),
-    "incomplete_recovery": ("r", "", 1.0),
-    "aging": ("k_per_day", "1/day", 1.0),
-    "spatial_nonuniformity": ("gx_per_mm", "1/mm", 1.0),
-    "force_crosstalk": ("kx", "", 1.0),
-}
-
 #: The sd of a vernier band's half-width read, px: the sample session's certified depths
 #: (``measurements.csv`` of ``tactilevision calibrate sample_frames/gelsight_session``,
 #: 48 presses, scored against the session's ``truth.json``; 2026-11-25) lie -0.47 um off
@@ -66,7 +47,7 @@ EFFECT_SIZE_PARAMS: dict[str, tuple[str, str, float]] = {
 VERNIER_EDGE_PX = 0.70
 
 #: The band half-width, px, below which a vernier's band is only bounded, not read: the
-#: contact package's ``RESOLVED_PX`` (mechanics does not import contact; a test keeps the
+#: contact package's ``RESOLVED_PX`` (planning does not import contact; a test keeps the
 #: two equal).
 RESOLVED_PX = 10.0
 
@@ -480,8 +461,8 @@ def untestable_in_table(columns: dict[str, np.ndarray], *, window_at: str | None
     for name in EFFECTS:
         if name == "large_deformation":
             continue
-        if _usable(name, columns) is not None:
-            why = _why(make_effect(name).columns, columns)
+        why = untestable_reason(name, columns)
+        if why is not None:
             if name == "viscoelastic_relaxation" and window_at == "start":
                 why += ("; with the window at the hold's start every press's window sits "
                         "at the same time of its hold: vary it with window_at = 'end' and "

@@ -1,9 +1,9 @@
 """``diagnose``, and what its verdict rules out.
 
-:func:`diagnose` runs the ladder (:func:`~tactilevision.mechanics._diagnose.diagnose_core`)
+:func:`diagnose` runs the ladder (:func:`~tactilevision.diagnosis._diagnose.diagnose_core`)
 and, when it names nothing, says what that rules out: the smallest size of each catalogue
 effect that this very table would have named (the plan's effect-size replay,
-:func:`~tactilevision.mechanics.table_sensitivity`, on the measured presses at the noise
+:func:`~tactilevision.diagnosis.table_sensitivity`, on the measured presses at the noise
 the diagnosis tested against), so that "none" reads "none larger than ...".
 """
 
@@ -18,7 +18,7 @@ import numpy as np
 from .._checks import InputError
 from ._budget import law_slope
 from ._diagnose import CURVATURE, Diagnosis, diagnose_core
-from ._plan_effects import table_sensitivity
+from ._replay import table_sensitivity
 
 __all__ = ["ABSORBED_BY_MARK", "RULES_OUT_DRAWS", "diagnose", "indenter_shared"]
 

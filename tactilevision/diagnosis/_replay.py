@@ -1,12 +1,14 @@
-"""Before the first press: the smallest size of each catalogue effect ``diagnose`` will find.
+"""The smallest size of each catalogue effect ``diagnose`` names: its decisions replayed.
 
-:func:`effect_sensitivity` answers, for a design (:class:`~tactilevision.mechanics.Design`),
-how large each effect of the catalogue (formats.md §5) must be for
-:func:`~tactilevision.mechanics.diagnose` to name it in 95 % of sessions at its
-default thresholds. It does not run ``diagnose``: it draws the noise of many sessions
-of the design and replays ``diagnose``'s decisions on each, linearized:
+:func:`replay_sizes` answers, for a session's presses and noise (a :class:`ReplaySetup`:
+a measured table, :func:`table_sensitivity`, or a planned design,
+:func:`tactilevision.planning.effect_sensitivity`), how large each effect of the
+catalogue (formats.md §5) must be for :func:`~tactilevision.diagnosis.diagnose` to name
+it in 95 % of sessions at its default thresholds. It does not run ``diagnose``: it
+draws the noise of many sessions and replays ``diagnose``'s decisions on each,
+linearized:
 
-- the base law is eq. (5), fitted by least squares to the design's finite-strain FEM
+- the base law is eq. (5), fitted by least squares to the session's finite-strain FEM
   forces (its own misfit to them is in every drawn session, as in a real one);
 - each candidate effect enters as the columns of its force change at zero size, taken
   on the fitted eq.-5 law as ``diagnose`` takes it (a depth offset's dP/dw of the law,
@@ -38,7 +40,8 @@ Left out: the cross-validation check (it passes whenever the BIC does, on tables
 this size), the robust loss, the stiffness change points (``stiffness_step``) and the
 generic trends, which compete only for effects they mimic.
 ``benchmarks/bench_plan_effects.py`` checks the predicted sizes against ``diagnose``
-itself on generated sessions of several designs.
+itself on generated sessions of several designs, ``benchmarks/bench_rules_out.py`` the
+sizes on measured tables.
 """
 
 from __future__ import annotations
@@ -49,20 +52,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._checks import InputError
-from ._catalogue import make_effect
-from ._design import (
-    EFFECT_SIZE_PARAMS,
-    Design,
-    depth_uncertainty,
-    design_table,
-    planned_columns,
-    untestable_effects,
-)
+from ..mechanics import EFFECT_SIZE_PARAMS, fem_force, make_effect
 from ._diagnose import CURVATURE_BIC, DELTA_BIC, EQUIVALENT_BIC
-from ._fem_tables import fem_force
 
-__all__ = ["EFFECT_SIZE_PARAMS", "EffectSensitivity", "effect_power", "effect_sensitivity",
-           "table_sensitivity"]
+__all__ = ["NOMINAL_TAU_S", "TANGENTIAL_FRACTION", "EffectSensitivity", "ReplaySetup",
+           "replay_power", "replay_sizes", "table_sensitivity"]
 
 #: Time constant of relaxation and recovery the sizes are given at, s (the catalogue's
 #: starting values; a design's ``relaxation_tau_s`` replaces relaxation's).
@@ -85,7 +79,7 @@ MAX_STEPS = 3
 
 @dataclass(frozen=True)
 class EffectSensitivity:
-    """The smallest size of one catalogue effect a design lets ``diagnose`` find.
+    """The smallest size of one catalogue effect a session lets ``diagnose`` find.
 
     Attributes
     ----------
@@ -144,12 +138,12 @@ class _Candidate:
         self.bounds = np.array([(q.lower, q.upper) for q in qs], np.float64)
 
 
-def _fem_force(d: Design, w: np.ndarray) -> np.ndarray:
-    """The design's finite-strain FEM force at each depth w (mm), N."""
+def _fem_force(d: ReplaySetup, w: np.ndarray) -> np.ndarray:
+    """The session's finite-strain FEM force at each depth w (mm), N."""
     return fem_force(d.E_mpa, d.nu, d.radius_mm, d.thickness_mm, w)
 
 
-def _slope(d: Design, w: np.ndarray) -> np.ndarray:
+def _slope(d: ReplaySetup, w: np.ndarray) -> np.ndarray:
     """dP/dw of the finite-strain FEM at each depth, N/mm (central difference)."""
     step = 1e-4 * d.thickness_mm
     lo = np.maximum(w - step, 0.0)
@@ -272,9 +266,36 @@ def _rss_bounded(bases: np.ndarray, lo: np.ndarray, hi: np.ndarray,
 
 
 @dataclass(frozen=True)
-class _TableSetup:
-    """A measured table as the replay's session: its presses, columns and noise, and the
-    gel (E, nu) its base fit found, in place of a design's."""
+class ReplaySetup:
+    """A session as the replay draws it: its presses, columns and noise, and the gel.
+
+    Attributes
+    ----------
+    E_mpa, nu : float
+        The gel (a measured table: what its base fit found; a design: its stated gel);
+        the replay's noise-free forces are the finite-strain FEM's at the presses.
+    radius_mm, thickness_mm : float
+        a and h, mm.
+    depths_mm : tuple of float
+        The session's depths (the deepest bounds a depth offset's reach).
+    w : (N,) float ndarray
+        Each press's depth, mm.
+    cols : dict of str to (N,) ndarray
+        The table's columns the effects read (formats.md section 2).
+    sigma : (N,) float ndarray or None
+        Each press's force noise, N; None: from `force_sd_n` and `depth_sd_mm`
+        through the FEM's dP/dw, sqrt(s_P^2 + (dP/dw s_w)^2).
+    untestable : dict of str to str
+        Effects the session cannot test, and why.
+    relaxation_tau_s : float, optional
+        Relaxation's time constant the size is given at (default 1 s).
+    force_sd_n, depth_sd_mm : float
+        The force's and the depth's sd per press, with ``sigma=None``.
+    own_tangential : bool
+        True: the table's ``fx_n``, ``fy_n`` are the tangential forces of every drawn
+        session (a measured table); False: drawn at :data:`TANGENTIAL_FRACTION` of the
+        normal force (a design).
+    """
 
     E_mpa: float
     nu: float
@@ -283,29 +304,27 @@ class _TableSetup:
     depths_mm: tuple[float, ...]
     w: np.ndarray
     cols: dict
-    sigma: np.ndarray
+    sigma: np.ndarray | None
     untestable: dict
     relaxation_tau_s: float | None = None
+    force_sd_n: float = 0.0
+    depth_sd_mm: float = 0.0
+    own_tangential: bool = True
 
 
 class _Replay:
-    """``diagnose``'s decisions, linearized, over many drawn sessions of a design (or of
-    one measured table, :class:`_TableSetup`: its own presses and noise)."""
+    """``diagnose``'s decisions, linearized, over many drawn sessions of a
+    :class:`ReplaySetup` (a design's, or one measured table's own presses and noise)."""
 
-    def __init__(self, d: Design | _TableSetup, draws: int, seed: int) -> None:
+    def __init__(self, d: ReplaySetup, draws: int, seed: int) -> None:
         self.d = d
-        if isinstance(d, _TableSetup):
-            w, cols, untest = d.w, d.cols, d.untestable
-            P = _fem_force(d, w)
-            self.dPdw = _slope(d, w)
-            self.sigma = np.asarray(d.sigma, np.float64)
+        w, cols, untest = d.w, d.cols, d.untestable
+        P = _fem_force(d, w)
+        self.dPdw = _slope(d, w)
+        if d.sigma is None:
+            self.sigma = np.sqrt(d.force_sd_n ** 2 + (self.dPdw * d.depth_sd_mm) ** 2)
         else:
-            w, P = design_table(d)
-            cols, untest = planned_columns(d), untestable_effects(d)
-            sd_um, _, _ = depth_uncertainty(d)
-            self.dPdw = _slope(d, w)
-            s_P = d.force_noise_n / math.sqrt(d.window_samples)
-            self.sigma = np.sqrt(s_P ** 2 + (self.dPdw * sd_um * 1e-3) ** 2)
+            self.sigma = np.asarray(d.sigma, np.float64)
         self.n = n = w.size
         rng = np.random.default_rng(seed)
         self.noise = self.sigma[:, None] * rng.standard_normal((n, draws))
@@ -316,7 +335,7 @@ class _Replay:
         self.tangential = [(TANGENTIAL_FRACTION * P * rng_t.standard_normal(n),
                             TANGENTIAL_FRACTION * P * rng_t.standard_normal(n))
                            for _ in range(TANGENTIAL_DRAWS)]
-        if isinstance(d, _TableSetup) and {"fx_n", "fy_n"} <= set(cols):
+        if d.own_tangential and {"fx_n", "fy_n"} <= set(cols):
             # a measured table's own tangential forces, in every drawn session
             self.tangential = [(np.asarray(cols["fx_n"], np.float64),
                                 np.asarray(cols["fy_n"], np.float64))] * TANGENTIAL_DRAWS
@@ -511,7 +530,7 @@ class _Replay:
         return float(math.sqrt(r / self.n) / np.sqrt(np.mean(self.sigma ** 2)))
 
 
-def _reach(d: Design, name: str) -> float:
+def _reach(d: ReplaySetup, name: str) -> float:
     """The largest size of the effect ``diagnose`` can fit: its parameter's upper bound in
     the catalogue (``IndentationModel.fit`` stays within it) and, for a depth offset,
     the FEM table's reach past the deepest press (w/h 0.23)."""
@@ -566,18 +585,18 @@ def _bisect(rep: _Replay, name: str, target: float, lo: float, hi: float,
     return hi
 
 
-def effect_power(design: Design, effect: str, size: float, *, draws: int = 2000,
+def replay_power(setup: ReplaySetup, effect: str, size: float, *, draws: int = 2000,
                  seed: int = 0) -> float:
-    """Share of sessions of the design in which ``diagnose`` (replayed, linearized)
-    names `effect` at `size`.
+    """Share of drawn sessions in which ``diagnose`` (replayed, linearized) names
+    `effect` at `size`.
 
     Parameters
     ----------
-    design : Design
+    setup : ReplaySetup
     effect : str
-        A catalogue effect of :data:`EFFECT_SIZE_PARAMS`.
+        A catalogue effect of :data:`~tactilevision.mechanics.EFFECT_SIZE_PARAMS`.
     size : float
-        The effect's size in its display unit (:data:`EFFECT_SIZE_PARAMS`).
+        The effect's size in its display unit (``EFFECT_SIZE_PARAMS``).
     draws : int, default 2000
         Sessions drawn.
     seed : int, default 0
@@ -585,30 +604,30 @@ def effect_power(design: Design, effect: str, size: float, *, draws: int = 2000,
     Returns
     -------
     power : float
-        In [0, 1]; 0 where the design cannot test the effect.
+        In [0, 1]; 0 where the session cannot test the effect.
 
     Raises
     ------
     InputError
-        For an effect without a plan.
+        For an effect without a size parameter.
     """
     if effect not in EFFECT_SIZE_PARAMS:
         raise InputError(f"no plan for effect {effect!r}: choose from "
                          f"{', '.join(EFFECT_SIZE_PARAMS)}")
-    rep = _Replay(design, draws, seed)
+    rep = _Replay(setup, draws, seed)
     if effect not in rep.cands:
         return 0.0
     return rep.power(effect, size / EFFECT_SIZE_PARAMS[effect][2])
 
 
-def effect_sensitivity(design: Design, *, power: float = 0.95, draws: int = 1000,
-                       seed: int = 0) -> dict[str, EffectSensitivity]:
+def replay_sizes(setup: ReplaySetup, *, power: float = 0.95, draws: int = 1000,
+                 seed: int = 0) -> dict[str, EffectSensitivity]:
     """The smallest size of each catalogue effect ``diagnose`` names in `power` of the
-    sessions of a design.
+    drawn sessions of `setup`.
 
     Parameters
     ----------
-    design : Design
+    setup : ReplaySetup
     power : float, default 0.95
         In (0, 1).
     draws : int, default 1000
@@ -618,7 +637,7 @@ def effect_sensitivity(design: Design, *, power: float = 0.95, draws: int = 1000
     Returns
     -------
     sizes : dict of str to EffectSensitivity
-        For every effect of :data:`EFFECT_SIZE_PARAMS`, in catalogue order.
+        For every effect of ``EFFECT_SIZE_PARAMS``, in catalogue order.
 
     Raises
     ------
@@ -628,15 +647,13 @@ def effect_sensitivity(design: Design, *, power: float = 0.95, draws: int = 1000
     Notes
     -----
     See the module's docstring: ``diagnose``'s BIC rule, its curvature gate and its
-    equivalences replayed on the design's drawn noise, each effect linearized at zero
-    size. The noise per press is the F/T window's sd and the certified depth's
-    (:func:`~tactilevision.mechanics.plan_session`'s) through the FEM's dP/dw, white.
-    Relaxation is sized at the design's ``relaxation_tau_s`` (else 1 s), recovery at
-    2 s; tangential forces at 2 % of the normal force, random.
+    equivalences replayed on the drawn noise, each effect linearized at zero size.
+    Relaxation is sized at the setup's ``relaxation_tau_s`` (else 1 s), recovery at
+    2 s.
     """
     if not 0 < power < 1:
         raise InputError(f"power must be in (0, 1), got {power!r}")
-    return _sizes(_Replay(design, draws, seed), design, power)
+    return _sizes(_Replay(setup, draws, seed), setup, power)
 
 
 def table_sensitivity(columns: dict, *, thickness_mm: float, radius_mm: float,
@@ -645,7 +662,7 @@ def table_sensitivity(columns: dict, *, thickness_mm: float, radius_mm: float,
                       seed: int = 0, relaxation_tau_s: float | None = None
                       ) -> dict[str, EffectSensitivity]:
     """The smallest size of each catalogue effect ``diagnose`` would have named on this
-    very table: :func:`effect_sensitivity`'s replay on the measured presses.
+    very table: :func:`replay_sizes` on the measured presses.
 
     Parameters
     ----------
@@ -661,7 +678,7 @@ def table_sensitivity(columns: dict, *, thickness_mm: float, radius_mm: float,
     untestable : dict of str to str
         Effects the table cannot test, and why (``diagnose``'s own list).
     power, draws, seed :
-        As :func:`effect_sensitivity`.
+        As :func:`replay_sizes`.
     relaxation_tau_s : float, optional
         Relaxation's time constant the size is given at (default 1 s).
 
@@ -680,7 +697,7 @@ def table_sensitivity(columns: dict, *, thickness_mm: float, radius_mm: float,
     sig = np.asarray(sigma_n, np.float64)
     if sig.shape != w.shape or not np.all(np.isfinite(sig) & (sig > 0)):
         raise InputError("sigma_n must hold one positive force noise per press")
-    setup = _TableSetup(E_mpa=float(E_mpa), nu=float(nu), radius_mm=float(radius_mm),
+    setup = ReplaySetup(E_mpa=float(E_mpa), nu=float(nu), radius_mm=float(radius_mm),
                         thickness_mm=float(thickness_mm), depths_mm=(float(w.max()),),
                         w=w, cols={k: np.asarray(v, np.float64) for k, v in columns.items()},
                         sigma=sig, untestable=dict(untestable),
@@ -688,9 +705,9 @@ def table_sensitivity(columns: dict, *, thickness_mm: float, radius_mm: float,
     return _sizes(_Replay(setup, draws, seed), setup, power)
 
 
-def _sizes(rep: _Replay, design: Design | _TableSetup, power: float
+def _sizes(rep: _Replay, design: ReplaySetup, power: float
            ) -> dict[str, EffectSensitivity]:
-    """:func:`effect_sensitivity`'s answer from a replay."""
+    """:func:`replay_sizes`' answer from a replay."""
     out = {}
     for name, (param, unit, scale) in EFFECT_SIZE_PARAMS.items():
         if name not in rep.cands:

@@ -1,8 +1,8 @@
-"""The statistics of :func:`~tactilevision.mechanics.diagnose`: residual structure along
+"""The statistics of :func:`~tactilevision.diagnosis.diagnose`: residual structure along
 each covariate, the replicate noise floor, and cross-validated error.
 
 The search for the missing effect (the candidates, the ladder, the verdict) is in
-:mod:`tactilevision.mechanics._diagnose`; these are the tests it is built on.
+:mod:`tactilevision.diagnosis._diagnose`; these are the tests it is built on.
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats
 
-from ._model import IndentationModel
+from ..mechanics import IndentationModel
 
 #: Family-wise level of the covariate structure tests (Bonferroni over columns).
 ALPHA = 0.01

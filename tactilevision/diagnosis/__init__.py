@@ -1,0 +1,93 @@
+"""Where the model meets the data: the error ladder, its statistics and its verdicts.
+
+A measurements table (formats.md §2) against the force law of
+:mod:`tactilevision.mechanics` and the effects of its catalogue (formats.md §5):
+
+- :func:`diagnose` -> :class:`Diagnosis`: where the model fails (residual structure,
+  covariates, the noise budget) and which catalogue effect is missing, climbed as a
+  ladder of models by BIC and cross-validation, on one noise model (each press's stated
+  uncertainties and the error each indenter's presses share, :func:`indenter_shared`);
+  a verdict of "nothing missing" says what it rules out (:func:`table_sensitivity`).
+- The statistics it rests on: :func:`covariate_tests`, :func:`certification_tests`
+  (the certification's own products, never physics), :func:`cross_validated_rmse`,
+  :func:`noise_floor`, :func:`noise_budget`.
+- What a table of presses lets ``diagnose`` find: :func:`replay_sizes` and
+  :func:`replay_power` replay its decisions over drawn sessions of a
+  :class:`ReplaySetup` (the measured table's, :func:`table_sensitivity`; a design's,
+  :mod:`tactilevision.planning`).
+- Another indenter (a ball): :func:`diagnose_indenter` -> :class:`IndenterDiagnosis`,
+  :func:`validate_indenter`.
+- The paper's FEA check of a flat punch: :func:`validate_indentation`.
+
+Effects of your own are :class:`tactilevision.mechanics.Effect` subclasses, passed
+to :func:`diagnose` (``docs/custom_effects.md``).
+"""
+
+from ._budget import NoiseBudget, law_slope, noise_budget
+from ._diagnose import (
+    CURVATURE_BIC,
+    DELTA_BIC,
+    EQUIVALENT_BIC,
+    CertificationTest,
+    CovariateTest,
+    Diagnosis,
+    certification_tests,
+    covariate_tests,
+    cross_validated_rmse,
+    noise_floor,
+    untestable_reason,
+)
+from ._diagnose_verdict import ABSORBED_BY_MARK, diagnose, indenter_shared
+from ._indenter_diagnose import (
+    INDENTER_EFFECTS,
+    IndenterDiagnosis,
+    IndenterRung,
+    IndenterValidation,
+    diagnose_indenter,
+    validate_indenter,
+)
+from ._replay import (
+    NOMINAL_TAU_S,
+    TANGENTIAL_FRACTION,
+    EffectSensitivity,
+    ReplaySetup,
+    replay_power,
+    replay_sizes,
+    table_sensitivity,
+)
+from ._validate import IndentationValidation, validate_indentation
+
+__all__ = [
+    "ABSORBED_BY_MARK",
+    "CURVATURE_BIC",
+    "DELTA_BIC",
+    "EQUIVALENT_BIC",
+    "INDENTER_EFFECTS",
+    "NOMINAL_TAU_S",
+    "TANGENTIAL_FRACTION",
+    "CertificationTest",
+    "CovariateTest",
+    "Diagnosis",
+    "EffectSensitivity",
+    "IndentationValidation",
+    "IndenterDiagnosis",
+    "IndenterRung",
+    "IndenterValidation",
+    "NoiseBudget",
+    "ReplaySetup",
+    "certification_tests",
+    "covariate_tests",
+    "cross_validated_rmse",
+    "diagnose",
+    "diagnose_indenter",
+    "indenter_shared",
+    "law_slope",
+    "noise_budget",
+    "noise_floor",
+    "replay_power",
+    "replay_sizes",
+    "table_sensitivity",
+    "untestable_reason",
+    "validate_indentation",
+    "validate_indenter",
+]

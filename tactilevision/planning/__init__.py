@@ -1,0 +1,53 @@
+"""What a session can show, before it is pressed: the design of experiments.
+
+A design (:class:`Design`: the gel, the gauge block's depths and repeats, holds, rests,
+the F/T sensor and the camera; a ``design.toml``, :func:`read_design`) is judged by
+what its session would certify and find:
+
+- :func:`plan` and :func:`plan_session` -> :class:`PlanPrediction`: the intervals of
+  E and nu the session would give, whether nu is identified, and the smallest size of
+  each catalogue effect ``diagnose`` would name (:func:`effect_sensitivity`,
+  :func:`effect_power`: :mod:`tactilevision.diagnosis`'s replay on the design's drawn
+  sessions); relaxation's own identifiability (:func:`relaxation_identifiability`).
+- :func:`recommend` -> :class:`Recommendation`: the change to the design that buys most
+  (:class:`DesignChange`, :func:`error_totals`).
+- From a calibration: :func:`design_from_calibration`; to a file: :func:`design_toml`.
+"""
+
+from ._design import depth_uncertainty, planned_columns
+from ._plan import (
+    Design,
+    PlanPrediction,
+    RelaxationPlan,
+    design_from_calibration,
+    design_toml,
+    plan,
+    plan_session,
+    read_design,
+    relaxation_identifiability,
+    untestable_in_table,
+)
+from ._plan_effects import design_setup, effect_power, effect_sensitivity
+from ._plan_recommend import DesignChange, Recommendation, error_totals, recommend
+
+__all__ = [
+    "Design",
+    "DesignChange",
+    "PlanPrediction",
+    "Recommendation",
+    "RelaxationPlan",
+    "depth_uncertainty",
+    "design_from_calibration",
+    "design_setup",
+    "design_toml",
+    "effect_power",
+    "effect_sensitivity",
+    "error_totals",
+    "plan",
+    "plan_session",
+    "planned_columns",
+    "read_design",
+    "recommend",
+    "relaxation_identifiability",
+    "untestable_in_table",
+]
