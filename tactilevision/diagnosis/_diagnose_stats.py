@@ -293,6 +293,18 @@ def cross_validated_rmse(model: IndentationModel, columns: Mapping[str, np.ndarr
     others. Folds are a seeded random partition, the same for every model
     given the same data and seed.
 
+    Under an error shared within groups of presses (``columns['_group']`` and
+    ``columns['_theta']``, as ``diagnose`` sets them for each indenter's shared
+    depth error: :func:`tactilevision.mechanics.shared_groups`), the cross-validation
+    takes the fits' noise model: each fold is fitted by the same generalized least
+    squares (theta recomputed for the group's presses in the fold), and a held-out
+    press is predicted with its group's share of the error, the best linear unbiased
+    predictor of a random intercept from the group's other presses, B mean(y - f) with
+    B = n rho / (1 + n rho), rho = t^2 / s^2 read from theta (Henderson's BLUP;
+    Fuller and Battese, J. Econometrics 2, 67, 1974, for theta). Without it the
+    held-out error is the shared error itself, which no effect can lower: an effect
+    that varies within the groups and passes the BIC was then refused by the folds.
+
     Parameters
     ----------
     model : IndentationModel
@@ -309,17 +321,54 @@ def cross_validated_rmse(model: IndentationModel, columns: Mapping[str, np.ndarr
     -------
     rmse : float
     """
-    d = {c: np.asarray(columns[c], np.float64) for c in model.columns}
+    shared = "_group" in columns and "_theta" in columns
+    keys = list(model.columns) + (["_group", "_theta"] if shared else [])
+    d = {c: np.asarray(columns[c], np.float64) for c in keys}
     n = d["depth_mm"].size
     k = min(k, n)
     fold = _folds(n, k, seed)
+    rho = _shared_ratio(d["_group"], d["_theta"]) if shared else None
     err = np.empty(n)
     for f in range(k):
         test = fold == f
         train = {c: v[~test] for c, v in d.items()}
+        if rho is not None:
+            train["_theta"] = _fold_theta(train["_group"], rho[~test])
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             mf = model.fit(train, thickness_mm=thickness_mm, start=start, identify=False)
         td = {c: v[test] for c, v in d.items()}
         err[test] = model.predict(mf.params, td, thickness_mm) - td["force_n"]
+        if rho is not None:
+            r_train = train["force_n"] - model.predict(mf.params, train, thickness_mm)
+            err[test] += _group_share(train["_group"], r_train, rho[~test],
+                                      td["_group"])
     return float(np.sqrt(np.mean(err**2)))
+
+
+def _shared_ratio(group: np.ndarray, theta: np.ndarray) -> np.ndarray:
+    """rho = t^2 / s^2 of each press's group from its theta = 1 - 1 / sqrt(1 + n rho)
+    (n the group's presses in the table)."""
+    n_g = np.array([np.count_nonzero(group == g) for g in group], np.float64)
+    lam = np.clip(1.0 - np.nan_to_num(theta), 1e-12, 1.0)
+    return (1.0 / lam**2 - 1.0) / n_g
+
+
+def _fold_theta(group: np.ndarray, rho: np.ndarray) -> np.ndarray:
+    """theta of each press's group among the presses of a fold."""
+    n_g = np.array([np.count_nonzero(group == g) for g in group], np.float64)
+    return 1.0 - 1.0 / np.sqrt(1.0 + n_g * rho)
+
+
+def _group_share(group: np.ndarray, resid: np.ndarray, rho: np.ndarray,
+                 test_group: np.ndarray) -> np.ndarray:
+    """Each held-out press's predicted share of its group's error (BLUP): B times the
+    mean of the group's training residuals y - f, B = n rho / (1 + n rho); 0 for a
+    group with no training press."""
+    out = np.zeros(test_group.size)
+    for i, g in enumerate(test_group):
+        same = group == g
+        if same.any():
+            nr = same.sum() * float(rho[same][0])
+            out[i] = nr / (1.0 + nr) * float(np.mean(resid[same]))
+    return out
