@@ -13,11 +13,11 @@ cli        the ``tactilevision`` command
 """
 
 from ._assets import KNOWN_SENSORS, default_calibration_path
-from ._checks import InputError, ShapeError
+from ._checks import InputError, InputWarning, ShapeError
 from ._version import __version__
 
-__all__ = ["KNOWN_SENSORS", "InputError", "SessionCalibration", "ShapeError", "__version__",
-           "calibrate_session", "default_calibration_path", "plan"]
+__all__ = ["KNOWN_SENSORS", "InputError", "InputWarning", "SessionCalibration", "ShapeError",
+           "__version__", "calibrate_session", "default_calibration_path", "plan"]
 
 
 def __getattr__(name: str):

@@ -14,7 +14,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-__all__ = ["InputError", "ShapeError", "check_array", "check_poisson", "check_positive"]
+__all__ = ["InputError", "InputWarning", "ShapeError", "check_array", "check_poisson",
+           "check_positive"]
 
 
 class InputError(ValueError):
@@ -26,6 +27,12 @@ class InputError(ValueError):
 
 class ShapeError(InputError):
     """An array argument has the wrong shape, dtype or non-finite values."""
+
+
+class InputWarning(UserWarning):
+    """Input that is read but likely not what the user meant: a key this version does
+    not read (a typo falls back to the default), with the nearest known key. The command
+    line prints it as one line, ``tactilevision COMMAND: warning: ...``."""
 
 
 def _dims_match(expected: Sequence[int | str | None], shape: tuple[int, ...],

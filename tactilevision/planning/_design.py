@@ -11,16 +11,19 @@ will write (:func:`planned_columns`), and the catalogue effects that table canno
 
 from __future__ import annotations
 
+import difflib
 import math
 import tomllib
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from .._checks import InputError
+from .._checks import InputError, InputWarning
 from ..diagnosis import untestable_reason
+from ..io import KNOWN_KEYS
 from ..mechanics import EFFECT_SIZE_PARAMS, EFFECTS, MAX_W_OVER_H, fem_force
 
 __all__ = [
@@ -267,6 +270,70 @@ def _check_schedule(d: Design) -> None:
         _positive(size, f"[plan.detect] {name}")
 
 
+#: The type of every key a design reads (``'number'``: an int or float, never a
+#: boolean; ``'integer'``; ``'numbers'``: a list of numbers; ``'text'``).
+DESIGN_KEYS: dict[str, dict[str, str]] = {
+    "sensor": {"gel_thickness_mm": "number", "mm_per_px": "number"},
+    "indenter": {"radius_mm": "number"},
+    "gauge_block": {"depths_mm": "numbers", "bevel_angle_deg": "number"},
+    "force_sensor": {"rate_hz": "number", "window_samples": "integer", "window_at": "text"},
+    "plan": {"repeats": "integer", "E_mpa": "number", "nu": "number",
+             "frame_rate_hz": "number", "stage_speed_mm_s": "number",
+             "force_noise_n": "number", "force_zero_n": "number", "hold_s": "number",
+             "depth_std_um": "number", "beta_table": "text", "overshoot_um": "numbers",
+             "holds_s": "numbers", "waits_s": "numbers", "days": "integer",
+             "positions": "integer", "relaxation_g": "number", "relaxation_tau_s": "number",
+             "detect": "table"},
+}
+
+_KIND_WORDS = {"number": "a number", "integer": "a whole number", "numbers": "a list of numbers",
+               "text": "a string", "table": "a table"}
+
+
+def _is_number(v: Any) -> bool:
+    return not isinstance(v, bool) and isinstance(v, int | float)
+
+
+def _typed(v: Any, kind: str) -> bool:
+    if kind == "number":
+        return _is_number(v)
+    if kind == "integer":
+        return _is_number(v) and float(v).is_integer()
+    if kind == "numbers":
+        return isinstance(v, list) and all(_is_number(x) for x in v)
+    return isinstance(v, str) if kind == "text" else isinstance(v, dict)
+
+
+def _check_keys(doc: dict, path: Path) -> None:
+    """Every key a design reads has its type (one sentence naming file, table and key);
+    a table or key neither a design nor a session reads is warned, with the nearest
+    known one (:class:`~tactilevision.InputWarning`)."""
+    for table, section in doc.items():
+        known = {**dict.fromkeys(KNOWN_KEYS.get(table, ())), **DESIGN_KEYS.get(table, {})}
+        if table not in DESIGN_KEYS and table not in KNOWN_KEYS:
+            near = difflib.get_close_matches(table, [*DESIGN_KEYS, *KNOWN_KEYS], n=1)
+            warnings.warn(f"{path}: table [{table}] is not read"
+                          + (f" (did you mean [{near[0]}]?)" if near else ""),
+                          InputWarning, stacklevel=3)
+            continue
+        if not isinstance(section, dict):
+            raise InputError(f"{path}: [{table}] must be a table")
+        for key, value in section.items():
+            kind = DESIGN_KEYS.get(table, {}).get(key)
+            if kind is not None and not _typed(value, kind):
+                raise InputError(f"{path}: [{table}] {key} must be {_KIND_WORDS[kind]}, "
+                                 f"got {value!r}")
+            if key not in known:
+                near = difflib.get_close_matches(key, list(known), n=1)
+                if table == "plan":
+                    raise InputError(f"{path}: [plan] {key} is not a design key"
+                                     + (f" (did you mean {near[0]}?)" if near else "")
+                                     + f" (known: {', '.join(sorted(known))})")
+                warnings.warn(f"{path}: [{table}] {key} is not read"
+                              + (f" (did you mean {near[0]}? its default is used)"
+                                 if near else ""), InputWarning, stacklevel=3)
+
+
 def read_design(path: str | Path) -> Design:
     """Read a design file: a ``session.toml`` with a ``[plan]`` table.
 
@@ -308,21 +375,9 @@ def read_design(path: str | Path) -> Design:
         except (KeyError, TypeError):
             raise InputError(f"{path}: [{table}] {key} is missing") from None
 
-    for table in ("sensor", "indenter", "gauge_block", "force_sensor", "plan"):
-        if not isinstance(doc.get(table, {}), dict):
-            raise InputError(f"{path}: [{table}] must be a table")
+    _check_keys(doc, path)
     plan = doc.get("plan", {})
-    known = {"repeats", "E_mpa", "nu", "frame_rate_hz", "stage_speed_mm_s", "force_noise_n",
-             "force_zero_n", "hold_s", "depth_std_um", "beta_table", "overshoot_um",
-             "holds_s", "waits_s", "days", "positions", "relaxation_g", "relaxation_tau_s",
-             "detect"}
-    unknown = sorted(set(plan) - known)
-    if unknown:
-        raise InputError(f"{path}: [plan] {unknown[0]} is not a design key (known: "
-                         f"{', '.join(sorted(known))})")
     depths = need("gauge_block", "depths_mm")
-    if not isinstance(depths, list):
-        raise InputError(f"{path}: [gauge_block] depths_mm must be a list of depths, mm")
     gauge = doc.get("gauge_block", {})
     sensor = doc.get("sensor", {})
     force = doc.get("force_sensor", {})
