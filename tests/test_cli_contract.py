@@ -158,7 +158,7 @@ def test_a_failed_json_write_leaves_nothing_behind(tmp_path, capsys):
     target = tmp_path / "fit.json"
     target.mkdir()                               # os.replace cannot put a file there
     rc = main(["fit", TABLE, "--json", str(target)])
-    assert rc == 2 and "cannot write the JSON result" in capsys.readouterr().err
+    assert rc == 2 and "is a folder, not a file" in capsys.readouterr().err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["fit.json"]
 
 

@@ -128,14 +128,18 @@ def test_deep_press_warns_but_fits(tmp_path, capsys):
     assert any("w/h = 0.300" in n for n in json.loads(cap.out)["notes"])
 
 
-def test_out_of_table_reported_with_exit_0(tmp_path, capsys):
+def test_out_of_table_reported_with_exit_3(tmp_path, capsys):
+    """A refused fit is reported (summary, JSON) and exits non-zero (issue 54, item 6):
+    a script must not take it as a fit."""
     rows = "".join(f"{w},{w * (9.0 * w / 3 + 3.0):.6f}\n" for w in DEPTHS)  # beta = 3
     csv = write_table(tmp_path, "depth_mm,force_n\n" + rows)
-    d = run_json(["fit", str(csv)], capsys)
+    assert main([*_paper(["fit", str(csv)]), "--json", "-"]) == 3
+    d = json.loads(capsys.readouterr().out)
     assert d["out_of_table"] is True and d["E_mpa"] is None and d["nu"] is None
     assert "nu in [0.30, 0.50)" in d["out_of_table_message"]
-    assert main(["fit", str(csv), *PAPER]) == 0
-    assert "OUT OF TABLE" in capsys.readouterr().out
+    assert main(["fit", str(csv), *PAPER]) == 3
+    cap = capsys.readouterr()
+    assert "OUT OF TABLE" in cap.out and "exit status 3" in cap.err
 
 
 def test_help(capsys):
@@ -233,10 +237,16 @@ def test_error_keeps_previous_json(tmp_path, capsys):
 
 
 def test_unwritable_json_is_input_error(tmp_path, capsys):
+    """A --json path under a file cannot be written: refused before any work (a missing
+    folder is created, as for output folders)."""
     csv = write_table(tmp_path)
-    msg = error_line(["fit", str(csv), "--json", str(tmp_path / "no" / "dir" / "f.json")],
+    (tmp_path / "a_file").write_text("x")
+    msg = error_line(["fit", str(csv), "--json", str(tmp_path / "a_file" / "f.json")],
                      capsys)
-    assert "cannot write the JSON result" in msg
+    assert "cannot write" in msg and "a_file is a file" in msg
+    assert main(_paper(["fit", str(csv), "--json", str(tmp_path / "no" / "dir" / "f.json")])
+                ) == 0
+    assert (tmp_path / "no" / "dir" / "f.json").is_file()
 
 
 # ------------------------------------------------------------- demo sample
@@ -271,9 +281,9 @@ def test_sample_fit_near_paper(capsys):
 def test_default_fem_tables_on_the_papers_line(tmp_path, capsys):
     # the paper's beta = 1.507 is beyond a bonded Neo-Hookean layer at
     # a/h = 0.83 (tests/test_fem_beta_table.py): no E, nu, and the message
-    # names the FEM range; exit status 0, as for any out-of-table fit
+    # names the FEM range; exit status 3, as for any out-of-table fit
     csv = write_table(tmp_path)
-    assert main(["fit", str(csv), "--json", "-"]) == 0
+    assert main(["fit", str(csv), "--json", "-"]) == 3
     d = json.loads(capsys.readouterr().out)
     assert d["beta_table"] == "fem" and d["kappa_source"] == "fem"
     assert d["contact"] == "bonded"

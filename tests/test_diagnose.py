@@ -437,7 +437,8 @@ def test_cli_bad_input(tmp_path, capsys, argv, expected):
     csv = write_measurements(tmp_path / "m.csv", cols, thickness_mm=t.thickness_mm,
                              radius_mm=t.radius_mm)
     (tmp_path / "out.json").write_text("{}")
-    assert main(["diagnose", str(csv), *argv, "--json", str(tmp_path / "out.json")]) == 2
+    assert main(["diagnose", str(csv), *argv, "--json", str(tmp_path / "out.json"),
+                 "--overwrite"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and expected in err[0]
     assert (tmp_path / "out.json").read_text() == "{}"     # nothing already written is lost

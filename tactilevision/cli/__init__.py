@@ -9,35 +9,55 @@ status 2, deleting nothing already written (``docs/formats.md``).
 from __future__ import annotations
 
 import argparse
+import importlib
 import sys
 import warnings
 from collections.abc import Sequence
 
 from .. import InputError, InputWarning, __version__
-from . import (
-    _batch,
-    _calibrate,
-    _diagnose,
-    _fem,
-    _fit,
-    _forces,
-    _history,
-    _live,
-    _optics,
-    _plan,
-    _reconstruct,
-    _validate,
-    _view,
-)
 
-__all__ = ["EXTRAS", "build_parser", "main", "missing_extra"]
+__all__ = ["COMMANDS", "EXTRAS", "build_parser", "main", "missing_extra", "synopses"]
 
-_COMMANDS = (_calibrate, _reconstruct, _optics, _fit, _diagnose, _validate, _plan, _fem,
-             _forces, _history, _batch, _live, _view)
+#: Each command, its module (imported only when the command runs, so that ``--version``
+#: and ``--help`` do not load every command's stack) and its one-line help (a test keeps
+#: it equal to the module's own).
+COMMANDS: dict[str, tuple[str, str]] = {
+    "calibrate": ("_calibrate", "session of frames and forces -> certified presses, E, nu, "
+                                "report"),
+    "reconstruct": ("_reconstruct", "height maps (.npy, mm) and depth images (.png) from a "
+                                    "folder of frames or a video"),
+    "optics": ("_optics", "photometric calibration of a sensor"),
+    "fit": ("_fit", "fit E and nu to a measurements table"),
+    "diagnose": ("_diagnose", "find where the model fails and which effect is missing"),
+    "validate": ("_validate", "simulated against measured depths (FEM check)"),
+    "plan": ("_plan", "predict what a calibration session's design will measure"),
+    "fem": ("_fem", "finite-element tables of the gel layer"),
+    "forces": ("_forces", "contact force maps (images, kPa) and total forces per frame "
+                          "(forces.csv)"),
+    "history": ("_history", "calibration folders over days -> each gel's E and nu history, "
+                            "trend, recalibrate or not"),
+    "batch": ("_batch", "reconstruct / forces / calibrate over many inputs on Dask (Zarr, "
+                        "Parquet)"),
+    "live": ("_live", "a camera, video or frame folder through the live pipeline: annotated "
+                      "video, CSV"),
+    "view": ("_view", "an interactive, self-contained HTML viewer (frame, height map, 3D "
+                      "surface, force map, frame slider)"),
+}
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """Build the argument parser with every sub-command registered.
+def _module(name: str):
+    """A command's module, imported on use (the command line's lazy dispatch)."""
+    return importlib.import_module(f"{__name__}.{COMMANDS[name][0]}")
+
+
+def build_parser(commands: Sequence[str] | None = None) -> argparse.ArgumentParser:
+    """Build the argument parser.
+
+    Parameters
+    ----------
+    commands : sequence of str, optional
+        The commands whose full parsers are built (their modules imported); the others
+        are listed by name and help alone. Default: every command.
 
     Returns
     -------
@@ -50,9 +70,43 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"tactilevision {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
-    for mod in _COMMANDS:
-        mod.add_parser(sub)
+    full = set(COMMANDS if commands is None else commands)
+    for name, (_, help_text) in COMMANDS.items():
+        if name in full:
+            _module(name).add_parser(sub)
+        else:
+            sub.add_parser(name, help=help_text, add_help=False)
     return parser
+
+
+def synopses() -> list[str]:
+    """One usage line per command, generated from the parsers (``docs/guide/cli.md``
+    shows exactly these; a test keeps the page equal to them).
+
+    Returns
+    -------
+    list of str
+        ``tactilevision COMMAND [SUBCOMMAND] ...`` with every option, in the order
+        the commands are registered.
+    """
+    out = []
+
+    def walk(parser: argparse.ArgumentParser) -> None:
+        subs = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+        if subs:
+            for child in subs[0].choices.values():
+                walk(child)
+            return
+        fmt = argparse.HelpFormatter(parser.prog, width=100_000)
+        fmt.add_usage(parser.usage, parser._actions, parser._mutually_exclusive_groups,
+                      prefix="")
+        out.append(fmt.format_help().strip().replace(" [-h]", "", 1))
+
+    for action in build_parser()._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for child in action.choices.values():
+                walk(child)
+    return out
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -69,11 +123,18 @@ def main(argv: Sequence[str] | None = None) -> int:
         0 on success, 2 on bad input (message on standard error), 130 when
         interrupted (Ctrl-C: one line, no traceback).
     """
-    parser = build_parser()
     argv = list(sys.argv[1:] if argv is None else argv)
+    # only the command that runs is imported: --version and --help stay light
+    first = next((a for a in argv if not a.startswith("-")), None)
+    parser = build_parser([first] if first in COMMANDS else [])
     args = parser.parse_args(argv)
     args.argv = argv
     try:
+        for opt in FILE_OPTIONS.get(args.command, ()):  # before any work
+            value = getattr(args, opt, None)
+            if value is not None and str(value) != "-":
+                importlib.import_module("tactilevision.io").check_output_file(
+                    value, overwrite=getattr(args, "overwrite", False))
         with warnings.catch_warnings():
             warnings.showwarning = _one_line(args.command, warnings.showwarning)
             return int(args.func(args) or 0)
@@ -90,6 +151,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"tactilevision {args.command}: error: {why}", file=sys.stderr)
         return 2
 
+
+#: Each command's single-file outputs, checked before any work: a file tactilevision did
+#: not write is replaced only with --overwrite (``view`` and ``live`` check their own).
+FILE_OPTIONS = {"fit": ("json",), "diagnose": ("json",), "validate": ("json",),
+                "calibrate": ("json",), "history": ("json",), "batch": ("json",),
+                "plan": ("json", "write_design", "write_recommended")}
 
 #: The optional extra (pyproject.toml) that installs each package imported on use.
 EXTRAS = {"torch": "torch", "kornia": "torch", "onnx": "torch", "dask": "dask",

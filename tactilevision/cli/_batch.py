@@ -10,7 +10,7 @@ from pathlib import Path
 from .. import InputError, default_calibration_path
 from ..batch import BatchSettings, run_batch
 from ._options import add_material_options, add_optics_options, beta_from_args, material_from_args
-from ._out import check_output_folder
+from ._out import check_output_folder, write_output_file
 
 __all__ = ["add_parser", "run"]
 
@@ -102,7 +102,7 @@ def run(args: argparse.Namespace) -> int:
         print(json.dumps(d, indent=2))
     else:
         if args.json:
-            Path(args.json).write_text(json.dumps(d, indent=2))
+            write_output_file(args.json, json.dumps(d, indent=2) + "\n", overwrite=True)
         for o in report.inputs:
             extra = (f" ({o.chunks_run} chunk(s) run, {o.chunks_skipped} already done)"
                      if args.kind != "calibrate" and o.status == "done" else "")

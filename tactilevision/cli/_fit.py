@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import os
 import sys
 import warnings
 from dataclasses import replace
@@ -14,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import InputError
-from ..io import Measurements, read_holds, read_measurements
+from ..io import Measurements, read_holds, read_measurements, write_output_file
 from ..mechanics import (
     EFFECT_NAMES,
     IndentationFit,
@@ -95,6 +94,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                         "(needs the table's hold_s; press matches rows to holds)")
     p.add_argument("--json", metavar="FILE",
                    help="write the result as JSON to FILE ('-' for standard output)")
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace --json FILE even when tactilevision did not write it")
     add_indenter_arguments(p)
     p.set_defaults(func=run)
 
@@ -283,14 +284,10 @@ def _write_json(obj: dict, dest: str) -> None:
     if dest == "-":
         sys.stdout.write(text)
         return
-    target = Path(dest)
-    tmp = target.with_name(target.name + ".tmp")
-    try:
-        tmp.write_text(text, encoding="utf-8")
-        os.replace(tmp, target)  # the old file stays whole until the new one is complete
-    except OSError as exc:
-        tmp.unlink(missing_ok=True)      # a failed write leaves nothing of its own behind
-        raise InputError(f"cannot write the JSON result to {dest}: {exc.strerror}") from None
+    # checked before any work (the command line's single-file rule, tactilevision.cli.main):
+    # written whole, the old file intact until the new one is complete, and listed in the
+    # folder's manifest so that a rerun may replace it
+    write_output_file(dest, text, overwrite=True)
 
 
 def _run_indenter(args: argparse.Namespace, table: Measurements, path: Path,
@@ -408,5 +405,10 @@ def run(args: argparse.Namespace) -> int:
         print(f"tactilevision fit: error: {path}: the model's parameters "
               f"{', '.join(fit.unidentified)} are not identified by these data; E and nu "
               "through them are not determined (exit status 3)", file=sys.stderr)
+        return 3
+    if fit.out_of_table:
+        # E and nu not computed: the summary says why; a script must not take it as a fit
+        print(f"tactilevision fit: error: {path}: E and nu not computed (out of the table; "
+              "exit status 3)", file=sys.stderr)
         return 3
     return 0

@@ -12,7 +12,7 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from .. import InputError, default_calibration_path
-from ..io import read_reference
+from ..io import check_output_file, read_reference, record_output
 from ..live import Pipeline
 from ._options import add_material_options, add_optics_options
 from ._out import check_output_folder, output_folder
@@ -62,6 +62,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="height of the colour map's top, mm (default: the first results' "
                    "deepest point)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace --out and --csv even when tactilevision did not write them")
     p.set_defaults(func=run)
 
 
@@ -145,6 +147,7 @@ def run(args: argparse.Namespace) -> int:
             check_output_folder(p.parent, f"folder of {p.name}")
             if p.is_dir():
                 raise InputError(f"{p} is a folder: give a file name")
+            check_output_file(p, overwrite=args.overwrite)
     reference = args.reference
     if reference not in ("auto", "calibration"):
         reference = read_reference(Path(reference))
@@ -163,6 +166,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         if args.csv is not None:
             fh = args.csv.open("w", newline="")
+            record_output(args.csv)
             wcsv = csv.DictWriter(fh, fieldnames=_COLUMNS)
             wcsv.writeheader()
         if not args.no_progress:
@@ -180,6 +184,7 @@ def run(args: argparse.Namespace) -> int:
                     fourcc = "mp4v" if args.out.suffix.lower() == ".mp4" else "MJPG"
                     writer = cv2.VideoWriter(str(args.out), cv2.VideoWriter_fourcc(*fourcc),
                                              30.0, (img.shape[1], img.shape[0]))
+                    record_output(args.out)
                 writer.write(img)
             if wcsv is not None:
                 tot = r.total_force_n

@@ -3,10 +3,18 @@
 
 from __future__ import annotations
 
-from ..io import MANIFEST, StagedOutput, check_output_folder, check_overwrite, output_folder
+from ..io import (
+    MANIFEST,
+    StagedOutput,
+    check_output_file,
+    check_output_folder,
+    check_overwrite,
+    output_folder,
+    write_output_file,
+)
 
-__all__ = ["MANIFEST", "StagedOutput", "add_overwrite_argument", "check_output_folder",
-           "check_overwrite", "output_folder"]
+__all__ = ["MANIFEST", "StagedOutput", "add_overwrite_argument", "check_output_file",
+           "check_output_folder", "check_overwrite", "output_folder", "write_output_file"]
 
 
 def add_overwrite_argument(parser, what: str = "output folder") -> None:

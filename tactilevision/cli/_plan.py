@@ -9,6 +9,7 @@ from pathlib import Path
 from .. import InputError
 from ..mechanics import EFFECT_SIZE_PARAMS
 from ..planning import (
+    PlanPrediction,
     Recommendation,
     design_from_calibration,
     design_toml,
@@ -17,6 +18,7 @@ from ..planning import (
     recommend,
 )
 from ._fit import _write_json
+from ._out import write_output_file
 
 __all__ = ["add_parser", "run"]
 
@@ -63,6 +65,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--write-recommended", metavar="FILE", type=Path,
                    help="write the cheapest design meeting the targets as a design file")
     p.add_argument("--json", metavar="FILE", help="write the prediction as JSON ('-': stdout)")
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace --json, --write-design and --write-recommended even when "
+                   "tactilevision did not write them")
     p.set_defaults(func=run)
 
 
@@ -72,7 +77,7 @@ def summary(pred) -> str:
     lines = [
         f"design: h {d.thickness_mm:g} mm, a {d.radius_mm:g} mm (a/h {d.a_over_h:.2f}), "
         f"{len(d.depths_mm)} depths x {d.repeats} repeats = {pred.n_presses} presses, "
-        f"E {d.E_mpa:g} MPa, nu {d.nu:g}",
+        f"E {d.E_mpa:.4g} MPa, nu {d.nu:.4g}",
         f"depth per press: sd {pred.depth_std_um:.2f} um random"
         + (f", up to {pred.depth_shared_um:.1f} um shared" if pred.depth_shared_um else "")
         + f" ({pred.depth_source}); force per press: sd {1e3 * pred.force_std_n:.2f} mN",
@@ -85,14 +90,14 @@ def summary(pred) -> str:
                 "depth_shared": f"a depth error of +{pred.depth_shared_um:.1f} um in every press",
                 "depth_shared_minus": f"a depth error of -{pred.depth_shared_um:.1f} um in "
                                       "every press",
-                "force_zero": f"a force offset of +{d.force_zero_n:g} N in every press",
-                "force_zero_minus": f"a force offset of -{d.force_zero_n:g} N in every press",
+                "force_zero": f"a force offset of +{d.force_zero_n:.3g} N in every press",
+                "force_zero_minus": f"a force offset of -{d.force_zero_n:.3g} N in every press",
                 }[name]
         if math.isfinite(e) and math.isfinite(n):
             lines.append(f"bias from {what}: E {e:+.1f} %, nu {n:+.4f}")
         else:
             lines.append(f"bias from {what}: no E or nu (beta beyond the beta table)")
-    lines.append("nu identified" if pred.nu_identified else "nu NOT identified")
+    lines.append(_verdict(pred))
     for name, why in pred.untestable.items():
         lines.append(f"diagnose cannot test {name}: {why}")
     found = [s for s in pred.effect_sizes.values() if math.isfinite(s.size)
@@ -127,11 +132,7 @@ def run(args: argparse.Namespace) -> int:
     design = (read_design(args.design) if args.design is not None
               else design_from_calibration(args.from_calibration, args.session))
     if args.write_design is not None:
-        try:
-            args.write_design.write_text(design_toml(design), encoding="utf-8")
-        except OSError as exc:
-            raise InputError(f"cannot write the design to {args.write_design}: "
-                             f"{exc.strerror}") from None
+        write_output_file(args.write_design, design_toml(design), overwrite=True)
     targets = args.target_E_pct is not None or args.target_nu is not None
     if args.write_recommended is not None and not targets:
         raise InputError("--write-recommended needs a target: --target-E-pct or --target-nu")
@@ -144,12 +145,8 @@ def run(args: argparse.Namespace) -> int:
     if rec is not None and args.write_recommended is not None:
         if rec.cheapest is None:
             raise InputError(f"no design file written to {args.write_recommended}: {rec.why}")
-        try:
-            args.write_recommended.write_text(design_toml(rec.cheapest.design),
-                                              encoding="utf-8")
-        except OSError as exc:
-            raise InputError(f"cannot write the design to {args.write_recommended}: "
-                             f"{exc.strerror}") from None
+        write_output_file(args.write_recommended, design_toml(rec.cheapest.design),
+                          overwrite=True)
     if args.json == "-":
         _write_json(doc, "-")
         return 0
@@ -159,6 +156,23 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         _write_json(doc, args.json)
     return 0
+
+
+def _verdict(pred: PlanPrediction) -> str:
+    """The one identification verdict of a run: the scatter's and the shared errors'."""
+    if not pred.nu_identified:
+        return "nu NOT identified"
+    if not pred.systematic_breaks:
+        return "nu identified (with the shared errors at their bounds too)"
+    what = {"depth_shared": f"a depth error of +{pred.depth_shared_um:.1f} um in every press",
+            "depth_shared_minus": f"a depth error of -{pred.depth_shared_um:.1f} um in every "
+                                  "press",
+            "force_zero": "a force offset at its bound", "force_zero_minus":
+            "a force offset at its bound"}
+    causes = sorted({what.get(k, k) for k in pred.systematic_breaks})
+    return (f"nu NOT identified: the presses' scatter alone would pin it (sd "
+            f"{pred.nu_sigma:.4f}), but {' or '.join(causes)}, within the shared errors' "
+            "bounds, takes beta beyond the beta table")
 
 
 def _total(e: float, n: float) -> str:

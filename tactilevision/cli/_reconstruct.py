@@ -33,8 +33,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="folder of .png/.jpg frames (sorted by name), or a video file (.mp4, "
                    ".avi, ...: its frames named <video stem>_<index>)")
     add_optics_options(p, required=True)
-    p.add_argument("--out", metavar="DIR", type=Path, default=Path("out/reconstruct"),
-                   help="output folder (default: out/reconstruct)")
+    p.add_argument("--out", metavar="DIR", type=Path, default=None,
+                   help="output folder (default: <FRAMES_DIR>_reconstruct beside the frames "
+                   "folder, <stem>_reconstruct beside a video; never the current folder "
+                   "unless the source is there)")
     p.add_argument("--no-images", action="store_true", help="write only the .npy height maps")
     p.add_argument("--level", choices=("median", "far_field", "contact"), default="median",
                    help="the height's zero: the frame's median (default, camera rate), a "
@@ -65,6 +67,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     """Run ``reconstruct``; returns 2 if any frame was skipped."""
     boundary, level = _boundary_and_level(args.boundary, args.level)
+    if args.out is None:
+        src_path = args.frames_dir
+        args.out = src_path.with_name(f"{src_path.stem if src_path.is_file() else src_path.name}"
+                                      "_reconstruct")
     out = check_output_folder(args.out)    # before any work: a bad --out fails at once
     src = open_source(args.frames_dir, reference=args.reference)
     cal, cal_path, _ = optics_calibration(args, src)

@@ -11,7 +11,7 @@ import numpy as np
 
 from .. import InputError
 from ..fem import ForceEstimator
-from ..io import open_source
+from ..io import check_output_file, open_source, record_output
 from ..optics import DepthReconstructor, PhotometricCalibration
 from ..pipeline import read_material
 from ..viz import write_viewer
@@ -34,8 +34,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("source", metavar="FRAMES_DIR|VIDEO|ZARR", type=Path,
                    help="a folder of frames, a video file, or a NAME.zarr group written by "
                    "'tactilevision batch'")
-    p.add_argument("--out", metavar="HTML", type=Path, default=Path("out/view.html"),
-                   help="the page to write (default: out/view.html)")
+    p.add_argument("--out", metavar="HTML", type=Path, default=None,
+                   help="the page to write (default: <source>_view.html beside the source; "
+                   "a page tactilevision did not write is replaced only with --overwrite)")
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace --out even when tactilevision did not write it")
     add_optics_options(p)
     p.add_argument("--max-frames", type=int, default=60, metavar="N",
                    help="at most N frames, evenly spaced (default 60)")
@@ -121,7 +124,10 @@ def _from_zarr(source: Path, args, picks_max: int):
 def run(args: argparse.Namespace) -> int:
     """Run ``view``; returns 0, or 2 on bad input (nothing written then)."""
     source: Path = args.source
+    if args.out is None:
+        args.out = source.with_name(f"{source.stem}_view.html")
     out: Path = args.out
+    check_output_file(out, overwrite=args.overwrite)
     if args.max_frames < 1:
         raise InputError(f"--max-frames must be >= 1, got {args.max_frames}")
     if args.max_px < 8:
@@ -146,6 +152,7 @@ def run(args: argparse.Namespace) -> int:
         frames, heights, pressure, mm_per_px, labels = _from_frames(source, args, material)
     path = write_viewer(out, frames, heights, mm_per_px=mm_per_px, pressure_kpa=pressure,
                         titles=labels, max_px=args.max_px)
+    record_output(path)                 # a rerun may replace it without --overwrite
     size = path.stat().st_size / 1e6
     print(f"wrote {path} ({size:.1f} MB): {len(labels)} frame(s) of {source}"
           + (", with the force map" if pressure is not None else ""))

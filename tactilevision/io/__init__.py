@@ -51,13 +51,16 @@ __all__ += ["VIDEO_SUFFIXES", "VideoFrames", "find_video_reference", "is_video"]
 from ._output import (  # noqa: E402
     MANIFEST,
     StagedOutput,
+    check_output_file,
     check_output_folder,
     check_overwrite,
     output_folder,
+    record_output,
+    write_output_file,
 )
 
-__all__ += ["MANIFEST", "StagedOutput", "check_output_folder", "check_overwrite",
-            "output_folder"]
+__all__ += ["MANIFEST", "StagedOutput", "check_output_file", "check_output_folder",
+            "check_overwrite", "output_folder", "record_output", "write_output_file"]
 
 # one way in for frames: folder, video, session or camera (every command): names appended
 from ._source import FrameSource, open_source  # noqa: E402

@@ -12,7 +12,8 @@ from pathlib import Path
 
 from .._checks import InputError
 
-__all__ = ["MANIFEST", "StagedOutput", "check_output_folder", "check_overwrite", "output_folder"]
+__all__ = ["MANIFEST", "StagedOutput", "check_output_file", "check_output_folder",
+           "check_overwrite", "output_folder", "record_output", "write_output_file"]
 
 
 def output_folder(path: Path, what: str = "output folder") -> Path:
@@ -112,6 +113,96 @@ def check_overwrite(out: Path, names, *, overwrite: bool = False) -> None:
                                             if len(blocking) > 6 else "")
         raise InputError(f"{out} already holds {shown}, not written by tactilevision: give "
                          "--overwrite to replace them, or another output folder")
+
+
+def check_output_file(path: str | Path, *, overwrite: bool = False) -> Path:
+    """Refuse, before any work, to replace a single file tactilevision did not write.
+
+    The one rule for every output (a folder's, :func:`check_overwrite`, and a single
+    file's): a file in the way is replaced only when the folder's manifest
+    (:data:`MANIFEST`) lists it (a tactilevision output of an earlier run) or with
+    `overwrite`.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file a command will write.
+    overwrite : bool, default False
+        ``--overwrite``: replace it whatever wrote it.
+
+    Returns
+    -------
+    Path
+
+    Raises
+    ------
+    InputError
+        Naming the file, when it is a folder, its folder cannot be created, or it
+        exists, was not written by tactilevision and `overwrite` is off.
+    """
+    path = Path(path)
+    if path.is_dir():
+        raise InputError(f"{path} is a folder, not a file")
+    parent = path.parent
+    while not parent.exists() and parent.parent != parent:
+        parent = parent.parent
+    if not parent.is_dir():
+        raise InputError(f"cannot write {path}: {parent} is a file")
+    if path.exists() and not overwrite and path.name not in _ours(path.parent):
+        raise InputError(f"{path} already exists and was not written by tactilevision: give "
+                         "--overwrite to replace it, or another file name")
+    return path
+
+
+def write_output_file(path: str | Path, data: str | bytes, *,
+                      overwrite: bool = False) -> Path:
+    """Write one output file whole (a temporary file moved into place) under the rule
+    of :func:`check_output_file`, and list it in its folder's manifest so that a rerun
+    may replace it.
+
+    Parameters
+    ----------
+    path : str or Path
+    data : str or bytes
+        UTF-8 text, or bytes.
+    overwrite : bool, default False
+
+    Returns
+    -------
+    Path
+
+    Raises
+    ------
+    InputError
+        As :func:`check_output_file`, or when the file cannot be written (nothing of
+        the failed write is left behind, the old file stays whole).
+    """
+    path = check_output_file(path, overwrite=overwrite)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.tactilevision-tmp")
+    try:
+        if isinstance(data, bytes):
+            tmp.write_bytes(data)
+        else:
+            tmp.write_text(data, encoding="utf-8")
+        os.replace(tmp, path)
+    except OSError as exc:
+        tmp.unlink(missing_ok=True)
+        raise InputError(f"cannot write {path}: {exc.strerror}") from None
+    record_output(path)
+    return path
+
+
+def record_output(path: str | Path) -> None:
+    """List a file tactilevision wrote in its folder's manifest (:data:`MANIFEST`); an
+    unwritable manifest is skipped (the file then needs ``--overwrite`` next time)."""
+    path = Path(path)
+    ours = _ours(path.parent) | {path.name}
+    try:
+        (path.parent / MANIFEST).write_text(json.dumps({"files": sorted(ours)}, indent=1)
+                                            + "\n", encoding="utf-8")
+    except OSError:
+        pass
 
 
 class StagedOutput:

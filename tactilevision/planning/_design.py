@@ -518,10 +518,16 @@ def untestable_in_table(columns: dict[str, np.ndarray], *, window_at: str | None
             continue
         why = untestable_reason(name, columns)
         if why is not None:
-            if name == "viscoelastic_relaxation" and window_at == "start":
-                why += ("; with the window at the hold's start every press's window sits "
-                        "at the same time of its hold: vary it with window_at = 'end' and "
-                        "holds of different lengths")
+            held = np.asarray(columns.get("hold_s", [np.nan]), np.float64)
+            held = held[np.isfinite(held)]
+            if name == "viscoelastic_relaxation" and window_at == "start" and \
+                    held.size and np.ptp(held) == 0:
+                # hold_s is the time from the hold's start to the window's middle: say so,
+                # not "constant 0.1" beside a design whose holds last 1 s
+                why = (f"every press's force window sits {float(held[0]):g} s into its hold "
+                       "(hold_s, the time from the hold's start to the window's middle, "
+                       "with the window at the hold's start), so relaxation cannot show: "
+                       "vary it with window_at = 'end' and holds of different lengths")
             elif name == "aging":
                 why += "; spread the presses over several days"
             elif name == "spatial_nonuniformity":

@@ -114,7 +114,8 @@ class PlanPrediction:
         bound). NaN where the fit finds no E or nu.
     nu_identified : bool
         False when the beta table cannot tell nu at this a/h, or sigma(nu) exceeds a
-        quarter of nu's range (0.3 to 0.5).
+        quarter of nu's range (0.3 to 0.5): the presses' scatter alone.
+        :attr:`nu_identified_total` carries the shared errors too.
     notes : list of str
         Why, in words.
     relaxation : RelaxationPlan or None
@@ -150,6 +151,19 @@ class PlanPrediction:
     effect_sizes: dict[str, EffectSensitivity] = field(default_factory=dict)
     detect_power: dict[str, float] = field(default_factory=dict)
 
+    @property
+    def systematic_breaks(self) -> list[str]:
+        """The shared errors (keys of :attr:`bias`) that, at their bound, leave the fit
+        without E or nu (beta beyond the beta table)."""
+        return [k for k, (e, n) in self.bias.items()
+                if k not in ("model", "noise") and not (math.isfinite(e) and math.isfinite(n))]
+
+    @property
+    def nu_identified_total(self) -> bool:
+        """One verdict: nu identified by the scatter and still with every shared error at
+        its bound (what ``plan`` prints, and the total error of ``recommend``)."""
+        return self.nu_identified and not self.systematic_breaks
+
     def as_dict(self) -> dict[str, Any]:
         """JSON-ready dict (the ``plan --json`` output; NaN written as None)."""
         d = self.design
@@ -162,7 +176,9 @@ class PlanPrediction:
             "E_sigma_mpa": self.E_sigma_mpa, "E_sigma_pct": self.E_sigma_pct,
             "nu_sigma": self.nu_sigma, "E_nu_corr": self.E_nu_corr,
             "bias": {k: {"E_pct": v[0], "nu": v[1]} for k, v in self.bias.items()},
-            "nu_identified": self.nu_identified, "notes": list(self.notes),
+            "nu_identified": self.nu_identified,
+            "nu_identified_total": self.nu_identified_total,
+            "systematic_breaks": self.systematic_breaks, "notes": list(self.notes),
             "untestable": dict(self.untestable),
             "relaxation": None if self.relaxation is None else dict(self.relaxation.__dict__),
             "effect_sizes": {k: dict(v.__dict__) for k, v in self.effect_sizes.items()},
