@@ -4,6 +4,12 @@ The root is ``$TACTILEVISION_CACHE`` if that variable is set, else
 ``~/.cache/tactilevision``; each cache keeps its files in a folder of its own
 (``fem/`` for the pad stiffness and the finite-strain sweeps, ``optics/`` for
 MLP tabulations; docs/install.md, "The cache").
+
+The cache is bounded: after every write the least recently used files are removed
+until the cache (its ``tests/`` folder, the suite's own renders, left out) holds at most
+``$TACTILEVISION_CACHE_MB`` MiB (default :data:`DEFAULT_MAX_MB`); a read marks a file
+used (:func:`touch`). :func:`cache_info` and :func:`clear_cache` back
+``tactilevision cache info|clear``.
 """
 
 from __future__ import annotations
@@ -16,10 +22,19 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["ENV_VAR", "cache_root", "code_digest", "savez_atomic"]
+__all__ = ["DEFAULT_MAX_MB", "ENV_VAR", "MAX_ENV_VAR", "UNBOUNDED", "cache_info",
+           "cache_limit_bytes", "cache_root", "clear_cache", "code_digest", "prune_cache",
+           "savez_atomic", "touch"]
 
 #: Environment variable naming the package's cache root.
 ENV_VAR = "TACTILEVISION_CACHE"
+#: Environment variable bounding the cache, MiB.
+MAX_ENV_VAR = "TACTILEVISION_CACHE_MB"
+#: The cache's default bound, MiB: the FEM sweeps of a busy week and some 20 optics tables
+#: (25 MiB each at 640 x 480).
+DEFAULT_MAX_MB = 1024
+#: Folders of the cache root left out of the bound (the test suite's own renders).
+UNBOUNDED = ("tests",)
 
 
 def cache_root() -> Path:
@@ -81,4 +96,121 @@ def savez_atomic(path: Path, **arrays: np.ndarray) -> bool:
     except OSError:
         Path(tmp).unlink(missing_ok=True)
         return False
+    prune_cache(keep=path)
     return True
+
+
+def cache_limit_bytes() -> int:
+    """The cache's bound: ``$TACTILEVISION_CACHE_MB`` MiB, else :data:`DEFAULT_MAX_MB`
+    (a value that is not a positive number falls back to the default)."""
+    try:
+        mb = float(os.environ.get(MAX_ENV_VAR, DEFAULT_MAX_MB))
+    except ValueError:
+        mb = DEFAULT_MAX_MB
+    return int((mb if mb > 0 else DEFAULT_MAX_MB) * 2**20)
+
+
+def touch(path: Path) -> None:
+    """Mark a cache file used (its modification time: the key, not the time, names its
+    content), so that eviction takes the least recently used first."""
+    try:
+        os.utime(path)
+    except OSError:
+        pass
+
+
+def _entries(root: Path) -> list[tuple[float, int, Path]]:
+    """(last use, size, path) of every bounded file under `root`."""
+    out = []
+    for p in root.rglob("*"):
+        rel = p.relative_to(root).parts
+        if not rel or rel[0] in UNBOUNDED:
+            continue
+        try:
+            st = p.stat()
+        except OSError:
+            continue
+        if p.is_file():
+            out.append((st.st_mtime, st.st_size, p))
+    return out
+
+
+def prune_cache(*, root: Path | None = None, limit: int | None = None,
+                keep: Path | None = None) -> int:
+    """Remove the least recently used files until the bounded part of the cache holds at
+    most `limit` bytes (default :func:`cache_limit_bytes`), `keep` last.
+
+    Returns
+    -------
+    removed : int
+        Bytes removed.
+    """
+    root = cache_root() if root is None else Path(root)
+    if not root.is_dir():
+        return 0
+    limit = cache_limit_bytes() if limit is None else int(limit)
+    entries = sorted(_entries(root), key=lambda e: (e[2] == keep, e[0]))
+    total = sum(e[1] for e in entries)
+    removed = 0
+    for _, size, path in entries:
+        if total <= limit:
+            break
+        try:
+            path.unlink()
+        except OSError:
+            continue
+        total -= size
+        removed += size
+    return removed
+
+
+def cache_info(root: Path | None = None) -> dict[str, tuple[int, int]]:
+    """Files and bytes in each folder of the cache.
+
+    Returns
+    -------
+    dict of str to (int, int)
+        Folder name (``'fem'``, ``'optics'``, ``'tests'``, ...) to (files, bytes).
+    """
+    root = cache_root() if root is None else Path(root)
+    out: dict[str, tuple[int, int]] = {}
+    if not root.is_dir():
+        return out
+    for p in root.rglob("*"):
+        if p.is_file():
+            folder = p.relative_to(root).parts[0] if len(p.relative_to(root).parts) > 1 \
+                else "."
+            n, b = out.get(folder, (0, 0))
+            out[folder] = (n + 1, b + p.stat().st_size)
+    return dict(sorted(out.items()))
+
+
+def clear_cache(folder: str | None = None, root: Path | None = None) -> tuple[int, int]:
+    """Delete the cache's files (always safe: they are computed again when needed).
+
+    Parameters
+    ----------
+    folder : str, optional
+        One folder of the cache (``'fem'``, ``'optics'``, ``'tests'``); default all.
+    root : Path, optional
+
+    Returns
+    -------
+    (files, bytes) removed
+    """
+    root = cache_root() if root is None else Path(root)
+    base = root if folder is None else root / folder
+    files = bytes_ = 0
+    if not base.is_dir():
+        return 0, 0
+    for p in sorted(base.rglob("*"), reverse=True):
+        try:
+            if p.is_file() or p.is_symlink():
+                size = p.stat().st_size
+                p.unlink()
+                files, bytes_ = files + 1, bytes_ + size
+            elif p.is_dir():
+                p.rmdir()
+        except OSError:
+            continue
+    return files, bytes_

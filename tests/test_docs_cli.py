@@ -22,7 +22,7 @@ def test_the_synopses_on_the_page_are_the_parsers():
 
 def test_every_option_of_every_command_is_in_its_synopsis():
     lines = synopses()
-    assert len(lines) == 13 and all(ln.startswith("tactilevision ") for ln in lines)
+    assert len(lines) == 15 and all(ln.startswith("tactilevision ") for ln in lines)
     fit = next(ln for ln in lines if ln.startswith("tactilevision fit "))
     for opt in ("--json", "--overwrite", "--ramp", "--friction", "--holds"):
         assert opt in fit

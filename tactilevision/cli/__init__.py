@@ -42,6 +42,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
                       "video, CSV"),
     "view": ("_view", "an interactive, self-contained HTML viewer (frame, height map, 3D "
                       "surface, force map, frame slider)"),
+    "cache": ("_cache", "what the disk cache holds (info), or empty it (clear)"),
 }
 
 
@@ -156,7 +157,8 @@ def main(argv: Sequence[str] | None = None) -> int:
 #: not write is replaced only with --overwrite (``view`` and ``live`` check their own).
 FILE_OPTIONS = {"fit": ("json",), "diagnose": ("json",), "validate": ("json",),
                 "calibrate": ("json",), "history": ("json",), "batch": ("json",),
-                "plan": ("json", "write_design", "write_recommended")}
+                "plan": ("json", "write_design", "write_recommended"),
+                "cache": ("json",)}
 
 #: The optional extra (pyproject.toml) that installs each package imported on use.
 EXTRAS = {"torch": "torch", "kornia": "torch", "onnx": "torch", "dask": "dask",

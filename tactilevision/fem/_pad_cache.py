@@ -23,7 +23,7 @@ import numpy as np
 import scipy
 import skfem
 
-from .._cache import ENV_VAR, cache_root
+from .._cache import ENV_VAR, cache_root, prune_cache, touch
 
 __all__ = ["ENV_VAR", "FORMAT_VERSION", "CacheError", "cache_directory", "cache_key", "cache_path",
            "pack_upper", "read_entry", "unpack_upper", "write_entry"]
@@ -105,6 +105,8 @@ def write_entry(path: Path, key: str, inputs: dict, k: np.ndarray, k_normal: np.
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
+    if path.parent.parent == cache_root():
+        prune_cache(keep=path)           # the cache's bound (tactilevision._cache)
     return path.stat().st_size
 
 
@@ -127,6 +129,7 @@ def read_entry(path: Path, key: str, inputs: dict, x_mm: np.ndarray,
         with np.load(path, allow_pickle=False) as data:
             arrays = {name: data[name] for name in
                       ("meta", "K_upper", "K_normal_upper", "x_mm", "y_mm")}
+        touch(path)                      # used: evicted last
         meta = json.loads(str(arrays["meta"]))
     except Exception as exc:  # zip CRC, truncation, missing member, bad JSON, ...
         raise CacheError(f"unreadable ({type(exc).__name__}: {exc})") from exc

@@ -26,7 +26,7 @@ import numpy as np
 import scipy
 import skfem
 
-from .._cache import code_digest, savez_atomic
+from .._cache import code_digest, savez_atomic, touch
 from ._pad_cache import cache_directory
 
 __all__ = ["FORMAT_VERSION", "SOURCES", "read_sweep", "sweep_key", "write_sweep"]
@@ -80,6 +80,7 @@ def read_sweep(inputs: dict, cls: type, cache_dir: str | os.PathLike | None = No
             if a.dtype.kind == "f" and not np.all(np.isfinite(a) | np.isnan(a)):
                 return None
             values[name] = a
+        touch(path)                      # used: evicted last
         return cls(**values, from_cache=True)
     except Exception:  # truncated zip, missing member, bad JSON, changed fields: a miss
         return None

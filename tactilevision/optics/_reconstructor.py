@@ -17,7 +17,7 @@ import numpy as np
 import onnxruntime
 from scipy import ndimage as ndi
 
-from .._cache import cache_root, savez_atomic
+from .._cache import cache_root, savez_atomic, touch
 from .._checks import InputError, check_array
 from ._ball import gradients_from_normals
 from ._calibration_data import CalibrationData
@@ -491,6 +491,7 @@ def _read_table(path, ref_inv: np.ndarray, bins: int):
     if (b != bins or cell.shape != ref_inv.shape[:2] or gx.shape != gy.shape
             or not (np.all(np.isfinite(gx)) and np.all(np.isfinite(gy)))):
         return None
+    touch(path)                          # used: evicted last (tactilevision._cache)
     return GradientTable(gx, gy, cell, b, lo, hi, ref_inv)
 
 

@@ -1,0 +1,61 @@
+"""``tactilevision cache info|clear``: what the disk cache holds, and emptying it."""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+from .._cache import (
+    MAX_ENV_VAR,
+    UNBOUNDED,
+    cache_info,
+    cache_limit_bytes,
+    cache_root,
+    clear_cache,
+)
+from ._out import write_output_file
+
+__all__ = ["add_parser", "run_clear", "run_info"]
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    """Register ``cache`` and its ``info`` and ``clear`` sub-commands."""
+    p = sub.add_parser("cache", help="what the disk cache holds (info), or empty it (clear)",
+                       description="The disk cache ($TACTILEVISION_CACHE, else "
+                       "~/.cache/tactilevision): FEM sweeps and stiffness, optics tables. "
+                       f"Bounded by ${MAX_ENV_VAR} MiB (least recently used files go "
+                       "first); deleting it is always safe.")
+    csub = p.add_subparsers(dest="cache_command", metavar="SUBCOMMAND", required=True)
+    i = csub.add_parser("info", help="files and size per folder, and the bound")
+    i.add_argument("--json", metavar="FILE", help="write the figures as JSON ('-': stdout)")
+    i.set_defaults(func=run_info)
+    c = csub.add_parser("clear", help="delete the cache's files (they are computed again)")
+    c.add_argument("--folder", choices=("fem", "optics", "tests"), default=None,
+                   help="one folder only (default: all)")
+    c.set_defaults(func=run_clear)
+
+
+def run_info(args: argparse.Namespace) -> int:
+    """Print (or write as JSON) the cache's folders, files and bytes, and its bound."""
+    info = cache_info()
+    doc = {"root": str(cache_root()), "limit_mb": cache_limit_bytes() / 2**20,
+           "folders": {k: {"files": n, "mb": b / 2**20} for k, (n, b) in info.items()},
+           "bounded_mb": sum(b for k, (_, b) in info.items() if k not in UNBOUNDED) / 2**20}
+    if args.json == "-":
+        print(json.dumps(doc, indent=2))
+        return 0
+    print(f"cache {doc['root']}: {doc['bounded_mb']:.1f} MiB of at most "
+          f"{doc['limit_mb']:.0f} MiB (${MAX_ENV_VAR}; {', '.join(UNBOUNDED)} not counted)")
+    for name, d in doc["folders"].items():
+        print(f"  {name:8s} {d['files']:6d} files {d['mb']:9.1f} MiB")
+    if args.json:
+        write_output_file(args.json, json.dumps(doc, indent=2) + "\n", overwrite=True)
+    return 0
+
+
+def run_clear(args: argparse.Namespace) -> int:
+    """Delete the cache's files (one folder, or all)."""
+    files, size = clear_cache(args.folder)
+    where = cache_root() if args.folder is None else cache_root() / args.folder
+    print(f"removed {files} files ({size / 2**20:.1f} MiB) from {where}")
+    return 0

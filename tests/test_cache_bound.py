@@ -1,0 +1,51 @@
+"""The disk cache is bounded (issue 54, item 9): least recently used files go first once
+the cache passes $TACTILEVISION_CACHE_MB; a read marks a file used; ``tactilevision cache
+info|clear`` say what it holds and empty it."""
+
+from __future__ import annotations
+
+import json
+import os
+import time
+
+import numpy as np
+
+from tactilevision._cache import cache_info, savez_atomic, touch
+from tactilevision.cli import main
+
+
+def _table(root, i):
+    path = root / "optics" / f"mlp_table_{i:02d}.npz"
+    assert savez_atomic(path, t=np.random.default_rng(i).random(2500))   # 20 kB each
+    os.utime(path, (time.time() - 1000 + i, time.time() - 1000 + i))   # written in turn
+    return path
+
+
+def test_twenty_tables_stay_within_the_bound_oldest_first(tmp_path, monkeypatch):
+    monkeypatch.setenv("TACTILEVISION_CACHE", str(tmp_path))
+    monkeypatch.setenv("TACTILEVISION_CACHE_MB", str(100e3 / 2**20))      # 100 kB
+    (tmp_path / "tests").mkdir()
+    (tmp_path / "tests" / "render.npz").write_bytes(b"x" * 200_000)      # not counted
+    paths = [_table(tmp_path, i) for i in range(3)]
+    touch(paths[0])                      # the first one read again: used last
+    paths += [_table(tmp_path, i) for i in range(3, 20)]
+    info = cache_info(tmp_path)
+    assert info["optics"][1] <= 100e3 and info["tests"] == (1, 200_000)
+    left = {p.name for p in (tmp_path / "optics").iterdir()}
+    assert paths[-1].name in left                  # the newest stays
+    assert paths[1].name not in left               # an old one unused goes
+    assert paths[0].name in left                   # the one read again outlives its peers
+    assert len(left) == 4                          # 4 x 20 kB within 100 kB
+
+
+def test_cache_info_and_clear(tmp_path, monkeypatch, capsys):
+    monkeypatch.setenv("TACTILEVISION_CACHE", str(tmp_path))
+    monkeypatch.delenv("TACTILEVISION_CACHE_MB", raising=False)
+    for i in range(3):
+        _table(tmp_path, i)
+    assert main(["cache", "info", "--json", "-"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["folders"]["optics"]["files"] == 3 and d["limit_mb"] == 1024
+    assert main(["cache", "clear", "--folder", "optics"]) == 0
+    assert "removed 3 files" in capsys.readouterr().out
+    assert not list((tmp_path / "optics").iterdir())
