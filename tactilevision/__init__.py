@@ -13,11 +13,13 @@ cli        the ``tactilevision`` command
 """
 
 from ._assets import KNOWN_SENSORS, default_calibration_path
+from ._cache import cache_info, cache_limit_bytes, cache_root, clear_cache
 from ._checks import InputError, InputWarning, ShapeError
 from ._version import __version__
 
 __all__ = ["KNOWN_SENSORS", "InputError", "InputWarning", "SessionCalibration", "ShapeError",
-           "__version__", "calibrate_session", "default_calibration_path", "plan"]
+           "__version__", "cache_info", "cache_limit_bytes", "cache_root", "calibrate_session",
+           "clear_cache", "default_calibration_path", "plan"]
 
 
 def __getattr__(name: str):

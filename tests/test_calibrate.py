@@ -618,7 +618,7 @@ def test_report_says_what_this_session_could_not_test(sample_run):
     html = (out / "report" / "report.html").read_text()
     assert "What this session could not test" in html
     section = html[html.index("What this session could not test"):html.index("Rejected presses")]
-    assert "<b>viscoelastic_relaxation</b>: hold_s is constant" in section
+    assert "<b>viscoelastic_relaxation</b>: every press&#x27;s force window sits" in section
     assert "window_at = &#x27;end&#x27;" in section
     assert "<b>aging</b>: needs day" in section
     assert "incomplete_recovery" not in section and "spatial_nonuniformity" not in section

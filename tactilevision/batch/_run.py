@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import asyncio
 import logging
 import os
 import sys
@@ -109,10 +110,29 @@ def _client(scheduler: str | None, n_workers: int | None):
             raise InputError(f"no Dask scheduler answers at {scheduler} ({exc})") from None
 
     n = n_workers or os.cpu_count() or 1
-    cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                           dashboard_address=":0",   # any free port: never 8787 twice
-                           silence_logs=logging.ERROR)
+    try:
+        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
+                               dashboard_address=":0",   # any free port: never 8787 twice
+                               silence_logs=logging.ERROR)
+    except Exception as exc:
+        # Ctrl-C while the workers start comes back as "Nanny failed to start": it is the
+        # interrupt, and is raised as one (exit 130, no traceback)
+        if _interrupted(exc):
+            raise KeyboardInterrupt from None
+        raise
     return Client(cluster), cluster
+
+
+def _interrupted(exc: BaseException) -> bool:
+    """Whether an interrupt (KeyboardInterrupt, or the cancellation it caused) lies in the
+    chain of causes of `exc`."""
+    seen = set()
+    while exc is not None and id(exc) not in seen:
+        seen.add(id(exc))
+        if isinstance(exc, KeyboardInterrupt | asyncio.CancelledError):
+            return True
+        exc = exc.__cause__ or exc.__context__
+    return False
 
 
 def run_batch(kind: str, inputs: Sequence[str | Path], out: str | Path, *,
@@ -193,9 +213,19 @@ def run_batch(kind: str, inputs: Sequence[str | Path], out: str | Path, *,
         report.seconds = time.perf_counter() - t0
         write_json_atomic(out / "batch.json", report.to_json_dict())
         if own_cluster is not None:
-            client.close()
-            own_cluster.close()
+            _close(client, own_cluster)
     return report
+
+
+def _close(client, cluster) -> None:
+    """Close our own client and cluster. An error while closing (distributed asserts on a
+    worker still starting when an interrupt closes the cluster) must not replace the
+    run's own outcome, its KeyboardInterrupt included: it is logged, not raised."""
+    for thing in (client, cluster):
+        try:
+            thing.close()
+        except Exception as exc:        # any failure to close: logged, not raised
+            logging.getLogger("tactilevision.batch").debug("closing %s: %r", thing, exc)
 
 
 def _bar(progress: bool, total: int, unit: str, desc: str):

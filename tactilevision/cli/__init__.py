@@ -10,7 +10,10 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
+import signal
 import sys
+import threading
 import warnings
 from collections.abc import Sequence
 
@@ -127,9 +130,78 @@ def main(argv: Sequence[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     # only the command that runs is imported: --version and --help stay light
     first = next((a for a in argv if not a.startswith("-")), None)
-    parser = build_parser([first] if first in COMMANDS else [])
-    args = parser.parse_args(argv)
-    args.argv = argv
+    name = first if first in COMMANDS else ""
+    with _interrupts(name):               # from the first moment: its imports included
+        try:
+            parser = build_parser([first] if first in COMMANDS else [])
+            args = parser.parse_args(argv)
+        except KeyboardInterrupt:
+            print(f"\ntactilevision {name}: interrupted", file=sys.stderr)
+            return 130
+        args.argv = argv
+        return _run(args)
+
+
+#: Set by the first Ctrl-C of a command-line run (:class:`_interrupts`).
+INTERRUPTED = threading.Event()
+
+#: Seconds an interrupt may take to unwind before the command line exits regardless
+#: (under a second, process teardown included).
+INTERRUPT_GRACE_S = 0.8
+
+
+class _interrupts:
+    """Ctrl-C honoured within :data:`INTERRUPT_GRACE_S`: the first SIGINT raises
+    KeyboardInterrupt as Python does and arms a watchdog; should the exception be
+    swallowed (raised inside a finalizer, "Exception ignored in ...") or the unwinding
+    hang, the watchdog removes the open staging folders (nothing half-written is left),
+    prints one line and exits with status 130."""
+
+    def __init__(self, command: str) -> None:
+        self.command = command
+        self.previous = None
+        self.armed = False
+        self.said = False
+        self.timer: threading.Timer | None = None
+
+    def __enter__(self) -> _interrupts:
+        INTERRUPTED.clear()
+        if threading.current_thread() is threading.main_thread():
+            self.previous = signal.signal(signal.SIGINT, self._on_sigint)
+        return self
+
+    def __exit__(self, *exc) -> bool:
+        if self.armed:
+            # interrupted and unwound (the command said so): the watchdog stays armed, so
+            # that a slow shutdown (a Dask cluster closing) still ends within the grace
+            self.said = True
+            return False
+        if self.previous is not None:
+            signal.signal(signal.SIGINT, self.previous)
+        return False
+
+    def _on_sigint(self, signum, frame):
+        INTERRUPTED.set()
+        if not self.armed:
+            self.armed = True
+            self.timer = threading.Timer(INTERRUPT_GRACE_S, self._hard_exit)
+            self.timer.daemon = True
+            self.timer.start()
+        raise KeyboardInterrupt
+
+    def _hard_exit(self) -> None:
+        io = sys.modules.get("tactilevision.io")
+        if io is not None:
+            io.remove_staging()
+        if not self.said:
+            print(f"\ntactilevision {self.command}: interrupted", file=sys.stderr,
+                  flush=True)
+        sys.stderr.flush()
+        os._exit(130)
+
+
+def _run(args: argparse.Namespace) -> int:
+    """Run the parsed command: the exit status, bad input and interrupts as one line."""
     try:
         for opt in FILE_OPTIONS.get(args.command, ()):  # before any work
             value = getattr(args, opt, None)
@@ -147,10 +219,20 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 130
     except ImportError as exc:
         why = missing_extra(exc)
-        if why is None:
+        if why is None and not INTERRUPTED.is_set():
             raise
+        if why is None:     # an extension's import cut short by Ctrl-C: the interrupt
+            print(f"\ntactilevision {args.command}: interrupted", file=sys.stderr)
+            return 130
         print(f"tactilevision {args.command}: error: {why}", file=sys.stderr)
         return 2
+    except Exception:
+        if not INTERRUPTED.is_set():
+            raise
+        # a library that turns the interrupt into an error of its own ("failed to start",
+        # "initialization failed"): it is the interrupt, said in one line
+        print(f"\ntactilevision {args.command}: interrupted", file=sys.stderr)
+        return 130
 
 
 #: Each command's single-file outputs, checked before any work: a file tactilevision did

@@ -56,11 +56,13 @@ from ._output import (  # noqa: E402
     check_overwrite,
     output_folder,
     record_output,
+    remove_staging,
     write_output_file,
 )
 
 __all__ += ["MANIFEST", "StagedOutput", "check_output_file", "check_output_folder",
-            "check_overwrite", "output_folder", "record_output", "write_output_file"]
+            "check_overwrite", "output_folder", "record_output", "remove_staging",
+            "write_output_file"]
 
 # one way in for frames: folder, video, session or camera (every command): names appended
 from ._source import FrameSource, open_source  # noqa: E402

@@ -12,8 +12,9 @@ from pathlib import Path
 
 from .._checks import InputError
 
-__all__ = ["MANIFEST", "StagedOutput", "check_output_file", "check_output_folder",
-           "check_overwrite", "output_folder", "record_output", "write_output_file"]
+__all__ = ["MANIFEST", "STAGING", "StagedOutput", "check_output_file", "check_output_folder",
+           "check_overwrite", "output_folder", "record_output", "remove_staging",
+           "write_output_file"]
 
 
 def output_folder(path: Path, what: str = "output folder") -> Path:
@@ -205,6 +206,18 @@ def record_output(path: str | Path) -> None:
         pass
 
 
+#: The hidden staging folders of the :class:`StagedOutput` blocks open now: what an
+#: interrupt that cannot unwind (the command line's watchdog) removes before it exits.
+STAGING: set[Path] = set()
+
+
+def remove_staging() -> None:
+    """Remove every open staging folder (:data:`STAGING`): nothing half-written is left."""
+    for path in list(STAGING):
+        shutil.rmtree(path, ignore_errors=True)
+        STAGING.discard(path)
+
+
 class StagedOutput:
     """A command's files written into a hidden folder in `out`, moved into place at the end.
 
@@ -249,6 +262,7 @@ class StagedOutput:
         except OSError as exc:
             raise InputError(f"cannot write into the {self.what} {self.out}: "
                              f"{exc.strerror}") from None
+        STAGING.add(self.path)
         return self
 
     def commit(self) -> list[str]:
@@ -276,6 +290,7 @@ class StagedOutput:
                              f"{exc.strerror}") from None
         finally:
             shutil.rmtree(self.path, ignore_errors=True)
+            STAGING.discard(self.path)
         self.committed = True
         return files
 
@@ -283,4 +298,5 @@ class StagedOutput:
 
         if not self.committed:
             shutil.rmtree(self.path, ignore_errors=True)
+            STAGING.discard(self.path)
         return False

@@ -1,0 +1,80 @@
+"""Ctrl-C (issue 54, item 5): an interrupted command exits with status 130 within about a
+second, prints one line and no traceback, and leaves no staging folder behind; a later
+run writes the folder whole. The watchdog also ends a command whose KeyboardInterrupt
+was swallowed."""
+
+from __future__ import annotations
+
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+SESSION = ROOT / "sample_frames" / "gelsight_session"
+
+pytestmark = pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
+
+
+def _interrupt(argv: list[str], after_s: float) -> tuple[int, str, float]:
+    proc = subprocess.Popen([sys.executable, "-m", "tactilevision", *argv],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    time.sleep(after_s)
+    sent = time.perf_counter()
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=30)
+    return proc.returncode, err, time.perf_counter() - sent
+
+
+@pytest.mark.parametrize("after_s", list(np.random.default_rng(54).uniform(1.5, 4.0, 3)))
+def test_reconstruct_interrupted_at_a_random_moment(tmp_path, after_s):
+    out = tmp_path / "r"
+    code, err, took = _interrupt(["reconstruct", str(SESSION / "frames"), "--calibration",
+                                  str(SESSION / "optics.npz"), "--out", str(out),
+                                  "--no-progress"], after_s)
+    if code == 0:
+        pytest.skip("the run ended before the signal")      # a fast machine
+    assert code == 130, err
+    assert "Traceback" not in err and err.strip().endswith("interrupted")
+    assert took < 3.0
+    assert not list(out.glob(".tactilevision-tmp-*")) if out.exists() else True
+
+
+def test_a_swallowed_interrupt_still_ends_the_command(tmp_path):
+    """A KeyboardInterrupt raised where Python ignores it (a finalizer) would let the run
+    go on; the watchdog ends it within the grace second, exit 130, staging removed."""
+    code = (
+        "import gc, sys, time\n"
+        "from pathlib import Path\n"
+        "import tactilevision.cli as cli\n"
+        "from tactilevision.io import StagedOutput\n"
+        "class Swallow:\n"
+        "    def __del__(self):\n"
+        "        time.sleep(5)\n"
+        "def run(args):\n"
+        f"    with StagedOutput(Path({str(tmp_path / 'o')!r})) as st:\n"
+        "        (st.path / 'x.txt').write_text('half')\n"
+        "        s = Swallow(); del s\n"             # the signal lands in the finalizer
+        "        time.sleep(10)\n"
+        "    return 0\n"
+        "import tactilevision.cli._fit as fit\n"
+        "fit.run = run\n"
+        "orig = fit.add_parser\n"
+        "def add(sub):\n"
+        "    orig(sub); sub.choices['fit'].set_defaults(func=run)\n"
+        "fit.add_parser = add\n"
+        "sys.exit(cli.main(['fit', 'x.csv']))\n")
+    proc = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    time.sleep(2.5)
+    sent = time.perf_counter()
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=30)
+    assert proc.returncode == 130, err
+    assert time.perf_counter() - sent < 3.0
+    assert "interrupted" in err
+    assert not list((tmp_path / "o").glob(".tactilevision-tmp-*"))
