@@ -14,7 +14,7 @@ from tactilevision.cli import build_parser
 
 ROOT = Path(__file__).resolve().parents[1]
 PAGES = [*sorted((ROOT / "docs").rglob("*.md")), ROOT / "README.md"]
-GROUPS = ("optics", "fem")          # sub-commands with sub-commands of their own
+GROUPS = ("optics", "fem", "cache")  # sub-commands with sub-commands of their own
 
 
 def command_lines(text: str) -> list[str]:

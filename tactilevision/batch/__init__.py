@@ -14,8 +14,9 @@ Needs the ``dask`` extra: ``pip install 'tactilevision[dask]'``.
 
 from ._run import BatchReport, InputOutcome, run_batch
 from ._sources import FrameSource, open_source
-from ._store import InputStore
+from ._store import HEIGHT_DIGITS, HEIGHT_RESOLUTION_MM, InputStore
 from ._tasks import BatchSettings, calibrate_task, process_chunk, worker_tools
 
-__all__ = ["BatchReport", "BatchSettings", "FrameSource", "InputOutcome", "InputStore",
-           "calibrate_task", "open_source", "process_chunk", "run_batch", "worker_tools"]
+__all__ = ["HEIGHT_DIGITS", "HEIGHT_RESOLUTION_MM", "BatchReport", "BatchSettings",
+           "FrameSource", "InputOutcome", "InputStore", "calibrate_task", "open_source",
+           "process_chunk", "run_batch", "worker_tools"]

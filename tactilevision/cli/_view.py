@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import importlib.util
 import json
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -88,7 +89,9 @@ def _from_zarr(source: Path, args, picks_max: int):
     if "height_mm" not in g:
         raise InputError(f"Zarr group {source} has no 'height_mm' array (not written by "
                          "'tactilevision batch'?)")
-    h = g["height_mm"]
+    with warnings.catch_warnings():    # batch stores heights through numcodecs' Quantize
+        warnings.filterwarnings("ignore", "Numcodecs codecs are not in the Zarr")
+        h = g["height_mm"]
     if len(h.shape) != 3 or h.shape[0] == 0:
         raise InputError(f"{source}/height_mm has shape {h.shape}, not (N, H, W) with N > 0")
     idx = _picks(h.shape[0], picks_max)
