@@ -19,7 +19,8 @@ FRAMES = Path(__file__).resolve().parents[1] / "sample_frames" / "gelsight_ball"
 def test_forces_on_a_frames_folder(tmp_path):
     out = tmp_path / "forces"
     rc = main(["forces", str(FRAMES), "--sensor", "gelsight", "--thickness-mm", "3.0",
-               "--E-mpa", "0.2", "--nu", "0.48", "--out", str(out), "--no-progress"])
+               "--E-mpa", "0.2", "--nu", "0.48", "--out", str(out), "--no-progress",
+               "--images"])
     assert rc == 0
     rows = list(csv.DictReader((out / "forces.csv").open()))
     assert len(rows) == 4
@@ -30,6 +31,11 @@ def test_forces_on_a_frames_folder(tmp_path):
     assert np.all(fz > 0)
     assert all((out / f"{Path(r['frame']).stem}_force.png").stat().st_size > 10_000
                for r in rows)
+    # the arrays, always: each frame's pressure map, kPa, whose sum over the pixels is fz
+    for r in rows:
+        p = np.load(out / f"{Path(r['frame']).stem}_pressure_kpa.npy")
+        assert p.dtype == np.float32 and p.ndim == 2 and float(p.max()) == pytest.approx(
+            float(r["max_pressure_kpa"]), abs=1e-3)
     # the contact's area: the footprint the traction acts on (height above 0.02 mm,
     # pushing) is the annotated contact disc (radius a) to within a fifth (measured 0.96 to
     # 1.18 times it on these frames)

@@ -179,7 +179,7 @@ def test_reconstruct_folder(calibration, presses, tmp_path, capsys):
     src = frames_dir(tmp_path / "frames", presses)
     out = tmp_path / "out"
     assert main(["reconstruct", str(src), "--calibration", str(calibration),
-                 "--out", str(out)]) == 0
+                 "--out", str(out), "--images"]) == 0
     stdout = capsys.readouterr().out
     assert "reconstructed 4 frame(s)" in stdout and "reference.png" in stdout
     stems = ["press_1", "press_3", "press_5", "press_9"]

@@ -90,4 +90,6 @@ def test_reconstruct_writes_beside_its_source_not_into_the_current_folder(
                    "--no-progress", "--reference", str(tmp_path / "data" / "reference.png")])
     assert status == 0, capsys.readouterr().err
     assert (tmp_path / "data" / "frames_reconstruct" / "press_01_height.npy").is_file()
+    # arrays by default, pictures on request (issue 54, item 1)
+    assert not list((tmp_path / "data" / "frames_reconstruct").glob("*.png"))
     assert list(cwd.iterdir()) == []

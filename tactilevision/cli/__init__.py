@@ -27,16 +27,16 @@ __all__ = ["COMMANDS", "EXTRAS", "build_parser", "main", "missing_extra", "synop
 COMMANDS: dict[str, tuple[str, str]] = {
     "calibrate": ("_calibrate", "session of frames and forces -> certified presses, E, nu, "
                                 "report"),
-    "reconstruct": ("_reconstruct", "height maps (.npy, mm) and depth images (.png) from a "
-                                    "folder of frames or a video"),
+    "reconstruct": ("_reconstruct", "height maps (.npy, mm) and heights.csv from a folder of "
+                                    "frames or a video (depth images with --images)"),
     "optics": ("_optics", "photometric calibration of a sensor"),
     "fit": ("_fit", "fit E and nu to a measurements table"),
     "diagnose": ("_diagnose", "find where the model fails and which effect is missing"),
     "validate": ("_validate", "simulated against measured depths (FEM check)"),
     "plan": ("_plan", "predict what a calibration session's design will measure"),
     "fem": ("_fem", "finite-element tables of the gel layer"),
-    "forces": ("_forces", "contact force maps (images, kPa) and total forces per frame "
-                          "(forces.csv)"),
+    "forces": ("_forces", "contact pressure maps (.npy, kPa) and total forces per frame "
+                          "(forces.csv; images with --images)"),
     "history": ("_history", "calibration folders over days -> each gel's E and nu history, "
                             "trend, recalibrate or not"),
     "batch": ("_batch", "reconstruct / forces / calibrate over many inputs on Dask (Zarr, "

@@ -34,10 +34,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     """Register the ``forces`` sub-command."""
     p = sub.add_parser(
         "forces",
-        help="contact force maps (images, kPa) and total forces per frame (forces.csv)",
+        help="contact pressure maps (.npy, kPa) and total forces per frame (forces.csv; "
+        "images with --images)",
         description="Photometric stereo on every frame, then the contact force distribution "
-        "(tactilevision.fem.ForceEstimator): writes <frame>_force.png (pressure in kPa with a "
-        "colour bar, arrows for the tangential part) and forces.csv (frame, t_s, fx_n, fy_n, "
+        "(tactilevision.fem.ForceEstimator): writes <frame>_pressure_kpa.npy (float32, kPa), "
+        "with --images <frame>_force.png (pressure in kPa with a colour bar, arrows for the "
+        "tangential part), and forces.csv (frame, t_s, fx_n, fy_n, "
         "fz_n, max_pressure_kpa, contact_area_mm2, and for a session ft_fz_n, the F/T "
         "sensor's fz at the frame's time). E and nu come from --E-mpa/--nu, --fit FIT.json, "
         "or a session's calibration/fit.json.",
@@ -72,7 +74,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="large-deformation stiffening of eq. (5), forces x (1 + beta w/h); "
                    "default: the fit JSON's beta, else 0")
     p.add_argument("--every", type=int, default=1, metavar="N", help="every N-th frame")
-    p.add_argument("--no-images", action="store_true", help="write forces.csv only")
+    p.add_argument("--images", action="store_true",
+                   help="also write <frame>_force.png (the force map drawn): pictures are "
+                   "opt-in, <frame>_pressure_kpa.npy and forces.csv are the output")
+    p.add_argument("--no-images", action="store_true",
+                   help="(the default now; kept so that older scripts run)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     add_overwrite_argument(p)
     p.set_defaults(func=run)
@@ -96,8 +102,9 @@ def run(args: argparse.Namespace) -> int:
     if args.every < 1:
         raise InputError(f"--every must be >= 1, got {args.every}")
     picks = range(0, src.n_frames, args.every)
-    names = ["forces.csv"] + ([] if args.no_images else
-                              [f"{src.frame_stem(i)}_force.png" for i in picks])
+    images = args.images and not args.no_images
+    names = (["forces.csv"] + [f"{src.frame_stem(i)}_pressure_kpa.npy" for i in picks]
+             + ([f"{src.frame_stem(i)}_force.png" for i in picks] if images else []))
     check_overwrite(out, names, overwrite=args.overwrite)
     E, nu, material_source, fit_obj = material_from_args(args, source if session else None)
     beta, beta_source = beta_from_args(args, fit_obj, material_source)
@@ -196,7 +203,9 @@ def _force_rows(src: FrameSource, picks, recon, est, ft, tmp: Path, args, shape,
         if ft is not None and np.isfinite(t):
             row["ft_fz_n"] = f"{float(np.interp(t, ft[0], ft[1])):.5f}"
         rows.append(row)
-        if not args.no_images:
+        np.save(tmp / f"{src.frame_stem(i)}_pressure_kpa.npy",
+                np.asarray(fm.pressure_kpa, np.float32))
+        if args.images and not args.no_images:
             save_force_image(tmp / f"{src.frame_stem(i)}_force.png", fm, mm_per_px=mm_per_px,
                              frame=frame, title=name, credit=credit)
     return rows, skipped, at_edge

@@ -24,10 +24,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     """Register the ``reconstruct`` sub-command."""
     p = sub.add_parser(
         "reconstruct",
-        help="height maps (.npy, mm) and depth images (.png) from a folder of frames or a video",
+        help="height maps (.npy, mm) and heights.csv from a folder of frames or a video "
+        "(depth images with --images)",
         description="Photometric stereo on every frame of FRAMES_DIR: writes <frame>_height.npy "
-        "(float32, mm, positive into the gel), <frame>_depth.png (frame beside its coloured "
-        "height map, colour bar in mm, scale bar) and heights.csv (one row per frame).",
+        "(float32, mm, positive into the gel) and heights.csv (one row per frame); with "
+        "--images also <frame>_depth.png (frame beside its coloured height map, colour bar in "
+        "mm, scale bar).",
     )
     p.add_argument("frames_dir", metavar="FRAMES_DIR", type=Path,
                    help="folder of .png/.jpg frames (sorted by name), or a video file (.mp4, "
@@ -37,7 +39,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="output folder (default: <FRAMES_DIR>_reconstruct beside the frames "
                    "folder, <stem>_reconstruct beside a video; never the current folder "
                    "unless the source is there)")
-    p.add_argument("--no-images", action="store_true", help="write only the .npy height maps")
+    p.add_argument("--images", action="store_true",
+                   help="also write <frame>_depth.png (the frame beside its coloured height "
+                   "map): pictures are opt-in, the arrays and heights.csv are the output")
+    p.add_argument("--no-images", action="store_true",
+                   help="(the default now; kept so that older scripts run)")
     p.add_argument("--level", choices=("median", "far_field", "contact"), default="median",
                    help="the height's zero: the frame's median (default, camera rate), a "
                    "surface fitted to the gel outside the contact, or zero outside the "
@@ -76,7 +82,8 @@ def run(args: argparse.Namespace) -> int:
     cal, cal_path, _ = optics_calibration(args, src)
     stems = [src.frame_stem(i) for i in range(src.n_frames)]
     names = ["heights.csv"] + [f"{s}_height.npy" for s in stems]
-    if not args.no_images:
+    images = args.images and not args.no_images
+    if images:
         names += [f"{s}_depth.png" for s in stems]
     check_overwrite(out, names, overwrite=args.overwrite)
     reference = src.reference(cal.shape)
@@ -98,7 +105,7 @@ def run(args: argparse.Namespace) -> int:
             name, stem = src.frame_name(i), stems[i]
             height = recon(frame)
             np.save(tmp / f"{stem}_height.npy", height)
-            if not args.no_images:
+            if images:
                 save_depth_image(tmp / f"{stem}_depth.png", height, mm_per_px=cal.mm_per_px,
                                  frame=frame, title=name, credit=credit)
             contact = recon.contact_mask(frame)
