@@ -50,7 +50,8 @@ class LiveResult:
     t_capture_s : float
         When the frame was captured, ``time.perf_counter()`` seconds.
     latency_s : float
-        Capture to result, s.
+        Capture to result, s: on a camera what the latency means; on a file or folder
+        (read ahead of the processing) it holds the time the frame waited in line.
     frame : (H, W, 3) uint8 ndarray
         The tactile frame, BGR.
     height_mm : (H, W) float32 ndarray
@@ -70,6 +71,12 @@ class LiveResult:
         For a marker gel: the lateral displacement field of the gel surface,
         (ux, uy) mm (:func:`~tactilevision.optics.lateral_displacement`, thin-plate
         spline through the valid tracks); None with fewer than 3 valid tracks.
+    process_s : float
+        The processing alone, from taking the frame to the result, s (no waiting in
+        line): the figure to compare with the frame period.
+    live : bool
+        True for a camera (the latency is capture to result), False for a file,
+        folder or iterable (read ahead: the latency includes the queue).
     """
 
     index: int
@@ -83,6 +90,8 @@ class LiveResult:
     dropped: int
     markers: object | None = None
     lateral_mm: np.ndarray | None = None
+    process_s: float = float("nan")
+    live: bool = True
 
 
 def open_frames(source) -> tuple[Iterator[np.ndarray], bool]:
@@ -427,13 +436,16 @@ class Pipeline:
                     if got is None:
                         break
                     (i, t_cap, frame), dropped = got
+                t_take = time.perf_counter()
                 h, contact, fm = self.process(frame)
                 flow, lateral = self.lateral(frame)
                 total = None if fm is None else np.asarray(fm.total_n, np.float64)
+                t_done = time.perf_counter()
                 yield LiveResult(index=i, t_capture_s=t_cap,
-                                 latency_s=time.perf_counter() - t_cap, frame=frame,
+                                 latency_s=t_done - t_cap, frame=frame,
                                  height_mm=h, contact=contact, forces=fm, total_force_n=total,
-                                 dropped=dropped, markers=flow, lateral_mm=lateral)
+                                 dropped=dropped, markers=flow, lateral_mm=lateral,
+                                 process_s=t_done - t_take, live=live)
                 n_out += 1
         finally:
             stop.set()
