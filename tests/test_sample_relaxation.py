@@ -6,6 +6,7 @@ session's truth.json (the generator's g, tau, E_0 and nu)."""
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -28,8 +29,8 @@ def calibrated(tmp_path_factory):
 def test_calibrate_reads_E0_and_E_inf_from_the_holds(calibrated):
     """From the hold curves: g and tau within 5 %, E_0 and E_inf within 12 % of the truth
     (two of E's predicted sds for the sample session's design with its 1.8 um depth sd,
-    ``tactilevision plan``: 6.1 %; they read +8.0 % and +8.0 %) and inside their 95 %
-    intervals, every press certified, the windows at the holds' ends
+    ``tactilevision plan``: 6.1 %; they read +8.0 % and +8.0 %, docs/relaxation.md) and
+    inside their 95 % intervals, every press certified, the windows at the holds' ends
     (hold_s spread over more than 1.5 s: the table can show the relaxation too)."""
     out, truth = calibrated
     fit = json.loads((out / "fit.json").read_text())
@@ -85,3 +86,28 @@ def test_plan_from_this_calibration_keeps_its_holds_and_relaxation(calibrated):
     assert pred.relaxation is not None and pred.relaxation.power > 0.95
     assert "viscoelastic_relaxation" not in pred.untestable
     assert "incomplete_recovery" not in pred.untestable
+
+
+def _quoted_row(label: str) -> list[float]:
+    """The numbers of docs/relaxation.md's table row that starts with `label`."""
+    page = (Path(__file__).resolve().parent.parent / "docs" / "relaxation.md").read_text()
+    row = next(ln for ln in page.splitlines() if ln.startswith(f"| {label}"))
+    cells = row.split("|")[2:6]
+    return [float(re.findall(r"-?\d+\.\d+", c)[0]) for c in cells] + \
+        [float(v) for c in cells[2:4] for v in re.findall(r"\[(-?\d+\.\d+), (-?\d+\.\d+)\]", c)
+         [0]]
+
+
+def test_the_docs_quote_what_calibrate_prints(calibrated):
+    """docs/relaxation.md quotes this run (issue 54, item 8): g, tau, E_0 and E_inf with
+    their intervals, each within one unit of the last digit it shows."""
+    out, _ = calibrated
+    fit = json.loads((out / "fit.json").read_text())
+    r = fit["relaxation"]
+    g, tau, e0, einf, e0_lo, e0_hi, einf_lo, einf_hi = _quoted_row("`calibrate`")
+    got = {g: r["g"], tau: r["tau_s"], e0: fit["E_mpa"], einf: r["E_inf_mpa"],
+           e0_lo: fit["E_ci95_mpa"][0], e0_hi: fit["E_ci95_mpa"][1],
+           einf_lo: r["E_inf_ci_mpa"][0], einf_hi: r["E_inf_ci_mpa"][1]}
+    for quoted, value in got.items():
+        assert value == pytest.approx(quoted, abs=1.5e-3 if quoted == tau else 1.5e-4), (
+            "docs/relaxation.md quotes", quoted, "the run gives", value)

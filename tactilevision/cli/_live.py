@@ -213,13 +213,21 @@ def run(args: argparse.Namespace) -> int:
             fh.close()
     if n == 0:
         raise InputError(f"{args.source}: no frame was processed")
-    med, pmed = 1e3 * float(np.median(lat)), 1e3 * float(np.median(proc))
-    timing = (f"latency median {med:.1f} ms, max {1e3 * max(lat):.1f} ms (processing median "
-              f"{pmed:.1f} ms)" if live else
-              f"processing median {pmed:.1f} ms a frame ({1e3 / pmed:.1f} frames/s), max "
-              f"{1e3 * max(proc):.1f} ms; a file is read ahead, so capture to result "
-              f"(median {med:.0f} ms) is mostly its queue, not a latency")
-    print(f"live: {n} frame(s) from {args.source}, {drops} dropped; {timing}"
+    print(f"live: {n} frame(s) from {args.source}, {drops} dropped; "
+          f"{_timing(lat, proc, live)}"
           + (f"; video {args.out}" if args.out else "") + (f"; CSV {args.csv}" if args.csv
                                                              else ""))
     return 0
+
+
+def _timing(lat: list[float], proc: list[float], live: bool) -> str:
+    """The run's timing in words: on a camera the latency (capture to result); on a file
+    or folder, read ahead of the processing, the processing time a frame, the
+    capture-to-result figure named as the queue it mostly is."""
+    med, pmed = 1e3 * float(np.median(lat)), 1e3 * float(np.median(proc))
+    if live:
+        return (f"latency median {med:.1f} ms, max {1e3 * max(lat):.1f} ms (processing "
+                f"median {pmed:.1f} ms)")
+    return (f"processing median {pmed:.1f} ms a frame ({1e3 / pmed:.1f} frames/s), max "
+            f"{1e3 * max(proc):.1f} ms; a file is read ahead, so capture to result "
+            f"(median {med:.0f} ms) is mostly its queue, not a latency")
