@@ -140,14 +140,7 @@ def run(args: argparse.Namespace) -> int:
     source: int | Path = int(args.source) if str(args.source).isdigit() else Path(args.source)
     if isinstance(source, Path) and not source.exists():
         raise InputError(f"{source}: no such file or folder")
-    if args.out is not None and args.out.suffix.lower() not in (".mp4", ".avi"):
-        raise InputError(f"--out {args.out}: write a .mp4 or .avi video")
-    for p in (args.out, args.csv):
-        if p is not None:
-            check_output_folder(p.parent, f"folder of {p.name}")
-            if p.is_dir():
-                raise InputError(f"{p} is a folder: give a file name")
-            check_output_file(p, overwrite=args.overwrite)
+    _check_outputs(args)
     reference = args.reference
     if reference not in ("auto", "calibration"):
         reference = read_reference(Path(reference))
@@ -231,3 +224,16 @@ def _timing(lat: list[float], proc: list[float], live: bool) -> str:
     return (f"processing median {pmed:.1f} ms a frame ({1e3 / pmed:.1f} frames/s), max "
             f"{1e3 * max(proc):.1f} ms; a file is read ahead, so capture to result "
             f"(median {med:.0f} ms) is mostly its queue, not a latency")
+
+
+def _check_outputs(args: argparse.Namespace) -> None:
+    """--out and --csv, before any work: a video's suffix, a file (not a folder) in a
+    folder that can be made, and not a file tactilevision did not write (--overwrite)."""
+    if args.out is not None and args.out.suffix.lower() not in (".mp4", ".avi"):
+        raise InputError(f"--out {args.out}: write a .mp4 or .avi video")
+    for p in (args.out, args.csv):
+        if p is not None:
+            check_output_folder(p.parent, f"folder of {p.name}")
+            if p.is_dir():
+                raise InputError(f"{p} is a folder: give a file name")
+            check_output_file(p, overwrite=args.overwrite)
