@@ -42,3 +42,21 @@ def test_the_hold_is_described_as_the_table_holds_it(capsys):
     lines = _lines(capsys, str(PLAN / "recommended.toml"))
     why = next(ln for ln in lines if ln.startswith("diagnose cannot test viscoelastic"))
     assert "sits 0.1 s into its hold" in why and "constant (0.1" not in why
+
+
+def test_a_mark_design_does_not_promise_what_its_depth_rule_absorbs(capsys):
+    """Issue 53, item 3 (the plan's half): with a mark (bevel_angle_deg = 0) calibrate reads
+    each depth past w0 from the press's own force, so diagnose cannot show a force effect
+    that varies between one indenter's presses (tactilevision.diagnosis.ABSORBED_BY_MARK;
+    on the Taxim mark session of seed 11 a spatial gradient, a softening and a damage step
+    went unnamed). plan says so instead of giving them a size; with a vernier they are
+    sized."""
+    assert main(["plan", str(PLAN / "paper_gauge_block.toml"), "--json", "-"]) == 0
+    mark = json.loads(capsys.readouterr().out)
+    assert main(["plan", str(PLAN / "recommended.toml"), "--json", "-"]) == 0
+    vernier = json.loads(capsys.readouterr().out)
+    for name in ("force_drift", "spatial_nonuniformity", "force_crosstalk"):
+        assert "mark rule" in mark["untestable"][name]
+        assert mark["effect_sizes"][name]["size"] is None
+        assert vernier["effect_sizes"][name]["size"] > 0
+    assert mark["effect_sizes"]["depth_offset"]["size"] > 0

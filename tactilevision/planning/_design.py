@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from .._checks import InputError, InputWarning
-from ..diagnosis import untestable_reason
+from ..diagnosis import ABSORBED_BY_MARK, untestable_reason
 from ..io import KNOWN_KEYS
 from ..mechanics import EFFECT_SIZE_PARAMS, EFFECTS, MAX_W_OVER_H, fem_force
 
@@ -485,11 +485,27 @@ def planned_columns(d: Design) -> dict[str, np.ndarray]:
     }
 
 
+#: Why a design with a mark (``bevel_angle_deg = 0``) cannot show a force effect that
+#: varies between one indenter's presses.
+MARK_ABSORBS = ("the mark rule reads each depth past w0 from the press's own force "
+                "(w = w0 + (P - P(w0)) / (dP/dw)), so a change of the force between one "
+                "indenter's presses is read as depth and absorbed; a vernier bevel "
+                "(bevel_angle_deg > 0) certifies depth apart from the force")
+
+
 def untestable_effects(d: Design) -> dict[str, str]:
     """The catalogue's effects ``diagnose`` could not test on a session of the design,
     and why (its column constant or missing in :func:`planned_columns`; the same test
-    ``diagnose`` makes of a table)."""
-    return untestable_in_table(planned_columns(d), window_at=d.window_at)
+    ``diagnose`` makes of a table; with a mark, the force effects its depth rule absorbs:
+    :data:`MARK_ABSORBS`)."""
+    out = untestable_in_table(planned_columns(d), window_at=d.window_at)
+    if d.bevel_angle_deg == 0:
+        # a mark: calibrate reads each depth past w0 from the press's own force, so an
+        # effect that changes the force between one indenter's presses is read as depth
+        # (diagnose says the same of such a table: tactilevision.diagnosis.ABSORBED_BY_MARK)
+        for name in ABSORBED_BY_MARK:
+            out.setdefault(name, MARK_ABSORBS)
+    return out
 
 
 def untestable_in_table(columns: dict[str, np.ndarray], *, window_at: str | None = None
