@@ -126,6 +126,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     status : int
         0 on success, 2 on bad input (message on standard error), 130 when
         interrupted (Ctrl-C: one line, no traceback).
+
+    Notes
+    -----
+    A Ctrl-C ends the process: should the command not have returned within
+    :data:`INTERRUPT_GRACE_S` of it, a watchdog exits with status 130 (so a program that
+    calls ``main`` in-process is ended too).
     """
     argv = list(sys.argv[1:] if argv is None else argv)
     # only the command that runs is imported: --version and --help stay light
