@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -22,6 +23,7 @@ from tactilevision.planning import (
 )
 
 PAPER_DEPTHS = (0.15, 0.30, 0.40, 0.50, 0.60)
+PAPER = Path(__file__).resolve().parents[1] / "sample_frames" / "plan" / "paper_gauge_block.toml"
 
 
 def test_error_totals_add_the_systematic_part_in_quadrature():
@@ -139,3 +141,17 @@ def test_bad_targets_exit_2(tmp_path, capsys, argv, key):
     assert key in capsys.readouterr().err
     with pytest.raises(InputError, match="target_nu"):
         recommend(d, target_nu=float("nan"))
+
+
+def test_the_recommendation_is_a_fixed_point():
+    """Issue 54, item 10: recommending again on the recommended design, with the same
+    targets, finds nothing cheaper. On the paper's block (targets E 3 %, nu 0.01) the
+    greedy path alone stopped at 50 presses; run again from there it found a tare and a
+    longer F/T window at 40 (before the search was repeated to a fixed point)."""
+    first = recommend(read_design(PAPER), target_E_pct=3.0, target_nu=0.01)
+    assert first.cheapest is not None and first.cheapest.n_presses <= 40
+    again = recommend(first.cheapest.design, target_E_pct=3.0, target_nu=0.01)
+    assert again.cheapest is not None
+    assert again.cheapest.n_presses == first.cheapest.n_presses
+    assert again.cheapest.E_total_pct == pytest.approx(first.cheapest.E_total_pct, abs=1e-9)
+    assert again.cheapest.what.endswith("repeats per depth") and ";" not in again.cheapest.what
