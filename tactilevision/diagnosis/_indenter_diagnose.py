@@ -30,7 +30,7 @@ import numpy as np
 from scipy import optimize, stats
 
 from .._checks import InputError, check_array
-from ..mechanics import Indenter
+from ..mechanics import Indenter, json_ready
 from ._indenter_noise import PressNoise, best_shift, press_noise, weighted_linear
 
 __all__ = ["INDENTER_EFFECTS", "IndenterDiagnosis", "IndenterRung", "IndenterValidation",
@@ -146,17 +146,7 @@ class IndenterDiagnosis:
 
     def to_json_dict(self) -> dict:
         """JSON-ready: arrays as lists, NaN as None."""
-        def clean(v):
-            if isinstance(v, np.ndarray):
-                return [clean(x) for x in v.tolist()]
-            if isinstance(v, float | np.floating):
-                return float(v) if math.isfinite(v) else None
-            if isinstance(v, tuple | list):
-                return [clean(x) for x in v]
-            if isinstance(v, dict):
-                return {k: clean(x) for k, x in v.items()}
-            return v
-
+        clean = json_ready
         rungs = [{k: clean(getattr(r, k)) for k in r.__dataclass_fields__} for r in self.ladder]
         return {"ladder": rungs, "missing_effects": list(self.missing_effects),
                 "candidates": clean(self.candidates), "nu": self.nu,

@@ -68,7 +68,7 @@ from ._fem_tables import fem_force, fem_kappa_table, fem_table_meta, kappa_n, ka
 from ._fit import MAX_W_OVER_H, fit_indentation
 from ._fit_model import fit_model
 from ._indenter import INDENTERS, FlatPunch, Indenter, Sphere, indenter_from_config
-from ._indenter_fit import IndenterFit, apparent_modulus, fit_indenter, paule_mandel
+from ._indenter_fit import IndenterFit, apparent_modulus, fit_indenter, json_ready, paule_mandel
 from ._kappa import HAYES_1972, KappaTable, kappa
 from ._model import IndentationModel, ModelFit, shared_groups
 from ._neohookean import neo_hookean_constants
@@ -143,6 +143,7 @@ __all__ = [
     "hold_blocks",
     "indenter_from_config",
     "instantaneous_forces",
+    "json_ready",
     "kappa",
     "kappa_n",
     "kappa_n_grid",

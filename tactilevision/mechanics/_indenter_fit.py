@@ -21,7 +21,7 @@ from scipy import optimize, stats
 from .._checks import InputError, check_array
 from ._indenter import Indenter
 
-__all__ = ["IndenterFit", "apparent_modulus", "fit_indenter"]
+__all__ = ["IndenterFit", "apparent_modulus", "fit_indenter", "json_ready"]
 
 #: Default nu at which E is reported when the presses do not identify nu: a silicone gel
 #: is nearly incompressible (the FEATS authors' fit of a GelSight Mini gel assumed 0.5).
@@ -103,20 +103,27 @@ class IndenterFit:
         --json`` object carries (formats.md section 3): ``effects`` (none: a ball's
         fit has no catalogue effects), ``effect_params``, and ``c_n_per_mm`` and
         ``beta`` (eq. 5's intercept and stiffening, a flat punch's: null here)."""
-        def clean(v: Any) -> Any:
-            if isinstance(v, np.ndarray):
-                return [clean(x) for x in v.tolist()]
-            if isinstance(v, float | np.floating):
-                return float(v) if math.isfinite(v) else None
-            if isinstance(v, tuple | list):
-                return [clean(x) for x in v]
-            if isinstance(v, np.bool_ | bool):
-                return bool(v)
-            return v
-
-        out = {k: clean(getattr(self, k)) for k in self.__dataclass_fields__}
+        out = {k: json_ready(getattr(self, k)) for k in self.__dataclass_fields__}
         out.update(c_n_per_mm=None, beta=None, effects=[], effect_params={})
         return out
+
+
+def json_ready(v: Any) -> Any:
+    """`v` as JSON can hold it: arrays and tuples as lists, NaN and inf as None, numpy
+    scalars as Python's, dicts cleaned value by value (the results' ``to_json_dict``)."""
+    if isinstance(v, np.ndarray):
+        return [json_ready(x) for x in v.tolist()]
+    if isinstance(v, np.bool_ | bool):
+        return bool(v)
+    if isinstance(v, float | np.floating):
+        return float(v) if math.isfinite(v) else None
+    if isinstance(v, np.integer):
+        return int(v)
+    if isinstance(v, tuple | list):
+        return [json_ready(x) for x in v]
+    if isinstance(v, dict):
+        return {k: json_ready(x) for k, x in v.items()}
+    return v
 
 
 def apparent_modulus(depth_mm: np.ndarray, force_n: np.ndarray, indenter: Indenter, *,

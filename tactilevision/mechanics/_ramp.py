@@ -35,7 +35,7 @@ from scipy import optimize, stats
 
 from .._checks import InputError, check_array, check_positive
 from ._indenter import Indenter
-from ._indenter_fit import NU_STATED, IndenterFit, fit_indenter
+from ._indenter_fit import NU_STATED, IndenterFit, fit_indenter, json_ready
 
 __all__ = ["MAX_RAMP_PRESSES", "RampFit", "fit_ramp"]
 
@@ -118,24 +118,10 @@ class RampFit:
 
     def to_json_dict(self) -> dict[str, Any]:
         """JSON-ready dict (arrays as lists, NaN as None, the fit of E nested)."""
-        out = {k: _clean(getattr(self, k)) for k in self.__dataclass_fields__
+        out = {k: json_ready(getattr(self, k)) for k in self.__dataclass_fields__
                if k != "indenter_fit"}
         out["indenter_fit"] = self.indenter_fit.to_json_dict()
         return out
-
-
-def _clean(v: Any) -> Any:
-    if isinstance(v, np.ndarray):
-        return [_clean(x) for x in v.tolist()]
-    if isinstance(v, float | np.floating):
-        return float(v) if math.isfinite(v) else None
-    if isinstance(v, tuple | list):
-        return [_clean(x) for x in v]
-    if isinstance(v, np.bool_ | bool):
-        return bool(v)
-    if isinstance(v, np.integer):
-        return int(v)
-    return v
 
 
 class _Tables(NamedTuple):
