@@ -198,12 +198,17 @@ def record_output(path: str | Path) -> None:
     """List a file tactilevision wrote in its folder's manifest (:data:`MANIFEST`); an
     unwritable manifest is skipped (the file then needs ``--overwrite`` next time)."""
     path = Path(path)
-    ours = _ours(path.parent) | {path.name}
     try:
-        (path.parent / MANIFEST).write_text(json.dumps({"files": sorted(ours)}, indent=1)
-                                            + "\n", encoding="utf-8")
+        _add_to_manifest(path.parent, [path.name])
     except OSError:
         pass
+
+
+def _add_to_manifest(out: Path, names) -> None:
+    """List `names` (relative to `out`) in `out`'s manifest beside what it lists already."""
+    ours = _ours(out) | set(names)
+    (out / MANIFEST).write_text(json.dumps({"files": sorted(ours)}, indent=1) + "\n",
+                                encoding="utf-8")
 
 
 #: The hidden staging folders of the :class:`StagedOutput` blocks open now: what an
@@ -282,9 +287,7 @@ class StagedOutput:
                 target = self.out / name
                 target.parent.mkdir(parents=True, exist_ok=True)
                 os.replace(self.path / name, target)
-            ours = _ours(self.out) | set(files)
-            (self.out / MANIFEST).write_text(json.dumps({"files": sorted(ours)}, indent=1)
-                                             + "\n", encoding="utf-8")
+            _add_to_manifest(self.out, files)
         except OSError as exc:
             raise InputError(f"cannot move the results into the {self.what} {self.out}: "
                              f"{exc.strerror}") from None
