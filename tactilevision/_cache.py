@@ -16,11 +16,15 @@ from __future__ import annotations
 
 import ast
 import hashlib
+import math
 import os
 import tempfile
+import warnings
 from pathlib import Path
 
 import numpy as np
+
+from ._checks import InputWarning
 
 __all__ = ["DEFAULT_MAX_MB", "ENV_VAR", "MAX_ENV_VAR", "UNBOUNDED", "cache_info",
            "cache_limit_bytes", "cache_root", "clear_cache", "code_digest", "prune_cache",
@@ -102,12 +106,21 @@ def savez_atomic(path: Path, **arrays: np.ndarray) -> bool:
 
 def cache_limit_bytes() -> int:
     """The cache's bound: ``$TACTILEVISION_CACHE_MB`` MiB, else :data:`DEFAULT_MAX_MB`
-    (a value that is not a positive number falls back to the default)."""
+    (a value that is not a positive number is warned, InputWarning, and the default
+    used)."""
+    raw = os.environ.get(MAX_ENV_VAR)
+    if raw is None:
+        return DEFAULT_MAX_MB * 2**20
     try:
-        mb = float(os.environ.get(MAX_ENV_VAR, DEFAULT_MAX_MB))
+        mb = float(raw)
     except ValueError:
-        mb = DEFAULT_MAX_MB
-    return int((mb if mb > 0 else DEFAULT_MAX_MB) * 2**20)
+        mb = math.nan
+    if not (math.isfinite(mb) and mb > 0):
+        warnings.warn(f"${MAX_ENV_VAR} = {raw!r} is not a positive number of MiB: the "
+                      f"cache's bound is the default {DEFAULT_MAX_MB} MiB",
+                      InputWarning, stacklevel=2)
+        return DEFAULT_MAX_MB * 2**20
+    return int(mb * 2**20)
 
 
 def touch(path: Path) -> None:

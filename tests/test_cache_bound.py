@@ -9,8 +9,10 @@ import os
 import time
 
 import numpy as np
+import pytest
 
-from tactilevision._cache import cache_info, savez_atomic, touch
+from tactilevision import InputWarning
+from tactilevision._cache import cache_info, cache_limit_bytes, savez_atomic, touch
 from tactilevision.cli import main
 
 
@@ -49,3 +51,12 @@ def test_cache_info_and_clear(tmp_path, monkeypatch, capsys):
     assert main(["cache", "clear", "--folder", "optics"]) == 0
     assert "removed 3 files" in capsys.readouterr().out
     assert not list((tmp_path / "optics").iterdir())
+
+
+def test_a_bad_bound_is_warned_and_the_default_used(monkeypatch):
+    for bad in ("lots", "-5", "nan"):
+        monkeypatch.setenv("TACTILEVISION_CACHE_MB", bad)
+        with pytest.warns(InputWarning, match="TACTILEVISION_CACHE_MB"):
+            assert cache_limit_bytes() == 1024 * 2**20
+    monkeypatch.setenv("TACTILEVISION_CACHE_MB", "0.5")
+    assert cache_limit_bytes() == 2**19

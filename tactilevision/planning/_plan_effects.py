@@ -43,28 +43,8 @@ def design_setup(design: Design) -> ReplaySetup:
 def effect_power(design: Design, effect: str, size: float, *, draws: int = 2000,
                  seed: int = 0) -> float:
     """Share of sessions of the design in which ``diagnose`` (replayed, linearized)
-    names `effect` at `size`.
-
-    Parameters
-    ----------
-    design : Design
-    effect : str
-        A catalogue effect of :data:`~tactilevision.mechanics.EFFECT_SIZE_PARAMS`.
-    size : float
-        The effect's size in its display unit (:data:`~tactilevision.mechanics.EFFECT_SIZE_PARAMS`).
-    draws : int, default 2000
-        Sessions drawn.
-    seed : int, default 0
-
-    Returns
-    -------
-    power : float
-        In [0, 1]; 0 where the design cannot test the effect.
-
-    Raises
-    ------
-    InputError
-        For an effect without a plan.
+    names `effect` at `size`: :func:`~tactilevision.diagnosis.replay_power` on the
+    design's sessions (:func:`design_setup`); its parameters, return value and errors.
     """
     return replay_power(design_setup(design), effect, size, draws=draws, seed=seed)
 
@@ -72,34 +52,9 @@ def effect_power(design: Design, effect: str, size: float, *, draws: int = 2000,
 def effect_sensitivity(design: Design, *, power: float = 0.95, draws: int = 1000,
                        seed: int = 0) -> dict[str, EffectSensitivity]:
     """The smallest size of each catalogue effect ``diagnose`` names in `power` of the
-    sessions of a design.
-
-    Parameters
-    ----------
-    design : Design
-    power : float, default 0.95
-        In (0, 1).
-    draws : int, default 1000
-        Sessions drawn (the sizes' own Monte Carlo error is about 3 % at 1000).
-    seed : int, default 0
-
-    Returns
-    -------
-    sizes : dict of str to EffectSensitivity
-        For every effect of :data:`~tactilevision.mechanics.EFFECT_SIZE_PARAMS`, in catalogue order.
-
-    Raises
-    ------
-    InputError
-        For `power` outside (0, 1).
-
-    Notes
-    -----
-    See the module's docstring: ``diagnose``'s BIC rule, its curvature gate and its
-    equivalences replayed on the design's drawn noise, each effect linearized at zero
-    size. The noise per press is the F/T window's sd and the certified depth's
-    (:func:`plan_session`'s) through the FEM's dP/dw, white.
-    Relaxation is sized at the design's ``relaxation_tau_s`` (else 1 s), recovery at
-    2 s; tangential forces at 2 % of the normal force, random.
+    sessions of a design: :func:`~tactilevision.diagnosis.replay_sizes` on the design's
+    sessions (:func:`design_setup`: the F/T window's sd and the certified depth's,
+    :func:`plan_session`'s, through the FEM's dP/dw, white; tangential forces at 2 % of
+    the normal force, random); its parameters, return value and errors.
     """
     return replay_sizes(design_setup(design), power=power, draws=draws, seed=seed)
