@@ -11,7 +11,7 @@ from ._footprint import Footprint, fit_footprint, nearest_indenter
 from ._force import ForceWindow, force_window, window_standard_error
 from ._holds import approach_start, hold_end, hold_start
 from ._land import bulge_at, bulge_height, land_contact_depth, land_contact_depths_mm
-from ._mark import crossing_forces, mark_depths, mark_shared_mm
+from ._mark import STIFFNESS_REL, crossing_forces, mark_depths, mark_shared_mm
 from ._mask import contact_mask, noise_level
 from ._results import Certification, CertifiedPress, Rejection
 from ._sync import (
@@ -43,6 +43,7 @@ __all__ = [
     "CREST_CHECK_P",
     "EDGE_SHARED_FRACTION",
     "RESOLVED_PX",
+    "STIFFNESS_REL",
     "BallPress",
     "BallPresses",
     "BevelGeometry",

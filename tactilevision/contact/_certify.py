@@ -414,7 +414,7 @@ def _press_reading(ctx: _PressContext, k: int, run: np.ndarray, peak: int, fp: F
             raise _Reject(got.reason, got.detail, at=got.frame, score=got.bevel_score)
         t_cert, onset, window, profiles, score, quick = got
     else:
-        onset, score = _mark_onset(ctx, centre, cand, run)
+        onset, score, first = _mark_onset(ctx, centre, cand, run)
         t_cert = float(times[onset])
     hold_mid = _window_middle(session, t_cert, ctx.offset, ctx.half, t_hold_end, ctx.period)
     if isinstance(hold_mid, tuple):
@@ -438,8 +438,9 @@ def _press_reading(ctx: _PressContext, k: int, run: np.ndarray, peak: int, fp: F
     if ctx.vernier:
         return {"press": press, "profiles": profiles, "window": window, "quick": quick,
                 "t0": float(times[run[0]]), "centre": centre}
-    travel = _onset_travel(session, run, onset, ctx.offset, ctx.period, w0)
-    f_on, f_on_se = _crossing_force(session, run, t_cert + ctx.offset, ctx.offset, ctx.period)
+    travel = _onset_travel(session, run, first, ctx.offset, ctx.period, w0)
+    f_on, f_on_se = _crossing_force(session, run, float(times[first]) + ctx.offset, ctx.offset,
+                                    ctx.period)
     return replace(press, rule="onset", closure_mm=0.0, closure_std_mm=travel / np.sqrt(12.0),
                    force_onset_n=f_on, force_onset_sem_n=f_on_se, travel_mm=float(travel))
 

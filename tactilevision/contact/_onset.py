@@ -18,8 +18,10 @@ from ._results import (
     MARK_BLOCK,
     MARK_HOLD_FORCE,
     MARK_NULL_FRAMES,
+    MARK_TRACE,
     MARK_Z_BLOCK,
     MARK_Z_FRAME,
+    MARK_Z_SEEN,
     MARK_Z_STEP,
     _PressContext,
     _Reject,
@@ -113,10 +115,10 @@ def _mark_residual(ctx: _PressContext, centre: tuple[float, float], i: int
 
 
 def _mark_template_onset(ctx: _PressContext, centre: tuple[float, float], run: np.ndarray
-                         ) -> tuple[int | None, str]:
-    """A mark's onset from the press's own template: ``(frame, why)``, frame None where
-    the press has too few frames to build one or the template shows no step (``why``
-    says which).
+                         ) -> tuple[tuple[int, int] | None, str]:
+    """A mark's onset from the press's own template: ``((onset, first), why)``, None
+    where the press has too few frames to build one or the template shows no step
+    (``why`` says which); ``first`` is the first frame that shows a trace of the mark.
 
     The per-frame score (:func:`bevel_score`) is a generic line filter; a thin mark
     under a renderer's shadows (Taxim's: a trough some 30 px wide) scores barely above
@@ -132,7 +134,16 @@ def _mark_template_onset(ctx: _PressContext, centre: tuple[float, float], run: n
     last frame under a quarter of the way lies at most two frames before the onset,
     and the step from it is :data:`MARK_Z_STEP` sds of a difference of two frames (the
     approach frames' projections' sd) high. A change that grows with the press's
-    depth (the indenter's shading, no mark) rises over the approach instead."""
+    depth (the indenter's shading, no mark) rises over the approach instead.
+
+    The mark's change grows with the land's depth past w0 (on Taxim's frames the
+    projection ran about linear in it: 0.41 of the hold's depth past w0 projected 0.50),
+    so a frame that crossed w0 shortly before it was taken can show the mark at less than
+    half-way: the onset then lies a frame after the crossing's period. ``first`` walks back
+    from the onset through the frames rising towards it while they lie
+    :data:`MARK_Z_SEEN` sds above the approach's level: the crossing lies in the period
+    before ``first`` (on a Taxim session at 10 frames/s, one such press put its indenter's
+    P(w0) 6 % high and its depths 8 um shallow)."""
     session = ctx.session
     tf, fz = session.force_times_s, session.forces_n[:, 2]
     f = np.interp(session.frame_times_s[run] + ctx.offset, tf, fz)
@@ -175,25 +186,30 @@ def _mark_template_onset(ctx: _PressContext, centre: tuple[float, float], run: n
             why = (f"its step is {step:.1f} sd of a frame difference, under "
                    f"{MARK_Z_STEP:g}")
             break
-        return int(run[j]), ""
+        first = j
+        while first > 0 and max(MARK_Z_SEEN * sd_a, MARK_TRACE) < a[first - 1] < a[first]:
+            first -= 1
+        return (int(run[j]), int(run[first])), ""
     return None, f"the press's own template shows no step: {why}"
 
 
 def _mark_onset(ctx: _PressContext, centre: tuple[float, float], cand: np.ndarray,
-                run: np.ndarray) -> tuple[int, float]:
+                run: np.ndarray) -> tuple[int, float, int]:
     """A bevel mark with no vernier: the first frame of `cand` where it shows firmly
     (:func:`certify_session`'s `bevel_threshold`), then back through the press's earlier
     frames while they show it too (`cand` starts near full contact, which the sink-in
     ring's growth can put frames after the mark's first showing), ``(frame, score)``.
     With the session's own rule, the press's own template decides first where it can
     (:func:`_mark_template_onset`); the score is then the onset frame's
-    :func:`bevel_score`."""
+    :func:`bevel_score`. ``(onset, score, first)``: ``first`` the first frame that shows a
+    trace of the mark (the template's; the onset otherwise), where the crossing's period
+    ends."""
     cfg = ctx.session.config
     rule = ctx.mark_rule
     if rule["rule"] == "auto":
-        onset, template_why = _mark_template_onset(ctx, centre, run)
-        if onset is not None:
-            return onset, _mark_score(ctx, centre, onset)
+        got, template_why = _mark_template_onset(ctx, centre, run)
+        if got is not None:
+            return got[0], _mark_score(ctx, centre, got[0]), got[1]
     scores = np.array([_mark_score(ctx, centre, int(i)) for i in cand])
     if rule["rule"] == "auto":
         base, n_base = _mark_baseline(ctx, centre, run, rule["median"])
@@ -238,7 +254,7 @@ def _mark_onset(ctx: _PressContext, centre: tuple[float, float], cand: np.ndarra
             break
         j -= 1
         onset, score = int(run[j]), before
-    return onset, score
+    return onset, score, onset
 
 
 def _crossing_force(session, run: np.ndarray, t_on: float, offset: float, period: float

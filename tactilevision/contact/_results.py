@@ -51,6 +51,14 @@ MARK_HOLD_FORCE = 0.9
 #: The press's template: the onset's step, in sds of the difference of two approach
 #: frames' projections on it.
 MARK_Z_STEP = 5.0
+#: ... and a frame before the onset, rising towards it, shows a trace of the mark when its
+#: projection lies this many sds above the approach's level (the crossing's period then
+#: ends at it: :func:`~tactilevision.contact._onset._mark_template_onset`).
+MARK_Z_SEEN = 4.0
+#: ... and at least this share of the way to the hold's level (an approach whose shading
+#: moves lifts the frames before the crossing by a few sds of a steady one: 0.01 of the way
+#: at 5 sd on a Taxim session with shadows).
+MARK_TRACE = 0.1
 
 #: Vernier: least colour contrast of a band (:attr:`BevelReading.contrast`), as a fraction
 #: of the median over the session's long, clear bands. The flanks tilt the gel by theta
