@@ -321,3 +321,50 @@ def taxim_dead_weights(sim, folder: Path, *, E_mpa: float = 1.0,
         f"[sensor]\nmm_per_px = {s}\ngel_thickness_mm = {H}\ngel_radius_mm = 1000.0\n\n"
         f'[indenter]\nradius_mm = {R}\nshape = "sphere"\ncontact = "frictionless"\n')
     return np.array(w_true), np.array(a_true)
+
+
+def taxim_mixed_presses(sim, folder: Path, *, balls: int = 10, seed: int = 0) -> list[str]:
+    """A ball-press folder drawn by Taxim's own renderer `sim` (:func:`flat_gel_taxim`) with
+    three frames of other objects among the ball presses: `balls` presses of a 2 mm ball
+    (each press's contact radius 0.6 to 1.3 mm, the gel taking the ball's cap and Hertz's
+    sink-in: ``tactilevision.sim.sphere_press_surface``) and, pressed 0.25 mm, a ring
+    (0.9 to 1.4 mm), a flat punch (1.2 mm) and a slotted screw head (1.4 mm, a 0.4 mm
+    slot), each with a circle in ``circles.csv`` as a hand would draw one (1.3 mm about
+    the object's centre). 1.5 grey levels of noise. Returns the other objects' file names.
+    """
+    import cv2
+
+    from tactilevision.sim import sphere_press_surface
+
+    shape, s, R = (480, 640), 0.0295, 2.0
+
+    def to8(rgb):
+        return cv2.cvtColor((np.clip(rgb, 0, 1) * 255).round().astype(np.uint8),
+                            cv2.COLOR_RGB2BGR)
+
+    rng = np.random.default_rng(seed)
+
+    def save(name, rgb):
+        img = to8(rgb) + rng.normal(0.0, 1.5, (*shape, 3))
+        cv2.imwrite(str(folder / name), np.clip(img, 0, 255).round().astype(np.uint8))
+
+    folder.mkdir(parents=True, exist_ok=True)
+    cv2.imwrite(str(folder / "reference.png"),
+                to8(sim.render(np.full(shape, 5.0), press_depth=None)))
+    rows = ["frame,x_px,y_px,radius_px"]
+    for i in range(balls):
+        a = rng.uniform(0.6, 1.3)
+        w = R - np.sqrt(R * R - a * a)
+        c = (shape[1] / 2 + rng.uniform(-200, 200), shape[0] / 2 + rng.uniform(-130, 130))
+        u = sphere_press_surface(shape, c, a, radius_mm=R, mm_per_px=s)
+        save(f"ball_{i:02d}.png", sim.render(w - u, press_depth=w))
+        rows.append(f"ball_{i:02d}.png,{c[0]:.2f},{c[1]:.2f},{a / s:.2f}")
+    yy, xx = np.mgrid[0:shape[0], 0:shape[1]].astype(np.float64)
+    rho = np.hypot(xx - 320, yy - 240) * s
+    others = {"ring.png": (rho > 0.9) & (rho < 1.4), "punch.png": rho < 1.2,
+              "screw.png": (rho < 1.4) & (np.abs(xx - 320) * s > 0.2)}
+    for name, face in others.items():
+        save(name, sim.render(np.where(face, 0.0, 5.0), press_depth=0.25))
+        rows.append(f"{name},320,240,{1.3 / s:.2f}")
+    (folder / "circles.csv").write_text("\n".join(rows) + "\n")
+    return list(others)

@@ -3,7 +3,10 @@
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import json
+import re
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -11,16 +14,27 @@ import numpy as np
 from .. import InputError
 from ..io import read_ball_presses, taxim_datapack
 from ..optics import (
+    CAP_DEG,
     CIRCLE_ERROR,
+    NON_BALL_RATIO,
     DepthReconstructor,
+    Engine,
     PhotometricCalibration,
     calibration_accuracy,
     detect_contact_circles,
+    edge_cut,
+    engine_candidates,
+    engine_cost,
     holdout_presses,
+    non_ball_presses,
+    press_folds,
 )
 from ._out import StagedOutput, add_overwrite_argument, check_output_folder, check_overwrite
 
 __all__ = ["add_parser", "parse_presses", "run_calibrate"]
+
+#: Folds the candidate tables are cross-validated over for the engine's choice.
+ENGINE_FOLDS = 10
 
 
 def parse_presses(text: str | None, n: int) -> np.ndarray:
@@ -136,9 +150,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="ball radius R (mm); needed unless BALL_PRESSES is a gs_sdk folder, "
                    "whose catalog.csv gives each press's ball diameter")
     c.add_argument("--mm-per-px", type=float, required=True, help="image scale (mm per px)")
-    c.add_argument("--model", choices=("lut", "mlp"), default="mlp",
-                   help="binned colour table, or position-aware network (needs the torch "
-                   "extra to train; default mlp)")
+    c.add_argument("--model", choices=("auto", "lut", "mlp"), default="auto",
+                   help="the engine: 'auto' (default) trains the colour table, the table "
+                   "with position cells and (with 8 training presses or more and the torch "
+                   "extra) the position-aware network on part of the training presses, "
+                   "scores each on the others (normal angle inside 0.8 of the radius, inner "
+                   "cap) and keeps the best; 'lut' (binned colour table, with --lut-cells) "
+                   "or 'mlp' (the network) forces one")
     c.add_argument("--out", metavar="OPTICS", type=Path, required=True,
                    help="calibration file to write (.npz)")
     c.add_argument("--presses", metavar="SEL", default=None,
@@ -191,12 +209,65 @@ def run_calibrate(args: argparse.Namespace) -> int:
     name = out.name if out.suffix == ".npz" else out.name + ".npz"
     report_name = Path(name).stem + "_accuracy.json"
     check_overwrite(out.parent, [name, report_name], overwrite=args.overwrite)
+    ps, ball_mm = _read_presses(args, cells)
+    idx = parse_presses(args.presses, len(ps.frames))
+    given = ps.centers_px is not None and ps.radii_px is not None and not args.detect_circles
+    mm = args.mm_per_px
+    ps, ball_mm, idx, refused, origin = _screen_presses(args, ps, ball_mm, idx, given)
+    held, spread = _held_out(args, ps, given, ball_mm / mm)
+    train = _trainer(args, ps, given, ball_mm)
+    # the report's calibration never sees the presses it is scored on, nor did the choice
+    # of its engine
+    train_idx = idx if held is None else np.flatnonzero(~held)
+    engine, choice, inner = _choose_engine(args, ps, given, spread, ball_mm / mm, train_idx,
+                                           cells, train)
+    for key in ("fitted_on", "scored_on"):          # the folder's numbering, and the files
+        if key in choice:
+            choice[f"{key}_files"] = [ps.names[i] for i in choice[key]]
+            choice[key] = [int(origin[i]) for i in choice[key]]
+    cal = train(idx, engine)
+    cal.provenance.update(engine=choice, presses=[int(origin[i]) for i in idx],
+                          files=[ps.names[i] for i in idx],
+                          command="tactilevision " + " ".join(args.argv))
+    if refused:
+        cal.provenance["refused"] = refused
+    if args.credit:
+        cal.provenance["credit"] = args.credit
+    report = _report(args, ps, cal, idx, train_idx, inner, engine, train, given, held, spread,
+                     ball_mm / mm, origin)
+    report.update(engine=choice, refused=refused)
+    # into place only when complete; the folder's manifest records it (a rerun may replace it)
+    with StagedOutput(out.parent, overwrite=args.overwrite,
+                      what="folder of the calibration file") as stage:
+        cal.save(stage.path / name)
+        (stage.path / report_name).write_text(json.dumps(report, indent=2) + "\n")
+        stage.commit()
+    if args.model == "auto":
+        print(_engine_text(choice))
+    print(f"wrote {engine.model} calibration from {len(idx)} presses to {out.parent / name} "
+          f"({engine.label()})")
+    if held is not None:
+        trained_on = (inner[1].size if inner is not None else np.count_nonzero(~held))
+        print(f"held out for the report: presses "
+              f"{', '.join(str(origin[i]) for i in np.flatnonzero(held))}"
+              f" ({np.count_nonzero(held)} of {len(ps.frames)}, spread over the pad and the "
+              f"ball sizes among the presses whose contact lies inside the image), scored by "
+              f"a calibration trained on {trained_on} of the others"
+              + (" (the rest scored the engines)" if inner is not None else "")
+              + f"; the calibration saved is trained on all {len(ps.frames)}")
+    print(report["error"] if "error" in report else _accuracy_text(report, mm))
+    print(f"accuracy report: {out.parent / report_name}")
+    return 0
+
+
+def _read_presses(args: argparse.Namespace, cells: tuple[int, int]):
+    """The ball presses and each one's ball radius (mm), the options checked against them."""
     src = str(args.ball_presses)
     ps = read_ball_presses(taxim_datapack(src.split(":", 1)[1]) if src.startswith("taxim:")
                            else args.ball_presses)
     if cells != (1, 1) and args.model != "lut":
         raise InputError("--lut-cells needs --model lut (the network takes the position "
-                         "itself)")
+                         "itself; --model auto tries position cells of its own)")
     if ps.ball_radius_mm is not None and args.ball_radius_mm is not None:
         raise InputError(f"{args.ball_presses} lists each press's ball diameter (catalog.csv); "
                          "leave out --ball-radius-mm")
@@ -205,50 +276,66 @@ def run_calibrate(args: argparse.Namespace) -> int:
                          "ball's size")
     ball_mm = (ps.ball_radius_mm if ps.ball_radius_mm is not None
                else np.full(len(ps.frames), args.ball_radius_mm))
-    idx = parse_presses(args.presses, len(ps.frames))
-    given = ps.centers_px is not None and ps.radii_px is not None and not args.detect_circles
-    mm = args.mm_per_px
-    held, spread = _held_out(args, ps, given, ball_mm / mm)
+    return ps, ball_mm
 
-    def train(sel: np.ndarray) -> PhotometricCalibration:
-        return PhotometricCalibration.from_ball_presses(
-            ps.reference, ps.frames[sel],
-            ps.centers_px[sel] if given else None, ps.radii_px[sel] if given else None,
-            ball_radius_mm=ball_mm[sel], mm_per_px=mm, model=args.model,
-            bins=args.bins, lut_cells=cells, epochs=args.epochs, hidden=args.hidden,
-            seed=args.seed, source=str(args.ball_presses), label_fraction=args.label_fraction,
-            progress=not args.no_progress, detect_edge=args.detect_edge,
-            flat_fraction=args.flat_fraction,
-        )
 
-    # the report's calibration never sees the presses it is scored on
-    train_idx = idx if held is None else np.flatnonzero(~held)
-    scoring = None if held is None else train(train_idx)
-    cal = train(idx)
-    cal.provenance["presses"] = [int(i) for i in idx]
-    cal.provenance["command"] = "tactilevision " + " ".join(args.argv)
-    if args.credit:
-        cal.provenance["credit"] = args.credit
-    report = _accuracy_report(args, ps, scoring if scoring is not None else cal, train_idx,
-                              given, held, spread, ball_mm / mm)
-    # into place only when complete; the folder's manifest records it (a rerun may replace it)
-    with StagedOutput(out.parent, overwrite=args.overwrite,
-                      what="folder of the calibration file") as stage:
-        cal.save(stage.path / name)
-        (stage.path / report_name).write_text(json.dumps(report, indent=2) + "\n")
-        stage.commit()
-    path = out.parent / name
-    print(f"wrote {args.model} calibration from {len(idx)} presses to {path}")
-    if held is not None:
-        print(f"held out for the report: presses {', '.join(str(i) for i in np.flatnonzero(held))}"
-              f" ({np.count_nonzero(held)} of {len(ps.frames)}, spread over the pad and the "
-              f"ball sizes among the presses whose contact lies inside the image), scored by "
-              f"a calibration trained on the other "
-              f"{np.count_nonzero(~held)}; the calibration saved is trained on all "
-              f"{len(ps.frames)}")
-    print(report["error"] if "error" in report else _accuracy_text(report, mm))
-    print(f"accuracy report: {out.parent / report_name}")
-    return 0
+def _trainer(args: argparse.Namespace, ps, given: bool, ball_mm: np.ndarray):
+    """``train(sel, engine)``: a calibration of `engine` on the presses `sel`; an error
+    about one of them names its file."""
+    def train(sel: np.ndarray, engine: Engine) -> PhotometricCalibration:
+        try:
+            return PhotometricCalibration.from_ball_presses(
+                ps.reference, ps.frames[sel],
+                ps.centers_px[sel] if given else None, ps.radii_px[sel] if given else None,
+                ball_radius_mm=ball_mm[sel], mm_per_px=args.mm_per_px, model=engine.model,
+                bins=args.bins, lut_cells=engine.lut_cells, epochs=args.epochs,
+                hidden=args.hidden, seed=args.seed, source=str(args.ball_presses),
+                label_fraction=args.label_fraction, progress=not args.no_progress,
+                detect_edge=args.detect_edge, flat_fraction=args.flat_fraction,
+            )
+        except InputError as exc:
+            raise InputError(_name_press(str(exc), [ps.names[i] for i in sel])) from None
+    return train
+
+
+def _name_press(text: str, names: list[str]) -> str:
+    """`text` with a leading ``press K`` or ``frames[K]`` (K: a position among the presses
+    given) replaced by that press's file name."""
+    m = re.match(r"(press |frames\[)(\d+)\]?(.*)", text, re.S)
+    if m is None or int(m.group(2)) >= len(names):
+        return text
+    return f"{names[int(m.group(2))]}{m.group(3)}"
+
+
+def _subset(ps, keep: np.ndarray):
+    """The ball-press set of the presses `keep` (indices, in order)."""
+    keep = np.asarray(keep, np.int64)
+    return replace(
+        ps, frames=ps.frames[keep], names=[ps.names[i] for i in keep],
+        centers_px=None if ps.centers_px is None else ps.centers_px[keep],
+        radii_px=None if ps.radii_px is None else ps.radii_px[keep],
+        ball_radius_mm=None if ps.ball_radius_mm is None else ps.ball_radius_mm[keep])
+
+
+def _report(args: argparse.Namespace, ps, cal, idx, train_idx, inner, engine, train,
+            given: bool, held, spread, ball_px: np.ndarray, origin: np.ndarray) -> dict:
+    """The accuracy report (:func:`_accuracy_report`). With an engine chosen on held-out
+    training presses, the calibration scored is the chosen candidate's (trained on the
+    presses the choice trained on), and the presses the choice scored are not scored."""
+    if inner is None:
+        scoring = None if held is None else train(train_idx, engine)
+        return _accuracy_report(args, ps, scoring if scoring is not None else cal, train_idx,
+                                given, held, spread, ball_px, origin)
+    scoring, fit_on, score_on = inner
+    if held is None and args.presses is None:        # --holdout 0: in sample, said so
+        return _accuracy_report(args, ps, cal, idx, given, None, None, ball_px, origin)
+    keep = np.setdiff1d(np.arange(len(ps.frames)), score_on)
+    pos = np.searchsorted(keep, fit_on)
+    view = _subset(ps, keep)
+    return _accuracy_report(args, view, scoring, pos, given,
+                            None if held is None else held[keep],
+                            None if spread is None else (spread[0][keep], spread[1][keep]),
+                            ball_px[keep], origin[keep])
 
 
 def _check_calibrate_options(args: argparse.Namespace) -> tuple[int, int]:
@@ -292,7 +379,8 @@ def _held_out(args: argparse.Namespace, ps, given: bool, ball_px: np.ndarray):
 
 
 def _accuracy_report(args: argparse.Namespace, ps, scoring, train_idx: np.ndarray,
-                     given: bool, held, spread, ball_px: np.ndarray) -> dict:
+                     given: bool, held, spread, ball_px: np.ndarray, origin: np.ndarray
+                     ) -> dict:
     """The accuracy report: held-out presses (else the training ones, said so), by ball."""
     trained = np.zeros(len(ps.frames), bool)
     trained[train_idx] = True
@@ -323,10 +411,212 @@ def _accuracy_report(args: argparse.Namespace, ps, scoring, train_idx: np.ndarra
                                                     else None))
     except InputError as exc:      # the calibration stands; only its report is missing
         report = {"error": f"no accuracy report: {exc}"}
+    for b in report.get("balls", []):           # the folder's numbering, and the files
+        b["files"] = [ps.names[i] for i in b.get("presses", [])]
+        b["presses"] = [int(origin[i]) for i in b.get("presses", [])]
     report["held_out"] = None if held is None else {
-        "presses": [int(i) for i in np.flatnonzero(held)], "share": float(args.holdout),
+        "presses": [int(origin[i]) for i in np.flatnonzero(held)],
+        "files": [ps.names[i] for i in np.flatnonzero(held)], "share": float(args.holdout),
         "scored_by": f"a calibration trained on the other {int(np.count_nonzero(~held))} "
                      "presses",
         "saved_calibration_trained_on": "every press"}
     report["mm_per_px"] = args.mm_per_px
     return report
+
+
+def _network_unavailable() -> str | None:
+    """Why this installation cannot train a network (None: it can)."""
+    if importlib.util.find_spec("torch") is None:
+        return "torch is not installed (pip install 'tactilevision[torch]')"
+    return None
+
+
+def _choose_engine(args: argparse.Namespace, ps, given: bool, spread, ball_px: np.ndarray,
+                   train_idx: np.ndarray, cells: tuple[int, int], train
+                   ) -> tuple[Engine, dict, tuple | None]:
+    """The engine the calibration keeps (:mod:`tactilevision.optics._engine`), the record
+    of the choice, and ``(calibration, fitted_on, scored_on)`` of the candidate kept on the
+    first fold (None where no choice was made).
+
+    The tables are cheap: each is cross-validated over the training presses
+    (:func:`press_folds`, :data:`ENGINE_FOLDS` folds) and the best kept. A network trains
+    once, on the first fold's split, and replaces that table where it scores better on the
+    first fold's presses."""
+    if args.model != "auto":
+        engine = (Engine("network", "mlp") if args.model == "mlp" else
+                  Engine("table_cells" if cells != (1, 1) else "table", "lut", cells))
+        return engine, {"chosen": engine.name, "model": engine.model,
+                        "lut_cells": list(engine.lut_cells), "by": f"--model {args.model}",
+                        "candidates": [], "left_out": {}}, None
+    centres, radii = _train_circles(args, ps, given, spread, train_idx)
+    shape = ps.reference.shape[:2]
+    n_in = int(np.count_nonzero(~edge_cut(centres, radii, shape)))
+    fold = (press_folds(centres, radii, ball_px[train_idx], shape, min(ENGINE_FOLDS, n_in))
+            if n_in >= 2 else np.full(train_idx.size, -1))
+    if n_in < 2 or np.count_nonzero(fold != 0) < 2:
+        why = (f"{n_in} of the {train_idx.size} training presses lie inside the image: too "
+               "few to choose an engine on presses it did not see; the colour table")
+        return Engine("table", "lut"), {"chosen": "table", "model": "lut", "lut_cells": [1, 1],
+                                        "by": why, "candidates": [], "left_out": {}}, None
+    fit0, score0 = train_idx[fold != 0], train_idx[fold == 0]
+    cands, left = engine_candidates(shape, int(fit0.size), network=_network_unavailable())
+    rows, first = [], {}
+    for engine in cands:
+        folds = [0] if engine.model == "mlp" else range(int(fold.max()) + 1)
+        reports = []
+        for f in folds:
+            if not args.no_progress:
+                print(f"choosing the engine: {engine.label()}, fold {f + 1} of {len(folds)}",
+                      flush=True)
+            fit_on, score_on = train_idx[fold != f], train_idx[fold == f]
+            cal = train(fit_on, engine)
+            rep = _score_split(args, ps, cal, fit_on, score_on, given,
+                               (centres[fold == f], radii[fold == f]), ball_px)
+            reports.append(rep)
+            if f == 0:
+                first[engine.name] = (cal, engine_cost(rep))
+        rows.append({"engine": engine.name, "label": engine.label(), "model": engine.model,
+                     "lut_cells": list(engine.lut_cells), "folds": len(folds),
+                     **engine_cost({"balls": [b for r in reports for b in r["balls"]]}),
+                     "first_fold": first[engine.name][1]})
+    chosen = _pick(rows)
+    engine = next(e for e in cands if e.name == chosen)
+    return engine, {
+        "chosen": chosen, "model": engine.model, "lut_cells": list(engine.lut_cells),
+        "by": (f"the lowest angle inside 0.8 of the radius + {CAP_DEG:g} deg x |inner cap| "
+               f"on training presses each candidate was not trained on (the tables "
+               f"cross-validated over {int(fold.max()) + 1} folds, a network on the first)"),
+        "fitted_on": [int(i) for i in fit0], "scored_on": [int(i) for i in score0],
+        "candidates": rows, "left_out": left}, (first[chosen][0], fit0, score0)
+
+
+def _pick(rows: list[dict]) -> str:
+    """The engine kept: the table of the lowest cross-validated cost, unless a network
+    scores lower than it on the first fold, where both were scored on the same presses."""
+    tables = [r for r in rows if r["model"] == "lut" and np.isfinite(r["cost"])]
+    best = min(tables, key=lambda r: r["cost"]) if tables else rows[0]
+    for r in rows:
+        if (r["model"] == "mlp" and np.isfinite(r["first_fold"]["cost"])
+                and not r["first_fold"]["cost"] >= best["first_fold"]["cost"]):
+            return r["engine"]
+    return best["engine"]
+
+
+def _train_circles(args: argparse.Namespace, ps, given: bool, spread, train_idx: np.ndarray):
+    """The training presses' circles: given, or detected by no calibration."""
+    if given:
+        return ps.centers_px[train_idx], ps.radii_px[train_idx]
+    if spread is not None:
+        return spread[0][train_idx], spread[1][train_idx]
+    return detect_contact_circles(ps.frames[train_idx], ps.reference, edge=args.detect_edge)
+
+
+def _score_split(args: argparse.Namespace, ps, cal: PhotometricCalibration,
+                 fit_on: np.ndarray, score_on: np.ndarray, given: bool, circles,
+                 ball_px: np.ndarray) -> dict:
+    """`cal` (trained on `fit_on`) scored on the presses `score_on` alone, against their
+    circles (given, or detected by no calibration)."""
+    sel = np.concatenate([fit_on, score_on])
+    trained = np.zeros(sel.size, bool)
+    trained[:fit_on.size] = True
+    if given:
+        centres, radii = ps.centers_px[sel], ps.radii_px[sel]
+    else:
+        centres = np.concatenate([np.asarray(cal.provenance["centers_px"]), circles[0]])
+        radii = np.concatenate([np.asarray(cal.provenance["radii_px"]), circles[1]])
+    try:
+        return calibration_accuracy(DepthReconstructor(cal), ps.frames[sel], centres, radii,
+                                    ball_px[sel], trained=trained,
+                                    label_fraction=cal.provenance["label_fraction"],
+                                    circles="given" if given else "detected",
+                                    edge="contact" if given else args.detect_edge)
+    except InputError:
+        return {"balls": []}
+
+
+def _engine_text(choice: dict) -> str:
+    """How the engine was chosen, as printed."""
+    if not choice["candidates"]:
+        return f"engine: {choice['chosen']} ({choice['by']})"
+    lines = [f"engine chosen by {choice['by']}:"]
+    for r in choice["candidates"]:
+        mark = "  <- kept" if r["engine"] == choice["chosen"] else ""
+        f0 = r["first_fold"]
+        score = ("not scored" if not r["n_scored"] else
+                 f"{r['angle_08_deg']:.2f} deg inside 0.8, inner cap "
+                 f"{100 * r['inner_cap']:+.1f} % over {r['n_scored']} presses"
+                 + (f" (first fold {f0['angle_08_deg']:.2f} deg, {100 * f0['inner_cap']:+.1f} %)"
+                    if r["folds"] > 1 and f0["n_scored"] else ""))
+        lines.append(f"  {r['label']}: {score}{mark}")
+    for name, why in choice["left_out"].items():
+        lines.append(f"  {name}: not tried ({why})")
+    return "\n".join(lines)
+
+
+def _screen_presses(args: argparse.Namespace, ps, ball_mm: np.ndarray, idx: np.ndarray,
+                    given: bool):
+    """Refuse what is not a press of the stated ball before anything trains on it or scores
+    it: a frame with no contact found, or whose contact does not read as the ball's
+    (:func:`~tactilevision.optics.non_ball_presses`). Each is printed with its file.
+
+    Returns ``(ps, ball_mm, idx, refused, origin)``: the presses kept, their balls, the
+    training selection among them, the refused (``press``, ``file``, ``reason``) and each
+    kept press's index in the folder."""
+    n = len(ps.frames)
+    alive = np.ones(n, bool)
+    refused: list[dict] = []
+    ball_px = ball_mm / args.mm_per_px
+    if given:
+        centres, radii = ps.centers_px, ps.radii_px
+    else:
+        centres, radii = np.zeros((n, 2)), np.zeros(n)
+        while True:
+            live = np.flatnonzero(alive)
+            try:
+                centres[live], radii[live] = detect_contact_circles(
+                    ps.frames[live], ps.reference, edge=args.detect_edge)
+                break
+            except InputError as exc:
+                m = re.match(r"frames\[(\d+)\]: (.*)", str(exc), re.S)
+                if m is None or live.size <= 2:
+                    raise InputError(f"{args.ball_presses}: {exc}") from None
+                k = int(live[int(m.group(1))])
+                alive[k] = False
+                refused.append({"press": k, "file": ps.names[k], "reason": m.group(2)})
+    over = np.flatnonzero(alive & (radii >= ball_px))
+    if given and over.size:
+        k = int(over[0])
+        raise InputError(f"{ps.names[k]}: contact radius {radii[k]:.1f} px is not smaller than "
+                         f"the ball radius {ball_px[k]:.1f} px: check --ball-radius-mm and "
+                         "--mm-per-px, or its circle")
+    for k in over:
+        alive[k] = False
+        refused.append({"press": int(k), "file": ps.names[k], "reason": (
+            f"its detected circle ({radii[k]:.1f} px) is not smaller than the ball "
+            f"({ball_px[k]:.1f} px)")})
+    live = np.flatnonzero(alive)
+    if live.size >= 3:
+        bad, ang, thr = non_ball_presses(ps.reference, ps.frames[live], centres[live],
+                                         radii[live], ball_px[live])
+        for j in np.flatnonzero(bad):
+            k = int(live[j])
+            alive[k] = False
+            read = ("cannot be read by the others' colours" if not np.isfinite(ang[j]) else
+                    f"reads {ang[j]:.1f} deg off the ball's normals inside 0.8 of its circle "
+                    f"by a colour table of the other presses, above {thr:.1f} deg "
+                    f"({NON_BALL_RATIO:g} times their median)")
+            refused.append({"press": k, "file": ps.names[k], "reason": (
+                f"its contact is not the {ball_mm[k]:g} mm ball's: it {read}; another "
+                "object, two contacts, or a circle off its contact")})
+    if not refused:
+        return ps, ball_mm, idx, refused, np.arange(n)
+    for r in refused:
+        print(f"refused press {r['press']} ({r['file']}): {r['reason']}")
+    keep = np.flatnonzero(alive)
+    pos = {int(k): i for i, k in enumerate(keep)}
+    idx = np.array([pos[int(i)] for i in idx if alive[i]], np.int64)
+    if idx.size < 2:
+        raise InputError(f"{args.ball_presses}: {idx.size} of the presses to train on left "
+                         f"after refusing {', '.join(r['file'] for r in refused)}; at least "
+                         "two are needed")
+    return _subset(ps, keep), ball_mm[keep], idx, refused, keep

@@ -16,6 +16,7 @@ from ._accuracy import (
     edge_cut,
     holdout_presses,
     max_tilt_deg,
+    press_folds,
 )
 from ._ball import (
     BallPressMetrics,
@@ -33,6 +34,15 @@ from ._circles import (
     fit_circle,
     locate_contact_edge,
 )
+from ._engine import (
+    CAP_DEG,
+    ENGINES,
+    MIN_NETWORK_PRESSES,
+    Engine,
+    engine_candidates,
+    engine_cost,
+    position_cells,
+)
 from ._evaluate import BallPressReport, evaluate_ball_presses
 from ._features import colour_change, frame_gain, reference_inverse
 from ._lut import ColourLUT, fit_cell_luts, fit_colour_lut
@@ -46,10 +56,21 @@ from ._mlp import (
     train_mlp,
 )
 from ._poisson import PoissonSolver, divergence, integrate_poisson, integrate_poisson_masked
+from ._press_check import (
+    NON_BALL_FLOOR_DEG,
+    NON_BALL_RATIO,
+    ball_press_angles,
+    non_ball_presses,
+)
 from ._reconstructor import DepthReconstructor
 
 __all__ = [
+    "CAP_DEG",
     "CIRCLE_ERROR",
+    "ENGINES",
+    "MIN_NETWORK_PRESSES",
+    "NON_BALL_FLOOR_DEG",
+    "NON_BALL_RATIO",
     "AbsoluteDepthMetrics",
     "BallCapFit",
     "BallPressMetrics",
@@ -57,12 +78,14 @@ __all__ = [
     "CircleError",
     "ColourLUT",
     "DepthReconstructor",
+    "Engine",
     "MLPGradientModel",
     "MarkerFlow",
     "PhotometricCalibration",
     "PoissonSolver",
     "absolute_depth_metrics",
     "ball_gradients",
+    "ball_press_angles",
     "ball_press_metrics",
     "calibration_accuracy",
     "cell_position_inputs",
@@ -72,6 +95,8 @@ __all__ = [
     "detect_contact_circles",
     "divergence",
     "edge_cut",
+    "engine_candidates",
+    "engine_cost",
     "evaluate_ball_presses",
     "fill_masked",
     "fit_ball_cap",
@@ -90,8 +115,11 @@ __all__ = [
     "marker_mask",
     "max_tilt_deg",
     "mlp_inputs",
+    "non_ball_presses",
     "normal_angle_deg",
     "normals_from_gradients",
+    "position_cells",
+    "press_folds",
     "reference_inverse",
     "track_markers",
     "train_mlp",

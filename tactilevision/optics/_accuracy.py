@@ -13,7 +13,7 @@ from ._ball import ball_gradients, ball_press_metrics, normal_angle_deg
 from ._reconstructor import DepthReconstructor
 
 __all__ = ["CIRCLE_ERROR", "CircleError", "calibration_accuracy", "edge_cut", "holdout_presses",
-           "max_tilt_deg"]
+           "max_tilt_deg", "press_folds"]
 
 
 @dataclass(frozen=True)
@@ -137,6 +137,51 @@ def holdout_presses(centers_px: np.ndarray, radii_px: np.ndarray,
         picks = np.arange(stride / 2 - 0.5, order.size, stride).astype(int)
         held[order[np.unique(np.clip(picks, 0, order.size - 1))]] = True
     return held
+
+
+def press_folds(centers_px: np.ndarray, radii_px: np.ndarray, ball_radius_px: np.ndarray,
+                shape: tuple[int, int], k: int) -> np.ndarray:
+    """Cross-validation folds of ball presses, spread over the pad and the ball sizes as
+    :func:`holdout_presses` spreads its held-out presses.
+
+    Parameters
+    ----------
+    centers_px, radii_px, ball_radius_px, shape
+        As :func:`holdout_presses`.
+    k : int
+        Folds (>= 2).
+
+    Returns
+    -------
+    fold : (N,) int64 ndarray
+        Each press's fold, 0 to k - 1, round the snake over the pad within each ball size;
+        -1 for a press whose disc runs past the image edge (:func:`edge_cut`: never scored,
+        always trained on).
+
+    Raises
+    ------
+    InputError
+        For k < 2 or arrays of different lengths.
+    """
+    if k < 2:
+        raise InputError(f"cross-validation needs at least two folds, got {k}")
+    c = np.asarray(centers_px, np.float64).reshape(-1, 2)
+    ball = np.asarray(ball_radius_px, np.float64).reshape(-1)
+    r = np.asarray(radii_px, np.float64).reshape(-1)
+    if ball.size != len(c) or r.size != len(c):
+        raise InputError(f"{len(c)} centres, {r.size} radii and {ball.size} ball radii: one "
+                         "each per press")
+    inside = ~edge_cut(c, r, shape)
+    band = np.clip((c[:, 1] * 3 // max(shape[0], 1)).astype(int), 0, 2)
+    x = np.where(band % 2 == 0, c[:, 0], -c[:, 0])
+    fold = np.full(len(c), -1, np.int64)
+    start = 0
+    for b in np.unique(ball):
+        idx = np.flatnonzero((ball == b) & inside)
+        order = idx[np.lexsort((x[idx], band[idx]))]
+        fold[order] = (start + np.arange(order.size)) % k
+        start += order.size
+    return fold
 
 
 def _inner_cap(height_px: np.ndarray, d: np.ndarray, radius: float, ball_px: float,

@@ -1,0 +1,100 @@
+"""Does ``optics calibrate --model auto`` keep the engine that reads best where it did not
+look?
+
+Issue 55's target: on each shared sensor, trained on 7 presses only, the engine chosen is
+within 0.3 deg (normal angle inside 0.8 of the contact radius) and 3 % (inner cap) of the
+best candidate scored on all the other presses. For each sensor and several selections of
+7 presses spread over the folder (every ``n // 7``-th press from an offset), this runs
+``optics calibrate --presses SEL`` with ``--model auto`` (which engine it keeps) and with
+each candidate forced (``--model lut``, ``--model lut --lut-cells NX,NY``, and with 8 or
+more presses ``--model mlp``), each scored by its report on the presses it was not given,
+and prints each candidate's score there and the kept engine's gap to the best.
+
+    python benchmarks/bench_engine_choice.py [--sensors taxim mini gelslim] [--presses 7]
+        [--selections 4]
+
+Needs ``taxim`` (its GelSight presses, circles annotated by hand) and ``../shared/real``
+(the GelSight Mini and GelSlim 3.0 presses, circles detected).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import tempfile
+from contextlib import redirect_stdout
+from io import StringIO
+from pathlib import Path
+
+import numpy as np
+
+from tactilevision.cli import main as cli
+from tactilevision.io import read_ball_presses, taxim_datapack
+from tactilevision.optics import CAP_DEG
+
+SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "real"
+SENSORS = {
+    "taxim": ("taxim:gelsight", ["--ball-radius-mm", "2.0", "--mm-per-px", "0.0295"]),
+    "mini": (str(SHARED / "gelsight_mini"), ["--mm-per-px", "0.0634"]),
+    "gelslim": (str(SHARED / "gelslim3" / "set_2020_11"),
+                ["--ball-radius-mm", "3.8", "--mm-per-px", "0.0806"]),
+}
+
+
+def _run(src: str, opts: list[str], sel: str, extra: list[str], out: Path) -> dict:
+    """One ``optics calibrate`` run; its accuracy report."""
+    with redirect_stdout(StringIO()):
+        rc = cli(["optics", "calibrate", src, *opts, "--presses", sel, "--out", str(out),
+                  "--no-progress", "--overwrite", *extra])
+    if rc != 0:
+        raise SystemExit(f"optics calibrate {src} --presses {sel} {extra} exited {rc}")
+    return json.loads(out.with_name(out.stem + "_accuracy.json").read_text())
+
+
+def _score(report: dict) -> tuple[float, float]:
+    """Angle inside 0.8 and inner cap over the scored presses (balls weighed by presses)."""
+    b = [x for x in report["balls"] if x["n_scored"]]
+    n = np.array([x["n_scored"] for x in b], float)
+    return (float(np.sum(n * [x["normal_angle_08_deg"] for x in b]) / n.sum()),
+            float(np.sum(n * [x["inner_cap"] for x in b]) / n.sum()))
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--sensors", nargs="+", default=list(SENSORS), choices=list(SENSORS))
+    ap.add_argument("--presses", type=int, default=7)
+    ap.add_argument("--selections", type=int, default=4)
+    a = ap.parse_args()
+    print("| sensor | presses | kept | candidates on the others: angle inside 0.8 (deg), "
+          "inner cap | kept - best: angle, |cap| | within 0.3 deg and 3 % |")
+    print("|---|---|---|---|---|---|")
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "o.npz"
+        for name in a.sensors:
+            src, opts = SENSORS[name]
+            n = len(read_ball_presses(taxim_datapack(src.split(":")[1])
+                                      if src.startswith("taxim:") else src).frames)
+            stride = n // a.presses
+            for off in range(min(a.selections, stride)):
+                sel = f"{off}:{off + stride * a.presses}:{stride}"
+                choice = _run(src, opts, sel, [], out)["engine"]
+                scores = {}
+                for r in choice["candidates"]:
+                    extra = ["--model", r["model"]]
+                    if r["engine"] == "table_cells":
+                        extra += ["--lut-cells", ",".join(map(str, r["lut_cells"]))]
+                    scores[r["engine"]] = _score(_run(src, opts, sel, extra, out))
+                best_a = min(s[0] for s in scores.values())
+                best_c = min(abs(s[1]) for s in scores.values())
+                kept = scores[choice["chosen"]]
+                da, dc = kept[0] - best_a, abs(kept[1]) - best_c
+                text = ", ".join(f"{k} {s[0]:.2f}, {100 * s[1]:+.1f} %"
+                                 for k, s in scores.items())
+                print(f"| {name} | {sel} | {choice['chosen']} | {text} | {da:+.2f}, "
+                      f"{100 * dc:+.1f} % | {'yes' if da <= 0.3 and dc <= 0.03 else 'no'} |",
+                      flush=True)
+    print(f"(the choice's cost: angle + {CAP_DEG:g} deg x |inner cap|)")
+
+
+if __name__ == "__main__":
+    main()
