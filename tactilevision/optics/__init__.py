@@ -19,6 +19,7 @@ from ._accuracy import (
     press_folds,
 )
 from ._ball import (
+    SLOPE_PEAK_AT,
     BallPressMetrics,
     ball_gradients,
     ball_press_metrics,
@@ -26,6 +27,7 @@ from ._ball import (
     gradients_from_normals,
     normal_angle_deg,
     normals_from_gradients,
+    slope_peak_radius,
 )
 from ._calibration import PhotometricCalibration
 from ._circles import (
@@ -71,6 +73,7 @@ __all__ = [
     "MIN_NETWORK_PRESSES",
     "NON_BALL_FLOOR_DEG",
     "NON_BALL_RATIO",
+    "SLOPE_PEAK_AT",
     "AbsoluteDepthMetrics",
     "BallCapFit",
     "BallPressMetrics",
@@ -121,6 +124,7 @@ __all__ = [
     "position_cells",
     "press_folds",
     "reference_inverse",
+    "slope_peak_radius",
     "track_markers",
     "train_mlp",
 ]

@@ -20,6 +20,7 @@ from scipy.optimize import least_squares
 from .._checks import InputError, check_array
 
 __all__ = [
+    "SLOPE_PEAK_AT",
     "BallPressMetrics",
     "ball_gradients",
     "ball_press_metrics",
@@ -27,6 +28,7 @@ __all__ = [
     "gradients_from_normals",
     "normal_angle_deg",
     "normals_from_gradients",
+    "slope_peak_radius",
 ]
 
 
@@ -264,3 +266,48 @@ def fit_ball_centre(gx: np.ndarray, gy: np.ndarray, centre_px: tuple[float, floa
         return np.concatenate([px + dx / s, py + dy / s])
 
     return least_squares(residual, np.array([cx, cy])).x
+
+
+#: Where the radial slope of a reconstructed ball press peaks, as a fraction of its contact
+#: radius, on circles annotated by hand: taxim's 48 real GelSight presses, read by a colour
+#: table and by the network trained on them, both 0.952 (median over the 46 whose disc lies
+#: 1.3 radii inside the image; 0.956 on the circles the contact-edge detector finds there).
+#: The gel follows the ball up to the contact edge and falls away outside it, so the slope
+#: peaks at the edge; the reconstruction's own blur puts the peak a little inside.
+SLOPE_PEAK_AT = 0.952
+
+
+def slope_peak_radius(gx: np.ndarray, gy: np.ndarray, centre_px: tuple[float, float],
+                      radius_px: float, *, reach: float = 1.3) -> float:
+    """Where the radial slope of a press's gradient field peaks, px from its centre.
+
+    Parameters
+    ----------
+    gx, gy : (H, W) float ndarray
+        Depth gradients, unitless (depth positive into the gel).
+    centre_px : (2,) float
+        Contact-circle centre (x, y), px.
+    radius_px : float
+        Contact-circle radius, px.
+    reach : float, default 1.3
+        Rings looked at out to this many radii.
+
+    Returns
+    -------
+    rho_px : float
+        The middle of the 1 px ring (their inner edges half a pixel apart) whose median
+        slope away from the centre is largest; NaN where a ring beyond the radius runs off
+        the image.
+    """
+    h, w = gx.shape
+    cx, cy = float(centre_px[0]), float(centre_px[1])
+    out = reach * float(radius_px)
+    if cx - out < 0 or cx + out > w - 1 or cy - out < 0 or cy + out > h - 1:
+        return float("nan")
+    x0, x1, y0, y1 = int(cx - out), int(cx + out) + 2, int(cy - out), int(cy + out) + 2
+    yy, xx = np.mgrid[y0:y1, x0:x1].astype(np.float64)
+    d = np.hypot(xx - cx, yy - cy)
+    slope = -((xx - cx) * gx[y0:y1, x0:x1] + (yy - cy) * gy[y0:y1, x0:x1]) / np.maximum(d, 1e-9)
+    rings = np.arange(0.5, out, 0.5)
+    prof = np.array([np.median(slope[(d >= a) & (d < a + 1.0)]) for a in rings])
+    return float(rings[int(np.argmax(prof))]) + 0.5
