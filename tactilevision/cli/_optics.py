@@ -151,12 +151,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    "whose catalog.csv gives each press's ball diameter")
     c.add_argument("--mm-per-px", type=float, required=True, help="image scale (mm per px)")
     c.add_argument("--model", choices=("auto", "lut", "mlp"), default="auto",
-                   help="the engine: 'auto' (default) trains the colour table, the table "
-                   "with position cells and (with 8 training presses or more and the torch "
-                   "extra) the position-aware network on part of the training presses, "
-                   "scores each on the others (normal angle inside 0.8 of the radius, inner "
-                   "cap) and keeps the best; 'lut' (binned colour table, with --lut-cells) "
-                   "or 'mlp' (the network) forces one")
+                   help="the engine: 'auto' (default) cross-validates the colour table and "
+                   "the table with position cells over the training presses, trains the "
+                   "position-aware network (8 presses or more, the torch extra) on the first "
+                   "fold, scores each on presses it was not trained on (normal angle inside "
+                   "0.8 of the radius, inner cap) and keeps the best; 'lut' (binned colour "
+                   "table, with --lut-cells) or 'mlp' (the network) forces one")
     c.add_argument("--out", metavar="OPTICS", type=Path, required=True,
                    help="calibration file to write (.npz)")
     c.add_argument("--presses", metavar="SEL", default=None,
@@ -253,7 +253,8 @@ def run_calibrate(args: argparse.Namespace) -> int:
               f" ({np.count_nonzero(held)} of {len(ps.frames)}, spread over the pad and the "
               f"ball sizes among the presses whose contact lies inside the image), scored by "
               f"a calibration trained on {trained_on} of the others"
-              + (" (the rest scored the engines)" if inner is not None else "")
+              + (" (the first fold's others scored the engines)" if inner is not None
+                 else "")
               + f"; the calibration saved is trained on all {len(ps.frames)}")
     print(report["error"] if "error" in report else _accuracy_text(report, mm))
     print(f"accuracy report: {out.parent / report_name}")

@@ -117,23 +117,11 @@ def holdout_presses(centers_px: np.ndarray, radii_px: np.ndarray,
     """
     if not 0 < share < 1:
         raise InputError(f"the held-out share must lie between 0 and 1, got {share!r}")
-    c = np.asarray(centers_px, np.float64).reshape(-1, 2)
-    ball = np.asarray(ball_radius_px, np.float64).reshape(-1)
-    r = np.asarray(radii_px, np.float64).reshape(-1)
-    if ball.size != len(c) or r.size != len(c):
-        raise InputError(f"{len(c)} centres, {r.size} radii and {ball.size} ball radii: one "
-                         "each per press")
-    inside = ~edge_cut(c, r, shape)
-    h, _ = shape
-    band = np.clip((c[:, 1] * 3 // max(h, 1)).astype(int), 0, 2)
-    x = np.where(band % 2 == 0, c[:, 0], -c[:, 0])        # a snake over the pad
-    held = np.zeros(len(c), bool)
+    held = np.zeros(len(np.asarray(centers_px).reshape(-1, 2)), bool)
     stride = 1.0 / share
-    for b in np.unique(ball):
-        idx = np.flatnonzero((ball == b) & inside)
-        if idx.size < 2:
+    for order in _snake(centers_px, radii_px, ball_radius_px, shape):
+        if order.size < 2:
             continue
-        order = idx[np.lexsort((x[idx], band[idx]))]
         picks = np.arange(stride / 2 - 0.5, order.size, stride).astype(int)
         held[order[np.unique(np.clip(picks, 0, order.size - 1))]] = True
     return held
@@ -165,6 +153,18 @@ def press_folds(centers_px: np.ndarray, radii_px: np.ndarray, ball_radius_px: np
     """
     if k < 2:
         raise InputError(f"cross-validation needs at least two folds, got {k}")
+    fold = np.full(len(np.asarray(centers_px).reshape(-1, 2)), -1, np.int64)
+    start = 0
+    for order in _snake(centers_px, radii_px, ball_radius_px, shape):
+        fold[order] = (start + np.arange(order.size)) % k
+        start += order.size
+    return fold
+
+
+def _snake(centers_px, radii_px, ball_radius_px, shape: tuple[int, int]) -> list[np.ndarray]:
+    """For each ball size, its presses whose disc lies inside the image, in order along a
+    snake over the pad (bands of a third of its height, left to right, alternate bands
+    right to left). Raises InputError for arrays of different lengths."""
     c = np.asarray(centers_px, np.float64).reshape(-1, 2)
     ball = np.asarray(ball_radius_px, np.float64).reshape(-1)
     r = np.asarray(radii_px, np.float64).reshape(-1)
@@ -174,14 +174,11 @@ def press_folds(centers_px: np.ndarray, radii_px: np.ndarray, ball_radius_px: np
     inside = ~edge_cut(c, r, shape)
     band = np.clip((c[:, 1] * 3 // max(shape[0], 1)).astype(int), 0, 2)
     x = np.where(band % 2 == 0, c[:, 0], -c[:, 0])
-    fold = np.full(len(c), -1, np.int64)
-    start = 0
+    out = []
     for b in np.unique(ball):
         idx = np.flatnonzero((ball == b) & inside)
-        order = idx[np.lexsort((x[idx], band[idx]))]
-        fold[order] = (start + np.arange(order.size)) % k
-        start += order.size
-    return fold
+        out.append(idx[np.lexsort((x[idx], band[idx]))])
+    return out
 
 
 def _inner_cap(height_px: np.ndarray, d: np.ndarray, radius: float, ball_px: float,
