@@ -11,7 +11,7 @@ from ._footprint import Footprint, fit_footprint, nearest_indenter
 from ._force import ForceWindow, force_window, window_standard_error
 from ._holds import approach_start, hold_end, hold_start
 from ._land import bulge_at, bulge_height, land_contact_depth, land_contact_depths_mm
-from ._mark import STIFFNESS_REL, crossing_forces, mark_depths, mark_shared_mm
+from ._mark import CLOCK_SD_S, STIFFNESS_REL, crossing_forces, mark_depths, mark_shared_mm
 from ._mask import contact_mask, noise_level
 from ._results import Certification, CertifiedPress, Rejection
 from ._sync import (
@@ -19,6 +19,7 @@ from ._sync import (
     contact_onsets,
     estimate_clock_offset,
     force_onsets,
+    press_clock_offset,
     refine_clock_offset,
 )
 from ._vernier import (
@@ -40,6 +41,7 @@ from ._vernier_presses import (
 from ._zero import ForceZero, force_zero
 
 __all__ = [
+    "CLOCK_SD_S",
     "CREST_CHECK_P",
     "EDGE_SHARED_FRACTION",
     "RESOLVED_PX",
@@ -83,6 +85,7 @@ __all__ = [
     "mark_shared_mm",
     "nearest_indenter",
     "noise_level",
+    "press_clock_offset",
     "read_bevel",
     "refine_clock_offset",
     "unresolved_closure",

@@ -131,7 +131,7 @@ def find_ball_presses(session, *, min_contact_px: int = 200,
     if not runs:
         raise InputError(f"no press found in the {times.size} frames of {session.path} (no "
                          f"frame has {min_contact_px} px of colour change above the noise)")
-    offset, source, _, warnings = _sync_clock(session, times, area, runs, period, None)
+    offset, source, _, warnings, _ = _sync_clock(session, times, area, runs, period, None)
     presses: list[BallPress] = []
     rejected: list[Rejection] = []
     for k, run in enumerate(runs):

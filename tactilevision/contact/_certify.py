@@ -74,7 +74,13 @@ from ._results import (
     _PressContext,
     _Reject,
 )
-from ._sync import ClockSync, estimate_clock_offset, force_onsets, refine_clock_offset
+from ._sync import (
+    ClockSync,
+    estimate_clock_offset,
+    force_onsets,
+    press_clock_offset,
+    refine_clock_offset,
+)
 from ._vernier import BevelGeometry
 from ._vernier_presses import (
     AGREE_PX,
@@ -237,8 +243,8 @@ def certify_session(session, *, min_contact_px: int = 200,
         raise InputError(f"no press found in the {nf} frames of {session.path} (no frame has "
                          f"{min_contact_px} px of colour change above the noise)")
     warnings: list[str] = []
-    offset, source, clock, clock_notes = _sync_clock(session, times, area, runs, period,
-                                                     sync_fz_n)
+    offset, source, clock, clock_notes, clock_se = _sync_clock(session, times, area, runs,
+                                                               period, sync_fz_n)
     warnings.extend(clock_notes)
     commanded = session.presses
     if commanded is not None and len(commanded["press"]) != len(runs):
@@ -291,6 +297,7 @@ def certify_session(session, *, min_contact_px: int = 200,
         certified.sort(key=lambda p: p.press)
     return Certification(presses=certified, rejected=rejected, clock=clock,
                          clock_offset_s=offset, clock_source=source, noise_sigma=sigma,
+                         clock_offset_se_s=clock_se,
                          contact_area_px=area, warnings=warnings, bevel_optics=optics,
                          mark_rule=mark_rule,
                          press_spans_s=np.array([(times[r[0]], times[r[-1]]) for r in runs],
@@ -474,10 +481,12 @@ def _window_middle(session, t_cert: float, offset: float, half: float, t_hold_en
 
 def _sync_clock(session, times: np.ndarray, area: np.ndarray, runs: list[np.ndarray],
                 period: float, sync_fz_n: np.ndarray | None
-                ) -> tuple[float, str, ClockSync | None, list[str]]:
+                ) -> tuple[float, str, ClockSync | None, list[str], float]:
     """The clock offset between frames and F/T log (step 2 of the module docstring).
 
-    Returns ``(offset_s, source, clock, warnings)``: the offset used, 'session.toml' or
+    Returns ``(offset_s, source, clock, warnings, se_s)``: the offset used (the median of
+    the presses' own profile correlations where five or more give one:
+    :func:`press_clock_offset`; the all-press correlation else), 'session.toml' or
     'estimated', the onset match (None when too few onsets), and the warning when a stated
     offset is contradicted by the presses.
     """
@@ -490,15 +499,20 @@ def _sync_clock(session, times: np.ndarray, area: np.ndarray, runs: list[np.ndar
     tol = max(0.05, 2.5 * period)
     clock = None
     refined = None
+    se = float("nan")
     if len(runs) >= 2 and force_on.size >= 2:
         clock = estimate_clock_offset(frame_on, force_on, tolerance_s=tol)
         if sync_fz_n is not None and np.shape(sync_fz_n) != fz.shape:
             raise InputError(f"sync_fz_n has {np.size(sync_fz_n)} values for {fz.size} F/T "
                              "samples")
-        refined, _ = refine_clock_offset(times, area, session.force_times_s,
-                                         fz if sync_fz_n is None else sync_fz_n, clock.offset_s,
-                                         span_s=max(0.2, 3 * period),
-                                         step_s=1.0 / cfg.rate_hz)
+        fz_sync = fz if sync_fz_n is None else sync_fz_n
+        span, step = max(0.2, 3 * period), 1.0 / cfg.rate_hz
+        refined, _ = refine_clock_offset(times, area, session.force_times_s, fz_sync,
+                                         clock.offset_s, span_s=span, step_s=step)
+        median, se, _ = press_clock_offset(times, area, runs, session.force_times_s, fz_sync,
+                                           refined, span_s=span, step_s=step)
+        if np.isfinite(median) and abs(median - refined) >= 0.5 * step:
+            refined = median                 # (the same grid step: the all-press value kept)
     if cfg.clock_offset_s is not None:
         offset, source = float(cfg.clock_offset_s), "session.toml"
         if refined is not None and abs(refined - offset) > max(0.5 * period, 0.02):
@@ -512,7 +526,7 @@ def _sync_clock(session, times: np.ndarray, area: np.ndarray, runs: list[np.ndar
     else:
         raise InputError(f"{session.path}: session.toml has no [force_sensor] clock_offset_s and "
                          "the frames and the F/T log share too few press onsets to estimate it")
-    return offset, source, clock, warnings
+    return offset, source, clock, warnings, (se if source == "estimated" else float("nan"))
 
 
 def _check_fz_sign(session, fz: np.ndarray) -> None:

@@ -153,8 +153,8 @@ def crossing_forces(indenter: np.ndarray, force_crossing_n: np.ndarray,
     return out, out_sd, disjoint
 
 
-def mark_shared_mm(travel_mm: np.ndarray, after_onset_mm: np.ndarray, period_s: float
-                   ) -> np.ndarray:
+def mark_shared_mm(travel_mm: np.ndarray, after_onset_mm: np.ndarray, period_s: float,
+                   clock_sd_s: float = CLOCK_SD_S) -> np.ndarray:
     """Half-width of the depth error every press shares under :func:`mark_depths`, mm.
 
     Parameters
@@ -165,15 +165,19 @@ def mark_shared_mm(travel_mm: np.ndarray, after_onset_mm: np.ndarray, period_s: 
         The depth read from the force after the onset, mm.
     period_s : float
         The frame period, s.
+    clock_sd_s : float, default CLOCK_SD_S
+        The clock offset's error, s (the larger of :data:`CLOCK_SD_S` and the
+        estimate's own standard error, :func:`press_clock_offset`, where it was
+        estimated).
 
     Returns
     -------
     shared_mm : (N,) float64 ndarray
-        ``speed x CLOCK_SD_S + STIFFNESS_REL x |after_onset|`` per press: the
-        clock's share (the onset's force read ``CLOCK_SD_S`` early or late on
+        ``speed x clock_sd_s + STIFFNESS_REL x |after_onset|`` per press: the
+        clock's share (the onset's force read ``clock_sd_s`` early or late on
         the ramp) and dP/dw's; every press moves the same way, so the
         intervals of E and nu carry it whole, not averaged.
     """
     u = np.asarray(travel_mm, np.float64)
     speed = u / float(period_s) if period_s > 0 else np.zeros_like(u)
-    return speed * CLOCK_SD_S + STIFFNESS_REL * np.abs(np.asarray(after_onset_mm, np.float64))
+    return speed * clock_sd_s + STIFFNESS_REL * np.abs(np.asarray(after_onset_mm, np.float64))

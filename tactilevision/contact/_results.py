@@ -214,6 +214,10 @@ class Certification:
         The offset used (t_force - t_frame).
     clock_source : str
         ``'session.toml'`` or ``'estimated'``.
+    clock_offset_se_s : float
+        The estimated offset's standard error from the spread of the presses' own
+        correlations (:func:`press_clock_offset`), s; NaN where the offset is stated or
+        too few presses give one.
     noise_sigma : float
         Camera noise (:func:`noise_level` of the first frame).
     contact_area_px : (F,) int64 ndarray
@@ -247,6 +251,7 @@ class Certification:
     bevel_optics: dict | None = None
     press_spans_s: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
     mark_rule: dict | None = None
+    clock_offset_se_s: float = float("nan")
 
 
 @dataclass(frozen=True)

@@ -15,8 +15,8 @@ import numpy as np
 
 from .._checks import InputError, check_array
 
-__all__ = ["ClockSync", "contact_onsets", "estimate_clock_offset", "force_onsets",
-           "refine_clock_offset"]
+__all__ = ["MIN_CLOCK_PRESSES", "ClockSync", "contact_onsets", "estimate_clock_offset",
+           "force_onsets", "press_clock_offset", "refine_clock_offset"]
 
 
 @dataclass(frozen=True)
@@ -280,3 +280,56 @@ def refine_clock_offset(frame_times_s: np.ndarray, contact_signal: np.ndarray,
         if c > best[0]:
             best = (c, float(o))
     return best[1], best[0]
+
+
+#: Fewest presses whose own profile correlations set the clock (:func:`press_clock_offset`).
+MIN_CLOCK_PRESSES = 5
+
+
+def press_clock_offset(frame_times_s: np.ndarray, contact_signal: np.ndarray,
+                       runs: list[np.ndarray], force_times_s: np.ndarray, fz_n: np.ndarray,
+                       offset_s: float, *, span_s: float = 0.2, step_s: float = 0.001
+                       ) -> tuple[float, float, int]:
+    """The clock offset as the median of each press's own profile correlation, and its
+    standard error.
+
+    :func:`refine_clock_offset` over all presses at once weighs the deep presses most,
+    whose contact area follows the force least linearly. Each press correlated on its
+    own frames (the run and three frames either side) gives one offset; their median is
+    the estimate, ``1.2533 x 1.4826 x MAD / sqrt(n)`` its standard error (a median's, of
+    a normal spread). On 12 gauge-block sessions rendered by Taxim (10 frames/s, true
+    offset 0.137 s) the all-press correlation was off by 4.9 ms RMS (up to 9.5), the
+    median of the presses' by 2.9 ms, and its error over its standard error by about 1
+    RMS (issue 53).
+
+    Parameters
+    ----------
+    frame_times_s, contact_signal, force_times_s, fz_n, offset_s, span_s, step_s
+        As :func:`refine_clock_offset` (`offset_s`: the start of each search).
+    runs : list of (K,) int ndarray
+        Each press's frames (indices into the frames).
+
+    Returns
+    -------
+    offset_s : float
+        The median (NaN with fewer than :data:`MIN_CLOCK_PRESSES` presses correlated).
+    se_s : float
+        Its standard error, s (NaN likewise).
+    n : int
+        Presses correlated.
+    """
+    tf = np.asarray(frame_times_s, np.float64)
+    a = np.asarray(contact_signal, np.float64)
+    per = []
+    for r in runs:
+        sel = np.arange(max(0, int(r[0]) - 3), min(a.size, int(r[-1]) + 4))
+        if np.ptp(a[sel]) == 0:
+            continue
+        per.append(refine_clock_offset(tf[sel], a[sel], force_times_s, fz_n, offset_s,
+                                       span_s=span_s, step_s=step_s)[0])
+    if len(per) < MIN_CLOCK_PRESSES:
+        return float("nan"), float("nan"), len(per)
+    per_a = np.asarray(per)
+    med = float(np.median(per_a))
+    mad = float(np.median(np.abs(per_a - med)))
+    return med, 1.2533 * 1.4826 * mad / np.sqrt(per_a.size), per_a.size

@@ -47,7 +47,7 @@ from pathlib import Path
 import numpy as np
 
 from .._checks import InputError
-from ..contact import certify_session
+from ..contact import CLOCK_SD_S, certify_session
 from ..io import Session, read_session
 from ..mechanics import relaxed_moduli
 from ._calibration import SessionCalibration
@@ -172,8 +172,9 @@ def calibrate_session(session: Session | str | Path, *, depth_rule: str = "auto"
         if depth_rule == "vernier":
             vernier_rule(st, presses, cert, cfg, fit_at, force, **rounds)
         elif depth_rule == "mark":
+            clock_sd = float(np.nan_to_num(max(CLOCK_SD_S, cert.clock_offset_se_s)))
             st.depth, st.std, st.fit, st.shared, mark_notes, std_indenter = mark_rule(
-                presses, force, fit_at, cfg, frame_period(session))
+                presses, force, fit_at, cfg, frame_period(session), clock_sd)
             notes.extend(mark_notes)
         elif depth_rule == "nominal":
             nominal_rule(st, presses, cfg, fit_at, force, frame_period(session))
