@@ -511,8 +511,10 @@ def _sync_clock(session, times: np.ndarray, area: np.ndarray, runs: list[np.ndar
                                          clock.offset_s, span_s=span, step_s=step)
         median, se, _ = press_clock_offset(times, area, runs, session.force_times_s, fz_sync,
                                            refined, span_s=span, step_s=step)
+        # within one grid step of the all-press value, that value is kept (the same step:
+        # only the float's last digits would move)
         if np.isfinite(median) and abs(median - refined) >= 0.5 * step:
-            refined = median                 # (the same grid step: the all-press value kept)
+            refined = median
     if cfg.clock_offset_s is not None:
         offset, source = float(cfg.clock_offset_s), "session.toml"
         if refined is not None and abs(refined - offset) > max(0.5 * period, 0.02):
