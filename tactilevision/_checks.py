@@ -15,7 +15,7 @@ from collections.abc import Sequence
 import numpy as np
 
 __all__ = ["InputError", "InputWarning", "ShapeError", "check_array", "check_poisson",
-           "check_positive"]
+           "check_positive", "check_presses"]
 
 
 class InputError(ValueError):
@@ -151,3 +151,23 @@ def check_array(
         bad = int(np.size(arr) - np.count_nonzero(np.isfinite(arr)))
         raise ShapeError(f"{name} must be finite, found {bad} NaN or infinite value(s)")
     return arr
+
+
+def check_presses(depth_mm: object, force_n: object, thickness_mm: object
+                  ) -> tuple[np.ndarray, np.ndarray, float]:
+    """A table of presses checked: ``(w, P, h)``, depths and forces as (N,) float64
+    arrays of one length with finite values, and the layer thickness positive.
+
+    Raises
+    ------
+    ShapeError
+        For arrays of other shapes or lengths.
+    InputError
+        For values that are not finite, or a thickness that is not positive.
+    """
+    w = check_array(depth_mm, "depth_mm", [("N",)], dtype=np.number, finite=True)
+    P = check_array(force_n, "force_n", [(w.shape[0],)], dtype=np.number, finite=True)
+    h = _real_scalar(thickness_mm, "thickness_mm", "a positive number")
+    if not (math.isfinite(h) and h > 0):
+        raise InputError(f"thickness_mm must be positive, got {thickness_mm!r}")
+    return w.astype(np.float64), P.astype(np.float64), h

@@ -12,7 +12,7 @@ import pytest
 
 from tactilevision import InputError
 from tactilevision.cli import main
-from tactilevision.cli._out import check_output_folder, output_folder
+from tactilevision.io import check_output_folder, output_folder
 
 SAMPLES = Path(__file__).resolve().parents[1] / "sample_frames"
 BALLS = str(SAMPLES / "gelsight_ball" / "frames")

@@ -11,7 +11,7 @@ import pytest
 
 from tactilevision import InputError
 from tactilevision.cli import main
-from tactilevision.cli._out import MANIFEST, StagedOutput, check_overwrite
+from tactilevision.io import MANIFEST, StagedOutput, check_overwrite
 
 ROOT = Path(__file__).resolve().parents[1]
 BALL_FRAMES = ROOT / "sample_frames" / "gelsight_ball" / "frames"

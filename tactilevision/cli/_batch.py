@@ -9,8 +9,8 @@ from pathlib import Path
 
 from .. import InputError, default_calibration_path
 from ..batch import BatchSettings, run_batch
+from ..io import check_output_folder, write_output_file
 from ._options import add_material_options, add_optics_options, beta_from_args, material_from_args
-from ._out import check_output_folder, write_output_file
 
 __all__ = ["add_parser", "run"]
 

@@ -6,7 +6,7 @@ import argparse
 import json
 
 from .. import cache_info, cache_limit_bytes, cache_root, clear_cache
-from ._out import write_output_file
+from ..io import write_output_file
 
 __all__ = ["add_parser", "run_clear", "run_info"]
 

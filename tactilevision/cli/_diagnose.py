@@ -9,7 +9,7 @@ from pathlib import Path
 
 from .. import InputError
 from ..diagnosis import diagnose, diagnose_indenter
-from ..io import read_measurements
+from ..io import StagedOutput, check_output_folder, check_overwrite, read_measurements
 from ..mechanics import effect_names, model_label
 from ..viz import (
     diagnosis_figures,
@@ -19,7 +19,7 @@ from ..viz import (
 )
 from ._fit import _write_json, depth_uncertainty
 from ._fit_indenter import depth_shared, force_sd, indenter_of
-from ._out import StagedOutput, add_overwrite_argument, check_output_folder, check_overwrite
+from ._out import add_overwrite_argument
 
 __all__ = ["add_parser", "run"]
 

@@ -18,8 +18,9 @@ from ..history import (
     write_history_csv,
     write_history_report,
 )
+from ..io import StagedOutput, check_output_folder, check_overwrite
 from ._fit import _write_json
-from ._out import StagedOutput, add_overwrite_argument, check_output_folder, check_overwrite
+from ._out import add_overwrite_argument
 
 _DESCRIPTION = """\
 Reads the output folders of tactilevision calibrate (fit.json, rejected.csv;

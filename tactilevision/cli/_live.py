@@ -12,10 +12,15 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from .. import InputError, default_calibration_path
-from ..io import check_output_file, read_reference, record_output
+from ..io import (
+    check_output_file,
+    check_output_folder,
+    output_folder,
+    read_reference,
+    record_output,
+)
 from ..live import Pipeline
 from ._options import add_material_options, add_optics_options
-from ._out import check_output_folder, output_folder
 
 __all__ = ["add_parser", "annotate", "run"]
 

@@ -12,7 +12,13 @@ from pathlib import Path
 import numpy as np
 
 from .. import InputError
-from ..io import read_ball_presses, taxim_datapack
+from ..io import (
+    StagedOutput,
+    check_output_folder,
+    check_overwrite,
+    read_ball_presses,
+    taxim_datapack,
+)
 from ..optics import (
     CAP_DEG,
     CIRCLE_ERROR,
@@ -29,7 +35,7 @@ from ..optics import (
     non_ball_presses,
     press_folds,
 )
-from ._out import StagedOutput, add_overwrite_argument, check_output_folder, check_overwrite
+from ._out import add_overwrite_argument
 
 __all__ = ["add_parser", "parse_presses", "run_calibrate"]
 

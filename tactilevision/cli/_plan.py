@@ -7,6 +7,7 @@ import math
 from pathlib import Path
 
 from .. import InputError
+from ..io import write_output_file
 from ..mechanics import EFFECT_SIZE_PARAMS
 from ..planning import (
     PlanPrediction,
@@ -18,7 +19,6 @@ from ..planning import (
     recommend,
 )
 from ._fit import _write_json
-from ._out import write_output_file
 
 __all__ = ["add_parser", "run"]
 

@@ -11,12 +11,12 @@ from pathlib import Path
 
 from .. import InputError
 from ..diagnosis import validate_indentation, validate_indenter
-from ..io import read_measurements
+from ..io import StagedOutput, check_output_folder, check_overwrite, read_measurements
 from ..mechanics import fit_indentation
 from ..viz import save_validation_figure
 from ._fit import _write_json
 from ._fit_indenter import fit_laws, indenter_of
-from ._out import StagedOutput, add_overwrite_argument, check_output_folder, check_overwrite
+from ._out import add_overwrite_argument
 
 __all__ = ["add_parser", "run"]
 

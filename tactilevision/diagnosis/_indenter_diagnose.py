@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import optimize, stats
 
-from .._checks import InputError, check_array
+from .._checks import InputError, check_array, check_presses
 from ..mechanics import Indenter, json_ready
 from ._indenter_noise import PressNoise, best_shift, press_noise, weighted_linear
 
@@ -333,12 +333,7 @@ def diagnose_indenter(depth_mm: np.ndarray, force_n: np.ndarray, indenter: Inden
 
 
 def _checked(depth_mm, force_n, thickness_mm) -> tuple[np.ndarray, np.ndarray, float]:
-    w = check_array(depth_mm, "depth_mm", [("N",)], dtype=np.number, finite=True)
-    P = check_array(force_n, "force_n", [(w.shape[0],)], dtype=np.number, finite=True)
-    w, P = w.astype(np.float64), P.astype(np.float64)
-    h = float(thickness_mm)
-    if not (math.isfinite(h) and h > 0):
-        raise InputError(f"thickness_mm must be positive, got {thickness_mm!r}")
+    w, P, h = check_presses(depth_mm, force_n, thickness_mm)
     if w.size < 3:
         raise InputError(f"{w.size} presses: the ladder needs three or more")
     for name, arr in (("depth_mm", w), ("force_n", P)):

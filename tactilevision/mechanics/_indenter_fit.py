@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 from scipy import optimize, stats
 
-from .._checks import InputError, check_array
+from .._checks import InputError, check_array, check_presses
 from ._indenter import Indenter
 
 __all__ = ["IndenterFit", "apparent_modulus", "fit_indenter", "json_ready"]
@@ -262,12 +262,7 @@ def _checked(depth_mm, force_n, indenter: Indenter, thickness_mm: float, law: st
              contact: str | None, nu: float | None, nu_range: tuple[float, float],
              depth_std_mm, depth_shared_mm: float, confidence: float) -> tuple:
     """:func:`fit_indenter`'s arguments checked: (w, P, u, h, reach, contact, nu stated)."""
-    w = check_array(depth_mm, "depth_mm", [("N",)], dtype=np.number, finite=True)
-    P = check_array(force_n, "force_n", [(w.shape[0],)], dtype=np.number, finite=True)
-    w, P = w.astype(np.float64), P.astype(np.float64)
-    h = float(thickness_mm)
-    if not (math.isfinite(h) and h > 0):
-        raise InputError(f"thickness_mm must be positive, got {thickness_mm!r}")
+    w, P, h = check_presses(depth_mm, force_n, thickness_mm)
     if not 0 < confidence < 1:
         raise InputError(f"confidence must be in (0, 1), got {confidence!r}")
     n = w.size
