@@ -219,14 +219,15 @@ def run_calibrate(args: argparse.Namespace) -> int:
     idx = parse_presses(args.presses, len(ps.frames))
     given = ps.centers_px is not None and ps.radii_px is not None and not args.detect_circles
     mm = args.mm_per_px
-    ps, ball_mm, idx, refused, origin = _screen_presses(args, ps, ball_mm, idx, given)
-    held, spread = _held_out(args, ps, given, ball_mm / mm)
+    ps, ball_mm, idx, refused, origin, circles = _screen_presses(args, ps, ball_mm, idx,
+                                                                 given)
+    held = _held_out(args, ps, circles, ball_mm / mm)
     train = _trainer(args, ps, given, ball_mm)
     # the report's calibration never sees the presses it is scored on, nor did the choice
     # of its engine
     train_idx = idx if held is None else np.flatnonzero(~held)
-    engine, choice, inner = _choose_engine(args, ps, given, spread, ball_mm / mm, train_idx,
-                                           cells, train)
+    engine, choice, inner = _choose_engine(args, ps, given, circles, ball_mm / mm,
+                                           train_idx, cells, train)
     for key in ("fitted_on", "scored_on"):          # the folder's numbering, and the files
         if key in choice:
             choice[f"{key}_files"] = [ps.names[i] for i in choice[key]]
@@ -239,8 +240,8 @@ def run_calibrate(args: argparse.Namespace) -> int:
         cal.provenance["refused"] = refused
     if args.credit:
         cal.provenance["credit"] = args.credit
-    report = _report(args, ps, cal, idx, train_idx, inner, engine, train, given, held, spread,
-                     ball_mm / mm, origin)
+    report = _report(args, ps, cal, idx, train_idx, inner, engine, train, given, held,
+                     circles, ball_mm / mm, origin)
     report.update(engine=choice, refused=refused)
     # into place only when complete; the folder's manifest records it (a rerun may replace it)
     with StagedOutput(out.parent, overwrite=args.overwrite,
@@ -325,14 +326,14 @@ def _subset(ps, keep: np.ndarray):
 
 
 def _report(args: argparse.Namespace, ps, cal, idx, train_idx, inner, engine, train,
-            given: bool, held, spread, ball_px: np.ndarray, origin: np.ndarray) -> dict:
+            given: bool, held, circles, ball_px: np.ndarray, origin: np.ndarray) -> dict:
     """The accuracy report (:func:`_accuracy_report`). With an engine chosen on held-out
     training presses, the calibration scored is the chosen candidate's (trained on the
     presses the choice trained on), and the presses the choice scored are not scored."""
     if inner is None:
         scoring = None if held is None else train(train_idx, engine)
         return _accuracy_report(args, ps, scoring if scoring is not None else cal, train_idx,
-                                given, held, spread, ball_px, origin)
+                                given, held, circles, ball_px, origin)
     scoring, fit_on, score_on = inner
     if held is None and args.presses is None:        # --holdout 0: in sample, said so
         return _accuracy_report(args, ps, cal, idx, given, None, None, ball_px, origin)
@@ -341,7 +342,7 @@ def _report(args: argparse.Namespace, ps, cal, idx, train_idx, inner, engine, tr
     view = _subset(ps, keep)
     return _accuracy_report(args, view, scoring, pos, given,
                             None if held is None else held[keep],
-                            None if spread is None else (spread[0][keep], spread[1][keep]),
+                            (circles[0][keep], circles[1][keep]),
                             ball_px[keep], origin[keep])
 
 
@@ -369,24 +370,20 @@ def _check_calibrate_options(args: argparse.Namespace) -> tuple[int, int]:
     return cells
 
 
-def _held_out(args: argparse.Namespace, ps, given: bool, ball_px: np.ndarray):
-    """The presses held out for the accuracy report (None: none), and the circles they were
-    spread by ((centres, radii); None when none were held out)."""
+def _held_out(args: argparse.Namespace, ps, circles, ball_px: np.ndarray):
+    """The presses held out for the accuracy report (None: none), spread over the pad by
+    their circles ((centres, radii): given, or detected by no calibration)."""
     if args.presses is not None or args.holdout <= 0:
-        return None, None
-    if given:
-        spread = (ps.centers_px, ps.radii_px)
-    else:
-        spread = detect_contact_circles(ps.frames, ps.reference, edge=args.detect_edge)
-    held = holdout_presses(spread[0], spread[1], ball_px, ps.reference.shape[:2],
+        return None
+    held = holdout_presses(circles[0], circles[1], ball_px, ps.reference.shape[:2],
                            args.holdout)
     if not held.any() or np.count_nonzero(~held) < 2:
-        return None, None
-    return held, spread
+        return None
+    return held
 
 
 def _accuracy_report(args: argparse.Namespace, ps, scoring, train_idx: np.ndarray,
-                     given: bool, held, spread, ball_px: np.ndarray, origin: np.ndarray
+                     given: bool, held, circles, ball_px: np.ndarray, origin: np.ndarray
                      ) -> dict:
     """The accuracy report: held-out presses (else the training ones, said so), by ball."""
     trained = np.zeros(len(ps.frames), bool)
@@ -402,12 +399,7 @@ def _accuracy_report(args: argparse.Namespace, ps, scoring, train_idx: np.ndarra
             centres[train_idx] = scoring.provenance["centers_px"]
             radii[train_idx] = scoring.provenance["radii_px"]
             others = np.flatnonzero(~trained)
-            if others.size:
-                if held is not None:
-                    centres[others], radii[others] = spread[0][others], spread[1][others]
-                else:
-                    centres[others], radii[others] = detect_contact_circles(
-                        ps.frames[others], ps.reference, edge=args.detect_edge)
+            centres[others], radii[others] = circles[0][others], circles[1][others]
         report = calibration_accuracy(DepthReconstructor(scoring), ps.frames, centres, radii,
                                       ball_px, trained=trained,
                                       label_fraction=scoring.provenance["label_fraction"],
@@ -438,7 +430,7 @@ def _network_unavailable() -> str | None:
     return None
 
 
-def _choose_engine(args: argparse.Namespace, ps, given: bool, spread, ball_px: np.ndarray,
+def _choose_engine(args: argparse.Namespace, ps, given: bool, circles, ball_px: np.ndarray,
                    train_idx: np.ndarray, cells: tuple[int, int], train
                    ) -> tuple[Engine, dict, tuple | None]:
     """The engine the calibration keeps (:mod:`tactilevision.optics._engine`), the record
@@ -455,7 +447,7 @@ def _choose_engine(args: argparse.Namespace, ps, given: bool, spread, ball_px: n
         return engine, {"chosen": engine.name, "model": engine.model,
                         "lut_cells": list(engine.lut_cells), "by": f"--model {args.model}",
                         "candidates": [], "left_out": {}}, None
-    centres, radii = _train_circles(args, ps, given, spread, train_idx)
+    centres, radii = circles[0][train_idx], circles[1][train_idx]
     shape = ps.reference.shape[:2]
     n_in = int(np.count_nonzero(~edge_cut(centres, radii, shape)))
     fold = (press_folds(centres, radii, ball_px[train_idx], shape, min(ENGINE_FOLDS, n_in))
@@ -509,15 +501,6 @@ def _pick(rows: list[dict]) -> str:
     return best["engine"]
 
 
-def _train_circles(args: argparse.Namespace, ps, given: bool, spread, train_idx: np.ndarray):
-    """The training presses' circles: given, or detected by no calibration."""
-    if given:
-        return ps.centers_px[train_idx], ps.radii_px[train_idx]
-    if spread is not None:
-        return spread[0][train_idx], spread[1][train_idx]
-    return detect_contact_circles(ps.frames[train_idx], ps.reference, edge=args.detect_edge)
-
-
 def _score_split(args: argparse.Namespace, ps, cal: PhotometricCalibration,
                  fit_on: np.ndarray, score_on: np.ndarray, given: bool, circles,
                  ball_px: np.ndarray) -> dict:
@@ -566,9 +549,10 @@ def _screen_presses(args: argparse.Namespace, ps, ball_mm: np.ndarray, idx: np.n
     it: a frame with no contact found, or whose contact does not read as the ball's
     (:func:`~tactilevision.optics.non_ball_presses`). Each is printed with its file.
 
-    Returns ``(ps, ball_mm, idx, refused, origin)``: the presses kept, their balls, the
-    training selection among them, the refused (``press``, ``file``, ``reason``) and each
-    kept press's index in the folder."""
+    Returns ``(ps, ball_mm, idx, refused, origin, circles)``: the presses kept, their
+    balls, the training selection among them, the refused (``press``, ``file``,
+    ``reason``), each kept press's index in the folder, and the kept presses' circles
+    ``(centres, radii)``: given, or detected by no calibration."""
     n = len(ps.frames)
     alive = np.ones(n, bool)
     refused: list[dict] = []
@@ -616,7 +600,7 @@ def _screen_presses(args: argparse.Namespace, ps, ball_mm: np.ndarray, idx: np.n
                 f"its contact is not the {ball_mm[k]:g} mm ball's: it {read}; another "
                 "object, two contacts, or a circle off its contact")})
     if not refused:
-        return ps, ball_mm, idx, refused, np.arange(n)
+        return ps, ball_mm, idx, refused, np.arange(n), (centres, radii)
     for r in refused:
         print(f"refused press {r['press']} ({r['file']}): {r['reason']}")
     keep = np.flatnonzero(alive)
@@ -626,4 +610,5 @@ def _screen_presses(args: argparse.Namespace, ps, ball_mm: np.ndarray, idx: np.n
         raise InputError(f"{args.ball_presses}: {idx.size} of the presses to train on left "
                          f"after refusing {', '.join(r['file'] for r in refused)}; at least "
                          "two are needed")
-    return _subset(ps, keep), ball_mm[keep], idx, refused, keep
+    return (_subset(ps, keep), ball_mm[keep], idx, refused, keep,
+            (centres[keep], radii[keep]))

@@ -24,8 +24,8 @@ __all__ = ["NON_BALL_FLOOR_DEG", "NON_BALL_RATIO", "ball_press_angles", "non_bal
 #: annotated by hand and 3.0 with detected ones (taxim's 48 GelSight presses: 12.7 and
 #: 15.6 deg against 5.0 and 5.2), 2.4 on the shared GelSight Mini's 22, 2.0 and 1.6 on
 #: GelSlim 3.0's 75 and 39 (circles detected); Taxim's renders of a ring, a flat punch and a
-#: slotted screw head among 12 of its ball presses read 6.8 to 11.9 times the median with
-#: the circles drawn for them and 4.7 to 5.8 with detected ones (issue 55).
+#: slotted screw head among 12 of its ball presses and a cone read 7.1 to 13.0 times the
+#: median with the circles drawn for them and 4.9 to 6.1 with detected ones (issue 55).
 NON_BALL_RATIO = 3.5
 #: ... and this many degrees (a set read within a few degrees is not held to a few more).
 NON_BALL_FLOOR_DEG = 12.0
@@ -91,21 +91,29 @@ def ball_press_angles(reference: np.ndarray, frames: np.ndarray, centers_px: np.
     per = _press_pixels(reference, frames, np.asarray(centers_px, np.float64),
                         np.asarray(radii_px, np.float64),
                         np.asarray(ball_radius_px, np.float64))
-    allc = np.concatenate([c for c, _ in per]) if per else np.zeros((0, 3))
+    return _table_angles(per, np.ones(len(per), bool), bins)
+
+
+def _table_angles(per: list, member: np.ndarray, bins: int = 16) -> np.ndarray:
+    """Each press's median angle read by the colour table of the `member` presses, less
+    its own pixels where it is one (the table's bins summed once; each press's taken off)."""
+    table = [c for (c, _), m in zip(per, member, strict=True) if m]
+    allc = np.concatenate(table) if table else np.zeros((0, 3))
     if allc.shape[0] == 0:
-        return np.full(len(frames), np.nan)
+        return np.full(len(per), np.nan)
     lo, hi = np.percentile(allc, 0.5, axis=0), np.percentile(allc, 99.5, axis=0)
     span = np.maximum(hi - lo, 1e-9)
     m = bins ** 3
     cells, sums = [], np.zeros((3, m))
-    for c, n in per:
+    for (c, n), mem in zip(per, member, strict=True):
         q = np.clip(((c - lo) / span * bins).astype(np.int64), 0, bins - 1)
         k = (q[:, 0] * bins + q[:, 1]) * bins + q[:, 2]
         own = np.stack([np.bincount(k, minlength=m), np.bincount(k, n[:, 0], m),
                         np.bincount(k, n[:, 1], m)])
-        cells.append((k, own))
-        sums += own
-    out = np.full(len(frames), np.nan)
+        cells.append((k, own if mem else 0.0))
+        if mem:
+            sums += own
+    out = np.full(len(per), np.nan)
     for i, ((k, own), (_, n)) in enumerate(zip(cells, per, strict=True)):
         rest = sums - own
         sel = rest[0][k] > 0
@@ -127,9 +135,9 @@ def non_ball_presses(reference: np.ndarray, frames: np.ndarray, centers_px: np.n
                      ) -> tuple[np.ndarray, np.ndarray, float]:
     """The presses whose contact is not the stated ball's.
 
-    :func:`ball_press_angles` twice: on every press, then on those it did not refuse
-    (a refused press's colours no longer in the table that reads the others; each
-    refused press read again by the table of the kept ones).
+    :func:`ball_press_angles`' reading twice: by the table of every press, then by the
+    table of those it did not refuse (a refused press's colours no longer in the table
+    that reads the others; each refused press read again by the kept ones' table).
 
     Parameters
     ----------
@@ -151,11 +159,12 @@ def non_ball_presses(reference: np.ndarray, frames: np.ndarray, centers_px: np.n
     InputError
         With fewer than two presses.
     """
-    frames = np.asarray(frames)
-    c = np.asarray(centers_px, np.float64).reshape(-1, 2)
-    r = np.asarray(radii_px, np.float64).reshape(-1)
-    b = np.asarray(ball_radius_px, np.float64).reshape(-1)
-    ang = ball_press_angles(reference, frames, c, r, b)
+    if len(frames) < 2:
+        raise InputError("checking the presses needs at least two")
+    per = _press_pixels(reference, frames, np.asarray(centers_px, np.float64).reshape(-1, 2),
+                        np.asarray(radii_px, np.float64).reshape(-1),
+                        np.asarray(ball_radius_px, np.float64).reshape(-1))
+    ang = _table_angles(per, np.ones(len(per), bool))
 
     def cut(a: np.ndarray) -> float:
         return max(NON_BALL_RATIO * float(np.nanmedian(a)), NON_BALL_FLOOR_DEG)
@@ -163,12 +172,9 @@ def non_ball_presses(reference: np.ndarray, frames: np.ndarray, centers_px: np.n
     refused = ~(ang <= cut(ang))
     kept = np.flatnonzero(~refused)
     if refused.any() and kept.size >= 2:
-        again = np.full(ang.shape, np.nan)
-        again[kept] = ball_press_angles(reference, frames[kept], c[kept], r[kept], b[kept])
-        for i in np.flatnonzero(refused):     # each refused press against the kept ones
-            sel = np.append(kept, i)
-            again[i] = ball_press_angles(reference, frames[sel], c[sel], r[sel], b[sel])[-1]
-        ang = again
+        # the kept presses' table: each kept press less its own pixels, each refused one
+        # read by it whole
+        ang = _table_angles(per, ~refused)
         refused = ~(ang <= cut(ang[kept]))
     if np.all(np.isnan(ang)):
         return refused, ang, float("nan")
