@@ -180,9 +180,10 @@ def test_todays_gs_sdk_network_reproduces_gs_sdk_on_a_real_gelsight_mini():
     gives gs_sdk's own gradients (``gs_sdk_reference.npz``, computed by gs_sdk itself on
     six of the folder's presses) to 0.05 deg everywhere (gs_sdk feeds its network the raw
     frame and background, so the import keeps the reference unblurred and the exposure
-    gain off); the default table engine within 1.7 deg median inside the contact (20 px
-    position cells at 320 x 240: 1.00 to 1.54 deg; 40 px cells gave 1.2 to 2.0; the
-    issue's target of 1.0 is not met)."""
+    gain off); the default table engine (first order, 16 colour cells, 20 px position
+    cells at 320 x 240: 0.41 to 0.85 deg when written) within 1.0 deg median inside the
+    contact of every press, where a table of order 0 (32 colour cells) read 1.00 to 1.54
+    deg and is kept here above 0.95 on the worst press."""
     import cv2
     from _data import GELSIGHT_MINI, GELSIGHT_MINI_MM_PER_PX, GELSIGHT_MINI_REASON
 
@@ -196,6 +197,9 @@ def test_todays_gs_sdk_network_reproduces_gs_sdk_on_a_real_gelsight_mini():
     assert cal.reference_blur == 0.0 and not cal.normalise_gain
     exact = DepthReconstructor(cal, engine="onnx")
     table = DepthReconstructor(cal)
+    assert cal.table_order == 1 and table._table.order == 1 and table._table.bins == 16
+    order0 = DepthReconstructor(cal, table_order=0)
+    worst0 = 0.0
 
     def angle_deg(G, gx, gy):
         # gs_sdk's G is the slope of the height towards the camera: our depth slope is -G
@@ -210,4 +214,6 @@ def test_todays_gs_sdk_network_reproduces_gs_sdk_on_a_real_gelsight_mini():
         contact = np.hypot(G[..., 0], G[..., 1]) > np.tan(np.radians(5.0))
         assert contact.sum() > 5000
         assert angle_deg(G, *exact.gradients(frame)).max() < 0.05
-        assert np.median(angle_deg(G, *table.gradients(frame))[contact]) < 1.7
+        assert np.median(angle_deg(G, *table.gradients(frame))[contact]) < 1.0
+        worst0 = max(worst0, np.median(angle_deg(G, *order0.gradients(frame))[contact]))
+    assert worst0 > 0.95

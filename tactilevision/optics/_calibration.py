@@ -89,6 +89,13 @@ class PhotometricCalibration(CalibrationData):
         99th percentiles of the labelled contact pixels, widened to the flat
         gel's 0.1 and 99.9, within ``colour_lo, colour_hi``); None: the
         colour range. Colours beyond it are read at its edge.
+    table_order : {0, 1}
+        MLP only: the order of the network's table in the default engine
+        (:func:`~tactilevision.optics._table.tabulate_mlp`): 0, a value per
+        colour cell (32 cells a channel); 1, a value and its slopes along
+        the colour axes (16 cells a channel), for a network that was not
+        trained on the table's cells. Default 0; 1 for gs_sdk's networks
+        (:meth:`from_gs_sdk`).
     provenance : dict
         Source, date, press count, ball radius, version: how it was made.
     shape : (int, int)
@@ -320,7 +327,8 @@ class PhotometricCalibration(CalibrationData):
         layers = gs_sdk_layers(state)
         # gs_sdk feeds its network the raw frame and the raw background, no exposure gain
         cal = cls(model="mlp", reference=reference.copy(), mm_per_px=float(mm_per_px),
-                  use_position=True, markers=False, reference_blur=0.0, normalise_gain=False)
+                  use_position=True, markers=False, reference_blur=0.0, normalise_gain=False,
+                  table_order=1)
         cal.onnx_bytes = onnx_from_gs_sdk(layers, cal.shape)
         cal.provenance = {
             "source": source, "imported_from": "gs_sdk BGRXYMLPNet",
@@ -356,6 +364,7 @@ class PhotometricCalibration(CalibrationData):
             "colour_lo": [float(v) for v in self.colour_lo],
             "colour_hi": [float(v) for v in self.colour_hi],
             "position_cell_px": int(self.position_cell_px),
+            "table_order": int(self.table_order),
             "provenance": self.provenance,
         }
         if self.table_lo is not None and self.table_hi is not None:
@@ -465,6 +474,10 @@ class PhotometricCalibration(CalibrationData):
         if isinstance(cell_px, bool) or not isinstance(cell_px, int) or cell_px < 0:
             raise InputError(f"calibration file {path}: 'position_cell_px' must be a "
                              f"non-negative integer, got {cell_px!r}")
+        table_order = meta.get("table_order", 0)
+        if isinstance(table_order, bool) or table_order not in (0, 1):
+            raise InputError(f"calibration file {path}: 'table_order' must be 0 or 1, got "
+                             f"{table_order!r}")
         table_range: tuple = (None, None)
         if "table_lo" in meta or "table_hi" in meta:
             try:
@@ -496,4 +509,4 @@ class PhotometricCalibration(CalibrationData):
                    normalise_gain=bool(meta.get("normalise_gain", defaults.normalise_gain)),
                    colour_lo=np.asarray(lo, np.float32), colour_hi=np.asarray(hi, np.float32),
                    position_cell_px=cell_px, table_lo=table_range[0], table_hi=table_range[1],
-                   provenance=dict(meta.get("provenance", {})))
+                   table_order=int(table_order), provenance=dict(meta.get("provenance", {})))

@@ -42,6 +42,7 @@ class CalibrationData:
     position_cell_px: int = 0
     table_lo: np.ndarray | None = None
     table_hi: np.ndarray | None = None
+    table_order: int = 0
     provenance: dict[str, Any] = field(default_factory=dict)
 
     @property

@@ -73,8 +73,17 @@ class DepthReconstructor:
         (on the sample session's flat-punch frames the area above 0.02 mm
         falls from 111-125 mm^2 to 23-34 mm^2, the punch face being
         20 mm^2).
-    table_bins : int, default 32
-        Colour cells per channel when tabulating an MLP.
+    table_bins : int, optional
+        Colour cells per channel when tabulating an MLP: by default 32 for a
+        table of order 0 and 16 for one of order 1.
+    table_order : {0, 1}, optional
+        Order of an MLP's table (:func:`tabulate_mlp`): 0, the network's
+        value per colour cell; 1, its value and slopes along the colour
+        axes, read as a plane inside the cell. Default: the calibration's
+        ``table_order`` (1 for gs_sdk's networks, whose table of order 0
+        read 1.00 to 1.54 degrees median from the network inside the
+        contacts of a real GelSight Mini and of order 1 0.41 to 0.82, at
+        about 1.4 times the per-frame cost: ``benchmarks/bench_table_order.py``).
     threads : int, default 1
         onnxruntime threads (1: one core, as embedded users run it).
     level : {'median', 'far_field'}, default 'median'
@@ -132,8 +141,8 @@ class DepthReconstructor:
 
     def __init__(self, calibration: CalibrationData, *,
                  reference: np.ndarray | str = "calibration", engine: Engine = "table",
-                 boundary: Boundary = "neumann", table_bins: int = 32,
-                 threads: int = 1, flat_reference: bool = False,
+                 boundary: Boundary = "neumann", table_bins: int | None = None,
+                 table_order: int | None = None, threads: int = 1, flat_reference: bool = False,
                  level: Literal["median", "far_field"] = "median",
                  level_degree: int = 4, zero_background: bool = False) -> None:
         if engine not in ("table", "onnx"):
@@ -191,7 +200,14 @@ class DepthReconstructor:
                 raise InputError("MLP calibration without a network")
             self._mlp = MLPGradientModel(calibration.onnx_bytes, threads=threads)
             if engine == "table":  # tabulated once on all cores, and kept for the next
-                self._table = _tabulated(calibration, self._ref_inv, table_bins)
+                order = calibration.table_order if table_order is None else table_order
+                if order not in (0, 1):
+                    raise InputError(f"table_order must be 0 or 1, got {table_order!r}")
+                bins = (32 if order == 0 else 16) if table_bins is None else table_bins
+                if isinstance(bins, bool) or not isinstance(bins, int | np.integer) or bins < 2:
+                    raise InputError(f"table_bins must be an integer of at least 2, got "
+                                     f"{table_bins!r}")
+                self._table = _tabulated(calibration, self._ref_inv, int(bins), int(order))
         self.engine = engine
         if engine == "onnx":
             h, w = self.shape
@@ -468,7 +484,7 @@ _TABLES: OrderedDict[tuple, object] = OrderedDict()
 _TABLES_KEPT = 2
 
 #: Bump when the stored tabulation or its meaning changes: old files then miss.
-_TABLE_FORMAT = 1
+_TABLE_FORMAT = 2
 
 
 def _table_cache_path(key: tuple):
@@ -480,26 +496,31 @@ def _table_cache_path(key: tuple):
     return cache_root() / "optics" / f"mlp_table_{h.hexdigest()}.npz"
 
 
-def _read_table(path, ref_inv: np.ndarray, bins: int):
+def _read_table(path, ref_inv: np.ndarray, bins: int, order: int = 0):
     """The tabulation stored at `path`, or None (a miss, or a file that cannot be trusted)."""
     try:
         with np.load(path, allow_pickle=False) as data:
             gx, gy, cell = data["gx_table"], data["gy_table"], data["cell_offset"]
             lo, hi, b = data["lo"], data["hi"], int(data["bins"])
+            slopes = data["slopes"] if order == 1 else None
     except Exception:          # missing, truncated, damaged or of another layout
         return None
     if (b != bins or cell.shape != ref_inv.shape[:2] or gx.shape != gy.shape
             or not (np.all(np.isfinite(gx)) and np.all(np.isfinite(gy)))):
         return None
+    if slopes is not None and (slopes.shape != (gx.size, 8)
+                               or not np.all(np.isfinite(slopes))):
+        return None
     touch(path)                          # used: evicted last (tactilevision._cache)
-    return GradientTable(gx, gy, cell, b, lo, hi, ref_inv)
+    return GradientTable(gx, gy, cell, b, lo, hi, ref_inv, slopes=slopes)
 
 
 def _write_table(path, table) -> None:
     """Store a tabulation atomically; a folder that cannot be written is skipped."""
+    extra = {} if table.slopes is None else {"slopes": table.slopes}
     savez_atomic(path, gx_table=table.gx_table, gy_table=table.gy_table,
                  cell_offset=table.cell_offset, lo=np.asarray(table.lo),
-                 hi=np.asarray(table.hi), bins=np.int64(table.bins))
+                 hi=np.asarray(table.hi), bins=np.int64(table.bins), **extra)
 
 
 def table_domain(calibration) -> tuple[np.ndarray, np.ndarray, int]:
@@ -518,28 +539,29 @@ def table_domain(calibration) -> tuple[np.ndarray, np.ndarray, int]:
     return np.asarray(lo, np.float32), np.asarray(hi, np.float32), cell_px
 
 
-def _tabulated(calibration, ref_inv: np.ndarray, bins: int):
-    """The network's gradient table for `ref_inv`: from memory, else from the disk cache,
-    else tabulated (and kept in both)."""
+def _tabulated(calibration, ref_inv: np.ndarray, bins: int, order: int = 0):
+    """The network's gradient table (of `order`) for `ref_inv`: from memory, else from the
+    disk cache, else tabulated (and kept in both)."""
     lo, hi, cell_px = table_domain(calibration)
     key = (hashlib.blake2b(calibration.onnx_bytes, digest_size=16).digest(),
            hashlib.blake2b(np.ascontiguousarray(ref_inv).tobytes(), digest_size=16).digest(),
            ref_inv.shape, tuple(lo.tolist()), tuple(hi.tolist()), int(bins),
-           bool(calibration.use_position), cell_px)
+           bool(calibration.use_position), cell_px, int(order))
     if key in _TABLES:
         _TABLES.move_to_end(key)
         return _TABLES[key]
     # then the disk cache (a CLI command or a worker process starts without the table in
     # memory), else the network over every colour cell
     path = _table_cache_path(key)
-    table = _read_table(path, ref_inv, bins)
+    table = _read_table(path, ref_inv, bins, order)
     if table is None:
         table = tabulate_mlp(MLPGradientModel(calibration.onnx_bytes, threads=0), ref_inv,
                              lo=lo, hi=hi, bins=bins, cell_px=cell_px,
-                             use_position=calibration.use_position)
+                             use_position=calibration.use_position, order=order)
         _write_table(path, table)
-    for arr in (table.gx_table, table.gy_table, table.cell_offset):
-        arr.setflags(write=False)             # shared between reconstructors: read only
+    for arr in (table.gx_table, table.gy_table, table.cell_offset, table.slopes):
+        if arr is not None:
+            arr.setflags(write=False)             # shared between reconstructors: read only
     _TABLES[key] = table
     while len(_TABLES) > _TABLES_KEPT:
         _TABLES.popitem(last=False)

@@ -9,6 +9,15 @@ per frame that construction could prepare. Two sources fill it:
 - a position-aware network, evaluated once per (position cell, colour cell)
   at construction (:func:`tabulate_mlp`): the network's accuracy at the
   table's speed, up to the quantisation of colour and position.
+
+A network's table may also be of first order (``order=1``): each colour cell
+then holds the network's value at its lower corner and its derivatives along
+the three colour axes, and a pixel reads ``g0 + sum_c dg/dq_c f_c`` with
+``f_c`` its place inside the cell: a piecewise-linear table, which on gs_sdk's
+GelSight Mini network removes most of what 32 colour cells cost (16 cells of
+first order: 0.41 to 0.82 degrees median from the network inside the contacts
+against 1.00 to 1.54 for 32 of order 0), at about 0.25 ms more per 320 x 240
+frame (``benchmarks/bench_table_order.py``).
 """
 
 from __future__ import annotations
@@ -18,6 +27,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from .._checks import InputError
 from ._ball import gradients_from_normals
 from ._lut import ColourLUT
 from ._mlp import MLPGradientModel, cell_position_inputs, mlp_inputs
@@ -42,6 +52,11 @@ class GradientTable:
         Colour-change range over the bins.
     ref_inv : (H, W, 3) float32 ndarray
         Inverse reference (:func:`reference_inverse`).
+    slopes : (C * B^3, 8) float32 ndarray or None
+        A first-order table: per row (gx, gy) at the colour cell's lower
+        corner, then (dgx/dq_c, dgy/dq_c) for c = 0, 1, 2, derivatives per
+        colour cell; ``gx_table, gy_table`` then hold the cells' centre
+        values. None: order 0 (the centre value for the whole cell).
     """
 
     gx_table: np.ndarray
@@ -51,6 +66,7 @@ class GradientTable:
     lo: np.ndarray
     hi: np.ndarray
     ref_inv: np.ndarray
+    slopes: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         k = (self.bins / (self.hi - self.lo)).astype(np.float32)
@@ -62,6 +78,16 @@ class GradientTable:
         b = self.bins
         self._weights = np.array([[b * b, b, 1]], np.float32)
         self._single_cell = not np.any(self.cell_offset)
+        self._rows = None
+        if self.slopes is not None:
+            # one gather of 32 bytes a pixel: the eight values of its row at once
+            rows = np.ascontiguousarray(self.slopes, dtype=np.float32)
+            self._rows = rows.view(np.dtype((np.void, 32))).ravel()
+
+    @property
+    def order(self) -> int:
+        """0 for a table of cell values, 1 for one of values and slopes."""
+        return 0 if self.slopes is None else 1
 
     def gradients(self, blurred: np.ndarray, *, normalise_gain: bool = True
                   ) -> tuple[np.ndarray, np.ndarray]:
@@ -104,6 +130,8 @@ class GradientTable:
         q = cv2.transform(q, a)
         cv2.threshold(q, self._top, self._top, cv2.THRESH_TRUNC, dst=q)
         cv2.threshold(q, 0.0, 0.0, cv2.THRESH_TOZERO, dst=q)
+        if self._rows is not None:
+            return self._first_order(q)
         np.floor(q, out=q)
         idx = cv2.transform(q, self._weights).astype(np.int32)  # HxW
         if not self._single_cell:
@@ -118,6 +146,21 @@ class GradientTable:
             gy = cv2.add(gy, 0.0, dtype=cv2.CV_32F)
         elif gx.dtype != np.float32:
             gx, gy = gx.astype(np.float32), gy.astype(np.float32)
+        return gx, gy
+
+    def _first_order(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(gx, gy) of a first-order table from the colour coordinates q (H, W, 3)."""
+        cell = np.floor(q)
+        frac = cv2.split(cv2.subtract(q, cell))       # place inside the cell, [0, 1)
+        idx = cv2.transform(cell, self._weights).astype(np.int32)
+        if not self._single_cell:
+            idx += self.cell_offset
+        h, w = idx.shape
+        rows = cv2.split(self._rows.take(idx).view(np.float32).reshape(h, w, 8))
+        gx, gy = rows[0], rows[1]
+        for c in range(3):                            # fused multiply-adds, in place
+            cv2.accumulateProduct(rows[2 + 2 * c], frac[c], gx)
+            cv2.accumulateProduct(rows[3 + 2 * c], frac[c], gy)
         return gx, gy
 
 
@@ -170,7 +213,7 @@ def table_from_cell_luts(tables: np.ndarray, ref_inv: np.ndarray, *, lo: np.ndar
 
 def tabulate_mlp(model: MLPGradientModel, ref_inv: np.ndarray, *, lo: np.ndarray,
                  hi: np.ndarray, bins: int = 32, cell_px: int = 40,
-                 use_position: bool = True) -> GradientTable:
+                 use_position: bool = True, order: int = 0) -> GradientTable:
     """Evaluate a position-aware network on a grid of position and colour cells.
 
     Parameters
@@ -194,13 +237,27 @@ def tabulate_mlp(model: MLPGradientModel, ref_inv: np.ndarray, *, lo: np.ndarray
         inside the contacts (``benchmarks/bench_table_engine.py``).
     use_position : bool, default True
         Whether the network takes the position (else one cell).
+    order : {0, 1}, default 0
+        0: the network's value at each colour cell's centre. 1: also its
+        slopes along the three colour axes, central differences across the
+        cell (half a cell either side of the centre: the chord), so that a
+        pixel is read by the plane through them (:class:`GradientTable`);
+        seven network evaluations per cell.
 
     Returns
     -------
     table : GradientTable
         ``C * bins^3`` entries per component, float16 (gradients to about
-        0.1%); at 192 cells and 32 bins 25 MB.
+        0.1%); at 192 cells and 32 bins 25 MB. Of order 1, also ``slopes``
+        (float32, 32 bytes a cell: at 192 cells and 16 bins 25 MB).
+
+    Raises
+    ------
+    InputError
+        For an order other than 0 or 1.
     """
+    if order not in (0, 1):
+        raise InputError(f"table order must be 0 or 1, got {order!r}")
     h, w = ref_inv.shape[:2]
     if not use_position:
         cell_px = max(h, w)
@@ -211,19 +268,45 @@ def tabulate_mlp(model: MLPGradientModel, ref_inv: np.ndarray, *, lo: np.ndarray
     grid = np.stack(np.meshgrid(*centres, indexing="ij"), axis=-1).reshape(-1, 3)
     # the cells' mean reference colour and centre, as a cell-snapped network sees them
     ref_cell, x_cell, y_cell = cell_position_inputs(1.0 / ref_inv, cell_px)
-    tables = []
+    step = (hi - lo) / bins                                   # one colour cell
+    # the centres, then (order 1) half a cell below and above along each channel
+    shifts = [np.zeros(3, np.float32)]
+    if order == 1:
+        for c in range(3):
+            shifts += [-0.5 * step * np.eye(3, dtype=np.float32)[c],
+                       0.5 * step * np.eye(3, dtype=np.float32)[c]]
+    points = np.concatenate([grid + s for s in shifts]).astype(np.float32)
+    n = len(grid)
+    tables, slopes = [], []
     for cy in range(ny):
         for cx in range(nx):
             y0, x0 = cy * cell_px, cx * cell_px
-            ref_colour = np.broadcast_to(ref_cell[y0, x0], grid.shape)
-            px = np.full(len(grid), x_cell[y0, x0], np.float32)
-            py = np.full(len(grid), y_cell[y0, x0], np.float32)
-            nxy = model.normals(mlp_inputs(grid.astype(np.float32), ref_colour, px, py, (h, w),
+            ref_colour = np.broadcast_to(ref_cell[y0, x0], points.shape)
+            px = np.full(len(points), x_cell[y0, x0], np.float32)
+            py = np.full(len(points), y_cell[y0, x0], np.float32)
+            nxy = model.normals(mlp_inputs(points, ref_colour, px, py, (h, w),
                                            use_position=use_position))
             gx, gy = gradients_from_normals(nxy[:, 0], nxy[:, 1])
-            tables.append((gx.astype(np.float16), gy.astype(np.float16)))
+            tables.append((gx[:n].astype(np.float16), gy[:n].astype(np.float16)))
+            if order == 1:
+                slopes.append(_cell_slopes(gx.reshape(7, n), gy.reshape(7, n)))
     rows = np.minimum(np.arange(h) // cell_px, ny - 1)
     cols = np.minimum(np.arange(w) // cell_px, nx - 1)
     cell = (rows[:, None] * nx + cols[None, :]).astype(np.int32) * np.int32(bins**3)
     return GradientTable(np.concatenate([t[0] for t in tables]),
-                         np.concatenate([t[1] for t in tables]), cell, bins, lo, hi, ref_inv)
+                         np.concatenate([t[1] for t in tables]), cell, bins, lo, hi, ref_inv,
+                         slopes=np.concatenate(slopes) if order == 1 else None)
+
+
+def _cell_slopes(gx: np.ndarray, gy: np.ndarray) -> np.ndarray:
+    """Rows of a first-order table from the network at the cells' centres and half a cell
+    either side along each channel ((7, n) each: centre, then -c0, +c0, -c1, +c1, -c2,
+    +c2): (gx, gy) at the lower corner, then (dgx/dq_c, dgy/dq_c) per cell."""
+    out = np.empty((gx.shape[1], 8), np.float32)
+    out[:, 0], out[:, 1] = gx[0], gy[0]
+    for c in range(3):
+        dx, dy = gx[2 + 2 * c] - gx[1 + 2 * c], gy[2 + 2 * c] - gy[1 + 2 * c]
+        out[:, 2 + 2 * c], out[:, 3 + 2 * c] = dx, dy
+        out[:, 0] -= 0.5 * dx                        # from the centre to the lower corner
+        out[:, 1] -= 0.5 * dy
+    return out
