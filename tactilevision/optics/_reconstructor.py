@@ -83,7 +83,7 @@ class DepthReconstructor:
         ``table_order`` (1 for gs_sdk's networks, whose table of order 0
         read 1.00 to 1.54 degrees median from the network inside the
         contacts of a real GelSight Mini and of order 1 0.41 to 0.82, at
-        about 1.4 times the per-frame cost: ``benchmarks/bench_table_order.py``).
+        about 1.3 times the per-frame cost: ``benchmarks/bench_table_order.py``).
     threads : int, default 1
         onnxruntime threads (1: one core, as embedded users run it).
     level : {'median', 'far_field'}, default 'median'
@@ -529,7 +529,7 @@ def table_domain(calibration) -> tuple[np.ndarray, np.ndarray, int]:
     colour range and :func:`default_position_cell_px` cells (a network of every pixel's
     own position: 20 px at 320 x 240, where 40 px cells read gs_sdk's GelSight Mini network
     1.17 to 1.97 degrees median from its own gradients inside the contacts and 20 px cells
-    1.00 to 1.54; 40 px at 640 x 480 as before)."""
+    1.00 to 1.54, tables of order 0; 40 px at 640 x 480 as before)."""
     if calibration.table_lo is not None and calibration.table_hi is not None:
         lo, hi = calibration.table_lo, calibration.table_hi
     else:
