@@ -470,25 +470,7 @@ class PhotometricCalibration(CalibrationData):
         defaults = cls(model=model, reference=data["reference"], mm_per_px=1.0)
         lo = meta.get("colour_lo", lut.lo if lut is not None else defaults.colour_lo)
         hi = meta.get("colour_hi", lut.hi if lut is not None else defaults.colour_hi)
-        cell_px = meta.get("position_cell_px", 0)
-        if isinstance(cell_px, bool) or not isinstance(cell_px, int) or cell_px < 0:
-            raise InputError(f"calibration file {path}: 'position_cell_px' must be a "
-                             f"non-negative integer, got {cell_px!r}")
-        table_order = meta.get("table_order", 0)
-        if isinstance(table_order, bool) or table_order not in (0, 1):
-            raise InputError(f"calibration file {path}: 'table_order' must be 0 or 1, got "
-                             f"{table_order!r}")
-        table_range: tuple = (None, None)
-        if "table_lo" in meta or "table_hi" in meta:
-            try:
-                table_range = tuple(np.asarray(meta[k], np.float32).reshape(3)
-                                    for k in ("table_lo", "table_hi"))
-            except (KeyError, TypeError, ValueError):
-                raise InputError(f"calibration file {path}: 'table_lo' and 'table_hi' must "
-                                 "both be three numbers") from None
-            if not (np.all(np.isfinite(table_range)) and np.all(table_range[0] < table_range[1])):
-                raise InputError(f"calibration file {path}: 'table_lo' must lie below "
-                                 "'table_hi', both finite")
+        cell_px, table_order, table_range = _table_meta(meta, path)
         cell_luts = data.get("lut_cells") if model == "lut" else None
         if cell_luts is not None:
             cell_luts = cell_luts.astype(np.float32)
@@ -510,3 +492,34 @@ class PhotometricCalibration(CalibrationData):
                    colour_lo=np.asarray(lo, np.float32), colour_hi=np.asarray(hi, np.float32),
                    position_cell_px=cell_px, table_lo=table_range[0], table_hi=table_range[1],
                    table_order=int(table_order), provenance=dict(meta.get("provenance", {})))
+
+
+def _table_meta(meta: dict, path) -> tuple[int, int, tuple]:
+    """A calibration file's network-table keys, checked: ``position_cell_px``,
+    ``table_order`` and ``(table_lo, table_hi)`` (None, None when absent).
+
+    Raises
+    ------
+    InputError
+        Naming the file and the key at fault.
+    """
+    cell_px = meta.get("position_cell_px", 0)
+    if isinstance(cell_px, bool) or not isinstance(cell_px, int) or cell_px < 0:
+        raise InputError(f"calibration file {path}: 'position_cell_px' must be a "
+                         f"non-negative integer, got {cell_px!r}")
+    table_order = meta.get("table_order", 0)
+    if isinstance(table_order, bool) or table_order not in (0, 1):
+        raise InputError(f"calibration file {path}: 'table_order' must be 0 or 1, got "
+                         f"{table_order!r}")
+    table_range: tuple = (None, None)
+    if "table_lo" in meta or "table_hi" in meta:
+        try:
+            table_range = tuple(np.asarray(meta[k], np.float32).reshape(3)
+                                for k in ("table_lo", "table_hi"))
+        except (KeyError, TypeError, ValueError):
+            raise InputError(f"calibration file {path}: 'table_lo' and 'table_hi' must "
+                             "both be three numbers") from None
+        if not (np.all(np.isfinite(table_range)) and np.all(table_range[0] < table_range[1])):
+            raise InputError(f"calibration file {path}: 'table_lo' must lie below "
+                             "'table_hi', both finite")
+    return cell_px, table_order, table_range
