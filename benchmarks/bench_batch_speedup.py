@@ -1,0 +1,101 @@
+"""``batch`` on N local workers against one ``reconstruct`` / ``forces`` process, same video.
+
+    python benchmarks/bench_batch_speedup.py [--frames 1200] [--workers 2]
+        [--kinds reconstruct forces] [--chunk-frames 32]
+
+A 640 x 480 MJPG video of ``--frames`` frames is written from the real GelSight ball
+presses of ``sample_frames/gelsight_ball`` (shifted a pixel a frame, a third of them
+the reference), with its ``<stem>_reference.png``. Then, as a user runs them, each
+command as its own process (``python -m tactilevision ...``, default options, the
+shipped GelSight calibration ``--sensor gelsight``; forces with E 0.2 MPa, nu 0.48, a
+3 mm gel), timed from start to exit, set-up included:
+
+- one ``reconstruct`` (or ``forces``) process over the video;
+- ``batch reconstruct`` (or ``batch forces``) on ``--workers`` local worker processes.
+
+Prints both rates, frames/s, and their ratio (issue target: at least 0.8 N times one
+process). The optics table's disk cache is warmed first, so neither run pays for
+tabulating the network.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+BALL = ROOT / "sample_frames" / "gelsight_ball"
+MATERIAL = ["--E-mpa", "0.2", "--nu", "0.48", "--thickness-mm", "3.0"]
+
+
+def make_video(folder: Path, n: int) -> Path:
+    """The video (n frames, 640 x 480, MJPG at 30 frames/s) and its reference beside it."""
+    ref = cv2.imread(str(BALL / "reference.png"))
+    presses = [cv2.imread(str(p)) for p in sorted((BALL / "frames").glob("press_*.png"))]
+    video = folder / "presses.avi"
+    cv2.imwrite(str(folder / "presses_reference.png"), ref)
+    h, w = ref.shape[:2]
+    vw = cv2.VideoWriter(str(video), cv2.VideoWriter_fourcc(*"MJPG"), 30.0, (w, h))
+    rng = np.random.default_rng(0)
+    for i in range(n):
+        vw.write(ref if rng.random() < 0.3 else np.roll(presses[i % len(presses)],
+                                                        (i % 60) - 30, axis=1))
+    vw.release()
+    return video
+
+
+def timed(cmd: list[str]) -> float:
+    """Wall seconds of one command run to its end (its output kept quiet unless it
+    fails)."""
+    t0 = time.perf_counter()
+    run = subprocess.run(cmd, capture_output=True, text=True)
+    seconds = time.perf_counter() - t0
+    if run.returncode != 0:
+        raise SystemExit(f"{' '.join(cmd)} exited {run.returncode}:\n{run.stderr[-2000:]}")
+    return seconds
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--frames", type=int, default=1200)
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--chunk-frames", type=int, default=32)
+    ap.add_argument("--kinds", nargs="+", default=["reconstruct", "forces"],
+                    choices=("reconstruct", "forces"))
+    args = ap.parse_args()
+    work = Path(tempfile.mkdtemp(prefix="bench_batch_speedup_"))
+    py = [sys.executable, "-m", "tactilevision"]
+    try:
+        video = make_video(work, args.frames)
+        print(f"machine: {os.cpu_count()} cores; video {args.frames} frames 640 x 480 MJPG "
+              f"({video.stat().st_size / 2**20:.0f} MiB)")
+        # the network's table into the disk cache: neither timed run tabulates it
+        timed([*py, "reconstruct", str(BALL / "frames"), "--sensor", "gelsight", "--out",
+               str(work / "warm"), "--no-progress"])
+        for kind in args.kinds:
+            extra = MATERIAL if kind == "forces" else []
+            one = timed([*py, kind, str(video), "--sensor", "gelsight", "--out",
+                         str(work / f"{kind}_one"), "--no-progress", *extra])
+            many = timed([*py, "batch", kind, str(video), "--sensor", "gelsight", "--out",
+                          str(work / f"{kind}_batch"), "--workers", str(args.workers),
+                          "--chunk-frames", str(args.chunk_frames), "--no-progress", *extra])
+            print(f"{kind}: one process {one:.1f} s ({args.frames / one:.1f} frames/s); "
+                  f"batch on {args.workers} workers {many:.1f} s ({args.frames / many:.1f} "
+                  f"frames/s): {one / many:.2f} x one process (target "
+                  f"{0.8 * args.workers:.1f})")
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
