@@ -87,9 +87,10 @@ def single_loop(video: Path, optics: Path, n: int) -> tuple[float, float]:
 def batch(video: Path, optics: Path, n_workers: int, out: Path, n: int | None = None
           ) -> tuple[float, list[float]]:
     """(seconds, peak RSS of each worker in MiB) of one batch on a fresh local cluster."""
+    import dask
     from distributed import Client, LocalCluster
 
-    from tactilevision.batch import BatchSettings, run_batch
+    from tactilevision.batch import WORKER_ENVIRON, BatchSettings, run_batch
 
     src = video
     if n is not None:                      # a shorter recording: the first n frames
@@ -103,8 +104,9 @@ def batch(video: Path, optics: Path, n_workers: int, out: Path, n: int | None = 
             for f in VideoFrames(video).iter(0, n):
                 vw.write(f)
             vw.release()
-    cluster = LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
-                           dashboard_address=":0")
+    with dask.config.set(WORKER_ENVIRON):       # as run_batch's own cluster
+        cluster = LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
+                               dashboard_address=":0")
     client = Client(cluster)
     try:
         client.run(lambda: None)            # workers up before the clock starts

@@ -12,11 +12,18 @@ calibrates many sessions side by side.
 Needs the ``dask`` extra: ``pip install 'tactilevision[dask]'``.
 """
 
-from ._run import BatchReport, InputOutcome, run_batch
+from ._run import WORKER_ENVIRON, BatchReport, InputOutcome, run_batch
 from ._sources import FrameSource, open_source
-from ._store import HEIGHT_DIGITS, HEIGHT_RESOLUTION_MM, InputStore
-from ._tasks import BatchSettings, calibrate_task, process_chunk, worker_tools
+from ._store import HEIGHT_DIGITS, HEIGHT_RESOLUTION_MM, InputStore, quantize_heights
+from ._tasks import (
+    BatchSettings,
+    calibrate_task,
+    keep_frames_in_the_heap,
+    process_chunk,
+    worker_tools,
+)
 
-__all__ = ["HEIGHT_DIGITS", "HEIGHT_RESOLUTION_MM", "BatchReport", "BatchSettings",
-           "FrameSource", "InputOutcome", "InputStore", "calibrate_task", "open_source",
-           "process_chunk", "run_batch", "worker_tools"]
+__all__ = ["HEIGHT_DIGITS", "HEIGHT_RESOLUTION_MM", "WORKER_ENVIRON", "BatchReport",
+           "BatchSettings", "FrameSource", "InputOutcome", "InputStore", "calibrate_task",
+           "keep_frames_in_the_heap", "open_source", "process_chunk", "quantize_heights",
+           "run_batch", "worker_tools"]

@@ -89,7 +89,7 @@ def _from_zarr(source: Path, args, picks_max: int):
     if "height_mm" not in g:
         raise InputError(f"Zarr group {source} has no 'height_mm' array (not written by "
                          "'tactilevision batch'?)")
-    with warnings.catch_warnings():    # batch stores heights through numcodecs' Quantize
+    with warnings.catch_warnings():    # groups written before 2026-11-26: Quantize
         warnings.filterwarnings("ignore", "Numcodecs codecs are not in the Zarr")
         h = g["height_mm"]
     if len(h.shape) != 3 or h.shape[0] == 0:
