@@ -77,4 +77,78 @@ def test_a_swallowed_interrupt_still_ends_the_command(tmp_path):
     assert proc.returncode == 130, err
     assert time.perf_counter() - sent < 3.0
     assert "interrupted" in err
+    assert "Exception ignored" not in err and "Traceback" not in err
     assert not list((tmp_path / "o").glob(".tactilevision-tmp-*"))
+
+
+def test_an_interrupt_landing_in_a_finalizer_is_raised_once_it_returns(tmp_path):
+    """A Ctrl-C that lands in a finalizer (distributed's garbage-collector callback, a
+    weakref dictionary's) is not raised there, where Python would print and ignore it,
+    but sent again: it interrupts the command's own code once the finalizer returns,
+    which unwinds as usual (its except clause runs), exit 130, nothing printed as
+    ignored."""
+    code = (
+        "import sys, time\n"
+        "from pathlib import Path\n"
+        "import tactilevision.cli as cli\n"
+        "from tactilevision.io import StagedOutput\n"
+        "class Slow:\n"
+        "    def __del__(self):\n"
+        "        print('finalizing', flush=True)\n"
+        "        time.sleep(0.3)\n"
+        "def run(args):\n"
+        f"    with StagedOutput(Path({str(tmp_path / 'o')!r})) as st:\n"
+        "        (st.path / 'x.txt').write_text('half')\n"
+        "        try:\n"
+        "            s = Slow(); del s\n"
+        "            time.sleep(10)\n"
+        "        except KeyboardInterrupt:\n"
+        "            print('raised in the command', file=sys.stderr, flush=True)\n"
+        "            raise\n"
+        "    return 0\n"
+        "import tactilevision.cli._fit as fit\n"
+        "orig = fit.add_parser\n"
+        "def add(sub):\n"
+        "    orig(sub); sub.choices['fit'].set_defaults(func=run)\n"
+        "fit.add_parser = add\n"
+        "sys.exit(cli.main(['fit', 'x.csv']))\n")
+    proc = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    assert proc.stdout.readline().strip() == "finalizing"
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=30)
+    assert proc.returncode == 130, err
+    assert "raised in the command" in err
+    assert "Exception ignored" not in err and "Traceback" not in err
+    assert not list((tmp_path / "o").glob(".tactilevision-tmp-*"))
+
+
+def test_in_finalizer_sees_finalizers_and_gc_callbacks_up_the_stack():
+    """The frames where an exception would be ignored: a __del__, a garbage-collector
+    callback, anything they call; not ordinary code."""
+    import gc
+
+    from tactilevision.cli import _in_finalizer
+
+    seen = {}
+
+    def inner(tag):
+        seen[tag] = _in_finalizer(sys._getframe())
+
+    class Finalized:
+        def __del__(self):
+            inner("del")
+
+    def callback(phase, info):
+        if phase == "start" and "gc" not in seen:
+            inner("gc")
+
+    inner("plain")
+    f = Finalized()
+    del f
+    gc.callbacks.append(callback)
+    try:
+        gc.collect()
+    finally:
+        gc.callbacks.remove(callback)
+    assert seen == {"plain": False, "del": True, "gc": True}

@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import logging
 import os
+import signal
 import sys
 import time
 from collections.abc import Callable, Sequence
@@ -113,6 +115,7 @@ def _client(scheduler: str | None, n_workers: int | None):
     try:
         import dask
         from distributed import Client, LocalCluster
+        from distributed.deploy.spec import SpecCluster
     except ModuleNotFoundError as exc:  # pragma: no cover - depends on the install
         raise InputError("batch needs Dask: pip install 'tactilevision[dask]'") from exc
     if scheduler:
@@ -122,18 +125,26 @@ def _client(scheduler: str | None, n_workers: int | None):
             raise InputError(f"no Dask scheduler answers at {scheduler} ({exc})") from None
 
     n = n_workers or os.cpu_count() or 1
+    before = set(SpecCluster._instances)
     try:
         with dask.config.set(WORKER_ENVIRON):
             cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
                                    dashboard_address=":0",   # any free port: never 8787 twice
                                    silence_logs=logging.ERROR)
-    except Exception as exc:
+        return Client(cluster), cluster
+    except BaseException as exc:
         # Ctrl-C while the workers start comes back as "Nanny failed to start": it is the
-        # interrupt, and is raised as one (exit 130, no traceback)
+        # interrupt, and is raised as one (exit 130, no traceback). The cluster it caught
+        # starting is abandoned: its workers stopped, and distributed's exit hook kept from
+        # closing it (it asserted on a worker still starting: a traceback after the prompt)
         if _interrupted(exc):
+            _quiet_teardown()
+            for started in set(SpecCluster._instances) - before:
+                _stop_workers(started)
+                with contextlib.suppress(Exception):
+                    started.shutdown_on_close = False
             raise KeyboardInterrupt from None
         raise
-    return Client(cluster), cluster
 
 
 def _interrupted(exc: BaseException) -> bool:
@@ -216,29 +227,64 @@ def run_batch(kind: str, inputs: Sequence[str | Path], out: str | Path, *,
         client, own_cluster = _client(scheduler, n_workers)
     report = BatchReport(kind=kind, out=out, inputs=outcomes,
                          workers=len(client.scheduler_info().get("workers", {})))
+    interrupted = False
     try:
         if kind == "calibrate":
             _run_sessions(client, paths, out, outcomes, report, progress, on_receipt)
         else:
             _run_frames(client, paths, out, settings, outcomes, report, overwrite, progress,
                         on_receipt)
+    except KeyboardInterrupt:
+        interrupted = True
+        raise
     finally:
         report.seconds = time.perf_counter() - t0
         write_json_atomic(out / "batch.json", report.to_json_dict())
         if own_cluster is not None:
-            _close(client, own_cluster)
+            _close(client, own_cluster, interrupted=interrupted)
     return report
 
 
-def _close(client, cluster) -> None:
+def _close(client, cluster, *, interrupted: bool = False) -> None:
     """Close our own client and cluster. An error while closing (distributed asserts on a
     worker still starting when an interrupt closes the cluster) must not replace the
-    run's own outcome, its KeyboardInterrupt included: it is logged, not raised."""
+    run's own outcome, its KeyboardInterrupt included: it is logged, not raised. After an
+    interrupt the workers are stopped first (:func:`_stop_workers`), and distributed's
+    exit hook is kept from closing the cluster a second time (its assertion on a worker
+    caught starting was printed as a traceback after the prompt came back)."""
+    if interrupted:
+        _quiet_teardown()
+        _stop_workers(cluster)
     for thing in (client, cluster):
         try:
             thing.close()
         except Exception as exc:        # any failure to close: logged, not raised
             logging.getLogger("tactilevision.batch").debug("closing %s: %r", thing, exc)
+    with contextlib.suppress(Exception):
+        cluster.shutdown_on_close = False
+
+
+def _quiet_teardown() -> None:
+    """After an interrupt, the teardown says nothing: the nannies' start-up tasks the
+    interrupt cancelled are logged by asyncio as "Task exception was never retrieved",
+    and the scheduler's comms to the stopped workers by distributed ("Batched Comm
+    Closed"), each with a traceback."""
+    for name in ("asyncio", "distributed"):
+        logging.getLogger(name).setLevel(logging.CRITICAL)
+
+
+def _stop_workers(cluster) -> None:
+    """Kill the local cluster's worker processes at once, their nannies told not to
+    restart them: a worker left running after the command has gone logs its lost
+    scheduler with a traceback on the terminal it shares (a chunk it was writing has no
+    receipt yet, so a rerun computes it again)."""
+    kill = getattr(signal, "SIGKILL", signal.SIGTERM)
+    for nanny in list(getattr(cluster, "workers", {}).values()):
+        with contextlib.suppress(Exception):
+            nanny.auto_restart = False
+            pid = nanny.process.process.pid
+            if pid:
+                os.kill(pid, kill)
 
 
 def _bar(progress: bool, total: int, unit: str, desc: str):

@@ -9,6 +9,7 @@ status 2, deleting nothing already written (``docs/formats.md``).
 from __future__ import annotations
 
 import argparse
+import gc
 import importlib
 import os
 import signal
@@ -179,8 +180,13 @@ class _interrupts:
     def __exit__(self, *exc) -> bool:
         if self.armed:
             # interrupted and unwound (the command said so): the watchdog stays armed, so
-            # that a slow shutdown (a Dask cluster closing) still ends within the grace
+            # that a slow shutdown (a Dask cluster closing) still ends within the grace,
+            # and a further SIGINT (a second Ctrl-C, or the one re-sent from a finalizer)
+            # is ignored: raised during the interpreter's shutdown it would end the process
+            # by the signal (status -2) instead of 130
             self.said = True
+            if threading.current_thread() is threading.main_thread():
+                signal.signal(signal.SIGINT, signal.SIG_IGN)
             return False
         if self.previous is not None:
             signal.signal(signal.SIGINT, self.previous)
@@ -193,6 +199,13 @@ class _interrupts:
             self.timer = threading.Timer(INTERRUPT_GRACE_S, self._hard_exit)
             self.timer.daemon = True
             self.timer.start()
+        if _in_finalizer(frame):
+            # raised here it would be printed and ignored ("Exception ignored in ..."):
+            # the signal is sent again a moment later, once the finalizer has returned
+            again = threading.Timer(0.02, os.kill, (os.getpid(), signal.SIGINT))
+            again.daemon = True
+            again.start()
+            return
         raise KeyboardInterrupt
 
     def _hard_exit(self) -> None:
@@ -204,6 +217,20 @@ class _interrupts:
                   flush=True)
         sys.stderr.flush()
         os._exit(130)
+
+
+def _in_finalizer(frame) -> bool:
+    """Whether `frame` runs inside a finalizer, a garbage-collector callback or a weakref
+    callback (anywhere up its stack), where Python prints an exception and ignores it:
+    distributed's GC diagnosis and weakref dictionaries swallowed a Ctrl-C so."""
+    callbacks = {getattr(getattr(cb, "__func__", cb), "__code__", None) for cb in gc.callbacks}
+    while frame is not None:
+        code = frame.f_code
+        if (code in callbacks or code.co_name == "__del__"
+                or (code.co_name == "remove" and code.co_filename.endswith("weakref.py"))):
+            return True
+        frame = frame.f_back
+    return False
 
 
 def _run(args: argparse.Namespace) -> int:
