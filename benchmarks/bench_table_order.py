@@ -25,7 +25,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import statistics
 import sys
 import tempfile
 import time
@@ -36,6 +35,7 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 import cv2
 import numpy as np
 import scipy.fft
+from bench_speed import per_frame_ms  # the same timing as the 640 x 480 benchmark
 
 from tactilevision.optics import DepthReconstructor, PhotometricCalibration
 
@@ -51,17 +51,6 @@ def angle_deg(G: np.ndarray, gx: np.ndarray, gy: np.ndarray) -> np.ndarray:
     b = np.dstack([gx, gy, np.ones(G.shape[:2])])
     cos = (a * b).sum(-1) / np.linalg.norm(a, axis=-1) / np.linalg.norm(b, axis=-1)
     return np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))
-
-
-def per_frame_ms(fn, frames: list[np.ndarray], rounds: int) -> float:
-    fn(frames[0])
-    times = []
-    for _ in range(rounds):
-        t0 = time.perf_counter()
-        for f in frames:
-            fn(f)
-        times.append((time.perf_counter() - t0) / len(frames))
-    return 1000 * statistics.median(times)
 
 
 def references_ms(shape: tuple[int, int], frames: list[np.ndarray]) -> tuple[float, float]:
