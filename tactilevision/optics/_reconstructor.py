@@ -82,7 +82,7 @@ class DepthReconstructor:
         axes, read as a plane inside the cell. Default: the calibration's
         ``table_order`` (1 for gs_sdk's networks, whose table of order 0
         read 1.00 to 1.54 degrees median from the network inside the
-        contacts of a real GelSight Mini and of order 1 0.41 to 0.82, at
+        contacts of a real GelSight Mini and of order 1 0.41 to 0.85, at
         about 1.3 times the per-frame cost: ``benchmarks/bench_table_order.py``).
     threads : int, default 1
         onnxruntime threads (1: one core, as embedded users run it).

@@ -15,7 +15,7 @@ then holds the network's value at its lower corner and its derivatives along
 the three colour axes, and a pixel reads ``g0 + sum_c dg/dq_c f_c`` with
 ``f_c`` its place inside the cell: a piecewise-linear table, which on gs_sdk's
 GelSight Mini network removes most of what 32 colour cells cost (16 cells of
-first order: 0.41 to 0.82 degrees median from the network inside the contacts
+first order: 0.41 to 0.85 degrees median from the network inside the contacts
 against 1.00 to 1.54 for 32 of order 0), at about 0.2 ms more per 320 x 240
 frame (``benchmarks/bench_table_order.py``).
 """
