@@ -34,6 +34,15 @@ NON_BALL_FLOOR_DEG = 12.0
 _MIN_COVERED = 0.2
 
 
+def _checked_pixels(reference, frames, centers_px, radii_px, ball_radius_px) -> list:
+    """:func:`_press_pixels` of at least two presses, their circles as float arrays."""
+    if len(frames) < 2:
+        raise InputError("checking the presses needs at least two")
+    return _press_pixels(reference, frames, np.asarray(centers_px, np.float64).reshape(-1, 2),
+                         np.asarray(radii_px, np.float64).reshape(-1),
+                         np.asarray(ball_radius_px, np.float64).reshape(-1))
+
+
 def _press_pixels(reference: np.ndarray, frames: np.ndarray, centers_px: np.ndarray,
                   radii_px: np.ndarray, ball_radius_px: np.ndarray):
     """Each press's colour change and the ball's in-plane normal inside 0.8 of its
@@ -86,11 +95,7 @@ def ball_press_angles(reference: np.ndarray, frames: np.ndarray, centers_px: np.
     InputError
         With fewer than two presses.
     """
-    if len(frames) < 2:
-        raise InputError("checking the presses needs at least two")
-    per = _press_pixels(reference, frames, np.asarray(centers_px, np.float64),
-                        np.asarray(radii_px, np.float64),
-                        np.asarray(ball_radius_px, np.float64))
+    per = _checked_pixels(reference, frames, centers_px, radii_px, ball_radius_px)
     return _table_angles(per, np.ones(len(per), bool), bins)
 
 
@@ -159,11 +164,7 @@ def non_ball_presses(reference: np.ndarray, frames: np.ndarray, centers_px: np.n
     InputError
         With fewer than two presses.
     """
-    if len(frames) < 2:
-        raise InputError("checking the presses needs at least two")
-    per = _press_pixels(reference, frames, np.asarray(centers_px, np.float64).reshape(-1, 2),
-                        np.asarray(radii_px, np.float64).reshape(-1),
-                        np.asarray(ball_radius_px, np.float64).reshape(-1))
+    per = _checked_pixels(reference, frames, centers_px, radii_px, ball_radius_px)
     ang = _table_angles(per, np.ones(len(per), bool))
 
     def cut(a: np.ndarray) -> float:
