@@ -44,13 +44,24 @@ def test_reconstruct_interrupted_at_a_random_moment(tmp_path, after_s):
     assert not list(out.glob(".tactilevision-tmp-*")) if out.exists() else True
 
 
+#: The end of a script that runs its own ``run(args)`` as ``tactilevision fit x.csv``
+#: (through the command line's interrupt handling); the script before it imports ``sys``,
+#: ``Path`` and ``StagedOutput`` and defines ``run``.
+_AS_FIT = ("import tactilevision.cli as cli\n"
+           "import tactilevision.cli._fit as fit\n"
+           "orig = fit.add_parser\n"
+           "def add(sub):\n"
+           "    orig(sub); sub.choices['fit'].set_defaults(func=run)\n"
+           "fit.add_parser = add\n"
+           "sys.exit(cli.main(['fit', 'x.csv']))\n")
+
+
 def test_a_swallowed_interrupt_still_ends_the_command(tmp_path):
     """A KeyboardInterrupt raised where Python ignores it (a finalizer) would let the run
     go on; the watchdog ends it within the grace second, exit 130, staging removed."""
     code = (
         "import gc, sys, time\n"
         "from pathlib import Path\n"
-        "import tactilevision.cli as cli\n"
         "from tactilevision.io import StagedOutput\n"
         "class Swallow:\n"
         "    def __del__(self):\n"
@@ -61,13 +72,7 @@ def test_a_swallowed_interrupt_still_ends_the_command(tmp_path):
         "        s = Swallow(); del s\n"             # the signal lands in the finalizer
         "        time.sleep(10)\n"
         "    return 0\n"
-        "import tactilevision.cli._fit as fit\n"
-        "fit.run = run\n"
-        "orig = fit.add_parser\n"
-        "def add(sub):\n"
-        "    orig(sub); sub.choices['fit'].set_defaults(func=run)\n"
-        "fit.add_parser = add\n"
-        "sys.exit(cli.main(['fit', 'x.csv']))\n")
+        + _AS_FIT)
     proc = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True)
     time.sleep(2.5)
@@ -90,7 +95,6 @@ def test_an_interrupt_landing_in_a_finalizer_is_raised_once_it_returns(tmp_path)
     code = (
         "import sys, time\n"
         "from pathlib import Path\n"
-        "import tactilevision.cli as cli\n"
         "from tactilevision.io import StagedOutput\n"
         "class Slow:\n"
         "    def __del__(self):\n"
@@ -106,12 +110,7 @@ def test_an_interrupt_landing_in_a_finalizer_is_raised_once_it_returns(tmp_path)
         "            print('raised in the command', file=sys.stderr, flush=True)\n"
         "            raise\n"
         "    return 0\n"
-        "import tactilevision.cli._fit as fit\n"
-        "orig = fit.add_parser\n"
-        "def add(sub):\n"
-        "    orig(sub); sub.choices['fit'].set_defaults(func=run)\n"
-        "fit.add_parser = add\n"
-        "sys.exit(cli.main(['fit', 'x.csv']))\n")
+        + _AS_FIT)
     proc = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True)
     assert proc.stdout.readline().strip() == "finalizing"
