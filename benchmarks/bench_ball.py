@@ -11,6 +11,10 @@ Prints:
    ball and gel (their model's 1.0, and 0.5, 0.2, 0.1) on the equal-area pad, E and
    the apparent E per press beside the tied and frictionless limits, and the FEM's force
    at w/h = 0.5 on two surface cells (mesh convergence of the node-wise friction).
+2c. The dome (``--dome``): the FEATS gel's top is domed (0.06 mm below the apex at
+   4 mm, 0.28 mm at 8 mm: a spherical cap of radius 114 mm through the second, 133 mm
+   through the first); every law x contact on the equal-area pad with each dome beside
+   the flat top, E and the apparent E per press.
 3. The ladder on circles with a shared error (``--seeds N``, default 10): presses drawn
    from the small-strain law (nothing missing), depths read through contact circles
    off by a shared bias (0, -1, -1.5 px; the stated bound 1.5 px) and 0.5 px at random
@@ -19,7 +23,7 @@ Prints:
    the shared error fitted within its bound), and the ladder's time.
 
 Usage: python benchmarks/bench_ball.py [--figure docs/feats_ladder.png] [--seeds 10]
-       [--friction]
+       [--friction] [--dome]
 """
 
 from __future__ import annotations
@@ -118,6 +122,31 @@ def friction() -> None:
               f"{forces[0]:.5f}, {forces[1]:.5f} ({100 * (forces[0] / forces[1] - 1):+.2f} %)")
 
 
+def dome() -> None:
+    data = np.loadtxt(ROOT / "sample_frames" / "feats" / "force_depth.csv", delimiter=",",
+                      skiprows=1)
+    w, P = data[:, 0], data[:, 1]
+    sag = {r: 0.28 if r == 8.0 else 0.06 for r in (8.0, 4.0)}
+    domes = [None] + [(r * r + s * s) / (2 * s) for r, s in sag.items()]   # chord's sagitta
+    print("2c. FEATS with the domed top (nu 0.5, pad 12.92 mm): E and apparent E per press")
+    for law in ("linear", "neo_hookean"):
+        for contact in ("tied", "frictionless"):
+            for rd in domes:
+                t0 = time.perf_counter()
+                try:
+                    f = fit_indenter(w, P, Sphere(7.5, pad_radius_mm=12.92, dome_radius_mm=rd),
+                                     thickness_mm=4.0, law=law, contact=contact, nu=0.5)
+                except InputError as exc:
+                    print(f"   {law:11s} {contact:12s} dome {rd or 0:5.1f} mm not computed: "
+                          f"{exc}")
+                    continue
+                name = "flat top  " if rd is None else f"dome {rd:5.1f}"
+                print(f"   {law:11s} {contact:12s} {name} E {f.E_mpa:.4f} MPa, rmse "
+                      f"{f.rmse_n * 1e3:5.0f} mN, apparent E "
+                      + " ".join(f"{v:.3f}" for v in f.apparent_E_mpa)
+                      + f"  ({time.perf_counter() - t0:.0f} s)")
+
+
 def shared_circles(seeds: int) -> None:
     sys.path.insert(0, str(ROOT / "tests"))
     from test_ball_diagnose_noise import BALL, H, _circle_presses
@@ -151,11 +180,15 @@ def main() -> None:
     ap.add_argument("--no-feats", action="store_true")
     ap.add_argument("--seeds", type=int, default=10)
     ap.add_argument("--friction", action="store_true", help="only part 2b (minutes)")
+    ap.add_argument("--dome", action="store_true", help="only part 2c (minutes)")
     args = ap.parse_args()
     print(f"machine: {platform.machine()}, {platform.processor() or '?'}; "
           f"python {platform.python_version()}")
     if args.friction:
         friction()
+        return
+    if args.dome:
+        dome()
         return
     timing()
     if not args.no_feats:

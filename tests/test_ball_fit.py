@@ -152,3 +152,38 @@ def test_cli_refuses_a_bad_ball(tmp_path, toml, rows, extra, match):
     assert r.returncode == 2, r.stdout + r.stderr
     assert match in r.stderr
     assert str(path) in r.stderr or "session.toml" in r.stderr
+
+
+def test_cli_dome_needs_a_pad_and_a_ball(tmp_path):
+    """A domed top is refused, in one sentence and exit 2, without the pad's radius, for a
+    flat punch, or when it is not wider than the pad; the sidecar's key is read."""
+    _, w, P = _drawn("linear", "tied")
+    path = _table(tmp_path / "s", w, P, TOML.format(r=2.0))
+    r = _cli("fit", path, "--dome-radius-mm", "114")
+    assert r.returncode == 2 and "needs the pad's radius" in r.stderr, r.stderr
+    assert "Traceback" not in r.stderr
+    r = _cli("fit", path, "--dome-radius-mm", "114", "--shape", "flat_punch")
+    assert r.returncode == 2 and "under a ball" in r.stderr, r.stderr
+    side = _table(tmp_path / "t", w, P, TOML.format(r=2.0).replace(
+        "gel_thickness_mm = 2.0", "gel_thickness_mm = 2.0\ngel_radius_mm = 12.0\n"
+                                  "gel_dome_radius_mm = 10.0"))
+    r = _cli("fit", side)
+    assert r.returncode == 2 and "smaller than the dome's" in r.stderr, r.stderr
+    assert str(side) in r.stderr and "unknown" not in r.stderr.lower()
+
+
+def test_cli_fit_of_the_feats_gel_with_its_dome(tmp_path):
+    """`fit --dome-radius-mm` reads the FEATS gel as the Python call does; the dome (114 mm,
+    their top's 0.28 mm at 8 mm) raises E, since a domed gel meets the ball over less of
+    its surface (the flat top's figure: test_feats_tied_law_drifts_...)."""
+    w, P = feats()
+    domed = Sphere(7.5, pad_radius_mm=12.92, dome_radius_mm=114.4)
+    fit = fit_indenter(w, P, domed, thickness_mm=4.0, law="linear", contact="frictionless")
+    flat = fit_indenter(w, P, Sphere(7.5, pad_radius_mm=12.92), thickness_mm=4.0,
+                        law="linear", contact="frictionless")
+    assert 1.03 < fit.E_mpa / flat.E_mpa < 1.10
+    r = _cli("fit", FEATS / "force_depth.csv", "--law", "linear", "--contact", "frictionless",
+             "--dome-radius-mm", "114.4", "--json", tmp_path / "fit.json")
+    assert r.returncode == 0, r.stderr
+    obj = json.loads((tmp_path / "fit.json").read_text())
+    assert obj["E_mpa"] == pytest.approx(fit.E_mpa, rel=1e-9)

@@ -18,7 +18,7 @@ from ..viz import (
     write_indenter_report,
 )
 from ._fit import _write_json, depth_uncertainty
-from ._fit_indenter import depth_shared, force_sd, indenter_of
+from ._fit_indenter import add_dome_argument, depth_shared, force_sd, indenter_of
 from ._out import add_overwrite_argument
 
 __all__ = ["add_parser", "run"]
@@ -86,6 +86,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--pad-radius-mm", type=float, metavar="R",
                    help="a ball's gel pad radius (default: session.toml [sensor] "
                         "gel_radius_mm, else the infinite layer)")
+    add_dome_argument(p)
     add_overwrite_argument(p, "report folder")
     p.set_defaults(func=run)
 

@@ -353,6 +353,9 @@ def run(args: argparse.Namespace) -> int:
     shape = args.shape or table.indenter.get("shape", "flat_punch")
     if shape != "flat_punch":
         return _run_indenter(args, table, path, effects)
+    if args.dome_radius_mm is not None:
+        raise InputError(f"{path}: a domed gel's top is modelled under a ball (--shape "
+                         "sphere) only")
     relax, corrected = None, False
     if args.holds is not None:
         table, relax, corrected = _relax_table(table, args.holds, effects)

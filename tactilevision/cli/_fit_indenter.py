@@ -13,8 +13,8 @@ from .. import InputError
 from ..io import Measurements, read_ramp, sidecar_geometry
 from ..mechanics import IndenterFit, fit_indenter, fit_ramp, indenter_from_config
 
-__all__ = ["LAW_CHOICES", "add_arguments", "depth_shared", "fit_laws", "force_sd",
-           "indenter_of", "run_indenter", "run_ramp", "summary_lines"]
+__all__ = ["LAW_CHOICES", "add_arguments", "add_dome_argument", "depth_shared", "fit_laws",
+           "force_sd", "indenter_of", "run_indenter", "run_ramp", "summary_lines"]
 
 #: ``--law`` choices: a material law, or ``auto`` (both fitted, the better one reported).
 LAW_CHOICES = ("auto", "neo_hookean", "linear")
@@ -48,6 +48,15 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="lateral radius of the gel pad, mm, when it is small enough to "
                         "matter (default: session.toml [sensor] gel_radius_mm, else the "
                         "infinite layer); each nu is then one FEM sweep")
+    add_dome_argument(g)
+
+
+def add_dome_argument(g) -> None:
+    """``--dome-radius-mm``: a domed gel's top (fit, diagnose)."""
+    g.add_argument("--dome-radius-mm", type=float, metavar="RD",
+                   help="a domed gel: its top's radius of curvature, mm, the depth counted "
+                        "from the apex (default: session.toml [sensor] gel_dome_radius_mm, "
+                        "else a flat top); needs the pad's radius; one FEM sweep per nu")
 
 
 def indenter_of(table: Measurements, args: argparse.Namespace):
@@ -58,12 +67,25 @@ def indenter_of(table: Measurements, args: argparse.Namespace):
            "radius_mm": table.radius_mm}
     ind = indenter_from_config(cfg, where=f"{table.path}: indenter")
     pad = args.pad_radius_mm if args.pad_radius_mm is not None else keys.get("pad_radius_mm")
+    dome = getattr(args, "dome_radius_mm", None)
+    dome = dome if dome is not None else keys.get("dome_radius_mm")
+    if dome is not None and ind.shape != "sphere":
+        raise InputError(f"{table.path}: a domed gel's top is modelled under a ball "
+                         "(--shape sphere) only")
     if pad is not None and ind.shape == "sphere":
-        if isinstance(pad, bool) or not isinstance(pad, int | float) or not (
-                math.isfinite(pad) and pad > 0):
-            raise InputError(f"{table.path}: the pad radius must be a positive number of mm, "
-                             f"got {pad!r}")
-        ind = type(ind)(ind.radius_mm, pad_radius_mm=float(pad))
+        for name, v in (("pad radius", pad), ("dome radius", dome)):
+            if v is not None and (isinstance(v, bool) or not isinstance(v, int | float)
+                                  or not (math.isfinite(v) and v > 0)):
+                raise InputError(f"{table.path}: the {name} must be a positive number of mm, "
+                                 f"got {v!r}")
+        try:
+            ind = type(ind)(ind.radius_mm, pad_radius_mm=float(pad),
+                            dome_radius_mm=None if dome is None else float(dome))
+        except InputError as exc:
+            raise InputError(f"{table.path}: {exc}") from None
+    elif dome is not None:
+        raise InputError(f"{table.path}: a domed gel (dome radius {dome!r} mm) needs the pad's "
+                         "radius ([sensor] gel_radius_mm or --pad-radius-mm)")
     contact = args.contact or keys.get("contact")
     mu = getattr(args, "friction", None)
     if (contact == "coulomb") != (mu is not None):
@@ -73,7 +95,8 @@ def indenter_of(table: Measurements, args: argparse.Namespace):
         if ind.shape != "sphere":
             raise InputError("--friction is for a ball (--shape sphere)")
         try:
-            ind = type(ind)(ind.radius_mm, pad_radius_mm=ind.pad_radius_mm, friction=mu)
+            ind = type(ind)(ind.radius_mm, pad_radius_mm=ind.pad_radius_mm, friction=mu,
+                            dome_radius_mm=ind.dome_radius_mm)
         except InputError as exc:
             raise InputError(f"--friction: {exc}") from None
         return ind, contact

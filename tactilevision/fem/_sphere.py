@@ -56,7 +56,7 @@ import functools
 import os
 import time
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -69,7 +69,7 @@ from ._finite_solver import ConstrainedNewton, IndentationProblem, RigidPunch
 from ._neohookean_forms import AxisymmetricNeoHookean
 from ._sweep_cache import read_sweep, write_sweep
 
-__all__ = ["SPHERE_CONTACTS", "SPHERE_MODELS", "SphereIndentation", "hertz_force",
+__all__ = ["SPHERE_CONTACTS", "SPHERE_MODELS", "SphereIndentation", "dome_sag", "hertz_force",
            "sphere_indentation", "sphere_mesh"]
 
 SPHERE_MODELS = ("linear", "neo_hookean")
@@ -115,7 +115,8 @@ def _graded(x0: float, x1: float, h0: float, growth: float) -> np.ndarray:
 
 
 def sphere_mesh(contact_radius_max: float, surface_cell: float, *,
-                pad_radius_over_h: float = 20.0, cell: float = 0.125) -> MeshTri:
+                pad_radius_over_h: float = 20.0, cell: float = 0.125,
+                dome_radius_over_h: float | None = None) -> MeshTri:
     """Triangles of the (r, z) half-section, graded towards the top surface under the sphere.
 
     Parameters
@@ -130,6 +131,10 @@ def sphere_mesh(contact_radius_max: float, surface_cell: float, *,
     pad_radius_over_h : float, default 20.0
     cell : float, default 0.125
         Base cell size through the thickness and under the sphere.
+    dome_radius_over_h : float, optional
+        A domed top: the free surface a spherical cap of this radius (units of
+        h), the layer 1 thick on the axis and ``1 - dome_sag(r)`` at radius r
+        (:func:`dome_sag`), each node's height scaled by that factor. None: flat.
 
     Returns
     -------
@@ -140,7 +145,8 @@ def sphere_mesh(contact_radius_max: float, surface_cell: float, *,
     Raises
     ------
     InputError
-        If the pad is not wider than 1.3 times the largest contact radius.
+        If the pad is not wider than 1.3 times the largest contact radius, or
+        the dome falls by more than half the thickness before the pad's edge.
     """
     a = float(contact_radius_max)
     if not (a > 0 and pad_radius_over_h > 1.3 * a):
@@ -161,13 +167,52 @@ def sphere_mesh(contact_radius_max: float, surface_cell: float, *,
         mesh = mesh.refined(np.nonzero(dist < 6 * size)[0])
         size *= 0.5
     eps = 1e-9
-    return mesh.with_boundaries({
+    mesh = mesh.with_boundaries({
         "bottom": lambda x: np.abs(x[1]) < eps,
         "axis": lambda x: np.abs(x[0]) < eps,
         "outer": lambda x: np.abs(x[0] - pad_radius_over_h) < eps,
         "punch": lambda x: (np.abs(x[1] - 1.0) < eps) & (x[0] <= zone + eps),
         "free": lambda x: (np.abs(x[1] - 1.0) < eps) & (x[0] >= zone - eps),
     })
+    if dome_radius_over_h is None:
+        return mesh
+    p = mesh.p.copy()
+    p[1] *= 1.0 - dome_sag(p[0], dome_radius_over_h, pad_radius_over_h)
+    return replace(mesh, doflocs=p)
+
+
+def dome_sag(r: np.ndarray, dome_radius_over_h: float, pad_radius_over_h: float
+             ) -> np.ndarray:
+    """How far a domed top lies below its apex at radius r: ``Rd - sqrt(Rd^2 - r^2)``.
+
+    Parameters
+    ----------
+    r : (M,) float ndarray
+        Radii, units of h, within the pad.
+    dome_radius_over_h : float
+        Rd / h, the top's radius of curvature (convex).
+    pad_radius_over_h : float
+        The pad's radius; the sag there must be at most half the thickness.
+
+    Returns
+    -------
+    (M,) float64 ndarray
+        Units of h, >= 0.
+
+    Raises
+    ------
+    InputError
+        When the dome is not wider than the pad or falls by more than 0.5 h by
+        its edge (then the pad's radius is what to give).
+    """
+    rd = float(dome_radius_over_h)
+    edge = rd - np.sqrt(max(rd * rd - pad_radius_over_h**2, 0.0)) if rd > 0 else np.inf
+    if not (np.isfinite(rd) and rd > pad_radius_over_h and edge <= 0.5):
+        raise InputError(f"the dome of radius {rd:g} h falls by {edge:.3g} h by the pad's edge "
+                         f"({pad_radius_over_h:g} h): at most 0.5 h (give the pad's own "
+                         "radius, or a flatter dome)")
+    r = np.asarray(r, dtype=np.float64)
+    return rd - np.sqrt(rd * rd - np.minimum(r * r, rd * rd))
 
 
 @dataclass(frozen=True)
@@ -216,6 +261,9 @@ class SphereIndentation:
         Coulomb contact: the nodal forces of the sphere on each top-surface node
         (normal, < 0 pressing; shear), per radian, units of E h^2; zero off the
         contact.
+    dome_radius_over_h : float or None
+        The domed top's radius of curvature (None: a flat top). `hertz_ratio`
+        stays the ball's Hertz force (radius R), not the two curvatures'.
     """
 
     radius_over_h: float
@@ -243,6 +291,7 @@ class SphereIndentation:
     slip_radius: np.ndarray | None = None
     surface_fz: np.ndarray | None = None
     surface_fr: np.ndarray | None = None
+    dome_radius_over_h: float | None = None
 
 
 class _RigidSphere(RigidPunch):
@@ -256,8 +305,23 @@ class _RigidSphere(RigidPunch):
     on the load steps (-3.5 % at w/h = 0.0025, R/h = 1, two steps).
     """
 
+    lift: np.ndarray | None = None
+
     def __init__(self, problem: AxisymmetricNeoHookean, radius: float, penalty: float) -> None:
         super().__init__(problem, radius, radius, penalty=penalty)
+        lift = problem.ubasis.doflocs[1, self.uz] - 1.0
+        if np.any(lift != 0.0):                      # a domed top: the nodes lie below 1
+            self.lift = lift
+            self.engaged = (self.signed_gap(np.zeros(self.n_dofs), 0.0)[0] <= 1e-12) \
+                & ~self.stuck
+
+    def signed_gap(self, x: np.ndarray, w: float) -> tuple[np.ndarray, ...]:
+        """The punch's gap, the top-surface nodes at their own reference heights."""
+        if self.lift is None:
+            return super().signed_gap(x, w)
+        y = x.copy()
+        y[self.uz] += self.lift
+        return super().signed_gap(y, w)
 
     def update(self, x: np.ndarray, w: float) -> bool:
         tol = 1e-6 * max(w, 1e-9)
@@ -300,6 +364,7 @@ class _Surface:
         order = np.argsort(ubasis.doflocs[0, ur])
         self.ur, self.uz = ur[order], uz[order]
         self.R = ubasis.doflocs[0, self.ur]
+        self.Z = ubasis.doflocs[1, self.uz]          # 1, or below it on a domed top
         self.radius = float(radius)
 
     def sphere_z(self, r: np.ndarray, w: float) -> np.ndarray:
@@ -313,19 +378,19 @@ class _Surface:
     def gap(self, x: np.ndarray, w: float, linear: bool) -> np.ndarray:
         """Signed gap (>= 0 free, < 0 penetrating), units of h."""
         if linear:
-            return self.sphere_z(self.R, w) - (1.0 + x[self.uz])
-        r, z = self.R + x[self.ur], 1.0 + x[self.uz]
+            return self.sphere_z(self.R, w) - (self.Z + x[self.uz])
+        r, z = self.R + x[self.ur], self.Z + x[self.uz]
         c = 1.0 - w + self.radius
         return np.hypot(r, z - c) - self.radius
 
     def project(self, x: np.ndarray, w: float, linear: bool) -> tuple[np.ndarray, np.ndarray]:
         """(u_r, u_z) that put each node on the sphere (linear: straight down)."""
         if linear:
-            return x[self.ur].copy(), self.sphere_z(self.R, w) - 1.0
-        r, z = self.R + x[self.ur], 1.0 + x[self.uz]
+            return x[self.ur].copy(), self.sphere_z(self.R, w) - self.Z
+        r, z = self.R + x[self.ur], self.Z + x[self.uz]
         c = 1.0 - w + self.radius
         d = np.maximum(np.hypot(r, z - c), 1e-300)
-        return r * self.radius / d - self.R, c + (z - c) * self.radius / d - 1.0
+        return r * self.radius / d - self.R, c + (z - c) * self.radius / d - self.Z
 
 
 def _edge(radii: np.ndarray, gaps: np.ndarray, held: np.ndarray, n_fit: int = 4
@@ -393,6 +458,7 @@ def sphere_indentation(radius_over_h: float, nu: float, w_over_h: np.ndarray, *,
                        pad_radius_over_h: float = 20.0, surface_cell: float | None = None,
                        steps_per_depth: int = 2, penalty: float = 1e3,
                        profile: str = "sphere", friction: float | None = None,
+                       dome_radius_over_h: float | None = None,
                        cache: bool | str = True,
                        cache_dir: str | os.PathLike | None = None) -> SphereIndentation | None:
     """P(w) and a(w) of a rigid sphere pressed into a bonded layer, linear or Neo-Hookean.
@@ -428,6 +494,13 @@ def sphere_indentation(radius_over_h: float, nu: float, w_over_h: np.ndarray, *,
         closed forms built on it (Hertz, Dimitriadis et al. 2002).
     friction : float, optional
         Coulomb's coefficient mu >= 0, with ``contact='coulomb'`` and only then.
+    dome_radius_over_h : float, optional
+        A domed gel: its top a spherical cap of radius Rd / h (convex, the
+        layer 1 h thick on the axis, thinner towards the pad's edge;
+        :func:`sphere_mesh`), w measured from first touch at the apex. In the
+        half-space limit the contact is Hertz's of two curvatures, radius
+        R Rd / (R + Rd) (Johnson 1985, sec. 4.2). A GelSight Mini's gel is
+        domed (FEATS: 0.28 mm at 8 mm, Rd about 114 mm). None: a flat top.
     cache : bool or 'only', default True
         Read and write complete sweeps in the disk cache (as
         :func:`~tactilevision.fem.neo_hookean_indentation`); ``'only'``: the
@@ -471,6 +544,9 @@ def sphere_indentation(radius_over_h: float, nu: float, w_over_h: np.ndarray, *,
               "penalty": float(penalty), "profile": profile}
     if friction is not None:
         inputs["friction"] = float(friction)
+    if dome_radius_over_h is not None:
+        dome_sag(np.zeros(1), dome_radius_over_h, pad_radius_over_h)       # checked
+        inputs["dome_radius_over_h"] = float(dome_radius_over_h)
     if profile not in ("sphere", "paraboloid") or (profile == "paraboloid" and model != "linear"):
         raise InputError(f"profile must be 'sphere', or 'paraboloid' with model='linear' "
                          f"(Hertz's approximation, for checks), got {profile!r}")
@@ -480,7 +556,8 @@ def sphere_indentation(radius_over_h: float, nu: float, w_over_h: np.ndarray, *,
             return hit
     res = _sweep(float(radius_over_h), float(nu), w_req, model, contact,
                  float(pad_radius_over_h), float(surface_cell), int(steps_per_depth),
-                 float(penalty), profile, 0.0 if friction is None else float(friction))
+                 float(penalty), profile, 0.0 if friction is None else float(friction),
+                 None if dome_radius_over_h is None else float(dome_radius_over_h))
     if cache and res.complete:
         write_sweep(inputs, res, cache_dir)
     return res
@@ -508,9 +585,9 @@ class _Sweep:
 
     def __init__(self, R: float, nu: float, w_max: float, model: str, contact: str,
                  pad: float, surface_cell: float, penalty: float, profile: str,
-                 friction: float = 0.0) -> None:
+                 friction: float = 0.0, dome: float | None = None) -> None:
         a_max = float(np.sqrt(max(2 * R * w_max - w_max**2, 0.0)))   # geometric, > elastic
-        mesh = sphere_mesh(a_max, surface_cell, pad_radius_over_h=pad)
+        mesh = sphere_mesh(a_max, surface_cell, pad_radius_over_h=pad, dome_radius_over_h=dome)
         bulk = np.inf if nu == 0.5 else 1.0 / (3.0 * (1.0 - 2.0 * nu))
         self.solid = solid = AxisymmetricNeoHookean(mesh, 1.0 / (4.0 * (1.0 + nu)), bulk)
         self.R, self.linear, self.tied = R, model == "linear", contact == "tied"
@@ -540,7 +617,8 @@ class _Sweep:
         if self.punch is not None:
             return self.base, np.zeros(self.base.size)
         surf, idx = self.surf, np.flatnonzero(self.held)
-        vz = (surf.sphere_z(surf.R[idx], w) - 1.0) if self.linear else self.offset_z[idx] - w
+        vz = (surf.sphere_z(surf.R[idx], w) - surf.Z[idx]) if self.linear \
+            else self.offset_z[idx] - w
         dofs, vals = [self.base, surf.uz[idx]], [np.zeros(self.base.size), vz]
         if self.tied or self.coulomb:
             idx = idx[self.stick[idx]] if self.coulomb else idx
@@ -658,10 +736,10 @@ class _Sweep:
 
 def _sweep(R: float, nu: float, w_req: np.ndarray, model: str, contact: str,
            pad: float, surface_cell: float, per: int, penalty: float,
-           profile: str, friction: float = 0.0) -> SphereIndentation:
+           profile: str, friction: float = 0.0, dome: float | None = None) -> SphereIndentation:
     t0 = time.perf_counter()
     sw = _Sweep(R, nu, float(w_req[-1]), model, contact, pad, surface_cell, penalty, profile,
-                friction)
+                friction, dome)
     x = np.zeros(sw.solid.n_dofs)
     x_prev, w_prev, w_pp = x.copy(), 0.0, 0.0
     # tied contact depends on the path: each step moves the edge by at most a surface cell
@@ -719,4 +797,5 @@ def _sweep(R: float, nu: float, w_req: np.ndarray, model: str, contact: str,
         surface_ur=np.array(surf_ur).reshape(-1, m), surface_uz=np.array(surf_uz).reshape(-1, m),
         friction=friction, slip_radius=res[:, 6] if contact == "coulomb" else None,
         surface_fz=np.array(forces[0::2]).reshape(-1, m) if sw.coulomb else None,
-        surface_fr=np.array(forces[1::2]).reshape(-1, m) if sw.coulomb else None)
+        surface_fr=np.array(forces[1::2]).reshape(-1, m) if sw.coulomb else None,
+        dome_radius_over_h=dome)

@@ -74,7 +74,8 @@ class Measurements:
     indenter : dict of str to object
         The sidecar ``session.toml``'s ``[indenter]`` keys beside ``radius_mm``
         (``shape``, ``contact``) and its ``[sensor] gel_radius_mm`` (as
-        ``pad_radius_mm``), where it has them; empty without a sidecar. A
+        ``pad_radius_mm``) and ``gel_dome_radius_mm`` (as ``dome_radius_mm``),
+        where it has them; empty without a sidecar. A
         flat punch is ``shape = "flat_punch"`` or no ``shape``.
     certification : dict of str to object
         The sidecar's ``[certification]`` keys (``depth_rule``: how ``calibrate``
@@ -423,7 +424,8 @@ def _sidecar(path: Path) -> tuple[Path, dict]:
 
 
 def _indenter_keys(path: Path) -> dict[str, object]:
-    """``[indenter] shape, contact`` and ``[sensor] gel_radius_mm`` of the sidecar, if any.
+    """``[indenter] shape, contact`` and ``[sensor] gel_radius_mm, gel_dome_radius_mm`` of
+    the sidecar, if any.
 
     Raises
     ------
@@ -441,8 +443,10 @@ def _indenter_keys(path: Path) -> dict[str, object]:
                                  f"{section[key]!r}")
             out[key] = section[key]
     sensor = doc.get("sensor", {})
-    if isinstance(sensor, dict) and "gel_radius_mm" in sensor:
-        out["pad_radius_mm"] = sensor["gel_radius_mm"]
+    for key, name in (("gel_radius_mm", "pad_radius_mm"), ("gel_dome_radius_mm",
+                                                            "dome_radius_mm")):
+        if isinstance(sensor, dict) and key in sensor:
+            out[name] = sensor[key]
     return out
 
 

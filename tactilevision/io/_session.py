@@ -200,7 +200,7 @@ def _toml_number(doc: dict, toml: Path, table: str, key: str, *, positive: bool 
 
 #: The keys of session.toml this version reads, per table (formats.md section 1).
 KNOWN_KEYS: dict[str, tuple[str, ...]] = {
-    "sensor": ("name", "mm_per_px", "gel_thickness_mm", "gel_radius_mm"),
+    "sensor": ("name", "mm_per_px", "gel_thickness_mm", "gel_radius_mm", "gel_dome_radius_mm"),
     "indenter": ("radius_mm", "shape", "contact"),
     "gauge_block": ("depths_mm", "bevel_offset_mm", "bevel_direction_deg", "bevel_angle_deg",
                     "bevel_length_mm", "bulge_correction", "bevel_force_correction"),

@@ -206,11 +206,20 @@ class Sphere(Indenter):
         available (``law='linear'`` only; the shear bounded by mu |p|, the
         normal contact tied, as in the FEATS authors' CalculiX model), one FEM
         sweep per nu as on a finite pad (:func:`tactilevision.fem.sphere_indentation`).
+    dome_radius_mm : float, optional
+        A domed gel: its top a spherical cap of this radius of curvature, mm
+        (a GelSight Mini's is about 114 mm: 0.28 mm below the apex at 8 mm),
+        the depth counted from first touch at the apex and the thickness
+        taken there. Needs `pad_radius_mm` (the dome must stay within half
+        the thickness of flat by the pad's edge); one FEM sweep per nu. In the
+        half-space limit it is Hertz's contact of two curvatures, of radius
+        R Rd / (R + Rd) (Johnson, Contact Mechanics, 1985, sec. 4.2).
     """
 
     radius_mm: float
     pad_radius_mm: float | None = None
     friction: float | None = None
+    dome_radius_mm: float | None = None
     shape: ClassVar[str] = "sphere"
     contacts: ClassVar[tuple[str, ...]] = ("frictionless", "tied")
     observes: ClassVar[str] = "the contact circle, whose radius grows with depth (a^2 ~ R w)"
@@ -226,6 +235,13 @@ class Sphere(Indenter):
                     or not (np.isfinite(mu) and mu >= 0):
                 raise InputError(f"friction must be a number >= 0, got {mu!r}")
             object.__setattr__(self, "friction", float(mu))
+        if self.dome_radius_mm is not None:
+            object.__setattr__(self, "dome_radius_mm",
+                               _positive(self.dome_radius_mm, "dome_radius_mm"))
+            if self.pad_radius_mm is None or not self.dome_radius_mm > self.pad_radius_mm:
+                raise InputError(f"a domed gel (dome_radius_mm = {self.dome_radius_mm:g}) needs "
+                                 "the pad's radius (pad_radius_mm, [sensor] gel_radius_mm), "
+                                 "smaller than the dome's")
 
     @property
     def costly_in_nu(self) -> bool:
@@ -275,7 +291,8 @@ class Sphere(Indenter):
         pad = 20.0 * h if self.pad_radius_mm is None else self.pad_radius_mm
         c = self._contact(contact)
         sweep = _pad_sweep(self.radius_mm / h, float(nu), pad / h, self._law(law), c, start,
-                           self.friction if c == "coulomb" else None)
+                           self.friction if c == "coulomb" else None,
+                           None if self.dome_radius_mm is None else self.dome_radius_mm / h)
         return sweep[0 if kind == "force" else 1](np.sqrt(np.minimum(x, reach)))
 
     def force(self, depth_mm, *, E_mpa, nu, thickness_mm, law="neo_hookean", contact=None):
@@ -320,14 +337,17 @@ class Sphere(Indenter):
             out["pad_radius_mm"] = self.pad_radius_mm
         if self.friction is not None:
             out["friction"] = self.friction
+        if self.dome_radius_mm is not None:
+            out["dome_radius_mm"] = self.dome_radius_mm
         return out
 
 
 @lru_cache(maxsize=32)
 def _pad_sweep(radius_over_h: float, nu: float, pad_over_h: float, law: str, contact: str,
-               start: float, friction: float | None = None) -> tuple[CubicSpline, CubicSpline]:
+               start: float, friction: float | None = None, dome_over_h: float | None = None
+               ) -> tuple[CubicSpline, CubicSpline]:
     """Force and contact ratios of one FEM sweep on a finite pad (or with Coulomb
-    friction, `friction`), as splines of sqrt(w/h)
+    friction, `friction`; on a domed top of radius `dome_over_h`), as splines of sqrt(w/h)
     (through 1 at w = 0, Hertz's limit), over the sphere table's depths from `start` to the
     reach (below the table's first depth, 0.01, doubling from `start`)."""
     reach = sphere_reach(radius_over_h)
@@ -343,7 +363,7 @@ def _pad_sweep(radius_over_h: float, nu: float, pad_over_h: float, law: str, con
     cell = min(0.0625, float(np.sqrt(radius_over_h * grid[0])) / 12.0)
     attempts = [dict(model=law, contact=contact, pad_radius_over_h=pad_over_h,
                      steps_per_depth=steps, surface_cell=min(0.125, factor * cell),
-                     friction=friction)
+                     friction=friction, dome_radius_over_h=dome_over_h)
                 for factor, steps in ((1.0, 2), (1.0, 4), (1.6, 4))]
     # a retry that converged before is in the disk cache; the attempts that failed before
     # it are not (only complete sweeps are kept), so it is looked for first
