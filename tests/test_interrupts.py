@@ -122,6 +122,24 @@ def test_an_interrupt_landing_in_a_finalizer_is_raised_once_it_returns(tmp_path)
     assert not list((tmp_path / "o").glob(".tactilevision-tmp-*"))
 
 
+def test_an_interrupt_caught_from_exec_of_text_exits_130_under_python_m(tmp_path):
+    """A Ctrl-C that lands in code ``exec``'d from text (a dataclass or named tuple being
+    created, many at import) and is caught by the command: ``python -m`` exits 130, not
+    by the signal (CPython's flag of an interrupt leaving such code is cleared; without
+    it the status was -2)."""
+    (tmp_path / "as_fit.py").write_text(
+        "import os, signal, sys\n"
+        "def run(args):\n"
+        "    exec('os.kill(os.getpid(), signal.SIGINT)\\nfor i in range(10**8): pass',\n"
+        "         {'os': os, 'signal': signal})\n"
+        "    return 0\n"
+        + _AS_FIT)
+    proc = subprocess.run([sys.executable, "-m", "as_fit"], cwd=tmp_path,
+                          capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 130, (proc.returncode, proc.stderr)
+    assert proc.stderr.strip().endswith("interrupted") and "Traceback" not in proc.stderr
+
+
 def test_in_finalizer_sees_finalizers_and_gc_callbacks_up_the_stack():
     """The frames where an exception would be ignored: a __del__, a garbage-collector
     callback, anything they call; not ordinary code."""
