@@ -44,7 +44,10 @@ Fit:
   each press's hold (``holds.csv``) -> :class:`RelaxationFit`: g and tau,
   hence E_0 and the relaxed E_inf = (1 - g) E_0.
 - :class:`Sphere` with ``friction`` takes Coulomb friction between ball and gel
-  (``contact='coulomb'``, small strain).
+  (``contact='coulomb'``, small strain), with ``dome_radius_mm`` a domed gel.
+- :func:`sphere_surface_depth` -- the gel's surface around a pressed ball (its
+  sink-in beyond the contact), from the small-strain FEM; :func:`hertz_surface_depth`
+  Hertz's closed form on a half-space.
 """
 
 from ._beta import (
@@ -88,6 +91,7 @@ from ._relaxation import (
 )
 from ._relaxation_log import refine_relaxation
 from ._result import IndentationFit
+from ._sphere_surface import hertz_surface_depth, sphere_surface_depth
 from ._sphere_table import (
     hertz_force_n,
     sphere_contact_ratio,
@@ -140,6 +144,7 @@ __all__ = [
     "fit_ramp",
     "fit_relaxation",
     "hertz_force_n",
+    "hertz_surface_depth",
     "hold_blocks",
     "indenter_from_config",
     "instantaneous_forces",
@@ -160,6 +165,7 @@ __all__ = [
     "sphere_contact_ratio",
     "sphere_force_ratio",
     "sphere_reach",
+    "sphere_surface_depth",
     "sphere_table_meta",
     "straight_decay",
     "table_reach",

@@ -26,7 +26,7 @@ from scipy.interpolate import CubicSpline
 from scipy.optimize import brentq
 
 from .._checks import InputError
-from ..fem import SPHERE_W_GRID, sphere_indentation
+from ..fem import SPHERE_W_GRID, SphereIndentation, sphere_indentation
 from ._fem_tables import TABLE_EXTRAPOLATION, fem_force, kappa_n
 from ._kappa import kappa
 from ._sphere_table import (
@@ -282,18 +282,24 @@ class Sphere(Indenter):
         if np.any(x < 0) or np.any(x > reach * (1 + 1e-9)):
             raise InputError(f"w/h = {float(np.max(x)):.4g} is outside the sphere's 0 to "
                              f"{reach:.4g}")
+        sweep = _pad_sweep(*self.sweep_key(x, nu, h, law, contact))
+        return sweep[0 if kind == "force" else 1](np.sqrt(np.minimum(x, reach)))
+
+    def sweep_key(self, w_over_h: np.ndarray, nu: float, h: float, law: str,
+                  contact: str | None) -> tuple:
+        """The arguments of :func:`pad_sweep_result` for depths `w_over_h` (one sweep
+        of the FEM over the table's depths, on this ball's pad, dome and friction)."""
         # the sweep starts below half the shallowest press, at one of a few depths (so that
         # nearby queries share it): its surface cell (1/12 of the first contact radius) is
         # no finer than the presses need
-        pos = x[x > 0]
-        low = 0.5 * float(pos.min()) if pos.size else reach
+        pos = w_over_h[w_over_h > 0]
+        low = 0.5 * float(pos.min()) if pos.size else sphere_reach(self.radius_mm / h)
         start = max((v for v in _PAD_STARTS if v <= low), default=_PAD_STARTS[0])
         pad = 20.0 * h if self.pad_radius_mm is None else self.pad_radius_mm
         c = self._contact(contact)
-        sweep = _pad_sweep(self.radius_mm / h, float(nu), pad / h, self._law(law), c, start,
-                           self.friction if c == "coulomb" else None,
-                           None if self.dome_radius_mm is None else self.dome_radius_mm / h)
-        return sweep[0 if kind == "force" else 1](np.sqrt(np.minimum(x, reach)))
+        return (self.radius_mm / h, float(nu), pad / h, self._law(law), c, start,
+                self.friction if c == "coulomb" else None,
+                None if self.dome_radius_mm is None else self.dome_radius_mm / h)
 
     def force(self, depth_mm, *, E_mpa, nu, thickness_mm, law="neo_hookean", contact=None):
         w = np.asarray(depth_mm, np.float64)
@@ -346,10 +352,31 @@ class Sphere(Indenter):
 def _pad_sweep(radius_over_h: float, nu: float, pad_over_h: float, law: str, contact: str,
                start: float, friction: float | None = None, dome_over_h: float | None = None
                ) -> tuple[CubicSpline, CubicSpline]:
-    """Force and contact ratios of one FEM sweep on a finite pad (or with Coulomb
-    friction, `friction`; on a domed top of radius `dome_over_h`), as splines of sqrt(w/h)
-    (through 1 at w = 0, Hertz's limit), over the sphere table's depths from `start` to the
-    reach (below the table's first depth, 0.01, doubling from `start`)."""
+    """Force and contact ratios of :func:`pad_sweep_result`, as splines of sqrt(w/h)
+    (through 1 at w = 0, Hertz's limit)."""
+    res = pad_sweep_result(radius_over_h, nu, pad_over_h, law, contact, start, friction,
+                           dome_over_h)
+    s = np.concatenate([[0.0], np.sqrt(res.w_over_h)])
+    force = np.concatenate([[1.0], res.hertz_ratio])
+    radius = np.concatenate([[1.0], res.contact_radius / np.sqrt(radius_over_h
+                                                                  * res.w_over_h)])
+    return CubicSpline(s, force), CubicSpline(s, radius)
+
+
+@lru_cache(maxsize=32)
+def pad_sweep_result(radius_over_h: float, nu: float, pad_over_h: float, law: str,
+                     contact: str, start: float, friction: float | None = None,
+                     dome_over_h: float | None = None) -> SphereIndentation:
+    """One FEM sweep of the ball on a pad of radius `pad_over_h` (20: the infinite layer;
+    with Coulomb friction, `friction`; on a domed top of radius `dome_over_h`) over the
+    sphere table's depths from `start` to the reach (below the table's first depth, 0.01,
+    doubling from `start`), from the disk cache where it was computed before.
+
+    Raises
+    ------
+    InputError
+        When Newton fails on three meshes.
+    """
     reach = sphere_reach(radius_over_h)
     grid = SPHERE_W_GRID[(SPHERE_W_GRID <= reach + 1e-12) & (SPHERE_W_GRID >= start - 1e-12)]
     below = start * 2.0 ** np.arange(8)                 # a thick gel's shallow presses
@@ -380,11 +407,7 @@ def _pad_sweep(radius_over_h: float, nu: float, pad_over_h: float, law: str, con
     if res is None:
         raise InputError(f"the FEM sweep of the sphere on the pad did not converge on three "
                          f"meshes: {why}")
-    s = np.concatenate([[0.0], np.sqrt(res.w_over_h)])
-    force = np.concatenate([[1.0], res.hertz_ratio])
-    radius = np.concatenate([[1.0], res.contact_radius / np.sqrt(radius_over_h
-                                                                  * res.w_over_h)])
-    return CubicSpline(s, force), CubicSpline(s, radius)
+    return res
 
 
 #: Indenter shapes by their ``[indenter] shape`` name.

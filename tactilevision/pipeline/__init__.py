@@ -18,7 +18,8 @@ A ball's session (``[indenter] shape = "sphere"``, no gauge block) is
 :func:`tactilevision.contact.find_ball_presses`, each depth from the contact
 circle (:func:`ball_press_depths`), E by
 :func:`tactilevision.mechanics.fit_indenter`; :func:`write_ball_calibration`
-writes its folder.
+writes its folder. With an optics calibration each press's height-map cap is a
+cross-check of its depth (:func:`ball_press_caps`).
 """
 
 from ._calibrate import calibrate_session
@@ -46,8 +47,9 @@ __all__ += ["CALIBRATION_FILES", "CalibrationResult", "read_material", "result_d
 
 # a ball as its own gauge: depth from the contact circle
 from ._ball import BallDepths, ball_press_depths  # noqa: E402
+from ._ball_caps import CAP_SCALE_SD, BallCaps, ball_press_caps  # noqa: E402
 
-__all__ += ["BallDepths", "ball_press_depths"]
+__all__ += ["CAP_SCALE_SD", "BallCaps", "BallDepths", "ball_press_caps", "ball_press_depths"]
 
 # a ball session: presses found in the frames and the F/T log, depths from the circles
 from ._ball_session import (  # noqa: E402

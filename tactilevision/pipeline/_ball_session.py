@@ -14,7 +14,7 @@ from __future__ import annotations
 import json
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -30,8 +30,10 @@ from ..io import (
     write_measurements,
 )
 from ..mechanics import IndenterFit, Sphere, fit_indenter
+from ..optics import DepthReconstructor, PhotometricCalibration
 from ..viz import ball_calibration_figure
 from ._ball import BallDepths, ball_press_depths
+from ._ball_caps import CAP_SCALE_SD, BallCaps, ball_press_caps
 from ._steps import read_force_zero
 
 __all__ = ["BALL_CALIBRATION_FILES", "BallCalibration", "ball_indenter", "calibrate_ball_session",
@@ -68,6 +70,9 @@ class BallCalibration:
     warnings : list of str
     seconds : float
         Wall time of :func:`calibrate_ball_session`, s.
+    caps : BallCaps or None
+        The height map's cap of each fitted press against its circle's depth (the
+        cross-check; None without an optics calibration).
     """
 
     session: Session | DeadWeightSession
@@ -84,6 +89,7 @@ class BallCalibration:
     contact: str
     warnings: list[str] = field(default_factory=list)
     seconds: float = 0.0
+    caps: BallCaps | None = None
 
     @property
     def frames(self) -> np.ndarray:
@@ -105,7 +111,9 @@ def ball_indenter(session: Session | DeadWeightSession) -> Sphere:
 
 def calibrate_ball_session(session: Session | str | Path, *, nu: float = 0.5,
                            law: str = "neo_hookean", progress: Callable | None = None,
-                           min_contact_px: int = 200) -> BallCalibration:
+                           min_contact_px: int = 200,
+                           optics: PhotometricCalibration | str | Path | None = None
+                           ) -> BallCalibration:
     """Find every press of a ball session, read its depth from its contact circle, fit E.
 
     Parameters
@@ -121,6 +129,11 @@ def calibrate_ball_session(session: Session | str | Path, *, nu: float = 0.5,
         Wraps the frame iterator (e.g. ``tqdm``).
     min_contact_px : int, default 200
         Pixels of contact that make a frame part of a press.
+    optics : PhotometricCalibration or path, optional
+        A photometric calibration of the sensor: each fitted press's height map then
+        gives its cap as a cross-check of the circle's depth
+        (:func:`ball_press_caps`, ``caps``); default: the session's ``[optics]
+        calibration``, else none.
 
     Returns
     -------
@@ -159,8 +172,35 @@ def calibrate_ball_session(session: Session | str | Path, *, nu: float = 0.5,
     force = np.array([found.presses[i].force_n for i in used])
     sem = np.array([found.presses[i].force_sem_n for i in used])
     force, zero_note = _take_off_zero(session, found, used, force)
-    return _fit(session, ball, found, used, depths, force, sem, rejected, nu, law,
-                list(session.notes) + list(found.warnings) + [zero_note], t0)
+    cal = _fit(session, ball, found, used, depths, force, sem, rejected, nu, law,
+               list(session.notes) + list(found.warnings) + [zero_note], t0)
+    return replace(with_caps(cal, optics), seconds=time.perf_counter() - t0)
+
+
+def with_caps(cal: BallCalibration, optics: PhotometricCalibration | str | Path | None
+              ) -> BallCalibration:
+    """`cal` with its presses' caps (:func:`ball_press_caps`) and a sentence on them, where
+    an optics calibration is given or named by the session (else `cal` as it is)."""
+    session = cal.session
+    optics = optics if optics is not None else session.config.calibration
+    if optics is None:
+        return cal
+    if not isinstance(optics, PhotometricCalibration):
+        optics = PhotometricCalibration.load(optics)
+    cfg = session.config
+    recon = DepthReconstructor(optics, reference=session.reference)
+    heights = np.stack([recon(session.frame(int(f))) for f in cal.frames])
+    caps = ball_press_caps(heights, cal.depths, cal.indenter, mm_per_px=cfg.mm_per_px,
+                           thickness_mm=cfg.gel_thickness_mm, nu=cal.nu, contact=cal.contact)
+    notes = [caps.summary()]
+    rel = float(np.median(cal.depths.depth_shared_mm / cal.depths.depth_mm))
+    bound = 2.0 * float(np.hypot(CAP_SCALE_SD, rel))
+    off = float(np.nanmedian(caps.ratio)) - 1.0
+    if abs(off) > bound:
+        notes.append(f"the caps and the circles disagree by {100 * off:+.1f} %, beyond both "
+                     f"their errors (+-{100 * bound:.0f} %): the circles are biased, or the "
+                     "optics calibration does not fit these frames")
+    return replace(cal, caps=caps, warnings=list(cal.warnings) + notes)
 
 
 def _take_off_zero(session: Session, found: BallPresses, used: list[int],
@@ -339,13 +379,7 @@ def _write_files(cal: BallCalibration, out: Path, figure: bool) -> list[str]:
     write_measurements(paths["measurements.csv"], columns, thickness_mm=cfg.gel_thickness_mm,
                        radius_mm=cfg.indenter_radius_mm)
     names = [cal.session.frame_paths[f].name for f in cal.frames]
-    rows = ["press,frame,frame_file,x_px,y_px,radius_px,contact_radius_mm,depth_mm,"
-            "depth_std_mm,depth_shared_mm"]
-    rows += [f"{k},{f},{n},{c[0]:.3f},{c[1]:.3f},{r:.3f},{a:.6g},{w:.6g},{s:.3g},{b:.3g}"
-             for k, f, n, c, r, a, w, s, b in zip(
-                 press, cal.frames, names, d.centres_px, d.radii_px, d.contact_radius_mm,
-                 d.depth_mm, d.depth_std_mm, d.depth_shared_mm, strict=True)]
-    paths["circles.csv"].write_text("\n".join(rows) + "\n")
+    paths["circles.csv"].write_text(_circles_csv(cal, press, names))
     paths["rejected.csv"].write_text("press,reason,detail,t_frame_s,frame\n" + "".join(
         f"{r.press},{r.reason},\"{r.detail.replace(chr(34), chr(39))}\","
         f"{_cell(r.t_frame_s)},{r.frame}\n" for r in cal.rejected))
@@ -366,6 +400,25 @@ def _write_files(cal: BallCalibration, out: Path, figure: bool) -> list[str]:
     return list(paths)
 
 
-def _cell(x: float) -> str:
-    """A time for a CSV cell: empty where there is none (dead weights)."""
-    return f"{x:.4f}" if np.isfinite(x) else ""
+def _circles_csv(cal: BallCalibration, press, names: list[str]) -> str:
+    """``circles.csv``: each press's frame, circle and depth (and its cap, where the caps
+    were read: ``cap_mm``, ``cap_expected_mm``, ``cap_depth_mm``, ``cap_depth_std_mm``)."""
+    d, caps = cal.depths, cal.caps
+    head = ("press,frame,frame_file,x_px,y_px,radius_px,contact_radius_mm,depth_mm,"
+            "depth_std_mm,depth_shared_mm")
+    rows = [f"{k},{f},{n},{c[0]:.3f},{c[1]:.3f},{r:.3f},{a:.6g},{w:.6g},{s:.3g},{b:.3g}"
+            for k, f, n, c, r, a, w, s, b in zip(
+                press, cal.frames, names, d.centres_px, d.radii_px, d.contact_radius_mm,
+                d.depth_mm, d.depth_std_mm, d.depth_shared_mm, strict=True)]
+    if caps is not None:
+        head += ",cap_mm,cap_expected_mm,cap_depth_mm,cap_depth_std_mm"
+        rows = [row + "," + ",".join(_cell(v, "6g") for v in vals) for row, *vals in zip(
+            rows, caps.cap_mm, caps.expected_mm, caps.depth_mm, caps.depth_std_mm,
+            strict=True)]
+    return "\n".join([head, *rows]) + "\n"
+
+
+def _cell(x: float, spec: str = ".4f") -> str:
+    """A number for a CSV cell: empty where there is none (a dead weight's time, a cap past
+    the ball's reach)."""
+    return format(x, spec) if np.isfinite(x) else ""
