@@ -11,7 +11,7 @@ import shutil
 import numpy as np
 import pytest
 
-from tactilevision import InputError
+from tactilevision import InputError, default_calibration_path
 from tactilevision.cli import main
 from tactilevision.io import read_dead_weights
 from tactilevision.pipeline import calibrate_dead_weights
@@ -42,6 +42,20 @@ def test_depths_and_E_from_the_frames(weights):
     fit = cal.fit
     assert fit.E_ci95_mpa[0] <= E <= fit.E_ci95_mpa[1], fit.E_ci95_mpa
     assert abs(fit.E_mpa / E - 1) < 0.12, fit.E_mpa
+
+
+def test_dead_weights_take_an_optics_calibration_for_their_caps(weights):
+    """With an optics calibration each resting weight's cap is read beside its circle:
+    finite, deeper for the heavier weights, and said in the warnings."""
+    folder, depth = weights
+    cal = calibrate_dead_weights(folder, nu=0.5, law="linear",
+                                 optics=default_calibration_path("gelsight"))
+    caps = cal.caps
+    assert caps is not None and caps.cap_mm.shape == (15,)
+    heavy, light = np.argmax(depth), np.argmin(depth)
+    assert caps.cap_mm[heavy] > 2 * caps.cap_mm[light] > 0
+    assert np.all(caps.expected_mm < cal.depths.depth_mm)
+    assert any(w.startswith("cap cross-check") for w in cal.warnings)
 
 
 def test_cli_calibrate_reads_a_dead_weight_folder(weights, tmp_path, capsys):

@@ -177,10 +177,11 @@ def calibrate_ball_session(session: Session | str | Path, *, nu: float = 0.5,
     return replace(with_caps(cal, optics), seconds=time.perf_counter() - t0)
 
 
-def with_caps(cal: BallCalibration, optics: PhotometricCalibration | str | Path | None
-              ) -> BallCalibration:
+def with_caps(cal: BallCalibration, optics: PhotometricCalibration | str | Path | None, *,
+              frame_of: Callable[[int], np.ndarray] | None = None) -> BallCalibration:
     """`cal` with its presses' caps (:func:`ball_press_caps`) and a sentence on them, where
-    an optics calibration is given or named by the session (else `cal` as it is)."""
+    an optics calibration is given or named by the session (else `cal` as it is);
+    `frame_of` reads a frame by its index (default the session's ``frame``)."""
     session = cal.session
     optics = optics if optics is not None else session.config.calibration
     if optics is None:
@@ -189,7 +190,8 @@ def with_caps(cal: BallCalibration, optics: PhotometricCalibration | str | Path 
         optics = PhotometricCalibration.load(optics)
     cfg = session.config
     recon = DepthReconstructor(optics, reference=session.reference)
-    heights = np.stack([recon(session.frame(int(f))) for f in cal.frames])
+    frame_of = frame_of or session.frame
+    heights = np.stack([recon(frame_of(int(f))) for f in cal.frames])
     caps = ball_press_caps(heights, cal.depths, cal.indenter, mm_per_px=cfg.mm_per_px,
                            thickness_mm=cfg.gel_thickness_mm, nu=cal.nu, contact=cal.contact)
     notes = [caps.summary()]
@@ -217,7 +219,9 @@ def _take_off_zero(session: Session, found: BallPresses, used: list[int],
 
 
 def calibrate_dead_weights(session: DeadWeightSession | str | Path, *, nu: float = 0.5,
-                           law: str = "neo_hookean") -> BallCalibration:
+                           law: str = "neo_hookean",
+                           optics: PhotometricCalibration | str | Path | None = None
+                           ) -> BallCalibration:
     """E from a ball at rest under known masses: P = m g, the depth from its contact circle.
 
     The route for a lab without an F/T sensor (formats.md section 1, "Dead weights").
@@ -229,6 +233,9 @@ def calibrate_dead_weights(session: DeadWeightSession | str | Path, *, nu: float
     nu : float, default 0.5
         Poisson's ratio of a(w), and E's nu when the weights do not identify it.
     law : {'neo_hookean', 'linear'}, default 'neo_hookean'
+    optics : PhotometricCalibration or path, optional
+        As :func:`calibrate_ball_session`'s: each frame's height-map cap beside its
+        circle's depth (default: the folder's ``[optics] calibration``, else none).
 
     Returns
     -------
@@ -249,8 +256,10 @@ def calibrate_dead_weights(session: DeadWeightSession | str | Path, *, nu: float
     stack = session.frames()
     used, depths, rejected = _circle_depths(session, ball, frames, nu, law,
                                             lambda i: stack[i])
-    return _fit(session, ball, None, used, depths, session.force_n[used],
-                session.force_std_n[used], rejected, nu, law, list(session.notes), t0)
+    cal = _fit(session, ball, None, used, depths, session.force_n[used],
+               session.force_std_n[used], rejected, nu, law, list(session.notes), t0)
+    return replace(with_caps(cal, optics, frame_of=lambda i: stack[i]),
+                   seconds=time.perf_counter() - t0)
 
 
 def _circle_depths(session, ball: Sphere, frames: list[tuple[int, int, float]], nu: float,
