@@ -10,7 +10,9 @@ A measurements table (formats.md §2) against the force law of
   a verdict of "nothing missing" says what it rules out (:func:`table_sensitivity`).
 - The statistics it rests on: :func:`covariate_tests`, :func:`certification_tests`
   (the certification's own products, never physics), :func:`cross_validated_rmse`,
-  :func:`noise_floor`, :func:`noise_budget`.
+  :func:`noise_floor`, :func:`noise_budget`; :func:`crossing_tests`, each press's force
+  at its crossing of the mark's w0 (a depth the frames certify apart from the force)
+  tested for changes within indenters, which the mark rule's depths absorb.
 - What a table of presses lets ``diagnose`` find: :func:`replay_sizes` and
   :func:`replay_power` replay its decisions over drawn sessions of a
   :class:`ReplaySetup` (the measured table's, :func:`table_sensitivity`; a design's,
@@ -24,6 +26,7 @@ to :func:`diagnose` (``docs/custom_effects.md``).
 """
 
 from ._budget import NoiseBudget, law_slope, noise_budget
+from ._crossings import CrossingScan, CrossingTest, crossing_tests
 from ._diagnose import (
     CURVATURE_BIC,
     DELTA_BIC,
@@ -67,6 +70,8 @@ __all__ = [
     "TANGENTIAL_FRACTION",
     "CertificationTest",
     "CovariateTest",
+    "CrossingScan",
+    "CrossingTest",
     "Diagnosis",
     "EffectSensitivity",
     "IndentationValidation",
@@ -78,6 +83,7 @@ __all__ = [
     "certification_tests",
     "covariate_tests",
     "cross_validated_rmse",
+    "crossing_tests",
     "diagnose",
     "diagnose_indenter",
     "indenter_shared",

@@ -40,6 +40,7 @@ from ._budget import (
     NoiseBudget,
     noise_budget,
 )
+from ._crossings import CrossingScan
 from ._diagnose_stats import (  # noqa: F401  (the statistics' names, also read from here)
     _NOT_COVARIATES,
     ALPHA,
@@ -223,6 +224,11 @@ class Diagnosis:
         computed (:data:`CERTIFICATION_COLUMNS`: ``overshoot_mm``), never scanned
         as covariates nor offered as physics: a significant one is a certification
         problem, reported with its size.
+    crossings : CrossingScan or None
+        Where the table has each press's force at its crossing of w0
+        (``force_w0_n``, ``force_w0_sem_n``): those forces tested for a change
+        within indenters (:func:`~tactilevision.diagnosis.crossing_tests`); its
+        finding is the verdict where the ladder named nothing.
     """
 
     model: tuple[str, ...]
@@ -254,6 +260,7 @@ class Diagnosis:
     rules_out: dict[str, Any] = field(default_factory=dict, hash=False)
     rules_out_note: str = ""
     shared_depth: dict[str, Any] = field(default_factory=dict, hash=False)
+    crossings: CrossingScan | None = field(default=None, hash=False)
 
     @property
     def depth_link_coarse(self) -> bool:
@@ -316,6 +323,7 @@ class Diagnosis:
                           for k, v in self.rules_out.items()},
             "rules_out_note": self.rules_out_note or None,
             "shared_depth": self.shared_depth or None,
+            "crossings": None if self.crossings is None else self.crossings.to_json_dict(),
         }
 
 

@@ -21,7 +21,8 @@ from ..mechanics import IndentationModel
 ALPHA = 0.01
 #: Columns that are never covariates (``depth_std_mm``: the depth's uncertainty, not physics).
 _NOT_COVARIATES = ("force_n", "depth_std_mm", "force_sem_n", "bevel_force_n", "force0_n",
-                   "ft_zero_n", "depth_shared_mm", "depth_indenter_std_mm")
+                   "ft_zero_n", "depth_shared_mm", "depth_indenter_std_mm", "force_w0_n",
+                   "force_w0_sem_n")
 #: Columns that respond to the press rather than set its conditions: a press's tangential
 #: forces and its F/T window's scatter grow with its normal force, so structure along them
 #: is the force itself. Not scanned as covariates unless asked (``scan``); ``fx_n`` and

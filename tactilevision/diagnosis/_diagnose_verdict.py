@@ -17,6 +17,7 @@ import numpy as np
 
 from .._checks import InputError
 from ._budget import law_slope
+from ._crossings import crossing_tests
 from ._diagnose import CURVATURE, Diagnosis, diagnose_core
 from ._replay import table_sensitivity
 
@@ -186,6 +187,7 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
                                shared[1])
     if depth_rule == "mark":
         d = replace(d, message=d.message + " " + MARK_SENTENCE)
+    d = _with_crossings(d, columns)
     if not rules_out or d.missing_effect or d.unexplained_covariate:
         return d
     if base != "paper":
@@ -195,6 +197,23 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
     if shared is not None:
         hidden.update({e: SHARED_WHY for e in ("depth_offset", "force_offset")})
     return _with_rules_out(d, float(thickness_mm), float(radius_mm), hidden)
+
+
+def _with_crossings(d: Diagnosis, columns: Mapping[str, np.ndarray]) -> Diagnosis:
+    """`d` with the crossing forces' tests (:func:`crossing_tests`) and their sentence; where
+    the ladder named nothing, what they find is the verdict: a step or spatial structure
+    as the missing effect, a trend as an unexplained covariate with its stiffness trend
+    offered (as the ladder reports a trend)."""
+    scan = crossing_tests(columns)
+    if scan is None:
+        return d
+    d = replace(d, crossings=scan, message=d.message + " " + scan.sentence())
+    found = scan.found
+    if found is None or d.missing_effect or d.unexplained_covariate:
+        return d
+    if found.kind == "trend" and found.column not in ("x_mm", "y_mm"):
+        return replace(d, unexplained_covariate=found.column, offered_effect=found.effect)
+    return replace(d, missing_effect=found.effect)
 
 
 def indenter_shared(columns: Mapping[str, np.ndarray]

@@ -31,14 +31,15 @@ MAX_FORCE_N = 1.0e4
 # every cell is a number, else kept as labels.
 _NUMERIC_COLUMNS = frozenset({
     "press", "depth_std_mm", "depth_shared_mm", "depth_indenter_std_mm", "overshoot_mm",
-    "force0_n", "force_std_n", "force_sem_n", "fx_n", "fy_n", "ft_zero_n", "ft_drift_n",
+    "force0_n", "force_w0_n", "force_w0_sem_n", "force_std_n", "force_sem_n", "fx_n", "fy_n",
+    "ft_zero_n", "ft_drift_n",
     "time_s", "hold_s", "wait_s", "x_mm", "y_mm", "day", "temperature_c",
 })
 
 # Optional columns that are uncertainties of another column, or another reading of the
 # force, not covariates.
 _UNCERTAINTY_COLUMNS = ("depth_std_mm", "depth_shared_mm", "depth_indenter_std_mm",
-                        "force_sem_n", "force0_n")
+                        "force_sem_n", "force0_n", "force_w0_n", "force_w0_sem_n")
 # Columns that say what was done to the force (the F/T's zero taken off), not covariates.
 _FORCE_COLUMNS = ("ft_zero_n",)
 # Columns the depth rule computed (a product of the certification), not covariates.
@@ -480,7 +481,8 @@ def _certification_keys(path: Path) -> tuple[dict[str, object], list[str]]:
 #: Column order of :func:`write_measurements` (formats.md section 2); other
 #: columns follow in the order given.
 COLUMN_ORDER = ("press", "indenter", "depth_mm", "depth_std_mm", "depth_indenter_std_mm",
-                "overshoot_mm", "force_n", "force0_n", "bevel_force_n", "ft_zero_n", "ft_drift_n",
+                "overshoot_mm", "force_n", "force0_n", "force_w0_n", "force_w0_sem_n",
+                "bevel_force_n", "ft_zero_n", "ft_drift_n",
                 "force_std_n", "force_sem_n", "fx_n", "fy_n", "time_s", "hold_s", "wait_s",
                 "x_mm", "y_mm", "day", "temperature_c")
 

@@ -142,7 +142,11 @@ class SessionCalibration:
             force at the instant of loading, less the bevel's; with a zero
             that drifts and was taken off as a constant, ``ft_drift_n``: the
             zero at the press less that constant, N (the drift left in
-            ``force_n``).
+            ``force_n``); where the presses' crossings of w0 were read (a
+            mark's onset), ``force_w0_n`` and ``force_w0_sem_n``: the force
+            at that crossing, less the zero, and its standard uncertainty, N
+            (:mod:`tactilevision.diagnosis` tests them for changes within
+            indenters).
         """
         ps = self.certification.presses
         col = {
@@ -161,6 +165,10 @@ class SessionCalibration:
         }
         if len(self.depth_indenter_std_mm) == len(ps):
             col["depth_indenter_std_mm"] = list(self.depth_indenter_std_mm)
+        onset = np.array([p.force_onset_n for p in ps], np.float64)
+        if np.any(np.isfinite(onset)):         # the force where each press crossed w0
+            col["force_w0_n"] = list(onset)
+            col["force_w0_sem_n"] = [p.force_onset_sem_n for p in ps]
         if len(self.force0_n) == len(ps):
             col["force0_n"] = list(self.force0_n - self._bevel())
         z = self.ft_zero

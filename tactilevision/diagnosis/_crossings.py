@@ -1,0 +1,238 @@
+"""The mark's crossing forces: a force at a depth the frames certify apart from the force.
+
+Under the mark rule each depth past the mark's w0 is read from the press's own force, so an
+effect that changes the force between one indenter's presses (a stiffness that steps or
+drifts over the session, a gel stiffer on one side) moves the depth with it and is
+absorbed. But every press also crossed w0, and the frames say when: the F/T at that moment
+(``force_w0_n``, bracketed by the frame period, its standard uncertainty
+``force_w0_sem_n``) is the force at the depth w0 that the frames certify, whatever the
+force law. Within one indenter w0 is the same for every press, so those forces differ
+only by the noise they state and by whatever changed the gel between the presses. This
+module tests them for that: each covariate that sets the press's conditions (time, press
+order, position) as a stiffness trend (a relative change per unit), time and press order
+as a step too, against the stated uncertainties alone (one noise model: what the
+certification states is what is tested against), Bonferroni over the tests.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import stats
+
+__all__ = ["CROSSING_ALPHA", "CROSSING_COLUMNS", "CrossingScan", "CrossingTest",
+           "crossing_tests"]
+
+#: Family-wise level of the crossing forces' tests (Bonferroni over all of them).
+CROSSING_ALPHA = 0.01
+#: Conditions of a press a within-indenter effect can follow: its time and order (a
+#: stiffness that drifts or steps over the session) and its position on the pad.
+CROSSING_COLUMNS = ("time_s", "press", "x_mm", "y_mm")
+#: Least presses (with a crossing force) in an indenter that takes part.
+_MIN_PER_INDENTER = 2
+
+
+@dataclass(frozen=True)
+class CrossingTest:
+    """One within-indenter test of the crossing forces.
+
+    Attributes
+    ----------
+    column : str
+    kind : {'trend', 'step'}
+        A stiffness changing linearly along the column, or stepping once along it.
+    size : float
+        The relative change of the crossing force: per unit of the column (trend), or
+        across the step (step, its side of larger values against the other).
+    se : float
+        Its standard error from the stated uncertainties.
+    at : float
+        The step's place (midway between the two presses it falls between); NaN for
+        a trend.
+    p_value : float
+        Two-sided, from the stated uncertainties (a step: the smallest over its
+        places, times their number).
+    significant : bool
+        ``p_value`` below :data:`CROSSING_ALPHA` over the number of tests
+        (Bonferroni).
+    """
+
+    column: str
+    kind: str
+    size: float
+    se: float
+    at: float
+    p_value: float
+    significant: bool
+
+    @property
+    def effect(self) -> str:
+        """The catalogue effect this structure is: ``spatial_nonuniformity`` along x or y,
+        ``stiffness_step:<column>`` or ``stiffness_trend:<column>`` otherwise."""
+        if self.column in ("x_mm", "y_mm"):
+            return "spatial_nonuniformity"
+        return f"stiffness_{self.kind}:{self.column}"
+
+
+@dataclass(frozen=True)
+class CrossingScan:
+    """:func:`crossing_tests`' result.
+
+    Attributes
+    ----------
+    n : int
+        Presses with a crossing force in an indenter of two or more.
+    n_indenters : int
+    chi2 : float
+        Scatter of the crossing forces about their indenters' means over the stated
+        variances; `dof` degrees of freedom.
+    dof : int
+    p_scatter : float
+        Upper tail of chi2: small when the crossing forces vary within indenters beyond
+        what they state.
+    tests : tuple of CrossingTest
+        Best first (smallest p).
+    """
+
+    n: int
+    n_indenters: int
+    chi2: float
+    dof: int
+    p_scatter: float
+    tests: tuple[CrossingTest, ...]
+
+    @property
+    def found(self) -> CrossingTest | None:
+        """The most significant test, where one is; along its column, a step and a trend
+        that are both significant give way to the one of larger |size / se|."""
+        sig = [t for t in self.tests if t.significant]
+        if not sig:
+            return None
+        best = sig[0]
+        rival = [t for t in sig if t.column == best.column and t.kind != best.kind]
+        if rival and abs(rival[0].size / rival[0].se) > abs(best.size / best.se):
+            return rival[0]          # the same column: the shape that fits it better
+        return best
+
+    def sentence(self) -> str:
+        """What the crossing forces say, in one or two sentences."""
+        head = (f"The crossing forces P(w0) ({self.n} presses of {self.n_indenters} indenters: "
+                "each press's force where it crossed w0, a depth the frames certify apart "
+                "from the force) scatter about their indenters' means "
+                f"{np.sqrt(self.chi2 / max(self.dof, 1)):.2f} times what they state "
+                f"(chi2 {self.chi2:.1f} on {self.dof}, p = {self.p_scatter:.2g})")
+        t = self.found
+        if t is None:
+            return head + ", with no significant change along " + ", ".join(
+                sorted({x.column for x in self.tests})) + "."
+        what = (f"{100 * t.size:+.1f} % per unit of {t.column}" if t.kind == "trend" else
+                f"{100 * t.size:+.1f} % after {t.column} {t.at:.4g}")
+        return (head + f"; they change within indenters: {what} (+-{100 * t.se:.1f} %, "
+                f"p = {t.p_value:.2g}), which is {t.effect}.")
+
+    def to_json_dict(self) -> dict:
+        def num(v: float) -> float | None:
+            return float(v) if np.isfinite(v) else None
+        return {"n": self.n, "n_indenters": self.n_indenters, "chi2": num(self.chi2),
+                "dof": self.dof, "p_scatter": num(self.p_scatter),
+                "found": None if self.found is None else self.found.effect,
+                "tests": [{"column": t.column, "kind": t.kind, "size": num(t.size),
+                           "se": num(t.se), "at": num(t.at), "p_value": num(t.p_value),
+                           "significant": t.significant} for t in self.tests]}
+
+
+def _within(v: np.ndarray, groups: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """`v` less its weighted mean within each group."""
+    out = np.empty_like(v)
+    for g in np.unique(groups):
+        m = groups == g
+        out[m] = v[m] - np.sum(w[m] * v[m]) / np.sum(w[m])
+    return out
+
+
+def _slope(r: np.ndarray, z: np.ndarray, groups: np.ndarray, w: np.ndarray
+           ) -> tuple[float, float]:
+    """Weighted least squares of r on z with a mean per group, known variances 1/w:
+    (slope, its se)."""
+    zc = _within(z, groups, w)
+    sxx = float(np.sum(w * zc * zc))
+    if sxx <= 0:
+        return float("nan"), float("inf")
+    return float(np.sum(w * zc * r) / sxx), float(1.0 / np.sqrt(sxx))
+
+
+def crossing_tests(columns: Mapping[str, np.ndarray]) -> CrossingScan | None:
+    """Test each indenter's crossing forces for a change along the press's conditions.
+
+    Parameters
+    ----------
+    columns : mapping of str to (N,) array_like
+        A mark-certified measurements table: ``indenter``, ``force_w0_n``,
+        ``force_w0_sem_n`` (rows without a finite, positive pair are left out) and
+        any of :data:`CROSSING_COLUMNS`.
+
+    Returns
+    -------
+    CrossingScan or None
+        None where the table has no crossing forces, or fewer than two indenters with
+        two presses each.
+    """
+    need = ("indenter", "force_w0_n", "force_w0_sem_n")
+    if any(k not in columns for k in need):
+        return None
+    ind = np.asarray(columns["indenter"])
+    f = np.asarray(columns["force_w0_n"], np.float64)
+    se = np.asarray(columns["force_w0_sem_n"], np.float64)
+    ok = np.isfinite(f) & np.isfinite(se) & (se > 0) & (f > 0)
+    counts = {g: int(np.sum(ok & (ind == g))) for g in np.unique(ind[ok])}
+    ok &= np.array([counts.get(g, 0) >= _MIN_PER_INDENTER for g in ind])
+    groups = ind[ok]
+    n_groups = len(np.unique(groups))
+    if n_groups < 2:
+        return None
+    f, se = f[ok], se[ok]
+    mean = {g: np.sum(f[groups == g] / se[groups == g] ** 2)
+            / np.sum(1 / se[groups == g] ** 2) for g in np.unique(groups)}
+    scale = np.array([mean[g] for g in groups])
+    r, w = f / scale - 1.0, (scale / se) ** 2                 # relative, known variances
+    rc = _within(r, groups, w)
+    chi2, dof = float(np.sum(w * rc * rc)), int(r.size - n_groups)
+    raw = []
+    for col in CROSSING_COLUMNS:
+        if col not in columns:
+            continue
+        z = np.asarray(columns[col], np.float64)[ok]
+        if not np.all(np.isfinite(z)) or np.ptp(z) == 0:
+            continue
+        b, s = _slope(rc, z, groups, w)
+        if np.isfinite(b):
+            raw.append((col, "trend", b, s, float("nan"), 2 * stats.norm.sf(abs(b / s))))
+        if col in ("time_s", "press"):
+            raw.append(_best_step(rc, z, groups, w, col))
+    m = max(len(raw), 1)
+    tests = sorted((CrossingTest(col, kind, b, s, at, p, bool(p < CROSSING_ALPHA / m))
+                    for col, kind, b, s, at, p in raw), key=lambda t: t.p_value)
+    return CrossingScan(n=int(r.size), n_indenters=n_groups, chi2=chi2, dof=dof,
+                        p_scatter=float(stats.chi2.sf(chi2, dof)) if dof > 0 else float("nan"),
+                        tests=tuple(tests))
+
+
+def _best_step(r: np.ndarray, z: np.ndarray, groups: np.ndarray, w: np.ndarray, col: str
+               ) -> tuple:
+    """The step along `z` with the largest |size / se| over the places between its distinct
+    values; its p-value times the number of places (Bonferroni)."""
+    values = np.unique(z)
+    best = (col, "step", float("nan"), float("inf"), float("nan"), 1.0)
+    places = 0
+    for lo, hi in itertools.pairwise(values):
+        after = (z > lo).astype(np.float64)
+        b, s = _slope(r, after, groups, w)
+        if not np.isfinite(b):
+            continue
+        places += 1
+        if abs(b / s) > abs(best[2] / best[3]) or not np.isfinite(best[2]):
+            best = (col, "step", b, s, 0.5 * (lo + hi), 2 * stats.norm.sf(abs(b / s)))
+    return (*best[:5], min(1.0, best[5] * max(places, 1)))

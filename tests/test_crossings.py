@@ -1,0 +1,112 @@
+"""The mark's crossing forces: each press's force where it crossed w0, a depth the frames
+certify apart from the force, tested for changes within indenters that the mark rule's
+depths absorb. Synthetic crossing forces with a known change and stated noise, then a
+generated mark session whose gel softens over the session (none of the test's truth is
+read back from the code under test)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from tactilevision.diagnosis import crossing_tests, diagnose
+from tactilevision.io import read_measurements
+from tactilevision.pipeline import calibrate_session, write_calibration
+from tactilevision.sim import GaugeBlock, SessionSpec, make_session
+
+SEM = 0.045                       # relative sd of a crossing force (a 15 frames/s bracket)
+
+
+def _crossings(seed: int, scale) -> dict[str, np.ndarray]:
+    """5 indenters x 4 presses in an interleaved order, each crossing force P_g x scale,
+    with relative noise SEM."""
+    rng = np.random.default_rng(seed)
+    press = np.arange(20)
+    ind = np.tile(np.arange(5), 4)
+    x = rng.uniform(-6.5, -1.3, 20)
+    p_g = np.array([0.3, 0.5, 0.7, 0.9, 1.1])[ind]
+    s = np.asarray(scale(press, x), np.float64)
+    f = p_g * s * (1 + SEM * rng.standard_normal(20))
+    return {"indenter": ind, "press": press.astype(float), "time_s": 3.0 * press,
+            "x_mm": x, "y_mm": rng.uniform(-4, 4, 20), "force_w0_n": f,
+            "force_w0_sem_n": SEM * p_g * s}
+
+
+def test_no_change_is_found_at_the_stated_level():
+    """Nothing changes: the family-wise level is 1 %, so at most a few of 200 tables (0 of
+    these 200: Bonferroni over six tests and a step's places is conservative)."""
+    alarms = sum(crossing_tests(_crossings(s, lambda p, x: np.ones(20))).found is not None
+                 for s in range(200))
+    assert alarms <= 6, alarms
+    chi = [crossing_tests(_crossings(s, lambda p, x: np.ones(20))).p_scatter
+           for s in range(200)]
+    assert 0.35 < float(np.mean(chi)) < 0.65              # uniform under the stated noise
+
+
+def test_a_stiffness_step_is_found_with_its_size():
+    """E falls 12 % after the 10th press: named a stiffness step along press or time in
+    at least 90 % of tables (98 of these 100), its size within 3 se of the truth in at
+    least 85 (97)."""
+    named, held = 0, 0
+    for seed in range(100):
+        scan = crossing_tests(_crossings(seed, lambda p, x: np.where(p >= 10, 0.88, 1.0)))
+        t = scan.found
+        if t is not None and t.kind == "step" and t.column in ("press", "time_s"):
+            named += 1
+            held += abs(t.size - (0.88 - 1)) < 3 * t.se
+    assert named >= 90 and held >= 85, (named, held)
+
+
+def test_a_gradient_across_the_pad_is_spatial():
+    """E 4 % higher per mm along x across the pad (+-10 % over the presses' 5 mm): named
+    spatial_nonuniformity in at least 90 % of tables (97 of these 100; 81 at 3 %/mm)."""
+    hits = sum(getattr(crossing_tests(_crossings(s, lambda p, x: 1 + 0.04 * (x + 4))).found,
+                       "effect", None) == "spatial_nonuniformity" for s in range(100))
+    assert hits >= 90, hits
+
+
+def test_tables_without_crossings_are_not_tested():
+    cols = _crossings(0, lambda p, x: np.ones(20))
+    assert crossing_tests({k: v for k, v in cols.items() if k != "force_w0_n"}) is None
+    one = {k: v[cols["indenter"] == 0] for k, v in cols.items()}
+    assert crossing_tests(one) is None                     # one indenter: no within test
+    cols["force_w0_n"][:3] = np.nan                        # unread crossings left out
+    assert crossing_tests(cols).n == 17
+
+
+@pytest.fixture(scope="module")
+def softening(tmp_path_factory):
+    """A generated drawn-mark session (15 frames/s) whose gel softens 15 % over the
+    session, calibrated by the mark rule; and the same without softening."""
+    out = {}
+    for name, soft in (("soft", 0.15), ("null", 0.0)):
+        folder = tmp_path_factory.mktemp(name) / "s"
+        spec = SessionSpec(E_mpa=0.2, nu=0.48, block=GaugeBlock(bevel_angle_deg=0.0),
+                           repeats=4, fps=15, overshoot_mm=(0.005, 0.06), softening=soft,
+                           seed=21)
+        make_session(folder, spec)
+        cal = calibrate_session(folder)
+        write_calibration(cal, folder.parent / "cal")
+        out[name] = read_measurements(folder.parent / "cal" / "measurements.csv")
+    return out
+
+
+def test_a_softening_gel_is_found_through_its_crossings(softening):
+    """The mark rule reads each depth past w0 from the force, so the softening moves the
+    depths and the ladder alone does not see it; the crossing forces do: a stiffness
+    trend along time (or press order) offered, the structure falling; nothing on the
+    same session without it."""
+    table = softening["soft"]
+    assert table.certification.get("depth_rule") == "mark"
+    cols = {**table.columns, "depth_mm": table.depth_mm, "force_n": table.force_n}
+    d = diagnose(cols, thickness_mm=table.thickness_mm, radius_mm=table.radius_mm,
+                 depth_rule="mark", rules_out=False)
+    t = d.crossings.found
+    assert t is not None and t.column in ("time_s", "press") and t.size < 0, d.message
+    assert (d.missing_effect or d.offered_effect or "").startswith("stiffness_")
+    assert "crossing forces" in d.message and d.to_json_dict()["crossings"]["found"]
+    null = softening["null"]
+    cols = {**null.columns, "depth_mm": null.depth_mm, "force_n": null.force_n}
+    d = diagnose(cols, thickness_mm=null.thickness_mm, radius_mm=null.radius_mm,
+                 depth_rule="mark", rules_out=False)
+    assert d.crossings is not None and d.crossings.found is None, d.message
