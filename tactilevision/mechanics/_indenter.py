@@ -438,7 +438,7 @@ def indenter_from_config(section: Mapping[str, object], *, where: str = "[indent
     Examples
     --------
     >>> indenter_from_config({"shape": "sphere", "radius_mm": 3.75})
-    Sphere(radius_mm=3.75, pad_radius_mm=None, friction=None)
+    Sphere(radius_mm=3.75, pad_radius_mm=None, friction=None, dome_radius_mm=None)
     """
     shape = section.get("shape", "flat_punch")
     if shape not in INDENTERS:
