@@ -56,6 +56,11 @@ def test_dead_weights_take_an_optics_calibration_for_their_caps(weights):
     assert caps.cap_mm[heavy] > 2 * caps.cap_mm[light] > 0
     assert np.all(caps.expected_mm < cal.depths.depth_mm)
     assert any(w.startswith("cap cross-check") for w in cal.warnings)
+    # a calibration that cannot be read leaves the calibration standing, said so
+    bad = calibrate_dead_weights(folder, nu=0.5, law="linear", optics=folder / "nope.npz")
+    assert bad.caps is None and bad.fit.E_mpa == pytest.approx(cal.fit.E_mpa)
+    assert any(w.startswith("cap cross-check not made") and "nope.npz" in w
+               for w in bad.warnings)
 
 
 def test_cli_calibrate_reads_a_dead_weight_folder(weights, tmp_path, capsys):

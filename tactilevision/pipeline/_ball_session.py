@@ -181,19 +181,25 @@ def with_caps(cal: BallCalibration, optics: PhotometricCalibration | str | Path 
               frame_of: Callable[[int], np.ndarray] | None = None) -> BallCalibration:
     """`cal` with its presses' caps (:func:`ball_press_caps`) and a sentence on them, where
     an optics calibration is given or named by the session (else `cal` as it is);
-    `frame_of` reads a frame by its index (default the session's ``frame``)."""
+    `frame_of` reads a frame by its index (default the session's ``frame``). A cap check
+    that cannot be made (a calibration that does not load or fit the frames, a press
+    without its annulus) leaves `cal` as it is, with a warning saying why."""
     session = cal.session
     optics = optics if optics is not None else session.config.calibration
     if optics is None:
         return cal
-    if not isinstance(optics, PhotometricCalibration):
-        optics = PhotometricCalibration.load(optics)
     cfg = session.config
-    recon = DepthReconstructor(optics, reference=session.reference)
-    frame_of = frame_of or session.frame
-    heights = np.stack([recon(frame_of(int(f))) for f in cal.frames])
-    caps = ball_press_caps(heights, cal.depths, cal.indenter, mm_per_px=cfg.mm_per_px,
-                           thickness_mm=cfg.gel_thickness_mm, nu=cal.nu, contact=cal.contact)
+    try:            # a cross-check: where it cannot be made, the calibration stands, said so
+        if not isinstance(optics, PhotometricCalibration):
+            optics = PhotometricCalibration.load(optics)
+        recon = DepthReconstructor(optics, reference=session.reference)
+        frame_of = frame_of or session.frame
+        heights = np.stack([recon(frame_of(int(f))) for f in cal.frames])
+        caps = ball_press_caps(heights, cal.depths, cal.indenter, mm_per_px=cfg.mm_per_px,
+                               thickness_mm=cfg.gel_thickness_mm, nu=cal.nu,
+                               contact=cal.contact)
+    except InputError as exc:
+        return replace(cal, warnings=[*cal.warnings, f"cap cross-check not made: {exc}"])
     notes = [caps.summary()]
     rel = float(np.median(cal.depths.depth_shared_mm / cal.depths.depth_mm))
     bound = 2.0 * float(np.hypot(CAP_SCALE_SD, rel))
