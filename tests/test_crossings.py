@@ -6,9 +6,12 @@ read back from the code under test)."""
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 
+from tactilevision.cli import main
 from tactilevision.diagnosis import crossing_tests, diagnose
 from tactilevision.io import read_measurements
 from tactilevision.pipeline import calibrate_session, write_calibration
@@ -89,6 +92,21 @@ def softening(tmp_path_factory):
         write_calibration(cal, folder.parent / "cal")
         out[name] = read_measurements(folder.parent / "cal" / "measurements.csv")
     return out
+
+
+def test_the_command_line_reads_the_crossings(softening, tmp_path):
+    """`diagnose` of the softening session's measurements.csv: the crossing forces are not
+    scanned as covariates, and its JSON carries their tests and the verdict."""
+    table = softening["soft"]
+    assert "force_w0_n" not in table.covariates and "force_w0_sem_n" not in table.covariates
+    assert main(["diagnose", str(table.path), "--no-progress", "--json",
+                 str(tmp_path / "d.json")]) == 0
+    obj = json.loads((tmp_path / "d.json").read_text())
+    c = obj["crossings"]
+    assert c["n"] >= 15 and c["found"] and c["found"].startswith("stiffness_")
+    assert obj["verdict"]["offered_effect"] == c["found"] or \
+        obj["verdict"]["missing_effect"] == c["found"]
+    assert "force_w0_n" not in obj["scanned_columns"]
 
 
 def test_a_softening_gel_is_found_through_its_crossings(softening):
