@@ -1,0 +1,102 @@
+"""Within-indenter effects on drawn-mark sessions, found through the crossing forces.
+
+    python benchmarks/bench_crossings.py [--seeds 20] [--first-seed 8000] [--fps 15]
+
+Each seed is a session of the project's generator (:func:`tactilevision.sim.make_session`:
+a drawn mark, ``bevel_angle_deg = 0``, 5 depths x 4 presses, the stage overshooting w0 by 5
+to 60 um), its F/T log written anew for each kind by ``benchmarks/bench_loop.py``'s
+``write_forces`` (eq. 5 with the paper's beta, Hayes' kappa; E 0.20 MPa, nu 0.48): nothing,
+a spatial gradient (10 % per 10 mm along x), a softening (10 % over the session) and a
+stiffness step (10 % after the 10th press). Each is calibrated by the mark rule and
+diagnosed (``diagnose(..., depth_rule='mark')``); printed per kind: how often the verdict
+is right (nothing; ``spatial_nonuniformity``; a stiffness trend or step along time or
+press order; a step), and how often the crossing forces found it (issue 53's target: at
+least 90 % of sessions for the within-indenter effects, no false alarm on the null).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import shutil
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from tactilevision.diagnosis import diagnose
+from tactilevision.io import read_measurements
+from tactilevision.pipeline import calibrate_session, write_calibration
+from tactilevision.sim import GaugeBlock, SessionSpec, make_session
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_loop import write_forces
+
+KINDS = ("null", "spatial", "softening", "damage")
+
+
+def right(kind: str, verdict: str | None) -> bool:
+    """Whether the verdict names the kind hidden."""
+    if kind == "null":
+        return verdict is None
+    if kind == "spatial":
+        return verdict == "spatial_nonuniformity"
+    if kind == "softening":
+        return bool(verdict) and verdict.startswith("stiffness_") and verdict.endswith(
+            (":time_s", ":press"))
+    return bool(verdict) and verdict.startswith("stiffness_step:")
+
+
+def one(work: Path, seed: int, fps: float) -> dict[str, tuple[str | None, str | None]]:
+    """The verdict and the crossings' finding of each kind on one generated session."""
+    folder = work / "s"
+    spec = SessionSpec(E_mpa=0.2, nu=0.48, block=GaugeBlock(bevel_angle_deg=0.0), repeats=4,
+                       fps=fps, overshoot_mm=(0.005, 0.06), seed=seed)
+    make_session(folder, spec)
+    truth = json.loads((folder / "truth.json").read_text())
+    for p in truth["presses"]:                 # the schedule write_forces reads
+        p["release_end_s"] = p["hold_to_s"] + spec.release_s
+    (folder / "truth.json").write_text(json.dumps(truth))
+    out = {}
+    for kind in KINDS:
+        write_forces(folder, work / kind, kind, seed=seed)
+        cal = calibrate_session(work / kind)
+        write_calibration(cal, work / f"{kind}_cal")
+        t = read_measurements(work / f"{kind}_cal" / "measurements.csv")
+        d = diagnose({**t.columns, "depth_mm": t.depth_mm, "force_n": t.force_n},
+                     thickness_mm=t.thickness_mm, radius_mm=t.radius_mm, depth_rule="mark",
+                     rules_out=False)
+        verdict = d.missing_effect or d.offered_effect
+        out[kind] = (verdict, None if d.crossings is None or d.crossings.found is None
+                     else d.crossings.found.effect)
+    return out
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--seeds", type=int, default=20)
+    ap.add_argument("--first-seed", type=int, default=8000)
+    ap.add_argument("--fps", type=float, default=15.0)
+    args = ap.parse_args()
+    score = {k: [0, 0] for k in KINDS}
+    t0 = time.perf_counter()
+    for seed in range(args.first_seed, args.first_seed + args.seeds):
+        work = Path(tempfile.mkdtemp(prefix="bench_crossings_"))
+        try:
+            res = one(work, seed, args.fps)
+        finally:
+            shutil.rmtree(work, ignore_errors=True)
+        print(f"seed {seed}: " + "; ".join(f"{k}: {v or 'nothing'} (crossings: {c or '-'})"
+                                           for k, (v, c) in res.items()), flush=True)
+        for k, (v, c) in res.items():
+            score[k][0] += right(k, v)
+            score[k][1] += right(k, c)
+    print(f"\n{args.seeds} sessions at {args.fps:g} frames/s ({time.perf_counter() - t0:.0f} s):")
+    for k, (v, c) in score.items():
+        print(f"  {k:9s}: verdict right in {v} of {args.seeds}; the crossings' own finding "
+              f"right in {c}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
