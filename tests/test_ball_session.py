@@ -126,6 +126,26 @@ def test_a_session_that_names_its_optics_has_its_caps_checked(ball_session, tmp_
     assert any(w.startswith("cap cross-check: the height map's caps read") for w in warn)
 
 
+def test_a_sessions_dome_is_checked_and_named(ball_session, tmp_path):
+    """``[sensor] gel_dome_radius_mm``: a number or refused naming the key; a dome without
+    the pad's radius refused naming the file and key; no unknown-key warning."""
+    folder, _ = ball_session
+    bad = tmp_path / "dome"
+    shutil.copytree(folder, bad)
+    toml = (bad / "session.toml").read_text()
+    (bad / "session.toml").write_text(toml.replace(
+        "[sensor]\n", '[sensor]\ngel_dome_radius_mm = "wide"\n', 1))
+    with pytest.raises(InputError, match=r"\[sensor\] gel_dome_radius_mm must be a positive"):
+        read_session(bad)
+    (bad / "session.toml").write_text(toml.replace(
+        "[sensor]\n", "[sensor]\ngel_dome_radius_mm = 500.0\n", 1))
+    assert not any("gel_dome_radius_mm" in n for n in read_session(bad).notes)
+    assert read_session(bad).config.gel_dome_radius_mm == 500.0
+    with pytest.raises(InputError, match=r"session.toml: \[sensor\] gel_dome_radius_mm: .*"
+                                         r"needs the pad's radius"):
+        calibrate_ball_session(bad, law="linear")
+
+
 def test_a_ball_session_is_not_a_gauge_blocks(ball_session):
     folder, _ = ball_session
     with pytest.raises(InputError, match="calibrate_ball_session"):

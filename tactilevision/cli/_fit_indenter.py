@@ -73,7 +73,9 @@ def indenter_of(table: Measurements, args: argparse.Namespace):
         raise InputError(f"{table.path}: a domed gel's top is modelled under a ball "
                          "(--shape sphere) only")
     if pad is not None and ind.shape == "sphere":
-        for name, v in (("pad radius", pad), ("dome radius", dome)):
+        for name, v in (("pad radius ([sensor] gel_radius_mm, --pad-radius-mm)", pad),
+                        ("dome radius ([sensor] gel_dome_radius_mm, --dome-radius-mm)",
+                         dome)):
             if v is not None and (isinstance(v, bool) or not isinstance(v, int | float)
                                   or not (math.isfinite(v) and v > 0)):
                 raise InputError(f"{table.path}: the {name} must be a positive number of mm, "

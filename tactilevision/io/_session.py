@@ -86,6 +86,9 @@ class SessionConfig:
         (``depths_mm`` is then empty unless given).
     indenter_contact : {'frictionless', 'tied'} or None
         ``[indenter] contact`` of a ball (None: the indenter's default).
+    gel_dome_radius_mm : float or None
+        ``[sensor] gel_dome_radius_mm``: a domed gel's top, its radius of curvature
+        (read under a ball, with ``gel_radius_mm``); None for a flat top.
     """
 
     sensor_name: str
@@ -108,6 +111,7 @@ class SessionConfig:
     date: datetime.date | None = None
     indenter_shape: str = "flat_punch"
     indenter_contact: str | None = None
+    gel_dome_radius_mm: float | None = None
 
 
 #: The places of the force window in a hold (``[force_sensor] window_at``).
@@ -299,6 +303,8 @@ def _read_config(folder: Path) -> SessionConfig:
         depths_mm=tuple(float(d) for d in depths),
         indenter_shape=shape,
         indenter_contact=contact,
+        gel_dome_radius_mm=_toml_number(doc, toml, "sensor", "gel_dome_radius_mm",
+                                        required=False),
         rate_hz=_rate(doc, toml),
         clock_offset_s=_toml_number(doc, toml, "force_sensor", "clock_offset_s", positive=False,
                                     required=False),

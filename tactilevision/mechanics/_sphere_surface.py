@@ -53,7 +53,8 @@ def hertz_surface_depth(depth_mm: float, r_mm: np.ndarray, radius_mm: float) -> 
 
 
 def sphere_surface_depth(ball: Sphere, depth_mm: np.ndarray, r_mm: np.ndarray, *, nu: float,
-                         thickness_mm: float, contact: str | None = None) -> np.ndarray:
+                         thickness_mm: float, contact: str | None = None,
+                         shallowest_mm: float | None = None) -> np.ndarray:
     """Depth of the gel's surface below its undeformed level around a pressed ball (small strain).
 
     Each press's surface comes from the small-strain FEM's sweep of the ball on
@@ -75,6 +76,10 @@ def sphere_surface_depth(ball: Sphere, depth_mm: np.ndarray, r_mm: np.ndarray, *
         h, mm.
     contact : str, optional
         The ball's contact condition (its default).
+    shallowest_mm : float, optional
+        The shallowest depth the sweep must resolve (default: the shallowest of
+        `depth_mm`). A caller that queries depth after depth (a root finder) gives
+        it once, so that every query reads the same sweep.
 
     Returns
     -------
@@ -96,7 +101,8 @@ def sphere_surface_depth(ball: Sphere, depth_mm: np.ndarray, r_mm: np.ndarray, *
                          f"h = {h:g} mm, got {float(np.min(w)):.4g} to {float(np.max(w)):.4g}")
     if not (np.all(np.isfinite(r)) and np.all(r >= 0)):
         raise InputError("radii must be finite and >= 0")
-    res = pad_sweep_result(*ball.sweep_key(w / h, nu, h, "linear", contact))
+    key_w = w if shallowest_mm is None else np.array([float(shallowest_mm)])
+    res = pad_sweep_result(*ball.sweep_key(key_w / h, nu, h, "linear", contact))
     s_grid = np.sqrt(res.w_over_h * h)
     a_grid = res.contact_radius * h
     ratio = a_grid / np.sqrt(ball.radius_mm * res.w_over_h * h)

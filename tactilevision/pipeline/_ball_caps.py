@@ -136,10 +136,14 @@ def ball_press_caps(heights_mm: np.ndarray, depths: BallDepths, ball: Sphere, *,
             raise InputError(f"press {i}: no pixel of the image lies 1.5 to 3 contact radii "
                              "from its centre")
 
+    # one sweep for every press and every depth the root finder tries
+    shallowest = float(np.min(depths.depth_mm))
+
     def predicted(w: float, ring: np.ndarray) -> float:
         if w <= 0:
             return 0.0
-        sink = sphere_surface_depth(ball, [w], ring, nu=nu, thickness_mm=h, contact=contact)
+        sink = sphere_surface_depth(ball, [w], ring, nu=nu, thickness_mm=h, contact=contact,
+                                    shallowest_mm=shallowest)
         return w - float(np.median(sink))
 
     read, std = np.full(n, np.nan), np.full(n, np.nan)

@@ -102,11 +102,22 @@ class BallCalibration:
 def ball_indenter(session: Session | DeadWeightSession) -> Sphere:
     """The session's ball: ``[indenter] radius_mm``, on the pad of ``[sensor]
     gel_radius_mm`` when it is given (the infinite layer, the sphere table, when it is
-    the default 20 h)."""
+    the default 20 h), the gel domed by ``[sensor] gel_dome_radius_mm`` where given.
+
+    Raises
+    ------
+    InputError
+        Naming the file and key: a dome without the pad's radius, or not wider than it.
+    """
     cfg = session.config
     pad = cfg.gel_radius_mm
     infinite = abs(pad - 20.0 * cfg.gel_thickness_mm) <= 1e-9 * pad
-    return Sphere(cfg.indenter_radius_mm, pad_radius_mm=None if infinite else pad)
+    try:
+        return Sphere(cfg.indenter_radius_mm, pad_radius_mm=None if infinite else pad,
+                      dome_radius_mm=cfg.gel_dome_radius_mm)
+    except InputError as exc:
+        raise InputError(f"{session.path / 'session.toml'}: [sensor] gel_dome_radius_mm: "
+                         f"{exc}") from None
 
 
 def calibrate_ball_session(session: Session | str | Path, *, nu: float = 0.5,
@@ -374,6 +385,8 @@ def _write_files(cal: BallCalibration, out: Path, figure: bool) -> list[str]:
     sensor = {"gel_thickness_mm": cfg.gel_thickness_mm, "mm_per_px": cfg.mm_per_px}
     if cal.indenter.pad_radius_mm is not None:
         sensor["gel_radius_mm"] = cal.indenter.pad_radius_mm
+    if cal.indenter.dome_radius_mm is not None:
+        sensor["gel_dome_radius_mm"] = cal.indenter.dome_radius_mm
     paths["session.toml"].write_text(
         "# written by tactilevision calibrate: the ball of the session's presses\n"
         "[sensor]\n" + "".join(f"{k} = {v!r}\n" for k, v in sensor.items())
