@@ -22,7 +22,8 @@ eq. (5) with the paper's beta relation (7) and Hayes' kappa at the exact a/h
 
 Then, for each: ``tactilevision calibrate --beta-table paper`` (its relaxation
 fit on), ``tactilevision diagnose --beta-table paper`` on its measurements.csv,
-and ``tactilevision fit --effects <the named effect> --beta-table paper``.
+and ``tactilevision fit --effects <the named effect> --beta-table paper`` (``--holds`` for
+a relaxation ``diagnose`` named from calibrate's holds.csv).
 Printed per kind: the certified depths against truth.json, the verdict, E from
 calibrate, E after the named effect (or after the trend offered for an unexplained
 covariate), and the truth that effect's E stands for (the catalogue's parametrisation: at x =
@@ -134,7 +135,11 @@ def one(session: Path, out: Path, kind: str, seed: int, reuse: bool = False) -> 
     fitted = named or v["offered_effect"]      # an unexplained covariate: the trend offered
     if fitted:
         if not (done and (folder / "fit.json").is_file()):
-            cli(["fit", str(meas), "--effects", fitted, "--beta-table", "paper",
+            # a relaxation the holds named is fitted from them (a table read at one time of
+            # every hold cannot carry it as a column effect)
+            how = (["--holds", str(cal / "holds.csv")] if (d.get("holds") or {}).get("named")
+                   and fitted == "viscoelastic_relaxation" else ["--effects", fitted])
+            cli(["fit", str(meas), *how, "--beta-table", "paper",
                  "--json", str(folder / "fit.json")])
         got = json.loads((folder / "fit.json").read_text())
         e_after, e_ci = got.get("E_mpa"), got.get("E_ci95_mpa")

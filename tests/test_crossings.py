@@ -48,16 +48,33 @@ def test_no_change_is_found_at_the_stated_level():
 
 def test_a_stiffness_step_is_found_with_its_size():
     """E falls 12 % after the 10th press: named a stiffness step along press or time in
-    at least 90 % of tables (98 of these 100), its size within 3 se of the truth in at
-    least 85 (97)."""
-    named, held = 0, 0
+    at least 88 % of tables (90 of these 100; Akaike's criterion between a step and a
+    trend), a step found or listed as equivalent in at least 95 (98), its size within 3
+    se of the truth in at least 85 (the step found: 88)."""
+    named, either, held = 0, 0, 0
     for seed in range(100):
         scan = crossing_tests(_crossings(seed, lambda p, x: np.where(p >= 10, 0.88, 1.0)))
-        t = scan.found
-        if t is not None and t.kind == "step" and t.column in ("press", "time_s"):
+        steps = [t for t in (scan.found, *scan.equivalent) if t is not None
+                 and t.kind == "step" and t.column in ("press", "time_s")]
+        either += bool(steps)
+        if steps and steps[0] is scan.found:
             named += 1
-            held += abs(t.size - (0.88 - 1)) < 3 * t.se
-    assert named >= 90 and held >= 85, (named, held)
+            held += abs(steps[0].size - (0.88 - 1)) < 3 * steps[0].se
+    assert named >= 88 and either >= 95 and held >= 85, (named, either, held)
+
+
+def test_a_steady_softening_is_a_trend():
+    """E falls 20 % steadily over the 20 presses: a stiffness trend along press or time
+    found in at least 88 % of tables (91 of these 100), found or listed as equivalent to
+    a step in at least 95 (97)."""
+    found, either = 0, 0
+    for seed in range(100):
+        scan = crossing_tests(_crossings(seed, lambda p, x: 1 - 0.2 * p / 19))
+        trends = [t for t in (scan.found, *scan.equivalent) if t is not None
+                  and t.kind == "trend" and t.column in ("press", "time_s")]
+        either += bool(trends)
+        found += bool(trends) and trends[0] is scan.found
+    assert found >= 88 and either >= 95, (found, either)
 
 
 def test_a_gradient_across_the_pad_is_spatial():

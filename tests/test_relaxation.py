@@ -547,3 +547,87 @@ def test_window_at_end_places_the_window_before_the_release(relaxing_session, tm
     (moved / "session.toml").write_text(toml + 'window_at = "middle"\n')
     with pytest.raises(InputError, match=r"window_at must be one of 'start', 'end'"):
         read_session(moved)
+
+
+def test_diagnose_names_a_relaxation_from_the_holds(tmp_path):
+    """A table read at one time of every hold (hold_s 0.1 throughout) cannot show a
+    relaxing gel (g 0.25, tau 0.7 s, the generator's hereditary integral): the ladder names
+    nothing. With the holds, ``diagnose`` names viscoelastic_relaxation from them, g and
+    tau within 10 % of the truth; on an elastic gel's holds it names nothing."""
+    from tactilevision.diagnosis import diagnose
+    from tactilevision.io import read_measurements
+
+    meas, holds = _relaxing_table(tmp_path)
+    table = read_measurements(meas)
+    kw = dict(thickness_mm=table.thickness_mm, radius_mm=table.radius_mm, rules_out=False)
+    cols = {**table.columns, "depth_mm": table.depth_mm, "force_n": table.force_n}
+    plain = diagnose(cols, **kw)
+    assert plain.missing_effect is None and plain.holds is None
+    assert "viscoelastic_relaxation" in plain.untestable
+    d = diagnose(cols, holds=read_holds(holds), **kw)
+    assert d.missing_effect == "viscoelastic_relaxation" and d.holds.named
+    r = d.holds.relaxation
+    assert r.identified and r.g == pytest.approx(0.25, rel=0.1)
+    assert r.tau_s == pytest.approx(0.7, rel=0.1)
+    assert "named from the holds" in d.message and "Nothing is missing" not in d.message
+    j = d.to_json_dict()["holds"]
+    assert j["named"] and j["g"] == pytest.approx(r.g) and j["verdict"] == "relaxing"
+    elastic = tmp_path / "elastic"
+    elastic.mkdir()
+    meas, holds = _relaxing_table(elastic, g=0.0)
+    table = read_measurements(meas)
+    cols = {**table.columns, "depth_mm": table.depth_mm, "force_n": table.force_n}
+    d = diagnose(cols, holds=read_holds(holds), **kw)
+    assert d.missing_effect is None and not d.holds.named
+    assert d.holds.relaxation.verdict == "flat" and "flat" in d.message
+
+
+def test_holds_name_a_slow_relaxation_but_not_a_softening_gel():
+    """A slow relaxation (g 0.3, tau 60 s under 2 s holds) is named, its g and tau not
+    identified, its initial rate within 20 %; a gel that softens 10 % over the session
+    (its holds fall too, and each press starts lower at its depth) is not."""
+    from tactilevision.diagnosis import holds_finding
+
+    press, t, f, ramp, _ = _holds(0.3, 60.0, hold=2.0)
+    cols = {"press": np.arange(20.0), "time_s": 4.0 * np.arange(20.0)}
+    found = holds_finding({"press": press, "t_s": t, "fz_n": f, "ramp_s": ramp}, cols)
+    assert found.named and not found.relaxation.identified
+    assert found.relaxation.decay_rate_per_s == pytest.approx(
+        -0.3 * ramp_factor(0.5, 60.0) / 60.0, rel=0.2)
+    assert "g and tau are not identified" in found.sentence()
+    assert found.to_json_dict()["g"] is None
+    press, t, f, ramp, times, groups = _softening_holds(0.10)
+    cols = {"press": np.array(sorted(times), np.float64),
+            "time_s": np.array([times[k] for k in sorted(times)]),
+            "indenter": np.array([groups[k] for k in sorted(times)], np.float64)}
+    found = holds_finding({"press": press, "t_s": t, "fz_n": f, "ramp_s": ramp}, cols)
+    assert not found.named and found.relaxation.verdict == "softening"
+
+
+def test_diagnose_command_reads_the_holds_beside_the_table(tmp_path, capsys):
+    """``diagnose`` reads holds.csv beside the table by default (the verdict and the JSON's
+    ``holds``), not with --no-holds; a --holds file that cannot be fitted is exit 2 naming
+    it; a broken holds.csv beside the table is a warning naming it, and the table is
+    diagnosed without it."""
+    from tactilevision.cli import main
+
+    meas, holds = _relaxing_table(tmp_path)
+    out = tmp_path / "d.json"
+    args = ["diagnose", str(meas), "--no-progress", "--json", str(out)]
+    assert main(args) == 0
+    obj = json.loads(out.read_text())
+    assert obj["verdict"]["missing_effect"] == "viscoelastic_relaxation"
+    assert obj["holds"]["named"] and obj["holds"]["source"] == str(holds)
+    assert main([*args, "--no-holds", "--overwrite"]) == 0
+    obj = json.loads(out.read_text())
+    assert obj["holds"] is None and obj["verdict"]["missing_effect"] is None
+    capsys.readouterr()
+    few = tmp_path / "few.csv"
+    few.write_text("press,t_s,fz_n\n1,0,1\n1,0.1,1\n")
+    assert main(["diagnose", str(meas), "--holds", str(few), "--no-progress"]) == 2
+    assert "few.csv" in capsys.readouterr().err
+    holds.write_text("press,t_s\n1,0\n")
+    assert main([*args, "--overwrite"]) == 0
+    err = capsys.readouterr().err
+    assert "holds.csv" in err and "without its holds" in err
+    assert json.loads(out.read_text())["holds"] is None

@@ -8,8 +8,15 @@ import sys
 from pathlib import Path
 
 from .. import InputError
-from ..diagnosis import diagnose, diagnose_indenter
-from ..io import StagedOutput, check_output_folder, check_overwrite, read_measurements
+from ..diagnosis import HoldsFinding, diagnose, diagnose_indenter, holds_finding
+from ..io import (
+    Measurements,
+    StagedOutput,
+    check_output_folder,
+    check_overwrite,
+    read_holds,
+    read_measurements,
+)
 from ..mechanics import effect_names, model_label
 from ..viz import (
     diagnosis_figures,
@@ -35,7 +42,10 @@ verdict that names nothing says what it rules out: per catalogue effect, the
 smallest size this table would have named (its presses replayed at its noise).
 A table certified by the mark rule ([certification] depth_rule in its
 session.toml) is told to read force effects within an indenter as depth.
---report DIR writes the figures and report.html. Exit status 2 on bad input.
+The force over each press's hold (calibrate's holds.csv, read from beside the
+table unless --holds names another or --no-holds) is tested for a relaxing gel,
+which a table read at one time of every hold cannot show. --report DIR writes
+the figures and report.html. Exit status 2 on bad input.
 
 A ball's table ([indenter] shape = "sphere"): the ladder starts from the
 small-strain law with the stated contact and tries large_deformation (finite
@@ -69,6 +79,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="paper: eq. (5), the layer with large_deformation (default); "
                         "layer: the small-strain layer alone; fem: the FEM's finite-strain "
                         "law (E and nu its own parameters; docs/diagnose_power.md)")
+    holds = p.add_mutually_exclusive_group()
+    holds.add_argument("--holds", metavar="HOLDS.csv", type=Path,
+                       help="the force over each press's hold, tested for a relaxing gel "
+                            "(default: holds.csv beside the table, where there is one)")
+    holds.add_argument("--no-holds", action="store_true",
+                       help="do not read the holds (not even holds.csv beside the table)")
     p.add_argument("--thickness-mm", type=float, metavar="H")
     p.add_argument("--radius-mm", type=float, metavar="A")
     p.add_argument("--beta-table", choices=("fem", "paper"), default="fem",
@@ -158,6 +174,29 @@ def _summary(diag, path: Path) -> str:
     return "\n".join(lines)
 
 
+def _holds(args: argparse.Namespace, table: Measurements, path: Path) -> HoldsFinding | None:
+    """What the holds say (``--holds``, else holds.csv beside the table): None without them.
+
+    A file named by ``--holds`` that cannot be read or fitted is an error naming it; a
+    holds.csv found beside the table is read the same way, but where it fails the table is
+    diagnosed without it, with a warning naming the file and why."""
+    if args.no_holds:
+        return None
+    given = args.holds is not None
+    hpath = args.holds if given else path.parent / "holds.csv"
+    if not given and not hpath.is_file():
+        return None
+    try:
+        return holds_finding(read_holds(hpath), table.columns, labels=table.labels,
+                             source=str(hpath))
+    except InputError as exc:
+        if given:
+            raise InputError(f"--holds: {exc}") from None
+        print(f"tactilevision diagnose: warning: {exc}; the table is diagnosed without its "
+              "holds (--holds names another file, --no-holds reads none)", file=sys.stderr)
+        return None
+
+
 def run(args: argparse.Namespace) -> int:
     """Run ``diagnose``; returns 0 (2 through InputError on bad input)."""
     overwrite = args.overwrite
@@ -176,12 +215,13 @@ def run(args: argparse.Namespace) -> int:
         print(f"tactilevision diagnose: warning: {note}", file=sys.stderr)
     if (args.shape or table.indenter.get("shape", "flat_punch")) != "flat_punch":
         return _run_indenter(args, table, path)
+    holds = _holds(args, table, path)
     try:
         diag = diagnose(table.columns, thickness_mm=table.thickness_mm,
                         radius_mm=table.radius_mm, base=args.base, effects=effects,
                         candidates=candidates, beta_table=args.beta_table,
                         scan=[c.strip() for c in args.scan.split(",") if c.strip()],
-                        depth_rule=table.certification.get("depth_rule"),
+                        depth_rule=table.certification.get("depth_rule"), holds=holds,
                         progress=not args.no_progress and args.json != "-")
     except InputError as exc:
         raise InputError(f"{path}: {exc}") from None

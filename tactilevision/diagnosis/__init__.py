@@ -12,7 +12,9 @@ A measurements table (formats.md §2) against the force law of
   (the certification's own products, never physics), :func:`cross_validated_rmse`,
   :func:`noise_floor`, :func:`noise_budget`; :func:`crossing_tests`, each press's force
   at its crossing of the mark's w0 (a depth the frames certify apart from the force)
-  tested for changes within indenters, which the mark rule's depths absorb.
+  tested for changes within indenters, which the mark rule's depths absorb;
+  :func:`holds_finding`, the force over each press's hold at the depth the stage keeps,
+  which names a relaxing gel that a table read at one time of every hold cannot show.
 - What a table of presses lets ``diagnose`` find: :func:`replay_sizes` and
   :func:`replay_power` replay its decisions over drawn sessions of a
   :class:`ReplaySetup` (the measured table's, :func:`table_sensitivity`; a design's,
@@ -41,6 +43,7 @@ from ._diagnose import (
     untestable_reason,
 )
 from ._diagnose_verdict import ABSORBED_BY_MARK, diagnose, indenter_shared
+from ._holds import HoldsFinding, holds_finding, holds_relaxation
 from ._indenter_diagnose import (
     INDENTER_EFFECTS,
     IndenterDiagnosis,
@@ -74,6 +77,7 @@ __all__ = [
     "CrossingTest",
     "Diagnosis",
     "EffectSensitivity",
+    "HoldsFinding",
     "IndentationValidation",
     "IndenterDiagnosis",
     "IndenterRung",
@@ -86,6 +90,8 @@ __all__ = [
     "crossing_tests",
     "diagnose",
     "diagnose_indenter",
+    "holds_finding",
+    "holds_relaxation",
     "indenter_shared",
     "law_slope",
     "noise_budget",

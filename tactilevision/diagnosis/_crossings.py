@@ -104,18 +104,44 @@ class CrossingScan:
     p_scatter: float
     tests: tuple[CrossingTest, ...]
 
-    @property
-    def found(self) -> CrossingTest | None:
-        """The most significant test, where one is; along its column, a step and a trend
-        that are both significant give way to the one of larger |size / se|."""
+    def _rivals(self) -> tuple[CrossingTest | None, CrossingTest | None]:
+        """The test found and its rival of the other shape along the same column (None
+        where there is none), by Akaike's criterion (module docstring of `found`)."""
         sig = [t for t in self.tests if t.significant]
         if not sig:
-            return None
+            return None, None
         best = sig[0]
         rival = [t for t in sig if t.column == best.column and t.kind != best.kind]
-        if rival and abs(rival[0].size / rival[0].se) > abs(best.size / best.se):
-            return rival[0]          # the same column: the shape that fits it better
-        return best
+        if not rival:
+            return best, None
+        step, trend = (best, rival[0]) if best.kind == "step" else (rival[0], best)
+        return (step, trend) if self._aic_gain(step, trend) > 0 else (trend, step)
+
+    @staticmethod
+    def _aic_gain(step: CrossingTest, trend: CrossingTest) -> float:
+        """How much better the step fits than the trend along one column, in AIC: the
+        drop in chi2, ``z_step^2 - z_trend^2``, less 2 for its one parameter more (the
+        change point)."""
+        return (step.size / step.se) ** 2 - (trend.size / trend.se) ** 2 - 2.0
+
+    @property
+    def found(self) -> CrossingTest | None:
+        """The most significant test, where one is; along its column, where a step and a
+        trend are both significant, the one Akaike's criterion prefers (the step pays 2 for
+        its change point; Akaike, IEEE Trans. Autom. Control 19, 716, 1974)."""
+        return self._rivals()[0]
+
+    @property
+    def equivalent(self) -> tuple[CrossingTest, ...]:
+        """The other shape along the found column where the data hardly prefer either
+        (AIC within 2 of the found: Burnham and Anderson, Model Selection and Multimodel
+        Inference, 2002, sec. 2.6); a gel that softens steadily fits a step at its middle
+        nearly as well at a crossing's noise."""
+        found, rival = self._rivals()
+        if rival is None:
+            return ()
+        step, trend = (found, rival) if found.kind == "step" else (rival, found)
+        return (rival,) if abs(self._aic_gain(step, trend)) <= 2.0 else ()
 
     def sentence(self) -> str:
         """What the crossing forces say, in one or two sentences."""
@@ -130,8 +156,10 @@ class CrossingScan:
                 sorted({x.column for x in self.tests})) + "."
         what = (f"{100 * t.size:+.1f} % per unit of {t.column}" if t.kind == "trend" else
                 f"{100 * t.size:+.1f} % after {t.column} {t.at:.4g}")
+        also = "".join(f" (or {e.effect}, which fits them about as well)"
+                       for e in self.equivalent)
         return (head + f"; they change within indenters: {what} (+-{100 * t.se:.1f} %, "
-                f"p = {t.p_value:.2g}), which is {t.effect}.")
+                f"p = {t.p_value:.2g}), which is {t.effect}{also}.")
 
     def to_json_dict(self) -> dict:
         def num(v: float) -> float | None:
@@ -139,6 +167,7 @@ class CrossingScan:
         return {"n": self.n, "n_indenters": self.n_indenters, "chi2": num(self.chi2),
                 "dof": self.dof, "p_scatter": num(self.p_scatter),
                 "found": None if self.found is None else self.found.effect,
+                "equivalent": [t.effect for t in self.equivalent],
                 "tests": [{"column": t.column, "kind": t.kind, "size": num(t.size),
                            "se": num(t.se), "at": num(t.at), "p_value": num(t.p_value),
                            "significant": t.significant} for t in self.tests]}

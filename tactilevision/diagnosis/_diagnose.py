@@ -57,6 +57,7 @@ from ._diagnose_stats import (  # noqa: F401  (the statistics' names, also read 
     cross_validated_rmse,
     noise_floor,
 )
+from ._holds import HoldsFinding
 
 __all__ = [
     "CURVATURE_BIC",
@@ -229,6 +230,10 @@ class Diagnosis:
         (``force_w0_n``, ``force_w0_sem_n``): those forces tested for a change
         within indenters (:func:`~tactilevision.diagnosis.crossing_tests`); its
         finding is the verdict where the ladder named nothing.
+    holds : HoldsFinding or None
+        Where the holds were given: what the force over each press's hold says of a
+        relaxing gel (:func:`~tactilevision.diagnosis.holds_finding`); where it names
+        ``viscoelastic_relaxation`` and the ladder named nothing, that is the verdict.
     """
 
     model: tuple[str, ...]
@@ -261,6 +266,7 @@ class Diagnosis:
     rules_out_note: str = ""
     shared_depth: dict[str, Any] = field(default_factory=dict, hash=False)
     crossings: CrossingScan | None = field(default=None, hash=False)
+    holds: HoldsFinding | None = field(default=None, hash=False)
 
     @property
     def depth_link_coarse(self) -> bool:
@@ -324,6 +330,7 @@ class Diagnosis:
             "rules_out_note": self.rules_out_note or None,
             "shared_depth": self.shared_depth or None,
             "crossings": None if self.crossings is None else self.crossings.to_json_dict(),
+            "holds": None if self.holds is None else self.holds.to_json_dict(),
         }
 
 

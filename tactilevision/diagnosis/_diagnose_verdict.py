@@ -19,6 +19,7 @@ from .._checks import InputError
 from ._budget import law_slope
 from ._crossings import crossing_tests
 from ._diagnose import CURVATURE, Diagnosis, diagnose_core
+from ._holds import HoldsFinding, holds_finding
 from ._replay import table_sensitivity
 
 __all__ = ["ABSORBED_BY_MARK", "RULES_OUT_DRAWS", "diagnose", "indenter_shared"]
@@ -58,7 +59,8 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
              max_steps: int = 3, cv_folds: int = 10, seed: int = 0,
              progress: bool = False, curvature: str = CURVATURE,
              candidates: Sequence = (), scan: Sequence[str] = (),
-             rules_out: bool = True, depth_rule: str | None = None) -> Diagnosis:
+             rules_out: bool = True, depth_rule: str | None = None,
+             holds: Mapping[str, np.ndarray] | HoldsFinding | None = None) -> Diagnosis:
     """Compare a model with the measurements and find the missing effect.
 
     Parameters
@@ -125,6 +127,11 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
         from each press's force, so a force effect that varies between an
         indenter's presses is read as depth and absorbed; the message says so and
         such effects are not ruled out (:data:`ABSORBED_BY_MARK`).
+    holds : mapping of str to (K,) ndarray or HoldsFinding, optional
+        The force over each press's hold (``holds.csv``'s columns, or
+        :func:`holds_finding`'s result): a decay at the depth the stage keeps names
+        ``viscoelastic_relaxation`` where the ladder named nothing (a table read at
+        one time of every hold cannot show it; :attr:`Diagnosis.holds`).
 
     Returns
     -------
@@ -187,6 +194,9 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
                                shared[1])
     if depth_rule == "mark":
         d = replace(d, message=d.message + " " + MARK_SENTENCE)
+    if holds is not None and not isinstance(holds, HoldsFinding):
+        holds = holds_finding(holds, columns)
+    d = _with_holds(d, holds)
     d = _with_crossings(d, columns)
     if not rules_out or d.missing_effect or d.unexplained_covariate:
         return d
@@ -197,6 +207,42 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
     if shared is not None:
         hidden.update({e: SHARED_WHY for e in ("depth_offset", "force_offset")})
     return _with_rules_out(d, float(thickness_mm), float(radius_mm), hidden)
+
+
+#: The ladder's sentences for a table that names nothing, and what they read where a finding
+#: beyond the table's columns (the holds, the crossing forces) then names an effect.
+_NOTHING_NAMED = (
+    ("Nothing is missing: the model explains the data to within its noise.",
+     "The table's columns show nothing the model misses beyond their noise; what follows "
+     "does."),
+    ("No effect of the gel's model is named;", "The table's columns name no effect of the "
+     "gel's model;"),
+    ("No effect of the gel's model is named, but", "The table's columns name no effect of "
+     "the gel's model, but"),
+    ("No effect of the gel's model is missing, but", "The table's columns name no missing "
+     "effect, but"),
+    ("Nothing shows above the noise, but", "Nothing shows in the table's columns above the "
+     "noise, but"))
+
+
+def _named_beyond_table(d: Diagnosis, **verdict) -> Diagnosis:
+    """`d` with a verdict found beyond the table's columns, its message no longer saying that
+    nothing is named."""
+    message = d.message
+    for old, new in _NOTHING_NAMED:
+        message = message.replace(old, new)
+    return replace(d, message=message, **verdict)
+
+
+def _with_holds(d: Diagnosis, finding: HoldsFinding | None) -> Diagnosis:
+    """`d` with what the holds say (:class:`HoldsFinding`); where the ladder named nothing
+    and the holds name the relaxation, it is the verdict."""
+    if finding is None:
+        return d
+    d = replace(d, holds=finding, message=d.message + " " + finding.sentence())
+    if not finding.named or d.missing_effect or d.unexplained_covariate:
+        return d
+    return _named_beyond_table(d, missing_effect="viscoelastic_relaxation")
 
 
 def _with_crossings(d: Diagnosis, columns: Mapping[str, np.ndarray]) -> Diagnosis:
@@ -211,9 +257,11 @@ def _with_crossings(d: Diagnosis, columns: Mapping[str, np.ndarray]) -> Diagnosi
     found = scan.found
     if found is None or d.missing_effect or d.unexplained_covariate:
         return d
+    also = tuple(t.effect for t in scan.equivalent)
     if found.kind == "trend" and found.column not in ("x_mm", "y_mm"):
-        return replace(d, unexplained_covariate=found.column, offered_effect=found.effect)
-    return replace(d, missing_effect=found.effect)
+        return _named_beyond_table(d, unexplained_covariate=found.column,
+                                   offered_effect=found.effect, equivalent_effects=also)
+    return _named_beyond_table(d, missing_effect=found.effect, equivalent_effects=also)
 
 
 def indenter_shared(columns: Mapping[str, np.ndarray]
