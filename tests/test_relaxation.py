@@ -580,6 +580,28 @@ def test_diagnose_names_a_relaxation_from_the_holds(tmp_path):
     d = diagnose(cols, holds=read_holds(holds), **kw)
     assert d.missing_effect is None and not d.holds.named
     assert d.holds.relaxation.verdict == "flat" and "flat" in d.message
+    ruled = diagnose(cols, holds=d.holds, thickness_mm=table.thickness_mm,
+                     radius_mm=table.radius_mm).rules_out["viscoelastic_relaxation"]
+    assert ruled.unit == "%/s" and ruled.size_param == pytest.approx(
+        d.holds.smallest_rate_per_s) and "from the holds" in ruled.why
+
+
+def test_what_flat_holds_rule_out_is_named_at_one_and_a_half_times():
+    """The smallest decay flat holds would have named (``smallest_rate_per_s``, 5.25
+    standard errors of their rate: the F test's power at 0.95): a slow relaxation (tau 60
+    s, 8 presses held 0.5 s) with 1.5 times that initial rate is named in at least 18 of
+    20 sessions (20)."""
+    from tactilevision.diagnosis import holds_finding
+
+    def found(g, seed):
+        press, t, f, ramp, _ = _holds(g, 60.0, n=8, hold=0.5, seed=seed)
+        cols = {"press": np.arange(8.0), "time_s": 4.0 * np.arange(8.0)}
+        return holds_finding({"press": press, "t_s": t, "fz_n": f, "ramp_s": ramp}, cols)
+
+    least = found(0.0, 1).smallest_rate_per_s
+    assert 0 < least < 0.05
+    g = 1.5 * least * 60.0 / float(ramp_factor(0.5, 60.0))
+    assert sum(found(g, 100 + s).named for s in range(20)) >= 18
 
 
 def test_holds_name_a_slow_relaxation_but_not_a_softening_gel():

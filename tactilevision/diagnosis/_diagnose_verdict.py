@@ -19,8 +19,8 @@ from .._checks import InputError
 from ._budget import law_slope
 from ._crossings import crossing_tests
 from ._diagnose import CURVATURE, Diagnosis, diagnose_core
-from ._holds import HoldsFinding, holds_finding
-from ._replay import table_sensitivity
+from ._holds import HOLDS_POWER, HoldsFinding, holds_finding
+from ._replay import EffectSensitivity, table_sensitivity
 
 __all__ = ["ABSORBED_BY_MARK", "RULES_OUT_DRAWS", "diagnose", "indenter_shared"]
 
@@ -206,7 +206,29 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
     hidden = {e: MARK_WHY for e in ABSORBED_BY_MARK} if depth_rule == "mark" else {}
     if shared is not None:
         hidden.update({e: SHARED_WHY for e in ("depth_offset", "force_offset")})
-    return _with_rules_out(d, float(thickness_mm), float(radius_mm), hidden)
+    if holds is not None and math.isfinite(holds.smallest_rate_per_s):
+        hidden.pop("viscoelastic_relaxation", None)     # the holds see it at a kept depth
+    d = _with_rules_out(d, float(thickness_mm), float(radius_mm), hidden)
+    return _holds_rule_out(d, holds)
+
+
+def _holds_rule_out(d: Diagnosis, holds: HoldsFinding | None) -> Diagnosis:
+    """Where the table cannot size a relaxation and the holds can (they name none), the
+    smallest decay the holds would have named is what the verdict rules out of it (the
+    holds' sentence in the message says so)."""
+    least = math.nan if holds is None else holds.smallest_rate_per_s
+    have = d.rules_out.get("viscoelastic_relaxation")
+    if not math.isfinite(least) or (
+            have is not None and math.isfinite(have.size)):
+        return d
+    entry = EffectSensitivity(
+        effect="viscoelastic_relaxation", parameter="decay rate at the hold's start (holds)",
+        unit="%/s", size=100.0 * least, size_param=least, power=HOLDS_POWER, snr=math.nan,
+        why=(f"from the holds ({holds.source or 'given'}): the F test's power on "
+             f"{holds.relaxation.n_presses} holds, "
+             f"{least / holds.relaxation.decay_rate_se_per_s:.3g} standard errors of their "
+             "measured rate"))
+    return replace(d, rules_out={**d.rules_out, "viscoelastic_relaxation": entry})
 
 
 #: The ladder's sentences for a table that names nothing, and what they read where a finding

@@ -20,11 +20,24 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from scipy import optimize, stats
 
 from .._checks import InputError
-from ..mechanics import RelaxationFit, fit_relaxation
+from ..mechanics import RELAX_ALPHA, RelaxationFit, fit_relaxation
 
-__all__ = ["HoldsFinding", "holds_finding", "holds_relaxation"]
+__all__ = ["HOLDS_POWER", "HoldsFinding", "holds_finding", "holds_relaxation"]
+
+#: The power at which the holds' smallest named decay is stated (as the table's rules-out).
+HOLDS_POWER = 0.95
+
+
+def _power_factor(alpha: float = RELAX_ALPHA, power: float = HOLDS_POWER) -> float:
+    """sqrt(lambda) of the noncentral chi2 on 2 degrees of freedom (g and tau: the holds' F
+    test) that exceeds its level-`alpha` quantile with probability `power`: 5.25 at 0.001
+    and 0.95. The smallest decay rate named is that many standard errors of the rate."""
+    crit = float(stats.chi2.ppf(1.0 - alpha, 2))
+    lam = optimize.brentq(lambda x: float(stats.ncx2.sf(crit, 2, x)) - power, 1e-6, 1e3)
+    return math.sqrt(lam)
 
 
 def holds_relaxation(holds: Mapping[str, np.ndarray], columns: Mapping[str, np.ndarray],
@@ -93,6 +106,16 @@ class HoldsFinding:
     source: str = ""
     named: bool = False
 
+    @property
+    def smallest_rate_per_s(self) -> float:
+        """The smallest initial decay rate these holds name in :data:`HOLDS_POWER` of
+        sessions, 1/s (> 0; NaN without a rate's standard error): the F test's
+        noncentrality at that power (2 degrees of freedom, level ``RELAX_ALPHA``) in
+        standard errors of the measured rate, ``5.25 se``. A slow relaxation's initial
+        rate is ``g phi(T / tau) / tau``."""
+        se = self.relaxation.decay_rate_se_per_s
+        return _power_factor() * se if math.isfinite(se) and se > 0 else math.nan
+
     def sentence(self) -> str:
         """One paragraph for ``diagnose``'s message: what the holds show."""
         r = self.relaxation
@@ -103,7 +126,11 @@ class HoldsFinding:
         head = (f"The holds{where}, {r.n_presses} presses' force while the stage keeps their "
                 f"depth, change at {rate} from the hold's start")
         if not self.named:
-            return f"{head}: {r.verdict} ({r.why})."
+            least = self.smallest_rate_per_s
+            rules = (f" A relaxation whose force falls faster than {100 * least:.2g} %/s at "
+                     f"the hold's start would have been named ({HOLDS_POWER:.0%} of sessions)."
+                     if math.isfinite(least) else "")
+            return f"{head}: {r.verdict} ({r.why}).{rules}"
         p = f"p = {r.p_value:.2g}" if r.p_value > 1e-16 else "p < 1e-16"
         between = (f"; between presses the forces at one depth move by "
                    f"{100 * r.trend_per_s:+.3g} %/s (se {100 * r.trend_se_per_s:.2g}), where "
@@ -135,6 +162,7 @@ class HoldsFinding:
                 "identified": r.identified,
                 "g": num(r.g) if r.identified else None,
                 "tau_s": num(r.tau_s) if r.identified else None,
+                "smallest_rate_per_s": num(self.smallest_rate_per_s),
                 "n_presses": r.n_presses, "why": r.why}
 
 
