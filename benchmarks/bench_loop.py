@@ -1,7 +1,7 @@
 """The whole loop on frames no project code drew: session -> calibrate -> diagnose -> fit.
 
     python benchmarks/bench_loop.py SESSION_DIR [--out DIR] [--kinds K1 K2 ...] [--seed S]
-        [--json FILE] [--from-json FILE] [--reuse]
+        [--json FILE] [--from-json FILE] [--reuse] [--at-rules-out K]
 
 Issue 23's loop. SESSION_DIR is a gauge-block session rendered by Taxim's own
 renderer (``benchmarks/taxim_gauge_session.py``; its holds long enough for the
@@ -44,6 +44,8 @@ from pathlib import Path
 import numpy as np
 
 from tactilevision.cli import main as cli
+from tactilevision.diagnosis import crossing_sizes
+from tactilevision.io import read_measurements
 from tactilevision.mechanics import beta_relation, kappa
 from tactilevision.sim._schedule import PressSchedule, ft_log
 
@@ -64,8 +66,16 @@ def _schedule(truth: dict) -> PressSchedule:
                          release_s=col["release_end_s"] - col["hold_to_s"], wait_s=col["wait_s"])
 
 
-def write_forces(session: Path, dest: Path, kind: str, seed: int) -> dict:
-    """Copy the session (frames linked) with a new forces.csv hiding `kind`; its truth."""
+#: Each kind's size by default: gx (1/mm), the fall over the session, the step after the
+#: 10th press (``--at-rules-out`` replaces them).
+DEFAULT_SIZE = {"spatial": 0.01, "softening": 0.1, "damage": 0.1}
+
+
+def write_forces(session: Path, dest: Path, kind: str, seed: int,
+                 size: float | None = None) -> dict:
+    """Copy the session (frames linked) with a new forces.csv hiding `kind` (of `size`, the
+    kind's parameter of :data:`DEFAULT_SIZE`, where given); its truth."""
+    size = DEFAULT_SIZE.get(kind) if size is None else size
     truth = json.loads((session / "truth.json").read_text())
     h, a = truth["thickness_mm"], truth["radius_mm"]
     beta = float(beta_relation("paper").beta(NU_TRUE))
@@ -78,14 +88,14 @@ def write_forces(session: Path, dest: Path, kind: str, seed: int) -> dict:
     relax = (0.0, 1.0)
     e_named = E_TRUE
     if kind == "spatial":
-        scale = 1 + 0.01 * sched.x_mm                  # 10 % per 10 mm along x
+        scale = 1 + size * sched.x_mm                  # 10 % per 10 mm along x by default
     elif kind == "offset":
         bias = 0.3
     elif kind == "softening":
-        scale = 1 - 0.1 * sched.t_start_s / float(sched.t_start_s[-1])
+        scale = 1 - size * sched.t_start_s / float(sched.t_start_s[-1])
         e_named = E_TRUE * float(np.mean(scale))     # stiffness_trend: at the mean time
     elif kind == "damage":
-        scale = np.where(np.arange(n) >= 10, 0.9, 1.0)
+        scale = np.where(np.arange(n) >= 10, 1.0 - size, 1.0)
     elif kind == "relaxation":
         relax = (0.25, 0.7)
     elif kind != "null":
@@ -106,14 +116,16 @@ def write_forces(session: Path, dest: Path, kind: str, seed: int) -> dict:
         (dest / item.name).symlink_to(item.resolve())
     np.savetxt(dest / "forces.csv", np.column_stack([t, f]), fmt="%.4f", delimiter=",",
                header="t_s,fx_n,fy_n,fz_n", comments="")
-    return {"E_named": e_named, "c": c, "beta": beta, "relaxation": relax}
+    return {"E_named": e_named, "c": c, "beta": beta, "relaxation": relax, "size": size}
 
 
-def one(session: Path, out: Path, kind: str, seed: int, reuse: bool = False) -> dict:
+def one(session: Path, out: Path, kind: str, seed: int, reuse: bool = False,
+        size: float | None = None) -> dict:
     folder = out / kind
     done = reuse and all((folder / f).is_file() for f in ("calibrate.json", "diagnose.json"))
     tr = (json.loads((folder / "truth.json").read_text()) if done and (
-        folder / "truth.json").is_file() else write_forces(session, folder / "session", kind, seed))
+        folder / "truth.json").is_file() else write_forces(session, folder / "session", kind, seed,
+                                                            size))
     (folder / "truth.json").write_text(json.dumps(tr) + "\n")
     cal = folder / "calibration"
     meas = cal / "measurements.csv"
@@ -160,6 +172,18 @@ def one(session: Path, out: Path, kind: str, seed: int, reuse: bool = False) -> 
             "depth_error_um": [float(err_um.mean()), float(err_um.std()),
                                float(np.abs(err_um).max())],
             "calibrate_s": t_cal, "message": d["message"]}
+
+
+def rules_out_sizes(session: Path, table: Path, k: float) -> dict[str, float]:
+    """`k` times the sizes the null table's crossing forces rule out, in the kinds'
+    parameters (:data:`DEFAULT_SIZE`): gx, the fall over the session (the trend per second
+    times the last press's start), the step half-way."""
+    got = crossing_sizes(read_measurements(table).columns)
+    last = max(p["t_start_s"] for p in json.loads((session / "truth.json").read_text())[
+        "presses"])
+    return {"spatial": k * got["spatial_nonuniformity"],
+            "softening": k * got["stiffness_trend:time_s"] * last,
+            "damage": k * got["stiffness_step:press"]}
 
 
 def _pct(x, truth) -> str:
@@ -210,13 +234,27 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seed", type=int, default=1000)
     ap.add_argument("--json", type=Path)
     ap.add_argument("--from-json", type=Path, help="print the table of an earlier --json")
+    ap.add_argument("--at-rules-out", type=float, metavar="K",
+                    help="hide the spatial gradient, the softening and the step at K times the "
+                         "smallest the null session's crossing forces rule out "
+                         "(tactilevision.diagnosis.crossing_sizes); null is run first")
     ap.add_argument("--reuse", action="store_true",
                     help="keep the calibrate, diagnose and fit outputs already in --out")
     a = ap.parse_args(argv)
     if a.from_json:
         print_rows(json.loads(a.from_json.read_text()), a.session)
         return 0
-    rows = [one(a.session, a.out, k, a.seed, a.reuse) for k in a.kinds]
+    sizes: dict[str, float] = {}
+    if a.at_rules_out is not None:
+        rows = [one(a.session, a.out, "null", a.seed, a.reuse)]
+        sizes = rules_out_sizes(a.session, a.out / "null" / "calibration" / "measurements.csv",
+                                a.at_rules_out)
+        print(f"sizes: {a.at_rules_out:g} times what the null session's crossing forces rule "
+              f"out: " + ", ".join(f"{k} {v:.4g}" for k, v in sizes.items()), flush=True)
+        rows += [one(a.session, a.out, k, a.seed, a.reuse, sizes.get(k)) for k in a.kinds
+                 if k != "null"]
+    else:
+        rows = [one(a.session, a.out, k, a.seed, a.reuse) for k in a.kinds]
     if a.json:
         a.json.write_text(json.dumps(rows, indent=1) + "\n")
     print_rows(rows, a.session)

@@ -12,7 +12,8 @@ A measurements table (formats.md §2) against the force law of
   (the certification's own products, never physics), :func:`cross_validated_rmse`,
   :func:`noise_floor`, :func:`noise_budget`; :func:`crossing_tests`, each press's force
   at its crossing of the mark's w0 (a depth the frames certify apart from the force)
-  tested for changes within indenters, which the mark rule's depths absorb;
+  tested for changes within indenters, which the mark rule's depths absorb
+  (:func:`crossing_sizes`, the smallest such change they name);
   :func:`holds_finding`, the force over each press's hold at the depth the stage keeps,
   which names a relaxing gel that a table read at one time of every hold cannot show.
 - What a table of presses lets ``diagnose`` find: :func:`replay_sizes` and
@@ -28,7 +29,7 @@ to :func:`diagnose` (``docs/custom_effects.md``).
 """
 
 from ._budget import NoiseBudget, law_slope, noise_budget
-from ._crossings import CrossingScan, CrossingTest, crossing_tests
+from ._crossings import CrossingScan, CrossingTest, crossing_sizes, crossing_tests
 from ._diagnose import (
     CURVATURE_BIC,
     DELTA_BIC,
@@ -87,6 +88,7 @@ __all__ = [
     "certification_tests",
     "covariate_tests",
     "cross_validated_rmse",
+    "crossing_sizes",
     "crossing_tests",
     "diagnose",
     "diagnose_indenter",

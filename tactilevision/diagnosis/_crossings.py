@@ -20,6 +20,7 @@ press order are nearly one test).
 from __future__ import annotations
 
 import itertools
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 
@@ -27,7 +28,7 @@ import numpy as np
 from scipy import stats
 
 __all__ = ["CROSSING_ALPHA", "CROSSING_COLUMNS", "CrossingScan", "CrossingTest",
-           "crossing_tests"]
+           "crossing_sizes", "crossing_tests"]
 
 #: Family-wise level of the crossing forces' tests (over all of them and a step's places).
 CROSSING_ALPHA = 0.01
@@ -215,6 +216,39 @@ def crossing_tests(columns: Mapping[str, np.ndarray]) -> CrossingScan | None:
         None where the table has no crossing forces, or fewer than two indenters with
         two presses each.
     """
+    prep = _prepared(columns)
+    if prep is None:
+        return None
+    ok, groups, r, w = prep
+    rc = _within(r, groups, w)
+    chi2, dof = float(np.sum(w * rc * rc)), int(r.size - len(np.unique(groups)))
+    raw, rows = [], []
+    for col, kind, z in _test_columns(columns, ok):
+        if kind == "trend":
+            b, s = _slope(rc, z, groups, w)
+            if np.isfinite(b):
+                raw.append((col, "trend", b, s, float("nan"), abs(b / s)))
+                rows.append([_direction(z, groups, w)])
+        else:
+            got, places = _best_step(rc, z, groups, w, col)
+            if places:
+                raw.append(got)
+                rows.append(places)
+    p_family = _max_statistic_p([t[5] for t in raw], rows)
+    tests = sorted((CrossingTest(col, kind, b, s, at, p, bool(p < CROSSING_ALPHA))
+                    for (col, kind, b, s, at, _), p in zip(raw, p_family, strict=True)),
+                   key=lambda t: (t.p_value, -abs(t.size / t.se)))
+    return CrossingScan(n=int(r.size), n_indenters=len(np.unique(groups)), chi2=chi2, dof=dof,
+                        p_scatter=float(stats.chi2.sf(chi2, dof)) if dof > 0 else float("nan"),
+                        tests=tuple(tests))
+
+
+def _prepared(columns: Mapping[str, np.ndarray]
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None:
+    """The rows taking part (a finite, positive crossing force and sd, in an indenter of
+    two or more), their indenters, relative crossing forces about their indenter's
+    weighted mean and weights (inverse relative variances); None where fewer than two
+    indenters take part."""
     need = ("indenter", "force_w0_n", "force_w0_sem_n")
     if any(k not in columns for k in need):
         return None
@@ -225,39 +259,30 @@ def crossing_tests(columns: Mapping[str, np.ndarray]) -> CrossingScan | None:
     counts = {g: int(np.sum(ok & (ind == g))) for g in np.unique(ind[ok])}
     ok &= np.array([counts.get(g, 0) >= _MIN_PER_INDENTER for g in ind])
     groups = ind[ok]
-    n_groups = len(np.unique(groups))
-    if n_groups < 2:
+    if len(np.unique(groups)) < 2:
         return None
     f, se = f[ok], se[ok]
     mean = {g: np.sum(f[groups == g] / se[groups == g] ** 2)
             / np.sum(1 / se[groups == g] ** 2) for g in np.unique(groups)}
     scale = np.array([mean[g] for g in groups])
-    r, w = f / scale - 1.0, (scale / se) ** 2                 # relative, known variances
-    rc = _within(r, groups, w)
-    chi2, dof = float(np.sum(w * rc * rc)), int(r.size - n_groups)
-    raw, rows = [], []
+    return ok, groups, f / scale - 1.0, (scale / se) ** 2       # relative, known variances
+
+
+def _test_columns(columns: Mapping[str, np.ndarray], ok: np.ndarray
+                  ) -> list[tuple[str, str, np.ndarray]]:
+    """The scan's tests in order, ``(column, kind, values)``: a trend along each of
+    :data:`CROSSING_COLUMNS` present and not constant, a step along time and press order."""
+    out = []
     for col in CROSSING_COLUMNS:
         if col not in columns:
             continue
         z = np.asarray(columns[col], np.float64)[ok]
         if not np.all(np.isfinite(z)) or np.ptp(z) == 0:
             continue
-        b, s = _slope(rc, z, groups, w)
-        if np.isfinite(b):
-            raw.append((col, "trend", b, s, float("nan"), abs(b / s)))
-            rows.append([_direction(z, groups, w)])
+        out.append((col, "trend", z))
         if col in ("time_s", "press"):
-            got, places = _best_step(rc, z, groups, w, col)
-            if places:
-                raw.append(got)
-                rows.append(places)
-    p_family = _max_statistic_p([t[5] for t in raw], rows)
-    tests = sorted((CrossingTest(col, kind, b, s, at, p, bool(p < CROSSING_ALPHA))
-                    for (col, kind, b, s, at, _), p in zip(raw, p_family, strict=True)),
-                   key=lambda t: (t.p_value, -abs(t.size / t.se)))
-    return CrossingScan(n=int(r.size), n_indenters=n_groups, chi2=chi2, dof=dof,
-                        p_scatter=float(stats.chi2.sf(chi2, dof)) if dof > 0 else float("nan"),
-                        tests=tuple(tests))
+            out.append((col, "step", z))
+    return out
 
 
 def _direction(x: np.ndarray, groups: np.ndarray, w: np.ndarray) -> np.ndarray:
@@ -268,27 +293,94 @@ def _direction(x: np.ndarray, groups: np.ndarray, w: np.ndarray) -> np.ndarray:
     return a / norm if norm > 0 else a
 
 
-def _max_statistic_p(observed: list[float], rows: list[list[np.ndarray]]) -> list[float]:
-    """Family-wise p-values of the tests' |z| statistics (a step's: its largest over its
-    places) under the stated noise, by :data:`_FAMILY_DRAWS` seeded draws of their joint
-    normal distribution: each test's own p from its statistic's null distribution (a
-    step's every place counted exactly, not by Bonferroni), then the family's by the
-    smallest of those over the tests (Westfall and Young's single-step min-P, Resampling-
-    Based Multiple Testing, 1993). It counts how alike the tests are (a trend along time
-    and along press order are nearly one test) and weighs each test alike, however many
-    places a step has."""
-    if not observed:
-        return []
+def _null_statistics(rows: list[list[np.ndarray]]) -> tuple[list[np.ndarray], np.ndarray]:
+    """Each test's |z| statistic (a step's: its largest over its places), sorted, over
+    :data:`_FAMILY_DRAWS` seeded draws of their joint normal distribution under the
+    stated noise; and per draw the smallest of the tests' own p-values."""
     u = np.random.default_rng(_FAMILY_SEED).standard_normal((_FAMILY_DRAWS, rows[0][0].size))
     d = _FAMILY_DRAWS
-    own, least = [], np.ones(d)
-    for z, r in zip(observed, rows, strict=True):
-        top = np.max(np.abs(u @ np.vstack(r).T), axis=1)           # (draws,) the test's null
+    tops, least = [], np.ones(d)
+    for r in rows:
+        top = np.max(np.abs(u @ np.vstack(r).T), axis=1)
         srt = np.sort(top)
-        own.append((d - np.searchsorted(srt, z, side="left") + 1) / (d + 1))
+        tops.append(srt)
         least = np.minimum(least, (d - np.searchsorted(srt, top, side="left") + 1) / (d + 1))
-    least = np.sort(least)
+    return tops, np.sort(least)
+
+
+def _max_statistic_p(observed: list[float], rows: list[list[np.ndarray]]) -> list[float]:
+    """Family-wise p-values of the tests' |z| statistics (a step's: its largest over its
+    places) under the stated noise (:func:`_null_statistics`): each test's own p from its
+    statistic's null distribution (a step's every place counted exactly, not by
+    Bonferroni), then the family's by the smallest of those over the tests (Westfall and
+    Young's single-step min-P, Resampling-Based Multiple Testing, 1993). It counts how
+    alike the tests are (a trend along time and along press order are nearly one test)
+    and weighs each test alike, however many places a step has."""
+    if not observed:
+        return []
+    tops, least = _null_statistics(rows)
+    d = _FAMILY_DRAWS
+    own = [(d - np.searchsorted(srt, z, side="left") + 1) / (d + 1)
+           for z, srt in zip(observed, tops, strict=True)]
     return [float((np.searchsorted(least, p, side="right") + 1) / (d + 1)) for p in own]
+
+
+def crossing_sizes(columns: Mapping[str, np.ndarray], *, power: float = 0.95
+                   ) -> dict[str, float]:
+    """The smallest within-indenter changes the crossing tests name in `power` of sessions
+    of this table's presses at their stated uncertainties.
+
+    Parameters
+    ----------
+    columns : mapping of str to (N,) array_like
+        As for :func:`crossing_tests` (the crossing forces' values only set their
+        relative uncertainties, ``force_w0_sem_n / force_w0_n``).
+    power : float, default 0.95
+
+    Returns
+    -------
+    sizes : dict of str to float
+        Where the table has the columns: ``'stiffness_step:press'``, the relative
+        change s of a stiffness step half-way through the presses;
+        ``'stiffness_trend:time_s'``, the trend k (1/s) of a stiffness changing
+        steadily with time; ``'spatial_nonuniformity'``, the gradient gx (1/mm) along
+        x. The catalogue's parametrisations (formats.md §5). Empty without crossings.
+
+    Notes
+    -----
+    Each test's statistic is linear in the crossing forces, so an effect of size
+    delta moves the statistic of its own test (a step at its true place, a trend
+    along its column) by ``delta q`` (q the norm of the weighted, within-indenter
+    centred effect shape) and the test names it with chance ``Phi(delta q - c)``,
+    c the test's threshold under the family-wise level (:func:`_null_statistics`).
+    So ``delta = (c + z_power) / q``. The other tests of the scan can only add to the
+    power: the sizes are upper bounds of what is named in `power` of sessions.
+    """
+    prep = _prepared(columns)
+    if prep is None:
+        return {}
+    ok, groups, _, w = prep
+    tests = _test_columns(columns, ok)
+    rows = [[_direction(z, groups, w)] if kind == "trend" else
+            [_direction((z > lo).astype(np.float64), groups, w)
+             for lo, _hi in itertools.pairwise(np.unique(z))]
+            for _col, kind, z in tests]
+    tops, least = _null_statistics(rows)
+    p_crit = float(np.quantile(least, CROSSING_ALPHA))
+    z_power = float(stats.norm.ppf(power))
+    out = {}
+    for (col, kind, z), srt in zip(tests, tops, strict=True):
+        c = float(np.quantile(srt, 1.0 - p_crit))
+        if kind == "step" and col == "press":
+            shape, name = (z > np.median(z)).astype(np.float64), "stiffness_step:press"
+        elif kind == "trend" and col in ("time_s", "x_mm"):
+            shape = z
+            name = "stiffness_trend:time_s" if col == "time_s" else "spatial_nonuniformity"
+        else:
+            continue
+        q = float(np.linalg.norm(np.sqrt(w) * _within(shape, groups, w)))
+        out[name] = (c + z_power) / q if q > 0 else math.inf
+    return out
 
 
 def _best_step(r: np.ndarray, z: np.ndarray, groups: np.ndarray, w: np.ndarray, col: str

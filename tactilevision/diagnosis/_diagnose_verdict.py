@@ -17,7 +17,7 @@ import numpy as np
 
 from .._checks import InputError
 from ._budget import law_slope
-from ._crossings import crossing_tests
+from ._crossings import crossing_sizes, crossing_tests
 from ._diagnose import CURVATURE, Diagnosis, diagnose_core
 from ._holds import HOLDS_POWER, HoldsFinding, holds_finding
 from ._replay import EffectSensitivity, table_sensitivity
@@ -206,29 +206,43 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
     hidden = {e: MARK_WHY for e in ABSORBED_BY_MARK} if depth_rule == "mark" else {}
     if shared is not None:
         hidden.update({e: SHARED_WHY for e in ("depth_offset", "force_offset")})
-    if holds is not None and math.isfinite(holds.smallest_rate_per_s):
-        hidden.pop("viscoelastic_relaxation", None)     # the holds see it at a kept depth
-    d = _with_rules_out(d, float(thickness_mm), float(radius_mm), hidden)
-    return _holds_rule_out(d, holds)
+    own = {**_crossing_entries(crossing_sizes(columns) if d.crossings is not None else {}),
+           **_holds_entries(holds)}
+    return _with_rules_out(d, float(thickness_mm), float(radius_mm), hidden, own)
 
 
-def _holds_rule_out(d: Diagnosis, holds: HoldsFinding | None) -> Diagnosis:
-    """Where the table cannot size a relaxation and the holds can (they name none), the
-    smallest decay the holds would have named is what the verdict rules out of it (the
-    holds' sentence in the message says so)."""
+#: What the crossing forces size (:func:`crossing_sizes`): parameter, display unit, factor.
+_CROSSING_UNITS = {"stiffness_step:press": ("s", "%", 100.0),
+                   "stiffness_trend:time_s": ("k", "%/min", 6000.0),
+                   "spatial_nonuniformity": ("gx_per_mm", "%/mm", 100.0)}
+
+
+def _crossing_entries(sizes: Mapping[str, float]) -> dict[str, EffectSensitivity]:
+    """The within-indenter changes the crossing forces would have named: a step half-way
+    through the presses, a steady change with time, a gradient across the pad."""
+    out = {}
+    for name, size in sizes.items():
+        param, unit, factor = _CROSSING_UNITS[name]
+        out[name] = EffectSensitivity(
+            effect=name, parameter=param, unit=unit, size=factor * size, size_param=size,
+            power=0.95, snr=math.nan,
+            why="from the crossing forces within indenters at their stated uncertainties "
+                "(the family-wise tests' power; a step half-way through the presses)")
+    return out
+
+
+def _holds_entries(holds: HoldsFinding | None) -> dict[str, EffectSensitivity]:
+    """The smallest decay the holds would have named, where they name none."""
     least = math.nan if holds is None else holds.smallest_rate_per_s
-    have = d.rules_out.get("viscoelastic_relaxation")
-    if not math.isfinite(least) or (
-            have is not None and math.isfinite(have.size)):
-        return d
-    entry = EffectSensitivity(
+    if not math.isfinite(least):
+        return {}
+    return {"viscoelastic_relaxation": EffectSensitivity(
         effect="viscoelastic_relaxation", parameter="decay rate at the hold's start (holds)",
         unit="%/s", size=100.0 * least, size_param=least, power=HOLDS_POWER, snr=math.nan,
         why=(f"from the holds ({holds.source or 'given'}): the F test's power on "
              f"{holds.relaxation.n_presses} holds, "
              f"{least / holds.relaxation.decay_rate_se_per_s:.3g} standard errors of their "
-             "measured rate"))
-    return replace(d, rules_out={**d.rules_out, "viscoelastic_relaxation": entry})
+             "measured rate"))}
 
 
 #: The ladder's sentences for a table that names nothing, and what they read where a finding
@@ -385,34 +399,42 @@ def _press_noise(d: Diagnosis) -> tuple[np.ndarray, str]:
     return np.full(r.size, rms), f"the final model's residual RMS ({rms * 1e3:.3g} mN)"
 
 
-def _with_rules_out(d: Diagnosis, h: float, a: float, hidden: dict[str, str] | None = None
-                    ) -> Diagnosis:
-    """The diagnosis with :attr:`Diagnosis.rules_out` and a sentence under its verdict."""
+def _with_rules_out(d: Diagnosis, h: float, a: float, hidden: dict[str, str] | None = None,
+                    own: Mapping[str, EffectSensitivity] | None = None) -> Diagnosis:
+    """The diagnosis with :attr:`Diagnosis.rules_out` and a sentence under its verdict.
+
+    `own`: sizes found by tests of their own (the holds, the crossing forces), which stand
+    where the replay of the table's presses has none (a certification hides the effect, or
+    the table cannot carry it) and are said apart."""
+    own = dict(own or {})
     cols = {k: np.asarray(v, np.float64)[d.fit_rows[-1]] for k, v in d.columns.items()}
     sigma, how = _press_noise(d)
     E, nu = d.ladder[-1].E_mpa, d.ladder[-1].nu
     if not (math.isfinite(E) and math.isfinite(nu)):
         E, nu = d.E_mpa, d.nu
     if not (math.isfinite(E) and math.isfinite(nu)):
-        return replace(d, rules_out_note="what the verdict rules out was not replayed: the "
-                                         "table's E and nu were not derived (the replay's "
-                                         "forces are the FEM's at them)")
+        return _own_sizes(replace(d, rules_out_note="what the verdict rules out was not "
+                                  "replayed: the table's E and nu were not derived (the "
+                                  "replay's forces are the FEM's at them)"), own)
     untestable = {k: d.untestable_reasons.get(k) or "needs " + ", ".join(v)
                   for k, v in d.untestable.items()}
     try:
         sizes = table_sensitivity(cols, thickness_mm=h, radius_mm=a, E_mpa=E, nu=nu,
                                   sigma_n=sigma, untestable=untestable, draws=RULES_OUT_DRAWS)
     except (InputError, ValueError) as exc:
-        return replace(d, rules_out_note=f"what the verdict rules out was not replayed: {exc}")
+        return _own_sizes(replace(d, rules_out_note=f"what the verdict rules out was not "
+                                                    f"replayed: {exc}"), own)
     note = (f"the smallest size of each effect this table would have named in 95 % of "
             f"{RULES_OUT_DRAWS} replays of its presses (the FEM's forces at E = {E:.4g} MPa, nu = "
             f"{nu:.4g}) with each press's noise from {how}")
     hidden = {k: v for k, v in (hidden or {}).items() if k in sizes}
     for name, why in hidden.items():     # what the table's certification hides
         sizes[name] = replace(sizes[name], size=math.nan, size_param=math.nan, why=why)
+    own = {k: v for k, v in own.items() if k not in sizes or not math.isfinite(sizes[k].size)}
+    hidden = {k: v for k, v in hidden.items() if k not in own}
     found = [f"{k} {v.size:.3g}{' ' + v.unit if v.unit else ''}" for k, v in sizes.items()
-             if math.isfinite(v.size)]
-    never = [k for k, v in sizes.items() if v.size == math.inf]
+             if math.isfinite(v.size) and k not in own]
+    never = [k for k, v in sizes.items() if v.size == math.inf and k not in own]
     s = []
     if found:
         s.append("None larger than: " + ", ".join(found) + f" ({note}).")
@@ -421,5 +443,18 @@ def _with_rules_out(d: Diagnosis, h: float, a: float, hidden: dict[str, str] | N
     for why in dict.fromkeys(hidden.values()):
         names = ", ".join(k for k, v in hidden.items() if v == why)
         s.append(f"Not ruled out ({why.removeprefix('not ruled out: ')}): {names}.")
-    return replace(d, rules_out=sizes, rules_out_note=note,
-                   message=d.message + (" " + " ".join(s) if s else ""))
+    d = replace(d, rules_out=sizes, rules_out_note=note,
+                message=d.message + (" " + " ".join(s) if s else ""))
+    return _own_sizes(d, own)
+
+
+def _own_sizes(d: Diagnosis, own: Mapping[str, EffectSensitivity]) -> Diagnosis:
+    """`d` with the sizes its own tests found (the holds, the crossing forces) in
+    ``rules_out`` and one sentence naming them."""
+    if not own:
+        return d
+    said = ", ".join(f"{k} {v.size:.3g} {v.unit}" for k, v in own.items())
+    return replace(d, rules_out={**d.rules_out, **own},
+                   message=d.message + f" From their own tests (the crossing forces within "
+                   f"indenters, the holds), none larger than: {said} (each named in 95 % of "
+                   "sessions of these presses at their stated uncertainties).")

@@ -126,11 +126,7 @@ class HoldsFinding:
         head = (f"The holds{where}, {r.n_presses} presses' force while the stage keeps their "
                 f"depth, change at {rate} from the hold's start")
         if not self.named:
-            least = self.smallest_rate_per_s
-            rules = (f" A relaxation whose force falls faster than {100 * least:.2g} %/s at "
-                     f"the hold's start would have been named ({HOLDS_POWER:.0%} of sessions)."
-                     if math.isfinite(least) else "")
-            return f"{head}: {r.verdict} ({r.why}).{rules}"
+            return f"{head}: {r.verdict} ({r.why})."
         p = f"p = {r.p_value:.2g}" if r.p_value > 1e-16 else "p < 1e-16"
         between = (f"; between presses the forces at one depth move by "
                    f"{100 * r.trend_per_s:+.3g} %/s (se {100 * r.trend_se_per_s:.2g}), where "
