@@ -653,3 +653,30 @@ def test_diagnose_command_reads_the_holds_beside_the_table(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "holds.csv" in err and "without its holds" in err
     assert json.loads(out.read_text())["holds"] is None
+
+
+def test_under_the_mark_rule_a_depth_only_verdict_gives_way_to_the_holds(tmp_path):
+    """Under the mark rule an offset seen along depth alone is also what a gel changing
+    between the indenters' presses looks like; the holds' relaxation, seen at a depth the
+    stage keeps, takes the verdict then (the message says why), but not over the same
+    verdict on a table certified otherwise, nor over an effect the ladder named along a
+    column."""
+    from dataclasses import replace
+
+    from tactilevision.diagnosis import diagnose, holds_finding
+    from tactilevision.diagnosis._diagnose_verdict import _with_holds
+    from tactilevision.io import read_measurements
+
+    meas, holds = _relaxing_table(tmp_path)
+    table = read_measurements(meas)
+    cols = {**table.columns, "depth_mm": table.depth_mm, "force_n": table.force_n}
+    d = diagnose(cols, thickness_mm=table.thickness_mm, radius_mm=table.radius_mm,
+                 rules_out=False)
+    found = holds_finding(read_holds(holds), cols)
+    offset = replace(d, missing_effect="force_offset", equivalent_effects=("depth_offset",))
+    got = _with_holds(offset, found, "mark")
+    assert got.missing_effect == "viscoelastic_relaxation" and not got.equivalent_effects
+    assert "The ladder's force_offset, seen along depth alone" in got.message
+    assert _with_holds(offset, found, None).missing_effect == "force_offset"
+    step = replace(d, missing_effect="stiffness_step:press")
+    assert _with_holds(step, found, "mark").missing_effect == "stiffness_step:press"

@@ -196,8 +196,8 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
         d = replace(d, message=d.message + " " + MARK_SENTENCE)
     if holds is not None and not isinstance(holds, HoldsFinding):
         holds = holds_finding(holds, columns)
-    d = _with_holds(d, holds)
-    d = _with_crossings(d, columns)
+    d = _with_holds(d, holds, depth_rule)
+    d = _with_crossings(d, columns, depth_rule)
     if not rules_out or d.missing_effect or d.unexplained_covariate:
         return d
     if base != "paper":
@@ -270,34 +270,66 @@ def _named_beyond_table(d: Diagnosis, **verdict) -> Diagnosis:
     return replace(d, message=message, **verdict)
 
 
-def _with_holds(d: Diagnosis, finding: HoldsFinding | None) -> Diagnosis:
+#: Ladder verdicts seen along depth alone: under the mark rule they are also what a gel that
+#: changes between the indenters' presses looks like (each indenter's depths move with its
+#: crossing force P(w0)), so a finding within indenters or in the holds takes their place.
+DEPTH_ONLY = ("depth_offset", "force_offset")
+
+
+def _open_verdict(d: Diagnosis, depth_rule: str | None) -> bool:
+    """Whether a finding beyond the table's columns may take the verdict: the ladder named
+    nothing, or, under the mark rule, only an effect along depth (:data:`DEPTH_ONLY`)."""
+    if d.unexplained_covariate:
+        return False
+    return not d.missing_effect or (depth_rule == "mark" and d.missing_effect in DEPTH_ONLY)
+
+
+def _gives_way(d: Diagnosis, **verdict) -> Diagnosis:
+    """`d` with a verdict found beyond the table's columns in place of the ladder's (none,
+    or a depth-only one under the mark rule, which the message then explains)."""
+    if not d.missing_effect:
+        return _named_beyond_table(d, **verdict)
+    was = d.missing_effect
+    return replace(d, **{"equivalent_effects": (), **verdict}, message=d.message + (
+        f" The ladder's {was}, seen along depth alone, is under the mark rule also what a gel "
+        "that changes between the indenters' presses looks like (each indenter's depths "
+        "move with its crossing force); the finding above, made at depths the frames or the "
+        f"stage keep, is the verdict in its place ({was} not ruled out: a tare check or a "
+        "height gauge tells)."))
+
+
+def _with_holds(d: Diagnosis, finding: HoldsFinding | None, depth_rule: str | None = None
+                ) -> Diagnosis:
     """`d` with what the holds say (:class:`HoldsFinding`); where the ladder named nothing
-    and the holds name the relaxation, it is the verdict."""
+    (or, under the mark rule, only an effect along depth) and the holds name the
+    relaxation, it is the verdict."""
     if finding is None:
         return d
     d = replace(d, holds=finding, message=d.message + " " + finding.sentence())
-    if not finding.named or d.missing_effect or d.unexplained_covariate:
+    if not finding.named or not _open_verdict(d, depth_rule):
         return d
-    return _named_beyond_table(d, missing_effect="viscoelastic_relaxation")
+    return _gives_way(d, missing_effect="viscoelastic_relaxation")
 
 
-def _with_crossings(d: Diagnosis, columns: Mapping[str, np.ndarray]) -> Diagnosis:
+def _with_crossings(d: Diagnosis, columns: Mapping[str, np.ndarray],
+                    depth_rule: str | None = None) -> Diagnosis:
     """`d` with the crossing forces' tests (:func:`crossing_tests`) and their sentence; where
-    the ladder named nothing, what they find is the verdict: a step or spatial structure
-    as the missing effect, a trend as an unexplained covariate with its stiffness trend
-    offered (as the ladder reports a trend)."""
+    the ladder named nothing (or, under the mark rule, only an effect along depth), what
+    they find is the verdict: a step or spatial structure as the missing effect, a trend as
+    an unexplained covariate with its stiffness trend offered (as the ladder reports a
+    trend)."""
     scan = crossing_tests(columns)
     if scan is None:
         return d
     d = replace(d, crossings=scan, message=d.message + " " + scan.sentence())
     found = scan.found
-    if found is None or d.missing_effect or d.unexplained_covariate:
+    if found is None or not _open_verdict(d, depth_rule):
         return d
     also = tuple(t.effect for t in scan.equivalent)
     if found.kind == "trend" and found.column not in ("x_mm", "y_mm"):
-        return _named_beyond_table(d, unexplained_covariate=found.column,
-                                   offered_effect=found.effect, equivalent_effects=also)
-    return _named_beyond_table(d, missing_effect=found.effect, equivalent_effects=also)
+        return _gives_way(d, missing_effect=None, unexplained_covariate=found.column,
+                          offered_effect=found.effect, equivalent_effects=also)
+    return _gives_way(d, missing_effect=found.effect, equivalent_effects=also)
 
 
 def indenter_shared(columns: Mapping[str, np.ndarray]
