@@ -1,6 +1,7 @@
 """Within-indenter effects on drawn-mark sessions, found through the crossing forces.
 
     python benchmarks/bench_crossings.py [--seeds 20] [--first-seed 8000] [--fps 15]
+        [--at-rules-out K]
 
 Each seed is a session of the project's generator (:func:`tactilevision.sim.make_session`:
 a drawn mark, ``bevel_angle_deg = 0``, 5 depths x 4 presses, the stage overshooting w0 by 5
@@ -30,7 +31,7 @@ from tactilevision.pipeline import calibrate_session, write_calibration
 from tactilevision.sim import GaugeBlock, SessionSpec, make_session
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_loop import write_forces
+from bench_loop import rules_out_sizes, write_forces
 
 KINDS = ("null", "spatial", "softening", "damage")
 
@@ -47,8 +48,11 @@ def right(kind: str, verdict: str | None) -> bool:
     return bool(verdict) and verdict.startswith("stiffness_step:")
 
 
-def one(work: Path, seed: int, fps: float) -> dict[str, tuple[str | None, str | None]]:
-    """The verdict and the crossings' finding of each kind on one generated session."""
+def one(work: Path, seed: int, fps: float, at_rules_out: float | None = None
+        ) -> dict[str, tuple[str | None, str | None]]:
+    """The verdict and the crossings' finding of each kind on one generated session (with
+    `at_rules_out`, each kind at that many times what the null table's crossing forces
+    rule out: :func:`bench_loop.rules_out_sizes`)."""
     folder = work / "s"
     spec = SessionSpec(E_mpa=0.2, nu=0.48, block=GaugeBlock(bevel_angle_deg=0.0), repeats=4,
                        fps=fps, overshoot_mm=(0.005, 0.06), seed=seed)
@@ -57,9 +61,9 @@ def one(work: Path, seed: int, fps: float) -> dict[str, tuple[str | None, str | 
     for p in truth["presses"]:                 # the schedule write_forces reads
         p["release_end_s"] = p["hold_to_s"] + spec.release_s
     (folder / "truth.json").write_text(json.dumps(truth))
-    out = {}
+    out, sizes = {}, {}
     for kind in KINDS:
-        write_forces(folder, work / kind, kind, seed=seed)
+        write_forces(folder, work / kind, kind, seed=seed, size=sizes.get(kind))
         cal = calibrate_session(work / kind)
         write_calibration(cal, work / f"{kind}_cal")
         t = read_measurements(work / f"{kind}_cal" / "measurements.csv")
@@ -69,6 +73,9 @@ def one(work: Path, seed: int, fps: float) -> dict[str, tuple[str | None, str | 
         verdict = d.missing_effect or d.offered_effect
         out[kind] = (verdict, None if d.crossings is None or d.crossings.found is None
                      else d.crossings.found.effect)
+        if kind == "null" and at_rules_out is not None:
+            sizes = rules_out_sizes(folder, work / "null_cal" / "measurements.csv",
+                                    at_rules_out)
     return out
 
 
@@ -77,13 +84,16 @@ def main() -> int:
     ap.add_argument("--seeds", type=int, default=20)
     ap.add_argument("--first-seed", type=int, default=8000)
     ap.add_argument("--fps", type=float, default=15.0)
+    ap.add_argument("--at-rules-out", type=float, metavar="K",
+                    help="each kind at K times what its session's null table's crossing "
+                         "forces rule out (default: the fixed sizes above)")
     args = ap.parse_args()
     score = {k: [0, 0] for k in KINDS}
     t0 = time.perf_counter()
     for seed in range(args.first_seed, args.first_seed + args.seeds):
         work = Path(tempfile.mkdtemp(prefix="bench_crossings_"))
         try:
-            res = one(work, seed, args.fps)
+            res = one(work, seed, args.fps, args.at_rules_out)
         finally:
             shutil.rmtree(work, ignore_errors=True)
         print(f"seed {seed}: " + "; ".join(f"{k}: {v or 'nothing'} (crossings: {c or '-'})"

@@ -5,9 +5,11 @@ table's hold_s column holds; figures rounded."""
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 from pathlib import Path
 
 from tactilevision.cli import main
+from tactilevision.planning import crossing_effect_sizes, read_design
 
 PLAN = Path(__file__).resolve().parents[1] / "sample_frames" / "plan"
 
@@ -50,13 +52,23 @@ def test_a_mark_design_does_not_promise_what_its_depth_rule_absorbs(capsys):
     that varies between one indenter's presses (tactilevision.diagnosis.ABSORBED_BY_MARK;
     on the Taxim mark session of seed 11 a spatial gradient, a softening and a damage step
     went unnamed). plan says so instead of giving them a size; with a vernier they are
-    sized."""
+    sized. What the mark's crossing forces see within indenters (a gradient across the pad,
+    a step, a steady change with time) is sized from them, and grows with the frame
+    period (the bracket of each crossing)."""
     assert main(["plan", str(PLAN / "paper_gauge_block.toml"), "--json", "-"]) == 0
     mark = json.loads(capsys.readouterr().out)
     assert main(["plan", str(PLAN / "recommended.toml"), "--json", "-"]) == 0
     vernier = json.loads(capsys.readouterr().out)
-    for name in ("force_drift", "spatial_nonuniformity", "force_crosstalk"):
+    for name in ("force_drift", "force_crosstalk"):
         assert "mark rule" in mark["untestable"][name]
         assert mark["effect_sizes"][name]["size"] is None
         assert vernier["effect_sizes"][name]["size"] > 0
     assert mark["effect_sizes"]["depth_offset"]["size"] > 0
+    for name in ("spatial_nonuniformity", "stiffness_step:press", "stiffness_trend:time_s"):
+        assert name not in mark["untestable"] and mark["effect_sizes"][name]["size"] > 0
+        assert "crossing forces" in mark["effect_sizes"][name]["why"]
+    assert "stiffness_step:press" not in vernier["effect_sizes"]
+    design = read_design(PLAN / "paper_gauge_block.toml")
+    fast = crossing_effect_sizes(replace(design, frame_rate_hz=2 * design.frame_rate_hz))
+    slow = crossing_effect_sizes(design)
+    assert 0.45 < fast["stiffness_step:press"].size / slow["stiffness_step:press"].size < 0.75

@@ -106,9 +106,10 @@ def summary(pred) -> str:
         lines.append("smallest effects diagnose names in 95 % of sessions (catalogue "
                      "parameter; snr: over the replicate noise):")
         for s in found:
+            snr = f"; snr {s.snr:.2g}" if math.isfinite(s.snr) else "; the crossing forces"
             lines.append(f"  {s.effect:24s} " + (
                 f"{s.size:.3g}{' ' + s.unit if s.unit else ''} ({s.parameter} "
-                f"{s.size_param:.3g}; snr {s.snr:.2g})"
+                f"{s.size_param:.3g}{snr})"
                 if math.isfinite(s.size) else "not at any size its parameter allows"))
             if s.dip:
                 lines.append(f"    ({s.dip})")

@@ -8,7 +8,9 @@ what its session would certify and find:
   E and nu the session would give, whether nu is identified, and the smallest size of
   each catalogue effect ``diagnose`` would name (:func:`effect_sensitivity`,
   :func:`effect_power`: :mod:`tactilevision.diagnosis`'s replay on the design's drawn
-  sessions); relaxation's own identifiability (:func:`relaxation_identifiability`).
+  sessions; a drawn mark's crossing forces, :func:`crossing_effect_sizes`, size what
+  its depths absorb within an indenter); relaxation's own identifiability
+  (:func:`relaxation_identifiability`).
 - :func:`recommend` -> :class:`Recommendation`: the change to the design that buys most
   (:class:`DesignChange`, :func:`error_totals`).
 - From a calibration: :func:`design_from_calibration`; to a file: :func:`design_toml`.
@@ -27,7 +29,13 @@ from ._plan import (
     relaxation_identifiability,
     untestable_in_table,
 )
-from ._plan_effects import design_setup, effect_power, effect_sensitivity
+from ._plan_effects import (
+    crossing_effect_sizes,
+    crossing_table,
+    design_setup,
+    effect_power,
+    effect_sensitivity,
+)
 from ._plan_recommend import DesignChange, Recommendation, error_totals, recommend
 
 __all__ = [
@@ -36,6 +44,8 @@ __all__ = [
     "PlanPrediction",
     "Recommendation",
     "RelaxationPlan",
+    "crossing_effect_sizes",
+    "crossing_table",
     "depth_uncertainty",
     "design_from_calibration",
     "design_setup",

@@ -60,7 +60,7 @@ from ._design import (
     untestable_effects,
     untestable_in_table,
 )
-from ._plan_effects import effect_power, effect_sensitivity
+from ._plan_effects import crossing_effect_sizes, effect_power, effect_sensitivity
 
 __all__ = [
     "VERNIER_EDGE_PX",
@@ -445,9 +445,12 @@ def plan_session(design: Design, *, effect_sizes: bool = True) -> PlanPrediction
         sizes = effect_sensitivity(d) if effect_sizes else {}
         seen = ({name: effect_power(d, name, float(size)) for name, size in d.detect}
                 if effect_sizes else {})
+        crossing = crossing_effect_sizes(d) if effect_sizes else {}
     except InputError as exc:           # the FEM table cannot give this design's forces
-        sizes, seen = {}, {}
+        sizes, seen, crossing = {}, {}, {}
         notes.append(f"no effect sizes: {exc}")
+    sizes = {**sizes, **crossing}       # a mark's crossing forces size what its depths absorb
+    untest = {k: v for k, v in untest.items() if k not in crossing}
     relax = (None if d.relaxation_g is None else
              relaxation_identifiability(d, float(d.relaxation_g), float(d.relaxation_tau_s)))
     try:

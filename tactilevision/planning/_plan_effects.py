@@ -15,7 +15,16 @@ from __future__ import annotations
 
 import math
 
-from ..diagnosis import EffectSensitivity, ReplaySetup, replay_power, replay_sizes
+import numpy as np
+
+from ..diagnosis import (
+    EffectSensitivity,
+    ReplaySetup,
+    crossing_sizes,
+    replay_power,
+    replay_sizes,
+)
+from ..mechanics import fem_force
 from ._design import (
     Design,
     depth_uncertainty,
@@ -24,7 +33,14 @@ from ._design import (
     untestable_effects,
 )
 
-__all__ = ["design_setup", "effect_power", "effect_sensitivity"]
+__all__ = ["crossing_effect_sizes", "crossing_table", "design_setup", "effect_power",
+           "effect_sensitivity"]
+
+#: What the crossing forces size (:func:`~tactilevision.diagnosis.crossing_sizes`):
+#: parameter, display unit and the factor from the parameter's unit to it.
+CROSSING_UNITS = {"stiffness_step:press": ("s", "%", 100.0),
+                  "stiffness_trend:time_s": ("k", "%/min", 6000.0),
+                  "spatial_nonuniformity": ("gx_per_mm", "%/mm", 100.0)}
 
 
 def design_setup(design: Design) -> ReplaySetup:
@@ -58,3 +74,56 @@ def effect_sensitivity(design: Design, *, power: float = 0.95, draws: int = 1000
     the normal force, random); its parameters, return value and errors.
     """
     return replay_sizes(design_setup(design), power=power, draws=draws, seed=seed)
+
+
+def crossing_table(design: Design) -> dict[str, np.ndarray]:
+    """The crossing forces a session of a drawn-mark design will write (formats.md §2
+    ``force_w0_n``, ``force_w0_sem_n``), noise-free, with their stated uncertainties.
+
+    The presses go round the indenters (each round presses every depth once, ``repeats``
+    rounds), at the times and positions of :func:`planned_columns`. A press crosses w0
+    within the frame period before the mark first shows: ``calibrate`` brackets the
+    force over that period, whose width is the stage's travel in one frame times dP/dw
+    at w0 (the FEM's) widened by four times the noise of its 10 ms average of the F/T;
+    the stated sd is the bracket's width over sqrt(12) (a uniform crossing).
+
+    Returns
+    -------
+    columns : dict of str to (N,) float64 ndarray
+        ``indenter``, ``press``, ``time_s``, ``x_mm``, ``y_mm``, ``force_w0_n`` (N),
+        ``force_w0_sem_n`` (N).
+    """
+    cols = planned_columns(design)
+    n_ind, n = len(design.depths_mm), int(design.repeats) * len(design.depths_mm)
+    ind = np.tile(np.arange(n_ind), int(design.repeats))
+    w0 = np.asarray(design.depths_mm, np.float64)
+    args = (design.E_mpa, design.nu, design.radius_mm, design.thickness_mm)
+    p0 = fem_force(*args, w0)
+    eps = 1e-3 * float(np.min(w0))
+    slope = (fem_force(*args, w0 + eps) - fem_force(*args, w0 - eps)) / (2 * eps)
+    avg = design.force_noise_n / math.sqrt(max(1.0, 0.01 * design.rate_hz))
+    width = slope * design.stage_speed_mm_s / design.frame_rate_hz + 4.0 * avg
+    return {"indenter": ind.astype(np.float64), "press": np.arange(n, dtype=np.float64),
+            "time_s": cols["time_s"][:n], "x_mm": cols["x_mm"][:n], "y_mm": cols["y_mm"][:n],
+            "force_w0_n": p0[ind], "force_w0_sem_n": (width / math.sqrt(12.0))[ind]}
+
+
+def crossing_effect_sizes(design: Design, *, power: float = 0.95
+                          ) -> dict[str, EffectSensitivity]:
+    """The within-indenter changes a drawn-mark design's crossing forces let ``diagnose``
+    name in `power` of sessions: a stiffness step half-way through the presses, a steady
+    change with time, a gradient across the pad
+    (:func:`~tactilevision.diagnosis.crossing_sizes` on :func:`crossing_table`). Empty for
+    a bevel read as a vernier (its depths do not absorb them: the replay sizes them).
+    """
+    if design.bevel_angle_deg != 0.0:
+        return {}
+    out = {}
+    for name, size in crossing_sizes(crossing_table(design), power=power).items():
+        param, unit, factor = CROSSING_UNITS[name]
+        out[name] = EffectSensitivity(
+            effect=name, parameter=param, unit=unit, size=factor * size, size_param=size,
+            power=power, snr=math.nan,
+            why="from the crossing forces within indenters (the mark's frame period "
+                "brackets each; presses going round the indenters)")
+    return out
