@@ -29,7 +29,13 @@ to :func:`diagnose` (``docs/custom_effects.md``).
 """
 
 from ._budget import NoiseBudget, law_slope, noise_budget
-from ._crossings import CrossingScan, CrossingTest, crossing_sizes, crossing_tests
+from ._crossings import (
+    CROSSING_UNITS,
+    CrossingScan,
+    CrossingTest,
+    crossing_sizes,
+    crossing_tests,
+)
 from ._diagnose import (
     CURVATURE_BIC,
     DELTA_BIC,
@@ -43,7 +49,12 @@ from ._diagnose import (
     noise_floor,
     untestable_reason,
 )
-from ._diagnose_verdict import ABSORBED_BY_MARK, diagnose, indenter_shared
+from ._diagnose_verdict import (
+    ABSORBED_BY_MARK,
+    crossing_sensitivity,
+    diagnose,
+    indenter_shared,
+)
 from ._holds import HoldsFinding, holds_finding, holds_relaxation
 from ._indenter_diagnose import (
     INDENTER_EFFECTS,
@@ -66,6 +77,7 @@ from ._validate import IndentationValidation, validate_indentation
 
 __all__ = [
     "ABSORBED_BY_MARK",
+    "CROSSING_UNITS",
     "CURVATURE_BIC",
     "DELTA_BIC",
     "EQUIVALENT_BIC",
@@ -88,6 +100,7 @@ __all__ = [
     "certification_tests",
     "covariate_tests",
     "cross_validated_rmse",
+    "crossing_sensitivity",
     "crossing_sizes",
     "crossing_tests",
     "diagnose",

@@ -27,14 +27,19 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats
 
-__all__ = ["CROSSING_ALPHA", "CROSSING_COLUMNS", "CrossingScan", "CrossingTest",
-           "crossing_sizes", "crossing_tests"]
+__all__ = ["CROSSING_ALPHA", "CROSSING_COLUMNS", "CROSSING_UNITS", "CrossingScan",
+           "CrossingTest", "crossing_sizes", "crossing_tests"]
 
 #: Family-wise level of the crossing forces' tests (over all of them and a step's places).
 CROSSING_ALPHA = 0.01
 #: Conditions of a press a within-indenter effect can follow: its time and order (a
 #: stiffness that drifts or steps over the session) and its position on the pad.
 CROSSING_COLUMNS = ("time_s", "press", "x_mm", "y_mm")
+#: What :func:`crossing_sizes` sizes: the parameter, its display unit and the factor from
+#: the parameter's unit to it.
+CROSSING_UNITS = {"stiffness_step:press": ("s", "%", 100.0),
+                  "stiffness_trend:time_s": ("k", "%/min", 6000.0),
+                  "spatial_nonuniformity": ("gx_per_mm", "%/mm", 100.0)}
 #: Least presses (with a crossing force) in an indenter that takes part.
 _MIN_PER_INDENTER = 2
 #: Draws of the tests' joint null distribution behind the family-wise p-values, and their

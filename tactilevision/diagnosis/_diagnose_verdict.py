@@ -17,12 +17,13 @@ import numpy as np
 
 from .._checks import InputError
 from ._budget import law_slope
-from ._crossings import crossing_sizes, crossing_tests
+from ._crossings import CROSSING_UNITS, crossing_sizes, crossing_tests
 from ._diagnose import CURVATURE, Diagnosis, diagnose_core
 from ._holds import HOLDS_POWER, HoldsFinding, holds_finding
 from ._replay import EffectSensitivity, table_sensitivity
 
-__all__ = ["ABSORBED_BY_MARK", "RULES_OUT_DRAWS", "diagnose", "indenter_shared"]
+__all__ = ["ABSORBED_BY_MARK", "RULES_OUT_DRAWS", "crossing_sensitivity", "diagnose",
+           "indenter_shared"]
 
 #: Effects that change the force between the presses of one indenter: under the mark
 #: rule (w = w0 + (P - P(w0)) / (dP/dw)) such a change is read as depth, so a table of
@@ -206,28 +207,25 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
     hidden = {e: MARK_WHY for e in ABSORBED_BY_MARK} if depth_rule == "mark" else {}
     if shared is not None:
         hidden.update({e: SHARED_WHY for e in ("depth_offset", "force_offset")})
-    own = {**_crossing_entries(crossing_sizes(columns) if d.crossings is not None else {}),
+    own = {**(crossing_sensitivity(columns) if d.crossings is not None else {}),
            **_holds_entries(holds)}
     return _with_rules_out(d, float(thickness_mm), float(radius_mm), hidden, own)
 
 
-#: What the crossing forces size (:func:`crossing_sizes`): parameter, display unit, factor.
-_CROSSING_UNITS = {"stiffness_step:press": ("s", "%", 100.0),
-                   "stiffness_trend:time_s": ("k", "%/min", 6000.0),
-                   "spatial_nonuniformity": ("gx_per_mm", "%/mm", 100.0)}
-
-
-def _crossing_entries(sizes: Mapping[str, float]) -> dict[str, EffectSensitivity]:
-    """The within-indenter changes the crossing forces would have named: a step half-way
-    through the presses, a steady change with time, a gradient across the pad."""
+def crossing_sensitivity(columns: Mapping[str, np.ndarray], *, power: float = 0.95,
+                         why: str = "from the crossing forces within indenters at their "
+                                    "stated uncertainties (the family-wise tests' power; a "
+                                    "step half-way through the presses)"
+                         ) -> dict[str, EffectSensitivity]:
+    """:func:`crossing_sizes` as :class:`~tactilevision.diagnosis.EffectSensitivity`
+    entries (``rules_out``, ``plan``'s ``effect_sizes``) in the units of
+    :data:`CROSSING_UNITS`; `why` is each entry's sentence."""
     out = {}
-    for name, size in sizes.items():
-        param, unit, factor = _CROSSING_UNITS[name]
-        out[name] = EffectSensitivity(
-            effect=name, parameter=param, unit=unit, size=factor * size, size_param=size,
-            power=0.95, snr=math.nan,
-            why="from the crossing forces within indenters at their stated uncertainties "
-                "(the family-wise tests' power; a step half-way through the presses)")
+    for name, size in crossing_sizes(columns, power=power).items():
+        param, unit, factor = CROSSING_UNITS[name]
+        out[name] = EffectSensitivity(effect=name, parameter=param, unit=unit,
+                                      size=factor * size, size_param=size, power=power,
+                                      snr=math.nan, why=why)
     return out
 
 

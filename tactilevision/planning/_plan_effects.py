@@ -20,7 +20,7 @@ import numpy as np
 from ..diagnosis import (
     EffectSensitivity,
     ReplaySetup,
-    crossing_sizes,
+    crossing_sensitivity,
     replay_power,
     replay_sizes,
 )
@@ -36,11 +36,6 @@ from ._design import (
 __all__ = ["crossing_effect_sizes", "crossing_table", "design_setup", "effect_power",
            "effect_sensitivity"]
 
-#: What the crossing forces size (:func:`~tactilevision.diagnosis.crossing_sizes`):
-#: parameter, display unit and the factor from the parameter's unit to it.
-CROSSING_UNITS = {"stiffness_step:press": ("s", "%", 100.0),
-                  "stiffness_trend:time_s": ("k", "%/min", 6000.0),
-                  "spatial_nonuniformity": ("gx_per_mm", "%/mm", 100.0)}
 
 
 def design_setup(design: Design) -> ReplaySetup:
@@ -118,12 +113,7 @@ def crossing_effect_sizes(design: Design, *, power: float = 0.95
     """
     if design.bevel_angle_deg != 0.0:
         return {}
-    out = {}
-    for name, size in crossing_sizes(crossing_table(design), power=power).items():
-        param, unit, factor = CROSSING_UNITS[name]
-        out[name] = EffectSensitivity(
-            effect=name, parameter=param, unit=unit, size=factor * size, size_param=size,
-            power=power, snr=math.nan,
-            why="from the crossing forces within indenters (the mark's frame period "
-                "brackets each; presses going round the indenters)")
-    return out
+    return crossing_sensitivity(
+        crossing_table(design), power=power,
+        why="from the crossing forces within indenters (the mark's frame period brackets "
+            "each; presses going round the indenters)")
