@@ -217,9 +217,25 @@ def crossing_sensitivity(columns: Mapping[str, np.ndarray], *, power: float = 0.
                                     "stated uncertainties (the family-wise tests' power; a "
                                     "step half-way through the presses)"
                          ) -> dict[str, EffectSensitivity]:
-    """:func:`crossing_sizes` as :class:`~tactilevision.diagnosis.EffectSensitivity`
-    entries (``rules_out``, ``plan``'s ``effect_sizes``) in the units of
-    :data:`CROSSING_UNITS`; `why` is each entry's sentence."""
+    """The smallest within-indenter changes the crossing forces name, as entries of
+    ``rules_out`` and of ``plan``'s ``effect_sizes``.
+
+    Parameters
+    ----------
+    columns : mapping of str to (N,) array_like
+        As for :func:`crossing_sizes` (``indenter``, ``force_w0_n``,
+        ``force_w0_sem_n`` and the press's conditions).
+    power : float, default 0.95
+    why : str
+        Each entry's sentence.
+
+    Returns
+    -------
+    sizes : dict of str to EffectSensitivity
+        :func:`crossing_sizes`'s, ``size`` in the display units of
+        :data:`CROSSING_UNITS` (%, %/min, %/mm), ``size_param`` in the catalogue's, ``snr``
+        NaN. Empty without crossing forces.
+    """
     out = {}
     for name, size in crossing_sizes(columns, power=power).items():
         param, unit, factor = CROSSING_UNITS[name]
