@@ -590,7 +590,7 @@ def test_what_flat_holds_rule_out_is_named_at_one_and_a_half_times():
     """The smallest decay flat holds would have named (``smallest_rate_per_s``, 5.25
     standard errors of their rate: the F test's power at 0.95): a slow relaxation (tau 60
     s, 8 presses held 0.5 s) with 1.5 times that initial rate is named in at least 18 of
-    20 sessions (20)."""
+    20 sessions (19)."""
     from tactilevision.diagnosis import holds_finding
 
     def found(g, seed):
