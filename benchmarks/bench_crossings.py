@@ -25,7 +25,8 @@ import tempfile
 import time
 from pathlib import Path
 
-from tactilevision.diagnosis import diagnose
+from tactilevision import InputError
+from tactilevision.diagnosis import crossing_tests, diagnose
 from tactilevision.io import read_measurements
 from tactilevision.pipeline import calibrate_session, write_calibration
 from tactilevision.sim import GaugeBlock, SessionSpec, make_session
@@ -67,12 +68,16 @@ def one(work: Path, seed: int, fps: float, at_rules_out: float | None = None
         cal = calibrate_session(work / kind)
         write_calibration(cal, work / f"{kind}_cal")
         t = read_measurements(work / f"{kind}_cal" / "measurements.csv")
-        d = diagnose({**t.columns, "depth_mm": t.depth_mm, "force_n": t.force_n},
-                     thickness_mm=t.thickness_mm, radius_mm=t.radius_mm, depth_rule="mark",
-                     rules_out=False)
-        verdict = d.missing_effect or d.offered_effect
-        out[kind] = (verdict, None if d.crossings is None or d.crossings.found is None
-                     else d.crossings.found.effect)
+        scan = crossing_tests(t.columns)
+        try:
+            d = diagnose({**t.columns, "depth_mm": t.depth_mm, "force_n": t.force_n},
+                         thickness_mm=t.thickness_mm, radius_mm=t.radius_mm,
+                         depth_rule="mark", rules_out=False)
+            verdict = d.missing_effect or d.offered_effect
+        except InputError as exc:       # e.g. a press past the FEM table: counted wrong
+            verdict = f"refused ({exc})"
+        out[kind] = (verdict, None if scan is None or scan.found is None
+                     else scan.found.effect)
         if kind == "null" and at_rules_out is not None:
             sizes = rules_out_sizes(folder, work / "null_cal" / "measurements.csv",
                                     at_rules_out)
