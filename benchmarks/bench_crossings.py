@@ -65,7 +65,13 @@ def one(work: Path, seed: int, fps: float, at_rules_out: float | None = None
     out, sizes = {}, {}
     for kind in KINDS:
         write_forces(folder, work / kind, kind, seed=seed, size=sizes.get(kind))
-        cal = calibrate_session(work / kind)
+        try:
+            cal = calibrate_session(work / kind)
+        except InputError as exc:       # e.g. a press past the FEM table: counted wrong
+            out[kind] = (f"calibrate refused ({exc})", None)
+            if kind == "null" and at_rules_out is not None:      # nothing to size from
+                return {k: (f"not run: the null {out[kind][0]}", None) for k in KINDS}
+            continue
         write_calibration(cal, work / f"{kind}_cal")
         t = read_measurements(work / f"{kind}_cal" / "measurements.csv")
         scan = crossing_tests(t.columns)
@@ -74,8 +80,8 @@ def one(work: Path, seed: int, fps: float, at_rules_out: float | None = None
                          thickness_mm=t.thickness_mm, radius_mm=t.radius_mm,
                          depth_rule="mark", rules_out=False)
             verdict = d.missing_effect or d.offered_effect
-        except InputError as exc:       # e.g. a press past the FEM table: counted wrong
-            verdict = f"refused ({exc})"
+        except InputError as exc:
+            verdict = f"diagnose refused ({exc})"
         out[kind] = (verdict, None if scan is None or scan.found is None
                      else scan.found.effect)
         if kind == "null" and at_rules_out is not None:

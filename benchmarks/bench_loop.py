@@ -22,8 +22,10 @@ eq. (5) with the paper's beta relation (7) and Hayes' kappa at the exact a/h
 
 Then, for each: ``tactilevision calibrate --beta-table paper`` (its relaxation
 fit on), ``tactilevision diagnose --beta-table paper`` on its measurements.csv,
-and ``tactilevision fit --effects <the named effect> --beta-table paper`` (``--holds`` for
-a relaxation ``diagnose`` named from calibrate's holds.csv).
+and ``tactilevision fit --effects <the named effect> --beta-table paper`` on what
+``diagnose`` says to fit it to (its verdict's ``fit_data``: ``--holds`` for a relaxation
+named from calibrate's holds.csv, ``--crossings`` for an effect the crossing forces found
+under the mark rule).
 Printed per kind: the certified depths against truth.json, the verdict, E from
 calibrate, E after the named effect (or after the trend offered for an unexplained
 covariate), and the truth that effect's E stands for (the catalogue's parametrisation: at x =
@@ -147,10 +149,13 @@ def one(session: Path, out: Path, kind: str, seed: int, reuse: bool = False,
     fitted = named or v["offered_effect"]      # an unexplained covariate: the trend offered
     if fitted:
         if not (done and (folder / "fit.json").is_file()):
-            # a relaxation the holds named is fitted from them (a table read at one time of
-            # every hold cannot carry it as a column effect)
-            how = (["--holds", str(cal / "holds.csv")] if (d.get("holds") or {}).get("named")
-                   and fitted == "viscoelastic_relaxation" else ["--effects", fitted])
+            # what diagnose says to fit it to: a relaxation the holds named from them (a
+            # table read at one time of every hold cannot carry it as a column effect), an
+            # effect the crossing forces found under the mark rule on them
+            data = v.get("fit_data", "table")
+            how = (["--holds", str(cal / "holds.csv")] if data == "holds" else
+                   ["--crossings", "--effects", fitted] if data == "crossings" else
+                   ["--effects", fitted])
             cli(["fit", str(meas), *how, "--beta-table", "paper",
                  "--json", str(folder / "fit.json")])
         got = json.loads((folder / "fit.json").read_text())

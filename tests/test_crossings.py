@@ -176,3 +176,40 @@ def test_a_softening_gel_is_found_through_its_crossings(softening):
                      depth_rule="mark").rules_out
     for name in ("stiffness_step:press", "stiffness_trend:time_s", "spatial_nonuniformity"):
         assert 0 < ruled[name].size < np.inf and "crossing forces" in ruled[name].why
+
+
+def test_fit_on_the_crossing_forces(softening, tmp_path, capsys):
+    """``fit --crossings``: the model fitted to each press's force at its crossing of w0 (a
+    depth the frames certify apart from the force), weighted by its stated sd. On the
+    generated session without softening E's interval holds the truth (0.2 MPa); on the
+    one softening 15 % over the session the stiffness trend along time comes back within
+    a factor of 1.7 of the truth, and diagnose says to fit it there (the verdict's
+    ``fit_data``). A table without crossing forces, or --crossings with --holds: exit 2
+    naming the file or the options."""
+    out = tmp_path / "f.json"
+    null, soft = softening["null"].path, softening["soft"].path
+    assert main(["fit", str(null), "--crossings", "--json", str(out)]) == 0
+    obj = json.loads(out.read_text())
+    assert obj["E_ci95_mpa"][0] <= 0.2 <= obj["E_ci95_mpa"][1]
+    assert "crossing forces" in obj["data"]
+    assert main(["fit", str(soft), "--crossings", "--effects", "stiffness_trend:time_s",
+                 "--json", str(out), "--overwrite"]) == 0
+    k = json.loads(out.read_text())["effect_params"]["stiffness_trend:time_s.k"]
+    span = float(np.ptp(softening["soft"].columns["time_s"]))
+    assert -0.15 * 1.7 < k * span < -0.15 / 1.7, k * span
+    capsys.readouterr()
+    assert main(["diagnose", str(soft), "--no-progress", "--json", str(tmp_path / "d.json")]) == 0
+    d = json.loads((tmp_path / "d.json").read_text())
+    assert d["verdict"]["fit_data"] == "crossings" and "fit --crossings" in d["message"]
+    plain = tmp_path / "plain.csv"
+    cols = ["press", "indenter", "depth_mm", "force_n"]
+    rows = np.genfromtxt(null, delimiter=",", names=True)
+    plain.write_text(",".join(cols) + "\n" + "\n".join(
+        ",".join(f"{r[c]:g}" for c in cols) for r in rows) + "\n")
+    (tmp_path / "session.toml").write_text((null.parent / "session.toml").read_text())
+    capsys.readouterr()
+    assert main(["fit", str(plain), "--crossings"]) == 2
+    assert "plain.csv" in capsys.readouterr().err
+    holds = null.parent / "holds.csv"
+    assert main(["fit", str(null), "--crossings", "--holds", str(holds)]) == 2
+    assert "--crossings and --holds" in capsys.readouterr().err

@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import InputError
+from ..diagnosis import crossing_measurements
 from ..io import Measurements, read_holds, read_measurements, write_output_file
 from ..mechanics import (
     EFFECT_NAMES,
@@ -92,6 +93,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                         "else force_n over what is left of it at hold_s), and report E as the "
                         "instantaneous E_0 with the relaxed E_inf = (1 - g) E_0 beside it "
                         "(needs the table's hold_s; press matches rows to holds)")
+    p.add_argument("--crossings", action="store_true",
+                   help="fit the crossing forces instead of the force windows: each press's "
+                        "force where it crossed its indenter's w0 (a table certified by the "
+                        "mark rule: force_w0_n at depth_mm - overshoot_mm), a depth the "
+                        "frames certify apart from the force, weighted by force_w0_sem_n; "
+                        "for an effect the mark's depths absorbed (diagnose says when)")
     p.add_argument("--json", metavar="FILE",
                    help="write the result as JSON to FILE ('-' for standard output)")
     p.add_argument("--overwrite", action="store_true",
@@ -205,6 +212,29 @@ def relaxation_lines(relax: RelaxationFit, moduli: dict | None, holds: Path, *,
     return lines
 
 
+#: What ``fit --crossings`` fits, in words (the summary and the JSON's ``data``).
+CROSSINGS_DATA = ("the crossing forces: each press's force where it crossed its indenter's "
+                  "w0, a depth the frames certify apart from the force, weighted by its "
+                  "stated sd (force_w0_sem_n)")
+
+
+def _crossing_table(table: Measurements, args: argparse.Namespace
+                    ) -> tuple[Measurements, np.ndarray]:
+    """``--crossings``: the table of the presses' crossing forces
+    (:func:`~tactilevision.diagnosis.crossing_measurements`) and its weights."""
+    if args.holds is not None:
+        raise InputError("--crossings and --holds: give one (the holds' relaxation reads the "
+                         "force windows)")
+    try:
+        cols = crossing_measurements(table.columns)
+    except InputError as exc:
+        raise InputError(f"{table.path}: --crossings: {exc}") from None
+    rows = cols.pop("row")
+    labels = {k: tuple(v[i] for i in rows) for k, v in table.labels.items()}
+    return (replace(table, columns=cols, labels=labels, line_numbers=table.line_numbers[rows]),
+            1.0 / np.asarray(cols["force_sem_n"], np.float64) ** 2)
+
+
 def _relax_table(table: Measurements, holds_path: Path, effects: tuple[str, ...]
                  ) -> tuple[Measurements, RelaxationFit, bool]:
     """Fit the holds; the table with its forces taken to the instant of loading."""
@@ -305,6 +335,8 @@ def _run_indenter(args: argparse.Namespace, table: Measurements, path: Path,
     if std_message is not None:
         print(f"tactilevision fit: warning: {path}: {std_message}", file=sys.stderr)
     obj["measurements"] = str(path)
+    if args.crossings:
+        obj["data"] = CROSSINGS_DATA
     obj["thickness_source"] = table.thickness_source
     obj["radius_source"] = table.radius_source
     if args.json is not None:
@@ -359,12 +391,15 @@ def run(args: argparse.Namespace) -> int:
     relax, corrected = None, False
     if args.holds is not None:
         table, relax, corrected = _relax_table(table, args.holds, effects)
+    weights = None
+    if args.crossings:
+        table, weights = _crossing_table(table, args)
     depth_std, std_message = depth_uncertainty(table, ignore=args.ignore_depth_std,
                                                effects=effects)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
-            if effects == ("large_deformation",):
+            if effects == ("large_deformation",) and weights is None:
                 fit = fit_indentation(table.depth_mm, table.force_n,
                                       thickness_mm=table.thickness_mm,
                                       radius_mm=table.radius_mm,
@@ -373,7 +408,8 @@ def run(args: argparse.Namespace) -> int:
             else:
                 fit, _ = fit_model(table.columns, ",".join(effects),
                                    thickness_mm=table.thickness_mm, radius_mm=table.radius_mm,
-                                   beta_table=args.beta_table, a_over_h=args.a_over_h)
+                                   beta_table=args.beta_table, a_over_h=args.a_over_h,
+                                   weights=weights)
         except InputError as exc:
             raise InputError(f"{path}: {exc}") from None
     for note in table.notes:
@@ -394,12 +430,16 @@ def run(args: argparse.Namespace) -> int:
                                       for k, v in moduli.items()})
             obj["relaxation"]["headline_E"] = "E_mpa is E0_mpa, the instantaneous modulus"
     obj["measurements"] = str(path)
+    if args.crossings:
+        obj["data"] = CROSSINGS_DATA
     obj["thickness_source"] = table.thickness_source
     obj["radius_source"] = table.radius_source
     if args.json is not None:
         _write_json(obj, args.json)  # first: a failed write prints nothing else
     if args.json != "-":
         print(summary(fit, path))
+        if args.crossings:
+            print(f"  data: {CROSSINGS_DATA} ({table.depth_mm.size} presses)")
         if relax is not None:
             print("\n".join(relaxation_lines(relax, moduli, args.holds,
                                               e_finite=math.isfinite(fit.E_mpa))))

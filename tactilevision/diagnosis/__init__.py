@@ -33,6 +33,7 @@ from ._crossings import (
     CROSSING_UNITS,
     CrossingScan,
     CrossingTest,
+    crossing_measurements,
     crossing_sizes,
     crossing_tests,
 )
@@ -100,6 +101,7 @@ __all__ = [
     "certification_tests",
     "covariate_tests",
     "cross_validated_rmse",
+    "crossing_measurements",
     "crossing_sensitivity",
     "crossing_sizes",
     "crossing_tests",

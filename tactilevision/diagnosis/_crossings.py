@@ -27,8 +27,10 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats
 
+from .._checks import InputError
+
 __all__ = ["CROSSING_ALPHA", "CROSSING_COLUMNS", "CROSSING_UNITS", "CrossingScan",
-           "CrossingTest", "crossing_sizes", "crossing_tests"]
+           "CrossingTest", "crossing_measurements", "crossing_sizes", "crossing_tests"]
 
 #: Family-wise level of the crossing forces' tests (over all of them and a step's places).
 CROSSING_ALPHA = 0.01
@@ -404,3 +406,62 @@ def _best_step(r: np.ndarray, z: np.ndarray, groups: np.ndarray, w: np.ndarray, 
         if abs(b / s) > best[5]:
             best = (col, "step", b, s, 0.5 * (lo + hi), abs(b / s))
     return best, places
+
+
+#: Columns of a mark-certified table that belong to the press's window or its certified
+#: depth, not to its crossing of w0: left out of :func:`crossing_measurements`.
+_WINDOW_COLUMNS = ("depth_mm", "depth_std_mm", "depth_indenter_std_mm", "overshoot_mm",
+                   "force_n", "force0_n", "force_std_n", "force_sem_n", "force_w0_n",
+                   "force_w0_sem_n", "bevel_force_n", "fx_n", "fy_n", "hold_s")
+
+
+def crossing_measurements(columns: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """A mark-certified table's crossing forces as a measurements table of their own.
+
+    Each press crossed its indenter's w0 (``depth_mm - overshoot_mm``), a depth the frames
+    certify apart from the force, at the force ``force_w0_n`` (bracketed by a frame period:
+    ``force_w0_sem_n``). Those pairs are presses of the gel at known depths whatever the
+    force law, so the model can be fitted to them, with the press's conditions as
+    covariates, where the mark's certified depths (read through the force) have absorbed
+    an effect. Their noise is larger (a frame period's bracket, 3 to 8 % of the force at
+    15 frames/s): weigh them by ``1 / force_sem_n**2``.
+
+    Parameters
+    ----------
+    columns : mapping of str to (N,) array_like
+        A measurements table certified by the mark rule (formats.md §2: ``depth_mm``,
+        ``overshoot_mm``, ``force_w0_n``, ``force_w0_sem_n``, and covariates).
+
+    Returns
+    -------
+    table : dict of str to (M,) ndarray
+        ``depth_mm`` (w0, mm), ``force_n`` (N), ``force_sem_n`` (N) and the table's
+        covariates (``press``, ``indenter``, ``time_s``, ``x_mm``, ...; not the window's
+        own columns), float64, for the M presses with a finite, positive crossing force
+        and sd; ``row`` (int64), each one's row in `columns`.
+
+    Raises
+    ------
+    InputError
+        Without those columns (a table not certified by the mark rule), or with fewer
+        than three distinct w0 among the presses kept.
+    """
+    need = ("depth_mm", "overshoot_mm", "force_w0_n", "force_w0_sem_n")
+    missing = [k for k in need if k not in columns]
+    if missing:
+        raise InputError(f"no crossing forces: the table lacks {', '.join(missing)} "
+                         "(calibrate writes them for presses certified by the mark rule)")
+    w0 = (np.asarray(columns["depth_mm"], np.float64)
+          - np.asarray(columns["overshoot_mm"], np.float64))
+    f = np.asarray(columns["force_w0_n"], np.float64)
+    se = np.asarray(columns["force_w0_sem_n"], np.float64)
+    ok = np.isfinite(w0) & (w0 > 0) & np.isfinite(f) & (f > 0) & np.isfinite(se) & (se > 0)
+    if np.unique(np.round(w0[ok], 6)).size < 3:
+        raise InputError(f"the crossing forces of {int(ok.sum())} presses lie at "
+                         f"{np.unique(np.round(w0[ok], 6)).size} distinct w0: the model needs "
+                         "three or more")
+    out = {k: np.asarray(v, np.float64)[ok] for k, v in columns.items()
+           if k not in _WINDOW_COLUMNS}
+    out.update(depth_mm=w0[ok], force_n=f[ok], force_sem_n=se[ok], row=np.flatnonzero(ok))
+    return out
+

@@ -234,6 +234,11 @@ class Diagnosis:
         Where the holds were given: what the force over each press's hold says of a
         relaxing gel (:func:`~tactilevision.diagnosis.holds_finding`); where it names
         ``viscoelastic_relaxation`` and the ladder named nothing, that is the verdict.
+    fit_data : {'table', 'crossings', 'holds'}
+        What the verdict's effect is fitted to: the table (``fit --effects``), the
+        crossing forces where they found it under the mark rule (``fit --crossings
+        --effects``: the mark's depths absorbed part of it) or the holds where they named
+        the relaxation (``fit --holds``).
     """
 
     model: tuple[str, ...]
@@ -267,6 +272,7 @@ class Diagnosis:
     shared_depth: dict[str, Any] = field(default_factory=dict, hash=False)
     crossings: CrossingScan | None = field(default=None, hash=False)
     holds: HoldsFinding | None = field(default=None, hash=False)
+    fit_data: str = "table"
 
     @property
     def depth_link_coarse(self) -> bool:
@@ -306,7 +312,8 @@ class Diagnosis:
                         "equivalent_effects": list(self.equivalent_effects),
                         "unexplained_covariate": self.unexplained_covariate,
                         "offered_effect": self.offered_effect,
-                        "separating_measurement": self.separating_measurement},
+                        "separating_measurement": self.separating_measurement,
+                        "fit_data": self.fit_data},
             "ladder": [{"model": list(s.model), "added": s.added, "rmse_n": num(s.rmse_n),
                         "cv_rmse_n": num(s.cv_rmse_n), "bic": num(s.bic),
                         "E_mpa": num(s.E_mpa), "nu": num(s.nu)} for s in self.ladder],

@@ -322,7 +322,7 @@ def _with_holds(d: Diagnosis, finding: HoldsFinding | None, depth_rule: str | No
     d = replace(d, holds=finding, message=d.message + " " + finding.sentence())
     if not finding.named or not _open_verdict(d, depth_rule):
         return d
-    return _gives_way(d, missing_effect="viscoelastic_relaxation")
+    return _gives_way(d, missing_effect="viscoelastic_relaxation", fit_data="holds")
 
 
 def _with_crossings(d: Diagnosis, columns: Mapping[str, np.ndarray],
@@ -340,10 +340,15 @@ def _with_crossings(d: Diagnosis, columns: Mapping[str, np.ndarray],
     if found is None or not _open_verdict(d, depth_rule):
         return d
     also = tuple(t.effect for t in scan.equivalent)
+    how = "crossings" if depth_rule == "mark" else "table"
+    if how == "crossings":
+        d = replace(d, message=d.message + f" Fit {found.effect} on the crossing forces "
+                    f"(fit --crossings --effects {found.effect}): the mark's depths, read "
+                    "through the force, absorbed part of it, and E fitted to them is biased.")
     if found.kind == "trend" and found.column not in ("x_mm", "y_mm"):
         return _gives_way(d, missing_effect=None, unexplained_covariate=found.column,
-                          offered_effect=found.effect, equivalent_effects=also)
-    return _gives_way(d, missing_effect=found.effect, equivalent_effects=also)
+                          offered_effect=found.effect, equivalent_effects=also, fit_data=how)
+    return _gives_way(d, missing_effect=found.effect, equivalent_effects=also, fit_data=how)
 
 
 def indenter_shared(columns: Mapping[str, np.ndarray]

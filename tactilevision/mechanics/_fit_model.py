@@ -34,7 +34,8 @@ _CI_METHOD = ("delta method through the covariance of c and beta of the robust (
 def fit_model(columns: Mapping[str, np.ndarray], model: IndentationModel | str = "paper", *,
               thickness_mm: float, radius_mm: float, beta_table: str = "fem",
               a_over_h: float | None = None, contact: str = "bonded",
-              confidence: float = 0.95, loss: str = "soft_l1"
+              confidence: float = 0.95, loss: str = "soft_l1",
+              weights: np.ndarray | None = None
               ) -> tuple[IndentationFit, ModelFit]:
     """Fit a model of effects, then derive E and nu from its c and beta.
 
@@ -64,6 +65,10 @@ def fit_model(columns: Mapping[str, np.ndarray], model: IndentationModel | str =
     confidence : float, default 0.95
     loss : str, default 'soft_l1'
         Robust loss of :meth:`IndentationModel.fit`.
+    weights : (N,) array_like, optional
+        Per-press weights of :meth:`IndentationModel.fit` (e.g. inverse stated
+        variances of the forces); default equal. The FEM's forces that E and nu are
+        read through are fitted with the same weights.
 
     Returns
     -------
@@ -112,7 +117,7 @@ def fit_model(columns: Mapping[str, np.ndarray], model: IndentationModel | str =
         raise InputError(f"a press reaches w/h = {float(np.max(w0 / h)):.3f}, beyond the FEM "
                          f"beta table's w/h <= {top:g}: drop the deeper presses or use "
                          "beta_table='paper'")
-    mf = model.fit(columns, thickness_mm=h, loss=loss)
+    mf = model.fit(columns, thickness_mm=h, loss=loss, weights=weights)
     w = np.asarray(columns["depth_mm"], np.float64) + mf.params.get("depth_offset.delta_mm", 0.0)
     if np.any(w <= 0):
         raise InputError("a depth corrected by depth_offset is not positive")
