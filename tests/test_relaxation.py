@@ -658,9 +658,9 @@ def test_diagnose_command_reads_the_holds_beside_the_table(tmp_path, capsys):
 def test_under_the_mark_rule_a_depth_only_verdict_gives_way_to_the_holds(tmp_path):
     """Under the mark rule an offset seen along depth alone is also what a gel changing
     between the indenters' presses looks like; the holds' relaxation, seen at a depth the
-    stage keeps, takes the verdict then (the message says why), but not over the same
-    verdict on a table certified otherwise, nor over an effect the ladder named along a
-    column."""
+    stage keeps, takes the verdict then (the message says why), as it does over an effect
+    the mark's depths absorb (incomplete_recovery), but not over the same verdict on a table
+    certified otherwise, nor over a stiffness effect the ladder named along a column."""
     from dataclasses import replace
 
     from tactilevision.diagnosis import diagnose, holds_finding
@@ -680,3 +680,6 @@ def test_under_the_mark_rule_a_depth_only_verdict_gives_way_to_the_holds(tmp_pat
     assert _with_holds(offset, found, None).missing_effect == "force_offset"
     step = replace(d, missing_effect="stiffness_step:press")
     assert _with_holds(step, found, "mark").missing_effect == "stiffness_step:press"
+    absorbed = _with_holds(replace(d, missing_effect="incomplete_recovery"), found, "mark")
+    assert absorbed.missing_effect == "viscoelastic_relaxation"
+    assert "is an effect the mark's depths absorb" in absorbed.message

@@ -292,10 +292,13 @@ DEPTH_ONLY = ("depth_offset", "force_offset")
 
 def _open_verdict(d: Diagnosis, depth_rule: str | None) -> bool:
     """Whether a finding beyond the table's columns may take the verdict: the ladder named
-    nothing, or, under the mark rule, only an effect along depth (:data:`DEPTH_ONLY`)."""
+    nothing, or, under the mark rule, only an effect along depth (:data:`DEPTH_ONLY`) or one
+    the mark's depths absorb (:data:`ABSORBED_BY_MARK`), which the table shows only through
+    each indenter's crossing force."""
     if d.unexplained_covariate:
         return False
-    return not d.missing_effect or (depth_rule == "mark" and d.missing_effect in DEPTH_ONLY)
+    return not d.missing_effect or (depth_rule == "mark" and d.missing_effect in (
+        *DEPTH_ONLY, *ABSORBED_BY_MARK))
 
 
 def _gives_way(d: Diagnosis, **verdict) -> Diagnosis:
@@ -304,12 +307,16 @@ def _gives_way(d: Diagnosis, **verdict) -> Diagnosis:
     if not d.missing_effect:
         return _named_beyond_table(d, **verdict)
     was = d.missing_effect
-    return replace(d, **{"equivalent_effects": (), **verdict}, message=d.message + (
-        f" The ladder's {was}, seen along depth alone, is under the mark rule also what a gel "
-        "that changes between the indenters' presses looks like (each indenter's depths "
-        "move with its crossing force); the finding above, made at depths the frames or the "
-        f"stage keep, is the verdict in its place ({was} not ruled out: a tare check or a "
-        "height gauge tells)."))
+    why = (f", seen along depth alone, is under the mark rule also what a gel that changes "
+           f"between the indenters' presses looks like (each indenter's depths move with its "
+           f"crossing force); the finding above, made at depths the frames or the stage keep, "
+           f"is the verdict in its place ({was} not ruled out: a tare check or a height gauge "
+           "tells)" if was in DEPTH_ONLY else
+           " is an effect the mark's depths absorb, which the table shows only through each "
+           "indenter's crossing force; the finding above, made at depths the frames or the "
+           f"stage keep, is the verdict in its place ({was} not ruled out)")
+    return replace(d, **{"equivalent_effects": (), **verdict},
+                   message=d.message + f" The ladder's {was}{why}.")
 
 
 def _with_holds(d: Diagnosis, finding: HoldsFinding | None, depth_rule: str | None = None
