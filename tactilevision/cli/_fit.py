@@ -212,6 +212,29 @@ def relaxation_lines(relax: RelaxationFit, moduli: dict | None, holds: Path, *,
     return lines
 
 
+def _fit_table(table: Measurements, effects: tuple[str, ...], args: argparse.Namespace,
+               depth_std: np.ndarray | None, weights: np.ndarray | None):
+    """The fit of `table` (eq. 5 alone with the depths' uncertainties, else the model with
+    `effects` by robust least squares, `weights` per press) and the warnings it raised."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            if effects == ("large_deformation",) and weights is None:
+                fit = fit_indentation(table.depth_mm, table.force_n,
+                                      thickness_mm=table.thickness_mm,
+                                      radius_mm=table.radius_mm,
+                                      beta_table=args.beta_table, a_over_h=args.a_over_h,
+                                      depth_std_mm=depth_std)
+            else:
+                fit, _ = fit_model(table.columns, ",".join(effects),
+                                   thickness_mm=table.thickness_mm, radius_mm=table.radius_mm,
+                                   beta_table=args.beta_table, a_over_h=args.a_over_h,
+                                   weights=weights)
+        except InputError as exc:
+            raise InputError(f"{table.path}: {exc}") from None
+    return fit, caught
+
+
 #: What ``fit --crossings`` fits, in words (the summary and the JSON's ``data``).
 CROSSINGS_DATA = ("the crossing forces: each press's force where it crossed its indenter's "
                   "w0, a depth the frames certify apart from the force, weighted by its "
@@ -396,22 +419,7 @@ def run(args: argparse.Namespace) -> int:
         table, weights = _crossing_table(table, args)
     depth_std, std_message = depth_uncertainty(table, ignore=args.ignore_depth_std,
                                                effects=effects)
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        try:
-            if effects == ("large_deformation",) and weights is None:
-                fit = fit_indentation(table.depth_mm, table.force_n,
-                                      thickness_mm=table.thickness_mm,
-                                      radius_mm=table.radius_mm,
-                                      beta_table=args.beta_table, a_over_h=args.a_over_h,
-                                      depth_std_mm=depth_std)
-            else:
-                fit, _ = fit_model(table.columns, ",".join(effects),
-                                   thickness_mm=table.thickness_mm, radius_mm=table.radius_mm,
-                                   beta_table=args.beta_table, a_over_h=args.a_over_h,
-                                   weights=weights)
-        except InputError as exc:
-            raise InputError(f"{path}: {exc}") from None
+    fit, caught = _fit_table(table, effects, args, depth_std, weights)
     for note in table.notes:
         print(f"tactilevision fit: warning: {note}", file=sys.stderr)
     if std_message is not None:
