@@ -18,6 +18,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 from scipy import optimize, stats
@@ -31,6 +32,7 @@ __all__ = ["HOLDS_POWER", "HoldsFinding", "holds_finding", "holds_relaxation"]
 HOLDS_POWER = 0.95
 
 
+@lru_cache(maxsize=8)
 def _power_factor(alpha: float = RELAX_ALPHA, power: float = HOLDS_POWER) -> float:
     """sqrt(lambda) of the noncentral chi2 on 2 degrees of freedom (g and tau: the holds' F
     test) that exceeds its level-`alpha` quantile with probability `power`: 5.25 at 0.001
