@@ -221,3 +221,33 @@ def test_unidentified_parameters_get_no_finite_interval():
     d["hold_s"] = rng.uniform(0.001, 0.05, d["depth_mm"].size)
     d["force_n"] = model.predict(truth, d, H) + rng.normal(0, 0.002, d["depth_mm"].size)
     assert model.fit(d, thickness_mm=H).unidentified == ()
+
+
+def test_stated_noise_floors_the_covariance_at_the_stated_sd():
+    """Eq. (5) is linear in (c, c beta / h): with weights 1 / sigma^2 and the noise as
+    stated, the closed form of c's standard error is sqrt of the first diagonal entry of
+    (X' W X)^-1, X = [w, w^2 / h]. Forces that scatter at a third of the stated sd keep
+    that standard error with ``stated_noise`` (the floor) and get about a third of it
+    without; forces scattering at three times it get about three times it either way."""
+    rng = np.random.default_rng(5)
+    h = 3.0
+    w = np.repeat([0.15, 0.3, 0.45, 0.6], 6)
+    sigma = 0.01 + 0.02 * w
+    P = 3.5 * w * (1 + 0.75 * w / h)
+    X = np.column_stack([w, w ** 2 / h])
+    se_closed = float(np.sqrt(np.linalg.inv(X.T @ (X / sigma[:, None] ** 2))[0, 0]))
+    model = IndentationModel()
+    for scale in (1 / 3, 3.0):
+        ratios = {True: [], False: []}
+        for _ in range(20):
+            data = {"depth_mm": w, "force_n": P + scale * sigma * rng.standard_normal(w.size)}
+            for floor in (True, False):
+                mf = model.fit(data, thickness_mm=h, weights=1 / sigma ** 2, loss="linear",
+                               stated_noise=floor)
+                ratios[floor].append(mf.stderr["c_n_per_mm"] / se_closed)
+        got = {k: float(np.median(v)) for k, v in ratios.items()}
+        if scale < 1:
+            assert got[True] == pytest.approx(1.0, rel=1e-6), got
+            assert 0.2 < got[False] < 0.45, got
+        else:
+            assert 2.4 < got[True] < 3.6 and 2.4 < got[False] < 3.6, got

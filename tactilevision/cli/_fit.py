@@ -215,7 +215,8 @@ def relaxation_lines(relax: RelaxationFit, moduli: dict | None, holds: Path, *,
 def _fit_table(table: Measurements, effects: tuple[str, ...], args: argparse.Namespace,
                depth_std: np.ndarray | None, weights: np.ndarray | None):
     """The fit of `table` (eq. 5 alone with the depths' uncertainties, else the model with
-    `effects` by robust least squares, `weights` per press) and the warnings it raised."""
+    `effects` by robust least squares, `weights` per press: 1 / sd^2 of the stated noise,
+    which the intervals then do not go below) and the warnings it raised."""
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
@@ -229,7 +230,7 @@ def _fit_table(table: Measurements, effects: tuple[str, ...], args: argparse.Nam
                 fit, _ = fit_model(table.columns, ",".join(effects),
                                    thickness_mm=table.thickness_mm, radius_mm=table.radius_mm,
                                    beta_table=args.beta_table, a_over_h=args.a_over_h,
-                                   weights=weights)
+                                   weights=weights, stated_noise=weights is not None)
         except InputError as exc:
             raise InputError(f"{table.path}: {exc}") from None
     return fit, caught
@@ -238,7 +239,8 @@ def _fit_table(table: Measurements, effects: tuple[str, ...], args: argparse.Nam
 #: What ``fit --crossings`` fits, in words (the summary and the JSON's ``data``).
 CROSSINGS_DATA = ("the crossing forces: each press's force where it crossed its indenter's "
                   "w0, a depth the frames certify apart from the force, weighted by its "
-                  "stated sd (force_w0_sem_n)")
+                  "stated sd (force_w0_sem_n), the intervals no narrower than that sd makes "
+                  "them")
 
 
 def _crossing_table(table: Measurements, args: argparse.Namespace

@@ -35,7 +35,7 @@ def fit_model(columns: Mapping[str, np.ndarray], model: IndentationModel | str =
               thickness_mm: float, radius_mm: float, beta_table: str = "fem",
               a_over_h: float | None = None, contact: str = "bonded",
               confidence: float = 0.95, loss: str = "soft_l1",
-              weights: np.ndarray | None = None
+              weights: np.ndarray | None = None, stated_noise: bool = False
               ) -> tuple[IndentationFit, ModelFit]:
     """Fit a model of effects, then derive E and nu from its c and beta.
 
@@ -69,6 +69,10 @@ def fit_model(columns: Mapping[str, np.ndarray], model: IndentationModel | str =
         Per-press weights of :meth:`IndentationModel.fit` (e.g. inverse stated
         variances of the forces); default equal. The FEM's forces that E and nu are
         read through are fitted with the same weights.
+    stated_noise : bool, default False
+        The `weights` are ``1 / sigma^2`` of the forces' stated uncertainties: the
+        intervals are at least as wide as that noise makes them
+        (:meth:`IndentationModel.fit`), wider where the residuals scatter more.
 
     Returns
     -------
@@ -117,7 +121,8 @@ def fit_model(columns: Mapping[str, np.ndarray], model: IndentationModel | str =
         raise InputError(f"a press reaches w/h = {float(np.max(w0 / h)):.3f}, beyond the FEM "
                          f"beta table's w/h <= {top:g}: drop the deeper presses or use "
                          "beta_table='paper'")
-    mf = model.fit(columns, thickness_mm=h, loss=loss, weights=weights)
+    mf = model.fit(columns, thickness_mm=h, loss=loss, weights=weights,
+                   stated_noise=stated_noise)
     w = np.asarray(columns["depth_mm"], np.float64) + mf.params.get("depth_offset.delta_mm", 0.0)
     if np.any(w <= 0):
         raise InputError("a depth corrected by depth_offset is not positive")

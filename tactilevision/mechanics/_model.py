@@ -295,7 +295,7 @@ class IndentationModel:
             weights: np.ndarray | None = None, loss: str = "soft_l1",
             f_scale: float | None = None,
             start: Mapping[str, float] | None = None,
-            identify: bool = True) -> ModelFit:
+            identify: bool = True, stated_noise: bool = False) -> ModelFit:
         """Fit the model by (weighted, robust) least squares.
 
         Parameters
@@ -333,6 +333,14 @@ class IndentationModel:
             keeps the local (Jacobian) check only, for a caller that reads
             costs and predictions of many candidate fits (:func:`diagnose`'s
             search and cross-validation folds).
+        stated_noise : bool, default False
+            The `weights` are ``1 / sigma_i^2`` of the forces' stated standard
+            uncertainties (N^-2): the covariance's scale is then at least that
+            noise's (chi-square per degree of freedom floored at one), raised
+            to the residuals' own scatter only where they scatter more (a Birge
+            ratio above one), as ``absolute_sigma`` of
+            :func:`scipy.optimize.curve_fit` with the scatter as a check. False:
+            the scale is the residuals' own (relative weights).
 
         Returns
         -------
@@ -391,7 +399,9 @@ class IndentationModel:
         active = np.zeros(k, int)
         active[free] = sol.active_mask
         rho_w = _robust_weights(r, scale, loss)
-        cov, bad, s2 = _covariance(J * np.sqrt(rho_w)[:, None], r, rho_w)
+        cov, bad, s2 = _covariance(J * np.sqrt(rho_w)[:, None], r, rho_w,
+                                   # the weights are normalised to mean one: sigma^2 = 1 / w
+                                   floor=1.0 / float(wts.mean()) if stated_noise else 0.0)
         srch = np.zeros(k, bool)
         srch[list(searched)] = True
         bad &= ~srch                # found by search: no standard error, but identified
@@ -494,13 +504,14 @@ def _robust_weights(r: np.ndarray, scale: float, loss: str) -> np.ndarray:
     return 1 / np.sqrt(1 + z)
 
 
-def _covariance(Jw: np.ndarray, r: np.ndarray, rho_w: np.ndarray
+def _covariance(Jw: np.ndarray, r: np.ndarray, rho_w: np.ndarray, floor: float = 0.0
                 ) -> tuple[np.ndarray, np.ndarray, float]:
     """The parameters' covariance s2 (Jw' Jw)^+ from the weighted Jacobian `Jw` (N, K),
     the parameters in a null direction of its column-normalised form (unidentified:
-    pinv alone would give them a finite, too small, error), and s2."""
+    pinv alone would give them a finite, too small, error), and s2 (at least `floor`: the
+    stated noise's, in the normalised weights' units)."""
     k = Jw.shape[1]
-    s2 = float(np.sum(rho_w * r ** 2)) / max(float(np.sum(rho_w)) - k, 1.0)
+    s2 = max(float(np.sum(rho_w * r ** 2)) / max(float(np.sum(rho_w)) - k, 1.0), floor)
     try:
         cov = np.linalg.pinv(Jw.T @ Jw) * s2
         norm = np.linalg.norm(Jw, axis=0)
