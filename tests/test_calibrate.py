@@ -696,3 +696,34 @@ def test_the_tables_sidecar_says_how_its_depths_were_certified(sample_run, tmp_p
     t = read_measurements(bad / "measurements.csv")
     assert t.certification == {"depth_rule": "mark"}
     assert any("[certification] key 'depth_rules' is not known" in n for n in t.notes)
+
+
+def test_a_press_past_the_beta_table_is_left_out_not_the_session():
+    """One press certified past the FEM beta table's reach (w/h 0.23) used to refuse the
+    whole session's fit; now it is left out, named by its press number, and the fit is the
+    one of the other presses; a press past the reach by less than two of its depth
+    uncertainties is kept (the table read at its last w/h)."""
+    h, a = 3.0, 2.5
+    w = np.repeat([0.15, 0.3, 0.45, 0.6], 4)
+    w = np.append(w, 0.75)                   # w/h 0.25
+    P = 3.5 * w * (1 + 0.78 * w / h)
+    std = np.full(w.size, 0.004)
+    press = np.arange(10, 10 + w.size)
+    fit_at = Fitter(P, thickness_mm=h, radius_mm=a, beta_table="fem", press=press)
+    fit = fit_at(w, std)
+    alone = fit_indentation(w[:-1], P[:-1], thickness_mm=h, radius_mm=a, depth_std_mm=std[:-1])
+    assert fit.n_presses == w.size - 1
+    assert fit.E_mpa == pytest.approx(alone.E_mpa, rel=1e-12)
+    note = [n for n in fit.notes if "left out of" in n]
+    assert note and "press(es) 26 (w/h 0.250)" in note[0]
+    assert note[0] in fit_at.warnings_of(fit)
+    # later fits (the shared error's bounds) leave it out too, even when moved inside
+    assert fit_at(w - 0.1, std).n_presses == w.size - 1
+    with pytest.raises(InputError, match="beyond the FEM beta"):
+        fit_indentation(w, P, thickness_mm=h, radius_mm=a, depth_std_mm=std)
+    near = w.copy()
+    near[-1] = 0.23 * h + 0.005              # within 2 sd of the reach: kept
+    assert Fitter(P, thickness_mm=h, radius_mm=a, beta_table="fem")(near, std).n_presses \
+        == w.size
+    paper = Fitter(P, thickness_mm=h, radius_mm=a, beta_table="paper")(w, std)
+    assert paper.n_presses == w.size

@@ -68,7 +68,7 @@ from ._effects import (
     model_label,
 )
 from ._fem_tables import fem_force, fem_kappa_table, fem_table_meta, kappa_n, kappa_n_grid
-from ._fit import MAX_W_OVER_H, fit_indentation
+from ._fit import BETA_TABLE_REACH, MAX_W_OVER_H, fit_indentation
 from ._fit_model import fit_model
 from ._indenter import INDENTERS, FlatPunch, Indenter, Sphere, indenter_from_config
 from ._indenter_fit import IndenterFit, apparent_modulus, fit_indenter, json_ready, paule_mandel
@@ -102,6 +102,7 @@ from ._sphere_table import (
 )
 
 __all__ = [
+    "BETA_TABLE_REACH",
     "EFFECTS",
     "EFFECT_NAMES",
     "EFFECT_SIZE_PARAMS",

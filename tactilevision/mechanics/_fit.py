@@ -18,10 +18,13 @@ from ._kappa import _table as _kappa_table
 from ._neohookean import neo_hookean_constants
 from ._result import IndentationFit
 
-__all__ = ["MAX_W_OVER_H", "fit_indentation"]
+__all__ = ["BETA_TABLE_REACH", "MAX_W_OVER_H", "fit_indentation"]
 
 #: Largest w/h for which the linear law (2) holds (paper, section VI.1).
 MAX_W_OVER_H = 0.2
+#: Deepest w/h the FEM beta table is read at (computed to MAX_W_OVER_H, read 15 % beyond:
+#: ``TABLE_EXTRAPOLATION``); a press deeper than this is refused by ``beta_table='fem'``.
+BETA_TABLE_REACH = MAX_W_OVER_H * TABLE_EXTRAPOLATION
 
 _NAN2 = (math.nan, math.nan)
 _CI_METHOD = ("delta method through the HC3 (heteroscedasticity-consistent) covariance of "

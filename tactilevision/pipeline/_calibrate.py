@@ -163,7 +163,7 @@ def calibrate_session(session: Session | str | Path, *, depth_rule: str = "auto"
     force = force0 if force0 is not None else np.array([p.force_n for p in presses])
     closure = np.array([p.closure_mm for p in presses])
     fit_at = Fitter(force, thickness_mm=cfg.gel_thickness_mm, radius_mm=cfg.indenter_radius_mm,
-                    beta_table=beta_table)
+                    beta_table=beta_table, press=np.array([p.press for p in presses]))
     st = DepthState(depth=w0 + closure, std=np.array([p.closure_std_mm for p in presses]),
                     bulge=np.zeros_like(w0), bevel_n=np.zeros_like(w0), notes=notes)
     rounds = dict(nu_start=float(nu_start), max_rounds=max_rounds, nu_tol=nu_tol)

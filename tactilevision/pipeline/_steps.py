@@ -13,6 +13,7 @@ from .._checks import InputError
 from ..contact import Certification, ForceZero, certify_session, force_window, force_zero
 from ..io import Session
 from ..mechanics import (
+    BETA_TABLE_REACH,
     IndentationFit,
     RelaxationFit,
     elastic_force,
@@ -28,6 +29,13 @@ __all__ = ["Fitter", "frame_period", "read_force_zero", "relaxation_step", "take
 class Fitter:
     """eq. (5) fitted to the session's forces at given depths, each fit's warnings kept.
 
+    With the FEM beta table, a press certified past the table's reach
+    (:data:`~tactilevision.mechanics.BETA_TABLE_REACH`, w/h 0.23) by more than two of its
+    depth uncertainties is left out of the fit, with a note naming it (it stays in the
+    measurements table, for ``fit --beta-table paper`` or ``diagnose``), instead of one
+    press refusing the whole session; once left out, it stays out of this object's later
+    fits (the shared depth error's bounds are fitted on the same presses).
+
     Parameters
     ----------
     force : (N,) float64 ndarray
@@ -36,23 +44,50 @@ class Fitter:
         Layer thickness h and indenter radius a, mm.
     beta_table : str
         Passed to :func:`~tactilevision.mechanics.fit_indentation`.
+    press : (N,) ndarray, optional
+        The presses' numbers, for the note; default their positions.
     """
 
     def __init__(self, force: np.ndarray, *, thickness_mm: float, radius_mm: float,
-                 beta_table: str) -> None:
+                 beta_table: str, press: np.ndarray | None = None) -> None:
         self.force = force
         self.kw = dict(thickness_mm=thickness_mm, radius_mm=radius_mm, beta_table=beta_table)
         self.caught: dict[int, list[str]] = {}
+        self.press = np.arange(len(force)) if press is None else np.asarray(press)
+        self.left_out = np.zeros(len(force), bool)
 
     def __call__(self, depth: np.ndarray, std: np.ndarray | None,
                  f_n: np.ndarray | None = None) -> IndentationFit:
         """Fit at `depth` (mm) with uncertainty `std` (mm) to `f_n` (N; default the forces)."""
+        f_n = self.force if f_n is None else f_n
+        note = self._past_reach(depth, std)
+        keep = ~self.left_out
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
-            f = fit_indentation(depth, self.force if f_n is None else f_n, depth_std_mm=std,
-                                **self.kw)
-        self.caught[id(f)] = [str(w.message) for w in caught]
+            f = fit_indentation(depth[keep], f_n[keep],
+                                depth_std_mm=None if std is None else std[keep], **self.kw)
+        if note is not None:
+            f = replace(f, notes=(*f.notes, note))
+        self.caught[id(f)] = [str(w.message) for w in caught] + ([note] if note else [])
         return f
+
+    def _past_reach(self, depth: np.ndarray, std: np.ndarray | None) -> str | None:
+        """Mark the presses past the FEM table's reach by more than 2 sd; the note (None
+        where none is left out)."""
+        if self.kw["beta_table"] != "fem":
+            return None
+        h = float(self.kw["thickness_mm"])
+        u = np.zeros_like(depth) if std is None else np.nan_to_num(std)
+        self.left_out |= depth - 2.0 * u > BETA_TABLE_REACH * h * (1 + 1e-12)
+        if not self.left_out.any():
+            return None
+        which = ", ".join(f"{int(p)} (w/h {w / h:.3f})"
+                          for p, w in zip(self.press[self.left_out], depth[self.left_out],
+                                          strict=True))
+        return (f"press(es) {which} certified past the FEM beta table's reach (w/h "
+                f"{BETA_TABLE_REACH:g}) by more than two of their depth uncertainties: left "
+                "out of E's and nu's fit, kept in the measurements (fit --beta-table paper "
+                "reads them)")
 
     def warnings_of(self, fit: IndentationFit) -> list[str]:
         """The warnings a fit made by this object raised."""
