@@ -8,6 +8,8 @@ import json
 import os
 import shutil
 import signal
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -334,7 +336,7 @@ def test_heights_are_rounded_as_numcodecs_quantize_rounds_them():
 
 
 def test_own_cluster_workers_keep_frames_in_the_heap_and_zarr_codecs(clip, tmp_path):
-    """run_batch's own cluster spawns its workers without Dask's MALLOC_TRIM_THRESHOLD_
+    """run_batch's own cluster starts its workers without Dask's MALLOC_TRIM_THRESHOLD_
     (which made a height map 3 times dearer in a worker: checked in a fresh process, as
     a Nanny leaves the variable in the process that ran it), a worker's tools raise
     glibc's thresholds whatever its cluster, and the heights are stored as plain float32
@@ -370,3 +372,32 @@ def test_own_cluster_workers_keep_frames_in_the_heap_and_zarr_codecs(clip, tmp_p
         assert len(arr.metadata.codecs) == 2          # bytes, then blosc: no filter
         heights = arr[:]
     np.testing.assert_allclose(heights, _expected(clip), atol=STORED)
+
+
+@pytest.mark.skipif(sys.platform != "linux", reason="workers are forked on Linux only")
+def test_own_cluster_forks_its_workers_safely_from_a_process_that_used_opencv(tmp_path):
+    """On Linux run_batch's own cluster forks its workers (they start with the batch stack
+    imported: no import on the critical path). A fork from a process whose OpenCV pool
+    has threads hung or crashed the child at its first cv2.setNumThreads; the guard shuts
+    the pool for the instant of the fork: the worker blurs with one thread and is the
+    same process after (not restarted), and this process gets its thread count back."""
+    code = ("import os, sys, cv2, numpy as np\n"
+            "from tactilevision.batch._run import _client, _close\n"
+            "def work():\n"
+            "    cv2.setNumThreads(1)\n"
+            "    cv2.GaussianBlur(np.ones((600, 600), np.float32), (31, 31), 5)\n"
+            "    return os.getpid(), 'tactilevision.batch._tasks' in sys.modules\n"
+            "if __name__ == '__main__':\n"
+            "    cv2.setNumThreads(2)\n"
+            "    for _ in range(3):\n"
+            "        cv2.GaussianBlur(np.ones((2000, 2000), np.float32), (31, 31), 5)\n"
+            "    c, cl = _client(None, 1)\n"
+            "    first = c.submit(work, pure=False).result(timeout=60)\n"
+            "    again = c.submit(work, pure=False).result(timeout=60)\n"
+            "    print(first[0] == again[0], first[1], cv2.getNumThreads())\n"
+            "    _close(c, cl)\n")
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         timeout=120, cwd=tmp_path)
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert "Fatal Python error" not in run.stderr
+    assert run.stdout.strip().splitlines()[-1] == "True True 2"

@@ -13,6 +13,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import cv2
 from tqdm.auto import tqdm
 
 from .._checks import InputError
@@ -22,7 +23,7 @@ from ._tasks import BatchSettings, calibrate_task, process_chunk
 
 __all__ = ["WORKER_ENVIRON", "BatchReport", "InputOutcome", "run_batch"]
 
-#: Dask configuration under which the local cluster's workers are spawned. Dask sets
+#: Dask configuration under which the local cluster's workers are started. Dask sets
 #: ``MALLOC_TRIM_THRESHOLD_=65536`` in its workers by default, which turns glibc's
 #: dynamic mmap threshold off: every frame-sized temporary (1.2 MB at 640 x 480) is then
 #: mapped and unmapped, its pages faulted in anew, and a height map cost 10.9 ms in a
@@ -30,8 +31,49 @@ __all__ = ["WORKER_ENVIRON", "BatchReport", "InputOutcome", "run_batch"]
 #: against 2.3 ms; 2-core x86_64, 2026-11-26). Workers keep glibc's defaults instead:
 #: 3.1 ms and 2.5 ms. A cluster of your own (``--scheduler``) should be started likewise
 #: (``distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_: null`` in its Dask
-#: configuration).
-WORKER_ENVIRON = {"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}
+#: configuration). On Linux the workers are forked from this process rather than spawned:
+#: they start with the batch stack already imported (a spawned worker imports Python,
+#: Dask and then, on its first task, the stack: about 2 s on the critical path of a short
+#: batch; ``benchmarks/bench_batch_speedup.py``: 1200 frames on 2 workers at 1.22 and 1.27
+#: times one process spawned, 1.50 and 1.57 forked, same runs' references). Each worker
+#: then sets its own thread counts (:func:`worker_tools`), and OpenCV's thread pool is
+#: shut in this process for the instant of each fork (:class:`_ForkGuard`); elsewhere
+#: (macOS, Windows) fork is not safe or not there, and they are spawned.
+WORKER_ENVIRON = {"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None,
+                  "distributed.worker.multiprocessing-method":
+                      "fork" if sys.platform.startswith("linux") else "spawn"}
+
+
+class _ForkGuard:
+    """OpenCV's thread pool shut in this process for the instant of a fork while a local
+    cluster of ours may fork workers (a nanny restarting one included), restored after.
+
+    A child forked while OpenCV's pthreads pool has threads inherits the pool without
+    them, and hangs or crashes at its first ``cv2.setNumThreads`` (a worker segfaulted
+    so under pytest, whose process had used the pool; a bare fork hung 3 of 3 times,
+    and 0 of 3 with the pool set to one thread first: ``os.fork`` after a
+    ``cv2.GaussianBlur``, opencv 5.0.0 built on pthreads). Only forks made while a
+    cluster of ours is open are touched (:func:`os.register_at_fork` hooks, registered
+    once)."""
+
+    def __init__(self) -> None:
+        self.open = 0
+        self.saved: int | None = None
+        if hasattr(os, "register_at_fork"):
+            os.register_at_fork(before=self._before, after_in_parent=self._after)
+
+    def _before(self) -> None:
+        if self.open:
+            self.saved = cv2.getNumThreads()
+            cv2.setNumThreads(1)
+
+    def _after(self) -> None:
+        if self.saved is not None:
+            cv2.setNumThreads(self.saved)
+            self.saved = None
+
+
+_FORK_GUARD = _ForkGuard()
 
 
 @dataclass
@@ -126,6 +168,7 @@ def _client(scheduler: str | None, n_workers: int | None):
 
     n = n_workers or os.cpu_count() or 1
     before = set(SpecCluster._instances)
+    _FORK_GUARD.open += 1           # until _close, or the failure below
     try:
         with dask.config.set(WORKER_ENVIRON):
             cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
@@ -133,6 +176,7 @@ def _client(scheduler: str | None, n_workers: int | None):
                                    silence_logs=logging.ERROR)
         return Client(cluster), cluster
     except BaseException as exc:
+        _FORK_GUARD.open -= 1
         # Ctrl-C while the workers start comes back as "Nanny failed to start": it is the
         # interrupt, and is raised as one (exit 130, no traceback). The cluster it caught
         # starting is abandoned: its workers stopped, and distributed's exit hook kept from
@@ -262,6 +306,7 @@ def _close(client, cluster, *, interrupted: bool = False) -> None:
             logging.getLogger("tactilevision.batch").debug("closing %s: %r", thing, exc)
     with contextlib.suppress(Exception):
         cluster.shutdown_on_close = False
+    _FORK_GUARD.open = max(_FORK_GUARD.open - 1, 0)
 
 
 def _quiet_teardown() -> None:
