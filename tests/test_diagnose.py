@@ -21,7 +21,7 @@ from tactilevision.diagnosis import (
     indenter_shared,
     noise_floor,
 )
-from tactilevision.diagnosis._diagnose import diagnose_core
+from tactilevision.diagnosis._diagnose import LadderStep, _moduli_text, diagnose_core
 from tactilevision.io import write_measurements
 from tactilevision.mechanics import IndentationModel, fit_model
 from tactilevision.sim import HIDDEN_EFFECTS, make_measurement_table
@@ -468,3 +468,16 @@ def test_sample_session_with_a_hidden_effect(tmp_path, capsys):
     fit = json.loads(capsys.readouterr().out)
     assert fit["E_ci95_mpa"][0] < truth["E_mpa"] < fit["E_ci95_mpa"][1]
     assert abs(fit["E_mpa"] / truth["E_mpa"] - 1) < 0.08
+
+
+def test_a_rung_without_E_says_so_instead_of_printing_nan():
+    """A rung whose model gives no E (its beta outside the FEM's for it, as the force
+    offset rung on a Taxim relaxation session) is printed as "no E or nu", not "E = nan
+    MPa"; a rung with E prints it to four figures."""
+    def rung(E, nu):
+        return LadderStep(model=("layer",), rmse_n=0.01, cv_rmse_n=0.01, bic=0.0, E_mpa=E,
+                          nu=nu, added=None)
+
+    assert _moduli_text(rung(0.2046, 0.48)) == "E = 0.2046 MPa, nu = 0.48"
+    text = _moduli_text(rung(float("nan"), float("nan")))
+    assert text.startswith("no E or nu") and "nan" not in text

@@ -957,6 +957,15 @@ def _separating(a: str, b: str, cols: Mapping[str, np.ndarray]) -> str:
     return f"{a} vs {b}: presses at more depths and forces along {ca[0]}"
 
 
+def _moduli_text(step: LadderStep) -> str:
+    """``E = ... MPa, nu = ...`` of a rung, or that it gives none (a beta outside what the
+    FEM gives its model, or a parameter the data do not identify: ``fit`` says which)."""
+    if math.isfinite(step.E_mpa) and math.isfinite(step.nu):
+        return f"E = {step.E_mpa:.4g} MPa, nu = {step.nu:.4g}"
+    return ("no E or nu (its beta lies outside what the FEM gives the model, or a parameter "
+            "is not identified: fit with --effects says which)")
+
+
 def _with_message(d: Diagnosis) -> Diagnosis:
     floor = d.noise_floor_n
     base = d.ladder[0]
@@ -979,11 +988,12 @@ def _with_message(d: Diagnosis) -> Diagnosis:
     if d.missing_effect:
         step = next(x for x in d.ladder if x.added == d.missing_effect)
         s.append(f"Missing: {d.missing_effect}. Adding it brings the cross-validated RMSE to "
-                 f"{step.cv_rmse_n * 1e3:.2f} mN and gives E = {step.E_mpa:.4g} MPa, "
-                 f"nu = {step.nu:.4g} (before: E = {base.E_mpa:.4g} MPa, nu = {base.nu:.4g}).")
+                 f"{step.cv_rmse_n * 1e3:.2f} mN and gives {_moduli_text(step)} (before: "
+                 f"{_moduli_text(base)}).")
         fit = d.fits[d.ladder.index(step)] if len(d.fits) == len(d.ladder) else None
         g = fit.params.get("viscoelastic_relaxation.g") if fit is not None else None
-        if d.missing_effect == "viscoelastic_relaxation" and g is not None:
+        if (d.missing_effect == "viscoelastic_relaxation" and g is not None
+                and math.isfinite(step.E_mpa)):
             s.append(f"That E is the instantaneous modulus E_0 (hold -> 0); the relaxed "
                      f"modulus (hold -> infinity) is E_inf = (1 - g) E_0 = "
                      f"{step.E_mpa * (1 - g):.4g} MPa (g = {g:.3g}). hold_s counts from "
@@ -991,7 +1001,8 @@ def _with_message(d: Diagnosis) -> Diagnosis:
                      "instant, below that of an instant load by what relaxed during the ramp; "
                      "the hold curves (calibrate's holds.csv, fit --holds) give the latter.")
         at = fit.params.get(f"{d.missing_effect}.at") if fit is not None else None
-        if d.missing_effect.startswith("stiffness_step:") and at is not None:
+        if (d.missing_effect.startswith("stiffness_step:") and at is not None
+                and math.isfinite(step.E_mpa)):
             sv = fit.params[f"{d.missing_effect}.s"]
             s.append(f"That E is the gel's up to {d.missing_effect.partition(':')[2]} = "
                      f"{at:g}; after it the stiffness is {1 + sv:.4g} times that "
