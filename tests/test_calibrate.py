@@ -727,3 +727,31 @@ def test_a_press_past_the_beta_table_is_left_out_not_the_session():
         == w.size
     paper = Fitter(P, thickness_mm=h, radius_mm=a, beta_table="paper")(w, std)
     assert paper.n_presses == w.size
+
+
+def test_fit_leaves_out_a_row_past_the_beta_table_as_calibrate_does(tmp_path, capsys):
+    """``fit`` on a table whose row lies past the FEM beta table's reach by more than two
+    of its depth uncertainties leaves that row out, names its line and w/h, and lists it
+    in the JSON (``left_out_rows``), as calibrate leaves the press out of its fit (the
+    table calibrate writes keeps it); E is then the other rows' fit."""
+    h = 3.0
+    w = np.append(np.repeat([0.15, 0.3, 0.45, 0.6], 4), 0.75)
+    P = 3.5 * w * (1 + 0.78 * w / h)
+    table = tmp_path / "m.csv"
+    table.write_text("press,indenter,depth_mm,force_n,depth_std_mm\n" + "".join(
+        f"{i},{i % 5},{a:.4f},{b:.6f},0.004\n" for i, (a, b) in enumerate(zip(w, P,
+                                                                            strict=True))))
+    out = tmp_path / "f.json"
+    assert main(["fit", str(table), "--thickness-mm", "3", "--radius-mm", "2.5",
+                 "--json", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert "line(s) 18 (w/h 0.250)" in err and "left out of the fit" in err
+    got = json.loads(out.read_text())
+    alone = fit_indentation(w[:-1], np.round(P[:-1], 6), thickness_mm=h, radius_mm=2.5,
+                            depth_std_mm=np.full(w.size - 1, 0.004))
+    assert got["left_out_rows"] == [18] and got["n_presses"] == w.size - 1
+    assert got["E_mpa"] == pytest.approx(alone.E_mpa, rel=1e-9)
+    # with the paper's relation every row is read
+    assert main(["fit", str(table), "--thickness-mm", "3", "--radius-mm", "2.5",
+                 "--beta-table", "paper", "--json", str(out), "--overwrite"]) == 0
+    assert "left_out_rows" not in json.loads(out.read_text())

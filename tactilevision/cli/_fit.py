@@ -16,6 +16,7 @@ from .. import InputError
 from ..diagnosis import crossing_measurements
 from ..io import Measurements, read_holds, read_measurements, write_output_file
 from ..mechanics import (
+    BETA_TABLE_REACH,
     EFFECT_NAMES,
     IndentationFit,
     RelaxationFit,
@@ -260,6 +261,34 @@ def _crossing_table(table: Measurements, args: argparse.Namespace
             1.0 / np.asarray(cols["force_sem_n"], np.float64) ** 2)
 
 
+def _within_reach(table: Measurements, args: argparse.Namespace, weights: np.ndarray | None
+                  ) -> tuple[Measurements, np.ndarray | None, list[int]]:
+    """With the FEM beta table, the rows certified past its reach (w/h
+    :data:`~tactilevision.mechanics.BETA_TABLE_REACH`) by more than two of their
+    ``depth_std_mm`` left out, as ``calibrate`` leaves them out of its fit, with a warning
+    naming their lines; the table, its weights and the lines left out."""
+    h = table.thickness_mm
+    u = table.columns.get("depth_std_mm")
+    u = np.zeros(table.depth_mm.shape) if u is None or args.ignore_depth_std else np.nan_to_num(u)
+    past = (table.depth_mm - 2.0 * u > BETA_TABLE_REACH * h * (1 + 1e-12)) if (
+        args.beta_table == "fem" and h > 0) else np.zeros(table.depth_mm.shape, bool)
+    if not past.any() or past.all():
+        return table, weights, []       # all past: the fit's own error says what to do
+    lines = [int(x) for x in table.line_numbers[past]]
+    print(f"tactilevision fit: warning: {table.path}: line(s) "
+          + ", ".join(f"{n} (w/h {w / h:.3f})" for n, w in zip(lines, table.depth_mm[past],
+                                                              strict=True))
+          + f" lie past the FEM beta table's reach (w/h {BETA_TABLE_REACH:g}) by more than "
+          "two of their depth uncertainties: left out of the fit, as calibrate does "
+          "(--beta-table paper reads them)", file=sys.stderr)
+    keep = ~past
+    cols = {k: np.asarray(v)[keep] for k, v in table.columns.items()}
+    labels = {k: tuple(x for x, ok in zip(v, keep, strict=True) if ok)
+              for k, v in table.labels.items()}
+    return (replace(table, columns=cols, labels=labels, line_numbers=table.line_numbers[keep]),
+            None if weights is None else weights[keep], lines)
+
+
 def _relax_table(table: Measurements, holds_path: Path, effects: tuple[str, ...]
                  ) -> tuple[Measurements, RelaxationFit, bool]:
     """Fit the holds; the table with its forces taken to the instant of loading."""
@@ -419,6 +448,7 @@ def run(args: argparse.Namespace) -> int:
     weights = None
     if args.crossings:
         table, weights = _crossing_table(table, args)
+    table, weights, left_out = _within_reach(table, args, weights)
     depth_std, std_message = depth_uncertainty(table, ignore=args.ignore_depth_std,
                                                effects=effects)
     fit, caught = _fit_table(table, effects, args, depth_std, weights)
@@ -440,6 +470,8 @@ def run(args: argparse.Namespace) -> int:
                                       for k, v in moduli.items()})
             obj["relaxation"]["headline_E"] = "E_mpa is E0_mpa, the instantaneous modulus"
     obj["measurements"] = str(path)
+    if left_out:
+        obj["left_out_rows"] = left_out
     if args.crossings:
         obj["data"] = CROSSINGS_DATA
     obj["thickness_source"] = table.thickness_source
