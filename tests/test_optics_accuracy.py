@@ -18,12 +18,32 @@ from tactilevision.optics import (
     DepthReconstructor,
     PhotometricCalibration,
     calibration_accuracy,
+    cap_prediction,
     edge_cut,
     max_tilt_deg,
 )
 
 MM, BALL_PX, SHAPE = 0.05, 40.0, (120, 160)
 ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_cap_prediction_holds_a_new_press_as_often_as_it_says():
+    """The prediction interval for a new press's inner cap (mean +- t s sqrt(1 + 1/n)):
+    over 4000 sets of 7 caps drawn from one normal, the next draw falls inside in 95 %
+    of sets (within 1 point); the plain +- t s / sqrt(n) interval of the mean would hold
+    it far less often. Fewer than three caps: None."""
+    rng = np.random.default_rng(7)
+    inside = plain = 0
+    for _ in range(4000):
+        caps = rng.normal(0.02, 0.03, 7)
+        new = rng.normal(0.02, 0.03)
+        ex = cap_prediction(caps)
+        inside += ex["low"] <= new <= ex["high"]
+        half = (ex["high"] - ex["mean"]) / np.sqrt(1 + 1 / 7) / np.sqrt(7)
+        plain += abs(new - ex["mean"]) <= half
+    assert abs(inside / 4000 - 0.95) < 0.01
+    assert plain / 4000 < 0.6
+    assert cap_prediction([0.01, np.nan, 0.02]) is None
 
 
 def test_max_tilt_and_edge_cut_closed_forms():
@@ -63,6 +83,9 @@ def test_report_scores_held_out_presses_and_counts_edge_cuts(presses):
     assert 0 < ball["normal_angle_deg"] < 5
     assert abs(ball["deepest_point"]) < 0.15
     assert ball["fitted_radius_px"] == pytest.approx(BALL_PX, rel=0.1)
+    # what a new press's inner cap is expected to read, from the three scored
+    ex = ball["inner_cap_expected"]
+    assert ex["n"] == 3 and ex["low"] < ex["mean"] < ex["high"]
     # every press trained on: scored in sample, and said so
     rep_in = calibration_accuracy(DepthReconstructor(cal), frames, centres, radii,
                                   np.full(8, BALL_PX), trained=np.ones(8, bool),

@@ -110,6 +110,12 @@ def _accuracy_text(report: dict, mm: float) -> str:
             f"um, fitted ball radius {b['fitted_radius_px'] * mm:.3f} +- "
             f"{b['fitted_radius_std_px'] * mm:.3f} mm (true {radius:g}); {trained}, these "
             f"rims reach {b['rim_tilt_deg']:.1f} deg")
+        ex = b.get("inner_cap_expected")
+        if ex:
+            lines.append(
+                f"  a new press's inner cap, from these {ex['n']}: {100 * ex['mean']:+.1f} % "
+                f"expected, {100 * ex['confidence']:.0f} % of presses within "
+                f"[{100 * ex['low']:+.1f}, {100 * ex['high']:+.1f}] %")
         cu = b.get("circle_uncertainty")
         if cu:
             a, c, e = cu["normal_angle_08_deg"], cu["inner_cap"], report["circle_error"]

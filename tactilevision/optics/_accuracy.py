@@ -7,13 +7,14 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from scipy import stats
 
 from .._checks import InputError
 from ._ball import ball_gradients, ball_press_metrics, normal_angle_deg
 from ._reconstructor import DepthReconstructor
 
-__all__ = ["CIRCLE_ERROR", "CircleError", "calibration_accuracy", "edge_cut", "holdout_presses",
-           "max_tilt_deg", "press_folds"]
+__all__ = ["CIRCLE_ERROR", "CircleError", "calibration_accuracy", "cap_prediction", "edge_cut",
+           "holdout_presses", "max_tilt_deg", "press_folds"]
 
 
 @dataclass(frozen=True)
@@ -179,6 +180,38 @@ def _snake(centers_px, radii_px, ball_radius_px, shape: tuple[int, int]) -> list
         idx = np.flatnonzero((ball == b) & inside)
         out.append(idx[np.lexsort((x[idx], band[idx]))])
     return out
+
+
+def cap_prediction(caps: np.ndarray, confidence: float = 0.95) -> dict | None:
+    """The inner cap error a new press is expected to read, from presses scored alike.
+
+    The presses' inner caps (:func:`_inner_cap`, relative errors) taken as draws of one
+    normal distribution: their mean, and the prediction interval a new press's cap lies
+    in with probability `confidence`, ``mean +- t_(n-1) s sqrt(1 + 1/n)`` (s the sample
+    sd; the textbook prediction interval for one new observation, e.g. Hahn and Meeker,
+    Statistical Intervals, 1991, eq. 4.2). The scoring circles' shared error
+    (``circle_uncertainty``) is not in it.
+
+    Parameters
+    ----------
+    caps : (N,) array_like of float
+        The presses' inner caps (NaN left out).
+    confidence : float, default 0.95
+
+    Returns
+    -------
+    dict or None
+        ``mean``, ``low``, ``high``, ``n``, ``confidence``; None with fewer than three
+        finite caps.
+    """
+    c = np.asarray(caps, np.float64)
+    c = c[np.isfinite(c)]
+    if c.size < 3:
+        return None
+    m, sd = float(c.mean()), float(c.std(ddof=1))
+    half = float(stats.t.ppf(0.5 + confidence / 2, c.size - 1)) * sd * math.sqrt(1 + 1 / c.size)
+    return {"mean": m, "low": m - half, "high": m + half, "n": int(c.size),
+            "confidence": float(confidence)}
 
 
 def _inner_cap(height_px: np.ndarray, d: np.ndarray, radius: float, ball_px: float,
@@ -375,7 +408,8 @@ def calibration_accuracy(recon: DepthReconstructor, frames: np.ndarray,
                                       if np.any(same & trained) else None),
                  "presses": [int(i) for i in use],
                  "normal_angle_deg": None, "normal_angle_08_deg": None,
-                 "deepest_point": None, "inner_cap": None, "rim_tilt_deg": None,
+                 "deepest_point": None, "inner_cap": None, "inner_cap_expected": None,
+                 "rim_tilt_deg": None,
                  "shape_rms_px": None, "fitted_radius_px": None, "fitted_radius_std_px": None}
         entry["circle_uncertainty"] = None
         if use.size:
@@ -398,6 +432,7 @@ def calibration_accuracy(recon: DepthReconstructor, frames: np.ndarray,
             entry["normal_angle_08_deg"] = float(np.median(inner))
             entry["deepest_point"] = float(np.nanmedian(deepest))
             entry["inner_cap"] = float(np.nanmedian(caps))
+            entry["inner_cap_expected"] = cap_prediction(caps)
             entry["rim_tilt_deg"] = float(max_tilt_deg(radii[use], b).max())
             entry["shape_rms_px"] = float(np.mean([p.shape_rms_px for p in per]))
             entry["fitted_radius_px"] = float(fitted.mean())
