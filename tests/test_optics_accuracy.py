@@ -44,6 +44,8 @@ def test_cap_prediction_holds_a_new_press_as_often_as_it_says():
     assert abs(inside / 4000 - 0.95) < 0.01
     assert plain / 4000 < 0.6
     assert cap_prediction([0.01, np.nan, 0.02]) is None
+    with pytest.raises(InputError, match="confidence"):
+        cap_prediction([0.01, 0.02, 0.03], confidence=95)
 
 
 def test_max_tilt_and_edge_cut_closed_forms():

@@ -188,8 +188,8 @@ def cap_prediction(caps: np.ndarray, confidence: float = 0.95) -> dict | None:
     The presses' inner caps (:func:`_inner_cap`, relative errors) taken as draws of one
     normal distribution: their mean, and the prediction interval a new press's cap lies
     in with probability `confidence`, ``mean +- t_(n-1) s sqrt(1 + 1/n)`` (s the sample
-    sd; the textbook prediction interval for one new observation, e.g. Hahn and Meeker,
-    Statistical Intervals, 1991, eq. 4.2). The scoring circles' shared error
+    sd; the normal-theory prediction interval for one future observation, as in Hahn and
+    Meeker, Statistical Intervals, Wiley 1991). The scoring circles' shared error
     (``circle_uncertainty``) is not in it.
 
     Parameters
@@ -203,7 +203,14 @@ def cap_prediction(caps: np.ndarray, confidence: float = 0.95) -> dict | None:
     dict or None
         ``mean``, ``low``, ``high``, ``n``, ``confidence``; None with fewer than three
         finite caps.
+
+    Raises
+    ------
+    InputError
+        For a confidence outside (0, 1).
     """
+    if not 0 < confidence < 1:
+        raise InputError(f"confidence must lie in (0, 1), got {confidence!r}")
     c = np.asarray(caps, np.float64)
     c = c[np.isfinite(c)]
     if c.size < 3:
