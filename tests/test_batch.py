@@ -10,6 +10,8 @@ import shutil
 import signal
 import subprocess
 import sys
+import threading
+import types
 from pathlib import Path
 
 import numpy as np
@@ -29,6 +31,7 @@ from _data import decoded, quarter_gelsight, write_video
 from distributed import Client, LocalCluster
 
 from tactilevision.batch import HEIGHT_RESOLUTION_MM, BatchSettings, open_source, run_batch
+from tactilevision.batch._run import _start_method
 from tactilevision.io import VideoFrames, read_reference
 from tactilevision.optics import DepthReconstructor, PhotometricCalibration
 
@@ -401,3 +404,19 @@ def test_own_cluster_forks_its_workers_safely_from_a_process_that_used_opencv(tm
     assert run.returncode == 0, run.stderr[-2000:]
     assert "Fatal Python error" not in run.stderr
     assert run.stdout.strip().splitlines()[-1] == "True True 2"
+
+
+def test_a_threaded_parent_spawns_its_workers(monkeypatch):
+    """Workers are forked only from a process with one Python thread and no runtime that
+    keeps threads of its own (JAX warns that a fork from it will likely deadlock): with
+    another thread alive, or such a module imported, they are spawned."""
+    stop = threading.Event()
+    t = threading.Thread(target=stop.wait, daemon=True)
+    t.start()
+    try:
+        assert _start_method() == "spawn"
+    finally:
+        stop.set()
+        t.join()
+    monkeypatch.setitem(sys.modules, "jax", types.ModuleType("jax"))
+    assert _start_method() == "spawn"

@@ -8,6 +8,7 @@ import logging
 import os
 import signal
 import sys
+import threading
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -31,17 +32,32 @@ __all__ = ["WORKER_ENVIRON", "BatchReport", "InputOutcome", "run_batch"]
 #: against 2.3 ms; 2-core x86_64, 2026-11-26). Workers keep glibc's defaults instead:
 #: 3.1 ms and 2.5 ms. A cluster of your own (``--scheduler``) should be started likewise
 #: (``distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_: null`` in its Dask
-#: configuration). On Linux the workers are forked from this process rather than spawned:
-#: they start with the batch stack already imported (a spawned worker imports Python,
-#: Dask and then, on its first task, the stack: about 2 s on the critical path of a short
-#: batch; ``benchmarks/bench_batch_speedup.py``: 1200 frames on 2 workers at 1.22 and 1.27
-#: times one process spawned, 1.50 and 1.57 forked, same runs' references). Each worker
-#: then sets its own thread counts (:func:`worker_tools`), and OpenCV's thread pool is
-#: shut in this process for the instant of each fork (:class:`_ForkGuard`); elsewhere
-#: (macOS, Windows) fork is not safe or not there, and they are spawned.
-WORKER_ENVIRON = {"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None,
-                  "distributed.worker.multiprocessing-method":
-                      "fork" if sys.platform.startswith("linux") else "spawn"}
+#: configuration).
+WORKER_ENVIRON = {"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}
+
+#: Modules whose runtimes keep threads of their own in the process that imported them; a
+#: process forked from theirs can deadlock (JAX warns so on every fork).
+_THREADED_RUNTIMES = ("jax", "torch", "tensorflow")
+
+
+def _start_method() -> str:
+    """How our local cluster starts its workers: forked on Linux, from a process with one
+    Python thread and none of :data:`_THREADED_RUNTIMES` imported; spawned otherwise.
+
+    A forked worker starts with the batch stack already imported; a spawned one imports
+    Python, Dask and, on its first task, the stack: about 2 s on the critical path of a
+    short batch (``benchmarks/bench_batch_speedup.py``, 1200 frames on 2 workers: 1.22,
+    1.27 and 1.39 times one process spawned, 1.44 to 1.71 forked, 2026-11-26). A fork
+    from a process whose other threads hold locks can deadlock the child, and OpenCV's
+    thread pool does so in any case: :class:`_ForkGuard` shuts that for the instant of
+    the fork; for the rest, a busy or threaded parent (a notebook's, one that has run JAX
+    or torch) gets spawned workers. Elsewhere (macOS, Windows) fork is unsafe or absent.
+    """
+    if not sys.platform.startswith("linux"):
+        return "spawn"
+    if threading.active_count() > 1 or any(m in sys.modules for m in _THREADED_RUNTIMES):
+        return "spawn"
+    return "fork"
 
 
 class _ForkGuard:
@@ -170,7 +186,8 @@ def _client(scheduler: str | None, n_workers: int | None):
     before = set(SpecCluster._instances)
     _FORK_GUARD.open += 1           # until _close, or the failure below
     try:
-        with dask.config.set(WORKER_ENVIRON):
+        method = {"distributed.worker.multiprocessing-method": _start_method()}
+        with dask.config.set({**WORKER_ENVIRON, **method}):
             cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
                                    dashboard_address=":0",   # any free port: never 8787 twice
                                    silence_logs=logging.ERROR)
