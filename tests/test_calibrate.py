@@ -755,3 +755,14 @@ def test_fit_leaves_out_a_row_past_the_beta_table_as_calibrate_does(tmp_path, ca
     assert main(["fit", str(table), "--thickness-mm", "3", "--radius-mm", "2.5",
                  "--beta-table", "paper", "--json", str(out), "--overwrite"]) == 0
     assert "left_out_rows" not in json.loads(out.read_text())
+
+
+def test_a_balls_fit_refuses_crossings(tmp_path, capsys):
+    """``fit --crossings`` reads a gauge block's mark crossings; a ball's table has none, and
+    the fit of its force windows must not be labelled as crossing forces: exit 2 naming
+    the option."""
+    table = tmp_path / "m.csv"
+    table.write_text("press,depth_mm,force_n\n0,0.1,0.05\n1,0.2,0.14\n2,0.3,0.26\n")
+    assert main(["fit", str(table), "--shape", "sphere", "--radius-mm", "3",
+                 "--thickness-mm", "3", "--crossings"]) == 2
+    assert "--crossings" in capsys.readouterr().err

@@ -26,6 +26,7 @@ from ..mechanics import (
     fit_relaxation,
     instantaneous_forces,
     model_label,
+    past_beta_table_reach,
     relaxed_moduli,
 )
 from ._fit_indenter import add_arguments as add_indenter_arguments
@@ -244,6 +245,16 @@ CROSSINGS_DATA = ("the crossing forces: each press's force where it crossed its 
                   "them")
 
 
+def _rows(table: Measurements, rows: np.ndarray, columns: dict | None = None
+          ) -> Measurements:
+    """`table` cut to `rows` (indices), its labels and line numbers with it; `columns`
+    (already cut) in place of its own where given."""
+    cols = columns if columns is not None else {
+        k: np.asarray(v)[rows] for k, v in table.columns.items()}
+    labels = {k: tuple(v[i] for i in rows) for k, v in table.labels.items()}
+    return replace(table, columns=cols, labels=labels, line_numbers=table.line_numbers[rows])
+
+
 def _crossing_table(table: Measurements, args: argparse.Namespace
                     ) -> tuple[Measurements, np.ndarray]:
     """``--crossings``: the table of the presses' crossing forces
@@ -256,22 +267,20 @@ def _crossing_table(table: Measurements, args: argparse.Namespace
     except InputError as exc:
         raise InputError(f"{table.path}: --crossings: {exc}") from None
     rows = cols.pop("row")
-    labels = {k: tuple(v[i] for i in rows) for k, v in table.labels.items()}
-    return (replace(table, columns=cols, labels=labels, line_numbers=table.line_numbers[rows]),
-            1.0 / np.asarray(cols["force_sem_n"], np.float64) ** 2)
+    return _rows(table, rows, cols), 1.0 / np.asarray(cols["force_sem_n"], np.float64) ** 2
 
 
 def _within_reach(table: Measurements, args: argparse.Namespace, weights: np.ndarray | None
                   ) -> tuple[Measurements, np.ndarray | None, list[int]]:
-    """With the FEM beta table, the rows certified past its reach (w/h
-    :data:`~tactilevision.mechanics.BETA_TABLE_REACH`) by more than two of their
-    ``depth_std_mm`` left out, as ``calibrate`` leaves them out of its fit, with a warning
-    naming their lines; the table, its weights and the lines left out."""
+    """With the FEM beta table, the rows certified past its reach by more than two of their
+    ``depth_std_mm`` (:func:`~tactilevision.mechanics.past_beta_table_reach`) left out, as
+    ``calibrate`` leaves them out of its fit, with a warning naming their lines; the
+    table, its weights and the lines left out."""
     h = table.thickness_mm
-    u = table.columns.get("depth_std_mm")
-    u = np.zeros(table.depth_mm.shape) if u is None or args.ignore_depth_std else np.nan_to_num(u)
-    past = (table.depth_mm - 2.0 * u > BETA_TABLE_REACH * h * (1 + 1e-12)) if (
-        args.beta_table == "fem" and h > 0) else np.zeros(table.depth_mm.shape, bool)
+    std = None if args.ignore_depth_std else table.columns.get("depth_std_mm")
+    if args.beta_table != "fem" or not h > 0:
+        return table, weights, []
+    past = past_beta_table_reach(table.depth_mm, h, std)
     if not past.any() or past.all():
         return table, weights, []       # all past: the fit's own error says what to do
     lines = [int(x) for x in table.line_numbers[past]]
@@ -281,12 +290,8 @@ def _within_reach(table: Measurements, args: argparse.Namespace, weights: np.nda
           + f" lie past the FEM beta table's reach (w/h {BETA_TABLE_REACH:g}) by more than "
           "two of their depth uncertainties: left out of the fit, as calibrate does "
           "(--beta-table paper reads them)", file=sys.stderr)
-    keep = ~past
-    cols = {k: np.asarray(v)[keep] for k, v in table.columns.items()}
-    labels = {k: tuple(x for x, ok in zip(v, keep, strict=True) if ok)
-              for k, v in table.labels.items()}
-    return (replace(table, columns=cols, labels=labels, line_numbers=table.line_numbers[keep]),
-            None if weights is None else weights[keep], lines)
+    keep = np.flatnonzero(~past)
+    return _rows(table, keep), None if weights is None else weights[keep], lines
 
 
 def _relax_table(table: Measurements, holds_path: Path, effects: tuple[str, ...]
@@ -377,8 +382,9 @@ def _write_json(obj: dict, dest: str) -> None:
 def _run_indenter(args: argparse.Namespace, table: Measurements, path: Path,
                   effects: tuple[str, ...]) -> int:
     """``fit`` of a ball (any indenter but the flat punch)."""
-    if effects != ("large_deformation",) or args.holds is not None:
-        raise InputError(f"{path}: --effects and --holds fit the flat punch's eq. (5); a "
+    if effects != ("large_deformation",) or args.holds is not None or args.crossings:
+        raise InputError(f"{path}: --effects, --holds and --crossings fit the flat punch's "
+                         f"eq. (5) (crossing forces come from a gauge block's mark); a "
                          f"{args.shape or table.indenter.get('shape')}'s presses take --law "
                          "(finite strain: neo_hookean) and --nu")
     depth_std, std_message = depth_uncertainty(table, ignore=args.ignore_depth_std,
@@ -389,8 +395,6 @@ def _run_indenter(args: argparse.Namespace, table: Measurements, path: Path,
     if std_message is not None:
         print(f"tactilevision fit: warning: {path}: {std_message}", file=sys.stderr)
     obj["measurements"] = str(path)
-    if args.crossings:
-        obj["data"] = CROSSINGS_DATA
     obj["thickness_source"] = table.thickness_source
     obj["radius_source"] = table.radius_source
     if args.json is not None:

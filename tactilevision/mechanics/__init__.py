@@ -68,7 +68,7 @@ from ._effects import (
     model_label,
 )
 from ._fem_tables import fem_force, fem_kappa_table, fem_table_meta, kappa_n, kappa_n_grid
-from ._fit import BETA_TABLE_REACH, MAX_W_OVER_H, fit_indentation
+from ._fit import BETA_TABLE_REACH, MAX_W_OVER_H, fit_indentation, past_beta_table_reach
 from ._fit_model import fit_model
 from ._indenter import INDENTERS, FlatPunch, Indenter, Sphere, indenter_from_config
 from ._indenter_fit import IndenterFit, apparent_modulus, fit_indenter, json_ready, paule_mandel
@@ -157,6 +157,7 @@ __all__ = [
     "model_label",
     "neo_hookean_constants",
     "nu_from_beta",
+    "past_beta_table_reach",
     "paule_mandel",
     "ramp_factor",
     "refine_relaxation",

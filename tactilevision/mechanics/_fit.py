@@ -18,13 +18,40 @@ from ._kappa import _table as _kappa_table
 from ._neohookean import neo_hookean_constants
 from ._result import IndentationFit
 
-__all__ = ["BETA_TABLE_REACH", "MAX_W_OVER_H", "fit_indentation"]
+__all__ = ["BETA_TABLE_REACH", "MAX_W_OVER_H", "fit_indentation", "past_beta_table_reach"]
 
 #: Largest w/h for which the linear law (2) holds (paper, section VI.1).
 MAX_W_OVER_H = 0.2
 #: Deepest w/h the FEM beta table is read at (computed to MAX_W_OVER_H, read 15 % beyond:
 #: ``TABLE_EXTRAPOLATION``); a press deeper than this is refused by ``beta_table='fem'``.
 BETA_TABLE_REACH = MAX_W_OVER_H * TABLE_EXTRAPOLATION
+
+
+
+def past_beta_table_reach(depth_mm: np.ndarray, thickness_mm: float,
+                          depth_std_mm: np.ndarray | None = None) -> np.ndarray:
+    """Which presses lie past the FEM beta table's reach (:data:`BETA_TABLE_REACH`) by more
+    than two of their depth uncertainties: those ``fit_indentation(beta_table='fem')``
+    refuses, and that ``calibrate`` and ``fit`` leave out of their fits, naming them (a
+    press nearer the reach is read at the table's last w/h).
+
+    Parameters
+    ----------
+    depth_mm : (N,) float ndarray
+    thickness_mm : float
+        h, mm (> 0).
+    depth_std_mm : (N,) float ndarray, optional
+        Standard uncertainties, mm (NaN counts as 0); default 0.
+
+    Returns
+    -------
+    past : (N,) bool ndarray
+    """
+    w = np.asarray(depth_mm, np.float64)
+    u = np.zeros_like(w) if depth_std_mm is None else np.nan_to_num(
+        np.asarray(depth_std_mm, np.float64))
+    return w - 2.0 * u > BETA_TABLE_REACH * float(thickness_mm) * (1 + 1e-12)
+
 
 _NAN2 = (math.nan, math.nan)
 _CI_METHOD = ("delta method through the HC3 (heteroscedasticity-consistent) covariance of "
@@ -383,10 +410,9 @@ def _table_depths(w: np.ndarray, u: np.ndarray | None, h: float, beta_table: str
     past = w > top + 1e-12 * h
     if beta_table != "fem" or u is None or not past.any():
         return w, None
-    near = past & (w - 2.0 * u <= top)
-    if np.any(past & ~near):
+    if past_beta_table_reach(w, h, u).any():
         return w, None
-    idx = ", ".join(str(int(i)) for i in np.flatnonzero(near))
+    idx = ", ".join(str(int(i)) for i in np.flatnonzero(past))
     note = (f"press(es) {idx} reach w/h = {float(np.max(w / h)):.4f}, past the FEM beta "
             f"table's {top / h:g} by less than two of their depth uncertainties: the table "
             "is read at its last w/h for them (their depths are fitted as certified)")

@@ -19,6 +19,7 @@ from ..mechanics import (
     elastic_force,
     fit_indentation,
     fit_relaxation,
+    past_beta_table_reach,
     refine_relaxation,
 )
 from ._calibration import hold_curves, hold_spans
@@ -77,8 +78,7 @@ class Fitter:
         if self.kw["beta_table"] != "fem":
             return None
         h = float(self.kw["thickness_mm"])
-        u = np.zeros_like(depth) if std is None else np.nan_to_num(std)
-        self.left_out |= depth - 2.0 * u > BETA_TABLE_REACH * h * (1 + 1e-12)
+        self.left_out |= past_beta_table_reach(depth, h, std)
         if not self.left_out.any():
             return None
         which = ", ".join(f"{int(p)} (w/h {w / h:.3f})"

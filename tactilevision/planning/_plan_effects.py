@@ -37,7 +37,6 @@ __all__ = ["crossing_effect_sizes", "crossing_table", "design_setup", "effect_po
            "effect_sensitivity"]
 
 
-
 def design_setup(design: Design) -> ReplaySetup:
     """The design's presses, columns and noise as the replay draws them."""
     w, _ = design_table(design)
