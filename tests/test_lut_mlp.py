@@ -39,6 +39,7 @@ from tactilevision.optics import (
     fit_colour_lut,
     gradients_from_normals,
     mlp_inputs,
+    mlp_layers,
     train_mlp,
 )
 
@@ -377,6 +378,51 @@ def test_train_mlp_stops_at_its_step_budget(torch_one_thread, monkeypatch):
             train_mlp(x, y, hidden=8, epochs=1, max_steps=bad)
 
 
+def test_a_warm_start_is_the_given_network_carried_into_the_new_standardisation(
+        linear_mlp, torch_one_thread):
+    """``init``: before a step the network is the given one exactly, though the new data
+    are standardised otherwise (W x + b = (W std) z + (b + W mean)); one step at a learning
+    rate of 1e-12 leaves its outputs within float32 rounding."""
+    onnx_bytes, inp, nxy = linear_mlp
+    shifted = inp * 1.7 + 0.3                  # another mean and spread for every input
+    again = train_mlp(shifted, nxy, hidden=32, epochs=1, batch_size=256,
+                      learning_rate=1e-12, max_steps=1, init=onnx_bytes)
+    ref = MLPGradientModel(onnx_bytes).normals(shifted[:500])
+    np.testing.assert_allclose(MLPGradientModel(again).normals(shifted[:500]), ref,
+                               atol=1e-5)
+    # and the layers read back are the ones written
+    layers = mlp_layers(onnx_bytes)
+    assert [w.shape for w, _ in layers] == [(32, 8), (32, 32), (2, 32)]
+
+
+def test_a_warm_start_learns_moved_labels_in_a_quarter_of_the_steps(linear_mlp,
+                                                                     torch_one_thread):
+    """Labels moved a little (the second round's refitted circles): a quarter of the
+    steps from the trained network end nearer them than the same steps from a random
+    start, and as near as a full cold training."""
+    onnx_bytes, inp, nxy = linear_mlp
+    moved = (nxy * 1.1 + 0.02).astype(np.float32)
+    kw = dict(hidden=32, batch_size=256, learning_rate=1e-2, seed=0)
+    steps = 3 * 32                                  # 8192 pixels: 32 batches an epoch
+
+    def rms(b):
+        return float(np.sqrt(np.mean((MLPGradientModel(b).normals(inp) - moved) ** 2)))
+
+    warm = rms(train_mlp(inp, moved, epochs=3, max_steps=steps // 4, init=onnx_bytes, **kw))
+    cold_short = rms(train_mlp(inp, moved, epochs=3, max_steps=steps // 4, **kw))
+    cold = rms(train_mlp(inp, moved, epochs=3, **kw))
+    assert warm < 0.7 * cold_short
+    assert warm < 1.5 * cold
+
+
+def test_a_warm_start_that_is_not_this_shape_is_refused(linear_mlp, torch_one_thread):
+    onnx_bytes, inp, nxy = linear_mlp
+    with pytest.raises(InputError, match="hidden=16"):
+        train_mlp(inp, nxy, hidden=16, epochs=1, init=onnx_bytes)
+    with pytest.raises(InputError, match="not an ONNX network"):
+        train_mlp(inp, nxy, hidden=32, epochs=1, init=b"not a network")
+
+
 # -------------------------------------------- calibration and reconstruction
 BALL_PX = 40.0
 MM_PER_PX = 0.05
@@ -615,6 +661,71 @@ def test_from_ball_presses_input_errors(synth):
     with pytest.raises(InputError, match="model"):
         PhotometricCalibration.from_ball_presses(ref, frames, centres, radii,
                                                  **{**kw, "model": "poly"})
+
+
+def test_a_warm_started_calibration_trains_a_quarter_of_the_steps(synth, synth_mlp,
+                                                                    synth_lut, monkeypatch):
+    """``warm_start``: the training starts from the given network and takes a quarter of a
+    cold round's steps; the second round (detected circles) starts from the first; the
+    provenance says so; a table or a network of other inputs is refused."""
+    import torch
+
+    from tactilevision.optics._training import MLP_WARM_FRACTION
+
+    ref, frames, centres, radii = synth
+    kw = dict(ball_radius_mm=BALL_PX * MM_PER_PX, mm_per_px=MM_PER_PX, model="mlp", epochs=2)
+    calls = []
+    step = torch.optim.Adam.step
+    monkeypatch.setattr(torch.optim.Adam, "step",
+                        lambda self, *a, **k: (calls.append(1), step(self, *a, **k))[1])
+    cold = PhotometricCalibration.from_ball_presses(ref, frames[0::2], centres[0::2],
+                                                    radii[0::2], **kw)
+    n_cold = len(calls)
+    calls.clear()
+    warm = PhotometricCalibration.from_ball_presses(ref, frames[0::2], centres[0::2],
+                                                    radii[0::2], warm_start=synth_mlp, **kw)
+    assert len(calls) == max(1, int(MLP_WARM_FRACTION * n_cold))
+    assert cold.provenance["warm_start"] is None
+    assert warm.provenance["warm_start"]["n_presses"] == synth_mlp.provenance["n_presses"]
+    # the same presses, warm: the network reads the ball as the cold one does
+    _, frames_t, centres_t, radii_t = synth
+    err = [evaluate_ball_presses(DepthReconstructor(c), frames_t[1::2], centres_t[1::2],
+                                 radii_t[1::2], ball_radius_px=BALL_PX).normal_angle_deg
+           for c in (cold, warm)]
+    assert err[1] < err[0] + 1.0
+    # detected circles: two rounds, the second warm
+    calls.clear()
+    PhotometricCalibration.from_ball_presses(ref, frames[0::2], **kw)
+    n_rounds = len(calls)
+    assert n_cold < n_rounds <= n_cold + max(1, int(MLP_WARM_FRACTION * n_cold)) + 1
+    with pytest.raises(InputError, match="warm_start: a network starts only a network"):
+        PhotometricCalibration.from_ball_presses(ref, frames[0::2], centres[0::2],
+                                                 radii[0::2], warm_start=synth_lut, **kw)
+    with pytest.raises(InputError, match="warm_start's network takes other inputs"):
+        PhotometricCalibration.from_ball_presses(ref, frames[0::2], centres[0::2],
+                                                 radii[0::2], warm_start=synth_mlp,
+                                                 use_position=False, **kw)
+
+
+def test_circles_detected_once_calibrate_as_if_detected_inside(synth):
+    """``detected=True`` with :func:`detect_contact_circles`'s own circles is the
+    calibration that detects them itself (refitted, rescaled, provenance 'detected'), so
+    that several calibrations of one folder detect once; ``detected=False`` needs them."""
+    ref, frames, _, _ = synth
+    kw = dict(ball_radius_mm=BALL_PX * MM_PER_PX, mm_per_px=MM_PER_PX, model="lut",
+              detect_edge="contact")
+    inside = PhotometricCalibration.from_ball_presses(ref, frames, **kw)
+    centres, radii = detect_contact_circles(frames, ref, edge="contact")
+    once = PhotometricCalibration.from_ball_presses(ref, frames, centres, radii,
+                                                    detected=True, **kw)
+    for key in ("circles", "centers_px", "radii_px", "radius_scale", "centers_refined"):
+        assert once.provenance[key] == inside.provenance[key], key
+    assert inside.provenance["circles"] == "detected"
+    np.testing.assert_array_equal(once.lut.table, inside.lut.table)
+    given = PhotometricCalibration.from_ball_presses(ref, frames, centres, radii, **kw)
+    assert given.provenance["circles"] == "given" and not given.provenance["centers_refined"]
+    with pytest.raises(InputError, match="detected=False needs the circles"):
+        PhotometricCalibration.from_ball_presses(ref, frames, detected=False, **kw)
 
 
 @pytest.mark.parametrize("field", ["model", "colour_lo"])

@@ -228,7 +228,7 @@ def run_calibrate(args: argparse.Namespace) -> int:
     ps, ball_mm, idx, refused, origin, circles = _screen_presses(args, ps, ball_mm, idx,
                                                                  given)
     held = _held_out(args, ps, circles, ball_mm / mm)
-    train = _trainer(args, ps, given, ball_mm)
+    train = _trainer(args, ps, given, ball_mm, circles)
     # the report's calibration never sees the presses it is scored on, nor did the choice
     # of its engine
     train_idx = idx if held is None else np.flatnonzero(~held)
@@ -238,7 +238,11 @@ def run_calibrate(args: argparse.Namespace) -> int:
         if key in choice:
             choice[f"{key}_files"] = [ps.names[i] for i in choice[key]]
             choice[key] = [int(origin[i]) for i in choice[key]]
-    cal = train(idx, engine)
+    # the network saved starts from the one scored (trained on most of these presses):
+    # a quarter of the steps (MLP_WARM_FRACTION)
+    scoring = (None if engine.model != "mlp" else inner[0] if inner is not None
+               else None if held is None else train(train_idx, engine))
+    cal = train(idx, engine, warm=scoring)
     cal.provenance.update(engine=choice, presses=[int(origin[i]) for i in idx],
                           files=[ps.names[i] for i in idx],
                           command="tactilevision " + " ".join(args.argv))
@@ -247,7 +251,7 @@ def run_calibrate(args: argparse.Namespace) -> int:
     if args.credit:
         cal.provenance["credit"] = args.credit
     report = _report(args, ps, cal, idx, train_idx, inner, engine, train, given, held,
-                     circles, ball_mm / mm, origin)
+                     circles, ball_mm / mm, origin, scoring)
     report.update(engine=choice, refused=refused)
     # into place only when complete; the folder's manifest records it (a rerun may replace it)
     with StagedOutput(out.parent, overwrite=args.overwrite,
@@ -268,7 +272,9 @@ def run_calibrate(args: argparse.Namespace) -> int:
               f"a calibration trained on {trained_on} of the others"
               + (" (the first fold's others scored the engines)" if inner is not None
                  else "")
-              + f"; the calibration saved is trained on all {len(ps.frames)}")
+              + f"; the calibration saved is trained on all {len(ps.frames)}"
+              + (" (its network started from the scored one's)"
+                 if cal.provenance.get("warm_start") else ""))
     print(report["error"] if "error" in report else _accuracy_text(report, mm))
     print(f"accuracy report: {out.parent / report_name}")
     return 0
@@ -293,19 +299,22 @@ def _read_presses(args: argparse.Namespace, cells: tuple[int, int]):
     return ps, ball_mm
 
 
-def _trainer(args: argparse.Namespace, ps, given: bool, ball_mm: np.ndarray):
-    """``train(sel, engine)``: a calibration of `engine` on the presses `sel`; an error
-    about one of them names its file."""
-    def train(sel: np.ndarray, engine: Engine) -> PhotometricCalibration:
+def _trainer(args: argparse.Namespace, ps, given: bool, ball_mm: np.ndarray, circles):
+    """``train(sel, engine, warm=None)``: a calibration of `engine` on the presses `sel`
+    (their circles given, else the ones detected once for all: `circles`), its network
+    started from `warm`'s; an error about one of them names its file."""
+    def train(sel: np.ndarray, engine: Engine,
+              warm: PhotometricCalibration | None = None) -> PhotometricCalibration:
         try:
             return PhotometricCalibration.from_ball_presses(
-                ps.reference, ps.frames[sel],
-                ps.centers_px[sel] if given else None, ps.radii_px[sel] if given else None,
+                ps.reference, ps.frames[sel], circles[0][sel], circles[1][sel],
+                detected=not given,
                 ball_radius_mm=ball_mm[sel], mm_per_px=args.mm_per_px, model=engine.model,
                 bins=args.bins, lut_cells=engine.lut_cells, epochs=args.epochs,
                 hidden=args.hidden, seed=args.seed, source=str(args.ball_presses),
                 label_fraction=args.label_fraction, progress=not args.no_progress,
                 detect_edge=args.detect_edge, flat_fraction=args.flat_fraction,
+                warm_start=warm,
             )
         except InputError as exc:
             raise InputError(_name_press(str(exc), [ps.names[i] for i in sel])) from None
@@ -332,12 +341,15 @@ def _subset(ps, keep: np.ndarray):
 
 
 def _report(args: argparse.Namespace, ps, cal, idx, train_idx, inner, engine, train,
-            given: bool, held, circles, ball_px: np.ndarray, origin: np.ndarray) -> dict:
+            given: bool, held, circles, ball_px: np.ndarray, origin: np.ndarray,
+            scoring=None) -> dict:
     """The accuracy report (:func:`_accuracy_report`). With an engine chosen on held-out
     training presses, the calibration scored is the chosen candidate's (trained on the
-    presses the choice trained on), and the presses the choice scored are not scored."""
+    presses the choice trained on), and the presses the choice scored are not scored;
+    else `scoring` (trained on `train_idx`; None: trained here)."""
     if inner is None:
-        scoring = None if held is None else train(train_idx, engine)
+        if scoring is None and held is not None:
+            scoring = train(train_idx, engine)
         return _accuracy_report(args, ps, scoring if scoring is not None else cal, train_idx,
                                 given, held, circles, ball_px, origin)
     scoring, fit_on, score_on = inner

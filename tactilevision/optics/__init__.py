@@ -56,6 +56,7 @@ from ._mlp import (
     cell_position_inputs,
     default_position_cell_px,
     mlp_inputs,
+    mlp_layers,
     train_mlp,
 )
 from ._poisson import PoissonSolver, divergence, integrate_poisson, integrate_poisson_masked
@@ -120,6 +121,7 @@ __all__ = [
     "marker_mask",
     "max_tilt_deg",
     "mlp_inputs",
+    "mlp_layers",
     "non_ball_presses",
     "normal_angle_deg",
     "normals_from_gradients",

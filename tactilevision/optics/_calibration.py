@@ -130,6 +130,8 @@ class PhotometricCalibration(CalibrationData):
         flat_fraction: float = 0.03,
         max_steps: int | None = 2400,
         position_cell_px: int | None = None,
+        warm_start: PhotometricCalibration | None = None,
+        detected: bool | None = None,
     ) -> PhotometricCalibration:
         """Calibrate from frames of a ball pressed into the gel.
 
@@ -236,6 +238,20 @@ class PhotometricCalibration(CalibrationData):
             to 1.2 at the 95th percentile better than before on those presses
             (``benchmarks/bench_table_engine.py``; docs/guide/optics.md, "The
             table engine: a network that its table reproduces").
+        warm_start : PhotometricCalibration, optional
+            A network calibration of the same sensor (frame size, position
+            inputs and cells, `hidden`) whose network the training starts
+            from, e.g. one trained on most of these presses: every round then
+            takes a quarter of a cold round's steps
+            (``MLP_WARM_FRACTION``). The second round (detected circles)
+            always starts from the first's network. None: a cold start.
+        detected : bool, optional
+            Whether the circles are detected ones, treated as such (centres
+            refitted, radii rescaled to the slope's peak, the colour edge's
+            label fraction). None: detected exactly when none are given. True
+            with circles given: they are :func:`detect_contact_circles`'s own
+            (``edge=detect_edge``), detected once for several calibrations of
+            these presses.
 
         Returns
         -------
@@ -249,7 +265,9 @@ class PhotometricCalibration(CalibrationData):
             If only one of centres and radii is given, a circle is larger
             than the ball, fewer than two presses are given, ``detect_edge``
             is not a known edge, ``flat_fraction`` is outside (0, 1] or
-            leaves no flat pixel, or a detected press has no contact.
+            leaves no flat pixel, a detected press has no contact, or
+            `warm_start` is not a network taking the same inputs, or
+            ``detected=False`` without circles.
         ImportError
             For ``model='mlp'`` without torch.
         """
@@ -260,7 +278,7 @@ class PhotometricCalibration(CalibrationData):
             lut_cells=lut_cells, epochs=epochs, hidden=hidden, blur_sigma=blur_sigma, seed=seed,
             source=source, progress=progress, detect_edge=detect_edge,
             flat_fraction=flat_fraction, max_steps=max_steps,
-            position_cell_px=position_cell_px)
+            position_cell_px=position_cell_px, warm_start=warm_start, detected=detected)
 
     @classmethod
     def from_gs_sdk(cls, model: str | Path | Mapping[str, Any], reference: np.ndarray, *,

@@ -20,7 +20,7 @@ from tqdm.auto import tqdm
 from .._checks import InputError, check_array
 
 __all__ = ["MLPGradientModel", "cell_position_inputs", "default_position_cell_px", "mlp_inputs",
-           "train_mlp"]
+           "mlp_layers", "train_mlp"]
 
 N_INPUTS = 8
 
@@ -169,6 +169,51 @@ class MLPGradientModel:
         return self._session.run(None, {"x": np.ascontiguousarray(inputs)})[0]
 
 
+def mlp_layers(onnx_bytes: bytes) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The layers of a network written by :func:`train_mlp`.
+
+    Parameters
+    ----------
+    onnx_bytes : bytes
+        ONNX bytes of this library's SiLU network (initialisers ``W0``,
+        ``b0``, ``W1``, ...), the input standardisation folded into ``W0``.
+
+    Returns
+    -------
+    layers : list of (W (out, in), b (out,)) float64 ndarray pairs
+
+    Raises
+    ------
+    InputError
+        If the bytes are not such a network (e.g. gs_sdk's convolutional one).
+    """
+    import onnx
+    from onnx import numpy_helper
+
+    try:
+        model = onnx.load_from_string(onnx_bytes)
+    except Exception as exc:                    # protobuf's DecodeError and kin
+        raise InputError(f"not an ONNX network: {exc}") from None
+    if model.graph.name != "tactilevision_normal_mlp":
+        raise InputError(f"the network {model.graph.name!r} is not this library's colour-to-"
+                         "normal MLP (train_mlp); it cannot be a warm start")
+    inits = {t.name: numpy_helper.to_array(t).astype(np.float64)
+             for t in model.graph.initializer}
+    return [(inits[f"W{k}"], inits[f"b{k}"]) for k in range(len(inits) // 2)]
+
+
+def _standardised_layers(layers: list[tuple[np.ndarray, np.ndarray]], mean: np.ndarray,
+                         std: np.ndarray, hidden: int) -> list[tuple[np.ndarray, np.ndarray]]:
+    """`layers` (raw inputs) with the first layer acting on ``(x - mean) / std``:
+    ``W x + b = (W std) z + (b + W mean)``."""
+    shapes = [(hidden, N_INPUTS), (hidden, hidden), (2, hidden)]
+    if [w.shape for w, _ in layers] != shapes:
+        raise InputError(f"the warm-start network's layers are "
+                         f"{[w.shape for w, _ in layers]}, not {shapes} (hidden={hidden})")
+    w0, b0 = layers[0]
+    return [(w0 * std[None, :], b0 + w0 @ mean), *layers[1:]]
+
+
 def _onnx_from_layers(layers: list[tuple[np.ndarray, np.ndarray]]) -> bytes:
     """Serialise a SiLU MLP (list of (W (out, in), b (out,))) as ONNX bytes."""
     from onnx import helper, numpy_helper
@@ -209,7 +254,8 @@ def serialise_normal_graph(nodes: list, initializers: list, name: str, producer:
 
 def train_mlp(inputs: np.ndarray, nxy: np.ndarray, *, hidden: int = 128, epochs: int = 12,
               batch_size: int = 4096, learning_rate: float = 3e-3, seed: int = 0,
-              progress: bool = False, max_steps: int | None = None) -> bytes:
+              progress: bool = False, max_steps: int | None = None,
+              init: bytes | None = None) -> bytes:
     """Train the colour-to-normal network and return it as ONNX bytes.
 
     Parameters
@@ -234,6 +280,12 @@ def train_mlp(inputs: np.ndarray, nxy: np.ndarray, *, hidden: int = 128, epochs:
         ``max_steps / epochs`` batches the training stops there, part-way
         through a pass, the learning-rate cycle fitted to it. None: every
         epoch in full.
+    init : bytes, optional
+        A network of this shape (ONNX bytes from this function, `hidden`
+        units) to start from instead of a random initialisation: a warm
+        start, e.g. on labels that moved a little. Its weights are carried
+        into this data's standardisation exactly (the network's output on
+        any input is unchanged before the first step).
 
     Returns
     -------
@@ -245,7 +297,8 @@ def train_mlp(inputs: np.ndarray, nxy: np.ndarray, *, hidden: int = 128, epochs:
     ImportError
         If torch or onnx is missing: ``pip install tactilevision[torch]``.
     InputError
-        For a ``max_steps`` that is not a positive integer.
+        For a ``max_steps`` that is not a positive integer, or an `init`
+        that is not a network of this shape.
     """
     try:
         import torch
@@ -270,6 +323,13 @@ def train_mlp(inputs: np.ndarray, nxy: np.ndarray, *, hidden: int = 128, epochs:
     if max_steps is not None and (isinstance(max_steps, bool) or int(max_steps) != max_steps
                                   or max_steps < 1):
         raise InputError(f"max_steps must be a positive integer or None, got {max_steps!r}")
+    if init is not None:
+        start = _standardised_layers(mlp_layers(init), mean, std, hidden)
+        with torch.no_grad():
+            for m, (w, b) in zip([m for m in net if isinstance(m, torch.nn.Linear)], start,
+                                 strict=True):
+                m.weight.copy_(torch.from_numpy(w.astype(np.float32)))
+                m.bias.copy_(torch.from_numpy(b.astype(np.float32)))
     per_epoch = (len(x) + batch_size - 1) // batch_size
     steps = epochs * per_epoch
     if max_steps is not None:

@@ -42,6 +42,12 @@ __all__ = ["fit_from_ball_presses"]
 #: folder (``benchmarks/bench_optics_calibration_time.py``).
 MLP_MAX_STEPS = 2400
 
+#: Network training: a round that starts from a trained network (the second round, on
+#: refitted circles; a calibration given a ``warm_start``) takes this share of a cold
+#: round's steps. On held-out presses (three folds, GelSlim 3.0 and GelSight Mini) it
+#: read as a cold second round did (docs/guide/optics.md, "How long a calibration takes").
+MLP_WARM_FRACTION = 0.25
+
 
 def fit_from_ball_presses(cls: type[CalibrationData], reference: np.ndarray,
                           frames: np.ndarray, centers_px: np.ndarray | None = None,
@@ -54,7 +60,9 @@ def fit_from_ball_presses(cls: type[CalibrationData], reference: np.ndarray,
                           source: str = "", progress: bool = False,
                           detect_edge: str = "contact", flat_fraction: float = 0.03,
                           max_steps: int | None = MLP_MAX_STEPS,
-                          position_cell_px: int | None = None):
+                          position_cell_px: int | None = None,
+                          warm_start: CalibrationData | None = None,
+                          detected: bool | None = None):
     """Train a photometric calibration of class `cls` from ball presses.
 
     The parameters, return value and errors are those of
@@ -68,7 +76,12 @@ def fit_from_ball_presses(cls: type[CalibrationData], reference: np.ndarray,
                                          or position_cell_px < 0):
         raise InputError(f"position_cell_px must be a non-negative integer or None, got "
                          f"{position_cell_px!r}")
-    detected = centers_px is None and radii_px is None
+    none_given = centers_px is None and radii_px is None
+    if detected is False and none_given:
+        raise InputError("detected=False needs the circles: give centers_px and radii_px")
+    detected = none_given if detected is None else bool(detected)
+    warm = _warm_network(warm_start, model, reference.shape[:2], use_position,
+                         position_cell_px)
     centers, radii = _press_circles(frames, reference, centers_px, radii_px, detect_edge)
     ball_px = ball_mm / mm_per_px              # (N,): each press's ball
     if label_fraction is None:     # the colour edge lies outside the contact (_circles.py)
@@ -99,9 +112,10 @@ def fit_from_ball_presses(cls: type[CalibrationData], reference: np.ndarray,
     for rnd in range(rounds):
         samples = _training_samples(changes, valid, background, centers,
                                     label_fraction * radii, ball_px)
+        init = cal.onnx_bytes if rnd > 0 else warm
         fell_back = _fit_round(cal, samples, ref_colour, fell_back, flat_fraction=flat_fraction,
                                bins=bins, lut_cells=lut_cells, hidden=hidden, epochs=epochs,
-                               seed=seed, progress=progress, max_steps=max_steps)
+                               seed=seed, progress=progress, max_steps=max_steps, init=init)
         if rnd + 1 < rounds:
             radius_scale = _refine_circles(DepthReconstructor(cal), frames, centers, radii,
                                            ball_px, label_fraction, detected)
@@ -121,6 +135,9 @@ def fit_from_ball_presses(cls: type[CalibrationData], reference: np.ndarray,
         "lut_cells": [int(c) for c in lut_cells] if model == "lut" else None,
         "lut_cells_fell_back": int(np.count_nonzero(fell_back)),
         "position_cell_px": int(cal.position_cell_px),
+        "warm_start": None if warm is None else {
+            "n_presses": warm_start.provenance.get("n_presses"),
+            "steps_share": float(MLP_WARM_FRACTION)},
         "centers_px": centers.round(2).tolist(),
         "radii_px": radii.round(2).tolist(),
         "tactilevision": __version__,
@@ -152,6 +169,27 @@ def _refine_circles(recon: DepthReconstructor, frames: np.ndarray, centers: np.n
     if ok.size < 3:
         return 1.0
     return float(np.clip(np.median(ok) / SLOPE_PEAK_AT, 0.7, 1.2))
+
+
+def _warm_network(warm_start: CalibrationData | None, model: str, shape: tuple[int, int],
+                  use_position: bool, position_cell_px: int | None) -> bytes | None:
+    """The network a calibration's first round starts from (None: a cold start), checked
+    against the calibration asked for: a network of the same inputs (frame size,
+    position inputs, position cells)."""
+    if warm_start is None:
+        return None
+    if model != "mlp" or warm_start.model != "mlp" or warm_start.onnx_bytes is None:
+        raise InputError(f"warm_start: a network starts only a network (model 'mlp'); got a "
+                         f"{warm_start.model!r} calibration for model {model!r}")
+    cell = (default_position_cell_px(shape) if position_cell_px is None
+            else int(position_cell_px))
+    want = (tuple(shape), bool(use_position), cell if use_position else 0)
+    have = (tuple(warm_start.shape), bool(warm_start.use_position),
+            int(warm_start.position_cell_px) if warm_start.use_position else 0)
+    if want != have:
+        raise InputError(f"warm_start's network takes other inputs: frame, position inputs, "
+                         f"position cell {have} against {want} asked for")
+    return warm_start.onnx_bytes
 
 
 def _checked_presses(reference: np.ndarray, frames: np.ndarray, ball_radius_mm: float,
@@ -208,7 +246,7 @@ def _pixel_sets(frames: np.ndarray, ref_inv: np.ndarray, markers: bool, blur_sig
 def _fit_round(cal: CalibrationData, samples: tuple[np.ndarray, ...], ref_colour: np.ndarray,
                fell_back: np.ndarray, *, flat_fraction: float, bins: int,
                lut_cells: tuple[int, int], hidden: int, epochs: int, seed: int,
-               progress: bool, max_steps: int | None) -> np.ndarray:
+               progress: bool, max_steps: int | None, init: bytes | None) -> np.ndarray:
     """Fit `cal`'s model, contact threshold and colour range to one round's labelled pixels
     (:func:`_training_samples`) in place; returns the position cells left on the
     colour-only table (`fell_back` when no cell tables are fitted)."""
@@ -236,8 +274,12 @@ def _fit_round(cal: CalibrationData, samples: tuple[np.ndarray, ...], ref_colour
             inputs = mlp_inputs(f_all, ref_colour[y_all, x_all], x_all, y_all, (h, w),
                                 use_position=cal.use_position)
         cal.table_lo, cal.table_hi = _table_range(f_all, in_disc, cal.colour_lo, cal.colour_hi)
+        if init is not None:        # a warm start: a share of a cold round's steps
+            cold = epochs * -(-len(inputs) // 4096)
+            max_steps = max(1, int(MLP_WARM_FRACTION * min(cold, max_steps or cold)))
         cal.onnx_bytes = train_mlp(inputs, n_all, hidden=hidden, epochs=epochs,
-                                   seed=seed, progress=progress, max_steps=max_steps)
+                                   seed=seed, progress=progress, max_steps=max_steps,
+                                   init=init)
     return fell_back
 
 
