@@ -1,7 +1,7 @@
 """Within-indenter effects on drawn-mark sessions, found through the crossing forces.
 
     python benchmarks/bench_crossings.py [--seeds 20] [--first-seed 8000] [--fps 15]
-        [--at-rules-out K]
+        [--at-rules-out K | --at-plan K]
 
 Each seed is a session of the project's generator (:func:`tactilevision.sim.make_session`:
 a drawn mark, ``bevel_angle_deg = 0``, 5 depths x 4 presses, the stage overshooting w0 by 5
@@ -13,6 +13,13 @@ diagnosed (``diagnose(..., depth_rule='mark')``); printed per kind: how often th
 is right (nothing; ``spatial_nonuniformity``; a stiffness trend or step along time or
 press order; a step), and how often the crossing forces found it (issue 53's target: at
 least 90 % of sessions for the within-indenter effects, no false alarm on the null).
+
+``--at-rules-out K`` puts each effect at K times what that session's own null table's
+crossing forces rule out; ``--at-plan K`` at K times what ``plan`` says the session's
+design can see (:func:`tactilevision.planning.crossing_effect_sizes` on the
+:class:`~tactilevision.planning.Design` the session follows: its block, repeats, frame
+rate, F/T noise and window, its median stage speed through w0, its overshoot range and
+its press count as positions), and prints both sizes per seed.
 """
 
 from __future__ import annotations
@@ -25,10 +32,13 @@ import tempfile
 import time
 from pathlib import Path
 
+import numpy as np
+
 from tactilevision import InputError
 from tactilevision.diagnosis import crossing_tests, diagnose
 from tactilevision.io import read_measurements
 from tactilevision.pipeline import calibrate_session, write_calibration
+from tactilevision.planning import Design, crossing_effect_sizes
 from tactilevision.sim import GaugeBlock, SessionSpec, make_session
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -49,8 +59,31 @@ def right(kind: str, verdict: str | None) -> bool:
     return bool(verdict) and verdict.startswith("stiffness_step:")
 
 
-def one(work: Path, seed: int, fps: float, at_rules_out: float | None = None
-        ) -> dict[str, tuple[str | None, str | None]]:
+def plan_sizes(spec: SessionSpec, truth: dict, k: float) -> dict[str, float]:
+    """`k` times what ``plan`` says the session's design lets the crossing forces name in
+    95 % of sessions, in the kinds' parameters (as :func:`bench_loop.rules_out_sizes`)."""
+    presses = truth["presses"]
+    speed = float(np.median([p["depth_mm"] / (p["hold_from_s"] - p["t_start_s"])
+                             for p in presses]))
+    over = [p["overshoot_mm"] for p in presses]
+    design = Design(thickness_mm=spec.thickness_mm, radius_mm=spec.block.radius_mm,
+                    depths_mm=tuple(spec.block.depths_mm), repeats=spec.repeats,
+                    E_mpa=spec.E_mpa, nu=spec.nu, bevel_angle_deg=0.0,
+                    mm_per_px=truth["mm_per_px"], frame_rate_hz=spec.fps,
+                    stage_speed_mm_s=speed, force_noise_n=spec.force_noise_n[2],
+                    window_samples=spec.window_samples, rate_hz=spec.rate_hz,
+                    hold_s=float(np.mean(spec.hold_s)),
+                    overshoot_um=(1e3 * min(over), 1e3 * max(over)),
+                    waits_s=(float(np.mean(spec.wait_s)),), positions=len(presses))
+    got = {name: s.size_param for name, s in crossing_effect_sizes(design).items()}
+    last = max(p["t_start_s"] for p in presses)
+    return {"spatial": k * got["spatial_nonuniformity"],
+            "softening": k * got["stiffness_trend:time_s"] * last,
+            "damage": k * got["stiffness_step:press"]}
+
+
+def one(work: Path, seed: int, fps: float, at_rules_out: float | None = None,
+        at_plan: float | None = None) -> dict[str, tuple[str | None, str | None]]:
     """The verdict and the crossings' finding of each kind on one generated session (with
     `at_rules_out`, each kind at that many times what the null table's crossing forces
     rule out: :func:`bench_loop.rules_out_sizes`)."""
@@ -63,6 +96,8 @@ def one(work: Path, seed: int, fps: float, at_rules_out: float | None = None
         p["release_end_s"] = p["hold_to_s"] + spec.release_s
     (folder / "truth.json").write_text(json.dumps(truth))
     out, sizes = {}, {}
+    if at_plan is not None:
+        sizes = plan_sizes(spec, truth, at_plan)
     for kind in KINDS:
         write_forces(folder, work / kind, kind, seed=seed, size=sizes.get(kind))
         try:
@@ -84,9 +119,16 @@ def one(work: Path, seed: int, fps: float, at_rules_out: float | None = None
             verdict = f"diagnose refused ({exc})"
         out[kind] = (verdict, None if scan is None or scan.found is None
                      else scan.found.effect)
-        if kind == "null" and at_rules_out is not None:
-            sizes = rules_out_sizes(folder, work / "null_cal" / "measurements.csv",
-                                    at_rules_out)
+        if kind == "null" and (at_rules_out is not None or at_plan is not None):
+            own = rules_out_sizes(folder, work / "null_cal" / "measurements.csv",
+                                  at_rules_out or at_plan)
+            if at_plan is None:
+                sizes = own
+            print(f"seed {seed} sizes (gradient /mm, fall over the session, step): "
+                  + ("plan " + ", ".join(f"{sizes[k]:.4f}" for k in KINDS[1:]) + "; "
+                     if at_plan is not None else "")
+                  + "the null table's own " + ", ".join(f"{own[k]:.4f}" for k in KINDS[1:]),
+                  flush=True)
     return out
 
 
@@ -98,13 +140,17 @@ def main() -> int:
     ap.add_argument("--at-rules-out", type=float, metavar="K",
                     help="each kind at K times what its session's null table's crossing "
                          "forces rule out (default: the fixed sizes above)")
+    ap.add_argument("--at-plan", type=float, metavar="K",
+                    help="each kind at K times what plan says the session's design can see")
     args = ap.parse_args()
+    if args.at_rules_out is not None and args.at_plan is not None:
+        ap.error("give --at-rules-out or --at-plan, not both")
     score = {k: [0, 0] for k in KINDS}
     t0 = time.perf_counter()
     for seed in range(args.first_seed, args.first_seed + args.seeds):
         work = Path(tempfile.mkdtemp(prefix="bench_crossings_"))
         try:
-            res = one(work, seed, args.fps, args.at_rules_out)
+            res = one(work, seed, args.fps, args.at_rules_out, args.at_plan)
         finally:
             shutil.rmtree(work, ignore_errors=True)
         print(f"seed {seed}: " + "; ".join(f"{k}: {v or 'nothing'} (crossings: {c or '-'})"
