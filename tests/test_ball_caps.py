@@ -9,7 +9,7 @@ import pytest
 
 from tactilevision import InputError
 from tactilevision.mechanics import Sphere, hertz_surface_depth, sphere_surface_depth
-from tactilevision.pipeline import BallDepths, ball_press_caps
+from tactilevision.pipeline import CAP_PRESS_SD, CAP_SCALE_SD, BallDepths, ball_press_caps
 
 R, H, S = 2.0, 100.0, 0.0295          # ball, a thick gel (mm), mm per px
 BALL = Sphere(R)
@@ -54,6 +54,29 @@ def _hertz_press(w: float, shape=(240, 320), centre=(160.0, 120.0)):
     return height, depths
 
 
+def test_a_caps_depth_carries_the_shared_scale_and_one_presss_own_error():
+    """depth_std_mm = hypot(CAP_SCALE_SD, press_sd) x cap / (dcap/dw): with press_sd 0 it
+    is the shared scale's alone, and the default (CAP_PRESS_SD, where the calibration
+    states none) multiplies it by hypot(1, CAP_PRESS_SD / CAP_SCALE_SD); a press_sd that
+    is no number >= 0 is refused."""
+    height, depths = _hertz_press(0.3)
+    kw = dict(mm_per_px=S, thickness_mm=H)
+    scale = ball_press_caps(height[None], depths, BALL, press_sd=0.0, **kw)
+    default = ball_press_caps(height[None], depths, BALL, **kw)
+    stated = ball_press_caps(height[None], depths, BALL, press_sd=0.031, **kw)
+    assert default.press_sd == CAP_PRESS_SD
+    assert default.depth_std_mm[0] / scale.depth_std_mm[0] == pytest.approx(
+        np.hypot(1.0, CAP_PRESS_SD / CAP_SCALE_SD), rel=1e-9)
+    assert stated.depth_std_mm[0] / scale.depth_std_mm[0] == pytest.approx(
+        np.hypot(1.0, 0.031 / CAP_SCALE_SD), rel=1e-9)
+    np.testing.assert_array_equal(default.depth_mm, scale.depth_mm)
+    assert f"one press's cap to +-{200 * np.hypot(CAP_SCALE_SD, 0.031):.0f} %" in \
+        stated.summary()
+    for bad in (-0.01, float("nan"), "0.05", None):
+        with pytest.raises(InputError, match="press_sd"):
+            ball_press_caps(height[None], depths, BALL, press_sd=bad, **kw)
+
+
 @pytest.mark.parametrize("w", [0.2, 0.5])
 def test_a_true_height_map_reads_the_circles_depth(w):
     """The true surface, any zero: its cap is what the circle's depth predicts (within
@@ -63,7 +86,8 @@ def test_a_true_height_map_reads_the_circles_depth(w):
     caps = ball_press_caps(height[None] - 0.05, depths, BALL, mm_per_px=S, thickness_mm=H)
     assert caps.ratio[0] == pytest.approx(1.0, abs=0.02)
     assert caps.depth_mm[0] == pytest.approx(w, rel=0.02)
-    assert 0 < caps.depth_std_mm[0] < 0.05 * w
+    # the scale's 2.5 % and one press's 7.7 % (CAP_PRESS_SD) of the cap, through dw/dcap
+    assert 0.05 * w < caps.depth_std_mm[0] < 0.1 * w
     assert caps.expected_mm[0] < 0.9 * w                   # the level has sunk in around it
     low = ball_press_caps(0.8 * height[None], depths, BALL, mm_per_px=S, thickness_mm=H)
     assert low.ratio[0] == pytest.approx(0.8, abs=0.02)

@@ -10,6 +10,7 @@ import cv2
 import numpy as np
 import pytest
 from _data import synthetic_presses
+from scipy import stats
 
 from tactilevision import InputError
 from tactilevision.cli import main
@@ -44,6 +45,8 @@ def test_cap_prediction_holds_a_new_press_as_often_as_it_says():
     assert abs(inside / 4000 - 0.95) < 0.01
     assert plain / 4000 < 0.6
     assert cap_prediction([0.01, np.nan, 0.02]) is None
+    caps = [0.01, 0.05, -0.02, 0.03]
+    assert cap_prediction(caps)["sd"] == pytest.approx(np.std(caps, ddof=1), rel=1e-12)
     with pytest.raises(InputError, match="confidence"):
         cap_prediction([0.01, 0.02, 0.03], confidence=95)
 
@@ -122,7 +125,20 @@ def test_cli_saves_the_report_and_reads_circles_beside_the_frames(presses, tmp_p
     assert "held out for the report: presses " + ", ".join(map(str, held)) in stdout
     assert "inner cap" in stdout and "deepest point" in stdout
     assert PhotometricCalibration.load(out).provenance["presses"] == list(range(8))
+    assert PhotometricCalibration.load(out).provenance["inner_cap_sd"] is None  # 2: too few
     assert report["mm_per_px"] == MM
+    # four held out: the saved calibration states one press's cap scatter on them, the
+    # report's prediction sd (for the ball sessions' cap cross-check)
+    assert main(["optics", "calibrate", str(folder), "--ball-radius-mm", str(BALL_PX * MM),
+                 "--mm-per-px", str(MM), "--model", "lut", "--no-progress", "--holdout",
+                 "0.5", "--out", str(out), "--overwrite"]) == 0
+    capsys.readouterr()
+    ex = json.loads((out.parent / "optics_accuracy.json").read_text())["balls"][0][
+        "inner_cap_expected"]
+    half = (ex["high"] - ex["mean"]) / np.sqrt(1 + 1 / ex["n"])
+    sd = PhotometricCalibration.load(out).provenance["inner_cap_sd"]
+    assert ex["n"] >= 3 and sd == pytest.approx(ex["sd"])
+    assert sd == pytest.approx(half / stats.t.ppf(0.975, ex["n"] - 1), rel=1e-9)
     # --holdout 0: the training presses, in sample, and said so
     assert main(["optics", "calibrate", str(folder), "--ball-radius-mm", str(BALL_PX * MM),
                  "--mm-per-px", str(MM), "--model", "lut", "--no-progress", "--holdout", "0",
@@ -132,6 +148,7 @@ def test_cli_saves_the_report_and_reads_circles_beside_the_frames(presses, tmp_p
     report = json.loads((out.parent / "optics_accuracy.json").read_text())
     assert report["in_sample"] is True and report["held_out"] is None
     assert report["balls"][0]["n_scored"] == 8
+    assert PhotometricCalibration.load(out).provenance["inner_cap_sd"] is None  # in sample
     for bad in ("1", "-0.1", "1.5"):
         assert main(["optics", "calibrate", str(folder), "--ball-radius-mm",
                      str(BALL_PX * MM), "--mm-per-px", str(MM), "--model", "lut",

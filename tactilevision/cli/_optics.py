@@ -253,6 +253,12 @@ def run_calibrate(args: argparse.Namespace) -> int:
     report = _report(args, ps, cal, idx, train_idx, inner, engine, train, given, held,
                      circles, ball_mm / mm, origin, scoring)
     report.update(engine=choice, refused=refused)
+    # one press's cap scatter on presses the calibration did not see, for the ball
+    # sessions' cap cross-check (pipeline.ball_press_caps' press_sd): the largest over balls
+    sds = [] if report.get("in_sample", True) else [
+        b["inner_cap_expected"]["sd"] for b in report.get("balls", [])
+        if b.get("inner_cap_expected")]
+    cal.provenance["inner_cap_sd"] = float(max(sds)) if sds else None
     # into place only when complete; the folder's manifest records it (a rerun may replace it)
     with StagedOutput(out.parent, overwrite=args.overwrite,
                       what="folder of the calibration file") as stage:

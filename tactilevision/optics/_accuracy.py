@@ -201,8 +201,8 @@ def cap_prediction(caps: np.ndarray, confidence: float = 0.95) -> dict | None:
     Returns
     -------
     dict or None
-        ``mean``, ``low``, ``high``, ``n``, ``confidence``; None with fewer than three
-        finite caps.
+        ``mean``, ``low``, ``high``, ``n``, ``confidence`` and ``sd`` (s, one press's
+        scatter); None with fewer than three finite caps.
 
     Raises
     ------
@@ -218,7 +218,7 @@ def cap_prediction(caps: np.ndarray, confidence: float = 0.95) -> dict | None:
     m, sd = float(c.mean()), float(c.std(ddof=1))
     half = float(stats.t.ppf(0.5 + confidence / 2, c.size - 1)) * sd * math.sqrt(1 + 1 / c.size)
     return {"mean": m, "low": m - half, "high": m + half, "n": int(c.size),
-            "confidence": float(confidence)}
+            "confidence": float(confidence), "sd": sd}
 
 
 def _inner_cap(height_px: np.ndarray, d: np.ndarray, radius: float, ball_px: float,

@@ -47,9 +47,10 @@ __all__ += ["CALIBRATION_FILES", "CalibrationResult", "read_material", "result_d
 
 # a ball as its own gauge: depth from the contact circle
 from ._ball import BallDepths, ball_press_depths  # noqa: E402
-from ._ball_caps import CAP_SCALE_SD, BallCaps, ball_press_caps  # noqa: E402
+from ._ball_caps import CAP_PRESS_SD, CAP_SCALE_SD, BallCaps, ball_press_caps  # noqa: E402
 
-__all__ += ["CAP_SCALE_SD", "BallCaps", "BallDepths", "ball_press_caps", "ball_press_depths"]
+__all__ += ["CAP_PRESS_SD", "CAP_SCALE_SD", "BallCaps", "BallDepths", "ball_press_caps",
+            "ball_press_depths"]
 
 # a ball session: presses found in the frames and the F/T log, depths from the circles
 from ._ball_session import (  # noqa: E402

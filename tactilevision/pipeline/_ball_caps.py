@@ -23,12 +23,19 @@ from ..mechanics import Sphere, sphere_reach, sphere_surface_depth
 from ..optics import fit_ball_cap
 from ._ball import BallDepths
 
-__all__ = ["CAP_SCALE_SD", "BallCaps", "ball_press_caps"]
+__all__ = ["CAP_PRESS_SD", "CAP_SCALE_SD", "BallCaps", "ball_press_caps"]
 
-#: The heights' scale error a cap carries, 1 sd: the inner caps of held-out real presses
-#: under this project's calibrations lie within 5 % (docs/guide/optics.md: GelSight +2.5 %,
-#: GelSlim 3.0 +0.7 %, GelSight Mini +5.1 %), taken as a 2-sd bound.
+#: The heights' scale error a cap carries, 1 sd, shared by a session's presses: the median
+#: inner caps of held-out real presses under this project's calibrations lie within 5 %
+#: (docs/guide/optics.md: GelSight +2.5 %, GelSlim 3.0 -0.1 %, GelSight Mini +2.1 %),
+#: taken as a 2-sd bound.
 CAP_SCALE_SD = 0.025
+
+#: One press's own cap error about that scale, 1 sd, where the optics calibration does not
+#: state its own (``provenance["inner_cap_sd"]``, from ``optics calibrate``'s held-out
+#: presses): the largest of the shared sensors' held-out sd, GelSlim 3.0's 7.7 % (GelSight
+#: 5.5 %, GelSight Mini 2.4 %; docs/guide/optics.md, "What a new press's cap will read").
+CAP_PRESS_SD = 0.077
 
 #: The far-field annulus the gel level is read from, in contact radii (fit_ball_cap's).
 _ANNULUS = (1.5, 3.0)
@@ -51,12 +58,15 @@ class BallCaps:
         The depth the cap reads: w whose expected cap is `cap_mm`, mm (NaN where none
         within the ball's reach does).
     depth_std_mm : (N,) float64 ndarray
-        Its standard uncertainty from the heights' scale error, mm
-        (:data:`CAP_SCALE_SD` of the cap through dw/dcap).
+        Its standard uncertainty from the heights' errors, mm: the scale error the
+        session's presses share (:data:`CAP_SCALE_SD`) and one press's own (`press_sd`
+        of :func:`ball_press_caps`) in quadrature, of the cap, through dw/dcap.
     ratio : (N,) float64 ndarray
         ``cap_mm / expected_mm``: 1 where the heights and the circles agree.
     rms_mm : (N,) float64 ndarray
         RMS residual of each cap's fit, mm.
+    press_sd : float
+        One press's own relative cap error, 1 sd, that `depth_std_mm` carries.
     """
 
     cap_mm: np.ndarray
@@ -65,6 +75,7 @@ class BallCaps:
     depth_std_mm: np.ndarray
     ratio: np.ndarray
     rms_mm: np.ndarray
+    press_sd: float = CAP_PRESS_SD
 
     def summary(self) -> str:
         """One sentence: the caps against the circles, median and range."""
@@ -74,8 +85,10 @@ class BallCaps:
         return (f"cap cross-check: the height map's caps read {100 * (np.median(r) - 1):+.1f} % "
                 f"(median; {100 * (r.min() - 1):+.1f} to {100 * (r.max() - 1):+.1f} %) against "
                 f"what the circles' depths predict, where the heights' scale is good to "
-                f"+-{200 * CAP_SCALE_SD:.0f} %" + ("" if np.all(np.isfinite(self.depth_mm)) else
-                                                   "; some caps lie past the ball's reach"))
+                f"+-{200 * CAP_SCALE_SD:.0f} % and one press's cap to "
+                f"+-{200 * np.hypot(CAP_SCALE_SD, self.press_sd):.0f} %"
+                + ("" if np.all(np.isfinite(self.depth_mm))
+                   else "; some caps lie past the ball's reach"))
 
 
 def _annulus_radii(centre: np.ndarray, radius_px: float, shape: tuple[int, int]
@@ -89,7 +102,7 @@ def _annulus_radii(centre: np.ndarray, radius_px: float, shape: tuple[int, int]
 
 def ball_press_caps(heights_mm: np.ndarray, depths: BallDepths, ball: Sphere, *,
                     mm_per_px: float, thickness_mm: float, nu: float = 0.5,
-                    contact: str | None = None) -> BallCaps:
+                    contact: str | None = None, press_sd: float = CAP_PRESS_SD) -> BallCaps:
     """Each press's cap in its height map, against what its contact circle predicts.
 
     Parameters
@@ -103,6 +116,9 @@ def ball_press_caps(heights_mm: np.ndarray, depths: BallDepths, ball: Sphere, *,
     mm_per_px, thickness_mm, nu : float
     contact : str, optional
         The ball's contact condition (its default).
+    press_sd : float, default CAP_PRESS_SD
+        One press's own relative cap error, 1 sd (the optics calibration's
+        ``provenance["inner_cap_sd"]`` where it states one).
 
     Returns
     -------
@@ -111,7 +127,8 @@ def ball_press_caps(heights_mm: np.ndarray, depths: BallDepths, ball: Sphere, *,
     Raises
     ------
     InputError
-        For heights not one map per press, or a press whose annulus holds no pixel.
+        For heights not one map per press, a press whose annulus holds no pixel, or a
+        `press_sd` that is not a finite number >= 0.
 
     Notes
     -----
@@ -120,6 +137,9 @@ def ball_press_caps(heights_mm: np.ndarray, depths: BallDepths, ball: Sphere, *,
     """
     n = depths.depth_mm.size
     heights_mm = check_array(heights_mm, "heights_mm", [(n, "H", "W")])
+    if not (isinstance(press_sd, int | float) and np.isfinite(press_sd) and press_sd >= 0):
+        raise InputError(f"press_sd must be a finite number >= 0, got {press_sd!r}")
+    rel_sd = float(np.hypot(CAP_SCALE_SD, press_sd))
     s, h = float(mm_per_px), float(thickness_mm)
     reach = sphere_reach(ball.radius_mm / h) * h
     cap, rms, expected = np.empty(n), np.empty(n), np.empty(n)
@@ -155,6 +175,6 @@ def ball_press_caps(heights_mm: np.ndarray, depths: BallDepths, ball: Sphere, *,
                        xtol=1e-7)
             eps = 1e-3 * w
             slope = (predicted(w, rings[i]) - predicted(w - eps, rings[i])) / eps
-            read[i], std[i] = w, CAP_SCALE_SD * cap[i] / slope
+            read[i], std[i] = w, rel_sd * cap[i] / slope
     return BallCaps(cap_mm=cap, expected_mm=expected, depth_mm=read, depth_std_mm=std,
-                    ratio=cap / expected, rms_mm=rms)
+                    ratio=cap / expected, rms_mm=rms, press_sd=float(press_sd))

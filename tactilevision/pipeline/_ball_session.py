@@ -33,7 +33,7 @@ from ..mechanics import IndenterFit, Sphere, fit_indenter
 from ..optics import DepthReconstructor, PhotometricCalibration
 from ..viz import ball_calibration_figure
 from ._ball import BallDepths, ball_press_depths
-from ._ball_caps import CAP_SCALE_SD, BallCaps, ball_press_caps
+from ._ball_caps import CAP_PRESS_SD, CAP_SCALE_SD, BallCaps, ball_press_caps
 from ._steps import read_force_zero
 
 __all__ = ["BALL_CALIBRATION_FILES", "BallCalibration", "ball_indenter", "calibrate_ball_session",
@@ -206,14 +206,20 @@ def with_caps(cal: BallCalibration, optics: PhotometricCalibration | str | Path 
         recon = DepthReconstructor(optics, reference=session.reference)
         frame_of = frame_of or session.frame
         heights = np.stack([recon(frame_of(int(f))) for f in cal.frames])
+        stated = optics.provenance.get("inner_cap_sd")
         caps = ball_press_caps(heights, cal.depths, cal.indenter, mm_per_px=cfg.mm_per_px,
                                thickness_mm=cfg.gel_thickness_mm, nu=cal.nu,
-                               contact=cal.contact)
+                               contact=cal.contact,
+                               press_sd=CAP_PRESS_SD if stated is None else float(stated))
     except InputError as exc:
         return replace(cal, warnings=[*cal.warnings, f"cap cross-check not made: {exc}"])
     notes = [caps.summary()]
     rel = float(np.median(cal.depths.depth_shared_mm / cal.depths.depth_mm))
-    bound = 2.0 * float(np.hypot(CAP_SCALE_SD, rel))
+    # the median ratio: the shared scale, the circles' shared depth error, and the
+    # presses' own scatter through a median (1.2533 sd / sqrt(n))
+    n_caps = max(1, int(np.count_nonzero(np.isfinite(caps.ratio))))
+    bound = 2.0 * float(np.sqrt(CAP_SCALE_SD ** 2 + rel ** 2
+                                + (1.2533 * caps.press_sd) ** 2 / n_caps))
     off = float(np.nanmedian(caps.ratio)) - 1.0
     if abs(off) > bound:
         notes.append(f"the caps and the circles disagree by {100 * off:+.1f} %, beyond both "
