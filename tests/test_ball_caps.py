@@ -72,7 +72,7 @@ def test_a_caps_depth_carries_the_shared_scale_and_one_presss_own_error():
     np.testing.assert_array_equal(default.depth_mm, scale.depth_mm)
     assert f"one press's cap to +-{200 * np.hypot(CAP_SCALE_SD, 0.031):.0f} %" in \
         stated.summary()
-    for bad in (-0.01, float("nan"), "0.05", None):
+    for bad in (-0.01, float("nan"), "0.05", None, True):
         with pytest.raises(InputError, match="press_sd"):
             ball_press_caps(height[None], depths, BALL, press_sd=bad, **kw)
 

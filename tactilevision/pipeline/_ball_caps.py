@@ -137,7 +137,8 @@ def ball_press_caps(heights_mm: np.ndarray, depths: BallDepths, ball: Sphere, *,
     """
     n = depths.depth_mm.size
     heights_mm = check_array(heights_mm, "heights_mm", [(n, "H", "W")])
-    if not (isinstance(press_sd, int | float) and np.isfinite(press_sd) and press_sd >= 0):
+    if (isinstance(press_sd, bool) or not isinstance(press_sd, int | float)
+            or not np.isfinite(press_sd) or press_sd < 0):
         raise InputError(f"press_sd must be a finite number >= 0, got {press_sd!r}")
     rel_sd = float(np.hypot(CAP_SCALE_SD, press_sd))
     s, h = float(mm_per_px), float(thickness_mm)
