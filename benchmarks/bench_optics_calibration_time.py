@@ -1,6 +1,7 @@
 """How long ``optics calibrate`` takes on a 67-press GelSight Mini folder, against
 decoding that folder once, in the same run (one calibration through the library, and
-the command with its default held-out report: two).
+the command with its default held-out report: the engine's choice, whose network is
+scored, then the calibration saved, its network started from the scored one's).
 
 The folder is the shared GelSight Mini calibration (gs_sdk's layout, 22 presses of a
 6.31 mm ball, 320 x 240) with its presses repeated to 67, so that it holds as many
@@ -81,8 +82,8 @@ def main() -> int:
                 mm_per_px=MM_PER_PX, **kw)
             t = time.perf_counter() - t0
             print(f"one calibration, {label}: {t:.1f} s, {t / t_read:.0f} x the decode")
-        # the command as a user runs it: a calibration for the held-out report, then the
-        # one saved, trained on every press
+        # the command as a user runs it: the engine's choice (the network scored on the
+        # first fold), then the one saved, trained on every press from that network
         t0 = time.perf_counter()
         with contextlib.redirect_stdout(io.StringIO()) as out:
             rc = cli_main(["optics", "calibrate", str(folder), "--mm-per-px", str(MM_PER_PX),
