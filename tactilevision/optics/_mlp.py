@@ -23,6 +23,8 @@ __all__ = ["MLPGradientModel", "cell_position_inputs", "default_position_cell_px
            "mlp_layers", "train_mlp"]
 
 N_INPUTS = 8
+#: Pixels per optimisation step of :func:`train_mlp` (its default batch).
+BATCH_SIZE = 4096
 
 
 def mlp_inputs(change: np.ndarray, ref_colour: np.ndarray, x_px: np.ndarray, y_px: np.ndarray,
@@ -253,7 +255,7 @@ def serialise_normal_graph(nodes: list, initializers: list, name: str, producer:
 
 
 def train_mlp(inputs: np.ndarray, nxy: np.ndarray, *, hidden: int = 128, epochs: int = 12,
-              batch_size: int = 4096, learning_rate: float = 3e-3, seed: int = 0,
+              batch_size: int = BATCH_SIZE, learning_rate: float = 3e-3, seed: int = 0,
               progress: bool = False, max_steps: int | None = None,
               init: bytes | None = None) -> bytes:
     """Train the colour-to-normal network and return it as ONNX bytes.

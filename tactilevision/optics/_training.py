@@ -31,7 +31,13 @@ from ._circles import detect_contact_circles
 from ._features import colour_change, reference_inverse
 from ._lut import fit_cell_luts, fit_colour_lut
 from ._markers import marker_mask
-from ._mlp import cell_position_inputs, default_position_cell_px, mlp_inputs, train_mlp
+from ._mlp import (
+    BATCH_SIZE,
+    cell_position_inputs,
+    default_position_cell_px,
+    mlp_inputs,
+    train_mlp,
+)
 from ._reconstructor import DepthReconstructor
 
 __all__ = ["fit_from_ball_presses"]
@@ -275,7 +281,7 @@ def _fit_round(cal: CalibrationData, samples: tuple[np.ndarray, ...], ref_colour
                                 use_position=cal.use_position)
         cal.table_lo, cal.table_hi = _table_range(f_all, in_disc, cal.colour_lo, cal.colour_hi)
         if init is not None:        # a warm start: a share of a cold round's steps
-            cold = epochs * -(-len(inputs) // 4096)
+            cold = epochs * -(-len(inputs) // BATCH_SIZE)
             max_steps = max(1, int(MLP_WARM_FRACTION * min(cold, max_steps or cold)))
         cal.onnx_bytes = train_mlp(inputs, n_all, hidden=hidden, epochs=epochs,
                                    seed=seed, progress=progress, max_steps=max_steps,
