@@ -18,43 +18,44 @@ from tactilevision.pipeline import calibrate_session, write_calibration
 from tactilevision.sim import GaugeBlock, SessionSpec, make_session
 
 SEM = 0.045                       # relative sd of a crossing force (a 15 frames/s bracket)
+WIDTH = np.sqrt(12.0) * SEM       # its bracket's width, relative to its reading
+_DESIGN = np.random.default_rng(7)
+X_MM, Y_MM = _DESIGN.uniform(-6.5, -1.3, 20), _DESIGN.uniform(-4, 4, 20)
 
 
 def _crossings(seed: int, scale) -> dict[str, np.ndarray]:
-    """5 indenters x 4 presses in an interleaved order, each crossing force P_g x scale,
-    with relative noise SEM."""
+    """5 indenters x 4 presses in an interleaved order at fixed places on the pad, each
+    crossing force P_g x scale bracketed as the certification brackets it: the bracket
+    ``force_w0_n -+ sqrt(3) force_w0_sem_n`` (WIDTH of its reading) holds the force at a
+    uniform place."""
     rng = np.random.default_rng(seed)
     press = np.arange(20)
     ind = np.tile(np.arange(5), 4)
-    x = rng.uniform(-6.5, -1.3, 20)
     p_g = np.array([0.3, 0.5, 0.7, 0.9, 1.1])[ind]
-    s = np.asarray(scale(press, x), np.float64)
-    f = p_g * s * (1 + SEM * rng.standard_normal(20))
+    p = p_g * np.asarray(scale(press, X_MM), np.float64)
+    f = p / (1.0 + (rng.random(20) - 0.5) * WIDTH)          # p = f (1 + (u - 1/2) WIDTH)
     return {"indenter": ind, "press": press.astype(float), "time_s": 3.0 * press,
-            "x_mm": x, "y_mm": rng.uniform(-4, 4, 20), "force_w0_n": f,
-            "force_w0_sem_n": SEM * p_g * s}
+            "x_mm": X_MM, "y_mm": Y_MM, "force_w0_n": f, "force_w0_sem_n": SEM * f}
 
 
 def test_no_change_is_found_at_the_stated_level():
     """Nothing changes: the family-wise level is 1 %, so at most a few of 200 tables (1 of
-    these 200), and the family-wise p-value of the scan is about uniform under the stated
-    noise: under 0.2 in 20 % of tables (16.5 % of these; the min-P's calibration)."""
-    alarms = sum(crossing_tests(_crossings(s, lambda p, x: np.ones(20))).found is not None
-                 for s in range(200))
+    these 200: 2), and the family-wise p-value of the scan is about uniform under the stated
+    brackets: under 0.2 in 20 % of tables (23.5 % of these; the min-P's calibration)."""
+    scans = [crossing_tests(_crossings(s, lambda p, x: np.ones(20))) for s in range(200)]
+    alarms = sum(scan.found is not None for scan in scans)
     assert alarms <= 6, alarms
-    least = [crossing_tests(_crossings(s, lambda p, x: np.ones(20))).tests[0].p_value
-             for s in range(200)]
+    least = [scan.tests[0].p_value for scan in scans]
     assert 0.13 < float(np.mean(np.array(least) < 0.2)) < 0.27
-    chi = [crossing_tests(_crossings(s, lambda p, x: np.ones(20))).p_scatter
-           for s in range(200)]
-    assert 0.35 < float(np.mean(chi)) < 0.65              # uniform under the stated noise
+    chi = [scan.p_scatter for scan in scans]
+    assert 0.35 < float(np.mean(chi)) < 0.65
 
 
 def test_a_stiffness_step_is_found_with_its_size():
     """E falls 12 % after the 10th press: named a stiffness step along press or time in
-    at least 88 % of tables (91 of these 100; Akaike's criterion between a step and a
-    trend), a step found or listed as equivalent in at least 95 (99), its size within 3
-    se of the truth in at least 85 (the step found: 90)."""
+    at least 84 % of tables (88 of these 100; the step and the trend told apart by what
+    each predicts, at the 5 % level), a step found or listed as equivalent in at least 90
+    (95), its size within 3 se of the truth in at least 80 (the step found: 87)."""
     named, either, held = 0, 0, 0
     for seed in range(100):
         scan = crossing_tests(_crossings(seed, lambda p, x: np.where(p >= 10, 0.88, 1.0)))
@@ -64,13 +65,14 @@ def test_a_stiffness_step_is_found_with_its_size():
         if steps and steps[0] is scan.found:
             named += 1
             held += abs(steps[0].size - (0.88 - 1)) < 3 * steps[0].se
-    assert named >= 88 and either >= 95 and held >= 85, (named, either, held)
+    assert named >= 84 and either >= 90 and held >= 80, (named, either, held)
 
 
 def test_a_steady_softening_is_a_trend():
     """E falls 20 % steadily over the 20 presses: a stiffness trend along press or time
-    found in at least 88 % of tables (91 of these 100), found or listed as equivalent to
-    a step in at least 95 (97)."""
+    found in at least 88 % of tables (93 of these 100), found or listed as equivalent to
+    a step in at least 90 (94: the fitted trend's own draws reject it in about 5 %, the
+    level of that test)."""
     found, either = 0, 0
     for seed in range(100):
         scan = crossing_tests(_crossings(seed, lambda p, x: 1 - 0.2 * p / 19))
@@ -78,7 +80,7 @@ def test_a_steady_softening_is_a_trend():
                   and t.kind == "trend" and t.column in ("press", "time_s")]
         either += bool(trends)
         found += bool(trends) and trends[0] is scan.found
-    assert found >= 88 and either >= 95, (found, either)
+    assert found >= 88 and either >= 90, (found, either)
 
 
 def test_a_gradient_across_the_pad_is_spatial():
@@ -90,11 +92,12 @@ def test_a_gradient_across_the_pad_is_spatial():
 
 
 def test_the_sizes_said_are_named_that_often():
-    """crossing_sizes on a table's presses (their stated uncertainties only): a step half-way
+    """crossing_sizes on a table's presses (their stated brackets only): a step half-way
     through the presses, a steady change with time and a gradient along x of that size are
     named (a stiffness change along press or time; spatial_nonuniformity) in about 95 % of
-    sessions (at least 51 of 60; 57 to 59 when written), of 1.5 times that size in at
-    least 57 of 60 (60)."""
+    sessions (at least 51 of 60; 58 to 60 when written), of 1.5 times that size in at
+    least 57 of 60 (60); and no smaller size would do: half of it is named in at most 45
+    of 60 (28 to 33)."""
     sizes = crossing_sizes(_crossings(0, lambda p, x: np.ones(20)))
     assert set(sizes) == {"stiffness_step:press", "stiffness_trend:time_s",
                           "spatial_nonuniformity"}
@@ -102,13 +105,13 @@ def test_the_sizes_said_are_named_that_often():
               "stiffness_trend:time_s": lambda d: lambda p, x: np.exp(d * 3.0 * p),
               "spatial_nonuniformity": lambda d: lambda p, x: 1 + d * x}
     for name, shape in shapes.items():
-        for k, least in ((1.0, 51), (1.5, 57)):
+        for k, least, most in ((0.5, 0, 45), (1.0, 51, 60), (1.5, 57, 60)):
             hits = 0
             for seed in range(60):
                 t = crossing_tests(_crossings(100 + seed, shape(k * sizes[name]))).found
                 hits += t is not None and (t.effect == name if name.startswith("spatial")
                                            else t.column in ("press", "time_s"))
-            assert hits >= least, (name, k, hits)
+            assert least <= hits <= most, (name, k, hits)
     assert crossing_sizes({"indenter": np.zeros(3)}) == {}
 
 

@@ -19,6 +19,7 @@ press order are nearly one test).
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 from collections.abc import Mapping
@@ -28,6 +29,7 @@ import numpy as np
 from scipy import stats
 
 from .._checks import InputError
+from ._brackets import BRACKET_DELTAS, bracket_draws, bracket_gains
 
 __all__ = ["CROSSING_ALPHA", "CROSSING_COLUMNS", "CROSSING_UNITS", "CrossingScan",
            "CrossingTest", "crossing_measurements", "crossing_sizes", "crossing_tests"]
@@ -46,7 +48,12 @@ CROSSING_UNITS = {"stiffness_step:press": ("s", "%", 100.0),
 _MIN_PER_INDENTER = 2
 #: Draws of the tests' joint null distribution behind the family-wise p-values, and their
 #: seed (the same table gives the same p-values).
-_FAMILY_DRAWS, _FAMILY_SEED = 10000, 20261126
+_BRACKET_DRAWS, _FAMILY_SEED = 10000, 20261126
+#: Draws under each of a fitted trend and step behind :func:`_shape_fits`, and the level
+#: below which a shape is taken not to explain the brackets.
+_SHAPE_DRAWS, _SHAPE_ALPHA = 400, 0.05
+#: Draws behind each size :func:`crossing_sizes` tries.
+_SIZE_DRAWS = 1000
 
 
 @dataclass(frozen=True)
@@ -60,18 +67,22 @@ class CrossingTest:
         A stiffness changing linearly along the column, or stepping once along it.
     size : float
         The relative change of the crossing force: per unit of the column (trend), or
-        across the step (step, its side of larger values against the other).
+        across the step (step, its side of larger values against the other); the
+        weighted least squares of the brackets' midpoints.
     se : float
-        Its standard error from the stated uncertainties.
+        Its standard error from the stated uncertainties (sd width / sqrt(12)).
     at : float
-        The step's place (midway between the two presses it falls between); NaN for
-        a trend.
+        The step's place (midway between the two presses it falls between, the one the
+        brackets' likelihood prefers); NaN for a trend.
     p_value : float
-        Family-wise: the chance, under the stated uncertainties and no change, that
-        some test of the scan (a step at any of its places) reaches a |size / se| this
-        large (the single-step maxT of Westfall and Young, by seeded draws).
+        Family-wise: the chance, under the stated brackets and no change, that some test
+        of the scan (a step at any of its places) gains this much likelihood
+        (:mod:`~tactilevision.diagnosis._brackets`; the single-step min-P of Westfall
+        and Young, by seeded draws).
     significant : bool
         ``p_value`` below :data:`CROSSING_ALPHA`.
+    gain : float
+        The brackets' log-likelihood gain at the test's best size over none.
     """
 
     column: str
@@ -81,6 +92,7 @@ class CrossingTest:
     at: float
     p_value: float
     significant: bool
+    gain: float = float("nan")
 
     @property
     def effect(self) -> str:
@@ -109,6 +121,11 @@ class CrossingScan:
         what they state.
     tests : tuple of CrossingTest
         Best first (smallest p).
+    p_trend_fits, p_step_fits : float
+        Where a trend and a step along the most significant test's column are both
+        significant: the chance that the fitted trend's brackets favour the best step over
+        the trend as much as these do, and that the fitted step's favour it this little
+        (:func:`_shape_fits`); NaN otherwise.
     """
 
     n: int
@@ -117,45 +134,48 @@ class CrossingScan:
     dof: int
     p_scatter: float
     tests: tuple[CrossingTest, ...]
+    p_trend_fits: float = float("nan")
+    p_step_fits: float = float("nan")
 
-    def _rivals(self) -> tuple[CrossingTest | None, CrossingTest | None]:
-        """The test found and its rival of the other shape along the same column (None
-        where there is none), by Akaike's criterion (module docstring of `found`)."""
+    def _rivals(self) -> tuple[CrossingTest | None, CrossingTest | None, bool]:
+        """The test found, its rival of the other shape along the same column (None where
+        there is none), and whether the rival explains the brackets about as well."""
         sig = [t for t in self.tests if t.significant]
         if not sig:
-            return None, None
+            return None, None, False
         best = sig[0]
         rival = [t for t in sig if t.column == best.column and t.kind != best.kind]
         if not rival:
-            return best, None
+            return best, None, False
         step, trend = (best, rival[0]) if best.kind == "step" else (rival[0], best)
-        return (step, trend) if self._aic_gain(step, trend) > 0 else (trend, step)
-
-    @staticmethod
-    def _aic_gain(step: CrossingTest, trend: CrossingTest) -> float:
-        """How much better the step fits than the trend along one column, in AIC: the
-        drop in chi2, ``z_step^2 - z_trend^2``, less 2 for its one parameter more (the
-        change point)."""
-        return (step.size / step.se) ** 2 - (trend.size / trend.se) ** 2 - 2.0
+        aic = (step.size / step.se) ** 2 - (trend.size / trend.se) ** 2 - 2.0
+        by_aic = (step, trend) if aic > 0 else (trend, step)
+        if not np.isfinite(self.p_trend_fits):
+            return by_aic + (abs(aic) <= 2.0,)
+        trend_ok = self.p_trend_fits >= _SHAPE_ALPHA
+        step_ok = self.p_step_fits >= _SHAPE_ALPHA
+        if trend_ok == step_ok:         # both explain them (or neither): Akaike's choice
+            return by_aic + (trend_ok,)
+        return (trend, step, False) if trend_ok else (step, trend, False)
 
     @property
     def found(self) -> CrossingTest | None:
         """The most significant test, where one is; along its column, where a step and a
-        trend are both significant, the one Akaike's criterion prefers (the step pays 2 for
-        its change point; Akaike, IEEE Trans. Autom. Control 19, 716, 1974)."""
+        trend are both significant, the one that explains the brackets where the other
+        does not, or the one whose fit the other's bootstrap rejects less
+        (``p_trend_fits``, ``p_step_fits``: Cox's test of separate families)."""
         return self._rivals()[0]
 
     @property
     def equivalent(self) -> tuple[CrossingTest, ...]:
-        """The other shape along the found column where the data hardly prefer either
-        (AIC within 2 of the found: Burnham and Anderson, Model Selection and Multimodel
-        Inference, 2002, sec. 2.6); a gel that softens steadily fits a step at its middle
-        nearly as well at a crossing's noise."""
-        found, rival = self._rivals()
-        if rival is None:
-            return ()
-        step, trend = (found, rival) if found.kind == "step" else (rival, found)
-        return (rival,) if abs(self._aic_gain(step, trend)) <= 2.0 else ()
+        """The other shape along the found column where the data hardly prefer either: both
+        explain the brackets (``p_trend_fits`` and ``p_step_fits`` at least
+        :data:`_SHAPE_ALPHA`); without those, where their midpoints' AIC lie within 2
+        (Burnham and Anderson, Model Selection and Multimodel Inference, 2002, sec. 2.6).
+        A gel that softens steadily fits a step at its middle nearly as well at a
+        crossing's noise."""
+        _, rival, alike = self._rivals()
+        return (rival,) if rival is not None and alike else ()
 
     def sentence(self) -> str:
         """What the crossing forces say, in one or two sentences."""
@@ -184,7 +204,8 @@ class CrossingScan:
                 "equivalent": [t.effect for t in self.equivalent],
                 "tests": [{"column": t.column, "kind": t.kind, "size": num(t.size),
                            "se": num(t.se), "at": num(t.at), "p_value": num(t.p_value),
-                           "significant": t.significant} for t in self.tests]}
+                           "significant": t.significant, "log_likelihood_gain": num(t.gain)}
+                          for t in self.tests]}
 
 
 def _within(v: np.ndarray, groups: np.ndarray, w: np.ndarray) -> np.ndarray:
@@ -207,6 +228,57 @@ def _slope(r: np.ndarray, z: np.ndarray, groups: np.ndarray, w: np.ndarray
     return float(np.sum(w * zc * r) / sxx), float(1.0 / np.sqrt(sxx))
 
 
+@dataclass(frozen=True)
+class _Brackets:
+    """A table's tests as shapes for the brackets' likelihood: every trend and every place
+    of a step (``shapes`` (K, N), ``owner`` (K,) each one's test, ``at`` (K,) a step's
+    place), the presses' indenters 0 to G - 1 and their brackets' widths relative to
+    their readings (three figures: tables of one design at one precision share their
+    null draws)."""
+
+    shapes: np.ndarray
+    owner: np.ndarray
+    at: list[float]
+    groups: np.ndarray
+    width: np.ndarray
+
+    @classmethod
+    def of(cls, columns: Mapping[str, np.ndarray], ok: np.ndarray, groups: np.ndarray,
+           w: np.ndarray, tests: list[tuple[str, str, np.ndarray]]) -> _Brackets:
+        shapes, owner, at = [], [], []
+        for j, (_col, kind, z) in enumerate(tests):
+            if kind == "trend":
+                shapes.append((z - z.mean()) / np.ptp(z))
+                at.append(float("nan"))
+            else:
+                for lo, hi in itertools.pairwise(np.unique(z)):
+                    shapes.append((z > lo).astype(np.float64))
+                    at.append(0.5 * (lo + hi))
+            owner += [j] * (len(shapes) - len(owner))
+        f = np.asarray(columns["force_w0_n"], np.float64)[ok]
+        se = np.asarray(columns["force_w0_sem_n"], np.float64)[ok]
+        width = np.array([float(f"{v:.3g}") for v in np.sqrt(12.0) * se / f])
+        _, gid = np.unique(groups, return_inverse=True)
+        return cls(np.vstack(shapes), np.array(owner, np.int64), at, gid.astype(np.int64),
+                   width)
+
+    def null(self) -> np.ndarray:
+        """Each test's largest gain over its places (D, T) with nothing changing."""
+        return _bracket_null(self.width.tobytes(), self.groups.tobytes(),
+                             self.shapes.tobytes(), self.owner.tobytes())
+
+    def thresholds(self) -> np.ndarray:
+        """Each test's gain (T,) that names it at the family-wise :data:`CROSSING_ALPHA`
+        (min-P: the tests' own p-value that the family's level allows)."""
+        null = self.null()
+        d = null.shape[0]
+        srt = np.sort(null, axis=0)
+        own = np.stack([(d - np.searchsorted(srt[:, j], null[:, j], side="left") + 1)
+                        / (d + 1) for j in range(null.shape[1])], axis=1)
+        p_crit = float(np.quantile(own.min(axis=1), CROSSING_ALPHA))
+        return np.quantile(null, 1.0 - p_crit, axis=0)
+
+
 def crossing_tests(columns: Mapping[str, np.ndarray]) -> CrossingScan | None:
     """Test each indenter's crossing forces for a change along the press's conditions.
 
@@ -222,6 +294,16 @@ def crossing_tests(columns: Mapping[str, np.ndarray]) -> CrossingScan | None:
     CrossingScan or None
         None where the table has no crossing forces, or fewer than two indenters with
         two presses each.
+
+    Notes
+    -----
+    Each crossing force is the bracket ``force_w0_n -+ sqrt(3) force_w0_sem_n`` the
+    certification states; each test (a trend along a column, a step at each place along
+    time and press order) is the brackets' likelihood ratio
+    (:mod:`~tactilevision.diagnosis._brackets`), its family-wise p-value by the min-P
+    over :data:`_BRACKET_DRAWS` seeded draws of brackets from the same model. The sizes
+    and standard errors reported are the weighted least squares of the brackets'
+    midpoints (sd width / sqrt(12)), which also gives the scatter's chi2.
     """
     prep = _prepared(columns)
     if prep is None:
@@ -229,25 +311,115 @@ def crossing_tests(columns: Mapping[str, np.ndarray]) -> CrossingScan | None:
     ok, groups, r, w = prep
     rc = _within(r, groups, w)
     chi2, dof = float(np.sum(w * rc * rc)), int(r.size - len(np.unique(groups)))
-    raw, rows = [], []
-    for col, kind, z in _test_columns(columns, ok):
+    tests = _test_columns(columns, ok)
+    if not tests:
+        return CrossingScan(n=int(r.size), n_indenters=len(np.unique(groups)), chi2=chi2,
+                            dof=dof, p_scatter=float(stats.chi2.sf(chi2, dof)) if dof > 0
+                            else float("nan"), tests=())
+    setup = _Brackets.of(columns, ok, groups, w, tests)
+    shape_a, owner_a, at, gid, width = (setup.shapes, setup.owner, setup.at, setup.groups,
+                                        setup.width)
+    half = np.sqrt(3.0) / np.sqrt(w)                 # half-widths relative to the indenter's
+    obs, _ = bracket_gains((r + 1.0 - half)[None], (r + 1.0 + half)[None], gid, shape_a)
+    best = [int(np.flatnonzero(owner_a == j)[np.argmax(obs[0, owner_a == j])])
+            for j in range(len(tests))]
+    observed = np.array([obs[0, k] for k in best])
+    per_test = setup.null()
+    p_family = _family_p(observed, per_test)
+    # each test's best shape's gain on a fine grid about its best size (what the step and
+    # the trend are weighed by; the p-values compare the coarse grid with its null)
+    fine = [_fine_gain(r + 1.0 - half, r + 1.0 + half, gid, shape_a[k]) for k in best]
+    out = []
+    for (col, kind, _z), k, p, (gain, _d) in zip(tests, best, p_family, fine, strict=True):
         if kind == "trend":
-            b, s = _slope(rc, z, groups, w)
-            if np.isfinite(b):
-                raw.append((col, "trend", b, s, float("nan"), abs(b / s)))
-                rows.append([_direction(z, groups, w)])
+            b, s = _slope(rc, np.asarray(columns[col], np.float64)[ok], groups, w)
         else:
-            got, places = _best_step(rc, z, groups, w, col)
-            if places:
-                raw.append(got)
-                rows.append(places)
-    p_family = _max_statistic_p([t[5] for t in raw], rows)
-    tests = sorted((CrossingTest(col, kind, b, s, at, p, bool(p < CROSSING_ALPHA))
-                    for (col, kind, b, s, at, _), p in zip(raw, p_family, strict=True)),
-                   key=lambda t: (t.p_value, -abs(t.size / t.se)))
+            b, s = _slope(rc, shape_a[k], groups, w)
+        out.append(CrossingTest(col, kind, b, s, at[k], float(p), bool(p < CROSSING_ALPHA),
+                                gain))
+    shape_p = (float("nan"), float("nan"))
+    sig = sorted((t for t in out if t.significant), key=lambda t: (t.p_value, -t.gain))
+    if sig:
+        j_of = {(t[0], t[1]): j for j, t in enumerate(tests)}
+        col = sig[0].column
+        if all((col, kind) in j_of and any(t.column == col and t.kind == kind for t in sig)
+               for kind in ("trend", "step")):
+            jt, js = j_of[(col, "trend")], j_of[(col, "step")]
+            shape_p = _shape_fits(r + 1.0 - half, r + 1.0 + half, gid, width,
+                                  shape_a[owner_a == jt][0], shape_a[owner_a == js],
+                                  fine[jt][1], shape_a[best[js]], fine[js][1])
+    out.sort(key=lambda t: (t.p_value, -t.gain))
     return CrossingScan(n=int(r.size), n_indenters=len(np.unique(groups)), chi2=chi2, dof=dof,
                         p_scatter=float(stats.chi2.sf(chi2, dof)) if dof > 0 else float("nan"),
-                        tests=tuple(tests))
+                        tests=tuple(out), p_trend_fits=shape_p[0], p_step_fits=shape_p[1])
+
+
+def _shape_fits(lo: np.ndarray, hi: np.ndarray, groups: np.ndarray, width: np.ndarray,
+                trend: np.ndarray, steps: np.ndarray, d_trend: float, step: np.ndarray,
+                d_step: float) -> tuple[float, float]:
+    """Whether a trend or a step along one column explains the brackets, each tested against
+    the other by what the other predicts (Cox's test of separate families, by parametric
+    bootstrap: Cox, Proc. 4th Berkeley Symp. 1, 105, 1961): the statistic is how much more
+    the best step gains than the trend, on the coarse grid; ``(p_trend, p_step)``, the chance
+    of a statistic this large under the fitted trend, and this small under the fitted step
+    (:data:`_SHAPE_DRAWS` draws of brackets of the table's widths about each)."""
+    shapes = np.vstack([trend[None], steps])
+
+    def stat(lo_, hi_):
+        g, _ = bracket_gains(lo_, hi_, groups, shapes)
+        return g[:, 1:].max(axis=1) - g[:, 0]
+
+    observed = float(stat(lo[None], hi[None])[0])
+    rng = np.random.default_rng(_FAMILY_SEED + 1)
+    out = []
+    for z, d, upper in ((trend, d_trend, True), (step, d_step, False)):
+        lo0, hi0 = bracket_draws(width, _SHAPE_DRAWS, rng)
+        true = 1.0 + d * z
+        draws = stat(lo0 * true, hi0 * true)
+        hits = np.sum(draws >= observed) if upper else np.sum(draws <= observed)
+        out.append(float((hits + 1) / (_SHAPE_DRAWS + 1)))
+    return out[0], out[1]
+
+
+def _fine_gain(lo: np.ndarray, hi: np.ndarray, groups: np.ndarray, shape: np.ndarray
+               ) -> tuple[float, float]:
+    """The brackets' largest log-likelihood gain along `shape` and the size that reaches
+    it: a coarse pass, then 201 sizes between its best's neighbours."""
+    _, d = bracket_gains(lo[None], hi[None], groups, shape[None])
+    j = int(np.argmin(np.abs(BRACKET_DELTAS - d[0, 0])))
+    ends = BRACKET_DELTAS[max(j - 1, 0)], BRACKET_DELTAS[min(j + 1, BRACKET_DELTAS.size - 1)]
+    near = np.r_[0.0, np.linspace(*ends, 201)]
+    gain, best = bracket_gains(lo[None], hi[None], groups, shape[None], near)
+    return float(gain[0, 0]), float(best[0, 0])
+
+
+@functools.lru_cache(maxsize=16)
+def _bracket_null(width: bytes, groups: bytes, shapes: bytes, owner: bytes) -> np.ndarray:
+    """Each test's largest gain over its places (D, T) in :data:`_BRACKET_DRAWS` seeded
+    draws of brackets of these relative widths with nothing changing (arrays as bytes:
+    float64 widths (N,), int64 groups (N,), float64 shapes (K, N), int64 owner (K,), each
+    shape's test)."""
+    w = np.frombuffer(width, np.float64)
+    z = np.frombuffer(shapes, np.float64).reshape(-1, w.size)
+    own = np.frombuffer(owner, np.int64)
+    lo, hi = bracket_draws(w, _BRACKET_DRAWS, np.random.default_rng(_FAMILY_SEED))
+    gain, _ = bracket_gains(lo, hi, np.frombuffer(groups, np.int64), z)
+    return np.stack([gain[:, own == j].max(axis=1) for j in range(int(own.max()) + 1)], 1)
+
+
+def _family_p(observed: np.ndarray, null: np.ndarray) -> np.ndarray:
+    """Family-wise p-values of the tests' statistics `observed` (T,) from their joint null
+    draws `null` (D, T), larger being more extreme: each test's own p from its null, then
+    the family's by the smallest of those over the tests (Westfall and Young's single-step
+    min-P, Resampling-Based Multiple Testing, 1993)."""
+    d = null.shape[0]
+    srt = np.sort(null, axis=0)
+    own_null = np.stack([(d - np.searchsorted(srt[:, j], null[:, j], side="left") + 1)
+                         / (d + 1) for j in range(null.shape[1])], axis=1)
+    least = np.sort(own_null.min(axis=1))
+    own = np.array([(d - np.searchsorted(srt[:, j], observed[j], side="left") + 1) / (d + 1)
+                    for j in range(null.shape[1])])
+    return (np.searchsorted(least, own, side="right") + 1) / (d + 1)
 
 
 def _prepared(columns: Mapping[str, np.ndarray]
@@ -292,46 +464,6 @@ def _test_columns(columns: Mapping[str, np.ndarray], ok: np.ndarray
     return out
 
 
-def _direction(x: np.ndarray, groups: np.ndarray, w: np.ndarray) -> np.ndarray:
-    """The unit vector a with ``a . u`` the z statistic of a slope along `x` (a mean per
-    group, known variances 1/w) for standard normal noise u: ``sqrt(w) x_c / |.|``."""
-    a = np.sqrt(w) * _within(x, groups, w)
-    norm = float(np.linalg.norm(a))
-    return a / norm if norm > 0 else a
-
-
-def _null_statistics(rows: list[list[np.ndarray]]) -> tuple[list[np.ndarray], np.ndarray]:
-    """Each test's |z| statistic (a step's: its largest over its places), sorted, over
-    :data:`_FAMILY_DRAWS` seeded draws of their joint normal distribution under the
-    stated noise; and per draw the smallest of the tests' own p-values."""
-    u = np.random.default_rng(_FAMILY_SEED).standard_normal((_FAMILY_DRAWS, rows[0][0].size))
-    d = _FAMILY_DRAWS
-    tops, least = [], np.ones(d)
-    for r in rows:
-        top = np.max(np.abs(u @ np.vstack(r).T), axis=1)
-        srt = np.sort(top)
-        tops.append(srt)
-        least = np.minimum(least, (d - np.searchsorted(srt, top, side="left") + 1) / (d + 1))
-    return tops, np.sort(least)
-
-
-def _max_statistic_p(observed: list[float], rows: list[list[np.ndarray]]) -> list[float]:
-    """Family-wise p-values of the tests' |z| statistics (a step's: its largest over its
-    places) under the stated noise (:func:`_null_statistics`): each test's own p from its
-    statistic's null distribution (a step's every place counted exactly, not by
-    Bonferroni), then the family's by the smallest of those over the tests (Westfall and
-    Young's single-step min-P, Resampling-Based Multiple Testing, 1993). It counts how
-    alike the tests are (a trend along time and along press order are nearly one test)
-    and weighs each test alike, however many places a step has."""
-    if not observed:
-        return []
-    tops, least = _null_statistics(rows)
-    d = _FAMILY_DRAWS
-    own = [(d - np.searchsorted(srt, z, side="left") + 1) / (d + 1)
-           for z, srt in zip(observed, tops, strict=True)]
-    return [float((np.searchsorted(least, p, side="right") + 1) / (d + 1)) for p in own]
-
-
 def crossing_sizes(columns: Mapping[str, np.ndarray], *, power: float = 0.95
                    ) -> dict[str, float]:
     """The smallest within-indenter changes the crossing tests name in `power` of sessions
@@ -341,7 +473,7 @@ def crossing_sizes(columns: Mapping[str, np.ndarray], *, power: float = 0.95
     ----------
     columns : mapping of str to (N,) array_like
         As for :func:`crossing_tests` (the crossing forces' values only set their
-        relative uncertainties, ``force_w0_sem_n / force_w0_n``).
+        brackets' relative widths, ``force_w0_sem_n / force_w0_n``).
     power : float, default 0.95
 
     Returns
@@ -355,57 +487,57 @@ def crossing_sizes(columns: Mapping[str, np.ndarray], *, power: float = 0.95
 
     Notes
     -----
-    Each test's statistic is linear in the crossing forces, so an effect of size
-    delta moves the statistic of its own test (a step at its true place, a trend
-    along its column) by ``delta q`` (q the norm of the weighted, within-indenter
-    centred effect shape) and the test names it with chance ``Phi(delta q - c)``,
-    c the test's threshold under the family-wise level (:func:`_null_statistics`).
-    So ``delta = (c + z_power) / q``. The other tests of the scan can only add to the
-    power: the sizes are upper bounds of what is named in `power` of sessions.
+    For each effect, brackets of the table's widths are drawn about crossing forces
+    changed by it (:data:`_SIZE_DRAWS` draws, the same for every size tried), and its
+    own test (a step along press order at any place, a trend along time or x) names it
+    where its gain passes the family-wise threshold (:meth:`_Brackets.thresholds`);
+    the size named in `power` of the draws is found by bisection. The other tests of
+    the scan can only add to the power: the sizes are upper bounds of what is named in
+    `power` of sessions.
     """
     prep = _prepared(columns)
     if prep is None:
         return {}
     ok, groups, _, w = prep
     tests = _test_columns(columns, ok)
-    rows = [[_direction(z, groups, w)] if kind == "trend" else
-            [_direction((z > lo).astype(np.float64), groups, w)
-             for lo, _hi in itertools.pairwise(np.unique(z))]
-            for _col, kind, z in tests]
-    tops, least = _null_statistics(rows)
-    p_crit = float(np.quantile(least, CROSSING_ALPHA))
-    z_power = float(stats.norm.ppf(power))
+    if not tests:
+        return {}
+    setup = _Brackets.of(columns, ok, groups, w, tests)
+    crit = setup.thresholds()
+    lo0, hi0 = bracket_draws(setup.width, _SIZE_DRAWS, np.random.default_rng(_FAMILY_SEED + 2))
     out = {}
-    for (col, kind, z), srt in zip(tests, tops, strict=True):
-        c = float(np.quantile(srt, 1.0 - p_crit))
+    for j, (col, kind, z) in enumerate(tests):
         if kind == "step" and col == "press":
-            shape, name = (z > np.median(z)).astype(np.float64), "stiffness_step:press"
+            name, effect = "stiffness_step:press", (z > np.median(z)).astype(np.float64)
         elif kind == "trend" and col in ("time_s", "x_mm"):
-            shape = z
             name = "stiffness_trend:time_s" if col == "time_s" else "spatial_nonuniformity"
+            effect = z - z.mean()
         else:
             continue
-        q = float(np.linalg.norm(np.sqrt(w) * _within(shape, groups, w)))
-        out[name] = (c + z_power) / q if q > 0 else math.inf
+        shapes = setup.shapes[setup.owner == j]
+
+        def named(size: float, effect=effect, shapes=shapes, c=crit[j],
+                  steady=name == "stiffness_trend:time_s") -> float:
+            true = np.exp(size * effect) if steady else 1.0 + size * effect
+            gain, _ = bracket_gains(lo0 * true, hi0 * true, setup.groups, shapes)
+            return float(np.mean(gain.max(axis=1) >= c))
+
+        out[name] = _bisect_size(named, power, 0.05 / max(float(np.ptp(effect)), 1e-12))
     return out
 
 
-def _best_step(r: np.ndarray, z: np.ndarray, groups: np.ndarray, w: np.ndarray, col: str
-               ) -> tuple[tuple, list[np.ndarray]]:
-    """The step along `z` with the largest |size / se| over the places between its distinct
-    values, ``(col, 'step', size, se, at, |size / se|)``, and each place's direction
-    (:func:`_direction`) for the family-wise p-value."""
-    best = (col, "step", float("nan"), float("inf"), float("nan"), 0.0)
-    places = []
-    for lo, hi in itertools.pairwise(np.unique(z)):
-        after = (z > lo).astype(np.float64)
-        b, s = _slope(r, after, groups, w)
-        if not np.isfinite(b):
-            continue
-        places.append(_direction(after, groups, w))
-        if abs(b / s) > best[5]:
-            best = (col, "step", b, s, 0.5 * (lo + hi), abs(b / s))
-    return best, places
+def _bisect_size(named, power: float, first: float) -> float:
+    """The size at which ``named(size)`` (the share of draws named, rising with the size)
+    reaches `power`, to 2 % (inf where even a change of half the force is not named)."""
+    lo, hi = 0.0, first
+    while named(hi) < power:
+        lo, hi = hi, 2.0 * hi
+        if hi > 64 * first:
+            return math.inf
+    while hi - lo > 0.02 * hi:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if named(mid) < power else (lo, mid)
+    return hi
 
 
 #: Columns of a mark-certified table that belong to the press's window or its certified

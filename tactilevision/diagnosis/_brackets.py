@@ -1,0 +1,153 @@
+"""The crossing forces read as the brackets they are: a likelihood for changes within indenters.
+
+Each press's crossing force is bracketed, not measured: the land crossed w0 at a moment
+within the frame period before its mark first showed, while fz ran from ``lo`` to ``hi``
+(``force_w0_n -+ sqrt(3) force_w0_sem_n``: the certification states the crossing as uniform
+over that period). Within one indenter every press crossed the same w0, so with nothing
+changing one force P_g lies in all of its presses' brackets; with a stiffness changed by
+the relative amount ``delta z_i`` at press i, ``P_g (1 + delta z_i)`` lies in bracket i.
+With each crossing uniform over its bracket (density 1 / width where the bracket holds the
+force) and P_g integrated out, an indenter's likelihood of delta is the length of the
+intersection of its brackets scaled back by ``1 + delta z_i``, over the product of their
+widths; the session's is the product over indenters.
+
+A bracket's edges are not exact (the 10 ms smoothing of fz, the clock offset's error, a
+frame's timing): each intersection's length ``l`` is softened to ``s log(1 + exp(l / s))``,
+``s`` :data:`BRACKET_SOFTNESS` of the indenter's mean bracket width, so a bracket a little
+off lowers the likelihood instead of zeroing it, and the null below jitters the edges by
+that much.
+
+A test's statistic is the log-likelihood's gain at its best delta (a grid,
+:data:`BRACKET_DELTAS`) over delta = 0. Its distribution with nothing changing comes from
+brackets drawn from the same model: each press's crossing at a uniform place in a bracket
+of its own width (relative to its indenter's force), the edges jittered by ``s``. One noise
+model: what the certification states (a uniform crossing over a frame period) is what the
+tests read and what their null draws.
+
+Why not the brackets' midpoints with sd width / sqrt(12): that reading spends what the
+intervals say. n brackets at random places pin a common force to about 2 / (n + 1) of one
+bracket's width (their intersection), their midpoints' mean to about 1 / sqrt(3 n). On
+two mark sessions rendered by Taxim (20 presses each, 10 and 15 frames/s, brackets 7 to 29
+% of the force), a 10 % stiffness step half-way, a 10 % softening over the session and a
+gradient of 1 %/mm across the pad were named at the family-wise 1 % by this likelihood in
+6 of 6, where the midpoints' least squares named 1 of 6 (docs/guide/diagnose.md).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["BRACKET_DELTAS", "BRACKET_SOFTNESS", "bracket_draws", "bracket_gains"]
+
+#: The softness of a bracket's edges, a fraction of its width (module docstring).
+BRACKET_SOFTNESS = 0.02
+#: The relative changes the likelihood is profiled over: a step's size, or a trend's change
+#: over the column's range in the table (its shape is scaled to a range of 1). Geometric,
+#: 0.1 % to 49 % each way in steps of 20 % of the size: as fine for a design whose brackets
+#: are 1 % wide as for one whose are 30 %.
+BRACKET_DELTAS = np.r_[-1e-3 * 1.2 ** np.arange(34, -1, -1), 0.0, 1e-3 * 1.2 ** np.arange(35)]
+#: Draws per block when the gains are computed for many draws at once (memory).
+_BLOCK = 256
+
+
+def bracket_gains(lo: np.ndarray, hi: np.ndarray, groups: np.ndarray, shapes: np.ndarray,
+                  deltas: np.ndarray = BRACKET_DELTAS) -> tuple[np.ndarray, np.ndarray]:
+    """Each shape's log-likelihood gain at its best size over none, for each set of brackets.
+
+    Parameters
+    ----------
+    lo, hi : (D, N) float ndarray
+        D sets of N brackets, each relative to its indenter's force (``hi > lo``).
+    groups : (N,) int ndarray
+        Each press's indenter, 0 to G - 1.
+    shapes : (K, N) float ndarray
+        Each test's shape z (a press's relative change is ``delta z_i``), ``|z| <= 1``.
+        A shape of zeros and ones (a step) is computed from its two sides' intersections
+        alone; identical shapes once.
+    deltas : (M,) float ndarray, default :data:`BRACKET_DELTAS`
+        The sizes tried (0 among them), each above -1.
+
+    Returns
+    -------
+    gain : (D, K) float64 ndarray
+        ``max over delta of log L(delta) - log L(0)`` (>= 0), delta on `deltas`.
+    delta : (D, K) float64 ndarray
+        The delta that reaches it.
+    """
+    lo, hi = np.atleast_2d(lo), np.atleast_2d(hi)
+    order = np.argsort(groups, kind="stable")
+    g = np.asarray(groups)[order]
+    starts = np.flatnonzero(np.r_[True, g[1:] != g[:-1]])
+    lo, hi = lo[:, order], hi[:, order]
+    z_all = np.asarray(shapes, np.float64)[:, order]
+    width = np.mean(hi - lo, axis=0)
+    soft = BRACKET_SOFTNESS * np.add.reduceat(width, starts) / np.diff(np.r_[starts, g.size])
+    deltas = np.asarray(deltas, np.float64)
+    zero = int(np.argmin(np.abs(deltas)))
+    n_draws = lo.shape[0]
+    gain = np.empty((n_draws, z_all.shape[0]))
+    best = np.empty((n_draws, z_all.shape[0]))
+    unique, back = np.unique(z_all, axis=0, return_inverse=True)
+    for k, zk in enumerate(unique):
+        step = bool(np.all((zk == 0) | (zk == 1)))
+        for a in range(0, n_draws, _BLOCK):
+            b = min(a + _BLOCK, n_draws)
+            low, high = (_step_bounds if step else _bounds)(lo[a:b], hi[a:b], zk, starts,
+                                                             deltas)
+            ll = np.sum(_log_softplus((high - low) / soft) + np.log(soft), axis=2)
+            j = np.argmax(ll, axis=1)
+            cols = np.flatnonzero(back.ravel() == k)
+            gain[a:b, cols] = (ll[np.arange(b - a), j] - ll[:, zero])[:, None]
+            best[a:b, cols] = deltas[j][:, None]
+    return gain, best
+
+
+def _log_softplus(x: np.ndarray) -> np.ndarray:
+    """``log(log(1 + exp(x)))``, without underflow far below 0 (where it is x)."""
+    with np.errstate(divide="ignore"):
+        out = np.log(np.logaddexp(0.0, x))
+    return np.where(x < -30.0, x, out)
+
+
+def _bounds(lo: np.ndarray, hi: np.ndarray, z: np.ndarray, starts: np.ndarray,
+            deltas: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each indenter's intersection ends (B, M, G) at every delta, any shape z."""
+    fac = 1.0 / (1.0 + deltas[:, None] * z[None, :])                      # (M, N)
+    return (np.maximum.reduceat(lo[:, None, :] * fac, starts, axis=2),
+            np.minimum.reduceat(hi[:, None, :] * fac, starts, axis=2))
+
+
+def _step_bounds(lo: np.ndarray, hi: np.ndarray, z: np.ndarray, starts: np.ndarray,
+                 deltas: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_bounds` for a shape of zeros and ones: each side's intersection once, the
+    side that changes scaled by ``1 / (1 + delta)``."""
+    one = z == 1
+    lo0 = np.maximum.reduceat(np.where(one, -np.inf, lo), starts, axis=1)[:, None, :]
+    hi0 = np.minimum.reduceat(np.where(one, np.inf, hi), starts, axis=1)[:, None, :]
+    lo1 = np.maximum.reduceat(np.where(one, lo, -np.inf), starts, axis=1)[:, None, :]
+    hi1 = np.minimum.reduceat(np.where(one, hi, np.inf), starts, axis=1)[:, None, :]
+    fac = (1.0 / (1.0 + deltas))[None, :, None]
+    return np.maximum(lo0, lo1 * fac), np.minimum(hi0, hi1 * fac)
+
+
+def bracket_draws(width: np.ndarray, n_draws: int, rng: np.random.Generator
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """Brackets with nothing changing: each press's crossing at a uniform place in a bracket
+    of its width about a force of 1, the edges jittered by the softness.
+
+    Parameters
+    ----------
+    width : (N,) float ndarray
+        Each bracket's width relative to its indenter's force.
+    n_draws : int
+    rng : numpy.random.Generator
+
+    Returns
+    -------
+    lo, hi : (n_draws, N) float64 ndarray
+    """
+    w = np.asarray(width, np.float64)
+    u = rng.random((n_draws, w.size))
+    jitter = rng.standard_normal((n_draws, w.size)) * (BRACKET_SOFTNESS * w)
+    lo = 1.0 - u * w + jitter
+    return lo, lo + w
