@@ -10,10 +10,11 @@ force law. Within one indenter w0 is the same for every press, so those forces d
 only by the noise they state and by whatever changed the gel between the presses. This
 module tests them for that: each covariate that sets the press's conditions (time, press
 order, position) as a stiffness trend (a relative change per unit), time and press order
-as a step too, against the stated uncertainties alone (one noise model: what the
-certification states is what is tested against), family-wise over every test and a
-step's every place by the maximum statistic under that noise (Westfall and Young's
-single-step maxT, which counts how alike the tests are: a trend along time and along
+as a step too, on the brackets the certification states (one noise model: the crossing
+uniform over its frame period is what the tests read and what their null draws:
+:mod:`~tactilevision.diagnosis._brackets`), family-wise over every test and a step's
+every place by the min-P over brackets drawn from that model (Westfall and Young's
+single-step min-P, which counts how alike the tests are: a trend along time and along
 press order are nearly one test).
 """
 
@@ -151,11 +152,11 @@ class CrossingScan:
         aic = (step.size / step.se) ** 2 - (trend.size / trend.se) ** 2 - 2.0
         by_aic = (step, trend) if aic > 0 else (trend, step)
         if not np.isfinite(self.p_trend_fits):
-            return by_aic + (abs(aic) <= 2.0,)
+            return (*by_aic, abs(aic) <= 2.0)
         trend_ok = self.p_trend_fits >= _SHAPE_ALPHA
         step_ok = self.p_step_fits >= _SHAPE_ALPHA
         if trend_ok == step_ok:         # both explain them (or neither): Akaike's choice
-            return by_aic + (trend_ok,)
+            return (*by_aic, trend_ok)
         return (trend, step, False) if trend_ok else (step, trend, False)
 
     @property
@@ -202,6 +203,7 @@ class CrossingScan:
                 "dof": self.dof, "p_scatter": num(self.p_scatter),
                 "found": None if self.found is None else self.found.effect,
                 "equivalent": [t.effect for t in self.equivalent],
+                "p_trend_fits": num(self.p_trend_fits), "p_step_fits": num(self.p_step_fits),
                 "tests": [{"column": t.column, "kind": t.kind, "size": num(t.size),
                            "se": num(t.se), "at": num(t.at), "p_value": num(t.p_value),
                            "significant": t.significant, "log_likelihood_gain": num(t.gain)}
