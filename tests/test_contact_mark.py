@@ -3,12 +3,15 @@ crossing (tactilevision.contact.mark_depths), worked by hand."""
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 
 from tactilevision import InputError
 from tactilevision.contact import crossing_forces, mark_depths, mark_shared_mm
 from tactilevision.contact._mark import CLOCK_SD_S, STIFFNESS_REL
+from tactilevision.contact._onset import _press_forces
 
 
 def test_depth_is_w0_plus_the_force_rise_over_the_slope():
@@ -65,3 +68,20 @@ def test_crossing_force_is_the_intersection_of_an_indenters_brackets():
     assert disjoint == 1 and f[4] == f[5] == pytest.approx(3.25)
     f2, _, _ = crossing_forces([0, 0], [1.0, np.nan], [0.01, np.nan])
     assert f2[0] == pytest.approx(1.0) and np.isnan(f2[1])
+
+
+def test_a_press_force_shares_are_of_its_own_force_whatever_the_ft_zero():
+    """_press_forces: the F/T at a press's frames less its rest before the press, so the
+    shares MARK_BASELINE_FORCE and MARK_HOLD_FORCE pick the same frames with 0.3 N on every
+    sample (an F/T zeroed before a fixture was mounted: on a Taxim mark session the raw
+    forces' shares put one onset two frames early, its crossing force 35 % low)."""
+    tf = np.arange(0.0, 4.0, 1e-3)
+    true = np.interp(tf, [0.0, 1.0, 1.5, 2.5, 3.0, 4.0], [0.0, 0.0, 2.0, 2.0, 0.0, 0.0])
+    frames = np.arange(0.0, 4.0, 0.1)
+    run = np.flatnonzero((frames > 1.05) & (frames < 2.95))
+    for zero in (0.0, 0.3):
+        session = SimpleNamespace(force_times_s=tf, frame_times_s=frames,
+                                  forces_n=np.column_stack([0 * tf, 0 * tf, true + zero]))
+        ctx = SimpleNamespace(session=session, offset=0.0, period=0.1)
+        f = _press_forces(ctx, run)
+        assert np.allclose(f, np.interp(frames[run], tf, true), atol=1e-9)

@@ -138,7 +138,32 @@ def softening(tmp_path_factory):
         cal = calibrate_session(folder)
         write_calibration(cal, folder.parent / "cal")
         out[name] = read_measurements(folder.parent / "cal" / "measurements.csv")
+        out[f"{name}_folder"] = folder
     return out
+
+
+def test_an_ft_zeroed_before_a_fixture_moves_no_crossing(softening, tmp_path):
+    """The same frames with 1 N on every F/T sample (zeroed before a fixture was
+    mounted): the mark's onsets are found where they were (the press's force shares read
+    from its own rest), so every press keeps its depth and crossing force once calibrate
+    takes the zero off (within 1 um and 3 mN: the zero read between the presses)."""
+    src = softening["null_folder"]
+    folder = tmp_path / "s"
+    folder.mkdir()
+    for p in src.iterdir():
+        if p.name != "forces.csv":
+            (folder / p.name).symlink_to(p.resolve())
+    lines = (src / "forces.csv").read_text().splitlines()
+    rows = [ln.split(",") for ln in lines[1:]]
+    (folder / "forces.csv").write_text("\n".join(
+        [lines[0]] + [",".join([*r[:3], f"{float(r[3]) + 1.0:.6f}"]) for r in rows]) + "\n")
+    cal = calibrate_session(folder)
+    write_calibration(cal, tmp_path / "cal")
+    got = read_measurements(tmp_path / "cal" / "measurements.csv").columns
+    ref = softening["null"].columns
+    assert list(got["press"]) == list(ref["press"])
+    assert np.max(np.abs(got["depth_mm"] - ref["depth_mm"])) < 1e-3
+    assert np.max(np.abs(got["force_w0_n"] - ref["force_w0_n"])) < 3e-3
 
 
 def test_the_command_line_reads_the_crossings(softening, tmp_path):

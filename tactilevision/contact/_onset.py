@@ -28,6 +28,9 @@ from ._results import (
 )
 from ._vernier import BevelGeometry, bevel_profile
 
+#: The F/T's rest before a press, s (:func:`_press_forces`).
+_REST_S = 0.3
+
 
 def _mark_score(ctx: _PressContext, centre: tuple[float, float], i: int) -> float:
     """:func:`bevel_score` of frame `i` at the mark of the press centred at `centre`."""
@@ -77,6 +80,25 @@ def _mark_null(session, runs: list[np.ndarray], area: np.ndarray, min_contact_px
             "z_frame": MARK_Z_FRAME, "z_block": MARK_Z_BLOCK, "block_frames": MARK_BLOCK}
 
 
+def _press_forces(ctx: _PressContext, run: np.ndarray) -> np.ndarray:
+    """fz at the press's frames (the F/T log at their times) less the F/T's rest before it:
+    the median over :data:`_REST_S` ending a frame period before its first frame (the
+    indenter touches the gel after that), or the least of them where the log has no
+    sample there. The shares of the largest that :data:`MARK_BASELINE_FORCE` and
+    :data:`MARK_HOLD_FORCE` set are shares of the press's own force, whatever the F/T's
+    zero (an F/T zeroed before a fixture was mounted reads it on every sample: on a Taxim
+    mark session with 0.3 N so added, one press's template took two frames of its
+    approach as the mark's, its crossing force 35 % low)."""
+    session = ctx.session
+    tf, fz = session.force_times_s, session.forces_n[:, 2]
+    f = np.interp(session.frame_times_s[run] + ctx.offset, tf, fz)
+    if f.size == 0:
+        return f
+    t0 = float(session.frame_times_s[run[0]]) + ctx.offset - ctx.period
+    rest = fz[(tf >= t0 - _REST_S) & (tf < t0)]
+    return f - (float(np.median(rest)) if rest.size else float(np.min(f)))
+
+
 def _mark_baseline(ctx: _PressContext, centre: tuple[float, float], run: np.ndarray,
                    fallback: float) -> tuple[float, int]:
     """The mark's score on this press's own approach, before the land can reach the gel:
@@ -84,10 +106,7 @@ def _mark_baseline(ctx: _PressContext, centre: tuple[float, float], run: np.ndar
     :data:`MARK_BASELINE_FORCE` of the press's largest (the indenter's contact moves the
     score at the mark on some renderers: Taxim's by up to 3.4 sd); `fallback` without such
     frames. Returns the baseline and the frames it used."""
-    session = ctx.session
-    tf, fz = session.force_times_s, session.forces_n[:, 2]
-    t = session.frame_times_s[run] + ctx.offset
-    f = np.interp(t, tf, fz)
+    f = _press_forces(ctx, run)
     early = run[f < MARK_BASELINE_FORCE * float(np.max(f))] if f.size else run[:0]
     if early.size == 0:
         return fallback, 0
@@ -144,9 +163,7 @@ def _mark_template_onset(ctx: _PressContext, centre: tuple[float, float], run: n
     :data:`MARK_Z_SEEN` sds above the approach's level: the crossing lies in the period
     before ``first`` (on a Taxim session at 10 frames/s, one such press put its indenter's
     P(w0) 6 % high and its depths 8 um shallow)."""
-    session = ctx.session
-    tf, fz = session.force_times_s, session.forces_n[:, 2]
-    f = np.interp(session.frame_times_s[run] + ctx.offset, tf, fz)
+    f = _press_forces(ctx, run)
     few = "the press has too few frames for its own template"
     if f.size == 0:
         return None, few
