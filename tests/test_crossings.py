@@ -179,6 +179,15 @@ def test_the_command_line_reads_the_crossings(softening, tmp_path):
     assert obj["verdict"]["offered_effect"] == c["found"] or \
         obj["verdict"]["missing_effect"] == c["found"]
     assert "force_w0_n" not in obj["scanned_columns"]
+    top = c["tests"][0]
+    assert top["significant"] and top["log_likelihood_gain"] > 0
+    assert all(t["log_likelihood_gain"] >= 0 for t in c["tests"])
+    both = {(t["column"], t["kind"]) for t in c["tests"] if t["significant"]}
+    column = next(t["column"] for t in c["tests"] if t["significant"])
+    shapes_tested = {(column, "trend"), (column, "step")} <= both
+    assert (c["p_trend_fits"] is not None) == shapes_tested
+    if shapes_tested:
+        assert 0 < c["p_trend_fits"] <= 1 and 0 < c["p_step_fits"] <= 1
 
 
 def test_a_softening_gel_is_found_through_its_crossings(softening):
