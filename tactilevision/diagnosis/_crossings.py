@@ -163,8 +163,10 @@ class CrossingScan:
     def found(self) -> CrossingTest | None:
         """The most significant test, where one is; along its column, where a step and a
         trend are both significant, the one that explains the brackets where the other
-        does not, or the one whose fit the other's bootstrap rejects less
-        (``p_trend_fits``, ``p_step_fits``: Cox's test of separate families)."""
+        does not (``p_trend_fits``, ``p_step_fits``: Cox's test of separate families), and
+        where both do (or neither), the one Akaike's criterion prefers on the midpoints
+        (the step pays 2 for its change point; Akaike, IEEE Trans. Autom. Control 19,
+        716, 1974)."""
         return self._rivals()[0]
 
     @property
