@@ -97,7 +97,7 @@ def test_the_sizes_said_are_named_that_often():
     named (a stiffness change along press or time; spatial_nonuniformity) in about 95 % of
     sessions (at least 51 of 60; 58 to 60 when written), of 1.5 times that size in at
     least 57 of 60 (60); and no smaller size would do: half of it is named in at most 45
-    of 60 (28 to 33)."""
+    of 60 (28 to 32)."""
     sizes = crossing_sizes(_crossings(0, lambda p, x: np.ones(20)))
     assert set(sizes) == {"stiffness_step:press", "stiffness_trend:time_s",
                           "spatial_nonuniformity"}

@@ -493,11 +493,11 @@ def crossing_sizes(columns: Mapping[str, np.ndarray], *, power: float = 0.95
     -----
     For each effect, brackets of the table's widths are drawn about crossing forces
     changed by it (:data:`_SIZE_DRAWS` draws, the same for every size tried), and its
-    own test (a step along press order at any place, a trend along time or x) names it
-    where its gain passes the family-wise threshold (:meth:`_Brackets.thresholds`);
-    the size named in `power` of the draws is found by bisection. The other tests of
-    the scan can only add to the power: the sizes are upper bounds of what is named in
-    `power` of sessions.
+    own test (a step along press order at its true place, a trend along time or x)
+    names it where its gain passes that test's family-wise threshold
+    (:meth:`_Brackets.thresholds`); the size named in `power` of the draws is found by
+    bisection. The step's other places and the scan's other tests can only add to the
+    power: the sizes are upper bounds of what is named in `power` of sessions.
     """
     prep = _prepared(columns)
     if prep is None:
@@ -513,12 +513,13 @@ def crossing_sizes(columns: Mapping[str, np.ndarray], *, power: float = 0.95
     for j, (col, kind, z) in enumerate(tests):
         if kind == "step" and col == "press":
             name, effect = "stiffness_step:press", (z > np.median(z)).astype(np.float64)
+            shapes = effect[None]                      # its true place only
         elif kind == "trend" and col in ("time_s", "x_mm"):
             name = "stiffness_trend:time_s" if col == "time_s" else "spatial_nonuniformity"
             effect = z - z.mean()
+            shapes = setup.shapes[setup.owner == j]
         else:
             continue
-        shapes = setup.shapes[setup.owner == j]
 
         def named(size: float, effect=effect, shapes=shapes, c=crit[j],
                   steady=name == "stiffness_trend:time_s") -> float:
