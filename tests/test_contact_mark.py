@@ -74,7 +74,8 @@ def test_a_press_force_shares_are_of_its_own_force_whatever_the_ft_zero():
     """_press_forces: the F/T at a press's frames less its rest before the press, so the
     shares MARK_BASELINE_FORCE and MARK_HOLD_FORCE pick the same frames with 0.3 N on every
     sample (an F/T zeroed before a fixture was mounted: on a Taxim mark session the raw
-    forces' shares put one onset two frames early, its crossing force 35 % low)."""
+    forces' shares put one onset two frames early, its crossing force 35 % low); and where
+    the rest still holds the last press's release, from the press's least force."""
     tf = np.arange(0.0, 4.0, 1e-3)
     true = np.interp(tf, [0.0, 1.0, 1.5, 2.5, 3.0, 4.0], [0.0, 0.0, 2.0, 2.0, 0.0, 0.0])
     frames = np.arange(0.0, 4.0, 0.1)
@@ -85,3 +86,10 @@ def test_a_press_force_shares_are_of_its_own_force_whatever_the_ft_zero():
         ctx = SimpleNamespace(session=session, offset=0.0, period=0.1)
         f = _press_forces(ctx, run)
         assert np.allclose(f, np.interp(frames[run], tf, true), atol=1e-9)
+    # a last press still releasing over the rest: the rest is the press's least instead
+    tail = true + 0.3 + np.where(tf < 1.0, 1.0, 0.0)
+    session = SimpleNamespace(force_times_s=tf, frame_times_s=frames,
+                              forces_n=np.column_stack([0 * tf, 0 * tf, tail]))
+    f = _press_forces(SimpleNamespace(session=session, offset=0.0, period=0.1), run)
+    on = np.interp(frames[run], tf, true)
+    assert np.allclose(f, on - on.min(), atol=1e-9)

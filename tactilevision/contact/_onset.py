@@ -83,12 +83,13 @@ def _mark_null(session, runs: list[np.ndarray], area: np.ndarray, min_contact_px
 def _press_forces(ctx: _PressContext, run: np.ndarray) -> np.ndarray:
     """fz at the press's frames (the F/T log at their times) less the F/T's rest before it:
     the median over :data:`_REST_S` ending a frame period before its first frame (the
-    indenter touches the gel after that), or the least of them where the log has no
-    sample there. The shares of the largest that :data:`MARK_BASELINE_FORCE` and
-    :data:`MARK_HOLD_FORCE` set are shares of the press's own force, whatever the F/T's
-    zero (an F/T zeroed before a fixture was mounted reads it on every sample: on a Taxim
-    mark session with 0.3 N so added, one press's template took two frames of its
-    approach as the mark's, its crossing force 35 % low)."""
+    indenter touches the gel after that), or the least of the frames' where that is
+    higher (or the log has no sample there). The shares of the largest that
+    :data:`MARK_BASELINE_FORCE` and :data:`MARK_HOLD_FORCE` set are then shares of the
+    press's own force, whatever the F/T's zero (an F/T zeroed before a fixture was
+    mounted reads it on every sample: on a Taxim mark session with 0.3 N so added, one
+    press's template took two frames of its approach as the mark's, its crossing force
+    35 % low)."""
     session = ctx.session
     tf, fz = session.force_times_s, session.forces_n[:, 2]
     f = np.interp(session.frame_times_s[run] + ctx.offset, tf, fz)
@@ -96,7 +97,9 @@ def _press_forces(ctx: _PressContext, run: np.ndarray) -> np.ndarray:
         return f
     t0 = float(session.frame_times_s[run[0]]) + ctx.offset - ctx.period
     rest = fz[(tf >= t0 - _REST_S) & (tf < t0)]
-    return f - (float(np.median(rest)) if rest.size else float(np.min(f)))
+    # a rest still in the last press's release (presses close together) reads above this
+    # press's first frames: the lower of the two
+    return f - min(float(np.median(rest)) if rest.size else np.inf, float(np.min(f)))
 
 
 def _mark_baseline(ctx: _PressContext, centre: tuple[float, float], run: np.ndarray,
