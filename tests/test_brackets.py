@@ -17,18 +17,21 @@ from tactilevision.diagnosis._brackets import (
 
 def test_two_brackets_gain_the_log_of_their_best_overlap():
     """One indenter, brackets [0.9, 1.1] and [1.0, 1.2], the second press changed by delta:
-    it is [1, 1.2] / (1 + delta), which overlaps the first by at most 0.2 / (1 + delta),
-    reached for 1 + delta in [1.2 / 1.1, 1 / 0.9]; so the best gain over no change (overlap
-    0.1) is log(0.2 / (1.2 / 1.1) / 0.1) = log(1.8333), at delta = 1/11 (the first of the
-    plateau). The softened edges change it by under 1e-6 (overlaps 25 softness widths)."""
+    in log force it is [0, log 1.2] - log(1 + delta), which lies inside the first's [log
+    0.9, log 1.1] for 1 + delta in [1.2 / 1.1, 1 / 0.9]: an overlap of log 1.2, against
+    log 1.1 with no change; so the best gain is log(log 1.2 / log 1.1) = 0.649, at delta =
+    1/11 (the first of the plateau). The softened edges change it by under 1e-6 (overlaps
+    25 softness widths). An indenter whose presses all change alike gains nothing."""
     lo, hi = np.array([[0.9, 1.0]]), np.array([[1.1, 1.2]])
     fine = np.r_[0.0, np.linspace(-0.3, 0.3, 60001)]
     gain, delta = bracket_gains(lo, hi, np.array([0, 0]), np.array([[0.0, 1.0]]), fine)
-    assert abs(gain[0, 0] - math.log(0.2 / (1.2 / 1.1) / 0.1)) < 1e-6
+    assert abs(gain[0, 0] - math.log(math.log(1.2) / math.log(1.1))) < 1e-6
     assert abs(delta[0, 0] - (1.2 / 1.1 - 1)) < 2e-5
     # the same change as a trend shape (any shape, not only a step's zeros and ones)
     gain_t, _ = bracket_gains(lo, hi, np.array([0, 0]), np.array([[0.0, 0.999999]]), fine)
     assert abs(gain_t[0, 0] - gain[0, 0]) < 1e-4
+    same, _ = bracket_gains(lo, hi, np.array([0, 0]), np.array([[1.0, 1.0]]), fine)
+    assert abs(same[0, 0]) < 1e-12
 
 
 def test_disjoint_indenters_are_joined_by_the_change_that_made_them():

@@ -7,15 +7,18 @@ over that period). Within one indenter every press crossed the same w0, so with 
 changing one force P_g lies in all of its presses' brackets; with a stiffness changed by
 the relative amount ``delta z_i`` at press i, ``P_g (1 + delta z_i)`` lies in bracket i.
 With each crossing uniform over its bracket (density 1 / width where the bracket holds the
-force) and P_g integrated out, an indenter's likelihood of delta is the length of the
-intersection of its brackets scaled back by ``1 + delta z_i``, over the product of their
-widths; the session's is the product over indenters.
+force) and P_g integrated out over log P_g (a force's scale is what is unknown, so no size
+of change is favoured for scaling a whole indenter), an indenter's likelihood of delta is
+the length of the intersection of its brackets in log force, each shifted back by
+``log(1 + delta z_i)``, over the product of their widths; the session's is the product
+over indenters. (Integrated over P_g itself, an indenter whose presses all lie on the
+changed side would gain ``-log(1 + delta)`` from nothing: 0.68 at the grid's -49 %.)
 
 A bracket's edges are not exact (the 10 ms smoothing of fz, the clock offset's error, a
 frame's timing): each intersection's length ``l`` is softened to ``s log(1 + exp(l / s))``,
-``s`` :data:`BRACKET_SOFTNESS` of the indenter's mean bracket width, so a bracket a little
-off lowers the likelihood instead of zeroing it, and the null below jitters the edges by
-that much.
+``s`` :data:`BRACKET_SOFTNESS` of the indenter's mean bracket width (in log force), so a
+bracket a little off lowers the likelihood instead of zeroing it, and the null below
+jitters the edges by that much.
 
 A test's statistic is the log-likelihood's gain at its best delta (a grid,
 :data:`BRACKET_DELTAS`) over delta = 0. Its distribution with nothing changing comes from
@@ -80,7 +83,9 @@ def bracket_gains(lo: np.ndarray, hi: np.ndarray, groups: np.ndarray, shapes: np
     order = np.argsort(groups, kind="stable")
     g = np.asarray(groups)[order]
     starts = np.flatnonzero(np.r_[True, g[1:] != g[:-1]])
-    lo, hi = lo[:, order], hi[:, order]
+    # in log force: a change shifts a bracket by -log(1 + delta z) (lo kept above 0)
+    lo = np.log(np.maximum(lo[:, order], 1e-9))
+    hi = np.log(np.maximum(hi[:, order], 2e-9))
     z_all = np.asarray(shapes, np.float64)[:, order]
     width = np.mean(hi - lo, axis=0)
     soft = BRACKET_SOFTNESS * np.add.reduceat(width, starts) / np.diff(np.r_[starts, g.size])
@@ -113,23 +118,24 @@ def _log_softplus(x: np.ndarray) -> np.ndarray:
 
 def _bounds(lo: np.ndarray, hi: np.ndarray, z: np.ndarray, starts: np.ndarray,
             deltas: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Each indenter's intersection ends (B, M, G) at every delta, any shape z."""
-    fac = 1.0 / (1.0 + deltas[:, None] * z[None, :])                      # (M, N)
-    return (np.maximum.reduceat(lo[:, None, :] * fac, starts, axis=2),
-            np.minimum.reduceat(hi[:, None, :] * fac, starts, axis=2))
+    """Each indenter's intersection ends (B, M, G) in log force at every delta, any shape z
+    (`lo`, `hi` in log force)."""
+    shift = np.log1p(deltas[:, None] * z[None, :])                        # (M, N)
+    return (np.maximum.reduceat(lo[:, None, :] - shift, starts, axis=2),
+            np.minimum.reduceat(hi[:, None, :] - shift, starts, axis=2))
 
 
 def _step_bounds(lo: np.ndarray, hi: np.ndarray, z: np.ndarray, starts: np.ndarray,
                  deltas: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """:func:`_bounds` for a shape of zeros and ones: each side's intersection once, the
-    side that changes scaled by ``1 / (1 + delta)``."""
+    side that changes shifted by ``-log(1 + delta)``."""
     one = z == 1
     lo0 = np.maximum.reduceat(np.where(one, -np.inf, lo), starts, axis=1)[:, None, :]
     hi0 = np.minimum.reduceat(np.where(one, np.inf, hi), starts, axis=1)[:, None, :]
     lo1 = np.maximum.reduceat(np.where(one, lo, -np.inf), starts, axis=1)[:, None, :]
     hi1 = np.minimum.reduceat(np.where(one, hi, np.inf), starts, axis=1)[:, None, :]
-    fac = (1.0 / (1.0 + deltas))[None, :, None]
-    return np.maximum(lo0, lo1 * fac), np.minimum(hi0, hi1 * fac)
+    shift = np.log1p(deltas)[None, :, None]
+    return np.maximum(lo0, lo1 - shift), np.minimum(hi0, hi1 - shift)
 
 
 def bracket_draws(width: np.ndarray, n_draws: int, rng: np.random.Generator
