@@ -275,11 +275,8 @@ class _Brackets:
         """Each test's gain (T,) that names it at the family-wise :data:`CROSSING_ALPHA`
         (min-P: the tests' own p-value that the family's level allows)."""
         null = self.null()
-        d = null.shape[0]
-        srt = np.sort(null, axis=0)
-        own = np.stack([(d - np.searchsorted(srt[:, j], null[:, j], side="left") + 1)
-                        / (d + 1) for j in range(null.shape[1])], axis=1)
-        p_crit = float(np.quantile(own.min(axis=1), CROSSING_ALPHA))
+        _, least = _min_p(null)
+        p_crit = float(np.quantile(least, CROSSING_ALPHA))
         return np.quantile(null, 1.0 - p_crit, axis=0)
 
 
@@ -417,13 +414,20 @@ def _family_p(observed: np.ndarray, null: np.ndarray) -> np.ndarray:
     the family's by the smallest of those over the tests (Westfall and Young's single-step
     min-P, Resampling-Based Multiple Testing, 1993)."""
     d = null.shape[0]
-    srt = np.sort(null, axis=0)
-    own_null = np.stack([(d - np.searchsorted(srt[:, j], null[:, j], side="left") + 1)
-                         / (d + 1) for j in range(null.shape[1])], axis=1)
-    least = np.sort(own_null.min(axis=1))
+    srt, least = _min_p(null)
     own = np.array([(d - np.searchsorted(srt[:, j], observed[j], side="left") + 1) / (d + 1)
                     for j in range(null.shape[1])])
     return (np.searchsorted(least, own, side="right") + 1) / (d + 1)
+
+
+def _min_p(null: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each test's null sorted (D, T), and per draw the smallest of the tests' own p-values
+    (D,), sorted: the min-P's null."""
+    d = null.shape[0]
+    srt = np.sort(null, axis=0)
+    own = np.stack([(d - np.searchsorted(srt[:, j], null[:, j], side="left") + 1) / (d + 1)
+                    for j in range(null.shape[1])], axis=1)
+    return srt, np.sort(own.min(axis=1))
 
 
 def _prepared(columns: Mapping[str, np.ndarray]
