@@ -237,6 +237,25 @@ def test_nothing_missing_says_what_it_rules_out():
     assert plain.rules_out == {} and "None larger than" not in plain.message
 
 
+def test_rules_out_is_replayed_for_a_gel_fitted_at_the_tables_edge():
+    """A gel whose fit reaches nu at or past the FEM table's edge (0.499; the paper's
+    relation reaches 0.5) is replayed there, said so, not left without sizes (the vernier
+    sessions of issue 53 fitted nu = 0.4999 and stated no size). Ground truth: the same
+    steepened table with a force offset of 1.5 times the size it states is named."""
+    t = make_measurement_table(None, 0)
+    x = t.columns["depth_mm"] / t.thickness_mm
+    steep = {**t.columns, "force_n": t.columns["force_n"] * (1 + x)}
+    kw = dict(thickness_mm=t.thickness_mm, radius_mm=t.radius_mm, base="paper",
+              beta_table="paper")
+    d = diagnose(steep, **kw)
+    assert d.missing_effect is None and d.ladder[-1].nu > 0.499, d.message
+    assert "taken at the FEM table's edge" in d.rules_out_note
+    size = d.rules_out["force_offset"].size_param
+    assert 0 < size < 1.0
+    big = diagnose({**steep, "force_n": steep["force_n"] + 1.5 * size}, **kw)
+    assert "force_offset" in (big.missing_effect, *big.equivalent_effects), big.message
+
+
 def test_a_mark_certified_table_does_not_rule_out_what_the_rule_absorbs():
     """Under the mark rule the depth past w0 is read from the force (w = w0 + (P -
     P(w0)) / (dP/dw)): an effect that changes the force between an indenter's presses is

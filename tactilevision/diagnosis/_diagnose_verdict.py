@@ -16,6 +16,7 @@ from dataclasses import replace
 import numpy as np
 
 from .._checks import InputError
+from ..mechanics import kappa_n_nu_range
 from ._budget import law_slope
 from ._crossings import CROSSING_UNITS, crossing_sizes, crossing_tests
 from ._diagnose import CURVATURE, Diagnosis, diagnose_core
@@ -476,7 +477,13 @@ def _with_rules_out(d: Diagnosis, h: float, a: float, hidden: dict[str, str] | N
                                   "replay's forces are the FEM's at them)"), own)
     untestable = {k: d.untestable_reasons.get(k) or "needs " + ", ".join(v)
                   for k, v in d.untestable.items()}
+    nu_fit, edge = nu, ""
     try:
+        # a fit at nu = 0.5 (or past the table's floor) is replayed at the table's edge: the
+        # sizes are relative changes of the force, which 0.499 and 0.5 shape alike
+        nu = float(np.clip(nu, *kappa_n_nu_range()))
+        if nu != nu_fit:
+            edge = f", the fit's nu = {nu_fit:.4g} taken at the FEM table's edge"
         sizes = table_sensitivity(cols, thickness_mm=h, radius_mm=a, E_mpa=E, nu=nu,
                                   sigma_n=sigma, untestable=untestable, draws=RULES_OUT_DRAWS)
     except (InputError, ValueError) as exc:
@@ -484,7 +491,7 @@ def _with_rules_out(d: Diagnosis, h: float, a: float, hidden: dict[str, str] | N
                                                     f"replayed: {exc}"), own)
     note = (f"the smallest size of each effect this table would have named in 95 % of "
             f"{RULES_OUT_DRAWS} replays of its presses (the FEM's forces at E = {E:.4g} MPa, nu = "
-            f"{nu:.4g}) with each press's noise from {how}")
+            f"{nu:.4g}{edge}) with each press's noise from {how}")
     hidden = {k: v for k, v in (hidden or {}).items() if k in sizes}
     for name, why in hidden.items():     # what the table's certification hides
         sizes[name] = replace(sizes[name], size=math.nan, size_param=math.nan, why=why)

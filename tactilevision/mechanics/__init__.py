@@ -67,7 +67,14 @@ from ._effects import (
     effect_names,
     model_label,
 )
-from ._fem_tables import fem_force, fem_kappa_table, fem_table_meta, kappa_n, kappa_n_grid
+from ._fem_tables import (
+    fem_force,
+    fem_kappa_table,
+    fem_table_meta,
+    kappa_n,
+    kappa_n_grid,
+    kappa_n_nu_range,
+)
 from ._fit import BETA_TABLE_REACH, MAX_W_OVER_H, fit_indentation, past_beta_table_reach
 from ._fit_model import fit_model
 from ._indenter import INDENTERS, FlatPunch, Indenter, Sphere, indenter_from_config
@@ -153,6 +160,7 @@ __all__ = [
     "kappa",
     "kappa_n",
     "kappa_n_grid",
+    "kappa_n_nu_range",
     "make_effect",
     "model_label",
     "neo_hookean_constants",

@@ -352,6 +352,32 @@ def kappa_n(nu: float | np.ndarray, a_over_h: float | np.ndarray,
     return float(out) if out.ndim == 0 else out
 
 
+def kappa_n_nu_range(contact: str = "bonded") -> tuple[float, float]:
+    """The Poisson's ratios the finite-strain table of :func:`kappa_n` holds.
+
+    Parameters
+    ----------
+    contact : str, default 'bonded'
+        A punch condition of the table.
+
+    Returns
+    -------
+    nu_min, nu_max : float
+        The table's first and last nu (0.30 and 0.499): :func:`kappa_n` and
+        :func:`fem_force` refuse a nu outside them.
+
+    Raises
+    ------
+    InputError
+        If the table is missing, or for an unknown contact.
+    """
+    data = _load("beta_fem.npz")
+    contacts = [str(c) for c in data["contacts"]]
+    if contact not in contacts:
+        raise InputError(f"contact must be one of {contacts}, got {contact!r}")
+    return float(data["nu"][0]), float(data["nu"][-1])
+
+
 def fem_force(E_mpa: float, nu: float, radius_mm: float, thickness_mm: float,
               depth_mm: float | np.ndarray) -> np.ndarray:
     """Force of a flat punch pressed into the bonded layer, from the finite-strain FEM.
