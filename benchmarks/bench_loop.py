@@ -46,9 +46,9 @@ from pathlib import Path
 import numpy as np
 
 from tactilevision.cli import main as cli
-from tactilevision.diagnosis import crossing_sizes
+from tactilevision.diagnosis import CROSSING_UNITS, crossing_sizes
 from tactilevision.io import read_measurements
-from tactilevision.mechanics import beta_relation, kappa
+from tactilevision.mechanics import EFFECT_SIZE_PARAMS, beta_relation, kappa
 from tactilevision.sim._schedule import PressSchedule, ft_log
 
 E_TRUE, NU_TRUE = 0.20, 0.48
@@ -182,8 +182,15 @@ def one(session: Path, out: Path, kind: str, seed: int, reuse: bool = False,
 def rules_out_sizes(session: Path, table: Path, k: float) -> dict[str, float]:
     """`k` times the sizes the null table's crossing forces rule out, in the kinds'
     parameters (:data:`DEFAULT_SIZE`): gx, the fall over the session (the trend per second
-    times the last press's start), the step half-way."""
+    times the last press's start), the step half-way. A table without crossing forces (a
+    vernier's): the sizes its null diagnosis states it rules out (``rules_out``, beside
+    the table's calibration folder)."""
     got = crossing_sizes(read_measurements(table).columns)
+    if not got:
+        ruled = json.loads((table.parents[1] / "diagnose.json").read_text())["rules_out"]
+        scale = {"spatial_nonuniformity": EFFECT_SIZE_PARAMS["spatial_nonuniformity"][2],
+                 **{k: v[2] for k, v in CROSSING_UNITS.items() if k.startswith("stiffness")}}
+        got = {k: ruled[k]["size"] / f for k, f in scale.items()}
     last = max(p["t_start_s"] for p in json.loads((session / "truth.json").read_text())[
         "presses"])
     return {"spatial": k * got["spatial_nonuniformity"],

@@ -11,7 +11,11 @@ seed's table is drawn again with one effect hidden at `factor` times that size (
 generator's draws do not depend on the effect's strength, so presses, design and noise are
 the same) and diagnosed: the effect is *named* when it is the missing effect or listed as
 equivalent to it (the replay's rule). Effects whose generator parameter is the catalogue's
-own: depth_offset (delta_mm), force_offset (offset_n), force_crosstalk (kx = chi).
+own: depth_offset (delta_mm), force_offset (offset_n), force_crosstalk (kx = chi). And a
+stiffness changing over the session, hidden by scaling the null table's forces in the
+catalogue's own parametrisation: a softening ``exp(-k (t - mean t))``
+(``stiffness_trend:time_s``, named also as the offered trend of an unexplained
+``time_s``) and a step ``1 - s [press > median]`` (``stiffness_step:press``).
 Printed: per effect, the share of seeds that named it, and the sizes; the time of a
 null diagnosis with its replay beside the same diagnosis without it (same run).
 """
@@ -23,6 +27,8 @@ import platform
 import time
 import warnings
 
+import numpy as np
+
 from tactilevision.diagnosis import diagnose
 from tactilevision.sim import make_measurement_table
 
@@ -30,6 +36,9 @@ from tactilevision.sim import make_measurement_table
 EFFECTS = {"depth_offset": ("depth_offset", "delta_mm"),
            "force_offset": ("force_offset", "offset_n"),
            "force_crosstalk": ("crosstalk", "chi")}
+#: a stiffness changing over the session: its force factor at size x
+COLUMN = {"stiffness_trend:time_s": lambda c, x: np.exp(-x * (c["time_s"] - c["time_s"].mean())),
+          "stiffness_step:press": lambda c, x: 1 - x * (c["press"] > np.median(c["press"]))}
 
 
 def _diag(t):
@@ -45,8 +54,8 @@ def main() -> None:
     args = ap.parse_args()
     print(f"machine: {platform.machine()}, python {platform.python_version()}; "
           f"{args.seeds} seeds, effects at {args.factor:g} x the size ruled out")
-    named = {k: 0 for k in EFFECTS}
-    tried = {k: 0 for k in EFFECTS}
+    named = {k: 0 for k in (*EFFECTS, *COLUMN)}
+    tried = {k: 0 for k in (*EFFECTS, *COLUMN)}
     took, bare = [], []
     for seed in range(args.seeds):
         null = make_measurement_table(None, seed)
@@ -76,7 +85,21 @@ def main() -> None:
                   f"{d0.rules_out[eff].unit}; hidden at {args.factor:g} x: "
                   f"{'named' if hit else 'missed'} (verdict {d.missing_effect}, "
                   f"equivalent {list(d.equivalent_effects)})")
-    for eff in EFFECTS:
+        for eff, factor in COLUMN.items():
+            x = args.factor * d0.rules_out[eff].size_param
+            c = null.columns
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                d = diagnose({**c, "force_n": c["force_n"] * factor(c, x)},
+                             thickness_mm=null.thickness_mm, radius_mm=null.radius_mm)
+            hit = eff in (d.missing_effect, *d.equivalent_effects, d.offered_effect)
+            tried[eff] += 1
+            named[eff] += hit
+            print(f"seed {seed}: {eff} ruled out above {d0.rules_out[eff].size:.3g} "
+                  f"{d0.rules_out[eff].unit}; hidden at {args.factor:g} x: "
+                  f"{'named' if hit else 'missed'} (verdict {d.missing_effect}, equivalent "
+                  f"{list(d.equivalent_effects)}, offered {d.offered_effect})")
+    for eff in (*EFFECTS, *COLUMN):
         print(f"{eff}: named in {named[eff]} of {tried[eff]}")
     med = sorted(took)[len(took) // 2]
     ref = sorted(bare)[len(bare) // 2]

@@ -237,6 +237,36 @@ def test_nothing_missing_says_what_it_rules_out():
     assert plain.rules_out == {} and "None larger than" not in plain.message
 
 
+@pytest.mark.parametrize("effect", ["stiffness_trend:time_s", "stiffness_step:press"])
+def test_nothing_missing_rules_out_a_stiffness_change_over_the_session(effect):
+    """A table without crossing forces states the softening over time and the stiffness
+    step it rules out (issue 53: "nothing missing" on a vernier's softening said nothing
+    of it). Ground truth: the same null table's forces scaled by that change (the
+    catalogue's parametrisation) at 1.5 times the stated size are named; at 0.3 times
+    they are not."""
+    t = make_measurement_table(None, 0)
+    d = _diag(t)
+    assert d.missing_effect is None and d.unexplained_covariate is None, d.message
+    e = d.rules_out[effect]
+    assert 0 < e.size_param < math.inf and e.unit in ("%/min", "%")
+    assert f"{effect} {e.size:.3g} {e.unit}" in d.message
+    c = t.columns
+
+    def changed(x):
+        if effect.startswith("stiffness_trend"):
+            f = np.exp(-x * (c["time_s"] - c["time_s"].mean()))
+        else:
+            f = 1 - x * (c["press"] > np.median(c["press"]))
+        return _diag(type(t)(**{**vars(t), "columns": {**c, "force_n": c["force_n"] * f}}))
+
+    big = changed(1.5 * e.size_param)
+    assert effect in (big.missing_effect, *big.equivalent_effects, big.offered_effect), \
+        big.message
+    small = changed(0.3 * e.size_param)
+    assert small.missing_effect is None and small.unexplained_covariate is None, \
+        small.message
+
+
 def test_rules_out_is_replayed_for_a_gel_fitted_at_the_tables_edge():
     """A gel whose fit reaches nu at or past the FEM table's edge (0.499; the paper's
     relation reaches 0.5) is replayed there, said so, not left without sizes (the vernier

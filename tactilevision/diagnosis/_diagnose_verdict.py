@@ -485,7 +485,8 @@ def _with_rules_out(d: Diagnosis, h: float, a: float, hidden: dict[str, str] | N
         if nu != nu_fit:
             edge = f", the fit's nu = {nu_fit:.4g} taken at the FEM table's edge"
         sizes = table_sensitivity(cols, thickness_mm=h, radius_mm=a, E_mpa=E, nu=nu,
-                                  sigma_n=sigma, untestable=untestable, draws=RULES_OUT_DRAWS)
+                                  sigma_n=sigma, untestable=untestable, draws=RULES_OUT_DRAWS,
+                                  column_effects=d.crossings is None)
     except (InputError, ValueError) as exc:
         return _own_sizes(replace(d, rules_out_note=f"what the verdict rules out was not "
                                                     f"replayed: {exc}"), own)

@@ -38,7 +38,12 @@ linearized:
 
 Left out: the cross-validation check (it passes whenever the BIC does, on tables of
 this size), the robust loss, the stiffness change points (``stiffness_step``) and the
-generic trends, which compete only for effects they mimic.
+generic trends, which compete only for effects they mimic. A measured table whose
+crossing forces do not size a stiffness changing over the session
+(``ReplaySetup.column_effects``) has it replayed too: the trend along time
+(``force_drift``'s counterpart, which passes only where the drift passes, or is named by
+the covariate scan where the climb names nothing) and the steps along press order and
+time; the trend and the press-order step are sized.
 ``benchmarks/bench_plan_effects.py`` checks the predicted sizes against ``diagnose``
 itself on generated sessions of several designs, ``benchmarks/bench_rules_out.py`` the
 sizes on measured tables.
@@ -50,13 +55,16 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from scipy import stats
 
 from .._checks import InputError
 from ..mechanics import EFFECT_SIZE_PARAMS, fem_force, make_effect
-from ._diagnose import CURVATURE_BIC, DELTA_BIC, EQUIVALENT_BIC
+from ._crossings import CROSSING_UNITS
+from ._diagnose import CURVATURE_BIC, DELTA_BIC, EQUIVALENT_BIC, EQUIVALENT_RMSE
+from ._diagnose_stats import ALPHA, _covariate_names, _group_means, _groups, _testable
 
-__all__ = ["NOMINAL_TAU_S", "TANGENTIAL_FRACTION", "EffectSensitivity", "ReplaySetup",
-           "replay_power", "replay_sizes", "table_sensitivity"]
+__all__ = ["COLUMN_SIZE_EFFECTS", "NOMINAL_TAU_S", "TANGENTIAL_FRACTION", "EffectSensitivity",
+           "ReplaySetup", "replay_power", "replay_sizes", "table_sensitivity"]
 
 #: Time constant of relaxation and recovery the sizes are given at, s (the catalogue's
 #: starting values; a design's ``relaxation_tau_s`` replaces relaxation's).
@@ -75,6 +83,19 @@ TANGENTIAL_DRAWS = 8
 
 #: Most rungs replayed (``diagnose``'s ``max_steps``).
 MAX_STEPS = 3
+
+#: A stiffness that changes over the session, replayed on a measured table whose crossing
+#: forces do not size it (``ReplaySetup.column_effects``): ``diagnose`` tries them as the
+#: trend along time (the counterpart of ``force_drift``) and the change point along press
+#: order. Sized as :data:`~tactilevision.diagnosis.CROSSING_UNITS` gives them.
+COLUMN_SIZE_EFFECTS = ("stiffness_trend:time_s", "stiffness_step:press")
+
+
+def _size_unit(name: str) -> tuple[str, str, float]:
+    """An effect's size parameter, its display unit and the factor to it."""
+    if name in EFFECT_SIZE_PARAMS:
+        return EFFECT_SIZE_PARAMS[name]
+    return CROSSING_UNITS[name]
 
 
 @dataclass(frozen=True)
@@ -130,11 +151,14 @@ class _Candidate:
     depth_only: bool = False       # along depth alone: must beat the law's curvature
     rung: bool = False             # the law's own curvature: a rung, never a verdict
     bounds: np.ndarray | None = None  # (m, 2): each column's parameter bounds
+    partner: str | None = None     # a counterpart: passes only where this effect passes
+    generic: bool = False          # a trend: never listed as equivalent, named when best
 
     def __post_init__(self) -> None:
         # each column's coefficient is one catalogue parameter (not tau_s, which is
         # searched over the grid): diagnose's fit keeps it within the parameter's bounds
-        qs = [q for q in make_effect(self.name).params if q.name != "tau_s"]
+        # (nor a change point's place, searched over the blocks)
+        qs = [q for q in make_effect(self.name).params if q.name not in ("tau_s", "at")]
         self.bounds = np.array([(q.lower, q.upper) for q in qs], np.float64)
 
 
@@ -295,6 +319,11 @@ class ReplaySetup:
         True: the table's ``fx_n``, ``fy_n`` are the tangential forces of every drawn
         session (a measured table); False: drawn at :data:`TANGENTIAL_FRACTION` of the
         normal force (a design).
+    column_effects : bool
+        Also replay a stiffness changing over the session (:data:`COLUMN_SIZE_EFFECTS`:
+        a trend along ``time_s``, a step half-way through the presses), which ``diagnose``
+        tries as candidates beside the catalogue's (a measured table whose crossing
+        forces do not size them); False (a design): as before, the catalogue's alone.
     """
 
     E_mpa: float
@@ -310,6 +339,47 @@ class ReplaySetup:
     force_sd_n: float = 0.0
     depth_sd_mm: float = 0.0
     own_tangential: bool = True
+    column_effects: bool = False
+
+
+class _SessionScan:
+    """``diagnose``'s covariate scan along ``time_s`` and ``press``
+    (:func:`~tactilevision.diagnosis.covariate_tests`: an F test of the residual on z,
+    z^2, q z, q z^2 within the groups of repeated presses, each column below ALPHA over
+    the columns scanned), on eq. (5)'s least squares residuals of drawn sessions."""
+
+    def __init__(self, cols: dict, law: np.ndarray) -> None:
+        w = np.asarray(cols["depth_mm"], np.float64)
+        self.q0, _ = np.linalg.qr(np.column_stack([w, w * w]))
+        self.grp = _groups(cols)
+        m = max(len(_testable(_covariate_names(cols), np.zeros(w.size), cols)), 1)
+        G = int(self.grp.max()) + 1
+        self.bases = []
+        for col in ("time_s", "press"):
+            x = np.asarray(cols.get(col, np.full(w.shape, np.nan)), np.float64)
+            if not (np.all(np.isfinite(x)) and np.unique(x).size > 8):
+                continue
+            z = (x - x.mean()) / x.std()
+            q = (law - law.mean()) / (law.std() or 1.0)
+            X = np.column_stack([z, z**2, q * z, q * z**2])
+            u, sv, _ = np.linalg.svd(X - _group_means(X, self.grp), full_matrices=False)
+            B = u[:, sv > 1e-10 * sv.max()]
+            df2 = w.size - G - B.shape[1]
+            if B.shape[1] and df2 >= 1:
+                f = stats.f.isf(ALPHA / m, B.shape[1], df2)
+                self.bases.append((B, f * B.shape[1] / df2))
+
+    def flags(self, Y: np.ndarray) -> np.ndarray:
+        """(M,) bool: the sessions Y (n, M) whose scan flags time or press order."""
+        R = Y - self.q0 @ (self.q0.T @ Y)
+        R = R - np.stack([_group_means(R[:, j], self.grp) for j in range(R.shape[1])], 1) \
+            if R.shape[1] else R
+        rss0 = np.einsum("ij,ij->j", R, R)
+        hit = np.zeros(R.shape[1], bool)
+        for B, crit in self.bases:
+            explained = np.sum((B.T @ R) ** 2, axis=0)
+            hit |= explained > crit * (rss0 - explained)      # F above its critical value
+        return hit
 
 
 class _Replay:
@@ -360,6 +430,8 @@ class _Replay:
             tau = tau_relax if name == "viscoelastic_relaxation" else NOMINAL_TAU_S.get(name)
             self.cands[name] = _effect_columns(name, cols, law, dlaw, tang, tau)
             self.signal[name] = _effect_signal(name, cols, P, self.dPdw, tang, tau)
+        if d.column_effects:
+            self._add_column_effects(law, P)
         self.x2 = x * x
         self.gamma_bounds = tuple(_Candidate("law_curvature", 1, []).bounds[0])
         # the law's curvature: its columns are the law's own (``_law``), not a block
@@ -367,6 +439,39 @@ class _Replay:
                                                  [(law * x * x)[:, None]], rung=True)
         # the design's own misfit: eq. (5) against the FEM's forces, in every session
         self.base_y = P
+
+    def _add_column_effects(self, law: np.ndarray, P: np.ndarray) -> None:
+        """The stiffness trend along time and the steps along press order and time, as
+        ``diagnose`` fits them (the law times exp(k t), linearized; the law times 1 + s
+        [x > at], ``at`` searched over :meth:`StiffnessStep.profile`'s places and counted
+        in the BIC), and the signals of the two sized (a trend about the session's mean
+        time, a step half-way through the presses) on the FEM's forces."""
+        cols = self.cols
+        t = np.asarray(cols.get("time_s", np.full(P.shape, np.nan)), np.float64)
+        name = COLUMN_SIZE_EFFECTS[0]
+        if "force_drift" in self.cands and np.all(np.isfinite(t)) and np.ptp(t) > 0:
+            # force_drift's counterpart: it competes only where the drift passes
+            self.cands[name] = _Candidate(name, 1, [(law * t)[:, None]], partner="force_drift",
+                                          generic=True)
+            self.signal[name] = P * (t - t.mean())
+            self.scan = _SessionScan(cols, law)
+        for col in ("press", "time_s"):
+            # the step along time competes as diagnose tries it (a softening is often
+            # named a step along time), sized along press order only
+            name = f"stiffness_step:{col}"
+            x = np.asarray(cols.get(col, np.full(P.shape, np.nan)), np.float64)
+            if name in self.untestable or not np.all(np.isfinite(x)):
+                continue
+            places = make_effect(name).profile({col: x})["at"]
+            after = x > np.median(x)
+            if places.size and 0 < after.sum() < after.size:
+                # once in the model, at its place half-way (the signal's)
+                # s, and the place counted twice (found by search), as the fit counts it
+                self.cands[name] = _Candidate(name, 3, [(law * (x > at))[:, None]
+                                                        for at in places],
+                                              fixed=(law * after)[:, None])
+                if col == "press":
+                    self.signal[name] = P * after
 
     def _block(self, name: str) -> np.ndarray:
         c = self.cands[name]
@@ -485,6 +590,11 @@ class _Replay:
                     if self.cands[c].depth_only and "law_curvature" in names:
                         ok &= db < curv - CURVATURE_BIC
                     passing[c] = np.where(ok, db, np.inf)
+                for c in passing:                   # a counterpart needs its effect
+                    p = self.cands[c].partner
+                    if p is not None:
+                        passing[c] = np.where(np.isfinite(passing.get(p, np.inf)),
+                                              passing[c], np.inf)
                 order = list(passing)
                 table = np.vstack([passing[c] for c in order])          # (C, m)
                 best = np.argmin(table, axis=0)
@@ -493,8 +603,19 @@ class _Replay:
                 if hidden in order:
                     hv = table[order.index(hidden)]
                     named_best = np.array([not self.cands[order[b]].rung for b in best])
+                    # as diagnose: as good by BIC, or (replayed with the column effects,
+                    # whose steps cost three parameters) leaving the same residual (the
+                    # BICs less their parameters' price, n log RSS, within 2 n log 1.01)
+                    k = np.array([self.cands[c].k for c in order], np.float64)
+                    price = math.log(self.n) * (self.cands[hidden].k - k[best])
+                    same = 2 * self.n * math.log1p(EQUIVALENT_RMSE) if self.d.column_effects \
+                        else -np.inf
                     with np.errstate(invalid="ignore"):
-                        close = hv - best_val < EQUIVALENT_BIC
+                        # a trend is named only as the best (diagnose lists no trend as
+                        # equivalent to a named effect that beats it)
+                        close = (hv <= best_val if self.cands[hidden].generic
+                                 else (hv - best_val < EQUIVALENT_BIC)
+                                 | (hv - best_val - price <= same))
                     equiv = np.isfinite(hv) & close & named_best
                     hit[idx] |= equiv & ~none
                 # found, or nothing passes: the climb ends for that session
@@ -502,6 +623,10 @@ class _Replay:
                 for jj, j in enumerate(idx):
                     if not done[j]:
                         state[j] = (*cur, order[best[jj]])
+        if hidden == COLUMN_SIZE_EFFECTS[0]:
+            # where the climb named nothing, the left-over scan flags the trend's column
+            bare = np.array([not s for s in state]) & ~hit
+            hit[bare] = self.scan.flags(Y[:, bare])
         return hit
 
     def power(self, hidden: str, size: float, draws: int | None = None) -> float:
@@ -534,7 +659,7 @@ def _reach(d: ReplaySetup, name: str) -> float:
     """The largest size of the effect ``diagnose`` can fit: its parameter's upper bound in
     the catalogue (``IndentationModel.fit`` stays within it) and, for a depth offset,
     the FEM table's reach past the deepest press (w/h 0.23)."""
-    param = EFFECT_SIZE_PARAMS[name][0]
+    param = _size_unit(name)[0]
     bound = next(q.upper for q in make_effect(name).params if q.name == param)
     if name == "depth_offset":
         # a hair inside the table's edge: w + bound / h would round past 0.23 (an error)
@@ -659,8 +784,8 @@ def replay_sizes(setup: ReplaySetup, *, power: float = 0.95, draws: int = 1000,
 def table_sensitivity(columns: dict, *, thickness_mm: float, radius_mm: float,
                       E_mpa: float, nu: float, sigma_n: np.ndarray,
                       untestable: dict[str, str], power: float = 0.95, draws: int = 1000,
-                      seed: int = 0, relaxation_tau_s: float | None = None
-                      ) -> dict[str, EffectSensitivity]:
+                      seed: int = 0, relaxation_tau_s: float | None = None,
+                      column_effects: bool = False) -> dict[str, EffectSensitivity]:
     """The smallest size of each catalogue effect ``diagnose`` would have named on this
     very table: :func:`replay_sizes` on the measured presses.
 
@@ -681,10 +806,17 @@ def table_sensitivity(columns: dict, *, thickness_mm: float, radius_mm: float,
         As :func:`replay_sizes`.
     relaxation_tau_s : float, optional
         Relaxation's time constant the size is given at (default 1 s).
+    column_effects : bool, default False
+        Also size a stiffness changing over the session (:data:`COLUMN_SIZE_EFFECTS`),
+        tried as ``diagnose`` tries it (:attr:`ReplaySetup.column_effects`): for a table
+        whose crossing forces do not size it.
 
     Returns
     -------
     sizes : dict of str to EffectSensitivity
+        Keyed by the catalogue's names; with `column_effects`, also
+        ``'stiffness_trend:time_s'`` (k, in %/min) and ``'stiffness_step:press'`` (s, in
+        %) where the table has the column.
 
     Raises
     ------
@@ -701,7 +833,7 @@ def table_sensitivity(columns: dict, *, thickness_mm: float, radius_mm: float,
                         thickness_mm=float(thickness_mm), depths_mm=(float(w.max()),),
                         w=w, cols={k: np.asarray(v, np.float64) for k, v in columns.items()},
                         sigma=sig, untestable=dict(untestable),
-                        relaxation_tau_s=relaxation_tau_s)
+                        relaxation_tau_s=relaxation_tau_s, column_effects=column_effects)
     return _sizes(_Replay(setup, draws, seed), setup, power)
 
 
@@ -709,7 +841,9 @@ def _sizes(rep: _Replay, design: ReplaySetup, power: float
            ) -> dict[str, EffectSensitivity]:
     """:func:`replay_sizes`' answer from a replay."""
     out = {}
-    for name, (param, unit, scale) in EFFECT_SIZE_PARAMS.items():
+    names = [*EFFECT_SIZE_PARAMS, *(c for c in COLUMN_SIZE_EFFECTS if c in rep.cands)]
+    for name in names:
+        param, unit, scale = _size_unit(name)
         if name not in rep.cands:
             why = rep.untestable.get(name, "not testable on this design")
             out[name] = EffectSensitivity(name, param, unit, math.nan, math.nan, power,
