@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import InputError
-from ..diagnosis import crossing_measurements
+from ..diagnosis import crossing_measurements, stated_weights
 from ..io import Measurements, read_holds, read_measurements, write_output_file
 from ..mechanics import (
     BETA_TABLE_REACH,
@@ -363,8 +363,9 @@ def depth_uncertainty(table: Measurements, *, ignore: bool, effects: tuple[str, 
                       f"line {int(table.line_numbers[i])}): fitted without the depth "
                       "uncertainties")
     if effects != ("large_deformation",):
-        return None, ("depth_std_mm is used by the fit of eq. (5) alone: the model with "
-                      "effects is fitted without the depth uncertainties")
+        return u, ("the model with effects weighs each press by its stated noise "
+                   "(force_sem_n and depth_std_mm x dP/dw of eq. (5)), its intervals no "
+                   "narrower than that noise makes them")
     return u, None
 
 
@@ -455,6 +456,12 @@ def run(args: argparse.Namespace) -> int:
     table, weights, left_out = _within_reach(table, args, weights)
     depth_std, std_message = depth_uncertainty(table, ignore=args.ignore_depth_std,
                                                effects=effects)
+    if weights is None and depth_std is not None and effects != ("large_deformation",):
+        weights = stated_weights(table.depth_mm, table.force_n, depth_std,
+                                 table.columns.get("force_sem_n"))
+        if weights is None:
+            std_message = ("the stated noise (force_sem_n, depth_std_mm) is zero at some "
+                           "press: the model with effects is fitted without it")
     fit, caught = _fit_table(table, effects, args, depth_std, weights)
     for note in table.notes:
         print(f"tactilevision fit: warning: {note}", file=sys.stderr)

@@ -28,7 +28,7 @@ Effects of your own are :class:`tactilevision.mechanics.Effect` subclasses, pass
 to :func:`diagnose` (``docs/custom_effects.md``).
 """
 
-from ._budget import NoiseBudget, law_slope, noise_budget
+from ._budget import NoiseBudget, law_slope, noise_budget, stated_weights
 from ._crossings import (
     CROSSING_UNITS,
     CrossingScan,
@@ -115,6 +115,7 @@ __all__ = [
     "noise_floor",
     "replay_power",
     "replay_sizes",
+    "stated_weights",
     "table_sensitivity",
     "untestable_reason",
     "validate_indentation",

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats
 
-__all__ = ["NoiseBudget", "law_slope", "noise_budget"]
+__all__ = ["NoiseBudget", "law_slope", "noise_budget", "stated_weights"]
 
 #: Significance of the budget test (chi-square on the within-group scatter).
 BUDGET_ALPHA = 1e-3
@@ -84,6 +84,38 @@ def law_slope(depth_mm: np.ndarray, force_n: np.ndarray) -> np.ndarray:
     w = np.asarray(depth_mm, np.float64)
     deg = min(2, np.unique(w).size - 1)
     return np.polyval(np.polyder(np.polyfit(w, np.asarray(force_n, np.float64), deg)), w)
+
+
+def stated_weights(depth_mm: np.ndarray, force_n: np.ndarray, depth_std_mm: np.ndarray,
+                   force_sem_n: np.ndarray | None = None) -> np.ndarray | None:
+    """Each press's weight in a fit with effects: 1 / sd^2 of its stated force noise.
+
+    The F/T window's standard error and the depth's uncertainty times the local
+    stiffness dP/dw (:func:`law_slope`), as eq. (5)'s errors-in-variables fit weighs
+    them (effective variance: sigma_i^2 = s_P,i^2 + (dP/dw_i s_w,i)^2).
+
+    Parameters
+    ----------
+    depth_mm, force_n : (N,) array_like
+        Certified depths w, mm, and forces P, N (two distinct depths or more).
+    depth_std_mm : (N,) array_like
+        Each depth's standard uncertainty, mm.
+    force_sem_n : (N,) array_like, optional
+        Each force's standard error, N (``force_sem_n``); 0 where absent or NaN.
+
+    Returns
+    -------
+    weights : (N,) float64 ndarray, 1/N^2, or None
+        None where a press's stated noise is zero or the depths are fewer than two
+        (nothing to weigh by).
+    """
+    w = np.asarray(depth_mm, np.float64)
+    if np.unique(w).size < 2:
+        return None
+    sem = np.zeros(w.size) if force_sem_n is None else np.nan_to_num(
+        np.asarray(force_sem_n, np.float64))
+    var = sem ** 2 + (law_slope(w, force_n) * np.asarray(depth_std_mm, np.float64)) ** 2
+    return 1.0 / var if np.all(var > 0) else None
 
 
 def noise_budget(residuals_n: np.ndarray, predicted_n: np.ndarray,
