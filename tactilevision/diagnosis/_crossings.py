@@ -149,7 +149,9 @@ class CrossingScan:
         if not rival:
             return best, None, False
         step, trend = (best, rival[0]) if best.kind == "step" else (rival[0], best)
-        aic = (step.size / step.se) ** 2 - (trend.size / trend.se) ** 2 - 2.0
+        # Akaike on the brackets' own likelihood (the tests' noise model): twice the step's
+        # gain over the trend's, less 2 for its change point
+        aic = 2.0 * (step.gain - trend.gain) - 2.0
         by_aic = (step, trend) if aic > 0 else (trend, step)
         if not np.isfinite(self.p_trend_fits):
             return (*by_aic, abs(aic) <= 2.0)
@@ -164,16 +166,16 @@ class CrossingScan:
         """The most significant test, where one is; along its column, where a step and a
         trend are both significant, the one that explains the brackets where the other
         does not (``p_trend_fits``, ``p_step_fits``: Cox's test of separate families), and
-        where both do (or neither), the one Akaike's criterion prefers on the midpoints
-        (the step pays 2 for its change point; Akaike, IEEE Trans. Autom. Control 19,
-        716, 1974)."""
+        where both do (or neither), the one Akaike's criterion prefers on the brackets'
+        likelihood (twice each shape's log-likelihood gain; the step pays 2 for its change
+        point; Akaike, IEEE Trans. Autom. Control 19, 716, 1974)."""
         return self._rivals()[0]
 
     @property
     def equivalent(self) -> tuple[CrossingTest, ...]:
         """The other shape along the found column where the data hardly prefer either: both
         explain the brackets (``p_trend_fits`` and ``p_step_fits`` at least
-        :data:`_SHAPE_ALPHA`); without those, where their midpoints' AIC lie within 2
+        :data:`_SHAPE_ALPHA`); without those, where their AIC on the brackets lie within 2
         (Burnham and Anderson, Model Selection and Multimodel Inference, 2002, sec. 2.6).
         A gel that softens steadily fits a step at its middle nearly as well at a
         crossing's noise."""
