@@ -249,7 +249,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--at-rules-out", type=float, metavar="K",
                     help="hide the spatial gradient, the softening and the step at K times the "
                          "smallest the null session's crossing forces rule out "
-                         "(tactilevision.diagnosis.crossing_sizes); null is run first")
+                         "(tactilevision.diagnosis.crossing_sizes; without crossing forces, "
+                         "its null diagnosis's rules_out); null is run first")
     ap.add_argument("--reuse", action="store_true",
                     help="keep the calibrate, diagnose and fit outputs already in --out")
     a = ap.parse_args(argv)
@@ -261,8 +262,9 @@ def main(argv: list[str] | None = None) -> int:
         rows = [one(a.session, a.out, "null", a.seed, a.reuse)]
         sizes = rules_out_sizes(a.session, a.out / "null" / "calibration" / "measurements.csv",
                                 a.at_rules_out)
-        print(f"sizes: {a.at_rules_out:g} times what the null session's crossing forces rule "
-              f"out: " + ", ".join(f"{k} {v:.4g}" for k, v in sizes.items()), flush=True)
+        print(f"sizes: {a.at_rules_out:g} times what the null session rules out (its crossing "
+              f"forces, or its diagnosis's rules_out): "
+              + ", ".join(f"{k} {v:.4g}" for k, v in sizes.items()), flush=True)
         rows += [one(a.session, a.out, k, a.seed, a.reuse, sizes.get(k)) for k in a.kinds
                  if k != "null"]
     else:
