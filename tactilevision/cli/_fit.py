@@ -369,6 +369,22 @@ def depth_uncertainty(table: Measurements, *, ignore: bool, effects: tuple[str, 
     return u, None
 
 
+def _effects_weights(table: Measurements, effects: tuple[str, ...],
+                     depth_std: np.ndarray | None, weights: np.ndarray | None,
+                     message: str | None) -> tuple[np.ndarray | None, str | None]:
+    """A model with effects weighs each press by its stated noise
+    (:func:`~tactilevision.diagnosis.stated_weights`) where the table states it and no
+    other weights are given (``--crossings``'); returns the weights and the message."""
+    if weights is not None or depth_std is None or effects == ("large_deformation",):
+        return weights, message
+    weights = stated_weights(table.depth_mm, table.force_n, depth_std,
+                             table.columns.get("force_sem_n"))
+    if weights is None:
+        message = ("the stated noise (force_sem_n, depth_std_mm) is zero at some press: the "
+                   "model with effects is fitted without it")
+    return weights, message
+
+
 def _write_json(obj: dict, dest: str) -> None:
     text = json.dumps(obj, indent=2, allow_nan=False) + "\n"
     if dest == "-":
@@ -456,12 +472,7 @@ def run(args: argparse.Namespace) -> int:
     table, weights, left_out = _within_reach(table, args, weights)
     depth_std, std_message = depth_uncertainty(table, ignore=args.ignore_depth_std,
                                                effects=effects)
-    if weights is None and depth_std is not None and effects != ("large_deformation",):
-        weights = stated_weights(table.depth_mm, table.force_n, depth_std,
-                                 table.columns.get("force_sem_n"))
-        if weights is None:
-            std_message = ("the stated noise (force_sem_n, depth_std_mm) is zero at some "
-                           "press: the model with effects is fitted without it")
+    weights, std_message = _effects_weights(table, effects, depth_std, weights, std_message)
     fit, caught = _fit_table(table, effects, args, depth_std, weights)
     for note in table.notes:
         print(f"tactilevision fit: warning: {note}", file=sys.stderr)
