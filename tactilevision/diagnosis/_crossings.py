@@ -157,8 +157,12 @@ class CrossingScan:
             return (*by_aic, abs(aic) <= 2.0)
         trend_ok = self.p_trend_fits >= _SHAPE_ALPHA
         step_ok = self.p_step_fits >= _SHAPE_ALPHA
-        if trend_ok == step_ok:         # both explain them (or neither): Akaike's choice
-            return (*by_aic, trend_ok)
+        if trend_ok == step_ok:
+            # both explain them (or neither): the shape under whose own draws the observed
+            # statistic is the more typical (the larger of the two Cox p-values)
+            by_p = ((trend, step) if self.p_trend_fits >= self.p_step_fits
+                    else (step, trend))
+            return (*by_p, trend_ok)
         return (trend, step, False) if trend_ok else (step, trend, False)
 
     @property
@@ -166,9 +170,12 @@ class CrossingScan:
         """The most significant test, where one is; along its column, where a step and a
         trend are both significant, the one that explains the brackets where the other
         does not (``p_trend_fits``, ``p_step_fits``: Cox's test of separate families), and
-        where both do (or neither), the one Akaike's criterion prefers on the brackets'
-        likelihood (twice each shape's log-likelihood gain; the step pays 2 for its change
-        point; Akaike, IEEE Trans. Autom. Control 19, 716, 1974)."""
+        where both do (or neither), the one under whose own draws the observed statistic is
+        the more typical (the larger of the two p-values: the draws count the step's search
+        over its places, which a nominal penalty does not). Without those p-values (one
+        shape not significant), Akaike's criterion on the brackets' likelihood (twice each
+        shape's log-likelihood gain; the step pays 2 for its change point; Akaike, IEEE
+        Trans. Autom. Control 19, 716, 1974)."""
         return self._rivals()[0]
 
     @property
