@@ -41,10 +41,21 @@ COLUMN = {"stiffness_trend:time_s": lambda c, x: np.exp(-x * (c["time_s"] - c["t
           "stiffness_step:press": lambda c, x: 1 - x * (c["press"] > np.median(c["press"]))}
 
 
-def _diag(t):
+def _diag(t, columns=None):
+    """diagnose of the table `t` (or of `columns` in its place, with its h and a)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        return diagnose(t.columns, thickness_mm=t.thickness_mm, radius_mm=t.radius_mm)
+        return diagnose(t.columns if columns is None else columns,
+                        thickness_mm=t.thickness_mm, radius_mm=t.radius_mm)
+
+
+def _said(seed: int, eff: str, ruled, factor: float, d) -> bool:
+    """Whether `d` names `eff` (its verdict, an equivalent or the offered trend), printed."""
+    hit = eff in (d.missing_effect, *d.equivalent_effects, d.offered_effect)
+    print(f"seed {seed}: {eff} ruled out above {ruled.size:.3g} {ruled.unit}; hidden at "
+          f"{factor:g} x: {'named' if hit else 'missed'} (verdict {d.missing_effect}, "
+          f"equivalent {list(d.equivalent_effects)}, offered {d.offered_effect})")
+    return hit
 
 
 def main() -> None:
@@ -71,34 +82,20 @@ def main() -> None:
         if d0.missing_effect or d0.unexplained_covariate:
             print(f"seed {seed}: the null table named {d0.missing_effect or d0.offered_effect}")
             continue
-        for eff, (hidden, key) in EFFECTS.items():
+        for eff in (*EFFECTS, *COLUMN):
             size = d0.rules_out[eff].size_param
             if not 0 < size < float("inf"):
                 continue
-            unit = make_measurement_table(hidden, seed).truth[key]
-            t = make_measurement_table(hidden, seed, strength=args.factor * size / unit)
-            d = _diag(t)
-            hit = d.missing_effect == eff or eff in d.equivalent_effects
+            x = args.factor * size
+            if eff in EFFECTS:
+                hidden, key = EFFECTS[eff]
+                unit = make_measurement_table(hidden, seed).truth[key]
+                d = _diag(make_measurement_table(hidden, seed, strength=x / unit))
+            else:
+                c = null.columns
+                d = _diag(null, {**c, "force_n": c["force_n"] * COLUMN[eff](c, x)})
             tried[eff] += 1
-            named[eff] += hit
-            print(f"seed {seed}: {eff} ruled out above {d0.rules_out[eff].size:.3g} "
-                  f"{d0.rules_out[eff].unit}; hidden at {args.factor:g} x: "
-                  f"{'named' if hit else 'missed'} (verdict {d.missing_effect}, "
-                  f"equivalent {list(d.equivalent_effects)})")
-        for eff, factor in COLUMN.items():
-            x = args.factor * d0.rules_out[eff].size_param
-            c = null.columns
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                d = diagnose({**c, "force_n": c["force_n"] * factor(c, x)},
-                             thickness_mm=null.thickness_mm, radius_mm=null.radius_mm)
-            hit = eff in (d.missing_effect, *d.equivalent_effects, d.offered_effect)
-            tried[eff] += 1
-            named[eff] += hit
-            print(f"seed {seed}: {eff} ruled out above {d0.rules_out[eff].size:.3g} "
-                  f"{d0.rules_out[eff].unit}; hidden at {args.factor:g} x: "
-                  f"{'named' if hit else 'missed'} (verdict {d.missing_effect}, equivalent "
-                  f"{list(d.equivalent_effects)}, offered {d.offered_effect})")
+            named[eff] += _said(seed, eff, d0.rules_out[eff], args.factor, d)
     for eff in (*EFFECTS, *COLUMN):
         print(f"{eff}: named in {named[eff]} of {tried[eff]}")
     med = sorted(took)[len(took) // 2]

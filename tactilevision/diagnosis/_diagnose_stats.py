@@ -181,6 +181,17 @@ def _testable(names: Sequence[str], r_all: np.ndarray, columns: Mapping[str, np.
     return out
 
 
+def scan_regressors(x: np.ndarray, predicted_n: np.ndarray, groups: np.ndarray
+                    ) -> np.ndarray:
+    """The scan's regressors along a column of more than 8 values (N, 4): z, z^2, q z,
+    q z^2 (z the standardised column, q the standardised prediction), each with its
+    replicate groups' means taken out (:func:`covariate_tests`' notes)."""
+    z = (x - x.mean()) / x.std()
+    q = (predicted_n - predicted_n.mean()) / (predicted_n.std() or 1.0)
+    X = np.column_stack([z, z**2, q * z, q * z**2])
+    return X - _group_means(X, groups)
+
+
 def _structure(name: str, r_all: np.ndarray, p_all: np.ndarray,
                columns: Mapping[str, np.ndarray], n_depth_params: int
                ) -> tuple[float, float, int, float]:
@@ -205,10 +216,7 @@ def _structure(name: str, r_all: np.ndarray, p_all: np.ndarray,
         G = int(grp.max()) + 1
         r = r - _group_means(r, grp)
         rss0 = float(np.sum(r ** 2))
-        z = (xs - xs.mean()) / xs.std()
-        q = (p - p.mean()) / (p.std() or 1.0)
-        X = np.column_stack([z, z**2, q * z, q * z**2])
-        X = X - _group_means(X, grp)
+        X = scan_regressors(xs, p, grp)
         coef, *_ = np.linalg.lstsq(X, r, rcond=None)
         rss1 = float(np.sum((r - X @ coef) ** 2))
         df1 = int(np.linalg.matrix_rank(X))

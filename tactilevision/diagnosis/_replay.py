@@ -61,7 +61,14 @@ from .._checks import InputError
 from ..mechanics import EFFECT_SIZE_PARAMS, fem_force, make_effect
 from ._crossings import CROSSING_UNITS
 from ._diagnose import CURVATURE_BIC, DELTA_BIC, EQUIVALENT_BIC, EQUIVALENT_RMSE
-from ._diagnose_stats import ALPHA, _covariate_names, _group_means, _groups, _testable
+from ._diagnose_stats import (
+    ALPHA,
+    _covariate_names,
+    _group_means,
+    _groups,
+    _testable,
+    scan_regressors,
+)
 
 __all__ = ["COLUMN_SIZE_EFFECTS", "NOMINAL_TAU_S", "TANGENTIAL_FRACTION", "EffectSensitivity",
            "ReplaySetup", "replay_power", "replay_sizes", "table_sensitivity"]
@@ -359,10 +366,7 @@ class _SessionScan:
             x = np.asarray(cols.get(col, np.full(w.shape, np.nan)), np.float64)
             if not (np.all(np.isfinite(x)) and np.unique(x).size > 8):
                 continue
-            z = (x - x.mean()) / x.std()
-            q = (law - law.mean()) / (law.std() or 1.0)
-            X = np.column_stack([z, z**2, q * z, q * z**2])
-            u, sv, _ = np.linalg.svd(X - _group_means(X, self.grp), full_matrices=False)
+            u, sv, _ = np.linalg.svd(scan_regressors(x, law, self.grp), full_matrices=False)
             B = u[:, sv > 1e-10 * sv.max()]
             df2 = w.size - G - B.shape[1]
             if B.shape[1] and df2 >= 1:
@@ -606,16 +610,16 @@ class _Replay:
                     # as diagnose: as good by BIC, or (replayed with the column effects,
                     # whose steps cost three parameters) leaving the same residual (the
                     # BICs less their parameters' price, n log RSS, within 2 n log 1.01)
-                    k = np.array([self.cands[c].k for c in order], np.float64)
-                    price = math.log(self.n) * (self.cands[hidden].k - k[best])
-                    same = 2 * self.n * math.log1p(EQUIVALENT_RMSE) if self.d.column_effects \
-                        else -np.inf
                     with np.errstate(invalid="ignore"):
                         # a trend is named only as the best (diagnose lists no trend as
                         # equivalent to a named effect that beats it)
                         close = (hv <= best_val if self.cands[hidden].generic
-                                 else (hv - best_val < EQUIVALENT_BIC)
-                                 | (hv - best_val - price <= same))
+                                 else hv - best_val < EQUIVALENT_BIC)
+                        if self.d.column_effects and not self.cands[hidden].generic:
+                            k = np.array([self.cands[c].k for c in order], np.float64)
+                            price = math.log(self.n) * (self.cands[hidden].k - k[best])
+                            close |= (hv - best_val - price
+                                      <= 2 * self.n * math.log1p(EQUIVALENT_RMSE))
                     equiv = np.isfinite(hv) & close & named_best
                     hit[idx] |= equiv & ~none
                 # found, or nothing passes: the climb ends for that session
