@@ -334,7 +334,7 @@ def _relax_table(table: Measurements, holds_path: Path, effects: tuple[str, ...]
 
 def depth_uncertainty(table: Measurements, *, ignore: bool, effects: tuple[str, ...]
                       ) -> tuple[np.ndarray | None, str | None]:
-    """The depth uncertainties the fit uses, and why it uses none when the table has them.
+    """The depth uncertainties the fit uses, and what it says of them.
 
     Parameters
     ----------
@@ -342,16 +342,17 @@ def depth_uncertainty(table: Measurements, *, ignore: bool, effects: tuple[str, 
     ignore : bool
         ``--ignore-depth-std``.
     effects : tuple of str
-        The model's effects (only the base eq. 5 fit takes depth uncertainties).
+        The model's effects: eq. (5) alone takes the uncertainties as errors in both
+        variables; a model with effects as weights (:func:`_effects_weights`).
 
     Returns
     -------
     depth_std_mm : (N,) float64 ndarray, mm, or None
-        The table's ``depth_std_mm`` when it has a value in every row, the
-        option is off and the model is eq. (5) alone; else None.
+        The table's ``depth_std_mm`` when it has a value in every row and the
+        option is off; else None.
     message : str or None
-        One sentence for stderr when the column is there but not used for
-        another reason than the option.
+        One sentence for stderr: why the column is there but not used (other than
+        the option), or how a model with effects uses it.
     """
     u = table.columns.get("depth_std_mm")
     if u is None or ignore:
