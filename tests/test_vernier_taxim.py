@@ -218,6 +218,34 @@ def test_narrow_bands_are_bounded_not_read(steep_taxim_session):
     assert any("not read" in w for w in cal.warnings)
 
 
+@pytest.fixture(scope="module")
+def shallow_bevel_taxim_session(tmp_path_factory):
+    """Eight presses rendered by Taxim now on an 8 deg bevel at 15 frames/s, stopped 0 to
+    50 um past w0 (bands of 0 to 12 px): the band models read the shadow block Taxim
+    paints beside a narrow band about as long as :data:`RESOLVED_PX` (10 to 12.5 px)."""
+    return _render_taxim_session(tmp_path_factory.mktemp("shallow"), presses=8, fps=15.0,
+                                 seed=11, theta_deg=8.0)
+
+
+def test_a_shadow_block_beside_a_narrow_band_is_not_read(shallow_bevel_taxim_session):
+    """A band read long must be seen by the shadows model too (SHADOW_RATIO): else the
+    shadow block beside two narrow bands of this session passed for long bands, 29 and
+    31 um deep at 2.5 um stated (z 11.5 and 12.6). Every certified press's truth lies
+    within 3.5 of its stated sd, and no narrow band is read."""
+    from tactilevision.contact import RESOLVED_PX
+
+    folder, truth = shallow_bevel_taxim_session
+    cal = calibrate_session(folder, allow_failure=True)
+    tp = {p["press"]: p for p in truth["presses"]}
+    ps = cal.certification.presses
+    assert len(ps) >= 6
+    for p, d, u in zip(ps, cal.depth_mm, cal.depth_std_mm, strict=True):
+        t = tp[p.press]
+        if p.band_resolved:
+            assert t["bevel_half_width_px"] >= 0.9 * RESOLVED_PX, f"press {p.press} read"
+        assert abs(d - t["depth_mm"]) <= 3.5 * u, f"press {p.press}"
+
+
 def test_unresolved_closure_and_shared_edge_error():
     """The uniform's middle and sd, and the shared bound of read bands, in closed form."""
     from tactilevision.contact import (

@@ -26,10 +26,17 @@ from ._results import (
     CertifiedPress,
     Rejection,
 )
-from ._vernier import RESOLVED_PX, BevelGeometry, bevel_profile, read_bevel
+from ._vernier import (
+    RESOLVED_PX,
+    BevelGeometry,
+    BevelProfile,
+    BevelReading,
+    bevel_profile,
+    read_bevel,
+)
 
-__all__ = ["CREST_CHECK_P", "EDGE_SHARED_FRACTION", "crest_consistency", "unresolved_closure",
-           "vernier_shared_mm"]
+__all__ = ["CREST_CHECK_P", "EDGE_SHARED_FRACTION", "SHADOW_RATIO", "band_models_agree",
+           "crest_consistency", "unresolved_closure", "vernier_shared_mm"]
 
 
 #: With lines, a long band is read only when its edges alone (``read_bevel(lines='only')``)
@@ -43,6 +50,16 @@ AGREE_PX = 1.5
 #: long bands of sweep cells A and B lie within 1 px of their median; the misread narrow
 #: bands that passed for long ones, 3 to 5.5 px off).
 CREST_TOLERANCE_PX = 2.0
+#: A long band is read, in a session with lines, only when the band read with shadows
+#: cast outward from thin edge lines (``read_bevel(lines='shadows')``) is at least this
+#: fraction of it (:func:`band_models_agree`). On Taxim's renders that model reads true
+#: bands of 9.5 to 38 px at 0.62 to 0.96 of the flanks' reading, and the shadow block
+#: beside a band of 2.6 to 5.6 px, read 10 to 12.5 px with flanks and within AGREE_PX by
+#: its edges, at 0.42 to 0.56 (8 deg flanks at 15 frames/s, seeds 81, 95 and 96 of
+#: ``benchmarks/taxim_gauge_session.py``; sweep cells A to C of
+#: ``benchmarks/bench_vernier.py``). Such blocks were read 24 to 31 um deep at 3 to 8 um
+#: stated.
+SHADOW_RATIO = 0.6
 #: The read bands' stated half-width uncertainties are widened by their crests' Birge
 #: ratio when the crests scatter more than those uncertainties allow at this significance
 #: (:func:`crest_consistency`).
@@ -319,6 +336,40 @@ def _crest_checked(out: list[CertifiedPress], optics: dict) -> list[CertifiedPre
             for p in out]
 
 
+def band_models_agree(profiles: list[BevelProfile], geom: BevelGeometry, s: float,
+                      flanks: BevelReading, kw: dict) -> bool:
+    """Whether a band read long with its flanks (`flanks`) is a band, in a session with
+    lines or shadows along its edges.
+
+    Two more band models must see it: its edges alone (``lines='only'``) give its
+    half-width within :data:`AGREE_PX`, and thin edge lines with shadows cast outward
+    (``lines='shadows'``) at least :data:`SHADOW_RATIO` of it. A block of colour beside
+    a narrow band (Taxim's shadow) reads long with flanks and, often, by its edges too,
+    while the shadows model sees the narrow band it is.
+
+    Parameters
+    ----------
+    profiles : list of BevelProfile
+        The press's window.
+    geom : BevelGeometry
+    s : float
+        Scale, mm per px.
+    flanks : BevelReading
+        The band read with the session's model (``kw``), resolved.
+    kw : dict
+        :func:`read_bevel`'s options of the session (``lines``, ``blur_px``, ...).
+
+    Returns
+    -------
+    bool
+    """
+    edges = read_bevel(profiles, geom, s, **{**kw, "lines": "only"})
+    if abs(edges.half_width_px - flanks.half_width_px) > AGREE_PX:
+        return False
+    shadows = read_bevel(profiles, geom, s, **{**kw, "lines": "shadows"})
+    return shadows.half_width_px >= SHADOW_RATIO * flanks.half_width_px
+
+
 def _read_vernier_presses(pending: list[dict], geom: BevelGeometry, s: float
                           ) -> tuple[list[CertifiedPress], list[Rejection], dict]:
     """Read every press's band over its window, with the session's own optics.
@@ -337,8 +388,9 @@ def _read_vernier_presses(pending: list[dict], geom: BevelGeometry, s: float
        (half-width >= ``RESOLVED_PX``), its crest lies where the session's
        long bands put it (within :data:`CREST_TOLERANCE_PX`, or 4 robust sd
        of theirs, of their median crest; three or more long bands needed),
-       and, in a session with lines, its edges alone (``lines='only'``) give
-       its width within :data:`AGREE_PX`. With or without the prior, its
+       and, in a session with lines, two other band models see it too
+       (:func:`band_models_agree`: its edges alone within :data:`AGREE_PX`,
+       the shadows model at least :data:`SHADOW_RATIO` of it). With or without the prior, its
        inner edge must also lie two edge widths clear of the profile's end
        on the indenter's side (:data:`INDENTER_CLEARANCE_MM`). Any other band
        is *unresolved*: its width is only bounded, to ``[0, max(RESOLVED_PX,
@@ -369,8 +421,7 @@ def _read_vernier_presses(pending: list[dict], geom: BevelGeometry, s: float
     if optics["lines"] != "none":
         for k, (d, r) in enumerate(zip(pending, first, strict=True)):
             if r.resolved:
-                edges = read_bevel(d["profiles"], geom, s, **{**kw, "lines": "only"})
-                agrees[k] = abs(edges.half_width_px - r.half_width_px) <= AGREE_PX
+                agrees[k] = band_models_agree(d["profiles"], geom, s, r, kw)
     long = np.array([r.resolved and r.snr >= 2 * VERNIER_SNR for r in first]) & agrees
     X = np.array([[1.0, d["press"].x_mm, d["press"].y_mm] for d in pending])
     C = np.array([r.flank_colours.ravel() for r in first])            # (N, 6)
