@@ -24,20 +24,29 @@ import numpy as np
 
 from .._checks import InputError
 
-__all__ = ["HEIGHT_DIGITS", "HEIGHT_RESOLUTION_MM", "InputStore", "quantize_heights"]
+__all__ = ["BLOSC_BLOCK_BYTES", "HEIGHT_DIGITS", "HEIGHT_RESOLUTION_MM", "InputStore",
+           "quantize_heights"]
 
 #: Heights are stored to this many decimal digits of a millimetre: rounded to
 #: 2^-ceil(log2(10^digits)) mm (:func:`quantize_heights`, the rule of numcodecs'
 #: Quantize, done here in float32: the same values, a tenth of its time), NaN kept, then
 #: compressed with Blosc's Zstandard (level 1) after a bit shuffle. The array is plain
 #: float32 in Zarr's own codecs. On the sample session's height maps (16 frames,
-#: 640 x 480) this stores 0.285 MB a frame against 1.118 MB as plain float32 with
-#: Zstandard, every height within 0.031 um of its float32 (issue 54, item 3;
-#: benchmarks/bench_height_store.py prints the figures). numcodecs' Quantize as a filter
-#: with Zstandard level 5 stored 0.274 MB but its rounding and writing cost 8.87 ms a
-#: frame against 2.86 ms for these (32 real 640 x 480 height maps a chunk, one Blosc
-#: thread, 2-core x86_64, 2026-11-26, same run).
+#: 640 x 480) this stores 0.272 MB a frame (0.285 before :data:`BLOSC_BLOCK_BYTES`)
+#: against 1.118 MB as plain float32 with Zstandard, every height within 0.031 um of its
+#: float32 (issue 54, item 3; benchmarks/bench_height_store.py prints the figures).
+#: numcodecs' Quantize as a filter with Zstandard level 5 stored 0.274 MB but its
+#: rounding and writing cost 8.87 ms a frame against 2.86 ms for these (32 real
+#: 640 x 480 height maps a chunk, one Blosc thread, 2-core x86_64, 2026-11-26, same run).
 HEIGHT_DIGITS = 4
+#: Blosc's block, bytes: Zstandard then sees 4 MiB at a time (a fraction of a 640 x 480
+#: chunk of 32 frames, 39 MB) instead of Blosc's default of tens of kB for level 1. On
+#: 320 quantized height maps of ``benchmarks/bench_batch_speedup.py``'s video (one Blosc
+#: thread, 2-core x86_64, 2026-11-27, same run): 0.311 MB and 1.24 ms a frame against
+#: 0.346 MB and 2.22 ms with the default block; 1 MiB gave 0.329 MB and 1.37 ms, 8 MiB
+#: 0.293 and 1.22, 16 MiB 0.283 and 1.66. A reader decompresses whole blocks, so reading
+#: one frame costs at most one block more.
+BLOSC_BLOCK_BYTES = 2 ** 22
 #: The stored heights' resolution, mm (2^-14 mm = 0.061 um: within 0.1 um).
 HEIGHT_RESOLUTION_MM = 2.0 ** -int(np.ceil(np.log2(10.0 ** HEIGHT_DIGITS)))
 
@@ -69,7 +78,8 @@ def _height_codecs() -> dict:
     rounded by :func:`quantize_heights` before they are written)."""
     from zarr.codecs import BloscCodec
 
-    return {"compressors": [BloscCodec(cname="zstd", clevel=1, shuffle="bitshuffle")]}
+    return {"compressors": [BloscCodec(cname="zstd", clevel=1, shuffle="bitshuffle",
+                                       blocksize=BLOSC_BLOCK_BYTES)]}
 
 
 def _atomic_write_parquet(table, path: Path) -> None:
