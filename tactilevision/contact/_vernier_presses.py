@@ -390,9 +390,10 @@ def _read_vernier_presses(pending: list[dict], geom: BevelGeometry, s: float
        of theirs, of their median crest; three or more long bands needed),
        and, in a session with lines, two other band models see it too
        (:func:`band_models_agree`: its edges alone within :data:`AGREE_PX`,
-       the shadows model at least :data:`SHADOW_RATIO` of it). With or without the prior, its
-       inner edge must also lie two edge widths clear of the profile's end
-       on the indenter's side (:data:`INDENTER_CLEARANCE_MM`). Any other band
+       the shadows model at least :data:`SHADOW_RATIO` of it). With or
+       without the prior, its inner edge must also lie two edge widths clear
+       of the profile's end on the indenter's side
+       (:data:`INDENTER_CLEARANCE_MM`). Any other band
        is *unresolved*: its width is only bounded, to ``[0, max(RESOLVED_PX,
        L)]`` pixels' worth (L plus two edge widths for a band cut off at the
        profile's end), its uncertainty that of a uniform over that range
