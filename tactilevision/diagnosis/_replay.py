@@ -376,8 +376,8 @@ class _SessionScan:
     def flags(self, Y: np.ndarray) -> np.ndarray:
         """(M,) bool: the sessions Y (n, M) whose scan flags time or press order."""
         R = Y - self.q0 @ (self.q0.T @ Y)
-        R = R - np.stack([_group_means(R[:, j], self.grp) for j in range(R.shape[1])], 1) \
-            if R.shape[1] else R
+        if R.shape[1]:
+            R = R - _group_means(R, self.grp)
         rss0 = np.einsum("ij,ij->j", R, R)
         hit = np.zeros(R.shape[1], bool)
         for B, crit in self.bases:
