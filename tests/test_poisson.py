@@ -7,6 +7,7 @@ import pytest
 
 from tactilevision import ShapeError
 from tactilevision.optics import PoissonSolver, divergence, integrate_poisson
+from tactilevision.optics._poisson import _median
 
 H, W = 64, 80
 Y, X = np.mgrid[0:H, 0:W].astype(np.float64)
@@ -243,3 +244,15 @@ def test_scale_is_folded_into_the_solve(boundary):
     plain = PoissonSolver((48, 64), boundary=boundary)(gx, gy)
     scaled = PoissonSolver((48, 64), boundary=boundary, scale=0.0295)(gx, gy)
     np.testing.assert_allclose(scaled, 0.0295 * plain, rtol=1e-5, atol=1e-7)
+
+
+@pytest.mark.parametrize("n", [4799, 4800])
+def test_the_offset_median_is_numpys(n):
+    """The partitioned median that fixes the Neumann offset equals np.median for odd and
+    even counts, and the unchecked solve equals the checked one."""
+    x = np.random.default_rng(n).standard_normal(n).astype(np.float32)
+    assert _median(x.copy()) == pytest.approx(float(np.median(x)), abs=1e-7)
+    gx, gy = (np.random.default_rng(k).standard_normal((24, 32)).astype(np.float32)
+              for k in (1, 2))
+    solver = PoissonSolver((24, 32))
+    np.testing.assert_array_equal(solver.solve_unchecked(gx.copy(), gy.copy()), solver(gx, gy))

@@ -135,6 +135,12 @@ class PoissonSolver:
         gy = check_array(gy, "gy", [gx.shape], dtype=np.floating)
         if zero_mask is not None:
             zero_mask = check_array(zero_mask, "zero_mask", [gx.shape], dtype=np.bool_)
+        return self.solve_unchecked(gx, gy, zero_mask)
+
+    def solve_unchecked(self, gx: np.ndarray, gy: np.ndarray,
+                        zero_mask: np.ndarray | None = None) -> np.ndarray:
+        """``__call__`` without its checks of the arguments' shapes and dtypes, for a
+        caller that made them (a :class:`DepthReconstructor`'s own gradients)."""
         dt = self._inv_lambda.dtype
         f = divergence(gx.astype(dt, copy=False), gy.astype(dt, copy=False), scale=1.0)
         axes = (-2, -1)
@@ -155,11 +161,22 @@ def _fix_offset(z: np.ndarray, zero_mask: np.ndarray | None) -> np.ndarray:
             z[i] = _fix_offset(z[i], None if zero_mask is None else zero_mask[i])
         return z
     if zero_mask is not None and np.count_nonzero(zero_mask) > 0:
-        ref = np.median(z[zero_mask])
+        ref = _median(z[zero_mask])
     else:
-        ref = np.median(z[::4, ::4])
+        ref = _median(z[::4, ::4].flatten())
     z -= ref
     return z
+
+
+def _median(x: np.ndarray) -> float:
+    """np.median of a 1-D array that may be overwritten (partitioned in place: half the
+    time of np.median's copy and mean at 4800 values)."""
+    n = x.size
+    if n % 2:
+        x.partition(n // 2)
+        return float(x[n // 2])
+    x.partition([n // 2 - 1, n // 2])
+    return 0.5 * (float(x[n // 2 - 1]) + float(x[n // 2]))
 
 
 def integrate_poisson(gx: np.ndarray, gy: np.ndarray, *, boundary: Boundary = "neumann",

@@ -262,7 +262,7 @@ class DepthReconstructor:
                     h, w = self.shape
                     keep = cv2.resize(keep, (w, h), interpolation=cv2.INTER_NEAREST).view(bool)
                     gx, gy = gx * keep, gy * keep
-            z = self._solver(gx, gy)              # mm
+            z = self._solver.solve_unchecked(gx, gy)    # mm; the gradients are its own
             if far_field:
                 z = self._level_far_field(z, grown)
         return z
