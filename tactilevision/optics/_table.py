@@ -16,9 +16,8 @@ the three colour axes, and a pixel reads ``g0 + sum_c dg/dq_c f_c`` with
 ``f_c`` its place inside the cell: a piecewise-linear table, which on gs_sdk's
 GelSight Mini network removes most of what 32 colour cells cost (16 cells of
 first order: 0.41 to 0.85 degrees median from the network inside the contacts
-against 1.00 to 1.54 for 32 of order 0), at about 0.1 ms more per 320 x 240
-frame (0.733 against 0.630 to 0.639 ms, one thread, ``benchmarks/bench_table_order.py``,
-2-core x86_64, 2026-11-27).
+against 1.00 to 1.54 for 32 of order 0), at 0.03 to 0.15 ms more per 320 x 240
+frame (one thread, ``benchmarks/bench_table_order.py``, 2-core x86_64, 2026-11-27).
 """
 
 from __future__ import annotations
