@@ -56,7 +56,10 @@ class GradientTable:
         A first-order table: per row (gx, gy) at the colour cell's lower
         corner, then (dgx/dq_c, dgy/dq_c) for c = 0, 1, 2, derivatives per
         colour cell; ``gx_table, gy_table`` then hold the cells' centre
-        values. None: order 0 (the centre value for the whole cell).
+        values. None: order 0 (the centre value for the whole cell). The
+        lookup reads a copy of these rows whose values are moved to the
+        colour origin (``g = row_0 + sum_c row_c q_c``), so a first-order
+        table holds its 32 bytes a cell twice in memory.
     """
 
     gx_table: np.ndarray
@@ -270,7 +273,8 @@ def tabulate_mlp(model: MLPGradientModel, ref_inv: np.ndarray, *, lo: np.ndarray
     table : GradientTable
         ``C * bins^3`` entries per component, float16 (gradients to about
         0.1%); at 192 cells and 32 bins 25 MB. Of order 1, also ``slopes``
-        (float32, 32 bytes a cell: at 192 cells and 16 bins 25 MB).
+        (float32, 32 bytes a cell: at 192 cells and 16 bins 25 MB, and as much
+        again for the lookup's copy, :class:`GradientTable`).
 
     Raises
     ------
