@@ -152,6 +152,15 @@ def test_batch_equals_the_single_process_run_frame_for_frame(client, clip, tmp_p
     np.testing.assert_allclose(table["t_s"], np.arange(N_VIDEO) / 90.0)
     # frame 0 is the reference itself (JPEG-compressed in the video): shallower than any press
     assert table["max_depth_mm"][0] < 0.5 * min(table["max_depth_mm"][1:])
+    # the contact area and the pixels out of the calibration's range, as reconstruct's
+    # heights.csv has them: from the reconstructor's own masks on the sequential decode
+    recon = DepthReconstructor(PhotometricCalibration.load(clip.parent / "optics.npz"),
+                               reference=cv2.imread(str(clip.with_name("clip_reference.png"))))
+    cal = recon.calibration
+    want_area = [float(recon.contact_mask(f).sum()) * cal.mm_per_px ** 2 for f in decoded(clip)]
+    want_out = [int(recon.out_of_range(f).sum()) for f in decoded(clip)]
+    np.testing.assert_allclose(table["contact_area_mm2"], want_area, rtol=1e-12)
+    assert table["out_of_range_px"] == want_out and max(want_out) > 0
     # the folder: its reference found in the parent, frame names kept
     ref = read_reference(clip.parent / "reference.png")
     frames = np.stack([cv2.imread(str(p)) for p in

@@ -222,6 +222,36 @@ def test_out_of_range_colours_lie_on_the_rims_of_real_presses():
     assert total > 500 and rim > 0.85 * total
 
 
+@pytest.mark.parametrize("markers", [False, True])
+def test_one_colour_change_gives_the_contact_and_the_out_of_range_masks(markers):
+    """``contact_and_out_of_range`` (one colour change, OpenCV's inRange) equals
+    ``contact_mask`` and ``out_of_range`` called apart, on the real GelSight presses
+    (with and without marker removal), and the one-frame colour change (OpenCV) equals the
+    batched one (numpy) to a float32 rounding; a batch of frames is refused."""
+    import dataclasses
+
+    from tactilevision import ShapeError, default_calibration_path
+    from tactilevision.optics._features import colour_change
+
+    ps = read_ball_presses(ROOT / "sample_frames" / "gelsight_ball")
+    cal = dataclasses.replace(PhotometricCalibration.load(default_calibration_path("gelsight")),
+                              markers=markers)
+    recon = DepthReconstructor(cal, reference=ps.reference)
+    flagged = 0
+    for f in ps.frames:
+        contact, outside = recon.contact_and_out_of_range(f)
+        np.testing.assert_array_equal(contact, recon.contact_mask(f))
+        np.testing.assert_array_equal(outside, recon.out_of_range(f))
+        flagged += int(outside.sum())
+        assert contact.sum() > 1000
+        one = colour_change(f, recon._ref_inv, blur_sigma=1.0)
+        batched = colour_change(f[None], recon._ref_inv, blur_sigma=1.0)[0]
+        np.testing.assert_allclose(one, batched, atol=4e-7)
+    assert flagged > 500
+    with pytest.raises(ShapeError, match="frame"):
+        recon.contact_and_out_of_range(ps.frames[:2])
+
+
 def test_holdout_presses_spread_over_the_pad_and_the_ball_sizes():
     """One in four of the presses the report can score (inside the image), in every ball
     size, spread over the pad; presses cut by the image edge are always trained on."""

@@ -177,7 +177,9 @@ class InputStore:
         import zarr
 
         parts = sorted(self.parts.glob("part-*.parquet"))
-        table = pa.concat_tables([pq.read_table(p) for p in parts]).sort_by("frame")
+        # a column added since an interrupted run wrote its first parts is null in those
+        table = pa.concat_tables([pq.read_table(p) for p in parts],
+                                 promote_options="default").sort_by("frame")
         frames = table.column("frame").to_numpy()
         if frames.size != n_frames or not np.array_equal(frames, np.arange(n_frames)):
             raise InputError(f"{self.parts}: the parts hold {frames.size} rows for "

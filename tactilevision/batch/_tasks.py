@@ -177,7 +177,9 @@ def process_chunk(settings: BatchSettings, source: FrameSource, reference: str |
     rows: dict[str, list] = {"frame": [], "source_frame": [], "t_s": [], "max_depth_mm": [],
                              "contact_area_mm2": []}
     forces = pressure = None
-    if est is not None:
+    if est is None:
+        rows["out_of_range_px"] = []      # as reconstruct's heights.csv
+    else:
         rows.update({"fx_n": [], "fy_n": [], "fz_n": [], "max_pressure_kpa": []})
     for k, frame in enumerate(source.iter(start, stop)):
         i = start + k
@@ -188,7 +190,9 @@ def process_chunk(settings: BatchSettings, source: FrameSource, reference: str |
         rows["t_s"].append(float(source.times_s[i]))
         rows["max_depth_mm"].append(float(h.max()))
         if est is None:
-            rows["contact_area_mm2"].append(float(recon.contact_mask(frame).sum()) * px_mm2)
+            contact, outside = recon.contact_and_out_of_range(frame)
+            rows["contact_area_mm2"].append(float(contact.sum()) * px_mm2)
+            rows["out_of_range_px"].append(int(outside.sum()))
             continue
         fm = est(h)
         if forces is None:

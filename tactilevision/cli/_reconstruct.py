@@ -108,10 +108,10 @@ def run(args: argparse.Namespace) -> int:
             if images:
                 save_depth_image(tmp / f"{stem}_depth.png", height, mm_per_px=cal.mm_per_px,
                                  frame=frame, title=name, credit=credit)
-            contact = recon.contact_mask(frame)
+            contact, outside = recon.contact_and_out_of_range(frame)
             rows.append({"frame": name, "max_depth_mm": f"{float(height.max()):.4f}",
                          "contact_area_mm2": f"{contact.sum() * cal.mm_per_px ** 2:.3f}",
-                         "out_of_range_px": int(recon.out_of_range(frame).sum())})
+                         "out_of_range_px": int(outside.sum())})
         if not rows:
             # nothing to show for the run: the output folder is left as it was
             raise InputError(f"no frame of {args.frames_dir} could be reconstructed, nothing "

@@ -397,19 +397,54 @@ class DepthReconstructor:
         """
         frames = self._check(frames)
         cal = self.calibration
-        lo = np.asarray(cal.colour_lo, np.float32)
-        hi = np.asarray(cal.colour_hi, np.float32)
         one = frames[None] if frames.ndim == 3 else frames
         masks = []
         for f in one:
-            change = colour_change(f, self._ref_inv, blur_sigma=cal.blur_sigma)
-            m = np.zeros(change.shape[:2], bool)
-            for ch in range(3):     # per channel: 7x faster than np.any over a length-3 axis
-                m |= (change[..., ch] < lo[ch]) | (change[..., ch] > hi[ch])
+            m = self._out_of_range(colour_change(f, self._ref_inv, blur_sigma=cal.blur_sigma))
             if cal.markers:
                 m &= ~marker_mask(f)
             masks.append(m)
         return masks[0] if frames.ndim == 3 else np.stack(masks)
+
+    def _out_of_range(self, change: np.ndarray) -> np.ndarray:
+        """Pixels of a colour change (H, W, 3) outside the calibration's range in any
+        channel (bool): the complement of OpenCV's inRange over all three at once."""
+        cal = self.calibration
+        inside = cv2.inRange(change, tuple(float(v) for v in np.float32(cal.colour_lo)),
+                             tuple(float(v) for v in np.float32(cal.colour_hi)))
+        return inside == 0
+
+    def contact_and_out_of_range(self, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`contact_mask` (at the calibration's threshold) and :meth:`out_of_range`
+        of one frame, from one colour change: what ``reconstruct`` and ``batch`` summarise
+        per frame.
+
+        Parameters
+        ----------
+        frame : (H, W, 3) uint8 ndarray
+            Tactile frame, BGR.
+
+        Returns
+        -------
+        contact, out_of_range : (H, W) bool ndarray
+            Equal to ``contact_mask(frame)`` and ``out_of_range(frame)``.
+
+        Raises
+        ------
+        ShapeError
+            If the frame is not one uint8 BGR frame of the calibration's size.
+        """
+        frame = check_array(frame, "frame", [(*self.shape, 3)], dtype=np.uint8)
+        cal = self.calibration
+        change = colour_change(frame, self._ref_inv, blur_sigma=cal.blur_sigma)
+        outside = self._out_of_range(change)
+        m = (channel_magnitude(change) > cal.contact_threshold).view(np.uint8)
+        if cal.markers:
+            markers = marker_mask(frame)
+            outside &= ~markers
+            m[markers] = 0
+        m = cv2.morphologyEx(m, cv2.MORPH_OPEN, self._open)
+        return cv2.dilate(m, self._dilate).view(bool), outside
 
     def contact_mask(self, frames: np.ndarray, *,
                      threshold: float | Literal["calibration", "frame"] = "calibration",

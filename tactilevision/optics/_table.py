@@ -29,6 +29,7 @@ import numpy as np
 
 from .._checks import InputError
 from ._ball import gradients_from_normals
+from ._features import channel_medians
 from ._lut import ColourLUT
 from ._mlp import MLPGradientModel, cell_position_inputs, mlp_inputs
 
@@ -128,7 +129,7 @@ class GradientTable:
         one core.
         """
         if normalise_gain:
-            gain = _channel_medians(blurred[::8, ::8].reshape(-1, 3) * self._sub_ref_inv)
+            gain = channel_medians(blurred[::8, ::8].reshape(-1, 3) * self._sub_ref_inv)
         else:
             gain = np.ones(3, np.float32)
         a = self._affine
@@ -175,17 +176,6 @@ class GradientTable:
             cv2.accumulateProduct(rows[2 + 2 * c], qc[c], gx)
             cv2.accumulateProduct(rows[3 + 2 * c], qc[c], gy)
         return gx, gy
-
-
-def _channel_medians(x: np.ndarray) -> np.ndarray:
-    """np.median(x, axis=0) of an (N, 3) float32 array, by partitioning its transpose
-    (a third faster at N = 1200: the median of every channel at once)."""
-    t = cv2.transpose(x)
-    n = t.shape[1]
-    if n % 2:
-        return np.partition(t, n // 2, axis=1)[:, n // 2]
-    p = np.partition(t, [n // 2 - 1, n // 2], axis=1)
-    return 0.5 * (p[:, n // 2 - 1] + p[:, n // 2])
 
 
 def table_from_lut(lut: ColourLUT, ref_inv: np.ndarray) -> GradientTable:
