@@ -429,3 +429,20 @@ def test_a_threaded_parent_spawns_its_workers(monkeypatch):
         t.join()
     monkeypatch.setitem(sys.modules, "jax", types.ModuleType("jax"))
     assert _start_method() == "spawn"
+
+
+def test_every_chunk_is_written_without_a_scan_for_the_fill_value(tmp_path):
+    """A task's chunk is written as it is (zarr's default would first scan it for one all of
+    the fill value, and skip it): a chunk of NaN heights lands on disk, and reads back."""
+    from tactilevision.batch._store import InputStore
+
+    store = InputStore(tmp_path, "x")
+    store.prepare(n_frames=4, shape=(6, 8), chunk_frames=2, force_shape=None,
+                  attrs={"settings": {}}, overwrite=False)
+    nan = np.full((2, 6, 8), np.nan, np.float32)
+    store.write_chunk(2, {"height_mm": nan}, {"frame": [2, 3]})
+    chunks = sorted(p.relative_to(store.zarr_path).as_posix()
+                    for p in (store.zarr_path / "height_mm").rglob("*") if p.is_file()
+                    and p.name != "zarr.json")
+    assert chunks == ["height_mm/c/1/0/0"]
+    assert np.isnan(zarr.open_group(str(store.zarr_path), mode="r")["height_mm"][2:]).all()
