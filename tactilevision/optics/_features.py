@@ -138,7 +138,7 @@ def colour_change(frames: np.ndarray, ref_inv: np.ndarray, *, blur_sigma: float 
         frames = blur_frames(frames, blur_sigma)
     if frames.ndim == 3 and ref_inv.dtype == np.float32:
         # one frame in two OpenCV passes (the ratio, then 1 / gain and -1 as one affine map
-        # per channel): 0.6 against 1.6 ms at 640 x 480 on one core for numpy's four
+        # per channel): 0.6 against 1.45 ms for numpy's four at 640 x 480, one core, 2026-11-27
         ratio = cv2.multiply(frames, ref_inv, dtype=cv2.CV_32F)
         gain = frame_gain(ratio).ravel() if normalise_gain else np.ones(3, np.float32)
         affine = np.zeros((3, 4), np.float32)
