@@ -20,14 +20,14 @@ from tactilevision.optics import (
 from tactilevision.optics import _reconstructor as rec
 from tactilevision.optics._ball import gradients_from_normals
 from tactilevision.optics._features import channel_medians
-from tactilevision.optics._table import GradientTable
+from tactilevision.optics._table import GradientTable, _cell_slopes
 
 FRAME = ROOT / "sample_frames" / "gelsight_ball" / "frames" / "press_01.png"
 
 
 def test_first_order_table_reads_the_plane_through_each_cell():
-    """Each pixel reads its row's corner value plus the slopes times its place inside the
-    colour cell, computed here from the definition in numpy."""
+    """Each pixel reads its row's plane, its value at the colour origin plus the slopes
+    times the pixel's colour coordinates, computed here from the definition in numpy."""
     rng = np.random.default_rng(3)
     bins, cells, shape = 4, 3, (12, 16)
     n = cells * bins ** 3
@@ -42,10 +42,9 @@ def test_first_order_table_reads_the_plane_through_each_cell():
     gx, gy = table.gradients(frame, normalise_gain=False)
     u = np.clip((frame / 128.0 - 1 + 0.5) * bins, 0, bins - 1e-3)
     q = np.floor(u).astype(int)
-    f = u - q
     row = slopes[(q[..., 0] * bins + q[..., 1]) * bins + q[..., 2] + offset]
-    want_x = row[..., 0] + (row[..., 2::2] * f).sum(-1)
-    want_y = row[..., 1] + (row[..., 3::2] * f).sum(-1)
+    want_x = row[..., 0] + (row[..., 2::2] * u).sum(-1)
+    want_y = row[..., 1] + (row[..., 3::2] * u).sum(-1)
     assert gx.dtype == np.float32
     np.testing.assert_allclose(gx, want_x, atol=1e-4)
     np.testing.assert_allclose(gy, want_y, atol=1e-4)
@@ -151,3 +150,26 @@ def test_the_frame_gain_is_the_median_of_each_channel(n):
     """The per-channel gain's partitioned median equals np.median along the pixels."""
     x = np.random.default_rng(n).uniform(0.5, 1.5, (n, 3)).astype(np.float32)
     np.testing.assert_array_equal(channel_medians(x), np.median(x, axis=0))
+
+
+def test_a_first_order_row_is_the_plane_through_its_cells_centre():
+    """The rows built from the network's seven values a cell (centre, and half a cell
+    either side along each axis) give back the centre value at the centre and the chords'
+    slopes, for a curved function of the colour coordinates q (in cells)."""
+    bins = 5
+    r = np.arange(bins ** 3)
+    centre = np.stack([r // (bins * bins), (r // bins) % bins, r % bins], 1) + 0.5
+
+    def g(q):                          # gx and gy: curved along every axis
+        return (0.3 + 0.2 * q[:, 0] - 0.1 * q[:, 1] ** 2 + 0.05 * q[:, 2] ** 3,
+                -0.4 + 0.01 * q[:, 0] * q[:, 1] + 0.3 * q[:, 2])
+
+    pts = [centre] + [centre + s * 0.5 * np.eye(3)[c] for c in range(3) for s in (-1, 1)]
+    gx = np.stack([g(p)[0] for p in pts])
+    gy = np.stack([g(p)[1] for p in pts])
+    rows = _cell_slopes(gx.astype(np.float32), gy.astype(np.float32), bins)
+    at_centre_x = rows[:, 0] + (rows[:, 2::2] * centre).sum(1)
+    at_centre_y = rows[:, 1] + (rows[:, 3::2] * centre).sum(1)
+    np.testing.assert_allclose(at_centre_x, gx[0], atol=2e-5)
+    np.testing.assert_allclose(at_centre_y, gy[0], atol=2e-5)
+    np.testing.assert_allclose(rows[:, 4], gx[4] - gx[3], atol=1e-6)     # dgx/dq_1

@@ -519,7 +519,7 @@ _TABLES: OrderedDict[tuple, object] = OrderedDict()
 _TABLES_KEPT = 2
 
 #: Bump when the stored tabulation or its meaning changes: old files then miss.
-_TABLE_FORMAT = 2
+_TABLE_FORMAT = 3       # 3: first-order rows hold their plane at the colour origin
 
 
 def _table_cache_path(key: tuple):

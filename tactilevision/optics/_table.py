@@ -11,9 +11,11 @@ per frame that construction could prepare. Two sources fill it:
   table's speed, up to the quantisation of colour and position.
 
 A network's table may also be of first order (``order=1``): each colour cell
-then holds the network's value at its lower corner and its derivatives along
-the three colour axes, and a pixel reads ``g0 + sum_c dg/dq_c f_c`` with
-``f_c`` its place inside the cell: a piecewise-linear table, which on gs_sdk's
+then holds the plane through the network's value at its centre with the
+network's derivatives along the three colour axes (stored as the plane's value
+at the colour origin and its slopes), and a pixel reads
+``g0 + sum_c dg/dq_c q_c`` at its colour coordinates q: a piecewise-linear
+table, which on gs_sdk's
 GelSight Mini network removes most of what 32 colour cells cost (16 cells of
 first order: 0.41 to 0.85 degrees median from the network inside the contacts
 against 1.00 to 1.54 for 32 of order 0), at 0.03 to 0.15 ms more per 320 x 240
@@ -54,13 +56,14 @@ class GradientTable:
     ref_inv : (H, W, 3) float32 ndarray
         Inverse reference (:func:`reference_inverse`).
     slopes : (C * B^3, 8) float32 ndarray or None
-        A first-order table: per row (gx, gy) at the colour cell's lower
-        corner, then (dgx/dq_c, dgy/dq_c) for c = 0, 1, 2, derivatives per
-        colour cell; ``gx_table, gy_table`` then hold the cells' centre
-        values. None: order 0 (the centre value for the whole cell). The
-        lookup reads a copy of these rows whose values are moved to the
-        colour origin (``g = row_0 + sum_c row_c q_c``), so a first-order
-        table holds its 32 bytes a cell twice in memory.
+        A first-order table: per row the plane of its colour cell, (gx, gy)
+        where the plane meets the colour origin (q = 0), then (dgx/dq_c,
+        dgy/dq_c) for c = 0, 1, 2, derivatives per colour cell, so that a
+        pixel of colour coordinates q in the row's cell reads
+        ``g = row_0 + sum_c row_c q_c`` (nothing about its place inside the
+        cell is computed per frame); ``gx_table, gy_table`` then hold the
+        cells' centre values. None: order 0 (the centre value for the whole
+        cell).
     """
 
     gx_table: np.ndarray
@@ -84,14 +87,8 @@ class GradientTable:
         self._single_cell = not np.any(self.cell_offset)
         self._rows = None
         if self.slopes is not None:
-            # one gather of 32 bytes a pixel: the eight values of its row at once, the
-            # value held at the colour origin (q = 0) rather than at the cell's corner, so
-            # that a pixel reads g = row_0 + sum_c row_c q_c without its place in the cell
-            rows = np.array(self.slopes, dtype=np.float32)
-            r = np.arange(len(rows)) % (b ** 3)
-            for c, corner in enumerate((r // (b * b), (r // b) % b, r % b)):
-                rows[:, 0] -= rows[:, 2 + 2 * c] * corner
-                rows[:, 1] -= rows[:, 3 + 2 * c] * corner
+            # one gather of 32 bytes a pixel: the eight values of its row at once
+            rows = np.ascontiguousarray(self.slopes, dtype=np.float32)
             self._rows = rows.view(np.dtype((np.void, 32))).ravel()
 
     @property
@@ -263,8 +260,7 @@ def tabulate_mlp(model: MLPGradientModel, ref_inv: np.ndarray, *, lo: np.ndarray
     table : GradientTable
         ``C * bins^3`` entries per component, float16 (gradients to about
         0.1%); at 192 cells and 32 bins 25 MB. Of order 1, also ``slopes``
-        (float32, 32 bytes a cell: at 192 cells and 16 bins 25 MB, and as much
-        again for the lookup's copy, :class:`GradientTable`).
+        (float32, 32 bytes a cell: at 192 cells and 16 bins 25 MB).
 
     Raises
     ------
@@ -304,7 +300,7 @@ def tabulate_mlp(model: MLPGradientModel, ref_inv: np.ndarray, *, lo: np.ndarray
             gx, gy = gradients_from_normals(nxy[:, 0], nxy[:, 1])
             tables.append((gx[:n].astype(np.float16), gy[:n].astype(np.float16)))
             if order == 1:
-                slopes.append(_cell_slopes(gx.reshape(7, n), gy.reshape(7, n)))
+                slopes.append(_cell_slopes(gx.reshape(7, n), gy.reshape(7, n), bins))
     rows = np.minimum(np.arange(h) // cell_px, ny - 1)
     cols = np.minimum(np.arange(w) // cell_px, nx - 1)
     cell = (rows[:, None] * nx + cols[None, :]).astype(np.int32) * np.int32(bins**3)
@@ -313,15 +309,19 @@ def tabulate_mlp(model: MLPGradientModel, ref_inv: np.ndarray, *, lo: np.ndarray
                          slopes=np.concatenate(slopes) if order == 1 else None)
 
 
-def _cell_slopes(gx: np.ndarray, gy: np.ndarray) -> np.ndarray:
+def _cell_slopes(gx: np.ndarray, gy: np.ndarray, bins: int) -> np.ndarray:
     """Rows of a first-order table from the network at the cells' centres and half a cell
-    either side along each channel ((7, n) each: centre, then -c0, +c0, -c1, +c1, -c2,
-    +c2): (gx, gy) at the lower corner, then (dgx/dq_c, dgy/dq_c) per cell."""
+    either side along each channel ((7, n) each, n = bins^3 in row order: centre, then
+    -c0, +c0, -c1, +c1, -c2, +c2): (gx, gy) of each cell's plane at the colour origin,
+    then (dgx/dq_c, dgy/dq_c) per cell (:class:`GradientTable`)."""
     out = np.empty((gx.shape[1], 8), np.float32)
     out[:, 0], out[:, 1] = gx[0], gy[0]
+    r = np.arange(gx.shape[1])
+    cells = (r // (bins * bins), (r // bins) % bins, r % bins)
     for c in range(3):
         dx, dy = gx[2 + 2 * c] - gx[1 + 2 * c], gy[2 + 2 * c] - gy[1 + 2 * c]
         out[:, 2 + 2 * c], out[:, 3 + 2 * c] = dx, dy
-        out[:, 0] -= 0.5 * dx                        # from the centre to the lower corner
-        out[:, 1] -= 0.5 * dy
+        centre = cells[c] + 0.5                      # the centre's colour coordinate
+        out[:, 0] -= dx * centre                     # from the centre to the origin
+        out[:, 1] -= dy * centre
     return out
