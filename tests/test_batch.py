@@ -30,7 +30,13 @@ import zarr
 from _data import decoded, quarter_gelsight, write_video
 from distributed import Client, LocalCluster
 
-from tactilevision.batch import HEIGHT_RESOLUTION_MM, BatchSettings, open_source, run_batch
+from tactilevision.batch import (
+    HEIGHT_RESOLUTION_MM,
+    BatchSettings,
+    open_source,
+    quantize_heights,
+    run_batch,
+)
 from tactilevision.batch._run import _start_method
 from tactilevision.io import VideoFrames, read_reference
 from tactilevision.optics import DepthReconstructor, PhotometricCalibration
@@ -446,3 +452,26 @@ def test_every_chunk_is_written_without_a_scan_for_the_fill_value(tmp_path):
                     and p.name != "zarr.json")
     assert chunks == ["height_mm/c/1/0/0"]
     assert np.isnan(zarr.open_group(str(store.zarr_path), mode="r")["height_mm"][2:]).all()
+
+
+def test_a_worker_thread_reuses_its_chunk_buffer_and_rounds_it_in_place():
+    """A task's heights go into its thread's buffer, the same array for the next task of
+    that size and another thread's own; rounding in place gives what a new array gets."""
+    import threading
+
+    from tactilevision.batch._tasks import _chunk_buffer
+
+    a = _chunk_buffer(4, (6, 8))
+    assert _chunk_buffer(4, (6, 8)) is a and a.shape == (4, 6, 8) and a.dtype == np.float32
+    other = []
+    t = threading.Thread(target=lambda: other.append(_chunk_buffer(4, (6, 8))))
+    t.start()
+    t.join()
+    assert other[0] is not a
+    assert _chunk_buffer(3, (6, 8)).shape == (3, 6, 8)          # the short last chunk
+    h = np.random.default_rng(0).normal(0, 0.3, (4, 6, 8)).astype(np.float32)
+    h[0, 0, 0] = np.nan
+    want = quantize_heights(h)
+    got = quantize_heights(h, out=h)
+    assert got is h
+    np.testing.assert_array_equal(got, want)

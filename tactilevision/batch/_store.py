@@ -51,23 +51,27 @@ BLOSC_BLOCK_BYTES = 2 ** 22
 HEIGHT_RESOLUTION_MM = 2.0 ** -int(np.ceil(np.log2(10.0 ** HEIGHT_DIGITS)))
 
 
-def quantize_heights(heights: np.ndarray) -> np.ndarray:
+def quantize_heights(heights: np.ndarray, *, out: np.ndarray | None = None) -> np.ndarray:
     """Heights rounded to :data:`HEIGHT_RESOLUTION_MM`, as a batch stores them.
 
     Parameters
     ----------
     heights : ndarray
         Heights, mm (any shape; NaN kept).
+    out : float32 ndarray, optional
+        Where to write them (``heights`` itself to round in place); a new array
+        by default.
 
     Returns
     -------
     rounded : float32 ndarray
-        A new array: ``rint(heights / res) * res`` for the resolution res, a
+        ``out``, or a new array: ``rint(heights / res) * res`` for the resolution res, a
         power of two, so every step is exact in float32 and the result equals
         numcodecs' ``Quantize(digits=HEIGHT_DIGITS, dtype='<f4')``; within
         res / 2 of the input.
     """
-    q = np.multiply(heights, np.float32(1.0 / HEIGHT_RESOLUTION_MM), dtype=np.float32)
+    q = np.multiply(heights, np.float32(1.0 / HEIGHT_RESOLUTION_MM), out=out,
+                    dtype=np.float32)
     np.rint(q, out=q)
     q *= np.float32(HEIGHT_RESOLUTION_MM)
     return q
@@ -193,7 +197,8 @@ class InputStore:
     # ------------------------------------------------------------------ worker side
     def write_chunk(self, start: int, arrays: dict[str, np.ndarray], rows: dict[str, list]
                     ) -> None:
-        """Write a task's frames into the group, then its part (the task's receipt)."""
+        """Write a task's frames into the group, then its part (the task's receipt). The
+        heights (``arrays['height_mm']``, float32) are rounded in place first."""
         import pyarrow as pa
         import zarr
 
@@ -206,7 +211,7 @@ class InputStore:
             targets = {key: g[key] for key in arrays}
         for key, value in arrays.items():
             if key == "height_mm":
-                value = quantize_heights(value)
+                value = quantize_heights(value, out=value)
             targets[key][start:start + value.shape[0]] = value
         _atomic_write_parquet(pa.table(rows), self.parts / f"part-{start:08d}.parquet")
 
