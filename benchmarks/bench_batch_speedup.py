@@ -14,8 +14,11 @@ shipped GelSight calibration ``--sensor gelsight``; forces with E 0.2 MPa, nu 0.
 - ``batch reconstruct`` (or ``batch forces``) on ``--workers`` local worker processes.
 
 Prints both rates, frames/s, and their ratio (issue target: at least 0.8 N times one
-process). The optics table's disk cache is warmed first, so neither run pays for
-tabulating the network.
+process). Both do the same work a frame: the height map, its deepest point, the contact
+area and ``out_of_range_px`` (for ``reconstruct``; until 2026-11-27 the one process also
+computed a second colour change a frame and the batch no ``out_of_range_px``), and the
+batch also rounds, compresses and writes the heights to Zarr. The optics table's disk
+cache is warmed first, so neither run pays for tabulating the network.
 """
 
 from __future__ import annotations
