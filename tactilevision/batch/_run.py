@@ -183,10 +183,17 @@ def _client(scheduler: str | None, n_workers: int | None):
             raise InputError(f"no Dask scheduler answers at {scheduler} ({exc})") from None
 
     n = n_workers or os.cpu_count() or 1
+    start = _start_method()
+    if start == "fork":
+        # the chunks' store, imported once here (the batch imports it before its first
+        # task in any case) rather than by every forked worker on its first task; neither
+        # starts a thread (pyarrow does: its workers import it themselves)
+        import numcodecs.blosc  # noqa: F401
+        import zarr  # noqa: F401
     before = set(SpecCluster._instances)
     _FORK_GUARD.open += 1           # until _close, or the failure below
     try:
-        method = {"distributed.worker.multiprocessing-method": _start_method()}
+        method = {"distributed.worker.multiprocessing-method": start}
         with dask.config.set({**WORKER_ENVIRON, **method}):
             cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
                                    dashboard_address=":0",   # any free port: never 8787 twice
