@@ -16,7 +16,8 @@ import numpy as np
 
 from .._checks import check_array
 
-__all__ = ["blur_frames", "channel_magnitude", "colour_change", "frame_gain", "reference_inverse"]
+__all__ = ["blur_frames", "channel_magnitude", "channel_medians", "colour_change", "frame_gain",
+           "median_last_axis", "reference_inverse"]
 
 
 def reference_inverse(reference: np.ndarray, *, blur_sigma: float = 2.0,
@@ -83,12 +84,25 @@ def channel_medians(x: np.ndarray) -> np.ndarray:
     -------
     median : (3,) float32 ndarray
     """
-    t = cv2.transpose(np.ascontiguousarray(x))
-    n = t.shape[1]
-    if n % 2:
-        return np.partition(t, n // 2, axis=1)[:, n // 2]
-    p = np.partition(t, [n // 2 - 1, n // 2], axis=1)
-    return np.float32(0.5) * (p[:, n // 2 - 1] + p[:, n // 2])
+    return median_last_axis(cv2.transpose(np.ascontiguousarray(x)))
+
+
+def median_last_axis(x: np.ndarray) -> np.ndarray:
+    """``np.median(x, axis=-1)``, the same values, partitioning `x` in place (no copy).
+
+    Parameters
+    ----------
+    x : (..., N) float ndarray
+        Overwritten (its last axis partitioned).
+
+    Returns
+    -------
+    median : (...) ndarray, dtype of `x`
+    """
+    n = x.shape[-1]
+    mid = [n // 2] if n % 2 else [n // 2 - 1, n // 2]
+    x.partition(mid, axis=-1)
+    return x[..., mid].mean(axis=-1)
 
 
 def blur_frames(frames: np.ndarray, sigma: float) -> np.ndarray:

@@ -18,6 +18,7 @@ from scipy import sparse
 from scipy.sparse.linalg import spsolve
 
 from .._checks import InputError, check_array
+from ._features import median_last_axis
 
 __all__ = ["PoissonSolver", "divergence", "integrate_poisson", "integrate_poisson_masked"]
 
@@ -161,22 +162,11 @@ def _fix_offset(z: np.ndarray, zero_mask: np.ndarray | None) -> np.ndarray:
             z[i] = _fix_offset(z[i], None if zero_mask is None else zero_mask[i])
         return z
     if zero_mask is not None and np.count_nonzero(zero_mask) > 0:
-        ref = _median(z[zero_mask])
+        ref = median_last_axis(z[zero_mask])   # a copy: partitioned in place
     else:
-        ref = _median(z[::4, ::4].flatten())
+        ref = median_last_axis(z[::4, ::4].flatten())
     z -= ref
     return z
-
-
-def _median(x: np.ndarray) -> float:
-    """np.median of a 1-D array that may be overwritten (partitioned in place: half the
-    time of np.median's copy and mean at 4800 values)."""
-    n = x.size
-    if n % 2:
-        x.partition(n // 2)
-        return float(x[n // 2])
-    x.partition([n // 2 - 1, n // 2])
-    return 0.5 * (float(x[n // 2 - 1]) + float(x[n // 2]))
 
 
 def integrate_poisson(gx: np.ndarray, gy: np.ndarray, *, boundary: Boundary = "neumann",

@@ -438,13 +438,19 @@ class DepthReconstructor:
         cal = self.calibration
         change = colour_change(frame, self._ref_inv, blur_sigma=cal.blur_sigma)
         outside = self._out_of_range(change)
-        m = (channel_magnitude(change) > cal.contact_threshold).view(np.uint8)
-        if cal.markers:
-            markers = marker_mask(frame)
+        markers = marker_mask(frame) if cal.markers else None
+        if markers is not None:
             outside &= ~markers
+        return self._grown(channel_magnitude(change) > cal.contact_threshold, markers), outside
+
+    def _grown(self, above: np.ndarray, markers: np.ndarray | None) -> np.ndarray:
+        """A contact mask from the pixels above the threshold (bool, (H, W)): marker pixels
+        out, opened (5 px) against specks and grown by 6 px."""
+        m = above.astype(np.uint8)
+        if markers is not None:
             m[markers] = 0
         m = cv2.morphologyEx(m, cv2.MORPH_OPEN, self._open)
-        return cv2.dilate(m, self._dilate).view(bool), outside
+        return cv2.dilate(m, self._dilate).astype(bool)
 
     def contact_mask(self, frames: np.ndarray, *,
                      threshold: float | Literal["calibration", "frame"] = "calibration",
@@ -503,11 +509,7 @@ class DepthReconstructor:
                 mag = channel_magnitude(colour_change(f, self._ref_inv,
                                                       blur_sigma=cal.blur_sigma))
                 thr = cal.contact_threshold if threshold == "calibration" else float(threshold)
-            m = (mag > thr).astype(np.uint8)
-            if cal.markers:
-                m[marker_mask(f)] = 0
-            m = cv2.morphologyEx(m, cv2.MORPH_OPEN, self._open)
-            m = cv2.dilate(m, self._dilate).astype(bool)
+            m = self._grown(mag > thr, marker_mask(f) if cal.markers else None)
             masks.append(ndi.binary_fill_holes(m) if fill_holes else m)
         return masks[0] if frames.ndim == 3 else np.stack(masks)
 
