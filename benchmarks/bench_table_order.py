@@ -8,8 +8,10 @@ gradients on six of the presses it was calibrated on, computed by gs_sdk itself:
 
 - per press, the median angle (degrees) between gs_sdk's surface normal and the
   default engine's, inside the contact (slope above 5 degrees), for tables of order 0
-  (32 and 64 colour cells a channel) and of first order (16, 24 and 32 cells), and for
-  the exact engine (onnxruntime per pixel);
+  (32 and 64 colour cells a channel) and of first order (16, 24 and 32 cells; the
+  default read by both kernels, ``DepthReconstructor(kernel=...)``: numba's compiled
+  pass where the ``fast`` extra is installed, and OpenCV and numpy), and for the exact
+  engine (onnxruntime per pixel);
 - the per-frame cost of ``DepthReconstructor(cal)(frame)`` (one thread: OpenCV,
   onnxruntime, scipy.fft) for each, beside two same-run references at 320 x 240: a bare
   scipy DCT-II pair and a bare gather of two components per pixel (as
@@ -37,7 +39,7 @@ import numpy as np
 import scipy.fft
 from bench_speed import per_frame_ms  # the same timing as the 640 x 480 benchmark
 
-from tactilevision.optics import DepthReconstructor, PhotometricCalibration
+from tactilevision.optics import DepthReconstructor, PhotometricCalibration, first_order_kernel
 
 cv2.setNumThreads(1)
 ROOT = Path(__file__).resolve().parents[1]
@@ -90,6 +92,7 @@ def main() -> int:
     engines = [("table, order 0, 32 cells", dict(table_order=0, table_bins=32)),
                ("table, order 0, 64 cells", dict(table_order=0, table_bins=64)),
                ("table, order 1, 16 cells (default)", dict(table_order=1, table_bins=16)),
+               ("the same, kernel 'numpy'", dict(table_order=1, table_bins=16, kernel="numpy")),
                ("table, order 1, 24 cells", dict(table_order=1, table_bins=24)),
                ("table, order 1, 32 cells", dict(table_order=1, table_bins=32)),
                ("exact (onnx)", dict(engine="onnx"))]
@@ -107,6 +110,9 @@ def main() -> int:
                                         ) / 1e6
         print(f"| {name} | " + " | ".join(f"{m:.2f}" for m in meds)
               + f" | {max(meds):.2f} | {mb:.0f} | {build_s:.1f} |")
+    compiled = first_order_kernel("auto") is not None
+    print(f"\nfirst-order tables read by {'numba' if compiled else 'OpenCV and numpy'} "
+          "(kernel 'auto'), and by OpenCV and numpy (kernel 'numpy')")
     print("\nper-frame cost, one thread, same run (ms):")
     for _ in range(2):
         dct, gather = references_ms(cal.shape, frames)

@@ -17,7 +17,7 @@ DOC = ROOT / "docs" / "structure.md"
 
 #: Imported where they are used, not at module top: the optional extras, and matplotlib
 #: (pyplot picks a backend when imported: only when a figure is made, never on import).
-LAZY = {"torch", "kornia", "onnx", "dask", "distributed", "zarr", "numcodecs", "pyarrow",
+LAZY = {"torch", "kornia", "onnx", "dask", "distributed", "zarr", "numcodecs", "pyarrow", "numba",
         "plotly", "threadpoolctl", "matplotlib"}
 #: Longest function body allowed, lines of code (docstring, blanks and comments excluded).
 MAX_LINES = 80

@@ -67,11 +67,13 @@ from ._press_check import (
     non_ball_presses,
 )
 from ._reconstructor import DepthReconstructor
+from ._table_kernel import KERNELS, first_order_kernel
 
 __all__ = [
     "CAP_DEG",
     "CIRCLE_ERROR",
     "ENGINES",
+    "KERNELS",
     "MIN_NETWORK_PRESSES",
     "NON_BALL_FLOOR_DEG",
     "NON_BALL_RATIO",
@@ -105,6 +107,7 @@ __all__ = [
     "engine_cost",
     "evaluate_ball_presses",
     "fill_masked",
+    "first_order_kernel",
     "fit_ball_cap",
     "fit_ball_centre",
     "fit_cell_luts",

@@ -31,11 +31,13 @@ from ._mlp import (
 )
 from ._poisson import PoissonSolver, integrate_poisson_masked
 from ._table import GradientTable, table_from_cell_luts, table_from_lut, tabulate_mlp
+from ._table_kernel import KERNELS, first_order_kernel
 
 __all__ = ["DepthReconstructor"]
 
 Engine = Literal["table", "onnx"]
 Boundary = Literal["neumann", "dirichlet", "contact"]
+Kernel = Literal["auto", "numba", "numpy"]
 
 
 class DepthReconstructor:
@@ -124,6 +126,24 @@ class DepthReconstructor:
         640 x 480 frame on one core (14.1 against 11.3 ms without it in the
         same run, shipped GelSight network, ``benchmarks/bench_speed.py``,
         2-core AMD EPYC, 2026-11-23).
+    kernel : {'auto', 'numba', 'numpy'}, default 'auto'
+        How a first-order table (gs_sdk's networks) is read per frame: one
+        compiled pass over the pixels where numba is installed (``pip install
+        'tactilevision[fast]'``; :func:`~tactilevision.optics.first_order_kernel`),
+        else whole-image OpenCV and numpy operations, with the same
+        arithmetic. numba costs about a quarter of a second once per
+        process (its import and the kernel read back from its disk cache;
+        half a second more the first time it is compiled), paid here;
+        'numpy' skips it for a few frames. 'numba' requires it for a
+        first-order table. Other tables are one gather either way.
+
+    Raises
+    ------
+    InputError
+        For an unknown `engine`, `boundary`, `level`, `kernel` (or 'numba'
+        without numba), a bad `level_degree`, `table_order` or `table_bins`, or a
+        calibration without its model; :class:`~tactilevision.ShapeError` (an
+        InputError) for a reference that is not uint8 BGR of the calibration's size.
 
     Notes
     -----
@@ -144,17 +164,11 @@ class DepthReconstructor:
                  boundary: Boundary = "neumann", table_bins: int | None = None,
                  table_order: int | None = None, threads: int = 1, flat_reference: bool = False,
                  level: Literal["median", "far_field"] = "median",
-                 level_degree: int = 4, zero_background: bool = False) -> None:
-        if engine not in ("table", "onnx"):
-            raise InputError(f"engine must be 'table' or 'onnx', got {engine!r}")
-        if boundary not in ("neumann", "dirichlet", "contact"):
-            raise InputError("boundary must be 'neumann', 'dirichlet' or 'contact', got "
-                             f"{boundary!r}")
+                 level_degree: int = 4, zero_background: bool = False,
+                 kernel: Kernel = "auto") -> None:
+        _check_options(engine, boundary, level, level_degree, kernel)
+        self.kernel = kernel
         self.boundary = boundary
-        if level not in ("median", "far_field"):
-            raise InputError(f"level must be 'median' or 'far_field', got {level!r}")
-        if not 0 <= int(level_degree) <= 8:
-            raise InputError(f"level_degree must be 0 to 8, got {level_degree!r}")
         self.level, self.level_degree = level, int(level_degree)
         self.zero_background = bool(zero_background)
         self._ref_inv_small: np.ndarray | None = None
@@ -209,6 +223,8 @@ class DepthReconstructor:
                                      f"{table_bins!r}")
                 self._table = _tabulated(calibration, self._ref_inv, int(bins), int(order))
         self.engine = engine
+        if self._table is not None and self._table.order == 1:
+            first_order_kernel(kernel)      # compiled now (once per process), not on a frame
         if engine == "onnx":
             h, w = self.shape
             if calibration.position_cell_px:   # the network sees each pixel's cell
@@ -233,7 +249,8 @@ class DepthReconstructor:
         cal = self.calibration
         blurred = blur_frames(frame, cal.blur_sigma) if cal.blur_sigma > 0 else frame
         if self._table is not None:
-            gx, gy = self._table.gradients(blurred, normalise_gain=cal.normalise_gain)
+            gx, gy = self._table.gradients(blurred, normalise_gain=cal.normalise_gain,
+                                           kernel=self.kernel)
         else:
             change = colour_change(blurred, self._ref_inv,
                                    normalise_gain=cal.normalise_gain).reshape(-1, 3)
@@ -531,6 +548,22 @@ def _table_cache_path(key: tuple):
     and the onnxruntime version that evaluated the network."""
     h = hashlib.sha256(repr((_TABLE_FORMAT, onnxruntime.__version__, key)).encode())
     return cache_root() / "optics" / f"mlp_table_{h.hexdigest()}.npz"
+
+
+def _check_options(engine: str, boundary: str, level: str, level_degree: int,
+                   kernel: str) -> None:
+    """:class:`DepthReconstructor`'s choices, each one of its own (InputError naming it)."""
+    if engine not in ("table", "onnx"):
+        raise InputError(f"engine must be 'table' or 'onnx', got {engine!r}")
+    if boundary not in ("neumann", "dirichlet", "contact"):
+        raise InputError("boundary must be 'neumann', 'dirichlet' or 'contact', got "
+                         f"{boundary!r}")
+    if level not in ("median", "far_field"):
+        raise InputError(f"level must be 'median' or 'far_field', got {level!r}")
+    if not 0 <= int(level_degree) <= 8:
+        raise InputError(f"level_degree must be 0 to 8, got {level_degree!r}")
+    if kernel not in KERNELS:
+        raise InputError(f"kernel must be one of {', '.join(KERNELS)}, got {kernel!r}")
 
 
 def _read_table(path, ref_inv: np.ndarray, bins: int, order: int = 0):

@@ -34,6 +34,7 @@ from ._ball import gradients_from_normals
 from ._features import channel_medians
 from ._lut import ColourLUT
 from ._mlp import MLPGradientModel, cell_position_inputs, mlp_inputs
+from ._table_kernel import first_order_kernel
 
 __all__ = ["GradientTable", "table_from_cell_luts", "table_from_lut", "tabulate_mlp"]
 
@@ -90,14 +91,17 @@ class GradientTable:
             # one gather of 32 bytes a pixel: the eight values of its row at once
             rows = np.ascontiguousarray(self.slopes, dtype=np.float32)
             self._rows = rows.view(np.dtype((np.void, 32))).ravel()
+            # the compiled kernel's inputs: read-only C-order views, made once
+            self._kernel_in = tuple(_read_only(a) for a in (
+                self._scale_map, np.ascontiguousarray(self.cell_offset, dtype=np.int32), rows))
 
     @property
     def order(self) -> int:
         """0 for a table of cell values, 1 for one of values and slopes."""
         return 0 if self.slopes is None else 1
 
-    def gradients(self, blurred: np.ndarray, *, normalise_gain: bool = True
-                  ) -> tuple[np.ndarray, np.ndarray]:
+    def gradients(self, blurred: np.ndarray, *, normalise_gain: bool = True,
+                  kernel: str = "numpy") -> tuple[np.ndarray, np.ndarray]:
         """Look up one (already blurred) frame.
 
         Parameters
@@ -107,11 +111,22 @@ class GradientTable:
         normalise_gain : bool, default True
             Divide by the frame's per-channel gain (else g = 1: the
             calibration's ``normalise_gain``).
+        kernel : {'numpy', 'auto', 'numba'}, default 'numpy'
+            How a first-order table is read: 'numpy', whole-image OpenCV and
+            numpy operations; 'numba', one compiled pass over the pixels with
+            the same arithmetic (:func:`first_order_kernel`, the ``fast``
+            extra); 'auto', numba where installed. A table of order 0 is one
+            gather either way.
 
         Returns
         -------
         gx, gy : (H, W) float32 ndarray
             Depth gradients.
+
+        Raises
+        ------
+        InputError
+            For an unknown `kernel`, or 'numba' without numba installed.
 
         Notes
         -----
@@ -129,6 +144,14 @@ class GradientTable:
             gain = channel_medians(blurred[::8, ::8].reshape(-1, 3) * self._sub_ref_inv)
         else:
             gain = np.ones(3, np.float32)
+        compiled = first_order_kernel(kernel)
+        if compiled is not None and self._rows is not None:
+            gx = np.empty(blurred.shape[:2], np.float32)
+            gy = np.empty_like(gx)
+            coef = np.concatenate([np.float32(1.0) / gain, self._offset]).astype(np.float32)
+            compiled(_read_only(blurred), self._kernel_in[0], _read_only(coef),
+                     np.float32(self._top), int(self.bins), *self._kernel_in[1:], gx, gy)
+            return gx, gy
         a = self._affine
         a[0, 0], a[1, 1], a[2, 2] = 1.0 / gain
         a[:, 3] = self._offset
@@ -173,6 +196,13 @@ class GradientTable:
             cv2.accumulateProduct(rows[2 + 2 * c], qc[c], gx)
             cv2.accumulateProduct(rows[3 + 2 * c], qc[c], gy)
         return gx, gy
+
+
+def _read_only(a: np.ndarray) -> np.ndarray:
+    """A read-only C-order view of `a` (a copy only where `a` is not C-ordered)."""
+    v = np.ascontiguousarray(a).view()
+    v.setflags(write=False)
+    return v
 
 
 def table_from_lut(lut: ColourLUT, ref_inv: np.ndarray) -> GradientTable:
