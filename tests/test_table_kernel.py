@@ -18,7 +18,7 @@ from tactilevision.optics import (
     first_order_kernel,
 )
 from tactilevision.optics import _table_kernel as tk
-from tactilevision.optics._table import GradientTable
+from tactilevision.optics._table import GradientTable, _read_only
 
 NUMBA = "numba is not installed (the fast extra): the compiled kernel cannot run"
 
@@ -121,3 +121,37 @@ def test_without_numba_auto_falls_back_and_numba_names_the_extra(monkeypatch):
     np.testing.assert_array_equal(a[0], b[0])
     with pytest.raises(InputError, match="needs numba"):
         table.gradients(frame, kernel="numba")
+
+
+@pytest.mark.skipif(not _has_numba(), reason=NUMBA)
+def test_a_kernel_with_no_cache_folder_is_compiled_without_one():
+    """numba refuses ``cache=True`` where it can write no cache folder (a read-only
+    install, no user cache): the kernel is then compiled without it, not refused."""
+    import numba
+
+    tried = []
+
+    class NoLocator:
+        types = numba.types
+
+        @staticmethod
+        def njit(signature, *, cache=False, **options):
+            tried.append(cache)
+            if cache:
+                raise RuntimeError("cannot cache function '_lookup': no locator available "
+                                   "for file '_table_kernel.py'")
+            return numba.njit(signature, **options)
+
+    kernel = tk._compile(NoLocator)
+    assert tried == [True, False]
+    table = _table(4)
+    frame = np.random.default_rng(1).integers(0, 256, (*table.cell_offset.shape, 3),
+                                              dtype=np.uint8)
+    gx = np.empty(frame.shape[:2], np.float32)
+    gy = np.empty_like(gx)
+    coef = np.concatenate([np.ones(3, np.float32), table._offset]).astype(np.float32)
+    kernel(*(_read_only(a) for a in (frame, table._scale_map, coef)), np.float32(table._top),
+           table.bins, *table._kernel_in[1:], gx, gy)
+    want = table.gradients(frame, normalise_gain=False, kernel="numpy")
+    assert np.mean(gx == want[0]) > 0.999 and np.mean(gy == want[1]) > 0.999
+

@@ -76,6 +76,18 @@ def _signature(t: Any) -> Any:
                   ro(t.int32, 2), ro(t.float32, 2), out, out)
 
 
+def _compile(numba: Any) -> Callable:
+    """The kernel compiled now, for :func:`_signature`'s types only (the caller makes them:
+    never compiled on a frame), kept in numba's disk cache; compiled afresh each process
+    where no cache folder can be written (numba finds none beside an installed package
+    and none in the user's cache folder)."""
+    options = dict(nogil=True, boundscheck=False, fastmath={"contract"})
+    try:
+        return numba.njit(_signature(numba.types), cache=True, **options)(_lookup)
+    except RuntimeError:                 # "cannot cache function ...: no locator available"
+        return numba.njit(_signature(numba.types), **options)(_lookup)
+
+
 def first_order_kernel(kernel: str = "auto") -> Callable | None:
     """The compiled first-order lookup, or None where the OpenCV path is to run.
 
@@ -107,11 +119,7 @@ def first_order_kernel(kernel: str = "auto") -> Callable | None:
             import numba
         except ImportError:
             numba = None
-        # compiled here, for these types only (the caller makes them): never on a frame
-        _COMPILED["numba"] = (None if numba is None else
-                              numba.njit(_signature(numba.types), nogil=True,
-                                         boundscheck=False, cache=True,
-                                         fastmath={"contract"})(_lookup))
+        _COMPILED["numba"] = None if numba is None else _compile(numba)
     compiled = _COMPILED["numba"]
     if compiled is None and kernel == "numba":
         raise InputError("kernel='numba' needs numba, which is not installed: pip install "
