@@ -5,10 +5,11 @@ chain of whole-image OpenCV and numpy operations (the colour coordinates, their 
 32-byte gather, a transpose into planes, six multiply-adds), each of which reads and
 writes the whole frame. :func:`first_order_kernel` compiles the same arithmetic as one
 loop over the pixels, which keeps a pixel's values in registers. On gs_sdk's GelSight
-Mini network at 320 x 240 (order 1, 16 cells) the whole reconstruction took 1.37 to
-1.39 times a DCT-II pair plus a gather with it, against 1.60 to 1.62 without it, in the
-same run, one thread, the angles to gs_sdk unchanged
-(``benchmarks/bench_table_order.py``, 2-core x86_64, 2026-11-27); its gradients were
+Mini network at 320 x 240 (order 1, 16 cells) the whole reconstruction took 1.36 to
+1.42 times a DCT-II pair plus a gather with it, against 1.54 to 1.65 without it in the
+same rounds, one thread, the angles to gs_sdk unchanged
+(``benchmarks/bench_table_order.py``, three runs of two rounds, 2-core x86_64,
+2026-11-27); its gradients were
 bit-identical to the OpenCV path's on those six presses. The plane's multiply-adds are
 fused (``fastmath={'contract'}``), as OpenCV's ``accumulateProduct`` fuses them; nothing
 else is reordered.
