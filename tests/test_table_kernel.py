@@ -155,3 +155,15 @@ def test_a_kernel_with_no_cache_folder_is_compiled_without_one():
     want = table.gradients(frame, normalise_gain=False, kernel="numpy")
     assert np.mean(gx == want[0]) > 0.999 and np.mean(gy == want[1]) > 0.999
 
+
+
+def test_a_frame_not_of_uint8_is_read_by_the_opencv_path():
+    """The compiled pass reads uint8 frames; a float frame (an already blurred or
+    averaged one) is read by OpenCV and numpy whatever the kernel."""
+    table = _table(7)
+    frame = np.random.default_rng(2).uniform(0, 255, (*table.cell_offset.shape, 3))
+    frame = frame.astype(np.float32)
+    a = table.gradients(frame, kernel="auto")
+    b = table.gradients(frame, kernel="numpy")
+    np.testing.assert_array_equal(a[0], b[0])
+    np.testing.assert_array_equal(a[1], b[1])

@@ -115,8 +115,8 @@ class GradientTable:
             How a first-order table is read: 'numpy', whole-image OpenCV and
             numpy operations; 'numba', one compiled pass over the pixels with
             the same arithmetic (:func:`first_order_kernel`, the ``fast``
-            extra); 'auto', numba where installed. A table of order 0 is one
-            gather either way.
+            extra; uint8 frames); 'auto', numba where installed. A table of
+            order 0 is one gather either way.
 
         Returns
         -------
@@ -145,7 +145,7 @@ class GradientTable:
         else:
             gain = np.ones(3, np.float32)
         compiled = first_order_kernel(kernel)
-        if compiled is not None and self._rows is not None:
+        if compiled is not None and self._rows is not None and blurred.dtype == np.uint8:
             gx = np.empty(blurred.shape[:2], np.float32)
             gy = np.empty_like(gx)
             coef = np.concatenate([np.float32(1.0) / gain, self._offset]).astype(np.float32)

@@ -39,7 +39,9 @@ KERNELS = ("auto", "numba", "numpy")
 _COMPILED: dict[str, Callable | None] = {}
 
 
-def _lookup(frame, scale_map, coef, top, bins, cell_offset, slopes, gx, gy):
+def _lookup(frame: np.ndarray, scale_map: np.ndarray, coef: np.ndarray, top: np.float32,
+            bins: int, cell_offset: np.ndarray, slopes: np.ndarray, gx: np.ndarray,
+            gy: np.ndarray) -> None:
     """gx, gy of a first-order table, pixel by pixel (compiled by numba; see
     :meth:`GradientTable.gradients`'s notes for the arithmetic)."""
     h, w = gx.shape
