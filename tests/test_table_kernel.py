@@ -17,6 +17,7 @@ from tactilevision.optics import (
     PhotometricCalibration,
     first_order_kernel,
 )
+from tactilevision.optics import _reconstructor as rec
 from tactilevision.optics import _table_kernel as tk
 from tactilevision.optics._table import GradientTable, _read_only
 
@@ -167,3 +168,25 @@ def test_a_frame_not_of_uint8_is_read_by_the_opencv_path():
     b = table.gradients(frame, kernel="numpy")
     np.testing.assert_array_equal(a[0], b[0])
     np.testing.assert_array_equal(a[1], b[1])
+
+
+def test_the_reconstructor_checks_its_kernel_and_needs_numba_only_for_first_order(
+        monkeypatch):
+    """An unknown kernel is refused by name before anything is built; without numba,
+    'numba' is refused only where a first-order table would use it (the shipped GelSight
+    network's table is of order 0, one gather either way)."""
+    from tactilevision import default_calibration_path
+
+    cal = PhotometricCalibration.load(default_calibration_path("gelsight"))
+    real = rec._tabulated
+    with pytest.raises(InputError, match="kernel must be one of auto, numba, numpy"):
+        DepthReconstructor(cal, kernel="cuda")
+    monkeypatch.setattr(tk, "_COMPILED", {})
+    monkeypatch.setitem(sys.modules, "numba", None)
+    tabulate = []
+    monkeypatch.setattr(rec, "_tabulated", lambda *a: tabulate.append(a) or real(*a))
+    recon = DepthReconstructor(cal, kernel="numba")
+    assert recon._table.order == 0 and recon.kernel == "numba"
+    with pytest.raises(InputError, match=r"tactilevision\[fast\]"):
+        DepthReconstructor(cal, kernel="numba", table_order=1)
+    assert len(tabulate) == 1          # refused before the first-order table was built

@@ -221,10 +221,10 @@ class DepthReconstructor:
                 if isinstance(bins, bool) or not isinstance(bins, int | np.integer) or bins < 2:
                     raise InputError(f"table_bins must be an integer of at least 2, got "
                                      f"{table_bins!r}")
+                if order == 1:   # compiled now (once per process), not on a frame
+                    first_order_kernel(kernel)
                 self._table = _tabulated(calibration, self._ref_inv, int(bins), int(order))
         self.engine = engine
-        if self._table is not None and self._table.order == 1:
-            first_order_kernel(kernel)      # compiled now (once per process), not on a frame
         if engine == "onnx":
             h, w = self.shape
             if calibration.position_cell_px:   # the network sees each pixel's cell
