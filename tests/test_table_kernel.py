@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from _data import GELSIGHT_MINI, GELSIGHT_MINI_MM_PER_PX, GELSIGHT_MINI_REASON
 
-from tactilevision import InputError
+from tactilevision import InputError, default_calibration_path
 from tactilevision.optics import (
     KERNELS,
     DepthReconstructor,
@@ -175,8 +175,6 @@ def test_the_reconstructor_checks_its_kernel_and_needs_numba_only_for_first_orde
     """An unknown kernel is refused by name before anything is built; without numba,
     'numba' is refused only where a first-order table would use it (the shipped GelSight
     network's table is of order 0, one gather either way)."""
-    from tactilevision import default_calibration_path
-
     cal = PhotometricCalibration.load(default_calibration_path("gelsight"))
     real = rec._tabulated
     with pytest.raises(InputError, match="kernel must be one of auto, numba, numpy"):
