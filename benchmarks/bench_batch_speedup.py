@@ -14,7 +14,10 @@ shipped GelSight calibration ``--sensor gelsight``; forces with E 0.2 MPa, nu 0.
 - ``batch reconstruct`` (or ``batch forces``) on ``--workers`` local worker processes.
 
 Prints both rates, frames/s, and their ratio (issue target: at least 0.8 N times one
-process). Both do the same work a frame: the height map, its deepest point, the contact
+process), and the CPU seconds (user + system) each used, the batch's workers included:
+on N cores the batch cannot run faster than its CPU seconds / N, which bounds the ratio
+at N x (one process's wall time) / (the batch's CPU seconds).
+Both do the same work a frame: the height map, its deepest point, the contact
 area and ``out_of_range_px`` (for ``reconstruct``; until 2026-11-27 the one process also
 computed a second colour change a frame and the batch no ``out_of_range_px``), and the
 batch also rounds, compresses and writes the heights to Zarr. The optics table's disk
@@ -25,6 +28,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import resource
 import shutil
 import subprocess
 import sys
@@ -56,15 +60,18 @@ def make_video(folder: Path, n: int) -> Path:
     return video
 
 
-def timed(cmd: list[str]) -> float:
-    """Wall seconds of one command run to its end (its output kept quiet unless it
-    fails)."""
+def timed(cmd: list[str]) -> tuple[float, float]:
+    """Wall seconds of one command run to its end, and the CPU seconds (user + system) it
+    and the processes it waited for (the batch's workers) used; its output kept quiet
+    unless it fails."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
     run = subprocess.run(cmd, capture_output=True, text=True)
     seconds = time.perf_counter() - t0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
     if run.returncode != 0:
         raise SystemExit(f"{' '.join(cmd)} exited {run.returncode}:\n{run.stderr[-2000:]}")
-    return seconds
+    return seconds, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
 
 
 def main() -> int:
@@ -86,15 +93,22 @@ def main() -> int:
                str(work / "warm"), "--no-progress"])
         for kind in args.kinds:
             extra = MATERIAL if kind == "forces" else []
-            one = timed([*py, kind, str(video), "--sensor", "gelsight", "--out",
-                         str(work / f"{kind}_one"), "--no-progress", *extra])
-            many = timed([*py, "batch", kind, str(video), "--sensor", "gelsight", "--out",
-                          str(work / f"{kind}_batch"), "--workers", str(args.workers),
-                          "--chunk-frames", str(args.chunk_frames), "--no-progress", *extra])
+            one, one_cpu = timed([*py, kind, str(video), "--sensor", "gelsight", "--out",
+                                  str(work / f"{kind}_one"), "--no-progress", *extra])
+            many, many_cpu = timed([*py, "batch", kind, str(video), "--sensor", "gelsight",
+                                    "--out", str(work / f"{kind}_batch"), "--workers",
+                                    str(args.workers), "--chunk-frames",
+                                    str(args.chunk_frames), "--no-progress", *extra])
+            cores = min(args.workers, os.cpu_count() or 1)
             print(f"{kind}: one process {one:.1f} s ({args.frames / one:.1f} frames/s); "
                   f"batch on {args.workers} workers {many:.1f} s ({args.frames / many:.1f} "
                   f"frames/s): {one / many:.2f} x one process (target "
                   f"{0.8 * args.workers:.1f})")
+            # the batch's own work bounds it: on `cores` cores it cannot finish before
+            # many_cpu / cores seconds, however well the frames are spread
+            print(f"  CPU (user + system): one process {one_cpu:.1f} s, batch {many_cpu:.1f} s "
+                  f"({many_cpu / one_cpu:.2f} x); on {cores} cores the batch can be at most "
+                  f"{cores * one / many_cpu:.2f} x one process")
     finally:
         shutil.rmtree(work, ignore_errors=True)
     return 0
