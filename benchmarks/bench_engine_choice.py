@@ -11,7 +11,12 @@ more presses ``--model mlp``), each scored by its report on the presses it was n
 and prints each candidate's score there and the kept engine's gap to the best.
 
     python benchmarks/bench_engine_choice.py [--sensors taxim mini gelslim] [--presses 7]
-        [--selections 4]
+        [--selections 4] [--random K --seed S]
+
+``--random K`` draws K selections of ``--presses`` presses at random (seed ``--seed``)
+per sensor instead of the spread ones: fresh selections no rule was chosen on. Each row
+also says which candidate the cross-validation's mean over the presses (the rule until
+2026-11-27) would have kept, from the same folds' per-press scores the report saves.
 
 Needs ``taxim`` (its GelSight presses, circles annotated by hand) and ``../shared/real``
 (the GelSight Mini and GelSlim 3.0 presses, circles detected).
@@ -59,15 +64,34 @@ def _score(report: dict) -> tuple[float, float]:
             float(np.sum(n * [x["inner_cap"] for x in b]) / n.sum()))
 
 
+def _mean_choice(choice: dict) -> str:
+    """The table the rule before 2026-11-27 kept: the folds' mean angle + CAP_DEG x the
+    mean |cap| over the presses they scored (each fold's medians averaged, one press a
+    fold here), from the per-press scores the report saves."""
+    def cost(r: dict) -> float:
+        pp = r["per_press"]
+        return (float(np.mean(pp["angle_08_deg"]))
+                + CAP_DEG * float(np.mean(np.abs(pp["inner_cap"]))))
+    tables = [r for r in choice["candidates"] if r["model"] == "lut" and r["per_press"]
+              ["angle_08_deg"]]
+    return min(tables, key=cost)["engine"] if tables else choice["chosen"]
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sensors", nargs="+", default=list(SENSORS), choices=list(SENSORS))
     ap.add_argument("--presses", type=int, default=7)
     ap.add_argument("--selections", type=int, default=4)
+    ap.add_argument("--random", type=int, default=0,
+                    help="K random selections a sensor instead of the spread ones")
+    ap.add_argument("--seed", type=int, default=0)
     a = ap.parse_args()
     print("| sensor | presses | kept | candidates on the others: angle inside 0.8 (deg), "
-          "inner cap | kept - best: angle, |cap| | within 0.3 deg and 3 % |")
-    print("|---|---|---|---|---|---|")
+          "inner cap | kept - best: angle, |cap| | within 0.3 deg and 3 % | the mean's "
+          "choice, within |")
+    print("|---|---|---|---|---|---|---|")
+    rng = np.random.default_rng(a.seed)
+    hits = {"median": 0, "mean": 0, "any": 0, "n": 0}
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "o.npz"
         for name in a.sensors:
@@ -75,8 +99,11 @@ def main() -> None:
             n = len(read_ball_presses(taxim_datapack(src.split(":")[1])
                                       if src.startswith("taxim:") else src).frames)
             stride = n // a.presses
-            for off in range(min(a.selections, stride)):
-                sel = f"{off}:{off + stride * a.presses}:{stride}"
+            sels = ([",".join(map(str, sorted(rng.choice(n, a.presses, replace=False))))
+                     for _ in range(a.random)] if a.random else
+                    [f"{off}:{off + stride * a.presses}:{stride}"
+                     for off in range(min(a.selections, stride))])
+            for sel in sels:
                 choice = _run(src, opts, sel, [], out)["engine"]
                 scores = {}
                 for r in choice["candidates"]:
@@ -86,14 +113,24 @@ def main() -> None:
                     scores[r["engine"]] = _score(_run(src, opts, sel, extra, out))
                 best_a = min(s[0] for s in scores.values())
                 best_c = min(abs(s[1]) for s in scores.values())
+                ok = {e: sc[0] - best_a <= 0.3 and abs(sc[1]) - best_c <= 0.03
+                      for e, sc in scores.items()}
                 kept = scores[choice["chosen"]]
                 da, dc = kept[0] - best_a, abs(kept[1]) - best_c
+                mean = _mean_choice(choice)
+                hits["n"] += 1
+                hits["median"] += ok[choice["chosen"]]
+                hits["mean"] += ok[mean]
+                hits["any"] += any(ok.values())
                 text = ", ".join(f"{k} {s[0]:.2f}, {100 * s[1]:+.1f} %"
                                  for k, s in scores.items())
                 print(f"| {name} | {sel} | {choice['chosen']} | {text} | {da:+.2f}, "
-                      f"{100 * dc:+.1f} % | {'yes' if da <= 0.3 and dc <= 0.03 else 'no'} |",
-                      flush=True)
-    print(f"(the choice's cost: angle + {CAP_DEG:g} deg x |inner cap|)")
+                      f"{100 * dc:+.1f} % | {'yes' if ok[choice['chosen']] else 'no'} | "
+                      f"{mean}, {'yes' if ok[mean] else 'no'} |", flush=True)
+    print(f"(the choice's cost: angle + {CAP_DEG:g} deg x |inner cap|, medians over the "
+          "presses the folds scored)")
+    print(f"within 0.3 deg and 3 %: kept (medians) {hits['median']} of {hits['n']}; the mean's "
+          f"choice {hits['mean']}; some candidate {hits['any']}")
 
 
 if __name__ == "__main__":

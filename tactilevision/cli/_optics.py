@@ -33,6 +33,7 @@ from ..optics import (
     engine_cost,
     holdout_presses,
     non_ball_presses,
+    pooled_cost,
     press_folds,
 )
 from ._out import add_overwrite_argument
@@ -500,17 +501,25 @@ def _choose_engine(args: argparse.Namespace, ps, given: bool, circles, ball_px: 
                 first[engine.name] = (cal, engine_cost(rep))
         rows.append({"engine": engine.name, "label": engine.label(), "model": engine.model,
                      "lut_cells": list(engine.lut_cells), "folds": len(folds),
-                     **engine_cost({"balls": [b for r in reports for b in r["balls"]]}),
-                     "first_fold": first[engine.name][1]})
+                     **pooled_cost(reports), "first_fold": first[engine.name][1],
+                     "per_press": _per_press(reports)})
     chosen = _pick(rows)
     engine = next(e for e in cands if e.name == chosen)
     return engine, {
         "chosen": chosen, "model": engine.model, "lut_cells": list(engine.lut_cells),
         "by": (f"the lowest angle inside 0.8 of the radius + {CAP_DEG:g} deg x |inner cap| "
-               f"on training presses each candidate was not trained on (the tables "
-               f"cross-validated over {int(fold.max()) + 1} folds, a network on the first)"),
+               f"(medians over the presses, as the report's) on training presses each "
+               f"candidate was not trained on (the tables cross-validated over "
+               f"{int(fold.max()) + 1} folds, a network on the first)"),
         "fitted_on": [int(i) for i in fit0], "scored_on": [int(i) for i in score0],
         "candidates": rows, "left_out": left}, (first[chosen][0], fit0, score0)
+
+
+def _per_press(reports: list[dict]) -> dict[str, list[float]]:
+    """Every press the folds scored: its angle inside 0.8 of the radius and inner cap."""
+    balls = [b for r in reports for b in r.get("balls", []) if b.get("n_scored")]
+    return {"angle_08_deg": [v for b in balls for v in b["normal_angle_08_per_press_deg"]],
+            "inner_cap": [v for b in balls for v in b["inner_cap_per_press"]]}
 
 
 def _pick(rows: list[dict]) -> str:

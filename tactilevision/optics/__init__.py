@@ -44,6 +44,7 @@ from ._engine import (
     Engine,
     engine_candidates,
     engine_cost,
+    pooled_cost,
     position_cells,
 )
 from ._evaluate import BallPressReport, evaluate_ball_presses
@@ -128,6 +129,7 @@ __all__ = [
     "non_ball_presses",
     "normal_angle_deg",
     "normals_from_gradients",
+    "pooled_cost",
     "position_cells",
     "press_folds",
     "reference_inverse",

@@ -416,6 +416,7 @@ def calibration_accuracy(recon: DepthReconstructor, frames: np.ndarray,
                  "presses": [int(i) for i in use],
                  "normal_angle_deg": None, "normal_angle_08_deg": None,
                  "deepest_point": None, "inner_cap": None, "inner_cap_expected": None,
+                 "normal_angle_08_per_press_deg": [], "inner_cap_per_press": [],
                  "rim_tilt_deg": None,
                  "shape_rms_px": None, "fitted_radius_px": None, "fitted_radius_std_px": None}
         entry["circle_uncertainty"] = None
@@ -440,6 +441,10 @@ def calibration_accuracy(recon: DepthReconstructor, frames: np.ndarray,
             entry["deepest_point"] = float(np.nanmedian(deepest))
             entry["inner_cap"] = float(np.nanmedian(caps))
             entry["inner_cap_expected"] = cap_prediction(caps)
+            # each scored press's own, in `presses` order: what pooled folds take their
+            # medians of (:func:`~tactilevision.optics.pooled_cost`)
+            entry["normal_angle_08_per_press_deg"] = [float(v) for v in inner]
+            entry["inner_cap_per_press"] = [float(v) for v in caps]
             entry["rim_tilt_deg"] = float(max_tilt_deg(radii[use], b).max())
             entry["shape_rms_px"] = float(np.mean([p.shape_rms_px for p in per]))
             entry["fitted_radius_px"] = float(fitted.mean())

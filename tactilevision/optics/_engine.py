@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 __all__ = ["CAP_DEG", "ENGINES", "MIN_NETWORK_PRESSES", "Engine", "engine_candidates",
-           "engine_cost", "position_cells"]
+           "engine_cost", "pooled_cost", "position_cells"]
 
 #: The fewest training presses a network is a candidate with. On a sensor the project had
 #: never seen, a network trained on 7 presses read the held-out caps 16 % deep where the
@@ -129,3 +129,37 @@ def engine_cost(report: dict) -> dict[str, float]:
     return {"angle_08_deg": ang, "inner_cap": float(np.sum(n * caps) / n.sum()),
             "n_scored": int(n.sum()),
             "cost": ang + CAP_DEG * float(np.sum(n * np.abs(caps)) / n.sum())}
+
+
+def pooled_cost(reports: list[dict]) -> dict[str, float]:
+    """Cross-validation folds' reports as one number to choose by: the report's own
+    statistic over every press the folds scored.
+
+    Each ball's scored presses are pooled over the folds, and its angle inside 0.8 of the
+    radius and its inner cap are the medians over them, as
+    :func:`calibration_accuracy` takes them over its presses; then :func:`engine_cost`.
+    (Until 2026-11-27 each fold's medians were averaged: with one press a fold, a mean
+    over the presses, which one press far off can carry, where the report and the
+    held-out score are medians.)
+
+    Parameters
+    ----------
+    reports : list of dict
+        :func:`calibration_accuracy`'s reports, one a fold, each ball with its
+        ``normal_angle_08_per_press_deg`` and ``inner_cap_per_press``.
+
+    Returns
+    -------
+    score : dict
+        As :func:`engine_cost`.
+    """
+    pooled: dict[float, tuple[list[float], list[float]]] = {}
+    for r in reports:
+        for b in r.get("balls", []):
+            if b.get("n_scored"):
+                angles, caps = pooled.setdefault(float(b["ball_radius_px"]), ([], []))
+                angles += b["normal_angle_08_per_press_deg"]
+                caps += b["inner_cap_per_press"]
+    return engine_cost({"balls": [
+        {"n_scored": len(a), "normal_angle_08_deg": float(np.median(a)),
+         "inner_cap": float(np.nanmedian(c))} for a, c in pooled.values()]})
