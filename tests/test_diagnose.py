@@ -21,7 +21,13 @@ from tactilevision.diagnosis import (
     indenter_shared,
     noise_floor,
 )
-from tactilevision.diagnosis._diagnose import LadderStep, _moduli_text, diagnose_core
+from tactilevision.diagnosis._diagnose import (
+    Candidate,
+    LadderStep,
+    _choose,
+    _moduli_text,
+    diagnose_core,
+)
 from tactilevision.io import write_measurements
 from tactilevision.mechanics import IndentationModel, fit_model
 from tactilevision.sim import HIDDEN_EFFECTS, make_measurement_table
@@ -530,3 +536,26 @@ def test_a_rung_without_E_says_so_instead_of_printing_nan():
     assert _moduli_text(rung(0.2046, 0.48)) == "E = 0.2046 MPa, nu = 0.48"
     text = _moduli_text(rung(float("nan"), float("nan")))
     assert text.startswith("no E or nu") and "nan" not in text
+
+
+def test_a_stiffness_trend_competes_where_the_step_along_its_column_passes():
+    """The trend along time is force_drift's counterpart: alone it raises no alarm (a null
+    table would by chance), but where the stiffness step along time passes the alarm is
+    raised already, and the trend, that change's other shape, competes for its name. The
+    candidates of Taxim's vernier seed 103 with a softening over the session (ground
+    truth: a trend in time): the trend 11.7 in BIC better than the step, force_drift not
+    passing. Before 2026-11-27 the step was named and the trend not even listed."""
+    cands = [Candidate("stiffness_trend:time_s", -23.39, 0.0340, 0.030, {}, 19),
+             Candidate("stiffness_step:press", -11.74, 0.0418, 0.034, {}, 19),
+             Candidate("stiffness_step:time_s", -11.74, 0.0448, 0.034, {}, 19),
+             Candidate("force_drift", -4.0, math.nan, 0.038, {}, 19)]
+    partner = {"stiffness_trend:time_s": "force_drift"}
+    best, eq = _choose(cands, 0.05, partner, ("law_curvature",), "gate")
+    assert best.effect == "stiffness_trend:time_s" and eq == ()
+    # without the step along time passing, the trend stays silent: the step along press
+    # order is named
+    no_step = [c for c in cands if c.effect != "stiffness_step:time_s"]
+    best, _ = _choose(no_step, 0.05, partner, ("law_curvature",), "gate")
+    assert best.effect == "stiffness_step:press"
+    # nor does it raise an alarm of its own
+    assert _choose([cands[0], cands[3]], 0.05, partner, ("law_curvature",), "gate") is None

@@ -915,10 +915,13 @@ def _choose(cands: Sequence[Candidate], cur_cv: float, partner: Mapping[str, str
                     or c.effect in law_rungs or curvature == "nuisance"
                     or c.delta_bic < curv_bic - CURVATURE_BIC)]
     # a counterpart competes only with its named effect: it does not raise an alarm
-    # of its own (so many more candidates would, by chance, on null tables)
+    # of its own (so many more candidates would, by chance, on null tables); nor where a
+    # stiffness change point along its own column raises one, where it is only that
+    # change's other shape (a softening over the session against a step in time)
     names_passing = {c.effect for c in passing}
     passing = [c for c in passing
-               if c.effect not in partner or partner[c.effect] in names_passing]
+               if c.effect not in partner or partner[c.effect] in names_passing
+               or _step_along(c.effect) in names_passing]
     if not passing:
         return None
     best = passing[0]
@@ -938,6 +941,12 @@ def _choose(cands: Sequence[Candidate], cur_cv: float, partner: Mapping[str, str
     if generic_first is not None:
         eq = (*eq, generic_first.effect)
     return best, eq
+
+
+def _step_along(effect: str) -> str | None:
+    """The stiffness change point along a stiffness trend's column (None for others)."""
+    kind, _, column = effect.partition(":")
+    return f"stiffness_step:{column}" if kind == "stiffness_trend" else None
 
 
 def _separating(a: str, b: str, cols: Mapping[str, np.ndarray]) -> str:

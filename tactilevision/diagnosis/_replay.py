@@ -158,7 +158,9 @@ class _Candidate:
     depth_only: bool = False       # along depth alone: must beat the law's curvature
     rung: bool = False             # the law's own curvature: a rung, never a verdict
     bounds: np.ndarray | None = None  # (m, 2): each column's parameter bounds
-    partner: str | None = None     # a counterpart: passes only where this effect passes
+    # a counterpart: passes only where one of these passes (its named effect, and a
+    # stiffness change point along its own column)
+    partner: tuple[str, ...] = ()
     generic: bool = False          # a trend: never listed as equivalent, named when best
 
     def __post_init__(self) -> None:
@@ -454,8 +456,10 @@ class _Replay:
         t = np.asarray(cols.get("time_s", np.full(P.shape, np.nan)), np.float64)
         name = COLUMN_SIZE_EFFECTS[0]
         if "force_drift" in self.cands and np.all(np.isfinite(t)) and np.ptp(t) > 0:
-            # force_drift's counterpart: it competes only where the drift passes
-            self.cands[name] = _Candidate(name, 1, [(law * t)[:, None]], partner="force_drift",
+            # force_drift's counterpart: it competes only where the drift passes, or the
+            # change point along time (as diagnose: then it is that change's other shape)
+            self.cands[name] = _Candidate(name, 1, [(law * t)[:, None]],
+                                          partner=("force_drift", "stiffness_step:time_s"),
                                           generic=True)
             self.signal[name] = P * (t - t.mean())
             self.scan = _SessionScan(cols, law)
@@ -595,10 +599,12 @@ class _Replay:
                         ok &= db < curv - CURVATURE_BIC
                     passing[c] = np.where(ok, db, np.inf)
                 for c in passing:                   # a counterpart needs its effect
-                    p = self.cands[c].partner
-                    if p is not None:
-                        passing[c] = np.where(np.isfinite(passing.get(p, np.inf)),
-                                              passing[c], np.inf)
+                    ps = self.cands[c].partner
+                    if ps:
+                        ok = np.zeros(idx.size, bool)
+                        for p in ps:
+                            ok |= np.isfinite(passing.get(p, np.inf))
+                        passing[c] = np.where(ok, passing[c], np.inf)
                 order = list(passing)
                 table = np.vstack([passing[c] for c in order])          # (C, m)
                 best = np.argmin(table, axis=0)
