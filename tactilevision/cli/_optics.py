@@ -34,6 +34,7 @@ from ..optics import (
     holdout_presses,
     non_ball_presses,
     pooled_cost,
+    pooled_presses,
     press_folds,
 )
 from ._out import add_overwrite_argument
@@ -517,9 +518,9 @@ def _choose_engine(args: argparse.Namespace, ps, given: bool, circles, ball_px: 
 
 def _per_press(reports: list[dict]) -> dict[str, list[float]]:
     """Every press the folds scored: its angle inside 0.8 of the radius and inner cap."""
-    balls = [b for r in reports for b in r.get("balls", []) if b.get("n_scored")]
-    return {"angle_08_deg": [v for b in balls for v in b["normal_angle_08_per_press_deg"]],
-            "inner_cap": [v for b in balls for v in b["inner_cap_per_press"]]}
+    pooled = pooled_presses(reports).values()
+    return {"angle_08_deg": [v for a, _ in pooled for v in a],
+            "inner_cap": [v for _, c in pooled for v in c]}
 
 
 def _pick(rows: list[dict]) -> str:

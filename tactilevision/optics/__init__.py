@@ -45,6 +45,7 @@ from ._engine import (
     engine_candidates,
     engine_cost,
     pooled_cost,
+    pooled_presses,
     position_cells,
 )
 from ._evaluate import BallPressReport, evaluate_ball_presses
@@ -130,6 +131,7 @@ __all__ = [
     "normal_angle_deg",
     "normals_from_gradients",
     "pooled_cost",
+    "pooled_presses",
     "position_cells",
     "press_folds",
     "reference_inverse",

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 __all__ = ["CAP_DEG", "ENGINES", "MIN_NETWORK_PRESSES", "Engine", "engine_candidates",
-           "engine_cost", "pooled_cost", "position_cells"]
+           "engine_cost", "pooled_cost", "pooled_presses", "position_cells"]
 
 #: The fewest training presses a network is a candidate with. On a sensor the project had
 #: never seen, a network trained on 7 presses read the held-out caps 16 % deep where the
@@ -153,6 +153,14 @@ def pooled_cost(reports: list[dict]) -> dict[str, float]:
     score : dict
         As :func:`engine_cost`.
     """
+    return engine_cost({"balls": [
+        {"n_scored": len(a), "normal_angle_08_deg": float(np.median(a)),
+         "inner_cap": float(np.nanmedian(c))} for a, c in pooled_presses(reports).values()]})
+
+
+def pooled_presses(reports: list[dict]) -> dict[float, tuple[list[float], list[float]]]:
+    """Every press the folds' reports scored, by ball radius (px): its angle inside 0.8
+    of the radius (deg) and its inner cap, as lists in the folds' order."""
     pooled: dict[float, tuple[list[float], list[float]]] = {}
     for r in reports:
         for b in r.get("balls", []):
@@ -160,6 +168,4 @@ def pooled_cost(reports: list[dict]) -> dict[str, float]:
                 angles, caps = pooled.setdefault(float(b["ball_radius_px"]), ([], []))
                 angles += b["normal_angle_08_per_press_deg"]
                 caps += b["inner_cap_per_press"]
-    return engine_cost({"balls": [
-        {"n_scored": len(a), "normal_angle_08_deg": float(np.median(a)),
-         "inner_cap": float(np.nanmedian(c))} for a, c in pooled.values()]})
+    return pooled

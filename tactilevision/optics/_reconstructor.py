@@ -31,7 +31,7 @@ from ._mlp import (
 )
 from ._poisson import PoissonSolver, integrate_poisson_masked
 from ._table import GradientTable, table_from_cell_luts, table_from_lut, tabulate_mlp
-from ._table_kernel import KERNELS, first_order_kernel
+from ._table_kernel import check_kernel, first_order_kernel
 
 __all__ = ["DepthReconstructor"]
 
@@ -562,8 +562,7 @@ def _check_options(engine: str, boundary: str, level: str, level_degree: int,
         raise InputError(f"level must be 'median' or 'far_field', got {level!r}")
     if not 0 <= int(level_degree) <= 8:
         raise InputError(f"level_degree must be 0 to 8, got {level_degree!r}")
-    if kernel not in KERNELS:
-        raise InputError(f"kernel must be one of {', '.join(KERNELS)}, got {kernel!r}")
+    check_kernel(kernel)
 
 
 def _read_table(path, ref_inv: np.ndarray, bins: int, order: int = 0):

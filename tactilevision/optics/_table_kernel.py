@@ -30,13 +30,19 @@ import numpy as np
 
 from .._checks import InputError
 
-__all__ = ["KERNELS", "first_order_kernel"]
+__all__ = ["KERNELS", "check_kernel", "first_order_kernel"]
 
 #: The ``kernel`` choices: 'auto' (numba where installed, else OpenCV and numpy),
 #: 'numba' (required: an error without it), 'numpy' (the OpenCV and numpy path).
 KERNELS = ("auto", "numba", "numpy")
 
 _COMPILED: dict[str, Callable | None] = {}
+
+
+def check_kernel(kernel: str) -> None:
+    """Raise :class:`InputError` naming `kernel` unless it is one of :data:`KERNELS`."""
+    if kernel not in KERNELS:
+        raise InputError(f"kernel must be one of {', '.join(KERNELS)}, got {kernel!r}")
 
 
 def _lookup(frame: np.ndarray, scale_map: np.ndarray, coef: np.ndarray, top: np.float32,
@@ -113,8 +119,7 @@ def first_order_kernel(kernel: str = "auto") -> Callable | None:
     InputError
         For an unknown `kernel`, or 'numba' without numba installed.
     """
-    if kernel not in KERNELS:
-        raise InputError(f"kernel must be one of {', '.join(KERNELS)}, got {kernel!r}")
+    check_kernel(kernel)
     if kernel == "numpy":
         return None
     if "numba" not in _COMPILED:
