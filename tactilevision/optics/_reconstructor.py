@@ -131,9 +131,10 @@ class DepthReconstructor:
         compiled pass over the pixels where numba is installed (``pip install
         'tactilevision[fast]'``; :func:`~tactilevision.optics.first_order_kernel`),
         else whole-image OpenCV and numpy operations, with the same
-        arithmetic. numba costs about a quarter of a second once per
-        process (its import and the kernel read back from its disk cache;
-        half a second more the first time it is compiled), paid here;
+        arithmetic. numba costs about 0.4 times the import of
+        ``tactilevision.optics`` once per process (its import and the kernel
+        read back from its disk cache; about as much again the first time
+        it is compiled; :mod:`~tactilevision.optics._table_kernel`), paid here;
         'numpy' skips it for a few frames. 'numba' requires it for a
         first-order table. Other tables are one gather either way.
 
