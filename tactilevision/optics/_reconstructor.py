@@ -134,7 +134,7 @@ class DepthReconstructor:
         arithmetic. numba costs about 0.4 times the import of
         ``tactilevision.optics`` once per process (its import and the kernel
         read back from its disk cache; about as much again the first time
-        it is compiled; :mod:`~tactilevision.optics._table_kernel`), paid here;
+        it is compiled; see ``first_order_kernel``), paid here;
         'numpy' skips it for a few frames. 'numba' requires it for a
         first-order table. Other tables are one gather either way.
 
