@@ -19,7 +19,11 @@ crossing forces rule out; ``--at-plan K`` at K times what ``plan`` says the sess
 design can see (:func:`tactilevision.planning.crossing_effect_sizes` on the
 :class:`~tactilevision.planning.Design` the session follows: its block, repeats, frame
 rate, F/T noise and window, its median stage speed through w0, its overshoot range and
-its press count as positions), and prints both sizes per seed.
+its ``presses.csv`` as the schedule: each press's indenter and position, in order; with
+``--spiral``, its press count as positions round a spiral, as before 2026-11-27), and
+prints both sizes per seed.
+
+    python benchmarks/bench_crossings.py [--seeds 20] [--first-seed S] --at-plan K [--spiral]
 """
 
 from __future__ import annotations
@@ -36,7 +40,7 @@ import numpy as np
 
 from tactilevision import InputError
 from tactilevision.diagnosis import crossing_tests, diagnose
-from tactilevision.io import read_measurements
+from tactilevision.io import read_measurements, read_presses
 from tactilevision.pipeline import calibrate_session, write_calibration
 from tactilevision.planning import Design, crossing_effect_sizes
 from tactilevision.sim import GaugeBlock, SessionSpec, make_session
@@ -59,9 +63,12 @@ def right(kind: str, verdict: str | None) -> bool:
     return bool(verdict) and verdict.startswith("stiffness_step:")
 
 
-def plan_sizes(spec: SessionSpec, truth: dict, k: float) -> dict[str, float]:
+def plan_sizes(spec: SessionSpec, truth: dict, k: float, folder: Path | None = None
+               ) -> dict[str, float]:
     """`k` times what ``plan`` says the session's design lets the crossing forces name in
-    95 % of sessions, in the kinds' parameters (as :func:`bench_loop.rules_out_sizes`)."""
+    95 % of sessions, in the kinds' parameters (as :func:`bench_loop.rules_out_sizes`);
+    with the session `folder`, its ``presses.csv`` (what the robot was to command, written
+    before any frame) as the design's schedule."""
     presses = truth["presses"]
     speed = float(np.median([p["depth_mm"] / (p["hold_from_s"] - p["t_start_s"])
                              for p in presses]))
@@ -74,7 +81,8 @@ def plan_sizes(spec: SessionSpec, truth: dict, k: float) -> dict[str, float]:
                     window_samples=spec.window_samples, rate_hz=spec.rate_hz,
                     hold_s=float(np.mean(spec.hold_s)),
                     overshoot_um=(1e3 * min(over), 1e3 * max(over)),
-                    waits_s=(float(np.mean(spec.wait_s)),), positions=len(presses))
+                    waits_s=(float(np.mean(spec.wait_s)),), positions=len(presses),
+                    schedule=None if folder is None else _schedule(folder, spec))
     got = {name: s.size_param for name, s in crossing_effect_sizes(design).items()}
     last = max(p["t_start_s"] for p in presses)
     return {"spatial": k * got["spatial_nonuniformity"],
@@ -82,8 +90,17 @@ def plan_sizes(spec: SessionSpec, truth: dict, k: float) -> dict[str, float]:
             "damage": k * got["stiffness_step:press"]}
 
 
+def _schedule(folder: Path, spec: SessionSpec) -> tuple[tuple[int, float, float], ...]:
+    """The session's ``presses.csv`` as a design's schedule, in press order."""
+    rows = read_presses(folder / "presses.csv", len(spec.block.depths_mm))
+    order = np.argsort(rows["press"])
+    return tuple((int(rows["indenter"][j]), float(rows["x_mm"][j]), float(rows["y_mm"][j]))
+                 for j in order)
+
+
 def one(work: Path, seed: int, fps: float, at_rules_out: float | None = None,
-        at_plan: float | None = None) -> dict[str, tuple[str | None, str | None]]:
+        at_plan: float | None = None, spiral: bool = False
+        ) -> dict[str, tuple[str | None, str | None]]:
     """The verdict and the crossings' finding of each kind on one generated session (with
     `at_rules_out`, each kind at that many times what the null table's crossing forces
     rule out: :func:`bench_loop.rules_out_sizes`)."""
@@ -97,7 +114,7 @@ def one(work: Path, seed: int, fps: float, at_rules_out: float | None = None,
     (folder / "truth.json").write_text(json.dumps(truth))
     out, sizes = {}, {}
     if at_plan is not None:
-        sizes = plan_sizes(spec, truth, at_plan)
+        sizes = plan_sizes(spec, truth, at_plan, None if spiral else folder)
     for kind in KINDS:
         write_forces(folder, work / kind, kind, seed=seed, size=sizes.get(kind))
         try:
@@ -142,6 +159,9 @@ def main() -> int:
                          "forces rule out (default: the fixed sizes above)")
     ap.add_argument("--at-plan", type=float, metavar="K",
                     help="each kind at K times what plan says the session's design can see")
+    ap.add_argument("--spiral", action="store_true",
+                    help="with --at-plan: plan the design without its presses.csv (the "
+                         "presses going round a spiral of positions), as before 2026-11-27")
     args = ap.parse_args()
     if args.at_rules_out is not None and args.at_plan is not None:
         ap.error("give --at-rules-out or --at-plan, not both")
@@ -150,7 +170,7 @@ def main() -> int:
     for seed in range(args.first_seed, args.first_seed + args.seeds):
         work = Path(tempfile.mkdtemp(prefix="bench_crossings_"))
         try:
-            res = one(work, seed, args.fps, args.at_rules_out, args.at_plan)
+            res = one(work, seed, args.fps, args.at_rules_out, args.at_plan, args.spiral)
         finally:
             shutil.rmtree(work, ignore_errors=True)
         print(f"seed {seed}: " + "; ".join(f"{k}: {v or 'nothing'} (crossings: {c or '-'})"

@@ -38,9 +38,9 @@ __all__ += ["COLUMN_ORDER", "REQUIRED_COLUMNS", "STANDARD_GRAVITY", "Measurement
             "read_measurements", "sidecar_geometry", "write_measurements"]
 
 # indentation session folders (calibrate): names appended below
-from ._session import KNOWN_KEYS, Session, SessionConfig, read_session  # noqa: E402
+from ._session import KNOWN_KEYS, Session, SessionConfig, read_presses, read_session  # noqa: E402
 
-__all__ += ["KNOWN_KEYS", "Session", "SessionConfig", "read_session"]
+__all__ += ["KNOWN_KEYS", "Session", "SessionConfig", "read_presses", "read_session"]
 
 # video files (batch, reconstruct): names appended below
 from ._video import VIDEO_SUFFIXES, VideoFrames, find_video_reference, is_video  # noqa: E402

@@ -24,7 +24,7 @@ from .._checks import InputError
 from ._frames import read_image
 from ._measurements import _read_table
 
-__all__ = ["Session", "SessionConfig", "read_session"]
+__all__ = ["Session", "SessionConfig", "read_presses", "read_session"]
 
 _FORCE_COLUMNS = ("t_s", "fx_n", "fy_n", "fz_n")
 _TORQUE_COLUMNS = ("tx_nmm", "ty_nmm", "tz_nmm")
@@ -508,8 +508,34 @@ def _read_forces(folder: Path, rate_hz: float
 
 def _read_presses(folder: Path, n_indenters: int) -> dict[str, np.ndarray] | None:
     path = folder / "presses.csv"
-    if not path.exists():
-        return None
+    return read_presses(path, n_indenters) if path.exists() else None
+
+
+def read_presses(path: str | Path, n_indenters: int) -> dict[str, np.ndarray]:
+    """Read a ``presses.csv`` (formats.md section 1): what the robot commanded, press by press.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file: columns ``press``, ``indenter``, ``x_mm``, ``y_mm``, one row a press.
+    n_indenters : int
+        The gauge block's indenters (``[gauge_block] depths_mm``): an indenter is an index
+        0 to ``n_indenters - 1``.
+
+    Returns
+    -------
+    presses : dict of str to (N,) ndarray
+        ``press``, ``indenter`` (int64), ``x_mm``, ``y_mm`` (float64, mm), in the file's
+        order.
+
+    Raises
+    ------
+    InputError
+        A missing or unreadable file, a missing column, a value that is not a number,
+        a press or indenter that is not a whole number, or an indenter outside the block,
+        each naming the file, line and column.
+    """
+    path = Path(path)
     header, rows, lines = _read_csv(path, _PRESS_COLUMNS)
     out = {c: _numbers(path, header, rows, lines, c) for c in _PRESS_COLUMNS}
     for c in ("press", "indenter"):

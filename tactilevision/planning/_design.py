@@ -23,7 +23,7 @@ import numpy as np
 
 from .._checks import InputError, InputWarning
 from ..diagnosis import ABSORBED_BY_MARK, untestable_reason
-from ..io import KNOWN_KEYS
+from ..io import KNOWN_KEYS, read_presses
 from ..mechanics import EFFECT_SIZE_PARAMS, EFFECTS, MAX_W_OVER_H, fem_force
 
 __all__ = [
@@ -36,6 +36,7 @@ __all__ = [
     "design_toml",
     "hold_lengths",
     "planned_columns",
+    "press_indenters",
     "read_design",
     "untestable_effects",
     "untestable_in_table",
@@ -103,7 +104,19 @@ class Design:
     days : int
         Calendar days (sessions) the presses are spread over.
     positions : int
-        Distinct press positions on the pad.
+        Distinct press positions on the pad (a golden-angle spiral over a 5 mm disc, the
+        presses going round them), where no `schedule` gives them.
+    schedule : tuple of (int, float, float) or None
+        The presses as the robot will command them (formats.md §1 ``presses.csv``), in
+        the order pressed: each one's indenter (0-based, into ``depths_mm``) and its
+        position x_mm, y_mm on the pad. Each indenter ``repeats`` times. None: the
+        presses go round the indenters at the spiral's `positions`. A drawn mark's
+        within-indenter effects are sized on it
+        (:func:`~tactilevision.planning.crossing_effect_sizes`): on 20
+        generated mark sessions at 15 frames/s (seeds 8200 to 8219 of
+        ``benchmarks/bench_crossings.py``) the gradient their own crossing forces could
+        name was 0.58 to 1.43 times the spiral's (each indenter's x spread 0.84 to 1.56
+        mm sd against the spiral's 1.41) and 0.70 to 1.09 times their own schedule's.
     detect : tuple of (str, float)
         Effect sizes the user wants to be able to see (``[plan.detect]``: a catalogue
         effect of :data:`EFFECT_SIZE_PARAMS` and its size in that table's unit):
@@ -137,6 +150,7 @@ class Design:
     waits_s: tuple[float, ...] = (2.0,)
     days: int = 1
     positions: int = 10
+    schedule: tuple[tuple[int, float, float], ...] | None = None
     relaxation_g: float | None = None
     relaxation_tau_s: float | None = None
     detect: tuple[tuple[str, float], ...] = ()
@@ -240,6 +254,7 @@ def _check_schedule(d: Design) -> None:
         v = getattr(d, key)
         if isinstance(v, bool) or not isinstance(v, int | float) or int(v) != v or v < 1:
             raise InputError(f"[plan] {key} must be a positive integer, got {v!r}")
+    _check_press_schedule(d)
     for key in ("holds_s", "waits_s"):
         v = getattr(d, key)
         if v is None:
@@ -270,6 +285,29 @@ def _check_schedule(d: Design) -> None:
         _positive(size, f"[plan.detect] {name}")
 
 
+def _check_press_schedule(d: Design) -> None:
+    """``[plan] schedule``: (indenter, x_mm, y_mm) per press, each indenter ``repeats``
+    times (one sentence naming the press at fault)."""
+    if d.schedule is None:
+        return
+    n_ind = len(d.depths_mm)
+    if not isinstance(d.schedule, tuple | list) or not d.schedule:
+        raise InputError(f"[plan] schedule must list the presses, got {d.schedule!r}")
+    for k, item in enumerate(d.schedule):
+        if not (isinstance(item, tuple | list) and len(item) == 3
+                and all(_is_number(v) and math.isfinite(v) for v in item)):
+            raise InputError(f"[plan] schedule: press {k} must be [indenter, x_mm, y_mm], "
+                             f"three finite numbers, got {item!r}")
+        if not float(item[0]).is_integer() or not 0 <= item[0] < n_ind:
+            raise InputError(f"[plan] schedule: press {k}'s indenter {item[0]!r} is not one "
+                             f"of [gauge_block] depths_mm (0 to {n_ind - 1})")
+    counts = np.bincount([int(item[0]) for item in d.schedule], minlength=n_ind)
+    off = np.flatnonzero(counts != int(d.repeats))
+    if off.size:
+        raise InputError(f"[plan] schedule presses indenter {off[0]} {counts[off[0]]} times; "
+                         f"[plan] repeats is {d.repeats} (each indenter repeats times)")
+
+
 #: The type of every key a design reads (``'number'``: an int or float, never a
 #: boolean; ``'integer'``; ``'numbers'``: a list of numbers; ``'text'``).
 DESIGN_KEYS: dict[str, dict[str, str]] = {
@@ -282,12 +320,13 @@ DESIGN_KEYS: dict[str, dict[str, str]] = {
              "force_noise_n": "number", "force_zero_n": "number", "hold_s": "number",
              "depth_std_um": "number", "beta_table": "text", "overshoot_um": "numbers",
              "holds_s": "numbers", "waits_s": "numbers", "days": "integer",
-             "positions": "integer", "relaxation_g": "number", "relaxation_tau_s": "number",
-             "detect": "table"},
+             "positions": "integer", "schedule": "schedule", "relaxation_g": "number",
+             "relaxation_tau_s": "number", "detect": "table"},
 }
 
 _KIND_WORDS = {"number": "a number", "integer": "a whole number", "numbers": "a list of numbers",
-               "text": "a string", "table": "a table"}
+               "text": "a string", "table": "a table",
+               "schedule": "a presses.csv file name or a list of [indenter, x_mm, y_mm]"}
 
 
 def _is_number(v: Any) -> bool:
@@ -301,6 +340,9 @@ def _typed(v: Any, kind: str) -> bool:
         return _is_number(v) and float(v).is_integer()
     if kind == "numbers":
         return isinstance(v, list) and all(_is_number(x) for x in v)
+    if kind == "schedule":
+        return isinstance(v, str) or (isinstance(v, list) and all(
+            isinstance(x, list) and all(_is_number(y) for y in x) for x in v))
     return isinstance(v, str) if kind == "text" else isinstance(v, dict)
 
 
@@ -345,8 +387,11 @@ def read_design(path: str | Path) -> Design:
         rate_hz, window_samples, window_at``, ``[plan] repeats, E_mpa, nu,
         frame_rate_hz, stage_speed_mm_s, force_noise_n, force_zero_n, hold_s,
         depth_std_um, beta_table, overshoot_um, holds_s, waits_s, days, positions,
-        relaxation_g, relaxation_tau_s`` and ``[plan.detect]`` (effect = size; every
-        ``[plan]`` key optional; :class:`Design` gives the defaults).
+        schedule, relaxation_g, relaxation_tau_s`` and ``[plan.detect]`` (effect = size;
+        every ``[plan]`` key optional; :class:`Design` gives the defaults). ``schedule``
+        is a list of ``[indenter, x_mm, y_mm]`` or the name of a ``presses.csv``
+        (formats.md §1; relative to the design file's folder, its rows in ``press``
+        order); without ``repeats`` it sets them.
 
     Returns
     -------
@@ -356,8 +401,9 @@ def read_design(path: str | Path) -> Design:
     ------
     InputError
         A missing or unreadable file, TOML that does not parse, a missing required
-        key, an unknown ``[plan]`` key, or a bad value (:func:`check_design`), each
-        naming the file and the key.
+        key, an unknown ``[plan]`` key, a bad value (:func:`check_design`), or a
+        ``schedule`` file :func:`~tactilevision.io.read_presses` refuses, each naming the
+        file and the key (or the line).
     """
     path = Path(path)
     try:
@@ -389,6 +435,12 @@ def read_design(path: str | Path) -> Design:
     for key in ("overshoot_um", "holds_s", "waits_s"):
         if key in kw and isinstance(kw[key], list):
             kw[key] = tuple(kw[key])
+    if "schedule" in kw:
+        kw["schedule"] = _read_schedule(kw["schedule"], path, len(depths))
+        if "repeats" not in kw:
+            counts = np.bincount([int(v[0]) for v in kw["schedule"]
+                                  if _is_number(v[0]) and 0 <= v[0] < len(depths)])
+            kw["repeats"] = int(counts.max()) if counts.size else 1
     if isinstance(force.get("window_at"), str):
         kw["window_at"] = force["window_at"]
     try:
@@ -402,6 +454,31 @@ def read_design(path: str | Path) -> Design:
                       **kw)
     except InputError as exc:
         raise InputError(f"{path}: {exc}") from None
+
+
+def _read_schedule(value: Any, path: Path, n_indenters: int
+                   ) -> tuple[tuple[Any, ...], ...]:
+    """``[plan] schedule`` as (indenter, x_mm, y_mm) per press: inline, or read from the
+    ``presses.csv`` it names (relative to the design file), its rows in ``press``
+    order."""
+    if not isinstance(value, str):
+        return tuple(tuple(v) for v in value)
+    p = Path(value) if Path(value).is_absolute() else path.parent / value
+    try:
+        rows = read_presses(p, n_indenters)
+    except InputError as exc:
+        raise InputError(f"{path}: [plan] schedule: {exc}") from None
+    order = np.argsort(rows["press"], kind="stable")
+    return tuple((int(rows["indenter"][k]), float(rows["x_mm"][k]), float(rows["y_mm"][k]))
+                 for k in order)
+
+
+def press_indenters(d: Design) -> np.ndarray:
+    """(N,) int64 indenter (index into ``depths_mm``) of each planned press in turn: the
+    ``schedule``'s, else each depth's ``repeats`` presses in turn."""
+    if d.schedule is not None:
+        return np.array([int(v[0]) for v in d.schedule], np.int64)
+    return np.repeat(np.arange(len(d.depths_mm)), int(d.repeats))
 
 
 def depth_uncertainty(d: Design) -> tuple[float, float, str]:
@@ -441,8 +518,9 @@ def depth_uncertainty(d: Design) -> tuple[float, float, str]:
 
 def design_table(d: Design) -> tuple[np.ndarray, np.ndarray]:
     """The design's noise-free presses: depths w (mm) and the finite-strain FEM's forces
-    P = 2 a E w kappa_n(nu, a/h, w/h) / (1 - nu^2) (N), ``repeats`` per depth."""
-    w = np.repeat(np.asarray(d.depths_mm, np.float64), int(d.repeats))
+    P = 2 a E w kappa_n(nu, a/h, w/h) / (1 - nu^2) (N), ``repeats`` per depth, in the
+    order of :func:`press_indenters`."""
+    w = np.asarray(d.depths_mm, np.float64)[press_indenters(d)]
     return w, fem_force(d.E_mpa, d.nu, d.radius_mm, d.thickness_mm, w)
 
 
@@ -456,9 +534,10 @@ def hold_lengths(d: Design, n: int) -> np.ndarray:
 
 def planned_columns(d: Design) -> dict[str, np.ndarray]:
     """The measurements table a session of the design will write, but its forces (formats.md
-    §2 columns): each depth's ``repeats`` presses in turn, the holds (``hold_s``: half
-    the window with ``window_at = 'start'``, the hold less half the window with
-    ``'end'``), the rests, the press times, the days and the positions on the pad; the
+    §2 columns): each depth's ``repeats`` presses in turn (or the ``schedule``'s
+    presses), the holds (``hold_s``: half the window with ``window_at = 'start'``, the
+    hold less half the window with ``'end'``), the rests, the press times, the days and
+    the positions on the pad (the ``schedule``'s, else a spiral's); the
     tangential forces ``fx_n``, ``fy_n`` only as varying columns (an F/T sensor always
     records them).
 
@@ -466,7 +545,7 @@ def planned_columns(d: Design) -> dict[str, np.ndarray]:
     -------
     columns : dict of str to (N,) float ndarray
     """
-    w = np.repeat(np.asarray(d.depths_mm, np.float64), int(d.repeats))
+    w = np.asarray(d.depths_mm, np.float64)[press_indenters(d)]
     n = w.size
     i = np.arange(n)
     hold = hold_lengths(d, n)
@@ -476,12 +555,15 @@ def planned_columns(d: Design) -> dict[str, np.ndarray]:
     ang = 2.39996 * k                   # a golden-angle spiral over a 5 mm disc
     px, py = 5.0 * np.sqrt((k + 0.5) / d.positions) * np.cos(ang), 5.0 * np.sqrt(
         (k + 0.5) / d.positions) * np.sin(ang)
+    x, y = px[i % d.positions], py[i % d.positions]
+    if d.schedule is not None:
+        x, y = (np.array([float(v[j]) for v in d.schedule]) for j in (1, 2))
     return {
         "press": i.astype(np.float64), "depth_mm": w,
         "hold_s": np.full(n, half) if d.window_at == "start" else hold - half,
         "wait_s": waits, "time_s": np.cumsum(waits + hold),
-        "day": np.floor(i * d.days / n), "x_mm": px[i % d.positions],
-        "y_mm": py[i % d.positions], "fx_n": np.cos(i), "fy_n": np.sin(i),
+        "day": np.floor(i * d.days / n), "x_mm": x, "y_mm": y, "fx_n": np.cos(i),
+        "fy_n": np.sin(i),
     }
 
 
@@ -578,6 +660,9 @@ def design_toml(d: Design) -> str:
         v = getattr(d, k)
         if v is not None:
             lines.append(f"{k} = {val(v)}")
+    if d.schedule is not None:
+        lines.append("schedule = [" + ", ".join(
+            f"[{int(i)}, {val(float(x))}, {val(float(y))}]" for i, x, y in d.schedule) + "]")
     if d.detect:
         lines += ["", "[plan.detect]"] + [f"{k} = {val(float(v))}" for k, v in d.detect]
     return "\n".join(lines) + "\n"

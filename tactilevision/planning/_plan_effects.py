@@ -30,6 +30,7 @@ from ._design import (
     depth_uncertainty,
     design_table,
     planned_columns,
+    press_indenters,
     untestable_effects,
 )
 
@@ -75,7 +76,8 @@ def crossing_table(design: Design) -> dict[str, np.ndarray]:
     ``force_w0_n``, ``force_w0_sem_n``), noise-free, with their stated uncertainties.
 
     The presses go round the indenters (each round presses every depth once, ``repeats``
-    rounds), at the times and positions of :func:`planned_columns`. A press crosses w0
+    rounds), at the times and positions of :func:`planned_columns`; with a ``schedule``,
+    its indenters and positions in its order. A press crosses w0
     within the frame period before the mark first shows: ``calibrate`` brackets the
     force over that period, whose width is the stage's travel in one frame times dP/dw
     at w0 (the FEM's) widened by four times the noise of its 10 ms average of the F/T;
@@ -89,7 +91,8 @@ def crossing_table(design: Design) -> dict[str, np.ndarray]:
     """
     cols = planned_columns(design)
     n_ind, n = len(design.depths_mm), int(design.repeats) * len(design.depths_mm)
-    ind = np.tile(np.arange(n_ind), int(design.repeats))
+    ind = (press_indenters(design) if design.schedule is not None
+           else np.tile(np.arange(n_ind), int(design.repeats)))
     w0 = np.asarray(design.depths_mm, np.float64)
     args = (design.E_mpa, design.nu, design.radius_mm, design.thickness_mm)
     p0 = fem_force(*args, w0)

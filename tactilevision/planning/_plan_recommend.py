@@ -166,17 +166,18 @@ def _changes(d: Design) -> list[tuple[str, Design, bool]]:
     h = d.thickness_mm
     out: list[tuple[str, Design, bool]] = [
         (f"{2 * d.repeats} repeats per depth (was {d.repeats})",
-         replace(d, repeats=2 * d.repeats), False)]
+         replace(d, repeats=2 * d.repeats, schedule=None), False)]
     depths = sorted(d.depths_mm)
     if depths[-1] / h < DEEPEST_W_OVER_H - 0.02:
         extra = [round(depths[-1] + (DEEPEST_W_OVER_H * h - depths[-1]) * k / 2, 4)
                  for k in (1, 2)]
         out.append((f"depths {', '.join(f'{x:g}' for x in extra)} mm added (deeper, to w/h "
-                    f"{DEEPEST_W_OVER_H:g})", replace(d, depths_mm=tuple(depths + extra)), True))
+                    f"{DEEPEST_W_OVER_H:g})",
+                    replace(d, depths_mm=tuple(depths + extra), schedule=None), True))
     if depths[0] / h > SHALLOWEST_W_OVER_H + 0.02:
         x = round(SHALLOWEST_W_OVER_H * h, 4)
         out.append((f"a depth of {x:g} mm added (shallower, w/h {SHALLOWEST_W_OVER_H:g})",
-                    replace(d, depths_mm=tuple([x, *depths])), True))
+                    replace(d, depths_mm=tuple([x, *depths]), schedule=None), True))
     if d.a_over_h < NU_A_OVER_H - 0.05:
         a = round(NU_A_OVER_H * h, 3)
         out.append((f"an indenter of radius {a:g} mm (a/h {NU_A_OVER_H:g}, was "
@@ -228,7 +229,8 @@ def _opening_changes(d: Design, untestable: dict[str, str]) -> list[tuple[str, D
     if "aging" in untestable:
         out.append(("the presses spread over 3 days", replace(d, days=3)))
     if "spatial_nonuniformity" in untestable:
-        out.append(("presses at 6 positions of the pad", replace(d, positions=6)))
+        out.append(("presses at 6 positions of the pad",
+                    replace(d, positions=6, schedule=None)))
     return out
 
 
@@ -279,7 +281,7 @@ def _cheapest_repeats(what: str, d: Design, tE: float, tnu: float,
         if r > MAX_REPEATS:
             return None
         label = f"{what}, {r} repeats per depth" if what else f"{r} repeats per depth"
-        c = _change(label, replace(d, repeats=r), ref, base_untestable, r0, plans)
+        c = _change(label, replace(d, repeats=r, schedule=None), ref, base_untestable, r0, plans)
         if _meets(c, tE, tnu):
             return c
         r += 1

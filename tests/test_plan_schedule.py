@@ -1,0 +1,131 @@
+"""A design's press schedule (``[plan] schedule``: each press's indenter and position, in
+order, as ``presses.csv`` lists them): what ``plan`` sizes within-indenter effects on."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from tactilevision import InputError
+from tactilevision.cli import main
+from tactilevision.diagnosis import crossing_sizes
+from tactilevision.planning import (
+    Design,
+    crossing_effect_sizes,
+    crossing_table,
+    design_toml,
+    planned_columns,
+    read_design,
+)
+from tactilevision.planning._plan_recommend import _changes
+
+DEPTHS = (0.15, 0.30, 0.40, 0.50, 0.60)
+MARK = Design(thickness_mm=3.0, radius_mm=2.5, depths_mm=DEPTHS, repeats=4, E_mpa=0.2,
+              nu=0.48, bevel_angle_deg=0.0, frame_rate_hz=15.0, stage_speed_mm_s=0.1)
+
+
+def _random_schedule(seed: int, spread: float = 1.0) -> tuple[tuple[int, float, float], ...]:
+    """Each indenter 4 times, shuffled, at positions drawn over a 5.2 x 8 mm patch."""
+    rng = np.random.default_rng(seed)
+    ind = rng.permutation(np.repeat(np.arange(len(DEPTHS)), 4))
+    x = spread * rng.uniform(-6.5, -1.3, ind.size)
+    y = rng.uniform(-4.0, 4.0, ind.size)
+    return tuple((int(i), float(a), float(b)) for i, a, b in zip(ind, x, y, strict=True))
+
+
+def test_the_schedule_sets_the_presses_order_indenters_and_places():
+    sch = _random_schedule(1)
+    d = replace(MARK, schedule=sch)
+    cols, tab = planned_columns(d), crossing_table(d)
+    ind = np.array([s[0] for s in sch])
+    np.testing.assert_array_equal(cols["depth_mm"], np.asarray(DEPTHS)[ind])
+    np.testing.assert_array_equal(cols["x_mm"], [s[1] for s in sch])
+    np.testing.assert_array_equal(cols["y_mm"], [s[2] for s in sch])
+    np.testing.assert_array_equal(tab["indenter"], ind)
+    np.testing.assert_array_equal(tab["x_mm"], [s[1] for s in sch])
+    # each press's crossing force is its own indenter's (the FEM's at its w0)
+    first = {int(i): f for i, f in zip(tab["indenter"], tab["force_w0_n"], strict=True)}
+    assert np.all(np.diff([first[i] for i in range(len(DEPTHS))]) > 0)
+
+
+def test_a_gradient_is_sized_on_the_spread_of_each_indenters_places():
+    """The crossing test sees a gradient only through x within each indenter: a schedule
+    pressing every indenter at one place cannot see one, and stretching every x by 2
+    halves the gradient it names (the effect is 1 + g (x - mean x))."""
+    sch = _random_schedule(2)
+    one = crossing_effect_sizes(replace(MARK, schedule=sch))["spatial_nonuniformity"]
+    two = crossing_effect_sizes(replace(MARK, schedule=_random_schedule(2, 2.0)))
+    assert np.isfinite(one.size_param) and one.size_param > 0
+    assert two["spatial_nonuniformity"].size_param == pytest.approx(one.size_param / 2,
+                                                                     rel=0.03)
+    fixed = tuple((i, -2.0 - 0.7 * i, 0.5 * i) for i, _, _ in sch)
+    assert not np.isfinite(
+        crossing_effect_sizes(replace(MARK, schedule=fixed))["spatial_nonuniformity"].size)
+    # the design's sizes are the crossing test's own on the table it plans
+    got = crossing_sizes(crossing_table(replace(MARK, schedule=sch)))
+    assert got["spatial_nonuniformity"] == pytest.approx(one.size_param)
+
+
+def test_the_gradient_named_grows_as_each_indenters_places_spread_less():
+    """Drawn schedules: the gradient the crossings name falls with the sd of x within each
+    indenter (the only x the within-indenter test sees)."""
+    sizes, spreads = [], []
+    for seed in range(5):
+        d = replace(MARK, schedule=_random_schedule(10 + seed))
+        tab = crossing_table(d)
+        spreads.append(np.sqrt(np.mean([np.var(tab["x_mm"][tab["indenter"] == i])
+                                        for i in range(len(DEPTHS))])))
+        sizes.append(crossing_effect_sizes(d)["spatial_nonuniformity"].size_param)
+    assert np.corrcoef(spreads, sizes)[0, 1] < -0.7
+
+
+def test_the_schedule_reads_from_presses_csv_and_sets_repeats(tmp_path):
+    sch = _random_schedule(3)
+    (tmp_path / "presses.csv").write_text("press,indenter,x_mm,y_mm\n" + "".join(
+        f"{k},{i},{x!r},{y!r}\n" for k, (i, x, y) in reversed(list(enumerate(sch)))))
+    path = tmp_path / "d.toml"
+    path.write_text("[sensor]\ngel_thickness_mm = 3.0\n[indenter]\nradius_mm = 2.5\n"
+                    f"[gauge_block]\ndepths_mm = {list(DEPTHS)}\nbevel_angle_deg = 0.0\n"
+                    "[plan]\nschedule = \"presses.csv\"\n")
+    d = read_design(path)
+    assert d.repeats == 4 and d.schedule == sch       # in press order, not the file's
+    again = tmp_path / "again.toml"
+    again.write_text(design_toml(d))
+    assert read_design(again).schedule == sch
+    assert main(["plan", str(path), "--json", str(tmp_path / "p.json")]) == 0
+
+
+@pytest.mark.parametrize(("plan", "csv", "match"), [
+    ("schedule = \"missing.csv\"", None, "missing.csv"),
+    ("schedule = \"p.csv\"", "press,indenter,x_mm,y_mm\n0,7,1.0,2.0\n",
+     "line 2, column indenter: 7 is not an indenter"),
+    ("schedule = \"p.csv\"", "press,indenter,x_mm\n0,1,1.0\n", "missing column"),
+    ("schedule = [[0, 1.0, 2.0], [1, 1.0]]", None, "press 1 must be"),
+    ("schedule = [[0, 1.0, 2.0], [5, 1.0, 2.0]]", None, "press 1's indenter 5"),
+    ("repeats = 2\nschedule = [[0, 1.0, 2.0], [1, 1.0, 2.0]]", None,
+     "presses indenter 0 1 times"),
+    ("schedule = 3", None, "schedule must be a presses.csv"),
+])
+def test_bad_schedules_name_the_file_and_the_press(tmp_path, capsys, plan, csv, match):
+    if csv is not None:
+        (tmp_path / "p.csv").write_text(csv)
+    path = tmp_path / "d.toml"
+    path.write_text("[sensor]\ngel_thickness_mm = 3.0\n[indenter]\nradius_mm = 2.5\n"
+                    "[gauge_block]\ndepths_mm = [0.15, 0.30]\nbevel_angle_deg = 0.0\n"
+                    f"[plan]\n{plan}\n")
+    with pytest.raises(InputError, match=match) as err:
+        read_design(path)
+    assert str(path) in str(err.value)
+    assert main(["plan", str(path)]) == 2
+    assert "Traceback" not in capsys.readouterr().err
+
+
+def test_changes_of_repeats_depths_or_positions_leave_the_schedule():
+    d = replace(MARK, schedule=_random_schedule(4))
+    changed = {label: new for label, new, _ in _changes(d)}
+    assert any(new.repeats == 8 and new.schedule is None for new in changed.values())
+    for new in changed.values():
+        if new.repeats == d.repeats and new.depths_mm == d.depths_mm:
+            assert new.schedule == d.schedule
