@@ -3,6 +3,7 @@ order, as ``presses.csv`` lists them): what ``plan`` sizes within-indenter effec
 
 from __future__ import annotations
 
+import json
 from dataclasses import replace
 
 import numpy as np
@@ -81,7 +82,7 @@ def test_the_gradient_named_grows_as_each_indenters_places_spread_less():
     assert np.corrcoef(spreads, sizes)[0, 1] < -0.7
 
 
-def test_the_schedule_reads_from_presses_csv_and_sets_repeats(tmp_path):
+def test_the_schedule_reads_from_presses_csv_and_sets_repeats(tmp_path, capsys):
     sch = _random_schedule(3)
     (tmp_path / "presses.csv").write_text("press,indenter,x_mm,y_mm\n" + "".join(
         f"{k},{i},{x!r},{y!r}\n" for k, (i, x, y) in reversed(list(enumerate(sch)))))
@@ -95,6 +96,9 @@ def test_the_schedule_reads_from_presses_csv_and_sets_repeats(tmp_path):
     again.write_text(design_toml(d))
     assert read_design(again).schedule == sch
     assert main(["plan", str(path), "--json", str(tmp_path / "p.json")]) == 0
+    assert "presses in the order and places of [plan] schedule" in capsys.readouterr().out
+    saved = json.loads((tmp_path / "p.json").read_text())["design"]["schedule"]
+    assert [tuple(v) for v in saved] == list(sch)
 
 
 @pytest.mark.parametrize(("plan", "csv", "match"), [
@@ -105,7 +109,7 @@ def test_the_schedule_reads_from_presses_csv_and_sets_repeats(tmp_path):
     ("schedule = [[0, 1.0, 2.0], [1, 1.0]]", None, "press 1 must be"),
     ("schedule = [[0, 1.0, 2.0], [5, 1.0, 2.0]]", None, "press 1's indenter 5"),
     ("repeats = 2\nschedule = [[0, 1.0, 2.0], [1, 1.0, 2.0]]", None,
-     "presses indenter 0 1 times"),
+     "presses indenter 0 1 time"),
     ("schedule = 3", None, "schedule must be a presses.csv"),
 ])
 def test_bad_schedules_name_the_file_and_the_press(tmp_path, capsys, plan, csv, match):

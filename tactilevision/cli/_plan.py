@@ -76,8 +76,9 @@ def summary(pred) -> str:
     d = pred.design
     lines = [
         f"design: h {d.thickness_mm:g} mm, a {d.radius_mm:g} mm (a/h {d.a_over_h:.2f}), "
-        f"{len(d.depths_mm)} depths x {d.repeats} repeats = {pred.n_presses} presses, "
-        f"E {d.E_mpa:.4g} MPa, nu {d.nu:.4g}",
+        f"{len(d.depths_mm)} depths x {d.repeats} repeats = {pred.n_presses} presses"
+        + (" in the order and places of [plan] schedule" if d.schedule is not None else "")
+        + f", E {d.E_mpa:.4g} MPa, nu {d.nu:.4g}",
         f"depth per press: sd {pred.depth_std_um:.2f} um random"
         + (f", up to {pred.depth_shared_um:.1f} um shared" if pred.depth_shared_um else "")
         + f" ({pred.depth_source}); force per press: sd {1e3 * pred.force_std_n:.2f} mN",

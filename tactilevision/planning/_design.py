@@ -304,8 +304,9 @@ def _check_press_schedule(d: Design) -> None:
     counts = np.bincount([int(item[0]) for item in d.schedule], minlength=n_ind)
     off = np.flatnonzero(counts != int(d.repeats))
     if off.size:
-        raise InputError(f"[plan] schedule presses indenter {off[0]} {counts[off[0]]} times; "
-                         f"[plan] repeats is {d.repeats} (each indenter repeats times)")
+        raise InputError(f"[plan] schedule presses indenter {off[0]} {counts[off[0]]} "
+                         f"time(s), but [plan] repeats is {d.repeats}: each indenter is "
+                         "pressed repeats times")
 
 
 #: The type of every key a design reads (``'number'``: an int or float, never a
