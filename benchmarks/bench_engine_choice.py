@@ -19,7 +19,9 @@ also says which candidate the cross-validation's mean over the presses (the rule
 2026-11-27) would have kept, from the same folds' per-press scores the report saves,
 and which candidate is the best on the others by the choice's own cost (angle +
 ``CAP_DEG`` x |inner cap|): where the candidates trade angle against cap, none may lie
-within both bounds of the best of each.
+within both bounds of the best of each. Last, whether the choice's margin said the
+training presses told the kept engine from the runner-up (its 95 % interval excluding 0),
+and how often the kept engine was right where it said so.
 
 Needs ``taxim`` (its GelSight presses, circles annotated by hand) and ``../shared/real``
 (the GelSight Mini and GelSlim 3.0 presses, circles detected).
@@ -91,10 +93,11 @@ def main() -> None:
     a = ap.parse_args()
     print("| sensor | presses | kept | candidates on the others: angle inside 0.8 (deg), "
           "inner cap | kept - best: angle, |cap| | within 0.3 deg and 3 % | the mean's "
-          "choice, within | best by the cost on the others |")
-    print("|---|---|---|---|---|---|---|---|")
+          "choice, within | best by the cost on the others | told apart |")
+    print("|---|---|---|---|---|---|---|---|---|")
     rng = np.random.default_rng(a.seed)
     hits = {"median": 0, "mean": 0, "any": 0, "n": 0, "cost": 0}
+    sure = {"n": 0, "within": 0, "cost": 0}
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "o.npz"
         for name in a.sensors:
@@ -122,6 +125,11 @@ def main() -> None:
                 # the best by the choice's own cost (angle + CAP_DEG |cap|) on the others
                 by_cost = min(scores, key=lambda e: scores[e][0] + CAP_DEG * abs(scores[e][1]))
                 hits["cost"] += by_cost == choice["chosen"]
+                told = bool(choice.get("margin") and choice["margin"]["told_apart"])
+                if told:
+                    sure["n"] += 1
+                    sure["within"] += ok[choice["chosen"]]
+                    sure["cost"] += by_cost == choice["chosen"]
                 da, dc = kept[0] - best_a, abs(kept[1]) - best_c
                 mean = _mean_choice(choice)
                 hits["n"] += 1
@@ -132,12 +140,16 @@ def main() -> None:
                                  for k, s in scores.items())
                 print(f"| {name} | {sel} | {choice['chosen']} | {text} | {da:+.2f}, "
                       f"{100 * dc:+.1f} % | {'yes' if ok[choice['chosen']] else 'no'} | "
-                      f"{mean}, {'yes' if ok[mean] else 'no'} | {by_cost} |", flush=True)
+                      f"{mean}, {'yes' if ok[mean] else 'no'} | {by_cost} | "
+                      f"{'yes' if told else 'no'} |", flush=True)
     print(f"(the choice's cost: angle + {CAP_DEG:g} deg x |inner cap|, medians over the "
           "presses the folds scored)")
     print(f"within 0.3 deg and 3 %: kept (medians) {hits['median']} of {hits['n']}; the mean's "
           f"choice {hits['mean']}; some candidate {hits['any']}; the kept engine the best by "
           f"the cost on the others {hits['cost']} of {hits['n']}")
+    print(f"told apart (the margin's 95 % interval excludes 0) on {sure['n']} of {hits['n']}: "
+          f"there within 0.3 deg and 3 % {sure['within']}, the best by the cost "
+          f"{sure['cost']}")
 
 
 if __name__ == "__main__":

@@ -15,6 +15,7 @@ import pytest
 from _data import TAXIM_BALL_RADIUS_MM, TAXIM_MM_PER_PX
 
 from tactilevision.cli import main
+from tactilevision.cli._optics import _engine_text
 from tactilevision.io import read_ball_presses, taxim_datapack
 from tactilevision.optics import (
     CAP_DEG,
@@ -25,7 +26,9 @@ from tactilevision.optics import (
     calibration_accuracy,
     engine_candidates,
     engine_cost,
+    engine_margin,
     pooled_cost,
+    pooled_presses,
     position_cells,
 )
 
@@ -77,6 +80,39 @@ def test_the_folds_pooled_take_the_reports_medians_over_their_presses():
     assert np.isnan(pooled_cost([{"balls": []}])["cost"])
 
 
+def _pooled(angles, caps, r: float = 40.0) -> dict:
+    return pooled_presses([{"balls": [{"ball_radius_px": r, "n_scored": len(angles),
+                                       "normal_angle_08_per_press_deg": list(angles),
+                                       "inner_cap_per_press": list(caps)}]}])
+
+
+def test_the_margin_tells_apart_what_every_press_agrees_on_and_not_a_coin_toss():
+    """Paired presses: a candidate 1 deg worse on every press of 7 is told apart, its
+    difference exactly 1 deg at every draw; one better on 3 and worse on 4 presses by a
+    press-sized scatter is not. Candidates scored on different presses are not paired."""
+    rng = np.random.default_rng(5)
+    a = rng.uniform(3, 9, 7)                 # the presses differ far more than the engines
+    caps = rng.normal(0.0, 0.1, 7)
+    m = engine_margin(_pooled(a, caps), _pooled(a + 1.0, caps))
+    assert m["cost_difference"] == pytest.approx(1.0)
+    assert m["ci95"] == pytest.approx((1.0, 1.0)) and m["told_apart"] and m["n_presses"] == 7
+    m = engine_margin(_pooled(a, caps), _pooled(a - 1.0, caps))     # the other is better
+    assert m["ci95"] == pytest.approx((-1.0, -1.0)) and m["told_apart"]
+    swing = np.array([1.5, -1.5, 1.5, -1.5, 1.5, -1.5, -0.2])
+    m = engine_margin(_pooled(a, caps), _pooled(a + swing, caps))
+    assert not m["told_apart"] and m["ci95"][0] < 0 < m["ci95"][1]
+    # its observed difference is the pooled costs' difference
+    assert m["cost_difference"] == pytest.approx(
+        pooled_cost([{"balls": [{"ball_radius_px": 40.0, "n_scored": 7,
+                                 "normal_angle_08_per_press_deg": list(a + swing),
+                                 "inner_cap_per_press": list(caps)}]}])["cost"]
+        - pooled_cost([{"balls": [{"ball_radius_px": 40.0, "n_scored": 7,
+                                   "normal_angle_08_per_press_deg": list(a),
+                                   "inner_cap_per_press": list(caps)}]}])["cost"])
+    assert engine_margin(_pooled(a, caps), _pooled(a[:3], caps[:3])) is None
+    assert engine_margin(_pooled(a, caps), _pooled(a, caps, r=60.0)) is None
+
+
 @pytest.fixture(scope="module")
 def seven(tmp_path_factory):
     out = tmp_path_factory.mktemp("engine") / "gelsight.npz"
@@ -87,7 +123,7 @@ def seven(tmp_path_factory):
     return out, report
 
 
-def test_seven_presses_keep_a_table_and_say_why_not_the_network(seven, capsys):
+def test_seven_presses_keep_a_table_and_say_why_not_the_network(seven):
     """Seven presses: the tables cross-validated over them, the first fold's split too few
     for a network, which the report says. The engine kept is the candidate that scored best and
     the calibration saved is of its kind."""
@@ -104,6 +140,14 @@ def test_seven_presses_keep_a_table_and_say_why_not_the_network(seven, capsys):
         assert len(pp["angle_08_deg"]) == len(pp["inner_cap"]) == r["n_scored"] == 7
         assert r["angle_08_deg"] == pytest.approx(np.median(pp["angle_08_deg"]))
         assert r["inner_cap"] == pytest.approx(np.median(pp["inner_cap"]))
+    m = choice["margin"]                 # the kept against the other, on the same 7
+    other = next(r for r in choice["candidates"] if r["engine"] != choice["chosen"])
+    assert m["runner_up"] == other["engine"] and m["n_presses"] == 7
+    assert m["cost_difference"] == pytest.approx(other["cost"] - best["cost"], abs=1e-6)
+    assert m["ci95"][0] <= m["cost_difference"] <= m["ci95"][1]
+    assert m["told_apart"] == (m["ci95"][0] > 0)
+    assert ("the presses tell the two apart" if m["told_apart"] else
+            "cannot tell the two apart") in _engine_text(choice)
     cal = PhotometricCalibration.load(out)
     assert cal.model == "lut" and cal.provenance["engine"]["chosen"] == choice["chosen"]
     # the report's presses are the 41 the choice never saw

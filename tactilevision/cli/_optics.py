@@ -31,6 +31,7 @@ from ..optics import (
     edge_cut,
     engine_candidates,
     engine_cost,
+    engine_margin,
     holdout_presses,
     non_ball_presses,
     pooled_cost,
@@ -485,7 +486,7 @@ def _choose_engine(args: argparse.Namespace, ps, given: bool, circles, ball_px: 
                                         "by": why, "candidates": [], "left_out": {}}, None
     fit0, score0 = train_idx[fold != 0], train_idx[fold == 0]
     cands, left = engine_candidates(shape, int(fit0.size), network=_network_unavailable())
-    rows, first = [], {}
+    rows, first, pooled = [], {}, {}
     for engine in cands:
         folds = [0] if engine.model == "mlp" else range(int(fold.max()) + 1)
         reports = []
@@ -500,6 +501,7 @@ def _choose_engine(args: argparse.Namespace, ps, given: bool, circles, ball_px: 
             reports.append(rep)
             if f == 0:
                 first[engine.name] = (cal, engine_cost(rep))
+        pooled[engine.name] = pooled_presses(reports)
         rows.append({"engine": engine.name, "label": engine.label(), "model": engine.model,
                      "lut_cells": list(engine.lut_cells), "folds": len(folds),
                      **pooled_cost(reports), "first_fold": first[engine.name][1],
@@ -513,7 +515,20 @@ def _choose_engine(args: argparse.Namespace, ps, given: bool, circles, ball_px: 
                f"candidate was not trained on (the tables cross-validated over "
                f"{int(fold.max()) + 1} folds, a network on the first)"),
         "fitted_on": [int(i) for i in fit0], "scored_on": [int(i) for i in score0],
-        "candidates": rows, "left_out": left}, (first[chosen][0], fit0, score0)
+        "candidates": rows, "left_out": left, "margin": _margin(rows, chosen, pooled)}, (
+        first[chosen][0], fit0, score0)
+
+
+def _margin(rows: list[dict], chosen: str, pooled: dict) -> dict | None:
+    """The kept engine against the next best candidate scored on the same presses
+    (:func:`engine_margin`); None where there is none."""
+    others = sorted((r for r in rows if r["engine"] != chosen and np.isfinite(r["cost"])
+                     and engine_margin(pooled[chosen], pooled[r["engine"]], draws=1)),
+                    key=lambda r: r["cost"])
+    if not others:
+        return None
+    m = engine_margin(pooled[chosen], pooled[others[0]["engine"]])
+    return {"runner_up": others[0]["engine"], **m, "ci95": list(m["ci95"])}
 
 
 def _per_press(reports: list[dict]) -> dict[str, list[float]]:
@@ -574,6 +589,17 @@ def _engine_text(choice: dict) -> str:
         lines.append(f"  {r['label']}: {score}{mark}")
     for name, why in choice["left_out"].items():
         lines.append(f"  {name}: not tried ({why})")
+    m = choice.get("margin")
+    if m:
+        lo, hi = m["ci95"]
+        other = next(r["label"] for r in choice["candidates"] if r["engine"] == m["runner_up"])
+        lines.append(
+            f"  the {other} costs {m['cost_difference']:+.2f} deg more on these "
+            f"{m['n_presses']} presses (95 % interval [{lo:+.2f}, {hi:+.2f}], paired "
+            "bootstrap over them): " + (
+                "the presses tell the two apart" if m["told_apart"] else
+                "the presses cannot tell the two apart; either may read better on new "
+                "presses"))
     return "\n".join(lines)
 
 
