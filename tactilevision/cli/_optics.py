@@ -23,6 +23,7 @@ from ..optics import (
     CAP_DEG,
     CIRCLE_ERROR,
     NON_BALL_RATIO,
+    UNDECIDED,
     DepthReconstructor,
     Engine,
     PhotometricCalibration,
@@ -37,6 +38,7 @@ from ..optics import (
     pooled_cost,
     pooled_presses,
     press_folds,
+    undecided_choice,
 )
 from ._out import add_overwrite_argument
 
@@ -507,15 +509,20 @@ def _choose_engine(args: argparse.Namespace, ps, given: bool, circles, ball_px: 
                      **pooled_cost(reports), "first_fold": first[engine.name][1],
                      "per_press": _per_press(reports)})
     chosen = _pick(rows)
+    margin = _margin(rows, chosen, pooled)
+    by = (f"the lowest angle inside 0.8 of the radius + {CAP_DEG:g} deg x |inner cap| "
+          f"(medians over the presses, as the report's) on training presses each "
+          f"candidate was not trained on (the tables cross-validated over "
+          f"{int(fold.max()) + 1} folds, a network on the first)")
+    if undecided_choice(chosen, margin) != chosen:
+        chosen = undecided_choice(chosen, margin)
+        margin = _margin(rows, chosen, pooled)
+        by += f"; {UNDECIDED}"
     engine = next(e for e in cands if e.name == chosen)
     return engine, {
         "chosen": chosen, "model": engine.model, "lut_cells": list(engine.lut_cells),
-        "by": (f"the lowest angle inside 0.8 of the radius + {CAP_DEG:g} deg x |inner cap| "
-               f"(medians over the presses, as the report's) on training presses each "
-               f"candidate was not trained on (the tables cross-validated over "
-               f"{int(fold.max()) + 1} folds, a network on the first)"),
-        "fitted_on": [int(i) for i in fit0], "scored_on": [int(i) for i in score0],
-        "candidates": rows, "left_out": left, "margin": _margin(rows, chosen, pooled)}, (
+        "by": by, "fitted_on": [int(i) for i in fit0], "scored_on": [int(i) for i in score0],
+        "candidates": rows, "left_out": left, "margin": margin}, (
         first[chosen][0], fit0, score0)
 
 

@@ -41,6 +41,7 @@ from ._engine import (
     CAP_DEG,
     ENGINES,
     MIN_NETWORK_PRESSES,
+    UNDECIDED,
     Engine,
     engine_candidates,
     engine_cost,
@@ -48,6 +49,7 @@ from ._engine import (
     pooled_cost,
     pooled_presses,
     position_cells,
+    undecided_choice,
 )
 from ._evaluate import BallPressReport, evaluate_ball_presses
 from ._features import colour_change, frame_gain, reference_inverse
@@ -81,6 +83,7 @@ __all__ = [
     "NON_BALL_FLOOR_DEG",
     "NON_BALL_RATIO",
     "SLOPE_PEAK_AT",
+    "UNDECIDED",
     "AbsoluteDepthMetrics",
     "BallCapFit",
     "BallPressMetrics",
@@ -140,4 +143,5 @@ __all__ = [
     "slope_peak_radius",
     "track_markers",
     "train_mlp",
+    "undecided_choice",
 ]
