@@ -15,7 +15,7 @@ import pytest
 from _data import TAXIM_BALL_RADIUS_MM, TAXIM_MM_PER_PX
 
 from tactilevision.cli import main
-from tactilevision.cli._optics import _engine_text
+from tactilevision.cli._optics import _engine_text, _margin
 from tactilevision.io import read_ball_presses, taxim_datapack
 from tactilevision.optics import (
     CAP_DEG,
@@ -112,6 +112,9 @@ def test_the_margin_tells_apart_what_every_press_agrees_on_and_not_a_coin_toss()
                                    "normal_angle_08_per_press_deg": list(a),
                                    "inner_cap_per_press": list(caps)}]}])["cost"])
     assert engine_margin(_pooled(a, caps), _pooled(a[:3], caps[:3])) is None
+    # two presses that agree are too few to tell anything apart (a sign test cannot)
+    m = engine_margin(_pooled(a[:2], caps[:2]), _pooled(a[:2] + 1.0, caps[:2]))
+    assert m["ci95"] == pytest.approx((1.0, 1.0)) and not m["told_apart"]
     assert engine_margin(_pooled(a, caps), _pooled(a, caps, r=60.0)) is None
 
 
@@ -123,6 +126,26 @@ def test_a_table_the_presses_cannot_tell_from_its_cells_gives_way_to_them():
     assert undecided_choice("table", {**toss, "runner_up": "network"}) == "table"
     assert undecided_choice("network", toss) == "network"
     assert undecided_choice("table", None) == "table"
+
+
+def test_a_network_is_weighed_against_the_best_table_on_its_one_fold():
+    """The network scores one fold; it is compared with the table of the lowest first-fold
+    cost on that fold's presses, not with the tables' every fold."""
+    rng = np.random.default_rng(8)
+    a, caps = rng.uniform(3, 9, 8), rng.normal(0.0, 0.05, 8)
+    first = {"table": (_pooled(a + 2.0, caps), _pooled(a[:3] + 2.0, caps[:3])),
+             "table_cells": (_pooled(a + 0.5, caps), _pooled(a[:3] + 0.5, caps[:3])),
+             "network": (_pooled(a[:3], caps[:3]), _pooled(a[:3], caps[:3]))}
+    rows = [{"engine": "table", "model": "lut", "cost": 5.0, "first_fold": {"cost": 9.0}},
+            {"engine": "table_cells", "model": "lut", "cost": 6.0,
+             "first_fold": {"cost": 7.0}},
+            {"engine": "network", "model": "mlp", "cost": 4.0, "first_fold": {"cost": 6.0}}]
+    m = _margin(rows, "network", first)
+    assert m["runner_up"] == "table_cells" and m["n_presses"] == 3
+    assert m["cost_difference"] == pytest.approx(0.5) and not m["told_apart"]
+    m = _margin(rows, "table", first)          # tables against tables, every fold
+    assert m["runner_up"] == "table_cells" and m["n_presses"] == 8
+    assert m["cost_difference"] == pytest.approx(-1.5) and m["told_apart"]
 
 
 @pytest.fixture(scope="module")

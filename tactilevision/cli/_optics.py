@@ -22,6 +22,7 @@ from ..io import (
 from ..optics import (
     CAP_DEG,
     CIRCLE_ERROR,
+    MIN_MARGIN_PRESSES,
     NON_BALL_RATIO,
     UNDECIDED,
     DepthReconstructor,
@@ -503,7 +504,7 @@ def _choose_engine(args: argparse.Namespace, ps, given: bool, circles, ball_px: 
             reports.append(rep)
             if f == 0:
                 first[engine.name] = (cal, engine_cost(rep))
-        pooled[engine.name] = pooled_presses(reports)
+        pooled[engine.name] = (pooled_presses(reports), pooled_presses(reports[:1]))
         rows.append({"engine": engine.name, "label": engine.label(), "model": engine.model,
                      "lut_cells": list(engine.lut_cells), "folds": len(folds),
                      **pooled_cost(reports), "first_fold": first[engine.name][1],
@@ -528,14 +529,18 @@ def _choose_engine(args: argparse.Namespace, ps, given: bool, circles, ball_px: 
 
 def _margin(rows: list[dict], chosen: str, pooled: dict) -> dict | None:
     """The kept engine against the next best candidate scored on the same presses
-    (:func:`engine_margin`); None where there is none."""
-    others = sorted((r for r in rows if r["engine"] != chosen and np.isfinite(r["cost"])
-                     and engine_margin(pooled[chosen], pooled[r["engine"]], draws=1)),
-                    key=lambda r: r["cost"])
+    (:func:`engine_margin`): the tables on every press their folds scored, a network (one
+    fold) against the table of the lowest first-fold cost on that fold's presses; None
+    where there is none."""
+    net = any(r["model"] == "mlp" for r in rows if r["engine"] == chosen)
+    key = (lambda r: r["first_fold"]["cost"]) if net else (lambda r: r["cost"])
+    others = sorted((r for r in rows if r["engine"] != chosen and np.isfinite(key(r))
+                     and (net or r["model"] != "mlp")), key=key)
     if not others:
         return None
-    m = engine_margin(pooled[chosen], pooled[others[0]["engine"]])
-    return {"runner_up": others[0]["engine"], **m, "ci95": list(m["ci95"])}
+    m = engine_margin(pooled[chosen][int(net)], pooled[others[0]["engine"]][int(net)])
+    return None if m is None else {"runner_up": others[0]["engine"], **m,
+                                   "ci95": list(m["ci95"])}
 
 
 def _per_press(reports: list[dict]) -> dict[str, list[float]]:
@@ -606,7 +611,8 @@ def _engine_text(choice: dict) -> str:
             "bootstrap over them): " + (
                 "the presses tell the two apart" if m["told_apart"] else
                 "the presses cannot tell the two apart; either may read better on new "
-                "presses"))
+                "presses" + (f" (fewer than {MIN_MARGIN_PRESSES} presses cannot)"
+                             if m["n_presses"] < MIN_MARGIN_PRESSES else "")))
     return "\n".join(lines)
 
 

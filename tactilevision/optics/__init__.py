@@ -40,6 +40,7 @@ from ._circles import (
 from ._engine import (
     CAP_DEG,
     ENGINES,
+    MIN_MARGIN_PRESSES,
     MIN_NETWORK_PRESSES,
     UNDECIDED,
     Engine,
@@ -79,6 +80,7 @@ __all__ = [
     "CIRCLE_ERROR",
     "ENGINES",
     "KERNELS",
+    "MIN_MARGIN_PRESSES",
     "MIN_NETWORK_PRESSES",
     "NON_BALL_FLOOR_DEG",
     "NON_BALL_RATIO",

@@ -18,6 +18,7 @@ __all__ = [
     "CAP_DEG",
     "ENGINES",
     "MARGIN_DRAWS",
+    "MIN_MARGIN_PRESSES",
     "MIN_NETWORK_PRESSES",
     "UNDECIDED",
     "Engine",
@@ -49,6 +50,10 @@ CAP_DEG = 10.0
 UNDECIDED = ("the table and its position cells not told apart by these presses, the cells "
              "are kept: folds train on fewer presses than the engine kept, and the cells "
              "gain more from the presses a fold leaves out than the one table does")
+#: The fewest paired presses :func:`engine_margin` tells two candidates apart on: with n
+#: presses all favouring one candidate, a two-sided sign test reaches p = 2 x 0.5^n, under
+#: 0.05 from n = 6 on; a bootstrap over fewer has too few distinct resamples to speak.
+MIN_MARGIN_PRESSES = 6
 #: Paired bootstrap draws of :func:`engine_margin`.
 MARGIN_DRAWS = 2000
 #: The engines, by name: the model kind of :class:`PhotometricCalibration` each is.
@@ -222,9 +227,10 @@ def engine_margin(kept: dict[float, tuple[list[float], list[float]]],
     -------
     margin : dict or None
         ``cost_difference`` (deg: the other's cost less the kept one's on the presses
-        scored), ``ci95`` (low, high), ``told_apart`` (the interval excludes 0) and
-        ``n_presses``; None where the two did not score the same presses (their ball
-        sizes or press counts differ, e.g. a network scored on one fold only).
+        scored), ``ci95`` (low, high), ``told_apart`` (the interval excludes 0, with at
+        least :data:`MIN_MARGIN_PRESSES` presses) and ``n_presses``; None where the two
+        did not score the same presses (their ball sizes or press counts differ, e.g. a
+        network scored on one fold only against a table's every fold).
     """
     if sorted(kept) != sorted(other) or any(
             len(kept[b][0]) != len(other[b][0]) for b in kept) or not kept:
@@ -241,7 +247,8 @@ def engine_margin(kept: dict[float, tuple[list[float], list[float]]],
         diff += m / n.sum() * (cost[1] - cost[0])
     lo, hi = np.percentile(diff[1:], [2.5, 97.5])
     return {"cost_difference": float(diff[0]), "ci95": (float(lo), float(hi)),
-            "told_apart": bool(lo > 0 or hi < 0), "n_presses": int(n.sum())}
+            "told_apart": bool((lo > 0 or hi < 0) and n.sum() >= MIN_MARGIN_PRESSES),
+            "n_presses": int(n.sum())}
 
 
 def undecided_choice(chosen: str, margin: dict | None) -> str:
