@@ -20,7 +20,7 @@ import pytest
 from tactilevision import InputError, calibrate_session
 from tactilevision.cli import main
 from tactilevision.contact import certify_session
-from tactilevision.io import COLUMN_ORDER, read_measurements, read_session
+from tactilevision.io import COLUMN_ORDER, read_measurements, read_presses, read_session
 from tactilevision.mechanics import fit_indentation
 from tactilevision.pipeline import (
     CalibrationResult,
@@ -648,6 +648,10 @@ def test_calibrate_writes_the_sessions_design(sample_run):
     assert d.repeats == 10 and d.bevel_angle_deg == 5.0
     assert (d.E_mpa, d.nu) == (fit["E_mpa"], fit["nu"])
     assert plan(d).nu_identified
+    # the session's presses.csv (what the robot commanded) is the design's schedule
+    rows = read_presses(SAMPLE / "presses.csv", 5)
+    assert d.schedule == tuple((int(i), float(x), float(y)) for i, x, y in zip(
+        rows["indenter"], rows["x_mm"], rows["y_mm"], strict=True))
 
 
 @pytest.mark.parametrize("delta_mm", [0.015, -0.015])

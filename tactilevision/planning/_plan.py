@@ -38,6 +38,7 @@ from scipy import stats
 
 from .._checks import InputError
 from ..diagnosis import EffectSensitivity
+from ..io import read_presses
 from ..mechanics import (
     RELAX_ALPHA,
     TAU_HOLD_RATIO,
@@ -551,8 +552,9 @@ def design_from_calibration(folder: str | Path, session: str | Path | None = Non
         less its overshoot); the repeats per depth (presses over depths, rounded); the
         overshoot range the presses had, um; the F/T sample sd (median of
         ``force_std_n``); the zero's stability (the drift ``calibrate`` measured plus two
-        of its standard errors). What the folders do not hold keeps :class:`Design`'s
-        default.
+        of its standard errors); the session's ``presses.csv``, where it presses every
+        depth equally often, as the ``schedule`` (and its repeats). What the folders do
+        not hold keeps :class:`Design`'s default.
 
     Raises
     ------
@@ -630,4 +632,32 @@ def design_from_calibration(folder: str | Path, session: str | Path | None = Non
             dt = np.diff(np.sort(t))
             if dt.size and np.median(dt) > 0:
                 kw["frame_rate_hz"] = float(1.0 / np.median(dt))
+        schedule = _session_schedule(where, gauge, depths)
+        if schedule is not None:
+            kw["schedule"] = schedule
+            kw["repeats"] = len(schedule) // len(depths)
     return Design(**kw)
+
+
+def _session_schedule(where: Path, gauge: Any, depths: tuple[float, ...]
+                      ) -> tuple[tuple[int, float, float], ...] | None:
+    """The session's ``presses.csv`` as the design's schedule (its indenters renumbered
+    onto the design's depths), where it has one that presses every depth equally often;
+    else None."""
+    path = where / "presses.csv"
+    block = gauge.get("depths_mm") if isinstance(gauge, dict) else None
+    if not path.is_file() or not isinstance(block, list) or not depths:
+        return None
+    try:
+        rows = read_presses(path, len(block))
+        index = [depths.index(round(float(w), 4)) if round(float(w), 4) in depths else -1
+                 for w in block]
+    except (InputError, TypeError, ValueError):
+        return None
+    order = np.argsort(rows["press"], kind="stable")
+    ind = np.array([index[int(i)] for i in rows["indenter"][order]])
+    counts = np.bincount(ind[ind >= 0], minlength=len(depths))
+    if (ind < 0).any() or len(set(counts.tolist())) != 1:
+        return None
+    return tuple((int(i), float(rows["x_mm"][k]), float(rows["y_mm"][k]))
+                 for i, k in zip(ind, order, strict=True))
