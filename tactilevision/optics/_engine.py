@@ -212,9 +212,10 @@ def engine_margin(kept: dict[float, tuple[list[float], list[float]]],
     both candidates (their folds scored the same presses, so their errors on one press
     are shared: a press hard for one is hard for the other), and takes both costs on them
     (percentile interval; Efron and Tibshirani, An Introduction to the Bootstrap, 1993,
-    ch. 13). With 7 training presses a press's inner cap scatters by about 10 % (the
-    report's ``inner_cap_expected``), so a median over a handful of them is good to a few
-    per cent of cap, as large as the 3 % a choice is asked to resolve.
+    ch. 13). On the shared sensors 95 % of single presses' inner caps lie within about
+    +-12 to +-17 % (the report's ``inner_cap_expected``), so a median over the handful of
+    presses 7 training presses leave to score is good to a few per cent of cap, as large
+    as the 3 % a choice is asked to resolve.
 
     Parameters
     ----------
