@@ -111,6 +111,7 @@ def test_the_schedule_reads_from_presses_csv_and_sets_repeats(tmp_path, capsys):
     ("repeats = 2\nschedule = [[0, 1.0, 2.0], [1, 1.0, 2.0]]", None,
      "presses indenter 0 1 time"),
     ("schedule = 3", None, "schedule must be a presses.csv"),
+    ("schedule = [[]]", None, "press 0 must be"),
 ])
 def test_bad_schedules_name_the_file_and_the_press(tmp_path, capsys, plan, csv, match):
     if csv is not None:

@@ -440,7 +440,7 @@ def read_design(path: str | Path) -> Design:
         kw["schedule"] = _read_schedule(kw["schedule"], path, len(depths))
         if "repeats" not in kw:
             counts = np.bincount([int(v[0]) for v in kw["schedule"]
-                                  if _is_number(v[0]) and 0 <= v[0] < len(depths)])
+                                  if v and _is_number(v[0]) and 0 <= v[0] < len(depths)])
             kw["repeats"] = int(counts.max()) if counts.size else 1
     if isinstance(force.get("window_at"), str):
         kw["window_at"] = force["window_at"]
