@@ -27,18 +27,17 @@ Predict, from a design (a session.toml plus a [plan] table: repeats, E_mpa,
 nu, frame_rate_hz, stage_speed_mm_s, overshoot_um, force_noise_n,
 force_zero_n, hold_s or holds_s, waits_s, days, positions or schedule (the
 presses the robot will command: a presses.csv or [[indenter, x_mm, y_mm],
-...]), depth_std_um), each
-press's depth uncertainty, the sds of E and nu that 'tactilevision fit' will
-give over sessions of this design, the biases its shared errors leave, whether
-nu is identified at all, and the catalogue effects 'diagnose' could not test
-on such a session, the smallest size of each it names in 95 % of sessions
-([plan.detect] effect = size: how often it names that size), and whether
-fit_relaxation identifies a planned relaxation. Nothing is drawn for E and
-nu: the fit is differentiated on the design's noise-free table and its E and
-nu integrated over the predicted spread of eq. (5)'s line. --from-calibration
-plans a repeat of a session 'calibrate' ran (its presses.csv as the schedule).
-Exit status 2 on a bad design,
-with one sentence naming the key."""
+...]), depth_std_um), each press's depth uncertainty, the sds of E and nu that
+'tactilevision fit' will give over sessions of this design, the biases its
+shared errors leave, whether nu is identified at all, and the catalogue
+effects 'diagnose' could not test on such a session, the smallest size of each
+it names in 95 % of sessions ([plan.detect] effect = size: how often it names
+that size), and whether fit_relaxation identifies a planned relaxation.
+Nothing is drawn for E and nu: the fit is differentiated on the design's
+noise-free table and its E and nu integrated over the predicted spread of eq.
+(5)'s line. --from-calibration plans a repeat of a session 'calibrate' ran
+(its presses.csv as the schedule). Exit status 2 on a bad design, with one
+sentence naming the key."""
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
