@@ -4,12 +4,13 @@ order, as ``presses.csv`` lists them): what ``plan`` sizes within-indenter effec
 from __future__ import annotations
 
 import json
+import warnings
 from dataclasses import replace
 
 import numpy as np
 import pytest
 
-from tactilevision import InputError
+from tactilevision import InputError, InputWarning
 from tactilevision.cli import main
 from tactilevision.diagnosis import crossing_sizes
 from tactilevision.planning import (
@@ -94,7 +95,13 @@ def test_the_schedule_reads_from_presses_csv_and_sets_repeats(tmp_path, capsys):
     assert d.repeats == 4 and d.schedule == sch       # in press order, not the file's
     again = tmp_path / "again.toml"
     again.write_text(design_toml(d))
-    assert read_design(again).schedule == sch
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")             # written without a positions to ignore
+        assert read_design(again).schedule == sch
+    both = tmp_path / "both.toml"
+    both.write_text(path.read_text() + "positions = 6\n")
+    with pytest.warns(InputWarning, match="positions is not read"):
+        assert read_design(both).schedule == sch
     assert main(["plan", str(path), "--json", str(tmp_path / "p.json")]) == 0
     assert "presses in the order and places of [plan] schedule" in capsys.readouterr().out
     saved = json.loads((tmp_path / "p.json").read_text())["design"]["schedule"]

@@ -437,6 +437,10 @@ def read_design(path: str | Path) -> Design:
         if key in kw and isinstance(kw[key], list):
             kw[key] = tuple(kw[key])
     if "schedule" in kw:
+        if "positions" in kw:
+            warnings.warn(f"{path}: [plan] positions is not read: [plan] schedule gives the "
+                          "presses' places", InputWarning, stacklevel=2)
+            del kw["positions"]
         kw["schedule"] = _read_schedule(kw["schedule"], path, len(depths))
         if "repeats" not in kw:
             counts = np.bincount([int(v[0]) for v in kw["schedule"]
@@ -659,7 +663,7 @@ def design_toml(d: Design) -> str:
              "[plan]"]
     for k in plan_keys:
         v = getattr(d, k)
-        if v is not None:
+        if v is not None and not (k == "positions" and d.schedule is not None):
             lines.append(f"{k} = {val(v)}")
     if d.schedule is not None:
         lines.append("schedule = [" + ", ".join(
