@@ -124,6 +124,28 @@ def test_without_numba_auto_falls_back_and_numba_names_the_extra(monkeypatch):
         table.gradients(frame, kernel="numba")
 
 
+def test_a_table_of_order_0_never_loads_numba(monkeypatch):
+    """An order-0 table is one gather: its frames neither import nor compile numba (the
+    shipped GelSight network's table, read with the default kernel='auto'), and 'numba'
+    without numba is not refused there."""
+    t1 = _table(3)
+    table = GradientTable(t1.gx_table, t1.gy_table, t1.cell_offset, t1.bins, t1.lo, t1.hi,
+                          np.full((*t1.cell_offset.shape, 3), 1 / 128, np.float32))
+    assert table.order == 0
+    frame = np.random.default_rng(1).integers(0, 256, (*table.cell_offset.shape, 3),
+                                              dtype=np.uint8)
+    monkeypatch.setattr(tk, "_COMPILED", {})
+    want = table.gradients(frame, kernel="numpy")
+    for k in ("auto", "numba"):
+        got = table.gradients(frame, kernel=k)
+        np.testing.assert_array_equal(got[0], want[0])
+    assert tk._COMPILED == {}                 # nothing imported, nothing compiled
+    monkeypatch.setitem(sys.modules, "numba", None)
+    np.testing.assert_array_equal(table.gradients(frame, kernel="numba")[1], want[1])
+    with pytest.raises(InputError, match="kernel must be one of"):
+        table.gradients(frame, kernel="jit")
+
+
 @pytest.mark.skipif(not _has_numba(), reason=NUMBA)
 def test_a_kernel_with_no_cache_folder_is_compiled_without_one():
     """numba refuses ``cache=True`` where it can write no cache folder (a read-only

@@ -34,7 +34,7 @@ from ._ball import gradients_from_normals
 from ._features import channel_medians
 from ._lut import ColourLUT
 from ._mlp import MLPGradientModel, cell_position_inputs, mlp_inputs
-from ._table_kernel import first_order_kernel
+from ._table_kernel import check_kernel, first_order_kernel
 
 __all__ = ["GradientTable", "table_from_cell_luts", "table_from_lut", "tabulate_mlp"]
 
@@ -126,7 +126,8 @@ class GradientTable:
         Raises
         ------
         InputError
-            For an unknown `kernel`, or 'numba' without numba installed.
+            For an unknown `kernel`, or 'numba' without numba installed (a first-order
+            table only).
 
         Notes
         -----
@@ -144,8 +145,9 @@ class GradientTable:
             gain = channel_medians(blurred[::8, ::8].reshape(-1, 3) * self._sub_ref_inv)
         else:
             gain = np.ones(3, np.float32)
-        compiled = first_order_kernel(kernel)
-        if compiled is not None and self._rows is not None and blurred.dtype == np.uint8:
+        # only a first-order table has a compiled pass: an order-0 one never loads numba
+        compiled = first_order_kernel(kernel) if self._rows is not None else check_kernel(kernel)
+        if compiled is not None and blurred.dtype == np.uint8:
             gx = np.empty(blurred.shape[:2], np.float32)
             gy = np.empty_like(gx)
             coef = np.concatenate([np.float32(1.0) / gain, self._offset]).astype(np.float32)
