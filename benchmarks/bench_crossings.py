@@ -40,9 +40,9 @@ import numpy as np
 
 from tactilevision import InputError
 from tactilevision.diagnosis import crossing_tests, diagnose
-from tactilevision.io import read_measurements, read_presses
+from tactilevision.io import read_measurements
 from tactilevision.pipeline import calibrate_session, write_calibration
-from tactilevision.planning import Design, crossing_effect_sizes
+from tactilevision.planning import Design, crossing_effect_sizes, read_schedule
 from tactilevision.sim import GaugeBlock, SessionSpec, make_session
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -82,20 +82,13 @@ def plan_sizes(spec: SessionSpec, truth: dict, k: float, folder: Path | None = N
                     hold_s=float(np.mean(spec.hold_s)),
                     overshoot_um=(1e3 * min(over), 1e3 * max(over)),
                     waits_s=(float(np.mean(spec.wait_s)),), positions=len(presses),
-                    schedule=None if folder is None else _schedule(folder, spec))
+                    schedule=None if folder is None else read_schedule(
+                        folder / "presses.csv", len(spec.block.depths_mm)))
     got = {name: s.size_param for name, s in crossing_effect_sizes(design).items()}
     last = max(p["t_start_s"] for p in presses)
     return {"spatial": k * got["spatial_nonuniformity"],
             "softening": k * got["stiffness_trend:time_s"] * last,
             "damage": k * got["stiffness_step:press"]}
-
-
-def _schedule(folder: Path, spec: SessionSpec) -> tuple[tuple[int, float, float], ...]:
-    """The session's ``presses.csv`` as a design's schedule, in press order."""
-    rows = read_presses(folder / "presses.csv", len(spec.block.depths_mm))
-    order = np.argsort(rows["press"])
-    return tuple((int(rows["indenter"][j]), float(rows["x_mm"][j]), float(rows["y_mm"][j]))
-                 for j in order)
 
 
 def one(work: Path, seed: int, fps: float, at_rules_out: float | None = None,

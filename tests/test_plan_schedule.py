@@ -20,6 +20,7 @@ from tactilevision.planning import (
     design_toml,
     planned_columns,
     read_design,
+    read_schedule,
 )
 from tactilevision.planning._plan_recommend import _changes
 
@@ -93,6 +94,7 @@ def test_the_schedule_reads_from_presses_csv_and_sets_repeats(tmp_path, capsys):
                     "[plan]\nschedule = \"presses.csv\"\n")
     d = read_design(path)
     assert d.repeats == 4 and d.schedule == sch       # in press order, not the file's
+    assert read_schedule(tmp_path / "presses.csv", len(DEPTHS)) == sch
     again = tmp_path / "again.toml"
     again.write_text(design_toml(d))
     with warnings.catch_warnings():

@@ -515,9 +515,9 @@ def _choose_engine(args: argparse.Namespace, ps, given: bool, circles, ball_px: 
           f"(medians over the presses, as the report's) on training presses each "
           f"candidate was not trained on (the tables cross-validated over "
           f"{int(fold.max()) + 1} folds, a network on the first)")
-    if undecided_choice(chosen, margin) != chosen:
-        chosen = undecided_choice(chosen, margin)
-        margin = _margin(rows, chosen, pooled)
+    keep = undecided_choice(chosen, margin)
+    if keep != chosen:
+        chosen, margin = keep, _margin(rows, keep, pooled)
         by += f"; {UNDECIDED}"
     engine = next(e for e in cands if e.name == chosen)
     return engine, {

@@ -16,7 +16,7 @@ what its session would certify and find:
 - From a calibration: :func:`design_from_calibration`; to a file: :func:`design_toml`.
 """
 
-from ._design import depth_uncertainty, planned_columns
+from ._design import depth_uncertainty, planned_columns, read_schedule
 from ._plan import (
     Design,
     PlanPrediction,
@@ -57,6 +57,7 @@ __all__ = [
     "plan_session",
     "planned_columns",
     "read_design",
+    "read_schedule",
     "recommend",
     "relaxation_identifiability",
     "untestable_in_table",

@@ -38,6 +38,7 @@ __all__ = [
     "planned_columns",
     "press_indenters",
     "read_design",
+    "read_schedule",
     "untestable_effects",
     "untestable_in_table",
 ]
@@ -470,9 +471,31 @@ def _read_schedule(value: Any, path: Path, n_indenters: int
         return tuple(tuple(v) for v in value)
     p = Path(value) if Path(value).is_absolute() else path.parent / value
     try:
-        rows = read_presses(p, n_indenters)
+        return read_schedule(p, n_indenters)
     except InputError as exc:
         raise InputError(f"{path}: [plan] schedule: {exc}") from None
+
+
+def read_schedule(path: str | Path, n_indenters: int) -> tuple[tuple[int, float, float], ...]:
+    """A ``presses.csv`` (formats.md §1) as a design's ``schedule``: each press's
+    (indenter, x_mm, y_mm), in ``press`` order.
+
+    Parameters
+    ----------
+    path : str or Path
+    n_indenters : int
+        The gauge block's indenters.
+
+    Returns
+    -------
+    schedule : tuple of (int, float, float)
+
+    Raises
+    ------
+    InputError
+        As :func:`~tactilevision.io.read_presses`.
+    """
+    rows = read_presses(path, n_indenters)
     order = np.argsort(rows["press"], kind="stable")
     return tuple((int(rows["indenter"][k]), float(rows["x_mm"][k]), float(rows["y_mm"][k]))
                  for k in order)

@@ -38,7 +38,6 @@ from scipy import stats
 
 from .._checks import InputError
 from ..diagnosis import EffectSensitivity
-from ..io import read_presses
 from ..mechanics import (
     RELAX_ALPHA,
     TAU_HOLD_RATIO,
@@ -58,6 +57,7 @@ from ._design import (
     hold_lengths,
     planned_columns,
     read_design,
+    read_schedule,
     untestable_effects,
     untestable_in_table,
 )
@@ -649,15 +649,13 @@ def _session_schedule(where: Path, gauge: Any, depths: tuple[float, ...]
     if not path.is_file() or not isinstance(block, list) or not depths:
         return None
     try:
-        rows = read_presses(path, len(block))
+        schedule = read_schedule(path, len(block))
         index = [depths.index(round(float(w), 4)) if round(float(w), 4) in depths else -1
                  for w in block]
     except (InputError, TypeError, ValueError):
         return None
-    order = np.argsort(rows["press"], kind="stable")
-    ind = np.array([index[int(i)] for i in rows["indenter"][order]])
+    ind = np.array([index[i] for i, _, _ in schedule])
     counts = np.bincount(ind[ind >= 0], minlength=len(depths))
     if (ind < 0).any() or len(set(counts.tolist())) != 1:
         return None
-    return tuple((int(i), float(rows["x_mm"][k]), float(rows["y_mm"][k]))
-                 for i, k in zip(ind, order, strict=True))
+    return tuple((int(i), x, y) for i, (_, x, y) in zip(ind, schedule, strict=True))
