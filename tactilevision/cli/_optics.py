@@ -505,10 +505,12 @@ def _choose_engine(args: argparse.Namespace, ps, given: bool, circles, ball_px: 
             if f == 0:
                 first[engine.name] = (cal, engine_cost(rep))
         pooled[engine.name] = (pooled_presses(reports), pooled_presses(reports[:1]))
+        every = pooled[engine.name][0].values()
         rows.append({"engine": engine.name, "label": engine.label(), "model": engine.model,
                      "lut_cells": list(engine.lut_cells), "folds": len(folds),
                      **pooled_cost(reports), "first_fold": first[engine.name][1],
-                     "per_press": _per_press(reports)})
+                     "per_press": {"angle_08_deg": [v for a, _ in every for v in a],
+                                   "inner_cap": [v for _, c in every for v in c]}})
     chosen = _pick(rows)
     margin = _margin(rows, chosen, pooled)
     by = (f"the lowest angle inside 0.8 of the radius + {CAP_DEG:g} deg x |inner cap| "
@@ -541,13 +543,6 @@ def _margin(rows: list[dict], chosen: str, pooled: dict) -> dict | None:
     m = engine_margin(pooled[chosen][int(net)], pooled[others[0]["engine"]][int(net)])
     return None if m is None else {"runner_up": others[0]["engine"], **m,
                                    "ci95": list(m["ci95"])}
-
-
-def _per_press(reports: list[dict]) -> dict[str, list[float]]:
-    """Every press the folds scored: its angle inside 0.8 of the radius and inner cap."""
-    pooled = pooled_presses(reports).values()
-    return {"angle_08_deg": [v for a, _ in pooled for v in a],
-            "inner_cap": [v for _, c in pooled for v in c]}
 
 
 def _pick(rows: list[dict]) -> str:
