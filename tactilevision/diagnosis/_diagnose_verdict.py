@@ -18,7 +18,7 @@ import numpy as np
 from .._checks import InputError
 from ..mechanics import kappa_n_nu_range
 from ._budget import law_slope
-from ._crossings import CROSSING_UNITS, crossing_sizes, crossing_tests
+from ._crossings import CROSSING_UNITS, CrossingScan, crossing_sizes, crossing_tests
 from ._diagnose import CURVATURE, Diagnosis, diagnose_core
 from ._holds import HOLDS_POWER, HoldsFinding, holds_finding
 from ._replay import EffectSensitivity, table_sensitivity
@@ -208,8 +208,8 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
     hidden = {e: MARK_WHY for e in ABSORBED_BY_MARK} if depth_rule == "mark" else {}
     if shared is not None:
         hidden.update({e: SHARED_WHY for e in ("depth_offset", "force_offset")})
-    own = {**(crossing_sensitivity(columns) if d.crossings is not None else {}),
-           **_holds_entries(holds)}
+    own = {**(crossing_sensitivity(_as_scanned(columns, d.crossings))
+              if d.crossings is not None else {}), **_holds_entries(holds)}
     return _with_rules_out(d, float(thickness_mm), float(radius_mm), hidden, own)
 
 
@@ -244,6 +244,17 @@ def crossing_sensitivity(columns: Mapping[str, np.ndarray], *, power: float = 0.
                                       size=factor * size, size_param=size, power=power,
                                       snr=math.nan, why=why)
     return out
+
+
+def _as_scanned(columns: Mapping[str, np.ndarray], scan: CrossingScan
+                ) -> Mapping[str, np.ndarray]:
+    """`columns` with the crossing forces' sds as the scan read them (scaled where the
+    stated ones fall short of their scatter: :attr:`CrossingScan.statement_scale`), so
+    that what the verdict rules out rests on the noise the tests found."""
+    if scan.statement_scale == 1.0:
+        return columns
+    sem = np.asarray(columns["force_w0_sem_n"], np.float64) * scan.statement_scale
+    return {**columns, "force_w0_sem_n": sem}
 
 
 def _holds_entries(holds: HoldsFinding | None) -> dict[str, EffectSensitivity]:
@@ -352,7 +363,11 @@ def _with_crossings(d: Diagnosis, columns: Mapping[str, np.ndarray],
     if how == "crossings":
         d = replace(d, message=d.message + f" Fit {found.effect} on the crossing forces "
                     f"(fit --crossings --effects {found.effect}): the mark's depths, read "
-                    "through the force, absorbed part of it, and E fitted to them is biased.")
+                    "through the force, absorbed part of it, and E fitted to them is biased."
+                    + ("" if scan.statement_scale == 1.0 else
+                       " The crossing forces' stated sds fall short of their scatter by "
+                       f"{scan.statement_scale:.2f}: that fit weighs them by the stated "
+                       "ones, and its intervals are too narrow by about as much."))
     if found.kind == "trend" and found.column not in ("x_mm", "y_mm"):
         return _gives_way(d, missing_effect=None, unexplained_covariate=found.column,
                           offered_effect=found.effect, equivalent_effects=also, fit_data=how)
