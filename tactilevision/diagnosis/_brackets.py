@@ -43,7 +43,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["BRACKET_DELTAS", "BRACKET_SOFTNESS", "bracket_draws", "bracket_gains",
-           "residual_scatter"]
+           "residual_scatter", "worst_residual"]
 
 #: The softness of a bracket's edges, a fraction of its width (module docstring).
 BRACKET_SOFTNESS = 0.02
@@ -200,19 +200,65 @@ def residual_scatter(r: np.ndarray, groups: np.ndarray, w: np.ndarray, shape: np
     draws: the observed scatter after a chosen place is if anything smaller than the
     draws', so the p-value errs large (a statement is less often called too narrow).
     """
-    w = np.asarray(w, np.float64)
-    _, gid = np.unique(np.asarray(groups), return_inverse=True)
-    sw = np.sqrt(w)
-    X = np.column_stack([np.eye(int(gid.max()) + 1)[gid], np.asarray(shape, np.float64)])
-    u, s, _ = np.linalg.svd(X * sw[:, None], full_matrices=False)
-    q = u[:, s > s[0] * 1e-10]
+    sw, q = _fit_basis(groups, w, shape)
 
     def chi2(res: np.ndarray) -> np.ndarray:
         rw = res * sw
         return np.sum(rw * rw, axis=1) - np.sum((rw @ q) ** 2, axis=1)
 
     observed = float(chi2(np.asarray(r, np.float64)[None])[0])
-    lo, hi = bracket_draws(np.sqrt(12.0 / w), n_draws, rng)
+    lo, hi = bracket_draws(np.sqrt(12.0 / sw ** 2), n_draws, rng)
     drawn = chi2(0.5 * (lo + hi) - 1.0)
-    return observed, int(w.size - q.shape[1]), float((np.sum(drawn >= observed) + 1)
-                                                      / (n_draws + 1))
+    return observed, int(sw.size - q.shape[1]), float((np.sum(drawn >= observed) + 1)
+                                                       / (n_draws + 1))
+
+
+def worst_residual(r: np.ndarray, groups: np.ndarray, w: np.ndarray, shape: np.ndarray | None,
+                   n_draws: int, rng: np.random.Generator) -> tuple[int, float, float]:
+    """The crossing force farthest from its indenter's about a fitted change, against what
+    the brackets state.
+
+    Parameters
+    ----------
+    r, groups, w, n_draws, rng
+        As for :func:`residual_scatter`.
+    shape : (N,) float ndarray or None
+        The change fitted beside a mean per indenter; None for none.
+
+    Returns
+    -------
+    index : int
+        The press whose studentized residual (the weighted least-squares residual over its
+        sd, ``sqrt((1 - h) / w)``, h its leverage) is largest in size.
+    z : float
+        That residual, in its sds.
+    p_value : float
+        The share of `n_draws` sets of brackets drawn from the stated model whose largest
+        studentized residual is as large, (hits + 1) / (n_draws + 1). A uniform crossing
+        puts a midpoint within sqrt(3) sds of the force, so a press far beyond that is a
+        bracket that does not hold its crossing (a mark's onset misread), whatever changed.
+    """
+    sw, q = _fit_basis(groups, w, np.zeros(np.asarray(w).size) if shape is None else shape)
+    lev = np.clip(1.0 - np.sum(q * q, axis=1), 1e-12, None)
+
+    def stud(res: np.ndarray) -> np.ndarray:
+        rw = res * sw
+        return (rw - (rw @ q) @ q.T) / np.sqrt(lev)
+
+    z = stud(np.asarray(r, np.float64)[None])[0]
+    k = int(np.argmax(np.abs(z)))
+    lo, hi = bracket_draws(np.sqrt(12.0 / sw ** 2), n_draws, rng)
+    drawn = np.abs(stud(0.5 * (lo + hi) - 1.0)).max(axis=1)
+    return k, float(z[k]), float((np.sum(drawn >= abs(z[k])) + 1) / (n_draws + 1))
+
+
+def _fit_basis(groups: np.ndarray, w: np.ndarray, shape: np.ndarray
+               ) -> tuple[np.ndarray, np.ndarray]:
+    """sqrt(w) (N,) and an orthonormal basis (N, K) of the weighted fit of a mean per group
+    and `shape` (a zero shape adds nothing)."""
+    w = np.asarray(w, np.float64)
+    _, gid = np.unique(np.asarray(groups), return_inverse=True)
+    sw = np.sqrt(w)
+    X = np.column_stack([np.eye(int(gid.max()) + 1)[gid], np.asarray(shape, np.float64)])
+    u, s, _ = np.linalg.svd(X * sw[:, None], full_matrices=False)
+    return sw, u[:, s > s[0] * 1e-10]
