@@ -158,17 +158,19 @@ class CrossingScan:
         the scatter that change leaves (its sqrt(chi2 / dof)), and again while the change
         then found leaves too much, up to :data:`_MAX_RESCALES` times.
     stated_found : CrossingTest or None
-        Where the statement was scaled: the change found under the stated sds (not named
-        on its own: it did not explain the scatter).
+        Where the statement was scaled or a press left out: the change found under the
+        stated sds on every press (not named on its own: it did not explain the scatter,
+        or one press carried it).
     stated_p_residual : float
         Where the statement was scaled: the ``p_residual`` that made it (of the presses
         kept); NaN otherwise.
     left_out : tuple of (press, z, p_value)
         Presses whose crossing force lay farther from their indenter's, about the change
-        found, than brackets drawn from the statement put any (:func:`worst_residual`, p
-        under :data:`_SHAPE_ALPHA`; at most :data:`_MAX_LEFT_OUT`, worst first): brackets
-        that do not hold their crossing, left out of the tests (``press`` is the table's
-        ``press``, its row where it has none).
+        found, than every one of the brackets drawn from the statement
+        (:func:`worst_residual`: p = 1 / (:data:`_RESIDUAL_DRAWS` + 1); at most
+        :data:`_MAX_LEFT_OUT`, in the order left out): brackets that do not hold their
+        crossing, left out of the tests (``press`` is the table's ``press``, its row where
+        it has none).
     """
 
     n: int
