@@ -140,6 +140,7 @@ def softening(tmp_path_factory):
         write_calibration(cal, folder.parent / "cal")
         out[name] = read_measurements(folder.parent / "cal" / "measurements.csv")
         out[f"{name}_folder"] = folder
+        out[f"{name}_warnings"] = list(cal.warnings)
     return out
 
 
@@ -251,3 +252,28 @@ def test_fit_on_the_crossing_forces(softening, tmp_path, capsys):
     holds = null.parent / "holds.csv"
     assert main(["fit", str(null), "--crossings", "--holds", str(holds)]) == 2
     assert "--crossings and --holds" in capsys.readouterr().err
+
+
+def test_calibrate_says_when_the_crossings_scatter_beyond_their_brackets(softening, tmp_path):
+    """The null session's frames with its F/T's fz falling 40 % over the log: each
+    indenter's crossing forces then differ by up to about 30 %, far beyond their brackets
+    (sd about 4.5 %), and calibrate says so (its Birge ratio above 2, and that E's interval
+    may be too narrow); on the session as it was it has nothing to say (the check is
+    conservative for uniform crossings: p < 0.05 in 0.5 % of honest tables,
+    tests/test_crossing_statement.py)."""
+    assert not [w for w in softening["null_warnings"] if "crossing forces scatter" in w]
+    src = softening["null_folder"]
+    folder = tmp_path / "s"
+    folder.mkdir()
+    for p in src.iterdir():
+        if p.name != "forces.csv":
+            (folder / p.name).symlink_to(p.resolve())
+    lines = (src / "forces.csv").read_text().splitlines()
+    rows = [ln.split(",") for ln in lines[1:]]
+    t_end = float(rows[-1][0])
+    (folder / "forces.csv").write_text("\n".join(
+        [lines[0]] + [",".join([*r[:3], f"{float(r[3]) * (1 - 0.4 * float(r[0]) / t_end):.6f}"])
+                      for r in rows]) + "\n")
+    said = [w for w in calibrate_session(folder).warnings if "crossing forces scatter within" in w]
+    assert said and "may be too narrow" in said[0]
+    assert float(said[0].split("within indenters ")[1].split(" times")[0]) > 2.0

@@ -11,7 +11,15 @@ from ._footprint import Footprint, fit_footprint, nearest_indenter
 from ._force import ForceWindow, force_window, window_standard_error
 from ._holds import approach_start, hold_end, hold_start
 from ._land import bulge_at, bulge_height, land_contact_depth, land_contact_depths_mm
-from ._mark import CLOCK_SD_S, STIFFNESS_REL, crossing_forces, mark_depths, mark_shared_mm
+from ._mark import (
+    CLOCK_SD_S,
+    CROSSING_CHECK_P,
+    STIFFNESS_REL,
+    crossing_consistency,
+    crossing_forces,
+    mark_depths,
+    mark_shared_mm,
+)
 from ._mask import contact_mask, noise_level
 from ._results import Certification, CertifiedPress, Rejection
 from ._sync import (
@@ -43,6 +51,7 @@ from ._zero import ForceZero, force_zero
 __all__ = [
     "CLOCK_SD_S",
     "CREST_CHECK_P",
+    "CROSSING_CHECK_P",
     "EDGE_SHARED_FRACTION",
     "RESOLVED_PX",
     "STIFFNESS_REL",
@@ -69,6 +78,7 @@ __all__ = [
     "contact_mask",
     "contact_onsets",
     "crest_consistency",
+    "crossing_consistency",
     "crossing_forces",
     "estimate_clock_offset",
     "find_ball_presses",

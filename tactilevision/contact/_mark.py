@@ -21,11 +21,20 @@ alike): :func:`mark_shared_mm`.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
+from scipy import stats
 
 from .._checks import InputError, check_array
 
-__all__ = ["CLOCK_SD_S", "STIFFNESS_REL", "crossing_forces", "mark_depths", "mark_shared_mm"]
+__all__ = ["CLOCK_SD_S", "CROSSING_CHECK_P", "STIFFNESS_REL", "crossing_consistency",
+           "crossing_forces", "mark_depths", "mark_shared_mm"]
+
+#: The mark rule says so where the crossing forces scatter within indenters more than
+#: their brackets allow at this significance (:func:`crossing_consistency`; the read
+#: bands' crests are checked at the same level).
+CROSSING_CHECK_P = 0.05
 
 #: The clock offset's error taken as shared by every press, s (the profile correlation
 #: that synchronises the F/T log gave 0.1335 to 0.1370 s against the true 0.137 s on the
@@ -151,6 +160,52 @@ def crossing_forces(indenter: np.ndarray, force_crossing_n: np.ndarray,
         out[sel] = mid
         out_sd[sel] = u * np.sqrt(n)
     return out, out_sd, disjoint
+
+
+def crossing_consistency(indenter: np.ndarray, force_crossing_n: np.ndarray,
+                         force_crossing_sd_n: np.ndarray) -> tuple[float, float]:
+    """Whether the crossing forces of each indenter agree as well as their brackets state.
+
+    Parameters
+    ----------
+    indenter : (N,) ndarray
+    force_crossing_n, force_crossing_sd_n : (N,) float ndarray
+        Each press's crossing force and its sd, N (NaN: not read; left out, as are
+        indenters with one press read).
+
+    Returns
+    -------
+    birge : float
+        sqrt(chi2 / dof) of the crossing forces about their indenters' weighted means
+        (Birge's ratio; Birge, Phys. Rev. 40, 207, 1932): about 1 where they scatter as
+        stated.
+    p_value : float
+        Upper tail of chi2 on dof. Both NaN without two presses read in an indenter.
+
+    Notes
+    -----
+    Within one indenter every press crossed the same w0, so on an elastic, uniform gel
+    their forces differ only by what the brackets state. A scatter beyond it is a
+    certification that reads some onsets late or early, or a gel that changes between
+    the presses (which ``diagnose`` tests); either way each indenter's P(w0), the
+    intersection of its brackets, is less sure than it claims.
+    """
+    ind = np.asarray(indenter)
+    f = np.asarray(force_crossing_n, np.float64)
+    sd = np.asarray(force_crossing_sd_n, np.float64)
+    ok = np.isfinite(f) & np.isfinite(sd) & (sd > 0)
+    chi2, dof = 0.0, 0
+    for g in np.unique(ind[ok]):
+        sel = ok & (ind == g)
+        if sel.sum() < 2:
+            continue
+        wt = 1.0 / sd[sel] ** 2
+        mean = float(np.sum(wt * f[sel]) / np.sum(wt))
+        chi2 += float(np.sum(wt * (f[sel] - mean) ** 2))
+        dof += int(sel.sum()) - 1
+    if dof == 0:
+        return math.nan, math.nan
+    return math.sqrt(chi2 / dof), float(stats.chi2.sf(chi2, dof))
 
 
 def mark_shared_mm(travel_mm: np.ndarray, after_onset_mm: np.ndarray, period_s: float,

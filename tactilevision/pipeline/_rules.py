@@ -14,6 +14,7 @@ import numpy as np
 from .._checks import InputError
 from ..contact import (
     CLOCK_SD_S,
+    CROSSING_CHECK_P,
     EDGE_SHARED_FRACTION,
     RESOLVED_PX,
     STIFFNESS_REL,
@@ -21,6 +22,7 @@ from ..contact import (
     bevel_force,
     bulge_at,
     certified_depths,
+    crossing_consistency,
     crossing_forces,
     mark_depths,
     mark_shared_mm,
@@ -114,9 +116,12 @@ def mark_rule(presses, force: np.ndarray, fit_at, cfg, period: float,
         raise InputError("the 'mark' depth rule needs every press certified by a mark's onset")
     w0 = np.array([p.w0_mm for p in presses])
     travel = np.array([p.travel_mm for p in presses])
-    f_on, sem_on, disjoint = crossing_forces(
-        np.array([p.indenter for p in presses]), np.array([p.force_onset_n for p in presses]),
-        np.array([p.force_onset_sem_n for p in presses]))
+    onset = np.array([p.force_onset_n for p in presses])
+    onset_sem = np.array([p.force_onset_sem_n for p in presses])
+    f_on, sem_on, disjoint = crossing_forces(np.array([p.indenter for p in presses]), onset,
+                                             onset_sem)
+    birge, p_birge = crossing_consistency(np.array([p.indenter for p in presses]), onset,
+                                          onset_sem)
     sem = np.array([p.force_sem_n for p in presses])
     h = cfg.gel_thickness_mm
     ind = np.array([p.indenter for p in presses])
@@ -173,6 +178,14 @@ def mark_rule(presses, force: np.ndarray, fit_at, cfg, period: float,
                 "travel" if unread else "")
              + (f"; the presses of {disjoint} indenter(s) do not agree on P(w0) (their mean is "
                 "used): a gel not uniform, or a drifting force?" if disjoint else "")]
+    if np.isfinite(p_birge) and p_birge < CROSSING_CHECK_P and birge > 1.0:
+        # before this, a Taxim session without shadows (onsets read late, one press 7 sds
+        # low) printed E +45 % with an interval 3 se off and nothing said
+        notes.append(f"the crossing forces scatter within indenters {birge:.2f} times what "
+                     f"their brackets state (Birge ratio, p = {p_birge:.2g}): onsets read late "
+                     "or early on some presses, or a gel that changed between them (diagnose "
+                     "tells which it can); each indenter's P(w0), and so the depths and E's "
+                     "and nu's intervals, rest on those brackets and may be too narrow")
     std_indenter = np.where(np.isfinite(f_on), sd_group / k, 0.0)
     return depth, std, fit, (-half, half), notes, std_indenter
 
