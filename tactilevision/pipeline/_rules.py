@@ -116,15 +116,13 @@ def mark_rule(presses, force: np.ndarray, fit_at, cfg, period: float,
         raise InputError("the 'mark' depth rule needs every press certified by a mark's onset")
     w0 = np.array([p.w0_mm for p in presses])
     travel = np.array([p.travel_mm for p in presses])
+    ind = np.array([p.indenter for p in presses])
     onset = np.array([p.force_onset_n for p in presses])
     onset_sem = np.array([p.force_onset_sem_n for p in presses])
-    f_on, sem_on, disjoint = crossing_forces(np.array([p.indenter for p in presses]), onset,
-                                             onset_sem)
-    birge, p_birge = crossing_consistency(np.array([p.indenter for p in presses]), onset,
-                                          onset_sem)
+    f_on, sem_on, disjoint = crossing_forces(ind, onset, onset_sem)
+    birge, p_birge = crossing_consistency(ind, onset, onset_sem)
     sem = np.array([p.force_sem_n for p in presses])
     h = cfg.gel_thickness_mm
-    ind = np.array([p.indenter for p in presses])
     n_group = np.array([np.count_nonzero(ind == g) for g in ind], np.float64)
     # P(w0) is one number per indenter, so its error is shared by that indenter's presses:
     # weighed as independent, n presses would count it n times. Its variance is carried n
