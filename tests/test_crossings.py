@@ -144,13 +144,9 @@ def softening(tmp_path_factory):
     return out
 
 
-def test_an_ft_zeroed_before_a_fixture_moves_no_crossing(softening, tmp_path):
-    """The same frames with 1 N on every F/T sample (zeroed before a fixture was
-    mounted): the mark's onsets are found where they were (the press's force shares read
-    from its own rest), so every press keeps its depth and crossing force once calibrate
-    takes the zero off (within 1 um and 3 mN: the zero read between the presses)."""
-    src = softening["null_folder"]
-    folder = tmp_path / "s"
+def _with_fz(src, folder, fz_of):
+    """Session `src` in `folder`: its files linked, its forces.csv's fz rewritten as
+    ``fz_of(t_s, fz_n)`` per sample."""
     folder.mkdir()
     for p in src.iterdir():
         if p.name != "forces.csv":
@@ -158,7 +154,17 @@ def test_an_ft_zeroed_before_a_fixture_moves_no_crossing(softening, tmp_path):
     lines = (src / "forces.csv").read_text().splitlines()
     rows = [ln.split(",") for ln in lines[1:]]
     (folder / "forces.csv").write_text("\n".join(
-        [lines[0]] + [",".join([*r[:3], f"{float(r[3]) + 1.0:.6f}"]) for r in rows]) + "\n")
+        [lines[0]] + [",".join([*r[:3], f"{fz_of(float(r[0]), float(r[3])):.6f}"])
+                      for r in rows]) + "\n")
+    return folder
+
+
+def test_an_ft_zeroed_before_a_fixture_moves_no_crossing(softening, tmp_path):
+    """The same frames with 1 N on every F/T sample (zeroed before a fixture was
+    mounted): the mark's onsets are found where they were (the press's force shares read
+    from its own rest), so every press keeps its depth and crossing force once calibrate
+    takes the zero off (within 1 um and 3 mN: the zero read between the presses)."""
+    folder = _with_fz(softening["null_folder"], tmp_path / "s", lambda t, fz: fz + 1.0)
     cal = calibrate_session(folder)
     write_calibration(cal, tmp_path / "cal")
     got = read_measurements(tmp_path / "cal" / "measurements.csv").columns
@@ -258,22 +264,12 @@ def test_calibrate_says_when_the_crossings_scatter_beyond_their_brackets(softeni
     """The null session's frames with its F/T's fz falling 40 % over the log: each
     indenter's crossing forces then differ by up to about 30 %, far beyond their brackets
     (sd about 4.5 %), and calibrate says so (its Birge ratio above 2, and that E's interval
-    may be too narrow); on the session as it was it has nothing to say (the check is
-    conservative for uniform crossings: p < 0.05 in 0.5 % of honest tables,
-    tests/test_crossing_statement.py)."""
+    may be too narrow); on the session as it was it has nothing to say."""
     assert not [w for w in softening["null_warnings"] if "crossing forces scatter" in w]
-    src = softening["null_folder"]
-    folder = tmp_path / "s"
-    folder.mkdir()
-    for p in src.iterdir():
-        if p.name != "forces.csv":
-            (folder / p.name).symlink_to(p.resolve())
-    lines = (src / "forces.csv").read_text().splitlines()
-    rows = [ln.split(",") for ln in lines[1:]]
-    t_end = float(rows[-1][0])
-    (folder / "forces.csv").write_text("\n".join(
-        [lines[0]] + [",".join([*r[:3], f"{float(r[3]) * (1 - 0.4 * float(r[0]) / t_end):.6f}"])
-                      for r in rows]) + "\n")
+    t_end = float(np.loadtxt(softening["null_folder"] / "forces.csv", delimiter=",",
+                             skiprows=1, usecols=0)[-1])
+    folder = _with_fz(softening["null_folder"], tmp_path / "s",
+                      lambda t, fz: fz * (1 - 0.4 * t / t_end))
     said = [w for w in calibrate_session(folder).warnings if "crossing forces scatter within" in w]
     assert said and "may be too narrow" in said[0]
     assert float(said[0].split("within indenters ")[1].split(" times")[0]) > 2.0
