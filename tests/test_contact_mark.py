@@ -11,7 +11,9 @@ import pytest
 from tactilevision import InputError
 from tactilevision.contact import crossing_forces, mark_depths, mark_shared_mm
 from tactilevision.contact._mark import CLOCK_SD_S, STIFFNESS_REL
-from tactilevision.contact._onset import _press_forces
+from tactilevision.contact import _onset
+from tactilevision.contact._onset import _crossing_force, _mark_template_onset, _press_forces
+from tactilevision.contact._results import MARK_FAINT_MAX
 
 
 def test_depth_is_w0_plus_the_force_rise_over_the_slope():
@@ -93,3 +95,66 @@ def test_a_press_force_shares_are_of_its_own_force_whatever_the_ft_zero():
     f = _press_forces(SimpleNamespace(session=session, offset=0.0, period=0.1), run)
     on = np.interp(frames[run], tf, true)
     assert np.allclose(f, on - on.min(), atol=1e-9)
+
+
+def _ramp_session():
+    """fz rising at 2 N/s from t = 1 s to a 2 N hold at 2 s (1 kHz, noise-free), frames
+    every 0.1 s; the press's frames in contact."""
+    tf = np.arange(0.0, 4.0, 1e-3)
+    fz = np.interp(tf, [0.0, 1.0, 2.0, 3.0, 3.5, 4.0], [0.0, 0.0, 2.0, 2.0, 0.0, 0.0])
+    frames = np.arange(0.0, 4.0, 0.1)
+    session = SimpleNamespace(force_times_s=tf, frame_times_s=frames,
+                              forces_n=np.column_stack([0 * tf, 0 * tf, fz]))
+    return session, np.flatnonzero((frames > 1.05) & (frames < 3.45))
+
+
+def test_crossing_bracket_spans_its_periods_and_ends_at_the_hold_when_told():
+    """The crossing lies in the `periods` frame periods before the mark's first trace: a
+    trace at 1.55 s brackets fz over [1.45, 1.55] s = [0.9, 1.1] N with one period, [0.7,
+    1.1] N with two; with `to_hold` (an onset that may be early) the bracket ends at the
+    hold's start (2.0 s, 2 N); a trace after the hold puts it in the periods before it.
+    Returned as the middle and the sd of a uniform over the bracket."""
+    session, run = _ramp_session()
+
+    def bracket(t_on, periods=1, to_hold=False):
+        mid, sd = _crossing_force(session, run, t_on, 0.0, 0.1, periods, to_hold)
+        half = np.sqrt(3.0) * sd
+        return mid - half, mid + half
+
+    np.testing.assert_allclose(bracket(1.55), [0.9, 1.1], atol=2e-3)
+    np.testing.assert_allclose(bracket(1.55, 2), [0.7, 1.1], atol=2e-3)
+    np.testing.assert_allclose(bracket(1.55, 2, to_hold=True), [0.7, 2.0], atol=1e-2)
+    np.testing.assert_allclose(bracket(2.35, 2), [1.6, 2.0], atol=1e-2)
+
+
+def _faint_press(monkeypatch, before: list[float]):
+    """A press whose template projections are known: approach frames at +-0.01 of the
+    way (fz under MARK_BASELINE_FORCE of the largest), then the frames `before` (fz 0.75 of
+    it), then six hold frames at the hold's level; each frame's profile across the mark is
+    its projection times a trough. `_mark_template_onset`'s ``(onset, first, faint)``."""
+    trough = -np.exp(-0.5 * (np.linspace(-3.0, 3.0, 41) / 0.6) ** 2)
+    a = [0.01, -0.01] * 4 + list(before) + [1.0] * 6
+    forces = np.array([0.05 * (k + 1) for k in range(8)] + [0.75] * len(before) + [1.0] * 6)
+    monkeypatch.setattr(_onset, "_press_forces", lambda ctx, run: forces[:len(run)])
+    monkeypatch.setattr(_onset, "_mark_residual", lambda ctx, centre, i: (
+        np.arange(41.0), np.column_stack([a[i] * trough] * 3)))
+    run = np.arange(len(a))
+    got, why = _mark_template_onset(SimpleNamespace(), (0.0, 0.0), run)
+    assert got is not None, why
+    return got
+
+
+def test_frames_before_the_first_trace_that_may_show_it_faintly_widen_its_bracket(
+        monkeypatch):
+    """A mark's trace grows from nothing at w0: the frame before the first that counts as a
+    trace (4 sds and 0.1 of the way) is counted as possibly showing the mark when it lies
+    above the approach's level (on Taxim's frames without shadows the first frame past w0
+    showed 0.05 to 0.23 of the way), at most MARK_FAINT_MAX of them; one at or under the
+    approach's level is not."""
+    onset, first, faint = _faint_press(monkeypatch, [-0.02, 0.06])
+    assert (onset, first, faint) == (10, 10, 1)
+    assert _faint_press(monkeypatch, [0.06, -0.02])[2] == 0
+    assert _faint_press(monkeypatch, [0.03, 0.05, 0.07])[2] == MARK_FAINT_MAX == 2
+    # a frame over 4 sds and 0.1 of the way, rising towards the hold, is the first trace
+    onset, first, faint = _faint_press(monkeypatch, [-0.02, 0.3])
+    assert (onset, first, faint) == (10, 9, 0)

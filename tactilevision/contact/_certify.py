@@ -423,7 +423,7 @@ def _press_reading(ctx: _PressContext, k: int, run: np.ndarray, peak: int, fp: F
             raise _Reject(got.reason, got.detail, at=got.frame, score=got.bevel_score)
         t_cert, onset, window, profiles, score, quick = got
     else:
-        onset, score, first = _mark_onset(ctx, centre, cand, run)
+        onset, score, first, periods, to_hold = _mark_onset(ctx, centre, cand, run)
         t_cert = float(times[onset])
     hold_mid = _window_middle(session, t_cert, ctx.offset, ctx.half, t_hold_end, ctx.period)
     if isinstance(hold_mid, tuple):
@@ -449,7 +449,7 @@ def _press_reading(ctx: _PressContext, k: int, run: np.ndarray, peak: int, fp: F
                 "t0": float(times[run[0]]), "centre": centre}
     travel = _onset_travel(session, run, first, ctx.offset, ctx.period, w0)
     f_on, f_on_se = _crossing_force(session, run, float(times[first]) + ctx.offset, ctx.offset,
-                                    ctx.period)
+                                    ctx.period, periods, to_hold)
     return replace(press, rule="onset", closure_mm=0.0, closure_std_mm=travel / np.sqrt(12.0),
                    force_onset_n=f_on, force_onset_sem_n=f_on_se, travel_mm=float(travel))
 

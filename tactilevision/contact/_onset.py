@@ -16,10 +16,12 @@ from ._mask import contact_mask
 from ._results import (
     MARK_BASELINE_FORCE,
     MARK_BLOCK,
+    MARK_FAINT_MAX,
     MARK_HOLD_FORCE,
     MARK_NULL_FRAMES,
     MARK_TRACE,
     MARK_Z_BLOCK,
+    MARK_Z_FAINT,
     MARK_Z_FRAME,
     MARK_Z_SEEN,
     MARK_Z_STEP,
@@ -137,10 +139,11 @@ def _mark_residual(ctx: _PressContext, centre: tuple[float, float], i: int
 
 
 def _mark_template_onset(ctx: _PressContext, centre: tuple[float, float], run: np.ndarray
-                         ) -> tuple[tuple[int, int] | None, str]:
-    """A mark's onset from the press's own template: ``((onset, first), why)``, None
-    where the press has too few frames to build one or the template shows no step
-    (``why`` says which); ``first`` is the first frame that shows a trace of the mark.
+                         ) -> tuple[tuple[int, int, int] | None, str]:
+    """A mark's onset from the press's own template: ``((onset, first, faint), why)``,
+    None where the press has too few frames to build one or the template shows no step
+    (``why`` says which); ``first`` is the first frame that shows a trace of the mark,
+    ``faint`` the number of frames just before it that may show it too faintly to count.
 
     The per-frame score (:func:`bevel_score`) is a generic line filter; a thin mark
     under a renderer's shadows (Taxim's: a trough some 30 px wide) scores barely above
@@ -165,7 +168,16 @@ def _mark_template_onset(ctx: _PressContext, centre: tuple[float, float], run: n
     from the onset through the frames rising towards it while they lie
     :data:`MARK_Z_SEEN` sds above the approach's level: the crossing lies in the period
     before ``first`` (on a Taxim session at 10 frames/s, one such press put its indenter's
-    P(w0) 6 % high and its depths 8 um shallow)."""
+    P(w0) 6 % high and its depths 8 um shallow).
+
+    A mark's trace grows from nothing at w0, so a frame taken just past it may show the
+    mark below any threshold that noise does not cross: ``faint`` counts the frames before
+    ``first`` (at most :data:`MARK_FAINT_MAX`) projected over :data:`MARK_Z_FAINT` sds
+    above the approach's level, whose periods the crossing's bracket then spans too (on
+    a Taxim session at 30 frames/s without shadows, 16 of 28 brackets missed P(w0), every
+    one of them a period late; an indenter's P(w0) is the intersection of its presses'
+    brackets, which one late bracket moves). A needless period costs that press's
+    bracket its width, not the intersection its truth."""
     f = _press_forces(ctx, run)
     few = "the press has too few frames for its own template"
     if f.size == 0:
@@ -209,27 +221,37 @@ def _mark_template_onset(ctx: _PressContext, centre: tuple[float, float], run: n
         first = j
         while first > 0 and max(MARK_Z_SEEN * sd_a, MARK_TRACE) < a[first - 1] < a[first]:
             first -= 1
-        return (int(run[j]), int(run[first])), ""
+        faint = 0
+        while (faint < MARK_FAINT_MAX and first - faint > 0
+               and a[first - faint - 1] > MARK_Z_FAINT * sd_a):
+            faint += 1
+        return (int(run[j]), int(run[first]), faint), ""
     return None, f"the press's own template shows no step: {why}"
 
 
 def _mark_onset(ctx: _PressContext, centre: tuple[float, float], cand: np.ndarray,
-                run: np.ndarray) -> tuple[int, float, int]:
+                run: np.ndarray) -> tuple[int, float, int, int, bool]:
     """A bevel mark with no vernier: the first frame of `cand` where it shows firmly
     (:func:`certify_session`'s `bevel_threshold`), then back through the press's earlier
     frames while they show it too (`cand` starts near full contact, which the sink-in
     ring's growth can put frames after the mark's first showing), ``(frame, score)``.
     With the session's own rule, the press's own template decides first where it can
     (:func:`_mark_template_onset`); the score is then the onset frame's
-    :func:`bevel_score`. ``(onset, score, first)``: ``first`` the first frame that shows a
-    trace of the mark (the template's; the onset otherwise), where the crossing's period
-    ends."""
+    :func:`bevel_score`. ``(onset, score, first, periods, to_hold)``: ``first`` the first
+    frame that shows a trace of the mark (the template's; the onset otherwise), where the
+    crossing's bracket ends, ``periods`` the frame periods it spans back from there: 1
+    plus the template's faint frames, 1 with a fixed threshold; and ``to_hold`` whether
+    the bracket ends at the hold's start instead. Where the session's rule reads the
+    press without its template (a hold too faint to build one: an overshoot of a few um)
+    a noise frame can pass for the onset, early or late: the bracket then spans 2 periods
+    and ends at the hold's start (on a Taxim session without shadows, a press with 4 um
+    of overshoot read this way put its crossing force 4.5 sds under P(w0))."""
     cfg = ctx.session.config
     rule = ctx.mark_rule
     if rule["rule"] == "auto":
         got, template_why = _mark_template_onset(ctx, centre, run)
         if got is not None:
-            return got[0], _mark_score(ctx, centre, got[0]), got[1]
+            return got[0], _mark_score(ctx, centre, got[0]), got[1], 1 + got[2], False
     scores = np.array([_mark_score(ctx, centre, int(i)) for i in cand])
     if rule["rule"] == "auto":
         base, n_base = _mark_baseline(ctx, centre, run, rule["median"])
@@ -274,30 +296,34 @@ def _mark_onset(ctx: _PressContext, centre: tuple[float, float], cand: np.ndarra
             break
         j -= 1
         onset, score = int(run[j]), before
-    return onset, score, onset
+    auto = rule["rule"] == "auto"
+    return onset, score, onset, 2 if auto else 1, auto
 
 
-def _crossing_force(session, run: np.ndarray, t_on: float, offset: float, period: float
-                    ) -> tuple[float, float]:
+def _crossing_force(session, run: np.ndarray, t_on: float, offset: float, period: float,
+                    periods: int = 1, to_hold: bool = False) -> tuple[float, float]:
     """fz when the land reached w0, from the F/T log, and its uncertainty, N.
 
-    The mark first shows at `t_on` (F/T clock), so the land reached w0 within the frame
-    period before, and not after the stage stopped (the hold's start, :func:`hold_start`):
-    fz at the ends of ``[t_on - period, min(t_on, t_hold)]`` (a 10 ms moving average,
-    read at the instants) brackets P(w0), widened by twice that average's noise. Returned
-    as the bracket's middle and the sd of a uniform over it. A hold that started before
-    that period (the mark seen late) puts the crossing in the period before the hold's
-    start. ``(nan, nan)`` when the log does not cover it.
+    The mark first shows at `t_on` (F/T clock), so the land reached w0 within the
+    `periods` frame periods before (1, or more where the frames before may show it
+    faintly: :func:`_mark_onset`), and not after the stage stopped (the hold's start,
+    :func:`hold_start`): fz at the ends of ``[t_on - periods * period, min(t_on,
+    t_hold)]`` (a 10 ms moving average, read at the instants) brackets P(w0), widened by
+    twice that average's noise. Returned as the bracket's middle and the sd of a uniform
+    over it. A hold that started before that span (the mark seen late) puts the crossing
+    in the span before the hold's start. `to_hold`: the bracket ends at the hold's start
+    whatever `t_on` (an onset that may be early). ``(nan, nan)`` when the log does not
+    cover it.
     """
     tf, fz = session.force_times_s, session.forces_n[:, 2]
     times = session.frame_times_s
     t_hold = hold_start(tf, fz, float(times[run[0]]) + offset - period,
                         float(times[run[-1]]) + offset + period)
-    t_a, t_b = t_on - period, t_on
+    t_a, t_b = t_on - periods * period, t_on
     if t_hold is not None:
-        t_b = min(t_b, t_hold)
+        t_b = t_hold if to_hold else min(t_b, t_hold)
         if t_b <= t_a:
-            t_a, t_b = t_hold - period, t_hold
+            t_a, t_b = t_hold - periods * period, t_hold
     dt = float(np.median(np.diff(tf))) if tf.size > 1 else 1.0
     k = max(1, round(0.01 / dt))
     sel = np.flatnonzero((tf >= t_a - k * dt) & (tf <= t_b + k * dt))
