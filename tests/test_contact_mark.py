@@ -112,7 +112,8 @@ def test_crossing_bracket_spans_its_periods_and_ends_at_the_hold_when_told():
     """The crossing lies in the `periods` frame periods before the mark's first trace: a
     trace at 1.55 s brackets fz over [1.45, 1.55] s = [0.9, 1.1] N with one period, [0.7,
     1.1] N with two; with `to_hold` (an onset that may be early) the bracket ends at the
-    hold's start (2.0 s, 2 N); a trace after the hold puts it in the periods before it.
+    hold's start (2.0 s, 2 N); a trace after the hold puts it in the periods before the
+    hold's start.
     Returned as the middle and the sd of a uniform over the bracket."""
     session, run = _ramp_session()
 
@@ -125,6 +126,8 @@ def test_crossing_bracket_spans_its_periods_and_ends_at_the_hold_when_told():
     np.testing.assert_allclose(bracket(1.55, 2), [0.7, 1.1], atol=2e-3)
     np.testing.assert_allclose(bracket(1.55, 2, to_hold=True), [0.7, 2.0], atol=1e-2)
     np.testing.assert_allclose(bracket(2.35, 2), [1.6, 2.0], atol=1e-2)
+    # an onset read in the hold (a noise frame, the template failing): still two periods
+    np.testing.assert_allclose(bracket(2.15, 2, to_hold=True), [1.6, 2.0], atol=1e-2)
 
 
 def _faint_press(monkeypatch, before: list[float]):

@@ -310,20 +310,22 @@ def _crossing_force(session, run: np.ndarray, t_on: float, offset: float, period
     :func:`hold_start`): fz at the ends of ``[t_on - periods * period, min(t_on,
     t_hold)]`` (a 10 ms moving average, read at the instants) brackets P(w0), widened by
     twice that average's noise. Returned as the bracket's middle and the sd of a uniform
-    over it. A hold that started before that span (the mark seen late) puts the crossing
-    in the span before the hold's start. `to_hold`: the bracket ends at the hold's start
-    whatever `t_on` (an onset that may be early). ``(nan, nan)`` when the log does not
-    cover it.
+    over it. A hold that started before `t_on` (the mark seen late) puts the crossing in
+    the periods before the hold's start. `to_hold`: the bracket ends at the hold's start
+    whatever `t_on` (an onset that may be early or late), and spans the periods before
+    the earlier of the two (on a Taxim session without shadows, a press with 14 um of
+    overshoot read 2 frames into its hold: a bracket from 2 periods before that to the
+    hold's start was half a period wide, its middle 5.8 sds above P(w0)). ``(nan, nan)`` when the
+    log does not cover it.
     """
     tf, fz = session.force_times_s, session.forces_n[:, 2]
     times = session.frame_times_s
     t_hold = hold_start(tf, fz, float(times[run[0]]) + offset - period,
                         float(times[run[-1]]) + offset + period)
-    t_a, t_b = t_on - periods * period, t_on
+    t_b = t_on
     if t_hold is not None:
-        t_b = t_hold if to_hold else min(t_b, t_hold)
-        if t_b <= t_a:
-            t_a, t_b = t_hold - periods * period, t_hold
+        t_b = t_hold if to_hold else min(t_on, t_hold)
+    t_a = min(t_on, t_b) - periods * period
     dt = float(np.median(np.diff(tf))) if tf.size > 1 else 1.0
     k = max(1, round(0.01 / dt))
     sel = np.flatnonzero((tf >= t_a - k * dt) & (tf <= t_b + k * dt))
