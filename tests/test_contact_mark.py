@@ -9,9 +9,8 @@ import numpy as np
 import pytest
 
 from tactilevision import InputError
-from tactilevision.contact import crossing_forces, mark_depths, mark_shared_mm
+from tactilevision.contact import _onset, crossing_forces, mark_depths, mark_shared_mm
 from tactilevision.contact._mark import CLOCK_SD_S, STIFFNESS_REL
-from tactilevision.contact import _onset
 from tactilevision.contact._onset import _crossing_force, _mark_template_onset, _press_forces
 from tactilevision.contact._results import MARK_FAINT_MAX
 
