@@ -151,12 +151,12 @@ def test_frames_before_the_first_trace_that_may_show_it_faintly_widen_its_bracke
     """A mark's trace grows from nothing at w0: the frame before the first that counts as a
     trace (4 sds and 0.1 of the way) is counted as possibly showing the mark when it lies
     above the approach's level (on Taxim's frames without shadows the first frame past w0
-    showed 0.05 to 0.23 of the way), at most MARK_FAINT_MAX of them; one at or under the
+    showed 0.01 to 0.23 of the way), at most MARK_FAINT_MAX of them; one at or under the
     approach's level is not."""
     onset, first, faint = _faint_press(monkeypatch, [-0.02, 0.06])
     assert (onset, first, faint) == (10, 10, 1)
     assert _faint_press(monkeypatch, [0.06, -0.02])[2] == 0
-    assert _faint_press(monkeypatch, [0.03, 0.05, 0.07])[2] == MARK_FAINT_MAX == 2
+    assert _faint_press(monkeypatch, [0.03, 0.05, 0.07])[2] == MARK_FAINT_MAX == 1
     # a frame over 4 sds and 0.1 of the way, rising towards the hold, is the first trace
     onset, first, faint = _faint_press(monkeypatch, [-0.02, 0.3])
     assert (onset, first, faint) == (10, 9, 0)

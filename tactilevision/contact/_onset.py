@@ -174,8 +174,8 @@ def _mark_template_onset(ctx: _PressContext, centre: tuple[float, float], run: n
     mark below any threshold that noise does not cross: ``faint`` counts the frames before
     ``first`` (at most :data:`MARK_FAINT_MAX`) projected over :data:`MARK_Z_FAINT` sds
     above the approach's level, whose periods the crossing's bracket then spans too (on
-    a Taxim session at 30 frames/s without shadows, 16 of 28 brackets missed P(w0), every
-    one of them a period late; an indenter's P(w0) is the intersection of its presses'
+    a Taxim session at 30 frames/s without shadows, 16 of 28 brackets missed P(w0), all
+    above it; an indenter's P(w0) is the intersection of its presses'
     brackets, which one late bracket moves). A needless period costs that press's
     bracket its width, not the intersection its truth."""
     f = _press_forces(ctx, run)

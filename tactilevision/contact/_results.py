@@ -59,14 +59,16 @@ MARK_Z_SEEN = 4.0
 #: moves lifts the frames before the crossing by a few sds of a steady one: 0.01 of the way
 #: at 5 sd on a Taxim session with shadows).
 MARK_TRACE = 0.1
-#: ... and the frames just before that first trace whose projection lies over this many
-#: sds above the approach's level may show the mark too faintly to count (a renderer's
-#: toe: on Taxim's frames without shadows the first frame past w0 projected 0.05 to 0.23
-#: of the way, 1.9 to 3.7 sds, on 14 of 28 presses of one session): the crossing's
-#: bracket spans their periods as well...
+#: ... and the frame just before that first trace, where its projection lies over this
+#: many sds above the approach's level, may show the mark too faintly to count (a
+#: renderer's toe: on Taxim's frames without shadows the first frame past w0 projected
+#: 0.01 to 0.23 of the way, up to 3.7 sds, on 14 of 28 presses of one session, 9 um past
+#: w0 showing 0.01): the crossing's bracket spans its period as well (0: any frame above
+#: the approach's level; a frame under it is taken as before w0)...
 MARK_Z_FAINT = 0.0
-#: ... at most this many of them.
-MARK_FAINT_MAX = 2
+#: ... and at most this many such frames (on four Taxim sessions without shadows the
+#: crossing never lay more than one period before the first trace).
+MARK_FAINT_MAX = 1
 
 #: Vernier: least colour contrast of a band (:attr:`BevelReading.contrast`), as a fraction
 #: of the median over the session's long, clear bands. The flanks tilt the gel by theta
