@@ -5,7 +5,8 @@ at depth w0. The first frame that shows it comes up to one frame period after th
 instant, and the stage goes on to its stop: every press is held past w0, by the same
 sign (issue 39: a median of 22 um random uncertainty stated, E's interval excluding
 the truth on 3 of 4 sessions). The force says how far. The land reached w0 within
-the frame period before the onset frame (and before the stage stopped), where the
+the frame period before the onset frame (or two, where the frame before may show the
+mark faintly; and before the stage stopped), where the
 F/T log reads fz; from there to the force window fz rises by dP/dw times the depth
 the stage went on by:
 

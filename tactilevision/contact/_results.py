@@ -128,10 +128,11 @@ class CertifiedPress:
         Standard error of the F/T window's mean fz, its autocorrelation
         included (``force_std_n`` is the window's sd), N.
     force_onset_n, force_onset_sem_n : float
-        ``'onset'``: fz when the land reached w0 (the mean of the smoothed
+        ``'onset'``: fz when the land reached w0 (the middle of the smoothed
         fz over the frame period before the first frame showing the mark,
-        up to the hold's start) and its uncertainty (that fz's spread over
-        the period and its noise), N: the force rises from there to the
+        or two where the frame before may show it faintly, up to the hold's
+        start) and its uncertainty (that fz's spread over the periods and
+        its noise), N: the force rises from there to the
         window's as the stage goes on past w0 (NaN for ``'vernier'``).
     travel_mm : float
         ``'onset'``: the depth the stage covers in one frame period at the
