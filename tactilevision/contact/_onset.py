@@ -305,18 +305,18 @@ def _crossing_force(session, run: np.ndarray, t_on: float, offset: float, period
     """fz when the land reached w0, from the F/T log, and its uncertainty, N.
 
     The mark first shows at `t_on` (F/T clock), so the land reached w0 within the
-    `periods` frame periods before (1, or more where the frames before may show it
-    faintly: :func:`_mark_onset`), and not after the stage stopped (the hold's start,
-    :func:`hold_start`): fz at the ends of ``[t_on - periods * period, min(t_on,
-    t_hold)]`` (a 10 ms moving average, read at the instants) brackets P(w0), widened by
-    twice that average's noise. Returned as the bracket's middle and the sd of a uniform
-    over it. A hold that started before `t_on` (the mark seen late) puts the crossing in
-    the periods before the hold's start. `to_hold`: the bracket ends at the hold's start
-    whatever `t_on` (an onset that may be early or late), and spans the periods before
-    the earlier of the two (on a Taxim session without shadows, a press with 14 um of
-    overshoot read 2 frames into its hold: a bracket from 2 periods before that to the
-    hold's start was half a period wide, its middle 5.8 sds above P(w0)). ``(nan, nan)`` when the
-    log does not cover it.
+    `periods` frame periods before (1, or 2 where the frame before may show it faintly:
+    :func:`_mark_onset`), and not after the stage stopped (the hold's start,
+    :func:`hold_start`): with ``t_b = min(t_on, t_hold)``, fz at the ends of ``[t_b -
+    periods * period, t_b]`` (a 10 ms moving average, read at the instants) brackets
+    P(w0), widened by twice that average's noise (a hold that started before `t_on`, the
+    mark seen late, puts the crossing in the periods before the hold's start). Returned
+    as the bracket's middle and the sd of a uniform over it. `to_hold`: the bracket ends
+    at the hold's start whatever `t_on` (an onset that may be early or late), from the
+    periods before the earlier of the two (on a Taxim session without shadows, a press
+    with 14 um of overshoot read 2 frames into its hold: a bracket from 2 periods before
+    that to the hold's start was half a period wide, its middle 5.8 sds above P(w0)).
+    ``(nan, nan)`` when the log does not cover it.
     """
     tf, fz = session.force_times_s, session.forces_n[:, 2]
     times = session.frame_times_s
