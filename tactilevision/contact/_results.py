@@ -61,10 +61,11 @@ MARK_Z_SEEN = 4.0
 MARK_TRACE = 0.1
 #: ... and the frame just before that first trace, where its projection lies over this
 #: many sds above the approach's level, may show the mark too faintly to count (a
-#: renderer's toe: on Taxim's frames without shadows the first frame past w0 projected
-#: 0.01 to 0.23 of the way, up to 3.7 sds, on 14 of 28 presses of one session, 9 um past
-#: w0 showing 0.01): the crossing's bracket spans its period as well (0: any frame above
-#: the approach's level; a frame under it is taken as before w0)...
+#: renderer's toe: on a Taxim session without shadows, 14 of the 23 presses its template
+#: read showed their first frame past w0 at only 0.05 to 0.23 of the way, 1.9 to 3.7
+#: sds; on another a frame 9 um past w0 showed 0.01): the crossing's bracket spans its
+#: period as well (0: any frame above the approach's level; one under it is taken as
+#: before w0)...
 MARK_Z_FAINT = 0.0
 #: ... and at most this many such frames (on four Taxim sessions without shadows the
 #: crossing never lay more than one period before the first trace).
