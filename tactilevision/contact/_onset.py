@@ -245,7 +245,8 @@ def _mark_onset(ctx: _PressContext, centre: tuple[float, float], cand: np.ndarra
     press without its template (a hold too faint to build one: an overshoot of a few um)
     a noise frame can pass for the onset, early or late: the bracket then spans 2 periods
     and ends at the hold's start (on a Taxim session without shadows, a press with 4 um
-    of overshoot read this way put its crossing force 4.5 sds under P(w0))."""
+    of overshoot read this way put its crossing force 7.0 sds under P(w0), and still 4.5
+    with its bracket spanning two periods up to that onset)."""
     cfg = ctx.session.config
     rule = ctx.mark_rule
     if rule["rule"] == "auto":
