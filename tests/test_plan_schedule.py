@@ -22,6 +22,7 @@ from tactilevision.planning import (
     read_design,
     read_schedule,
 )
+from tactilevision.planning._plan_effects import CROSSING_PERIODS
 from tactilevision.planning._plan_recommend import _changes
 
 DEPTHS = (0.15, 0.30, 0.40, 0.50, 0.60)
@@ -51,6 +52,28 @@ def test_the_schedule_sets_the_presses_order_indenters_and_places():
     # each press's crossing force is its own indenter's (the FEM's at its w0)
     first = {int(i): f for i, f in zip(tab["indenter"], tab["force_w0_n"], strict=True)}
     assert np.all(np.diff([first[i] for i in range(len(DEPTHS))]) > 0)
+
+
+def test_crossing_brackets_span_the_periods_the_mark_rule_gives():
+    """A drawn mark's crossing bracket spans one frame period on a third of the presses and
+    two on the rest, press by press in turn (the certification adds the period of a frame
+    before the first trace that may show it faintly): without F/T noise, each press's
+    width over its periods is one frame's travel (0.1 mm/s at 15 frames/s) times dP/dw at
+    its indenter's w0, the same for all of an indenter's presses and growing with w0."""
+    tab = crossing_table(replace(MARK, force_noise_n=0.0))
+    width = tab["force_w0_sem_n"] * np.sqrt(12.0)
+    periods = np.resize(np.asarray(CROSSING_PERIODS, np.float64), width.size)
+    assert CROSSING_PERIODS == (1, 2, 2)
+    ind = tab["indenter"].astype(int)
+    unit = width / periods
+    per_indenter = []
+    for i in range(len(DEPTHS)):
+        np.testing.assert_allclose(unit[ind == i], unit[ind == i][0], rtol=1e-12)
+        assert set(periods[ind == i]) == {1.0, 2.0}        # each indenter sees both
+        per_indenter.append(unit[ind == i][0])
+    assert np.all(np.diff(per_indenter) > 0)
+    # dP/dw of a 3 mm layer under a 2.5 mm punch at E 0.2 MPa: a few N/mm
+    assert 1.0 < per_indenter[0] / (0.1 / 15.0) < 10.0
 
 
 def test_a_gradient_is_sized_on_the_spread_of_each_indenters_places():
