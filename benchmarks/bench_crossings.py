@@ -18,7 +18,9 @@ least 90 % of sessions for the within-indenter effects, no false alarm on the nu
 crossing forces rule out; ``--at-plan K`` at K times what ``plan`` says the session's
 design can see (:func:`tactilevision.planning.crossing_effect_sizes` on the
 :class:`~tactilevision.planning.Design` the session follows: its block, repeats, frame
-rate, F/T noise and window, its median stage speed through w0, its overshoot range and
+rate, F/T noise and window, its approach time (``approach_s``: the generator reaches
+every press's depth in the same time, so each indenter passes its mark at its own speed;
+before 2026-11-27's second change, the median speed for all), its overshoot range and
 its ``presses.csv`` as the schedule: each press's indenter and position, in order; with
 ``--spiral``, its press count as positions round a spiral, as before 2026-11-27), and
 prints both sizes per seed.
@@ -70,14 +72,13 @@ def plan_sizes(spec: SessionSpec, truth: dict, k: float, folder: Path | None = N
     with the session `folder`, its ``presses.csv`` (what the robot was to command, written
     before any frame) as the design's schedule."""
     presses = truth["presses"]
-    speed = float(np.median([p["depth_mm"] / (p["hold_from_s"] - p["t_start_s"])
-                             for p in presses]))
+    approach = float(np.median([p["hold_from_s"] - p["t_start_s"] for p in presses]))
     over = [p["overshoot_mm"] for p in presses]
     design = Design(thickness_mm=spec.thickness_mm, radius_mm=spec.block.radius_mm,
                     depths_mm=tuple(spec.block.depths_mm), repeats=spec.repeats,
                     E_mpa=spec.E_mpa, nu=spec.nu, bevel_angle_deg=0.0,
                     mm_per_px=truth["mm_per_px"], frame_rate_hz=spec.fps,
-                    stage_speed_mm_s=speed, force_noise_n=spec.force_noise_n[2],
+                    approach_s=approach, force_noise_n=spec.force_noise_n[2],
                     window_samples=spec.window_samples, rate_hz=spec.rate_hz,
                     hold_s=float(np.mean(spec.hold_s)),
                     overshoot_um=(1e3 * min(over), 1e3 * max(over)),

@@ -119,6 +119,7 @@ def _write(tmp_path, **change):
     (dict(plan="relaxation_g = 0.2"), "relaxation_g and relaxation_tau_s go together"),
     (dict(plan="relaxation_g = 1.5\nrelaxation_tau_s = 1"), "relaxation_g"),
     (dict(plan="relaxation_g = 0.2\nrelaxation_tau_s = -1"), "relaxation_tau_s"),
+    (dict(plan="approach_s = -0.5"), "approach_s"),
 ])
 def test_bad_designs_exit_2_naming_the_key(tmp_path, capsys, change, key):
     path = _write(tmp_path, **change)

@@ -16,7 +16,7 @@ what its session would certify and find:
 - From a calibration: :func:`design_from_calibration`; to a file: :func:`design_toml`.
 """
 
-from ._design import depth_uncertainty, planned_columns, read_schedule
+from ._design import depth_uncertainty, indenter_speeds, planned_columns, read_schedule
 from ._plan import (
     Design,
     PlanPrediction,
@@ -53,6 +53,7 @@ __all__ = [
     "effect_power",
     "effect_sensitivity",
     "error_totals",
+    "indenter_speeds",
     "plan",
     "plan_session",
     "planned_columns",

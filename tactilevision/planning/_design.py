@@ -79,6 +79,11 @@ class Design:
     frame_rate_hz, stage_speed_mm_s : float
         Camera rate and the stage's speed as it passes w0 (a mark's depth error is one
         frame's travel).
+    approach_s : float or None
+        The stage reaches each press's depth in this time, s, at constant speed (a move
+        of fixed duration: its speed through w0 is ``(w0 + overshoot) / approach_s``, the
+        overshoot the middle of ``overshoot_um``, so deeper indenters pass their mark
+        faster); None: every press at ``stage_speed_mm_s`` (:func:`indenter_speeds`).
     force_noise_n : float
         sd of one F/T sample, N.
     window_samples : int
@@ -138,6 +143,7 @@ class Design:
     mm_per_px: float = 0.0295
     frame_rate_hz: float = 30.0
     stage_speed_mm_s: float = 0.1
+    approach_s: float | None = None
     force_noise_n: float = 0.0125
     window_samples: int = 200
     force_zero_n: float = 0.0
@@ -232,6 +238,8 @@ def _check_block(d: Design) -> None:
     _positive(d.mm_per_px, "[sensor] mm_per_px")
     _positive(d.frame_rate_hz, "[plan] frame_rate_hz")
     _positive(d.stage_speed_mm_s, "[plan] stage_speed_mm_s")
+    if d.approach_s is not None:
+        _positive(d.approach_s, "[plan] approach_s")
     _positive(d.force_noise_n, "[plan] force_noise_n", allow_zero=True)
     _positive(d.force_zero_n, "[plan] force_zero_n", allow_zero=True)
     if d.depth_std_um is not None:
@@ -319,7 +327,8 @@ DESIGN_KEYS: dict[str, dict[str, str]] = {
     "force_sensor": {"rate_hz": "number", "window_samples": "integer", "window_at": "text"},
     "plan": {"repeats": "integer", "E_mpa": "number", "nu": "number",
              "frame_rate_hz": "number", "stage_speed_mm_s": "number",
-             "force_noise_n": "number", "force_zero_n": "number", "hold_s": "number",
+             "approach_s": "number", "force_noise_n": "number", "force_zero_n": "number",
+             "hold_s": "number",
              "depth_std_um": "number", "beta_table": "text", "overshoot_um": "numbers",
              "holds_s": "numbers", "waits_s": "numbers", "days": "integer",
              "positions": "integer", "schedule": "schedule", "relaxation_g": "number",
@@ -387,7 +396,7 @@ def read_design(path: str | Path) -> Design:
         The TOML file. Keys: ``[sensor] gel_thickness_mm, mm_per_px``, ``[indenter]
         radius_mm``, ``[gauge_block] depths_mm, bevel_angle_deg``, ``[force_sensor]
         rate_hz, window_samples, window_at``, ``[plan] repeats, E_mpa, nu,
-        frame_rate_hz, stage_speed_mm_s, force_noise_n, force_zero_n, hold_s,
+        frame_rate_hz, stage_speed_mm_s or approach_s, force_noise_n, force_zero_n, hold_s,
         depth_std_um, beta_table, overshoot_um, holds_s, waits_s, days, positions,
         schedule, relaxation_g, relaxation_tau_s`` and ``[plan.detect]`` (effect = size;
         every ``[plan]`` key optional; :class:`Design` gives the defaults). ``schedule``
@@ -403,7 +412,8 @@ def read_design(path: str | Path) -> Design:
     ------
     InputError
         A missing or unreadable file, TOML that does not parse, a missing required
-        key, an unknown ``[plan]`` key, a bad value (:func:`check_design`), or a
+        key, an unknown ``[plan]`` key, both ``stage_speed_mm_s`` and ``approach_s``
+        (one says how the stage moves), a bad value (:func:`check_design`), or a
         ``schedule`` file :func:`~tactilevision.io.read_presses` refuses, each naming the
         file and the key (or the line).
     """
@@ -425,6 +435,9 @@ def read_design(path: str | Path) -> Design:
 
     _check_keys(doc, path)
     plan = doc.get("plan", {})
+    if "stage_speed_mm_s" in plan and "approach_s" in plan:
+        raise InputError(f"{path}: [plan] gives both stage_speed_mm_s and approach_s: give "
+                         "the stage's speed through w0 or its move's duration, not both")
     depths = need("gauge_block", "depths_mm")
     gauge = doc.get("gauge_block", {})
     sensor = doc.get("sensor", {})
@@ -509,6 +522,29 @@ def press_indenters(d: Design) -> np.ndarray:
     return np.repeat(np.arange(len(d.depths_mm)), int(d.repeats))
 
 
+def indenter_speeds(d: Design) -> np.ndarray:
+    """(I,) float64 the stage's speed through each indenter's w0, mm/s.
+
+    ``stage_speed_mm_s`` for every indenter; with ``approach_s`` (a move of fixed
+    duration at constant speed to the press's depth) ``(w0 + o) / approach_s``, o the
+    middle of ``overshoot_um`` (mm).
+    """
+    w0 = np.asarray(d.depths_mm, np.float64)
+    if d.approach_s is None:
+        return np.full(w0.size, float(d.stage_speed_mm_s))
+    over = 0.5e-3 * (float(d.overshoot_um[0]) + float(d.overshoot_um[1]))
+    return (w0 + over) / float(d.approach_s)
+
+
+def speed_words(d: Design) -> str:
+    """The stage's speed through w0 in words (mm/s; the range over indenters with
+    ``approach_s``)."""
+    v = indenter_speeds(d)
+    if d.approach_s is None:
+        return f"{d.stage_speed_mm_s:g} mm/s"
+    return f"{v.min():.3g} to {v.max():.3g} mm/s, each depth reached in {d.approach_s:g} s"
+
+
 def depth_uncertainty(d: Design) -> tuple[float, float, str]:
     """Random sd and shared bound of a press's certified depth, um, and how.
 
@@ -521,7 +557,9 @@ def depth_uncertainty(d: Design) -> tuple[float, float, str]:
     the sd per press is ``sqrt(f sd_read^2 + (1 - f) o_r^2 / 12)``. A mark is seen at the
     first frame past it: the depth past w0 is off by up to one frame's travel ``v / f``,
     uniformly (sd ``v / (f sqrt 12)``), and the clock that dates the crossing can share
-    up to that much in every press (the bound given as ``depth_shared_um``).
+    up to that much in every press (the bound given as ``depth_shared_um``). With
+    ``approach_s`` the travel differs by indenter (:func:`indenter_speeds`): the sd is
+    the root mean square over the planned presses, the bound the largest travel.
     ``depth_std_um`` overrides the random part.
     """
     if d.bevel_angle_deg > 0:
@@ -535,9 +573,12 @@ def depth_uncertainty(d: Design) -> tuple[float, float, str]:
                             f"tan(theta) = {read_sd:.2f} um), the rest bounded to "
                             f"{o_r:.1f} um past w0")
     else:
-        travel = d.stage_speed_mm_s / d.frame_rate_hz * 1e3
-        sd, shared = travel / math.sqrt(12.0), travel
-        how = (f"mark: one frame's travel {travel:.1f} um ({d.stage_speed_mm_s:g} mm/s at "
+        travel = indenter_speeds(d)[press_indenters(d)] / d.frame_rate_hz * 1e3
+        rms = math.sqrt(float(np.mean(travel**2)))
+        sd, shared = rms / math.sqrt(12.0), float(travel.max())
+        what = (f"{rms:.1f} um" if d.approach_s is None else
+                f"{travel.min():.1f} to {travel.max():.1f} um by indenter, rms {rms:.1f} um")
+        how = (f"mark: one frame's travel {what} ({speed_words(d)}, "
                f"{d.frame_rate_hz:g} frames/s) / sqrt(12), shared up to one frame's travel")
     if d.depth_std_um is not None:
         sd, how = float(d.depth_std_um), "given ([plan] depth_std_um)"
@@ -672,7 +713,8 @@ def design_toml(d: Design) -> str:
             return f'"{v}"'
         return repr(float(v)) if isinstance(v, float) else str(v)
 
-    plan_keys = ["repeats", "E_mpa", "nu", "frame_rate_hz", "stage_speed_mm_s",
+    speed = "stage_speed_mm_s" if d.approach_s is None else "approach_s"
+    plan_keys = ["repeats", "E_mpa", "nu", "frame_rate_hz", speed,
                  "force_noise_n", "force_zero_n", "hold_s", "depth_std_um", "beta_table",
                  "overshoot_um", "holds_s", "waits_s", "days", "positions", "relaxation_g",
                  "relaxation_tau_s"]

@@ -55,7 +55,9 @@ from ._design import (
     design_table,
     design_toml,
     hold_lengths,
+    indenter_speeds,
     planned_columns,
+    press_indenters,
     read_design,
     read_schedule,
     untestable_effects,
@@ -272,8 +274,9 @@ def relaxation_identifiability(d: Design, g: float, tau_s: float, *,
     against the fitted standard linear solid by an F test at ``RELAX_ALPHA``
     and tau lies in the span the holds resolve. The holds are planned without
     noise: each press's force ``F_i(t) = P_i [(1 - g) + g phi(T_i / tau)
-    exp(-t / tau)]`` (P_i the FEM force at its depth, T_i its loading time
-    ``w / stage_speed_mm_s``, phi :func:`ramp_factor`), sampled at ``rate_hz``
+    exp(-t / tau)]`` (P_i the FEM force at its depth, T_i its loading time:
+    ``w`` over the stage's speed, :func:`indenter_speeds`; phi
+    :func:`ramp_factor`), sampled at ``rate_hz``
     over its hold and averaged in blocks as the fit does; ``force_noise_n`` per
     sample, white, gives the block means' variance sigma_b^2. The straight
     decay's least-squares misfit ``RSS_line`` to these noise-free holds over
@@ -287,7 +290,7 @@ def relaxation_identifiability(d: Design, g: float, tau_s: float, *,
     tau = _positive(tau_s, "relaxation tau_s")
     w, P = design_table(d)
     hold = hold_lengths(d, w.size)
-    ramp = w / d.stage_speed_mm_s
+    ramp = w / indenter_speeds(d)[press_indenters(d)]
     curves, var_b = [], []
     for Pi, Ti, Hi in zip(P, ramp, hold, strict=True):
         n = max(round(Hi * d.rate_hz), 5)

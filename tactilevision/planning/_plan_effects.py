@@ -29,6 +29,7 @@ from ._design import (
     Design,
     depth_uncertainty,
     design_table,
+    indenter_speeds,
     planned_columns,
     press_indenters,
     untestable_effects,
@@ -87,10 +88,11 @@ def crossing_table(design: Design) -> dict[str, np.ndarray]:
     its indenters and positions in its order. A press crosses w0
     within the frame period before the mark first shows, or within the periods of the
     frames before that which may show it faintly: ``calibrate`` brackets the force over
-    those periods, whose width is the stage's travel in one frame times dP/dw at w0 (the
-    FEM's) times the periods, widened by four times the noise of its 10 ms average of the
-    F/T; the stated sd is the bracket's width over sqrt(12) (a uniform crossing). The
-    presses' periods go 1, 2, 2 in turn (:data:`CROSSING_PERIODS`).
+    those periods, whose width is the stage's travel in one frame (at the indenter's
+    speed, :func:`indenter_speeds`) times dP/dw at w0 (the FEM's) times the periods,
+    widened by four times the noise of its 10 ms average of the F/T; the stated sd is
+    the bracket's width over sqrt(12) (a uniform crossing). The presses' periods go 1,
+    2, 2 in turn (:data:`CROSSING_PERIODS`).
 
     Returns
     -------
@@ -109,7 +111,8 @@ def crossing_table(design: Design) -> dict[str, np.ndarray]:
     slope = (fem_force(*args, w0 + eps) - fem_force(*args, w0 - eps)) / (2 * eps)
     avg = design.force_noise_n / math.sqrt(max(1.0, 0.01 * design.rate_hz))
     periods = np.resize(np.asarray(CROSSING_PERIODS, np.float64), n)
-    width = slope[ind] * design.stage_speed_mm_s / design.frame_rate_hz * periods + 4.0 * avg
+    travel = indenter_speeds(design) / design.frame_rate_hz
+    width = slope[ind] * travel[ind] * periods + 4.0 * avg
     return {"indenter": ind.astype(np.float64), "press": np.arange(n, dtype=np.float64),
             "time_s": cols["time_s"][:n], "x_mm": cols["x_mm"][:n], "y_mm": cols["y_mm"][:n],
             "force_w0_n": p0[ind], "force_w0_sem_n": width / math.sqrt(12.0)}

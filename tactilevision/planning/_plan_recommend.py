@@ -205,9 +205,7 @@ def _changes(d: Design) -> list[tuple[str, Design, bool]]:
                  replace(d, bevel_angle_deg=5.0), True),
                 (f"the camera at {3 * d.frame_rate_hz:g} frames/s (was {d.frame_rate_hz:g})",
                  replace(d, frame_rate_hz=3 * d.frame_rate_hz), True),
-                (f"the stage at {d.stage_speed_mm_s / 3:.3g} mm/s past the mark (was "
-                 f"{d.stage_speed_mm_s:g})", replace(d, stage_speed_mm_s=d.stage_speed_mm_s / 3),
-                 True)]
+                _slower_stage(d)]
     shortest = min(d.holds_s) if d.holds_s else (d.hold_s if d.hold_s is not None else 1.0)
     if 2 * d.window_samples / d.rate_hz <= shortest:
         out.append((f"an F/T window of {2 * d.window_samples} samples (was {d.window_samples})",
@@ -216,6 +214,17 @@ def _changes(d: Design) -> list[tuple[str, Design, bool]]:
         out.append(("a tare before each press (the F/T zero measured, not a drift of up to "
                     f"{1e3 * d.force_zero_n:.2g} mN)", replace(d, force_zero_n=0.0), True))
     return out
+
+
+def _slower_stage(d: Design) -> tuple[str, Design, bool]:
+    """The stage three times slower past the mark: its speed, or its move's duration."""
+    if d.approach_s is None:
+        return (f"the stage at {d.stage_speed_mm_s / 3:.3g} mm/s past the mark (was "
+                f"{d.stage_speed_mm_s:g})", replace(d, stage_speed_mm_s=d.stage_speed_mm_s / 3),
+                True)
+    return (f"each press's approach in {3 * d.approach_s:g} s, the stage three times slower "
+            f"past the mark (was {d.approach_s:g} s)", replace(d, approach_s=3 * d.approach_s),
+            True)
 
 
 def _opening_changes(d: Design, untestable: dict[str, str]) -> list[tuple[str, Design]]:

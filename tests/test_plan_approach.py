@@ -1,0 +1,81 @@
+"""A stage that reaches every press's depth in a fixed time (``[plan] approach_s``): each
+indenter passes its mark at its own speed, and ``plan`` sizes the mark's lag with it."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from tactilevision import InputError
+from tactilevision.cli import main
+from tactilevision.planning import (
+    Design,
+    crossing_table,
+    depth_uncertainty,
+    design_toml,
+    indenter_speeds,
+    read_design,
+)
+from tactilevision.planning._plan_recommend import _changes
+
+DEPTHS = (0.15, 0.30, 0.40, 0.50, 0.60)
+TIMED = Design(thickness_mm=3.0, radius_mm=2.5, depths_mm=DEPTHS, repeats=4, E_mpa=0.2,
+               nu=0.48, bevel_angle_deg=0.0, frame_rate_hz=15.0, approach_s=0.5,
+               overshoot_um=(5.0, 60.0))
+
+
+def test_a_move_of_fixed_duration_passes_each_mark_at_its_depth_over_that_time():
+    # constant speed to w0 + overshoot, the overshoot the middle of its range (32.5 um)
+    np.testing.assert_allclose(indenter_speeds(TIMED),
+                               (np.asarray(DEPTHS) + 0.0325) / 0.5, rtol=1e-12)
+    np.testing.assert_allclose(indenter_speeds(replace(TIMED, approach_s=None)), 0.1)
+    # one frame's travel: 0.365 mm/s / 15 to 1.265 mm/s / 15, the lag bound the longest
+    sd, shared, how = depth_uncertainty(TIMED)
+    travel = 1e3 * np.repeat((np.asarray(DEPTHS) + 0.0325) / 0.5 / 15.0, 4)
+    assert shared == pytest.approx(travel.max()) == pytest.approx(1e3 * 0.6325 / 0.5 / 15)
+    assert sd == pytest.approx(np.sqrt(np.mean(travel**2) / 12.0))
+    assert "0.365 to 1.26 mm/s" in how and "reached in 0.5 s" in how
+
+
+def test_each_indenters_crossing_bracket_is_a_constant_speed_designs_at_its_speed():
+    """The crossing table of the timed design, indenter by indenter, is the one a stage at
+    that indenter's own speed would give; the deepest brackets widest (a faster pass and
+    a steeper P(w))."""
+    tab = crossing_table(TIMED)
+    ind = tab["indenter"].astype(int)
+    for i, v in enumerate(indenter_speeds(TIMED)):
+        same = crossing_table(replace(TIMED, approach_s=None, stage_speed_mm_s=float(v)))
+        np.testing.assert_allclose(tab["force_w0_sem_n"][ind == i],
+                                   same["force_w0_sem_n"][ind == i], rtol=1e-12)
+    one = tab["force_w0_sem_n"][::5][0], tab["force_w0_sem_n"][4::5][0]    # press 0 and 4
+    assert one[1] > 3 * one[0]
+
+
+def test_a_slower_stage_is_offered_as_a_longer_move_and_the_file_round_trips(tmp_path):
+    slower = [new for _, new, _ in _changes(TIMED) if new.approach_s != TIMED.approach_s]
+    assert [new.approach_s for new in slower] == [1.5]
+    assert slower[0].stage_speed_mm_s == TIMED.stage_speed_mm_s
+    path = tmp_path / "d.toml"
+    path.write_text(design_toml(TIMED))
+    assert "approach_s = 0.5" in path.read_text()
+    assert "stage_speed_mm_s" not in path.read_text()
+    assert read_design(path) == TIMED
+
+
+@pytest.mark.parametrize(("plan", "match"), [
+    ("approach_s = 0.5\nstage_speed_mm_s = 0.1", "both stage_speed_mm_s and approach_s"),
+    ("approach_s = 0", "approach_s must be positive"),
+    ('approach_s = "fast"', "approach_s must be a number"),
+])
+def test_bad_approaches_are_refused_naming_the_key(tmp_path, capsys, plan, match):
+    path = tmp_path / "d.toml"
+    path.write_text("[sensor]\ngel_thickness_mm = 3.0\n[indenter]\nradius_mm = 2.5\n"
+                    "[gauge_block]\ndepths_mm = [0.15, 0.3, 0.45]\nbevel_angle_deg = 0\n"
+                    f"[plan]\n{plan}\n")
+    with pytest.raises(InputError, match=match):
+        read_design(path)
+    assert main(["plan", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert "approach_s" in err and str(path) in err and "Traceback" not in err
