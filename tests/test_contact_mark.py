@@ -9,7 +9,13 @@ import numpy as np
 import pytest
 
 from tactilevision import InputError
-from tactilevision.contact import _onset, crossing_forces, mark_depths, mark_shared_mm
+from tactilevision.contact import (
+    _onset,
+    crossing_bracket,
+    crossing_forces,
+    mark_depths,
+    mark_shared_mm,
+)
 from tactilevision.contact._mark import CLOCK_SD_S, STIFFNESS_REL
 from tactilevision.contact._onset import _crossing_force, _mark_template_onset, _press_forces
 from tactilevision.contact._results import MARK_FAINT_MAX
@@ -117,7 +123,10 @@ def test_crossing_bracket_spans_its_periods_and_ends_at_the_hold_when_told():
     session, run = _ramp_session()
 
     def bracket(t_on, periods=1, to_hold=False):
-        mid, sd = _crossing_force(session, run, t_on, 0.0, 0.1, periods, to_hold)
+        mid, sd, span = _crossing_force(session, run, t_on, 0.0, 0.1, periods, to_hold)
+        # the instants it is read at, kept with the press: the same bracket read again
+        assert crossing_bracket(session.force_times_s, session.forces_n[:, 2],
+                                *span) == (mid, sd)
         half = np.sqrt(3.0) * sd
         return mid - half, mid + half
 
@@ -127,6 +136,14 @@ def test_crossing_bracket_spans_its_periods_and_ends_at_the_hold_when_told():
     np.testing.assert_allclose(bracket(2.35, 2), [1.6, 2.0], atol=1e-2)
     # an onset read in the hold (a noise frame, the template failing): still two periods
     np.testing.assert_allclose(bracket(2.15, 2, to_hold=True), [1.6, 2.0], atol=1e-2)
+    _, _, span = _crossing_force(session, run, 1.55, 0.0, 0.1, 2, False)
+    np.testing.assert_allclose(span, [1.35, 1.55], atol=1e-9)
+    # read on another force at those instants (the elastic force behind a relaxing log)
+    twice = session.forces_n[:, 2] * 2.0
+    mid, sd = crossing_bracket(session.force_times_s, twice, *span)
+    np.testing.assert_allclose([mid - np.sqrt(3) * sd, mid + np.sqrt(3) * sd], [1.4, 2.2],
+                               atol=4e-3)
+    assert np.isnan(crossing_bracket(session.force_times_s, twice, 5.0, 5.2)[0])
 
 
 def _faint_press(monkeypatch, before: list[float]):

@@ -6,20 +6,30 @@ from __future__ import annotations
 
 import json
 import math
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
 from tactilevision import InputError
-from tactilevision.contact import approach_start, hold_start
+from tactilevision.contact import (
+    Certification,
+    CertifiedPress,
+    approach_start,
+    crossing_bracket,
+    hold_start,
+)
 from tactilevision.io import read_holds
 from tactilevision.mechanics import (
     beta_relation,
+    elastic_force,
     fit_relaxation,
     instantaneous_forces,
     ramp_factor,
     refine_relaxation,
 )
+from tactilevision.pipeline import hold_spans
+from tactilevision.pipeline._steps import _elastic_crossings
 from tactilevision.sim import ft_log, press_schedule
 
 
@@ -683,3 +693,61 @@ def test_under_the_mark_rule_a_depth_only_verdict_gives_way_to_the_holds(tmp_pat
     absorbed = _with_holds(replace(d, missing_effect="incomplete_recovery"), found, "mark")
     assert absorbed.missing_effect == "viscoelastic_relaxation"
     assert "is an effect the mark's depths absorb" in absorbed.message
+
+
+def _relaxing_log():
+    """Two presses of a relaxing gel (g 0.3, tau 0.5 s), noise-free, and their schedule."""
+    sched = press_schedule((0.4, 0.3), repeats=1, approach_s=0.5, hold_s=1.0, release_s=0.25,
+                           start_s=1.0, seed=2)
+    dur = float(sched.t_end_s[-1]) + 1.0
+
+    def law(i, d):
+        return 4.0 * d * (1 + 0.8 * d / 3.0)
+
+    t, relaxed = ft_log(sched, law, duration_s=dur, relaxation=(0.3, 0.5),
+                        noise_n=(0, 0, 0), seed=4)
+    return sched, law, t, relaxed
+
+
+def _press(k: int, t_frame: float, **kw) -> CertifiedPress:
+    return CertifiedPress(press=k, indenter=0, w0_mm=0.3, frame=0, t_frame_s=t_frame,
+                          footprint=None, x_mm=0.0, y_mm=0.0, force_n=1.0, force_std_n=0.0,
+                          fx_n=0.0, fy_n=0.0, tangential_ratio=0.0, time_s=t_frame, hold_s=0.1,
+                          wait_s=1.0, bevel_score=9.0, **kw)
+
+
+def test_a_hold_starts_where_the_force_stops_rising_not_at_the_marks_frame():
+    """A drawn mark's certification frame comes on the approach, up to a period or two
+    before the stage stops: holds.csv starts at the hold itself (the schedule's, to 2 ms),
+    whether the frame came 60 ms early or in the hold; it ends at the release."""
+    sched, _, t, relaxed = _relaxing_log()
+    session = SimpleNamespace(force_times_s=t, forces_n=relaxed)
+    hold = sched.t_start_s + sched.approach_s
+    frames = [hold[0] - 0.06, hold[1] + 0.02]
+    cert = SimpleNamespace(clock_offset_s=0.0,
+                           presses=[_press(k, f) for k, f in enumerate(frames)])
+    spans = hold_spans(session, cert)
+    np.testing.assert_allclose([s[1] for s in spans], hold, atol=0.002)
+    np.testing.assert_allclose([s[2] for s in spans], hold + sched.hold_s, atol=0.01)
+
+
+def test_under_relaxation_a_marks_crossing_force_is_read_on_the_elastic_force():
+    """The mark rule takes a depth from the window's force less P(w0): with the window read
+    on the elastic force behind the log, P(w0) must be too. Bracketing the instant press 1
+    (w 0.3 mm + overshoot in 0.5 s) crosses 0.28 mm, the elastic force's bracket holds the
+    law's P(0.28 mm), the measured one lies under it; a vernier press is left as it was."""
+    sched, law, t, relaxed = _relaxing_log()
+    elastic = elastic_force(t, relaxed[:, 2], 0.3, 0.5)
+    i = 1
+    t_c = sched.t_start_s[i] + sched.approach_s[i] * 0.28 / sched.depth_mm[i]
+    onset = _press(1, t_c, rule="onset", onset_span_s=(t_c - 0.02, t_c + 0.01))
+    vern = _press(0, 1.0, rule="vernier", force_onset_n=7.0)
+    cert = Certification(presses=[vern, onset], rejected=[], clock=None, clock_offset_s=0.0,
+                         clock_source="given", noise_sigma=1.0, contact_area_px=np.zeros(0))
+    got = _elastic_crossings(cert, t, elastic)
+    assert got.presses[0] == vern
+    p = got.presses[1]
+    half = np.sqrt(3.0) * p.force_onset_sem_n
+    assert p.force_onset_n - half < law(1, 0.28) < p.force_onset_n + half
+    measured, sd = crossing_bracket(t, relaxed[:, 2], *onset.onset_span_s)
+    assert measured + np.sqrt(3.0) * sd < law(1, 0.28)

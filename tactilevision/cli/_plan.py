@@ -24,7 +24,8 @@ __all__ = ["add_parser", "run"]
 
 _DESCRIPTION = """\
 Predict, from a design (a session.toml plus a [plan] table: repeats, E_mpa,
-nu, frame_rate_hz, stage_speed_mm_s, overshoot_um, force_noise_n,
+nu, frame_rate_hz, stage_speed_mm_s or approach_s (each press's depth reached
+in that time), overshoot_um, force_noise_n,
 force_zero_n, hold_s or holds_s, waits_s, days, positions or schedule (the
 presses the robot will command: a presses.csv or [[indenter, x_mm, y_mm],
 ...]), depth_std_um), each press's depth uncertainty, the sds of E and nu that

@@ -21,6 +21,7 @@ from ._mark import (
     mark_shared_mm,
 )
 from ._mask import contact_mask, noise_level
+from ._onset import crossing_bracket
 from ._results import Certification, CertifiedPress, Rejection
 from ._sync import (
     ClockSync,
@@ -78,6 +79,7 @@ __all__ = [
     "contact_mask",
     "contact_onsets",
     "crest_consistency",
+    "crossing_bracket",
     "crossing_consistency",
     "crossing_forces",
     "estimate_clock_offset",

@@ -302,22 +302,23 @@ def _mark_onset(ctx: _PressContext, centre: tuple[float, float], cand: np.ndarra
 
 
 def _crossing_force(session, run: np.ndarray, t_on: float, offset: float, period: float,
-                    periods: int = 1, to_hold: bool = False) -> tuple[float, float]:
-    """fz when the land reached w0, from the F/T log, and its uncertainty, N.
+                    periods: int = 1, to_hold: bool = False
+                    ) -> tuple[float, float, tuple[float, float]]:
+    """fz when the land reached w0, from the F/T log, its uncertainty, N, and the
+    instants that bracket it, F/T clock, s.
 
     The mark first shows at `t_on` (F/T clock), so the land reached w0 within the
     `periods` frame periods before (1, or 2 where the frame before may show it faintly:
     :func:`_mark_onset`), and not after the stage stopped (the hold's start,
     :func:`hold_start`): with ``t_b = min(t_on, t_hold)``, fz at the ends of ``[t_b -
-    periods * period, t_b]`` (a 10 ms moving average, read at the instants) brackets
-    P(w0), widened by twice that average's noise (a hold that started before `t_on`, the
-    mark seen late, puts the crossing in the periods before the hold's start). Returned
-    as the bracket's middle and the sd of a uniform over it. `to_hold`: the bracket ends
+    periods * period, t_b]`` brackets P(w0) (:func:`crossing_bracket`; a hold that
+    started before `t_on`, the mark seen late, puts the crossing in the periods before
+    the hold's start). `to_hold`: the bracket ends
     at the hold's start whatever `t_on` (an onset that may be early or late), from the
     periods before the earlier of the two (on a Taxim session without shadows, a press
     with 14 um of overshoot read 2 frames into its hold: a bracket from 2 periods before
     that to the hold's start was half a period wide, its middle 5.8 sds above P(w0)).
-    ``(nan, nan)`` when the log does not cover it.
+    ``(nan, nan, span)`` when the log does not cover it.
     """
     tf, fz = session.force_times_s, session.forces_n[:, 2]
     times = session.frame_times_s
@@ -327,7 +328,35 @@ def _crossing_force(session, run: np.ndarray, t_on: float, offset: float, period
     if t_hold is not None:
         t_b = t_hold if to_hold else min(t_on, t_hold)
     t_a = min(t_on, t_b) - periods * period
-    dt = float(np.median(np.diff(tf))) if tf.size > 1 else 1.0
+    return (*crossing_bracket(tf, fz, t_a, t_b), (float(t_a), float(t_b)))
+
+
+def crossing_bracket(force_times_s: np.ndarray, fz_n: np.ndarray, t_a: float, t_b: float
+                     ) -> tuple[float, float]:
+    """The force a press had when it crossed a depth between two instants, N.
+
+    Parameters
+    ----------
+    force_times_s : (M,) float64 ndarray
+        F/T clock, s.
+    fz_n : (M,) float64 ndarray
+        Normal force, N: the F/T log's, or the elastic force behind it for a relaxing
+        gel (:func:`~tactilevision.mechanics.elastic_force`).
+    t_a, t_b : float
+        The instants the crossing lies between, F/T clock, s
+        (:attr:`CertifiedPress.onset_span_s`).
+
+    Returns
+    -------
+    force, sd : float
+        The middle of the bracket ``[fz(t_a), fz(t_b)]`` (a 10 ms moving average read at
+        the instants), widened by twice that average's noise, and the sd of a uniform
+        over it; ``(nan, nan)`` when the log does not cover the instants.
+    """
+    tf, fz = np.asarray(force_times_s, np.float64), np.asarray(fz_n, np.float64)
+    if not (np.isfinite(t_a) and np.isfinite(t_b)) or tf.size < 2:
+        return float("nan"), float("nan")
+    dt = float(np.median(np.diff(tf)))
     k = max(1, round(0.01 / dt))
     sel = np.flatnonzero((tf >= t_a - k * dt) & (tf <= t_b + k * dt))
     if sel.size < k + 2:

@@ -135,6 +135,10 @@ class CertifiedPress:
         start) and its uncertainty (that fz's spread over the periods and
         its noise), N: the force rises from there to the
         window's as the stage goes on past w0 (NaN for ``'vernier'``).
+    onset_span_s : (float, float)
+        ``'onset'``: the instants, F/T clock, s, between which the land crossed w0
+        (``force_onset_n`` is the force's bracket over them,
+        :func:`~tactilevision.contact.crossing_bracket`); NaN for ``'vernier'``.
     travel_mm : float
         ``'onset'``: the depth the stage covers in one frame period at the
         onset, mm (the speed read from the approach's force: the mark shows
@@ -175,6 +179,7 @@ class CertifiedPress:
     force_onset_sem_n: float = float("nan")
     travel_mm: float = float("nan")
     band_resolved: bool = True
+    onset_span_s: tuple[float, float] = (float("nan"), float("nan"))
 
 
 @dataclass(frozen=True)

@@ -564,7 +564,8 @@ def _verdict(tests: _HoldTests, g_lo: float, tau: float, r_w: float, se_w: float
         why = (f"the holds relax with a curvature that pins tau (a straight decay is rejected, "
                f"p = {curv_p:.2g}; tau = {tau:.3g} s lies within the span the holds resolve, "
                f"{TAU_MIN_HOLD_FRACTION:g} of the shortest hold to {TAU_HOLD_RATIO:g} times the "
-               f"longest: {shortest:.3g} to {longest:.3g} s)")
+               f"longest: {TAU_MIN_HOLD_FRACTION * shortest:.3g} to "
+               f"{TAU_HOLD_RATIO * longest:.3g} s)")
         if softening:
             why += (f"; the presses' forces also trend between presses ({trend}): a gel that "
                     "softens too")

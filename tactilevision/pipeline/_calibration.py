@@ -7,11 +7,22 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..contact import Certification, CertifiedPress, ForceZero, approach_start, hold_end
+from ..contact import (
+    Certification,
+    CertifiedPress,
+    ForceZero,
+    approach_start,
+    hold_end,
+    hold_start,
+)
 from ..io import Session
 from ..mechanics import IndentationFit, RelaxationFit
 
-__all__ = ["SessionCalibration", "hold_curves", "hold_spans"]
+__all__ = ["HOLD_SEARCH_S", "SessionCalibration", "hold_curves", "hold_spans"]
+
+#: How long before a press's certification frame its approach's rise is looked for, s:
+#: the end of the rise is the hold's start (:func:`hold_spans`).
+HOLD_SEARCH_S = 0.5
 
 
 @dataclass(frozen=True)
@@ -186,15 +197,29 @@ def hold_spans(session: Session, certification: Certification
                 ) -> list[tuple[CertifiedPress, float, float]]:
     """Each certified press's hold on the F/T clock, (press, start, end), s: from its
     arrival at depth to the start of its release (presses whose release is not found left
-    out)."""
+    out).
+
+    The arrival is where the force stops rising (:func:`~tactilevision.contact.hold_start`
+    over the :data:`HOLD_SEARCH_S` before the press's certification frame to its release),
+    not the frame itself: a drawn mark's first trace comes while the stage still goes
+    deeper, up to a frame period or two before it stops (a hold read from there starts
+    with the approach's last rise: on a Taxim mark session of a gel relaxing with tau
+    0.7 s, the holds then looked straight and tau was not identified). Where no rise is
+    found, the frame's time.
+    """
     t, fz = np.asarray(session.force_times_s, np.float64), np.asarray(session.forces_n[:, 2])
     off = certification.clock_offset_s
     spans = []
     for p in certification.presses:
         t0 = p.t_frame_s + off
         t1 = hold_end(t, fz, t0)
-        if t1 is not None:
-            spans.append((p, t0, t1))
+        if t1 is None:
+            continue
+        t_hold = hold_start(t, fz, t0 - HOLD_SEARCH_S, t1)
+        if t_hold is not None and t_hold < t1:
+            t0 = t_hold
+            t1 = hold_end(t, fz, t0) or t1
+        spans.append((p, t0, t1))
     return spans
 
 

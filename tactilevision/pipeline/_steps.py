@@ -10,7 +10,14 @@ from dataclasses import replace
 import numpy as np
 
 from .._checks import InputError
-from ..contact import Certification, ForceZero, certify_session, force_window, force_zero
+from ..contact import (
+    Certification,
+    ForceZero,
+    certify_session,
+    crossing_bracket,
+    force_window,
+    force_zero,
+)
 from ..io import Session
 from ..mechanics import (
     BETA_TABLE_REACH,
@@ -248,10 +255,28 @@ def relaxation_step(session: Session, cert: Certification, progress: Callable | 
     off, n = again.clock_offset_s, session.config.window_samples
     force0 = np.array([force_window(session.force_times_s, elastic, p.t_frame_s + off + p.hold_s,
                                     n).fz_n for p in again.presses])
+    again = _elastic_crossings(again, session.force_times_s, elastic[:, 2])
     note = (f"the gel relaxes while held (g = {relax.g:.3f}, tau = {relax.tau_s:.3g} s from "
             f"{relax.n_presses} holds; {relax.why}): the clock was synchronised on the "
             f"elastic force behind the F/T log ({cert.clock_offset_s:.4f} s on the measured force, "
             f"{again.clock_offset_s:.4f} s on the elastic one), and the fit takes each "
-            "press's force from it (force0_n, the force at the instant of loading): E is "
-            "E_0, the instantaneous modulus")
+            "press's force from it (force0_n, the force at the instant of loading; a drawn "
+            "mark's crossing forces likewise): E is E_0, the instantaneous modulus")
     return again, relax, [note], force0
+
+
+def _elastic_crossings(cert: Certification, force_times_s: np.ndarray, elastic_fz_n: np.ndarray
+                       ) -> Certification:
+    """A drawn mark's crossing forces P(w0) read again on the elastic force behind the log,
+    at the instants that bracket each crossing (:func:`~tactilevision.contact.crossing_bracket`
+    over ``onset_span_s``): the mark rule takes each depth past w0 from the difference of
+    the window's force and P(w0), which must come from one force. On a Taxim mark session
+    of a gel relaxing with g 0.25, tau 0.7 s, the elastic window force less the measured
+    P(w0) read the depths 34 um deep on average."""
+    presses = []
+    for p in cert.presses:
+        if p.rule == "onset" and np.all(np.isfinite(p.onset_span_s)):
+            f, sd = crossing_bracket(force_times_s, elastic_fz_n, *p.onset_span_s)
+            p = replace(p, force_onset_n=f, force_onset_sem_n=sd)
+        presses.append(p)
+    return replace(cert, presses=presses)
