@@ -3,6 +3,7 @@ indenter passes its mark at its own speed, and ``plan`` sizes the mark's lag wit
 
 from __future__ import annotations
 
+import json
 from dataclasses import replace
 
 import numpy as np
@@ -14,6 +15,7 @@ from tactilevision.planning import (
     Design,
     crossing_table,
     depth_uncertainty,
+    design_from_calibration,
     design_toml,
     indenter_speeds,
     read_design,
@@ -79,3 +81,42 @@ def test_bad_approaches_are_refused_naming_the_key(tmp_path, capsys, plan, match
     assert main(["plan", str(path)]) == 2
     err = capsys.readouterr().err
     assert "approach_s" in err and str(path) in err and "Traceback" not in err
+
+
+def _calibration(tmp_path, ramp_of, name):
+    """A calibration folder of 12 presses at w0 0.15, 0.30, 0.45 mm (overshoot 10 to 40 um)
+    whose holds.csv times each press's loading as `ramp_of(depth)`, s."""
+    cal = tmp_path / name
+    cal.mkdir()
+    (cal / "fit.json").write_text(json.dumps({"E_mpa": 0.2, "nu": 0.48, "thickness_mm": 3.0,
+                                              "radius_mm": 2.5}))
+    rng = np.random.default_rng(3)
+    rows, holds = ["press,depth_mm,overshoot_mm,force_n,force_std_n"], ["press,t_s,fz_n,ramp_s"]
+    for k in range(12):
+        w0, o = (0.15, 0.30, 0.45)[k % 3], rng.uniform(0.010, 0.040)
+        rows.append(f"{k},{w0 + o:.6f},{o:.6f},1.0,0.01")
+        holds += [f"{k},{t:.3f},1.0,{ramp_of(w0 + o) * rng.uniform(0.98, 1.02):.4f}"
+                  for t in (0.0, 0.1)]
+    (cal / "measurements.csv").write_text("\n".join(rows) + "\n")
+    (cal / "holds.csv").write_text("\n".join(holds) + "\n")
+    return cal
+
+
+def test_a_calibration_says_how_its_stage_moved(tmp_path):
+    """plan --from-calibration reads the stage's motion from the presses' loading times
+    (holds.csv's ramp_s): the same 0.5 s at every depth is a move of fixed duration
+    (approach_s 0.5), times growing with depth a constant speed (0.2 mm/s); without the
+    loading times the default speed stays."""
+    timed = design_from_calibration(_calibration(tmp_path, lambda w: 0.5, "timed"))
+    assert timed.approach_s == pytest.approx(0.5, rel=0.02)
+    steady = design_from_calibration(_calibration(tmp_path, lambda w: w / 0.2, "steady"))
+    assert steady.approach_s is None
+    assert steady.stage_speed_mm_s == pytest.approx(0.2, rel=0.02)
+    bare = _calibration(tmp_path, lambda w: 0.5, "bare")
+    (bare / "holds.csv").unlink()
+    assert design_from_calibration(bare).stage_speed_mm_s == Design.stage_speed_mm_s
+    assert design_from_calibration(bare).approach_s is None
+    path = tmp_path / "next.toml"
+    assert main(["plan", "--from-calibration", str(tmp_path / "timed"), "--write-design",
+                 str(path)]) == 0
+    assert read_design(path) == timed

@@ -553,7 +553,9 @@ def design_from_calibration(folder: str | Path, session: str | Path | None = Non
     design : Design
         h and a, E and nu as fitted; the gauge block's depths w0 (each press's depth
         less its overshoot); the repeats per depth (presses over depths, rounded); the
-        overshoot range the presses had, um; the F/T sample sd (median of
+        overshoot range the presses had, um; the stage's motion from the presses'
+        loading times in ``holds.csv`` (``approach_s`` where every press took about the
+        same time, else ``stage_speed_mm_s``); the F/T sample sd (median of
         ``force_std_n``); the zero's stability (the drift ``calibrate`` measured plus two
         of its standard errors); the session's ``presses.csv``, where it presses every
         depth equally often, as the ``schedule`` (and its repeats). What the folders do
@@ -599,6 +601,8 @@ def design_from_calibration(folder: str | Path, session: str | Path | None = Non
     waits = col("wait_s") if rows and "wait_s" in rows[0] else np.array([])
     if np.isfinite(waits).any():
         kw["waits_s"] = tuple(round(float(v), 3) for v in waits[np.isfinite(waits)])
+    if rows and "press" in rows[0]:
+        kw.update(_stage_motion(folder / "holds.csv", depth, col("press")))
     relax = fit.get("relaxation")
     if isinstance(relax, dict) and relax.get("resolved") and 0 < float(relax.get("g") or 0) < 1:
         kw["relaxation_g"] = float(relax["g"])      # the relaxation it found, to plan for
@@ -640,6 +644,33 @@ def design_from_calibration(folder: str | Path, session: str | Path | None = Non
             kw["schedule"] = schedule
             kw["repeats"] = len(schedule) // len(depths)
     return Design(**kw)
+
+
+def _stage_motion(holds: Path, depth: np.ndarray, press: np.ndarray) -> dict[str, float]:
+    """How the session's stage moved, from each press's loading time (``holds.csv``'s
+    ``ramp_s``, from the force's rise to the hold) and depth: ``approach_s`` (the median
+    loading time) where the presses took about the same time whatever their depth (a move
+    of fixed duration), ``stage_speed_mm_s`` (the median depth over loading time) where
+    the time grew with the depth, whichever leaves the smaller relative scatter; nothing
+    with fewer than 3 presses timed."""
+    ramp: dict[int, float] = {}
+    try:
+        with open(holds, newline="") as fh:
+            for r in csv.DictReader(fh):
+                if r.get("ramp_s") not in (None, "") and r.get("press") not in (None, ""):
+                    ramp[int(float(r["press"]))] = float(r["ramp_s"])
+    except (OSError, ValueError):
+        return {}
+    pairs = np.array([(w, ramp[int(p)]) for w, p in zip(depth, press, strict=True)
+                      if np.isfinite(p) and int(p) in ramp and np.isfinite(w) and w > 0
+                      and math.isfinite(ramp[int(p)]) and ramp[int(p)] > 0])
+    if len(pairs) < 3:
+        return {}
+    w, r = pairs[:, 0], pairs[:, 1]
+    v = w / r
+    if np.std(r) / np.mean(r) <= np.std(v) / np.mean(v):
+        return {"approach_s": round(float(np.median(r)), 4)}
+    return {"stage_speed_mm_s": round(float(np.median(v)), 5)}
 
 
 def _session_schedule(where: Path, gauge: Any, depths: tuple[float, ...]
