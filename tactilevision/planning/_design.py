@@ -78,7 +78,7 @@ class Design:
         Image scale, mm per px (the vernier's resolution).
     frame_rate_hz, stage_speed_mm_s : float
         Camera rate and the stage's speed as it passes w0 (a mark's depth error is one
-        frame's travel).
+        frame's travel); the speed is not read where ``approach_s`` is given.
     approach_s : float or None
         The stage reaches each press's depth in this time, s, at constant speed (a move
         of fixed duration: its speed through w0 is ``(w0 + overshoot) / approach_s``, the
