@@ -111,9 +111,16 @@ def bracket_gains(lo: np.ndarray, hi: np.ndarray, groups: np.ndarray, shapes: np
 
 
 def _log_softplus(x: np.ndarray) -> np.ndarray:
-    """``log(log(1 + exp(x)))``, without underflow far below 0 (where it is x)."""
+    """``log(log(1 + exp(x)))``, without underflow far below 0 (where it is x).
+
+    The softplus as ``max(x, 0) + log1p(exp(-|x|))``: the same to 4e-15 as
+    ``np.logaddexp(0, x)`` on (256, 70, 5) arrays of x ~ N(0, 10), and faster: a
+    ``crossing_tests`` call on a 20-press table with a 10 % step took 0.248 and 0.289 s
+    against 0.278 and 0.346 s with ``logaddexp`` (alternating in one run, this project's
+    2-core machine under load), where the profile had put a third of its time here."""
+    soft = np.maximum(x, 0.0) + np.log1p(np.exp(-np.abs(x)))
     with np.errstate(divide="ignore"):
-        out = np.log(np.logaddexp(0.0, x))
+        out = np.log(soft)
     return np.where(x < -30.0, x, out)
 
 
