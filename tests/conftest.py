@@ -111,18 +111,19 @@ def taxim_lut(taxim_presses):
 
 
 #: Test files by their measured time, longest first (``pytest --durations=0``, summed per
-#: file, 2026-11-23). pytest-xdist hands out whole files (``--dist loadfile``) in
+#: file, 2026-11-27: test_crossings.py 190 s, test_calibrate.py 91, test_diagnose.py 81 of
+#: 1222 s in all). pytest-xdist hands out whole files (``--dist loadfile``) in
 #: collection order (``--no-loadscope-reorder`` in pyproject.toml): the long files first and
 #: the many short ones after fill the two workers evenly, where the default order (files
 #: with the most tests first) left the longest files to the end, one worker busy alone.
 LONGEST_FIRST = (
-    "test_diagnose.py", "test_optics_real.py", "test_calibrate.py", "test_calibrate_gelslim.py",
-    "test_fem_pad.py", "test_batch.py", "test_forces_session.py", "test_relaxation.py",
-    "test_cli_forces.py", "test_contact_edge.py", "test_vernier_taxim.py",
-    "test_fem_forces_proof.py",
-    "test_lut_mlp.py", "test_forces_gelslim.py", "test_sample_relaxation.py",
-    "test_viewer.py", "test_history.py", "test_docs.py", "test_cli_optics.py",
-    "test_diagnose_separation.py", "test_noise_budget.py",
+    "test_crossings.py", "test_calibrate.py", "test_diagnose.py", "test_plan_effects.py",
+    "test_plan_recommend.py", "test_table_engine_real.py", "test_crossing_statement.py",
+    "test_ball_session.py", "test_plan.py", "test_relaxation.py", "test_fem_sphere_coulomb.py",
+    "test_optics_real.py", "test_table_order.py", "test_vernier_taxim.py", "test_batch.py",
+    "test_ft_zero.py", "test_calibrate_gelslim.py", "test_plan_schedule.py",
+    "test_ball_taxim.py", "test_plan_speaks_once.py", "test_optics_press_check.py",
+    "test_viewer.py", "test_noise_budget.py", "test_cli_forces.py",
 )
 
 
