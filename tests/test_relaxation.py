@@ -751,3 +751,23 @@ def test_under_relaxation_a_marks_crossing_force_is_read_on_the_elastic_force():
     assert p.force_onset_n - half < law(1, 0.28) < p.force_onset_n + half
     measured, sd = crossing_bracket(t, relaxed[:, 2], *onset.onset_span_s)
     assert measured + np.sqrt(3.0) * sd < law(1, 0.28)
+
+
+def test_an_unidentified_decay_says_what_E_is(tmp_path, capsys):
+    """A slow relaxation (g 0.3, tau 60 s) under 2 s holds: the holds fall, tau is not
+    identified, and ``fit --holds`` says E is neither E_0 nor E_inf and E_0 at least it
+    (fit.json's ``headline_E``): the fitted E lies under the gel's E_0 (0.2 MPa). (It
+    read 0.1398 MPa, under even E_inf, 0.14: rests of 4 to 5 s leave each press the
+    memory of the last, so no lower bound is said.)"""
+    from tactilevision.cli import main
+    from tactilevision.mechanics import APPARENT_E
+
+    meas, holds = _relaxing_table(tmp_path, g=0.3, tau=60.0)
+    assert main(["fit", str(meas), "--holds", str(holds), "--beta-table", "paper",
+                 "--a-over-h", "0.8", "--json", str(tmp_path / "fit.json")]) in (0, 3)
+    assert "E above is the modulus the force windows read" in capsys.readouterr().out
+    obj = json.loads((tmp_path / "fit.json").read_text())
+    r = obj["relaxation"]
+    assert r["verdict"] == "decay not identified" and not r["resolved"]
+    assert r["headline_E"] == APPARENT_E and "E0_mpa" not in r
+    assert 0.12 < obj["E_mpa"] < 0.2

@@ -16,6 +16,7 @@ from .. import InputError
 from ..diagnosis import crossing_measurements, stated_weights
 from ..io import Measurements, read_holds, read_measurements, write_output_file
 from ..mechanics import (
+    APPARENT_E,
     BETA_TABLE_REACH,
     EFFECT_NAMES,
     IndentationFit,
@@ -201,6 +202,8 @@ def relaxation_lines(relax: RelaxationFit, moduli: dict | None, holds: Path, *,
                  "tau not identified"]
     if not relax.resolved:
         lines.append(f"  {relax.why}: the forces are used as they are")
+        if relax.verdict == "decay not identified":
+            lines.append(f"  {APPARENT_E.replace('E_mpa', 'E above', 1)}")
     elif moduli is None:
         lines.append("  the forces were taken back to the instant of loading"
                      + ("" if e_finite else ", but E was not computed: no E_0 or E_inf"))
@@ -492,6 +495,8 @@ def run(args: argparse.Namespace) -> int:
             obj["relaxation"].update({k: list(v) if isinstance(v, tuple) else v
                                       for k, v in moduli.items()})
             obj["relaxation"]["headline_E"] = "E_mpa is E0_mpa, the instantaneous modulus"
+        elif relax.verdict == "decay not identified":
+            obj["relaxation"]["headline_E"] = APPARENT_E
     obj["measurements"] = str(path)
     if left_out:
         obj["left_out_rows"] = left_out

@@ -84,6 +84,7 @@ from ._model import IndentationModel, ModelFit, shared_groups
 from ._neohookean import neo_hookean_constants
 from ._ramp import RampFit, fit_ramp
 from ._relaxation import (
+    APPARENT_E,
     RELAX_ALPHA,
     TAU_HOLD_RATIO,
     TAU_MIN_HOLD_FRACTION,
@@ -109,6 +110,7 @@ from ._sphere_table import (
 )
 
 __all__ = [
+    "APPARENT_E",
     "BETA_TABLE_REACH",
     "EFFECTS",
     "EFFECT_NAMES",

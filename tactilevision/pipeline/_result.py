@@ -23,6 +23,7 @@ import numpy as np
 from .._assets import KNOWN_SENSORS, default_calibration_path
 from .._checks import InputError
 from ..io import Session, StagedOutput, read_holds, read_measurements, write_measurements
+from ..mechanics import APPARENT_E
 from ..optics import DepthReconstructor, PhotometricCalibration
 from ..planning import design_from_calibration, design_toml
 from ..viz import calibration_figures, write_calibration_report
@@ -98,6 +99,8 @@ def result_dict(cal: SessionCalibration) -> dict:
         if cal.moduli is not None:
             r.update({k: list(v) if isinstance(v, tuple) else v for k, v in cal.moduli.items()})
             r["headline_E"] = "E_mpa is E0_mpa, the instantaneous modulus"
+        elif cal.relaxation.verdict == "decay not identified":
+            r["headline_E"] = APPARENT_E
         obj["relaxation"] = r
     return obj
 

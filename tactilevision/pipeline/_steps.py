@@ -20,6 +20,7 @@ from ..contact import (
 )
 from ..io import Session
 from ..mechanics import (
+    APPARENT_E,
     BETA_TABLE_REACH,
     IndentationFit,
     RelaxationFit,
@@ -226,8 +227,10 @@ def relaxation_step(session: Session, cert: Certification, progress: Callable | 
     except InputError as exc:
         return cert, None, [f"relaxation: not tested ({exc})"], None
     if not relax.resolved:
-        return cert, relax, ([] if relax.verdict == "flat" else
-                             [f"relaxation {relax.verdict}: {relax.why}"]), None
+        note = f"relaxation {relax.verdict}: {relax.why}"
+        if relax.verdict == "decay not identified":
+            note += f"; {APPARENT_E.replace('E_mpa', 'the E fitted', 1)}"
+        return cert, relax, ([] if relax.verdict == "flat" else [note]), None
 
     def refined(c: Certification, r: RelaxationFit) -> RelaxationFit:
         # each hold remembers the presses before it: g and tau from the whole log
