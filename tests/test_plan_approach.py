@@ -116,6 +116,8 @@ def test_a_calibration_says_how_its_stage_moved(tmp_path):
     (bare / "holds.csv").unlink()
     assert design_from_calibration(bare).stage_speed_mm_s == Design.stage_speed_mm_s
     assert design_from_calibration(bare).approach_s is None
+    (bare / "holds.csv").write_text("press,t_s,fz_n,ramp_s\n0,zero,1.0,0.5\n")
+    assert design_from_calibration(bare).approach_s is None      # unreadable: not used
     path = tmp_path / "next.toml"
     assert main(["plan", "--from-calibration", str(tmp_path / "timed"), "--write-design",
                  str(path)]) == 0

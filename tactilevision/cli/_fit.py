@@ -17,6 +17,7 @@ from ..diagnosis import crossing_measurements, stated_weights
 from ..io import Measurements, read_holds, read_measurements, write_output_file
 from ..mechanics import (
     APPARENT_E,
+    APPARENT_E_WHY,
     BETA_TABLE_REACH,
     EFFECT_NAMES,
     IndentationFit,
@@ -203,7 +204,7 @@ def relaxation_lines(relax: RelaxationFit, moduli: dict | None, holds: Path, *,
     if not relax.resolved:
         lines.append(f"  {relax.why}: the forces are used as they are")
         if relax.verdict == "decay not identified":
-            lines.append(f"  {APPARENT_E.replace('E_mpa', 'E above', 1)}")
+            lines.append(f"  E above is {APPARENT_E_WHY}")
     elif moduli is None:
         lines.append("  the forces were taken back to the instant of loading"
                      + ("" if e_finite else ", but E was not computed: no E_0 or E_inf"))

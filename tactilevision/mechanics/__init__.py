@@ -85,6 +85,7 @@ from ._neohookean import neo_hookean_constants
 from ._ramp import RampFit, fit_ramp
 from ._relaxation import (
     APPARENT_E,
+    APPARENT_E_WHY,
     RELAX_ALPHA,
     TAU_HOLD_RATIO,
     TAU_MIN_HOLD_FRACTION,
@@ -111,6 +112,7 @@ from ._sphere_table import (
 
 __all__ = [
     "APPARENT_E",
+    "APPARENT_E_WHY",
     "BETA_TABLE_REACH",
     "EFFECTS",
     "EFFECT_NAMES",

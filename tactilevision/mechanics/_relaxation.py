@@ -589,9 +589,10 @@ def _verdict(tests: _HoldTests, g_lo: float, tau: float, r_w: float, se_w: float
 #: E_inf; E_0 is at least it. (A gel that has not recovered between presses starts each
 #: one low: with g 0.3, tau 60 s and rests of 4 to 5 s, E read 0.1398 MPa where E_inf was
 #: 0.14, so no lower bound is claimed.)
-APPARENT_E = ("E_mpa is the modulus the force windows read, neither the instantaneous E_0 "
-              "nor the relaxed E_inf: the holds decay, but g and tau are not identified; "
-              "E_0 is at least this")
+APPARENT_E_WHY = ("the modulus the force windows read, neither the instantaneous E_0 nor "
+                  "the relaxed E_inf: the holds decay, but g and tau are not identified; E_0 "
+                  "is at least this")
+APPARENT_E = f"E_mpa is {APPARENT_E_WHY}"
 
 
 def _not_identified_why(curv_p: float, tau: float, shortest: float, longest: float, pct: str,

@@ -217,8 +217,7 @@ def hold_spans(session: Session, certification: Certification
             continue
         t_hold = hold_start(t, fz, t0 - HOLD_SEARCH_S, t1)
         if t_hold is not None and t_hold < t1:
-            t0 = t_hold
-            t1 = hold_end(t, fz, t0) or t1
+            t0 = t_hold            # the release found from the frame is the hold's (to 1 ms)
         spans.append((p, t0, t1))
     return spans
 

@@ -20,7 +20,7 @@ from ..contact import (
 )
 from ..io import Session
 from ..mechanics import (
-    APPARENT_E,
+    APPARENT_E_WHY,
     BETA_TABLE_REACH,
     IndentationFit,
     RelaxationFit,
@@ -229,7 +229,7 @@ def relaxation_step(session: Session, cert: Certification, progress: Callable | 
     if not relax.resolved:
         note = f"relaxation {relax.verdict}: {relax.why}"
         if relax.verdict == "decay not identified":
-            note += f"; {APPARENT_E.replace('E_mpa', 'the E fitted', 1)}"
+            note += f"; the E fitted is {APPARENT_E_WHY}"
         return cert, relax, ([] if relax.verdict == "flat" else [note]), None
 
     def refined(c: Certification, r: RelaxationFit) -> RelaxationFit:

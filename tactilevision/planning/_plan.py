@@ -38,6 +38,7 @@ from scipy import stats
 
 from .._checks import InputError
 from ..diagnosis import EffectSensitivity
+from ..io import read_holds
 from ..mechanics import (
     RELAX_ALPHA,
     TAU_HOLD_RATIO,
@@ -652,18 +653,19 @@ def _stage_motion(holds: Path, depth: np.ndarray, press: np.ndarray) -> dict[str
     loading time) where the presses took about the same time whatever their depth (a move
     of fixed duration), ``stage_speed_mm_s`` (the median depth over loading time) where
     the time grew with the depth, whichever leaves the smaller relative scatter; nothing
-    with fewer than 3 presses timed."""
-    ramp: dict[int, float] = {}
-    try:
-        with open(holds, newline="") as fh:
-            for r in csv.DictReader(fh):
-                if r.get("ramp_s") not in (None, "") and r.get("press") not in (None, ""):
-                    ramp[int(float(r["press"]))] = float(r["ramp_s"])
-    except (OSError, ValueError):
+    without holds.csv or with fewer than 3 presses timed."""
+    if not holds.is_file():
         return {}
-    pairs = np.array([(w, ramp[int(p)]) for w, p in zip(depth, press, strict=True)
-                      if np.isfinite(p) and int(p) in ramp and np.isfinite(w) and w > 0
-                      and math.isfinite(ramp[int(p)]) and ramp[int(p)] > 0])
+    try:
+        h = read_holds(holds)
+    except InputError:
+        return {}
+    ids, first = np.unique(h["press"], return_index=True)
+    ramp = dict(zip(ids.tolist(), h["ramp_s"][first].tolist(), strict=True))
+    pairs = np.array([(w, ramp.get(int(p), np.nan)) for w, p in zip(depth, press, strict=True)
+                      if np.isfinite(p)])
+    if pairs.size:
+        pairs = pairs[np.isfinite(pairs).all(axis=1) & (pairs > 0).all(axis=1)]
     if len(pairs) < 3:
         return {}
     w, r = pairs[:, 0], pairs[:, 1]
