@@ -356,9 +356,13 @@ def crossing_bracket(force_times_s: np.ndarray, fz_n: np.ndarray, t_a: float, t_
     tf, fz = np.asarray(force_times_s, np.float64), np.asarray(fz_n, np.float64)
     if not (np.isfinite(t_a) and np.isfinite(t_b)) or tf.size < 2:
         return float("nan"), float("nan")
-    dt = float(np.median(np.diff(tf)))
+    # the log's times increase strictly (read_session): the samples about the bracket by
+    # bisection, their own spacing, not a pass over the whole log per press
+    i_a, i_b = np.searchsorted(tf, [t_a, t_b])
+    dt = float(np.median(np.diff(tf[max(i_a - 20, 0):min(i_b + 20, tf.size)])))
     k = max(1, round(0.01 / dt))
-    sel = np.flatnonzero((tf >= t_a - k * dt) & (tf <= t_b + k * dt))
+    sel = np.arange(np.searchsorted(tf, t_a - k * dt, side="left"),
+                    np.searchsorted(tf, t_b + k * dt, side="right"))
     if sel.size < k + 2:
         return float("nan"), float("nan")
     smooth = np.convolve(fz[sel], np.ones(k) / k, mode="same")
