@@ -52,6 +52,8 @@ BRACKET_SOFTNESS = 0.02
 #: 0.1 % to 49 % each way in steps of 20 % of the size: as fine for a design whose brackets
 #: are 1 % wide as for one whose are 30 %.
 BRACKET_DELTAS = np.r_[-1e-3 * 1.2 ** np.arange(34, -1, -1), 0.0, 1e-3 * 1.2 ** np.arange(35)]
+#: Log-likelihoods within this of each other are a tie (a plateau of the maximum).
+_TIE = 1e-12
 #: Draws per block when the gains are computed for many draws at once (memory).
 _BLOCK = 256
 
@@ -96,15 +98,19 @@ def bracket_gains(lo: np.ndarray, hi: np.ndarray, groups: np.ndarray, shapes: np
     gain = np.empty((n_draws, z_all.shape[0]))
     best = np.empty((n_draws, z_all.shape[0]))
     unique, back = np.unique(z_all, axis=0, return_inverse=True)
-    for k, zk in enumerate(unique):
-        step = bool(np.all((zk == 0) | (zk == 1)))
+    is_step = np.all((unique == 0) | (unique == 1), axis=1)
+    if np.any(is_step):
+        g_s, d_s = _step_search(lo, hi, unique[is_step], starts, deltas, soft, zero)
+        for i, k in enumerate(np.flatnonzero(is_step)):
+            cols = np.flatnonzero(back.ravel() == k)
+            gain[:, cols], best[:, cols] = g_s[i][:, None], d_s[i][:, None]
+    for k in np.flatnonzero(~is_step):
+        zk, cols = unique[k], np.flatnonzero(back.ravel() == k)
         for a in range(0, n_draws, _BLOCK):
             b = min(a + _BLOCK, n_draws)
-            low, high = (_step_bounds if step else _bounds)(lo[a:b], hi[a:b], zk, starts,
-                                                             deltas)
+            low, high = _bounds(lo[a:b], hi[a:b], zk, starts, deltas)
             ll = np.sum(_log_softplus((high - low) / soft) + np.log(soft), axis=2)
             j = np.argmax(ll, axis=1)
-            cols = np.flatnonzero(back.ravel() == k)
             gain[a:b, cols] = (ll[np.arange(b - a), j] - ll[:, zero])[:, None]
             best[a:b, cols] = deltas[j][:, None]
     return gain, best
@@ -133,17 +139,62 @@ def _bounds(lo: np.ndarray, hi: np.ndarray, z: np.ndarray, starts: np.ndarray,
             np.minimum.reduceat(hi[:, None, :] - shift, starts, axis=2))
 
 
-def _step_bounds(lo: np.ndarray, hi: np.ndarray, z: np.ndarray, starts: np.ndarray,
-                 deltas: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`_bounds` for a shape of zeros and ones: each side's intersection once, the
-    side that changes shifted by ``-log(1 + delta)``."""
-    one = z == 1
-    lo0 = np.maximum.reduceat(np.where(one, -np.inf, lo), starts, axis=1)[:, None, :]
-    hi0 = np.minimum.reduceat(np.where(one, np.inf, hi), starts, axis=1)[:, None, :]
-    lo1 = np.maximum.reduceat(np.where(one, lo, -np.inf), starts, axis=1)[:, None, :]
-    hi1 = np.minimum.reduceat(np.where(one, hi, np.inf), starts, axis=1)[:, None, :]
-    shift = np.log1p(deltas)[None, :, None]
-    return np.maximum(lo0, lo1 - shift), np.minimum(hi0, hi1 - shift)
+def _step_search(lo: np.ndarray, hi: np.ndarray, z: np.ndarray, starts: np.ndarray,
+                 deltas: np.ndarray, soft: np.ndarray, zero: int
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """The gains (K, D) and their deltas (K, D) for K shapes of zeros and ones (K, N), by
+    bisection.
+
+    Each side's intersection is taken once, the side that changes shifted by ``-s``,
+    ``s = log(1 + delta)``: an indenter's intersection length ``min(hi0, hi1 - s) -
+    max(lo0, lo1 - s)`` is concave in s (a minimum of lines less a maximum of lines), the
+    log of the softplus is concave and increasing, so the log-likelihood, their sum over
+    indenters, is concave in s and unimodal along the sorted grid of deltas. Its maximum
+    is found by bisection on the sign of the forward difference: about 4 log2(M)
+    evaluations of a (K, D, G) array where the grid's is M. The gains equal the grid's
+    (``np.argmax``) to rounding (1e-13 on random brackets); where the maximum is a plateau
+    (within :data:`_TIE`), the delta of the plateau nearest 0 is taken (the least change
+    that explains the brackets as well; ``np.argmax`` took whichever rounding favoured).
+    """
+    one = (z == 1)[:, None, :]                                            # (K, 1, N)
+    k, d, g = z.shape[0], lo.shape[0], starts.size
+    ends = [np.maximum.reduceat(np.where(one, -np.inf, lo), starts, axis=2),
+            np.minimum.reduceat(np.where(one, np.inf, hi), starts, axis=2),
+            np.maximum.reduceat(np.where(one, lo, -np.inf), starts, axis=2),
+            np.minimum.reduceat(np.where(one, hi, np.inf), starts, axis=2)]
+    lo0, hi0, lo1, hi1 = (e.reshape(k * d, g) for e in ends)            # a row a (shape, draw)
+    grid = np.unique(deltas)                     # sorted, each size once (no false flat)
+    s = np.log1p(grid)
+    log_soft = float(np.sum(np.log(soft)))
+
+    def ll(j: np.ndarray, rows: np.ndarray | slice = slice(None)) -> np.ndarray:
+        shift = s[j][:, None]
+        length = (np.minimum(hi0[rows], hi1[rows] - shift)
+                  - np.maximum(lo0[rows], lo1[rows] - shift))
+        return np.sum(_log_softplus(length / soft), axis=1) + log_soft
+
+    top = s.size - 1
+    zero_at = np.full(k * d, int(np.searchsorted(grid, deltas[zero])))
+    first = _bisect(ll, np.zeros_like(zero_at), np.full_like(zero_at, top), _TIE)
+    # a plateau only where the next size is as likely: bisect for its end there alone
+    last = first.copy()
+    flat = np.flatnonzero(ll(np.minimum(first + 1, top)) - ll(first) >= -_TIE)
+    if flat.size:
+        last[flat] = _bisect(lambda j: ll(j, flat), first[flat],
+                             np.full(flat.size, top), -_TIE)
+    j = np.clip(zero_at, first, last)
+    return (ll(j) - ll(zero_at)).reshape(k, d), grid[j].reshape(k, d)
+
+
+def _bisect(f, a: np.ndarray, b: np.ndarray, rise: float) -> np.ndarray:
+    """Per row, the first index j in [a, b] where ``f(j + 1) - f(j) > rise`` fails, for f
+    unimodal along the index (vectorised bisection: f takes an index per row)."""
+    top = int(b.max())
+    while np.any(a < b):
+        mid = (a + b) // 2
+        up = f(np.minimum(mid + 1, top)) - f(mid) > rise
+        a, b = np.where(up & (a < b), mid + 1, a), np.where(up, b, mid)
+    return a
 
 
 def bracket_draws(width: np.ndarray, n_draws: int, rng: np.random.Generator

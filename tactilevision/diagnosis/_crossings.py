@@ -352,16 +352,23 @@ class _Brackets:
         return cls(np.vstack(shapes), np.array(owner, np.int64), at, gid.astype(np.int64),
                    width)
 
+    def _key(self) -> tuple[bytes, bytes, bytes, bytes]:
+        return (self.width.tobytes(), self.groups.tobytes(), self.shapes.tobytes(),
+                self.owner.tobytes())
+
     def null(self) -> np.ndarray:
         """Each test's largest gain over its places (D, T) with nothing changing."""
-        return _bracket_null(self.width.tobytes(), self.groups.tobytes(),
-                             self.shapes.tobytes(), self.owner.tobytes())
+        return _bracket_null(*self._key())
+
+    def min_p(self) -> tuple[np.ndarray, np.ndarray]:
+        """:func:`_min_p` of :meth:`null` (sorted once per design, as the null is drawn)."""
+        return _bracket_min_p(*self._key())
 
     def thresholds(self) -> np.ndarray:
         """Each test's gain (T,) that names it at the family-wise :data:`CROSSING_ALPHA`
         (min-P: the tests' own p-value that the family's level allows)."""
         null = self.null()
-        _, least = _min_p(null)
+        _, least = self.min_p()
         p_crit = float(np.quantile(least, CROSSING_ALPHA))
         return np.quantile(null, 1.0 - p_crit, axis=0)
 
@@ -507,8 +514,7 @@ def _scan(columns: Mapping[str, np.ndarray]) -> CrossingScan | None:
     best = [int(np.flatnonzero(owner_a == j)[np.argmax(obs[0, owner_a == j])])
             for j in range(len(tests))]
     observed = np.array([obs[0, k] for k in best])
-    per_test = setup.null()
-    p_family = _family_p(observed, per_test)
+    p_family = _family_p(observed, *setup.min_p())
     # each test's best shape's gain on a fine grid about its best size (what the step and
     # the trend are weighed by; the p-values compare the coarse grid with its null)
     fine = [_fine_gain(r + 1.0 - half, r + 1.0 + half, gid, shape_a[k]) for k in best]
@@ -590,16 +596,24 @@ def _bracket_null(width: bytes, groups: bytes, shapes: bytes, owner: bytes) -> n
     return np.stack([gain[:, own == j].max(axis=1) for j in range(int(own.max()) + 1)], 1)
 
 
-def _family_p(observed: np.ndarray, null: np.ndarray) -> np.ndarray:
+def _family_p(observed: np.ndarray, srt: np.ndarray, least: np.ndarray) -> np.ndarray:
     """Family-wise p-values of the tests' statistics `observed` (T,) from their joint null
-    draws `null` (D, T), larger being more extreme: each test's own p from its null, then
-    the family's by the smallest of those over the tests (Westfall and Young's single-step
-    min-P, Resampling-Based Multiple Testing, 1993)."""
-    d = null.shape[0]
-    srt, least = _min_p(null)
+    draws, larger being more extreme (`srt`, `least`: :func:`_min_p` of the draws): each
+    test's own p from its null, then the family's by the smallest of those over the tests
+    (Westfall and Young's single-step min-P, Resampling-Based Multiple Testing, 1993)."""
+    d = srt.shape[0]
     own = np.array([(d - np.searchsorted(srt[:, j], observed[j], side="left") + 1) / (d + 1)
-                    for j in range(null.shape[1])])
+                    for j in range(srt.shape[1])])
     return (np.searchsorted(least, own, side="right") + 1) / (d + 1)
+
+
+@functools.lru_cache(maxsize=16)
+def _bracket_min_p(width: bytes, groups: bytes, shapes: bytes, owner: bytes
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_min_p` of :func:`_bracket_null` (the same arguments), read-only."""
+    srt, least = _min_p(_bracket_null(width, groups, shapes, owner))
+    srt.flags.writeable = least.flags.writeable = False
+    return srt, least
 
 
 def _min_p(null: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
