@@ -65,3 +65,43 @@ def test_the_nulls_brackets_hold_the_force_at_a_uniform_place():
     place = (1.0 - lo) / w
     counts = np.histogram(place[inside], bins=4, range=(0, 1))[0] / inside.sum()
     assert np.all(np.abs(counts - 0.25) < 0.02), counts
+
+
+def _grid_by_hand(lo, hi, groups, z, deltas):
+    """The log-likelihood of one set of brackets at every delta, written from the module's
+    definition (no code of it): per indenter the softened length of the intersection of
+    its brackets in log force, each shifted by -log(1 + delta z), and their sum."""
+    llo, lhi = np.log(lo), np.log(hi)
+    out = np.zeros(deltas.size)
+    for g in np.unique(groups):
+        m = groups == g
+        soft = BRACKET_SOFTNESS * float(np.mean(lhi[m] - llo[m]))
+        for i, d in enumerate(deltas):
+            shift = np.log1p(d * z[m])
+            length = np.min(lhi[m] - shift) - np.max(llo[m] - shift)
+            out[i] += np.log(soft * np.logaddexp(0.0, length / soft))
+    return out
+
+
+def test_a_steps_best_size_is_the_grids():
+    """A step (a shape of zeros and ones) is searched by bisection, not on every size: on
+    random brackets of 4 indenters with and without a change, its gain is the hand-written
+    grid's largest (within 1e-9), the size it names reaches that largest, and where no
+    change reaches more than none (a plateau holding 0) the size is 0."""
+    rng = np.random.default_rng(3)
+    groups = np.repeat(np.arange(4), 4)[rng.permutation(16)]
+    zeros_named = plateaus = 0
+    for trial in range(60):
+        z = (np.arange(16) >= rng.integers(3, 13)).astype(float)
+        lo = rng.uniform(0.8, 1.0, 16) * (1.0 + rng.choice([0.0, 0.1, -0.15]) * z)
+        hi = lo * (1.0 + rng.uniform(0.02, 0.3, 16))
+        ll = _grid_by_hand(lo, hi, groups, z, BRACKET_DELTAS)
+        gain, delta = bracket_gains(lo[None], hi[None], groups, z[None])
+        zero = int(np.flatnonzero(BRACKET_DELTAS == 0.0)[0])
+        assert abs(gain[0, 0] - (ll.max() - ll[zero])) < 1e-9, trial
+        at = int(np.flatnonzero(BRACKET_DELTAS == delta[0, 0])[0])
+        assert ll[at] > ll.max() - 1e-9, trial
+        if ll[zero] > ll.max() - 1e-12:
+            zeros_named += delta[0, 0] == 0.0
+            plateaus += 1
+    assert plateaus >= 3 and zeros_named == plateaus, (plateaus, zeros_named)
