@@ -14,14 +14,22 @@ by the min-P over 10,000 draws of their joint normal null, a step preferred to a
 along one column where its chi2 drops by more than 2 beyond the trend's. Counted as named:
 the change's own kind (a step or a trend along press order or time;
 ``spatial_nonuniformity`` for the gradient); for nothing, any finding.
+
+Also the milliseconds per ``crossing_tests`` call on each change's tables (the design's
+null draws made once, before the rows: the first call's time is printed apart), beside a
+same-run reference: one plain :func:`scipy.optimize.least_squares` fit of eq. (5) to 20
+points (best of 20, at the start and at the end; the figure to compare across machines
+is the ratio).
 """
 
 from __future__ import annotations
 
 import argparse
 import itertools
+import time
 
 import numpy as np
+from scipy.optimize import least_squares
 
 from tactilevision.diagnosis import crossing_tests
 
@@ -96,6 +104,20 @@ class Midpoints:
         return self.tests[j][0], self.tests[j][1]
 
 
+def reference_fit() -> float:
+    """Seconds for one least_squares fit of eq. (5) to 20 points (best of 20)."""
+    rng = np.random.default_rng(0)
+    w = np.linspace(0.15, 0.65, 20)
+    p = 3.5 * w * (1 + 0.8 * w / 3.0) + rng.normal(0, 0.01, 20)
+    best = np.inf
+    for _ in range(20):
+        t0 = time.perf_counter()
+        least_squares(lambda x: x[0] * w * (1 + x[1] * w / 3.0) - p, [3.0, 1.0],
+                      bounds=([0, -5], [np.inf, 20]), x_scale="jac")
+        best = min(best, time.perf_counter() - t0)
+    return best
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--tables", type=int, default=100)
@@ -108,13 +130,22 @@ def main() -> None:
                ("the same, 10 %", 1 - 0.1 * PRESS / 19, "trend"),
                ("gradient along x, 4 %/mm", 1 + 0.04 * (X_MM + 4), "spatial"),
                ("the same, 2 %/mm", 1 + 0.02 * (X_MM + 4), "spatial")]
-    print(f"{n} tables each | brackets named | midpoints named")
-    print("|---|---|---|")
+    ref = reference_fit()
+    t0 = time.perf_counter()
+    crossing_tests(table(10 ** 6, np.ones(20)))          # the design's null draws, once
+    first = time.perf_counter() - t0
+    print(f"reference: one least_squares fit of eq. (5), {ref * 1e3:.2f} ms; the first "
+          f"crossing_tests call (the design's null draws) {first:.2f} s")
+    print(f"{n} tables each | brackets named | midpoints named | ms / crossing_tests | "
+          "/ reference")
+    print("|---|---|---|---|---|")
     for label, scale, kind in changes:
-        got = [0, 0]
+        got, spent = [0, 0], 0.0
         for seed in range(n):
             cols = table(seed, scale)
+            t0 = time.perf_counter()
             t = crossing_tests(cols).found
+            spent += time.perf_counter() - t0
             ours = None if t is None else (t.column, t.kind)
             for i, f in enumerate((ours, mid.found(cols))):
                 if kind is None:
@@ -123,7 +154,9 @@ def main() -> None:
                     got[i] += f is not None and f[0] in ("x_mm", "y_mm")
                 else:
                     got[i] += f is not None and f[1] == kind and f[0] in ("press", "time_s")
-        print(f"| {label} | {got[0]} | {got[1]} |")
+        per = spent / n
+        print(f"| {label} | {got[0]} | {got[1]} | {per * 1e3:.1f} | {per / ref:.0f} |")
+    print(f"reference at the end {reference_fit() * 1e3:.2f} ms")
 
 
 if __name__ == "__main__":
