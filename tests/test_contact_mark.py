@@ -184,10 +184,10 @@ def test_a_trace_rises_above_the_frames_before_it_not_an_approach_lifted_by_shad
     """An approach whose shading lifts the mark's profile lifts every frame before the
     crossing (Taxim, seed 171, no shadows: 0.07 to 0.20 of the way on the first press's
     last four): a frame 4 sds and 0.1 of the way up counts as the first trace only when it
-    also lies 4 sds above the median of the three frames before it. Here 0.17 after 0.20,
-    0.14 and 0.07 does not: the onset is the first trace, its period and the one before
-    bracket the crossing. After frames at the approach's level the same 0.17 is the
-    trace."""
+    also lies 4 sds above the median of the three frames before the one before it (that
+    one may show the mark's toe). Here 0.17 after 0.20, 0.14 and 0.07 does not: the onset
+    is the first trace, its period and the one before bracket the crossing. After frames
+    at the approach's level the same 0.17 is the trace."""
     lifted = [0.20, 0.14, 0.07, 0.17]
     onset, first, faint = _faint_press(monkeypatch, lifted)
     assert (onset, first, faint) == (12, 12, 1)

@@ -167,14 +167,15 @@ def _mark_template_onset(ctx: _PressContext, centre: tuple[float, float], run: n
     half-way: the onset then lies a frame after the crossing's period. ``first`` walks back
     from the onset through the frames rising towards it while they lie
     :data:`MARK_Z_SEEN` sds above the approach's level, and as far above the three frames
-    before each (their median): the crossing lies in the period before ``first`` (on a
+    before the one before it (their median): the crossing lies in the period before ``first`` (on a
     Taxim session at 10 frames/s, one such press put its indenter's P(w0) 6 % high and its
     depths 8 um shallow). A trace rises from the frames before it; an approach whose
     shading lifts the mark's profile lifts them all (on a Taxim session without shadows,
     seed 171, the first press's four frames before its crossing projected 0.07 to 0.20 of
-    the way, 1.7 to 4.9 sds: the last, 0.6 sd above the three before it, was taken for the
-    first trace, its bracket 77 mN under P(w0), and the crossing forces named a stiffness
-    step along time on the session's null).
+    the way, 1.7 to 4.9 sds: the last, 0.6 sd above that level, was taken for the first
+    trace, its bracket 77 mN under P(w0), and the crossing forces named a stiffness step
+    along time on the session's null; on seed 191 a frame 4.0 sds up, 3.7 above that
+    level, put a bracket 120 mN under P(w0)).
 
     A mark's trace grows from nothing at w0, so a frame taken just past it may show the
     mark below any threshold that noise does not cross: ``faint`` counts the frames before
@@ -237,9 +238,12 @@ def _mark_template_onset(ctx: _PressContext, centre: tuple[float, float], run: n
 
 
 def _level_before(a: np.ndarray, k: int) -> float:
-    """The median projection of the (up to) three frames before frame `k` (0 where none):
-    the level a trace at `k` must rise above (:func:`_mark_template_onset`)."""
-    return float(np.median(a[max(k - 3, 0):k])) if k > 0 else 0.0
+    """The median projection of the (up to) three frames before frame `k`'s neighbour
+    (``k - 4`` to ``k - 2``; 0 where none): the level a trace at `k` must rise above
+    (:func:`_mark_template_onset`). The frame just before `k` is left out: it may show
+    the mark's toe (:data:`MARK_Z_FAINT`)."""
+    before = a[max(k - 4, 0):max(k - 1, 0)]
+    return float(np.median(before)) if before.size else 0.0
 
 
 def _mark_onset(ctx: _PressContext, centre: tuple[float, float], cand: np.ndarray,
