@@ -161,21 +161,20 @@ def _mark_template_onset(ctx: _PressContext, centre: tuple[float, float], run: n
     approach frames' projections' sd) high. A change that grows with the press's
     depth (the indenter's shading, no mark) rises over the approach instead.
 
-    The mark's change grows with the land's depth past w0 (on Taxim's frames the
-    projection ran about linear in it: 0.41 of the hold's depth past w0 projected 0.50),
-    so a frame that crossed w0 shortly before it was taken can show the mark at less than
-    half-way: the onset then lies a frame after the crossing's period. ``first`` walks back
-    from the onset through the frames rising towards it while they lie
-    :data:`MARK_Z_SEEN` sds above the approach's level, and as far above the three frames
-    before the one before it (their median): the crossing lies in the period before ``first`` (on a
-    Taxim session at 10 frames/s, one such press put its indenter's P(w0) 6 % high and its
-    depths 8 um shallow). A trace rises from the frames before it; an approach whose
-    shading lifts the mark's profile lifts them all (on a Taxim session without shadows,
-    seed 171, the first press's four frames before its crossing projected 0.07 to 0.20 of
-    the way, 1.7 to 4.9 sds: the last, 0.6 sd above that level, was taken for the first
-    trace, its bracket 77 mN under P(w0), and the crossing forces named a stiffness step
-    along time on the session's null; on seed 191 a frame 4.0 sds up, 3.7 above that
-    level, put a bracket 120 mN under P(w0)).
+    The mark's change grows with the land's depth past w0 (on Taxim's frames the projection
+    ran about linear in it: 0.41 of the hold's depth past w0 projected 0.50), so a frame
+    that crossed w0 shortly before it was taken can show the mark at less than half-way: the
+    onset then lies a frame after the crossing's period. ``first`` walks back from the onset
+    through the frames rising towards it while they lie :data:`MARK_Z_SEEN` sds above the
+    approach's level, and as far above the three frames before the one before it (their
+    median): the crossing lies in the period before ``first`` (on a Taxim session at 10
+    frames/s, one such press put its indenter's P(w0) 6 % high and its depths 8 um shallow).
+    A trace rises from the frames before it; an approach whose shading lifts the mark's
+    profile lifts them all (on a Taxim session without shadows, seed 171, the first press's
+    four frames before its crossing projected 0.07 to 0.20 of the way, 1.7 to 4.9 sds: the
+    last, 0.6 sd above that level, was taken for the first trace, its bracket 77 mN under
+    P(w0), and the crossing forces named a stiffness step along time on the session's null;
+    on seed 191 a frame 4.0 sds up, 3.7 above that level, put a bracket 120 mN under P(w0)).
 
     A mark's trace grows from nothing at w0, so a frame taken just past it may show the
     mark below any threshold that noise does not cross: ``faint`` counts the frames before

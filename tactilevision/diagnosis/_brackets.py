@@ -162,7 +162,7 @@ def _step_search(lo: np.ndarray, hi: np.ndarray, z: np.ndarray, starts: np.ndarr
             np.minimum.reduceat(np.where(one, np.inf, hi), starts, axis=2),
             np.maximum.reduceat(np.where(one, lo, -np.inf), starts, axis=2),
             np.minimum.reduceat(np.where(one, hi, np.inf), starts, axis=2)]
-    lo0, hi0, lo1, hi1 = (e.reshape(k * d, g) for e in ends)            # a row a (shape, draw)
+    lo0, hi0, lo1, hi1 = (e.reshape(k * d, g) for e in ends)            # a row per (shape, draw)
     grid = np.unique(deltas)                     # sorted, each size once (no false flat)
     s = np.log1p(grid)
     log_soft = float(np.sum(np.log(soft)))
