@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from tactilevision.cli import main
-from tactilevision.diagnosis import crossing_sizes, crossing_tests, diagnose
+from tactilevision.diagnosis import crossing_sizes, crossing_step_places, crossing_tests, diagnose
 from tactilevision.io import read_measurements
 from tactilevision.pipeline import calibrate_session, write_calibration
 from tactilevision.sim import GaugeBlock, SessionSpec, make_session
@@ -114,6 +114,30 @@ def test_the_sizes_said_are_named_that_often():
                                            else t.column in ("press", "time_s"))
             assert least <= hits <= most, (name, k, hits)
     assert crossing_sizes({"indenter": np.zeros(3)}) == {}
+
+
+def test_a_step_anywhere_is_ruled_out_only_at_its_own_places_size():
+    """crossing_step_places: a step near the end of the presses has few on one side and
+    needs to be larger than the half-way one to be named. On 20 presses (0 to 19) the
+    half-way size stands at the place after press 9 (between 9 and 10); the largest,
+    at an end of the places, is named that often there (at least 34 of 40 sessions; 39
+    of these 40 when written) where the half-way size is not (at most 30 of 40; 20): a
+    "none larger than" at the half-way size alone would rule out steps it misses."""
+    null = _crossings(0, lambda p, x: np.ones(20))
+    half = crossing_sizes(null)["stiffness_step:press"]
+    places = dict(crossing_step_places(null))
+    assert places[9.0] == half
+    after, worst = max(places.items(), key=lambda p: p[1])
+    assert after in (min(places), max(places)) and worst > 1.4 * half
+
+    def named(size: float) -> int:
+        return sum(getattr(crossing_tests(_crossings(100 + seed, lambda p, x: np.where(
+            p > after, 1 + size, 1.0))).found, "column", None) in ("press", "time_s")
+            for seed in range(40))
+
+    assert named(worst) >= 34
+    assert named(half) <= 30
+    assert crossing_step_places({"indenter": np.zeros(3)}) == ()
 
 
 def test_tables_without_crossings_are_not_tested():

@@ -117,6 +117,8 @@ def summary(pred) -> str:
                 if math.isfinite(s.size) else "not at any size its parameter allows"))
             if s.dip:
                 lines.append(f"    ({s.dip})")
+            if s.at_places:
+                lines.append(f"    ({s.places_sentence()})")
     for name, p in pred.detect_power.items():
         size = dict(d.detect)[name]
         unit = EFFECT_SIZE_PARAMS[name][1]

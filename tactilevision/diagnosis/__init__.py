@@ -13,7 +13,8 @@ A measurements table (formats.md §2) against the force law of
   :func:`noise_floor`, :func:`noise_budget`; :func:`crossing_tests`, each press's force
   at its crossing of the mark's w0 (a depth the frames certify apart from the force)
   tested for changes within indenters, which the mark rule's depths absorb
-  (:func:`crossing_sizes`, the smallest such change they name);
+  (:func:`crossing_sizes`, the smallest such change they name; :func:`crossing_step_places`,
+  a step's at each place along press order);
   :func:`holds_finding`, the force over each press's hold at the depth the stage keeps,
   which names a relaxing gel that a table read at one time of every hold cannot show.
 - What a table of presses lets ``diagnose`` find: :func:`replay_sizes` and
@@ -35,6 +36,7 @@ from ._crossings import (
     CrossingTest,
     crossing_measurements,
     crossing_sizes,
+    crossing_step_places,
     crossing_tests,
 )
 from ._diagnose import (
@@ -104,6 +106,7 @@ __all__ = [
     "crossing_measurements",
     "crossing_sensitivity",
     "crossing_sizes",
+    "crossing_step_places",
     "crossing_tests",
     "diagnose",
     "diagnose_indenter",

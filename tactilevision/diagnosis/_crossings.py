@@ -39,7 +39,8 @@ from ._brackets import (
 )
 
 __all__ = ["CROSSING_ALPHA", "CROSSING_COLUMNS", "CROSSING_UNITS", "CrossingScan",
-           "CrossingTest", "crossing_measurements", "crossing_sizes", "crossing_tests"]
+           "CrossingTest", "crossing_measurements", "crossing_sizes", "crossing_step_places",
+           "crossing_tests"]
 
 #: Family-wise level of the crossing forces' tests (over all of them and a step's places).
 CROSSING_ALPHA = 0.01
@@ -716,36 +717,109 @@ def crossing_sizes(columns: Mapping[str, np.ndarray], *, power: float = 0.95
     bisection. The step's other places and the scan's other tests can only add to the
     power: the sizes are upper bounds of what is named in `power` of sessions.
     """
-    prep = _prepared(columns)
-    if prep is None:
+    sized = _size_setup(columns)
+    if sized is None:
         return {}
-    ok, groups, _, w = prep
-    tests = _test_columns(columns, ok)
-    if not tests:
-        return {}
-    setup = _Brackets.of(columns, ok, groups, w, tests)
-    crit = setup.thresholds()
-    lo0, hi0 = bracket_draws(setup.width, _SIZE_DRAWS, np.random.default_rng(_FAMILY_SEED + 2))
+    setup, tests, crit, draws = sized
     out = {}
     for j, (col, kind, z) in enumerate(tests):
         if kind == "step" and col == "press":
-            name, effect = "stiffness_step:press", (z > np.median(z)).astype(np.float64)
-            shapes = effect[None]                      # its true place only
+            out["stiffness_step:press"] = _step_size(setup, crit[j], draws,
+                                                     z > np.median(z), power)
         elif kind == "trend" and col in ("time_s", "x_mm"):
             name = "stiffness_trend:time_s" if col == "time_s" else "spatial_nonuniformity"
             effect = z - z.mean()
             shapes = setup.shapes[setup.owner == j]
-        else:
-            continue
 
-        def named(size: float, effect=effect, shapes=shapes, c=crit[j],
-                  steady=name == "stiffness_trend:time_s") -> float:
-            true = np.exp(size * effect) if steady else 1.0 + size * effect
-            gain, _ = bracket_gains(lo0 * true, hi0 * true, setup.groups, shapes)
-            return float(np.mean(gain.max(axis=1) >= c))
+            def named(size: float, effect=effect, shapes=shapes, c=crit[j],
+                      steady=name == "stiffness_trend:time_s") -> float:
+                true = np.exp(size * effect) if steady else 1.0 + size * effect
+                gain, _ = bracket_gains(draws[0] * true, draws[1] * true, setup.groups,
+                                        shapes)
+                return float(np.mean(gain.max(axis=1) >= c))
 
-        out[name] = _bisect_size(named, power, 0.05 / max(float(np.ptp(effect)), 1e-12))
+            out[name] = _bisect_size(named, power, 0.05 / max(float(np.ptp(effect)), 1e-12))
     return out
+
+
+def crossing_step_places(columns: Mapping[str, np.ndarray], *, power: float = 0.95
+                         ) -> tuple[tuple[float, float], ...]:
+    """The smallest stiffness step along press order the crossing tests name in `power`
+    of sessions, at places other than half-way through the presses.
+
+    :func:`crossing_sizes` sizes the step half-way, where the presses on its two sides
+    are most even and it is seen best; a step early or late in the session has fewer
+    presses on one side and needs to be larger (on a Taxim session of 25 read presses,
+    7.7 % half-way, 9.2 % after the 9th, 18.1 % and 20.9 % after the first and the last
+    places the scan tests). A "none larger than" that gives the half-way size alone
+    would rule out a step it could miss elsewhere.
+
+    Parameters
+    ----------
+    columns : mapping of str to (N,) array_like
+        As for :func:`crossing_sizes` (with ``press``).
+    power : float, default 0.95
+
+    Returns
+    -------
+    places : tuple of (float, float)
+        ``(after, s)``: a step just after press number ``after`` (the step falls
+        between it and the next press the table has), of relative size ``s``, at the
+        first, a quarter of the way, three quarters of the way and the last of the
+        places the scan tests a step at (:data:`_MIN_STEP_SIDE` presses on each side);
+        ordered by ``after``, each place once. Empty without crossing forces or a
+        ``press`` column.
+
+    Notes
+    -----
+    As :func:`crossing_sizes`: brackets of the table's widths drawn about crossing
+    forces with the step at that place (the same draws for every size and place), named
+    where its test's gain passes the family-wise threshold; the size by bisection. The
+    power is least at the ends of the places (fewest presses on one side), so the
+    largest of these is about the largest over every place (on the session above it
+    was, over all 22).
+    """
+    sized = _size_setup(columns)
+    if sized is None:
+        return ()
+    setup, tests, crit, draws = sized
+    out = []
+    for j, (col, kind, z) in enumerate(tests):
+        if kind != "step" or col != "press":
+            continue
+        for after, _ in _step_places(z, setup.groups):
+            out.append((after, _step_size(setup, crit[j], draws, z > after, power)))
+    return tuple(out)
+
+
+def _size_setup(columns: Mapping[str, np.ndarray]):
+    """What :func:`crossing_sizes` draws its sessions from: ``(setup, tests, thresholds,
+    (lo, hi))``, the brackets' draws about 1 (:data:`_SIZE_DRAWS`, seeded); None without
+    crossing forces or tests."""
+    prep = _prepared(columns)
+    if prep is None:
+        return None
+    ok, groups, _, w = prep
+    tests = _test_columns(columns, ok)
+    if not tests:
+        return None
+    setup = _Brackets.of(columns, ok, groups, w, tests)
+    draws = bracket_draws(setup.width, _SIZE_DRAWS, np.random.default_rng(_FAMILY_SEED + 2))
+    return setup, tests, setup.thresholds(), draws
+
+
+def _step_size(setup: _Brackets, crit: float, draws: tuple[np.ndarray, np.ndarray],
+               after: np.ndarray, power: float) -> float:
+    """The smallest step 1 + s [after] (a (n,) bool over the presses) that its own test,
+    at its true place only, names in `power` of `draws`."""
+    effect = after.astype(np.float64)
+
+    def named(size: float) -> float:
+        true = 1.0 + size * effect
+        gain, _ = bracket_gains(draws[0] * true, draws[1] * true, setup.groups, effect[None])
+        return float(np.mean(gain.max(axis=1) >= crit))
+
+    return _bisect_size(named, power, 0.05)
 
 
 def _bisect_size(named, power: float, first: float) -> float:

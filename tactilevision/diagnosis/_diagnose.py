@@ -331,9 +331,7 @@ class Diagnosis:
                                "explained_fraction": num(t.explained_fraction),
                                "significant": t.significant, "n": t.n,
                                "size_n": num(t.size_n)} for t in self.certification],
-            "rules_out": {k: {"parameter": v.parameter, "unit": v.unit,
-                              "size": num(v.size), "power": v.power, "why": v.why}
-                          for k, v in self.rules_out.items()},
+            "rules_out": {k: v.to_json_dict() for k, v in self.rules_out.items()},
             "rules_out_note": self.rules_out_note or None,
             "shared_depth": self.shared_depth or None,
             "crossings": None if self.crossings is None else self.crossings.to_json_dict(),

@@ -18,7 +18,13 @@ import numpy as np
 from .._checks import InputError
 from ..mechanics import kappa_n_nu_range
 from ._budget import law_slope
-from ._crossings import CROSSING_UNITS, CrossingScan, crossing_sizes, crossing_tests
+from ._crossings import (
+    CROSSING_UNITS,
+    CrossingScan,
+    crossing_sizes,
+    crossing_step_places,
+    crossing_tests,
+)
 from ._diagnose import CURVATURE, Diagnosis, diagnose_core
 from ._holds import HOLDS_POWER, HoldsFinding, holds_finding
 from ._replay import EffectSensitivity, table_sensitivity
@@ -240,9 +246,11 @@ def crossing_sensitivity(columns: Mapping[str, np.ndarray], *, power: float = 0.
     out = {}
     for name, size in crossing_sizes(columns, power=power).items():
         param, unit, factor = CROSSING_UNITS[name]
+        places = (tuple((a, factor * s) for a, s in crossing_step_places(columns, power=power))
+                  if name == "stiffness_step:press" else ())
         out[name] = EffectSensitivity(effect=name, parameter=param, unit=unit,
                                       size=factor * size, size_param=size, power=power,
-                                      snr=math.nan, why=why)
+                                      snr=math.nan, why=why, at_places=places)
     return out
 
 
@@ -534,7 +542,9 @@ def _own_sizes(d: Diagnosis, own: Mapping[str, EffectSensitivity]) -> Diagnosis:
     ``rules_out`` and one sentence naming them."""
     if not own:
         return d
-    said = ", ".join(f"{k} {v.size:.3g} {v.unit}" for k, v in own.items())
+    said = ", ".join(f"{k} {v.size:.3g} {v.unit}"
+                     + (f" ({v.places_sentence()})" if v.at_places else "")
+                     for k, v in own.items())
     return replace(d, rules_out={**d.rules_out, **own},
                    message=d.message + f" From their own tests (the crossing forces within "
                    f"indenters, the holds), none larger than: {said} (each named in 95 % of "

@@ -136,6 +136,11 @@ class EffectSensitivity:
     dip : str
         Where the power falls again past a smaller size already found (an offset the
         law's curvature mimics there), what it is there; '' where it does not.
+    at_places : tuple of (float, float)
+        For ``stiffness_step:press`` from the crossing forces: ``(after, size)``, the
+        smallest step (in ``unit``) just after press number ``after``, at every place the
+        scan tests (:func:`~tactilevision.diagnosis.crossing_step_places`); ``size``
+        is the step half-way. Empty otherwise.
     """
 
     effect: str
@@ -147,6 +152,25 @@ class EffectSensitivity:
     snr: float
     why: str
     dip: str = ""
+    at_places: tuple[tuple[float, float], ...] = ()
+
+    def places_sentence(self) -> str:
+        """Where a step elsewhere than half-way needs more: '' without ``at_places``."""
+        if not self.at_places:
+            return ""
+        after, size = max(self.at_places, key=lambda p: p[1])
+        lo, hi = self.at_places[0][0], self.at_places[-1][0]
+        return (f"half-way through the presses; anywhere after presses {lo:g} to {hi:g}: "
+                f"{size:.3g} {self.unit}, the most after press {after:g}")
+
+    def to_json_dict(self) -> dict:
+        """``parameter``, ``unit``, ``size`` (null where not finite), ``power``, ``why``
+        and ``at_places`` (``[{"after_press", "size"}]``, null where none)."""
+        return {"parameter": self.parameter, "unit": self.unit,
+                "size": self.size if math.isfinite(self.size) else None,
+                "power": self.power, "why": self.why,
+                "at_places": [{"after_press": a, "size": s} for a, s in self.at_places]
+                or None}
 
 
 @dataclass

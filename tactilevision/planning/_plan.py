@@ -185,7 +185,8 @@ class PlanPrediction:
             "systematic_breaks": self.systematic_breaks, "notes": list(self.notes),
             "untestable": dict(self.untestable),
             "relaxation": None if self.relaxation is None else dict(self.relaxation.__dict__),
-            "effect_sizes": {k: dict(v.__dict__) for k, v in self.effect_sizes.items()},
+            "effect_sizes": {k: {**v.__dict__, "at_places": v.to_json_dict()["at_places"]}
+                             for k, v in self.effect_sizes.items()},
             "detect_power": dict(self.detect_power),
         })
 
