@@ -93,11 +93,12 @@ def plan_sizes(spec: SessionSpec, truth: dict, k: float, folder: Path | None = N
 
 
 def one(work: Path, seed: int, fps: float, at_rules_out: float | None = None,
-        at_plan: float | None = None, spiral: bool = False
-        ) -> dict[str, tuple[str | None, str | None]]:
+        at_plan: float | None = None, spiral: bool = False, kinds: tuple[str, ...] = KINDS,
+        step_after: float | None = None) -> dict[str, tuple[str | None, str | None]]:
     """The verdict and the crossings' finding of each kind on one generated session (with
     `at_rules_out`, each kind at that many times what the null table's crossing forces
-    rule out: :func:`bench_loop.rules_out_sizes`)."""
+    rule out: :func:`bench_loop.rules_out_sizes`; with `step_after`, the damage's step
+    after that press number, sized at its place)."""
     folder = work / "s"
     spec = SessionSpec(E_mpa=0.2, nu=0.48, block=GaugeBlock(bevel_angle_deg=0.0), repeats=4,
                        fps=fps, overshoot_mm=(0.005, 0.06), seed=seed)
@@ -109,14 +110,15 @@ def one(work: Path, seed: int, fps: float, at_rules_out: float | None = None,
     out, sizes = {}, {}
     if at_plan is not None:
         sizes = plan_sizes(spec, truth, at_plan, None if spiral else folder)
-    for kind in KINDS:
-        write_forces(folder, work / kind, kind, seed=seed, size=sizes.get(kind))
+    for kind in kinds:
+        write_forces(folder, work / kind, kind, seed=seed, size=sizes.get(kind),
+                     step_after=9.5 if step_after is None else step_after)
         try:
             cal = calibrate_session(work / kind)
         except InputError as exc:       # e.g. a press past the FEM table: counted wrong
             out[kind] = (f"calibrate refused ({exc})", None)
             if kind == "null" and at_rules_out is not None:      # nothing to size from
-                return {k: (f"not run: the null {out[kind][0]}", None) for k in KINDS}
+                return {k: (f"not run: the null {out[kind][0]}", None) for k in kinds}
             continue
         write_calibration(cal, work / f"{kind}_cal")
         t = read_measurements(work / f"{kind}_cal" / "measurements.csv")
@@ -132,7 +134,7 @@ def one(work: Path, seed: int, fps: float, at_rules_out: float | None = None,
                      else scan.found.effect)
         if kind == "null" and (at_rules_out is not None or at_plan is not None):
             own = rules_out_sizes(folder, work / "null_cal" / "measurements.csv",
-                                  at_rules_out or at_plan)
+                                  at_rules_out or at_plan, step_after)
             if at_plan is None:
                 sizes = own
             print(f"seed {seed} sizes (gradient /mm, fall over the session, step): "
@@ -153,18 +155,25 @@ def main() -> int:
                          "forces rule out (default: the fixed sizes above)")
     ap.add_argument("--at-plan", type=float, metavar="K",
                     help="each kind at K times what plan says the session's design can see")
+    ap.add_argument("--kinds", nargs="+", default=list(KINDS), choices=KINDS,
+                    help="the kinds to hide (null first: the others are sized from it)")
+    ap.add_argument("--step-after", type=float, metavar="N",
+                    help="the damage's step after press number N (default: after the 10th), "
+                         "with --at-rules-out sized at that place")
     ap.add_argument("--spiral", action="store_true",
                     help="with --at-plan: plan the design without its presses.csv (the "
                          "presses going round a spiral of positions), as before 2026-11-27")
     args = ap.parse_args()
     if args.at_rules_out is not None and args.at_plan is not None:
         ap.error("give --at-rules-out or --at-plan, not both")
-    score = {k: [0, 0] for k in KINDS}
+    kinds = tuple(k for k in KINDS if k in args.kinds)
+    score = {k: [0, 0] for k in kinds}
     t0 = time.perf_counter()
     for seed in range(args.first_seed, args.first_seed + args.seeds):
         work = Path(tempfile.mkdtemp(prefix="bench_crossings_"))
         try:
-            res = one(work, seed, args.fps, args.at_rules_out, args.at_plan, args.spiral)
+            res = one(work, seed, args.fps, args.at_rules_out, args.at_plan, args.spiral, kinds,
+                      args.step_after)
         finally:
             shutil.rmtree(work, ignore_errors=True)
         print(f"seed {seed}: " + "; ".join(f"{k}: {v or 'nothing'} (crossings: {c or '-'})"

@@ -46,7 +46,7 @@ from pathlib import Path
 import numpy as np
 
 from tactilevision.cli import main as cli
-from tactilevision.diagnosis import CROSSING_UNITS, crossing_sizes
+from tactilevision.diagnosis import CROSSING_UNITS, crossing_sizes, crossing_step_places
 from tactilevision.io import read_measurements
 from tactilevision.mechanics import EFFECT_SIZE_PARAMS, beta_relation, kappa
 from tactilevision.sim._schedule import PressSchedule, ft_log
@@ -74,9 +74,10 @@ DEFAULT_SIZE = {"spatial": 0.01, "softening": 0.1, "damage": 0.1}
 
 
 def write_forces(session: Path, dest: Path, kind: str, seed: int,
-                 size: float | None = None) -> dict:
+                 size: float | None = None, step_after: float = 9.5) -> dict:
     """Copy the session (frames linked) with a new forces.csv hiding `kind` (of `size`, the
-    kind's parameter of :data:`DEFAULT_SIZE`, where given); its truth."""
+    kind's parameter of :data:`DEFAULT_SIZE`, where given; the damage's step falls after
+    press number `step_after`: after the 10th by default); its truth."""
     size = DEFAULT_SIZE.get(kind) if size is None else size
     truth = json.loads((session / "truth.json").read_text())
     h, a = truth["thickness_mm"], truth["radius_mm"]
@@ -97,7 +98,7 @@ def write_forces(session: Path, dest: Path, kind: str, seed: int,
         scale = 1 - size * sched.t_start_s / float(sched.t_start_s[-1])
         e_named = E_TRUE * float(np.mean(scale))     # stiffness_trend: at the mean time
     elif kind == "damage":
-        scale = np.where(np.arange(n) >= 10, 1.0 - size, 1.0)
+        scale = np.where(np.arange(n) > step_after, 1.0 - size, 1.0)
     elif kind == "relaxation":
         relax = (0.25, 0.7)
     elif kind != "null":
@@ -122,12 +123,12 @@ def write_forces(session: Path, dest: Path, kind: str, seed: int,
 
 
 def one(session: Path, out: Path, kind: str, seed: int, reuse: bool = False,
-        size: float | None = None) -> dict:
+        size: float | None = None, step_after: float = 9.5) -> dict:
     folder = out / kind
     done = reuse and all((folder / f).is_file() for f in ("calibrate.json", "diagnose.json"))
     tr = (json.loads((folder / "truth.json").read_text()) if done and (
         folder / "truth.json").is_file() else write_forces(session, folder / "session", kind, seed,
-                                                            size))
+                                                            size, step_after))
     (folder / "truth.json").write_text(json.dumps(tr) + "\n")
     cal = folder / "calibration"
     meas = cal / "measurements.csv"
@@ -179,13 +180,21 @@ def one(session: Path, out: Path, kind: str, seed: int, reuse: bool = False,
             "calibrate_s": t_cal, "message": d["message"]}
 
 
-def rules_out_sizes(session: Path, table: Path, k: float) -> dict[str, float]:
+def rules_out_sizes(session: Path, table: Path, k: float, step_after: float | None = None
+                    ) -> dict[str, float]:
     """`k` times the sizes the null table's crossing forces rule out, in the kinds'
     parameters (:data:`DEFAULT_SIZE`): gx, the fall over the session (the trend per second
-    times the last press's start), the step half-way. A table without crossing forces (a
-    vernier's): the sizes its null diagnosis states it rules out (``rules_out``, beside
-    the table's calibration folder)."""
-    got = crossing_sizes(read_measurements(table).columns)
+    times the last press's start), the step half-way (with `step_after`, the step at that
+    place: :func:`crossing_step_places`). A table without crossing forces (a vernier's):
+    the sizes its null diagnosis states it rules out (``rules_out``, beside the table's
+    calibration folder)."""
+    cols = read_measurements(table).columns
+    got = crossing_sizes(cols)
+    if got and step_after is not None:
+        places = [(a, s) for a, s in crossing_step_places(cols) if a <= step_after]
+        if not places:
+            raise ValueError(f"no step place at or before press {step_after:g} in {table}")
+        got["stiffness_step:press"] = places[-1][1]
     if not got:
         ruled = json.loads((table.parents[1] / "diagnose.json").read_text())["rules_out"]
         scale = {"spatial_nonuniformity": EFFECT_SIZE_PARAMS["spatial_nonuniformity"][2],
@@ -251,6 +260,10 @@ def main(argv: list[str] | None = None) -> int:
                          "smallest the null session's crossing forces rule out "
                          "(tactilevision.diagnosis.crossing_sizes; without crossing forces, "
                          "its null diagnosis's rules_out); null is run first")
+    ap.add_argument("--step-after", type=float, default=9.5, metavar="N",
+                    help="the damage's step falls after press number N (default 9.5: after "
+                         "the 10th press); with --at-rules-out, sized at that place "
+                         "(tactilevision.diagnosis.crossing_step_places)")
     ap.add_argument("--reuse", action="store_true",
                     help="keep the calibrate, diagnose and fit outputs already in --out")
     a = ap.parse_args(argv)
@@ -261,14 +274,16 @@ def main(argv: list[str] | None = None) -> int:
     if a.at_rules_out is not None:
         rows = [one(a.session, a.out, "null", a.seed, a.reuse)]
         sizes = rules_out_sizes(a.session, a.out / "null" / "calibration" / "measurements.csv",
-                                a.at_rules_out)
+                                a.at_rules_out,
+                                None if a.step_after == 9.5 else a.step_after)
         print(f"sizes: {a.at_rules_out:g} times what the null session rules out (its crossing "
               f"forces, or its diagnosis's rules_out): "
               + ", ".join(f"{k} {v:.4g}" for k, v in sizes.items()), flush=True)
-        rows += [one(a.session, a.out, k, a.seed, a.reuse, sizes.get(k)) for k in a.kinds
-                 if k != "null"]
+        rows += [one(a.session, a.out, k, a.seed, a.reuse, sizes.get(k), a.step_after)
+                 for k in a.kinds if k != "null"]
     else:
-        rows = [one(a.session, a.out, k, a.seed, a.reuse) for k in a.kinds]
+        rows = [one(a.session, a.out, k, a.seed, a.reuse, step_after=a.step_after)
+                for k in a.kinds]
     if a.json:
         a.json.write_text(json.dumps(rows, indent=1) + "\n")
     print_rows(rows, a.session)

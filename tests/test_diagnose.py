@@ -255,7 +255,11 @@ def test_nothing_missing_rules_out_a_stiffness_change_over_the_session(effect):
     assert d.missing_effect is None and d.unexplained_covariate is None, d.message
     e = d.rules_out[effect]
     assert 0 < e.size_param < math.inf and e.unit in ("%/min", "%")
-    assert f"{effect} {e.size:.3g} {e.unit}" in d.message
+    said = f"{effect} {e.size:.3g} {e.unit}"
+    assert said in d.message
+    # the step is sized half-way, and says so (one near an end needs more)
+    half = "(a step half-way through the presses"
+    assert (half in d.message.split(said)[1][:len(half) + 1]) == (effect == "stiffness_step:press")
     c = t.columns
 
     def changed(x):
