@@ -257,16 +257,16 @@ def test_nothing_missing_rules_out_a_stiffness_change_over_the_session(effect):
     assert 0 < e.size_param < math.inf and e.unit in ("%/min", "%")
     said = f"{effect} {e.size:.3g} {e.unit}"
     assert said in d.message
-    # the step is sized half-way, and says so (one near an end needs more)
-    half = "(a step half-way through the presses"
+    # the step is sized half-way, and says so, with what one near an end needs
+    half = "(half-way through the presses; anywhere after presses"
     assert (half in d.message.split(said)[1][:len(half) + 1]) == (effect == "stiffness_step:press")
     c = t.columns
 
-    def changed(x):
+    def changed(x, after=None):
         if effect.startswith("stiffness_trend"):
             f = np.exp(-x * (c["time_s"] - c["time_s"].mean()))
         else:
-            f = 1 - x * (c["press"] > np.median(c["press"]))
+            f = 1 - x * (c["press"] > (np.median(c["press"]) if after is None else after))
         return _diag(type(t)(**{**vars(t), "columns": {**c, "force_n": c["force_n"] * f}}))
 
     big = changed(1.5 * e.size_param)
@@ -275,6 +275,13 @@ def test_nothing_missing_rules_out_a_stiffness_change_over_the_session(effect):
     small = changed(0.3 * e.size_param)
     assert small.missing_effect is None and small.unexplained_covariate is None, \
         small.message
+    if effect == "stiffness_step:press":
+        # near the start the step needs more (the fewest presses before it), and that
+        # size is named there
+        after, first = e.at_places[0]
+        assert after < np.median(c["press"]) and first > 1.5 * e.size
+        early = changed(1.5 * first / 100, after)
+        assert effect in (early.missing_effect, *early.equivalent_effects), early.message
 
 
 def test_rules_out_is_replayed_for_a_gel_fitted_at_the_tables_edge():

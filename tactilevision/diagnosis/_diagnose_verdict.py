@@ -522,8 +522,7 @@ def _with_rules_out(d: Diagnosis, h: float, a: float, hidden: dict[str, str] | N
     own = {k: v for k, v in own.items() if k not in sizes or not math.isfinite(sizes[k].size)}
     hidden = {k: v for k, v in hidden.items() if k not in own}
     found = [f"{k} {v.size:.3g}{' ' + v.unit if v.unit else ''}"
-             + (" (a step half-way through the presses; one near either end needs more)"
-                if k == "stiffness_step:press" else "")
+             + (f" ({v.places_sentence()})" if v.at_places else "")
              for k, v in sizes.items() if math.isfinite(v.size) and k not in own]
     never = [k for k, v in sizes.items() if v.size == math.inf and k not in own]
     s = []
