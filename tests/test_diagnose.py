@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 import math
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -28,12 +29,13 @@ from tactilevision.diagnosis._diagnose import (
     _moduli_text,
     diagnose_core,
 )
-from tactilevision.io import write_measurements
+from tactilevision.io import read_measurements, write_measurements
 from tactilevision.mechanics import IndentationModel, fit_model
 from tactilevision.sim import HIDDEN_EFFECTS, make_measurement_table
 from tactilevision.sim._tables import _fem_force
 
 SEEDS = range(4)
+DATA = Path(__file__).parent / "data"
 CATALOGUE = [k for k in HIDDEN_EFFECTS if k != "temperature"]
 #: the generator's hidden F/T cross-talk is the catalogue's force_crosstalk
 NAME = {"crosstalk": "force_crosstalk"}
@@ -570,3 +572,26 @@ def test_a_stiffness_trend_competes_where_the_step_along_its_column_passes():
     assert best.effect == "stiffness_step:press"
     # nor does it raise an alarm of its own
     assert _choose([cands[0], cands[3]], 0.05, partner, ("law_curvature",), "gate") is None
+
+
+def test_an_offset_along_depth_under_the_mark_rule_needs_the_crossing_forces():
+    """A generated drawn-mark session with nothing hidden (tests/data/mark_null_8919):
+    within each indenter the mark's depths are read through the force, and the ladder on
+    them named depth_offset (BIC lower by 26); the crossing forces, at depths the frames
+    certify apart from the force, name nothing. The verdict is then nothing, the offsets
+    not identified. Ground truth the other way: the same presses with every depth said
+    100 um shallower than it was (lands 100 um off) name an offset, which the crossing
+    forces show too."""
+    t = read_measurements(DATA / "mark_null_8919" / "measurements.csv")
+    cols = {**t.columns, "depth_mm": t.depth_mm, "force_n": t.force_n}
+    kw = dict(thickness_mm=t.thickness_mm, radius_mm=t.radius_mm, rules_out=False)
+    group, theta = indenter_shared(cols)
+    ladder = diagnose_core({**cols, "_group": group, "_theta": theta},
+                           thickness_mm=t.thickness_mm, radius_mm=t.radius_mm)
+    assert ladder.missing_effect in ("depth_offset", "force_offset")
+    d = diagnose(cols, depth_rule="mark", **kw)
+    assert d.missing_effect is None and d.unexplained_covariate is None, d.message
+    assert "not identified under the mark rule" in d.untestable_reasons["depth_offset"]
+    assert "not identified on this table" in d.message
+    off = diagnose({**cols, "depth_mm": cols["depth_mm"] - 0.1}, depth_rule="mark", **kw)
+    assert off.missing_effect in ("depth_offset", "force_offset"), off.message

@@ -501,9 +501,12 @@ def diagnose_core(columns: Mapping[str, np.ndarray], *, thickness_mm: float,
                   radius_mm: float, base: str = "paper", effects: Sequence[str] = (),
                   beta_table: str = "fem", max_steps: int = 3, cv_folds: int = 10,
                   seed: int = 0, progress: bool = False, curvature: str = CURVATURE,
-                  candidates: Sequence = (), scan: Sequence[str] = ()) -> Diagnosis:
+                  candidates: Sequence = (), scan: Sequence[str] = (),
+                  not_tried: Mapping[str, str] | None = None) -> Diagnosis:
     """:func:`tactilevision.diagnosis.diagnose` without what its verdict rules out (the
-    effect-size replay on the table): the ladder, the verdicts, the message."""
+    effect-size replay on the table): the ladder, the verdicts, the message.
+    `not_tried`: catalogue effects left out of the ladder, each with the reason the
+    message gives (listed as not testable on this table)."""
     cols = {k: np.asarray(v, np.float64) for k, v in columns.items()}
     h, a = float(thickness_mm), float(radius_mm)
     model = _model_to_diagnose(cols, h, a, base, effects)
@@ -512,6 +515,10 @@ def diagnose_core(columns: Mapping[str, np.ndarray], *, thickness_mm: float,
     law_rungs = ("law_curvature",) + (("large_deformation",) if base == "fem" else ())
     table = _Table(cols, h, a, beta_table, law_rungs)
     pool = _candidate_pool(cols, base, model, candidates, tuple(scan))
+    for n, why in (not_tried or {}).items():
+        if n in pool.named and n not in pool.untestable:
+            pool.untestable[n] = tuple(make_effect(n).columns)
+            pool.why_untestable[n] = why
     if curvature not in ("gate", "nuisance"):
         raise InputError(f"curvature must be 'gate' or 'nuisance', got {curvature!r}")
     scan = pool.scan
