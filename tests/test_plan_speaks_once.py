@@ -5,11 +5,23 @@ table's hold_s column holds; figures rounded."""
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import replace
 from pathlib import Path
 
+import numpy as np
+
 from tactilevision.cli import main
-from tactilevision.planning import crossing_effect_sizes, read_design
+from tactilevision.diagnosis import crossing_measurements
+from tactilevision.diagnosis._diagnose import diagnose_core
+from tactilevision.planning import (
+    crossing_effect_sizes,
+    crossing_offset_sizes,
+    effect_sensitivity,
+    plan_session,
+    read_design,
+)
+from tactilevision.planning._plan_effects import crossing_table
 
 PLAN = Path(__file__).resolve().parents[1] / "sample_frames" / "plan"
 
@@ -72,3 +84,37 @@ def test_a_mark_design_does_not_promise_what_its_depth_rule_absorbs(capsys):
     fast = crossing_effect_sizes(replace(design, frame_rate_hz=2 * design.frame_rate_hz))
     slow = crossing_effect_sizes(design)
     assert 0.45 < fast["stiffness_step:press"].size / slow["stiffness_step:press"].size < 0.75
+
+
+def test_an_offset_along_depth_on_a_mark_design_needs_the_crossing_forces():
+    """Under the mark rule diagnose names an offset along depth only where the crossing
+    forces' own table names it too (tests/test_diagnose.py), so plan sizes it as the larger
+    of what the mark's table and the crossing forces need. Ground truth on the crossing
+    forces themselves: the design's crossing forces, each drawn uniformly in its stated
+    bracket, with a force offset of 1.5 times the size plan states, are named force_offset
+    by diagnose's ladder in at least 8 of 10 draws (10 of 10 when written), at half of it
+    in at most 5 (0)."""
+    design = read_design(PLAN / "paper_gauge_block.toml")
+    got = plan_session(design).effect_sizes["force_offset"]
+    mark = effect_sensitivity(design)["force_offset"].size_param
+    cross = crossing_offset_sizes(design)["force_offset"].size_param
+    assert math.isfinite(cross) and got.size_param == max(mark, cross)
+    assert "both the mark's depths and the crossing forces" in got.why
+    c = crossing_table(design)
+    w0 = np.asarray(design.depths_mm)[c["indenter"].astype(int)]
+    rng = np.random.default_rng(5)
+
+    def named(offset: float) -> int:
+        hits = 0
+        for _ in range(10):
+            f = c["force_w0_n"] + offset + (rng.random(w0.size) - 0.5) * np.sqrt(12.0) * c[
+                "force_w0_sem_n"]
+            table = crossing_measurements({**c, "force_w0_n": f, "depth_mm": w0,
+                                           "overshoot_mm": np.zeros(w0.size)})
+            d = diagnose_core(table, thickness_mm=design.thickness_mm,
+                              radius_mm=design.radius_mm)
+            hits += "force_offset" in (d.missing_effect, *d.equivalent_effects)
+        return hits
+
+    assert named(1.5 * got.size_param) >= 8
+    assert named(0.5 * got.size_param) <= 5

@@ -8,7 +8,8 @@ what its session would certify and find:
   E and nu the session would give, whether nu is identified, and the smallest size of
   each catalogue effect ``diagnose`` would name (:func:`effect_sensitivity`,
   :func:`effect_power`: :mod:`tactilevision.diagnosis`'s replay on the design's drawn
-  sessions; a drawn mark's crossing forces, :func:`crossing_effect_sizes`, size what
+  sessions; a drawn mark's crossing forces, :func:`crossing_effect_sizes`
+  (and :func:`crossing_offset_sizes`, the offsets along depth they must also show), size what
   its depths absorb within an indenter); relaxation's own identifiability
   (:func:`relaxation_identifiability`).
 - :func:`recommend` -> :class:`Recommendation`: the change to the design that buys most
@@ -31,6 +32,7 @@ from ._plan import (
 )
 from ._plan_effects import (
     crossing_effect_sizes,
+    crossing_offset_sizes,
     crossing_table,
     design_setup,
     effect_power,
@@ -45,6 +47,7 @@ __all__ = [
     "Recommendation",
     "RelaxationPlan",
     "crossing_effect_sizes",
+    "crossing_offset_sizes",
     "crossing_table",
     "depth_uncertainty",
     "design_from_calibration",

@@ -64,7 +64,13 @@ from ._design import (
     untestable_effects,
     untestable_in_table,
 )
-from ._plan_effects import crossing_effect_sizes, effect_power, effect_sensitivity
+from ._plan_effects import (
+    crossing_effect_sizes,
+    crossing_offset_sizes,
+    effect_power,
+    effect_sensitivity,
+    larger_of,
+)
 
 __all__ = [
     "VERNIER_EDGE_PX",
@@ -456,6 +462,14 @@ def plan_session(design: Design, *, effect_sizes: bool = True) -> PlanPrediction
         sizes, seen, crossing = {}, {}, {}
         notes.append(f"no effect sizes: {exc}")
     sizes = {**sizes, **crossing}       # a mark's crossing forces size what its depths absorb
+    if effect_sizes and crossing:
+        # an offset along depth: named under the mark rule where the crossing forces name it
+        try:
+            offsets = crossing_offset_sizes(d)
+        except InputError as exc:
+            offsets = {}
+            notes.append(f"the offsets along depth were not sized on the crossing forces: {exc}")
+        sizes.update({k: larger_of(sizes[k], v) for k, v in offsets.items() if k in sizes})
     untest = {k: v for k, v in untest.items() if k not in crossing}
     relax = (None if d.relaxation_g is None else
              relaxation_identifiability(d, float(d.relaxation_g), float(d.relaxation_tau_s)))

@@ -23,8 +23,9 @@ from ..diagnosis import (
     crossing_sensitivity,
     replay_power,
     replay_sizes,
+    table_sensitivity,
 )
-from ..mechanics import fem_force
+from ..mechanics import EFFECT_SIZE_PARAMS, fem_force
 from ._design import (
     Design,
     depth_uncertainty,
@@ -35,8 +36,12 @@ from ._design import (
     untestable_effects,
 )
 
-__all__ = ["crossing_effect_sizes", "crossing_table", "design_setup", "effect_power",
-           "effect_sensitivity"]
+__all__ = ["crossing_effect_sizes", "crossing_offset_sizes", "crossing_table", "design_setup",
+           "effect_power", "effect_sensitivity"]
+
+#: The effects along depth alone: under the mark rule ``diagnose`` names them only where
+#: the crossing forces' own table names them too.
+DEPTH_ONLY = ("depth_offset", "force_offset")
 
 #: The frame periods a drawn mark's crossing bracket spans, press by press in turn: the
 #: mark rule adds the period of the frame before the first trace when it lies above the
@@ -132,3 +137,49 @@ def crossing_effect_sizes(design: Design, *, power: float = 0.95
         crossing_table(design), power=power,
         why="from the crossing forces within indenters (the mark's frame period brackets "
             "each; presses going round the indenters)")
+
+
+def crossing_offset_sizes(design: Design, *, power: float = 0.95, draws: int = 400
+                          ) -> dict[str, EffectSensitivity]:
+    """The offsets along depth alone (``depth_offset``, ``force_offset``) that a
+    drawn-mark design's crossing forces let ``diagnose`` name in `power` of sessions.
+
+    Under the mark rule ``diagnose`` names such an offset only where the ladder on the
+    crossing forces' own table (each press at its w0, certified apart from the force;
+    :func:`~tactilevision.diagnosis.crossing_measurements`) names it too: within an
+    indenter the mark's depths are read through the force. So an offset must be as large
+    as both the mark's table and this one need. Here the crossing forces of
+    :func:`crossing_table` at the design's w0, each with its stated sd, are replayed as a
+    table of their own (:func:`~tactilevision.diagnosis.table_sensitivity`, `draws`
+    sessions; the other effects, which the mark's table or the crossing tests size,
+    are not tried there). Empty for a bevel read as a vernier.
+    """
+    if design.bevel_angle_deg != 0.0:
+        return {}
+    c = crossing_table(design)
+    w0 = np.asarray(design.depths_mm, np.float64)[c["indenter"].astype(int)]
+    cols = {**{k: v for k, v in c.items() if k not in ("force_w0_n", "force_w0_sem_n")},
+            "depth_mm": w0, "force_n": c["force_w0_n"]}
+    sizes = table_sensitivity(cols, thickness_mm=design.thickness_mm,
+                              radius_mm=design.radius_mm, E_mpa=design.E_mpa, nu=design.nu,
+                              sigma_n=c["force_w0_sem_n"], power=power, draws=draws,
+                              untestable={k: "sized on the mark's table" for k in
+                                          EFFECT_SIZE_PARAMS if k not in DEPTH_ONLY})
+    return {k: sizes[k] for k in DEPTH_ONLY if k in sizes}
+
+
+def larger_of(mark: EffectSensitivity, crossing: EffectSensitivity) -> EffectSensitivity:
+    """An offset along depth under the mark rule: the larger of what the mark's table and
+    the crossing forces' need (both must name it), said so; NaN (untestable) where either
+    is."""
+    if not (math.isfinite(mark.size_param) or math.isinf(mark.size_param)):
+        return mark
+    if not (math.isfinite(crossing.size_param) or math.isinf(crossing.size_param)):
+        return crossing
+    big = crossing if crossing.size_param > mark.size_param else mark
+    return EffectSensitivity(
+        big.effect, big.parameter, big.unit, big.size, big.size_param, big.power, big.snr,
+        f"under the mark rule both the mark's depths and the crossing forces must name it: "
+        f"{mark.size:.3g} and {crossing.size:.3g}{' ' + big.unit if big.unit else ''} "
+        f"({'the crossing forces' if big is crossing else 'the mark' + chr(39) + 's depths'} "
+        f"need more)", big.dip)
