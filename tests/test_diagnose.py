@@ -15,6 +15,7 @@ import pytest
 from tactilevision import InputError
 from tactilevision.cli import main
 from tactilevision.diagnosis import (
+    EffectSensitivity,
     certification_tests,
     covariate_tests,
     cross_validated_rmse,
@@ -595,3 +596,20 @@ def test_an_offset_along_depth_under_the_mark_rule_needs_the_crossing_forces():
     assert "not identified on this table" in d.message
     off = diagnose({**cols, "depth_mm": cols["depth_mm"] - 0.1}, depth_rule="mark", **kw)
     assert off.missing_effect in ("depth_offset", "force_offset"), off.message
+
+
+def test_a_step_at_a_place_no_size_reaches_reads_as_such():
+    """A place where no step size the parameter allows is named (inf) says so in the
+    sentence and is null in the JSON (strict JSON has no Infinity); the largest is found
+    and the ends of the places named."""
+    e = EffectSensitivity("stiffness_step:press", "s", "%", 7.0, 0.07, 0.95, math.nan, "w",
+                          at_places=((1.0, math.inf), (5.0, 7.0), (9.0, 12.0)))
+    assert e.places_sentence() == ("half-way through the presses; anywhere after presses 1 "
+                                   "to 9: not at any size the parameter allows, the most "
+                                   "after press 1")
+    out = json.loads(json.dumps(e.to_json_dict(), allow_nan=False))
+    assert out["at_places"] == [{"after_press": 1.0, "size": None},
+                                {"after_press": 5.0, "size": 7.0},
+                                {"after_press": 9.0, "size": 12.0}]
+    assert EffectSensitivity("x", "p", "", 1.0, 1.0, 0.95, 1.0, "w").to_json_dict()[
+        "at_places"] is None

@@ -164,17 +164,20 @@ class EffectSensitivity:
             return ""
         after, size = max(self.at_places, key=lambda p: p[1])
         lo, hi = self.at_places[0][0], self.at_places[-1][0]
+        most = (f"{size:.3g} {self.unit}" if math.isfinite(size)
+                else "not at any size the parameter allows")
         return (f"half-way through the presses; anywhere after presses {lo:g} to {hi:g}: "
-                f"{size:.3g} {self.unit}, the most after press {after:g}")
+                f"{most}, the most after press {after:g}")
 
     def to_json_dict(self) -> dict:
         """``parameter``, ``unit``, ``size`` (null where not finite), ``power``, ``why``
-        and ``at_places`` (``[{"after_press", "size"}]``, null where none)."""
+        and ``at_places`` (``[{"after_press", "size"}]``, a size null where not finite;
+        null where none)."""
         return {"parameter": self.parameter, "unit": self.unit,
                 "size": self.size if math.isfinite(self.size) else None,
                 "power": self.power, "why": self.why,
-                "at_places": [{"after_press": a, "size": s} for a, s in self.at_places]
-                or None}
+                "at_places": [{"after_press": a, "size": s if math.isfinite(s) else None}
+                              for a, s in self.at_places] or None}
 
 
 @dataclass
