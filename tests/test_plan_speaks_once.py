@@ -18,7 +18,6 @@ from tactilevision.planning import (
     crossing_effect_sizes,
     crossing_offset_sizes,
     effect_sensitivity,
-    plan_session,
     read_design,
 )
 from tactilevision.planning._plan_effects import crossing_table
@@ -80,6 +79,13 @@ def test_a_mark_design_does_not_promise_what_its_depth_rule_absorbs(capsys):
         assert name not in mark["untestable"] and mark["effect_sizes"][name]["size"] > 0
         assert "crossing forces" in mark["effect_sizes"][name]["why"]
     assert "stiffness_step:press" not in vernier["effect_sizes"]
+    # an offset along depth: the larger of what the mark's table and the crossing forces need
+    design = read_design(PLAN / "paper_gauge_block.toml")
+    got = mark["effect_sizes"]["force_offset"]
+    need = (effect_sensitivity(design)["force_offset"].size_param,
+            crossing_offset_sizes(design)["force_offset"].size_param)
+    assert got["size_param"] == max(need) and "both the mark's depths and the crossing " \
+        "forces" in got["why"]
     design = read_design(PLAN / "paper_gauge_block.toml")
     fast = crossing_effect_sizes(replace(design, frame_rate_hz=2 * design.frame_rate_hz))
     slow = crossing_effect_sizes(design)
@@ -89,17 +95,15 @@ def test_a_mark_design_does_not_promise_what_its_depth_rule_absorbs(capsys):
 def test_an_offset_along_depth_on_a_mark_design_needs_the_crossing_forces():
     """Under the mark rule diagnose names an offset along depth only where the crossing
     forces' own table names it too (tests/test_diagnose.py), so plan sizes it as the larger
-    of what the mark's table and the crossing forces need. Ground truth on the crossing
-    forces themselves: the design's crossing forces, each drawn uniformly in its stated
-    bracket, with a force offset of 1.5 times the size plan states, are named force_offset
-    by diagnose's ladder in at least 8 of 10 draws (10 of 10 when written), at half of it
-    in at most 5 (0)."""
+    of what the mark's table and the crossing forces need (the test above; on this design
+    the crossing forces', 106 mN against 80.8). Ground truth on the crossing forces
+    themselves: the design's crossing forces, each drawn uniformly in its stated bracket,
+    with a force offset of 1.5 times that size are named force_offset by diagnose's
+    ladder in at least 8 of 10 draws (10 of 10 when written), at half of it in at most 5
+    (0)."""
     design = read_design(PLAN / "paper_gauge_block.toml")
-    got = plan_session(design).effect_sizes["force_offset"]
-    mark = effect_sensitivity(design)["force_offset"].size_param
-    cross = crossing_offset_sizes(design)["force_offset"].size_param
-    assert math.isfinite(cross) and got.size_param == max(mark, cross)
-    assert "both the mark's depths and the crossing forces" in got.why
+    size = crossing_offset_sizes(design)["force_offset"].size_param
+    assert math.isfinite(size)
     c = crossing_table(design)
     w0 = np.asarray(design.depths_mm)[c["indenter"].astype(int)]
     rng = np.random.default_rng(5)
@@ -116,5 +120,5 @@ def test_an_offset_along_depth_on_a_mark_design_needs_the_crossing_forces():
             hits += "force_offset" in (d.missing_effect, *d.equivalent_effects)
         return hits
 
-    assert named(1.5 * got.size_param) >= 8
-    assert named(0.5 * got.size_param) <= 5
+    assert named(1.5 * size) >= 8
+    assert named(0.5 * size) <= 5
