@@ -260,9 +260,9 @@ def main(argv: list[str] | None = None) -> int:
                          "smallest the null session's crossing forces rule out "
                          "(tactilevision.diagnosis.crossing_sizes; without crossing forces, "
                          "its null diagnosis's rules_out); null is run first")
-    ap.add_argument("--step-after", type=float, default=9.5, metavar="N",
-                    help="the damage's step falls after press number N (default 9.5: after "
-                         "the 10th press); with --at-rules-out, sized at that place "
+    ap.add_argument("--step-after", type=float, metavar="N",
+                    help="the damage's step falls after press number N (default: after the "
+                         "10th press, sized half-way); with --at-rules-out, sized at that place "
                          "(tactilevision.diagnosis.crossing_step_places)")
     ap.add_argument("--reuse", action="store_true",
                     help="keep the calibrate, diagnose and fit outputs already in --out")
@@ -271,18 +271,18 @@ def main(argv: list[str] | None = None) -> int:
         print_rows(json.loads(a.from_json.read_text()), a.session)
         return 0
     sizes: dict[str, float] = {}
+    after = 9.5 if a.step_after is None else a.step_after
     if a.at_rules_out is not None:
         rows = [one(a.session, a.out, "null", a.seed, a.reuse)]
         sizes = rules_out_sizes(a.session, a.out / "null" / "calibration" / "measurements.csv",
-                                a.at_rules_out,
-                                None if a.step_after == 9.5 else a.step_after)
+                                a.at_rules_out, a.step_after)
         print(f"sizes: {a.at_rules_out:g} times what the null session rules out (its crossing "
               f"forces, or its diagnosis's rules_out): "
               + ", ".join(f"{k} {v:.4g}" for k, v in sizes.items()), flush=True)
-        rows += [one(a.session, a.out, k, a.seed, a.reuse, sizes.get(k), a.step_after)
+        rows += [one(a.session, a.out, k, a.seed, a.reuse, sizes.get(k), after)
                  for k in a.kinds if k != "null"]
     else:
-        rows = [one(a.session, a.out, k, a.seed, a.reuse, step_after=a.step_after)
+        rows = [one(a.session, a.out, k, a.seed, a.reuse, step_after=after)
                 for k in a.kinds]
     if a.json:
         a.json.write_text(json.dumps(rows, indent=1) + "\n")
