@@ -12,7 +12,7 @@ from scipy.interpolate import PchipInterpolator
 
 from .._checks import InputError
 from ._catalogue import make_effect
-from ._fem_tables import TABLE_EXTRAPOLATION, kappa_n
+from ._fem_tables import TABLE_EXTRAPOLATION, kappa_n_grid
 from ._fit import (
     MAX_W_OVER_H,
     _geometry,
@@ -230,8 +230,8 @@ def _consistent_material(fit: IndentationFit, model: IndentationModel, mf: Model
     base = {k: np.asarray(columns[k], np.float64) for k in shape.columns if k != "force_n"}
     nus = np.linspace(rel_lo, rel_hi, n_grid)
     cg, bg = [], []
-    for nu in nus:
-        kn = np.array([kappa_n(nu, a / h, x / h, contact=contact) for x in ws])
+    k_grid = kappa_n_grid(nus, a / h, ws / h, contact=contact)       # (n_grid, len(ws))
+    for nu, kn in zip(nus, k_grid, strict=True):
         P1 = 2 * a * ws * kn / (1 - nu**2)
         g = shape.fit({**base, "force_n": P1[inv]}, thickness_mm=h, loss="linear",
                       weights=mf.weights)
