@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import json
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cached_property, lru_cache
 
 import numpy as np
 from scipy.interpolate import PchipInterpolator
@@ -132,11 +132,30 @@ class TabulatedBetaRelation:
         instead of the small-strain kappa (they differ by the curvature of
         P/w, under 1%).
         """
-        return float(PchipInterpolator(self.nu_grid, self.kappa_line_grid)(nu))
+        return float(self._kappa_line_pchip(nu))
 
     def dkappa_line_dnu(self, nu: float) -> float:
         """d kappa_line / d nu at `nu`."""
-        return float(PchipInterpolator(self.nu_grid, self.kappa_line_grid).derivative()(nu))
+        return float(self._kappa_line_pchip.derivative()(nu))
+
+    # the interpolants, built once per relation (a fit reads them many times)
+    @cached_property
+    def _kappa_line_pchip(self) -> PchipInterpolator:
+        return PchipInterpolator(self.nu_grid, self.kappa_line_grid)
+
+    @cached_property
+    def _beta_pchip(self) -> PchipInterpolator:
+        return PchipInterpolator(self.nu_grid, self.beta_grid)
+
+    @cached_property
+    def _inverse_pchip(self) -> PchipInterpolator:
+        first, last = self.branch
+        if last == first:
+            raise InputError(
+                f"the FEM beta ({self.definition}, {self.contact} punch) does not rise with "
+                f"nu at a/h = {self.a_over_h:.4g}: nu cannot be recovered from beta there")
+        sel = slice(first, last + 1)
+        return PchipInterpolator(self.beta_grid[sel], self.nu_grid[sel])
 
     @property
     def branch(self) -> tuple[int, int]:
@@ -185,17 +204,11 @@ class TabulatedBetaRelation:
         return float(np.nextafter(self.beta_grid[self.branch[1]], np.inf))
 
     def _inverse(self):
-        first, last = self.branch
-        if last == first:
-            raise InputError(
-                f"the FEM beta ({self.definition}, {self.contact} punch) does not rise with "
-                f"nu at a/h = {self.a_over_h:.4g}: nu cannot be recovered from beta there")
-        sel = slice(first, last + 1)
-        return PchipInterpolator(self.beta_grid[sel], self.nu_grid[sel])
+        return self._inverse_pchip
 
     def beta(self, nu: float | np.ndarray) -> float | np.ndarray:
         """beta at `nu` (PCHIP in nu over the whole table; no range check)."""
-        out = PchipInterpolator(self.nu_grid, self.beta_grid)(np.asarray(nu, np.float64))
+        out = self._beta_pchip(np.asarray(nu, np.float64))
         return float(out) if out.ndim == 0 else out
 
     def nu(self, beta: float | np.ndarray) -> float | np.ndarray:
@@ -283,9 +296,7 @@ def fem_beta_relation(a_over_h: float, *, contact: str = "bonded",
         if x.ndim != 1 or x.size < 2 or np.ptp(x) <= 0 or not np.all((x > 0) & (x <= top + 1e-12)):
             raise InputError(f"w_over_h must hold two distinct depths or more within "
                              f"(0, {top:g}], got {w_over_h!r}")
-        kn = np.concatenate([data["kappa0"][c][..., None], data["kappa_n"][c]], axis=-1)
-        kn_ah = PchipInterpolator(ah, kn, axis=0)(a_over_h)          # (N, K + 1)
-        k_at = PchipInterpolator(wt, kn_ah, axis=1)(x)               # (N, n)
+        k_at = _kappa_n_along_w(float(a_over_h), c)(x)               # (N, n)
         if weights is None:
             wt_fit = None
         else:
@@ -303,6 +314,18 @@ def fem_beta_relation(a_over_h: float, *, contact: str = "bonded",
         nu_grid=data["nu"].astype(np.float64), beta_grid=row, kappa_line_grid=line,
         source=(f"tactilevision FEM, finite-strain Neo-Hookean, {contact} punch, {definition} "
                 f"beta (mesh {meta['mesh']}; built {meta.get('created', '?')})"))
+
+
+@lru_cache(maxsize=64)
+def _kappa_n_along_w(a_over_h: float, contact_index: int) -> PchipInterpolator:
+    """kappa_n of the FEM table at one a/h (PCHIP across a/h), as a PCHIP along w/h
+    through kappa0 at 0 and the stored depths: (N,) per w/h, one per nu of the table."""
+    data = _load("beta_fem.npz")
+    wt = np.concatenate([[0.0], data["w_over_h"]])
+    kn = np.concatenate([data["kappa0"][contact_index][..., None],
+                         data["kappa_n"][contact_index]], axis=-1)
+    kn_ah = PchipInterpolator(data["a_over_h"], kn, axis=0)(a_over_h)     # (N, K + 1)
+    return PchipInterpolator(wt, kn_ah, axis=1)
 
 
 def kappa_n(nu: float | np.ndarray, a_over_h: float | np.ndarray,
