@@ -248,6 +248,8 @@ def test_a_softening_gel_is_found_through_its_crossings(softening):
                      depth_rule="mark").rules_out
     for name in ("stiffness_step:press", "stiffness_trend:time_s", "spatial_nonuniformity"):
         assert 0 < ruled[name].size < np.inf and "crossing forces" in ruled[name].why
+        # only the step is sized at a place (half-way, and just after each press)
+        assert ("half-way" in ruled[name].why) == (name == "stiffness_step:press")
 
 
 def test_fit_on_the_crossing_forces(softening, tmp_path, capsys):

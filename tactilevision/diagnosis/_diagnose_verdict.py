@@ -219,8 +219,7 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
 
 def crossing_sensitivity(columns: Mapping[str, np.ndarray], *, power: float = 0.95,
                          why: str = "from the crossing forces within indenters at their "
-                                    "stated uncertainties (the family-wise tests' power; a "
-                                    "step half-way through the presses)"
+                                    "stated uncertainties (the family-wise tests' power)"
                          ) -> dict[str, EffectSensitivity]:
     """The smallest within-indenter changes the crossing forces name, as entries of
     ``rules_out`` and of ``plan``'s ``effect_sizes``.
@@ -232,7 +231,8 @@ def crossing_sensitivity(columns: Mapping[str, np.ndarray], *, power: float = 0.
         ``force_w0_sem_n`` and the press's conditions).
     power : float, default 0.95
     why : str
-        Each entry's sentence.
+        Each entry's sentence (the step's adds where its size is taken: half-way through
+        the presses, and just after each press in ``at_places``).
 
     Returns
     -------
@@ -246,9 +246,11 @@ def crossing_sensitivity(columns: Mapping[str, np.ndarray], *, power: float = 0.
         param, unit, factor = CROSSING_UNITS[name]
         places = (tuple((a, factor * s) for a, s in crossing_step_places(columns, power=power))
                   if name == "stiffness_step:press" else ())
+        said = (why + "; a step half-way through the presses, and just after each press "
+                "at_places names") if places else why
         out[name] = EffectSensitivity(effect=name, parameter=param, unit=unit,
                                       size=factor * size, size_param=size, power=power,
-                                      snr=math.nan, why=why, at_places=places)
+                                      snr=math.nan, why=said, at_places=places)
     return out
 
 
