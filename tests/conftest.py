@@ -14,6 +14,8 @@ import pytest
 from threadpoolctl import threadpool_limits
 
 _THREAD_VARS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+#: the worker's thread limit (threadpoolctl's handle), kept for the session
+_LIMITS = pytest.StashKey[object]()
 
 
 def pytest_configure(config):
@@ -27,8 +29,6 @@ def pytest_configure(config):
     config.stash[_LIMITS] = threadpool_limits(1)
     cv2.setNumThreads(1)
 
-
-_LIMITS = pytest.StashKey[object]()
 
 # Hayes et al. 1972 kappa as listed in method.md, typed independently of the
 # package: rows a/h, columns nu.

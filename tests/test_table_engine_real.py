@@ -55,7 +55,7 @@ def test_table_engine_is_within_0_3_degrees_of_the_exact_one(sensor, torch_one_t
     ball_px = ball_mm / mm
     held = holdout_presses(centres, radii, ball_px, ps.reference.shape[:2], 0.25)
     train = np.flatnonzero(~held)
-    # GelSlim's 56 training presses: a smaller, quicker network than the default (64 units,
+    # GelSlim's training presses: a smaller, quicker network than the default (64 units,
     # 15 epochs, as tests/test_optics_real.py); the check is the table against the exact
     # engine on the same network, whichever network it is
     small = {"hidden": 64, "epochs": 15} if sensor == "gelslim3" else {}
