@@ -26,7 +26,9 @@ and ``tactilevision fit --effects <the named effect> --beta-table paper`` on wha
 ``diagnose`` says to fit it to (its verdict's ``fit_data``: ``--holds`` for a relaxation
 named from calibrate's holds.csv, ``--crossings`` for an effect the crossing forces found
 under the mark rule).
-Printed per kind: the certified depths against truth.json, the verdict, E from
+Printed per kind: the certified depths against truth.json, the verdict, whether it is
+right (:func:`score`: ``yes``, ``shape`` where a change of stiffness was named in the other
+shape, ``no``), E from
 calibrate, E after the named effect (or after the trend offered for an unexplained
 covariate), and the truth that effect's E stands for (the catalogue's parametrisation: at x =
 0 for spatial_nonuniformity, before the step for stiffness_step, at the
@@ -215,14 +217,39 @@ def _fmt(x, spec: str = ".4f") -> str:
     return "-" if x is None or not math.isfinite(x) else format(x, spec)
 
 
+#: What each kind is right to name (named, offered for an unexplained covariate, or listed
+#: as equivalent); a change of stiffness in the other shape (a step for a steady softening,
+#: a trend for a step) scores ``shape``. The offset is taken off by calibrate's F/T zero, so
+#: nothing named is right there, as is the offset itself.
+RIGHT = {"null": (), "offset": ("force_offset",), "spatial": ("spatial_nonuniformity",),
+         "softening": ("stiffness_trend:time_s", "stiffness_trend:press"),
+         "damage": ("stiffness_step:time_s", "stiffness_step:press"),
+         "relaxation": ("viscoelastic_relaxation",)}
+_OTHER_SHAPE = {"softening": ("stiffness_step:time_s", "stiffness_step:press"),
+                "damage": ("stiffness_trend:time_s", "stiffness_trend:press")}
+
+
+def score(row: dict) -> str:
+    """'yes', 'shape' or 'no' for one row of :func:`one` by :data:`RIGHT`: null and offset
+    right where nothing is named (no effect, no unexplained covariate); the others where
+    their effect is named, offered or equivalent."""
+    kind = row["kind"]
+    said = {e for e in (row["verdict"], row["fitted"], *(row["equivalent"] or ())) if e}
+    if not said and not row["unexplained"]:
+        return "yes" if kind in ("null", "offset") else "no"
+    if said & set(RIGHT[kind]):
+        return "yes"
+    return "shape" if said & set(_OTHER_SHAPE.get(kind, ())) else "no"
+
+
 def print_rows(rows: list[dict], session: Path | str) -> None:
     """The markdown table of docs/loop.md."""
     print(f"session {session} (Taxim's renderer), E = {E_TRUE} MPa, nu = {NU_TRUE}; "
           "forces: eq. (5), the paper's beta, Hayes' kappa")
     print("| hidden | rejected | clock (s) | depth error (um): mean, sd, max | calibrate: E "
           "(error) | verdict (equivalent) | scatter / noise budget | E after it (error against "
-          "the effect's E) [95 % CI, covers] | relaxation |")
-    print("|---|---|---|---|---|---|---|---|---|")
+          "the effect's E) [95 % CI, covers] | relaxation | right |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for r in rows:
         verdict = (r["verdict"] or (f"unexplained {r['unexplained']} (offered "
                                     f"{r['fitted']})" if r["unexplained"]
@@ -244,7 +271,12 @@ def print_rows(rows: list[dict], session: Path | str) -> None:
         depth = "-" if not de else f"{de[0]:+.1f}, {de[1]:.1f}, {de[2]:.1f}"
         print(f"| {r['kind']} | {r['n_rejected']} | {r['clock_s']:.4f} | {depth} | "
               f"{_fmt(e_cal)} ({_pct(e_cal, E_TRUE)}) | {verdict} | {budget} | "
-              f"{_fmt(e_after)} ({_pct(e_after, truth)}){cover} | {relax} |", flush=True)
+              f"{_fmt(e_after)} ({_pct(e_after, truth)}){cover} | {relax} | {score(r)} |",
+              flush=True)
+    marks = [score(r) for r in rows]
+    print(f"right: {marks.count('yes')} of {len(rows)}"
+          + (f" ({marks.count('shape')} more as a change of stiffness in the other shape)"
+             if "shape" in marks else ""))
 
 
 def main(argv: list[str] | None = None) -> int:
