@@ -54,6 +54,7 @@ from ._diagnose import (
 )
 from ._diagnose_verdict import (
     ABSORBED_BY_MARK,
+    DEPTH_ONLY,
     crossing_sensitivity,
     diagnose,
     indenter_shared,
@@ -83,6 +84,7 @@ __all__ = [
     "CROSSING_UNITS",
     "CURVATURE_BIC",
     "DELTA_BIC",
+    "DEPTH_ONLY",
     "EQUIVALENT_BIC",
     "INDENTER_EFFECTS",
     "NOMINAL_TAU_S",

@@ -30,8 +30,8 @@ from ._diagnose import CURVATURE, Diagnosis, diagnose_core
 from ._holds import HOLDS_POWER, HoldsFinding, holds_finding
 from ._replay import EffectSensitivity, table_sensitivity
 
-__all__ = ["ABSORBED_BY_MARK", "RULES_OUT_DRAWS", "crossing_sensitivity", "diagnose",
-           "indenter_shared"]
+__all__ = ["ABSORBED_BY_MARK", "DEPTH_ONLY", "RULES_OUT_DRAWS", "crossing_sensitivity",
+           "diagnose", "indenter_shared"]
 
 #: Effects that change the force between the presses of one indenter: under the mark
 #: rule (w = w0 + (P - P(w0)) / (dP/dw)) such a change is read as depth, so a table of

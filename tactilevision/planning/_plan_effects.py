@@ -18,6 +18,7 @@ import math
 import numpy as np
 
 from ..diagnosis import (
+    DEPTH_ONLY,
     EffectSensitivity,
     ReplaySetup,
     crossing_sensitivity,
@@ -38,10 +39,6 @@ from ._design import (
 
 __all__ = ["crossing_effect_sizes", "crossing_offset_sizes", "crossing_table", "design_setup",
            "effect_power", "effect_sensitivity"]
-
-#: The effects along depth alone: under the mark rule ``diagnose`` names them only where
-#: the crossing forces' own table names them too.
-DEPTH_ONLY = ("depth_offset", "force_offset")
 
 #: The frame periods a drawn mark's crossing bracket spans, press by press in turn: the
 #: mark rule adds the period of the frame before the first trace when it lies above the
@@ -172,14 +169,14 @@ def larger_of(mark: EffectSensitivity, crossing: EffectSensitivity) -> EffectSen
     """An offset along depth under the mark rule: the larger of what the mark's table and
     the crossing forces' need (both must name it), said so; NaN (untestable) where either
     is."""
-    if not (math.isfinite(mark.size_param) or math.isinf(mark.size_param)):
+    if math.isnan(mark.size_param):
         return mark
-    if not (math.isfinite(crossing.size_param) or math.isinf(crossing.size_param)):
+    if math.isnan(crossing.size_param):
         return crossing
     big = crossing if crossing.size_param > mark.size_param else mark
+    needs = "the crossing forces" if big is crossing else "the mark's depths"
     return EffectSensitivity(
         big.effect, big.parameter, big.unit, big.size, big.size_param, big.power, big.snr,
         f"under the mark rule both the mark's depths and the crossing forces must name it: "
         f"{mark.size:.3g} and {crossing.size:.3g}{' ' + big.unit if big.unit else ''} "
-        f"({'the crossing forces' if big is crossing else 'the mark' + chr(39) + 's depths'} "
-        f"need more)", big.dip)
+        f"({needs} need more)", big.dip)
