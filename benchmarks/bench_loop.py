@@ -2,6 +2,7 @@
 
     python benchmarks/bench_loop.py SESSION_DIR [--out DIR] [--kinds K1 K2 ...] [--seed S]
         [--json FILE] [--from-json FILE] [--reuse] [--at-rules-out K]
+        [--at-plan K [--bracket-periods P]]
 
 Issue 23's loop. SESSION_DIR is a gauge-block session rendered by Taxim's own
 renderer (``benchmarks/taxim_gauge_session.py``; its holds long enough for the
@@ -34,6 +35,11 @@ covariate), and the truth that effect's E stands for (the catalogue's parametris
 0 for spatial_nonuniformity, before the step for stiffness_step, at the
 table's mean of the column for stiffness_trend, at time 0 for force_drift's
 counterpart; E_0 for the relaxation).
+
+``--at-rules-out K`` hides the gradient, the softening and the step at K times what the
+null session's own crossing forces rule out; ``--at-plan K`` at K times what ``plan`` says
+the session's design can see (its null calibration's design, with ``--bracket-periods P``
+the brackets' mean frame periods measured on other sessions of the sensor).
 """
 
 from __future__ import annotations
@@ -43,6 +49,7 @@ import json
 import math
 import shutil
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -51,6 +58,7 @@ from tactilevision.cli import main as cli
 from tactilevision.diagnosis import CROSSING_UNITS, crossing_sizes, crossing_step_places
 from tactilevision.io import read_measurements
 from tactilevision.mechanics import EFFECT_SIZE_PARAMS, beta_relation, kappa
+from tactilevision.planning import crossing_effect_sizes, design_from_calibration
 from tactilevision.sim._schedule import PressSchedule, ft_log
 
 E_TRUE, NU_TRUE = 0.20, 0.48
@@ -209,6 +217,29 @@ def rules_out_sizes(session: Path, table: Path, k: float, step_after: float | No
             "damage": k * got["stiffness_step:press"]}
 
 
+def plan_sizes(session: Path, calibration: Path, k: float, after: float,
+               periods: float | None = None) -> tuple[dict[str, float], float]:
+    """`k` times the sizes ``plan`` says the session's design lets the crossing forces
+    name (:func:`~tactilevision.planning.crossing_effect_sizes` of
+    :func:`~tactilevision.planning.design_from_calibration` on the null calibration: its
+    presses.csv as the schedule, its stage's motion, frame rate and F/T noise), in the
+    kinds' parameters as :func:`rules_out_sizes`, the step at its place (after press
+    number `after`). `periods`: the brackets' mean frame periods to plan with (a figure
+    measured on other sessions) instead of this session's own; returns the sizes and the
+    periods planned with."""
+    design = design_from_calibration(calibration, session)
+    if periods is not None:
+        design = replace(design, bracket_periods=periods)
+    got = crossing_effect_sizes(design)
+    places = [(a, s) for a, s in got["stiffness_step:press"].at_places or () if a <= after]
+    step = (places[-1][1] / 100.0 if places else got["stiffness_step:press"].size_param)
+    last = max(p["t_start_s"] for p in json.loads((session / "truth.json").read_text())[
+        "presses"])
+    return ({"spatial": k * got["spatial_nonuniformity"].size_param,
+             "softening": k * got["stiffness_trend:time_s"].size_param * last,
+             "damage": k * step}, design.bracket_periods)
+
+
 def _pct(x, truth) -> str:
     return "-" if x is None or not math.isfinite(x) else f"{100 * (x / truth - 1):+.1f} %"
 
@@ -296,6 +327,15 @@ def main(argv: list[str] | None = None) -> int:
                     help="the damage's step falls after press number N (default: after the "
                          "10th press, sized half-way); with --at-rules-out, sized at that place "
                          "(tactilevision.diagnosis.crossing_step_places)")
+    ap.add_argument("--at-plan", type=float, metavar="K",
+                    help="hide the spatial gradient, the softening and the step at K times the "
+                         "smallest plan says the session's design lets its crossing forces "
+                         "name (planning.crossing_effect_sizes of design_from_calibration on "
+                         "the null calibration; the step at its place); null is run first")
+    ap.add_argument("--bracket-periods", type=float, metavar="P",
+                    help="with --at-plan: plan with crossing brackets of P frame periods on "
+                         "average (measured on other sessions) instead of the null "
+                         "calibration's own")
     ap.add_argument("--reuse", action="store_true",
                     help="keep the calibrate, diagnose and fit outputs already in --out")
     a = ap.parse_args(argv)
@@ -304,13 +344,22 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     sizes: dict[str, float] = {}
     after = 9.5 if a.step_after is None else a.step_after
-    if a.at_rules_out is not None:
+    if a.at_rules_out is not None and a.at_plan is not None:
+        ap.error("--at-rules-out and --at-plan: one of them")
+    if a.at_rules_out is not None or a.at_plan is not None:
         rows = [one(a.session, a.out, "null", a.seed, a.reuse)]
-        sizes = rules_out_sizes(a.session, a.out / "null" / "calibration" / "measurements.csv",
-                                a.at_rules_out, a.step_after)
-        print(f"sizes: {a.at_rules_out:g} times what the null session rules out (its crossing "
-              f"forces, or its diagnosis's rules_out): "
-              + ", ".join(f"{k} {v:.4g}" for k, v in sizes.items()), flush=True)
+        if a.at_plan is not None:
+            sizes, periods = plan_sizes(a.session, a.out / "null" / "calibration", a.at_plan,
+                                        after, a.bracket_periods)
+            print(f"sizes: {a.at_plan:g} times what plan says the design can see (brackets "
+                  f"of {periods:.3g} frame periods): ", end="")
+        else:
+            sizes = rules_out_sizes(a.session,
+                                    a.out / "null" / "calibration" / "measurements.csv",
+                                    a.at_rules_out, a.step_after)
+            print(f"sizes: {a.at_rules_out:g} times what the null session rules out (its "
+                  f"crossing forces, or its diagnosis's rules_out): ", end="")
+        print(", ".join(f"{k} {v:.4g}" for k, v in sizes.items()), flush=True)
         rows += [one(a.session, a.out, k, a.seed, a.reuse, sizes.get(k), after)
                  for k in a.kinds if k != "null"]
     else:

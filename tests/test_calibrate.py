@@ -12,6 +12,7 @@ import csv
 import json
 import shutil
 import warnings
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -31,6 +32,7 @@ from tactilevision.pipeline import (
     vernier_rule,
     with_shared_depth,
 )
+from tactilevision.planning import Design, crossing_table, measured_bracket_periods
 
 SAMPLE = Path(__file__).resolve().parents[1] / "sample_frames" / "gelsight_session"
 
@@ -489,6 +491,21 @@ def test_mark_overshoot_read_from_the_force(tmp_path):
     cols = cal.measurements()
     shared = np.array(cols["depth_indenter_std_mm"])
     assert np.all(shared > 0) and np.all(shared <= np.array(cols["depth_std_mm"]) + 1e-12)
+    # plan reads the frame periods these brackets spanned from their widths alone: the
+    # spans the certification bracketed (onset_span_s, in frame periods), weighted by
+    # each press's frame travel times dP/dw as the widths are, within 10 %
+    design = Design(thickness_mm=3.0, radius_mm=2.5, depths_mm=spec.block.depths_mm,
+                    repeats=2, E_mpa=truth["E_mpa"], nu=truth["nu"], frame_rate_hz=30.0,
+                    approach_s=0.5, overshoot_um=(5.0, 60.0), force_noise_n=1 / 80)
+    w0 = np.array([spec.block.depths_mm[p.indenter] for p in ps])
+    got = measured_bracket_periods(design, w0, np.array(cols["force_w0_sem_n"]))
+    span = np.array([30.0 * (p.onset_span_s[1] - p.onset_span_s[0]) for p in ps])
+    one = crossing_table(replace(design, force_noise_n=0.0, bracket_periods=1.0))
+    unit = {int(i): u for i, u in zip(one["indenter"], one["force_w0_sem_n"], strict=True)}
+    want = np.average(span, weights=[unit[p.indenter] for p in ps])
+    assert np.all(np.isclose(span, 1.0, atol=1e-3) | np.isclose(span, 2.0, atol=1e-3))
+    assert want > 1.1
+    assert got == pytest.approx(want, rel=0.10), (got, want)
     f = cal.fit
     assert f.E_ci95_mpa[0] <= truth["E_mpa"] <= f.E_ci95_mpa[1]
     assert f.nu_ci95[0] <= truth["nu"] <= f.nu_ci95[1]

@@ -14,15 +14,17 @@ from tactilevision import InputError, InputWarning
 from tactilevision.cli import main
 from tactilevision.diagnosis import crossing_sizes
 from tactilevision.planning import (
+    BRACKET_PERIODS,
     Design,
     crossing_effect_sizes,
     crossing_table,
     design_toml,
+    measured_bracket_periods,
     planned_columns,
+    press_bracket_periods,
     read_design,
     read_schedule,
 )
-from tactilevision.planning._plan_effects import CROSSING_PERIODS
 from tactilevision.planning._plan_recommend import _changes
 
 DEPTHS = (0.15, 0.30, 0.40, 0.50, 0.60)
@@ -62,8 +64,8 @@ def test_crossing_brackets_span_the_periods_the_mark_rule_gives():
     its indenter's w0, the same for all of an indenter's presses and growing with w0."""
     tab = crossing_table(replace(MARK, force_noise_n=0.0))
     width = tab["force_w0_sem_n"] * np.sqrt(12.0)
-    periods = np.resize(np.asarray(CROSSING_PERIODS, np.float64), width.size)
-    assert CROSSING_PERIODS == (1, 2, 2)
+    periods = press_bracket_periods(BRACKET_PERIODS, width.size)
+    np.testing.assert_array_equal(periods, np.resize([1.0, 2.0, 2.0], width.size))
     ind = tab["indenter"].astype(int)
     unit = width / periods
     per_indenter = []
@@ -166,3 +168,59 @@ def test_changes_of_repeats_depths_or_positions_leave_the_schedule():
     for new in changed.values():
         if new.repeats == d.repeats and new.depths_mm == d.depths_mm:
             assert new.schedule == d.schedule
+
+
+@pytest.mark.parametrize("mean", [1.0, 1.25, 5.0 / 3.0, 1.94, 2.0, 2.5, 4.0])
+def test_bracket_periods_average_what_the_design_says(mean):
+    """Each press spans floor(mean) or one more frame period, spread evenly, their mean
+    the design's to within one press in 600 (every press the same at a whole number)."""
+    p = press_bracket_periods(mean, 600)
+    assert set(np.unique(p)) <= {np.floor(mean), np.floor(mean) + 1}
+    assert p.mean() == pytest.approx(mean, abs=1 / 600)
+    if mean.is_integer():
+        assert np.all(p == mean)
+
+
+def test_brackets_twice_as_wide_double_what_the_crossings_can_name():
+    """Without F/T noise a bracket's width is its periods times one frame's travel times
+    dP/dw, so every bracket two periods wide instead of one doubles it, and the crossing
+    test (on log force, brackets softened by 2 % of their width) names changes about
+    twice as large: the gradient, the steady change and the step half-way."""
+    quiet = replace(MARK, force_noise_n=0.0)
+    one = crossing_effect_sizes(replace(quiet, bracket_periods=1.0))
+    two = crossing_effect_sizes(replace(quiet, bracket_periods=2.0))
+    w1 = crossing_table(replace(quiet, bracket_periods=1.0))["force_w0_sem_n"]
+    w2 = crossing_table(replace(quiet, bracket_periods=2.0))["force_w0_sem_n"]
+    np.testing.assert_allclose(w2, 2 * w1, rtol=1e-12)
+    for name in ("spatial_nonuniformity", "stiffness_trend:time_s", "stiffness_step:press"):
+        assert two[name].size / one[name].size == pytest.approx(2.0, rel=0.06), name
+
+
+@pytest.mark.parametrize("periods", [1.0, 2.0, 3.0])
+def test_a_sessions_brackets_give_back_their_periods(periods):
+    """measured_bracket_periods inverts crossing_table's widths, F/T noise and each
+    indenter's own speed included: brackets of a whole number of periods on every press
+    read back exactly; a vernier's and a table of two presses give none."""
+    d = replace(MARK, bracket_periods=periods, approach_s=0.5, force_noise_n=0.02,
+                schedule=_random_schedule(3))
+    tab = crossing_table(d)
+    w0 = np.asarray(DEPTHS)[tab["indenter"].astype(int)]
+    assert measured_bracket_periods(d, w0, tab["force_w0_sem_n"]) == pytest.approx(
+        periods, rel=1e-9)
+    assert measured_bracket_periods(replace(d, bevel_angle_deg=8.0), w0,
+                                    tab["force_w0_sem_n"]) is None
+    assert measured_bracket_periods(d, w0[:2], tab["force_w0_sem_n"][:2]) is None
+
+
+def test_bracket_periods_round_trip_and_are_checked(tmp_path, capsys):
+    """[plan] bracket_periods is read, written by design_toml and refused outside [1, 4]
+    with the key named."""
+    d = replace(MARK, bracket_periods=1.94)
+    path = tmp_path / "d.toml"
+    path.write_text(design_toml(d))
+    assert read_design(path) == d
+    path.write_text(design_toml(d).replace("bracket_periods = 1.94", "bracket_periods = 0.5"))
+    with pytest.raises(InputError, match=r"\[plan\] bracket_periods must lie in \[1, 4\]"):
+        read_design(path)
+    assert main(["plan", str(path)]) == 2
+    assert "bracket_periods" in capsys.readouterr().err

@@ -10,14 +10,22 @@ what its session would certify and find:
   :func:`effect_power`: :mod:`tactilevision.diagnosis`'s replay on the design's drawn
   sessions; a drawn mark's crossing forces, :func:`crossing_effect_sizes`
   (and :func:`crossing_offset_sizes`, the offsets along depth they must also show), size what
-  its depths absorb within an indenter); relaxation's own identifiability
+  its depths absorb within an indenter, its brackets :data:`BRACKET_PERIODS` frame
+  periods wide on average unless the design says: :func:`press_bracket_periods`);
+  relaxation's own identifiability
   (:func:`relaxation_identifiability`).
 - :func:`recommend` -> :class:`Recommendation`: the change to the design that buys most
   (:class:`DesignChange`, :func:`error_totals`).
 - From a calibration: :func:`design_from_calibration`; to a file: :func:`design_toml`.
 """
 
-from ._design import depth_uncertainty, indenter_speeds, planned_columns, read_schedule
+from ._design import (
+    BRACKET_PERIODS,
+    depth_uncertainty,
+    indenter_speeds,
+    planned_columns,
+    read_schedule,
+)
 from ._plan import (
     Design,
     PlanPrediction,
@@ -37,10 +45,13 @@ from ._plan_effects import (
     design_setup,
     effect_power,
     effect_sensitivity,
+    measured_bracket_periods,
+    press_bracket_periods,
 )
 from ._plan_recommend import DesignChange, Recommendation, error_totals, recommend
 
 __all__ = [
+    "BRACKET_PERIODS",
     "Design",
     "DesignChange",
     "PlanPrediction",
@@ -57,9 +68,11 @@ __all__ = [
     "effect_sensitivity",
     "error_totals",
     "indenter_speeds",
+    "measured_bracket_periods",
     "plan",
     "plan_session",
     "planned_columns",
+    "press_bracket_periods",
     "read_design",
     "read_schedule",
     "recommend",

@@ -27,6 +27,7 @@ from ..io import KNOWN_KEYS, read_presses
 from ..mechanics import EFFECT_SIZE_PARAMS, EFFECTS, MAX_W_OVER_H, fem_force
 
 __all__ = [
+    "BRACKET_PERIODS",
     "RESOLVED_PX",
     "VERNIER_EDGE_PX",
     "Design",
@@ -55,6 +56,16 @@ VERNIER_EDGE_PX = 0.70
 #: contact package's ``RESOLVED_PX`` (planning does not import contact; a test keeps the
 #: two equal).
 RESOLVED_PX = 10.0
+
+#: The frame periods a drawn mark's crossing bracket spans on average, where a design
+#: does not say (``[plan] bracket_periods``): the mark rule adds the period of the frame
+#: before the first trace when it lies above the approach's level (the certification's
+#: ``MARK_Z_FAINT``), and a press read without its template spans two. On three generated
+#: 15 frames/s sessions (seeds 8400 to 8402) 23 of 60 presses spanned one period, 37 two
+#: (1.62 on average); the 296 presses of eleven Taxim mark sessions rendered without the
+#: renderer's shadows 1.94, the 120 of four with them 1.50 (2026-11-28). 5/3 here: the
+#: presses spanning 1, 2, 2 in turn.
+BRACKET_PERIODS = 5.0 / 3.0
 
 #: nu's physical range as this project's beta tables hold it: a sigma of nu beyond a
 
@@ -123,6 +134,13 @@ class Design:
         ``benchmarks/bench_crossings.py``) the gradient their own crossing forces could
         name was 0.58 to 1.43 times the spiral's (each indenter's x spread 0.84 to 1.56
         mm sd against the spiral's 1.41) and 0.70 to 1.09 times their own schedule's.
+    bracket_periods : float
+        The frame periods of the stage's travel a drawn mark's crossing bracket spans on
+        average, 1 to 4 (:data:`BRACKET_PERIODS` by default): its crossing forces'
+        brackets are that many frames' travel times dP/dw wide
+        (:func:`~tactilevision.planning.crossing_table`).
+        :func:`~tactilevision.planning.design_from_calibration` measures it on the
+        session's own brackets.
     detect : tuple of (str, float)
         Effect sizes the user wants to be able to see (``[plan.detect]``: a catalogue
         effect of :data:`EFFECT_SIZE_PARAMS` and its size in that table's unit):
@@ -161,6 +179,7 @@ class Design:
     relaxation_g: float | None = None
     relaxation_tau_s: float | None = None
     detect: tuple[tuple[str, float], ...] = ()
+    bracket_periods: float = BRACKET_PERIODS
 
     def __post_init__(self) -> None:
         check_design(self)
@@ -191,7 +210,7 @@ def check_design(d: Design) -> None:
         A non-positive h or a, no depth or a depth beyond the gel (w0 >= h) or past
         the FEM beta table's reach (w/h > 0.23), fewer than two distinct depths, a bevel
         angle of 45 degrees or more, a window longer than the hold, a repeat count
-        below 1, or a nu outside (0, 0.5].
+        below 1, a nu outside (0, 0.5], or a ``bracket_periods`` outside [1, 4].
     """
     _check_block(d)
     _check_schedule(d)
@@ -255,6 +274,10 @@ def _check_block(d: Design) -> None:
     if d.window_at not in ("start", "end"):
         raise InputError(f"[force_sensor] window_at must be 'start' or 'end', got "
                          f"{d.window_at!r}")
+    periods = float(d.bracket_periods)
+    if not 1.0 <= periods <= 4.0:
+        raise InputError(f"[plan] bracket_periods must lie in [1, 4] (frame periods a mark's "
+                         f"crossing bracket spans), got {d.bracket_periods!r}")
 
 
 def _check_schedule(d: Design) -> None:
@@ -332,7 +355,7 @@ DESIGN_KEYS: dict[str, dict[str, str]] = {
              "depth_std_um": "number", "beta_table": "text", "overshoot_um": "numbers",
              "holds_s": "numbers", "waits_s": "numbers", "days": "integer",
              "positions": "integer", "schedule": "schedule", "relaxation_g": "number",
-             "relaxation_tau_s": "number", "detect": "table"},
+             "relaxation_tau_s": "number", "detect": "table", "bracket_periods": "number"},
 }
 
 _KIND_WORDS = {"number": "a number", "integer": "a whole number", "numbers": "a list of numbers",
@@ -398,7 +421,8 @@ def read_design(path: str | Path) -> Design:
         rate_hz, window_samples, window_at``, ``[plan] repeats, E_mpa, nu,
         frame_rate_hz, stage_speed_mm_s or approach_s, force_noise_n, force_zero_n, hold_s,
         depth_std_um, beta_table, overshoot_um, holds_s, waits_s, days, positions,
-        schedule, relaxation_g, relaxation_tau_s`` and ``[plan.detect]`` (effect = size;
+        schedule, relaxation_g, relaxation_tau_s, bracket_periods`` and ``[plan.detect]``
+        (effect = size;
         every ``[plan]`` key optional; :class:`Design` gives the defaults). ``schedule``
         is a list of ``[indenter, x_mm, y_mm]`` or the name of a ``presses.csv``
         (formats.md §1; relative to the design file's folder, its rows in ``press``
@@ -717,7 +741,7 @@ def design_toml(d: Design) -> str:
     plan_keys = ["repeats", "E_mpa", "nu", "frame_rate_hz", speed,
                  "force_noise_n", "force_zero_n", "hold_s", "depth_std_um", "beta_table",
                  "overshoot_um", "holds_s", "waits_s", "days", "positions", "relaxation_g",
-                 "relaxation_tau_s"]
+                 "relaxation_tau_s", "bracket_periods"]
     lines = ["[sensor]", f"gel_thickness_mm = {val(d.thickness_mm)}",
              f"mm_per_px = {val(d.mm_per_px)}", "", "[indenter]",
              f"radius_mm = {val(d.radius_mm)}", "", "[gauge_block]",

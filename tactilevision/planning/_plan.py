@@ -29,7 +29,7 @@ import json
 import math
 import tomllib
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -70,6 +70,7 @@ from ._plan_effects import (
     effect_power,
     effect_sensitivity,
     larger_of,
+    measured_bracket_periods,
 )
 
 __all__ = [
@@ -574,7 +575,9 @@ def design_from_calibration(folder: str | Path, session: str | Path | None = Non
         same time, else ``stage_speed_mm_s``); the F/T sample sd (median of
         ``force_std_n``); the zero's stability (the drift ``calibrate`` measured plus two
         of its standard errors); the session's ``presses.csv``, where it presses every
-        depth equally often, as the ``schedule`` (and its repeats). What the folders do
+        depth equally often, as the ``schedule`` (and its repeats); under the mark rule,
+        the frame periods its crossing brackets spanned on average
+        (:func:`~tactilevision.planning.measured_bracket_periods`). What the folders do
         not hold keeps :class:`Design`'s default.
 
     Raises
@@ -659,7 +662,10 @@ def design_from_calibration(folder: str | Path, session: str | Path | None = Non
         if schedule is not None:
             kw["schedule"] = schedule
             kw["repeats"] = len(schedule) // len(depths)
-    return Design(**kw)
+    design = Design(**kw)
+    periods = (measured_bracket_periods(design, w0, col("force_w0_sem_n"))
+               if rows and "force_w0_sem_n" in rows[0] else None)
+    return design if periods is None else replace(design, bracket_periods=periods)
 
 
 def _stage_motion(holds: Path, depth: np.ndarray, press: np.ndarray) -> dict[str, float]:

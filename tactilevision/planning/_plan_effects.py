@@ -38,14 +38,23 @@ from ._design import (
 )
 
 __all__ = ["crossing_effect_sizes", "crossing_offset_sizes", "crossing_table", "design_setup",
-           "effect_power", "effect_sensitivity"]
+           "effect_power", "effect_sensitivity", "measured_bracket_periods",
+           "press_bracket_periods"]
 
-#: The frame periods a drawn mark's crossing bracket spans, press by press in turn: the
-#: mark rule adds the period of the frame before the first trace when it lies above the
-#: approach's level (the certification's ``MARK_Z_FAINT``), and a press read without its
-#: template spans two: on three generated 15 frames/s sessions (seeds 8400 to 8402) 23
-#: of 60 presses spanned one period, 37 two; a third and two thirds here.
-CROSSING_PERIODS = (1, 2, 2)
+def press_bracket_periods(mean: float, n: int) -> np.ndarray:
+    """The frame periods each of `n` presses' crossing brackets spans, in press order,
+    averaging `mean` (:attr:`Design.bracket_periods`): ``floor(mean)``, plus one on a
+    share ``mean - floor(mean)`` of the presses spread evenly over them (1, 2, 2 in turn
+    for 5/3; every press 2 for 2).
+
+    Returns
+    -------
+    periods : (n,) float64 ndarray
+    """
+    base = math.floor(mean)
+    frac = mean - base
+    i = np.arange(n, dtype=np.float64)
+    return base + np.floor((i + 1) * frac + 1e-9) - np.floor(i * frac + 1e-9)
 
 
 def design_setup(design: Design) -> ReplaySetup:
@@ -93,8 +102,9 @@ def crossing_table(design: Design) -> dict[str, np.ndarray]:
     those periods, whose width is the stage's travel in one frame (at the indenter's
     speed, :func:`indenter_speeds`) times dP/dw at w0 (the FEM's) times the periods,
     widened by four times the noise of its 10 ms average of the F/T; the stated sd is
-    the bracket's width over sqrt(12) (a uniform crossing). The presses' periods go 1,
-    2, 2 in turn (:data:`CROSSING_PERIODS`).
+    the bracket's width over sqrt(12) (a uniform crossing). The presses' periods average
+    the design's ``bracket_periods`` (:func:`press_bracket_periods`: 1, 2, 2 in turn by
+    default).
 
     Returns
     -------
@@ -112,12 +122,53 @@ def crossing_table(design: Design) -> dict[str, np.ndarray]:
     eps = 1e-3 * float(np.min(w0))
     slope = (fem_force(*args, w0 + eps) - fem_force(*args, w0 - eps)) / (2 * eps)
     avg = design.force_noise_n / math.sqrt(max(1.0, 0.01 * design.rate_hz))
-    periods = np.resize(np.asarray(CROSSING_PERIODS, np.float64), n)
+    periods = press_bracket_periods(float(design.bracket_periods), n)
     travel = indenter_speeds(design) / design.frame_rate_hz
     width = slope[ind] * travel[ind] * periods + 4.0 * avg
     return {"indenter": ind.astype(np.float64), "press": np.arange(n, dtype=np.float64),
             "time_s": cols["time_s"][:n], "x_mm": cols["x_mm"][:n], "y_mm": cols["y_mm"][:n],
             "force_w0_n": p0[ind], "force_w0_sem_n": width / math.sqrt(12.0)}
+
+
+def measured_bracket_periods(design: Design, w0_mm: np.ndarray, sem_n: np.ndarray
+                             ) -> float | None:
+    """The frame periods a session's crossing brackets spanned on average, as
+    :func:`crossing_table` counts them: the brackets' summed widths (``sqrt(12)
+    force_w0_sem_n``) less their F/T noise widening over the summed widths of one frame's
+    travel times dP/dw at each press's w0 (the design's speeds and FEM slope), within
+    [1, 4]. Planned with it, :func:`crossing_table` states brackets as wide on average as
+    the session's.
+
+    Parameters
+    ----------
+    design : Design
+        The session's design (a drawn mark: ``bevel_angle_deg`` 0).
+    w0_mm : (N,) float64 ndarray
+        Each press's gauge-block depth w0, mm (one of ``design.depths_mm``; others and
+        NaN skipped).
+    sem_n : (N,) float64 ndarray
+        Each press's ``force_w0_sem_n``, N (NaN skipped).
+
+    Returns
+    -------
+    periods : float or None
+        None for a vernier design or fewer than 3 presses with both.
+    """
+    w0 = np.asarray(w0_mm, np.float64)
+    sem = np.asarray(sem_n, np.float64)
+    depths = np.asarray(design.depths_mm, np.float64)
+    idx = np.clip(np.searchsorted(depths, w0), 0, depths.size - 1)
+    ok = np.isfinite(w0) & np.isfinite(sem) & (sem > 0) & np.isclose(depths[idx], w0,
+                                                                         atol=1e-4)
+    if design.bevel_angle_deg != 0.0 or np.count_nonzero(ok) < 3:
+        return None
+    args = (design.E_mpa, design.nu, design.radius_mm, design.thickness_mm)
+    eps = 1e-3 * float(np.min(depths))
+    slope = (fem_force(*args, depths + eps) - fem_force(*args, depths - eps)) / (2 * eps)
+    avg = design.force_noise_n / math.sqrt(max(1.0, 0.01 * design.rate_hz))
+    unit = (slope * indenter_speeds(design) / design.frame_rate_hz)[idx[ok]]
+    width = math.sqrt(12.0) * sem[ok] - 4.0 * avg
+    return float(np.clip(np.sum(width) / np.sum(unit), 1.0, 4.0))
 
 
 def crossing_effect_sizes(design: Design, *, power: float = 0.95
@@ -132,8 +183,10 @@ def crossing_effect_sizes(design: Design, *, power: float = 0.95
         return {}
     return crossing_sensitivity(
         crossing_table(design), power=power,
-        why="from the crossing forces within indenters (the mark's frame period brackets "
-            "each; presses going round the indenters)")
+        why="from the crossing forces within indenters (each bracketed by "
+            f"{design.bracket_periods:.3g} frame periods of travel on average; the "
+            + ("presses in the schedule's order and places)" if design.schedule is not None
+               else "presses going round the indenters)"))
 
 
 def crossing_offset_sizes(design: Design, *, power: float = 0.95, draws: int = 400
