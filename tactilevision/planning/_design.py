@@ -62,8 +62,9 @@ RESOLVED_PX = 10.0
 #: before the first trace when it lies above the approach's level (the certification's
 #: ``MARK_Z_FAINT``), and a press read without its template spans two. On three generated
 #: 15 frames/s sessions (seeds 8400 to 8402) 23 of 60 presses spanned one period, 37 two
-#: (1.62 on average); the 296 presses of eleven Taxim mark sessions rendered without the
-#: renderer's shadows 1.94, the 120 of four with them 1.50 (2026-11-28). 5/3 here: the
+#: (1.62 on average); eleven Taxim mark sessions rendered without the renderer's shadows
+#: 1.76 to 2.09 (mean 1.94), four with them 1.47 to 1.68 (mean 1.55), each read by
+#: :func:`~tactilevision.planning.measured_bracket_periods` (2026-11-28). 5/3 here: the
 #: presses spanning 1, 2, 2 in turn.
 BRACKET_PERIODS = 5.0 / 3.0
 

@@ -57,6 +57,18 @@ def press_bracket_periods(mean: float, n: int) -> np.ndarray:
     return base + np.floor((i + 1) * frac + 1e-9) - np.floor(i * frac + 1e-9)
 
 
+def _one_period(design: Design) -> tuple[np.ndarray, float]:
+    """Each indenter's crossing bracket over one frame period, N (the stage's travel in
+    one frame at the indenter's speed times the FEM's dP/dw at its w0), and the noise of
+    the 10 ms F/T average ``calibrate`` reads the bracket's ends with, N."""
+    w0 = np.asarray(design.depths_mm, np.float64)
+    args = (design.E_mpa, design.nu, design.radius_mm, design.thickness_mm)
+    eps = 1e-3 * float(np.min(w0))
+    slope = (fem_force(*args, w0 + eps) - fem_force(*args, w0 - eps)) / (2 * eps)
+    avg = design.force_noise_n / math.sqrt(max(1.0, 0.01 * design.rate_hz))
+    return slope * indenter_speeds(design) / design.frame_rate_hz, avg
+
+
 def design_setup(design: Design) -> ReplaySetup:
     """The design's presses, columns and noise as the replay draws them."""
     w, _ = design_table(design)
@@ -117,14 +129,10 @@ def crossing_table(design: Design) -> dict[str, np.ndarray]:
     ind = (press_indenters(design) if design.schedule is not None
            else np.tile(np.arange(n_ind), int(design.repeats)))
     w0 = np.asarray(design.depths_mm, np.float64)
-    args = (design.E_mpa, design.nu, design.radius_mm, design.thickness_mm)
-    p0 = fem_force(*args, w0)
-    eps = 1e-3 * float(np.min(w0))
-    slope = (fem_force(*args, w0 + eps) - fem_force(*args, w0 - eps)) / (2 * eps)
-    avg = design.force_noise_n / math.sqrt(max(1.0, 0.01 * design.rate_hz))
+    p0 = fem_force(design.E_mpa, design.nu, design.radius_mm, design.thickness_mm, w0)
+    unit, avg = _one_period(design)
     periods = press_bracket_periods(float(design.bracket_periods), n)
-    travel = indenter_speeds(design) / design.frame_rate_hz
-    width = slope[ind] * travel[ind] * periods + 4.0 * avg
+    width = unit[ind] * periods + 4.0 * avg
     return {"indenter": ind.astype(np.float64), "press": np.arange(n, dtype=np.float64),
             "time_s": cols["time_s"][:n], "x_mm": cols["x_mm"][:n], "y_mm": cols["y_mm"][:n],
             "force_w0_n": p0[ind], "force_w0_sem_n": width / math.sqrt(12.0)}
@@ -162,13 +170,9 @@ def measured_bracket_periods(design: Design, w0_mm: np.ndarray, sem_n: np.ndarra
                                                                          atol=1e-4)
     if design.bevel_angle_deg != 0.0 or np.count_nonzero(ok) < 3:
         return None
-    args = (design.E_mpa, design.nu, design.radius_mm, design.thickness_mm)
-    eps = 1e-3 * float(np.min(depths))
-    slope = (fem_force(*args, depths + eps) - fem_force(*args, depths - eps)) / (2 * eps)
-    avg = design.force_noise_n / math.sqrt(max(1.0, 0.01 * design.rate_hz))
-    unit = (slope * indenter_speeds(design) / design.frame_rate_hz)[idx[ok]]
+    unit, avg = _one_period(design)
     width = math.sqrt(12.0) * sem[ok] - 4.0 * avg
-    return float(np.clip(np.sum(width) / np.sum(unit), 1.0, 4.0))
+    return float(np.clip(np.sum(width) / np.sum(unit[idx[ok]]), 1.0, 4.0))
 
 
 def crossing_effect_sizes(design: Design, *, power: float = 0.95
