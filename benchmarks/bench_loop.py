@@ -2,7 +2,7 @@
 
     python benchmarks/bench_loop.py SESSION_DIR [--out DIR] [--kinds K1 K2 ...] [--seed S]
         [--json FILE] [--from-json FILE] [--reuse] [--at-rules-out K]
-        [--at-plan K [--bracket-periods P]]
+        [--at-plan K [--bracket-periods P] [--unseen-share Q]]
 
 Issue 23's loop. SESSION_DIR is a gauge-block session rendered by Taxim's own
 renderer (``benchmarks/taxim_gauge_session.py``; its holds long enough for the
@@ -39,7 +39,8 @@ counterpart; E_0 for the relaxation).
 ``--at-rules-out K`` hides the gradient, the softening and the step at K times what the
 null session's own crossing forces rule out; ``--at-plan K`` at K times what ``plan`` says
 the session's design can see (its null calibration's design, with ``--bracket-periods P``
-the brackets' mean frame periods measured on other sessions of the sensor).
+and ``--unseen-share Q`` the brackets' mean frame periods and the share of presses whose
+mark is not seen, measured on other sessions of the sensor).
 """
 
 from __future__ import annotations
@@ -218,18 +219,21 @@ def rules_out_sizes(session: Path, table: Path, k: float, step_after: float | No
 
 
 def plan_sizes(session: Path, calibration: Path, k: float, after: float,
-               periods: float | None = None) -> tuple[dict[str, float], float]:
+               periods: float | None = None, unseen: float | None = None
+               ) -> tuple[dict[str, float], float, float]:
     """`k` times the sizes ``plan`` says the session's design lets the crossing forces
     name (:func:`~tactilevision.planning.crossing_effect_sizes` of
     :func:`~tactilevision.planning.design_from_calibration` on the null calibration: its
     presses.csv as the schedule, its stage's motion, frame rate and F/T noise), in the
     kinds' parameters as :func:`rules_out_sizes`, the step at its place (after press
-    number `after`). `periods`: the brackets' mean frame periods to plan with (a figure
-    measured on other sessions) instead of this session's own; returns the sizes and the
-    periods planned with."""
+    number `after`). `periods`, `unseen`: the brackets' mean frame periods and the share
+    of presses unseen to plan with (figures measured on other sessions) instead of this
+    session's own; returns the sizes and the periods and share planned with."""
     design = design_from_calibration(calibration, session)
     if periods is not None:
         design = replace(design, bracket_periods=periods)
+    if unseen is not None:
+        design = replace(design, unseen_share=unseen)
     got = crossing_effect_sizes(design)
     places = [(a, s) for a, s in got["stiffness_step:press"].at_places or () if a <= after]
     step = (places[-1][1] / 100.0 if places else got["stiffness_step:press"].size_param)
@@ -237,7 +241,7 @@ def plan_sizes(session: Path, calibration: Path, k: float, after: float,
         "presses"])
     return ({"spatial": k * got["spatial_nonuniformity"].size_param,
              "softening": k * got["stiffness_trend:time_s"].size_param * last,
-             "damage": k * step}, design.bracket_periods)
+             "damage": k * step}, design.bracket_periods, design.unseen_share)
 
 
 def _pct(x, truth) -> str:
@@ -336,6 +340,10 @@ def main(argv: list[str] | None = None) -> int:
                     help="with --at-plan: plan with crossing brackets of P frame periods on "
                          "average (measured on other sessions) instead of the null "
                          "calibration's own")
+    ap.add_argument("--unseen-share", type=float, metavar="Q",
+                    help="with --at-plan: plan with this share of presses whose mark is not "
+                         "seen (measured on other sessions) instead of the null "
+                         "calibration's own")
     ap.add_argument("--reuse", action="store_true",
                     help="keep the calibrate, diagnose and fit outputs already in --out")
     a = ap.parse_args(argv)
@@ -349,10 +357,12 @@ def main(argv: list[str] | None = None) -> int:
     if a.at_rules_out is not None or a.at_plan is not None:
         rows = [one(a.session, a.out, "null", a.seed, a.reuse)]
         if a.at_plan is not None:
-            sizes, periods = plan_sizes(a.session, a.out / "null" / "calibration", a.at_plan,
-                                        after, a.bracket_periods)
+            sizes, periods, unseen = plan_sizes(a.session, a.out / "null" / "calibration",
+                                                a.at_plan, after, a.bracket_periods,
+                                                a.unseen_share)
             print(f"sizes: {a.at_plan:g} times what plan says the design can see (brackets "
-                  f"of {periods:.3g} frame periods): ", end="")
+                  f"of {periods:.3g} frame periods, {unseen:.3g} of presses unseen): ",
+                  end="")
         else:
             sizes = rules_out_sizes(a.session,
                                     a.out / "null" / "calibration" / "measurements.csv",

@@ -17,6 +17,7 @@ from tactilevision.planning import (
     BRACKET_PERIODS,
     Design,
     crossing_effect_sizes,
+    crossing_sessions,
     crossing_table,
     design_toml,
     measured_bracket_periods,
@@ -91,9 +92,13 @@ def test_a_gradient_is_sized_on_the_spread_of_each_indenters_places():
     fixed = tuple((i, -2.0 - 0.7 * i, 0.5 * i) for i, _, _ in sch)
     assert not np.isfinite(
         crossing_effect_sizes(replace(MARK, schedule=fixed))["spatial_nonuniformity"].size)
-    # the design's sizes are the crossing test's own on the table it plans
-    got = crossing_sizes(crossing_table(replace(MARK, schedule=sch)))
+    # the design's sizes are the crossing test's own on the sessions it draws of the table
+    # it plans, within a tenth of the evenly spread table's
+    d = replace(MARK, schedule=sch)
+    got = crossing_sizes(crossing_table(d), sessions=crossing_sessions(d))
     assert got["spatial_nonuniformity"] == pytest.approx(one.size_param)
+    even = crossing_sizes(crossing_table(d))["spatial_nonuniformity"]
+    assert one.size_param == pytest.approx(even, rel=0.10)
 
 
 def test_the_gradient_named_grows_as_each_indenters_places_spread_less():
@@ -213,8 +218,8 @@ def test_a_sessions_brackets_give_back_their_periods(periods):
 
 
 def test_bracket_periods_round_trip_and_are_checked(tmp_path, capsys):
-    """[plan] bracket_periods is read, written by design_toml and refused outside [1, 4]
-    with the key named."""
+    """[plan] bracket_periods and unseen_share are read, written by design_toml and refused
+    outside [1, 4] and [0, 0.5) with the key named."""
     d = replace(MARK, bracket_periods=1.94)
     path = tmp_path / "d.toml"
     path.write_text(design_toml(d))
@@ -224,3 +229,47 @@ def test_bracket_periods_round_trip_and_are_checked(tmp_path, capsys):
         read_design(path)
     assert main(["plan", str(path)]) == 2
     assert "bracket_periods" in capsys.readouterr().err
+    d = replace(MARK, unseen_share=0.1)
+    path.write_text(design_toml(d))
+    assert read_design(path) == d
+    path.write_text(design_toml(d).replace("unseen_share = 0.1", "unseen_share = 0.5"))
+    with pytest.raises(InputError, match=r"\[plan\] unseen_share must lie in \[0, 0.5\)"):
+        read_design(path)
+
+
+def test_sessions_draw_each_press_s_periods_and_losses_as_the_design_says():
+    """crossing_sessions: each press two periods with probability frac(bracket_periods)
+    (1.94: 94 % of 1000 x 20 presses, to 1 %), its width one or two periods' travel
+    times dP/dw plus the F/T widening; without unseen presses one session keeping every
+    press, with unseen_share 0.25 five sessions keeping about three quarters; the same
+    draws every time."""
+    d = replace(MARK, bracket_periods=1.94)
+    one = crossing_table(replace(d, bracket_periods=1.0))["force_w0_sem_n"]
+    two = crossing_table(replace(d, bracket_periods=2.0))["force_w0_sem_n"]
+    (keep, sem), = crossing_sessions(d)
+    assert keep.all() and sem.shape == (1000, one.size)
+    is_two = np.isclose(sem, two[None], rtol=1e-12)
+    assert np.all(is_two | np.isclose(sem, one[None], rtol=1e-12))
+    assert is_two.mean() == pytest.approx(0.94, abs=0.01)
+    lossy = crossing_sessions(replace(d, unseen_share=0.25))
+    assert len(lossy) == 5 and sum(s.shape[0] for _, s in lossy) == 1000
+    kept = np.mean([k.mean() for k, _ in lossy])
+    assert 0.6 < kept < 0.9
+    again = crossing_sessions(replace(d, unseen_share=0.25))
+    assert all(np.array_equal(a[0], b[0]) and np.array_equal(a[1], b[1])
+               for a, b in zip(lossy, again, strict=True))
+
+
+def test_unseen_presses_raise_what_the_crossings_can_name():
+    """With whole periods and every press seen, the drawn sessions are the planned table
+    (the sizes its own, to the bisection's 2 %); losing each press with probability 0.3
+    leaves fewer presses per indenter, and the gradient, the steady change and the step
+    named in 95 % of sessions are larger."""
+    d = replace(MARK, bracket_periods=2.0)
+    plan = crossing_effect_sizes(d)
+    table = crossing_sizes(crossing_table(d))
+    lossy = crossing_effect_sizes(replace(d, unseen_share=0.3))
+    for name in ("spatial_nonuniformity", "stiffness_trend:time_s", "stiffness_step:press"):
+        assert plan[name].size_param == pytest.approx(table[name], rel=0.03), name
+        assert lossy[name].size_param > 1.05 * plan[name].size_param, name
+    assert "30 % of presses unseen" in lossy["stiffness_step:press"].why

@@ -204,8 +204,8 @@ def bracket_draws(width: np.ndarray, n_draws: int, rng: np.random.Generator
 
     Parameters
     ----------
-    width : (N,) float ndarray
-        Each bracket's width relative to its indenter's force.
+    width : (N,) or (n_draws, N) float ndarray
+        Each bracket's width relative to its indenter's force (per draw where 2-D).
     n_draws : int
     rng : numpy.random.Generator
 
@@ -214,8 +214,8 @@ def bracket_draws(width: np.ndarray, n_draws: int, rng: np.random.Generator
     lo, hi : (n_draws, N) float64 ndarray
     """
     w = np.asarray(width, np.float64)
-    u = rng.random((n_draws, w.size))
-    jitter = rng.standard_normal((n_draws, w.size)) * (BRACKET_SOFTNESS * w)
+    u = rng.random((n_draws, w.shape[-1]))
+    jitter = rng.standard_normal((n_draws, w.shape[-1])) * (BRACKET_SOFTNESS * w)
     lo = 1.0 - u * w + jitter
     return lo, lo + w
 

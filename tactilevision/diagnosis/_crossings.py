@@ -23,7 +23,7 @@ from __future__ import annotations
 import functools
 import itertools
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -686,7 +686,8 @@ def _test_columns(columns: Mapping[str, np.ndarray], ok: np.ndarray
     return out
 
 
-def crossing_sizes(columns: Mapping[str, np.ndarray], *, power: float = 0.95
+def crossing_sizes(columns: Mapping[str, np.ndarray], *, power: float = 0.95,
+                   sessions: Sequence[tuple[np.ndarray, np.ndarray]] | None = None
                    ) -> dict[str, float]:
     """The smallest within-indenter changes the crossing tests name in `power` of sessions
     of this table's presses at their stated uncertainties.
@@ -697,6 +698,12 @@ def crossing_sizes(columns: Mapping[str, np.ndarray], *, power: float = 0.95
         As for :func:`crossing_tests` (the crossing forces' values only set their
         brackets' relative widths, ``force_w0_sem_n / force_w0_n``).
     power : float, default 0.95
+    sessions : sequence of (keep, sem), optional
+        Sessions of the table's design that differ from it, drawn by the caller (a plan's:
+        :func:`~tactilevision.planning.crossing_sessions`): ``keep`` (N,) bool, the
+        presses such a session certifies, and ``sem`` (M, N) float, the stated sds of
+        ``force_w0_n`` in each of its M draws. The :data:`_SIZE_DRAWS` draws are then
+        theirs, the tests' thresholds the table's own. Default: the table as it is.
 
     Returns
     -------
@@ -717,32 +724,36 @@ def crossing_sizes(columns: Mapping[str, np.ndarray], *, power: float = 0.95
     bisection. The step's other places and the scan's other tests can only add to the
     power: the sizes are upper bounds of what is named in `power` of sessions.
     """
-    sized = _size_setup(columns)
+    sized = _size_setup(columns, sessions)
     if sized is None:
         return {}
-    setup, tests, crit, draws = sized
+    tests, _, crit, parts = sized
     out = {}
     for j, (col, kind, z) in enumerate(tests):
         if kind == "step" and col == "press":
-            out["stiffness_step:press"] = _step_size(setup, crit[j], draws,
-                                                     z > np.median(z), power)
+            out["stiffness_step:press"] = _step_size(parts, j, crit[j], float(np.median(z)),
+                                                     power)
         elif kind == "trend" and col in ("time_s", "x_mm"):
             name = "stiffness_trend:time_s" if col == "time_s" else "spatial_nonuniformity"
-            effect = z - z.mean()
-            shapes = setup.shapes[setup.owner == j]
 
-            def named(size: float, effect=effect, shapes=shapes, c=crit[j],
+            def named(size: float, j=j, c=crit[j],
                       steady=name == "stiffness_trend:time_s") -> float:
-                true = np.exp(size * effect) if steady else 1.0 + size * effect
-                gain, _ = bracket_gains(draws[0] * true, draws[1] * true, setup.groups,
-                                        shapes)
-                return float(np.mean(gain.max(axis=1) >= c))
+                hit = 0
+                for setup, part_tests, draws in parts:
+                    effect = part_tests[j][2] - part_tests[j][2].mean()
+                    true = np.exp(size * effect) if steady else 1.0 + size * effect
+                    gain, _ = bracket_gains(draws[0] * true, draws[1] * true, setup.groups,
+                                            setup.shapes[setup.owner == j])
+                    hit += int(np.sum(gain.max(axis=1) >= c))
+                return hit / sum(d[0].shape[0] for _, _, d in parts)
 
-            out[name] = _bisect_size(named, power, 0.05 / max(float(np.ptp(effect)), 1e-12))
+            out[name] = _bisect_size(named, power,
+                                     0.05 / max(float(np.ptp(z - z.mean())), 1e-12))
     return out
 
 
-def crossing_step_places(columns: Mapping[str, np.ndarray], *, power: float = 0.95
+def crossing_step_places(columns: Mapping[str, np.ndarray], *, power: float = 0.95,
+                         sessions: Sequence[tuple[np.ndarray, np.ndarray]] | None = None
                          ) -> tuple[tuple[float, float], ...]:
     """The smallest stiffness step along press order the crossing tests name in `power`
     of sessions, at places other than half-way through the presses.
@@ -759,6 +770,8 @@ def crossing_step_places(columns: Mapping[str, np.ndarray], *, power: float = 0.
     columns : mapping of str to (N,) array_like
         As for :func:`crossing_sizes` (with ``press``).
     power : float, default 0.95
+    sessions : sequence of (keep, sem), optional
+        As for :func:`crossing_sizes`.
 
     Returns
     -------
@@ -779,22 +792,25 @@ def crossing_step_places(columns: Mapping[str, np.ndarray], *, power: float = 0.
     largest of these is about the largest over every place (on the session above it
     was, over all 22).
     """
-    sized = _size_setup(columns)
+    sized = _size_setup(columns, sessions)
     if sized is None:
         return ()
-    setup, tests, crit, draws = sized
+    tests, groups, crit, parts = sized
     out = []
     for j, (col, kind, z) in enumerate(tests):
         if kind != "step" or col != "press":
             continue
-        for after, _ in _step_places(z, setup.groups):
-            out.append((after, _step_size(setup, crit[j], draws, z > after, power)))
+        for after, _ in _step_places(z, groups):
+            out.append((after, _step_size(parts, j, crit[j], after, power)))
     return tuple(out)
 
 
-def _size_setup(columns: Mapping[str, np.ndarray]):
-    """What :func:`crossing_sizes` draws its sessions from: ``(setup, tests, thresholds,
-    (lo, hi))``, the brackets' draws about 1 (:data:`_SIZE_DRAWS`, seeded); None without
+def _size_setup(columns: Mapping[str, np.ndarray],
+                sessions: Sequence[tuple[np.ndarray, np.ndarray]] | None = None):
+    """What :func:`crossing_sizes` draws its sessions from: ``(tests, groups, thresholds,
+    parts)``, the table's tests, indenters and thresholds, and ``parts`` a list of
+    ``(setup, tests, (lo, hi))``: the table's own brackets' draws about 1
+    (:data:`_SIZE_DRAWS`, seeded), or each of `sessions` with its draws; None without
     crossing forces or tests."""
     prep = _prepared(columns)
     if prep is None:
@@ -804,20 +820,48 @@ def _size_setup(columns: Mapping[str, np.ndarray]):
     if not tests:
         return None
     setup = _Brackets.of(columns, ok, groups, w, tests)
-    draws = bracket_draws(setup.width, _SIZE_DRAWS, np.random.default_rng(_FAMILY_SEED + 2))
-    return setup, tests, setup.thresholds(), draws
+    rng = np.random.default_rng(_FAMILY_SEED + 2)
+    if sessions is None:
+        return tests, groups, setup.thresholds(), [
+            (setup, tests, bracket_draws(setup.width, _SIZE_DRAWS, rng))]
+    parts = [p for keep, sem in sessions
+             if (p := _session_part(columns, keep, sem, tests, rng)) is not None]
+    return (tests, groups, setup.thresholds(), parts) if parts else None
 
 
-def _step_size(setup: _Brackets, crit: float, draws: tuple[np.ndarray, np.ndarray],
-               after: np.ndarray, power: float) -> float:
-    """The smallest step 1 + s [after] (a (n,) bool over the presses) that its own test,
-    at its true place only, names in `power` of `draws`."""
-    effect = after.astype(np.float64)
+def _session_part(columns: Mapping[str, np.ndarray], keep: np.ndarray, sem: np.ndarray,
+                  tests: list[tuple[str, str, np.ndarray]], rng: np.random.Generator):
+    """One drawn session's ``(setup, tests, (lo, hi))``: the presses it keeps, its brackets
+    drawn at each draw's widths; None where its tests are not the table's."""
+    keep = np.asarray(keep, bool)
+    sem = np.atleast_2d(np.asarray(sem, np.float64))
+    cols = {k: np.asarray(v)[keep] for k, v in columns.items()}
+    cols["force_w0_sem_n"] = sem[0][keep]
+    prep = _prepared(cols)
+    if prep is None:
+        return None
+    ok, groups, _, w = prep
+    own = _test_columns(cols, ok)
+    if [t[:2] for t in own] != [t[:2] for t in tests]:
+        return None
+    setup = _Brackets.of(cols, ok, groups, w, own)
+    f = np.asarray(cols["force_w0_n"], np.float64)[ok]
+    width = np.sqrt(12.0) * sem[:, keep][:, ok] / f
+    return setup, own, bracket_draws(width, width.shape[0], rng)
 
+
+def _step_size(parts: list, j: int, crit: float, after: float, power: float) -> float:
+    """The smallest step 1 + s [press > after] that its own test (the `j`-th), at its
+    true place only, names in `power` of the parts' draws."""
     def named(size: float) -> float:
-        true = 1.0 + size * effect
-        gain, _ = bracket_gains(draws[0] * true, draws[1] * true, setup.groups, effect[None])
-        return float(np.mean(gain.max(axis=1) >= crit))
+        hit = 0
+        for setup, tests, draws in parts:
+            effect = (tests[j][2] > after).astype(np.float64)
+            true = 1.0 + size * effect
+            gain, _ = bracket_gains(draws[0] * true, draws[1] * true, setup.groups,
+                                    effect[None])
+            hit += int(np.sum(gain.max(axis=1) >= crit))
+        return hit / sum(d[0].shape[0] for _, _, d in parts)
 
     return _bisect_size(named, power, 0.05)
 

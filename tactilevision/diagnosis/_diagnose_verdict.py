@@ -219,7 +219,8 @@ def diagnose(columns: Mapping[str, np.ndarray], *, thickness_mm: float, radius_m
 
 def crossing_sensitivity(columns: Mapping[str, np.ndarray], *, power: float = 0.95,
                          why: str = "from the crossing forces within indenters at their "
-                                    "stated uncertainties (the family-wise tests' power)"
+                                    "stated uncertainties (the family-wise tests' power)",
+                         sessions: Sequence[tuple[np.ndarray, np.ndarray]] | None = None
                          ) -> dict[str, EffectSensitivity]:
     """The smallest within-indenter changes the crossing forces name, as entries of
     ``rules_out`` and of ``plan``'s ``effect_sizes``.
@@ -233,6 +234,8 @@ def crossing_sensitivity(columns: Mapping[str, np.ndarray], *, power: float = 0.
     why : str
         Each entry's sentence (the step's adds where its size is taken: half-way through
         the presses, and just after each press in ``at_places``).
+    sessions : sequence of (keep, sem), optional
+        Drawn sessions of the table's design (:func:`crossing_sizes`).
 
     Returns
     -------
@@ -242,10 +245,11 @@ def crossing_sensitivity(columns: Mapping[str, np.ndarray], *, power: float = 0.
         NaN. Empty without crossing forces.
     """
     out = {}
-    for name, size in crossing_sizes(columns, power=power).items():
+    for name, size in crossing_sizes(columns, power=power, sessions=sessions).items():
         param, unit, factor = CROSSING_UNITS[name]
-        places = (tuple((a, factor * s) for a, s in crossing_step_places(columns, power=power))
-                  if name == "stiffness_step:press" else ())
+        places = (tuple((a, factor * s) for a, s in crossing_step_places(
+            columns, power=power, sessions=sessions)) if name == "stiffness_step:press"
+            else ())
         said = (why + "; a step half-way through the presses, and just after each press "
                 "at_places names") if places else why
         out[name] = EffectSensitivity(effect=name, parameter=param, unit=unit,

@@ -41,6 +41,7 @@ from ._plan import (
 from ._plan_effects import (
     crossing_effect_sizes,
     crossing_offset_sizes,
+    crossing_sessions,
     crossing_table,
     design_setup,
     effect_power,
@@ -59,6 +60,7 @@ __all__ = [
     "RelaxationPlan",
     "crossing_effect_sizes",
     "crossing_offset_sizes",
+    "crossing_sessions",
     "crossing_table",
     "depth_uncertainty",
     "design_from_calibration",

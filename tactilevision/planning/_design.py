@@ -142,6 +142,13 @@ class Design:
         (:func:`~tactilevision.planning.crossing_table`).
         :func:`~tactilevision.planning.design_from_calibration` measures it on the
         session's own brackets.
+    unseen_share : float
+        The share of presses whose mark the certification will not see (the stage
+        stopping too little past w0 to show it), in [0, 0.5): a drawn mark's crossing
+        forces are sized on sessions that lose each press with that probability
+        (:func:`~tactilevision.planning.crossing_sessions`); E's and nu's prediction
+        counts every press. :func:`~tactilevision.planning.design_from_calibration`
+        measures it (the presses ``calibrate`` rejected).
     detect : tuple of (str, float)
         Effect sizes the user wants to be able to see (``[plan.detect]``: a catalogue
         effect of :data:`EFFECT_SIZE_PARAMS` and its size in that table's unit):
@@ -181,6 +188,7 @@ class Design:
     relaxation_tau_s: float | None = None
     detect: tuple[tuple[str, float], ...] = ()
     bracket_periods: float = BRACKET_PERIODS
+    unseen_share: float = 0.0
 
     def __post_init__(self) -> None:
         check_design(self)
@@ -211,7 +219,8 @@ def check_design(d: Design) -> None:
         A non-positive h or a, no depth or a depth beyond the gel (w0 >= h) or past
         the FEM beta table's reach (w/h > 0.23), fewer than two distinct depths, a bevel
         angle of 45 degrees or more, a window longer than the hold, a repeat count
-        below 1, a nu outside (0, 0.5], or a ``bracket_periods`` outside [1, 4].
+        below 1, a nu outside (0, 0.5], a ``bracket_periods`` outside [1, 4] or an
+        ``unseen_share`` outside [0, 0.5).
     """
     _check_block(d)
     _check_schedule(d)
@@ -279,6 +288,9 @@ def _check_block(d: Design) -> None:
     if not 1.0 <= periods <= 4.0:
         raise InputError(f"[plan] bracket_periods must lie in [1, 4] (frame periods a mark's "
                          f"crossing bracket spans), got {d.bracket_periods!r}")
+    if not 0.0 <= float(d.unseen_share) < 0.5:
+        raise InputError(f"[plan] unseen_share must lie in [0, 0.5) (the share of presses "
+                         f"whose mark is not seen), got {d.unseen_share!r}")
 
 
 def _check_schedule(d: Design) -> None:
@@ -356,7 +368,8 @@ DESIGN_KEYS: dict[str, dict[str, str]] = {
              "depth_std_um": "number", "beta_table": "text", "overshoot_um": "numbers",
              "holds_s": "numbers", "waits_s": "numbers", "days": "integer",
              "positions": "integer", "schedule": "schedule", "relaxation_g": "number",
-             "relaxation_tau_s": "number", "detect": "table", "bracket_periods": "number"},
+             "relaxation_tau_s": "number", "detect": "table", "bracket_periods": "number",
+             "unseen_share": "number"},
 }
 
 _KIND_WORDS = {"number": "a number", "integer": "a whole number", "numbers": "a list of numbers",
@@ -422,7 +435,8 @@ def read_design(path: str | Path) -> Design:
         rate_hz, window_samples, window_at``, ``[plan] repeats, E_mpa, nu,
         frame_rate_hz, stage_speed_mm_s or approach_s, force_noise_n, force_zero_n, hold_s,
         depth_std_um, beta_table, overshoot_um, holds_s, waits_s, days, positions,
-        schedule, relaxation_g, relaxation_tau_s, bracket_periods`` and ``[plan.detect]``
+        schedule, relaxation_g, relaxation_tau_s, bracket_periods, unseen_share`` and
+        ``[plan.detect]``
         (effect = size;
         every ``[plan]`` key optional; :class:`Design` gives the defaults). ``schedule``
         is a list of ``[indenter, x_mm, y_mm]`` or the name of a ``presses.csv``
@@ -742,7 +756,7 @@ def design_toml(d: Design) -> str:
     plan_keys = ["repeats", "E_mpa", "nu", "frame_rate_hz", speed,
                  "force_noise_n", "force_zero_n", "hold_s", "depth_std_um", "beta_table",
                  "overshoot_um", "holds_s", "waits_s", "days", "positions", "relaxation_g",
-                 "relaxation_tau_s", "bracket_periods"]
+                 "relaxation_tau_s", "bracket_periods", "unseen_share"]
     lines = ["[sensor]", f"gel_thickness_mm = {val(d.thickness_mm)}",
              f"mm_per_px = {val(d.mm_per_px)}", "", "[indenter]",
              f"radius_mm = {val(d.radius_mm)}", "", "[gauge_block]",

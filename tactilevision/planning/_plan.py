@@ -577,8 +577,9 @@ def design_from_calibration(folder: str | Path, session: str | Path | None = Non
         of its standard errors); the session's ``presses.csv``, where it presses every
         depth equally often, as the ``schedule`` (and its repeats); under the mark rule,
         the frame periods its crossing brackets spanned on average
-        (:func:`~tactilevision.planning.measured_bracket_periods`). What the folders do
-        not hold keeps :class:`Design`'s default.
+        (:func:`~tactilevision.planning.measured_bracket_periods`) and the share of its
+        presses ``calibrate`` rejected (``unseen_share``, at most 0.45). What the folders
+        do not hold keeps :class:`Design`'s default.
 
     Raises
     ------
@@ -665,7 +666,11 @@ def design_from_calibration(folder: str | Path, session: str | Path | None = Non
     design = Design(**kw)
     periods = (measured_bracket_periods(design, w0, col("force_w0_sem_n"))
                if rows and "force_w0_sem_n" in rows[0] else None)
-    return design if periods is None else replace(design, bracket_periods=periods)
+    if periods is None:
+        return design
+    lost = fit.get("n_rejected")
+    lost = float(lost) / (lost + len(rows)) if isinstance(lost, int) and lost > 0 else 0.0
+    return replace(design, bracket_periods=periods, unseen_share=round(min(lost, 0.45), 4))
 
 
 def _stage_motion(holds: Path, depth: np.ndarray, press: np.ndarray) -> dict[str, float]:
