@@ -19,6 +19,7 @@ from tactilevision.planning import (
     crossing_effect_sizes,
     crossing_sessions,
     crossing_table,
+    design_from_calibration,
     design_toml,
     measured_bracket_periods,
     planned_columns,
@@ -273,3 +274,28 @@ def test_unseen_presses_raise_what_the_crossings_can_name():
         assert plan[name].size_param == pytest.approx(table[name], rel=0.03), name
         assert lossy[name].size_param > 1.05 * plan[name].size_param, name
     assert "30 % of presses unseen" in lossy["stiffness_step:press"].why
+
+
+def test_a_calibration_gives_its_brackets_periods_and_unseen_share(tmp_path):
+    """plan --from-calibration reads a mark session's brackets back: a calibration folder
+    whose crossing forces' sds are those of brackets two periods wide on every press
+    (crossing_table at 30 frames/s, 0.1 mm/s, the defaults a folder without frames or
+    holds keeps) gives bracket_periods 2; 3 presses rejected beside its 20 an
+    unseen_share of 3/23."""
+    d = replace(MARK, frame_rate_hz=30.0, bracket_periods=2.0, force_noise_n=0.0125)
+    tab = crossing_table(d)
+    cal = tmp_path / "cal"
+    cal.mkdir()
+    (cal / "fit.json").write_text(json.dumps({"E_mpa": d.E_mpa, "nu": d.nu, "thickness_mm": 3.0,
+                                              "radius_mm": 2.5, "n_rejected": 3}))
+    rows = ["press,indenter,depth_mm,overshoot_mm,force_n,force_std_n,force_w0_n,"
+            "force_w0_sem_n"]
+    for k, (i, f, sd) in enumerate(zip(tab["indenter"].astype(int), tab["force_w0_n"],
+                                       tab["force_w0_sem_n"], strict=True)):
+        rows.append(f"{k},{i},{DEPTHS[i] + 0.02:.6f},0.020000,{f * 1.05:.8g},0.0125,"
+                    f"{f:.8g},{sd:.8g}")
+    (cal / "measurements.csv").write_text("\n".join(rows) + "\n")
+    got = design_from_calibration(cal)
+    assert got.frame_rate_hz == 30.0 and got.stage_speed_mm_s == pytest.approx(0.1)
+    assert got.bracket_periods == pytest.approx(2.0, rel=1e-4)
+    assert got.unseen_share == pytest.approx(3 / 23, abs=1e-4)

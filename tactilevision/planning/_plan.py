@@ -663,13 +663,20 @@ def design_from_calibration(folder: str | Path, session: str | Path | None = Non
         if schedule is not None:
             kw["schedule"] = schedule
             kw["repeats"] = len(schedule) // len(depths)
-    design = Design(**kw)
-    periods = (measured_bracket_periods(design, w0, col("force_w0_sem_n"))
-               if rows and "force_w0_sem_n" in rows[0] else None)
+    sem = col("force_w0_sem_n") if rows and "force_w0_sem_n" in rows[0] else None
+    return _with_mark_brackets(Design(**kw), w0, sem, fit.get("n_rejected"))
+
+
+def _with_mark_brackets(design: Design, w0: np.ndarray, sem: np.ndarray | None,
+                        rejected: Any) -> Design:
+    """`design` with a drawn mark's crossing brackets as the session had them: their mean
+    frame periods (:func:`measured_bracket_periods`) and the share of its presses
+    ``calibrate`` rejected (at most 0.45); unchanged without crossing forces."""
+    periods = None if sem is None else measured_bracket_periods(design, w0, sem)
     if periods is None:
         return design
-    lost = fit.get("n_rejected")
-    lost = float(lost) / (lost + len(rows)) if isinstance(lost, int) and lost > 0 else 0.0
+    lost = (float(rejected) / (rejected + len(w0))
+            if isinstance(rejected, int) and rejected > 0 else 0.0)
     return replace(design, bracket_periods=periods, unseen_share=round(min(lost, 0.45), 4))
 
 
