@@ -22,6 +22,7 @@ from tactilevision.planning import (
     design_from_calibration,
     design_toml,
     measured_bracket_periods,
+    plan_session,
     planned_columns,
     press_bracket_periods,
     read_design,
@@ -299,3 +300,17 @@ def test_a_calibration_gives_its_brackets_periods_and_unseen_share(tmp_path):
     assert got.frame_rate_hz == 30.0 and got.stage_speed_mm_s == pytest.approx(0.1)
     assert got.bracket_periods == pytest.approx(2.0, rel=1e-4)
     assert got.unseen_share == pytest.approx(3 / 23, abs=1e-4)
+
+
+def test_unseen_presses_widen_e_and_nu_as_fewer_presses_do():
+    """E's and nu's predicted spread with a quarter of 8 repeats unseen is that of 6
+    repeats (the same depths and noise) within 2 %, and wider than all 8 seen; the note
+    says on how many presses it counts."""
+    d = replace(MARK, repeats=8, frame_rate_hz=30.0)
+    lossy = plan_session(replace(d, unseen_share=0.25), effect_sizes=False)
+    six = plan_session(replace(d, repeats=6), effect_sizes=False)
+    eight = plan_session(d, effect_sizes=False)
+    assert lossy.E_sigma_mpa == pytest.approx(six.E_sigma_mpa, rel=0.02)
+    assert lossy.nu_sigma == pytest.approx(six.nu_sigma, rel=0.02)
+    assert lossy.E_sigma_mpa > 1.05 * eight.E_sigma_mpa
+    assert any("75 % of presses" in n for n in lossy.notes)

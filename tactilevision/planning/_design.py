@@ -146,8 +146,8 @@ class Design:
         The share of presses whose mark the certification will not see (the stage
         stopping too little past w0 to show it), in [0, 0.5): a drawn mark's crossing
         forces are sized on sessions that lose each press with that probability
-        (:func:`~tactilevision.planning.crossing_sessions`); E's and nu's prediction
-        counts every press. :func:`~tactilevision.planning.design_from_calibration`
+        (:func:`~tactilevision.planning.crossing_sessions`), and E's and nu's spread on
+        the presses left. :func:`~tactilevision.planning.design_from_calibration`
         measures it (the presses ``calibrate`` rejected).
     detect : tuple of (str, float)
         Effect sizes the user wants to be able to see (``[plan.detect]``: a catalogue

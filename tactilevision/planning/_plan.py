@@ -437,7 +437,8 @@ def plan_session(design: Design, *, effect_sizes: bool = True) -> PlanPrediction
     clips nu: their mean, sds and correlation are integrated over that Gaussian by
     Gauss-Hermite quadrature (:data:`QUADRATURE_NODES` per axis), each node a fit of
     the table moved by the node's line. The shared errors are fitted at their bounds,
-    either way.
+    either way. With an ``unseen_share`` q the line's covariance is divided by 1 - q (the
+    presses left, lost evenly over the depths).
 
     The effect sizes are :func:`effect_sensitivity`'s (``diagnose``'s decisions replayed
     over drawn noise) and the ``detect`` sizes' power :func:`effect_power`'s.
@@ -488,7 +489,12 @@ def plan_session(design: Design, *, effect_sizes: bool = True) -> PlanPrediction
                               False, [f"nu is not identified by this design: {why}"],
                               untest, relax, sizes, seen)
     n = w.size
-    cov_cs = _line_covariance(d, w, P, u, s_P, s_w)
+    # presses whose mark is not seen are lost to the fit too: the line's covariance over the
+    # (1 - unseen_share) of them that remain, lost evenly over the depths
+    cov_cs = _line_covariance(d, w, P, u, s_P, s_w) / (1.0 - d.unseen_share)
+    if d.unseen_share > 0:
+        notes.append(f"E's and nu's spread counts the {100 * (1 - d.unseen_share):.3g} % of "
+                     "presses whose mark is expected to be seen ([plan] unseen_share)")
     mean, sE, snu, corr, out_of_table = _quadrature(d, w, P, u, cov_cs)
     if not np.isfinite(mean).all():
         nan = math.nan
