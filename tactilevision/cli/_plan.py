@@ -110,8 +110,11 @@ def summary(pred) -> str:
         lines.append("smallest effects diagnose names in 95 % of sessions (catalogue "
                      "parameter; snr: over the replicate noise):")
         if any(s.why.startswith("from the crossing forces") for s in found):
-            lines.append(f"  (the crossing forces bracketed by {d.bracket_periods:.3g} frame "
-                         "periods of travel on average: [plan] bracket_periods)")
+            lost = (f", {100 * d.unseen_share:.3g} % of presses unseen"
+                    if d.unseen_share > 0 else "")
+            lines.append(f"  (sessions drawn: the crossing forces bracketed by "
+                         f"{d.bracket_periods:.3g} frame periods of travel on average{lost}; "
+                         "[plan] bracket_periods, unseen_share)")
         for s in found:
             snr = f"; snr {s.snr:.2g}" if math.isfinite(s.snr) else "; the crossing forces"
             lines.append(f"  {s.effect:24s} " + (
