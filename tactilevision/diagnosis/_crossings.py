@@ -736,16 +736,12 @@ def crossing_sizes(columns: Mapping[str, np.ndarray], *, power: float = 0.95,
         elif kind == "trend" and col in ("time_s", "x_mm"):
             name = "stiffness_trend:time_s" if col == "time_s" else "spatial_nonuniformity"
 
-            def named(size: float, j=j, c=crit[j],
+            effects = [t[j][2] - t[j][2].mean() for _, t, _ in parts]
+            shapes = [setup.shapes[setup.owner == j] for setup, _, _ in parts]
+
+            def named(size: float, effects=effects, shapes=shapes, c=crit[j],
                       steady=name == "stiffness_trend:time_s") -> float:
-                hit = 0
-                for setup, part_tests, draws in parts:
-                    effect = part_tests[j][2] - part_tests[j][2].mean()
-                    true = np.exp(size * effect) if steady else 1.0 + size * effect
-                    gain, _ = bracket_gains(draws[0] * true, draws[1] * true, setup.groups,
-                                            setup.shapes[setup.owner == j])
-                    hit += int(np.sum(gain.max(axis=1) >= c))
-                return hit / sum(d[0].shape[0] for _, _, d in parts)
+                return _named_share(parts, c, effects, shapes, size, steady)
 
             out[name] = _bisect_size(named, power,
                                      0.05 / max(float(np.ptp(z - z.mean())), 1e-12))
@@ -853,17 +849,24 @@ def _session_part(columns: Mapping[str, np.ndarray], keep: np.ndarray, sem: np.n
 def _step_size(parts: list, j: int, crit: float, after: float, power: float) -> float:
     """The smallest step 1 + s [press > after] that its own test (the `j`-th), at its
     true place only, names in `power` of the parts' draws."""
-    def named(size: float) -> float:
-        hit = 0
-        for setup, tests, draws in parts:
-            effect = (tests[j][2] > after).astype(np.float64)
-            true = 1.0 + size * effect
-            gain, _ = bracket_gains(draws[0] * true, draws[1] * true, setup.groups,
-                                    effect[None])
-            hit += int(np.sum(gain.max(axis=1) >= crit))
-        return hit / sum(d[0].shape[0] for _, _, d in parts)
+    effects = [(t[j][2] > after).astype(np.float64) for _, t, _ in parts]
+    shapes = [e[None] for e in effects]
+    return _bisect_size(lambda size: _named_share(parts, crit, effects, shapes, size),
+                        power, 0.05)
 
-    return _bisect_size(named, power, 0.05)
+
+def _named_share(parts: list, crit: float, effects: list[np.ndarray],
+                 shapes: list[np.ndarray], size: float, steady: bool = False) -> float:
+    """The share of the parts' draws in which a test whose largest gain over `shapes`
+    passes `crit` names a change of `size` along each part's `effects` (relative, 1 + s x;
+    ``exp(s x)`` where `steady`)."""
+    hit = total = 0
+    for (setup, _, draws), effect, shape in zip(parts, effects, shapes, strict=True):
+        true = np.exp(size * effect) if steady else 1.0 + size * effect
+        gain, _ = bracket_gains(draws[0] * true, draws[1] * true, setup.groups, shape)
+        hit += int(np.sum(gain.max(axis=1) >= crit))
+        total += gain.shape[0]
+    return hit / total
 
 
 def _bisect_size(named, power: float, first: float) -> float:

@@ -59,6 +59,14 @@ def press_bracket_periods(mean: float, n: int) -> np.ndarray:
     return base + np.floor((i + 1) * frac + 1e-9) - np.floor(i * frac + 1e-9)
 
 
+def _press_order(design: Design) -> np.ndarray:
+    """Each press's indenter, in the order pressed: the schedule's, or round the
+    indenters ``repeats`` times."""
+    if design.schedule is not None:
+        return press_indenters(design)
+    return np.tile(np.arange(len(design.depths_mm)), int(design.repeats))
+
+
 def _one_period(design: Design) -> tuple[np.ndarray, float]:
     """Each indenter's crossing bracket over one frame period, N (the stage's travel in
     one frame at the indenter's speed times the FEM's dP/dw at its w0), and the noise of
@@ -127,9 +135,8 @@ def crossing_table(design: Design) -> dict[str, np.ndarray]:
         ``force_w0_sem_n`` (N).
     """
     cols = planned_columns(design)
-    n_ind, n = len(design.depths_mm), int(design.repeats) * len(design.depths_mm)
-    ind = (press_indenters(design) if design.schedule is not None
-           else np.tile(np.arange(n_ind), int(design.repeats)))
+    ind = _press_order(design)
+    n = ind.size
     w0 = np.asarray(design.depths_mm, np.float64)
     p0 = fem_force(design.E_mpa, design.nu, design.radius_mm, design.thickness_mm, w0)
     unit, avg = _one_period(design)
@@ -198,8 +205,7 @@ def crossing_sessions(design: Design, *, draws: int = 1000
         ``keep`` (N,) bool, the presses certified; ``sem`` (M, N) float64, the stated sds
         of their crossing forces (N) in each of M draws, ``draws`` in all.
     """
-    table = crossing_table(design)
-    ind = table["indenter"].astype(np.int64)
+    ind = _press_order(design).astype(np.int64)
     unit, avg = _one_period(design)
     base = math.floor(design.bracket_periods)
     share = design.bracket_periods - base
