@@ -54,9 +54,11 @@ def test_no_change_is_found_at_the_stated_level():
 def test_a_stiffness_step_is_found_with_its_size():
     """E falls 12 % after the 10th press: named a stiffness step along press or time in
     at least 84 % of tables (88 of these 100; the step and the trend told apart by what
-    each predicts, at the 5 % level; where both explain them, the one whose own draws make
+    each predicts, at the 1 % level; where both explain them, the one whose own draws make
     the observed statistic the more typical), a step found or listed as equivalent in at
-    least 90 (95), its size within 3 se of the truth in at least 80 (the step found: 87)."""
+    least 96 (100; 95 with the shapes told apart at 5 %, the level before 2026-11-28: a
+    trend named alone for the step in 5), its size within 3 se of the truth in at least
+    80 (the step found: 87)."""
     named, either, held = 0, 0, 0
     for seed in range(100):
         scan = crossing_tests(_crossings(seed, lambda p, x: np.where(p >= 10, 0.88, 1.0)))
@@ -66,14 +68,14 @@ def test_a_stiffness_step_is_found_with_its_size():
         if steps and steps[0] is scan.found:
             named += 1
             held += abs(steps[0].size - (0.88 - 1)) < 3 * steps[0].se
-    assert named >= 84 and either >= 90 and held >= 80, (named, either, held)
+    assert named >= 84 and either >= 96 and held >= 80, (named, either, held)
 
 
 def test_a_steady_softening_is_a_trend():
     """E falls 20 % steadily over the 20 presses: a stiffness trend along press or time
-    found in at least 88 % of tables (93 of these 100), found or listed as equivalent to
-    a step in at least 90 (94: the fitted trend's own draws reject it in about 5 %, the
-    level of that test)."""
+    found in at least 88 % of tables (92 of these 100), found or listed as equivalent to
+    a step in at least 95 (98: the fitted trend's own draws reject it in about 1 %, the
+    level of that test; 94 at the 5 % before 2026-11-28)."""
     found, either = 0, 0
     for seed in range(100):
         scan = crossing_tests(_crossings(seed, lambda p, x: 1 - 0.2 * p / 19))
@@ -81,7 +83,7 @@ def test_a_steady_softening_is_a_trend():
                   and t.kind == "trend" and t.column in ("press", "time_s")]
         either += bool(trends)
         found += bool(trends) and trends[0] is scan.found
-    assert found >= 88 and either >= 90, (found, either)
+    assert found >= 88 and either >= 95, (found, either)
 
 
 def test_a_gradient_across_the_pad_is_spatial():

@@ -63,8 +63,18 @@ _MIN_STEP_SIDE = 2
 #: seed (the same table gives the same p-values).
 _BRACKET_DRAWS, _FAMILY_SEED = 10000, 20261126
 #: Draws under each of a fitted trend and step behind :func:`_shape_fits`, and the level
-#: below which a shape is taken not to explain the brackets.
+#: below which a fitted change is taken not to explain the brackets' scatter
+#: (:func:`residual_scatter`).
 _SHAPE_DRAWS, _SHAPE_ALPHA = 400, 0.05
+#: The level below which Cox's test (:func:`_shape_fits`) takes one shape not to explain
+#: the brackets where the other does: naming a trend for a step (damage for a drift) is a
+#: claim the user acts on, so it is made at 1 %. At 5 % (before 2026-11-28), on 200
+#: tables drawn from a Taxim session's design (251's, `benchmarks/bench_shape_choice.py`)
+#: with a 6.6 % step after the 10th press, the trend was named alone in 14 (the fitted
+#: step's search over its places makes its own draws' statistic large, so a true step
+#: failed its Cox test more often than 5 %); at 1 %, in 3, the step listed as equivalent
+#: in 26 instead of 15. With a 10.8 % softening over the session: a step alone 5 and 0.
+_CHOICE_ALPHA = 0.01
 #: Draws behind each size :func:`crossing_sizes` tries.
 _SIZE_DRAWS = 1000
 #: Draws behind the scatter left after a found change (:func:`residual_scatter`), and the
@@ -205,8 +215,8 @@ class CrossingScan:
         by_aic = (step, trend) if aic > 0 else (trend, step)
         if not np.isfinite(self.p_trend_fits):
             return (*by_aic, abs(aic) <= 2.0)
-        trend_ok = self.p_trend_fits >= _SHAPE_ALPHA
-        step_ok = self.p_step_fits >= _SHAPE_ALPHA
+        trend_ok = self.p_trend_fits >= _CHOICE_ALPHA
+        step_ok = self.p_step_fits >= _CHOICE_ALPHA
         if trend_ok == step_ok:
             # both explain them (or neither): the shape under whose own draws the observed
             # statistic is the more typical (the larger of the two Cox p-values)
@@ -219,7 +229,8 @@ class CrossingScan:
     def found(self) -> CrossingTest | None:
         """The most significant test, where one is; along its column, where a step and a
         trend are both significant, the one that explains the brackets where the other
-        does not (``p_trend_fits``, ``p_step_fits``: Cox's test of separate families), and
+        does not (``p_trend_fits``, ``p_step_fits``: Cox's test of separate families, at
+        :data:`_CHOICE_ALPHA`), and
         where both do (or neither), the one under whose own draws the observed statistic is
         the more typical (the larger of the two p-values: the draws count the step's search
         over its places, which a nominal penalty does not). Without those p-values (one
@@ -232,7 +243,7 @@ class CrossingScan:
     def equivalent(self) -> tuple[CrossingTest, ...]:
         """The other shape along the found column where the data hardly prefer either: both
         explain the brackets (``p_trend_fits`` and ``p_step_fits`` at least
-        :data:`_SHAPE_ALPHA`); without those, where their AIC on the brackets lie within 2
+        :data:`_CHOICE_ALPHA`); without those, where their AIC on the brackets lie within 2
         (Burnham and Anderson, Model Selection and Multimodel Inference, 2002, sec. 2.6).
         A gel that softens steadily fits a step at its middle nearly as well at a
         crossing's noise."""
