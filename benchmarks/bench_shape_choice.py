@@ -11,7 +11,8 @@ of ``--softening`` over the session (linear in the press's time, as
 ``bench_loop.py``'s), runs ``tactilevision.diagnosis.crossing_tests`` on each and counts
 how it reads them: the change named in its shape, named in the other shape with its own
 listed as equivalent, named in the other shape alone (the wrong shape), another column, or
-nothing.
+nothing; with the shapes told apart by Cox's test at 1 % (the library's level) and at 5 %
+(the rule before 2026-11-28), from the same scans.
 
     python benchmarks/bench_shape_choice.py CALIBRATION_DIR [--session DIR]
         [--periods P] [--step S] [--after A] [--softening T] [--draws N] [--seed K]
@@ -21,9 +22,9 @@ periods, the other shadowed sessions' mean), 200 tables each, 2026-11-28 (the st
 softening are the sizes ``plan`` gave that design then): the step of 6.64 % after the 10th
 press named a step in 166, a trend with the step equivalent in 26, a trend alone in 3 and
 nothing in 5; the softening of 10.8 % a trend in 178, a step with the trend equivalent in
-15, nothing in 7. With Cox's test at 5 % (the rule before that day; the same 200 tables'
-p-values read at 5 %): the trend alone for the step in 14 (equivalent in 15), a step alone
-for the softening in 5 (equivalent in 10).
+15, nothing in 7. At 5 % (the rule before that day), the same scans: the trend alone for
+the step in 14 (the step equivalent in 15), a step alone for the softening in 5 (the
+trend equivalent in 10).
 """
 
 from __future__ import annotations
@@ -44,23 +45,29 @@ from tactilevision.planning import crossing_table, design_from_calibration
 SOFTNESS = 0.02
 
 
-def shape_read(scan, kind: str) -> str:
-    """How a scan reads a change of the shape `kind` (``'step'`` or ``'trend'``)."""
-    if scan is None or scan.found is None:
+#: The levels Cox's test is read at: the library's (1 %) and the rule before 2026-11-28.
+LEVELS = (0.01, 0.05)
+
+
+def shape_read(scan, kind: str, alpha: float) -> str:
+    """How a scan reads a change of the shape `kind` (``'step'`` or ``'trend'``), the
+    shapes told apart at `alpha`."""
+    found, equivalent = (None, ()) if scan is None else scan.shapes_at(alpha)
+    if found is None:
         return "nothing"
-    found = scan.found
     if found.column not in ("time_s", "press"):
         return "another column"
     if found.kind == kind:
         return "its shape"
-    if any(e.kind == kind for e in scan.equivalent):
+    if any(e.kind == kind for e in equivalent):
         return "the other, its own equivalent"
     return "the other alone"
 
 
 def shape_counts(design, kind: str, size: float, after: float, draws: int, seed: int
-                 ) -> Counter:
-    """How `draws` tables of `design` with a change of `kind` and `size` are read."""
+                 ) -> dict[float, Counter]:
+    """How `draws` tables of `design` with a change of `kind` and `size` are read, at each
+    of :data:`LEVELS`."""
     table = crossing_table(design)
     f, se = table["force_w0_n"], table["force_w0_sem_n"]
     if kind == "step":
@@ -73,10 +80,11 @@ def shape_counts(design, kind: str, size: float, after: float, draws: int, seed:
     # each crossing at a uniform place in its bracket, the edges jittered: the midpoints
     u = rng.random((draws, width.size))
     mid = 1.0 + (0.5 - u) * width + rng.standard_normal((draws, width.size)) * SOFTNESS * width
-    out = Counter()
+    out = {a: Counter() for a in LEVELS}
     for i in range(draws):
         scan = crossing_tests({**table, "force_w0_n": mid[i] * change * f})
-        out[shape_read(scan, kind)] += 1
+        for a in LEVELS:
+            out[a][shape_read(scan, kind, a)] += 1
     return out
 
 
@@ -105,8 +113,10 @@ def main(argv: list[str] | None = None) -> int:
         got = shape_counts(design, kind, size, a.after, a.draws, a.seed + k)
         what = (f"step of {100 * size:.3g} % after press {a.after:g}" if kind == "step"
                 else f"softening of {100 * size:.3g} % over the session")
-        print(f"  {what}: " + ", ".join(f"{v} {n}" for n, v in sorted(got.items()))
-              + f" ({time.perf_counter() - t0:.0f} s)")
+        print(f"  {what} ({time.perf_counter() - t0:.0f} s):")
+        for level in LEVELS:
+            print(f"    shapes told apart at {100 * level:g} %: "
+                  + ", ".join(f"{v} {n}" for n, v in sorted(got[level].items())))
     return 0
 
 

@@ -12,7 +12,14 @@ import numpy as np
 import pytest
 
 from tactilevision.cli import main
-from tactilevision.diagnosis import crossing_sizes, crossing_step_places, crossing_tests, diagnose
+from tactilevision.diagnosis import (
+    CrossingScan,
+    CrossingTest,
+    crossing_sizes,
+    crossing_step_places,
+    crossing_tests,
+    diagnose,
+)
 from tactilevision.io import read_measurements
 from tactilevision.pipeline import calibrate_session, write_calibration
 from tactilevision.sim import GaugeBlock, SessionSpec, make_session
@@ -149,6 +156,31 @@ def test_tables_without_crossings_are_not_tested():
     assert crossing_tests(one) is None                     # one indenter: no within test
     cols["force_w0_n"][:3] = np.nan                        # unread crossings left out
     assert crossing_tests(cols).n == 17
+
+
+def test_the_shapes_are_told_apart_at_one_percent():
+    """A step and a trend both significant along time: where the trend's Cox p-value lies
+    between 1 % and 5 %, at 5 % (the rule before 2026-11-28) the step is found alone; at
+    the library's 1 % both explain the brackets, the larger p-value is found and the other
+    listed as equivalent. Where one shape's p-value is under 1 %, the other alone."""
+    step = CrossingTest("time_s", "step", -0.1, 0.02, 30.0, 1e-4, True, 12.0)
+    trend = CrossingTest("time_s", "trend", -0.002, 5e-4, float("nan"), 1e-3, True, 9.0)
+    far = CrossingTest("x_mm", "trend", 0.001, 0.01, float("nan"), 0.5, False, 0.1)
+
+    def scan(p_trend: float, p_step: float) -> CrossingScan:
+        return CrossingScan(n=20, n_indenters=5, chi2=30.0, dof=15, p_scatter=0.01,
+                            tests=(step, trend, far), p_trend_fits=p_trend,
+                            p_step_fits=p_step)
+
+    between = scan(0.03, 0.4)
+    assert between.shapes_at(0.05) == (step, ())
+    assert between.shapes_at(0.01) == (step, (trend,))
+    assert (between.found, between.equivalent) == between.shapes_at(0.01)
+    assert scan(0.2, 0.02).shapes_at(0.01) == (trend, (step,))  # the trend typical, both ok
+    assert scan(0.2, 0.005).shapes_at(0.01) == (trend, ())
+    assert scan(0.004, 0.3).shapes_at(0.01) == (step, ())
+    with pytest.raises(ValueError, match="alpha"):
+        between.shapes_at(0.0)
 
 
 @pytest.fixture(scope="module")

@@ -198,9 +198,11 @@ class CrossingScan:
     stated_p_residual: float = float("nan")
     left_out: tuple[tuple[float, float, float], ...] = ()
 
-    def _rivals(self) -> tuple[CrossingTest | None, CrossingTest | None, bool]:
+    def _rivals(self, alpha: float = _CHOICE_ALPHA
+                ) -> tuple[CrossingTest | None, CrossingTest | None, bool]:
         """The test found, its rival of the other shape along the same column (None where
-        there is none), and whether the rival explains the brackets about as well."""
+        there is none), and whether the rival explains the brackets about as well (the
+        shapes told apart at `alpha`)."""
         sig = [t for t in self.tests if t.significant]
         if not sig:
             return None, None, False
@@ -215,8 +217,8 @@ class CrossingScan:
         by_aic = (step, trend) if aic > 0 else (trend, step)
         if not np.isfinite(self.p_trend_fits):
             return (*by_aic, abs(aic) <= 2.0)
-        trend_ok = self.p_trend_fits >= _CHOICE_ALPHA
-        step_ok = self.p_step_fits >= _CHOICE_ALPHA
+        trend_ok = self.p_trend_fits >= alpha
+        step_ok = self.p_step_fits >= alpha
         if trend_ok == step_ok:
             # both explain them (or neither): the shape under whose own draws the observed
             # statistic is the more typical (the larger of the two Cox p-values)
@@ -247,8 +249,34 @@ class CrossingScan:
         (Burnham and Anderson, Model Selection and Multimodel Inference, 2002, sec. 2.6).
         A gel that softens steadily fits a step at its middle nearly as well at a
         crossing's noise."""
-        _, rival, alike = self._rivals()
-        return (rival,) if rival is not None and alike else ()
+        return self.shapes_at(_CHOICE_ALPHA)[1]
+
+    def shapes_at(self, alpha: float) -> tuple[CrossingTest | None, tuple[CrossingTest, ...]]:
+        """:attr:`found` and :attr:`equivalent` as they read with a step and a trend told
+        apart by Cox's test at `alpha` instead of :data:`_CHOICE_ALPHA` (0.05: the rule
+        before 2026-11-28; ``benchmarks/bench_shape_choice.py`` reads both).
+
+        Parameters
+        ----------
+        alpha : float
+            The level in (0, 1) below which a shape's Cox p-value (``p_trend_fits``,
+            ``p_step_fits``) takes it not to explain the brackets.
+
+        Returns
+        -------
+        found : CrossingTest or None
+        equivalent : tuple of CrossingTest
+            Empty or the other shape along the found column.
+
+        Raises
+        ------
+        ValueError
+            Where `alpha` is not in (0, 1).
+        """
+        if not 0.0 < alpha < 1.0:
+            raise ValueError(f"alpha must lie in (0, 1), got {alpha!r}")
+        found, rival, alike = self._rivals(alpha)
+        return found, ((rival,) if rival is not None and alike else ())
 
     def sentence(self) -> str:
         """What the crossing forces say, in one to three sentences."""
