@@ -52,20 +52,30 @@ def drawn_sizes(design, draws: int, lost: float, seed: int) -> np.ndarray:
     return np.array(out)
 
 
-def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def add_design_arguments(ap: argparse.ArgumentParser) -> None:
+    """A calibration's design on the command line: the folder, its ``--session`` and
+    ``--periods`` (the brackets' mean frame periods instead of its own)."""
     ap.add_argument("calibration", type=Path)
     ap.add_argument("--session", type=Path)
     ap.add_argument("--periods", type=float, help="plan with this bracket_periods instead "
                     "of the calibration's own")
+
+
+def design_of(a: argparse.Namespace):
+    """The design :func:`add_design_arguments`' arguments name."""
+    design = design_from_calibration(a.calibration, a.session)
+    return design if a.periods is None else replace(design, bracket_periods=a.periods)
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    add_design_arguments(ap)
     ap.add_argument("--lost", type=float, default=0.0, help="each press lost with this "
                     "probability")
     ap.add_argument("--draws", type=int, default=20)
     ap.add_argument("--seed", type=int, default=5)
     a = ap.parse_args(argv)
-    design = design_from_calibration(a.calibration, a.session)
-    if a.periods is not None:
-        design = replace(design, bracket_periods=a.periods)
+    design = design_of(a)
     r = drawn_sizes(design, a.draws, a.lost, a.seed)
     print(f"design: {len(design.depths_mm)} depths x {design.repeats}, brackets of "
           f"{design.bracket_periods:.3g} periods, presses lost with probability {a.lost:g}; "

@@ -30,15 +30,18 @@ trend equivalent in 10).
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 from collections import Counter
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
 from tactilevision.diagnosis import crossing_tests
-from tactilevision.planning import crossing_table, design_from_calibration
+from tactilevision.planning import crossing_table
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_bracket_spread import add_design_arguments, design_of
 
 #: A bracket's edges jittered by this share of its width (the scan's own null model:
 #: ``BRACKET_SOFTNESS`` of ``tactilevision.diagnosis``'s brackets).
@@ -90,10 +93,7 @@ def shape_counts(design, kind: str, size: float, after: float, draws: int, seed:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("calibration", type=Path)
-    ap.add_argument("--session", type=Path)
-    ap.add_argument("--periods", type=float, help="the brackets' mean frame periods "
-                    "instead of the calibration's own")
+    add_design_arguments(ap)
     ap.add_argument("--step", type=float, default=0.0664, help="relative stiffness step")
     ap.add_argument("--after", type=float, default=9.5, help="the step falls after this "
                     "press number")
@@ -103,9 +103,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seed", type=int, default=11, help="the step's tables' seed (the "
                     "softening's: one more)")
     a = ap.parse_args(argv)
-    design = design_from_calibration(a.calibration, a.session)
-    if a.periods is not None:
-        design = replace(design, bracket_periods=a.periods)
+    design = design_of(a)
     print(f"design: {len(design.depths_mm)} depths x {design.repeats}, brackets of "
           f"{design.bracket_periods:.3g} periods; {a.draws} tables each")
     for k, (kind, size) in enumerate((("step", a.step), ("trend", a.softening))):

@@ -11,6 +11,7 @@ import json
 import numpy as np
 import pytest
 
+from tactilevision import InputError
 from tactilevision.cli import main
 from tactilevision.diagnosis import (
     CrossingScan,
@@ -179,7 +180,7 @@ def test_the_shapes_are_told_apart_at_one_percent():
     assert scan(0.2, 0.02).shapes_at(0.01) == (trend, (step,))  # the trend typical, both ok
     assert scan(0.2, 0.005).shapes_at(0.01) == (trend, ())
     assert scan(0.004, 0.3).shapes_at(0.01) == (step, ())
-    with pytest.raises(ValueError, match="alpha"):
+    with pytest.raises(InputError, match="alpha"):
         between.shapes_at(0.0)
 
 

@@ -198,8 +198,7 @@ class CrossingScan:
     stated_p_residual: float = float("nan")
     left_out: tuple[tuple[float, float, float], ...] = ()
 
-    def _rivals(self, alpha: float = _CHOICE_ALPHA
-                ) -> tuple[CrossingTest | None, CrossingTest | None, bool]:
+    def _rivals(self, alpha: float) -> tuple[CrossingTest | None, CrossingTest | None, bool]:
         """The test found, its rival of the other shape along the same column (None where
         there is none), and whether the rival explains the brackets about as well (the
         shapes told apart at `alpha`)."""
@@ -239,7 +238,7 @@ class CrossingScan:
         shape not significant), Akaike's criterion on the brackets' likelihood (twice each
         shape's log-likelihood gain; the step pays 2 for its change point; Akaike, IEEE
         Trans. Autom. Control 19, 716, 1974)."""
-        return self._rivals()[0]
+        return self.shapes_at(_CHOICE_ALPHA)[0]
 
     @property
     def equivalent(self) -> tuple[CrossingTest, ...]:
@@ -270,11 +269,11 @@ class CrossingScan:
 
         Raises
         ------
-        ValueError
+        InputError
             Where `alpha` is not in (0, 1).
         """
         if not 0.0 < alpha < 1.0:
-            raise ValueError(f"alpha must lie in (0, 1), got {alpha!r}")
+            raise InputError(f"alpha must lie in (0, 1), got {alpha!r}")
         found, rival, alike = self._rivals(alpha)
         return found, ((rival,) if rival is not None and alike else ())
 
