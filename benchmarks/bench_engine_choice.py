@@ -11,7 +11,7 @@ more presses ``--model mlp``), each scored by its report on the presses it was n
 and prints each candidate's score there and the kept engine's gap to the best.
 
     python benchmarks/bench_engine_choice.py [--sensors taxim mini gelslim] [--presses 7]
-        [--selections 4] [--random K --seed S]
+        [--selections 4] [--random K --seed S] [--dump FILE]
 
 ``--random K`` draws K selections of ``--presses`` presses at random (seed ``--seed``)
 per sensor instead of the spread ones: fresh selections no rule was chosen on. Each row
@@ -21,7 +21,13 @@ and which candidate is the best on the others by the choice's own cost (angle +
 ``CAP_DEG`` x |inner cap|): where the candidates trade angle against cap, none may lie
 within both bounds of the best of each. Last, whether the choice's margin said the
 training presses told the kept engine from the runner-up (its 95 % interval excluding 0),
-and how often the kept engine was right where it said so.
+and how often the kept engine was right where it said so; and the kept engine's cost on
+the others less the best candidate's (0 where it is the best by the cost), with the
+selections where the best by the cost misses one of the two bounds (there the candidates
+trade angle against cap, and no choice by the cost meets both).
+``--dump FILE`` appends each selection's choice record (candidates, per-press scores of
+the folds, margin) and every candidate's score on the others as JSON lines, to try a
+rule on recorded selections before drawing fresh ones.
 
 Needs ``taxim`` (its GelSight presses, circles annotated by hand) and ``../shared/real``
 (the GelSight Mini and GelSlim 3.0 presses, circles detected).
@@ -69,6 +75,11 @@ def _score(report: dict) -> tuple[float, float]:
             float(np.sum(n * [x["inner_cap"] for x in b]) / n.sum()))
 
 
+def _cost(score: tuple[float, float]) -> float:
+    """The choice's own cost of a score on the others: angle + ``CAP_DEG`` x |inner cap|."""
+    return score[0] + CAP_DEG * abs(score[1])
+
+
 def _mean_choice(choice: dict) -> str:
     """The table the rule before 2026-11-27 kept: the folds' mean angle + CAP_DEG x the
     mean |cap| over the presses they scored (each fold's medians averaged, one press a
@@ -98,6 +109,9 @@ def main() -> None:
     ap.add_argument("--random", type=int, default=0,
                     help="K random selections a sensor instead of the spread ones")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--dump", type=Path, default=None,
+                    help="write every selection's choice record and its candidates' "
+                         "scores on the other presses here (JSON lines)")
     a = ap.parse_args()
     print("| sensor | presses | kept | candidates on the others: angle inside 0.8 (deg), "
           "inner cap | kept - best: angle, |cap| | within 0.3 deg and 3 % | the mean's "
@@ -105,6 +119,8 @@ def main() -> None:
     print("|---|---|---|---|---|---|---|---|---|")
     rng = np.random.default_rng(a.seed)
     hits = {"median": 0, "mean": 0, "any": 0, "n": 0, "cost": 0, "cv": 0}
+    excess: list[float] = []          # the kept engine's cost on the others less the best's
+    best_out = 0                      # the best by the cost outside the bounds
     sure = {"n": 0, "within": 0, "cost": 0}
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "o.npz"
@@ -131,8 +147,10 @@ def main() -> None:
                       for e, sc in scores.items()}
                 kept = scores[choice["chosen"]]
                 # the best by the choice's own cost (angle + CAP_DEG |cap|) on the others
-                by_cost = min(scores, key=lambda e: scores[e][0] + CAP_DEG * abs(scores[e][1]))
+                by_cost = min(scores, key=lambda e: _cost(scores[e]))
                 hits["cost"] += by_cost == choice["chosen"]
+                excess.append(_cost(kept) - _cost(scores[by_cost]))
+                best_out += not ok[by_cost]
                 told = bool(choice.get("margin") and choice["margin"]["told_apart"])
                 if told:
                     sure["n"] += 1
@@ -146,6 +164,10 @@ def main() -> None:
                 hits["median"] += ok[choice["chosen"]]
                 hits["mean"] += ok[mean]
                 hits["any"] += any(ok.values())
+                if a.dump:
+                    with a.dump.open("a") as fh:
+                        fh.write(json.dumps({"sensor": name, "presses": sel, "choice": choice,
+                                             "others": scores}) + "\n")
                 text = ", ".join(f"{k} {s[0]:.2f}, {100 * s[1]:+.1f} %"
                                  for k, s in scores.items())
                 print(f"| {name} | {sel} | {choice['chosen']} | {text} | {da:+.2f}, "
@@ -158,6 +180,11 @@ def main() -> None:
           f"choice {hits['mean']}; the folds' lowest cost (no undecided rule) {hits['cv']}; "
           f"some candidate {hits['any']}; the kept engine the best by "
           f"the cost on the others {hits['cost']} of {hits['n']}")
+    ex = np.asarray(excess)
+    print(f"the kept engine's cost on the others less the best's (deg): 0 in "
+          f"{np.count_nonzero(ex == 0)} of {ex.size}, mean {ex.mean():.2f}, over 0.3 in "
+          f"{np.count_nonzero(ex > 0.3)}, largest {ex.max():.2f}; the best by the cost "
+          f"outside the two bounds in {best_out} (no choice by the cost meets them there)")
     print(f"told apart (the margin's 95 % interval excludes 0) on {sure['n']} of {hits['n']}: "
           f"there within 0.3 deg and 3 % {sure['within']}, the best by the cost "
           f"{sure['cost']}")
