@@ -110,9 +110,11 @@ def main() -> None:
                     help="K random selections a sensor instead of the spread ones")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--dump", type=Path, default=None,
-                    help="write every selection's choice record and its candidates' "
+                    help="append every selection's choice record and its candidates' "
                          "scores on the other presses here (JSON lines)")
     a = ap.parse_args()
+    if a.dump and not a.dump.parent.is_dir():
+        ap.error(f"--dump {a.dump}: no folder {a.dump.parent}")
     print("| sensor | presses | kept | candidates on the others: angle inside 0.8 (deg), "
           "inner cap | kept - best: angle, |cap| | within 0.3 deg and 3 % | the mean's "
           "choice, within | best by the cost on the others | told apart |")
