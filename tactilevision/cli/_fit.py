@@ -423,6 +423,21 @@ def _run_indenter(args: argparse.Namespace, table: Measurements, path: Path,
         _write_json(obj, args.json)
     if args.json != "-":
         print("\n".join(lines))
+    return _verdict_status(obj, path)
+
+
+def _verdict_status(obj: dict, path: Path) -> int:
+    """A ball's or a ramp's exit status: its misfit's warning on stderr; 3 when E is not
+    identified (its interval spans more than a factor of e^2), else 0."""
+    misfit = obj.get("misfit") or {}
+    if misfit.get("warning"):
+        print(f"tactilevision fit: warning: {path}: {misfit['warning']}", file=sys.stderr)
+    if obj.get("E_identified") is False:
+        lo, hi = obj["E_ci95_mpa"]
+        print(f"tactilevision fit: error: {path}: E is not identified by these data (its "
+              f"interval [{lo:.4g}, {hi:.4g}] MPa spans more than a factor of 7.4; exit "
+              "status 3)", file=sys.stderr)
+        return 3
     return 0
 
 
@@ -460,7 +475,7 @@ def run(args: argparse.Namespace) -> int:
             _write_json(obj, args.json)
         if args.json != "-":
             print("\n".join(lines))
-        return 0
+        return _verdict_status(obj, path)
     table = read_measurements(path, thickness_mm=args.thickness_mm, radius_mm=args.radius_mm)
     shape = args.shape or table.indenter.get("shape", "flat_punch")
     if shape != "flat_punch":

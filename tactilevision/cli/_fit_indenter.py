@@ -14,7 +14,8 @@ from ..io import Measurements, read_ramp, sidecar_geometry
 from ..mechanics import IndenterFit, fit_indenter, fit_ramp, indenter_from_config
 
 __all__ = ["LAW_CHOICES", "add_arguments", "add_dome_argument", "depth_shared", "fit_laws",
-           "force_sd", "indenter_of", "run_indenter", "run_ramp", "summary_lines"]
+           "force_sd", "indenter_of", "note_lines", "nu_words", "run_indenter", "run_ramp",
+           "summary_lines"]
 
 #: ``--law`` choices: a material law, or ``auto`` (both fitted, the better one reported).
 LAW_CHOICES = ("auto", "neo_hookean", "linear")
@@ -174,8 +175,7 @@ def summary_lines(fit: IndenterFit, fits: dict[str, IndenterFit], why: str,
              + f", {fit.contact} contact",
              f"  law: {fit.law} ({why})",
              f"  E  = {fit.E_mpa:.4f} MPa  {pct} CI [{fit.E_ci95_mpa[0]:.4f}, "
-             f"{fit.E_ci95_mpa[1]:.4f}] MPa at nu = {fit.nu:.4g}"
-             + ("" if fit.nu_identified else " (stated: nu not identified)"),
+             f"{fit.E_ci95_mpa[1]:.4f}] MPa at nu = {fit.nu:.4g}" + nu_words(fit),
              f"  rmse = {fit.rmse_n * 1e3:.4g} mN; {_drift(fit, table.depth_mm)}"]
     if fit.nu_identified:
         lines.insert(3, f"  nu = {fit.nu:.4f}      {pct} CI [{fit.nu_ci95[0]:.4f}, "
@@ -189,8 +189,26 @@ def summary_lines(fit: IndenterFit, fits: dict[str, IndenterFit], why: str,
     lines.append("  apparent E per press (depth mm: MPa): " + ", ".join(
         f"{table.depth_mm[i]:.4g}: {fit.apparent_E_mpa[i]:.4f}" for i in order[:12])
         + (" ..." if order.size > 12 else ""))
-    lines += [f"  note: {n}" for n in fit.notes]
+    lines += note_lines(fit.notes)
     return lines
+
+
+def note_lines(notes: tuple[str, ...] | list[str]) -> list[str]:
+    """A fit's notes as summary lines: a note starting ``warning:`` (the model does not
+    explain the data to within their noise) as ``WARNING:``, first."""
+    warn = [f"  WARNING: {n.removeprefix('warning: ')}" for n in notes
+            if n.startswith("warning: ")]
+    return warn + [f"  note: {n}" for n in notes if not n.startswith("warning: ")]
+
+
+def nu_words(fit) -> str:
+    """What the summary says after E's nu: nothing where nu is identified, else that it is
+    stated, with the bound the presses put on it."""
+    if fit.nu_identified:
+        return ""
+    if fit.nu_bound:
+        return f" (stated: nu not identified; the presses say {fit.nu_bound}, a bound)"
+    return " (stated: nu not identified)"
 
 
 def run_indenter(args: argparse.Namespace, table: Measurements, path: Path,
@@ -230,8 +248,7 @@ def run_ramp(args: argparse.Namespace, path: Path) -> tuple[dict, list[str]]:
              f"  contact point z0 = {fit.contact_point_mm:.5f} mm  {pct} CI [{lo:.5f}, "
              f"{hi:.5f}] mm; baseline {fit.baseline_n * 1e3:.4g} mN",
              f"  E  = {fit.E_mpa:.4f} MPa  {pct} CI [{fit.E_ci95_mpa[0]:.4f}, "
-             f"{fit.E_ci95_mpa[1]:.4f}] MPa at nu = {fit.nu:.4g}"
-             + ("" if fit.nu_identified else " (stated: nu not identified)"),
+             f"{fit.E_ci95_mpa[1]:.4f}] MPa at nu = {fit.nu:.4g}" + nu_words(fit),
              f"  rmse = {fit.rmse_n * 1e3:.4g} mN"]
-    lines += [f"  note: {n}" for n in fit.notes]
+    lines += note_lines(fit.notes)
     return fit.to_json_dict(), lines

@@ -980,6 +980,14 @@ def _moduli_text(step: LadderStep) -> str:
             "is not identified: fit with --effects says which)")
 
 
+def _final_in_table(d: Diagnosis) -> bool:
+    """Whether the last rung of the ladder gives E and nu where its model has a beta (the
+    small-strain layer alone, ``--base layer``, has none to give them)."""
+    last = d.ladder[-1] if d.ladder else None
+    return (last is None or "large_deformation" not in last.model
+            or (math.isfinite(last.E_mpa) and math.isfinite(last.nu)))
+
+
 def _with_message(d: Diagnosis) -> Diagnosis:
     floor = d.noise_floor_n
     base = d.ladder[0]
@@ -1079,6 +1087,17 @@ def _closing(d: Diagnosis) -> list[str]:
             s.append("No effect of the gel's model is missing, but " + chain)
         elif coarse:
             s.append("Nothing shows above the noise, but " + coarse)
+        elif not _final_in_table(d):
+            s.append("Nothing shows above the noise, but the model gives no E or nu here (its "
+                     "beta lies outside what the FEM gives it: `fit` says OUT OF TABLE): the "
+                     "model does not describe these presses, so it cannot be said to explain "
+                     "them.")
+        elif not math.isfinite(d.noise_floor_n) and b is None:
+            s.append("Nothing shows above the residuals' own scatter, but the table has no "
+                     "noise floor (no repeated depths, no stated force or depth uncertainty): "
+                     "a misfit of the model cannot be told from noise here. Repeat depths, or "
+                     "give force_sem_n and depth_std_mm, before reading this as nothing "
+                     "missing.")
         else:
             s.append("Nothing is missing: the model explains the data to within its noise.")
     elif coarse:

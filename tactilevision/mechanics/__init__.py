@@ -38,7 +38,9 @@ Fit:
   :func:`sphere_force_ratio`, :func:`sphere_contact_ratio`), made from
   ``[indenter]`` by :func:`indenter_from_config`; :func:`fit_indenter` fits E
   (and nu where the presses pin it) to any indenter's presses ->
-  :class:`IndenterFit`.
+  :class:`IndenterFit`; :func:`assess_misfit` reads a fit's residuals against its
+  stated noise and along depth (:class:`Misfit`), and the fits carry it into their
+  intervals.
 - :func:`neo_hookean_constants` -- Abaqus C10, D1 from E, nu.
 - :func:`fit_relaxation` -- a standard linear solid fitted to the force over
   each press's hold (``holds.csv``) -> :class:`RelaxationFit`: g and tau,
@@ -80,6 +82,7 @@ from ._fit_model import fit_model
 from ._indenter import INDENTERS, FlatPunch, Indenter, Sphere, indenter_from_config
 from ._indenter_fit import IndenterFit, apparent_modulus, fit_indenter, json_ready, paule_mandel
 from ._kappa import HAYES_1972, KappaTable, kappa
+from ._misfit import MISFIT_ALPHA, Misfit, assess_misfit
 from ._model import IndentationModel, ModelFit, shared_groups
 from ._neohookean import neo_hookean_constants
 from ._ramp import RampFit, fit_ramp
@@ -121,6 +124,7 @@ __all__ = [
     "HAYES_1972",
     "INDENTERS",
     "MAX_W_OVER_H",
+    "MISFIT_ALPHA",
     "PAPER_BETA_RELATION",
     "RELAX_ALPHA",
     "TAU_HOLD_RATIO",
@@ -134,12 +138,14 @@ __all__ = [
     "Indenter",
     "IndenterFit",
     "KappaTable",
+    "Misfit",
     "ModelFit",
     "Param",
     "RampFit",
     "RelaxationFit",
     "Sphere",
     "apparent_modulus",
+    "assess_misfit",
     "beta",
     "beta_from_nu",
     "beta_relation",

@@ -367,6 +367,12 @@ def kappa_n(nu: float | np.ndarray, a_over_h: float | np.ndarray,
     n, r, x = np.broadcast_arrays(*(np.asarray(v, np.float64) for v in (nu, a_over_h, w_over_h)))
     data, wt, kn = _kappa_n_nodes(n, r, x, contact)
     along_w = PchipInterpolator(wt, kn, axis=2)
+    if n.size > 1 and np.all(n == n.flat[0]) and np.all(r == r.flat[0]):
+        # one nu and a/h (a ramp's or a table's depths): each depth's column is interpolated
+        # on its own, so all depths at once give the same numbers as the loop below
+        k_w = along_w(x.ravel())                                            # (A, N, M)
+        k_nu = PchipInterpolator(data["nu"], k_w, axis=1)(n.flat[0])        # (A, M)
+        return PchipInterpolator(data["a_over_h"], k_nu, axis=0)(r.flat[0]).reshape(n.shape)
     out = np.empty(n.shape)
     for idx in np.ndindex(n.shape):
         k_w = along_w(x[idx])                                       # (A, N)

@@ -12,7 +12,7 @@ would be over the nu the data allow beside it.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -20,6 +20,7 @@ from scipy import optimize, stats
 
 from .._checks import InputError, check_array, check_presses
 from ._indenter import Indenter
+from ._misfit import Misfit, assess_misfit, log_interval
 
 __all__ = ["IndenterFit", "apparent_modulus", "fit_indenter", "json_ready"]
 
@@ -28,6 +29,9 @@ __all__ = ["IndenterFit", "apparent_modulus", "fit_indenter", "json_ready"]
 NU_STATED = 0.5
 #: Widest nu interval still called identified.
 _NU_IDENTIFIED_WIDTH = 0.10
+#: Widest ratio of E's interval's ends still called identified: e^2, where the symmetric
+#: interval E +- t se would first reach zero (t se = E).
+_E_IDENTIFIED_RATIO = math.exp(2.0)
 
 
 @dataclass(frozen=True)
@@ -39,16 +43,19 @@ class IndenterFit:
     E_mpa : float
         Young's modulus at `nu`, MPa.
     E_ci95_mpa : (float, float)
-        Its interval at `confidence` (the profile likelihood over nu when nu is
-        identified; at the stated nu otherwise), widened to the fits at the
-        bounds of `depth_shared_mm` when given.
+        Its interval at `confidence`, in log E (it never reaches zero): the
+        profile likelihood over nu when nu is identified, at the stated nu
+        otherwise; widened by the misfit (:attr:`misfit`: the residuals' serial
+        correlation, and to the shallowest and deepest presses' apparent E where
+        it drifts with depth), then to the fits at the bounds of
+        `depth_shared_mm` when given.
     nu : float
         The fitted nu when `nu_identified`, else the stated one.
     nu_ci95 : (float, float)
         The profile interval of nu over the table's range (whether identified
         or not: it says what the presses allow).
     nu_identified : bool
-        The interval lies inside the table's range, away from its lower end,
+        The interval lies inside the table's range, away from both its ends,
         and is at most 0.10 wide.
     E_over_nu_ci_mpa : (float, float)
         E fitted at the ends of `nu_ci95`: what E would be over the nu the
@@ -73,6 +80,21 @@ class IndenterFit:
         freedom.
     confidence : float
     notes : tuple of str
+        What the fit did and found; a note starting ``warning:`` says the model does
+        not explain the presses to within their noise (:attr:`misfit`).
+    nu_bound : str or None
+        Where nu's interval reaches one end of the table's range and not the other:
+        the bound the presses put on nu (``'nu >= 0.4925'``); nu is then not
+        identified, and E is reported at the stated nu.
+    E_identified : bool
+        False when E's interval spans more than a factor of e^2 (7.4): where the
+        symmetric interval E +- t se would reach zero. E is then not a measurement;
+        ``fit`` exits with status 3.
+    misfit : Misfit or None
+        The residuals against the stated noise and along depth
+        (:func:`~tactilevision.mechanics.assess_misfit`): the Birge ratio, the
+        residuals' serial correlation and the apparent E's drift, and the factor
+        the intervals were widened by.
     """
 
     E_mpa: float
@@ -97,13 +119,19 @@ class IndenterFit:
     dof: int = 0
     confidence: float = 0.95
     notes: tuple[str, ...] = ()
+    nu_bound: str | None = None
+    E_identified: bool = True
+    misfit: Misfit | None = None
 
     def to_json_dict(self) -> dict[str, Any]:
         """JSON-ready dict (arrays as lists, NaN as None), with the keys every ``fit
         --json`` object carries (formats.md section 3): ``effects`` (none: a ball's
         fit has no catalogue effects), ``effect_params``, and ``c_n_per_mm`` and
-        ``beta`` (eq. 5's intercept and stiffening, a flat punch's: null here)."""
-        out = {k: json_ready(getattr(self, k)) for k in self.__dataclass_fields__}
+        ``beta`` (eq. 5's intercept and stiffening, a flat punch's: null here);
+        ``misfit`` as :meth:`Misfit.to_json_dict`."""
+        out = {k: json_ready(getattr(self, k)) for k in self.__dataclass_fields__
+               if k != "misfit"}
+        out["misfit"] = None if self.misfit is None else self.misfit.to_json_dict()
         out.update(c_n_per_mm=None, beta=None, effects=[], effect_params={})
         return out
 
@@ -191,6 +219,8 @@ def _profile(grid: np.ndarray, cols: list, P: np.ndarray, u: np.ndarray | None,
     var : (N,) ndarray
     sigma0 : float
     weighted : bool
+    stated : (N,) ndarray or None
+        The stated variances alone (depth and force), without sigma0^2; None unweighted.
     """
     n = P.size
     dof = n - 2
@@ -206,18 +236,22 @@ def _profile(grid: np.ndarray, cols: list, P: np.ndarray, u: np.ndarray | None,
         t = paule_mandel(g0, P, D, max(dof, 1))
         var = np.maximum(t + D, max((1e-12 * float(np.max(P))) ** 2, np.finfo(float).tiny))
         sigma0 = math.sqrt(t)
+        stated = D
     else:
         var = np.ones(n)
         sigma0 = math.sqrt(float(rss[k0]) / dof) if dof > 0 else math.nan
+        stated = None
     prof = np.array([(v, *_slope(g, P, var)) for v, (g, _) in zip(grid, cols, strict=True)])
-    return prof, var, sigma0, weighted
+    return prof, var, sigma0, weighted, stated
 
 
 def _read_profile(prof: np.ndarray, n: int, weighted: bool, confidence: float,
                   nu_range: tuple[float, float], nu: float | None, nu_stated: float,
-                  notes: list[str]) -> tuple:
-    """E, var_E, E's interval, nu, nu's interval and whether it is identified (module
-    docstring of :func:`fit_indenter`, Notes); notes appended to `notes`."""
+                  notes: list[str], scale: float = 1.0) -> tuple:
+    """E, var_E, E's interval, nu, nu's interval, whether nu is identified and the bound
+    the presses put on it (module docstring of :func:`fit_indenter`, Notes); notes
+    appended to `notes`. `scale` multiplies the residuals' variance (the misfit's factor
+    squared)."""
     lo, hi = nu_range
     dof = n - 2
     k_best = int(np.argmin(prof[:, 3]))
@@ -225,6 +259,7 @@ def _read_profile(prof: np.ndarray, n: int, weighted: bool, confidence: float,
     s2 = chi2_min / dof if dof > 0 else math.nan
     if weighted and dof > 0:
         s2 = max(s2, 1.0)        # the stated depth uncertainties explain the scatter
+    s2 *= scale
     if dof > 0 and s2 > 0:
         thr = float(stats.f.ppf(confidence, 1, dof)) * s2
         inside = prof[:, 3] - chi2_min <= thr
@@ -232,30 +267,45 @@ def _read_profile(prof: np.ndarray, n: int, weighted: bool, confidence: float,
     else:
         thr, inside, nu_ci = math.nan, np.ones(prof.shape[0], bool), (lo, hi)
         notes.append(f"{n} presses leave no degree of freedom to test nu: it is not identified")
-    # identified: inside the table's range, off its lower end, and narrow
-    nu_identified = bool(dof > 0 and nu_ci[0] > lo + 1e-9
+    at_lo, at_hi = nu_ci[0] <= lo + 1e-9, nu_ci[1] >= hi - 1e-9
+    # identified: inside the table's range, off both its ends, and narrow
+    nu_identified = bool(dof > 0 and not at_lo and not at_hi
                          and nu_ci[1] - nu_ci[0] <= _NU_IDENTIFIED_WIDTH)
+    bound = None
+    if dof > 0 and at_hi != at_lo:   # one end on the table's edge: a bound, not a value
+        bound = f"nu >= {nu_ci[0]:.4g}" if at_hi else f"nu <= {nu_ci[1]:.4g}"
     if nu_identified:
         nu_fit = float(prof[k_best, 0])
         sel = prof[inside]
         half = np.sqrt(np.maximum(thr - (sel[:, 3] - chi2_min), 0.0) * sel[:, 2])
-        E_ci = (float(np.min(sel[:, 1] - half)), float(np.max(sel[:, 1] + half)))
+        # in log E: the interval of a positive modulus never reaches zero
+        rel = half / sel[:, 1]
+        E_ci = (float(np.min(sel[:, 1] * np.exp(-rel))), float(np.max(sel[:, 1] * np.exp(rel))))
         E_fit, E_var = float(prof[k_best, 1]), float(prof[k_best, 2]) * s2
         if nu is not None and abs(nu - nu_fit) > 1e-9:
             notes.append(f"nu stated {nu:g}; the presses identify nu = {nu_fit:.3f} "
                          f"[{nu_ci[0]:.3f}, {nu_ci[1]:.3f}]: E is reported at the fitted nu")
-        return E_fit, E_var, E_ci, nu_fit, nu_ci, nu_identified
+        return E_fit, E_var, E_ci, nu_fit, nu_ci, nu_identified, bound
     k = int(np.argmin(np.abs(prof[:, 0] - nu_stated)))
     # one parameter (E) at the stated nu: its own scale, n - 1 degrees of freedom
     s2_1 = float(prof[k, 3]) / (n - 1)
     if weighted:
         s2_1 = max(s2_1, 1.0)
-    E_fit, E_var = float(prof[k, 1]), float(prof[k, 2]) * s2_1
-    half = float(stats.t.ppf(0.5 + confidence / 2, n - 1)) * math.sqrt(E_var)
-    notes.append(f"nu not identified: the presses allow nu from {nu_ci[0]:.3f} to "
-                 f"{nu_ci[1]:.3f} ({confidence:.0%} profile interval); E is reported at "
-                 f"the stated nu = {nu_stated:g}")
-    return E_fit, E_var, (E_fit - half, E_fit + half), nu_stated, nu_ci, False
+    E_fit, E_var = float(prof[k, 1]), float(prof[k, 2]) * s2_1 * scale
+    E_ci = log_interval(E_fit, math.sqrt(E_var), float(stats.t.ppf(0.5 + confidence / 2, n - 1)))
+    if bound is not None:
+        notes.append(f"nu not identified: {bound} ({confidence:.0%} profile interval "
+                     f"[{nu_ci[0]:.4g}, {nu_ci[1]:.4g}] reaches the table's edge, "
+                     f"{hi if at_hi else lo:g}: a bound, not a value); E is reported at the "
+                     f"stated nu = {nu_stated:g}")
+    else:
+        notes.append(f"nu not identified: the presses allow nu from {nu_ci[0]:.3f} to "
+                     f"{nu_ci[1]:.3f} ({confidence:.0%} profile interval); E is reported at "
+                     f"the stated nu = {nu_stated:g}")
+    if dof > 0 and not nu_ci[0] - 1e-9 <= nu_stated <= nu_ci[1] + 1e-9:
+        notes.append(f"the stated nu = {nu_stated:g} lies outside what the presses allow "
+                     f"([{nu_ci[0]:.4g}, {nu_ci[1]:.4g}]): E at it is not what they say")
+    return E_fit, E_var, E_ci, nu_stated, nu_ci, False, bound
 
 
 def _checked(depth_mm, force_n, indenter: Indenter, thickness_mm: float, law: str,
@@ -404,9 +454,20 @@ def fit_indenter(depth_mm: np.ndarray, force_n: np.ndarray, indenter: Indenter, 
     is where chi2(nu) - min chi2 <= F(1, n - 2) s^2, with s^2 = min chi2 / (n
     - 2) floored at 1 where depth uncertainties were given (a likelihood
     ratio with the scale estimated, as a Student t interval). E's interval at a
-    fixed nu is E +- t(n - 1) se; with nu identified it is the union over
-    the nu of the profile of E(nu) +- sqrt((threshold - excess(nu)) var_E(nu))
-    (the exact profile-likelihood interval of E).
+    fixed nu is E exp(-+ t(n - 1) se / E), the Student t interval of log E (a
+    modulus is positive: its interval never reaches zero); with nu identified
+    it is the union over the nu of the profile of E(nu) exp(-+ sqrt((threshold
+    - excess(nu)) var_E(nu)) / E(nu)). An interval whose profile reaches one end
+    of the table and not the other is a bound (`nu_bound`), never "identified".
+
+    The misfit (:func:`~tactilevision.mechanics.assess_misfit`) is then read on
+    the residuals at the reported nu: a serial correlation of the residuals
+    along depth (a law that cannot follow the curve) widens both intervals by
+    sqrt((1 + rho) / (1 - rho)), and a drift of the apparent E with depth
+    widens E's to hold the shallowest and deepest quarters' apparent E; a note
+    starting ``warning:`` names the factor and the drift. The Birge ratio on the
+    stated noise is named there too; the fit's scale (the residual variance, or
+    Paule and Mandel's sigma0) already carries it.
     """
     if nu_range is None:
         nu_range = indenter.nu_limits(law)
@@ -435,25 +496,59 @@ def fit_indenter(depth_mm: np.ndarray, force_n: np.ndarray, indenter: Indenter, 
         if np.any(f_sd < 0):
             i = int(np.argmax(f_sd < 0))
             raise InputError(f"press {i}: force_std_n = {f_sd[i]:g} must be >= 0")
-    prof, _, sigma0, weighted = _profile(grid, [columns(w, v) for v in grid], P, u, f_sd)
-    notes: list[str] = []
-    if costly:     # one parameter at the stated nu; nu not profiled
-        nu_fit, nu_ci, nu_identified = nu_stated, (lo, hi), False
-        s2_1 = float(prof[0, 3]) / (n - 1)
-        E_fit, E_var = float(prof[0, 1]), float(prof[0, 2]) * (max(s2_1, 1.0) if weighted
-                                                                  else s2_1)
-        half = float(stats.t.ppf(0.5 + confidence / 2, n - 1)) * math.sqrt(E_var)
-        E_ci, E_over = (E_fit - half, E_fit + half), (math.nan, math.nan)
-        notes.append(f"nu not profiled: each nu is a FEM sweep of this {indenter.shape} "
-                     f"(a finite pad); E is reported at the stated nu = {nu_stated:g}")
-    else:
-        E_fit, E_var, E_ci, nu_fit, nu_ci, nu_identified = _read_profile(
-            prof, n, weighted, confidence, (lo, hi), nu, nu_stated, notes)
+    prof, _, sigma0, weighted, stated = _profile(grid, [columns(w, v) for v in grid], P, u,
+                                                 f_sd)
+    t_q = float(stats.t.ppf(0.5 + confidence / 2, max(n - 1, 1)))
+    kw = {"thickness_mm": h, "law": law, "contact": contact}
+
+    def read(scale: float) -> tuple:
+        """The profile read with the residuals' variance times `scale`: E, var_E, E's and
+        nu's intervals, nu, identified, bound, E at nu's ends, notes."""
+        notes: list[str] = []
+        if costly:     # one parameter at the stated nu; nu not profiled
+            s2_1 = float(prof[0, 3]) / (n - 1)
+            E_fit = float(prof[0, 1])
+            E_var = float(prof[0, 2]) * (max(s2_1, 1.0) if weighted else s2_1) * scale
+            notes.append(f"nu not profiled: each nu is a FEM sweep of this {indenter.shape} "
+                         f"(a finite pad); E is reported at the stated nu = {nu_stated:g}")
+            return (E_fit, E_var, log_interval(E_fit, math.sqrt(E_var), t_q), nu_stated,
+                    (lo, hi), False, None, (math.nan, math.nan), notes)
+        E_fit, E_var, E_ci, nu_fit, nu_ci, ident, bound = _read_profile(
+            prof, n, weighted, confidence, (lo, hi), nu, nu_stated, notes, scale)
         ends = [int(np.argmin(np.abs(prof[:, 0] - v))) for v in nu_ci]
-        E_over = (float(min(prof[ends, 1])), float(max(prof[ends, 1])))
+        return (E_fit, E_var, E_ci, nu_fit, nu_ci, ident, bound,
+                (float(min(prof[ends, 1])), float(max(prof[ends, 1]))), notes)
+
+    def residuals(E_fit: float, nu_fit: float, ident: bool) -> tuple:
+        g = indenter.force(w, E_mpa=1.0, nu=nu_fit, **kw)
+        resid = P - E_fit * g
+        return g, resid, assess_misfit(
+            w, resid, P / g, noise_sd_n=None if stated is None else np.sqrt(stated),
+            n_params=2 if ident else 1)
+
+    # the misfit's factor read at the first reading's nu scales the residuals' variance of
+    # the second (the profile's threshold and E's variance), then is read again where the
+    # second puts nu
+    first = read(1.0)
+    factor = residuals(first[0], first[3], first[5])[2].factor
+    E_fit, E_var, E_ci, nu_fit, nu_ci, nu_identified, bound, E_over, notes = (
+        read(factor ** 2) if factor > 1 else first)
     dof = n - 2
     if not (np.isfinite(depth_shared_rel) and 0 <= depth_shared_rel < 1):
         raise InputError(f"depth_shared_rel must be within [0, 1), got {depth_shared_rel!r}")
+    g, resid, misfit = residuals(E_fit, nu_fit, nu_identified)
+    misfit = replace(misfit, factor=factor)
+    pred = E_fit * g
+    if misfit.drifts:
+        E_ci = (min(E_ci[0], misfit.E_shallow_mpa, misfit.E_deep_mpa),
+                max(E_ci[1], misfit.E_shallow_mpa, misfit.E_deep_mpa))
+    if misfit.warning:
+        notes.append(f"warning: {misfit.warning}")
+    E_identified = bool(E_ci[0] > 0 and E_ci[1] / E_ci[0] < _E_IDENTIFIED_RATIO)
+    if not E_identified:
+        notes.append(f"E not identified by these presses: its {confidence:.0%} interval "
+                     f"[{E_ci[0]:.4g}, {E_ci[1]:.4g}] MPa spans more than a factor of "
+                     f"{_E_IDENTIFIED_RATIO:.3g}")
     shared = np.asarray(depth_shared_mm, np.float64)
     if np.any(shared > 0) or depth_shared_rel > 0:
         def refit(ws: np.ndarray) -> IndenterFit:
@@ -463,10 +558,6 @@ def fit_indenter(depth_mm: np.ndarray, force_n: np.ndarray, indenter: Indenter, 
 
         E_ci, nu_ci = _shared_hull(refit, w, shared, depth_shared_rel, reach, E_ci, nu_ci,
                                    notes)
-    kw = {"nu": nu_fit, "thickness_mm": h, "law": law, "contact": contact}
-    g = indenter.force(w, E_mpa=1.0, **kw)
-    pred = E_fit * g
-    resid = P - pred
     k_nu = int(np.argmin(np.abs(prof[:, 0] - nu_fit)))
     if weighted:
         notes.append("errors in both variables: effective variance with the stated depth "
@@ -479,4 +570,6 @@ def fit_indenter(depth_mm: np.ndarray, force_n: np.ndarray, indenter: Indenter, 
         contact=contact, n_presses=n, rmse_n=float(np.sqrt(np.mean(resid ** 2))),
         residuals_n=resid, predicted_n=pred, apparent_E_mpa=P / g,
         sigma0_n=sigma0, chi2=float(prof[k_nu, 3]), dof=dof,
-        confidence=confidence, notes=tuple(notes))
+        confidence=confidence, notes=tuple(notes), nu_bound=bound, E_identified=E_identified,
+        misfit=misfit)
+

@@ -36,6 +36,7 @@ from scipy import optimize, stats
 from .._checks import InputError, check_array, check_positive
 from ._indenter import Indenter
 from ._indenter_fit import NU_STATED, IndenterFit, fit_indenter, json_ready
+from ._misfit import serial_correlation
 
 __all__ = ["MAX_RAMP_PRESSES", "RampFit", "fit_ramp"]
 
@@ -116,11 +117,25 @@ class RampFit:
     confidence: float = 0.95
     notes: tuple[str, ...] = ()
 
+    @property
+    def nu_bound(self) -> str | None:
+        """The bound the ramp puts on nu where its interval reaches the table's edge
+        (:attr:`IndenterFit.nu_bound`)."""
+        return self.indenter_fit.nu_bound
+
+    @property
+    def E_identified(self) -> bool:
+        """Whether E's interval is a measurement (:attr:`IndenterFit.E_identified`)."""
+        return self.indenter_fit.E_identified
+
     def to_json_dict(self) -> dict[str, Any]:
-        """JSON-ready dict (arrays as lists, NaN as None, the fit of E nested)."""
+        """JSON-ready dict (arrays as lists, NaN as None, the fit of E nested; its
+        ``nu_bound``, ``E_identified`` and ``misfit`` repeated at the top)."""
         out = {k: json_ready(getattr(self, k)) for k in self.__dataclass_fields__
                if k != "indenter_fit"}
         out["indenter_fit"] = self.indenter_fit.to_json_dict()
+        for k in ("nu_bound", "E_identified", "misfit"):
+            out[k] = out["indenter_fit"][k]
         return out
 
 
@@ -226,6 +241,11 @@ def _rss(z: np.ndarray, P: np.ndarray, z0s: np.ndarray, tab: _Tables
     return np.maximum(rss, 0.0), F0, E
 
 
+def _g_at(w: np.ndarray, tab: _Tables, m: int) -> np.ndarray:
+    """g(w) of the tables' nu number `m`, linear between the table's depths (0 for w <= 0)."""
+    return np.interp(w, tab.w, tab.g[m], left=0.0)
+
+
 def _refine(grid: np.ndarray, rss: np.ndarray, at: Callable[[float], float]
             ) -> tuple[float, float]:
     """The minimum of a profile known on `grid`: Brent's bounded search about its best node."""
@@ -251,7 +271,14 @@ def _scan(z: np.ndarray, P: np.ndarray, L: float, U: float, tab: _Tables,
 
     z0, rmin = _refine(grid, rss, at)
     dof = z.size - (3 if tab.nu.size == 1 else 4)
-    thr = float(stats.f.ppf(confidence, 1, dof)) * rmin / dof
+    # residuals that run along the travel (a law that does not follow the curve) carry
+    # fewer independent points than the ramp holds: the threshold grows by their factor^2
+    r, F0, E = _rss(z, P, np.array([z0]), tab)
+    m = int(np.argmin(r[0]))
+    order = np.argsort(z, kind="stable")
+    resid = P - F0[0, m] - E[0, m] * _g_at(z - z0, tab, m)
+    inflation = serial_correlation(resid[order])[2] ** 2
+    thr = float(stats.f.ppf(confidence, 1, dof)) * rmin / dof * inflation
     excess = rss - rmin - thr
 
     def end(side: int) -> tuple[float, bool]:
@@ -267,8 +294,6 @@ def _scan(z: np.ndarray, P: np.ndarray, L: float, U: float, tab: _Tables,
                                      xtol=1e-9)), False
 
     (lo, lo_edge), (hi, hi_edge) = end(-1), end(+1)
-    r, F0, E = _rss(z, P, np.array([z0]), tab)
-    m = int(np.argmin(r[0]))
     return _Profile(z0, lo, hi, float(F0[0, m]), float(E[0, m]), float(tab.nu[m]), m, rmin,
                     dof, lo_edge, hi_edge)
 
@@ -382,6 +407,35 @@ def _checked(displacement_mm: np.ndarray, force_n: np.ndarray, indenter: Indente
             why)
 
 
+def _edge_reason(z: np.ndarray, P: np.ndarray, prof: _Profile, L: float, z_rise: float,
+                 shape: str, name: str) -> str:
+    """Why a contact point whose interval reaches the ramp's first point cannot be fitted:
+    the ramp starts in contact, or (its force flat for a stretch of travel before it rises)
+    the law cannot follow the curve."""
+    before = z < z_rise
+    travel = float(np.ptp(z[before])) if before.any() else 0.0
+    # flat: no rise of the force along the first half of the travel before z_rise (the
+    # second may hold the contact's toe) that its scatter does not explain
+    first = z < float(np.min(z)) + 0.5 * travel
+    rising = (first.sum() >= _MIN_LOADING // 2 and travel > 0
+              and (line := stats.linregress(z[first], P[first])).slope > 0
+              and line.pvalue < 0.01)
+    if before.sum() < _MIN_LOADING or not travel > 0 or rising:
+        return (f"{name} starts in contact, or too close to it: its contact point's interval "
+                f"reaches its first point ({L:.4g} mm), so the force before contact, the "
+                "baseline, is not seen; record the approach from before the indenter touches")
+    sd = _noise(P)
+    rms = math.sqrt(prof.rss / prof.dof) if prof.dof > 0 else math.nan
+    times = f", {rms / sd:.3g} times the force's noise ({sd * 1e3:.3g} mN)" if sd > 0 else ""
+    return (f"{name}: the {shape} law cannot follow this curve: its force stays at its "
+            f"baseline for {travel:.3g} mm of travel ({int(before.sum())} points) before it "
+            f"rises at {z_rise:.4g} mm, so it does not start in contact, yet the law puts the "
+            f"contact point's interval at the first point fitted ({L:.4g} mm), with a residual "
+            f"of {rms * 1e3:.3g} mN rms{times}: the indenter's shape or size, the gel's "
+            "thickness or the material law is not the rig's (a curve near-linear in depth is "
+            "a flat punch's, not a ball's)")
+
+
 def _fit_pass(z: np.ndarray, P: np.ndarray, indenter: Indenter, tab: _Tables, *, h: float,
               law: str, contact: str, nu: float | None, confidence: float, limit: float,
               why: str, z_rise: float, name: str) -> tuple:
@@ -394,10 +448,7 @@ def _fit_pass(z: np.ndarray, P: np.ndarray, indenter: Indenter, tab: _Tables, *,
     if not rise > _RISE_SDS * math.sqrt(prof.rss / prof.dof):
         raise InputError(past)
     if prof.lo_edge:
-        raise InputError(f"{name} starts in contact, or too close to it: its contact point's "
-                         f"interval reaches its first point ({L:.4g} mm), so the force before "
-                         "contact, the baseline, is not seen; record the approach from before "
-                         "the indenter touches")
+        raise InputError(_edge_reason(z, P, prof, L, z_rise, indenter.shape, name))
     notes: list[str] = []
     if prof.hi_edge:
         notes.append(f"the contact point's interval reaches the last {_MIN_CONTACT} points "
@@ -487,9 +538,14 @@ def fit_ramp(displacement_mm: np.ndarray, force_n: np.ndarray, indenter: Indente
     wmax = limit if math.isfinite(limit) else float(zl.max() - zl.min())
     kw = {"h": h, "law": law, "contact": contact, "nu": nu, "confidence": confidence,
           "limit": limit, "why": why, "z_rise": z_rise, "name": name}
-    tab = _tables(indenter, wmax, [NU_STATED if nu is None else float(nu)], h, law, contact)
+    # the stated nu's default lies inside the indenter's tables (a flat punch's finite-strain
+    # table stops at 0.499)
+    nu0 = min(NU_STATED, indenter.nu_limits(law)[1]) if nu is None else float(nu)
+    tab = _tables(indenter, wmax, [nu0], h, law, contact)
     keep, prof, L, U, w, F, fit, notes = _fit_pass(zl, Pl, indenter, tab, **kw)
-    if fit.nu_identified:   # z0 and nu together: the contact point profiled over nu too
+    if fit.nu_identified or fit.nu_bound is not None:
+        # the ramp says something of nu (identified, or bounded by the table's edge at the
+        # stated nu's contact point, which a wrong nu drags): z0 and nu together
         coarse = _tables(indenter, wmax, np.round(np.linspace(*indenter.nu_limits(law), 21), 6),
                          h, law, contact)
         window = _nu_window(zl[keep], Pl[keep], L, U, coarse, confidence)

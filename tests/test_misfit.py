@@ -1,0 +1,208 @@
+"""The misfit enters every interval: the Birge ratio, the residuals' serial correlation and
+the apparent E's drift (mechanics.assess_misfit), E's interval in log E, nu on a table's
+edge a bound, and the refusals' true causes (issue: right or refused on real recordings).
+
+The laws here are closed forms written in this file (no table of ours in the loop)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import ClassVar
+
+import numpy as np
+import pytest
+
+from tactilevision import InputError
+from tactilevision.diagnosis import diagnose
+from tactilevision.mechanics import (
+    FlatPunch,
+    Indenter,
+    assess_misfit,
+    fit_indenter,
+    fit_ramp,
+)
+from tactilevision.mechanics._misfit import log_interval, serial_correlation
+
+
+@dataclass(frozen=True)
+class HertzBall(Indenter):
+    """Hertz's half-space, P = 4/3 E/(1 - nu^2) R^1/2 w^3/2, with a nu-dependent layer
+    term (1 + k chi), chi = sqrt(R w)/h, k = 0.88 + 1.3 (nu - 0.3): a closed form whose
+    curvature tells nu apart (the first-order term of a bonded layer)."""
+
+    radius_mm: float
+    shape: ClassVar[str] = "hertz_ball"
+    contacts: ClassVar[tuple[str, ...]] = ("frictionless",)
+    observes: ClassVar[str] = "nothing (a test law)"
+
+    def reach_mm(self, thickness_mm, law="neo_hookean"):
+        return 0.5 * thickness_mm
+
+    def force(self, depth_mm, *, E_mpa, nu, thickness_mm, law="neo_hookean", contact=None):
+        w = np.asarray(depth_mm, float)
+        chi = np.sqrt(self.radius_mm * w) / thickness_mm
+        k = 0.88 + 1.3 * (nu - 0.3)
+        return 4 / 3 * E_mpa / (1 - nu**2) * np.sqrt(self.radius_mm) * w**1.5 * (1 + k * chi)
+
+    def contact_radius(self, depth_mm, *, nu, thickness_mm, law="neo_hookean", contact=None):
+        return np.sqrt(self.radius_mm * np.asarray(depth_mm, float))
+
+
+BALL = HertzBall(3.0)
+
+
+def test_white_residuals_on_a_flat_profile_raise_nothing():
+    """Residuals drawn white at their stated sd, apparent E flat: no warning, factor 1,
+    the Birge ratio near 1."""
+    rng = np.random.default_rng(0)
+    w = np.linspace(0.1, 1.0, 40)
+    sd = np.full(w.size, 0.01)
+    r = sd * rng.standard_normal(w.size)
+    m = assess_misfit(w, r, 0.3 + 0.0 * w + 1e-4 * rng.standard_normal(w.size),
+                      noise_sd_n=sd, n_params=1)
+    assert m.warning is None and m.factor == 1.0
+    assert not m.drifts and not m.beyond_noise
+    assert m.birge_ratio == pytest.approx(1.0, abs=0.3)
+
+
+def test_a_law_that_cannot_follow_the_curve_widens_by_its_serial_correlation():
+    """Residuals that run in one long wave along depth (a wrong law): lag-1 correlation
+    near 1, the factor sqrt((1 + rho) / (1 - rho)) applied and named."""
+    w = np.linspace(0.1, 1.0, 100)
+    r = 0.01 * np.sin(2 * np.pi * w)
+    m = assess_misfit(w, r, np.full(w.size, 0.3))
+    rho = m.correlation
+    assert rho > 0.9
+    # capped at sqrt(n): one independent residual left
+    assert m.factor == pytest.approx(min(math.sqrt((1 + rho) / (1 - rho)), 10.0), rel=1e-9)
+    assert "lag-1 correlation" in m.warning and f"x{m.factor:.2g}" in m.warning
+    # a white sequence of the same size is not widened
+    assert serial_correlation(np.random.default_rng(1).standard_normal(100))[2] == 1.0
+
+
+def test_residuals_beyond_the_stated_noise_give_the_birge_ratio():
+    """Residuals five times their stated sd: R_B = 5 (to the draw), chi2's p tiny; applied
+    where the fit had not carried it, named only where it had."""
+    rng = np.random.default_rng(2)
+    w = np.linspace(0.1, 1.0, 30)
+    r = rng.standard_normal(w.size)
+    r *= 0.05 / np.sqrt(np.sum(r**2) / (w.size - 2))      # exactly 5 x 0.01 in chi2 / dof
+    flat = np.full(w.size, 0.3)
+    m = assess_misfit(w, r, flat, noise_sd_n=np.full(w.size, 0.01), carried=False)
+    assert m.birge_ratio == pytest.approx(5.0, rel=1e-9)
+    assert m.beyond_noise and m.chi2_p < 1e-10
+    assert m.factor == pytest.approx(5.0 * max(1.0, serial_correlation(r)[2]), rel=1e-9)
+    carried = assess_misfit(w, r, flat, noise_sd_n=np.full(w.size, 0.01))
+    assert carried.factor == pytest.approx(serial_correlation(r)[2])
+    assert "carry that scatter" in carried.warning
+
+
+def test_feats_like_drift_is_found_on_four_points():
+    """Four presses whose apparent E falls 21 % (the FEATS points read by the linear law):
+    the drift is found at 5 %, the quarters are the end presses."""
+    w = np.array([0.5, 1.0, 1.5, 2.0])
+    e = np.array([0.4649, 0.4177, 0.3995, 0.3671])
+    m = assess_misfit(w, np.zeros(4), e, n_params=1)
+    assert m.drifts and m.drift_p == pytest.approx(0.0149, abs=0.001)
+    assert m.drift == pytest.approx(0.3671 / 0.4649 - 1)
+    assert (m.E_shallow_mpa, m.E_deep_mpa) == (0.4649, 0.3671)
+    assert "-21.0 %" in m.warning
+
+
+def test_log_interval_never_reaches_zero():
+    assert log_interval(1.0, 1.0, 2.0) == pytest.approx((math.exp(-2), math.exp(2)))
+    lo, hi = log_interval(5.43, 0.01, 1.96)
+    assert (lo, hi) == pytest.approx((5.43 - 0.0196, 5.43 + 0.0196), rel=1e-4)
+
+
+def test_three_scattered_presses_give_no_modulus():
+    """The golf ball's case: three presses whose forces scatter as much as they rise. The
+    interval is in log E (never through zero) and E is said not identified."""
+    w = np.array([0.2, 0.25, 0.3])
+    P = BALL.force(w, E_mpa=0.2, nu=0.5, thickness_mm=5.0) * np.array([0.3, 2.5, 0.6])
+    f = fit_indenter(w, P, BALL, thickness_mm=5.0, nu=0.5)
+    assert f.E_ci95_mpa[0] > 0
+    assert not f.E_identified
+    assert any(n.startswith("E not identified") for n in f.notes)
+    assert f.to_json_dict()["E_identified"] is False
+
+
+def test_nu_on_the_table_edge_is_a_bound():
+    """Ball presses drawn at nu = 0.5, the top of the range: the profile reaches the edge,
+    nu is reported as a bound ('nu >= ...'), never identified; E at the stated nu holds the
+    truth."""
+    rng = np.random.default_rng(4)
+    w = np.repeat(np.linspace(0.1, 1.0, 10), 3)
+    P = BALL.force(w, E_mpa=0.3, nu=0.5, thickness_mm=2.0) + 0.002 * rng.standard_normal(w.size)
+    f = fit_indenter(w, P, BALL, thickness_mm=2.0, nu_range=(0.3, 0.5))
+    assert not f.nu_identified
+    assert f.nu_bound is not None and f.nu_bound.startswith("nu >= ")
+    assert float(f.nu_bound.split()[-1]) == pytest.approx(f.nu_ci95[0])
+    assert f.nu_ci95[1] == pytest.approx(0.5)
+    assert f.E_ci95_mpa[0] <= 0.3 <= f.E_ci95_mpa[1]
+    assert any("a bound, not a value" in n for n in f.notes)
+
+
+def _ramp(z0: float = 0.0, noise: float = 2e-4, seed: int = 0):
+    """A ramp of a flat punch's near-linear curve: 0.3 mm flat, then P = k (z - z0)."""
+    rng = np.random.default_rng(seed)
+    z = np.linspace(-0.3, 1.0, 651)
+    P = 0.01 + 0.45 * np.clip(z - z0, 0, None) + noise * rng.standard_normal(z.size)
+    return z, P
+
+
+def test_a_ramp_the_ball_law_cannot_follow_is_refused_for_that_reason():
+    """A near-linear ramp (a flat punch's) fitted as a ball: refused because the law cannot
+    follow the curve, with its residual against the force's noise, never as 'starts in
+    contact' (its first 0.3 mm are flat at the baseline)."""
+    z, P = _ramp()
+    with pytest.raises(InputError) as err:
+        fit_ramp(z, P, BALL, thickness_mm=5.0, source="bench/ramp.csv")
+    msg = str(err.value)
+    assert msg.startswith("bench/ramp.csv: the hertz_ball law cannot follow this curve")
+    assert "starts in contact" not in msg
+    assert "times the force's noise" in msg
+
+
+def test_a_ramp_that_starts_in_contact_is_still_said_so():
+    """The same ball law on its own curve started past the contact point: 'starts in
+    contact'."""
+    rng = np.random.default_rng(5)
+    z = np.linspace(0.25, 1.0, 300)
+    P = 0.03 + BALL.force(z, E_mpa=0.5, nu=0.5, thickness_mm=2.0) + 2e-3 * rng.standard_normal(
+        z.size)
+    with pytest.raises(InputError, match="starts in contact"):
+        fit_ramp(z, P, BALL, thickness_mm=2.0)
+
+
+def test_a_flat_punch_ramp_at_the_default_nu_lies_inside_its_table():
+    """The finite-strain flat punch's table stops at nu = 0.499: a ramp fitted with no nu
+    stated is read at 0.499 (was refused: 'nu = 0.5 is outside the FEM kappa_n table')."""
+    z, P = _ramp(noise=2e-4)
+    f = fit_ramp(z, P, FlatPunch(2.0), thickness_mm=5.0, law="neo_hookean")
+    assert f.nu == pytest.approx(0.499)
+    assert f.E_mpa > 0
+
+
+def _table(depth: np.ndarray, force: np.ndarray) -> dict[str, np.ndarray]:
+    return {"depth_mm": depth, "force_n": force}
+
+
+def test_diagnose_says_nothing_missing_only_with_a_noise_floor_and_in_the_table():
+    """25 distinct depths (no replicate), no stated noise: not 'Nothing is missing' but that
+    the table has no noise floor; a table whose beta is out of the FEM's: that the model
+    gives no E or nu."""
+    rng = np.random.default_rng(3)
+    w = np.linspace(0.05, 0.6, 25)
+    punch = FlatPunch(2.5)
+    nh = punch.force(w, E_mpa=0.2, nu=0.45, thickness_mm=3.0, law="neo_hookean")
+    d = diagnose(_table(w, nh * (1 + 0.002 * rng.standard_normal(w.size))), thickness_mm=3.0,
+                 radius_mm=2.5, rules_out=False)
+    assert "Nothing is missing" not in d.message
+    assert "no noise floor" in d.message
+    lin = punch.force(w, E_mpa=0.2, nu=0.45, thickness_mm=3.0, law="linear")
+    d = diagnose(_table(w, lin * (1 + 0.002 * rng.standard_normal(w.size))), thickness_mm=3.0,
+                 radius_mm=2.5, rules_out=False)
+    assert "Nothing is missing" not in d.message
+    assert "OUT OF TABLE" in d.message
