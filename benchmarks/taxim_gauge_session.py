@@ -3,7 +3,9 @@
     python benchmarks/taxim_gauge_session.py OUT_DIR [--presses N | --repeats K]
         [--fps F] [--seed S] [--no-shadow] [--taxim-contact-scale X]
         [--theta DEG] [--offset-mm R] [--direction-deg PHI] [--length-mm W]
-        [--overshoot-mm LO HI] [--progress]
+        [--overshoot-mm LO HI] [--hold-s LO HI] [--mark-flank-deg DEG]
+        [--approach-mm-s V] [--clock-offset-s T] [--force-rate-hz R]
+        [--c-n-per-mm C] [--beta B] [--progress]
 
 Writes a session folder in the project's public format (``session.toml``,
 ``reference.png``, ``frames/``, ``frames.csv``, ``forces.csv``,
@@ -180,15 +182,25 @@ def _pixel_grid_mm(shape=SHAPE, mm_per_px=MM_PER_PX):
 MARK_WIDTH_MM = 0.15
 
 
+#: Half-width of the base of a drawn mark's ridge (``mark_flank_deg > 0``), mm: a small V
+#: ridge whose crest lies at the land's level and whose flanks fall at the mark's flank
+#: angle to this half-width, the block relieved beyond it.
+MARK_RIDGE_HALF_MM = 0.5
+
+
 def gauge_height_map(x_mm: float, y_mm: float, w0_mm: float, *, radius_mm=INDENTER_RADIUS_MM,
                      offset_mm=7.5, direction_deg=0.0, theta_deg=5.0, length_mm=3.0,
-                     relief_mm=RELIEF_MM, shape=SHAPE, mm_per_px=MM_PER_PX) -> np.ndarray:
+                     relief_mm=RELIEF_MM, shape=SHAPE, mm_per_px=MM_PER_PX,
+                     mark_flank_deg=0.0) -> np.ndarray:
     """Taxim object height map (mm from the gel's highest point; smaller = closer to the camera).
 
     Indenter face 0 inside the circle of ``radius_mm`` about (x_mm, y_mm); the
     bevel's crest w0 on the line u = 0 (u along ``direction_deg`` measured from
     ``offset_mm``), |v| <= length/2; its flanks w0 + |u| tan(theta); the rest
-    of the block w0 + relief. Pixel centres are sampled (no anti-aliasing).
+    of the block w0 + relief. With ``theta_deg = 0`` a drawn mark: a line
+    :data:`MARK_WIDTH_MM` wide at w0, or with ``mark_flank_deg > 0`` a V ridge
+    w0 + |u| tan(mark_flank) for |u| <= :data:`MARK_RIDGE_HALF_MM`. Pixel
+    centres are sampled (no anti-aliasing).
     """
     X, Y = _pixel_grid_mm(shape, mm_per_px)
     X = X - x_mm
@@ -199,6 +211,12 @@ def gauge_height_map(x_mm: float, y_mm: float, w0_mm: float, *, radius_mm=INDENT
     h = np.full(shape, w0_mm + relief_mm)
     if theta_deg > 0:
         ridge = w0_mm + np.abs(u) * math.tan(math.radians(theta_deg))
+    elif mark_flank_deg > 0:
+        # a drawn mark with flanks: a small V ridge, crest at the land's level, its contact
+        # growing from nothing at w0 as a band |u| <= delta / tan(flank)
+        ridge = np.where(np.abs(u) <= MARK_RIDGE_HALF_MM,
+                         w0_mm + np.abs(u) * math.tan(math.radians(mark_flank_deg)),
+                         w0_mm + relief_mm)
     else:
         # a mark, not a vernier: a line MARK_WIDTH_MM wide at the land's level (w0 behind
         # the indenter face), whose contact shows once the press passes w0
@@ -238,10 +256,10 @@ def press_positions_region(*, offset_mm=7.5, direction_deg=0.0, length_mm=3.0, s
             "y_mm": [round(float(Y[ok].min()), 4), round(float(Y[ok].max()), 4)]}
 
 
-def force_n(w_mm):
+def force_n(w_mm, c_n_per_mm=C_N_PER_MM, beta=BETA):
     """Normal force, eq. 5 of the in-situ calibration paper: P = c w (1 + beta w / h)."""
     w = np.maximum(np.asarray(w_mm, dtype=float), 0.0)
-    return C_N_PER_MM * w * (1.0 + BETA * w / GEL_THICKNESS_MM)
+    return c_n_per_mm * w * (1.0 + beta * w / GEL_THICKNESS_MM)
 
 
 def _depth(t, p) -> np.ndarray:
@@ -294,13 +312,15 @@ def _taxim_version() -> str:
 
 
 def _schedule(rng, rng_pos, n_presses, repeats, overshoot_mm, offset_mm, direction_deg,
-              length_mm, hold_s=(HOLD_S, HOLD_S), rng_hold=None):
+              length_mm, hold_s=(HOLD_S, HOLD_S), rng_hold=None, approach_mm_s=None,
+              law=(C_N_PER_MM, BETA)):
     """Chronological presses: indenter, overshoot, position and times (camera clock).
 
     Order, waits and overshoots come from ``rng``, positions from ``rng_pos``,
     hold lengths (uniform in ``hold_s``) from ``rng_hold``: sessions of one seed
     share their indenters, overshoots and timing whatever the bevel geometry, and
-    a constant hold draws nothing.
+    a constant hold draws nothing. The approach lasts :data:`APPROACH_S`, or runs at
+    ``approach_mm_s`` (the stage's speed, mm/s) where given.
     """
     k = len(DEPTHS_MM)
     if n_presses is None:
@@ -328,12 +348,13 @@ def _schedule(rng, rng_pos, n_presses, repeats, overshoot_mm, offset_mm, directi
                 else float(rng_hold.uniform(*hold_s)))
         w0 = DEPTHS_MM[int(ind)]
         depth = round(w0 + delta, 5)
+        approach = APPROACH_S if approach_mm_s is None else depth / float(approach_mm_s)
         p = {"press": i, "indenter": int(ind), "w0_mm": w0, "overshoot_mm": delta,
-             "depth_mm": depth, "force_n": round(float(force_n(depth)), 6),
+             "depth_mm": depth, "force_n": round(float(force_n(depth, *law)), 6),
              "x_mm": x, "y_mm": y, "t_start_s": t0,
-             "hold_from_s": round(t0 + APPROACH_S, 4),
-             "hold_to_s": round(t0 + APPROACH_S + hold, 4),
-             "release_end_s": round(t0 + APPROACH_S + hold + RELEASE_S, 4),
+             "hold_from_s": round(t0 + approach, 4),
+             "hold_to_s": round(t0 + approach + hold, 4),
+             "release_end_s": round(t0 + approach + hold + RELEASE_S, 4),
              "wait_s": round(wait, 4)}
         presses.append(p)
         t_prev = p["release_end_s"]
@@ -353,7 +374,8 @@ _TOML_COMMENTS = {
 }
 
 
-def _session_toml(offset_mm, direction_deg, theta_deg, length_mm) -> str:
+def _session_toml(offset_mm, direction_deg, theta_deg, length_mm,
+                  force_rate_hz=FORCE_RATE_HZ) -> str:
     depths = ", ".join(f"{d:.2f}" for d in DEPTHS_MM)
     bevel = [("bevel_offset_mm", repr(float(offset_mm))),
              ("bevel_direction_deg", repr(float(direction_deg))),
@@ -365,13 +387,30 @@ def _session_toml(offset_mm, direction_deg, theta_deg, length_mm) -> str:
              "[indenter]", f"radius_mm = {INDENTER_RADIUS_MM}", "",
              "[gauge_block]", f"depths_mm = [{depths}]"]
     lines += [f"{f'{k} = {v}':<32} # {_TOML_COMMENTS[k]}" for k, v in bevel]
-    lines += ["", "[force_sensor]", f"rate_hz = {FORCE_RATE_HZ}", "window_samples = 200", ""]
+    # the force window: 0.2 s of samples (200 at 1 kHz)
+    lines += ["", "[force_sensor]", f"rate_hz = {force_rate_hz:g}",
+              f"window_samples = {round(0.2 * force_rate_hz)}", ""]
     return "\n".join(lines)
 
 
 def _holds(truth: dict) -> str:
     lo, hi = truth["hold_range_s"]
     return f"{lo:g} s" if lo == hi else f"{lo:g} to {hi:g} s (uniform)"
+
+
+def _approach(truth: dict) -> str:
+    a = truth["approach"]
+    return f"in {a}" if a.endswith(" s") else f"at {a}"
+
+
+def _mark_text(b: dict) -> str:
+    if b["angle_deg"] > 0:
+        return ""
+    if b["mark_flank_deg"] > 0:
+        return (f" (a drawn mark, `bevel_angle_deg = 0` in session.toml: a V ridge whose "
+                f"flanks fall at {b['mark_flank_deg']:g} deg to |u| = {b['mark_ridge_half_mm']:g} "
+                "mm)")
+    return f" (a drawn mark: a line {MARK_WIDTH_MM:g} mm wide at the crest's level)"
 
 
 def _session_readme(truth: dict, command: str) -> str:
@@ -392,19 +431,19 @@ RA-L 2022), not by any `tactilevision` code: the generator
   block's reference plane; beside each, {b['offset_mm']:g} mm from its axis in
   direction {b['direction_deg']:g} deg (0 = +x along the columns, 90 = +y down the rows),
   a V ridge whose crest ({b['length_mm']:g} mm long, perpendicular to that direction)
-  lies w0 behind the face, flanks falling away at {b['angle_deg']:g} deg; the rest of
+  lies w0 behind the face, flanks falling away at {b['angle_deg']:g} deg{_mark_text(b)}; the rest of
   the block is relieved {b['relief_mm']:g} mm. Pressed to w = w0 + delta, the ridge
   contact is the band |u| <= delta / tan(theta): its half-width is the vernier.
 - **Presses** ({n}, chronological in `presses.csv`, centres in mm from the image
   centre, sub-pixel): shuffled indenters, idle 1.5 to 2.5 s, approach from
-  w = 0 to w0 + delta in 0.5 s, hold {_holds(truth)}, release in 0.25 s; delta uniform in
+  w = 0 to w0 + delta {_approach(truth)}, hold {_holds(truth)}, release in 0.25 s; delta uniform in
   [{truth['overshoot_range_mm'][0]:g}, {truth['overshoot_range_mm'][1]:g}] mm.
 - **Frames** (`frames/`, 640 x 480 JPEG quality {tx['jpeg_quality']}, {truth['fps']:g} frames/s
   from 0.2 s before each press to its release end, times on the camera clock in
   `frames.csv`): one Taxim render per frame at the true depth; frames with no
   contact reuse the no-contact render (`reference.png`, noise-free); every
   frame has fresh Gaussian camera noise of {tx['camera_noise_grey']:g} grey levels per channel.
-- **Forces** (`forces.csv`, 1 kHz, on the F/T clock: t_force = t_frame +
+- **Forces** (`forces.csv`, {truth['force_rate_hz']:g} Hz, on the F/T clock: t_force = t_frame +
   {truth['clock_offset_s']} s, not in `session.toml`): P(w) = c w (1 + beta w / h), eq. 5
   of the in-situ calibration paper, c = {truth['c_n_per_mm']} N/mm, beta = {truth['beta']},
   h = {truth['thickness_mm']} mm, following w(t); Fx = Fy = 0.01 P; noise 1/40, 1/40,
@@ -446,6 +485,10 @@ def make_taxim_session(folder, *, repeats: int = 2, presses: int | None = None, 
                        direction_deg: float = 0.0, length_mm: float = 3.0,
                        overshoot_mm: tuple[float, float] = (0.0, 0.050),
                        hold_s: tuple[float, float] = (HOLD_S, HOLD_S),
+                       mark_flank_deg: float = 0.0, approach_mm_s: float | None = None,
+                       clock_offset_s: float = CLOCK_OFFSET_S,
+                       force_rate_hz: float = FORCE_RATE_HZ,
+                       c_n_per_mm: float = C_N_PER_MM, beta: float = BETA,
                        progress: bool = False, command: str | None = None,
                        timing: dict | None = None) -> dict:
     """Render a gauge-block session with Taxim into ``folder``; return its truth (truth.json).
@@ -471,6 +514,18 @@ def make_taxim_session(folder, *, repeats: int = 2, presses: int | None = None, 
         Range of the uniform overshoot delta past w0.
     hold_s : (lo, hi)
         Range of the uniform hold length, s (default: every hold 0.5 s).
+    mark_flank_deg : float
+        With ``theta_deg = 0`` (a drawn mark, ``bevel_angle_deg = 0`` in session.toml):
+        the flank angle of the mark's small V ridge (:data:`MARK_RIDGE_HALF_MM`), deg; 0:
+        the flat line :data:`MARK_WIDTH_MM` wide.
+    approach_mm_s : float or None
+        The stage's approach speed, mm/s (None: every approach lasts :data:`APPROACH_S`).
+    clock_offset_s : float
+        t_force - t_frame, s (never written to session.toml).
+    force_rate_hz : float
+        The F/T log's rate, Hz (the force window is 0.2 s of its samples).
+    c_n_per_mm, beta : float
+        The force law's c and beta (eq. 5).
     progress : bool
         tqdm progress bar over the frames.
     command : str or None
@@ -494,11 +549,20 @@ def make_taxim_session(folder, *, repeats: int = 2, presses: int | None = None, 
     rng_force = np.random.default_rng([seed, 2])
     rng_hold = np.random.default_rng([seed, 4])
 
+    if theta_deg > 0 and mark_flank_deg:
+        raise ValueError("mark_flank_deg is a drawn mark's (theta_deg = 0)")
     plist = _schedule(rng_layout, rng_pos, presses, repeats, tuple(overshoot_mm), offset_mm,
-                      direction_deg, length_mm, tuple(hold_s), rng_hold)
+                      direction_deg, length_mm, tuple(hold_s), rng_hold, approach_mm_s,
+                      (c_n_per_mm, beta))
     tan_t = math.tan(math.radians(theta_deg))
     for p in plist:
-        L = p["overshoot_mm"] / tan_t if tan_t > 0 else MARK_WIDTH_MM / 2
+        if tan_t > 0:
+            L = p["overshoot_mm"] / tan_t
+        elif mark_flank_deg > 0:
+            L = min(p["overshoot_mm"] / math.tan(math.radians(mark_flank_deg)),
+                    MARK_RIDGE_HALF_MM)
+        else:
+            L = MARK_WIDTH_MM / 2
         p["bevel_half_width_mm"] = round(L, 5)
         p["bevel_half_width_px"] = round(L / MM_PER_PX, 3)
         p["taxim_narrow_band"] = bool(L / MM_PER_PX < NARROW_BAND_PX)
@@ -543,7 +607,8 @@ def make_taxim_session(folder, *, repeats: int = 2, presses: int | None = None, 
                     hmaps.clear()
                     hmaps[pi] = gauge_height_map(p["x_mm"], p["y_mm"], p["w0_mm"],
                                                  offset_mm=offset_mm, direction_deg=direction_deg,
-                                                 theta_deg=theta_deg, length_mm=length_mm)
+                                                 theta_deg=theta_deg, length_mm=length_mm,
+                                                 mark_flank_deg=mark_flank_deg)
                 t = time.perf_counter()
                 img = np.asarray(sim.render(hmaps[pi], with_shadow=shadow, press_depth=w))
                 timings["render_s"] += time.perf_counter() - t
@@ -564,16 +629,16 @@ def make_taxim_session(folder, *, repeats: int = 2, presses: int | None = None, 
         for name, tf, _ in frame_rows:
             f.write(f"{name},{tf:.6f}\n")
 
-    # forces: 1 kHz on the F/T clock over the whole session
+    # forces: force_rate_hz on the F/T clock over the whole session
     t_end = plist[-1]["release_end_s"] + 0.5
-    n = round(t_end * FORCE_RATE_HZ) + 1
-    t_cam = np.arange(n) / FORCE_RATE_HZ
+    n = round(t_end * force_rate_hz) + 1
+    t_cam = np.arange(n) / force_rate_hz
     w_all = np.zeros(n)
     for p in plist:
         w_all = np.maximum(w_all, _depth(t_cam, p))
-    P = force_n(w_all)
+    P = force_n(w_all, c_n_per_mm, beta)
     noise = rng_force.normal(0.0, 1.0, (n, 3)) * np.array(FORCE_NOISE_N)
-    table = np.column_stack([t_cam + CLOCK_OFFSET_S,
+    table = np.column_stack([t_cam + clock_offset_s,
                              TANGENTIAL_FRACTION * P + noise[:, 0],
                              TANGENTIAL_FRACTION * P + noise[:, 1],
                              P + noise[:, 2]])
@@ -586,11 +651,14 @@ def make_taxim_session(folder, *, repeats: int = 2, presses: int | None = None, 
             f.write(f"{p['press']},{p['indenter']},{p['x_mm']:.4f},{p['y_mm']:.4f}\n")
 
     (folder / "session.toml").write_text(_session_toml(offset_mm, direction_deg, theta_deg,
-                                                       length_mm))
+                                                       length_mm, force_rate_hz))
 
     truth = {
-        "c_n_per_mm": C_N_PER_MM, "beta": BETA, "thickness_mm": GEL_THICKNESS_MM,
-        "radius_mm": INDENTER_RADIUS_MM, "clock_offset_s": CLOCK_OFFSET_S,
+        "c_n_per_mm": c_n_per_mm, "beta": beta, "thickness_mm": GEL_THICKNESS_MM,
+        "radius_mm": INDENTER_RADIUS_MM, "clock_offset_s": clock_offset_s,
+        "force_rate_hz": force_rate_hz,
+        "approach": (f"{APPROACH_S} s" if approach_mm_s is None
+                     else f"{approach_mm_s:g} mm/s"),
         "mm_per_px": MM_PER_PX, "seed": seed, "fps": fps,
         "overshoot_range_mm": [float(overshoot_mm[0]), float(overshoot_mm[1])],
         "hold_range_s": [float(hold_s[0]), float(hold_s[1])],
@@ -603,6 +671,8 @@ def make_taxim_session(folder, *, repeats: int = 2, presses: int | None = None, 
                   "jpeg_quality": JPEG_QUALITY, "reference": "no-contact render, noise-free"},
         "bevel": {"offset_mm": offset_mm, "direction_deg": direction_deg,
                   "angle_deg": theta_deg, "length_mm": length_mm, "relief_mm": RELIEF_MM,
+                  "mark_flank_deg": mark_flank_deg,
+                  "mark_ridge_half_mm": MARK_RIDGE_HALF_MM if mark_flank_deg > 0 else None,
                   "half_width": "delta / tan(angle_deg), delta = overshoot_mm",
                   "taxim_narrow_band_px": NARROW_BAND_PX,
                   "taxim_narrow_band": "presses whose band half-width is under "
@@ -629,6 +699,13 @@ def make_taxim_session(folder, *, repeats: int = 2, presses: int | None = None, 
             args.append(f"--overshoot-mm {overshoot_mm[0]:g} {overshoot_mm[1]:g}")
         if tuple(hold_s) != (HOLD_S, HOLD_S):
             args.append(f"--hold-s {hold_s[0]:g} {hold_s[1]:g}")
+        for flag, value, default in (("--mark-flank-deg", mark_flank_deg, 0.0),
+                                     ("--approach-mm-s", approach_mm_s, None),
+                                     ("--clock-offset-s", clock_offset_s, CLOCK_OFFSET_S),
+                                     ("--force-rate-hz", force_rate_hz, FORCE_RATE_HZ),
+                                     ("--c-n-per-mm", c_n_per_mm, C_N_PER_MM),
+                                     ("--beta", beta, BETA)):
+            args += [f"{flag} {value:g}"] if value != default else []
         command = f"python benchmarks/taxim_gauge_session.py {folder.as_posix()} " + " ".join(args)
     (folder / "README.md").write_text(_session_readme(truth, command))
     (folder / "LICENSE").write_text(
@@ -664,6 +741,15 @@ def main(argv=None) -> None:
                     metavar=("LO", "HI"))
     ap.add_argument("--hold-s", type=float, nargs=2, default=(HOLD_S, HOLD_S),
                     metavar=("LO", "HI"), help=f"hold lengths, uniform (default {HOLD_S} s)")
+    ap.add_argument("--mark-flank-deg", type=float, default=0.0,
+                    help="with --theta 0: the drawn mark's V ridge flank, deg (0: a flat line)")
+    ap.add_argument("--approach-mm-s", type=float, default=None,
+                    help=f"the stage's approach speed, mm/s (default: {APPROACH_S} s approaches)")
+    ap.add_argument("--clock-offset-s", type=float, default=CLOCK_OFFSET_S,
+                    help="t_force - t_frame, s (not in session.toml)")
+    ap.add_argument("--force-rate-hz", type=float, default=FORCE_RATE_HZ)
+    ap.add_argument("--c-n-per-mm", type=float, default=C_N_PER_MM, help="eq. 5's c")
+    ap.add_argument("--beta", type=float, default=BETA, help="eq. 5's beta")
     ap.add_argument("--progress", action="store_true")
     a = ap.parse_args(argv)
     if (a.presses is not None and a.presses < 1) or a.repeats < 1:
@@ -675,6 +761,11 @@ def main(argv=None) -> None:
         ap.error("--overshoot-mm needs 0 <= LO <= HI")
     if not 0 < a.hold_s[0] <= a.hold_s[1]:
         ap.error("--hold-s needs 0 < LO <= HI")
+    if a.mark_flank_deg and (a.theta != 0 or not 0 < a.mark_flank_deg < 45):
+        ap.error("--mark-flank-deg needs --theta 0 and 0 < DEG < 45")
+    if (a.approach_mm_s is not None and a.approach_mm_s <= 0) or a.force_rate_hz <= 0 \
+            or a.c_n_per_mm <= 0:
+        ap.error("--approach-mm-s, --force-rate-hz and --c-n-per-mm must be positive")
     t = time.perf_counter()
     tm: dict = {}
     truth = make_taxim_session(a.out_dir, repeats=a.repeats, presses=a.presses, fps=a.fps,
@@ -682,7 +773,10 @@ def main(argv=None) -> None:
                                contact_scale=a.taxim_contact_scale, theta_deg=a.theta,
                                offset_mm=a.offset_mm, direction_deg=a.direction_deg,
                                length_mm=a.length_mm, overshoot_mm=tuple(a.overshoot_mm),
-                               hold_s=tuple(a.hold_s), progress=a.progress, timing=tm)
+                               hold_s=tuple(a.hold_s), mark_flank_deg=a.mark_flank_deg,
+                               approach_mm_s=a.approach_mm_s, clock_offset_s=a.clock_offset_s,
+                               force_rate_hz=a.force_rate_hz, c_n_per_mm=a.c_n_per_mm,
+                               beta=a.beta, progress=a.progress, timing=tm)
     per = tm["render_s"] / max(tm["renders"], 1)
     print(f"{a.out_dir}: {len(truth['presses'])} presses, {tm['frames']} frames, "
           f"{tm['renders']} Taxim renders, {per:.2f} s per render (first, with jit: "

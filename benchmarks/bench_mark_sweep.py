@@ -1,0 +1,298 @@
+"""Certified depths on gauge-block designs drawn at random: a sweep of Taxim sessions as the judge.
+
+    python benchmarks/bench_mark_sweep.py --seed S [--designs N] [--cache DIR]
+        [--kinds mark-shadow mark-plain vernier] [--jobs J] [--render-only]
+        [--json FILE] [--list]
+
+Issue 83. Each design is drawn from seed S (design k from ``numpy.random.default_rng([S,
+k])``) over what labs use, then rendered by Taxim's own renderer through
+``benchmarks/taxim_gauge_session.py`` (no project code draws its frames; each render in a
+process of its own, under ``nice``, cached in DIR by design) and calibrated
+(``calibrate_session(..., beta_table='paper')``):
+
+=====================  ==========================================================
+kind                   ``mark-shadow``, ``mark-plain`` (a drawn mark, Taxim's
+                       shadows on / off; ``bevel_angle_deg = 0`` in session.toml) or
+                       ``vernier`` (shadows on), in turn over k
+ridge offset           3.5 to 8 mm from the punch axis, direction 0 to 360 deg
+flank                  mark: a third of them 0 (a flat line 0.15 mm wide), the others
+                       a V ridge of flank 0 to 2 deg to |u| = 0.5 mm; vernier: 5 to 10 deg
+frames                 10 to 30 per second
+holds                  0.3 to 3 s (each design a range within it, uniform per press)
+approach               0.4 to 1.6 mm/s (a factor of 4, log-uniform), one per design
+overshoot              per press uniform in [0, hi], hi 30 to 60 um
+clock offset           0 to 0.3 s, not in session.toml
+F/T                    0.5 to 1 kHz
+presses                16 to 24
+=====================  ==========================================================
+
+The forces follow eq. (5) with E = 0.2 MPa, nu = 0.48 (the paper's beta relation,
+Hayes' kappa at the exact a/h; as ``benchmarks/bench_loop.py``), so E's truth is 0.2 MPa;
+the depths' truth is the renderer's (truth.json). Printed per design: the presses
+certified, refused (with reasons) and flagged by the second reading; the certified
+depths' error (mean, sd, um) on the presses fitted, their z-scores (error over the
+stated sd), the stated sd's median; the largest error and whether every press more than
+50 um off was refused, flagged or warned of; E with its 95 % interval, whether it holds
+the truth, its half-width (% of E); calibrate's time beside decoding every frame once in
+the same run (as ``benchmarks/bench_calibrate.py``). Then the pooled figures against the
+issue's targets.
+
+``--render-only`` renders the designs (``--jobs`` at a time) and stops; ``--list``
+prints the designs drawn.
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import json
+import math
+import os
+import subprocess
+import sys
+import time
+from collections import Counter
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import numpy as np
+
+from tactilevision import calibrate_session
+from tactilevision.io import read_session
+from tactilevision.mechanics import beta_relation, kappa
+
+ROOT = Path(__file__).resolve().parents[1]
+GENERATOR = ROOT / "benchmarks" / "taxim_gauge_session.py"
+KINDS = ("mark-shadow", "mark-plain", "vernier")
+E_TRUE, NU_TRUE = 0.20, 0.48
+RADIUS_MM, THICKNESS_MM = 2.5, 3.0          # the generator's indenter and gel
+#: A press this far from the truth must be refused, flagged or warned of, um.
+BIG_UM = 50.0
+
+
+def force_law() -> tuple[float, float]:
+    """eq. (5)'s c (N/mm) and beta at E_TRUE, NU_TRUE: the paper's beta relation, Hayes'
+    kappa at the exact a/h (as bench_loop's forces)."""
+    beta = float(beta_relation("paper").beta(NU_TRUE))
+    c = (2 * RADIUS_MM * E_TRUE * float(kappa(NU_TRUE, RADIUS_MM / THICKNESS_MM,
+                                              source="hayes")) / (1 - NU_TRUE ** 2))
+    return c, beta
+
+
+def draw_design(seed: int, k: int, kinds: tuple[str, ...] = KINDS) -> dict:
+    """Design `k` of seed `seed` (module docstring): the generator's arguments."""
+    rng = np.random.default_rng([seed, k])
+    kind = kinds[k % len(kinds)]
+    vernier = kind == "vernier"
+    hold_lo = float(rng.uniform(0.3, 1.5))
+    hold_hi = float(rng.uniform(hold_lo, 3.0))
+    d = {
+        "kind": kind,
+        "offset_mm": round(float(rng.uniform(3.5, 8.0)), 3),
+        "direction_deg": round(float(rng.uniform(0.0, 360.0)), 1),
+        "flank_deg": round(float(rng.uniform(5.0, 10.0) if vernier else rng.uniform(0.0, 2.0)),
+                           3),
+        "fps": int(rng.integers(10, 31)),
+        "hold_s": [round(hold_lo, 3), round(hold_hi, 3)],
+        "approach_mm_s": round(float(0.4 * 4.0 ** rng.uniform(0.0, 1.0)), 4),
+        "overshoot_mm": [0.0, round(float(rng.uniform(0.030, 0.060)), 4)],
+        "clock_offset_s": round(float(rng.uniform(0.0, 0.3)), 4),
+        "force_rate_hz": int(10 * rng.integers(50, 101)),
+        "presses": int(rng.integers(16, 25)),
+        "shadow": kind != "mark-plain",
+        "render_seed": int(rng.integers(0, 2 ** 31 - 1)),
+    }
+    if not vernier and rng.random() < 1 / 3:
+        d["flank_deg"] = 0.0            # a third of the marks: the flat line, no flanks
+    return d
+
+
+def _args(d: dict, folder: Path) -> list[str]:
+    c, beta = force_law()
+    theta, flank = (d["flank_deg"], 0.0) if d["kind"] == "vernier" else (0.0, d["flank_deg"])
+    args = [str(folder), "--presses", str(d["presses"]), "--fps", str(d["fps"]),
+            "--seed", str(d["render_seed"]), "--theta", f"{theta:g}",
+            "--offset-mm", f"{d['offset_mm']:g}", "--direction-deg", f"{d['direction_deg']:g}",
+            "--overshoot-mm", *(f"{v:g}" for v in d["overshoot_mm"]),
+            "--hold-s", *(f"{v:g}" for v in d["hold_s"]),
+            "--approach-mm-s", f"{d['approach_mm_s']:g}",
+            "--clock-offset-s", f"{d['clock_offset_s']:g}",
+            "--force-rate-hz", f"{d['force_rate_hz']:g}",
+            "--c-n-per-mm", f"{c:.6g}", "--beta", f"{beta:.6g}"]
+    if flank:
+        args += ["--mark-flank-deg", f"{flank:g}"]
+    if not d["shadow"]:
+        args.append("--no-shadow")
+    return args
+
+
+def design_folder(cache: Path, seed: int, k: int, d: dict) -> Path:
+    """The design's session folder in the cache, named by its seed, number and a digest of
+    its arguments and the generator's source (a changed generator renders again)."""
+    key = hashlib.sha256(json.dumps(_args(d, Path("."))).encode()
+                         + GENERATOR.read_bytes()).hexdigest()[:10]
+    return cache / f"s{seed}_d{k:02d}_{d['kind']}_{key}"
+
+
+def render(folder: Path, d: dict) -> float:
+    """Render the design into `folder` (skipped where its truth.json is there); seconds."""
+    if (folder / "truth.json").is_file():
+        return 0.0
+    t = time.perf_counter()
+    part = folder.with_name(folder.name + ".part")
+    cmd = ["nice", "-n", "5", sys.executable, str(GENERATOR), *_args(d, part)]
+    log = folder.with_name(folder.name + ".log")
+    with open(log, "w") as f:
+        subprocess.run(cmd, check=True, stdout=f, stderr=subprocess.STDOUT,
+                       env={**os.environ, "PYTHONUNBUFFERED": "1"})
+    part.rename(folder)
+    return time.perf_counter() - t
+
+
+def score(folder: Path, d: dict) -> dict:
+    """Calibrate the design's session and score it against its truth (module docstring)."""
+    truth = json.loads((folder / "truth.json").read_text())
+    tp = {p["press"]: p for p in truth["presses"]}
+    session = read_session(folder)
+    t0 = time.perf_counter()
+    cal = calibrate_session(session, beta_table="paper", allow_failure=True)
+    t_cal = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    for i in range(session.n_frames):
+        session.frame(i)
+    t_decode = time.perf_counter() - t0
+    ps = cal.certification.presses
+    flagged = set(getattr(cal, "flagged_presses", ()) or ())
+    err = np.array([1e3 * (dd - tp[p.press]["depth_mm"]) for p, dd in zip(ps, cal.depth_mm,
+                                                                          strict=True)])
+    sd = 1e3 * np.asarray(cal.depth_std_mm, np.float64)
+    kept = np.array([p.press not in flagged for p in ps], bool)
+    warned = " ".join(cal.warnings)
+    big = [(p.press, float(e)) for p, e in zip(ps, err, strict=True) if abs(e) > BIG_UM]
+    # a press far off "with a warning": flagged, or named in calibrate's warnings
+    silent = [b for b in big if b[0] not in flagged and f"press {b[0]} " not in warned
+              and f"press(es) {b[0]} " not in warned]
+    f = cal.fit
+    e_ok = f is not None and np.isfinite(f.E_mpa)
+    ci = tuple(f.E_ci95_mpa) if e_ok else (math.nan, math.nan)
+    ek, sk = err[kept], sd[kept]
+    z = ek / np.where(sk > 0, sk, np.nan)
+    return {
+        "design": d, "folder": str(folder), "n_presses": len(truth["presses"]),
+        "certified": len(ps), "fitted": int(kept.sum()),
+        "refused": Counter(r.reason for r in cal.certification.rejected),
+        "flagged": sorted(flagged),
+        "err_mean_um": float(ek.mean()) if ek.size else math.nan,
+        "err_sd_um": float(ek.std(ddof=1)) if ek.size > 1 else math.nan,
+        "err_max_um": float(np.max(np.abs(err))) if err.size else math.nan,
+        "stated_median_um": float(np.median(sk)) if sk.size else math.nan,
+        "z": [float(v) for v in z if np.isfinite(v)],
+        "big": big, "silent_big": silent,
+        "E": float(f.E_mpa) if e_ok else math.nan, "E_ci": ci,
+        "E_holds": bool(ci[0] <= E_TRUE <= ci[1]),
+        "E_half_pct": (100 * (ci[1] - ci[0]) / 2 / f.E_mpa) if e_ok else math.nan,
+        "calibrate_s": t_cal, "decode_s": t_decode, "n_frames": session.n_frames,
+        "clock_error_ms": 1e3 * (cal.certification.clock_offset_s - truth["clock_offset_s"]),
+        "depth_rule": cal.depth_rule, "failure": cal.failure,
+    }
+
+
+def _design_text(d: dict) -> str:
+    return (f"{d['kind']}, offset {d['offset_mm']:g} mm at {d['direction_deg']:g} deg, flank "
+            f"{d['flank_deg']:g} deg, {d['fps']} frames/s, holds {d['hold_s'][0]:g}-"
+            f"{d['hold_s'][1]:g} s, {d['approach_mm_s']:g} mm/s, overshoot 0-"
+            f"{1e3 * d['overshoot_mm'][1]:.0f} um, clock {d['clock_offset_s']:g} s, F/T "
+            f"{d['force_rate_hz']} Hz, {d['presses']} presses")
+
+
+def print_row(k: int, r: dict) -> None:
+    z = np.array(r["z"])
+    refused = "; ".join(f"{n} {why}" for why, n in r["refused"].items()) or "none"
+    ci = r["E_ci"]
+    print(f"| {k} | {_design_text(r['design'])} | {r['certified']}/{r['n_presses']} "
+          f"({r['fitted']} fitted; refused: {refused}; flagged {len(r['flagged'])}) | "
+          f"{r['err_mean_um']:+.1f}, {r['err_sd_um']:.1f} | "
+          f"{np.std(z):.2f} | {r['stated_median_um']:.1f} | {r['err_max_um']:.0f} "
+          f"({len(r['big'])} > {BIG_UM:g}, {len(r['silent_big'])} silent) | "
+          f"{r['E']:.4f} [{ci[0]:.4f}, {ci[1]:.4f}] {'yes' if r['E_holds'] else 'NO'}, "
+          f"{r['E_half_pct']:.0f} % | {r['calibrate_s']:.1f} s / {r['decode_s']:.1f} s "
+          f"({r['n_frames']} frames) |", flush=True)
+
+
+def summary(rows: list[dict]) -> None:
+    n = len(rows)
+    ok_depth = [r for r in rows if abs(r["err_mean_um"]) <= 5 and r["err_sd_um"] <= 10]
+    stated = np.median([r["stated_median_um"] for r in rows])
+    z = np.concatenate([r["z"] for r in rows]) if rows else np.zeros(0)
+    holds = sum(r["E_holds"] for r in rows)
+    narrow = sum(r["E_half_pct"] <= 20 for r in rows)
+    silent = sum(len(r["silent_big"]) for r in rows)
+    print(f"\n{n} designs: depth mean within +-5 um and sd <= 10 um on {len(ok_depth)}; "
+          f"stated sd median (of the designs' medians) {stated:.1f} um; pooled z-scores "
+          f"({z.size}): mean {z.mean():+.2f}, sd {z.std():.2f}; E's interval holds the truth "
+          f"on {holds}, half-width <= 20 % on {narrow}; presses > {BIG_UM:g} um off without a "
+          f"refusal, flag or warning: {silent}")
+    for kind in KINDS:
+        sel = [r for r in rows if r["design"]["kind"] == kind]
+        if sel:
+            zk = np.concatenate([r["z"] for r in sel])
+            print(f"  {kind}: {len(sel)} designs, depth targets met on "
+                  f"{sum(r in ok_depth for r in sel)}, z sd {zk.std():.2f}, E holds "
+                  f"{sum(r['E_holds'] for r in sel)}")
+    cal20 = [r["calibrate_s"] / r["decode_s"] for r in rows]
+    if cal20:
+        print(f"calibrate took {np.median([r['calibrate_s'] for r in rows]):.1f} s median "
+              f"({min(r['calibrate_s'] for r in rows):.1f} to "
+              f"{max(r['calibrate_s'] for r in rows):.1f}); {np.median(cal20):.1f} times "
+              "the decode of its frames in the same run (median)")
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--seed", type=int, required=True)
+    ap.add_argument("--designs", type=int, default=20)
+    ap.add_argument("--first", type=int, default=0, help="first design number")
+    ap.add_argument("--cache", type=Path, default=Path("/tmp/mark_sweep"))
+    ap.add_argument("--kinds", nargs="+", default=list(KINDS), choices=KINDS)
+    ap.add_argument("--jobs", type=int, default=1, help="renders at a time")
+    ap.add_argument("--render-only", action="store_true")
+    ap.add_argument("--list", action="store_true", help="print the designs drawn and stop")
+    ap.add_argument("--json", type=Path)
+    a = ap.parse_args(argv)
+    kinds = tuple(a.kinds)
+    ks = range(a.first, a.first + a.designs)
+    designs = {k: draw_design(a.seed, k, kinds) for k in ks}
+    folders = {k: design_folder(a.cache, a.seed, k, designs[k]) for k in ks}
+    if a.list:
+        for k in ks:
+            print(k, folders[k].name, _design_text(designs[k]))
+        return 0
+    a.cache.mkdir(parents=True, exist_ok=True)
+
+    def job(k: int) -> None:
+        s = render(folders[k], designs[k])
+        if s:
+            print(f"design {k} rendered in {s:.0f} s: {folders[k]}", flush=True)
+
+    rows = []
+    if a.render_only:
+        with ThreadPoolExecutor(max_workers=max(1, a.jobs)) as pool:
+            list(pool.map(job, ks))
+        return 0
+    print(f"seed {a.seed}; E = {E_TRUE} MPa, nu = {NU_TRUE}; calibrate --beta-table paper")
+    print("| k | design | certified | depth error (um): mean, sd | z sd | stated sd median "
+          "(um) | largest error (um) | E [95 %] holds, half-width | calibrate / decode |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for k in ks:
+        job(k)
+        r = score(folders[k], designs[k])
+        rows.append(r)
+        print_row(k, r)
+    summary(rows)
+    if a.json:
+        a.json.write_text(json.dumps(rows, indent=1, default=str) + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
