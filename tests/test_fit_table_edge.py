@@ -52,6 +52,7 @@ def test_beta_below_the_table_within_its_interval_is_read_at_the_bottom():
     assert b_hi == pytest.approx(0.7394, abs=1e-4)
     assert not fit.out_of_table and fit.out_of_table_message is None
     assert fit.nu == nu_b
+    assert fit.nu_bound == f"nu <= {fit.nu_ci95[1]:.4g}"   # at the table's edge: a bound
     # E of eq. (4) at that nu, with the FEM kappa line at these depths: E0 back
     assert fit.kappa == pytest.approx(rel.kappa_line(nu_b), rel=1e-12)
     assert fit.E_mpa == pytest.approx(c * (1 - nu_b**2) / (2 * A * rel.kappa_line(nu_b)),
@@ -127,6 +128,7 @@ def test_beta_above_the_table_within_its_interval_is_read_at_the_top():
     assert fit.E_mpa == pytest.approx(E0, rel=1e-12)
     lo, hi = fit.nu_ci95
     assert rel.beta(lo) == pytest.approx(fit.beta_ci95[0], abs=2e-4) and hi == 0.499
+    assert fit.nu_bound == f"nu >= {lo:.4g}"       # at the table's edge: a bound
     assert fit.E_ci95_mpa[0] < fit.E_mpa < fit.E_ci95_mpa[1]
     assert any(n.startswith("beta lies above") and "table's top, 0.485" in n
                for n in fit.notes)

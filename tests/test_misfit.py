@@ -15,10 +15,12 @@ import pytest
 
 from tactilevision import InputError
 from tactilevision.diagnosis import diagnose
+from tactilevision.io import read_measurements
 from tactilevision.mechanics import (
     FlatPunch,
     Indenter,
     assess_misfit,
+    fit_indentation,
     fit_indenter,
     fit_ramp,
 )
@@ -206,3 +208,36 @@ def test_diagnose_says_nothing_missing_only_with_a_noise_floor_and_in_the_table(
                  radius_mm=2.5, rules_out=False)
     assert "Nothing is missing" not in d.message
     assert "OUT OF TABLE" in d.message
+
+
+def test_a_ramp_read_as_a_measurements_table_suggests_the_ramp_option(tmp_path):
+    path = tmp_path / "ramp.csv"
+    path.write_text("displacement_mm,force_n\n" + "".join(f"{0.01 * i},{0.1 * i}\n"
+                                                        for i in range(12)))
+    with pytest.raises(InputError, match=r"ramp.csv line 1: missing required column\(s\) "
+                                         r"depth_mm .*fit --ramp"):
+        read_measurements(path, thickness_mm=3.0, radius_mm=2.5)
+
+
+def test_gauge_block_presses_a_law_cannot_follow_widen_and_warn():
+    """Flat-punch presses whose P/w bends in w/h (a square term eq. 5 lacks), 10 repeats at
+    each of 8 depths with 2 mN of noise, read through the paper's relation (7): the
+    residuals run in long runs along depth; the intervals are wider than the same presses
+    on eq. (5)'s own line, and the fit warns; the straight presses raise nothing."""
+    rng = np.random.default_rng(8)
+    w = np.repeat(np.linspace(0.1, 0.6, 8), 10)
+    x = w / 3.0
+    straight = w * 3.5 * (1 + 1.5 * x)
+    bent = w * 3.5 * (1 + 1.5 * x - 8.0 * (x - 0.1) ** 2)
+    noise = 0.002 * rng.standard_normal(w.size)
+    kw = {"thickness_mm": 3.0, "radius_mm": 2.5, "beta_table": "paper", "a_over_h": 0.8}
+    ok = fit_indentation(w, straight + noise, **kw)
+    assert ok.misfit.warning is None and not any(n.startswith("warning") for n in ok.notes)
+    bad = fit_indentation(w, bent + noise, **kw)
+    assert math.isfinite(bad.E_mpa)
+    assert bad.misfit.correlation > 0.5 and bad.misfit.factor > 1.5
+    assert any(n.startswith("warning: the model does not explain") and "lag-1" in n
+               for n in bad.notes)
+    width = np.diff(bad.E_ci95_mpa)[0] / bad.E_mpa
+    assert width > 1.5 * np.diff(ok.E_ci95_mpa)[0] / ok.E_mpa
+    assert bad.to_json_dict()["misfit"]["factor"] == pytest.approx(bad.misfit.factor)

@@ -171,6 +171,8 @@ def _summary(diag, path: Path) -> str:
                  f"{list(diag.equivalent_effects)}, unexplained covariate "
                  f"{diag.unexplained_covariate}")
     lines.append(f"  {diag.message}")
+    if diag.misfit is not None and diag.misfit.warning:
+        lines.append(f"  WARNING (the final model's fit): {diag.misfit.warning}")
     return "\n".join(lines)
 
 

@@ -32,7 +32,7 @@ from ..mechanics import (
     relaxed_moduli,
 )
 from ._fit_indenter import add_arguments as add_indenter_arguments
-from ._fit_indenter import run_indenter, run_ramp
+from ._fit_indenter import note_lines, run_indenter, run_ramp
 
 _DESCRIPTION = """\
 Fit the paper's law P/w = c beta (w/h) + c (eq. 5) to a measurements table
@@ -157,7 +157,9 @@ def summary(fit: IndentationFit, path: Path) -> str:
     else:
         lines += [
             f"  E  = {fit.E_mpa:.4f} MPa  {pct} CI {_fmt_ci(fit.E_ci95_mpa, 4)} MPa",
-            f"  nu = {fit.nu:.4f}      {pct} CI {_fmt_ci(fit.nu_ci95, 4)}",
+            f"  nu = {fit.nu:.4f}      {pct} CI {_fmt_ci(fit.nu_ci95, 4)}"
+            + (f"  (at the table's edge: {fit.nu_bound}, a bound, not a value)"
+               if fit.nu_bound else ""),
             f"  Neo-Hookean (Abaqus): C10 = {fit.C10_mpa:.4f} MPa, "
             f"D1 = {fit.D1_per_mpa:.4f} 1/MPa",
         ]
@@ -166,9 +168,10 @@ def summary(fit: IndentationFit, path: Path) -> str:
                      "kappa_fem.npz)")
     else:
         lines.append("  beta: the paper's relation (7); kappa: Hayes 1972 (frictionless)")
-    lines += [f"  note: {n}" for n in fit.notes
-              if not n.startswith(("intervals:", "beta table", "errors in both variables"))
-              and n != fit.out_of_table_message]
+    lines += note_lines(tuple(n for n in fit.notes
+                              if not n.startswith(("intervals:", "beta table",
+                                                   "errors in both variables"))
+                              and n != fit.out_of_table_message))
     return "\n".join(lines)
 
 
@@ -500,6 +503,8 @@ def run(args: argparse.Namespace) -> int:
         print(f"tactilevision fit: warning: {path}: {std_message}", file=sys.stderr)
     for w in caught:
         print(f"tactilevision fit: warning: {path}: {w.message}", file=sys.stderr)
+    if fit.misfit is not None and fit.misfit.warning and math.isfinite(fit.E_mpa):
+        print(f"tactilevision fit: warning: {path}: {fit.misfit.warning}", file=sys.stderr)
     obj = fit.to_json_dict()
     moduli = None
     if relax is not None:

@@ -24,7 +24,9 @@ from ..mechanics import (
     EFFECTS,
     Effect,
     IndentationModel,
+    Misfit,
     ModelFit,
+    assess_misfit,
     effect_name,
     fit_indentation,
     fit_model,
@@ -273,6 +275,7 @@ class Diagnosis:
     crossings: CrossingScan | None = field(default=None, hash=False)
     holds: HoldsFinding | None = field(default=None, hash=False)
     fit_data: str = "table"
+    misfit: Misfit | None = field(default=None, hash=False)
 
     @property
     def depth_link_coarse(self) -> bool:
@@ -303,6 +306,7 @@ class Diagnosis:
             "params": {"E_mpa": num(self.E_mpa), "nu": num(self.nu)},
             "rmse_n": num(self.rmse_n), "cv_rmse_n": num(self.cv_rmse_n),
             "noise_floor_n": num(self.noise_floor_n),
+            "misfit": None if self.misfit is None else self.misfit.to_json_dict(),
             "covariates": [cov(t) for t in self.covariates],
             "candidates": [{"effect": c.effect, "delta_bic": num(c.delta_bic),
                             "cv_rmse_n": num(c.cv_rmse_n),
@@ -530,6 +534,7 @@ def diagnose_core(columns: Mapping[str, np.ndarray], *, thickness_mm: float,
     floor = noise_floor(cur_fit.residuals_n, d_final)
     budget, budget_missing = noise_budget(cur_fit.residuals_n, cur_fit.predicted_n, d_final,
                                           _groups(d_final))
+    misfit = _final_misfit(climb)
     separating = None
     if climb.missing_effect and climb.equivalent:
         separating = "; ".join(_separating(climb.missing_effect, e, cols)
@@ -540,7 +545,7 @@ def diagnose_core(columns: Mapping[str, np.ndarray], *, thickness_mm: float,
         noise_floor_n=floor, covariates=cov0, covariates_after=cov_after,
         candidates=climb.first_candidates, missing_effect=climb.missing_effect,
         equivalent_effects=climb.equivalent, separating_measurement=separating,
-        unexplained_covariate=climb.unexplained, offered_effect=climb.offered,
+        unexplained_covariate=climb.unexplained, offered_effect=climb.offered, misfit=misfit,
         ladder=tuple(climb.ladder), untestable=pool.untestable,
         untestable_reasons=pool.why_untestable, fits=tuple(climb.fits),
         fit_rows=tuple(climb.fit_rows), columns=cols, noise_budget=budget,
@@ -552,6 +557,24 @@ def diagnose_core(columns: Mapping[str, np.ndarray], *, thickness_mm: float,
             climb.fits[0].predicted_n,
             climb.table.sub(climb.fit_rows[0])))
     return _with_message(diag)
+
+
+def _final_misfit(climb) -> Misfit | None:
+    """The misfit of the model the ladder reached (:func:`~tactilevision.mechanics.
+    assess_misfit`): its residuals' serial correlation along depth and its presses'
+    apparent E's drift (E P / P_fit, at the last rung's E where it has one)."""
+    if not climb.fits:
+        return None
+    fit, rows = climb.fits[-1], climb.fit_rows[-1]
+    d = climb.table.sub(rows)
+    pred = np.asarray(fit.predicted_n, np.float64)
+    if not np.all(pred > 0):
+        return None
+    E = climb.ladder[-1].E_mpa if climb.ladder else math.nan
+    P = pred + np.asarray(fit.residuals_n, np.float64)
+    m = assess_misfit(d["depth_mm"], fit.residuals_n,
+                      (E if math.isfinite(E) else 1.0) * P / pred, n_params=fit.n_params)
+    return m if math.isfinite(E) else replace(m, E_shallow_mpa=math.nan, E_deep_mpa=math.nan)
 
 
 def _gls(residuals_n: np.ndarray, d: Mapping[str, np.ndarray]) -> np.ndarray:

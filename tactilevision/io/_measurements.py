@@ -333,8 +333,11 @@ def read_measurements(path: str | Path, *, thickness_mm: float | None = None,
         names, rows = _weights_to_forces(path, names, rows, lines)
     missing = [c for c in REQUIRED_COLUMNS if c not in names]
     if missing:
+        hint = ("; it has displacement_mm: a force-depth ramp (an Instron's or a robot's "
+                "loading curve) is fitted with `tactilevision fit --ramp`"
+                if "displacement_mm" in names and "depth_mm" in missing else "")
         raise InputError(f"{path} line 1: missing required column(s) {', '.join(missing)} "
-                         f"(found: {', '.join(names)})")
+                         f"(found: {', '.join(names)}){hint}")
     if not rows:
         raise InputError(f"{path} has a header but no data rows")
     columns, labels = _parse_columns(path, names, rows, lines)

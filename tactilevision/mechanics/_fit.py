@@ -15,10 +15,12 @@ from ._effects import FIT_EFFECTS
 from ._fem_tables import TABLE_EXTRAPOLATION
 from ._kappa import _dkappa_dnu, kappa
 from ._kappa import _table as _kappa_table
+from ._misfit import assess_misfit, widen_interval
 from ._neohookean import neo_hookean_constants
 from ._result import IndentationFit
 
-__all__ = ["BETA_TABLE_REACH", "MAX_W_OVER_H", "fit_indentation", "past_beta_table_reach"]
+__all__ = ["BETA_TABLE_REACH", "MAX_W_OVER_H", "carry_misfit", "fit_indentation",
+           "past_beta_table_reach"]
 
 #: Largest w/h for which the linear law (2) holds (paper, section VI.1).
 MAX_W_OVER_H = 0.2
@@ -283,13 +285,70 @@ def fit_indentation(depth_mm: np.ndarray, force_n: np.ndarray, *, thickness_mm: 
     r2 = 1.0 - float(resid @ resid) / tss if tss > 0 else 1.0
     rmse = float(np.sqrt(np.mean((P - w * (X @ coef)) ** 2)))
     cov, cov_note = _covariance(X, resid)
-    return material_fit(c, s, cov, depth_mm=w, thickness_mm=h, radius_mm=a, a_over_h=ah,
-                        beta_table=beta_table, contact=contact, kappa_source=kappa_source,
-                        confidence=confidence, dof=w.size - 2, rmse_n=rmse, r_squared=r2,
-                        effects=FIT_EFFECTS, effect_params=None,
-                        a_over_h_given=a_over_h is not None,
-                        extra_notes=((cov_note,) if cov_note else ()) + zero_note,
-                        ci_method=_CI_METHOD)
+    fit = material_fit(c, s, cov, depth_mm=w, thickness_mm=h, radius_mm=a, a_over_h=ah,
+                       beta_table=beta_table, contact=contact, kappa_source=kappa_source,
+                       confidence=confidence, dof=w.size - 2, rmse_n=rmse, r_squared=r2,
+                       effects=FIT_EFFECTS, effect_params=None,
+                       a_over_h_given=a_over_h is not None,
+                       extra_notes=((cov_note,) if cov_note else ()) + zero_note,
+                       ci_method=_CI_METHOD)
+    return carry_misfit(fit, w, P, w * (X @ coef))
+
+
+def carry_misfit(fit: IndentationFit, depth_mm: np.ndarray, force_n: np.ndarray,
+                 predicted_n: np.ndarray, noise_sd_n: np.ndarray | None = None,
+                 n_params: int = 2) -> IndentationFit:
+    """`fit` with the misfit of its presses read and carried into its intervals.
+
+    Parameters
+    ----------
+    fit : IndentationFit
+    depth_mm, force_n, predicted_n : (N,) float ndarray
+        The presses and the fit's force at each, mm and N.
+    noise_sd_n : (N,) float ndarray, optional
+        The stated noise of each press's force (the F/T window's and the depth's
+        through dP/dw), N: gives the Birge ratio.
+    n_params : int, default 2
+        Parameters fitted (c and c beta for eq. 5 alone).
+
+    Returns
+    -------
+    IndentationFit
+        With :attr:`~IndentationFit.misfit` set; where the residuals run in long
+        runs along depth (a serial correlation), E's and nu's intervals widened
+        by its factor (E's in log E, nu's clipped to [0, 0.5]); where each
+        press's apparent E (E P / P_fit) drifts with depth, E's interval widened
+        to hold the shallowest and deepest quarters' apparent E; a note
+        ``warning: ...`` naming them. The fit's covariance (HC3, or Paule and
+        Mandel's extra variance) already carries the residuals' size: the Birge
+        ratio is named, not applied again.
+    """
+    w, P = np.asarray(depth_mm, np.float64), np.asarray(force_n, np.float64)
+    pred = np.asarray(predicted_n, np.float64)
+    E = fit.E_mpa
+    finite = math.isfinite(E) and E > 0 and bool(np.all(pred > 0))
+    apparent = (E if finite else 1.0) * P / np.where(pred > 0, pred, np.nan)
+    m = assess_misfit(w, P - pred, apparent, noise_sd_n=noise_sd_n, n_params=n_params)
+    if not finite:        # no E: the drift is of the force's ratio, not a modulus
+        m = dataclasses.replace(m, E_shallow_mpa=math.nan, E_deep_mpa=math.nan)
+    E_ci, nu_ci = fit.E_ci95_mpa, fit.nu_ci95
+    extra: tuple[str, ...] = ()
+    if finite and math.isfinite(E_ci[0]) and E_ci[0] <= 0 < E_ci[1]:
+        # the delta method's symmetric interval reaches zero: a modulus is positive, its
+        # interval is taken in log E (the same half-width in units of E's se)
+        q = (E_ci[1] - E) / E
+        E_ci = (E * math.exp(-q), E * math.exp(q))
+        extra = (f"E is not identified by these presses: its interval reached zero, taken in "
+                 f"log E it is [{E_ci[0]:.4g}, {E_ci[1]:.4g}] MPa",)
+    if finite and m.factor > 1 and all(math.isfinite(v) and v > 0 for v in E_ci):
+        E_ci = (E * (E_ci[0] / E) ** m.factor, E * (E_ci[1] / E) ** m.factor)
+    if m.factor > 1 and math.isfinite(fit.nu) and all(math.isfinite(v) for v in nu_ci):
+        nu_ci = widen_interval(fit.nu, nu_ci, m.factor, (0.0, 0.5))
+    if finite and m.drifts:
+        E_ci = (min(E_ci[0], m.E_shallow_mpa, m.E_deep_mpa),
+                max(E_ci[1], m.E_shallow_mpa, m.E_deep_mpa))
+    notes = fit.notes + extra + ((f"warning: {m.warning}",) if m.warning and finite else ())
+    return dataclasses.replace(fit, E_ci95_mpa=E_ci, nu_ci95=nu_ci, misfit=m, notes=notes)
 
 
 def _depth_std(depth_std_mm: object, n: int) -> np.ndarray:
@@ -449,8 +508,12 @@ def _fit_with_depth_std(w: np.ndarray, P: np.ndarray, u: np.ndarray, *, h: float
                        rmse_n=rmse, r_squared=r2, effects=FIT_EFFECTS, effect_params=None,
                        a_over_h_given=a_over_h_given, extra_notes=tuple(notes),
                        ci_method=_EV_CI_METHOD, weights=weights)
-    return dataclasses.replace(fit, depth_std_used=True, depth_std_median_mm=med,
-                               sigma0_n=sigma0)
+    fit = dataclasses.replace(fit, depth_std_used=True, depth_std_median_mm=med,
+                              sigma0_n=sigma0)
+    pred = w * (c + s * x)
+    # no Birge ratio: the depth uncertainties are only part of the stated noise (the F/T
+    # window's is not given here), and sigma0 carries the rest
+    return carry_misfit(fit, w, P, pred)
 
 
 def _geometry(w: np.ndarray, h: float, a: float, beta_table: str, a_over_h: float | None,
@@ -564,6 +627,7 @@ def material_fit(c: float, slope: float, cov: np.ndarray, *, depth_mm: np.ndarra
         beta_se=beta_se, beta_ci95=beta_ci, nu_se=m.nu_se, E_se_mpa=m.E_se, r_squared=r_squared,
         confidence=confidence, ci_method=ci_method, max_w_over_h=wh,
         out_of_table=m.msg is not None, out_of_table_message=m.msg, notes=tuple(notes),
+        nu_bound=m.bound,
     )
 
 
@@ -588,6 +652,7 @@ class _Moduli:
     E_ci: tuple[float, float] = _NAN2
     nu_ci: tuple[float, float] = _NAN2
     msg: str | None = None
+    bound: str | None = None
 
 
 def _moduli(rel, c: float, s: float, cov: np.ndarray, beta: float, beta_se: float, tq: float,
@@ -608,6 +673,8 @@ def _moduli(rel, c: float, s: float, cov: np.ndarray, beta: float, beta_se: floa
             confidence)
         m.C10, m.D1 = neo_hookean_constants(m.E, m.nu)
         m.nu_se, m.E_se = (m.nu_ci[1] - m.nu_ci[0]) / (2 * tq), (m.E_ci[1] - m.E_ci[0]) / (2 * tq)
+        # nu put at the table's edge: what the presses say is a bound, not a value
+        m.bound = (f"nu >= {m.nu_ci[0]:.4g}" if top is not None else f"nu <= {m.nu_ci[1]:.4g}")
         notes.append(edge_note)
     elif not (c > 0 and rel.beta_min <= beta < rel.beta_max):
         m.msg = (f"c = {c:.4g} N/mm and beta = {beta:.4g} are outside the {beta_table} beta "

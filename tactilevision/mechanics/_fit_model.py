@@ -17,6 +17,7 @@ from ._fit import (
     MAX_W_OVER_H,
     _geometry,
     _positive,
+    carry_misfit,
     material_fit,
     nu_range_below,
     nu_range_reaching,
@@ -175,6 +176,10 @@ def fit_model(columns: Mapping[str, np.ndarray], model: IndentationModel | str =
         fit = replace(fit, beta=math.nan, beta_ci95=(math.nan, math.nan), beta_se=math.nan,
                       out_of_table=False, out_of_table_message=None,
                       notes=tuple(n for n in fit.notes if n != fit.out_of_table_message))
+    P_obs = np.asarray(columns["force_n"], np.float64)
+    noise = None if weights is None else 1.0 / np.sqrt(np.asarray(weights, np.float64))
+    fit = carry_misfit(fit, np.asarray(columns["depth_mm"], np.float64), P_obs,
+                       P_obs - mf.residuals_n, noise_sd_n=noise, n_params=mf.n_params)
     return fit, mf
 
 

@@ -6,6 +6,8 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
+from ._misfit import Misfit
+
 __all__ = ["IndentationFit"]
 
 
@@ -77,6 +79,13 @@ class IndentationFit:
         on a table whose hold_s is constant); empty when every parameter is
         identified. ``identified`` (a property, and a key of the JSON) is
         True when it is empty.
+    nu_bound : str or None
+        Where beta lies past the table's edge and nu is put there: the bound
+        the presses put on nu (``'nu >= 0.47'``), not a value.
+    misfit : Misfit or None
+        The presses' residuals against the fit, along depth
+        (:func:`~tactilevision.mechanics.carry_misfit`): their serial
+        correlation and the apparent E's drift, carried into the intervals.
     """
 
     E_mpa: float
@@ -118,6 +127,8 @@ class IndentationFit:
     depth_std_median_mm: float = math.nan
     sigma0_n: float = math.nan
     unidentified: tuple[str, ...] = ()
+    nu_bound: str | None = None
+    misfit: Misfit | None = None
 
     @property
     def identified(self) -> bool:
@@ -141,6 +152,8 @@ class IndentationFit:
                 return {k: clean(x) for k, x in v.items()}
             return v
 
-        obj = {name: clean(getattr(self, name)) for name in self.__dataclass_fields__}
+        obj = {name: clean(getattr(self, name)) for name in self.__dataclass_fields__
+               if name != "misfit"}
+        obj["misfit"] = None if self.misfit is None else self.misfit.to_json_dict()
         obj["identified"] = self.identified
         return obj
