@@ -7,6 +7,7 @@ from pathlib import Path
 
 from .. import InputError
 from ..fem import build_beta_table, build_kappa_table, build_sphere_table, write_table
+from ..mechanics import PAD_SWEEPS_FILE, SHIPPED_PAD_SWEEPS, build_pad_sweeps, pad_sweep_result
 
 __all__ = ["add_parser", "run_tables"]
 
@@ -24,9 +25,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "provenance. kappa takes about 10 minutes on 2 cores; beta (bonded punch only: a "
         "frictionless sharp punch does not converge at finite strain) about 15 minutes with "
         "--jobs 2. sphere: a ball's P(w) and a(w) over R/h 0.5 to 20, nu 0.30 to 0.50 and w/h "
-        "to 0.5, linear and Neo-Hookean, frictionless and tied (about 90 minutes with --jobs 2).")
+        "to 0.5, linear and Neo-Hookean, frictionless and tied (about 90 minutes with --jobs 2). "
+        "pad: the ball-on-a-finite-pad sweeps the bundled FEATS sample reads "
+        "(models/sphere_pad_sweeps.npz; from the disk cache where they are there, else about "
+        "15 minutes).")
     t.add_argument("--what", default="kappa,beta",
-                   help="comma-separated: kappa, beta, sphere (default kappa,beta)")
+                   help="comma-separated: kappa, beta, sphere, pad (default kappa,beta)")
     t.add_argument("--out-dir", type=Path, default=Path("models"),
                    help="folder for kappa_fem.npz and beta_fem.npz (default models/)")
     t.add_argument("--jobs", type=int, default=1, metavar="N",
@@ -40,8 +44,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 def run_tables(args: argparse.Namespace) -> int:
     """Run ``fem tables``."""
     what = {w.strip() for w in args.what.split(",") if w.strip()}
-    if not what or not what <= {"kappa", "beta", "sphere"}:
-        raise InputError(f"--what must name kappa, beta and/or sphere, got '{args.what}'")
+    if not what or not what <= {"kappa", "beta", "sphere", "pad"}:
+        raise InputError(f"--what must name kappa, beta, sphere and/or pad, got "
+                         f"'{args.what}'")
     if args.jobs < 1:
         raise InputError(f"--jobs must be at least 1, got {args.jobs}")
     command = "tactilevision " + " ".join(args.argv)
@@ -63,5 +68,13 @@ def run_tables(args: argparse.Namespace) -> int:
                  if args.quick else {})
         table = build_sphere_table(**sgrid, jobs=args.jobs, progress=not args.no_progress)
         path = write_table(args.out_dir / "sphere_fem.npz", table, command=command)
+        print(f"wrote {path}")
+    if "pad" in what:
+        def say(key: str) -> None:
+            if not args.no_progress:
+                print(f"pad sweep {key}", flush=True)
+
+        table = build_pad_sweeps(SHIPPED_PAD_SWEEPS, pad_sweep_result, progress=say)
+        path = write_table(args.out_dir / PAD_SWEEPS_FILE, table, command=command)
         print(f"wrote {path}")
     return 0

@@ -77,14 +77,28 @@ from ._fem_tables import (
     kappa_n_grid,
     kappa_n_nu_range,
 )
-from ._fit import BETA_TABLE_REACH, MAX_W_OVER_H, fit_indentation, past_beta_table_reach
+from ._fit import (
+    BETA_TABLE_REACH,
+    MAX_W_OVER_H,
+    carry_misfit,
+    fit_indentation,
+    past_beta_table_reach,
+)
 from ._fit_model import fit_model
-from ._indenter import INDENTERS, FlatPunch, Indenter, Sphere, indenter_from_config
+from ._indenter import (
+    INDENTERS,
+    FlatPunch,
+    Indenter,
+    Sphere,
+    indenter_from_config,
+    pad_sweep_result,
+)
 from ._indenter_fit import IndenterFit, apparent_modulus, fit_indenter, json_ready, paule_mandel
 from ._kappa import HAYES_1972, KappaTable, kappa
 from ._misfit import MISFIT_ALPHA, Misfit, assess_misfit
 from ._model import IndentationModel, ModelFit, shared_groups
 from ._neohookean import neo_hookean_constants
+from ._pad_sweeps import PAD_SWEEPS_FILE, SHIPPED_PAD_SWEEPS, build_pad_sweeps, pad_sweep_key
 from ._ramp import RampFit, fit_ramp
 from ._relaxation import (
     APPARENT_E,
@@ -125,8 +139,10 @@ __all__ = [
     "INDENTERS",
     "MAX_W_OVER_H",
     "MISFIT_ALPHA",
+    "PAD_SWEEPS_FILE",
     "PAPER_BETA_RELATION",
     "RELAX_ALPHA",
+    "SHIPPED_PAD_SWEEPS",
     "TAU_HOLD_RATIO",
     "TAU_MIN_HOLD_FRACTION",
     "BetaRelation",
@@ -149,6 +165,8 @@ __all__ = [
     "beta",
     "beta_from_nu",
     "beta_relation",
+    "build_pad_sweeps",
+    "carry_misfit",
     "check_fit_effects",
     "effect_name",
     "effect_names",
@@ -175,6 +193,8 @@ __all__ = [
     "model_label",
     "neo_hookean_constants",
     "nu_from_beta",
+    "pad_sweep_key",
+    "pad_sweep_result",
     "past_beta_table_reach",
     "paule_mandel",
     "ramp_factor",

@@ -29,6 +29,7 @@ from .._checks import InputError
 from ..fem import SPHERE_W_GRID, SphereIndentation, sphere_indentation
 from ._fem_tables import TABLE_EXTRAPOLATION, fem_force, kappa_n
 from ._kappa import kappa
+from ._pad_sweeps import shipped_pad_sweep
 from ._sphere_table import (
     hertz_force_n,
     sphere_contact_ratio,
@@ -352,15 +353,20 @@ class Sphere(Indenter):
 def _pad_sweep(radius_over_h: float, nu: float, pad_over_h: float, law: str, contact: str,
                start: float, friction: float | None = None, dome_over_h: float | None = None
                ) -> tuple[CubicSpline, CubicSpline]:
-    """Force and contact ratios of :func:`pad_sweep_result`, as splines of sqrt(w/h)
-    (through 1 at w = 0, Hertz's limit)."""
-    res = pad_sweep_result(radius_over_h, nu, pad_over_h, law, contact, start, friction,
-                           dome_over_h)
-    s = np.concatenate([[0.0], np.sqrt(res.w_over_h)])
-    force = np.concatenate([[1.0], res.hertz_ratio])
-    radius = np.concatenate([[1.0], res.contact_radius / np.sqrt(radius_over_h
-                                                                  * res.w_over_h)])
-    return CubicSpline(s, force), CubicSpline(s, radius)
+    """Force and contact ratios of :func:`pad_sweep_result` (the shipped table's where it
+    holds the sweep: :func:`~tactilevision.mechanics._pad_sweeps.shipped_pad_sweep`), as
+    splines of sqrt(w/h) (through 1 at w = 0, Hertz's limit)."""
+    key = (radius_over_h, nu, pad_over_h, law, contact, start, friction, dome_over_h)
+    shipped = shipped_pad_sweep(*key)
+    if shipped is not None:
+        w, f, a = shipped
+    else:
+        res = pad_sweep_result(*key)
+        w, f = res.w_over_h, res.hertz_ratio
+        a = res.contact_radius / np.sqrt(radius_over_h * res.w_over_h)
+    s = np.concatenate([[0.0], np.sqrt(w)])
+    return (CubicSpline(s, np.concatenate([[1.0], f])),
+            CubicSpline(s, np.concatenate([[1.0], a])))
 
 
 @lru_cache(maxsize=32)

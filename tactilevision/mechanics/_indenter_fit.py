@@ -489,35 +489,10 @@ def fit_indenter(depth_mm: np.ndarray, force_n: np.ndarray, indenter: Indenter, 
     costly = bool(getattr(indenter, "costly_in_nu", False))
     grid = (np.array([nu_stated]) if costly else
             np.unique(np.append(np.round(np.arange(lo, hi + 1e-9, 0.0025), 6), nu_stated)))
-    f_sd = None
-    if force_std_n is not None:
-        f_sd = check_array(force_std_n, "force_std_n", [(n,)], dtype=np.number,
-                           finite=True).astype(np.float64)
-        if np.any(f_sd < 0):
-            i = int(np.argmax(f_sd < 0))
-            raise InputError(f"press {i}: force_std_n = {f_sd[i]:g} must be >= 0")
+    f_sd = _force_sd(force_std_n, n)
     prof, _, sigma0, weighted, stated = _profile(grid, [columns(w, v) for v in grid], P, u,
                                                  f_sd)
-    t_q = float(stats.t.ppf(0.5 + confidence / 2, max(n - 1, 1)))
     kw = {"thickness_mm": h, "law": law, "contact": contact}
-
-    def read(scale: float) -> tuple:
-        """The profile read with the residuals' variance times `scale`: E, var_E, E's and
-        nu's intervals, nu, identified, bound, E at nu's ends, notes."""
-        notes: list[str] = []
-        if costly:     # one parameter at the stated nu; nu not profiled
-            s2_1 = float(prof[0, 3]) / (n - 1)
-            E_fit = float(prof[0, 1])
-            E_var = float(prof[0, 2]) * (max(s2_1, 1.0) if weighted else s2_1) * scale
-            notes.append(f"nu not profiled: each nu is a FEM sweep of this {indenter.shape} "
-                         f"(a finite pad); E is reported at the stated nu = {nu_stated:g}")
-            return (E_fit, E_var, log_interval(E_fit, math.sqrt(E_var), t_q), nu_stated,
-                    (lo, hi), False, None, (math.nan, math.nan), notes)
-        E_fit, E_var, E_ci, nu_fit, nu_ci, ident, bound = _read_profile(
-            prof, n, weighted, confidence, (lo, hi), nu, nu_stated, notes, scale)
-        ends = [int(np.argmin(np.abs(prof[:, 0] - v))) for v in nu_ci]
-        return (E_fit, E_var, E_ci, nu_fit, nu_ci, ident, bound,
-                (float(min(prof[ends, 1])), float(max(prof[ends, 1]))), notes)
 
     def residuals(E_fit: float, nu_fit: float, ident: bool) -> tuple:
         g = indenter.force(w, E_mpa=1.0, nu=nu_fit, **kw)
@@ -529,26 +504,18 @@ def fit_indenter(depth_mm: np.ndarray, force_n: np.ndarray, indenter: Indenter, 
     # the misfit's factor read at the first reading's nu scales the residuals' variance of
     # the second (the profile's threshold and E's variance), then is read again where the
     # second puts nu
-    first = read(1.0)
+    args = (prof, n, weighted, confidence, (lo, hi), nu, nu_stated, costly, indenter.shape)
+    first = _read(*args, 1.0)
     factor = residuals(first[0], first[3], first[5])[2].factor
     E_fit, E_var, E_ci, nu_fit, nu_ci, nu_identified, bound, E_over, notes = (
-        read(factor ** 2) if factor > 1 else first)
+        _read(*args, factor ** 2) if factor > 1 else first)
     dof = n - 2
     if not (np.isfinite(depth_shared_rel) and 0 <= depth_shared_rel < 1):
         raise InputError(f"depth_shared_rel must be within [0, 1), got {depth_shared_rel!r}")
     g, resid, misfit = residuals(E_fit, nu_fit, nu_identified)
     misfit = replace(misfit, factor=factor)
     pred = E_fit * g
-    if misfit.drifts:
-        E_ci = (min(E_ci[0], misfit.E_shallow_mpa, misfit.E_deep_mpa),
-                max(E_ci[1], misfit.E_shallow_mpa, misfit.E_deep_mpa))
-    if misfit.warning:
-        notes.append(f"warning: {misfit.warning}")
-    E_identified = bool(E_ci[0] > 0 and E_ci[1] / E_ci[0] < _E_IDENTIFIED_RATIO)
-    if not E_identified:
-        notes.append(f"E not identified by these presses: its {confidence:.0%} interval "
-                     f"[{E_ci[0]:.4g}, {E_ci[1]:.4g}] MPa spans more than a factor of "
-                     f"{_E_IDENTIFIED_RATIO:.3g}")
+    E_ci, E_identified = _drift_hull(misfit, E_ci, confidence, notes)
     shared = np.asarray(depth_shared_mm, np.float64)
     if np.any(shared > 0) or depth_shared_rel > 0:
         def refit(ws: np.ndarray) -> IndenterFit:
@@ -573,3 +540,54 @@ def fit_indenter(depth_mm: np.ndarray, force_n: np.ndarray, indenter: Indenter, 
         confidence=confidence, notes=tuple(notes), nu_bound=bound, E_identified=E_identified,
         misfit=misfit)
 
+
+def _force_sd(force_std_n: np.ndarray | None, n: int) -> np.ndarray | None:
+    """`force_std_n` checked: (n,) float64, finite, >= 0 (naming the press), or None."""
+    if force_std_n is None:
+        return None
+    f_sd = check_array(force_std_n, "force_std_n", [(n,)], dtype=np.number,
+                       finite=True).astype(np.float64)
+    if np.any(f_sd < 0):
+        i = int(np.argmax(f_sd < 0))
+        raise InputError(f"press {i}: force_std_n = {f_sd[i]:g} must be >= 0")
+    return f_sd
+
+
+def _read(prof: np.ndarray, n: int, weighted: bool, confidence: float,
+          nu_range: tuple[float, float], nu: float | None, nu_stated: float, costly: bool,
+          shape: str, scale: float) -> tuple:
+    """The profile read with the residuals' variance times `scale`: E, var_E, E's and nu's
+    intervals, nu, identified, bound, E at nu's ends, notes."""
+    lo, hi = nu_range
+    notes: list[str] = []
+    if costly:     # one parameter at the stated nu; nu not profiled
+        t_q = float(stats.t.ppf(0.5 + confidence / 2, max(n - 1, 1)))
+        s2_1 = float(prof[0, 3]) / (n - 1)
+        E_fit = float(prof[0, 1])
+        E_var = float(prof[0, 2]) * (max(s2_1, 1.0) if weighted else s2_1) * scale
+        notes.append(f"nu not profiled: each nu is a FEM sweep of this {shape} (a finite "
+                     f"pad); E is reported at the stated nu = {nu_stated:g}")
+        return (E_fit, E_var, log_interval(E_fit, math.sqrt(E_var), t_q), nu_stated,
+                (lo, hi), False, None, (math.nan, math.nan), notes)
+    E_fit, E_var, E_ci, nu_fit, nu_ci, ident, bound = _read_profile(
+        prof, n, weighted, confidence, (lo, hi), nu, nu_stated, notes, scale)
+    ends = [int(np.argmin(np.abs(prof[:, 0] - v))) for v in nu_ci]
+    return (E_fit, E_var, E_ci, nu_fit, nu_ci, ident, bound,
+            (float(min(prof[ends, 1])), float(max(prof[ends, 1]))), notes)
+
+
+def _drift_hull(misfit: Misfit, E_ci: tuple[float, float], confidence: float,
+                notes: list[str]) -> tuple[tuple[float, float], bool]:
+    """E's interval widened to the drift's ends where the apparent E drifts, the misfit's
+    warning noted, and whether E is identified (its interval within a factor e^2)."""
+    if misfit.drifts:
+        E_ci = (min(E_ci[0], misfit.E_shallow_mpa, misfit.E_deep_mpa),
+                max(E_ci[1], misfit.E_shallow_mpa, misfit.E_deep_mpa))
+    if misfit.warning:
+        notes.append(f"warning: {misfit.warning}")
+    identified = bool(E_ci[0] > 0 and E_ci[1] / E_ci[0] < _E_IDENTIFIED_RATIO)
+    if not identified:
+        notes.append(f"E not identified by these presses: its {confidence:.0%} interval "
+                     f"[{E_ci[0]:.4g}, {E_ci[1]:.4g}] MPa spans more than a factor of "
+                     f"{_E_IDENTIFIED_RATIO:.3g}")
+    return E_ci, identified
