@@ -129,6 +129,14 @@ class IndenterDiagnosis:
         much scatter, ``p_low`` of too little; None without them).
     not_testable : dict of str to str
         Changes the presses cannot tell from the depths' shared error, and why.
+    equivalent_effects : dict of str to dict
+        For each change taken, the others that lowered the BIC by more than 2 as well
+        and came within 2 of it (``E_mpa``, ``bic``, their offsets): the presses cannot
+        tell them apart; each is named beside the one taken.
+    offset_bounds : (float, float)
+        The range a depth offset was searched in, mm (a quarter of the shallowest
+        depth each way, the reach on the deep side): an offset at either end is a
+        bound, not a value.
     """
 
     ladder: tuple[IndenterRung, ...]
@@ -143,6 +151,8 @@ class IndenterDiagnosis:
     not_tried: dict = field(default_factory=dict)
     noise: dict = field(default_factory=dict)
     not_testable: dict = field(default_factory=dict)
+    equivalent_effects: dict = field(default_factory=dict)
+    offset_bounds: tuple[float, float] = (math.nan, math.nan)
 
     def to_json_dict(self) -> dict:
         """JSON-ready: arrays as lists, NaN as None."""
@@ -153,7 +163,9 @@ class IndenterDiagnosis:
                 "floor_n": clean(self.floor_n), "floor_test": clean(self.floor_test),
                 "message": self.message, "depth_mm": clean(self.depth_mm),
                 "force_n": clean(self.force_n), "not_tried": dict(self.not_tried),
-                "noise": clean(self.noise), "not_testable": dict(self.not_testable)}
+                "noise": clean(self.noise), "not_testable": dict(self.not_testable),
+                "equivalent_effects": clean(self.equivalent_effects),
+                "offset_bounds_mm": clean(self.offset_bounds)}
 
 
 def _drift(depth: np.ndarray, apparent: np.ndarray) -> float:
@@ -315,7 +327,7 @@ def diagnose_indenter(depth_mm: np.ndarray, force_n: np.ndarray, indenter: Inden
         depth_std_mm=depth_std_mm, force_std_n=force_std_n,
         depth_shared_mm=depth_shared_mm, depth_shared_rel=depth_shared_rel)
     models = _Models(indenter, w, P, h, float(nu), noise)
-    ladder, state, tried, not_tried = _climb(models, base_contact)
+    ladder, state, tried, not_tried, equivalent = _climb(models, base_contact)
     rung = ladder[-1]
     not_testable = (_confounded(models, state, base_contact, tried) if noise.has_shared
                     else {})
@@ -328,7 +340,13 @@ def diagnose_indenter(depth_mm: np.ndarray, force_n: np.ndarray, indenter: Inden
         ladder=tuple(ladder), missing_effects=tuple(state["effects"]), candidates=candidates,
         nu=float(nu), floor_n=floor, floor_test=test, message="", depth_mm=w, force_n=P,
         not_tried=not_tried, noise=_noise_summary(noise, resid, rung),
-        not_testable=not_testable)
+        not_testable=not_testable,
+        equivalent_effects={k: {e: {"E_mpa": r.E_mpa, "bic": r.bic,
+                                    "depth_offset_mm": r.depth_offset_mm,
+                                    "force_offset_n": r.force_offset_n}
+                                for e, r in v.items()} for k, v in equivalent.items() if v},
+        offset_bounds=(-0.25 * float(w.min()), min(reach - float(w.max()),
+                                                   0.25 * float(w.min()))))
     return _with_message(diag)
 
 
@@ -365,12 +383,15 @@ def _step(models: _Models, state: dict, base_contact: str, *, shared: bool = Tru
     return tried, not_tried
 
 
-def _climb(models: _Models, base_contact: str) -> tuple[list, dict, dict, dict]:
+def _climb(models: _Models, base_contact: str) -> tuple[list, dict, dict, dict, dict]:
     """The ladder: take the change that lowers the BIC most (by more than BIC_STEP) until
-    none does. Returns the rungs, the final state, the last round's fits and failures."""
+    none does. Returns the rungs, the final state, the last round's fits and failures, and
+    for each change taken the others within BIC_STEP of it that would have been taken too
+    (the presses cannot tell them apart): {taken: {other: rung}}."""
     state = {"effects": (), "law": "linear", "contact": base_contact}
     rung = models.fit((), "linear", base_contact)
     ladder = [rung]
+    equivalent: dict[str, dict] = {}
     while True:
         tried, not_tried = _step(models, state, base_contact)
         if not tried:
@@ -378,12 +399,15 @@ def _climb(models: _Models, base_contact: str) -> tuple[list, dict, dict, dict]:
         best = min(tried, key=lambda k: tried[k][0].bic)
         if not tried[best][0].bic < rung.bic - BIC_STEP:
             break
+        equivalent[best] = {k: v[0] for k, v in tried.items()
+                            if k != best and v[0].bic < rung.bic - BIC_STEP
+                            and v[0].bic < tried[best][0].bic + BIC_STEP}
         cand, law, con = tried[best]
         state = {"effects": (*state["effects"], best), "law": law, "contact": con}
         rung = IndenterRung(**{**{k: getattr(cand, k) for k in cand.__dataclass_fields__},
                                "effects": state["effects"]})
         ladder.append(rung)
-    return ladder, state, tried, not_tried
+    return ladder, state, tried, not_tried, equivalent
 
 
 def _confounded(models: _Models, state: dict, base_contact: str, free: dict) -> dict:
@@ -435,6 +459,16 @@ def _with_message(d: IndenterDiagnosis) -> IndenterDiagnosis:
                  "missing.")
     else:
         s.append(f"Missing: {', '.join(d.missing_effects)}.")
+    for taken, others in d.equivalent_effects.items():
+        s.append(f"In place of {taken}, " + "; ".join(
+            f"{e} ({_offset_words(v, d.offset_bounds)}E = {v['E_mpa']:.4g} MPa)"
+            for e, v in others.items())
+                 + " explain the presses as well (the BIC within 2): these presses cannot "
+                 "tell them apart.")
+    last = d.ladder[-1]
+    if "depth_offset" in last.effects:
+        words = _offset_words({"depth_offset_mm": last.depth_offset_mm}, d.offset_bounds)
+        s.append(f"The final model puts {words.removeprefix('a ')[:-2]}.")
     for name, why in d.not_tried.items():
         s.append(f"Not tried: {name} ({why}).")
     for name, why in d.not_testable.items():
@@ -442,6 +476,23 @@ def _with_message(d: IndenterDiagnosis) -> IndenterDiagnosis:
     s += _completeness(d)
     return IndenterDiagnosis(**{**{k: getattr(d, k) for k in d.__dataclass_fields__},
                                 "message": " ".join(s)})
+
+
+def _offset_words(rung: dict, bounds: tuple[float, float]) -> str:
+    """A candidate's offsets in words ('a depth offset of +0.050 mm, '), an offset at the
+    end of its search range said to be a bound."""
+    out = ""
+    delta = rung.get("depth_offset_mm", 0.0) or 0.0
+    if delta:
+        lo, hi = bounds
+        edge = (f" (at the end of the range searched, {lo:+.3f} to {hi:+.3f} mm: a bound, "
+                f"not a value)" if math.isfinite(lo) and min(abs(delta - lo),
+                                                             abs(delta - hi)) < 1e-6 else "")
+        out += f"a depth offset of {delta:+.3f} mm{edge}, "
+    force = rung.get("force_offset_n", 0.0) or 0.0
+    if force:
+        out += f"a force offset of {force * 1e3:+.4g} mN, "
+    return out
 
 
 def _noise_sentences(noise: dict) -> list[str]:
