@@ -7,6 +7,8 @@ import math
 import sys
 from pathlib import Path
 
+import numpy as np
+
 from .. import InputError
 from ..diagnosis import HoldsFinding, diagnose, diagnose_indenter, holds_finding
 from ..io import (
@@ -17,7 +19,7 @@ from ..io import (
     read_holds,
     read_measurements,
 )
-from ..mechanics import effect_names, model_label
+from ..mechanics import effect_names, fit_indentation, model_label
 from ..viz import (
     diagnosis_figures,
     indenter_figure,
@@ -26,6 +28,7 @@ from ..viz import (
 )
 from ._fit import _write_json, depth_uncertainty
 from ._fit_indenter import add_dome_argument, depth_shared, force_sd, indenter_of
+from ._fit_specimens import table_specimens
 from ._out import add_overwrite_argument
 
 __all__ = ["add_parser", "run"]
@@ -230,6 +233,8 @@ def run(args: argparse.Namespace) -> int:
     obj = diag.to_json_dict()
     obj["measurements"] = str(path)
     obj["depth_rule"] = table.certification.get("depth_rule")
+    spec, spec_lines = _specimens(table, args)
+    obj["specimens"] = spec
     if args.json is not None:
         _write_json(obj, args.json)
     if args.report is not None:
@@ -239,4 +244,20 @@ def run(args: argparse.Namespace) -> int:
             stage.commit()
     if args.json != "-":
         print(_summary(diag, path), file=sys.stdout)
+        if spec_lines:
+            print("  specimens (the specimen column): " + "\n  ".join(spec_lines))
     return 0
+
+
+def _specimens(table, args: argparse.Namespace) -> tuple[dict | None, list[str]]:
+    """A table with a specimen column: each specimen's base fit (eq. 5 with its depth
+    uncertainties) and the batch's E with the spread between them."""
+    def fit_flat(t):
+        std = t.columns.get("depth_std_mm")
+        return fit_indentation(t.depth_mm, t.force_n, thickness_mm=t.thickness_mm,
+                               radius_mm=t.radius_mm, beta_table=args.beta_table,
+                               depth_std_mm=None if std is None or np.any(np.isnan(std))
+                               else std)
+
+    args.ignore_depth_std = getattr(args, "ignore_depth_std", False)
+    return table_specimens(table, args, fit_flat)

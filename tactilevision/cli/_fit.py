@@ -33,6 +33,7 @@ from ..mechanics import (
 )
 from ._fit_indenter import add_arguments as add_indenter_arguments
 from ._fit_indenter import note_lines, run_indenter, run_ramp
+from ._fit_specimens import SPECIMEN_COLUMN, fit_specimens, specimen_lines
 
 _DESCRIPTION = """\
 Fit the paper's law P/w = c beta (w/h) + c (eq. 5) to a measurements table
@@ -69,8 +70,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("fit", help="fit E and nu to a measurements table",
                        description=_DESCRIPTION,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("measurements", metavar="MEASUREMENTS.csv", type=Path,
-                   help="table of certified presses (formats.md section 2)")
+    p.add_argument("measurements", metavar="MEASUREMENTS.csv", type=Path, nargs="+",
+                   help="table of certified presses (formats.md section 2); several tables "
+                        "(or ramps, with --ramp), or a table with a specimen column: each "
+                        "specimen fitted on its own, then the batch's E with the spread "
+                        "between them (a random effect of the specimen)")
     p.add_argument("--thickness-mm", type=float, metavar="H",
                    help="gel thickness h in mm (default: session.toml [sensor] gel_thickness_mm)")
     p.add_argument("--radius-mm", type=float, metavar="A",
@@ -429,6 +433,61 @@ def _run_indenter(args: argparse.Namespace, table: Measurements, path: Path,
     return _verdict_status(obj, path)
 
 
+def _run_ramp(args: argparse.Namespace, path: Path, effects: tuple[str, ...]) -> int:
+    """``fit --ramp`` of one ramp."""
+    if effects != ("large_deformation",) or args.holds is not None:
+        raise InputError(f"{path}: --ramp fits the indenter's own law; --effects and "
+                         "--holds are for a measurements table")
+    obj, lines = run_ramp(args, path)
+    obj["ramp"] = str(path)
+    if args.json is not None:
+        _write_json(obj, args.json)
+    if args.json != "-":
+        print("\n".join(lines))
+    return _verdict_status(obj, path)
+
+
+def _has_specimens(path: Path, args: argparse.Namespace) -> bool:
+    """Whether the table has a ``specimen`` column (read once more by the fit)."""
+    table = read_measurements(path, thickness_mm=args.thickness_mm, radius_mm=args.radius_mm)
+    return SPECIMEN_COLUMN in table.columns or SPECIMEN_COLUMN in table.labels
+
+
+def _run_specimens(args: argparse.Namespace, paths: list[Path],
+                   effects: tuple[str, ...]) -> int:
+    """``fit`` of several specimens: each on its own, then the batch's E."""
+    if args.holds is not None or args.crossings:
+        raise InputError("--holds and --crossings fit one session's table: give one table")
+
+    def fit_flat(table: Measurements) -> IndentationFit:
+        table, weights, _ = _within_reach(table, args, None)
+        depth_std, _ = depth_uncertainty(table, ignore=args.ignore_depth_std, effects=effects)
+        weights, _ = _effects_weights(table, effects, depth_std, weights, None)
+        return _fit_table(table, effects, args, depth_std, weights)[0]
+
+    fits, left_out, pool = fit_specimens(paths, args, fit_flat)
+    obj: dict = {"measurements": [str(p) for p in paths], "fits": dict(fits),
+                 "left_out": [{"specimen": t, "why": w} for t, w in left_out],
+                 "specimens": None if pool is None else pool.to_json_dict(),
+                 "E_mpa": None if pool is None else pool.E_batch_mpa,
+                 "E_ci95_mpa": (None if pool is None else list(pool.E_batch_ci95_mpa)),
+                 "nu": None, "nu_ci95": None, "c_n_per_mm": None, "beta": None,
+                 "rmse_n": None, "n_presses": sum(int(o.get("n_presses") or 0)
+                                                 for _, o in fits),
+                 "effects": list(effects), "effect_params": {}}
+    if args.json is not None:
+        _write_json(obj, args.json)
+    if args.json != "-":
+        print("\n".join(specimen_lines(fits, left_out, pool)))
+    if pool is None:
+        print("tactilevision fit: error: fewer than two specimens give an E: no batch E "
+              "(exit status 3)", file=sys.stderr)
+        return 3
+    if pool.disagree:
+        print(f"tactilevision fit: warning: {pool.message}", file=sys.stderr)
+    return 0
+
+
 def _verdict_status(obj: dict, path: Path) -> int:
     """A ball's or a ramp's exit status: its misfit's warning on stderr; 3 when E is not
     identified (its interval spans more than a factor of e^2), else 0."""
@@ -467,18 +526,12 @@ def run(args: argparse.Namespace) -> int:
     effects = check_fit_effects([e.strip() for e in args.effects.split(",") if e.strip()])
     if args.a_over_h is not None and not math.isfinite(args.a_over_h):
         raise InputError(f"--a-over-h must be a finite number, got {args.a_over_h}")
-    path = args.measurements
+    paths = list(args.measurements)
+    if len(paths) > 1 or (not args.ramp and _has_specimens(paths[0], args)):
+        return _run_specimens(args, paths, effects)
+    args.measurements = path = paths[0]
     if args.ramp:
-        if effects != ("large_deformation",) or args.holds is not None:
-            raise InputError(f"{path}: --ramp fits the indenter's own law; --effects and "
-                             "--holds are for a measurements table")
-        obj, lines = run_ramp(args, path)
-        obj["ramp"] = str(path)
-        if args.json is not None:
-            _write_json(obj, args.json)
-        if args.json != "-":
-            print("\n".join(lines))
-        return _verdict_status(obj, path)
+        return _run_ramp(args, path, effects)
     table = read_measurements(path, thickness_mm=args.thickness_mm, radius_mm=args.radius_mm)
     shape = args.shape or table.indenter.get("shape", "flat_punch")
     if shape != "flat_punch":

@@ -117,6 +117,7 @@ from ._relaxation import (
 )
 from ._relaxation_log import refine_relaxation
 from ._result import IndentationFit
+from ._specimens import SPECIMEN_ALPHA, SpecimenPool, pool_specimens
 from ._sphere_surface import hertz_surface_depth, sphere_surface_depth
 from ._sphere_table import (
     hertz_force_n,
@@ -143,6 +144,7 @@ __all__ = [
     "PAPER_BETA_RELATION",
     "RELAX_ALPHA",
     "SHIPPED_PAD_SWEEPS",
+    "SPECIMEN_ALPHA",
     "TAU_HOLD_RATIO",
     "TAU_MIN_HOLD_FRACTION",
     "BetaRelation",
@@ -159,6 +161,7 @@ __all__ = [
     "Param",
     "RampFit",
     "RelaxationFit",
+    "SpecimenPool",
     "Sphere",
     "apparent_modulus",
     "assess_misfit",
@@ -197,6 +200,7 @@ __all__ = [
     "pad_sweep_result",
     "past_beta_table_reach",
     "paule_mandel",
+    "pool_specimens",
     "ramp_factor",
     "refine_relaxation",
     "register_effect",

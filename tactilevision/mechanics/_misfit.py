@@ -10,10 +10,16 @@ the intervals by what it shows:
   the intervals (a fit that scales its covariance by its residual variance, or adds an
   extra variance by Paule and Mandel's rule, already carries it: the factor is then
   named, not applied twice);
-- the **serial correlation** of the residuals ordered by depth (lag 1): a law that
+- the **serial correlation** of the residuals ordered by depth (lag 1; repeats at one
+  depth averaged, since they have no order among them): a law that
   cannot follow the curve leaves long runs of one sign, and n such residuals carry the
   information of n (1 - rho) / (1 + rho) independent ones (an AR(1) process; Bayley and
   Hammersley 1946), so the intervals widen by sqrt((1 + rho) / (1 - rho));
+- where depths are repeated, the **lack of fit** of the repeats' mean residuals against
+  the repeats' own scatter (an F test): significant, the repeats of a depth share its
+  misfit, and the intervals widen by Kish's design effect sqrt(1 + (m - 1) icc), m
+  presses per depth, icc = (F - 1) / (F - 1 + m) the share of the residual variance
+  between depths;
 - the **drift** of each press's apparent E over depth (the deepest quarter's mean over
   the shallowest's, tested by the slope of a straight line of apparent E on depth): a
   law that fits gives a flat profile; a drift says the E the fit reports depends on
@@ -59,7 +65,8 @@ class Misfit:
     chi2_p : float
         chi2's upper-tail probability on dof degrees of freedom; NaN without noise.
     correlation : float
-        Lag-1 correlation of the residuals ordered by depth; NaN for fewer than 8.
+        Lag-1 correlation of the residuals ordered by depth (the mean residual of
+        each depth where presses repeat it); NaN for fewer than 8 depths.
     correlation_p : float
         Its one-sided p (rho sqrt(n) against the standard normal); NaN likewise.
     drift : float
@@ -161,7 +168,19 @@ def assess_misfit(depth_mm: np.ndarray, residuals_n: np.ndarray, apparent_E_mpa:
         if np.all(np.isfinite(sd) & (sd > 0)):
             chi2 = float(np.sum((r / sd) ** 2))
             birge, chi2_p = math.sqrt(chi2 / dof), float(stats.chi2.sf(chi2, dof))
-    rho, rho_p, f_corr = serial_correlation(r[np.argsort(w, kind="stable")])
+    # presses at one depth (repeats) have no order among them: their mean residual is read
+    _, inv = np.unique(np.round(w, 9), return_inverse=True)
+    r_depth = np.bincount(inv, r) / np.bincount(inv)
+    rho, rho_p, f_corr = serial_correlation(r_depth)
+    lof_F, lof_p = _lack_of_fit(inv, r, n_params)
+    f_lof = 1.0
+    if lof_p < MISFIT_ALPHA and lof_F > 1:
+        # the repeats of a depth share its misfit: n presses carry the information of
+        # n / (1 + (m - 1) icc) (Kish's design effect, m presses per depth, icc the share
+        # of the residual variance between depths), the residual-scaled intervals too few
+        m = r.size / (int(inv.max()) + 1)
+        icc = (lof_F - 1) / (lof_F - 1 + m)
+        f_lof = math.sqrt(1 + (m - 1) * icc)
     drift = drift_p = math.nan
     shallow, deep = _quarters(w, e)
     if shallow != 0 and math.isfinite(shallow) and math.isfinite(deep):
@@ -176,10 +195,16 @@ def assess_misfit(depth_mm: np.ndarray, residuals_n: np.ndarray, apparent_E_mpa:
             drift_p = 0.0
     factor = 1.0
     found = []
-    if f_corr > 1:
-        factor *= f_corr
-        found.append(f"the residuals run in long runs along depth (lag-1 correlation "
-                     f"{rho:.2f}): the intervals widened x{f_corr:.2g}")
+    if f_corr > 1 or f_lof > 1:
+        factor *= max(f_corr, f_lof)
+        why = []
+        if f_corr > 1:
+            why.append(f"the residuals run in long runs along depth (lag-1 correlation "
+                       f"{rho:.2f})")
+        if f_lof > 1:
+            why.append(f"the repeats' mean residuals lie off the law beyond the repeats' own "
+                       f"scatter (lack of fit F = {lof_F:.3g}, p = {lof_p:.2g})")
+        found.append(" and ".join(why) + f": the intervals widened x{max(f_corr, f_lof):.2g}")
     if math.isfinite(chi2_p) and chi2_p < MISFIT_ALPHA:
         if carried:
             found.append(f"the residuals are {birge:.3g} times the stated noise (Birge ratio, "
@@ -201,6 +226,23 @@ def assess_misfit(depth_mm: np.ndarray, residuals_n: np.ndarray, apparent_E_mpa:
     return Misfit(birge_ratio=birge, chi2_p=chi2_p, correlation=rho, correlation_p=rho_p,
                   drift=drift, drift_p=drift_p, E_shallow_mpa=shallow, E_deep_mpa=deep,
                   factor=factor, carried=carried, warning=warning)
+
+
+def _lack_of_fit(groups: np.ndarray, r: np.ndarray, n_params: int) -> tuple[float, float]:
+    """The lack-of-fit F of residuals `r` whose presses repeat depths (`groups`, the index
+    of each press's depth), and its p; (NaN, 1) without two degrees of freedom on each
+    side."""
+    k = int(groups.max()) + 1 if groups.size else 0
+    dof_pure, dof_lack = r.size - k, k - n_params
+    if dof_pure < 2 or dof_lack < 1:
+        return math.nan, 1.0
+    means = np.bincount(groups, r) / np.bincount(groups)
+    ss_pure = float(np.sum((r - means[groups]) ** 2))
+    ss_lack = float(np.sum(r ** 2)) - ss_pure
+    if not ss_pure > 0:
+        return math.nan, 1.0
+    F = (ss_lack / dof_lack) / (ss_pure / dof_pure)
+    return F, float(stats.f.sf(F, dof_lack, dof_pure))
 
 
 def serial_correlation(residuals: np.ndarray) -> tuple[float, float, float]:
