@@ -27,7 +27,8 @@ the intervals by what it shows:
   shallowest and of the deepest quarter of the presses.
 
 The first two are tested at :data:`MISFIT_ALPHA` (1 %), the drift at :data:`DRIFT_ALPHA`
-(5 %); what is found is named in one warning (the
+(5 %), or at :data:`DRIFT_LENIENT` (20 %) where it is :data:`DRIFT_LARGE` (5 %) or more;
+what is found is named in one warning (the
 factor and the drift) that ``fit``, ``calibrate`` and ``diagnose`` print and write.
 """
 
@@ -40,8 +41,8 @@ from typing import Any
 import numpy as np
 from scipy import stats
 
-__all__ = ["DRIFT_ALPHA", "MISFIT_ALPHA", "Misfit", "assess_misfit", "log_interval",
-           "serial_correlation", "widen_interval"]
+__all__ = ["DRIFT_ALPHA", "DRIFT_LARGE", "DRIFT_LENIENT", "MISFIT_ALPHA", "Misfit",
+           "assess_misfit", "log_interval", "serial_correlation", "widen_interval"]
 
 #: Level of the tests of the residuals' size (chi2's tail) and serial correlation: 1 %.
 MISFIT_ALPHA = 0.01
@@ -49,6 +50,14 @@ MISFIT_ALPHA = 0.01
 #: slope's t test few degrees of freedom (FEATS' four points drift 21 % at p = 0.015), and a
 #: drift missed is an interval too narrow where one found is only an interval wider.
 DRIFT_ALPHA = 0.05
+#: A drift this large (5 % of E over the depths pressed) is named and held in E's interval
+#: at a lenient level (p below :data:`DRIFT_LENIENT`): four presses cannot make a 13 %
+#: drift significant at 5 % when it is curved (a contact point 0.05 mm off on the FEATS
+#: geometry: p = 0.06 to 0.07), and an E that moves that much with the depths fitted is not
+#: one number.
+DRIFT_LARGE = 0.05
+#: The lenient level of a large drift.
+DRIFT_LENIENT = 0.20
 #: Fewest residuals whose lag-1 correlation is read (fewer: not read).
 _MIN_CORRELATED = 8
 
@@ -106,8 +115,9 @@ class Misfit:
 
     @property
     def drifts(self) -> bool:
-        """The apparent E drifts with depth (its slope's p below :data:`DRIFT_ALPHA`)."""
-        return bool(np.isfinite(self.drift_p) and self.drift_p < DRIFT_ALPHA)
+        """The apparent E drifts with depth: its slope's p below :data:`DRIFT_ALPHA`, or a
+        drift of :data:`DRIFT_LARGE` or more at p below :data:`DRIFT_LENIENT`."""
+        return _drifts(self.drift, self.drift_p)
 
     @property
     def beyond_noise(self) -> bool:
@@ -122,6 +132,13 @@ class Misfit:
             out[k] = (None if isinstance(v, float) and not math.isfinite(v) else v)
         out["drifts"], out["beyond_noise"] = self.drifts, self.beyond_noise
         return out
+
+
+def _drifts(drift: float, p: float) -> bool:
+    if not math.isfinite(p):
+        return False
+    return p < DRIFT_ALPHA or (math.isfinite(drift) and abs(drift) >= DRIFT_LARGE
+                               and p < DRIFT_LENIENT)
 
 
 def _quarters(depth: np.ndarray, apparent: np.ndarray) -> tuple[float, float]:
@@ -213,7 +230,7 @@ def assess_misfit(depth_mm: np.ndarray, residuals_n: np.ndarray, apparent_E_mpa:
             factor *= birge
             found.append(f"the residuals are {birge:.3g} times the stated noise (Birge ratio, "
                          f"chi2 p = {chi2_p:.2g}): the intervals widened x{birge:.3g}")
-    if math.isfinite(drift_p) and drift_p < DRIFT_ALPHA:
+    if _drifts(drift, drift_p):
         found.append(f"the apparent E drifts {100 * drift:+.1f} % over the depths pressed "
                      f"(p = {drift_p:.2g}; {shallow:.4g} MPa at the shallowest presses, "
                      f"{deep:.4g} MPa at the deepest): E depends on the depths fitted, its "
