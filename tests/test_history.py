@@ -333,3 +333,18 @@ def test_session_date_is_read_without_a_warning_and_checked(tmp_path):
     toml.write_text(base + "\n[session]\ndate = 20261102\n")
     with pytest.raises(InputError, match=r"session.toml: \[session\] date must be a date"):
         read_session(folder)
+
+
+def test_the_specimen_column_makes_each_specimen_a_series(tmp_path):
+    """Two gels of one sensor's batch, each calibration folder's measurements.csv naming its
+    specimen: two series, not one; a folder naming two specimens is refused, naming it."""
+    for i, (spec, E) in enumerate((("A", 0.20), ("B", 0.26), ("A", 0.199), ("B", 0.261))):
+        f = _fake(tmp_path / f"c{i}", E=E, half=0.01, date=f"2026-01-{1 + i:02d}")
+        (f / "measurements.csv").write_text(f"specimen,depth_mm,force_n\n{spec},0.3,1.0\n")
+    by = gather(sorted(tmp_path.glob("c*")))
+    assert sorted(by) == ["gelA (specimen A)", "gelA (specimen B)"]
+    assert [r.E_mpa for r in by["gelA (specimen B)"]] == [0.26, 0.261]
+    bad = _fake(tmp_path / "mixed", E=0.2, half=0.01, date="2026-02-01")
+    (bad / "measurements.csv").write_text("specimen,depth_mm,force_n\nA,0.3,1.0\nB,0.3,1.1\n")
+    with pytest.raises(InputError, match=r"mixed: its measurements.csv names 2 specimens"):
+        gather([bad])

@@ -9,6 +9,7 @@ them into one date-ordered list per sensor.
 
 from __future__ import annotations
 
+import csv
 import datetime
 import math
 import tomllib
@@ -37,7 +38,9 @@ class CalibrationRecord:
         The ``calibrate`` output folder.
     sensor : str
         ``sensor_name`` of fit.json (``[sensor] name`` of the session), else
-        the folder's session.toml ``[sensor] name``, else ``'unnamed'``.
+        the folder's session.toml ``[sensor] name``, else ``'unnamed'``; with
+        ``(specimen S)`` after it where the folder's measurements.csv has a
+        ``specimen`` column naming one specimen S (each specimen a series).
     date : datetime.date
         The day of the calibration session.
     date_source : str
@@ -155,6 +158,35 @@ def _n_rejected(result: CalibrationResult, folder: Path) -> int:
     return len(result.rejected)
 
 
+def _specimen(folder: Path) -> str:
+    """The ``specimen`` column of the folder's measurements.csv: its one value, or '' when
+    the table has no such column (or no table).
+
+    Raises
+    ------
+    InputError
+        Naming the folder, when the column names more than one specimen: a calibration
+        folder is one gel's; several specimens are pooled by ``fit``.
+    """
+    path = folder / "measurements.csv"
+    if not path.is_file():
+        return ""
+    with path.open(newline="") as f:
+        rows = list(csv.reader(line for line in f if line.strip()
+                               and not line.lstrip().startswith("#")))
+    if not rows or "specimen" not in [c.strip() for c in rows[0]]:
+        return ""
+    i = [c.strip() for c in rows[0]].index("specimen")
+    values = sorted({r[i].strip() for r in rows[1:] if len(r) > i and r[i].strip()})
+    if len(values) > 1:
+        raise InputError(f"calibration folder {folder}: its measurements.csv names "
+                         f"{len(values)} specimens ({', '.join(values[:4])}"
+                         f"{', ...' if len(values) > 4 else ''}): a history follows one gel "
+                         "per calibration; pool specimens with `tactilevision fit` (its "
+                         "specimen column)")
+    return values[0] if values else ""
+
+
 def read_calibration(folder: str | Path, *, date: datetime.date | None = None
                      ) -> CalibrationRecord:
     """Read one ``calibrate`` output folder.
@@ -193,6 +225,9 @@ def read_calibration(folder: str | Path, *, date: datetime.date | None = None
         section = toml.get("sensor")
         sensor = section.get("name") if isinstance(section, dict) else None
     sensor = sensor.strip() if isinstance(sensor, str) and sensor.strip() else UNNAMED
+    specimen = _specimen(folder)
+    if specimen:            # each specimen of a sensor's gels is a series of its own
+        sensor = f"{sensor} (specimen {specimen})"
     when, source = _date(fit, toml, folder, date)
     E = _number(fit, "E_mpa", path)
     E_ci = _interval(fit, "E_ci95_mpa", path)
