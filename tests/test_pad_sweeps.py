@@ -42,3 +42,33 @@ def test_the_feats_ball_reads_the_shipped_sweep_without_solving(monkeypatch):
                       contact="frictionless")
     assert np.all(tied > 0) and tied[-1] > slip[-1]
     indenter_module._pad_sweep.cache_clear()
+
+
+def _feats() -> tuple[np.ndarray, np.ndarray]:
+    from pathlib import Path
+    data = np.loadtxt(Path(__file__).resolve().parents[1] / "sample_frames" / "feats"
+                      / "force_depth.csv", delimiter=",", skiprows=1)
+    return data[:, 0], data[:, 1]
+
+
+def test_feats_fit_warns_of_its_drift_and_holds_what_diagnose_selects():
+    """The real FEATS gel read by fit's defaults (tied, linear, nu 0.5): its apparent E
+    drifts 21 %, which fit warns of and holds in E's interval, and that interval holds the
+    E of the model diagnose selects; depths shifted 0.05 mm either way (a contact point
+    off) are fitted, not refused, and the shift toward the gel is named a depth offset."""
+    from tactilevision.diagnosis import diagnose_indenter
+    from tactilevision.mechanics import fit_indenter
+
+    ball = Sphere(7.5, pad_radius_mm=12.92)
+    w, P = _feats()
+    kw = {"thickness_mm": 4.0, "contact": "tied"}
+    fit = fit_indenter(w, P, ball, law="linear", **kw)
+    assert fit.misfit.drifts and fit.misfit.drift == pytest.approx(-0.21, abs=0.01)
+    assert any(n.startswith("warning:") for n in fit.notes)
+    chosen = diagnose_indenter(w, P, ball, **kw).ladder[-1].E_mpa
+    assert fit.E_ci95_mpa[0] <= chosen <= fit.E_ci95_mpa[1]
+    for shift in (-0.05, 0.05):
+        f = fit_indenter(w + shift, P, ball, law="linear", **kw)
+        assert f.E_ci95_mpa[0] > 0
+    d = diagnose_indenter(w - 0.05, P, ball, **kw)
+    assert "depth_offset" in d.missing_effects and d.ladder[-1].depth_offset_mm > 0.05
