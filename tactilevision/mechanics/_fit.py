@@ -334,11 +334,14 @@ def carry_misfit(fit: IndentationFit, depth_mm: np.ndarray, force_n: np.ndarray,
         With :attr:`~IndentationFit.misfit` set; where the residuals run in long
         runs along depth (a serial correlation), E's and nu's intervals widened
         by its factor (E's in log E, nu's clipped to [0, 0.5]); where each
-        press's apparent E (E P / P_fit) drifts with depth, E's interval widened
+        press's apparent E (E P / P_fit, P_fit the FEM's own force law at E and
+        nu where the FEM table gave them, else `predicted_n`) drifts with
+        depth, E's interval widened
         to hold the shallowest and deepest quarters' apparent E; a note
         ``warning: ...`` naming them. The fit's covariance (HC3, or Paule and
         Mandel's extra variance) already carries the residuals' size: the Birge
-        ratio is named, not applied again.
+        ratio is named, not applied again. ``E_se_mpa`` and ``nu_se`` stay the
+        fit's own (the press scatter's).
     """
     w, P = np.asarray(depth_mm, np.float64), np.asarray(force_n, np.float64)
     pred = np.asarray(predicted_n, np.float64)
