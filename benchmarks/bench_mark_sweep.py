@@ -68,6 +68,9 @@ E_TRUE, NU_TRUE = 0.20, 0.48
 RADIUS_MM, THICKNESS_MM = 2.5, 3.0          # the generator's indenter and gel
 #: A press this far from the truth must be refused, flagged or warned of, um.
 BIG_UM = 50.0
+#: calibrate's reasons for refusing a press whose depth readings disagree or whose depth
+#: is past the gauge block's reach (rejected.csv)
+FLAG_REASONS = ("depth readings disagree", "depth past the gauge's reach")
 
 
 def force_law() -> tuple[float, float]:
@@ -149,6 +152,35 @@ def render(folder: Path, d: dict) -> float:
     return time.perf_counter() - t
 
 
+def true_depth_at_window(tp: dict, truth: dict, t0: float, t1: float) -> float:
+    """The true depth the force window of a press saw, mm: eq. (5) with the truth's c and
+    beta inverted at the mean of the true force over the window's span ``[t0, t1]``
+    (camera clock, s; the depth follows the generator's ramp, hold and release). Where the
+    window lies in the hold, the hold's depth; where it starts on the approach (a mark seen
+    before the stage stopped), less."""
+    t = np.linspace(t0, t1, 201)
+    ts, t1_, t2, t3 = tp["t_start_s"], tp["hold_from_s"], tp["hold_to_s"], tp["release_end_s"]
+    wf = tp["depth_mm"]
+    w = np.interp(t, [ts, t1_, t2, t3], [0.0, wf, wf, 0.0], left=0.0, right=0.0)
+    c, beta, h = truth["c_n_per_mm"], truth["beta"], truth["thickness_mm"]
+    p_mean = float(np.mean(c * w * (1 + beta * w / h)))
+    a = c * beta / h                              # a w^2 + c w - P = 0
+    return (-c + math.sqrt(c * c + 4 * a * p_mean)) / (2 * a)
+
+
+def own_sd(cal) -> np.ndarray:
+    """Each press's own depth sd, mm: ``depth_std_mm`` less the n-fold part of its
+    indenter's shared error (``depth_indenter_std_mm``, carried n times over in the
+    variance for the fit: Kish's design effect), that part counted once."""
+    sd = np.asarray(cal.depth_std_mm, np.float64)
+    ind = np.asarray(cal.depth_indenter_std_mm, np.float64)
+    if ind.shape != sd.shape:
+        return sd
+    g = np.array([p.indenter for p in cal.certification.presses])
+    n = np.array([np.sum(g == k) for k in g], np.float64)
+    return np.sqrt(np.maximum(sd ** 2 - ind ** 2 * (1 - 1 / n), 0.0))
+
+
 def score(folder: Path, d: dict) -> dict:
     """Calibrate the design's session and score it against its truth (module docstring)."""
     truth = json.loads((folder / "truth.json").read_text())
@@ -162,10 +194,12 @@ def score(folder: Path, d: dict) -> dict:
         session.frame(i)
     t_decode = time.perf_counter() - t0
     ps = cal.certification.presses
-    flagged = set(getattr(cal, "flagged_presses", ()) or ())
-    err = np.array([1e3 * (dd - tp[p.press]["depth_mm"]) for p, dd in zip(ps, cal.depth_mm,
-                                                                          strict=True)])
-    sd = 1e3 * np.asarray(cal.depth_std_mm, np.float64)
+    flagged = {r.press for r in cal.certification.rejected if r.reason in FLAG_REASONS}
+    half = session.config.window_samples / (2.0 * session.config.rate_hz)
+    true = np.array([true_depth_at_window(tp[p.press], truth, p.t_frame_s + p.hold_s - half,
+                                          p.t_frame_s + p.hold_s + half) for p in ps])
+    err = 1e3 * (np.asarray(cal.depth_mm, np.float64) - true)
+    sd = 1e3 * own_sd(cal)
     kept = np.array([p.press not in flagged for p in ps], bool)
     warned = " ".join(cal.warnings)
     big = [(p.press, float(e)) for p, e in zip(ps, err, strict=True) if abs(e) > BIG_UM]

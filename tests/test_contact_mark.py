@@ -116,27 +116,33 @@ def _ramp_session():
 def test_crossing_bracket_spans_its_periods_and_ends_at_the_hold_when_told():
     """The crossing lies in the `periods` frame periods before the mark's first trace: a
     trace at 1.55 s brackets fz over [1.45, 1.55] s = [0.9, 1.1] N with one period, [0.7,
-    1.1] N with two; with `to_hold` (an onset that may be early) the bracket ends at the
-    hold's start (2.0 s, 2 N); a trace after the hold puts it in the periods before the
-    hold's start.
+    1.1] N with two; a trace at 2.05 s, the hold begun at 2.0 s, over [1.95, 2.05] s with
+    the approach's ramp extrapolated past the hold's start: [1.9, 2.1] N (clipped at the
+    hold, [1.8, 2.0] N, the crossing sat near the top of such brackets whenever the stage
+    stopped within a period of w0, and the intersections read P(w0) low: issue 83); with
+    `to_hold` (an onset that may be early) the bracket ends at the hold's start (2.0 s,
+    2 N); a trace whose frame before was already in the hold puts it in the periods before
+    the hold's start.
     Returned as the middle and the sd of a uniform over the bracket."""
     session, run = _ramp_session()
 
     def bracket(t_on, periods=1, to_hold=False):
-        mid, sd, span = _crossing_force(session, run, t_on, 0.0, 0.1, periods, to_hold)
+        mid, sd, span, hold = _crossing_force(session, run, t_on, 0.0, 0.1, periods, to_hold)
+        assert hold == pytest.approx(2.0, abs=2e-3)
         # the instants it is read at, kept with the press: the same bracket read again
         assert crossing_bracket(session.force_times_s, session.forces_n[:, 2],
-                                *span) == (mid, sd)
+                                *span, ramp_end_s=hold) == (mid, sd)
         half = np.sqrt(3.0) * sd
         return mid - half, mid + half
 
     np.testing.assert_allclose(bracket(1.55), [0.9, 1.1], atol=2e-3)
     np.testing.assert_allclose(bracket(1.55, 2), [0.7, 1.1], atol=2e-3)
+    np.testing.assert_allclose(bracket(2.05), [1.9, 2.1], atol=1e-2)
     np.testing.assert_allclose(bracket(1.55, 2, to_hold=True), [0.7, 2.0], atol=1e-2)
     np.testing.assert_allclose(bracket(2.35, 2), [1.6, 2.0], atol=1e-2)
     # an onset read in the hold (a noise frame, the template failing): still two periods
     np.testing.assert_allclose(bracket(2.15, 2, to_hold=True), [1.6, 2.0], atol=1e-2)
-    _, _, span = _crossing_force(session, run, 1.55, 0.0, 0.1, 2, False)
+    _, _, span, _ = _crossing_force(session, run, 1.55, 0.0, 0.1, 2, False)
     np.testing.assert_allclose(span, [1.35, 1.55], atol=1e-9)
     # read on another force at those instants (the elastic force behind a relaxing log)
     twice = session.forces_n[:, 2] * 2.0
@@ -167,13 +173,18 @@ def test_frames_before_the_first_trace_that_may_show_it_faintly_widen_its_bracke
         monkeypatch):
     """A mark's trace grows from nothing at w0: the frame before the first that counts as a
     trace (4 sds and 0.1 of the way) is counted as possibly showing the mark when it lies
-    above the approach's level (on Taxim's frames without shadows the first frame past w0
-    showed 0.01 to 0.23 of the way), at most MARK_FAINT_MAX of them; one at or under the
-    approach's level is not."""
+    MARK_Z_FAINT sds above the approach's level and as far above the frames before it (on
+    Taxim's frames without shadows the first frame past w0 showed 0.01 to 0.23 of the
+    way), at most MARK_FAINT_MAX of them; one at or under the approach's level is not, nor
+    one within MARK_Z_FAINT sds of it (issue 83: at 0 sds, any frame above the approach's
+    level, the needless periods widened the brackets downwards only and the depths read
+    deep)."""
     onset, first, faint = _faint_press(monkeypatch, [-0.02, 0.06])
     assert (onset, first, faint) == (10, 10, 1)
     assert _faint_press(monkeypatch, [0.06, -0.02])[2] == 0
     assert _faint_press(monkeypatch, [0.03, 0.05, 0.07])[2] == MARK_FAINT_MAX == 1
+    # 0.02 of the way: under MARK_Z_FAINT sds of the approach's frames (sd 0.011)
+    assert _faint_press(monkeypatch, [-0.02, 0.02])[2] == 0
     # a frame over 4 sds and 0.1 of the way, rising towards the hold, is the first trace
     onset, first, faint = _faint_press(monkeypatch, [-0.02, 0.3])
     assert (onset, first, faint) == (10, 9, 0)
@@ -186,10 +197,11 @@ def test_a_trace_rises_above_the_frames_before_it_not_an_approach_lifted_by_shad
     last four): a frame 4 sds and 0.1 of the way up counts as the first trace only when it
     also lies 4 sds above the median of the three frames before the one before it (that
     one may show the mark's toe). Here 0.17 after 0.20, 0.14 and 0.07 does not: the onset
-    is the first trace, its period and the one before bracket the crossing. After frames
-    at the approach's level the same 0.17 is the trace."""
+    is the first trace; nor is it a faint trace (MARK_Z_FAINT sds above the frames before
+    it), so its period alone brackets the crossing. After frames at the approach's level
+    the same 0.17 is the trace."""
     lifted = [0.20, 0.14, 0.07, 0.17]
     onset, first, faint = _faint_press(monkeypatch, lifted)
-    assert (onset, first, faint) == (12, 12, 1)
+    assert (onset, first, faint) == (12, 12, 0)
     onset, first, faint = _faint_press(monkeypatch, [0.01, -0.01, 0.0, 0.17])
     assert (onset, first, faint) == (12, 11, 0)

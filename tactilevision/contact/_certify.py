@@ -275,7 +275,7 @@ def certify_session(session, *, min_contact_px: int = 200,
             thr = 12.0 if bevel_threshold == "auto" else float(bevel_threshold)
             mark_rule = {"rule": "fixed", "threshold": thr}
     ctx = _PressContext(session=session, sigma=sigma, area=area, period=period, offset=offset,
-                        geom=geom, n_runs=len(runs), mark_rule=mark_rule)
+                        geom=geom, n_runs=len(runs), mark_rule=mark_rule, runs=tuple(runs))
 
     certified: list[CertifiedPress] = []
     rejected: list[Rejection] = []
@@ -448,11 +448,11 @@ def _press_reading(ctx: _PressContext, k: int, run: np.ndarray, peak: int, fp: F
         return {"press": press, "profiles": profiles, "window": window, "quick": quick,
                 "t0": float(times[run[0]]), "centre": centre}
     travel = _onset_travel(session, run, first, ctx.offset, ctx.period, w0)
-    f_on, f_on_se, span = _crossing_force(session, run, float(times[first]) + ctx.offset,
-                                          ctx.offset, ctx.period, periods, to_hold)
+    f_on, f_on_se, span, t_hold = _crossing_force(session, run, float(times[first]) + ctx.offset,
+                                                  ctx.offset, ctx.period, periods, to_hold)
     return replace(press, rule="onset", closure_mm=0.0, closure_std_mm=travel / np.sqrt(12.0),
                    force_onset_n=f_on, force_onset_sem_n=f_on_se, travel_mm=float(travel),
-                   onset_span_s=span)
+                   onset_span_s=span, hold_start_s=t_hold)
 
 
 def _window_middle(session, t_cert: float, offset: float, half: float, t_hold_end: float,

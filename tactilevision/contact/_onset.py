@@ -138,7 +138,8 @@ def _mark_residual(ctx: _PressContext, centre: tuple[float, float], i: int
     return u, R - B @ coef
 
 
-def _mark_template_onset(ctx: _PressContext, centre: tuple[float, float], run: np.ndarray
+def _mark_template_onset(ctx: _PressContext, centre: tuple[float, float], run: np.ndarray,
+                         lead: np.ndarray | None = None
                          ) -> tuple[tuple[int, int, int] | None, str]:
     """A mark's onset from the press's own template: ``((onset, first, faint), why)``,
     None where the press has too few frames to build one or the template shows no step
@@ -165,10 +166,12 @@ def _mark_template_onset(ctx: _PressContext, centre: tuple[float, float], run: n
     ran about linear in it: 0.41 of the hold's depth past w0 projected 0.50), so a frame
     that crossed w0 shortly before it was taken can show the mark at less than half-way: the
     onset then lies a frame after the crossing's period. ``first`` walks back from the onset
-    through the frames rising towards it while they lie :data:`MARK_Z_SEEN` sds above the
-    approach's level, and as far above the three frames before the one before it (their
-    median): the crossing lies in the period before ``first`` (on a Taxim session at 10
-    frames/s, one such press put its indenter's P(w0) 6 % high and its depths 8 um shallow).
+    through the frames rising towards it while they lie :data:`MARK_Z_SEEN` sds (and
+    :data:`MARK_TRACE` of the way) off the approach's level, and as far off the three
+    frames before the one before it (their median), the same way (:func:`_departs`; a
+    trace may project either way): the crossing lies in the period before ``first`` (on a
+    Taxim session at 10 frames/s, one such press put its indenter's P(w0) 6 % high and its
+    depths 8 um shallow).
     A trace rises from the frames before it; an approach whose shading lifts the mark's
     profile lifts them all (on a Taxim session without shadows, seed 171, the first press's
     four frames before its crossing projected 0.07 to 0.20 of the way, 1.7 to 4.9 sds: the
@@ -178,12 +181,21 @@ def _mark_template_onset(ctx: _PressContext, centre: tuple[float, float], run: n
 
     A mark's trace grows from nothing at w0, so a frame taken just past it may show the
     mark below any threshold that noise does not cross: ``faint`` counts the frames before
-    ``first`` (at most :data:`MARK_FAINT_MAX`) projected over :data:`MARK_Z_FAINT` sds
-    above the approach's level, whose periods the crossing's bracket then spans too (on
-    a Taxim session at 30 frames/s without shadows, 16 of 28 brackets missed P(w0), all
-    above it; an indenter's P(w0) is the intersection of its presses'
-    brackets, which one late bracket moves). A needless period costs that press's
-    bracket its width, not the intersection its truth."""
+    ``first`` (at most :data:`MARK_FAINT_MAX`) projected over :data:`MARK_Z_FAINT` sds off
+    the approach's level and as far off the frames before them, whose periods the
+    crossing's bracket then spans too (on a Taxim session at 30 frames/s without shadows,
+    16 of 28 brackets missed P(w0), all above it; an indenter's P(w0) is the intersection
+    of its presses' brackets, which one late bracket moves). A needless period widens the
+    press's bracket downwards only, and so moves its indenter's intersection: the test
+    is a rise, not any frame above the approach's level (issue 83).
+
+    `lead`: frames just before the press's first frame in contact (no contact yet, so no
+    mark), taken into the approach's frames: a fast approach at a low frame rate shows
+    under three frames in contact before the land reaches the gel (on a Taxim session at
+    12 frames/s and 1.3 mm/s, 9 of 17 presses, whose marks stepped 0 to 1.0 of the way
+    at 0.003 sd, were refused as never seen without them)."""
+    if lead is not None and len(lead):
+        run = np.concatenate([np.asarray(lead, run.dtype), run])
     f = _press_forces(ctx, run)
     few = "the press has too few frames for its own template"
     if f.size == 0:
@@ -225,15 +237,46 @@ def _mark_template_onset(ctx: _PressContext, centre: tuple[float, float], run: n
                    f"{MARK_Z_STEP:g}")
             break
         first = j
-        while (first > 0 and max(MARK_Z_SEEN * sd_a, MARK_TRACE) < a[first - 1] < a[first]
-               and a[first - 1] - _level_before(a, first - 1) > MARK_Z_SEEN * sd_a):
+        while (first > 0 and a[first - 1] < a[first]
+               and _departs(a, first - 1, MARK_Z_SEEN * sd_a, MARK_TRACE)):
             first -= 1
         faint = 0
         while (faint < MARK_FAINT_MAX and first - faint > 0
-               and a[first - faint - 1] > MARK_Z_FAINT * sd_a):
+               and _departs(a, first - faint - 1, MARK_Z_FAINT * sd_a, 0.0)):
             faint += 1
         return (int(run[j]), int(run[first]), faint), ""
     return None, f"the press's own template shows no step: {why}"
+
+
+#: Frames before a press's first frame in contact taken into its template's approach, at
+#: most (:func:`_lead_frames`).
+_LEAD_FRAMES = 3
+
+
+def _lead_frames(ctx: _PressContext, run: np.ndarray) -> np.ndarray:
+    """Up to :data:`_LEAD_FRAMES` frames just before `run`, after the last press's frames
+    and within one frame period of each other (the camera running through the press's
+    approach): the frames before its contact (:func:`_mark_template_onset`)."""
+    runs = getattr(ctx, "runs", ())
+    times = ctx.session.frame_times_s
+    prev_end = max((int(r[-1]) for r in runs if int(r[-1]) < int(run[0])), default=-1)
+    lead = []
+    k = int(run[0]) - 1
+    while (k > prev_end and len(lead) < _LEAD_FRAMES
+           and times[k + 1] - times[k] < 1.5 * ctx.period):
+        lead.append(k)
+        k -= 1
+    return np.array(lead[::-1], np.int64)
+
+
+def _departs(a: np.ndarray, k: int, z_sd: float, floor: float) -> bool:
+    """Whether frame `k`'s projection departs from the approach's level (0) by more than
+    `z_sd` and `floor`, and by more than `z_sd` from the frames before it
+    (:func:`_level_before`), the same way: a trace of the mark, which may project either
+    way (on Taxim's frames a ridge pressed 3 um past w0 projected -0.52 of the way, 170
+    sds, its next frame 1.05), where an approach whose shading moves drifts slowly."""
+    d = a[k] - _level_before(a, k)
+    return bool(abs(a[k]) > max(z_sd, floor) and abs(d) > z_sd and d * a[k] > 0)
 
 
 def _level_before(a: np.ndarray, k: int) -> float:
@@ -266,7 +309,7 @@ def _mark_onset(ctx: _PressContext, centre: tuple[float, float], cand: np.ndarra
     cfg = ctx.session.config
     rule = ctx.mark_rule
     if rule["rule"] == "auto":
-        got, template_why = _mark_template_onset(ctx, centre, run)
+        got, template_why = _mark_template_onset(ctx, centre, run, _lead_frames(ctx, run))
         if got is not None:
             return got[0], _mark_score(ctx, centre, got[0]), got[1], 1 + got[2], False
     scores = np.array([_mark_score(ctx, centre, int(i)) for i in cand])
@@ -319,36 +362,46 @@ def _mark_onset(ctx: _PressContext, centre: tuple[float, float], cand: np.ndarra
 
 def _crossing_force(session, run: np.ndarray, t_on: float, offset: float, period: float,
                     periods: int = 1, to_hold: bool = False
-                    ) -> tuple[float, float, tuple[float, float]]:
-    """fz when the land reached w0, from the F/T log, its uncertainty, N, and the
-    instants that bracket it, F/T clock, s.
+                    ) -> tuple[float, float, tuple[float, float], float]:
+    """fz when the land reached w0, from the F/T log, its uncertainty, N, the instants
+    that bracket it, F/T clock, s, and the hold's start (F/T clock, s; NaN where the log
+    shows none).
 
     The mark first shows at `t_on` (F/T clock), so the land reached w0 within the
     `periods` frame periods before (1, or 2 where the frame before may show it faintly:
-    :func:`_mark_onset`), and not after the stage stopped (the hold's start,
-    :func:`hold_start`): with ``t_b = min(t_on, t_hold)``, fz at the ends of ``[t_b -
-    periods * period, t_b]`` brackets P(w0) (:func:`crossing_bracket`; a hold that
-    started before `t_on`, the mark seen late, puts the crossing in the periods before
-    the hold's start). `to_hold`: the bracket ends
-    at the hold's start whatever `t_on` (an onset that may be early or late), from the
-    periods before the earlier of the two (on a Taxim session without shadows, a press
-    with 14 um of overshoot read 2 frames into its hold: a bracket from 2 periods before
-    that to the hold's start was half a period wide, its middle 5.8 sds above P(w0)).
-    ``(nan, nan, span)`` when the log does not cover it.
+    :func:`_mark_onset`): fz at the ends of ``[t_on - periods * period, t_on]`` brackets
+    P(w0) (:func:`crossing_bracket`). A bracket is the frames' periods whatever the stage
+    did: where the stage stopped (the hold's start, :func:`hold_start`) inside them, the
+    force at the instants past the stop is the approach's ramp extrapolated (the force
+    the press would have had, had it gone on), not the hold's. The frames' phase is
+    independent of the press, so the crossing is uniform over the periods; clipped at the
+    hold's start, the bracket held it near its top wherever the stage stopped within a
+    period of w0 (an overshoot under one period's travel), and the brackets' middles read
+    P(w0) low: on Taxim mark sessions at 10 and 12 frames/s the clipped brackets put the
+    depths 20 to 60 um deep (benchmarks/bench_mark_sweep.py). Where the frame before the
+    first trace was already in the hold (the mark seen late), the crossing lies in the
+    `periods` before the hold's start. `to_hold`: the bracket ends at the hold's start
+    whatever `t_on` (an onset that may be early or late), from the periods before the
+    earlier of the two (on a Taxim session without shadows, a press with 14 um of
+    overshoot read 2 frames into its hold: a bracket from 2 periods before that to the
+    hold's start was half a period wide, its middle 5.8 sds above P(w0)). ``(nan, nan,
+    span, t_hold)`` when the log does not cover it.
     """
     tf, fz = session.force_times_s, session.forces_n[:, 2]
     times = session.frame_times_s
     t_hold = hold_start(tf, fz, float(times[run[0]]) + offset - period,
                         float(times[run[-1]]) + offset + period)
-    t_b = t_on
-    if t_hold is not None:
-        t_b = t_hold if to_hold else min(t_on, t_hold)
-    t_a = min(t_on, t_b) - periods * period
-    return (*crossing_bracket(tf, fz, t_a, t_b), (float(t_a), float(t_b)))
+    t_b, t_a = t_on, t_on - periods * period
+    if t_hold is not None and (to_hold or t_a >= t_hold):
+        t_b = t_hold
+        t_a = min(t_on, t_b) - periods * period
+    hold = float("nan") if t_hold is None else float(t_hold)
+    return (*crossing_bracket(tf, fz, t_a, t_b, ramp_end_s=hold), (float(t_a), float(t_b)),
+            hold)
 
 
-def crossing_bracket(force_times_s: np.ndarray, fz_n: np.ndarray, t_a: float, t_b: float
-                     ) -> tuple[float, float]:
+def crossing_bracket(force_times_s: np.ndarray, fz_n: np.ndarray, t_a: float, t_b: float,
+                     ramp_end_s: float = float("nan")) -> tuple[float, float]:
     """The force a press had when it crossed a depth between two instants, N.
 
     Parameters
@@ -361,6 +414,12 @@ def crossing_bracket(force_times_s: np.ndarray, fz_n: np.ndarray, t_a: float, t_
     t_a, t_b : float
         The instants the crossing lies between, F/T clock, s
         (:attr:`CertifiedPress.onset_span_s`).
+    ramp_end_s : float, default NaN
+        Where the approach's ramp ended (the hold's start, F/T clock, s;
+        :attr:`CertifiedPress.hold_start_s`): at an instant past it the force is
+        the ramp's, a straight line fitted to the :data:`_RAMP_S` of fz before it
+        (or the bracket's length, if longer) and extrapolated, not the hold's.
+        NaN: fz at both instants.
 
     Returns
     -------
@@ -387,11 +446,32 @@ def crossing_bracket(force_times_s: np.ndarray, fz_n: np.ndarray, t_a: float, t_
     if ok.size < 2:
         return float("nan"), float("nan")
     f_a, f_b = np.interp([t_a, t_b], tf[sel][ok], smooth[ok])
+    if np.isfinite(ramp_end_s) and t_b > ramp_end_s:
+        ramp = _ramp_line(tf, fz, float(ramp_end_s), max(_RAMP_S, t_b - t_a))
+        if ramp is not None:
+            f_a = float(np.polyval(ramp, t_a)) if t_a > ramp_end_s else f_a
+            f_b = float(np.polyval(ramp, t_b))
     noise = float(np.std(np.diff(fz[sel]))) / np.sqrt(2.0 * k)      # one smoothed sample's
     # the bracket [fz(t_a), fz(t_b)] holds P(w0), widened by twice the smoothed noise; given
     # as its middle and the sd of a uniform over it (crossing_forces reads it back)
     lo, hi = min(f_a, f_b) - 2 * noise, max(f_a, f_b) + 2 * noise
     return float(0.5 * (lo + hi)), float((hi - lo) / np.sqrt(12.0))
+
+
+#: Least span of the approach's force before the hold's start that its ramp is fitted to, s
+#: (:func:`crossing_bracket`).
+_RAMP_S = 0.05
+
+
+def _ramp_line(tf: np.ndarray, fz: np.ndarray, t_end: float, span: float
+               ) -> np.ndarray | None:
+    """The approach's ramp, a straight line (``np.polyval`` coefficients) fitted by least
+    squares to fz over ``[t_end - span, t_end]``; None with fewer than 5 samples there."""
+    i0, i1 = np.searchsorted(tf, [t_end - span, t_end], side="right")
+    if i1 - i0 < 5:
+        return None
+    slope, level = np.polyfit(tf[i0:i1] - t_end, fz[i0:i1], 1)     # centred: well posed
+    return np.array([slope, level - slope * t_end])
 
 
 def _onset_travel(session, run: np.ndarray, onset: int, offset: float, period: float,

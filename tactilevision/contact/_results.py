@@ -59,14 +59,17 @@ MARK_Z_SEEN = 4.0
 #: moves lifts the frames before the crossing by a few sds of a steady one: 0.01 of the way
 #: at 5 sd on a Taxim session with shadows).
 MARK_TRACE = 0.1
-#: ... and the frame just before that first trace, where its projection lies over this
-#: many sds above the approach's level, may show the mark too faintly to count (a
-#: renderer's toe: on a Taxim session without shadows, 14 of the 23 presses its template
-#: read showed their first frame past w0 at only 0.05 to 0.23 of the way, 1.9 to 3.7
-#: sds; on another a frame 9 um past w0 showed 0.01): the crossing's bracket spans its
-#: period as well (0: any frame above the approach's level; one under it is taken as
-#: before w0)...
-MARK_Z_FAINT = 0.0
+#: ... and the frame just before that first trace may show the mark too faintly to count
+#: (a renderer's toe: on a Taxim session without shadows, 14 of the 23 presses its template
+#: read showed their first frame past w0 at only 0.05 to 0.23 of the way, 1.9 to 3.7 sds)
+#: where its projection lies this many sds above the approach's level and as far above
+#: the frames before it (:func:`~tactilevision.contact._onset._level_before`): the
+#: crossing's bracket spans its period as well. A needless period is no harmless width:
+#: it widens the bracket downwards only, so an indenter's intersection reads P(w0) low and
+#: its depths deep. At 0 (any frame above the approach's level, which the indenter's
+#: shading lifts on most presses) the depths of Taxim mark sessions of designs drawn at
+#: random read +10 to +60 um deep (issue 83; benchmarks/bench_mark_sweep.py)...
+MARK_Z_FAINT = 3.0
 #: ... and at most this many such frames (on four Taxim sessions without shadows the
 #: crossing never lay more than one period before the first trace).
 MARK_FAINT_MAX = 1
@@ -131,14 +134,19 @@ class CertifiedPress:
     force_onset_n, force_onset_sem_n : float
         ``'onset'``: fz when the land reached w0 (the middle of the smoothed
         fz over the frame period before the first frame showing the mark,
-        or two where the frame before may show it faintly, up to the hold's
-        start) and its uncertainty (that fz's spread over the periods and
-        its noise), N: the force rises from there to the
-        window's as the stage goes on past w0 (NaN for ``'vernier'``).
+        or two where the frame before may show it faintly; the approach's ramp
+        extrapolated past the hold's start) and its uncertainty (that fz's
+        spread over the periods and its noise), N: the force rises from there
+        to the window's as the stage goes on past w0 (NaN for ``'vernier'``).
     onset_span_s : (float, float)
         ``'onset'``: the instants, F/T clock, s, between which the land crossed w0
         (``force_onset_n`` is the force's bracket over them,
         :func:`~tactilevision.contact.crossing_bracket`); NaN for ``'vernier'``.
+    hold_start_s : float
+        ``'onset'``: where the approach's ramp ended, the hold's start in the F/T
+        log (F/T clock, s; :func:`~tactilevision.contact.hold_start`): past it the
+        bracket's force is the ramp's, extrapolated; NaN where the log shows none
+        and for ``'vernier'``.
     travel_mm : float
         ``'onset'``: the depth the stage covers in one frame period at the
         onset, mm (the speed read from the approach's force: the mark shows
@@ -180,6 +188,7 @@ class CertifiedPress:
     travel_mm: float = float("nan")
     band_resolved: bool = True
     onset_span_s: tuple[float, float] = (float("nan"), float("nan"))
+    hold_start_s: float = float("nan")
 
 
 @dataclass(frozen=True)
@@ -283,6 +292,7 @@ class _PressContext:
     geom: BevelGeometry
     n_runs: int
     mark_rule: dict | None
+    runs: tuple = ()
 
     @property
     def vernier(self) -> bool:

@@ -123,14 +123,16 @@ def mark_rule(presses, force: np.ndarray, fit_at, cfg, period: float,
     birge, p_birge = crossing_consistency(ind, onset, onset_sem)
     sem = np.array([p.force_sem_n for p in presses])
     h = cfg.gel_thickness_mm
-    n_group = np.array([np.count_nonzero(ind == g) for g in ind], np.float64)
     # P(w0) is one number per indenter, so its error is shared by that indenter's presses:
     # weighed as independent, n presses would count it n times. Its variance is carried n
     # times over in each press (Kish's design effect: with the presses of one indenter at
     # nearly one depth, the fit's estimate and covariance are then those of the correlated
     # errors). Before this, 10 frames/s sessions read beta 2.8 se low with depth errors
     # shared within each indenter (benchmarks/bench_mark_coverage.py, seed 3005).
-    sd_group = np.nan_to_num(sem_on) * np.sqrt(n_group)
+    # crossing_forces gives that sd already times sqrt(n) (it was multiplied by sqrt(n)
+    # once more here until issue 83: the variance n^2 times over, the stated depths' sds
+    # 2 to 5 times their errors' on Taxim mark sessions)
+    sd_group = np.nan_to_num(sem_on)
     depth = w0 + travel / 2
     after = travel / 2
     for _ in range(20):
@@ -153,15 +155,14 @@ def mark_rule(presses, force: np.ndarray, fit_at, cfg, period: float,
     # on one of 12 Taxim mark sessions with no hidden effect (benchmarks/bench_loop.py)
     std = np.sqrt(std ** 2 + (STIFFNESS_REL * after) ** 2)
     fit = fit_at(depth, std)
+    # shared by every press: the clock and dP/dw. Where P(w0) lies in its indenter's
+    # intersection is not: the crossing is uniform over each press's frame periods
+    # (_onset._crossing_force: the bracket is never clipped at the hold's start), and the
+    # frames' phases differ from press to press. Until issue 83 the brackets were clipped
+    # there, which put every crossing near the top of its bracket whenever the stage
+    # stopped within a period of w0, and the intersection's half-width was carried as
+    # shared too (on Taxim mark sessions of drawn designs it doubled E's interval).
     half = mark_shared_mm(travel, after, period, clock_sd_s)
-    # where P(w0) lies in its indenter's bracket is not random across indenters: a stage
-    # that stops soon after w0 puts every crossing near the top of its last frame period,
-    # so the brackets' middles read P(w0) low by up to their half-width, the deeper (faster)
-    # presses most (on simulated 10 frames/s sessions the depth error rose 2 to 47 um per mm
-    # of w0, and beta read low). Carried as shared: every press at its bracket's end at once.
-    cross = np.where(np.isfinite(f_on), np.sqrt(3.0) * np.nan_to_num(sem_on)
-                     / np.sqrt(n_group) / k, 0.0)
-    half = half + cross
     unread = int(np.sum(~np.isfinite(f_on)))
     notes = [f"depth rule 'mark': w = w0 + the depth past w0 that the force reads, from the "
              "crossing of w0 (P(w0) of each indenter: the intersection of its presses' frame "
@@ -169,9 +170,8 @@ def mark_rule(presses, force: np.ndarray, fit_at, cfg, period: float,
              f"({1e3 * float(np.median(after)):.1f} um median, "
              f"{1e3 * float(np.min(after)):.1f} to {1e3 * float(np.max(after)):.1f} um; dP/dw "
              f"from each press's P/w, eq. 5 at beta {MARK_BETA:g}); shared by every press, "
-             f"+-{1e3 * float(np.median(half)):.1f} um median (the clock, dP/dw, and where "
-             f"P(w0) lies in its indenter's bracket, +-{1e3 * float(np.median(cross)):.1f} um "
-             "median), carried whole into E's and nu's intervals"
+             f"+-{1e3 * float(np.median(half)):.1f} um median (the clock and dP/dw), carried "
+             "whole into E's and nu's intervals"
              + (f"; {unread} presses without the crossing's force keep w0 + half a frame's "
                 "travel" if unread else "")
              + (f"; the presses of {disjoint} indenter(s) do not agree on P(w0) (their mean is "

@@ -279,7 +279,8 @@ def _elastic_crossings(cert: Certification, force_times_s: np.ndarray, elastic_f
     presses = []
     for p in cert.presses:
         if p.rule == "onset" and np.all(np.isfinite(p.onset_span_s)):
-            f, sd = crossing_bracket(force_times_s, elastic_fz_n, *p.onset_span_s)
+            f, sd = crossing_bracket(force_times_s, elastic_fz_n, *p.onset_span_s,
+                                     ramp_end_s=p.hold_start_s)
             p = replace(p, force_onset_n=f, force_onset_sem_n=sd)
         presses.append(p)
     return replace(cert, presses=presses)
