@@ -80,6 +80,10 @@ class SessionConfig:
     bevel_force_correction : bool
         Whether the force of the bevel's own band of contact is taken off the
         F/T force (default true; only with a vernier).
+    max_overshoot_mm : float
+        ``[gauge_block] max_overshoot_mm``: the most the stage goes past an
+        indenter's w0, mm (default 0.1): a press certified deeper than its w0
+        plus this is refused, never fitted.
     indenter_shape : {'flat_punch', 'sphere'}
         ``[indenter] shape`` (default 'flat_punch'). A ball (``'sphere'``)
         needs no ``[gauge_block]``: its depths come from its contact circles
@@ -107,6 +111,7 @@ class SessionConfig:
     bevel_direction_deg: float = 0.0
     bulge_correction: bool = True
     bevel_force_correction: bool = True
+    max_overshoot_mm: float = 0.1
     window_at: str = "start"
     date: datetime.date | None = None
     indenter_shape: str = "flat_punch"
@@ -207,7 +212,8 @@ KNOWN_KEYS: dict[str, tuple[str, ...]] = {
     "sensor": ("name", "mm_per_px", "gel_thickness_mm", "gel_radius_mm", "gel_dome_radius_mm"),
     "indenter": ("radius_mm", "shape", "contact"),
     "gauge_block": ("depths_mm", "bevel_offset_mm", "bevel_direction_deg", "bevel_angle_deg",
-                    "bevel_length_mm", "bulge_correction", "bevel_force_correction"),
+                    "bevel_length_mm", "bulge_correction", "bevel_force_correction",
+                    "max_overshoot_mm"),
     "force_sensor": ("rate_hz", "clock_offset_s", "window_samples", "window_at"),
     "optics": ("calibration",),
     "session": ("date",),
@@ -319,6 +325,8 @@ def _read_config(folder: Path) -> SessionConfig:
         bulge_correction=_toml_bool(doc, toml, "gauge_block", "bulge_correction", default=True),
         bevel_force_correction=_toml_bool(doc, toml, "gauge_block", "bevel_force_correction",
                                           default=True),
+        max_overshoot_mm=_toml_number(doc, toml, "gauge_block", "max_overshoot_mm",
+                                      default=0.1),
         date=_session_date(doc, toml),
     )
 
