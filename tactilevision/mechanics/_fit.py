@@ -314,7 +314,7 @@ def _fem_law(fit: IndentationFit, w: np.ndarray) -> np.ndarray | None:
 
 def carry_misfit(fit: IndentationFit, depth_mm: np.ndarray, force_n: np.ndarray,
                  predicted_n: np.ndarray, noise_sd_n: np.ndarray | None = None,
-                 n_params: int = 2) -> IndentationFit:
+                 n_params: int = 2, structure: bool = True) -> IndentationFit:
     """`fit` with the misfit of its presses read and carried into its intervals.
 
     Parameters
@@ -327,6 +327,10 @@ def carry_misfit(fit: IndentationFit, depth_mm: np.ndarray, force_n: np.ndarray,
         through dP/dw), N: gives the Birge ratio.
     n_params : int, default 2
         Parameters fitted (c and c beta for eq. 5 alone).
+    structure : bool, default True
+        Read the residuals' structure along depth (:func:`assess_misfit`); False for
+        a model whose E the FEM's law at these depths gives while `predicted_n` is
+        its line's.
 
     Returns
     -------
@@ -354,7 +358,8 @@ def carry_misfit(fit: IndentationFit, depth_mm: np.ndarray, force_n: np.ndarray,
         pred = law
     finite = math.isfinite(E) and E > 0 and bool(np.all(pred > 0))
     apparent = (E if finite else 1.0) * P / np.where(pred > 0, pred, np.nan)
-    m = assess_misfit(w, P - pred, apparent, noise_sd_n=noise_sd_n, n_params=n_params)
+    m = assess_misfit(w, P - pred, apparent, noise_sd_n=noise_sd_n, n_params=n_params,
+                      structure=structure or law is not None)
     if not finite:        # no E: the drift is of the force's ratio, not a modulus
         m = dataclasses.replace(m, E_shallow_mpa=math.nan, E_deep_mpa=math.nan)
     E_ci, nu_ci = fit.E_ci95_mpa, fit.nu_ci95

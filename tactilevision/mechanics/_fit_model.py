@@ -178,8 +178,13 @@ def fit_model(columns: Mapping[str, np.ndarray], model: IndentationModel | str =
                       notes=tuple(n for n in fit.notes if n != fit.out_of_table_message))
     P_obs = np.asarray(columns["force_n"], np.float64)
     noise = None if weights is None else 1.0 / np.sqrt(np.asarray(weights, np.float64))
+    # with the FEM table, E is read through the FEM's law fitted by the model at these
+    # depths, which the model's own curve only approximates: its residuals' shape along
+    # depth says nothing of E (the drift of the apparent E still does)
+    fem_read = beta_table == "fem" and "large_deformation.beta" in mf.params
     fit = carry_misfit(fit, np.asarray(columns["depth_mm"], np.float64), P_obs,
-                       P_obs - mf.residuals_n, noise_sd_n=noise, n_params=mf.n_params)
+                       P_obs - mf.residuals_n, noise_sd_n=noise, n_params=mf.n_params,
+                       structure=not fem_read)
     return fit, mf
 
 

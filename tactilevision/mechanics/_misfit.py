@@ -41,7 +41,7 @@ from typing import Any
 import numpy as np
 from scipy import stats
 
-__all__ = ["DRIFT_ALPHA", "DRIFT_LARGE", "DRIFT_LENIENT", "MISFIT_ALPHA", "Misfit",
+__all__ = ["DRIFT_ALPHA", "DRIFT_LARGE", "DRIFT_LENIENT", "DRIFT_MIN", "MISFIT_ALPHA", "Misfit",
            "assess_misfit", "log_interval", "serial_correlation", "widen_interval"]
 
 #: Level of the tests of the residuals' size (chi2's tail) and serial correlation: 1 %.
@@ -58,6 +58,9 @@ DRIFT_ALPHA = 0.05
 DRIFT_LARGE = 0.05
 #: The lenient level of a large drift.
 DRIFT_LENIENT = 0.20
+#: A drift smaller than this (1 % of E over the depths pressed) is not named however
+#: significant: it moves E less than any calibration's interval.
+DRIFT_MIN = 0.01
 #: Fewest residuals whose lag-1 correlation is read (fewer: not read).
 _MIN_CORRELATED = 8
 
@@ -115,8 +118,9 @@ class Misfit:
 
     @property
     def drifts(self) -> bool:
-        """The apparent E drifts with depth: its slope's p below :data:`DRIFT_ALPHA`, or a
-        drift of :data:`DRIFT_LARGE` or more at p below :data:`DRIFT_LENIENT`."""
+        """The apparent E drifts with depth: by :data:`DRIFT_MIN` or more at its slope's p
+        below :data:`DRIFT_ALPHA`, or by :data:`DRIFT_LARGE` or more at p below
+        :data:`DRIFT_LENIENT`."""
         return _drifts(self.drift, self.drift_p)
 
     @property
@@ -135,10 +139,10 @@ class Misfit:
 
 
 def _drifts(drift: float, p: float) -> bool:
-    if not math.isfinite(p):
+    if not (math.isfinite(p) and math.isfinite(drift)):
         return False
-    return p < DRIFT_ALPHA or (math.isfinite(drift) and abs(drift) >= DRIFT_LARGE
-                               and p < DRIFT_LENIENT)
+    return ((p < DRIFT_ALPHA and abs(drift) >= DRIFT_MIN)
+            or (abs(drift) >= DRIFT_LARGE and p < DRIFT_LENIENT))
 
 
 def _quarters(depth: np.ndarray, apparent: np.ndarray) -> tuple[float, float]:
@@ -149,7 +153,7 @@ def _quarters(depth: np.ndarray, apparent: np.ndarray) -> tuple[float, float]:
 
 def assess_misfit(depth_mm: np.ndarray, residuals_n: np.ndarray, apparent_E_mpa: np.ndarray,
                   *, noise_sd_n: np.ndarray | None = None, n_params: int = 2,
-                  carried: bool = True) -> Misfit:
+                  carried: bool = True, structure: bool = True) -> Misfit:
     """Read a fit's residuals against its stated noise, along depth.
 
     Parameters
@@ -169,6 +173,11 @@ def assess_misfit(depth_mm: np.ndarray, residuals_n: np.ndarray, apparent_E_mpa:
         Whether the fit's own covariance already carries the residuals' size (a
         residual variance, or Paule and Mandel's extra variance): the Birge ratio is
         then named but not applied.
+    structure : bool, default True
+        Whether the residuals' structure along depth (serial correlation, lack of fit)
+        is read: False where the residuals are against a curve that only stands for the
+        law E is read through (eq. 5's line with effects, whose E the FEM's law at these
+        depths gives), so that their shape says nothing of E.
 
     Returns
     -------
@@ -188,8 +197,9 @@ def assess_misfit(depth_mm: np.ndarray, residuals_n: np.ndarray, apparent_E_mpa:
     # presses at one depth (repeats) have no order among them: their mean residual is read
     _, inv = np.unique(np.round(w, 9), return_inverse=True)
     r_depth = np.bincount(inv, r) / np.bincount(inv)
-    rho, rho_p, f_corr = serial_correlation(r_depth)
-    lof_F, lof_p = _lack_of_fit(inv, r, n_params)
+    rho, rho_p, f_corr = (serial_correlation(r_depth) if structure
+                          else (math.nan, math.nan, 1.0))
+    lof_F, lof_p = _lack_of_fit(inv, r, n_params) if structure else (math.nan, 1.0)
     f_lof = 1.0
     if lof_p < MISFIT_ALPHA and lof_F > 1:
         # the repeats of a depth share its misfit: n presses carry the information of
