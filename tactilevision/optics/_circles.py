@@ -234,7 +234,8 @@ def detect_contact_circles(frames: np.ndarray, reference: np.ndarray, *,
 def locate_contact_edge(frame: np.ndarray, reference: np.ndarray,
                         centre_px: tuple[float, float] | np.ndarray, radius_px: float, *,
                         shoulder: float = 0.03, floor: float = 0.85, n_rays: int = 120,
-                        iterations: int = 2, sigma: float = 1.0) -> tuple[np.ndarray, float]:
+                        iterations: int = 2, sigma: float = 1.0,
+                        change: np.ndarray | None = None) -> tuple[np.ndarray, float]:
     """Move a ball press's colour-edge circle in to the contact edge.
 
     Inside the contact the gel takes the ball's shape and its tilt grows
@@ -284,6 +285,10 @@ def locate_contact_edge(frame: np.ndarray, reference: np.ndarray,
         Rounds of rays and circle fit.
     sigma : float, default 1.0
         Gaussian blur (px) of frame and reference before the colour change.
+    change : (H, W, 3) float ndarray, optional
+        The colour change to read instead of the frame less the reference (less their
+        median difference): e.g. :func:`~tactilevision.optics.drift_free_change`'s, a
+        global drift of brightness and colour taken off (`sigma` is then not used).
 
     Returns
     -------
@@ -306,7 +311,10 @@ def locate_contact_edge(frame: np.ndarray, reference: np.ndarray,
         raise InputError(f"shoulder must lie in (0, 1), got {shoulder!r}")
     if not 0 <= floor <= 1:
         raise InputError(f"floor must lie in [0, 1], got {floor!r}")
-    change = _colour_difference(frame, reference, sigma)
+    if change is None:
+        change = _colour_difference(frame, reference, sigma)
+    else:
+        change = check_array(change, "change", [frame.shape])
     norm = np.sqrt(np.sum(change * change, axis=-1))
     h, w = norm.shape
     theta = np.linspace(0.0, 2.0 * np.pi, n_rays, endpoint=False)

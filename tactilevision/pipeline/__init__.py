@@ -55,12 +55,15 @@ __all__ += ["CAP_PRESS_SD", "CAP_SCALE_SD", "BallCaps", "BallDepths", "ball_pres
 # a ball session: presses found in the frames and the F/T log, depths from the circles
 from ._ball_session import (  # noqa: E402
     BALL_CALIBRATION_FILES,
+    E_PLAUSIBLE_MPA,
     BallCalibration,
     ball_indenter,
     calibrate_ball_session,
     calibrate_dead_weights,
+    circle_depths,
     write_ball_calibration,
 )
 
-__all__ += ["BALL_CALIBRATION_FILES", "BallCalibration", "ball_indenter",
-            "calibrate_ball_session", "calibrate_dead_weights", "write_ball_calibration"]
+__all__ += ["BALL_CALIBRATION_FILES", "E_PLAUSIBLE_MPA", "BallCalibration", "ball_indenter",
+            "calibrate_ball_session", "calibrate_dead_weights", "circle_depths",
+            "write_ball_calibration"]

@@ -2,11 +2,15 @@
 
 A session whose ``[indenter] shape`` is ``"sphere"`` has no gauge block: each
 press's depth is read from the ball's contact circle through the sphere's a(w)
-(:func:`ball_press_depths`), its force from the F/T log over the hold
-(:func:`tactilevision.contact.find_ball_presses`), and E is fitted to the presses
-by the sphere's force law (:func:`tactilevision.mechanics.fit_indenter`), the
-circles' shared error carried into its interval. :func:`write_ball_calibration`
-writes the output folder (formats.md section 3, "A ball session").
+(:func:`circle_depths`; the circle from :func:`tactilevision.optics.find_contact_circle`,
+found on textured balls, under a drift of the illumination, on contacts that cover much
+of the pad or run past its edge, and refused where it cannot be trusted), its force from
+the F/T log over the hold (:func:`tactilevision.contact.find_ball_presses`); a press whose
+force needs a modulus no tactile gel has at its circle's depth (:data:`E_PLAUSIBLE_MPA`)
+is refused, and E is fitted to the others by the sphere's force law
+(:func:`tactilevision.mechanics.fit_indenter`), the circles' shared error carried into its
+interval. :func:`write_ball_calibration` writes the output folder (formats.md section 3,
+"A ball session").
 """
 
 from __future__ import annotations
@@ -30,14 +34,30 @@ from ..io import (
     write_measurements,
 )
 from ..mechanics import IndenterFit, Sphere, fit_indenter
-from ..optics import DepthReconstructor, PhotometricCalibration
+from ..optics import (
+    CIRCLE_ERROR,
+    MIN_RIM_IN_FRAME,
+    ContactCircle,
+    DepthReconstructor,
+    PhotometricCalibration,
+    find_contact_circle,
+)
 from ..viz import ball_calibration_figure
-from ._ball import BallDepths, ball_press_depths
+from ._ball import CIRCLE_ERROR_RADIUS_PX, BallDepths
 from ._ball_caps import CAP_PRESS_SD, CAP_SCALE_SD, BallCaps, ball_press_caps
 from ._steps import read_force_zero
 
-__all__ = ["BALL_CALIBRATION_FILES", "BallCalibration", "ball_indenter", "calibrate_ball_session",
-           "calibrate_dead_weights", "write_ball_calibration"]
+__all__ = ["BALL_CALIBRATION_FILES", "E_PLAUSIBLE_MPA", "BallCalibration", "ball_indenter",
+           "calibrate_ball_session", "calibrate_dead_weights", "circle_depths",
+           "write_ball_calibration"]
+
+#: The moduli a press's force and its circle's depth may imply, MPa. The gels of vision-based
+#: tactile sensors are silicones and polyurethanes from about Shore 00-10 (some 0.05 MPa) to
+#: Shore A 60 (some 2 to 3 MPa); the range reaches a decade past each end so that no real gel
+#: is refused for its softness or stiffness. A press whose force needs a modulus outside it
+#: at its circle's depth has the wrong circle (a texture's, part of the contact) or a force
+#: that is not its own (units, a tare, another press).
+E_PLAUSIBLE_MPA = (0.01, 10.0)
 
 #: The files :func:`write_ball_calibration` writes.
 BALL_CALIBRATION_FILES = ("measurements.csv", "session.toml", "circles.csv", "rejected.csv",
@@ -123,7 +143,8 @@ def ball_indenter(session: Session | DeadWeightSession) -> Sphere:
 def calibrate_ball_session(session: Session | str | Path, *, nu: float = 0.5,
                            law: str = "neo_hookean", progress: Callable | None = None,
                            min_contact_px: int = 200,
-                           optics: PhotometricCalibration | str | Path | None = None
+                           optics: PhotometricCalibration | str | Path | None = None,
+                           e_range_mpa: tuple[float, float] = E_PLAUSIBLE_MPA
                            ) -> BallCalibration:
     """Find every press of a ball session, read its depth from its contact circle, fit E.
 
@@ -145,6 +166,9 @@ def calibrate_ball_session(session: Session | str | Path, *, nu: float = 0.5,
         gives its cap as a cross-check of the circle's depth
         (:func:`ball_press_caps`, ``caps``); default: the session's ``[optics]
         calibration``, else none.
+    e_range_mpa : (float, float), default :data:`E_PLAUSIBLE_MPA`
+        The moduli a press's force may imply at its circle's depth; a press outside is
+        rejected (``'force contradicts the circle'``).
 
     Returns
     -------
@@ -154,15 +178,20 @@ def calibrate_ball_session(session: Session | str | Path, *, nu: float = 0.5,
     ------
     InputError
         For a session that is not a ball's, no press found, a clock that cannot be
-        synchronised, or fewer than two presses with a depth and a force.
+        synchronised, a bad `e_range_mpa`, or fewer than two presses with a depth and a
+        force.
 
     Notes
     -----
     The contact condition is ``[indenter] contact`` (default frictionless). Each
     press's depth is w = a^-1(r s), r the contact circle's radius at the frame in the
-    middle of the force window, s = ``mm_per_px``; its random and shared errors
-    (:class:`BallDepths`) enter the fit as errors in the depths and a shared depth
-    error (``depth_shared_mm``), and the F/T window's standard error as the force's.
+    middle of the force window (:func:`circle_depths`), s = ``mm_per_px``; its random and
+    shared errors (:class:`BallDepths`) enter the fit as errors in the depths and a shared
+    depth error (``depth_shared_mm``), and the F/T window's standard error as the force's.
+    A press is rejected, with its reason in ``rejected``, when its circle is not found or
+    not trusted (:func:`~tactilevision.optics.find_contact_circle`: cut by the image's
+    edge, a rim that does not stand out from the pad) or its force needs a modulus outside
+    `e_range_mpa` at its circle's depth.
     The F/T's zero is read from the rests between the presses and taken off the forces
     (its line over the session where it drifts, else its mean; as ``calibrate_session``'s
     ``ft_zero='auto'``).
@@ -176,13 +205,18 @@ def calibrate_ball_session(session: Session | str | Path, *, nu: float = 0.5,
                          f"{cfg.indenter_shape!r}: calibrate_ball_session reads a ball's "
                          "session (shape = \"sphere\"); a gauge block's is calibrate_session's")
     ball = ball_indenter(session)
+    e_range = _e_range(e_range_mpa)
     found = find_ball_presses(session, min_contact_px=min_contact_px, progress=progress)
     frames = [(p.press, p.frame, p.t_frame_s) for p in found.presses]
     used, depths, rejected = _circle_depths(session, ball, frames, nu, law, session.frame)
-    rejected = sorted(rejected + list(found.rejected), key=lambda r: r.press)
     force = np.array([found.presses[i].force_n for i in used])
     sem = np.array([found.presses[i].force_sem_n for i in used])
     force, zero_note = _take_off_zero(session, found, used, force)
+    keep, refused = _force_check(session, ball, [frames[i] for i in used], depths, force,
+                                 nu, law, e_range)
+    used, depths = [used[i] for i in keep], _take(depths, keep)
+    force, sem = force[keep], sem[keep]
+    rejected = sorted(rejected + refused + list(found.rejected), key=lambda r: r.press)
     cal = _fit(session, ball, found, used, depths, force, sem, rejected, nu, law,
                list(session.notes) + list(found.warnings) + [zero_note], t0)
     return replace(with_caps(cal, optics), seconds=time.perf_counter() - t0)
@@ -243,7 +277,8 @@ def _take_off_zero(session: Session, found: BallPresses, used: list[int],
 
 def calibrate_dead_weights(session: DeadWeightSession | str | Path, *, nu: float = 0.5,
                            law: str = "neo_hookean",
-                           optics: PhotometricCalibration | str | Path | None = None
+                           optics: PhotometricCalibration | str | Path | None = None,
+                           e_range_mpa: tuple[float, float] = E_PLAUSIBLE_MPA
                            ) -> BallCalibration:
     """E from a ball at rest under known masses: P = m g, the depth from its contact circle.
 
@@ -259,6 +294,8 @@ def calibrate_dead_weights(session: DeadWeightSession | str | Path, *, nu: float
     optics : PhotometricCalibration or path, optional
         As :func:`calibrate_ball_session`'s: each frame's height-map cap beside its
         circle's depth (default: the folder's ``[optics] calibration``, else none).
+    e_range_mpa : (float, float), default :data:`E_PLAUSIBLE_MPA`
+        As :func:`calibrate_ball_session`'s.
 
     Returns
     -------
@@ -268,21 +305,89 @@ def calibrate_dead_weights(session: DeadWeightSession | str | Path, *, nu: float
     Raises
     ------
     InputError
-        For a broken folder (:func:`~tactilevision.io.read_dead_weights`) or fewer than
-        two frames whose circle gives a depth.
+        For a broken folder (:func:`~tactilevision.io.read_dead_weights`), a bad
+        `e_range_mpa`, or fewer than two frames whose circle gives a depth and whose mass
+        it agrees with.
     """
     t0 = time.perf_counter()
     if not isinstance(session, DeadWeightSession):
         session = read_dead_weights(session)
     ball = ball_indenter(session)
+    e_range = _e_range(e_range_mpa)
     frames = [(i, i, float("nan")) for i in range(len(session.frame_paths))]
     stack = session.frames()
     used, depths, rejected = _circle_depths(session, ball, frames, nu, law,
                                             lambda i: stack[i])
+    keep, refused = _force_check(session, ball, [frames[i] for i in used], depths,
+                                 session.force_n[used], nu, law, e_range)
+    used, depths = [used[i] for i in keep], _take(depths, keep)
+    rejected = sorted(rejected + refused, key=lambda r: r.press)
     cal = _fit(session, ball, None, used, depths, session.force_n[used],
                session.force_std_n[used], rejected, nu, law, list(session.notes), t0)
     return replace(with_caps(cal, optics, frame_of=lambda i: stack[i]),
                    seconds=time.perf_counter() - t0)
+
+
+def circle_depths(circle: ContactCircle, indenter: Sphere, *, mm_per_px: float,
+                  thickness_mm: float, nu: float = 0.5, law: str = "neo_hookean",
+                  contact: str | None = None, name: str = "frame") -> BallDepths:
+    """One press's depth from its contact circle (:func:`~tactilevision.optics.find_contact_circle`)
+    through the indenter's a(w), with its uncertainty.
+
+    Parameters
+    ----------
+    circle : ContactCircle
+    indenter : Sphere
+    mm_per_px, thickness_mm, nu, law, contact
+        As :func:`ball_press_depths`'s.
+    name : str
+        The frame, for messages.
+
+    Returns
+    -------
+    BallDepths
+        One press. Its radius errors: the detector's (:data:`~tactilevision.optics.CIRCLE_ERROR`,
+        2.5 % of the radius, random and shared alike) taken at the circle's radius or at
+        61 px, whichever is larger (an edge is located to a number of pixels on a small
+        circle; a large one's edge moves with its texture and the colour response's
+        saturation, by 2 to 9 % of its radius on the renders of
+        ``tests/test_ball_texture.py``), and the radial profile's own bootstrap sd in
+        quadrature with the random part.
+
+    Raises
+    ------
+    InputError
+        Naming the frame: a contact radius the indenter's table does not reach or not
+        smaller than the ball; or a bad scale.
+    """
+    s = float(mm_per_px)
+    if not (np.isfinite(s) and s > 0):
+        raise InputError(f"mm_per_px must be positive, got {mm_per_px!r}")
+    r = float(circle.radius_px)
+    scale_px = max(r, CIRCLE_ERROR_RADIUS_PX)
+    sd_px = float(np.hypot(CIRCLE_ERROR.radius_sd * scale_px, circle.radius_sd_px))
+    bias_px = CIRCLE_ERROR.radius_bias * scale_px
+    a = r * s
+    kw = {"nu": nu, "thickness_mm": thickness_mm, "law": law, "contact": contact}
+    try:
+        w = float(indenter.depth_from_contact_radius(np.array([a]), **kw)[0])
+    except InputError as exc:
+        raise InputError(f"{name}: {exc}") from None
+    eps = 1e-4 * w
+    da_dw = float(indenter.contact_radius(np.array([w + eps]), **kw)[0]
+                  - indenter.contact_radius(np.array([w - eps]), **kw)[0]) / (2 * eps)
+    dw_da = 1.0 / da_dw
+    one = np.ones(1)
+    return BallDepths(depth_mm=w * one, depth_std_mm=dw_da * sd_px * s * one,
+                      depth_shared_mm=dw_da * bias_px * s * one, contact_radius_mm=a * one,
+                      centres_px=np.asarray(circle.centre_px, np.float64).reshape(1, 2),
+                      radii_px=r * one, dw_da=dw_da * one, radius_sd_px=sd_px,
+                      radius_bias_px=bias_px,
+                      notes=(f"depths from the contact circles (the radial profile's edge "
+                             f"about the colour edge's centre) through a(w) ({law}, "
+                             f"{indenter._contact(contact)}, nu = {nu:g}); circle radius "
+                             "error 2.5 % of the radius or of 61 px, whichever is larger, "
+                             "random and shared, and the profile's own sd",))
 
 
 def _circle_depths(session, ball: Sphere, frames: list[tuple[int, int, float]], nu: float,
@@ -296,15 +401,78 @@ def _circle_depths(session, ball: Sphere, frames: list[tuple[int, int, float]], 
     used, parts, rejected = [], [], []
     for i, (press, frame, t) in enumerate(frames):
         name = f"press {press} (frame {frame}, {session.frame_paths[frame].name})"
+
+        def reject(reason: str, detail: str, press=press, frame=frame, t=t) -> None:
+            rejected.append(Rejection(press=press, reason=reason, detail=detail, t_frame_s=t,
+                                      frame=frame))
+
         try:
-            parts.append(ball_press_depths(frame_of(frame)[None], session.reference, ball,
-                                           names=[name], **kw))
+            circle = find_contact_circle(frame_of(frame), session.reference)
         except InputError as exc:
-            rejected.append(Rejection(press=press, reason="no depth from the circle",
-                                      detail=str(exc), t_frame_s=t, frame=frame))
+            reject("no contact circle", f"{name}: {exc}")
+            continue
+        if circle.problems:
+            cut = circle.rim_in_frame < MIN_RIM_IN_FRAME
+            reject("contact cut by the image's edge" if cut else "contact circle not trusted",
+                   f"{name}: " + "; ".join(circle.problems))
+            continue
+        try:
+            parts.append(circle_depths(circle, ball, name=name, **kw))
+        except InputError as exc:
+            reject("no depth from the circle", str(exc))
             continue
         used.append(i)
     return used, (_stack(parts) if parts else None), rejected
+
+
+def _e_range(e_range_mpa) -> tuple[float, float]:
+    """`e_range_mpa` checked: two finite moduli, 0 < low < high."""
+    try:
+        lo, hi = (float(v) for v in e_range_mpa)
+    except (TypeError, ValueError):
+        raise InputError(f"e_range_mpa must be two moduli (low, high) in MPa, got "
+                         f"{e_range_mpa!r}") from None
+    if not (np.isfinite(lo) and np.isfinite(hi) and 0 < lo < hi):
+        raise InputError(f"e_range_mpa must hold 0 < low < high, got {e_range_mpa!r}")
+    return lo, hi
+
+
+def _force_check(session, ball: Sphere, frames: list[tuple[int, int, float]],
+                 depths: BallDepths | None, force: np.ndarray, nu: float, law: str,
+                 e_range: tuple[float, float]) -> tuple[list[int], list[Rejection]]:
+    """Each press's apparent E, its force over the law's at E = 1 at its circle's depth:
+    (indices of the presses whose E lies in `e_range`, the others' rejections)."""
+    if depths is None or not len(frames):
+        return [], []
+    cfg = session.config
+    g = ball.force(depths.depth_mm, E_mpa=1.0, nu=nu, thickness_mm=cfg.gel_thickness_mm,
+                   law=law, contact=cfg.indenter_contact)
+    e_app = np.asarray(force, np.float64) / np.asarray(g, np.float64)
+    lo, hi = e_range
+    keep, rejected = [], []
+    for k, (press, frame, t) in enumerate(frames):
+        if np.isfinite(e_app[k]) and lo <= e_app[k] <= hi:
+            keep.append(k)
+            continue
+        name = f"press {press} (frame {frame}, {session.frame_paths[frame].name})"
+        rejected.append(Rejection(
+            press=press, reason="force contradicts the circle", t_frame_s=t, frame=frame,
+            detail=f"{name}: its circle (radius {depths.contact_radius_mm[k]:.4g} mm) gives a "
+                   f"depth of {1e3 * depths.depth_mm[k]:.4g} um, where its force, "
+                   f"{force[k]:.4g} N, needs E = {e_app[k]:.3g} MPa ({law}, nu = {nu:g}): "
+                   f"outside the {lo:g} to {hi:g} MPa of any tactile gel (the circle is not "
+                   "the contact's, or the force not the press's)"))
+    return keep, rejected
+
+
+def _take(depths: BallDepths | None, keep: list[int]) -> BallDepths | None:
+    """`depths` of the presses `keep` only (None where none is kept)."""
+    if depths is None or not keep:
+        return None
+    idx = np.asarray(keep, np.int64)
+    return replace(depths, **{name: getattr(depths, name)[idx] for name in (
+        "depth_mm", "depth_std_mm", "depth_shared_mm", "contact_radius_mm", "centres_px",
+        "radii_px", "dw_da")})
 
 
 def _fit(session, ball: Sphere, found: BallPresses | None, used: list[int],

@@ -1,0 +1,142 @@
+"""The contact circles on the real ball presses we have, before and after a change of the
+detector: not worse is the target.
+
+    python benchmarks/bench_ball_circles_real.py [--before 8f4cf4a] [--figures DIR]
+
+Sets (``../shared/real``, never copied into the repository; ``taxim``'s data pack):
+
+- ``taxim``: the 48 real GelSight presses of the ``taxim`` package, with hand-annotated
+  circles: each detector's contact edge against them (radius ratio median and sd, how many
+  within 5 %, the centres' median distance);
+- ``gelslim11``, ``gelslim09``: GelSlim 3.0's 75 and 39 presses (the second through a grid
+  of markers), no truth;
+- ``mini``: the GelSight Mini's 22 presses, about half of them cut by the image's edge, no
+  truth.
+
+"Before" is ``tactilevision/optics/_circles.py`` at git revision ``--before`` (default
+8f4cf4a, the tree before the dipole-seeded detector), loaded from ``git show``; "after" is
+the installed tree: ``detect_contact_circle(edge='contact')`` (the optics calibration's
+labels) and :func:`tactilevision.optics.find_contact_circle` (a ball session's circle: the
+radial profile's edge, its checks). Printed per set: circles found, the after / before
+radius ratio (median; how many differ by more than 5 %), the centres' shift, how many of
+the ball session's circles are trusted and why the others are not, and the time per frame.
+With ``--figures``, the frames where before and after differ by more than 5 % are drawn
+(before red, after green, the ball session's circle blue) for a look.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.util
+import subprocess
+import tempfile
+import time
+from collections import Counter
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from tactilevision import InputError
+from tactilevision.io import read_ball_presses, taxim_datapack
+from tactilevision.optics import detect_contact_circle, edge_cut, find_contact_circle
+
+ROOT = Path(__file__).resolve().parents[1]
+REAL = ROOT.parent / "shared" / "real"
+
+
+def old_detector(rev: str):
+    """The module ``tactilevision/optics/_circles.py`` at git revision `rev`."""
+    src = subprocess.run(["git", "show", f"{rev}:tactilevision/optics/_circles.py"],
+                         cwd=ROOT, check=True, capture_output=True, text=True).stdout
+    src = (src.replace("from .._checks", "from tactilevision._checks")
+           .replace("from ._features", "from tactilevision.optics._features")
+           .replace("from ._ball_contact", "from tactilevision.optics._ball_contact"))
+    path = Path(tempfile.mkdtemp()) / "circles_before.py"
+    path.write_text(src)
+    spec = importlib.util.spec_from_file_location("circles_before", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def circle(fn, *args, **kwargs) -> tuple[np.ndarray, float]:
+    try:
+        c, r = fn(*args, **kwargs)
+        return np.asarray(c, np.float64), float(r)
+    except InputError:
+        return np.full(2, np.nan), float("nan")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--before", default="8f4cf4a")
+    ap.add_argument("--figures", type=Path, default=None)
+    ap.add_argument("--sets", nargs="+", default=["taxim", "gelslim11", "gelslim09", "mini"])
+    args = ap.parse_args()
+    before = old_detector(args.before)
+    paths = {"taxim": taxim_datapack(), "gelslim11": REAL / "gelslim3" / "set_2020_11",
+             "gelslim09": REAL / "gelslim3" / "set_2020_09", "mini": REAL / "gelsight_mini"}
+    for name in args.sets:
+        ps = read_ball_presses(paths[name])
+        rows, reasons, tiles = [], Counter(), []
+        t_old = t_new = t_find = 0.0
+        for i, f in enumerate(ps.frames):
+            t = time.perf_counter()
+            c0, r0 = circle(before.detect_contact_circle, f, ps.reference, edge="contact")
+            t_old += time.perf_counter() - t
+            t = time.perf_counter()
+            c1, r1 = circle(detect_contact_circle, f, ps.reference, edge="contact")
+            t_new += time.perf_counter() - t
+            t = time.perf_counter()
+            try:
+                cc = find_contact_circle(f, ps.reference)
+                c2, r2, ok = cc.centre_px, cc.radius_px, cc.trusted
+                for p in cc.problems:
+                    reasons[p.split(" (")[0].split(":")[0][:60]] += 1
+            except InputError as exc:
+                c2, r2, ok = np.full(2, np.nan), float("nan"), False
+                reasons[str(exc)[:60]] += 1
+            t_find += time.perf_counter() - t
+            cut = bool(edge_cut(c0[None], [r0], f.shape[:2])[0]) if np.isfinite(r0) else True
+            rows.append((r0, r1, r2, np.hypot(*(c1 - c0)), ok, cut))
+            if args.figures is not None and not abs(r1 / r0 - 1) <= 0.05:
+                g = f.copy()
+                for (c, r), col in (((c0, r0), (0, 0, 255)), ((c1, r1), (0, 255, 0)),
+                                    ((c2, r2), (255, 0, 0))):
+                    if np.isfinite(r):
+                        cv2.circle(g, (round(c[0]), round(c[1])), round(r), col, 1)
+                cv2.putText(g, str(i), (4, 14), cv2.FONT_HERSHEY_SIMPLEX, 0.5, (255,) * 3, 1)
+                tiles.append(g)
+        r = np.array(rows, np.float64)
+        n = len(r)
+        rel = r[:, 1] / r[:, 0] - 1
+        print(f"== {name}: {n} presses; circles found before {np.isfinite(r[:, 0]).sum()}, "
+              f"after {np.isfinite(r[:, 1]).sum()}; time per frame before "
+              f"{1e3 * t_old / n:.0f} ms, after {1e3 * t_new / n:.0f} ms (ball session's "
+              f"{1e3 * t_find / n:.0f} ms)")
+        print(f"   contact edge after / before: median {np.nanmedian(rel):+.4f}, differing by "
+              f"more than 5 %: {int(np.sum(~(np.abs(rel) <= 0.05)))}; centre moved median "
+              f"{np.nanmedian(r[:, 3]):.2f} px, largest {np.nanmax(r[:, 3]):.1f} px")
+        print(f"   ball session's circle (radial profile) / before: median "
+              f"{np.nanmedian(r[:, 2] / r[:, 0] - 1):+.4f}; trusted {int(r[:, 4].sum())} of {n} "
+              f"(before: {int((r[:, 5] == 0).sum())} inside the image); not trusted: "
+              f"{dict(reasons) or 'none'}")
+        if ps.radii_px is not None:
+            ann = np.asarray(ps.radii_px, np.float64)
+            for label, k in (("before", 0), ("after", 1), ("session", 2)):
+                q = r[:, k] / ann
+                print(f"   {label:8s} radius / annotated: median {np.nanmedian(q):.3f}, sd "
+                      f"{np.nanstd(q):.3f}, within 5 %: {int(np.sum(np.abs(q - 1) < 0.05))} "
+                      f"of {n}")
+        if tiles and args.figures is not None:
+            args.figures.mkdir(parents=True, exist_ok=True)
+            while len(tiles) % 4:
+                tiles.append(np.zeros_like(tiles[0]))
+            grid = np.vstack([np.hstack(tiles[k:k + 4]) for k in range(0, len(tiles), 4)])
+            cv2.imwrite(str(args.figures / f"{name}_differing.png"), grid)
+            print(f"   drew {args.figures / f'{name}_differing.png'}")
+
+
+if __name__ == "__main__":
+    main()
