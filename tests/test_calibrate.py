@@ -506,7 +506,7 @@ def test_mark_overshoot_read_from_the_force(tmp_path):
     assert np.all(np.isclose(span, 1.0, atol=1e-3) | np.isclose(span, 2.0, atol=1e-3))
     # (a faint frame's period joins a bracket only where it rises 3 sds off the approach
     # and the frames before it, issue 83: on this session every bracket spans one period)
-    assert 1.0 <= want <= 2.0
+    assert 0.999 <= want <= 2.0
     assert got == pytest.approx(want, rel=0.10), (got, want)
     f = cal.fit
     assert f.E_ci95_mpa[0] <= truth["E_mpa"] <= f.E_ci95_mpa[1]

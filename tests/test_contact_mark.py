@@ -183,8 +183,8 @@ def test_frames_before_the_first_trace_that_may_show_it_faintly_widen_its_bracke
     assert (onset, first, faint) == (10, 10, 1)
     assert _faint_press(monkeypatch, [0.06, -0.02])[2] == 0
     assert _faint_press(monkeypatch, [0.03, 0.05, 0.07])[2] == MARK_FAINT_MAX == 1
-    # 0.02 of the way: under MARK_Z_FAINT sds of the approach's frames (sd 0.011)
-    assert _faint_press(monkeypatch, [-0.02, 0.02])[2] == 0
+    # 0.015 of the way: under MARK_Z_FAINT sds of the approach's frames (sd 0.011)
+    assert _faint_press(monkeypatch, [-0.02, 0.015])[2] == 0
     # a frame over 4 sds and 0.1 of the way, rising towards the hold, is the first trace
     onset, first, faint = _faint_press(monkeypatch, [-0.02, 0.3])
     assert (onset, first, faint) == (10, 9, 0)
@@ -197,11 +197,13 @@ def test_a_trace_rises_above_the_frames_before_it_not_an_approach_lifted_by_shad
     last four): a frame 4 sds and 0.1 of the way up counts as the first trace only when it
     also lies 4 sds above the median of the three frames before the one before it (that
     one may show the mark's toe). Here 0.17 after 0.20, 0.14 and 0.07 does not: the onset
-    is the first trace; nor is it a faint trace (MARK_Z_FAINT sds above the frames before
-    it), so its period alone brackets the crossing. After frames at the approach's level
+    is the first trace; 2.8 sds of the approach's frames over them, it may be a faint one
+    (MARK_Z_FAINT), so its period joins the bracket. After frames at the approach's level
     the same 0.17 is the trace."""
     lifted = [0.20, 0.14, 0.07, 0.17]
     onset, first, faint = _faint_press(monkeypatch, lifted)
-    assert (onset, first, faint) == (12, 12, 0)
+    assert (onset, first, faint) == (12, 12, 1)
+    # lifted as much as the frames before it, it is no trace at all: its period stays out
+    assert _faint_press(monkeypatch, [0.20, 0.14, 0.16, 0.15])[1:] == (12, 0)
     onset, first, faint = _faint_press(monkeypatch, [0.01, -0.01, 0.0, 0.17])
     assert (onset, first, faint) == (12, 11, 0)

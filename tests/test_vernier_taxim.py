@@ -348,3 +348,29 @@ def test_thin_mark_under_shadows_is_seen_at_its_step(taxim_mark_session):
     for p, d, sd in zip(cal.certification.presses, cal.depth_mm, cal.depth_std_mm,
                         strict=True):
         assert abs(d - tp[p.press]["depth_mm"]) <= 3 * sd
+
+
+def test_a_mark_press_past_the_gauges_reach_is_refused_and_the_rest_checked(
+        taxim_mark_session, tmp_path):
+    """With ``[gauge_block] max_overshoot_mm = 0.03`` on the thin-mark session (stopped 5 to
+    60 um past w0), the presses certified past w0 + 30 um are refused, named so in the
+    certification's rejections, and the fit is made without them: every press kept lies
+    within the reach, and none refused was stopped under 15 um past w0. The depths left are
+    checked by the stage's reading (calibrate says how many agree)."""
+    from tactilevision.pipeline._rules import REACH_REASON
+
+    folder, truth = taxim_mark_session
+    copy = tmp_path / "reach"
+    shutil.copytree(folder, copy)
+    toml = copy / "session.toml"
+    toml.write_text(toml.read_text().replace("[gauge_block]\n",
+                                             "[gauge_block]\nmax_overshoot_mm = 0.03\n"))
+    cal = calibrate_session(copy, allow_failure=True)
+    tp = {p["press"]: p for p in truth["presses"]}
+    refused = {r.press for r in cal.certification.rejected if r.reason == REACH_REASON}
+    kept = [p.press for p in cal.certification.presses]
+    assert refused and len(kept) >= 2 and not refused & set(kept)
+    assert all(d - p.w0_mm <= 0.03 for p, d in zip(cal.certification.presses, cal.depth_mm,
+                                                     strict=True))
+    assert all(tp[k]["overshoot_mm"] > 0.015 for k in refused)
+    assert any("second reading of the depths" in w for w in cal.warnings)

@@ -23,6 +23,7 @@ from ._mark import (
 from ._mask import contact_mask, noise_level
 from ._onset import crossing_bracket
 from ._results import Certification, CertifiedPress, Rejection
+from ._stage import STAGE_Z, StageReading, stage_depths, touch_time
 from ._sync import (
     ClockSync,
     contact_onsets,
@@ -55,6 +56,7 @@ __all__ = [
     "CROSSING_CHECK_P",
     "EDGE_SHARED_FRACTION",
     "RESOLVED_PX",
+    "STAGE_Z",
     "STIFFNESS_REL",
     "BallPress",
     "BallPresses",
@@ -68,6 +70,7 @@ __all__ = [
     "ForceWindow",
     "ForceZero",
     "Rejection",
+    "StageReading",
     "approach_start",
     "bevel_force",
     "bevel_profile",
@@ -100,6 +103,8 @@ __all__ = [
     "press_clock_offset",
     "read_bevel",
     "refine_clock_offset",
+    "stage_depths",
+    "touch_time",
     "unresolved_closure",
     "vernier_shared_mm",
     "window_standard_error",

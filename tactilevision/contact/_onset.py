@@ -16,6 +16,7 @@ from ._mask import contact_mask
 from ._results import (
     MARK_BASELINE_FORCE,
     MARK_BLOCK,
+    MARK_FAINT_FLOOR,
     MARK_FAINT_MAX,
     MARK_HOLD_FORCE,
     MARK_NULL_FRAMES,
@@ -181,8 +182,9 @@ def _mark_template_onset(ctx: _PressContext, centre: tuple[float, float], run: n
 
     A mark's trace grows from nothing at w0, so a frame taken just past it may show the
     mark below any threshold that noise does not cross: ``faint`` counts the frames before
-    ``first`` (at most :data:`MARK_FAINT_MAX`) projected over :data:`MARK_Z_FAINT` sds off
-    the approach's level and as far off the frames before them, whose periods the
+    ``first`` (at most :data:`MARK_FAINT_MAX`) projected over :data:`MARK_Z_FAINT` sds
+    (and :data:`MARK_FAINT_FLOOR` of the way) off the approach's level and as far off the
+    frames before them, whose periods the
     crossing's bracket then spans too (on a Taxim session at 30 frames/s without shadows,
     16 of 28 brackets missed P(w0), all above it; an indenter's P(w0) is the intersection
     of its presses' brackets, which one late bracket moves). A needless period widens the
@@ -242,7 +244,7 @@ def _mark_template_onset(ctx: _PressContext, centre: tuple[float, float], run: n
             first -= 1
         faint = 0
         while (faint < MARK_FAINT_MAX and first - faint > 0
-               and _departs(a, first - faint - 1, MARK_Z_FAINT * sd_a, 0.0)):
+               and _departs(a, first - faint - 1, MARK_Z_FAINT * sd_a, MARK_FAINT_FLOOR)):
             faint += 1
         return (int(run[j]), int(run[first]), faint), ""
     return None, f"the press's own template shows no step: {why}"

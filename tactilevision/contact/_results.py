@@ -68,8 +68,16 @@ MARK_TRACE = 0.1
 #: it widens the bracket downwards only, so an indenter's intersection reads P(w0) low and
 #: its depths deep. At 0 (any frame above the approach's level, which the indenter's
 #: shading lifts on most presses) the depths of Taxim mark sessions of designs drawn at
-#: random read +10 to +60 um deep (issue 83; benchmarks/bench_mark_sweep.py)...
-MARK_Z_FAINT = 3.0
+#: random read +10 to +44 um deep (issue 83; benchmarks/bench_mark_sweep.py). A trace
+#: missed costs more than a needless period (a late bracket moves its indenter's
+#: intersection; one needless period rarely does): 2 sds, not 3 (a frame 8 um past w0
+#: projected 2.7 sds on a Taxim session without shadows, its bracket late)...
+MARK_Z_FAINT = 2.0
+#: ... and at least this share of the way (with Taxim's shadows the approach frames'
+#: sd is 0.003 of the way, under the 0.01 an approach's shading lifts a frame: a frame
+#: 100 um before w0 passed 2 sds and doubled the bracket of an indenter's only press,
+#: certified 128 um deep; a toe 8 um past w0 without shadows projected 0.25)...
+MARK_FAINT_FLOOR = 0.05
 #: ... and at most this many such frames (on four Taxim sessions without shadows the
 #: crossing never lay more than one period before the first trace).
 MARK_FAINT_MAX = 1

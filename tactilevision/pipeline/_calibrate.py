@@ -42,6 +42,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -51,7 +52,15 @@ from ..contact import CLOCK_SD_S, certify_session
 from ..io import Session, read_session
 from ..mechanics import relaxed_moduli
 from ._calibration import SessionCalibration
-from ._rules import DepthState, land_rule, mark_rule, nominal_rule, vernier_rule
+from ._rules import (
+    DepthState,
+    depth_refusals,
+    land_rule,
+    mark_rule,
+    mark_stage_reading,
+    nominal_rule,
+    vernier_rule,
+)
 from ._shared import with_shared_depth
 from ._steps import Fitter, frame_period, relaxation_step, take_off_zero
 
@@ -146,47 +155,48 @@ def calibrate_session(session: Session | str | Path, *, depth_rule: str = "auto"
     if relaxation == "auto" and cert.presses:
         cert, relax, relax_notes, force0 = relaxation_step(session, cert, progress,
                                                            bevel_threshold)
-    notes = (list(session.notes) + list(cert.warnings) + zero_notes  # the reader's notes first
-             + relax_notes)
-    presses = cert.presses
-    common = dict(session=session, certification=cert, depth_rule=depth_rule, warnings=notes,
-                  ft_zero=zero)
-    too_few = _too_few(session, cert)
-    if too_few is not None:
-        if not allow_failure:
-            raise InputError(too_few)
-        z = np.array([p.w0_mm for p in presses], np.float64)
-        return SessionCalibration(depth_mm=z, fit=None, nu_rounds=[],
-                                  seconds=time.perf_counter() - t0, depth_std_mm=np.zeros_like(z),
-                                  bulge_mm=np.zeros_like(z), failure=too_few, **common)
-    w0 = np.array([p.w0_mm for p in presses])
-    force = force0 if force0 is not None else np.array([p.force_n for p in presses])
-    closure = np.array([p.closure_mm for p in presses])
-    fit_at = Fitter(force, thickness_mm=cfg.gel_thickness_mm, radius_mm=cfg.indenter_radius_mm,
-                    beta_table=beta_table, press=np.array([p.press for p in presses]))
-    st = DepthState(depth=w0 + closure, std=np.array([p.closure_std_mm for p in presses]),
-                    bulge=np.zeros_like(w0), bevel_n=np.zeros_like(w0), notes=notes)
+    base_notes = (list(session.notes) + list(cert.warnings) + zero_notes  # the reader's first
+                  + relax_notes)
     rounds = dict(nu_start=float(nu_start), max_rounds=max_rounds, nu_tol=nu_tol)
-    std_indenter = np.zeros(0)
-    try:
-        if depth_rule == "vernier":
-            vernier_rule(st, presses, cert, cfg, fit_at, force, **rounds)
-        elif depth_rule == "mark":
-            clock_sd = float(np.nan_to_num(max(CLOCK_SD_S, cert.clock_offset_se_s)))
-            st.depth, st.std, st.fit, st.shared, mark_notes, std_indenter = mark_rule(
-                presses, force, fit_at, cfg, frame_period(session), clock_sd)
-            notes.extend(mark_notes)
-        elif depth_rule == "nominal":
-            nominal_rule(st, presses, cfg, fit_at, force, frame_period(session))
-        else:
-            land_rule(st, presses, cfg, fit_at, **rounds)
-    except InputError as exc:
-        if not allow_failure:
-            raise
-        return SessionCalibration(depth_mm=w0 + closure, fit=None, nu_rounds=st.rounds,
-                                  seconds=time.perf_counter() - t0, depth_std_mm=st.std,
-                                  bulge_mm=st.bulge, bevel_force_n=st.bevel_n,
-                                  failure=f"{session.path}: the fit failed: {exc}", **common)
+    check_notes: list[str] = []
+    while True:
+        # a press refused once its depth is read (past the gauge's reach, or two readings
+        # that disagree) leaves the rule's inputs too: the rule is read again without it
+        # (each round refuses one press or more, or ends)
+        notes = list(base_notes)
+        common = dict(session=session, certification=cert, depth_rule=depth_rule,
+                      warnings=notes, ft_zero=zero)
+        too_few = _too_few(session, cert)
+        if too_few is not None:
+            notes.extend(check_notes)
+            if not allow_failure:
+                raise InputError(too_few)
+            z = np.array([p.w0_mm for p in cert.presses], np.float64)
+            return SessionCalibration(depth_mm=z, fit=None, nu_rounds=[],
+                                      seconds=time.perf_counter() - t0,
+                                      depth_std_mm=np.zeros_like(z), bulge_mm=np.zeros_like(z),
+                                      failure=too_few, **common)
+        presses = cert.presses
+        try:
+            st, std_indenter, fit_at, force = _read_depths(session, cert, force0, depth_rule,
+                                                           beta_table, rounds, notes)
+        except _RuleFailed as failed:
+            notes.extend(check_notes)
+            if not allow_failure:
+                raise failed.exc from None
+            st = failed.state
+            return SessionCalibration(depth_mm=failed.depth, fit=None, nu_rounds=st.rounds,
+                                      seconds=time.perf_counter() - t0, depth_std_mm=st.std,
+                                      bulge_mm=st.bulge, bevel_force_n=st.bevel_n,
+                                      failure=f"{session.path}: the fit failed: {failed.exc}",
+                                      **common)
+        refused, round_notes = _refusals(presses, st, std_indenter, depth_rule, session, cert)
+        if not refused:
+            check_notes.extend(round_notes)
+            break
+        check_notes.extend(n for n in round_notes if "refused" in n)
+        cert, force0 = _without(cert, refused, force0)
+    notes.extend(check_notes)
     fit = st.fit
     for msg in fit_at.warnings_of(fit):      # the warnings of the fit reported
         if msg not in notes:
@@ -205,6 +215,80 @@ def calibrate_session(session: Session | str | Path, *, depth_rule: str = "auto"
                               force0_n=force0 if force0 is not None else np.zeros(0),
                               force_fit_n=force - st.bevel_n,
                               depth_indenter_std_mm=std_indenter, **common)
+
+
+class _RuleFailed(Exception):
+    """A depth rule's fit failed: the InputError, the state it got to, the depths to write."""
+
+    def __init__(self, exc: InputError, state: DepthState, depth: np.ndarray) -> None:
+        super().__init__(str(exc))
+        self.exc, self.state, self.depth = exc, state, depth
+
+
+def _read_depths(session: Session, cert, force0: np.ndarray | None, depth_rule: str,
+                 beta_table: str, rounds: dict, notes: list[str]):
+    """The depth rule run on the certified presses: ``(state, std_indenter, fitter,
+    force)``; its notes appended to `notes`. Raises :class:`_RuleFailed` where its fit
+    fails."""
+    cfg = session.config
+    presses = cert.presses
+    w0 = np.array([p.w0_mm for p in presses])
+    force = force0 if force0 is not None else np.array([p.force_n for p in presses])
+    closure = np.array([p.closure_mm for p in presses])
+    fit_at = Fitter(force, thickness_mm=cfg.gel_thickness_mm, radius_mm=cfg.indenter_radius_mm,
+                    beta_table=beta_table, press=np.array([p.press for p in presses]))
+    st = DepthState(depth=w0 + closure, std=np.array([p.closure_std_mm for p in presses]),
+                    bulge=np.zeros_like(w0), bevel_n=np.zeros_like(w0), notes=notes)
+    std_indenter = np.zeros(0)
+    try:
+        if depth_rule == "vernier":
+            vernier_rule(st, presses, cert, cfg, fit_at, force, **rounds)
+        elif depth_rule == "mark":
+            clock_sd = float(np.nan_to_num(max(CLOCK_SD_S, cert.clock_offset_se_s)))
+            st.depth, st.std, st.fit, st.shared, mark_notes, std_indenter = mark_rule(
+                presses, force, fit_at, cfg, frame_period(session), clock_sd)
+            notes.extend(mark_notes)
+        elif depth_rule == "nominal":
+            nominal_rule(st, presses, cfg, fit_at, force, frame_period(session))
+        else:
+            land_rule(st, presses, cfg, fit_at, **rounds)
+    except InputError as exc:
+        raise _RuleFailed(exc, st, w0 + closure) from exc
+    return st, std_indenter, fit_at, force
+
+
+def _refusals(presses, st: DepthState, std_indenter: np.ndarray, depth_rule: str,
+              session: Session, cert) -> tuple[list, list[str]]:
+    """The presses refused once their depths are read (:func:`depth_refusals`: past the
+    gauge's reach, under any rule; the mark rule's depths also against the stage's
+    reading), and the notes."""
+    if depth_rule not in ("mark", "vernier"):
+        return [], []
+    std = np.asarray(st.std, np.float64)
+    stage, half = None, None
+    if depth_rule == "mark":
+        # each press's own sd: the indenter's shared part counted once, not n times over
+        ind = np.array([p.indenter for p in presses])
+        n = np.array([np.sum(ind == g) for g in ind], np.float64)
+        shared = np.asarray(std_indenter, np.float64) if len(std_indenter) else np.zeros_like(std)
+        std = np.sqrt(np.maximum(std ** 2 - shared ** 2 * (1 - 1 / n), 0.0))
+        stage = mark_stage_reading(presses, session, cert)
+        half = None if st.shared is None else np.asarray(st.shared[1], np.float64)
+    refused, notes = depth_refusals(presses, np.asarray(st.depth, np.float64), std,
+                                    session.config, shared_half=half, stage=stage)
+    return refused, notes
+
+
+def _without(cert, refused: list, force0: np.ndarray | None):
+    """The certification with the `refused` presses moved to its rejections (and the
+    relaxation's force0 of the others)."""
+    gone = {r.press for r in refused}
+    keep = np.array([p.press not in gone for p in cert.presses], bool)
+    presses = [p for p, k in zip(cert.presses, keep, strict=True) if k]
+    rejected = sorted([*cert.rejected, *refused], key=lambda r: r.press)
+    if force0 is not None:
+        force0 = np.asarray(force0)[keep]
+    return replace(cert, presses=presses, rejected=rejected), force0
 
 
 def _check_options(bevel_threshold, relaxation: str, ft_zero: str) -> None:

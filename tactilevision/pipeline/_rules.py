@@ -17,8 +17,11 @@ from ..contact import (
     CROSSING_CHECK_P,
     EDGE_SHARED_FRACTION,
     RESOLVED_PX,
+    STAGE_Z,
     STIFFNESS_REL,
     BevelGeometry,
+    Rejection,
+    StageReading,
     bevel_force,
     bulge_at,
     certified_depths,
@@ -26,13 +29,16 @@ from ..contact import (
     crossing_forces,
     mark_depths,
     mark_shared_mm,
+    stage_depths,
+    touch_time,
     unresolved_closure,
     vernier_shared_mm,
 )
 from ..mechanics import IndentationFit
 from ._steps import Fitter
 
-__all__ = ["MARK_BETA", "DepthState", "land_rule", "mark_rule", "nominal_rule", "vernier_depths",
+__all__ = ["MARK_BETA", "REACH_REASON", "STAGE_REASON", "DepthState", "depth_refusals",
+           "land_rule", "mark_rule", "mark_stage_reading", "nominal_rule", "vernier_depths",
            "vernier_rule"]
 
 
@@ -389,3 +395,132 @@ def land_rule(st: DepthState, presses, cfg, fit_at: Fitter, *, nu_start: float,
     else:
         st.notes.append(f"nu did not settle in {max_rounds} certification-fit rounds "
                         f"(last {st.rounds[-2:]})")
+
+
+#: rejected.csv's reasons for a press refused after its depth was read (issue 83).
+REACH_REASON = "depth past the gauge's reach"
+STAGE_REASON = "depth readings disagree"
+#: How far before a press's first frame in contact its touch is looked for, s (bounded by
+#: the last press's release).
+_TOUCH_LOOKBACK_S = 0.6
+
+
+def mark_stage_reading(presses, session, cert) -> StageReading:
+    """The second reading of mark-certified presses' depths: the stage's speed times the
+    time since each touched the gel (:func:`~tactilevision.contact.stage_depths`).
+
+    Parameters
+    ----------
+    presses : sequence of CertifiedPress
+        Certified by a mark's onset (``onset_span_s``, ``hold_start_s`` set).
+    session : Session
+        Its F/T log with the zero taken off (:func:`take_off_zero`).
+    cert : Certification
+        The presses' runs (``press_spans_s``) and the clock offset.
+
+    Returns
+    -------
+    StageReading
+    """
+    tf, fz = session.force_times_s, session.forces_n[:, 2]
+    off = float(cert.clock_offset_s)
+    spans_run = np.asarray(cert.press_spans_s, np.float64).reshape(-1, 2)
+    cfg = session.config
+    half = cfg.window_samples / (2.0 * cfg.rate_hz)
+    n = len(presses)
+    touch, touch_sd = np.full(n, np.nan), np.full(n, np.nan)
+    windows = np.zeros((n, 2))
+    for i, p in enumerate(presses):
+        k = int(p.press)
+        first = spans_run[k, 0] + off if k < len(spans_run) else p.onset_span_s[0]
+        t0 = first - _TOUCH_LOOKBACK_S
+        if 0 < k <= len(spans_run):
+            t0 = max(t0, spans_run[k - 1, 1] + off + 0.5 * (first - off - spans_run[k - 1, 1]))
+        if np.isfinite(p.onset_span_s[0]):
+            touch[i], touch_sd[i] = touch_time(tf, fz, t0, float(p.onset_span_s[0]))
+        mid = p.t_frame_s + off + p.hold_s
+        windows[i] = (mid - half, mid + half)
+    return stage_depths(np.array([p.w0_mm for p in presses]),
+                        np.array([p.onset_span_s for p in presses], np.float64).reshape(n, 2),
+                        touch, touch_sd, np.array([p.hold_start_s for p in presses]), windows)
+
+
+def depth_refusals(presses, depth: np.ndarray, std: np.ndarray, cfg, *,
+                   shared_half: np.ndarray | None = None,
+                   stage: StageReading | None = None) -> tuple[list[Rejection], list[str]]:
+    """The presses refused after their depths were read, and the notes on the checks.
+
+    A depth past the press's w0 plus ``[gauge_block] max_overshoot_mm`` is no stage's
+    (:data:`REACH_REASON`: certified at w/h 0.31, four presses of an issue-83 session had
+    been fitted). Where a second reading is given (the mark rule's stage reading), a
+    press whose two readings differ by more than :data:`~tactilevision.contact.STAGE_Z`
+    sds of their difference (each one's own sd, and the shared bound `shared_half` taken
+    as a uniform's) is refused (:data:`STAGE_REASON`): one of them misread it.
+
+    Parameters
+    ----------
+    presses : sequence of CertifiedPress
+    depth, std : (N,) float64 ndarray
+        The rule's depths and each press's own sd (not the n-fold one the fit weighs), mm.
+    cfg : SessionConfig
+    shared_half : (N,) float64 ndarray, optional
+        Half-width of the depth error the rule's presses share, mm.
+    stage : StageReading, optional
+
+    Returns
+    -------
+    refused : list of Rejection
+    notes : list of str
+    """
+    w0 = np.array([p.w0_mm for p in presses])
+    top = float(cfg.max_overshoot_mm)
+    refused, notes = [], []
+    gone = set()
+
+    def refuse(i: int, reason: str, detail: str) -> None:
+        p = presses[i]
+        gone.add(i)
+        refused.append(Rejection(press=p.press, reason=reason, detail=detail,
+                                 t_frame_s=p.t_frame_s, frame=p.frame,
+                                 bevel_score=p.bevel_score,
+                                 centre_px=tuple(float(c) for c in p.footprint.center_px)))
+
+    for i in np.flatnonzero(depth - w0 > top):
+        refuse(int(i), REACH_REASON,
+               f"certified at {depth[i]:.4f} mm, {1e3 * (depth[i] - w0[i]):.1f} um past its "
+               f"indenter's w0 = {w0[i]:g} mm, beyond [gauge_block] max_overshoot_mm = {top:g} "
+               "mm: no stage goes so far; its onset or its indenter's P(w0) was misread")
+    if stage is not None:
+        if stage.note:
+            notes.append(f"second reading of the depths (the stage's speed times the time "
+                         f"since the touch) not made: {stage.note}")
+        elif not np.isfinite(stage.depth_mm).any():
+            notes.append("second reading of the depths not made: no press read")
+        else:
+            sh = np.zeros_like(depth) if shared_half is None else np.asarray(shared_half)
+            diff = depth - stage.depth_mm
+            sd = np.sqrt(std ** 2 + stage.depth_std_mm ** 2 + sh ** 2 / 3.0)
+            z = np.abs(diff) / sd
+            read = np.isfinite(z) & ~np.isin(np.arange(len(presses)), sorted(gone))
+            for i in np.flatnonzero(read & (z > STAGE_Z)):
+                refuse(int(i), STAGE_REASON,
+                       f"the mark rule reads {depth[i]:.4f} +- {std[i]:.4f} mm, the stage's "
+                       f"speed times the time since the touch {stage.depth_mm[i]:.4f} +- "
+                       f"{stage.depth_std_mm[i]:.4f} mm: {1e3 * diff[i]:+.1f} um, "
+                       f"{z[i]:.1f} sds of their difference (over {STAGE_Z:g}); left out of "
+                       "the fit")
+            n_dis = int(np.sum(read & (z > STAGE_Z)))
+            which = ", ".join(str(presses[i].press) for i in np.flatnonzero(read & (z > STAGE_Z)))
+            notes.append(
+                f"second reading of the depths: the stage's speed (w0 over the time from each "
+                f"press's touch to its crossing, {float(np.nanmin(stage.speed_mm_s)):.3g} to "
+                f"{float(np.nanmax(stage.speed_mm_s)):.3g} mm/s) times the time from the touch "
+                f"to the force window agrees with the mark rule within {STAGE_Z:g} sds on "
+                f"{int(read.sum()) - n_dis} of {int(read.sum())} presses read (median "
+                f"difference {1e3 * float(np.median(diff[read])):+.1f} um, the second "
+                f"reading's sd {1e3 * float(np.median(stage.depth_std_mm[read])):.1f} um "
+                "median)"
+                + (f"; {n_dis} refused ({STAGE_REASON}): press(es) {which}" if n_dis else "")
+                + (f"; {int((~np.isfinite(z)).sum())} not read (no touch found in the F/T "
+                   "log)" if (~np.isfinite(z)).any() else ""))
+    return refused, notes
