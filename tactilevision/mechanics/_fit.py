@@ -297,10 +297,10 @@ def fit_indentation(depth_mm: np.ndarray, force_n: np.ndarray, *, thickness_mm: 
 
 def _fem_law(fit: IndentationFit, w: np.ndarray) -> np.ndarray | None:
     """The FEM's finite-strain force at the fit's E and nu (eq. 5 alone, FEM table, bonded
-    punch, E and nu computed), or None."""
+    punch, E and nu computed inside the table, not put at its edge), or None."""
     if not (fit.beta_table == "fem" and fit.contact == "bonded" and fit.effects == FIT_EFFECTS
-            and math.isfinite(fit.E_mpa) and math.isfinite(fit.nu)):
-        return None
+            and math.isfinite(fit.E_mpa) and math.isfinite(fit.nu) and fit.nu_bound is None):
+        return None         # (at the table's edge the law at that nu is not the fitted one)
     lo, hi = kappa_n_nu_range()
     h = fit.thickness_mm
     if not lo <= fit.nu <= hi:
