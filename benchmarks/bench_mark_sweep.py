@@ -28,14 +28,16 @@ presses                16 to 24
 
 The forces follow eq. (5) with E = 0.2 MPa, nu = 0.48 (the paper's beta relation,
 Hayes' kappa at the exact a/h; as ``benchmarks/bench_loop.py``), so E's truth is 0.2 MPa;
-the depths' truth is the renderer's (truth.json). Printed per design: the presses
-certified, refused (with reasons) and flagged by the second reading; the certified
-depths' error (mean, sd, um) on the presses fitted, their z-scores (error over the
-stated sd), the stated sd's median; the largest error and whether every press more than
-50 um off was refused, flagged or warned of; E with its 95 % interval, whether it holds
-the truth, its half-width (% of E); calibrate's time beside decoding every frame once in
-the same run (as ``benchmarks/bench_calibrate.py``). Then the pooled figures against the
-issue's targets.
+the depths' truth is the renderer's (truth.json): each press's true depth over its own
+force window (:func:`true_depth_at_window`; a window that starts on the approach saw
+less than the hold's depth). Printed per design: the presses certified, refused (with
+reasons; "flagged": refused once their depth was read, by the second reading or past the
+gauge's reach); the certified depths' error (mean, sd, um), their z-scores (error over
+the press's own stated sd, :func:`own_sd`), the stated sd's median; the largest error
+and whether every press more than 50 um off was refused or warned of; E with its 95 %
+interval, whether it holds the truth, its half-width (% of E); calibrate's time beside
+decoding every frame once in the same run (as ``benchmarks/bench_calibrate.py``). Then
+the pooled figures against the issue's targets.
 
 ``--render-only`` renders the designs (``--jobs`` at a time) and stops; ``--list``
 prints the designs drawn.
