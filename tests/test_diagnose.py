@@ -4,6 +4,7 @@ tests and the noise floor on known answers; the command line and its JSON."""
 
 from __future__ import annotations
 
+import functools
 import json
 import math
 import warnings
@@ -58,6 +59,13 @@ def _diag(t):
                         base=t.truth["base"])
 
 
+@functools.cache
+def _null_diag(seed: int):
+    """``_diag`` of the generator's null table of `seed` (deterministic), read-only: several
+    tests read the same verdict (seed 0's five times), its replayed sizes computed once."""
+    return _diag(make_measurement_table(None, seed))
+
+
 def test_generator_tables_hold_every_column_and_are_deterministic():
     cols = ("press", "indenter", "depth_mm", "force_n", "force_std_n", "fx_n", "fy_n",
             "time_s", "hold_s", "wait_s", "x_mm", "y_mm", "day", "temperature_c")
@@ -75,7 +83,7 @@ def test_generator_tables_hold_every_column_and_are_deterministic():
 @pytest.mark.parametrize("seed", SEEDS)
 def test_null_tables_give_a_null_verdict(seed):
     t = make_measurement_table(None, seed)
-    d = _diag(t)
+    d = _null_diag(seed)
     assert d.missing_effect is None and d.unexplained_covariate is None, d.message
     assert "Nothing is missing" in d.message
     assert len(d.ladder) in (1, 2)        # at most eq. (5)'s own curvature is added
@@ -147,7 +155,7 @@ def test_responses_are_not_scanned_unless_asked():
     (the generator's cross-talk) names force_crosstalk, which reads fx_n and fy_n as the
     sensor's conditions, with or without the scan."""
     t = make_measurement_table(None, 1)
-    d = _diag(t)
+    d = _null_diag(1)
     assert not {"fx_n", "fy_n", "force_std_n"} & set(d.scanned_columns)
     assert {"time_s", "day", "x_mm", "temperature_c"} <= set(d.scanned_columns)
     assert d.responses_not_scanned == ("fx_n", "fy_n", "force_std_n")
@@ -220,7 +228,7 @@ def test_nothing_missing_says_what_it_rules_out():
     at 0.3 times it is not. Effects the table cannot test say why; a verdict that names
     an effect states no sizes."""
     t = make_measurement_table(None, 0)
-    d = _diag(t)
+    d = _null_diag(0)
     assert d.missing_effect is None and d.unexplained_covariate is None, d.message
     sizes = d.rules_out
     assert set(sizes) >= {"depth_offset", "force_offset", "spatial_nonuniformity"}
@@ -254,7 +262,7 @@ def test_nothing_missing_rules_out_a_stiffness_change_over_the_session(effect):
     catalogue's parametrisation) at 1.5 times the stated size are named; at 0.3 times
     they are not."""
     t = make_measurement_table(None, 0)
-    d = _diag(t)
+    d = _null_diag(0)
     assert d.missing_effect is None and d.unexplained_covariate is None, d.message
     e = d.rules_out[effect]
     assert 0 < e.size_param < math.inf and e.unit in ("%/min", "%")
@@ -312,7 +320,7 @@ def test_a_mark_certified_table_does_not_rule_out_what_the_rule_absorbs():
     read as depth. The verdict says so and rules none of them out; an offset keeps its
     size (it moves the crossing force too)."""
     t = make_measurement_table(None, 0)
-    plain = _diag(t)
+    plain = _null_diag(0)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         d = diagnose(t.columns, thickness_mm=t.thickness_mm, radius_mm=t.radius_mm,
