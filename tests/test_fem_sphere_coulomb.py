@@ -5,6 +5,7 @@ incompressible half-space friction does nothing (Dundurs' second constant is 0).
 
 from __future__ import annotations
 
+import functools
 import json
 import subprocess
 import sys
@@ -21,7 +22,10 @@ GEOMETRY = dict(radius_over_h=1.875, nu=0.5, w_over_h=np.array([0.0625, 0.25]),
                 model="linear", pad_radius_over_h=3.23, surface_cell=0.0625, cache=False)
 
 
+@functools.cache
 def _run(contact: str, mu: float | None):
+    """The sweep of GEOMETRY (read-only; computed once per module: mu = 0.2's is read by
+    two tests)."""
     res = sphere_indentation(contact=contact, friction=mu, **GEOMETRY)
     assert res.complete
     return res
