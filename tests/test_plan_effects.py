@@ -3,6 +3,7 @@ form and against ``diagnose`` itself on drawn sessions; the design's ``[plan.det
 
 from __future__ import annotations
 
+import functools
 import json
 import math
 import re
@@ -67,13 +68,20 @@ def test_sizes_scale_with_the_noise():
         assert s2[name].size / s1[name].size == pytest.approx(2.0, rel=0.08), name
 
 
+@functools.cache
+def _varied_sensitivity():
+    """effect_sensitivity of Design(**VARIED), read-only: computed once for the three
+    effects of test_diagnose_finds_the_predicted_sizes, not once per effect."""
+    return effect_sensitivity(Design(**VARIED))
+
+
 @pytest.mark.parametrize("effect", ["aging", "force_offset", "incomplete_recovery"])
 def test_diagnose_finds_the_predicted_sizes(effect):
     """diagnose itself on drawn sessions of the design: named in nearly every session at
     1.5 times the predicted 95 % size, in few at 0.4 times
     (``benchmarks/bench_plan_effects.py`` checks the factor 1.3 over six designs)."""
     d = Design(**VARIED)
-    s = effect_sensitivity(d)[effect]
+    s = _varied_sensitivity()[effect]
     assert 0 < s.size_param < math.inf
 
     def named(size: float, seed: int) -> bool:
