@@ -243,3 +243,46 @@ def test_gauge_block_presses_a_law_cannot_follow_widen_and_warn():
     width = np.diff(bad.E_ci95_mpa)[0] / bad.E_mpa
     assert width > 1.5 * np.diff(ok.E_ci95_mpa)[0] / ok.E_mpa
     assert bad.to_json_dict()["misfit"]["factor"] == pytest.approx(bad.misfit.factor)
+
+
+def test_an_error_each_indenters_presses_share_is_not_a_misfit():
+    """Mark-rule presses: 5 indenters x 4 presses, eq. (5)'s own law exact, each indenter's
+    depths off by one shared error drawn at its stated sd (its P(w0)'s) and each press's
+    depth past w0 read with a slope error (the rule's dP/dw): along depth the residuals
+    come in runs of four. Read per press they are a serial correlation; read on the
+    indenters' means (`group`), as the stated errors say, no misfit. Across 16 indenters,
+    a law that cannot follow the curve is still found on the means."""
+    rng = np.random.default_rng(83)
+    h, c, beta = 3.0, 3.5, 1.5
+
+    def law(w):
+        return c * w * (1 + beta * w / h)
+
+    def presses(w0s, bend=0.0):
+        ind = np.repeat(np.arange(w0s.size), 4)
+        past = rng.uniform(0.0, 0.05, ind.size)
+        shared = 0.015 * rng.standard_normal(w0s.size)[ind]       # mm, per indenter
+        w_true = w0s[ind] + past
+        P = law(w_true) * (1 - bend * (w_true / h) ** 2) \
+            + 0.001 * rng.standard_normal(ind.size)
+        w = w_true + shared + 0.1 * past * rng.choice([-1, 1])    # slope error per press
+        return ind, w, P
+
+    ind, w, P = presses(np.linspace(0.15, 0.6, 5))
+    u = np.full(w.size, 0.015 * 2.0)            # the shared part counted n = 4 times over
+    kw = {"thickness_mm": h, "radius_mm": 2.5, "beta_table": "paper", "a_over_h": 0.8,
+          "depth_std_mm": u}
+    plain = fit_indentation(w, P, **kw)
+    grouped = fit_indentation(w, P, indenter=ind, depth_indenter_std_mm=u, **kw)
+    assert plain.misfit.correlation > 0.5 and plain.misfit.factor > 1.5
+    assert grouped.misfit.factor == 1.0 and not grouped.misfit.drifts
+    assert grouped.E_mpa == plain.E_mpa
+    assert np.diff(grouped.E_ci95_mpa)[0] < np.diff(plain.E_ci95_mpa)[0] / 1.5
+    # the same law bent (a square term eq. 5 lacks) across 16 indenters: the means' run
+    ind, w, P = presses(np.linspace(0.1, 0.6, 16), bend=10.0)
+    m = assess_misfit(w, P - law(w), np.full(w.size, 0.2), group=ind)
+    assert m.correlation > 0.5 and m.factor > 1.5
+    with pytest.raises(InputError, match="go together"):
+        fit_indentation(w, P, indenter=ind, **{**kw, "depth_std_mm": np.full(w.size, 0.03)})
+    with pytest.raises(ValueError, match="group must have shape"):
+        assess_misfit(w, P - law(w), np.full(w.size, 0.2), group=ind[:3])

@@ -572,8 +572,13 @@ def _final_misfit(climb) -> Misfit | None:
         return None
     E = climb.ladder[-1].E_mpa if climb.ladder else math.nan
     P = pred + np.asarray(fit.residuals_n, np.float64)
+    # where each indenter's presses share a stated depth error (the fits' quasi-demeaning
+    # groups), the structure and drift are read on the indenters' means
+    group = (np.asarray(d["_group"]) if "_group" in d and "_theta" in d
+             and np.any(np.asarray(d["_theta"], np.float64) > 0) else None)
     m = assess_misfit(d["depth_mm"], fit.residuals_n,
-                      (E if math.isfinite(E) else 1.0) * P / pred, n_params=fit.n_params)
+                      (E if math.isfinite(E) else 1.0) * P / pred, n_params=fit.n_params,
+                      group=group)
     return m if math.isfinite(E) else replace(m, E_shallow_mpa=math.nan, E_deep_mpa=math.nan)
 
 

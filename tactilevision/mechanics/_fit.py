@@ -89,7 +89,9 @@ def fit_indentation(depth_mm: np.ndarray, force_n: np.ndarray, *, thickness_mm: 
                     radius_mm: float, beta_table: str = "fem",
                     a_over_h: float | None = None, contact: str = "bonded",
                     confidence: float = 0.95,
-                    depth_std_mm: np.ndarray | None = None) -> IndentationFit:
+                    depth_std_mm: np.ndarray | None = None,
+                    indenter: np.ndarray | None = None,
+                    depth_indenter_std_mm: np.ndarray | None = None) -> IndentationFit:
     """Fit E and nu of a bonded gel layer to flat-punch presses (the paper's method).
 
     Parameters
@@ -126,6 +128,14 @@ def fit_indentation(depth_mm: np.ndarray, force_n: np.ndarray, *, thickness_mm: 
         and not all zero: eq. (5) is fitted with errors in both variables
         (effective variance, see Notes). None (default), or zero for every
         press: the depths are taken as exact (ordinary least squares below).
+    indenter, depth_indenter_std_mm : (N,) array_like, optional
+        Each press's indenter and the part of its `depth_std_mm` that the
+        indenter's presses share (the mark rule's P(w0), counted n times over as
+        `depth_std_mm` counts it), mm; with `depth_std_mm` only. The fit is
+        unchanged; its misfit's structure and drift along depth are read on the
+        indenters' means (:func:`~tactilevision.mechanics.assess_misfit`'s
+        `group`), so that the indenters' stated shared errors are not taken for a
+        misfit.
 
     Returns
     -------
@@ -264,6 +274,7 @@ def fit_indentation(depth_mm: np.ndarray, force_n: np.ndarray, *, thickness_mm: 
         raise InputError(f"depth_mm holds {depths.size} distinct depth(s); the fit of "
                          "eq. (5) needs presses at two depths or more")
     u = None if depth_std_mm is None else _depth_std(depth_std_mm, w.size)
+    shared = _indenter_shared(indenter, depth_indenter_std_mm, u, w.size)
     w_table, reach_note = _table_depths(w, u, h, beta_table)
     ah, kappa_source, contact = _geometry(w_table, h, a, beta_table, a_over_h, contact)
     if u is not None and np.any(u > 0):
@@ -271,7 +282,8 @@ def fit_indentation(depth_mm: np.ndarray, force_n: np.ndarray, *, thickness_mm: 
                                        contact=contact, kappa_source=kappa_source,
                                        confidence=confidence,
                                        a_over_h_given=a_over_h is not None,
-                                       w_table=w_table, reach_note=reach_note)
+                                       w_table=w_table, reach_note=reach_note,
+                                       shared=shared)
     zero_note = (("depth_std_mm is 0 for every press: the depths are taken as exact "
                   "(ordinary fit)",) if u is not None else ())
 
@@ -314,7 +326,8 @@ def _fem_law(fit: IndentationFit, w: np.ndarray) -> np.ndarray | None:
 
 def carry_misfit(fit: IndentationFit, depth_mm: np.ndarray, force_n: np.ndarray,
                  predicted_n: np.ndarray, noise_sd_n: np.ndarray | None = None,
-                 n_params: int = 2, structure: bool = True) -> IndentationFit:
+                 n_params: int = 2, structure: bool = True,
+                 group: np.ndarray | None = None) -> IndentationFit:
     """`fit` with the misfit of its presses read and carried into its intervals.
 
     Parameters
@@ -331,6 +344,8 @@ def carry_misfit(fit: IndentationFit, depth_mm: np.ndarray, force_n: np.ndarray,
         Read the residuals' structure along depth (:func:`assess_misfit`); False for
         a model whose E the FEM's law at these depths gives while `predicted_n` is
         its line's.
+    group : (N,) ndarray, optional
+        Groups of presses that share a stated error (:func:`assess_misfit`).
 
     Returns
     -------
@@ -359,7 +374,7 @@ def carry_misfit(fit: IndentationFit, depth_mm: np.ndarray, force_n: np.ndarray,
     finite = math.isfinite(E) and E > 0 and bool(np.all(pred > 0))
     apparent = (E if finite else 1.0) * P / np.where(pred > 0, pred, np.nan)
     m = assess_misfit(w, P - pred, apparent, noise_sd_n=noise_sd_n, n_params=n_params,
-                      structure=structure or law is not None)
+                      structure=structure or law is not None, group=group)
     if not finite:        # no E: the drift is of the force's ratio, not a modulus
         m = dataclasses.replace(m, E_shallow_mpa=math.nan, E_deep_mpa=math.nan)
     E_ci, nu_ci = fit.E_ci95_mpa, fit.nu_ci95
@@ -513,7 +528,9 @@ def _fit_with_depth_std(w: np.ndarray, P: np.ndarray, u: np.ndarray, *, h: float
                             ah: float, beta_table: str, contact: str, kappa_source: str,
                             confidence: float, a_over_h_given: bool,
                             w_table: np.ndarray | None = None,
-                            reach_note: str | None = None) -> IndentationFit:
+                            reach_note: str | None = None,
+                            shared: tuple[np.ndarray, np.ndarray] | None = None
+                            ) -> IndentationFit:
     """:func:`fit_indentation` with depth uncertainties: effective variance, then E and nu
     (the tables read at `w_table`, default `w`: :func:`_table_depths`, with the fit's
     weights)."""
@@ -544,7 +561,40 @@ def _fit_with_depth_std(w: np.ndarray, P: np.ndarray, u: np.ndarray, *, h: float
     pred = w * (c + s * x)
     # no Birge ratio: the depth uncertainties are only part of the stated noise (the F/T
     # window's is not given here), and sigma0 carries the rest
-    return carry_misfit(fit, w, P, pred)
+    # where the indenters' presses share a stated depth error, the misfit is read on the
+    # indenters' means (assess_misfit's group)
+    group = None
+    if shared is not None and np.any(shared[1] > 0):
+        group = shared[0]
+    return carry_misfit(fit, w, P, pred, group=group)
+
+
+def _indenter_shared(indenter: object, depth_indenter_std_mm: object, u: np.ndarray | None,
+                     n: int) -> tuple[np.ndarray, np.ndarray] | None:
+    """:func:`fit_indentation`'s `indenter` and `depth_indenter_std_mm` checked, or None.
+
+    Raises
+    ------
+    InputError
+        Where one is given without the other or without ``depth_std_mm``, or a shared
+        part is negative or exceeds its press's ``depth_std_mm``.
+    ShapeError
+        For a wrong shape, NaN or inf.
+    """
+    if indenter is None and depth_indenter_std_mm is None:
+        return None
+    if indenter is None or depth_indenter_std_mm is None or u is None:
+        raise InputError("indenter and depth_indenter_std_mm go together, and with "
+                         "depth_std_mm")
+    g = check_array(indenter, "indenter", [(n,)], finite=True)
+    ui = check_array(depth_indenter_std_mm, "depth_indenter_std_mm", [(n,)],
+                     dtype=np.number, finite=True).astype(np.float64)
+    bad = (ui < 0) | (ui > u * (1 + 1e-9) + 1e-15)
+    if np.any(bad):
+        i = int(np.argmax(bad))
+        raise InputError(f"depth_indenter_std_mm[{i}] = {ui[i]:g} mm: the shared part must "
+                         f"lie in [0, depth_std_mm[{i}] = {u[i]:g}]")
+    return g, ui
 
 
 def _geometry(w: np.ndarray, h: float, a: float, beta_table: str, a_over_h: float | None,

@@ -26,6 +26,11 @@ the intervals by what it shows:
   which depths were pressed, and E's interval is widened to hold the apparent E of the
   shallowest and of the deepest quarter of the presses.
 
+Where groups of presses share a stated error (an indenter's P(w0) under the mark
+rule, whose depths past w0 are read from the force itself), the structure and the
+drift are read on the groups' means: what the stated errors make among a group's
+presses, side by side along depth, is not a misfit.
+
 The first two are tested at :data:`MISFIT_ALPHA` (1 %), the drift at :data:`DRIFT_ALPHA`
 (5 %), or at :data:`DRIFT_LENIENT` (20 %) where it is :data:`DRIFT_LARGE` (5 %) or more;
 what is found is named in one warning (the
@@ -153,7 +158,8 @@ def _quarters(depth: np.ndarray, apparent: np.ndarray) -> tuple[float, float]:
 
 def assess_misfit(depth_mm: np.ndarray, residuals_n: np.ndarray, apparent_E_mpa: np.ndarray,
                   *, noise_sd_n: np.ndarray | None = None, n_params: int = 2,
-                  carried: bool = True, structure: bool = True) -> Misfit:
+                  carried: bool = True, structure: bool = True,
+                  group: np.ndarray | None = None) -> Misfit:
     """Read a fit's residuals against its stated noise, along depth.
 
     Parameters
@@ -178,10 +184,23 @@ def assess_misfit(depth_mm: np.ndarray, residuals_n: np.ndarray, apparent_E_mpa:
         is read: False where the residuals are against a curve that only stands for the
         law E is read through (eq. 5's line with effects, whose E the FEM's law at these
         depths gives), so that their shape says nothing of E.
+    group : (N,) ndarray, optional
+        Where groups of presses share a stated error (an indenter's P(w0) under the
+        mark rule, whose depths past w0 are read from the force itself): each press's
+        group. The structure and the drift are then read on the groups' mean depths,
+        residuals and apparent E (the between-groups estimator), so that what the
+        stated errors make within and between a group's presses (side by side along
+        depth) is not taken for a misfit; the lack of fit is not read (groups are not
+        repeats). The Birge ratio stays the presses'.
 
     Returns
     -------
     Misfit
+
+    Raises
+    ------
+    ValueError
+        Where `group` is not (N,).
     """
     w = np.asarray(depth_mm, np.float64)
     r = np.asarray(residuals_n, np.float64)
@@ -195,26 +214,35 @@ def assess_misfit(depth_mm: np.ndarray, residuals_n: np.ndarray, apparent_E_mpa:
             chi2 = float(np.sum((r / sd) ** 2))
             birge, chi2_p = math.sqrt(chi2 / dof), float(stats.chi2.sf(chi2, dof))
     # presses at one depth (repeats) have no order among them: their mean residual is read
-    _, inv = np.unique(np.round(w, 9), return_inverse=True)
-    r_depth = np.bincount(inv, r) / np.bincount(inv)
+    ws, rs, es = w, r, e          # what the structure and the drift are read on
+    if group is not None:
+        g = np.asarray(group)
+        if g.shape != (n,):
+            raise ValueError(f"group must have shape ({n},), got {g.shape}")
+        _, gi = np.unique(g, return_inverse=True)
+        cnt = np.bincount(gi)
+        ws, rs, es = (np.bincount(gi, v) / cnt for v in (w, r, e))
+    _, inv = np.unique(np.round(ws, 9), return_inverse=True)
+    r_depth = np.bincount(inv, rs) / np.bincount(inv)
     rho, rho_p, f_corr = (serial_correlation(r_depth) if structure
                           else (math.nan, math.nan, 1.0))
-    lof_F, lof_p = _lack_of_fit(inv, r, n_params) if structure else (math.nan, 1.0)
+    lof_F, lof_p = (_lack_of_fit(inv, rs, n_params) if structure and group is None
+                    else (math.nan, 1.0))
     f_lof = 1.0
     if lof_p < MISFIT_ALPHA and lof_F > 1:
         # the repeats of a depth share its misfit: n presses carry the information of
         # n / (1 + (m - 1) icc) (Kish's design effect, m presses per depth, icc the share
         # of the residual variance between depths), the residual-scaled intervals too few
-        m = r.size / (int(inv.max()) + 1)
+        m = rs.size / (int(inv.max()) + 1)
         icc = (lof_F - 1) / (lof_F - 1 + m)
         f_lof = math.sqrt(1 + (m - 1) * icc)
     drift = drift_p = math.nan
-    shallow, deep = _quarters(w, e)
+    shallow, deep = _quarters(ws, es)
     if shallow != 0 and math.isfinite(shallow) and math.isfinite(deep):
         drift = deep / shallow - 1.0
-    if n >= 3 and np.ptp(w) > 0 and np.all(np.isfinite(e)):
-        line = stats.linregress(w, e)
-        if dof > 0 and math.isfinite(line.stderr) and line.stderr > 0:
+    if ws.size >= 3 and np.ptp(ws) > 0 and np.all(np.isfinite(es)):
+        line = stats.linregress(ws, es)
+        if ws.size - n_params > 0 and math.isfinite(line.stderr) and line.stderr > 0:
             drift_p = float(line.pvalue)
         elif line.slope == 0:
             drift_p = 1.0

@@ -160,6 +160,12 @@ def mark_rule(presses, force: np.ndarray, fit_at, cfg, period: float,
     # is no physics: before it was stated, diagnose named a force offset from that slope
     # on one of 12 Taxim mark sessions with no hidden effect (benchmarks/bench_loop.py)
     std = np.sqrt(std ** 2 + (STIFFNESS_REL * after) ** 2)
+    std_indenter = np.where(np.isfinite(f_on), sd_group / k, 0.0)
+    # the fit's misfit is read under the error each indenter's presses share (stated: its
+    # P(w0)'s): along depth an indenter's presses lie side by side, and before this their
+    # shared error read as a serial correlation and widened E's interval 2.4 times on a
+    # drawn design whose model was exact (benchmarks/bench_mark_sweep.py, seed 9161)
+    fit_at.indenter_shared = (ind, std_indenter)
     fit = fit_at(depth, std)
     # shared by every press: the clock and dP/dw. Where P(w0) lies in its indenter's
     # intersection is not: the crossing is uniform over each press's frame periods
@@ -190,7 +196,6 @@ def mark_rule(presses, force: np.ndarray, fit_at, cfg, period: float,
                      "or early on some presses, or a gel that changed between them (diagnose "
                      "tells which it can); each indenter's P(w0), and so the depths and E's "
                      "and nu's intervals, rest on those brackets and may be too narrow")
-    std_indenter = np.where(np.isfinite(f_on), sd_group / k, 0.0)
     return depth, std, fit, (-half, half), notes, std_indenter
 
 

@@ -64,6 +64,9 @@ class Fitter:
         self.caught: dict[int, list[str]] = {}
         self.press = np.arange(len(force)) if press is None else np.asarray(press)
         self.left_out = np.zeros(len(force), bool)
+        # each press's indenter and the part of its depth sd the indenter's presses share
+        # (the mark rule sets them): the fits' misfit is read under that shared error
+        self.indenter_shared: tuple[np.ndarray, np.ndarray] | None = None
 
     def __call__(self, depth: np.ndarray, std: np.ndarray | None,
                  f_n: np.ndarray | None = None) -> IndentationFit:
@@ -73,8 +76,14 @@ class Fitter:
         keep = ~self.left_out
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
+            shared = {}
+            if self.indenter_shared is not None and std is not None:
+                ind, ui = self.indenter_shared
+                shared = dict(indenter=ind[keep], depth_indenter_std_mm=np.minimum(
+                    ui[keep], std[keep]))
             f = fit_indentation(depth[keep], f_n[keep],
-                                depth_std_mm=None if std is None else std[keep], **self.kw)
+                                depth_std_mm=None if std is None else std[keep], **shared,
+                                **self.kw)
         if note is not None:
             f = replace(f, notes=(*f.notes, note))
         self.caught[id(f)] = [str(w.message) for w in caught] + ([note] if note else [])
