@@ -102,8 +102,24 @@ def test_a_depth_past_the_gauges_reach_is_refused_and_disagreeing_readings_flagg
                                 stage=stage)
     assert {r.press for r in refused} == {0}
     # a wider reach keeps the deep press
-    refused, _ = depth_refusals(presses, depth, std, SimpleNamespace(max_overshoot_mm=1.0))
-    assert refused == []
+    refused, notes = depth_refusals(presses, depth, std, SimpleNamespace(max_overshoot_mm=1.0))
+    assert refused == [] and not any("loosely" in n for n in notes)
+
+
+def test_a_loosely_certified_press_is_named():
+    """A press whose depth's 95 % interval is wider than +-50 um (sd 30 um: +-59 um) is
+    named in a warning, one at sd 20 um (+-39 um) is not, nor a refused one; a shared
+    bound of +-0.06 mm (a uniform's sd 35 um) makes the second loose too."""
+    presses = [_press(0, 0.15), _press(1, 0.30), _press(2, 0.40)]
+    depth = np.array([0.16, 0.32, 0.90])
+    std = np.array([0.030, 0.020, 0.030])
+    cfg = SimpleNamespace(max_overshoot_mm=0.1)
+    _, notes = depth_refusals(presses, depth, std, cfg)
+    loose = [n for n in notes if "loosely" in n]
+    assert len(loose) == 1 and loose[0].startswith("press(es) 0 certified loosely")
+    assert "+-59 to +-59 um" in loose[0]
+    _, notes = depth_refusals(presses, depth, std, cfg, shared_half=np.full(3, 0.06))
+    assert any(n.startswith("press(es) 0, 1 certified loosely") for n in notes)
 
 
 _TOML = """\

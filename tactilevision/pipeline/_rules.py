@@ -404,6 +404,11 @@ def land_rule(st: DepthState, presses, cfg, fit_at: Fitter, *, nu_start: float,
 
 #: rejected.csv's reasons for a press refused after its depth was read (issue 83).
 REACH_REASON = "depth past the gauge's reach"
+#: A certified depth whose 95 % interval is wider than +- this, mm, is named in a warning:
+#: a press certified so loosely may lie 50 um or more from its true depth with nothing
+#: wrong in its reading (on a drawn 10 frames/s design at 1.46 mm/s, two presses 55 um off
+#: at 1.6 sds, benchmarks/bench_mark_sweep.py seed 9161).
+LOOSE_DEPTH_MM = 0.05
 STAGE_REASON = "depth readings disagree"
 #: How far before a press's first frame in contact its touch is looked for, s (bounded by
 #: the last press's release).
@@ -460,7 +465,9 @@ def depth_refusals(presses, depth: np.ndarray, std: np.ndarray, cfg, *,
     been fitted). Where a second reading is given (the mark rule's stage reading), a
     press whose two readings differ by more than :data:`~tactilevision.contact.STAGE_Z`
     sds of their difference (each one's own sd, and the shared bound `shared_half` taken
-    as a uniform's) is refused (:data:`STAGE_REASON`): one of them misread it.
+    as a uniform's) is refused (:data:`STAGE_REASON`): one of them misread it. Presses
+    kept whose depth's 95 % interval is wider than +- :data:`LOOSE_DEPTH_MM` are named in
+    a note.
 
     Parameters
     ----------
@@ -528,4 +535,14 @@ def depth_refusals(presses, depth: np.ndarray, std: np.ndarray, cfg, *,
                 + (f"; {n_dis} refused ({STAGE_REASON}): press(es) {which}" if n_dis else "")
                 + (f"; {int((~np.isfinite(z)).sum())} not read (no touch found in the F/T "
                    "log)" if (~np.isfinite(z)).any() else ""))
+    sh = np.zeros_like(depth) if shared_half is None else np.asarray(shared_half, np.float64)
+    half95 = 1.96 * np.sqrt(std ** 2 + sh ** 2 / 3.0)
+    loose = [i for i in np.flatnonzero(half95 > LOOSE_DEPTH_MM) if i not in gone]
+    if loose:
+        notes.append(
+            f"press(es) {', '.join(str(presses[i].press) for i in loose)} certified loosely: "
+            f"their depths' 95 % intervals are +-{1e3 * float(np.min(half95[loose])):.0f} to "
+            f"+-{1e3 * float(np.max(half95[loose])):.0f} um (over +-{1e3 * LOOSE_DEPTH_MM:.0f} "
+            "um), so each may lie that far from its true depth; they are fitted with that "
+            "weight (more frames per second or a slower approach pins them closer)")
     return refused, notes
