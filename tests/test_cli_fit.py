@@ -369,3 +369,31 @@ def test_unidentified_fit_says_so(tmp_path, capsys):
     assert main(["fit", str(csv), "--json", str(out)]) == 0
     assert json.loads(out.read_text())["identified"] is True
     assert "NOT IDENTIFIED" not in capsys.readouterr().out
+
+
+def test_a_mark_tables_shared_depth_error_is_not_read_as_a_misfit(tmp_path, capsys):
+    """A table as calibrate's mark rule writes it: 5 indenters x 4 presses on the paper's
+    line (6), each indenter's depths off by one shared error (15 um, stated as
+    depth_indenter_std_mm, counted n = 4 times over in depth_std_mm). Without the
+    indenter columns ``fit`` reads the runs along depth as a misfit and widens E's
+    interval; with them it does not, and E is the same."""
+    rng = np.random.default_rng(5)
+    ind = np.repeat(np.arange(5), 4)
+    w_true = np.array(DEPTHS)[ind] + rng.uniform(0.0, 0.04, ind.size)
+    w = w_true + np.array([0.02, -0.02, 0.015, -0.015, 0.02])[ind]
+    P = np.array([line6(v) for v in w_true])
+    rows = "".join(f"{i},{g},{a:.6f},0.03,0.03,{b:.6f}\n"
+                   for i, (g, a, b) in enumerate(zip(ind, w, P, strict=True)))
+    csv = write_table(tmp_path, "press,indenter,depth_mm,depth_std_mm,depth_indenter_std_mm,"
+                      "force_n\n" + rows)
+    grouped = run_json(["fit", str(csv)], capsys)
+    (tmp_path / "plain").mkdir()
+    plain_csv = write_table(tmp_path / "plain", "press,depth_mm,depth_std_mm,force_n\n" + "".join(
+        f"{i},{a:.6f},0.03,{b:.6f}\n" for i, (a, b) in enumerate(zip(w, P, strict=True))))
+    plain = run_json(["fit", str(plain_csv)], capsys)
+    assert plain["misfit"]["factor"] > 1.5
+    assert grouped["misfit"]["factor"] == 1.0
+    assert grouped["E_mpa"] == pytest.approx(plain["E_mpa"], rel=1e-12)
+    lo, hi = grouped["E_ci95_mpa"]
+    plo, phi = plain["E_ci95_mpa"]
+    assert hi - lo < (phi - plo) / 1.5

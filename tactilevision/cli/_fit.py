@@ -238,7 +238,8 @@ def _fit_table(table: Measurements, effects: tuple[str, ...], args: argparse.Nam
                                       thickness_mm=table.thickness_mm,
                                       radius_mm=table.radius_mm,
                                       beta_table=args.beta_table, a_over_h=args.a_over_h,
-                                      depth_std_mm=depth_std)
+                                      depth_std_mm=depth_std,
+                                      **_indenter_shared(table, depth_std))
             else:
                 fit, _ = fit_model(table.columns, ",".join(effects),
                                    thickness_mm=table.thickness_mm, radius_mm=table.radius_mm,
@@ -247,6 +248,21 @@ def _fit_table(table: Measurements, effects: tuple[str, ...], args: argparse.Nam
         except InputError as exc:
             raise InputError(f"{table.path}: {exc}") from None
     return fit, caught
+
+
+def _indenter_shared(table: Measurements, depth_std: np.ndarray | None) -> dict:
+    """The table's ``indenter`` and ``depth_indenter_std_mm`` (the depth error each
+    indenter's presses share, as calibrate's mark rule writes it) for
+    :func:`~tactilevision.mechanics.fit_indentation`, where the table states a shared part;
+    else nothing."""
+    cols = table.columns
+    if depth_std is None or "indenter" not in cols or "depth_indenter_std_mm" not in cols:
+        return {}
+    ui = np.asarray(cols["depth_indenter_std_mm"], np.float64)
+    ind = np.asarray(cols["indenter"], np.float64)
+    if not (np.all(np.isfinite(ui)) and np.all(np.isfinite(ind)) and np.any(ui > 0)):
+        return {}
+    return {"indenter": ind, "depth_indenter_std_mm": np.minimum(ui, depth_std)}
 
 
 #: What ``fit --crossings`` fits, in words (the summary and the JSON's ``data``).
