@@ -13,7 +13,7 @@ from typing import ClassVar
 import numpy as np
 import pytest
 
-from tactilevision import InputError
+from tactilevision import InputError, ShapeError
 from tactilevision.diagnosis import diagnose
 from tactilevision.io import read_measurements
 from tactilevision.mechanics import (
@@ -284,5 +284,5 @@ def test_an_error_each_indenters_presses_share_is_not_a_misfit():
     assert m.correlation > 0.5 and m.factor > 1.5
     with pytest.raises(InputError, match="go together"):
         fit_indentation(w, P, indenter=ind, **{**kw, "depth_std_mm": np.full(w.size, 0.03)})
-    with pytest.raises(ValueError, match="group must have shape"):
+    with pytest.raises(ShapeError, match="group"):
         assess_misfit(w, P - law(w), np.full(w.size, 0.2), group=ind[:3])

@@ -46,6 +46,8 @@ from typing import Any
 import numpy as np
 from scipy import stats
 
+from .._checks import check_array
+
 __all__ = ["DRIFT_ALPHA", "DRIFT_LARGE", "DRIFT_LENIENT", "DRIFT_MIN", "MISFIT_ALPHA", "Misfit",
            "assess_misfit", "log_interval", "serial_correlation", "widen_interval"]
 
@@ -199,7 +201,7 @@ def assess_misfit(depth_mm: np.ndarray, residuals_n: np.ndarray, apparent_E_mpa:
 
     Raises
     ------
-    ValueError
+    ShapeError
         Where `group` is not (N,).
     """
     w = np.asarray(depth_mm, np.float64)
@@ -216,9 +218,7 @@ def assess_misfit(depth_mm: np.ndarray, residuals_n: np.ndarray, apparent_E_mpa:
     # presses at one depth (repeats) have no order among them: their mean residual is read
     ws, rs, es = w, r, e          # what the structure and the drift are read on
     if group is not None:
-        g = np.asarray(group)
-        if g.shape != (n,):
-            raise ValueError(f"group must have shape ({n},), got {g.shape}")
+        g = check_array(group, "group", [(n,)])
         _, gi = np.unique(g, return_inverse=True)
         cnt = np.bincount(gi)
         ws, rs, es = (np.bincount(gi, v) / cnt for v in (w, r, e))
