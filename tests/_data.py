@@ -27,7 +27,9 @@ its default place beside the repository); tests using it skip when it is absent.
 from __future__ import annotations
 
 import contextlib
+import importlib.util
 import os
+import types
 from pathlib import Path
 
 import numpy as np
@@ -368,3 +370,11 @@ def taxim_mixed_presses(sim, folder: Path, *, balls: int = 10, seed: int = 0) ->
         rows.append(f"{name},320,240,{1.3 / s:.2f}")
     (folder / "circles.csv").write_text("\n".join(rows) + "\n")
     return list(others)
+
+
+def load_benchmark(name: str) -> types.ModuleType:
+    """The module ``benchmarks/<name>.py`` (benchmarks are scripts, not a package)."""
+    spec = importlib.util.spec_from_file_location(name, ROOT / "benchmarks" / f"{name}.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod

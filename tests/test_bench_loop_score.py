@@ -3,20 +3,13 @@ right answer is written out here: the Taxim scores the docs quote rest on it."""
 
 from __future__ import annotations
 
-import importlib.util
-from pathlib import Path
-
 import pytest
-
-_PATH = Path(__file__).resolve().parents[1] / "benchmarks" / "bench_loop.py"
+from _data import load_benchmark
 
 
 @pytest.fixture(scope="module")
 def score():
-    spec = importlib.util.spec_from_file_location("bench_loop", _PATH)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module.score
+    return load_benchmark("bench_loop").score
 
 
 def _row(kind, verdict=None, fitted=None, equivalent=(), unexplained=None):

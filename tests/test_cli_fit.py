@@ -2,13 +2,13 @@
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import math
 from pathlib import Path
 
 import numpy as np
 import pytest
+from _data import load_benchmark
 
 from tactilevision.cli import main
 from tactilevision.mechanics import fit_indentation
@@ -253,11 +253,7 @@ def test_unwritable_json_is_input_error(tmp_path, capsys):
 
 
 def _generator():
-    spec = importlib.util.spec_from_file_location(
-        "make_paper_line6", ROOT / "benchmarks" / "make_paper_line6.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    return load_benchmark("make_paper_line6")
 
 
 def test_sample_is_what_the_generator_writes():

@@ -3,7 +3,6 @@ and the design sweep that judges them (benchmarks/bench_mark_sweep.py)."""
 
 from __future__ import annotations
 
-import importlib.util
 import math
 from pathlib import Path
 from types import SimpleNamespace
@@ -11,6 +10,7 @@ from types import SimpleNamespace
 import cv2
 import numpy as np
 import pytest
+from _data import load_benchmark
 
 from tactilevision import InputError
 from tactilevision.contact import STAGE_Z, stage_depths, touch_time
@@ -162,11 +162,7 @@ def test_max_overshoot_is_read_from_the_gauge_block(tmp_path):
 
 
 def _bench():
-    spec = importlib.util.spec_from_file_location(
-        "bench_mark_sweep", ROOT / "benchmarks" / "bench_mark_sweep.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    return load_benchmark("bench_mark_sweep")
 
 
 def test_the_sweep_draws_its_designs_from_the_seed_within_the_issues_ranges():

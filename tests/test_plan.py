@@ -8,7 +8,7 @@ import warnings
 
 import numpy as np
 import pytest
-from _data import plan_sessions
+from _data import load_benchmark, plan_sessions
 
 import tactilevision
 from tactilevision import InputError
@@ -261,16 +261,10 @@ def test_relaxation_power_against_fit_relaxation_on_drawn_holds():
     F/T noise (benchmarks/bench_plan_relaxation.py draws more): where the plan says 1 %
     or less, at most 2 of 12 sessions are identified; where it says 99 % or more, at
     least 11 of 12."""
-    import importlib.util
-    from pathlib import Path
 
     from tactilevision.mechanics import fit_relaxation
     from tactilevision.planning import relaxation_identifiability
-    spec = importlib.util.spec_from_file_location(
-        "bench_plan_relaxation",
-        Path(__file__).resolve().parents[1] / "benchmarks" / "bench_plan_relaxation.py")
-    bench = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(bench)
+    bench = load_benchmark("bench_plan_relaxation")
     d = _relax_design()
     for g, tau, low in ((0.002, 0.3, True), (0.06, 0.3, False)):
         r = relaxation_identifiability(d, g, tau)
