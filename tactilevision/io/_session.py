@@ -11,7 +11,6 @@ headers, but their pixels are read only on demand (:meth:`Session.frame`).
 from __future__ import annotations
 
 import datetime
-import difflib
 import math
 import tomllib
 from dataclasses import dataclass, field
@@ -22,6 +21,7 @@ from PIL import Image
 
 from .._checks import InputError
 from ._frames import read_image
+from ._keys import KNOWN_KEYS, equal_area_radius, unknown_key_notes
 from ._measurements import _read_table
 
 __all__ = ["Session", "SessionConfig", "read_presses", "read_session"]
@@ -39,7 +39,9 @@ class SessionConfig:
     ----------
     sensor_name : str
     mm_per_px, gel_thickness_mm, gel_radius_mm, indenter_radius_mm : float
-        Image scale on the gel, h, the pad's lateral half-size, a.
+        Image scale on the gel, h, the pad's lateral half-size (``[sensor]
+        gel_radius_mm``; else a rectangular pad's equal-area radius, sqrt(``gel_width_mm``
+        ``gel_length_mm`` / pi); else 20 h), a.
     depths_mm : tuple of float
         Gauge-block depth w0 of each indenter, in indenter order (indenter ids
         are 0, 1, ...).
@@ -207,41 +209,15 @@ def _toml_number(doc: dict, toml: Path, table: str, key: str, *, positive: bool 
     return float(v)
 
 
-#: The keys of session.toml this version reads, per table (formats.md section 1).
-KNOWN_KEYS: dict[str, tuple[str, ...]] = {
-    "sensor": ("name", "mm_per_px", "gel_thickness_mm", "gel_radius_mm", "gel_dome_radius_mm"),
-    "indenter": ("radius_mm", "shape", "contact"),
-    "gauge_block": ("depths_mm", "bevel_offset_mm", "bevel_direction_deg", "bevel_angle_deg",
-                    "bevel_length_mm", "bulge_correction", "bevel_force_correction",
-                    "max_overshoot_mm"),
-    "force_sensor": ("rate_hz", "clock_offset_s", "window_samples", "window_at"),
-    "optics": ("calibration",),
-    "session": ("date",),
-}
-
-
 def _unknown_keys(folder: Path) -> list[str]:
     """Notes on tables and keys of session.toml this version does not read (a typo in an
-    optional key would otherwise fall back to its default without a word)."""
+    optional key would otherwise fall back to its default without a word), and on a
+    rectangular pad's width and length (:func:`~tactilevision.io._keys.equal_area_radius`)."""
 
     toml = folder / "session.toml"
     with toml.open("rb") as fh:
         doc = tomllib.load(fh)
-    notes = []
-    for table, section in doc.items():
-        if table not in KNOWN_KEYS:
-            near = difflib.get_close_matches(table, list(KNOWN_KEYS), n=1, cutoff=0.75)
-            hint = f" (did you mean [{near[0]}]?)" if near else ""
-            notes.append(f"{toml}: table [{table}] is not read by tactilevision{hint}")
-            continue
-        if not isinstance(section, dict):
-            continue
-        for key in section:
-            if key not in KNOWN_KEYS[table]:
-                near = difflib.get_close_matches(key, list(KNOWN_KEYS[table]), n=1, cutoff=0.75)
-                hint = f" (did you mean {near[0]}? it stays unset)" if near else ""
-                notes.append(f"{toml}: [{table}] {key} is not a key tactilevision reads{hint}")
-    return notes
+    return unknown_key_notes(doc, toml, KNOWN_KEYS) + equal_area_radius(doc, toml)[1]
 
 
 def _indenter_shape(doc: dict, toml: Path) -> tuple[str, str | None]:
@@ -300,11 +276,13 @@ def _read_config(folder: Path) -> SessionConfig:
             raise InputError(f"{toml}: [optics] calibration {cal_path} does not exist")
     name = doc.get("sensor", {}).get("name", "") if isinstance(doc.get("sensor"), dict) else ""
     h = _toml_number(doc, toml, "sensor", "gel_thickness_mm")
+    rectangle, _ = equal_area_radius(doc, toml)     # a rectangular pad: its equal-area disc
     return SessionConfig(
         sensor_name=str(name),
         mm_per_px=_toml_number(doc, toml, "sensor", "mm_per_px"),
         gel_thickness_mm=h,
-        gel_radius_mm=_toml_number(doc, toml, "sensor", "gel_radius_mm", default=20.0 * h),
+        gel_radius_mm=_toml_number(doc, toml, "sensor", "gel_radius_mm",
+                                   default=20.0 * h if rectangle is None else rectangle),
         indenter_radius_mm=_toml_number(doc, toml, "indenter", "radius_mm"),
         depths_mm=tuple(float(d) for d in depths),
         indenter_shape=shape,
