@@ -718,7 +718,8 @@ def test_the_tables_sidecar_says_how_its_depths_were_certified(sample_run, tmp_p
                                       "\"mark\"\ndepth_rules = \"x\"\n")
     t = read_measurements(bad / "measurements.csv")
     assert t.certification == {"depth_rule": "mark"}
-    assert any("[certification] key 'depth_rules' is not known" in n for n in t.notes)
+    assert any("[certification] depth_rules is not a key tactilevision reads (did you mean "
+               "depth_rule?" in n for n in t.notes)
 
 
 def test_a_press_past_the_beta_table_is_left_out_not_the_session():

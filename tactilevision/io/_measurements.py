@@ -6,12 +6,14 @@ import csv
 import math
 import os
 import tomllib
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from .._checks import InputError
+from .._checks import InputError, InputWarning
+from ._keys import SIDECAR_KEYS, equal_area_radius, unknown_key_notes
 
 __all__ = ["COLUMN_ORDER", "REQUIRED_COLUMNS", "STANDARD_GRAVITY", "Measurements", "read_holds",
            "read_measurements", "sidecar_geometry", "write_measurements"]
@@ -368,6 +370,7 @@ def read_measurements(path: str | Path, *, thickness_mm: float | None = None,
                      "(standard gravity)")
     geo, src = _geometry(path, {"thickness_mm": thickness_mm, "radius_mm": radius_mm})
     certification, cert_notes = _certification_keys(path)
+    cert_notes += _sidecar_notes(path)
     return Measurements(
         path=path, columns=columns, labels=labels,
         line_numbers=np.array(lines, dtype=np.int64),
@@ -406,7 +409,10 @@ def sidecar_geometry(path: str | Path, *, thickness_mm: float | None = None,
     """
     path = Path(path)
     geo, src = _geometry(path, {"thickness_mm": thickness_mm, "radius_mm": radius_mm})
-    return geo["thickness_mm"], geo["radius_mm"], src, _indenter_keys(path)
+    keys = _indenter_keys(path)
+    for note in _sidecar_notes(path):
+        warnings.warn(note, InputWarning, stacklevel=2)
+    return geo["thickness_mm"], geo["radius_mm"], src, keys
 
 
 def _sidecar(path: Path) -> tuple[Path, dict]:
@@ -451,7 +457,27 @@ def _indenter_keys(path: Path) -> dict[str, object]:
                                                             "dome_radius_mm")):
         if isinstance(sensor, dict) and key in sensor:
             out[name] = sensor[key]
+    rectangle, _ = equal_area_radius(doc, toml)
+    if rectangle is not None:               # a rectangular pad: the disc of the same area
+        out["pad_radius_mm"] = rectangle
     return out
+
+
+def _sidecar_notes(path: Path) -> list[str]:
+    """Notes on the sidecar of `path`: each table and key it holds that no reader of a
+    table's sidecar reads (:data:`~tactilevision.io._keys.SIDECAR_KEYS`), with the nearest
+    known one, and what was made of a rectangular pad's width and length; [] without a
+    sidecar.
+
+    Raises
+    ------
+    InputError
+        For a sidecar that is not valid TOML, or a pad's width or length that is not a
+        positive number (naming the file and key).
+    """
+    toml, doc = _sidecar(path)
+    return (unknown_key_notes(doc, toml, SIDECAR_KEYS, skip=("certification",))
+            + equal_area_radius(doc, toml)[1])
 
 
 #: ``calibrate``'s depth rules, the values ``[certification] depth_rule`` takes.
@@ -475,9 +501,7 @@ def _certification_keys(path: Path) -> tuple[dict[str, object], list[str]]:
     if rule is not None and rule not in DEPTH_RULES:
         raise InputError(f"{toml}: [certification] depth_rule must be one of "
                          f"{', '.join(DEPTH_RULES)}, got {rule!r}")
-    unknown = [k for k in section if k != "depth_rule"]
-    notes = [f"{toml}: [certification] key {k!r} is not known (known: depth_rule); ignored"
-             for k in unknown]
+    notes = unknown_key_notes({"certification": section}, toml, SIDECAR_KEYS)
     return {k: v for k, v in section.items() if k == "depth_rule"}, notes
 
 
