@@ -53,8 +53,9 @@ def test_a_mistyped_value_names_file_table_and_key(tmp_path, old, new, fragment)
 
 def test_an_unknown_key_is_warned_with_the_nearest_and_the_default_used(tmp_path):
     path = _design(tmp_path, "mm_per_px = 0.0295", "mm_per_pix = 0.05")
-    with pytest.warns(InputWarning, match=r"\[sensor\] mm_per_pix is not read \(did you "
-                                          r"mean mm_per_px\? its default is used\)"):
+    with pytest.warns(InputWarning, match=r"\[sensor\] mm_per_pix is not a key tactilevision "
+                                          r"reads \(did you mean mm_per_px\? its default is "
+                                          r"used\)"):
         d = read_design(path)
     assert d.mm_per_px == type(d).mm_per_px != 0.05
     # a session key a design does not use is no mistake

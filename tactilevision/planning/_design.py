@@ -24,6 +24,7 @@ import numpy as np
 from .._checks import InputError, InputWarning
 from ..diagnosis import ABSORBED_BY_MARK, untestable_reason
 from ..io import KNOWN_KEYS, read_presses
+from ..io._keys import warn_unknown_keys
 from ..mechanics import EFFECT_SIZE_PARAMS, EFFECTS, MAX_W_OVER_H, fem_force
 
 __all__ = [
@@ -395,16 +396,14 @@ def _typed(v: Any, kind: str) -> bool:
 
 
 def _check_keys(doc: dict, path: Path) -> None:
-    """Every key a design reads has its type (one sentence naming file, table and key);
-    a table or key neither a design nor a session reads is warned, with the nearest
-    known one (:class:`~tactilevision.InputWarning`)."""
+    """Every key a design reads has its type (one sentence naming file, table and key), and
+    a ``[plan]`` key it does not know is refused; a table or key neither a design nor a
+    session reads is warned, with the nearest known one (:class:`~tactilevision.InputWarning`,
+    :func:`~tactilevision.io._keys.warn_unknown_keys`)."""
+    known = {table: (*KNOWN_KEYS.get(table, ()), *DESIGN_KEYS.get(table, {}))
+             for table in (*KNOWN_KEYS, *DESIGN_KEYS)}
     for table, section in doc.items():
-        known = {**dict.fromkeys(KNOWN_KEYS.get(table, ())), **DESIGN_KEYS.get(table, {})}
-        if table not in DESIGN_KEYS and table not in KNOWN_KEYS:
-            near = difflib.get_close_matches(table, [*DESIGN_KEYS, *KNOWN_KEYS], n=1)
-            warnings.warn(f"{path}: table [{table}] is not read"
-                          + (f" (did you mean [{near[0]}]?)" if near else ""),
-                          InputWarning, stacklevel=3)
+        if table not in known:
             continue
         if not isinstance(section, dict):
             raise InputError(f"{path}: [{table}] must be a table")
@@ -413,15 +412,13 @@ def _check_keys(doc: dict, path: Path) -> None:
             if kind is not None and not _typed(value, kind):
                 raise InputError(f"{path}: [{table}] {key} must be {_KIND_WORDS[kind]}, "
                                  f"got {value!r}")
-            if key not in known:
-                near = difflib.get_close_matches(key, list(known), n=1)
-                if table == "plan":
-                    raise InputError(f"{path}: [plan] {key} is not a design key"
-                                     + (f" (did you mean {near[0]}?)" if near else "")
-                                     + f" (known: {', '.join(sorted(known))})")
-                warnings.warn(f"{path}: [{table}] {key} is not read"
-                              + (f" (did you mean {near[0]}? its default is used)"
-                                 if near else ""), InputWarning, stacklevel=3)
+            if table == "plan" and key not in known["plan"]:
+                near = difflib.get_close_matches(key, list(known["plan"]), n=1)
+                raise InputError(f"{path}: [plan] {key} is not a design key"
+                                 + (f" (did you mean {near[0]}?)" if near else "")
+                                 + f" (known: {', '.join(sorted(known['plan']))})")
+    warn_unknown_keys(doc, path, known, unset="its default is used", skip=("plan",),
+                      stacklevel=3)
 
 
 def read_design(path: str | Path) -> Design:

@@ -38,7 +38,8 @@ from scipy import stats
 
 from .._checks import InputError
 from ..diagnosis import EffectSensitivity
-from ..io import read_holds
+from ..io import KNOWN_KEYS, read_holds
+from ..io._keys import warn_unknown_keys
 from ..mechanics import (
     RELAX_ALPHA,
     TAU_HOLD_RATIO,
@@ -644,6 +645,7 @@ def design_from_calibration(folder: str | Path, session: str | Path | None = Non
             doc = tomllib.loads((where / "session.toml").read_text())
         except (OSError, tomllib.TOMLDecodeError) as exc:
             raise InputError(f"{where / 'session.toml'}: {exc}") from None
+        warn_unknown_keys(doc, where / "session.toml", KNOWN_KEYS)
         sensor, gauge = doc.get("sensor", {}), doc.get("gauge_block", {})
         force = doc.get("force_sensor", {})
         for key, table, name in (("mm_per_px", sensor, "mm_per_px"),
