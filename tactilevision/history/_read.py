@@ -20,6 +20,7 @@ from pathlib import Path
 from scipy import stats
 
 from .._checks import InputError
+from ..io._keys import SIDECAR_KEYS, warn_unknown_keys
 from ..pipeline import CalibrationResult
 
 __all__ = ["CalibrationRecord", "gather", "read_calibration"]
@@ -119,9 +120,11 @@ def _toml(folder: Path) -> dict:
         return {}
     try:
         with path.open("rb") as fh:
-            return tomllib.load(fh)
+            doc = tomllib.load(fh)
     except (tomllib.TOMLDecodeError, UnicodeDecodeError, OSError):
         return {}
+    warn_unknown_keys(doc, path, SIDECAR_KEYS, stacklevel=3)
+    return doc
 
 
 def _date(fit: Mapping, toml: Mapping, folder: Path,
