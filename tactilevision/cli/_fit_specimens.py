@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
 from dataclasses import replace
 from pathlib import Path
 
@@ -101,6 +102,8 @@ def fit_specimens(paths: list[Path], args: argparse.Namespace, fit_flat
             continue
         table = read_measurements(path, thickness_mm=args.thickness_mm,
                                   radius_mm=args.radius_mm)
+        for note in table.notes:        # the sidecar's unread keys among them
+            print(f"tactilevision fit: warning: {note}", file=sys.stderr)
         for label, rows in specimen_groups(table):
             sub = table if not label else _cut(table, rows)
             tag = label if len(paths) == 1 else (f"{name}:{label}" if label else name)

@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 import csv
 import sys
-import tomllib
 import warnings
 from pathlib import Path
 
@@ -60,19 +59,15 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
-def _pad_radius(path: Path) -> float | None:
-    side = path.parent / "session.toml"
-    if not side.is_file():
-        return None
-    try:
-        with side.open("rb") as fh:
-            value = tomllib.load(fh).get("sensor", {}).get("gel_radius_mm")
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(f"{side} is not valid TOML ({exc})") from None
+def _pad_radius(table) -> float | None:
+    """The pad's radius the table's sidecar gives (``[sensor] gel_radius_mm``, or a
+    rectangular pad's equal-area radius), checked; None without one."""
+    value = table.indenter.get("pad_radius_mm")
     if value is None:
         return None
-    if not isinstance(value, int | float) or value <= 0:
-        raise InputError(f"{side}: [sensor] gel_radius_mm must be a positive number")
+    if isinstance(value, bool) or not isinstance(value, int | float) or value <= 0:
+        raise InputError(f"{table.path.parent / 'session.toml'}: [sensor] gel_radius_mm must "
+                         "be a positive number")
     return float(value)
 
 
@@ -128,6 +123,8 @@ def run(args: argparse.Namespace) -> int:
         check_overwrite(args.report, ("validation.png", "validation.csv"), overwrite=overwrite)
     path = args.measurements
     table = read_measurements(path, thickness_mm=args.thickness_mm, radius_mm=args.radius_mm)
+    for note in table.notes:
+        print(f"tactilevision validate: warning: {note}", file=sys.stderr)
     if (args.shape or table.indenter.get("shape", "flat_punch")) != "flat_punch":
         return _run_indenter(args, table, path)
     args.contact = args.contact or "bonded"
@@ -144,7 +141,7 @@ def run(args: argparse.Namespace) -> int:
         E, nu, source = fit.E_mpa, fit.nu, f"fit ({fit.beta_table} beta table)"
     else:
         E, nu, source = args.E_mpa, args.nu, "given"
-    pad = args.pad_radius_mm if args.pad_radius_mm is not None else _pad_radius(path)
+    pad = args.pad_radius_mm if args.pad_radius_mm is not None else _pad_radius(table)
     try:
         res = validate_indentation(table.depth_mm, table.force_n, E_mpa=E, nu=nu,
                                    thickness_mm=table.thickness_mm, radius_mm=table.radius_mm,
