@@ -73,13 +73,17 @@ class Measurements:
         ``'argument'`` or ``'<session.toml path> [table] key'``.
     notes : tuple of str
         Warnings on the values read (non-positive forces), each naming the
-        file, line and column.
+        file, line and column; and on the sidecar ``session.toml``: each table and
+        key it holds that no reader of a table's sidecar reads, naming the file,
+        ``[table] key`` and the nearest known key, and what was made of a
+        rectangular pad's ``gel_width_mm`` and ``gel_length_mm`` (formats.md §1).
     indenter : dict of str to object
         The sidecar ``session.toml``'s ``[indenter]`` keys beside ``radius_mm``
         (``shape``, ``contact``) and its ``[sensor] gel_radius_mm`` (as
-        ``pad_radius_mm``) and ``gel_dome_radius_mm`` (as ``dome_radius_mm``),
-        where it has them; empty without a sidecar. A
-        flat punch is ``shape = "flat_punch"`` or no ``shape``.
+        ``pad_radius_mm``; without it, a rectangular pad's ``gel_width_mm`` and
+        ``gel_length_mm`` as the radius of the disc of the same area) and
+        ``gel_dome_radius_mm`` (as ``dome_radius_mm``), where it has them; empty
+        without a sidecar. A flat punch is ``shape = "flat_punch"`` or no ``shape``.
     certification : dict of str to object
         The sidecar's ``[certification]`` keys (``depth_rule``: how ``calibrate``
         certified the depths, e.g. ``'mark'``, whose depths past w0 are read from
@@ -406,6 +410,14 @@ def sidecar_geometry(path: str | Path, *, thickness_mm: float | None = None,
     InputError
         One sentence naming what is missing (the value, and the option and sidecar key
         that give it) or bad (not a positive number, invalid TOML).
+
+    Warns
+    -----
+    InputWarning
+        For each table and key of the sidecar that no reader of a table's sidecar reads
+        (naming the file, ``[table] key`` and the nearest known key), and on a
+        rectangular pad's ``gel_width_mm`` and ``gel_length_mm``: read as the
+        equal-area radius, or not read.
     """
     path = Path(path)
     geo, src = _geometry(path, {"thickness_mm": thickness_mm, "radius_mm": radius_mm})
