@@ -238,6 +238,7 @@ class DepthReconstructor:
                 self._ref_colour = (1.0 / self._ref_inv).reshape(-1, 3)
         self.flat_reference = bool(flat_reference)
         self._g0: tuple[np.ndarray, np.ndarray] | None = None
+        self._last_contact_z: np.ndarray | None = None    # boundary='contact': warm start
         if self.flat_reference:
             self._g0 = self._one(ref)
         k = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (13, 13))
@@ -268,8 +269,12 @@ class DepthReconstructor:
 
     def _integrate(self, gx: np.ndarray, gy: np.ndarray, frame: np.ndarray) -> np.ndarray:
         if self.boundary == "contact":
+            # warm-started from the previous frame's height (pixel units): a video's next
+            # frame is close to it, and a guess further off than zero is not used
             z = integrate_poisson_masked(gx, gy, self.contact_mask(frame, threshold="frame",
-                                                                   fill_holes=True))
+                                                                   fill_holes=True),
+                                         z0=self._last_contact_z)
+            self._last_contact_z = z.copy()
             z *= self._mm
         else:
             far_field = self.level == "far_field" and self.boundary == "neumann"
