@@ -1,0 +1,101 @@
+"""The default ``forces`` path's solves on the contact's bounding box against the
+solvers they replace, on the sample session's frames (issue 85 item 1).
+
+The contact-pinned height (:func:`integrate_poisson_masked`: conjugate gradients on
+the mask's bounding box, warm-started from the previous frame) against the sparse
+direct solve (``method='direct'``), and the 'footprint' force map (its solve on the
+footprint's bounding box, warm-started) against the padded whole-image solve
+(``_Spectral.box = False``), each old one fed its own old heights: the total force
+within 0.5 % and the pressure map within 1 % of its peak.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tactilevision.fem import ForceEstimator
+from tactilevision.io import read_session
+from tactilevision.optics import (
+    DepthReconstructor,
+    PhotometricCalibration,
+    integrate_poisson_masked,
+)
+
+SESSION = Path(__file__).resolve().parents[1] / "sample_frames" / "gelsight_session"
+
+#: Frames: a deep press reaching the image's bottom and left edges (40: the box's
+#: transforms mirrored on those sides) and the frame after it (warm-started), a
+#: shallow contact of 2 mN (90) and a frame without contact (0).
+FRAMES = (40, 41, 90, 0)
+
+
+@pytest.fixture(scope="module")
+def maps():
+    s = read_session(SESSION)
+    cal = PhotometricCalibration.load(SESSION / "optics.npz")
+    mm = s.config.mm_per_px
+    recon = DepthReconstructor(cal, reference=s.reference, boundary="contact")
+    kw = dict(thickness_mm=s.config.gel_thickness_mm, E_mpa=0.2, nu=0.48,
+              contact="footprint", threshold_mm=0.02, beta=0.82)
+    new, old = ForceEstimator(cal.shape, mm, **kw), ForceEstimator(cal.shape, mm, **kw)
+    old._op.box = False
+    out = []
+    for i in FRAMES:
+        frame = s.frame(i)
+        h_new = recon(frame)
+        gx, gy = recon.gradients(frame)
+        mask = recon.contact_mask(frame, threshold="frame", fill_holes=True)
+        h_old = integrate_poisson_masked(gx, gy, mask, method="direct") * np.float32(
+            cal.mm_per_px)
+        out.append((i, h_new, h_old, new(h_new), old(h_old)))
+    return out
+
+
+def test_contact_pinned_height_matches_the_direct_solve(maps):
+    for i, h_new, h_old, _, _ in maps:
+        peak = float(np.abs(h_old).max())
+        assert np.all((h_new == 0) == (h_old == 0)), i
+        assert np.abs(h_new - h_old).max() <= 1e-4 * max(peak, 1e-6), i
+
+
+def test_footprint_force_map_matches_the_padded_solve(maps):
+    loaded = 0
+    for i, _, _, f_new, f_old in maps:
+        fz_old = float(f_old.total_n[2])
+        if fz_old < 1e-3:                       # no contact: nothing either way
+            assert abs(float(f_new.total_n[2])) < 1e-6, i
+            continue
+        loaded += 1
+        assert float(f_new.total_n[2]) == pytest.approx(fz_old, rel=5e-3), i
+        peak = float(f_old.pressure_kpa.max())
+        assert np.abs(f_new.pressure_kpa - f_old.pressure_kpa).max() <= 0.01 * peak, i
+        assert f_new.forces_n.dtype == f_old.forces_n.dtype
+        # the footprints agree but for a rim pixel or two at the tensile cut
+        assert np.count_nonzero(f_new.contact != f_old.contact) <= 0.001 * f_old.contact.sum()
+    assert loaded == 3
+
+
+@pytest.mark.parametrize("rows, cols", [((10, 40), (15, 60)),     # inside: sine on both axes
+                                        ((0, 40), (15, 80)),      # top and right edges
+                                        ((20, 64), (0, 50)),      # bottom and left edges
+                                        ((0, 64), (5, 70))])      # top to bottom
+def test_masked_cg_matches_the_direct_solve_at_every_border(rows, cols):
+    rng = np.random.default_rng(3)
+    gx, gy = rng.normal(size=(2, 64, 80)).astype(np.float32)
+    mask = np.zeros((64, 80), bool)
+    mask[rows[0]:rows[1], cols[0]:cols[1]] = True
+    mask[rows[0] + 3:rows[0] + 6, cols[0] + 2:cols[0] + 9] = False      # a pinned island
+    direct = integrate_poisson_masked(gx, gy, mask, method="direct")
+    cg = integrate_poisson_masked(gx, gy, mask)
+    peak = float(np.abs(direct).max())
+    assert np.abs(cg - direct).max() <= 1e-5 * peak
+    assert not cg[~mask].any()
+    # a first guess far off is not used; a batch starts each frame from the one before
+    warm = integrate_poisson_masked(gx, gy, mask, z0=np.full((64, 80), 1e6, np.float32))
+    assert np.abs(warm - direct).max() <= 1e-5 * peak
+    batch = integrate_poisson_masked(np.stack([gx, gx]), np.stack([gy, gy]),
+                                     np.stack([mask, mask]))
+    assert np.abs(batch - direct).max() <= 1e-5 * peak
