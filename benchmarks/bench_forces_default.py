@@ -2,6 +2,7 @@
 
     python benchmarks/bench_forces_default.py [--fit FIT.json] [--every N]
         [--variants default,shipped,field,before]
+    python benchmarks/bench_forces_default.py --rate [--frames N] [--start I]
 
 Runs the command on every N-th frame of ``sample_frames/gelsight_session``
 (default 3) once per variant and compares each frame's total Fz with the F/T
@@ -20,6 +21,17 @@ far_field``: the height field trusted everywhere); ``before`` (the defaults
 before issue 16: ``--sensor gelsight --contact field --level far_field
 --beta 0``). ``--fit`` defaults to ``out/calibration/fit.json`` (the README's
 first command), else the truth (E, nu, clock offset; beta 0.82).
+
+``--rate``: the cost of a force frame on the default path in bare height maps,
+in one process and one run: N consecutive frames of the session from frame I
+(default 60 from 30: presses being made, held and released) through a bare
+``DepthReconstructor`` on the session's optics (the reference), through the
+default path (``boundary='contact'`` heights, 'footprint' forces with beta: what
+the command does per frame), through the pieces of that path alone, and through
+the solvers it had before (the sparse direct masked solve and the padded
+whole-image footprint solve) and the default path on a spread of those frames
+(no warm start between them); the ratios of
+their per-frame times to the bare height map's.
 """
 
 from __future__ import annotations
@@ -34,6 +46,13 @@ from pathlib import Path
 import numpy as np
 
 from tactilevision.cli import main as cli
+from tactilevision.fem import ForceEstimator
+from tactilevision.io import read_session
+from tactilevision.optics import (
+    DepthReconstructor,
+    PhotometricCalibration,
+    integrate_poisson_masked,
+)
 
 ROOT = Path(__file__).resolve().parents[1]
 SESSION = ROOT / "sample_frames" / "gelsight_session"
@@ -69,12 +88,80 @@ def evaluate(rows: list[dict], truth: dict) -> dict:
     return out
 
 
+def rate(frames: int, start: int, before: int) -> None:
+    """Per-frame times of the default path and its pieces against bare height maps."""
+    s = read_session(SESSION)
+    cal = PhotometricCalibration.load(SESSION / "optics.npz")
+    mm = s.config.mm_per_px
+    kw = dict(thickness_mm=s.config.gel_thickness_mm, E_mpa=0.2, nu=0.48,
+              contact="footprint", threshold_mm=0.02, beta=0.82)
+    frames_ = [s.frame(i) for i in range(start, min(start + frames, s.n_frames))]
+    bare = DepthReconstructor(cal, reference=s.reference)
+    recon = DepthReconstructor(cal, reference=s.reference, boundary="contact")
+    est = ForceEstimator(cal.shape, mm, **kw)
+    old = ForceEstimator(cal.shape, mm, **kw)
+    old._op.box = False                     # the padded whole-image footprint solve
+
+    def per_frame(fn, fs) -> float:
+        fn(fs[0])                           # warm: tables, FFT plans
+        t0 = time.perf_counter()
+        for f in fs:
+            fn(f)
+        return (time.perf_counter() - t0) / len(fs)
+
+    def old_path(f):
+        gx, gy = recon.gradients(f)
+        mask = recon.contact_mask(f, threshold="frame", fill_holes=True)
+        h = integrate_poisson_masked(gx, gy, mask, method="direct") * np.float32(mm)
+        return old(h)
+
+    heights = [recon(f) for f in frames_]
+    t_bare = per_frame(bare, frames_)
+    t_default = per_frame(lambda f: est(recon(f)), frames_)
+    t_heights = per_frame(recon, frames_)
+    t_mask = per_frame(lambda f: recon.contact_mask(f, threshold="frame", fill_holes=True),
+                       frames_)
+    it = iter(heights * 2)
+    t_forces = per_frame(lambda _f: est(next(it)), frames_)
+    sub = frames_[::max(1, len(frames_) // before)]
+    t_before = per_frame(old_path, sub)
+    t_after = per_frame(lambda f: est(recon(f)), sub)
+    t_bare2 = per_frame(bare, frames_)
+    print(f"Command: python benchmarks/bench_forces_default.py --rate --frames {frames} "
+          f"--start {start} --before {before}\n{len(frames_)} consecutive frames from "
+          f"{start} (every {max(1, len(frames_) // before)}th, {len(sub)} frames, for the "
+          "solvers before), 640 x 480, one process\n")
+    print("| path | ms per frame | bare height maps per frame |")
+    print("|---|---|---|")
+    ref = 0.5 * (t_bare + t_bare2)
+    for name, t in (("bare DepthReconstructor (the reference; mean of a run before and "
+                     f"after: {t_bare * 1e3:.1f}, {t_bare2 * 1e3:.1f} ms)", ref),
+                    ("default path: contact-pinned height + footprint force", t_default),
+                    ("  its contact-pinned height map alone", t_heights),
+                    ("    of which the frame's contact mask", t_mask),
+                    ("  its footprint force map alone", t_forces),
+                    ("the solvers before (direct masked solve, padded footprint solve), "
+                     "on the spread frames", t_before),
+                    ("the default path on the same spread frames", t_after)):
+        print(f"| {name} | {t * 1e3:.1f} | {t / ref:.1f} |", flush=True)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--fit", type=Path, default=ROOT / "out" / "calibration" / "fit.json")
     ap.add_argument("--every", type=int, default=3)
     ap.add_argument("--variants", default="default,shipped,field,before")
+    ap.add_argument("--rate", action="store_true",
+                    help="the default path's cost per frame in bare height maps (in-process)")
+    ap.add_argument("--frames", type=int, default=60)
+    ap.add_argument("--start", type=int, default=30)
+    ap.add_argument("--before", type=int, default=10,
+                    help="--rate: frames (spread over the N) through the solvers before "
+                    "(about 1.5 s each)")
     args = ap.parse_args()
+    if args.rate:
+        rate(args.frames, args.start, args.before)
+        return
     truth = json.loads((SESSION / "truth.json").read_text())
     with tempfile.TemporaryDirectory() as tmp:
         fit = args.fit
