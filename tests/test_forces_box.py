@@ -99,3 +99,19 @@ def test_masked_cg_matches_the_direct_solve_at_every_border(rows, cols):
     batch = integrate_poisson_masked(np.stack([gx, gx]), np.stack([gy, gy]),
                                      np.stack([mask, mask]))
     assert np.abs(batch - direct).max() <= 1e-5 * peak
+
+
+@pytest.mark.parametrize("shape", [(9, 1), (1, 9), (1, 1)])
+def test_a_footprint_one_pixel_wide_is_solved_on_its_box(shape):
+    """A footprint one pixel wide or tall (a thin ridge's edge, the first frame of a
+    contact): the box's FFT grid is kept at least 2 x 2 (OpenCV's dft refuses a single
+    column with nonzeroRows), and the force equals the padded solve's."""
+    kw = dict(thickness_mm=3.0, E_mpa=0.2, nu=0.48, contact="footprint",
+              threshold_mm=0.01, beta=0.82)
+    new, old = ForceEstimator((40, 50), 0.05, **kw), ForceEstimator((40, 50), 0.05, **kw)
+    old._op.box = False
+    h = np.zeros((40, 50), np.float32)
+    h[20:20 + shape[0], 25:25 + shape[1]] = 0.03
+    f_new, f_old = new(h), old(h)
+    assert float(f_old.total_n[2]) > 0
+    assert float(f_new.total_n[2]) == pytest.approx(float(f_old.total_n[2]), rel=5e-3)

@@ -499,7 +499,10 @@ class _Spectral:
         cols = np.flatnonzero(m.any(axis=0))
         r0, r1, c0, c1 = int(rows[0]), int(rows[-1]) + 1, int(cols[0]), int(cols[-1]) + 1
         h, w = r1 - r0, c1 - c0
-        Fy, Fx = cv2.getOptimalDFTSize(2 * h - 1), cv2.getOptimalDFTSize(2 * w - 1)
+        # at least 2 x 2: OpenCV's dft refuses nonzeroRows on a single column (a footprint
+        # one pixel wide)
+        Fy = max(2, cv2.getOptimalDFTSize(2 * h - 1))
+        Fx = max(2, cv2.getOptimalDFTSize(2 * w - 1))
         if Fy > self.fshape[0] or Fx > self.fshape[1]:       # no smaller than the padded grid
             Fy, Fx = self.fshape
         c_ccs, k_ccs = self._box_spectra((Fy, Fx))
