@@ -26,6 +26,7 @@ import pytest
 
 from tactilevision import InputError, calibrate_session
 from tactilevision._cache import cache_root
+from tactilevision.contact._certify import CREST_NOMINAL_PX
 from tactilevision.mechanics import fit_indentation
 
 TAXIM_SESSION = Path(__file__).resolve().parents[1] / "sample_frames" / "taxim_gauge"
@@ -105,6 +106,7 @@ def test_taxim_live_render_reads_the_overshoot(taxim_bevel):
     prof = bevel_profile(frame, reference, centre, 0.0295, geom, reach_px=46.0)
     r = read_bevel(prof, geom, 0.0295, lines="all", line_px=3.0, blur_px=1.3)
     assert r.closure_mm == pytest.approx(overshoot, abs=0.0015)
+    assert abs(r.crest_px) <= 0.5 * CREST_NOMINAL_PX            # on the block's crest line
 
 
 @pytest.mark.parametrize(("w0", "overshoot"), [(0.3, 0.008), (0.15, 0.018)])
@@ -120,6 +122,11 @@ def test_taxim_shadows_beside_narrow_bands(taxim_bevel, w0, overshoot):
     lined = read_bevel(prof, geom, 0.0295, lines="all", line_px=3.0, blur_px=1.3)
     shadow = read_bevel(prof, geom, 0.0295, lines="shadows", line_px=3.0, blur_px=1.3)
     assert lined.closure_mm > overshoot + 0.01
+    # the block read with the band moves its crest off the block's crest line by about half
+    # its width, to the shadow's side (measured: +7.25 and +3.2 px): such a reading is
+    # never read as a band (CREST_NOMINAL_PX), where a long band's crest lies on the line
+    # (test_taxim_live_render_reads_the_overshoot)
+    assert abs(lined.crest_px) > CREST_NOMINAL_PX
     assert shadow.noise < lined.noise
     assert abs(shadow.closure_mm - overshoot) < 2 * shadow.closure_std_mm
     with pytest.raises(InputError, match="lines"):

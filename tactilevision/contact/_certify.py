@@ -85,6 +85,7 @@ from ._vernier import BevelGeometry
 from ._vernier_presses import (
     AGREE_PX,
     BLUR_SHRINK,
+    CREST_NOMINAL_PX,
     CREST_TOLERANCE_PX,
     EDGE_SHARED_FRACTION,
     INDENTER_CLEARANCE_MM,
@@ -102,6 +103,7 @@ __all__ = [
     "AGREE_PX",
     "BACKGROUND_DEGREE",
     "BLUR_SHRINK",
+    "CREST_NOMINAL_PX",
     "CREST_TOLERANCE_PX",
     "EDGE_SHARED_FRACTION",
     "FRAME_SNR",

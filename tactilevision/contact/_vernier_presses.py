@@ -35,8 +35,8 @@ from ._vernier import (
     read_bevel,
 )
 
-__all__ = ["CREST_CHECK_P", "EDGE_SHARED_FRACTION", "SHADOW_RATIO", "band_models_agree",
-           "crest_consistency", "unresolved_closure", "vernier_shared_mm"]
+__all__ = ["CREST_CHECK_P", "CREST_NOMINAL_PX", "EDGE_SHARED_FRACTION", "SHADOW_RATIO",
+           "band_models_agree", "crest_consistency", "unresolved_closure", "vernier_shared_mm"]
 
 
 #: With lines, a long band is read only when its edges alone (``read_bevel(lines='only')``)
@@ -50,6 +50,20 @@ AGREE_PX = 1.5
 #: long bands of sweep cells A and B lie within 1 px of their median; the misread narrow
 #: bands that passed for long ones, 3 to 5.5 px off).
 CREST_TOLERANCE_PX = 2.0
+#: Without the flank colours' prior, a band is read only when its crest lies within this
+#: (px) of the crest line the block's geometry puts it on (session.toml's bevel offset and
+#: direction from the press's footprint centre: ``BevelReading.crest_px`` is measured from
+#: it). The median of the long bands alone is no anchor where every band read long is a
+#: misread: on a drawn vernier design (seed 9161, design 23 of
+#: ``benchmarks/bench_mark_sweep.py``: 8.7 deg, 20 frames/s) Taxim's shadow block beside
+#: bands 4.4 to 4.8 px long read as bands of 10.5 to 10.9 px with their crests 6.4 to
+#: 6.7 px towards the indenter (a block beside the band moves the crest by about half its
+#: width, to the shadow's side: +3.2 and +7.25 px in tests/test_vernier_taxim.py),
+#: 27 um too deep at 3 um stated, while the two truly long bands, crests -0.35 and -0.8 px,
+#: were refused as far from that median. True bands' crests lie within 0.75 px of the line
+#: on the committed Taxim session (sample_frames/taxim_gauge) and within 2.1 px on the
+#: simulated sample session.
+CREST_NOMINAL_PX = 2.5
 #: A long band is read, in a session with lines, only when the band read with shadows
 #: cast outward from thin edge lines (``read_bevel(lines='shadows')``) is at least this
 #: fraction of it (:func:`band_models_agree`). On Taxim's renders that model reads true
@@ -385,9 +399,11 @@ def _read_vernier_presses(pending: list[dict], geom: BevelGeometry, s: float
        their position as a prior, weighted by its residual spread.
     4. Without that prior (bands carrying lines or shadows along their
        edges, or too few long bands), a band is read only when it is long
-       (half-width >= ``RESOLVED_PX``), its crest lies where the session's
-       long bands put it (within :data:`CREST_TOLERANCE_PX`, or 4 robust sd
-       of theirs, of their median crest; three or more long bands needed),
+       (half-width >= ``RESOLVED_PX``), its crest lies on the block's crest
+       line (within :data:`CREST_NOMINAL_PX`) and where the session's long
+       bands on that line put it (within :data:`CREST_TOLERANCE_PX`, or 4
+       robust sd of theirs, of their median crest; three or more such long
+       bands needed),
        and, in a session with lines, two other band models see it too
        (:func:`band_models_agree`: its edges alone within :data:`AGREE_PX`,
        the shadows model at least :data:`SHADOW_RATIO` of it). With or
@@ -445,7 +461,9 @@ def _read_vernier_presses(pending: list[dict], geom: BevelGeometry, s: float
     n_unresolved = 0
     edge = _edge_width(optics)
     crest0, crest_tol = float("nan"), float("inf")
-    seen_long = [r.crest_px for r, ok in zip(first, agrees, strict=True) if r.resolved and ok]
+    on_line = np.array([abs(r.crest_px) <= CREST_NOMINAL_PX for r in first])
+    seen_long = [r.crest_px for r, ok, on in zip(first, agrees, on_line, strict=True)
+                 if r.resolved and ok and on]
     if len(seen_long) >= 3:
         cr = np.array(seen_long)
         crest0 = float(np.median(cr))
@@ -476,7 +494,7 @@ def _read_vernier_presses(pending: list[dict], geom: BevelGeometry, s: float
         to_end = r.crest_px - d["profiles"][0].u_px[0]          # crest to the profile's end
         clear = to_end - r.half_width_px >= 2.0 * edge
         read = clear and (plane is not None or (r.resolved and abs(r.crest_px - crest0)
-                                                <= crest_tol and agrees[k]))
+                                                <= crest_tol and agrees[k] and on_line[k]))
         if not read:
             # no prior, and not long where the long bands are: only bounded (step 4)
             # (a band cut off at the profile's end may be longer than read; a short band

@@ -348,7 +348,8 @@ def _vernier_notes(st: DepthState, presses, cert, geom, cfg) -> None:
         top = 2e3 * unresolved_closure(geom, cfg.mm_per_px)[0]
         st.notes.append(f"{unread} of {len(presses)} bands not read (shorter than "
                         f"{RESOLVED_PX:g} px without the session's flank colours, or their "
-                        "crest away from the long bands'): their overshoot is only "
+                        "crest off the block's crest line or away from the long bands'): "
+                        "their overshoot is only "
                         f"bounded, 0 to {top:.1f} um or to their reading if longer, with "
                         "the sd of a uniform over that (the point: the band read with "
                         "edge lines and shadows, clipped to it); the fit weighs them "
