@@ -279,8 +279,12 @@ def test_cli_batch_forces_on_a_running_scheduler(client, clip, tmp_path, capsys)
     frame = decoded(clip)[5]
     fm = est(recon(frame))
     table = pq.read_table(out / "clip.parquet").to_pydict()
-    assert table["fz_n"][5] == pytest.approx(float(fm.total_n[2]), rel=1e-5)
-    np.testing.assert_allclose(g["pressure_kpa"][5], fm.pressure_kpa, rtol=1e-5, atol=1e-6)
+    assert table["fz_n"][5] == pytest.approx(float(fm.total_n[2]), rel=1e-4)
+    # the batch's estimator starts each frame's solve from the frame before it (warm
+    # start), this one from zero: the maps agree to the solver's tolerance (a relative
+    # residual of 1e-5), not to the last digit (measured: 5.3e-4 kPa of a 375 kPa peak)
+    peak = float(np.max(fm.pressure_kpa))
+    np.testing.assert_allclose(g["pressure_kpa"][5], fm.pressure_kpa, rtol=0, atol=1e-5 * peak)
     assert table["fz_n"][5] > 0.05 and abs(table["fz_n"][0]) < 0.2 * table["fz_n"][5]
 
 

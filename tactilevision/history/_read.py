@@ -20,7 +20,7 @@ from pathlib import Path
 from scipy import stats
 
 from .._checks import InputError
-from ..io._keys import SIDECAR_KEYS, warn_unknown_keys
+from ..io import SIDECAR_KEYS, warn_unknown_keys
 from ..pipeline import CalibrationResult
 
 __all__ = ["CalibrationRecord", "gather", "read_calibration"]

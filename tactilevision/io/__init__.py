@@ -42,6 +42,11 @@ from ._session import KNOWN_KEYS, Session, SessionConfig, read_presses, read_ses
 
 __all__ += ["KNOWN_KEYS", "Session", "SessionConfig", "read_presses", "read_session"]
 
+# the one rule for session.toml keys no reader reads (every reader of a session.toml)
+from ._keys import SIDECAR_KEYS, equal_area_radius, unknown_key_notes, warn_unknown_keys  # noqa: E402
+
+__all__ += ["SIDECAR_KEYS", "equal_area_radius", "unknown_key_notes", "warn_unknown_keys"]
+
 # video files (batch, reconstruct): names appended below
 from ._video import VIDEO_SUFFIXES, VideoFrames, find_video_reference, is_video  # noqa: E402
 

@@ -477,7 +477,7 @@ def _indenter_keys(path: Path) -> dict[str, object]:
 
 def _sidecar_notes(path: Path) -> list[str]:
     """Notes on the sidecar of `path`: each table and key it holds that no reader of a
-    table's sidecar reads (:data:`~tactilevision.io._keys.SIDECAR_KEYS`), with the nearest
+    table's sidecar reads (:data:`~tactilevision.io.SIDECAR_KEYS`), with the nearest
     known one, and what was made of a rectangular pad's width and length; [] without a
     sidecar.
 

@@ -212,7 +212,7 @@ def _toml_number(doc: dict, toml: Path, table: str, key: str, *, positive: bool 
 def _unknown_keys(folder: Path) -> list[str]:
     """Notes on tables and keys of session.toml this version does not read (a typo in an
     optional key would otherwise fall back to its default without a word), and on a
-    rectangular pad's width and length (:func:`~tactilevision.io._keys.equal_area_radius`)."""
+    rectangular pad's width and length (:func:`~tactilevision.io.equal_area_radius`)."""
 
     toml = folder / "session.toml"
     with toml.open("rb") as fh:

@@ -23,8 +23,7 @@ import numpy as np
 
 from .._checks import InputError, InputWarning
 from ..diagnosis import ABSORBED_BY_MARK, untestable_reason
-from ..io import KNOWN_KEYS, read_presses
-from ..io._keys import warn_unknown_keys
+from ..io import KNOWN_KEYS, read_presses, warn_unknown_keys
 from ..mechanics import EFFECT_SIZE_PARAMS, EFFECTS, MAX_W_OVER_H, fem_force
 
 __all__ = [
@@ -399,7 +398,7 @@ def _check_keys(doc: dict, path: Path) -> None:
     """Every key a design reads has its type (one sentence naming file, table and key), and
     a ``[plan]`` key it does not know is refused; a table or key neither a design nor a
     session reads is warned, with the nearest known one (:class:`~tactilevision.InputWarning`,
-    :func:`~tactilevision.io._keys.warn_unknown_keys`)."""
+    :func:`~tactilevision.io.warn_unknown_keys`)."""
     known = {table: (*KNOWN_KEYS.get(table, ()), *DESIGN_KEYS.get(table, {}))
              for table in (*KNOWN_KEYS, *DESIGN_KEYS)}
     for table, section in doc.items():

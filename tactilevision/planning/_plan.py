@@ -38,8 +38,7 @@ from scipy import stats
 
 from .._checks import InputError
 from ..diagnosis import EffectSensitivity
-from ..io import KNOWN_KEYS, read_holds
-from ..io._keys import warn_unknown_keys
+from ..io import KNOWN_KEYS, read_holds, warn_unknown_keys
 from ..mechanics import (
     RELAX_ALPHA,
     TAU_HOLD_RATIO,
