@@ -65,6 +65,7 @@ def test_a_swallowed_interrupt_still_ends_the_command(tmp_path):
         "from tactilevision.io import StagedOutput\n"
         "class Swallow:\n"
         "    def __del__(self):\n"
+        "        print('in the finalizer', flush=True)\n"
         "        time.sleep(5)\n"
         "def run(args):\n"
         f"    with StagedOutput(Path({str(tmp_path / 'o')!r})) as st:\n"
@@ -75,7 +76,10 @@ def test_a_swallowed_interrupt_still_ends_the_command(tmp_path):
         + _AS_FIT)
     proc = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True)
-    time.sleep(2.5)
+    # the signal is sent once the child says it is in the finalizer, whatever its imports
+    # took (a fixed 2.5 s wait landed in them on a machine that compiles every import)
+    assert proc.stdout.readline().strip() == "in the finalizer"
+    time.sleep(0.2)
     sent = time.perf_counter()
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=30)
