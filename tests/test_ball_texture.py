@@ -218,6 +218,32 @@ def test_a_contact_mostly_off_the_image_is_refused_as_cut(sim, reference):
     assert "cut by the image's edge" in c.problems[0]
 
 
+def test_a_contact_over_most_of_the_pad_is_found_not_called_no_contact(sim, reference):
+    """A smooth ball whose contact (a = 3.2 mm, 109 px) covers most of the 240 x 320 image,
+    the frame 11 to 13 % brighter and tinted. The no-contact gate measured its noise on the
+    quieter half of the image, which here lies inside the contact (the ball's cap): it
+    refused the press as "no contact found". Right answer: a circle found on the contact,
+    radius and centre within 5 % (whether its rim is then trusted is the contrast check's
+    call, not the gate's)."""
+    a, R, centre = 3.21, 5.24, (152.1, 114.6)
+    frame = render_press(sim, reference, kind="smooth", a=a, R=R, centre=centre,
+                         gain=(1.135, 1.108, 1.122), offset=(-2.9, -7.0, 7.1), seed=532)
+    c = find_contact_circle(frame, reference)
+    assert abs(c.radius_px - a / S) < 0.05 * a / S, (c.radius_px, a / S)
+    assert np.hypot(*(c.centre_px - centre)) < 0.05 * a / S
+    assert not any("no contact" in p for p in c.problems)
+
+
+def test_a_drifted_noisy_frame_without_contact_is_no_contact(reference):
+    """The reference again under a gain, an offset and 1.5 grey levels of fresh camera
+    noise: no contact, whatever the noise gate reads its noise from."""
+    rng = np.random.default_rng(3)
+    frame = reference * np.array([1.1, 1.05, 0.95]) + np.array([3.0, -4.0, 5.0])
+    frame = np.clip(np.rint(frame + rng.normal(0, 1.5, frame.shape)), 0, 255).astype(np.uint8)
+    with pytest.raises(InputError, match="no contact found"):
+        find_contact_circle(frame, reference)
+
+
 def test_drift_free_change_takes_off_a_gain_and_offset():
     """A frame that is the reference with another exposure and white balance (a gain and an
     offset per channel) and a small square press: the drift leaves under 3 grey levels off

@@ -495,6 +495,18 @@ def _pad_noise(mag: np.ndarray, cx: float, cy: float, r: float) -> float:
     return max(1.4826 * float(np.median(np.abs(bg - np.median(bg)))), 0.5)
 
 
+def _pixel_noise(change: np.ndarray) -> float:
+    """The camera's noise in the colour change, grey levels: the robust sd (1.4826 MAD) of
+    what a 2 px Gaussian blur takes off each channel, the channels added in quadrature. A
+    contact's change, and a ball's texture, are smooth on that scale, so this reads the
+    pixels' noise even where a contact covers most of the image (the quieter half of the
+    image, the rule before, lay inside such a contact and refused it as no contact)."""
+    change = np.asarray(change, np.float32)
+    fine = change - cv2.GaussianBlur(change, (0, 0), 2.0)
+    per = [1.4826 * float(np.median(np.abs(c - np.median(c)))) for c in np.moveaxis(fine, -1, 0)]
+    return float(np.sqrt(np.sum(np.square(per))))
+
+
 def _rim_contrast(change: np.ndarray, cx: float, cy: float, r: float) -> float:
     """A circle's rim contrast in noise sigmas of the pad beyond it (:func:`profile_radius`'s
     contrast, without its bootstrap; -inf where it cannot be read)."""
@@ -519,16 +531,14 @@ def colour_edge_circle(frame: np.ndarray, reference: np.ndarray, *, min_change: 
     Raises
     ------
     InputError
-        When the frame holds no colour change above `min_change` grey levels and 4 noise
-        sigmas (99.9th percentile), or no circle is found.
+        When the frame holds no colour change above `min_change` grey levels and 4 sigmas
+        of the camera's pixel noise (99.9th percentile), or no circle is found.
     """
     change = drift_free_change(frame, reference)
     mag = _magnitude(change)
     peak = float(np.percentile(mag, 99.9))
     ref = cv2.GaussianBlur(reference, (0, 0), 1.5)
-    # the noise from the quieter half of the image: a contact may cover the rest
-    low = mag[mag <= np.median(mag)]
-    noise = 1.4826 * float(np.median(np.abs(low - np.median(low)))) * 2.0
+    noise = _pixel_noise(change)
     if peak < max(min_change, 4.0 * noise):
         raise InputError(f"no contact found in frame (largest colour change {peak:.1f} is "
                          f"below {max(min_change, 4.0 * noise):.1f})")
@@ -580,7 +590,7 @@ def find_contact_circle(frame: np.ndarray, reference: np.ndarray, *, min_change:
         The ball at rest and the no-contact reference, BGR.
     min_change : float, default 12.0
         A frame whose 99.9th-percentile colour change (grey levels) is below this, or
-        below 4 noise sigmas, has no contact.
+        below 4 sigmas of the camera's pixel noise, has no contact.
 
     Returns
     -------
