@@ -1,0 +1,466 @@
+"""CalculiX beside our FEM on the FEATS authors' own GelSight Mini model (issue 84, item 1).
+
+The FEATS authors (E. Helmut et al., arXiv:2411.03315; github.com/feats-ai/feats, MIT)
+published the CalculiX input files of their gel identification
+(``../shared/real/feats/calculix/``: ``sim.inp``, ``materials.inp``, ``all.msh`` with
+second-order tetrahedra, the ``.nam``/``.sur`` sets) and the four measured presses
+(``sample_frames/feats/force_depth.csv``). This benchmark runs their model with ``ccx``
+and our axisymmetric Neo-Hookean sphere FEM on the same problem, side by side.
+
+Install CalculiX once (the library never installs it; CI does not need it)::
+
+    apt-get install -y calculix-ccx        # Debian's CalculiX 2.20, the command `ccx`
+
+Usage::
+
+    python benchmarks/bench_calculix_feats.py --cache out/calculix_feats
+    python benchmarks/bench_calculix_feats.py --cache out/calculix_feats --quick
+    python benchmarks/bench_calculix_feats.py --cache DIR --depths 0.5,1.0,1.5,2.0 \
+        --ccx-cases published,frictionless
+
+Each CalculiX case is one NLGEOM run to the deepest depth in a scratch folder under
+``--cache`` (their files copied into ``template/`` so that their include paths resolve;
+nothing in ``../shared`` is touched). The driver ``sim.inp`` is their text with only
+these changes: the indenter's displacement set to the deepest depth (their own script
+edits that line per depth), a ``*TIME POINTS`` list at the other depths over it, and
+``TIME POINTS=`` on their two ``*NODE PRINT`` requests, so that one run reports the
+force at every depth (their script ran one job per depth; the load path is the same
+ramp). The ``frictionless`` case also replaces their contact block by
+``PRESSURE-OVERCLOSURE=LINEAR`` with K = 100 MPa/mm and no friction. A run takes tens of
+minutes on the project's 2-core machine (43,299 equations; progress is printed every
+30 s); its forces, log and timing are cached in ``--cache`` and reused by a rerun whose
+driver input and ``ccx`` version are unchanged.
+
+Prints:
+
+1. What ccx said while reading their input: every WARNING and INFO block verbatim
+   (the material's compressibility, the contact law, the friction), then what that
+   means for the model it actually solves.
+2. Per CalculiX case: the total force on the gel's fixed base (``NGELSIGHT_MINIFIXED``)
+   and their own reading (``NGELSIGHT_MINIVOLUME``, all gel nodes) at each depth, its
+   increments and time.
+3. Our FEM (``tactilevision.fem.sphere_indentation``, Neo-Hookean, finite strain):
+   their geometry as our axisymmetric pad allows (the equal-area radius of their
+   20.75 x 25.25 mm pad, h = 4.0 mm, R = 7.5 mm, their dome's mean radius of curvature
+   fitted to their mesh), at the material CalculiX runs (mu = 2 C10, bulk modulus
+   2 / D1 as ccx replaced it) and at nu = 0.5, tied and frictionless, the frictionless
+   penalty matched to a ccx case's pressure-overclosure slope, each on two surface cells
+   (``--quick``: the coarser only).
+4. Side by side at each depth: measured, CalculiX, ours, and the ratios.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import hashlib
+import json
+import os
+import platform
+import re
+import shutil
+import subprocess
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from tactilevision.fem import sphere_indentation
+
+ROOT = Path(__file__).resolve().parents[1]
+FEATS = ROOT.parent / "shared" / "real" / "feats" / "calculix"
+MEASURED = ROOT / "sample_frames" / "feats" / "force_depth.csv"
+TEMPLATE_FILES = ("all.msh", "gelsight_miniVolume.nam", "gelsight_miniFixed.nam",
+                  "gelsight_miniSurface.sur", "indenterVolume.nam", "indenterFixed.nam",
+                  "indenterSurface.sur")
+C10 = 0.0725                  # MPa, their materials.inp
+MU = 2.0 * C10                # shear modulus, MPa
+H_MM, R_MM = 4.0, 7.5         # gel thickness at the apex, ball radius
+PAD_MM = (20.75, 25.25)       # their gel's sides
+CONTACT_BLOCK = "*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=TIED\n*FRICTION\n1.0\n"
+FRICTIONLESS_K = 100.0        # MPa/mm, the 'frictionless' case's pressure-overclosure slope
+CCX_CASES = ("published", "frictionless")
+CELLS = (0.04, 0.02)          # our surface cells, units of h (coarse: the default here)
+INSTALL = "apt-get install -y calculix-ccx"
+
+
+@dataclass
+class CcxResult:
+    """One CalculiX run: forces (N, into the gel) at each depth, and what ccx printed."""
+
+    case: str
+    depths_mm: list[float]
+    force_fixed: list[float]
+    force_volume: list[float]
+    notes: list[str]
+    equations: int
+    increments: int
+    seconds: float
+    version: str
+    from_cache: bool = False
+
+
+def equal_area_radius_mm() -> float:
+    """The radius of the disc of their pad's area."""
+    return float(np.sqrt(PAD_MM[0] * PAD_MM[1] / np.pi))
+
+
+def read_measured() -> dict[float, float]:
+    """Depth (mm) -> measured force (N) of the four FEATS presses."""
+    with open(MEASURED, newline="") as f:
+        return {float(r["depth_mm"]): float(r["force_n"]) for r in csv.DictReader(f)}
+
+
+def read_mesh_nodes() -> np.ndarray:
+    """(N, 3) node coordinates of their all.msh (mm), in node-number order."""
+    rows = []
+    with open(FEATS / "all.msh") as f:
+        next(f)
+        for line in f:
+            if line.startswith("*"):
+                break
+            rows.append([float(v) for v in line.split(",")[1:4]])
+    return np.array(rows)
+
+
+def read_node_set(name: str) -> np.ndarray:
+    """Node numbers of the first *NSET in one of their .nam files."""
+    ids: list[int] = []
+    with open(FEATS / name) as f:
+        for line in f:
+            if line.startswith("**"):
+                continue
+            if line.startswith("*"):
+                if ids:
+                    break
+                continue
+            ids += [int(v) for v in line.split(",") if v.strip()]
+    return np.array(ids)
+
+
+def dome_fit() -> tuple[float, float, float]:
+    """Their gel top's radii of curvature (mm) along x and y near the apex, and the mean.
+
+    The top-surface nodes within 6 mm of the axis (the contact radius at 2 mm is about
+    5 mm) fitted by z = -(x^2 / 2 Rx + y^2 / 2 Ry); the mean is 2 / (1/Rx + 1/Ry), the
+    axisymmetric cap with the same mean curvature.
+    """
+    xyz = read_mesh_nodes()[read_node_set("gelsight_miniVolume.nam") - 1]
+    top = xyz[(np.hypot(xyz[:, 0], xyz[:, 1]) < 6.0) & (xyz[:, 2] > -0.3)]
+    top = top[top[:, 2] > -0.5 * (top[:, 0] ** 2 + top[:, 1] ** 2) / 50.0]   # the top only
+    a = np.c_[top[:, 0] ** 2, top[:, 1] ** 2]
+    cx, cy = np.linalg.lstsq(a, -top[:, 2], rcond=None)[0]
+    rx, ry = 0.5 / cx, 0.5 / cy
+    return float(rx), float(ry), float(2.0 / (1.0 / rx + 1.0 / ry))
+
+
+# ---------------------------------------------------------------------------- CalculiX
+
+def ccx_version(ccx: str) -> str:
+    """The version line ccx prints (run without input it prints its banner and stops)."""
+    out = subprocess.run([ccx, "-v"], capture_output=True, text=True, timeout=60)
+    m = re.search(r"Version\s+([\d.]+)", out.stdout + out.stderr)
+    return m.group(1) if m else "unknown"
+
+
+def driver_text(case: str, depths_mm: list[float]) -> str:
+    """Their sim.inp with the deepest depth, time points at the others and (frictionless)
+    the contact block replaced; everything else as published."""
+    src = (FEATS / "sim.inp").read_text()
+    d_max = max(depths_mm)
+    points = ", ".join(str(round(d / d_max, 6)) for d in depths_mm)
+    edits = [] if d_max == 2.0 else [("NindenterFixed,3,,-2.", f"NindenterFixed,3,,-{d_max:g}")]
+    edits += [("** Normal Simulation Step",
+              f"*TIME POINTS, NAME=TP\n{points}\n** Normal Simulation Step"),
+             ("*NODE PRINT,NSET=Ngelsight_miniVolume, TOTALS=YES",
+              "*NODE PRINT,NSET=Ngelsight_miniVolume, TOTALS=YES, TIME POINTS=TP"),
+             ("*NODE PRINT,NSET=Ngelsight_miniFixed, TOTALS=YES",
+              "*NODE PRINT,NSET=Ngelsight_miniFixed, TOTALS=YES, TIME POINTS=TP")]
+    if case == "frictionless":
+        edits.append((CONTACT_BLOCK,
+                      f"*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=LINEAR\n{FRICTIONLESS_K:.0f}.\n"))
+    for old, new in edits:
+        if src.count(old) != 1:
+            raise SystemExit(f"their sim.inp no longer holds {old!r} once: the driver "
+                             "cannot be built; read the file and update this benchmark")
+        src = src.replace(old, new)
+    return src
+
+
+def read_totals(dat: Path, node_set: str) -> dict[float, float]:
+    """time -> -fz of the 'total force' blocks of one node set in a .dat file."""
+    text = dat.read_text()
+    pat = re.compile(r"total force \(fx,fy,fz\) for set " + node_set
+                     + r" and time\s+(\S+)\s*\n\s*\n\s*(\S+)\s+(\S+)\s+(\S+)")
+    return {float(m.group(1)): -float(m.group(4)) for m in pat.finditer(text)}
+
+
+def log_notes(log: str) -> list[str]:
+    """Every WARNING / INFO block ccx printed (a block runs to the next blank line or the
+    next block)."""
+    notes: list[str] = []
+    block: list[str] = []
+    for line in log.splitlines():
+        starts = line.strip().startswith(("*WARNING", "*INFO", "*ERROR"))
+        if starts or (block and not line.strip()):
+            if block:
+                notes.append("\n".join(block))
+            block = [line.rstrip()] if starts else []
+        elif block:
+            block.append(line.rstrip())
+    if block:
+        notes.append("\n".join(block))
+    return notes
+
+
+def case_folder(case: str, depths_mm: list[float], cache: Path, version: str
+                ) -> tuple[Path, str]:
+    """The case's scratch folder (named by a digest of its driver, their files and the
+    ccx version) and its driver text."""
+    text = driver_text(case, depths_mm)
+    key = hashlib.sha256((text + (FEATS / "materials.inp").read_text() + version
+                          + "".join(f"{n}:{(FEATS / n).stat().st_size}" for n in TEMPLATE_FILES)
+                          ).encode()).hexdigest()[:16]
+    return cache / "ccx" / f"{case}_{key}", text
+
+
+def collect(folder: Path, case: str, depths_mm: list[float], version: str,
+            returncode: int = 0) -> CcxResult:
+    """Read a finished run's forces, notes and size from its folder (and cache them)."""
+    log_text = (folder / "ccx.log").read_text()
+    fixed = read_totals(folder / "sim.dat", "NGELSIGHT_MINIFIXED")
+    volume = read_totals(folder / "sim.dat", "NGELSIGHT_MINIVOLUME")
+    times = [d / max(depths_mm) for d in depths_mm]
+
+    def at(table: dict[float, float]) -> list[float]:
+        return [next((f for t, f in table.items() if abs(t - tt) < 1e-5), float("nan"))
+                for tt in times]
+
+    eq = re.search(r"number of equations\s*\n\s*(\d+)", log_text)
+    sec = re.search(r"Total CalculiX Time:\s*(\S+)", log_text)
+    sta_rows = (folder / "sim.sta").read_text().splitlines()[3:]
+    res = CcxResult(case=case, depths_mm=list(depths_mm), force_fixed=at(fixed),
+                    force_volume=at(volume), notes=log_notes(log_text),
+                    equations=int(eq.group(1)) if eq else 0, increments=len(sta_rows),
+                    seconds=float(sec.group(1)) if sec else float("nan"), version=version)
+    if returncode != 0 or any(np.isnan(res.force_fixed)):
+        raise SystemExit(f"ccx ({case}) ended with code {returncode} and forces "
+                         f"{res.force_fixed}: read {folder / 'ccx.log'}")
+    (folder / "result.json").write_text(json.dumps(res.__dict__, indent=1))
+    return res
+
+
+def run_ccx(ccx: str, case: str, depths_mm: list[float], cache: Path,
+            version: str) -> CcxResult:
+    """Run (or read from the cache) one CalculiX case; print progress every 30 s.
+
+    A folder whose ccx.log already ends with ccx's total time (a finished run whose
+    result was not yet collected) is read, not run again.
+    """
+    folder, text = case_folder(case, depths_mm, cache, version)
+    done = folder / "result.json"
+    if done.exists():
+        res = CcxResult(**json.loads(done.read_text()))
+        res.from_cache = True
+        return res
+    log = folder / "ccx.log"
+    if log.exists() and "Total CalculiX Time" in log.read_text() \
+            and (folder / "sim.inp").read_text() == text:
+        return collect(folder, case, depths_mm, version)
+    (folder / "template").mkdir(parents=True, exist_ok=True)
+    for name in TEMPLATE_FILES:
+        shutil.copyfile(FEATS / name, folder / "template" / name)
+    shutil.copyfile(FEATS / "materials.inp", folder / "materials.inp")
+    (folder / "sim.inp").write_text(text)
+    env = dict(os.environ, GFORTRAN_UNBUFFERED_ALL="y",
+               OMP_NUM_THREADS=os.environ.get("OMP_NUM_THREADS", "1"))
+    t0 = time.perf_counter()
+    print(f"   running ccx ({case}) in {folder} ...", flush=True)
+    with open(log, "w") as out:
+        proc = subprocess.Popen([ccx, "sim"], cwd=folder, stdout=out, stderr=subprocess.STDOUT,
+                                env=env)
+        while proc.poll() is None:
+            time.sleep(30)
+            sta = folder / "sim.sta"
+            rows = sta.read_text().splitlines()[3:] if sta.exists() else []
+            last = rows[-1].split() if rows else []
+            step_time = float(last[4]) if len(last) >= 5 else 0.0
+            print(f"   ... {time.perf_counter() - t0:6.0f} s: {len(rows)} increments, "
+                  f"depth {step_time * max(depths_mm):.3f} of {max(depths_mm):g} mm",
+                  flush=True)
+    return collect(folder, case, depths_mm, version, proc.returncode)
+
+
+def material_as_run(notes: list[str]) -> tuple[float, float]:
+    """(D1 in 1/MPa, contact slope K in MPa/mm) that ccx printed it uses (nan if not said)."""
+    d1 = k = float("nan")
+    for n in notes:
+        m = re.search(r"D1 =\s*(\S+)", n)
+        if "HYPERELASTIC" in n and m:
+            d1 = float(m.group(1))
+        m = re.search(r"default will be used:\s*(\S+)", n)
+        if "SURFACE BEHAVIOR: K must" in n and m:
+            k = float(m.group(1))
+    return d1, k
+
+
+def nu_from_bulk(bulk: float) -> float:
+    """Small-strain Poisson's ratio of shear modulus MU and bulk modulus `bulk`."""
+    return float((3 * bulk - 2 * MU) / (2 * (3 * bulk + MU)))
+
+
+# ---------------------------------------------------------------------------- ours
+
+@dataclass
+class OurRow:
+    label: str
+    nu: float
+    contact: str
+    dome_mm: float | None
+    k_mm: float | None = None        # frictionless: pressure per penetration, MPa/mm
+
+
+def ours(row: OurRow, depths_mm: list[float], cell: float, cache: Path
+         ) -> tuple[np.ndarray, float, bool]:
+    """Forces (N) of one of our sweeps at the depths; its seconds; from the cache."""
+    e = 2.0 * MU * (1.0 + row.nu)
+    # RigidPunch's penalty is a pressure per penetration of penalty / l (l the surface cell,
+    # units E / h): a slope K (MPa/mm) is penalty = K h / E * l.
+    penalty = 1e3 if row.k_mm is None else row.k_mm * H_MM / e * cell
+    pad = equal_area_radius_mm() / H_MM
+    t0 = time.perf_counter()
+    res = sphere_indentation(R_MM / H_MM, row.nu, np.asarray(depths_mm) / H_MM,
+                             model="neo_hookean", contact=row.contact, pad_radius_over_h=pad,
+                             surface_cell=cell, penalty=penalty,
+                             dome_radius_over_h=None if row.dome_mm is None
+                             else row.dome_mm / H_MM, cache_dir=cache / "ours")
+    if res is None or not res.complete:
+        return np.full(len(depths_mm), np.nan), time.perf_counter() - t0, False
+    return res.force * e * H_MM**2, time.perf_counter() - t0, res.from_cache
+
+
+# ---------------------------------------------------------------------------- report
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--cache", type=Path, required=True,
+                    help="folder for the CalculiX runs and our sweeps (reused by reruns)")
+    ap.add_argument("--depths", default="0.5,1.0,1.5,2.0",
+                    help="indentation depths in mm, comma-separated (default the four "
+                         "measured)")
+    ap.add_argument("--quick", action="store_true",
+                    help="our FEM on the coarser surface cell only; CalculiX read from the "
+                         "cache only (no run)")
+    ap.add_argument("--ccx-cases", default=",".join(CCX_CASES),
+                    help=f"CalculiX cases to run, from {', '.join(CCX_CASES)}")
+    args = ap.parse_args()
+    depths = sorted(float(v) for v in args.depths.split(","))
+    cases = [c for c in args.ccx_cases.split(",") if c]
+    if any(c not in CCX_CASES for c in cases):
+        ap.error(f"--ccx-cases: choose from {', '.join(CCX_CASES)}")
+    args.cache.mkdir(parents=True, exist_ok=True)
+    measured = read_measured()
+    print(f"FEATS GelSight Mini: CalculiX on their model beside our FEM "
+          f"({platform.node()}, {os.cpu_count()} cores, Python {platform.python_version()})")
+
+    ccx = shutil.which("ccx")
+    if ccx is None:
+        print(f"ccx (CalculiX) is not installed: `{INSTALL}` (Debian's CalculiX 2.20), "
+              "then run this again. The library does not need it.", file=sys.stderr)
+        return 2
+    version = ccx_version(ccx)
+    runs: dict[str, CcxResult] = {}
+    print(f"\n1-2. CalculiX {version} on their input files ({FEATS})")
+    for case in cases:
+        if args.quick:
+            folder = args.cache / "ccx"
+            hits = sorted(folder.glob(f"{case}_*/result.json")) if folder.exists() else []
+            key_ok = [h for h in hits
+                      if json.loads(h.read_text())["depths_mm"] == depths]
+            if not key_ok:
+                print(f"   {case}: not in the cache (--quick runs no ccx); run without --quick")
+                continue
+            runs[case] = CcxResult(**json.loads(key_ok[-1].read_text()))
+            runs[case].from_cache = True
+        else:
+            runs[case] = run_ccx(ccx, case, depths, args.cache, version)
+        r = runs[case]
+        print(f"\n   case '{case}': {r.equations} equations, {r.increments} increments, "
+              f"{r.seconds / 60:.1f} min{' (cached run)' if r.from_cache else ''}")
+        if case == cases[0] or case == "published":
+            print("   what ccx printed while reading the input (every WARNING / INFO block):")
+            for n in r.notes:
+                print("     | " + n.strip().replace("\n", "\n     | "))
+        for d, ff, fv in zip(r.depths_mm, r.force_fixed, r.force_volume, strict=True):
+            print(f"   w = {d:.2f} mm: force on the fixed base {ff:8.4f} N, on all gel nodes "
+                  f"(their reading) {fv:8.4f} N")
+
+    d1, k_ccx = material_as_run(runs["published"].notes) if "published" in runs \
+        else (0.1 / MU, 50.0 * C10)
+    bulk = 2.0 / d1
+    nu_ccx = nu_from_bulk(bulk)
+    rx, ry, rd = dome_fit()
+    pad = equal_area_radius_mm()
+    print(f"\n   The model ccx solves (from the lines above and its 2.20 source): "
+          f"Neo-Hookean C10 = {C10} MPa with D1 = 0 replaced by {d1:.4g} /MPa (bulk "
+          f"{bulk:.3g} MPa, nu = {nu_ccx:.4f} at small strain, E = "
+          f"{2 * MU * (1 + nu_ccx):.4f} MPa); the TIED contact without its data line "
+          f"read as LINEAR (compression only) with K = {k_ccx:.4g} MPa/mm; friction 1.0 "
+          f"with the default stick slope {C10 / 2:.4g} MPa/mm.")
+    print(f"   Their gel top near the apex: radii of curvature {rx:.0f} mm (x, the "
+          f"{PAD_MM[0]} mm side) and {ry:.0f} mm (y); mean {rd:.0f} mm. Pad: equal-area "
+          f"radius {pad:.3f} mm.")
+
+    rows = [OurRow("tied, nu 0.5, flat (the stated model)", 0.5, "tied", None),
+            OurRow(f"tied, nu {nu_ccx:.4f}, dome", nu_ccx, "tied", rd),
+            OurRow(f"frictionless K {FRICTIONLESS_K:g}, nu {nu_ccx:.4f}, dome", nu_ccx,
+                   "frictionless", rd, FRICTIONLESS_K),
+            OurRow(f"frictionless K {FRICTIONLESS_K:g}, nu {nu_ccx:.4f}, flat", nu_ccx,
+                   "frictionless", None, FRICTIONLESS_K),
+            OurRow(f"frictionless K {k_ccx:.4g}, nu {nu_ccx:.4f}, dome", nu_ccx,
+                   "frictionless", rd, k_ccx)]
+    cells = CELLS[:1] if args.quick else CELLS
+    print(f"\n3. Our FEM: Neo-Hookean sphere on the bonded pad (R/h = {R_MM / H_MM:g}, pad "
+          f"{pad / H_MM:.4f} h), surface cells {', '.join(f'h/{1 / c:g}' for c in cells)}")
+    table: dict[str, list[np.ndarray]] = {}
+    for row in rows:
+        table[row.label] = []
+        for cell in cells:
+            f, sec, hit = ours(row, depths, cell, args.cache)
+            table[row.label].append(f)
+            print(f"   {row.label:46s} h/{1 / cell:g}: "
+                  + " ".join(f"{v:8.4f}" for v in f)
+                  + f" N  ({'cache' if hit else f'{sec:.0f} s'})", flush=True)
+        if len(cells) == 2:
+            c, fn = table[row.label]
+            print(f"   {'':46s} fine/coarse - 1: "
+                  + " ".join(f"{100 * (b / a - 1):+7.2f}%" for a, b in zip(c, fn, strict=True)))
+
+    print("\n4. Side by side (N; ours on the finest cell run)")
+    head = "   " + f"{'':46s}" + "".join(f"{d:>10.2f}" for d in depths) + "  mm"
+    print(head)
+    meas = [measured.get(d, float("nan")) for d in depths]
+    print("   " + f"{'measured (FEATS)':46s}" + "".join(f"{v:10.4f}" for v in meas))
+    for case, r in runs.items():
+        print("   " + f"{'CalculiX ' + case:46s}" + "".join(f"{v:10.4f}" for v in r.force_fixed))
+    for label, fs in table.items():
+        print("   " + f"{'ours ' + label:46s}" + "".join(f"{v:10.4f}" for v in fs[-1]))
+    pairs = [("frictionless", f"frictionless K {FRICTIONLESS_K:g}, nu {nu_ccx:.4f}, dome"),
+             ("published", f"frictionless K {k_ccx:.4g}, nu {nu_ccx:.4f}, dome"),
+             ("published", f"tied, nu {nu_ccx:.4f}, dome")]
+    print("   ratios:")
+    for case, label in pairs:
+        if case in runs:
+            ratio = table[label][-1] / np.array(runs[case].force_fixed)
+            print("   " + f"{'ours ' + label[:28] + ' / ccx ' + case:46s}"
+                  + "".join(f"{v:10.4f}" for v in ratio))
+    for case, r in runs.items():
+        print("   " + f"{'ccx ' + case + ' / measured':46s}"
+              + "".join(f"{a / b:10.4f}" for a, b in zip(r.force_fixed, meas, strict=True)))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
