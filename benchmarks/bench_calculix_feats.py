@@ -81,7 +81,7 @@ H_MM, R_MM = 4.0, 7.5         # gel thickness at the apex, ball radius
 PAD_MM = (20.75, 25.25)       # their gel's sides
 CONTACT_BLOCK = "*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=TIED\n*FRICTION\n1.0\n"
 FRICTIONLESS_K = 100.0        # MPa/mm, the 'frictionless' case's pressure-overclosure slope
-CCX_CASES = ("published", "frictionless")
+CCX_CASES = ("published", "frictionless", "frictionless-soft")
 CELLS = (0.04, 0.02)          # our surface cells, units of h (coarse: the default here)
 INSTALL = "apt-get install -y calculix-ccx"
 
@@ -181,6 +181,9 @@ def driver_text(case: str, depths_mm: list[float]) -> str:
     if case == "frictionless":
         edits.append((CONTACT_BLOCK,
                       f"*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=LINEAR\n{FRICTIONLESS_K:.0f}.\n"))
+    elif case == "frictionless-soft":             # the slope ccx gave theirs, no friction
+        edits.append((CONTACT_BLOCK,
+                      f"*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=LINEAR\n{50 * C10!r}\n"))
     for old, new in edits:
         if src.count(old) != 1:
             raise SystemExit(f"their sim.inp no longer holds {old!r} once: the driver "
@@ -190,11 +193,12 @@ def driver_text(case: str, depths_mm: list[float]) -> str:
 
 
 def read_totals(dat: Path, node_set: str) -> dict[float, float]:
-    """time -> -fz of the 'total force' blocks of one node set in a .dat file."""
+    """time -> fz of the 'total force' blocks of one node set in a .dat file (the base's
+    reaction on the gel, upward: the force the ball presses with)."""
     text = dat.read_text()
     pat = re.compile(r"total force \(fx,fy,fz\) for set " + node_set
                      + r" and time\s+(\S+)\s*\n\s*\n\s*(\S+)\s+(\S+)\s+(\S+)")
-    return {float(m.group(1)): -float(m.group(4)) for m in pat.finditer(text)}
+    return {float(m.group(1)): float(m.group(4)) for m in pat.finditer(text)}
 
 
 def log_notes(log: str) -> list[str]:
@@ -240,7 +244,7 @@ def collect(folder: Path, case: str, depths_mm: list[float], version: str,
 
     eq = re.search(r"number of equations\s*\n\s*(\d+)", log_text)
     sec = re.search(r"Total CalculiX Time:\s*(\S+)", log_text)
-    sta_rows = (folder / "sim.sta").read_text().splitlines()[3:]
+    sta_rows = (folder / "sim.sta").read_text().splitlines()[2:]
     res = CcxResult(case=case, depths_mm=list(depths_mm), force_fixed=at(fixed),
                     force_volume=at(volume), notes=log_notes(log_text),
                     equations=int(eq.group(1)) if eq else 0, increments=len(sta_rows),
@@ -284,7 +288,7 @@ def run_ccx(ccx: str, case: str, depths_mm: list[float], cache: Path,
         while proc.poll() is None:
             time.sleep(30)
             sta = folder / "sim.sta"
-            rows = sta.read_text().splitlines()[3:] if sta.exists() else []
+            rows = sta.read_text().splitlines()[2:] if sta.exists() else []
             last = rows[-1].split() if rows else []
             step_time = float(last[4]) if len(last) >= 5 else 0.0
             print(f"   ... {time.perf_counter() - t0:6.0f} s: {len(rows)} increments, "
@@ -320,6 +324,8 @@ class OurRow:
     contact: str
     dome_mm: float | None
     k_mm: float | None = None        # frictionless: pressure per penetration, MPa/mm
+    fine: bool = True                # also on the finer surface cell
+    pad_mm: float | None = None      # the pad's radius (None: the equal-area radius)
 
 
 def ours(row: OurRow, depths_mm: list[float], cell: float, cache: Path
@@ -329,7 +335,7 @@ def ours(row: OurRow, depths_mm: list[float], cell: float, cache: Path
     # RigidPunch's penalty is a pressure per penetration of penalty / l (l the surface cell,
     # units E / h): a slope K (MPa/mm) is penalty = K h / E * l.
     penalty = 1e3 if row.k_mm is None else row.k_mm * H_MM / e * cell
-    pad = equal_area_radius_mm() / H_MM
+    pad = (equal_area_radius_mm() if row.pad_mm is None else row.pad_mm) / H_MM
     t0 = time.perf_counter()
     res = sphere_indentation(R_MM / H_MM, row.nu, np.asarray(depths_mm) / H_MM,
                              model="neo_hookean", contact=row.contact, pad_radius_over_h=pad,
@@ -397,8 +403,14 @@ def main() -> int:
             print(f"   w = {d:.2f} mm: force on the fixed base {ff:8.4f} N, on all gel nodes "
                   f"(their reading) {fv:8.4f} N")
 
-    d1, k_ccx = material_as_run(runs["published"].notes) if "published" in runs \
-        else (0.1 / MU, 50.0 * C10)
+    # ccx's rules (hyperelastics.f, surfacebehaviors.f, frictions.f of 2.20): D1 = 0 becomes
+    # 0.1 / mu, a missing K 50 C10; the printed values (4 digits) are checked against them.
+    d1, k_ccx = 0.1 / MU, 50.0 * C10
+    if "published" in runs:
+        d1_p, k_p = material_as_run(runs["published"].notes)
+        if not (abs(d1_p / d1 - 1) < 1e-3 and abs(k_p / k_ccx - 1) < 1e-3):
+            d1, k_ccx = d1_p, k_p
+            print(f"   ccx printed D1 = {d1_p}, K = {k_p}: not 2.20's rules; using them")
     bulk = 2.0 / d1
     nu_ccx = nu_from_bulk(bulk)
     rx, ry, rd = dome_fit()
@@ -413,40 +425,44 @@ def main() -> int:
           f"{PAD_MM[0]} mm side) and {ry:.0f} mm (y); mean {rd:.0f} mm. Pad: equal-area "
           f"radius {pad:.3f} mm.")
 
-    rows = [OurRow("tied, nu 0.5, flat (the stated model)", 0.5, "tied", None),
-            OurRow(f"tied, nu {nu_ccx:.4f}, dome", nu_ccx, "tied", rd),
-            OurRow(f"frictionless K {FRICTIONLESS_K:g}, nu {nu_ccx:.4f}, dome", nu_ccx,
+    rows = [OurRow(f"frictionless K {FRICTIONLESS_K:g}, nu {nu_ccx:.4f}, dome", nu_ccx,
                    "frictionless", rd, FRICTIONLESS_K),
-            OurRow(f"frictionless K {FRICTIONLESS_K:g}, nu {nu_ccx:.4f}, flat", nu_ccx,
-                   "frictionless", None, FRICTIONLESS_K),
             OurRow(f"frictionless K {k_ccx:.4g}, nu {nu_ccx:.4f}, dome", nu_ccx,
-                   "frictionless", rd, k_ccx)]
+                   "frictionless", rd, k_ccx),
+            OurRow(f"tied, nu {nu_ccx:.4f}, dome", nu_ccx, "tied", rd),
+            OurRow(f"frictionless K {FRICTIONLESS_K:g}, nu {nu_ccx:.4f}, flat", nu_ccx,
+                   "frictionless", None, FRICTIONLESS_K, fine=False),
+            OurRow(f"frictionless K {FRICTIONLESS_K:g}, nu {nu_ccx:.4f}, dome, pad "
+                   f"{PAD_MM[0] / 2:g} mm", nu_ccx, "frictionless", rd, FRICTIONLESS_K,
+                   fine=False, pad_mm=PAD_MM[0] / 2),
+            OurRow("tied, nu 0.5, flat (the files' stated model)", 0.5, "tied", None,
+                   fine=False)]
     cells = CELLS[:1] if args.quick else CELLS
     print(f"\n3. Our FEM: Neo-Hookean sphere on the bonded pad (R/h = {R_MM / H_MM:g}, pad "
           f"{pad / H_MM:.4f} h), surface cells {', '.join(f'h/{1 / c:g}' for c in cells)}")
     table: dict[str, list[np.ndarray]] = {}
     for row in rows:
         table[row.label] = []
-        for cell in cells:
+        for cell in cells if row.fine else cells[:1]:
             f, sec, hit = ours(row, depths, cell, args.cache)
             table[row.label].append(f)
-            print(f"   {row.label:46s} h/{1 / cell:g}: "
+            print(f"   {row.label:52s} h/{1 / cell:g}: "
                   + " ".join(f"{v:8.4f}" for v in f)
                   + f" N  ({'cache' if hit else f'{sec:.0f} s'})", flush=True)
-        if len(cells) == 2:
+        if len(table[row.label]) == 2:
             c, fn = table[row.label]
-            print(f"   {'':46s} fine/coarse - 1: "
+            print(f"   {'':52s} fine/coarse - 1: "
                   + " ".join(f"{100 * (b / a - 1):+7.2f}%" for a, b in zip(c, fn, strict=True)))
 
     print("\n4. Side by side (N; ours on the finest cell run)")
-    head = "   " + f"{'':46s}" + "".join(f"{d:>10.2f}" for d in depths) + "  mm"
+    head = "   " + f"{'':52s}" + "".join(f"{d:>10.2f}" for d in depths) + "  mm"
     print(head)
     meas = [measured.get(d, float("nan")) for d in depths]
-    print("   " + f"{'measured (FEATS)':46s}" + "".join(f"{v:10.4f}" for v in meas))
+    print("   " + f"{'measured (FEATS)':52s}" + "".join(f"{v:10.4f}" for v in meas))
     for case, r in runs.items():
-        print("   " + f"{'CalculiX ' + case:46s}" + "".join(f"{v:10.4f}" for v in r.force_fixed))
+        print("   " + f"{'CalculiX ' + case:52s}" + "".join(f"{v:10.4f}" for v in r.force_fixed))
     for label, fs in table.items():
-        print("   " + f"{'ours ' + label:46s}" + "".join(f"{v:10.4f}" for v in fs[-1]))
+        print("   " + f"{'ours ' + label:52s}" + "".join(f"{v:10.4f}" for v in fs[-1]))
     pairs = [("frictionless", f"frictionless K {FRICTIONLESS_K:g}, nu {nu_ccx:.4f}, dome"),
              ("published", f"frictionless K {k_ccx:.4g}, nu {nu_ccx:.4f}, dome"),
              ("published", f"tied, nu {nu_ccx:.4f}, dome")]
@@ -454,11 +470,36 @@ def main() -> int:
     for case, label in pairs:
         if case in runs:
             ratio = table[label][-1] / np.array(runs[case].force_fixed)
-            print("   " + f"{'ours ' + label[:28] + ' / ccx ' + case:46s}"
+            print("   " + f"{'ours ' + label[:28] + ' / ccx ' + case:52s}"
                   + "".join(f"{v:10.4f}" for v in ratio))
     for case, r in runs.items():
-        print("   " + f"{'ccx ' + case + ' / measured':46s}"
+        print("   " + f"{'ccx ' + case + ' / measured':52s}"
               + "".join(f"{a / b:10.4f}" for a, b in zip(r.force_fixed, meas, strict=True)))
+    if "published" in runs and not np.isnan(meas).any():
+        # ccx's defaults make every modulus of their model C10 times a constant (the bulk
+        # modulus 2 / D1 = 20 C10, K = 50 C10, the stick slope C10 / 2; the steel ball is
+        # rigid beside them), so its forces scale with C10: the least-squares C10 of the
+        # four points (their script's loss) is C10 * sum(Fm Fc) / sum(Fc^2).
+        fc, fm = np.array(runs["published"].force_fixed), np.array(meas)
+        c10 = C10 * float(fm @ fc / (fc @ fc))
+        print(f"   their model as ccx {version} runs it, fitted to the measured points: "
+              f"C10 = {c10:.4f} MPa (theirs {C10}), E = {4 * c10 * (1 + nu_ccx):.3f} MPa at "
+              f"nu {nu_ccx:.4f}; measured / fitted at each depth: "
+              + ", ".join(f"{v:.3f}" for v in fm / (fc * c10 / C10)))
+    if not np.isnan(meas).any():
+        # a Neo-Hookean solid's forces scale with its modulus at a fixed nu and contact (the
+        # penalty slope scaled with it; at K 100 MPa/mm its share of the depth is < 0.5 %)
+        print("\n5. Our rows fitted to the measured points (one modulus each, least squares):")
+        fm = np.array(meas)
+        for row in rows:
+            fo = table[row.label][-1]
+            if np.isnan(fo).any():
+                continue
+            s = float(fm @ fo / (fo @ fo))
+            rmse = float(np.sqrt(np.mean((fm - s * fo) ** 2)))
+            print(f"   {row.label:52s} E = {s * 2 * MU * (1 + row.nu):.3f} MPa, rmse "
+                  f"{1e3 * rmse:4.0f} mN, measured / fitted "
+                  + ", ".join(f"{v:.3f}" for v in fm / (s * fo)))
     return 0
 
 
