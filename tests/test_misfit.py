@@ -24,7 +24,7 @@ from tactilevision.mechanics import (
     fit_indenter,
     fit_ramp,
 )
-from tactilevision.mechanics._misfit import log_interval, serial_correlation
+from tactilevision.mechanics._misfit import _linregress, log_interval, serial_correlation
 
 
 @dataclass(frozen=True)
@@ -286,3 +286,29 @@ def test_an_error_each_indenters_presses_share_is_not_a_misfit():
         fit_indentation(w, P, indenter=ind, **{**kw, "depth_std_mm": np.full(w.size, 0.03)})
     with pytest.raises(ShapeError, match="group"):
         assess_misfit(w, P - law(w), np.full(w.size, 0.2), group=ind[:3])
+
+
+def test_the_drift_line_is_scipys_linregress():
+    """The apparent E's drift is read with a local copy of ``scipy.stats.linregress``'s
+    arithmetic (its argument handling cost more than the rest of the misfit): slope,
+    its standard error and the two-sided p-value equal scipy's on random tables, repeated
+    depths, exact lines and a constant apparent E (NaN where scipy's is NaN)."""
+    from scipy import stats
+
+    rng = np.random.default_rng(86)
+    n_cases = 0
+    for n in (2, 3, 4, 5, 8, 20):
+        for k in range(40):
+            x = (np.resize(np.repeat(rng.uniform(0.05, 0.6, n), 2), n) if k % 2
+                 else rng.uniform(0.05, 0.6, n))
+            if np.ptp(x) == 0:
+                continue
+            y = (rng.normal(1.0, 0.1, n), 0.2 + 0.3 * x, np.full(n, 0.3),
+                 0.2 + 0.3 * x + 1e-12 * rng.normal(size=n))[k % 4]
+            ref = stats.linregress(x, y)
+            got = _linregress(x, y)
+            want = (float(ref.slope), float(ref.stderr), float(ref.pvalue))
+            assert all(a == b or (math.isnan(a) and math.isnan(b))
+                       for a, b in zip(got, want, strict=True)), (n, k, got, want)
+            n_cases += 1
+    assert n_cases > 200

@@ -328,6 +328,16 @@ def _kappa_n_along_w(a_over_h: float, contact_index: int) -> PchipInterpolator:
     return PchipInterpolator(wt, kn_ah, axis=1)
 
 
+@lru_cache(maxsize=8)
+def _kappa_n_along_w_all(contact: str) -> PchipInterpolator:
+    """The whole table's kappa_n as a PCHIP along w/h (through kappa0 at 0 and the stored
+    depths), (A, N) per w/h: the first step of :func:`kappa_n`, the same for every query,
+    built once (building it was a third of a call, and the planner calls it thousands of
+    times). Read-only: a caller must not change its arrays."""
+    _, wt, kn = _kappa_n_nodes(np.asarray(0.4), np.asarray(1.0), np.asarray(0.0), contact)
+    return PchipInterpolator(wt, kn, axis=2)
+
+
 def kappa_n(nu: float | np.ndarray, a_over_h: float | np.ndarray,
             w_over_h: float | np.ndarray, *, contact: str = "bonded") -> float | np.ndarray:
     """Finite-strain layer factor kappa_n(nu, a/h, w/h) of eq. (1), from the FEM table.
@@ -365,8 +375,8 @@ def kappa_n(nu: float | np.ndarray, a_over_h: float | np.ndarray,
        tables --what beta``).
     """
     n, r, x = np.broadcast_arrays(*(np.asarray(v, np.float64) for v in (nu, a_over_h, w_over_h)))
-    data, wt, kn = _kappa_n_nodes(n, r, x, contact)
-    along_w = PchipInterpolator(wt, kn, axis=2)
+    data, _, _ = _kappa_n_nodes(n, r, x, contact)
+    along_w = _kappa_n_along_w_all(contact)
     if n.size > 1 and np.all(n == n.flat[0]) and np.all(r == r.flat[0]):
         # one nu and a/h (a ramp's or a table's depths): each depth's column is interpolated
         # on its own, so all depths at once give the same numbers as the loop below
