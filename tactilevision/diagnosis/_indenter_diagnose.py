@@ -613,7 +613,7 @@ def validate_indenter(depth_mm: np.ndarray, force_n: np.ndarray, indenter: Inden
         raise InputError(f"press {int(bad[0])}: force_n = {P[bad[0]]:g} must be positive")
     h = float(thickness_mm)
     c = indenter._contact(contact)
-    top = indenter.reach_mm(h, law)
+    top = indenter.reach_mm(h, law, c)
 
     def force(x: float) -> float:
         return float(indenter.force(np.array([x]), E_mpa=E_mpa, nu=nu, thickness_mm=h,

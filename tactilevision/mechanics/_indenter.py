@@ -98,8 +98,10 @@ class Indenter(ABC):
         """Contact radius a (mm) at depths w (mm)."""
 
     @abstractmethod
-    def reach_mm(self, thickness_mm: float, law: str = "neo_hookean") -> float:
-        """The deepest press its tables hold, mm."""
+    def reach_mm(self, thickness_mm: float, law: str = "neo_hookean",
+                 contact: str | None = None) -> float:
+        """The deepest press its tables hold, mm, for `law` and `contact` (the one figure the
+        fit, a ramp's reader and :meth:`depth_from_contact_radius` refuse past)."""
 
     def depth_from_contact_radius(self, contact_radius_mm: np.ndarray, *, nu: float,
                                   thickness_mm: float, law: str = "neo_hookean",
@@ -155,7 +157,8 @@ class FlatPunch(Indenter):
     def __post_init__(self) -> None:
         object.__setattr__(self, "radius_mm", _positive(self.radius_mm, "radius_mm"))
 
-    def reach_mm(self, thickness_mm: float, law: str = "neo_hookean") -> float:
+    def reach_mm(self, thickness_mm: float, law: str = "neo_hookean",
+                 contact: str | None = None) -> float:
         return 0.2 * TABLE_EXTRAPOLATION * thickness_mm if law == "neo_hookean" else np.inf
 
     def force(self, depth_mm, *, E_mpa, nu, thickness_mm, law="neo_hookean", contact=None):
@@ -197,6 +200,24 @@ class Sphere(Indenter):
     contact) is one FEM sweep (:func:`tactilevision.fem.sphere_indentation`,
     minutes at finite strain, then kept in the disk cache). Both tend to
     Hertz's half-space (ratio 1) on a thick layer.
+
+    A thick gel (R/h below 0.5, down to Hertz's half-space, R/h -> 0), on the
+    infinite layer: the closed forms carried on from the table's R/h = 0.5 at
+    the same w/R (:mod:`tactilevision.mechanics._sphere_closed`). The force is
+    Hertz's (Johnson 1985, eq. 4.22-4.23) made a sphere's by Sneddon (1965)
+    times Dimitriadis et al.'s bonded-layer series in chi = sqrt(R w)/h
+    (Biophys. J. 82:2798, 2002, eq. 9-12; their layer bonded to its base as
+    ours, their ball frictionless), times the table's own ratio to that closed
+    form at R/h = 0.5 (continuous there): for ``law='linear'`` with
+    ``contact='frictionless'`` that ratio is within 0.25 % of 1 to w/R = 0.26
+    and 2.8 % at 0.6; ``'tied'`` carries the no-slip contact's stiffening
+    (1.4 % at nu = 0.3, none at 0.5); ``'neo_hookean'`` carries the finite
+    strain, trusted to w/R = 0.08 only (that transfer, tried from R/h = 1 to
+    0.5, is within 1.3 % there and 2 to 21 % deeper), so the finite-strain
+    law refuses deeper presses below R/h 0.5 where the small-strain law keeps
+    w <= 0.6 R. Dimitriadis' layer-sliding variant has no contact here (every
+    layer of this package is bonded to its base). :meth:`reach_mm` is the one
+    reach the fit, a ramp's reader and :meth:`depth_from_contact_radius` use.
 
     Parameters
     ----------

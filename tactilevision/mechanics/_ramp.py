@@ -453,7 +453,8 @@ def _fit_pass(z: np.ndarray, P: np.ndarray, indenter: Indenter, tab: _Tables, *,
     if prof.hi_edge:
         notes.append(f"the contact point's interval reaches the last {_MIN_CONTACT} points "
                      "within the reach: the ramp does not bound it from above")
-    w, F, half = _presses(z[keep], P[keep], prof, tab, indenter.reach_mm(h, law), name, notes)
+    w, F, half = _presses(z[keep], P[keep], prof, tab, indenter.reach_mm(h, law, contact),
+                          name, notes)
     fit = fit_indenter(w, F, indenter, thickness_mm=h, law=law, contact=contact, nu=nu,
                        depth_shared_mm=half, confidence=confidence)
     return keep, prof, L, U, w, F, fit, notes
@@ -531,7 +532,7 @@ def fit_ramp(displacement_mm: np.ndarray, force_n: np.ndarray, indenter: Indente
     z, P, h, contact, limit, why = _checked(displacement_mm, force_n, indenter, thickness_mm,
                                             contact, confidence, max_depth_mm)
     k, z_rise = _loading(z, P, name)
-    reach = indenter.reach_mm(h, law)
+    reach = indenter.reach_mm(h, law, contact)
     if reach < limit:
         limit, why = reach, f"the {indenter.shape} table's reach on h = {h:g} mm"
     zl, Pl = z[:k], P[:k]
