@@ -16,7 +16,7 @@ Usage::
     python benchmarks/bench_calculix_feats.py --cache out/calculix_feats
     python benchmarks/bench_calculix_feats.py --cache out/calculix_feats --quick
     python benchmarks/bench_calculix_feats.py --cache DIR --depths 0.5,1.0,1.5,2.0 \
-        --ccx-cases published,frictionless
+        --ccx-cases published,frictionless,frictionless-soft,axisym-1,axisym-2
 
 Each CalculiX case is one NLGEOM run to the deepest depth in a scratch folder under
 ``--cache`` (their files copied into ``template/`` so that their include paths resolve;
@@ -25,11 +25,20 @@ these changes: the indenter's displacement set to the deepest depth (their own s
 edits that line per depth), a ``*TIME POINTS`` list at the other depths over it, and
 ``TIME POINTS=`` on their two ``*NODE PRINT`` requests, so that one run reports the
 force at every depth (their script ran one job per depth; the load path is the same
-ramp). The ``frictionless`` case also replaces their contact block by
-``PRESSURE-OVERCLOSURE=LINEAR`` with K = 100 MPa/mm and no friction. A run takes tens of
-minutes on the project's 2-core machine (43,299 equations; progress is printed every
-30 s); its forces, log and timing are cached in ``--cache`` and reused by a rerun whose
-driver input and ``ccx`` version are unchanged.
+ramp). The cases:
+
+- ``published``: their files as they are;
+- ``frictionless``: their contact block replaced by ``PRESSURE-OVERCLOSURE=LINEAR`` with
+  K = 100 MPa/mm and no friction (the law our frictionless FEM solves);
+- ``frictionless-soft``: the same with the slope ccx gave theirs (50 C10 = 3.625 MPa/mm);
+- ``axisym-1``, ``axisym-2``: our problem in CalculiX, not their mesh: the round pad of
+  equal area, axisymmetric (CAX8), the ``frictionless`` law, on two meshes (the second
+  halves every cell), written by :func:`axisym_text`.
+
+A 3D run takes 8 to 26 minutes on the project's 2-core machine (43,299 equations),
+the axisymmetric ones less and more; progress is printed every 30 s; forces, log and
+timing are cached in ``--cache`` and reused by a rerun whose input and ``ccx`` version
+are unchanged.
 
 Prints:
 
@@ -43,10 +52,15 @@ Prints:
    their geometry as our axisymmetric pad allows (the equal-area radius of their
    20.75 x 25.25 mm pad, h = 4.0 mm, R = 7.5 mm, their dome's mean radius of curvature
    fitted to their mesh), at the material CalculiX runs (mu = 2 C10, bulk modulus
-   2 / D1 as ccx replaced it) and at nu = 0.5, tied and frictionless, the frictionless
-   penalty matched to a ccx case's pressure-overclosure slope, each on two surface cells
-   (``--quick``: the coarser only).
-4. Side by side at each depth: measured, CalculiX, ours, and the ratios.
+   2 / D1 as ccx replaced it) and at nu = 0.5, tied and frictionless (the penalty
+   slope that of the ``frictionless`` case, 100 MPa/mm), on two surface cells
+   (``--quick``: the coarser only), and the frictionless law on a pad of the
+   rectangle's half-width. (Not the slope of 3.625 MPa/mm: our penalty contact's Newton
+   fails past w/h = 0.48 with it, on both cells; CalculiX's soft-slope case stands in.)
+4. Side by side at each depth: measured, CalculiX, ours, and the ratios that name the
+   causes (mesh, pad shape, contact slope, friction).
+5. Each of our rows fitted to the measured points: one modulus, its rmse and the
+   measured over fitted force at each depth (the drift).
 """
 
 from __future__ import annotations
@@ -81,7 +95,7 @@ H_MM, R_MM = 4.0, 7.5         # gel thickness at the apex, ball radius
 PAD_MM = (20.75, 25.25)       # their gel's sides
 CONTACT_BLOCK = "*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=TIED\n*FRICTION\n1.0\n"
 FRICTIONLESS_K = 100.0        # MPa/mm, the 'frictionless' case's pressure-overclosure slope
-CCX_CASES = ("published", "frictionless", "frictionless-soft")
+CCX_CASES = ("published", "frictionless", "frictionless-soft", "axisym-1", "axisym-2")
 CELLS = (0.04, 0.02)          # our surface cells, units of h (coarse: the default here)
 INSTALL = "apt-get install -y calculix-ccx"
 
@@ -192,13 +206,14 @@ def driver_text(case: str, depths_mm: list[float]) -> str:
     return src
 
 
-def read_totals(dat: Path, node_set: str) -> dict[float, float]:
-    """time -> fz of the 'total force' blocks of one node set in a .dat file (the base's
-    reaction on the gel, upward: the force the ball presses with)."""
+def read_totals(dat: Path, node_set: str, axis: int = 2, scale: float = 1.0
+                ) -> dict[float, float]:
+    """time -> scale * F[axis] of the 'total force' blocks of one node set in a .dat file
+    (the base's reaction on the gel, upward: the force the ball presses with)."""
     text = dat.read_text()
     pat = re.compile(r"total force \(fx,fy,fz\) for set " + node_set
                      + r" and time\s+(\S+)\s*\n\s*\n\s*(\S+)\s+(\S+)\s+(\S+)")
-    return {float(m.group(1)): float(m.group(4)) for m in pat.finditer(text)}
+    return {float(m.group(1)): scale * float(m.group(2 + axis)) for m in pat.finditer(text)}
 
 
 def log_notes(log: str) -> list[str]:
@@ -223,19 +238,28 @@ def case_folder(case: str, depths_mm: list[float], cache: Path, version: str
                 ) -> tuple[Path, str]:
     """The case's scratch folder (named by a digest of its driver, their files and the
     ccx version) and its driver text."""
-    text = driver_text(case, depths_mm)
+    text = axisym_text(int(case[-1]), depths_mm, dome_fit()[2]) if case.startswith("axisym") \
+        else driver_text(case, depths_mm)
     key = hashlib.sha256((text + (FEATS / "materials.inp").read_text() + version
                           + "".join(f"{n}:{(FEATS / n).stat().st_size}" for n in TEMPLATE_FILES)
                           ).encode()).hexdigest()[:16]
     return cache / "ccx" / f"{case}_{key}", text
 
 
+def job_name(case: str) -> str:
+    """ccx's job (input file stem) of a case."""
+    return "axi" if case.startswith("axisym") else "sim"
+
+
 def collect(folder: Path, case: str, depths_mm: list[float], version: str,
             returncode: int = 0) -> CcxResult:
     """Read a finished run's forces, notes and size from its folder (and cache them)."""
     log_text = (folder / "ccx.log").read_text()
-    fixed = read_totals(folder / "sim.dat", "NGELSIGHT_MINIFIXED")
-    volume = read_totals(folder / "sim.dat", "NGELSIGHT_MINIVOLUME")
+    if case.startswith("axisym"):           # y is the axis; forces per 2 degrees
+        fixed = volume = read_totals(folder / "axi.dat", "BASE", axis=1, scale=180.0)
+    else:
+        fixed = read_totals(folder / "sim.dat", "NGELSIGHT_MINIFIXED")
+        volume = read_totals(folder / "sim.dat", "NGELSIGHT_MINIVOLUME")
     times = [d / max(depths_mm) for d in depths_mm]
 
     def at(table: dict[float, float]) -> list[float]:
@@ -244,7 +268,7 @@ def collect(folder: Path, case: str, depths_mm: list[float], version: str,
 
     eq = re.search(r"number of equations\s*\n\s*(\d+)", log_text)
     sec = re.search(r"Total CalculiX Time:\s*(\S+)", log_text)
-    sta_rows = (folder / "sim.sta").read_text().splitlines()[2:]
+    sta_rows = (folder / f"{job_name(case)}.sta").read_text().splitlines()[2:]
     res = CcxResult(case=case, depths_mm=list(depths_mm), force_fixed=at(fixed),
                     force_volume=at(volume), notes=log_notes(log_text),
                     equations=int(eq.group(1)) if eq else 0, increments=len(sta_rows),
@@ -269,25 +293,27 @@ def run_ccx(ccx: str, case: str, depths_mm: list[float], cache: Path,
         res = CcxResult(**json.loads(done.read_text()))
         res.from_cache = True
         return res
-    log = folder / "ccx.log"
+    log, job = folder / "ccx.log", job_name(case)
     if log.exists() and "Total CalculiX Time" in log.read_text() \
-            and (folder / "sim.inp").read_text() == text:
+            and (folder / f"{job}.inp").read_text() == text:
         return collect(folder, case, depths_mm, version)
-    (folder / "template").mkdir(parents=True, exist_ok=True)
-    for name in TEMPLATE_FILES:
-        shutil.copyfile(FEATS / name, folder / "template" / name)
-    shutil.copyfile(FEATS / "materials.inp", folder / "materials.inp")
-    (folder / "sim.inp").write_text(text)
+    folder.mkdir(parents=True, exist_ok=True)
+    if job == "sim":
+        (folder / "template").mkdir(exist_ok=True)
+        for name in TEMPLATE_FILES:
+            shutil.copyfile(FEATS / name, folder / "template" / name)
+        shutil.copyfile(FEATS / "materials.inp", folder / "materials.inp")
+    (folder / f"{job}.inp").write_text(text)
     env = dict(os.environ, GFORTRAN_UNBUFFERED_ALL="y",
                OMP_NUM_THREADS=os.environ.get("OMP_NUM_THREADS", "1"))
     t0 = time.perf_counter()
     print(f"   running ccx ({case}) in {folder} ...", flush=True)
     with open(log, "w") as out:
-        proc = subprocess.Popen([ccx, "sim"], cwd=folder, stdout=out, stderr=subprocess.STDOUT,
+        proc = subprocess.Popen([ccx, job], cwd=folder, stdout=out, stderr=subprocess.STDOUT,
                                 env=env)
         while proc.poll() is None:
             time.sleep(30)
-            sta = folder / "sim.sta"
+            sta = folder / f"{job}.sta"
             rows = sta.read_text().splitlines()[2:] if sta.exists() else []
             last = rows[-1].split() if rows else []
             step_time = float(last[4]) if len(last) >= 5 else 0.0
@@ -295,6 +321,103 @@ def run_ccx(ccx: str, case: str, depths_mm: list[float], cache: Path,
                   f"depth {step_time * max(depths_mm):.3f} of {max(depths_mm):g} mm",
                   flush=True)
     return collect(folder, case, depths_mm, version, proc.returncode)
+
+
+def _graded(x0: float, x1: float, h0: float, growth: float) -> np.ndarray:
+    xs, step = [x0], h0
+    while xs[-1] + step < x1 - 0.5 * step:
+        xs.append(xs[-1] + step)
+        step *= growth
+    xs.append(x1)
+    return np.array(xs)
+
+
+def axisym_text(level: int, depths_mm: list[float], dome_mm: float) -> str:
+    """A CalculiX model of our problem: the round pad of equal area, axisymmetric.
+
+    CAX8 quadrilaterals (ccx expands them to a 2 degree wedge of C3D20R): the gel
+    (radius the equal-area one, 4 mm thick at the apex, its top the cap of radius
+    `dome_mm`, the base fixed) on a grid of 0.25 / level mm out to 7 mm, graded beyond,
+    layers from 0.25 / level mm at the top growing 15 % downwards; the ball a steel ring
+    (radius 7.5 to 7.0 mm, 0 to 60 degrees from the apex) driven down by its inner arc.
+    Their material as ccx runs it (C10, D1 = 0.1 / mu), frictionless surface-to-surface
+    contact, K = 100 MPa/mm: the 'frictionless' case on our pad. Forces are per 2 degrees.
+    """
+    h, radius, pad, d_max = H_MM, R_MM, equal_area_radius_mm(), max(depths_mm)
+    dr = 0.25 / level
+    r = np.unique(np.round(np.concatenate([np.arange(0.0, 7.0, dr),
+                                           _graded(7.0, pad, dr, 1.2)]), 9))
+    zf = np.sort(1.0 - _graded(0.0, 1.0, 0.0625 / level, 1.15))
+    rr = np.empty(2 * r.size - 1)
+    rr[0::2], rr[1::2] = r, 0.5 * (r[:-1] + r[1:])
+    zz = np.empty(2 * zf.size - 1)
+    zz[0::2], zz[1::2] = zf, 0.5 * (zf[:-1] + zf[1:])
+    sag = dome_mm - np.sqrt(dome_mm**2 - rr**2)
+    nid = -np.ones((rr.size, zz.size), dtype=int)
+    coords: dict[int, tuple[float, float]] = {}
+
+    def node(i: int, j: int) -> int:
+        if nid[i, j] < 0:
+            nid[i, j] = len(coords) + 1
+            coords[int(nid[i, j])] = (float(rr[i]), float(-h + zz[j] * (h - sag[i])))
+        return int(nid[i, j])
+
+    els: list[list[int]] = []
+    top: list[int] = []
+    ne_r, ne_z = (rr.size - 1) // 2, (zz.size - 1) // 2
+    for i in range(ne_r):
+        for j in range(ne_z):
+            a, b = 2 * i, 2 * j
+            els.append([node(a, b), node(a + 2, b), node(a + 2, b + 2), node(a, b + 2),
+                        node(a + 1, b), node(a + 2, b + 1), node(a + 1, b + 2), node(a, b + 1)])
+            if j == ne_z - 1 and rr[a] < radius:
+                top.append(len(els))
+    n_gel = len(els)
+    base = [int(nid[i, 0]) for i in range(rr.size) if nid[i, 0] > 0]
+    axis = [int(nid[0, j]) for j in range(zz.size) if nid[0, j] > 0]
+    n_phi = int(np.ceil(np.radians(60.0) * radius / dr))
+    phi = np.linspace(0.0, np.radians(60.0), 2 * n_phi + 1)
+    ring = (radius, radius - 0.25, radius - 0.5)
+    pid: dict[tuple[int, int], int] = {}
+    for i, p in enumerate(phi):
+        for j, q in enumerate(ring):
+            pid[i, j] = len(coords) + 1
+            coords[pid[i, j]] = (float(q * np.sin(p)), float(radius - q * np.cos(p)))
+    master: list[int] = []
+    for i in range(n_phi):
+        a = 2 * i
+        els.append([pid[a, 0], pid[a + 2, 0], pid[a + 2, 2], pid[a, 2], pid[a + 1, 0],
+                    pid[a + 2, 1], pid[a + 1, 2], pid[a, 1]])
+        master.append(len(els))
+    inner = [pid[i, 2] for i in range(phi.size)]
+    used = {n for e in els for n in e}
+    lines = ["*NODE, NSET=NALL"]
+    lines += [f"{n}, {x:.12g}, {y:.12g}, 0" for n, (x, y) in coords.items() if n in used]
+    lines.append("*ELEMENT, TYPE=CAX8, ELSET=GEL")
+    lines += [f"{k}, " + ", ".join(map(str, e)) for k, e in enumerate(els[:n_gel], 1)]
+    lines.append("*ELEMENT, TYPE=CAX8, ELSET=BALL")
+    lines += [f"{k}, " + ", ".join(map(str, e)) for k, e in enumerate(els[n_gel:], n_gel + 1)]
+    for name, ids in (("BASE", base), ("AXIS", axis), ("DRIVE", inner)):
+        lines.append(f"*NSET, NSET={name}")
+        lines += [", ".join(map(str, ids[s:s + 8])) + "," for s in range(0, len(ids), 8)]
+    lines.append("*SURFACE, NAME=SGEL")
+    lines += [f"{e}, S3" for e in top]
+    lines.append("*SURFACE, NAME=SBALL")
+    lines += [f"{e}, S1" for e in master]
+    points = ", ".join(str(round(d / d_max, 6)) for d in depths_mm)
+    lines += ["*MATERIAL, NAME=SILICONE", "*HYPERELASTIC, NEO HOOKE", f"{C10!r}, {0.1 / MU!r}",
+              "*MATERIAL, NAME=STEEL", "*ELASTIC", "210000.0, 0.3",
+              "*SOLID SECTION, ELSET=GEL, MATERIAL=SILICONE",
+              "*SOLID SECTION, ELSET=BALL, MATERIAL=STEEL",
+              "*SURFACE INTERACTION, NAME=PRESS",
+              "*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=LINEAR", f"{FRICTIONLESS_K!r}",
+              "*CONTACT PAIR, INTERACTION=PRESS, TYPE=SURFACE TO SURFACE", "SGEL, SBALL",
+              "*BOUNDARY", "BASE, 1, 2", "AXIS, 1, 1", "DRIVE, 1, 1",
+              "*TIME POINTS, NAME=TP", points,
+              "*STEP, NLGEOM, INC=1000", "*STATIC", "0.05, 1.0, 1e-6, 0.1",
+              "*BOUNDARY", f"DRIVE, 2, 2, -{d_max!r}",
+              "*NODE PRINT, NSET=BASE, TOTALS=ONLY, TIME POINTS=TP", "RF", "*END STEP"]
+    return "\n".join(lines) + "\n"
 
 
 def material_as_run(notes: list[str]) -> tuple[float, float]:
@@ -427,8 +550,6 @@ def main() -> int:
 
     rows = [OurRow(f"frictionless K {FRICTIONLESS_K:g}, nu {nu_ccx:.4f}, dome", nu_ccx,
                    "frictionless", rd, FRICTIONLESS_K),
-            OurRow(f"frictionless K {k_ccx:.4g}, nu {nu_ccx:.4f}, dome", nu_ccx,
-                   "frictionless", rd, k_ccx),
             OurRow(f"tied, nu {nu_ccx:.4f}, dome", nu_ccx, "tied", rd),
             OurRow(f"frictionless K {FRICTIONLESS_K:g}, nu {nu_ccx:.4f}, flat", nu_ccx,
                    "frictionless", None, FRICTIONLESS_K, fine=False),
@@ -463,15 +584,21 @@ def main() -> int:
         print("   " + f"{'CalculiX ' + case:52s}" + "".join(f"{v:10.4f}" for v in r.force_fixed))
     for label, fs in table.items():
         print("   " + f"{'ours ' + label:52s}" + "".join(f"{v:10.4f}" for v in fs[-1]))
-    pairs = [("frictionless", f"frictionless K {FRICTIONLESS_K:g}, nu {nu_ccx:.4f}, dome"),
-             ("published", f"frictionless K {k_ccx:.4g}, nu {nu_ccx:.4f}, dome"),
-             ("published", f"tied, nu {nu_ccx:.4f}, dome")]
+    k100 = f"frictionless K {FRICTIONLESS_K:g}, nu {nu_ccx:.4f}, dome"
+    pairs = [(f"ours {k100[:26]} / ccx {c}", table[k100][-1], runs[c].force_fixed)
+             for c in ("frictionless", "axisym-1", "axisym-2") if c in runs]
+    for num, den, what in (("axisym-2", "axisym-1", "mesh: fine / coarse"),
+                           ("frictionless", "axisym-2", "rectangle + 3D mesh / round"),
+                           ("frictionless-soft", "frictionless", "K 3.625 / K 100"),
+                           ("published", "frictionless-soft", "friction (stick slope)"),
+                           ("published", "frictionless", "their contact / K 100")):
+        if num in runs and den in runs:
+            pairs.append((f"ccx {num} / {den} ({what})", runs[num].force_fixed,
+                          runs[den].force_fixed))
     print("   ratios:")
-    for case, label in pairs:
-        if case in runs:
-            ratio = table[label][-1] / np.array(runs[case].force_fixed)
-            print("   " + f"{'ours ' + label[:28] + ' / ccx ' + case:52s}"
-                  + "".join(f"{v:10.4f}" for v in ratio))
+    for label, a, b in pairs:
+        print("   " + f"{label:52s}" + "".join(f"{x / y:10.4f}" for x, y in
+                                              zip(a, b, strict=True)))
     for case, r in runs.items():
         print("   " + f"{'ccx ' + case + ' / measured':52s}"
               + "".join(f"{a / b:10.4f}" for a, b in zip(r.force_fixed, meas, strict=True)))
