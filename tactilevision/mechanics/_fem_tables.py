@@ -11,7 +11,7 @@ from dataclasses import dataclass
 from functools import cached_property, lru_cache
 
 import numpy as np
-from scipy.interpolate import PchipInterpolator
+from scipy.interpolate import PchipInterpolator, PPoly
 
 from .._assets import asset_dir
 from .._checks import InputError
@@ -328,6 +328,37 @@ def _kappa_n_along_w(a_over_h: float, contact_index: int) -> PchipInterpolator:
     return PchipInterpolator(wt, kn_ah, axis=1)
 
 
+def _window(x: np.ndarray, x0: float) -> slice:
+    """The nodes of a PCHIP through `x` that decide its value at `x0`.
+
+    PCHIP's value in the interval [x_k, x_k+1] that holds x0 is the cubic through the values
+    and slopes at nodes k and k+1; an interior node's slope is read from its two secants
+    (nodes k-1 to k+2), an end node's from the first or last three nodes. The interpolant
+    through this window alone gives the same numbers, from the same operations on the same
+    values (tests/test_mechanics_tables.py), at a fraction of the cost where there are many
+    columns (a ramp's 600 depths x 14 x 14 nodes)."""
+    n = x.size
+    k = min(max(int(np.searchsorted(x, x0, side="right")) - 1, 0), n - 2)
+    lo, hi = max(k - 1, 0), min(k + 3, n)
+    if lo == 0:
+        hi = max(hi, min(3, n))
+    if hi == n:
+        lo = min(lo, max(n - 3, 0))
+    return slice(lo, hi)
+
+
+def _kappa_n_at(data: dict, along_w: PchipInterpolator, nu: float, a_over_h: float,
+                w_over_h: np.ndarray) -> np.ndarray:
+    """kappa_n at one nu and a/h, at each of `w_over_h` (M,): PCHIP along w/h, nu, then a/h,
+    each on the window of nodes that decides the next step's value (:func:`_window`)."""
+    a_sl, n_sl = _window(data["a_over_h"], a_over_h), _window(data["nu"], nu)
+    part = PPoly.construct_fast(along_w.c[:, :, a_sl, n_sl], along_w.x,
+                                along_w.extrapolate)
+    k_w = np.moveaxis(part(w_over_h), 0, -1)                                # (A', N', M)
+    k_nu = PchipInterpolator(data["nu"][n_sl], k_w, axis=1)(nu)             # (A', M)
+    return PchipInterpolator(data["a_over_h"][a_sl], k_nu, axis=0)(a_over_h)  # (M,)
+
+
 @lru_cache(maxsize=8)
 def _kappa_n_along_w_all(contact: str) -> PchipInterpolator:
     """The whole table's kappa_n as a PCHIP along w/h (through kappa0 at 0 and the stored
@@ -380,14 +411,12 @@ def kappa_n(nu: float | np.ndarray, a_over_h: float | np.ndarray,
     if n.size > 1 and np.all(n == n.flat[0]) and np.all(r == r.flat[0]):
         # one nu and a/h (a ramp's or a table's depths): each depth's column is interpolated
         # on its own, so all depths at once give the same numbers as the loop below
-        k_w = along_w(x.ravel())                                            # (A, N, M)
-        k_nu = PchipInterpolator(data["nu"], k_w, axis=1)(n.flat[0])        # (A, M)
-        return PchipInterpolator(data["a_over_h"], k_nu, axis=0)(r.flat[0]).reshape(n.shape)
+        return _kappa_n_at(data, along_w, float(n.flat[0]), float(r.flat[0]),
+                           x.ravel()).reshape(n.shape)
     out = np.empty(n.shape)
     for idx in np.ndindex(n.shape):
-        k_w = along_w(x[idx])                                       # (A, N)
-        k_nu = PchipInterpolator(data["nu"], k_w, axis=1)(n[idx])  # (A,)
-        out[idx] = PchipInterpolator(data["a_over_h"], k_nu)(r[idx])
+        out[idx] = _kappa_n_at(data, along_w, float(n[idx]), float(r[idx]),
+                               np.atleast_1d(x[idx]))[0]
     return float(out) if out.ndim == 0 else out
 
 
