@@ -4,12 +4,14 @@ table's hold_s column holds; figures rounded."""
 
 from __future__ import annotations
 
+import io
 import json
 import math
 from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from tactilevision.cli import main
 from tactilevision.diagnosis import crossing_measurements
@@ -25,39 +27,56 @@ from tactilevision.planning._plan_effects import crossing_table
 PLAN = Path(__file__).resolve().parents[1] / "sample_frames" / "plan"
 
 
-def _lines(capsys, *argv) -> list[str]:
-    assert main(["plan", *argv]) == 0
-    return capsys.readouterr().out.splitlines()
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory) -> dict:
+    """What ``plan`` prints and writes for the two sample designs, each run once for the
+    tests below (each plan sizes every effect, seconds of work): the paper's design with
+    --recommend, its text and its --json file (the same document --json - prints); the
+    recommended design's text, and its --json - on stdout."""
+    out = tmp_path_factory.mktemp("plan")
+    got = {}
+    with pytest.MonkeyPatch.context() as mp:
+        for key, argv in (("paper", [str(PLAN / "paper_gauge_block.toml"), "--recommend",
+                                     "--json", str(out / "paper.json")]),
+                          ("recommended", [str(PLAN / "recommended.toml")]),
+                          ("recommended_json", [str(PLAN / "recommended.toml"), "--json",
+                                                "-"])):
+            buf = io.StringIO()
+            mp.setattr("sys.stdout", buf)
+            assert main(["plan", *argv]) == 0
+            got[key] = buf.getvalue()
+    return {"paper_lines": got["paper"].splitlines(),
+            "paper": json.loads((out / "paper.json").read_text()),
+            "recommended_lines": got["recommended"].splitlines(),
+            "recommended": json.loads(got["recommended_json"])}
 
 
-def test_one_identification_verdict_agreeing_with_the_total(capsys):
+def test_one_identification_verdict_agreeing_with_the_total(runs):
     """The paper's mark design: its scatter pins nu, but a depth error at the mark's bound
     takes beta beyond the table, and the total error says nu is not identified; the
     verdict line says the same, once, with the reason."""
-    lines = _lines(capsys, str(PLAN / "paper_gauge_block.toml"), "--recommend")
+    lines = runs["paper_lines"]
     verdicts = [ln for ln in lines if ln.startswith("nu ")]
     assert len(verdicts) == 1
     assert verdicts[0].startswith("nu NOT identified: the presses' scatter alone")
     assert "depth error of +3.3 um" in verdicts[0]
     assert any("total error now" in ln and "nu not identified" in ln for ln in lines)
-    assert main(["plan", str(PLAN / "paper_gauge_block.toml"), "--json", "-"]) == 0
-    d = json.loads(capsys.readouterr().out)
+    d = runs["paper"]
     assert d["nu_identified"] is True and d["nu_identified_total"] is False
     assert d["systematic_breaks"] == ["depth_shared"]
-    lines = _lines(capsys, str(PLAN / "recommended.toml"))
-    assert [ln for ln in lines if ln.startswith("nu ")] == [
+    assert [ln for ln in runs["recommended_lines"] if ln.startswith("nu ")] == [
         "nu identified (with the shared errors at their bounds too)"]
 
 
-def test_the_hold_is_described_as_the_table_holds_it(capsys):
+def test_the_hold_is_described_as_the_table_holds_it(runs):
     """recommended.toml holds each press 1 s with the window at the hold's start: the
     table's hold_s is 0.1 s (the window's middle), and plan says so, not 'constant 0.1'."""
-    lines = _lines(capsys, str(PLAN / "recommended.toml"))
+    lines = runs["recommended_lines"]
     why = next(ln for ln in lines if ln.startswith("diagnose cannot test viscoelastic"))
     assert "sits 0.1 s into its hold" in why and "constant (0.1" not in why
 
 
-def test_a_mark_design_does_not_promise_what_its_depth_rule_absorbs(capsys):
+def test_a_mark_design_does_not_promise_what_its_depth_rule_absorbs(runs):
     """Issue 53, item 3 (the plan's half): with a mark (bevel_angle_deg = 0) calibrate reads
     each depth past w0 from the press's own force, so diagnose cannot show a force effect
     that varies between one indenter's presses (tactilevision.diagnosis.ABSORBED_BY_MARK;
@@ -66,10 +85,7 @@ def test_a_mark_design_does_not_promise_what_its_depth_rule_absorbs(capsys):
     sized. What the mark's crossing forces see within indenters (a gradient across the pad,
     a step, a steady change with time) is sized from them, and grows with the frame
     period (the bracket of each crossing)."""
-    assert main(["plan", str(PLAN / "paper_gauge_block.toml"), "--json", "-"]) == 0
-    mark = json.loads(capsys.readouterr().out)
-    assert main(["plan", str(PLAN / "recommended.toml"), "--json", "-"]) == 0
-    vernier = json.loads(capsys.readouterr().out)
+    mark, vernier = runs["paper"], runs["recommended"]
     for name in ("force_drift", "force_crosstalk"):
         assert "mark rule" in mark["untestable"][name]
         assert mark["effect_sizes"][name]["size"] is None
