@@ -133,10 +133,16 @@ def test_cli_recommends_and_writes_the_cheapest_design(tmp_path, capsys):
 @pytest.mark.parametrize("argv, key", [(["--target-E-pct", "-1"], "target_E_pct"),
                                        (["--target-nu", "0"], "target_nu"),
                                        (["--write-recommended", "x.toml"], "target")])
-def test_bad_targets_exit_2(tmp_path, capsys, argv, key):
+def test_bad_targets_exit_2(tmp_path, capsys, monkeypatch, argv, key):
+    """Refused before any planning (the plan of a design takes seconds)."""
     d = Design(thickness_mm=3.0, radius_mm=2.5, depths_mm=PAPER_DEPTHS)
     path = tmp_path / "d.toml"
     path.write_text(design_toml(d))
+
+    def planned(*args, **kwargs):
+        raise AssertionError("planned before the targets were checked")
+
+    monkeypatch.setattr("tactilevision.cli._plan.plan_session", planned)
     assert main(["plan", str(path), *argv]) == 2
     assert key in capsys.readouterr().err
     with pytest.raises(InputError, match="target_nu"):

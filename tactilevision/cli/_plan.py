@@ -149,6 +149,10 @@ def run(args: argparse.Namespace) -> int:
     targets = args.target_E_pct is not None or args.target_nu is not None
     if args.write_recommended is not None and not targets:
         raise InputError("--write-recommended needs a target: --target-E-pct or --target-nu")
+    for key, v in (("target_E_pct", args.target_E_pct), ("target_nu", args.target_nu)):
+        # refused before the plan's work, as recommend() refuses it
+        if v is not None and not (math.isfinite(v) and v > 0):
+            raise InputError(f"{key} must be a positive number, got {v!r}")
     pred = plan_session(design)
     rec = (recommend(design, target_E_pct=args.target_E_pct, target_nu=args.target_nu)
            if args.recommend or targets else None)
