@@ -31,6 +31,7 @@ from scipy import optimize, stats
 
 from .._checks import InputError, check_array, check_presses
 from ..mechanics import Indenter, json_ready
+from ..mechanics._indenter import reach_of
 from ._indenter_noise import PressNoise, best_shift, press_noise, weighted_linear
 
 __all__ = ["INDENTER_EFFECTS", "IndenterDiagnosis", "IndenterRung", "IndenterValidation",
@@ -613,7 +614,7 @@ def validate_indenter(depth_mm: np.ndarray, force_n: np.ndarray, indenter: Inden
         raise InputError(f"press {int(bad[0])}: force_n = {P[bad[0]]:g} must be positive")
     h = float(thickness_mm)
     c = indenter._contact(contact)
-    top = indenter.reach_mm(h, law, c)
+    top = reach_of(indenter, h, law, c)
 
     def force(x: float) -> float:
         return float(indenter.force(np.array([x]), E_mpa=E_mpa, nu=nu, thickness_mm=h,

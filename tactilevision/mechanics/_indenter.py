@@ -14,6 +14,7 @@ its moduli), so an indenter gives its force as ``E * shape_function``:
 
 from __future__ import annotations
 
+import inspect
 import warnings
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
@@ -38,7 +39,7 @@ from ._sphere_table import (
     table_reach,
 )
 
-__all__ = ["INDENTERS", "FlatPunch", "Indenter", "Sphere", "indenter_from_config"]
+__all__ = ["INDENTERS", "FlatPunch", "Indenter", "Sphere", "indenter_from_config", "reach_of"]
 
 #: Where a finite pad's FEM sweep may start (w/h): the largest below half the shallowest
 #: press (:meth:`Sphere._ratio`).
@@ -442,6 +443,37 @@ def pad_sweep_result(radius_over_h: float, nu: float, pad_over_h: float, law: st
         raise InputError(f"the FEM sweep of the sphere on the pad did not converge on three "
                          f"meshes: {why}")
     return res
+
+
+def reach_of(indenter: Indenter, thickness_mm: float, law: str = "neo_hookean",
+             contact: str | None = None) -> float:
+    """:meth:`Indenter.reach_mm` for `law` and `contact`: the one reach the fit, a ramp's
+    reader, diagnose and :meth:`Indenter.depth_from_contact_radius` refuse past.
+
+    An indenter written before ``reach_mm`` took a contact (``reach_mm(thickness_mm,
+    law)``) is asked without it.
+
+    Parameters
+    ----------
+    indenter : Indenter
+    thickness_mm : float
+        h, mm.
+    law : str, default 'neo_hookean'
+    contact : str, optional
+        The indenter's contact condition (None: its default).
+
+    Returns
+    -------
+    float
+        The deepest press, mm.
+    """
+    try:
+        takes = "contact" in inspect.signature(indenter.reach_mm).parameters
+    except (TypeError, ValueError):
+        takes = False
+    if takes:
+        return float(indenter.reach_mm(thickness_mm, law, contact))
+    return float(indenter.reach_mm(thickness_mm, law))
 
 
 #: Indenter shapes by their ``[indenter] shape`` name.

@@ -19,7 +19,7 @@ import numpy as np
 from scipy import optimize, stats
 
 from .._checks import InputError, check_array, check_presses
-from ._indenter import Indenter
+from ._indenter import Indenter, reach_of
 from ._misfit import Misfit, assess_misfit, log_interval
 
 __all__ = ["IndenterFit", "apparent_modulus", "fit_indenter", "json_ready"]
@@ -321,7 +321,7 @@ def _checked(depth_mm, force_n, indenter: Indenter, thickness_mm: float, law: st
     bad = np.flatnonzero(w <= 0)
     if bad.size:
         raise InputError(f"press {int(bad[0])}: depth_mm = {w[bad[0]]:g} must be positive")
-    reach = indenter.reach_mm(h, law, contact)     # the inverse's own (contact's) reach
+    reach = reach_of(indenter, h, law, contact)     # the inverse's own (contact's) reach
     bad = np.flatnonzero(w > reach * (1 + 1e-9))
     if bad.size:
         raise InputError(f"press {int(bad[0])}: depth {w[bad[0]]:.4g} mm is past the "

@@ -34,7 +34,7 @@ import numpy as np
 from scipy import optimize, stats
 
 from .._checks import InputError, check_array, check_positive
-from ._indenter import Indenter
+from ._indenter import Indenter, reach_of
 from ._indenter_fit import NU_STATED, IndenterFit, fit_indenter, json_ready
 from ._misfit import serial_correlation
 
@@ -453,7 +453,7 @@ def _fit_pass(z: np.ndarray, P: np.ndarray, indenter: Indenter, tab: _Tables, *,
     if prof.hi_edge:
         notes.append(f"the contact point's interval reaches the last {_MIN_CONTACT} points "
                      "within the reach: the ramp does not bound it from above")
-    w, F, half = _presses(z[keep], P[keep], prof, tab, indenter.reach_mm(h, law, contact),
+    w, F, half = _presses(z[keep], P[keep], prof, tab, reach_of(indenter, h, law, contact),
                           name, notes)
     fit = fit_indenter(w, F, indenter, thickness_mm=h, law=law, contact=contact, nu=nu,
                        depth_shared_mm=half, confidence=confidence)
@@ -532,7 +532,7 @@ def fit_ramp(displacement_mm: np.ndarray, force_n: np.ndarray, indenter: Indente
     z, P, h, contact, limit, why = _checked(displacement_mm, force_n, indenter, thickness_mm,
                                             contact, confidence, max_depth_mm)
     k, z_rise = _loading(z, P, name)
-    reach = indenter.reach_mm(h, law, contact)
+    reach = reach_of(indenter, h, law, contact)
     if reach < limit:
         limit, why = reach, f"the {indenter.shape} table's reach on h = {h:g} mm"
     zl, Pl = z[:k], P[:k]
