@@ -34,8 +34,9 @@ ramp). The cases:
 - ``axisym-1``, ``axisym-2``: our problem in CalculiX, not their mesh: the round pad of
   equal area, axisymmetric (CAX8), the ``frictionless`` law, on two meshes (the second
   halves every cell), written by :func:`axisym_text`. Both stop converging past
-  1.7 mm (ccx cuts the increment to nothing; the cause, in this model of ours or in
-  ccx, not found), so they give the first three depths: end them by hand there.
+  1.7 mm (ccx cuts the increment again and again; the cause, in this model of ours or
+  in ccx, not found), so they give the first three depths: a run whose last six
+  attempts failed is ended there (the cached ones were ended by hand at that point).
 
 A 3D run takes 8 to 26 minutes on the project's 2-core machine (43,299 equations),
 the axisymmetric ones less and more; progress is printed every 30 s; forces, log and
@@ -99,6 +100,7 @@ FRICTIONLESS_K = 100.0        # MPa/mm, the 'frictionless' case's pressure-overc
 CCX_CASES = ("published", "frictionless", "frictionless-soft", "axisym-1", "axisym-2")
 CELLS = (0.04, 0.02)          # our surface cells, units of h (coarse: the default here)
 INSTALL = "apt-get install -y calculix-ccx"
+STALLED = 6                   # failed attempts in a row that end a ccx run
 
 
 @dataclass
@@ -325,6 +327,16 @@ def run_ccx(ccx: str, case: str, depths_mm: list[float], cache: Path,
             print(f"   ... {time.perf_counter() - t0:6.0f} s: {len(rows)} increments, "
                   f"depth {step_time * max(depths_mm):.3f} of {max(depths_mm):g} mm",
                   flush=True)
+            failed = 0
+            for row in reversed(rows):                 # trailing unconverged attempts
+                if len(row.split()) < 3 or not row.split()[2].endswith("U"):
+                    break
+                failed += 1
+            if failed >= STALLED:
+                print(f"   ccx ({case}): {failed} attempts in a row did not converge; ended",
+                      flush=True)
+                proc.terminate()
+                proc.wait()
     return collect(folder, case, depths_mm, version, proc.returncode)
 
 
@@ -521,7 +533,7 @@ def main() -> int:
             runs[case] = run_ccx(ccx, case, depths, args.cache, version)
         r = runs[case]
         took = (f"ccx's total time {r.seconds / 60:.1f} min" if np.isfinite(r.seconds)
-                else "ended by hand")
+                else "ended early")
         print(f"\n   case '{case}': {r.equations} equations, {r.increments} increments, {took}"
               f"{' (cached run)' if r.from_cache else ''}"
               f"{'' if r.complete else '; STOPPED before the last depth'}")
