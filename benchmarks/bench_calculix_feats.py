@@ -38,10 +38,11 @@ ramp). The cases:
   in ccx, not found), so they give the first three depths: a run whose last six
   attempts failed is ended there (the cached ones were ended by hand at that point).
 
-A 3D run takes 8 to 26 minutes on the project's 2-core machine (43,299 equations),
-the axisymmetric ones less and more; progress is printed every 30 s; forces, log and
-timing are cached in ``--cache`` and reused by a rerun whose input and ``ccx`` version
-are unchanged.
+A 3D run takes 8 to 22 minutes by ccx's own clock on the project's 2-core machine
+(43,299 equations; longer on the wall under load), an axisymmetric one 10 to 15 minutes
+of wall time to its stop; progress is printed every 30 s; forces, log and timing are
+cached in ``--cache`` and reused by a rerun whose input and ``ccx`` version are
+unchanged.
 
 Prints:
 
@@ -55,10 +56,12 @@ Prints:
    their geometry as our axisymmetric pad allows (the equal-area radius of their
    20.75 x 25.25 mm pad, h = 4.0 mm, R = 7.5 mm, their dome's mean radius of curvature
    fitted to their mesh), at the material CalculiX runs (mu = 2 C10, bulk modulus
-   2 / D1 as ccx replaced it) and at nu = 0.5, tied and frictionless (the penalty
-   slope that of the ``frictionless`` case, 100 MPa/mm), on two surface cells
-   (``--quick``: the coarser only). (Not the slope of 3.625 MPa/mm: our penalty contact's Newton
-   fails past w/h = 0.48 with it, on both cells; CalculiX's soft-slope case stands in.)
+   2 / D1 as ccx replaced it; the files' stated nu = 0.5 beside it), tied and
+   frictionless (the penalty slope that of the ``frictionless`` case, 100 MPa/mm), on
+   two surface cells (``--quick``: the coarser only). Not the slope of 3.625 MPa/mm
+   (our penalty contact's Newton fails past w/h = 0.48 with it, on both cells) nor the
+   stick slope (our FEM has no elastic tangential spring): CalculiX's own cases part
+   those two.
 4. Side by side at each depth: measured, CalculiX, ours, and the ratios that name the
    causes (mesh, pad shape, contact slope, friction).
 5. Each of our rows fitted to the measured points: one modulus, its rmse and the
