@@ -30,8 +30,7 @@ import numpy as np
 from scipy import optimize, stats
 
 from .._checks import InputError, check_array, check_presses
-from ..mechanics import Indenter, json_ready
-from ..mechanics._indenter import reach_of
+from ..mechanics import Indenter, json_ready, reach_of
 from ._indenter_noise import PressNoise, best_shift, press_noise, weighted_linear
 
 __all__ = ["INDENTER_EFFECTS", "IndenterDiagnosis", "IndenterRung", "IndenterValidation",

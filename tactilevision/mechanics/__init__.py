@@ -92,6 +92,7 @@ from ._indenter import (
     Sphere,
     indenter_from_config,
     pad_sweep_result,
+    reach_of,
 )
 from ._indenter_fit import IndenterFit, apparent_modulus, fit_indenter, json_ready, paule_mandel
 from ._kappa import HAYES_1972, KappaTable, kappa
@@ -202,6 +203,7 @@ __all__ = [
     "paule_mandel",
     "pool_specimens",
     "ramp_factor",
+    "reach_of",
     "refine_relaxation",
     "register_effect",
     "relaxed_moduli",
