@@ -156,7 +156,10 @@ def sphere_mesh(contact_radius_max: float, surface_cell: float, *,
     reach = min(zone + 6 * cell, pad_radius_over_h)
     n_in = max(2, int(np.ceil(reach / cell)))
     r_in = np.linspace(0.0, reach, n_in + 1)
-    r_out = _graded(reach, pad_radius_over_h, reach / n_in, 1.25)
+    # where the fine stretch reaches the pad's edge there is nothing beyond it: a second
+    # node at the edge would make cells of zero width (a singular stiffness matrix)
+    r_out = (_graded(reach, pad_radius_over_h, reach / n_in, 1.25)
+             if pad_radius_over_h > reach + 1e-9 else np.array([reach]))
     r = np.concatenate([r_in, r_out[1:]])
     z = np.linspace(0.0, 1.0, max(2, int(np.ceil(1.0 / cell))) + 1)
     mesh = MeshTri.init_tensor(r, z)
