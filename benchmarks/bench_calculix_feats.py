@@ -1,9 +1,10 @@
 """CalculiX beside our FEM on the FEATS authors' own GelSight Mini model (issue 84, item 1).
 
 The FEATS authors (E. Helmut et al., arXiv:2411.03315; github.com/feats-ai/feats, MIT)
-published the CalculiX input files of their gel identification
-(``../shared/real/feats/calculix/``: ``sim.inp``, ``materials.inp``, ``all.msh`` with
-second-order tetrahedra, the ``.nam``/``.sur`` sets) and the four measured presses
+published the CalculiX input files of their gel identification (their repository,
+commit f15e158, folder ``src/calculix/src/hyperelasticity_identification/``: ``sim.inp``,
+``materials.inp``, ``templates/all.msh`` with second-order tetrahedra, the ``.nam``/``.sur``
+sets; put them in one folder, given as ``--model-dir``) and the four measured presses
 (``sample_frames/feats/force_depth.csv``). This benchmark runs their model with ``ccx``
 and our axisymmetric Neo-Hookean sphere FEM on the same problem, side by side.
 
@@ -13,14 +14,16 @@ Install CalculiX once (the library never installs it; CI does not need it)::
 
 Usage::
 
-    python benchmarks/bench_calculix_feats.py --cache out/calculix_feats
-    python benchmarks/bench_calculix_feats.py --cache out/calculix_feats --quick
-    python benchmarks/bench_calculix_feats.py --cache DIR --depths 0.5,1.0,1.5,2.0 \
+    python benchmarks/bench_calculix_feats.py --model-dir FEATS_DIR --cache out/calculix_feats
+    python benchmarks/bench_calculix_feats.py --model-dir FEATS_DIR --cache out/calculix_feats \
+        --quick
+    python benchmarks/bench_calculix_feats.py --model-dir FEATS_DIR --cache DIR \
+        --depths 0.5,1.0,1.5,2.0 \
         --ccx-cases published,frictionless,frictionless-soft,axisym-1,axisym-2
 
 Each CalculiX case is one NLGEOM run to the deepest depth in a scratch folder under
 ``--cache`` (their files copied into ``template/`` so that their include paths resolve;
-nothing in ``../shared`` is touched). The driver ``sim.inp`` is their text with only
+nothing in ``--model-dir`` is touched). The driver ``sim.inp`` is their text with only
 these changes: the indenter's displacement set to the deepest depth (their own script
 edits that line per depth), a ``*TIME POINTS`` list at the other depths over it, and
 ``TIME POINTS=`` on their two ``*NODE PRINT`` requests, so that one run reports the
@@ -89,7 +92,8 @@ import numpy as np
 from tactilevision.fem import sphere_indentation
 
 ROOT = Path(__file__).resolve().parents[1]
-FEATS = ROOT.parent / "shared" / "real" / "feats" / "calculix"
+#: The folder of their input files (``--model-dir``; set by :func:`main`).
+FEATS = Path()
 MEASURED = ROOT / "sample_frames" / "feats" / "force_depth.csv"
 TEMPLATE_FILES = ("all.msh", "gelsight_miniVolume.nam", "gelsight_miniFixed.nam",
                   "gelsight_miniSurface.sur", "indenterVolume.nam", "indenterFixed.nam",
@@ -493,6 +497,9 @@ def ours(row: OurRow, depths_mm: list[float], cell: float, cache: Path
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--model-dir", type=Path, required=True,
+                    help="folder holding their input files (sim.inp, materials.inp, all.msh, "
+                         "the .nam and .sur sets)")
     ap.add_argument("--cache", type=Path, required=True,
                     help="folder for the CalculiX runs and our sweeps (reused by reruns)")
     ap.add_argument("--depths", default="0.5,1.0,1.5,2.0",
@@ -504,6 +511,13 @@ def main() -> int:
     ap.add_argument("--ccx-cases", default=",".join(CCX_CASES),
                     help=f"CalculiX cases to run, from {', '.join(CCX_CASES)}")
     args = ap.parse_args()
+    global FEATS
+    FEATS = args.model_dir
+    missing = [n for n in ("sim.inp", "materials.inp", *TEMPLATE_FILES)
+               if not (FEATS / n).is_file()]
+    if missing:
+        ap.error(f"--model-dir {FEATS}: missing {', '.join(missing)} (the FEATS authors' "
+                 "CalculiX files, see this script's docstring)")
     depths = sorted(float(v) for v in args.depths.split(","))
     cases = [c for c in args.ccx_cases.split(",") if c]
     if any(c not in CCX_CASES for c in cases):
