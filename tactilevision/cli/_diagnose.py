@@ -146,6 +146,20 @@ def _run_indenter(args: argparse.Namespace, table, path: Path) -> int:
     return 0
 
 
+def _verdict_words(diag) -> str:
+    """The verdict in words: the effect named (and those equivalent to it), or that none
+    is, and a covariate the residuals follow that no effect explains."""
+    if diag.missing_effect is None:
+        words = "no missing effect named"
+    else:
+        words = f"missing effect {diag.missing_effect}"
+        if diag.equivalent_effects:
+            words += f" (equivalent: {', '.join(diag.equivalent_effects)})"
+    if diag.unexplained_covariate is not None:
+        words += f"; unexplained covariate {diag.unexplained_covariate}"
+    return words
+
+
 def _summary(diag, path: Path) -> str:
     def mn(v: float) -> str:
         return f"{v * 1e3:.3f} mN" if math.isfinite(v) else "-"
@@ -170,9 +184,7 @@ def _summary(diag, path: Path) -> str:
              else "E, nu not derived")
         lines.append(f"    {'base' if s.added is None else '+ ' + s.added:28s} "
                      f"RMSE {mn(s.rmse_n)}, CV {mn(s.cv_rmse_n)}; {e}")
-    lines.append(f"  verdict: missing effect {diag.missing_effect}, equivalent "
-                 f"{list(diag.equivalent_effects)}, unexplained covariate "
-                 f"{diag.unexplained_covariate}")
+    lines.append(f"  verdict: {_verdict_words(diag)}")
     lines.append(f"  {diag.message}")
     if diag.misfit is not None and diag.misfit.warning:
         lines.append(f"  WARNING (the final model's fit): {diag.misfit.warning}")
