@@ -236,8 +236,8 @@ class PhotometricCalibration(CalibrationData):
             95th percentile from it inside held-out real contacts). With the
             cells the default engine read 0.03 to 0.37 degrees median and 0.05
             to 1.2 at the 95th percentile better than before on those presses
-            (``benchmarks/bench_table_engine.py``; docs/guide/optics.md, "The
-            table engine: a network that its table reproduces").
+            (``benchmarks/bench_table_engine.py``; docs/validation/optics.md, "The
+            table engine against the exact network").
         warm_start : PhotometricCalibration, optional
             A network calibration of the same sensor (frame size, position
             inputs and cells, `hidden`) whose network the training starts

@@ -51,7 +51,8 @@ MLP_MAX_STEPS = 2400
 #: Network training: a round that starts from a trained network (the second round, on
 #: refitted circles; a calibration given a ``warm_start``) takes this share of a cold
 #: round's steps. On held-out presses (three folds, GelSlim 3.0 and GelSight Mini) it
-#: read as a cold second round did (docs/guide/optics.md, "How long a calibration takes").
+#: read as a cold second round did (docs/validation/optics.md, "How long a calibration
+#: takes").
 MLP_WARM_FRACTION = 0.25
 
 
