@@ -59,7 +59,7 @@ Data kinds (each skipped, with the reason printed, when its data is missing):
 
 Run: ``python benchmarks/bench_absolute_depth.py`` (about 1 minute on 2 busy
 cores; 2 minutes with ``--boundary contact``). Tables and findings:
-``docs/absolute_depth.md``. From Python, with another reconstructor::
+``docs/validation/optics.md``. From Python, with another reconstructor::
 
     from bench_absolute_depth import run, format_report
     res = run(lambda cal, ref: DepthReconstructor(cal, reference=ref, boundary="contact"))
