@@ -13,8 +13,7 @@ cli        the ``tactilevision`` command
 """
 
 from ._assets import KNOWN_SENSORS, default_calibration_path
-from ._cache import cache_info, cache_limit_bytes, cache_root, clear_cache
-from ._checks import InputError, InputWarning, ShapeError
+from ._errors import InputError, InputWarning, ShapeError
 from ._version import __version__
 
 __all__ = ["KNOWN_SENSORS", "InputError", "InputWarning", "SessionCalibration", "ShapeError",
@@ -23,7 +22,13 @@ __all__ = ["KNOWN_SENSORS", "InputError", "InputWarning", "SessionCalibration", 
 
 
 def __getattr__(name: str):
-    # the main job, imported on first use so that ``import tactilevision`` stays light
+    # imported on first use so that ``import tactilevision`` stays light: no NumPy, nor
+    # anything heavier (the command line's start and every --help load only the standard
+    # library and these few modules; tests/test_cli_help_imports.py)
+    if name in ("cache_info", "cache_limit_bytes", "cache_root", "clear_cache"):
+        from . import _cache
+
+        return getattr(_cache, name)
     if name in ("calibrate_session", "SessionCalibration"):
         from . import pipeline
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ._checks import InputError
+from ._errors import InputError
 
 __all__ = ["KNOWN_SENSORS", "asset_dir", "default_calibration_path"]
 

@@ -14,25 +14,10 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from ._errors import InputError, InputWarning, ShapeError
+
 __all__ = ["InputError", "InputWarning", "ShapeError", "check_array", "check_poisson",
            "check_positive", "check_presses"]
-
-
-class InputError(ValueError):
-    """Bad user input: a file, row, key or argument the user can fix.
-
-    The message is one sentence naming the file, row or key at fault.
-    """
-
-
-class ShapeError(InputError):
-    """An array argument has the wrong shape, dtype or non-finite values."""
-
-
-class InputWarning(UserWarning):
-    """Input that is read but likely not what the user meant: a key this version does
-    not read (a typo falls back to the default), with the nearest known key. The command
-    line prints it as one line, ``tactilevision COMMAND: warning: ...``."""
 
 
 def _dims_match(expected: Sequence[int | str | None], shape: tuple[int, ...],
