@@ -6,7 +6,7 @@ from types import SimpleNamespace
 
 import pytest
 
-from tactilevision.cli._diagnose import _verdict_words
+from tactilevision.cli._diagnose_run import _verdict_words
 
 
 @pytest.mark.parametrize(("missing", "equivalent", "covariate", "expected"), [

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-import tactilevision.cli._fem as fem
+import tactilevision.cli._fem_run as fem
 from tactilevision.cli import main
 from tactilevision.fem import build_kappa_table
 

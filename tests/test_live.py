@@ -113,7 +113,7 @@ def test_fem_forces_follow_the_fem_estimator_and_draw_node_arrows(sensor):
     footprint, their totals near the spectral method's (another model of the pad:
     18.8 x 14 mm, free sides, 0.48 mm nodes; measured 0.91 to 0.985 of it); the
     annotation draws its tangential arrows at the nodes."""
-    from tactilevision.cli._live import annotate
+    from tactilevision.cli._live_run import annotate
 
     _, cal, ref, presses, _ = sensor
     kw = dict(reference=ref, E_mpa=0.2, nu=0.48, thickness_mm=3.0, contact="footprint",

@@ -15,7 +15,7 @@ import pytest
 from _data import TAXIM_BALL_RADIUS_MM, TAXIM_MM_PER_PX
 
 from tactilevision.cli import main
-from tactilevision.cli._optics import _engine_text, _margin
+from tactilevision.cli._optics_run import _engine_text, _margin
 from tactilevision.io import read_ball_presses, taxim_datapack
 from tactilevision.optics import (
     CAP_DEG,

@@ -142,7 +142,7 @@ def test_bad_targets_exit_2(tmp_path, capsys, monkeypatch, argv, key):
     def planned(*args, **kwargs):
         raise AssertionError("planned before the targets were checked")
 
-    monkeypatch.setattr("tactilevision.cli._plan.plan_session", planned)
+    monkeypatch.setattr("tactilevision.cli._plan_run.plan_session", planned)
     assert main(["plan", str(path), *argv]) == 2
     assert key in capsys.readouterr().err
     with pytest.raises(InputError, match="target_nu"):

@@ -1,7 +1,10 @@
 """The ``tactilevision`` command line.
 
 Each sub-command lives in its own module with ``add_parser(subparsers)`` and
-``run(args) -> int``. Bad input raises :class:`tactilevision.InputError`; the
+``run(args) -> int``. That module imports only the standard library and the package
+root (no NumPy), so that any command's ``--help`` is quick; its ``run`` imports the
+command's work from ``_<name>_run`` when the command runs (tests/test_cli_help_imports.py
+keeps it so). Bad input raises :class:`tactilevision.InputError`; the
 command prints its one-sentence message on standard error and exits with
 status 2, deleting nothing already written (``docs/formats.md``).
 """
@@ -22,9 +25,10 @@ from .. import InputError, InputWarning, __version__
 
 __all__ = ["COMMANDS", "EXTRAS", "build_parser", "main", "missing_extra", "synopses"]
 
-#: Each command, its module (imported only when the command runs, so that ``--version``
-#: and ``--help`` do not load every command's stack) and its one-line help (a test keeps
-#: it equal to the module's own).
+#: Each command, its module (imported only when the command runs or shows its help, so
+#: that ``--version`` and ``--help`` do not load every command's parser; light itself, its
+#: work in ``<module>_run``) and its one-line help (a test keeps it equal to the module's
+#: own).
 COMMANDS: dict[str, tuple[str, str]] = {
     "calibrate": ("_calibrate", "session of frames and forces -> certified presses, E, nu, "
                                 "report"),

@@ -3,10 +3,7 @@
 from __future__ import annotations
 
 import argparse
-import json
-
-from .. import cache_info, cache_limit_bytes, cache_root, clear_cache
-from ..io import write_output_file
+import importlib
 
 __all__ = ["add_parser", "run_clear", "run_info"]
 
@@ -29,27 +26,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run_info(args: argparse.Namespace) -> int:
-    """Print (or write as JSON) the cache's folders, files and bytes, and its bound."""
-    info = cache_info()
-    doc = {"root": str(cache_root()), "limit_mb": cache_limit_bytes() / 2**20,
-           "folders": {k: {"files": n, "mb": b / 2**20} for k, (n, b) in info.items()},
-           # the suite's own renders (tests/) are not counted against the bound
-           "bounded_mb": sum(b for k, (_, b) in info.items() if k != "tests") / 2**20}
-    if args.json == "-":
-        print(json.dumps(doc, indent=2))
-        return 0
-    print(f"cache {doc['root']}: {doc['bounded_mb']:.1f} MiB of at most "
-          f"{doc['limit_mb']:.0f} MiB ($TACTILEVISION_CACHE_MB; tests not counted)")
-    for name, d in doc["folders"].items():
-        print(f"  {name:8s} {d['files']:6d} files {d['mb']:9.1f} MiB")
-    if args.json:
-        write_output_file(args.json, json.dumps(doc, indent=2) + "\n", overwrite=True)
-    return 0
+    """Run ``cache info``: :func:`~tactilevision.cli._cache_run.run_info`, imported only now
+    (``--help`` reads the options without the command's stack)."""
+    return importlib.import_module("._cache_run", __package__).run_info(args)
 
 
 def run_clear(args: argparse.Namespace) -> int:
-    """Delete the cache's files (one folder, or all)."""
-    files, size = clear_cache(args.folder)
-    where = cache_root() if args.folder is None else cache_root() / args.folder
-    print(f"removed {files} files ({size / 2**20:.1f} MiB) from {where}")
-    return 0
+    """Run ``cache clear``: :func:`~tactilevision.cli._cache_run.run_clear`, imported only now
+    (``--help`` reads the options without the command's stack)."""
+    return importlib.import_module("._cache_run", __package__).run_clear(args)

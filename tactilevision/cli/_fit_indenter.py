@@ -13,51 +13,8 @@ from .. import InputError
 from ..io import Measurements, read_ramp, sidecar_geometry
 from ..mechanics import IndenterFit, fit_indenter, fit_ramp, indenter_from_config
 
-__all__ = ["LAW_CHOICES", "add_arguments", "add_dome_argument", "depth_shared", "fit_laws",
-           "force_sd", "indenter_of", "note_lines", "nu_words", "run_indenter", "run_ramp",
-           "summary_lines"]
-
-#: ``--law`` choices: a material law, or ``auto`` (both fitted, the better one reported).
-LAW_CHOICES = ("auto", "neo_hookean", "linear")
-
-
-def add_arguments(p: argparse.ArgumentParser) -> None:
-    """The options of ``fit`` that an indenter other than the flat punch reads."""
-    g = p.add_argument_group("indenter (a ball: [indenter] shape = \"sphere\")")
-    g.add_argument("--shape", choices=("flat_punch", "sphere"),
-                   help="indenter shape (default: session.toml [indenter] shape, else "
-                        "flat_punch)")
-    g.add_argument("--contact", choices=("frictionless", "tied", "coulomb"),
-                   help="ball-gel contact (default: session.toml [indenter] contact, else "
-                        "frictionless); coulomb: friction --friction between them (the "
-                        "small-strain law only, one FEM sweep per nu)")
-    g.add_argument("--friction", type=float, metavar="MU",
-                   help="Coulomb's friction coefficient between ball and gel, with "
-                        "--contact coulomb")
-    g.add_argument("--law", choices=LAW_CHOICES, default="auto",
-                   help="material law of a ball's force: auto (default: both fitted, the one "
-                        "with the smaller residuals reported, the other beside it), "
-                        "neo_hookean (finite strain) or linear")
-    g.add_argument("--nu", type=float, metavar="NU",
-                   help="Poisson's ratio at which E is reported when the presses do not "
-                        "identify nu (default 0.5)")
-    g.add_argument("--ramp", action="store_true",
-                   help="the table is a force-depth ramp (displacement_mm, force_n[, time_s]: "
-                        "an Instron's or a robot's loading curve, the contact point not "
-                        "marked): fit its contact point, baseline and E (docs/guide/ramps.md)")
-    g.add_argument("--pad-radius-mm", type=float, metavar="R",
-                   help="lateral radius of the gel pad, mm, when it is small enough to "
-                        "matter (default: session.toml [sensor] gel_radius_mm, else the "
-                        "infinite layer); each nu is then one FEM sweep")
-    add_dome_argument(g)
-
-
-def add_dome_argument(g) -> None:
-    """``--dome-radius-mm``: a domed gel's top (fit, diagnose)."""
-    g.add_argument("--dome-radius-mm", type=float, metavar="RD",
-                   help="a domed gel: its top's radius of curvature, mm, the depth counted "
-                        "from the apex (default: session.toml [sensor] gel_dome_radius_mm, "
-                        "else a flat top); needs the pad's radius; one FEM sweep per nu")
+__all__ = ["depth_shared", "fit_laws", "force_sd", "indenter_of", "note_lines", "nu_words",
+           "run_indenter", "run_ramp", "summary_lines"]
 
 
 def indenter_of(table: Measurements, args: argparse.Namespace):
