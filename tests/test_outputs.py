@@ -11,7 +11,7 @@ import pytest
 
 from tactilevision import InputError
 from tactilevision.cli import main
-from tactilevision.io import MANIFEST, StagedOutput, check_overwrite
+from tactilevision.io import MANIFEST, StagedOutput, check_overwrite, remove_staging
 
 ROOT = Path(__file__).resolve().parents[1]
 BALL_FRAMES = ROOT / "sample_frames" / "gelsight_ball" / "frames"
@@ -52,6 +52,37 @@ def test_staged_output_leaves_the_folder_as_it_was_on_error_or_ctrl_c(tmp_path, 
         raise error
     assert _snapshot(out) == before
     assert not list(out.glob(".tactilevision-tmp-*"))
+
+
+@pytest.mark.parametrize("error", [RuntimeError("boom"), KeyboardInterrupt()])
+def test_a_folder_the_block_created_is_removed_again_when_nothing_was_moved(tmp_path, error):
+    """Issue 86: an interrupted run leaves no empty output folder (nor the parents it
+    made); a folder that was there before, or holds anything, stays."""
+    out = tmp_path / "a" / "b" / "out"
+    with pytest.raises(type(error)), StagedOutput(out) as stage:
+        assert out.is_dir()
+        (stage.path / "x.csv").write_text("half")
+        raise error
+    assert list(tmp_path.iterdir()) == []
+    (tmp_path / "a").mkdir()
+    (tmp_path / "a" / "mine.txt").write_text("the user's")
+    with pytest.raises(type(error)), StagedOutput(out):
+        raise error
+    assert [p.name for p in (tmp_path / "a").iterdir()] == ["mine.txt"]
+    with StagedOutput(out) as stage:                  # committed: kept
+        (stage.path / "x.csv").write_text("whole")
+        stage.commit()
+    assert (out / "x.csv").read_text() == "whole"
+
+
+def test_the_watchdogs_cleanup_removes_the_folders_open_blocks_created(tmp_path):
+    """remove_staging (what the command line's watchdog calls before it exits 130, the
+    block never left) removes the staging folder and the empty folders the block made."""
+    out = tmp_path / "new" / "out"
+    stage = StagedOutput(out).__enter__()
+    (stage.path / "x.csv").write_text("half")
+    remove_staging()
+    assert list(tmp_path.iterdir()) == []
 
 
 def test_files_tactilevision_did_not_write_stop_the_run(tmp_path):

@@ -215,12 +215,35 @@ def _add_to_manifest(out: Path, names) -> None:
 #: interrupt that cannot unwind (the command line's watchdog) removes before it exits.
 STAGING: set[Path] = set()
 
+#: The folders the open :class:`StagedOutput` blocks created (an output folder and the
+#: parents it lacked), removed with their staging folders when nothing was moved into them.
+_CREATED: set[Path] = set()
+
 
 def remove_staging() -> None:
-    """Remove every open staging folder (:data:`STAGING`): nothing half-written is left."""
+    """Remove every open staging folder (:data:`STAGING`), and the output folders their
+    blocks created, when empty: nothing half-written is left, nor an empty folder."""
     for path in list(STAGING):
         shutil.rmtree(path, ignore_errors=True)
         STAGING.discard(path)
+    _remove_empty(list(_CREATED))
+
+
+def _missing(path: Path) -> list[Path]:
+    """`path` and those of its parents that do not exist, deepest first."""
+    path = Path(path).absolute()
+    return [p for p in (path, *path.parents) if not p.exists()]
+
+
+def _remove_empty(folders: list[Path]) -> None:
+    """Remove each of `folders` that is empty, deepest first (a parent after its child);
+    one that holds anything stays, and none is remembered afterwards."""
+    for folder in sorted(folders, key=lambda p: len(p.parts), reverse=True):
+        try:
+            folder.rmdir()
+        except OSError:
+            pass
+        _CREATED.discard(folder)
 
 
 class StagedOutput:
@@ -231,7 +254,8 @@ class StagedOutput:
     :meth:`commit` moves each into `out` (``os.replace``) only when the
     command has written them all. Leaving the ``with`` block without a
     commit (an error, Ctrl-C) removes the hidden folder and leaves `out` as
-    it was. The files moved are listed in `out`'s manifest (:data:`MANIFEST`):
+    it was (a folder the block created, `out` or a parent, is removed again
+    when empty). The files moved are listed in `out`'s manifest (:data:`MANIFEST`):
     a rerun may replace them without ``--overwrite``; anything else in the
     way stops the commit (and the run's files are dropped) unless
     `overwrite`.
@@ -258,16 +282,24 @@ class StagedOutput:
         self.what = what
         self.path: Path = self.out
         self.committed = False
+        self.created: list[Path] = []
 
     def __enter__(self) -> StagedOutput:
 
-        output_folder(self.out, self.what)
+        # noted before they exist: an interrupt at any moment finds them (remove_staging)
+        self.created = _missing(self.out)
+        _CREATED.update(self.created)
         try:
+            output_folder(self.out, self.what)
             self.path = Path(tempfile.mkdtemp(prefix=".tactilevision-tmp-", dir=self.out))
+            STAGING.add(self.path)
         except OSError as exc:
+            _remove_empty(self.created)
             raise InputError(f"cannot write into the {self.what} {self.out}: "
                              f"{exc.strerror}") from None
-        STAGING.add(self.path)
+        except BaseException:
+            _remove_empty(self.created)
+            raise
         return self
 
     def commit(self) -> list[str]:
@@ -302,4 +334,7 @@ class StagedOutput:
         if not self.committed:
             shutil.rmtree(self.path, ignore_errors=True)
             STAGING.discard(self.path)
+            _remove_empty(self.created)
+        else:
+            _CREATED.difference_update(self.created)
         return False
