@@ -11,8 +11,14 @@ Prints:
    default and half of it), linear and Neo-Hookean, frictionless and tied.
 4. The sphere table's interpolation (models/sphere_fem.npz) against direct
    sweeps off its grid.
+5. The seam with the closed forms: the table at its smallest R/h (0.5; small strain,
+   frictionless) against Hertz times Dimitriadis' bonded series, for a paraboloid and
+   for Sneddon's (1965) sphere, at nu = 0.3 and 0.5 (no FEM solve).
 
-Usage: python benchmarks/bench_fem_sphere.py [--quick]
+Usage: python benchmarks/bench_fem_sphere.py [--quick] [--no-table]
+
+The functions ``*_rows`` return the figures the sections print (the validation
+report's ``sphere_closed_forms``, ``benchmarks/report.py``).
 """
 
 from __future__ import annotations
@@ -22,9 +28,11 @@ import platform
 import time
 
 import numpy as np
+from scipy.optimize import brentq
 
 from tactilevision.fem import sphere_indentation
 from tactilevision.mechanics import sphere_contact_ratio, sphere_force_ratio
+from tactilevision.mechanics._sphere_closed import dimitriadis_coefficients
 
 DIM12 = (1.133, 1.283, 0.769, 0.0975)
 
@@ -34,28 +42,48 @@ def dimitriadis(chi):
     return 1 + c[0] * chi + c[1] * chi**2 + c[2] * chi**3 + c[3] * chi**4
 
 
-def hertz_limit() -> None:
+def hertz_rows() -> dict:
+    """Section 1's figures: the FEM on a thick layer (R/h = 0.1) at chi = 0.003 and 0.005
+    against Hertz times the layer's first-order term; ``{"rows": [...], "dofs", "s"}``."""
     R, w = 0.1, np.array([1e-4, 2.5e-4])
     t = time.perf_counter()
     r = sphere_indentation(R, 0.5, w, model="linear", profile="paraboloid", cache=False)
     chi = np.sqrt(R * w)
-    print(f"1. Hertz limit (R/h = {R}, paraboloid, linear, nu = 0.5; {r.n_dofs} dofs, "
-          f"{time.perf_counter() - t:.1f} s)")
-    for k in range(w.size):
-        print(f"   chi = {chi[k]:.4f}: P/P_Hertz = {r.hertz_ratio[k]:.5f} (layer's first order "
-              f"1 + 1.133 chi = {1 + 1.133 * chi[k]:.5f}), a/sqrt(Rw) = "
-              f"{r.contact_radius[k] / np.sqrt(R * w[k]):.5f}")
+    rows = [{"chi": float(chi[k]), "fem": float(r.hertz_ratio[k]),
+             "first_order": float(1 + 1.133 * chi[k]),
+             "a_over_sqrt_rw": float(r.contact_radius[k] / np.sqrt(R * w[k]))}
+            for k in range(w.size)]
+    return {"rows": rows, "dofs": r.n_dofs, "s": time.perf_counter() - t, "R_over_h": R}
 
 
-def dimitriadis_check(quick: bool) -> None:
+def hertz_limit() -> None:
+    h = hertz_rows()
+    print(f"1. Hertz limit (R/h = {h['R_over_h']}, paraboloid, linear, nu = 0.5; {h['dofs']} "
+          f"dofs, {h['s']:.1f} s)")
+    for k in h["rows"]:
+        print(f"   chi = {k['chi']:.4f}: P/P_Hertz = {k['fem']:.5f} (layer's first order "
+              f"1 + 1.133 chi = {k['first_order']:.5f}), a/sqrt(Rw) = "
+              f"{k['a_over_sqrt_rw']:.5f}")
+
+
+def dimitriadis_rows(quick: bool) -> dict:
+    """Section 2's figures: the FEM (R/h = 1) over Dimitriadis' eq. (12) at each chi;
+    ``{"rows": [{"chi", "fem", "eq12"}, ...], "dofs", "s"}``."""
     chi = np.array([0.1, 0.2, 0.3] if quick else [0.1, 0.15, 0.2, 0.25, 0.3, 0.4, 0.5])
     t = time.perf_counter()
     r = sphere_indentation(1.0, 0.5, chi**2, model="linear", profile="paraboloid", cache=False)
+    rows = [{"chi": float(chi[k]), "fem": float(r.hertz_ratio[k]),
+             "eq12": float(dimitriadis(chi[k]))} for k in range(chi.size)]
+    return {"rows": rows, "dofs": r.n_dofs, "s": time.perf_counter() - t}
+
+
+def dimitriadis_check(quick: bool) -> None:
+    d = dimitriadis_rows(quick)
     print(f"2. Dimitriadis eq. (12) (R/h = 1, paraboloid, linear, nu = 0.5, bonded base; "
-          f"{r.n_dofs} dofs, {time.perf_counter() - t:.1f} s)")
-    for k in range(chi.size):
-        print(f"   chi = {chi[k]:.2f}: FEM {r.hertz_ratio[k]:.4f}, eq. (12) "
-              f"{dimitriadis(chi[k]):.4f}, ratio {r.hertz_ratio[k] / dimitriadis(chi[k]):.4f}")
+          f"{d['dofs']} dofs, {d['s']:.1f} s)")
+    for k in d["rows"]:
+        print(f"   chi = {k['chi']:.2f}: FEM {k['fem']:.4f}, eq. (12) "
+              f"{k['eq12']:.4f}, ratio {k['fem'] / k['eq12']:.4f}")
 
 
 def convergence(quick: bool) -> None:
@@ -90,6 +118,43 @@ def table_check() -> None:
             f"{v:+.2f}%" for v in df) + "; contact radius " + " ".join(f"{v:+.2f}%" for v in da))
 
 
+def sneddon(w_over_r: float) -> float:
+    """Sneddon 1965's rigid sphere on a half-space, P / P_Hertz at w/R (written out here,
+    not the package's)."""
+    a = brentq(lambda x: x / 2 * np.log((1 + x) / (1 - x)) - w_over_r, 1e-12, 1 - 1e-12)
+    P = 0.5 * ((a**2 + 1) * np.log((1 + a) / (1 - a)) - 2 * a)
+    return P / (4.0 / 3.0 * w_over_r**1.5)
+
+
+SEAM_W = (0.01, 0.02, 0.04, 0.08, 0.13, 0.2, 0.3)
+
+
+def seam_rows(nu: float, R_over_h: float = 0.5) -> list[dict]:
+    """Section 5's figures at one nu: per w/h, the table's P/P_Hertz and the closed forms'
+    (Hertz x the series for a paraboloid; x Sneddon's sphere too). The series is the
+    paper's general eq. (9)-(10) at every nu (at nu = 0.5 eq. (12) but for the sign of its
+    chi^4 term, which moves the product by at most 0.45 % here; _sphere_closed.py)."""
+    w = np.array(SEAM_W)
+    table = sphere_force_ratio(R_over_h, nu, w, model="linear", contact="frictionless")
+    chi = np.sqrt(R_over_h * w)
+    series = sum(c * chi**k for k, c in enumerate(dimitriadis_coefficients(nu)))
+    return [{"w_over_h": float(w[k]), "chi": float(chi[k]), "table": float(table[k]),
+             "paraboloid": float(series[k]),
+             "sphere": float(series[k] * sneddon(w[k] / R_over_h))} for k in range(w.size)]
+
+
+def seam_check() -> None:
+    print("5. The table at R/h 0.5 (linear, frictionless) against the closed forms: "
+          "closed / table - 1")
+    for nu in (0.3, 0.5):
+        rows = seam_rows(nu)
+        print(f"   nu {nu}: w/h " + " ".join(f"{r['w_over_h']:g}" for r in rows))
+        print("     Hertz x series       " + " ".join(
+            f"{100 * (r['paraboloid'] / r['table'] - 1):+.2f}%" for r in rows))
+        print("     x Sneddon's sphere   " + " ".join(
+            f"{100 * (r['sphere'] / r['table'] - 1):+.2f}%" for r in rows))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="fewer depths")
@@ -102,6 +167,7 @@ def main() -> None:
     convergence(args.quick)
     if not args.no_table:
         table_check()
+    seam_check()
 
 
 if __name__ == "__main__":
