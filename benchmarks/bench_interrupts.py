@@ -1,19 +1,26 @@
-"""Ctrl-C at random moments: exit status, time to exit, traceback, staging left behind.
+"""Ctrl-C at random moments: exit status, time to exit, traceback, what is left behind.
 
     python benchmarks/bench_interrupts.py [--n 5] [--commands reconstruct forces calibrate batch]
-                                          [--window 1.0 6.0]
+                                          [--window 1.0 6.0] [--seed 0]
 
 Each command runs on the sample session (sample_frames/gelsight_session, 777 frames) into
 a fresh folder and gets SIGINT at a moment uniform in the window (default 1 to 6 s after
-its start; ``--window 0.93 1.13`` hits batch's imports, where an interrupt caught inside
-code ``exec``'d from text once ended ``python -m`` by the signal); printed per command: how
+its start; ``--window 0 2`` includes the interpreter's start and the imports, issue 86's
+"20 of 20 interrupts at random moments from 0 to 2 s": ``--n 20 --window 0 2``;
+``--window 0.93 1.13`` hits batch's imports, where an interrupt caught inside code
+``exec``'d from text once ended ``python -m`` by the signal); printed per command: how
 many of n exited 130, within 1 s of the signal, without a traceback, with no
-``.tactilevision-tmp-*`` folder left (issue 54, item 5's target: all of them).
+``.tactilevision-tmp-*`` folder and no empty folder left (issue 54, item 5's target and
+issue 86's: all of them). A run that had ended before its signal was sent is counted
+apart ("ended first") and left out of the others; a failure while the interpreter itself
+started, before any of tactilevision's code ran (killed before Python's own handler was
+installed, or in its ``site`` module), is marked as such.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import platform
 import signal
 import subprocess
@@ -41,6 +48,40 @@ def argv_for(command: str, out: Path) -> list[str]:
             "--workers", "2", "--no-progress"]
 
 
+def empty_folders(tmp: Path) -> list[Path]:
+    """The folders under `tmp` with nothing in them (an output folder made and left)."""
+    return [p for p in Path(tmp).rglob("*") if p.is_dir() and not any(p.iterdir())]
+
+
+def interpreters_start(status: int, err: str) -> bool:
+    """Whether the signal landed while the interpreter itself started, before any of
+    tactilevision's code ran: killed before Python's own handler was installed (status
+    -2, nothing printed), or in its ``site`` module ("init_import_site")."""
+    return (status == -signal.SIGINT and not err.strip()) or "init_import_site" in err
+
+
+def interrupt_once(command: str, after_s: float) -> dict:
+    """Run `command` into a fresh folder, send SIGINT `after_s` seconds after its start;
+    how it ended."""
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "out"
+        proc = subprocess.Popen([sys.executable, "-m", "tactilevision",
+                                 *argv_for(command, out)],
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        time.sleep(after_s)
+        if proc.poll() is not None:              # it ended before the signal
+            proc.communicate()
+            return {"ended first": True, "status": proc.returncode}
+        t0 = time.perf_counter()
+        proc.send_signal(signal.SIGINT)
+        proc.wait(timeout=120)                   # the command's own exit (the prompt back)
+        took = time.perf_counter() - t0
+        _, err = proc.communicate(timeout=120)   # its workers may hold the pipes
+        return {"ended first": False, "status": proc.returncode, "took": took, "err": err,
+                "staging": list(Path(tmp).rglob(".tactilevision-tmp-*")),
+                "empty": empty_folders(Path(tmp))}
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--n", type=int, default=5)
@@ -48,37 +89,42 @@ def main() -> None:
                     default=["reconstruct", "forces", "calibrate", "batch"])
     ap.add_argument("--window", nargs=2, type=float, default=(1.0, 6.0), metavar=("FROM", "TO"),
                     help="seconds after the start between which the signal is sent")
+    ap.add_argument("--seed", type=int, default=0, help="seed of the moments (default 0)")
     args = ap.parse_args()
-    print(f"machine: {platform.machine()}, python {platform.python_version()}")
-    rng = np.random.default_rng(0)
+    print(f"machine: {platform.machine()}, {os.cpu_count()} cores, python "
+          f"{platform.python_version()}; load average {os.getloadavg()[0]:.2f}; window "
+          f"{args.window[0]:g} to {args.window[1]:g} s, seed {args.seed}")
+    rng = np.random.default_rng(args.seed)
     for command in args.commands:
-        ok = {"130": 0, "1 s": 0, "no traceback": 0, "nothing left": 0}
-        waits, shown, codes = [], False, {}
+        ok = {"130": 0, "1 s": 0, "no traceback": 0, "no staging": 0, "no empty folder": 0}
+        waits, codes, first, runs, starts = [], {}, 0, 0, 0
         for _ in range(args.n):
-            with tempfile.TemporaryDirectory() as tmp:
-                out = Path(tmp) / "out"
-                proc = subprocess.Popen([sys.executable, "-m", "tactilevision",
-                                         *argv_for(command, out)],
-                                        stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                                        text=True)
-                time.sleep(float(rng.uniform(*args.window)))
-                t0 = time.perf_counter()
-                proc.send_signal(signal.SIGINT)
-                proc.wait(timeout=120)             # the command's own exit (the prompt back)
-                took = time.perf_counter() - t0
-                _, err = proc.communicate(timeout=120)  # its workers may hold the pipes
-                waits.append(took)
-                ok["130"] += proc.returncode == 130
-                codes[proc.returncode] = codes.get(proc.returncode, 0) + 1
-                ok["1 s"] += took <= 1.0
-                ok["no traceback"] += "Traceback" not in err
-                ok["nothing left"] += not list(Path(tmp).rglob(".tactilevision-tmp-*"))
-                if (proc.returncode != 130 or "Traceback" in err) and not shown:
-                    shown = True        # the first failure, as it ended
-                    print(f"  {command}: exit {proc.returncode}; stderr ends: "
-                          + " | ".join(err.strip().splitlines()[-4:]))
-        print(f"{command}: of {args.n}: " + ", ".join(f"{k} {v}" for k, v in ok.items())
-              + f"; time to exit {min(waits):.2f} to {max(waits):.2f} s; statuses {codes}")
+            after = float(rng.uniform(*args.window))
+            r = interrupt_once(command, after)
+            if r["ended first"]:
+                first += 1
+                continue
+            runs += 1
+            waits.append(r["took"])
+            codes[r["status"]] = codes.get(r["status"], 0) + 1
+            ok["130"] += r["status"] == 130
+            ok["1 s"] += r["took"] <= 1.0
+            ok["no traceback"] += "Traceback" not in r["err"]
+            ok["no staging"] += not r["staging"]
+            ok["no empty folder"] += not r["empty"]
+            if r["status"] != 130 or "Traceback" in r["err"] or r["staging"] or r["empty"]:
+                start = interpreters_start(r["status"], r["err"])
+                starts += start
+                print(f"  {command} at {after:.3f} s"
+                      + (" (in the interpreter's start)" if start else "")
+                      + f": exit {r['status']}; left "
+                      f"{[str(p.name) for p in r['staging'] + r['empty']]}; stderr ends: "
+                      + " | ".join(r["err"].strip().splitlines()[-3:]))
+        span = f"{min(waits):.2f} to {max(waits):.2f} s" if waits else "-"
+        print(f"{command}: of {runs} interrupted ({first} ended first): "
+              + ", ".join(f"{k} {v}" for k, v in ok.items())
+              + f"; time to exit {span}; statuses {codes}; failures in the interpreter's "
+              f"start {starts}")
 
 
 if __name__ == "__main__":

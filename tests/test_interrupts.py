@@ -87,7 +87,7 @@ def test_a_swallowed_interrupt_still_ends_the_command(tmp_path):
     assert time.perf_counter() - sent < 3.0
     assert "interrupted" in err
     assert "Exception ignored" not in err and "Traceback" not in err
-    assert not list((tmp_path / "o").glob(".tactilevision-tmp-*"))
+    assert not (tmp_path / "o").exists()      # its staging folder, and the folder it made
 
 
 def test_an_interrupt_landing_in_a_finalizer_is_raised_once_it_returns(tmp_path):
@@ -126,6 +126,42 @@ def test_an_interrupt_landing_in_a_finalizer_is_raised_once_it_returns(tmp_path)
     assert not list((tmp_path / "o").glob(".tactilevision-tmp-*"))
 
 
+def test_an_interrupt_any_callback_swallowed_is_raised_in_the_command(tmp_path):
+    """A Ctrl-C that lands in a callback whose exceptions Python prints and ignores, of a
+    kind _in_finalizer does not name (a weakref callback of one's own), is not printed
+    but sent again (sys.unraisablehook): it interrupts the command's code, whose except
+    clause runs, exit 130, well before the watchdog's grace."""
+    code = (
+        "import sys, time, weakref\n"
+        "from pathlib import Path\n"
+        "from tactilevision.io import StagedOutput\n"
+        "class Thing:\n"
+        "    pass\n"
+        "def on_collected(ref):\n"
+        "    print('in the callback', flush=True)\n"
+        "    time.sleep(0.3)\n"
+        "def run(args):\n"
+        f"    with StagedOutput(Path({str(tmp_path / 'o')!r})) as st:\n"
+        "        (st.path / 'x.txt').write_text('half')\n"
+        "        try:\n"
+        "            t = Thing(); r = weakref.ref(t, on_collected); del t\n"
+        "            time.sleep(10)\n"
+        "        except KeyboardInterrupt:\n"
+        "            print('raised in the command', file=sys.stderr, flush=True)\n"
+        "            raise\n"
+        "    return 0\n"
+        + _AS_FIT)
+    proc = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    assert proc.stdout.readline().strip() == "in the callback"
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=30)
+    assert proc.returncode == 130, err
+    assert "raised in the command" in err
+    assert "Exception ignored" not in err and "Traceback" not in err
+    assert not (tmp_path / "o").exists()
+
+
 def test_an_interrupt_caught_from_exec_of_text_exits_130_under_python_m(tmp_path):
     """A Ctrl-C that lands in code ``exec``'d from text (a dataclass or named tuple being
     created, many at import) and is caught by the command: ``python -m`` exits 130, not
@@ -142,6 +178,75 @@ def test_an_interrupt_caught_from_exec_of_text_exits_130_under_python_m(tmp_path
                           capture_output=True, text=True, timeout=60)
     assert proc.returncode == 130, (proc.returncode, proc.stderr)
     assert proc.stderr.strip().endswith("interrupted") and "Traceback" not in proc.stderr
+
+
+#: Runs the command line as ``python -m tactilevision`` does (runpy) or as the
+#: ``tactilevision`` script does (pyproject.toml's entry point), sending itself SIGINT the
+#: moment the module named first starts to import: an interrupt at a chosen point of the
+#: imports, whatever the machine's speed.
+_AT_IMPORT = """
+import importlib.abc, os, runpy, signal, sys
+module, how, *argv = sys.argv[1:]
+class InterruptAt(importlib.abc.MetaPathFinder):
+    def find_spec(self, name, path=None, target=None):
+        if name == module:
+            sys.meta_path.remove(self)
+            print('sent', flush=True)
+            os.kill(os.getpid(), signal.SIGINT)
+        return None
+sys.meta_path.insert(0, InterruptAt())
+sys.argv = ['tactilevision', *argv]
+if how == '-m':
+    runpy.run_module('tactilevision', run_name='__main__', alter_sys=True)
+else:
+    from tactilevision.__main__ import main
+    sys.exit(main())
+"""
+
+
+@pytest.mark.parametrize("module, how", [
+    ("argparse", "-m"),                       # the command line's own import
+    ("argparse", "script"),
+    ("numpy", "-m"),                          # the package root's once, now the command's
+    ("tactilevision.cli._fit", "-m"),         # the command's parser
+    ("tactilevision.cli._fit_run", "-m"),     # the command's work
+    ("scipy.stats", "-m"),                    # deep in its imports (issue 86's failure)
+    ("scipy.stats", "script")])
+def test_an_interrupt_during_the_imports_exits_130_without_a_traceback(tmp_path, module, how):
+    """Issue 86: a Ctrl-C at any moment, imports included, exits 130 with one line; the
+    entry point imports the command line inside its guard. (Sent by the child itself as
+    the module starts to import, so that the moment does not depend on the load.)"""
+    r = subprocess.run([sys.executable, "-c", _AT_IMPORT, module, how, "fit",
+                        str(tmp_path / "x.csv")], capture_output=True, text=True, timeout=120)
+    assert r.stdout.startswith("sent"), (r.returncode, r.stderr)
+    assert r.returncode == 130, r.stderr
+    assert "Traceback" not in r.stderr and r.stderr.strip().endswith("interrupted"), r.stderr
+
+
+def test_an_interrupted_run_leaves_no_empty_output_folder(tmp_path):
+    """The output folder (and the parents) a run created before its Ctrl-C is removed
+    with its staging folder: the run leaves nothing behind."""
+    out = tmp_path / "new" / "out"
+    code = (
+        "import sys, time\n"
+        "from pathlib import Path\n"
+        "from tactilevision.io import StagedOutput\n"
+        "def run(args):\n"
+        f"    with StagedOutput(Path({str(out)!r})) as st:\n"
+        "        (st.path / 'x.txt').write_text('half')\n"
+        "        print('staged', flush=True)\n"
+        "        time.sleep(10)\n"
+        "    return 0\n"
+        + _AS_FIT)
+    proc = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    assert proc.stdout.readline().strip() == "staged"
+    assert out.is_dir()
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=30)
+    assert proc.returncode == 130, err
+    assert "Traceback" not in err
+    assert list(tmp_path.iterdir()) == []
 
 
 def test_in_finalizer_sees_finalizers_and_gc_callbacks_up_the_stack():

@@ -186,17 +186,23 @@ class _interrupts:
     KeyboardInterrupt as Python does and arms a watchdog; should the exception be
     swallowed (raised inside a finalizer, "Exception ignored in ...") or the unwinding
     hang, the watchdog removes the open staging folders (nothing half-written is left),
-    prints one line and exits with status 130."""
+    prints one line and exits with status 130. A KeyboardInterrupt that Python would
+    print and ignore (a finalizer, a weakref or garbage-collector callback, a generator
+    closed by the collector) is not printed but sent again, to be raised in the
+    command's own code once that callback has returned."""
 
     def __init__(self, command: str) -> None:
         self.command = command
         self.previous = None
+        self.unraisable = None
         self.armed = False
         self.said = False
         self.timer: threading.Timer | None = None
 
     def __enter__(self) -> _interrupts:
         INTERRUPTED.clear()
+        self.unraisable = sys.unraisablehook
+        sys.unraisablehook = self._on_unraisable
         if threading.current_thread() is threading.main_thread():
             self.previous = signal.signal(signal.SIGINT, self._on_sigint)
         return self
@@ -212,6 +218,7 @@ class _interrupts:
             if threading.current_thread() is threading.main_thread():
                 signal.signal(signal.SIGINT, signal.SIG_IGN)
             return False
+        sys.unraisablehook = self.unraisable
         if self.previous is not None:
             signal.signal(signal.SIGINT, self.previous)
         return False
@@ -226,11 +233,20 @@ class _interrupts:
         if _in_finalizer(frame):
             # raised here it would be printed and ignored ("Exception ignored in ..."):
             # the signal is sent again a moment later, once the finalizer has returned
-            again = threading.Timer(0.02, os.kill, (os.getpid(), signal.SIGINT))
-            again.daemon = True
-            again.start()
+            _send_again()
             return
         raise KeyboardInterrupt
+
+    def _on_unraisable(self, unraisable) -> None:
+        """``sys.unraisablehook``: a KeyboardInterrupt raised where Python ignores
+        exceptions (a callback :func:`_in_finalizer` does not know) is sent again rather
+        than printed; anything else goes to the hook that was there."""
+        if unraisable.exc_type is not None and issubclass(unraisable.exc_type,
+                                                          KeyboardInterrupt):
+            if not self.said:
+                _send_again()
+            return
+        self.unraisable(unraisable)
 
     def _hard_exit(self) -> None:
         io = sys.modules.get("tactilevision.io")
@@ -241,6 +257,14 @@ class _interrupts:
                   flush=True)
         sys.stderr.flush()
         os._exit(130)
+
+
+def _send_again() -> None:
+    """SIGINT to this process a moment from now (from a thread: once the callback that
+    swallowed or deferred the interrupt has returned)."""
+    again = threading.Timer(0.02, os.kill, (os.getpid(), signal.SIGINT))
+    again.daemon = True
+    again.start()
 
 
 def _in_finalizer(frame) -> bool:
