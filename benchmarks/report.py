@@ -171,10 +171,22 @@ def render_index(pages: dict[str, tuple[Subject, dict[str, str]]], out: Path) ->
              "Each page holds what one benchmark measured, with the commit, machine and date "
              "it ran on; the guides and the [validation pages](../index.md) cite these tables.",
              "", "| subject | page | commit | date | run time |", "|---|---|---|---|---|"]
+    total = 0.0
     for name, (sub, head) in pages.items():
         lines.append(f"| {cell(sub.title)} | [{name}]({name}.md) | {head.get('commit', '?')} "
                      f"| {head.get('date', '?')} | {head.get('run time', '?')} |")
+        m = re.fullmatch(r"(\d+(?:\.\d+)?) s", head.get("run time", ""))
+        total += float(m.group(1)) if m else float("nan")
+    lines += ["", f"The pages' run times add up to {total:.0f} s ({total / 60:.1f} min)."]
     return "\n".join(lines) + "\n"
+
+
+def write_index(folder: Path, out: Path, registry: dict[str, Subject] | None = None) -> None:
+    """(Re)write ``folder/index.md`` from the headers of the subjects' pages present."""
+    registry = SUBJECTS if registry is None else registry
+    pages = {n: (s, read_header((folder / f"{n}.md").read_text(encoding="utf-8")))
+             for n, s in registry.items() if (folder / f"{n}.md").is_file()}
+    (folder / "index.md").write_text(render_index(pages, out), encoding="utf-8")
 
 
 # ---------------------------------------------------------------- provenance
@@ -261,9 +273,7 @@ def run_subjects(names: Sequence[str], *, quick: bool, out: Path,
         tmp.replace(folder / f"{name}.md")
         print(f"[{i}/{len(names)}] {name}: done in {dt:.1f} s -> "
               f"{(folder / f'{name}.md').as_posix()}", file=log, flush=True)
-    pages = {n: (s, read_header((folder / f"{n}.md").read_text(encoding="utf-8")))
-             for n, s in registry.items() if (folder / f"{n}.md").is_file()}
-    (folder / "index.md").write_text(render_index(pages, out), encoding="utf-8")
+    write_index(folder, out, registry)
     return failed
 
 
