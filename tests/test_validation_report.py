@@ -163,3 +163,12 @@ def test_run_subjects_writes_pages_and_index_and_survives_a_failure(tmp_path):
     index = (tmp_path / "index.md").read_text()
     assert "[fake](fake.md)" in index and "broken" not in index
     assert head["date"] in index
+
+
+def test_the_link_check_catches_a_missing_heading():
+    assert slug("Dimitriadis et al. (2002), eq. (12)") == "dimitriadis-et-al-2002-eq-12"
+    assert slug("Hertz's half-space") == "hertzs-half-space"
+    heads = anchors(REPORT / "sphere_closed_forms.md")
+    assert "hertzs-half-space" in heads and "no-such-table" not in heads
+    m = LINK.search("see [report](../validation/report/x.md#a-b) and")
+    assert m and m.group(1) == "../validation/report/x.md" and m.group(2) == "#a-b"
