@@ -128,3 +128,40 @@ def test_press_clock_offset_is_the_median_of_the_presses():
     assert abs(med - 0.137) < 0.002 and abs(med - 0.137) <= 3 * se + 0.001
     med, se, n = press_clock_offset(frames, area, runs[:MIN_CLOCK_PRESSES - 1], tf, fz, start)
     assert np.isnan(med) and np.isnan(se) and n == MIN_CLOCK_PRESSES - 1
+
+
+def test_force_onsets_when_presses_fill_most_of_the_session():
+    """Presses that hold the force for most of a session (long holds, short rests): the
+    unloaded level is still the rests', and each onset lies within 0.1 s of its touch
+    (the threshold's own lag: 6 noise sds at 1.5 N/s, 50 ms; the median of Fz, a held
+    force here, put them 0.3 s and more late)."""
+    rng = np.random.default_rng(5)
+    tf = np.arange(0.0, 60.0, 0.001)
+    touches = 1.0 + np.arange(12) * 4.8 + rng.uniform(0.0, 0.3, 12)
+    hold = 2.5
+    w = np.zeros_like(tf)
+    for t0, d in zip(touches, rng.uniform(0.15, 0.6, 12), strict=True):
+        # 0.4 mm/s approach, a 2.5 s hold, 0.25 s release: 3.7 of every 4.8 s loaded
+        w = np.maximum(w, np.interp(tf, [t0, t0 + d / 0.4, t0 + d / 0.4 + hold,
+                                         t0 + d / 0.4 + hold + 0.25], [0.0, d, d, 0.0],
+                                    left=0.0, right=0.0))
+    fz = 3.65 * w * (1 + 1.5 * w / 3.0) + rng.normal(0, 1 / 80, tf.size)
+    assert np.mean(fz > 0.05) > 0.5                  # the median is a held force
+    on = force_onsets(tf, fz)
+    assert on.size == 12
+    assert np.all((on > touches) & (on - touches < 0.1))
+
+
+def test_press_clock_offset_leaves_out_a_search_that_ends_on_its_edge():
+    """Searched from 0.45 s off with a 0.2 s span, most presses' best lies on the grid's
+    edge: those are not read, too few are left, and the median is NaN (each such edge
+    once counted as a value)."""
+    from tactilevision.contact import press_clock_offset
+    from tactilevision.contact._sync import MIN_CLOCK_PRESSES
+
+    depths = list(np.resize([0.1, 0.6, 0.3, 0.5, 0.2, 0.4], 20))
+    frames, area, tf, fz = _presses(0.137, depths)
+    on = np.flatnonzero(area > 0)
+    runs = np.split(on, np.flatnonzero(np.diff(on) > 1) + 1)
+    med, se, n = press_clock_offset(frames, area, runs, tf, fz, 0.137 + 0.45, span_s=0.2)
+    assert np.isnan(med) and np.isnan(se) and n < MIN_CLOCK_PRESSES

@@ -76,6 +76,7 @@ from ._results import (
 )
 from ._sync import (
     ClockSync,
+    _on_search_edge,
     estimate_clock_offset,
     force_onsets,
     press_clock_offset,
@@ -484,6 +485,11 @@ def _window_middle(session, t_cert: float, offset: float, half: float, t_hold_en
     return half
 
 
+#: Searches of +-span each that the profile correlation may move through before the
+#: clock is called unread (:func:`_sync_clock`).
+CLOCK_SEARCHES = 4
+
+
 def _sync_clock(session, times: np.ndarray, area: np.ndarray, runs: list[np.ndarray],
                 period: float, sync_fz_n: np.ndarray | None
                 ) -> tuple[float, str, ClockSync | None, list[str], float]:
@@ -512,8 +518,21 @@ def _sync_clock(session, times: np.ndarray, area: np.ndarray, runs: list[np.ndar
                              "samples")
         fz_sync = fz if sync_fz_n is None else sync_fz_n
         span, step = max(0.2, 3 * period), 1.0 / cfg.rate_hz
-        refined, _ = refine_clock_offset(times, area, session.force_times_s, fz_sync,
-                                         clock.offset_s, span_s=span, step_s=step)
+        # a best offset on the search's edge is a bound: the search moves there and goes
+        # on (the onsets may be off by more than the span)
+        start = clock.offset_s
+        for _ in range(CLOCK_SEARCHES):
+            refined, _ = refine_clock_offset(times, area, session.force_times_s, fz_sync,
+                                             start, span_s=span, step_s=step)
+            if not _on_search_edge(refined, start, span, step):
+                break
+            start = refined
+        else:
+            warnings.append(
+                f"the frames' contact area and the F/T force correlate best ever further "
+                f"from the press onsets' clock offset ({clock.offset_s:.3f} s; searched "
+                f"to {refined:.3f} s): the clock is not read from the presses; give "
+                "[force_sensor] clock_offset_s in session.toml")
         median, se, _ = press_clock_offset(times, area, runs, session.force_times_s, fz_sync,
                                            refined, span_s=span, step_s=step)
         # within one grid step of the all-press value, that value is kept (the same step:

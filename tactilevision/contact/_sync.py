@@ -9,6 +9,7 @@ onsets gives offset = t_force - t_frame (formats.md section 1).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -107,10 +108,13 @@ def force_onsets(times_s: np.ndarray, fz_n: np.ndarray, *, threshold_n: float | 
     fz_n : (M,) array_like of float
         Normal force, N, positive pushing into the gel.
     threshold_n : float, optional
-        Contact threshold on Fz. Default: the median of Fz (the unloaded
-        level, as presses cover less than half of a session) plus the larger
+        Contact threshold on Fz. Default: the unloaded level plus the larger
         of 0.02 N and 6 sample-noise standard deviations (robust: the median
-        absolute first difference, scaled to a Gaussian sd, over sqrt(2)).
+        absolute first difference, scaled to a Gaussian sd, over sqrt(2)). The
+        unloaded level is the force Fz holds most often (:func:`_rest_level`):
+        the rests between presses, however long the presses last (the median
+        of all of Fz was a held force on a Taxim session whose presses filled
+        61 % of its F/T log, and put every onset 0.4 s late).
     min_gap_s : float, default 0.05
         Crossings closer than this to the end of the previous contact are
         noise on the same press.
@@ -129,10 +133,25 @@ def force_onsets(times_s: np.ndarray, fz_n: np.ndarray, *, threshold_n: float | 
     if threshold_n is None:
         d = np.diff(f)
         noise = 1.4826 * float(np.median(np.abs(d - np.median(d)))) / np.sqrt(2)
-        threshold_n = float(np.median(f)) + max(6.0 * noise, 0.02)
+        threshold_n = _rest_level(f, noise) + max(6.0 * noise, 0.02)
     elif not threshold_n > 0:
         raise InputError(f"threshold_n must be positive, got {threshold_n!r}")
     return contact_onsets(t, f > threshold_n, min_gap_s=min_gap_s)
+
+
+def _rest_level(fz: np.ndarray, noise: float) -> float:
+    """The force an F/T log holds most often, N: the median of the samples in the fullest
+    bin of a histogram of bins two noise sds wide (at least a thousandth of its range)
+    and the bins either side. The rests between presses are one level, where each hold
+    is its own and a relaxing gel's holds and recoveries spread out."""
+    lo, hi = (float(v) for v in np.percentile(fz, [0.1, 99.9]))
+    if hi <= lo:
+        return float(np.median(fz))
+    width = max(2.0 * noise, (hi - lo) / 1000.0)
+    counts, edges = np.histogram(fz, np.arange(lo, hi + width, width))
+    k = int(np.argmax(counts))
+    near = fz[(fz >= edges[k] - width) & (fz <= edges[k + 1] + width)]
+    return float(np.median(near))
 
 
 def estimate_clock_offset(frame_onsets_s: np.ndarray, force_onsets_s: np.ndarray, *,
@@ -237,7 +256,8 @@ def refine_clock_offset(frame_times_s: np.ndarray, contact_signal: np.ndarray,
     span_s : float, default 0.2
         Search ``offset_s +- span_s``.
     step_s : float, default 0.001
-        Grid step (the F/T sample period is a natural choice).
+        Grid step (the F/T sample period is a natural choice); the grid is the whole
+        multiples of it within ``offset_s +- span_s``.
 
     Returns
     -------
@@ -268,7 +288,10 @@ def refine_clock_offset(frame_times_s: np.ndarray, contact_signal: np.ndarray,
     fz = check_array(fz_n, "fz_n", [ft.shape], dtype=np.number, finite=True).astype(float)
     if np.ptp(a) == 0:
         raise InputError("the contact signal is constant: no press to synchronise on")
-    grid = offset_s + np.arange(-span_s, span_s + 0.5 * step_s, step_s)
+    # the grid: whole multiples of the step, so that where the search starts moves only
+    # its ends
+    lo, hi = _search_ends(offset_s, span_s, step_s)
+    grid = step_s * np.arange(round(lo / step_s), round(hi / step_s) + 1)
     a0 = (a - a.mean()) / a.std()
     best = (-np.inf, float(offset_s))
     for o in grid:
@@ -286,6 +309,21 @@ def refine_clock_offset(frame_times_s: np.ndarray, contact_signal: np.ndarray,
 MIN_CLOCK_PRESSES = 5
 
 
+def _search_ends(offset_s: float, span_s: float, step_s: float) -> tuple[float, float]:
+    """The first and last offsets :func:`refine_clock_offset` tries: the whole multiples
+    of `step_s` nearest inside ``offset_s +- span_s``, s."""
+    return (step_s * math.ceil((offset_s - span_s) / step_s - 1e-9),
+            step_s * math.floor((offset_s + span_s) / step_s + 1e-9))
+
+
+def _on_search_edge(found_s: float, offset_s: float, span_s: float, step_s: float) -> bool:
+    """Whether :func:`refine_clock_offset`'s best offset lies on its grid's first or last
+    point: the correlation still rose there, so it bounds the offset rather than reads it.
+    """
+    lo, hi = _search_ends(offset_s, span_s, step_s)
+    return found_s <= lo + 0.5 * step_s or found_s >= hi - 0.5 * step_s
+
+
 def press_clock_offset(frame_times_s: np.ndarray, contact_signal: np.ndarray,
                        runs: list[np.ndarray], force_times_s: np.ndarray, fz_n: np.ndarray,
                        offset_s: float, *, span_s: float = 0.2, step_s: float = 0.001
@@ -295,9 +333,10 @@ def press_clock_offset(frame_times_s: np.ndarray, contact_signal: np.ndarray,
 
     :func:`refine_clock_offset` over all presses at once weighs the deep presses most,
     whose contact area follows the force least linearly. Each press correlated on its
-    own frames (the run and three frames either side) gives one offset; their median is
-    the estimate, ``1.2533 x 1.4826 x MAD / sqrt(n)`` its standard error (a median's, of
-    a normal spread). On 12 gauge-block sessions rendered by Taxim (10 frames/s, true
+    own frames (the run and three frames either side) gives one offset (none where its
+    best lies on the search grid's edge, :func:`_on_search_edge`); their median is the
+    estimate, ``1.2533 x 1.4826 x MAD / sqrt(n)`` its standard error (a median's, of a
+    normal spread). On 12 gauge-block sessions rendered by Taxim (10 frames/s, true
     offset 0.137 s) the all-press correlation was off by 4.9 ms RMS (up to 9.5), the
     median of the presses' by 2.9 ms, and its error over its standard error by about 1
     RMS (issue 53).
@@ -325,8 +364,10 @@ def press_clock_offset(frame_times_s: np.ndarray, contact_signal: np.ndarray,
         sel = np.arange(max(0, int(r[0]) - 3), min(a.size, int(r[-1]) + 4))
         if np.ptp(a[sel]) == 0:
             continue
-        per.append(refine_clock_offset(tf[sel], a[sel], force_times_s, fz_n, offset_s,
-                                       span_s=span_s, step_s=step_s)[0])
+        o = refine_clock_offset(tf[sel], a[sel], force_times_s, fz_n, offset_s,
+                                span_s=span_s, step_s=step_s)[0]
+        if not _on_search_edge(o, offset_s, span_s, step_s):
+            per.append(o)
     if len(per) < MIN_CLOCK_PRESSES:
         return float("nan"), float("nan"), len(per)
     per_a = np.asarray(per)
