@@ -174,7 +174,7 @@ def test_dimpled_ball_covering_the_pad_under_a_drift(sim, reference):
     and tinted against the reference. Right answer: the radius within its stated bound and
     the centre within 5 % of it (the optics' ``detect_contact_circle``, whose first circle
     is a blob of strong colour change, puts it on a patch of dimples 2.3 mm off: see
-    docs/guide/ball.md)."""
+    docs/validation/ball.md)."""
     a, R, centre = 2.7, 6.5, (166.3, 118.7)
     frame = render_press(sim, reference, kind="dimples", a=a, R=R, centre=centre,
                          gain=(0.88, 0.9, 0.86), offset=(6.0, -4.0, 9.0), seed=11)

@@ -27,7 +27,8 @@ __all__ = ["DesignChange", "Recommendation", "error_totals", "recommend"]
 MAX_REPEATS = 30
 
 #: Bevel angles a change proposes, deg: the range over which the vernier's depth model
-#: was compared with frames Taxim rendered (docs/guide/plan.md, "How far to trust it").
+#: was compared with frames Taxim rendered (docs/validation/plan.md, "The depth model
+#: against Taxim's frames").
 #: A shallower bevel reads finer but its band runs longer (an overshoot over tan theta),
 #: and the pad and the camera's view bound it: the design does not hold them.
 BEVEL_RANGE_DEG = (3.0, 15.0)
