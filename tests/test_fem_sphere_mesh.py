@@ -42,3 +42,37 @@ def test_the_equal_area_pad_under_a_large_ball_is_solved():
                              pad_radius_over_h=8.43 / 5.5, surface_cell=0.0625)
     assert res.complete
     assert res.force[0] > 0 and res.hertz_ratio[0] > 1.0
+
+
+def test_a_failed_sweep_names_each_mesh_and_why(monkeypatch):
+    """When every mesh of a pad sweep fails, the error names the sweep (R/h, nu, law,
+    contact, pad, depths) and each mesh with its own failure: Newton's (the depth it
+    reached) or the linear solver's (SuperLU's singular matrix), not only the last."""
+    import warnings as _w
+
+    from tactilevision import InputError
+    from tactilevision.mechanics import _indenter
+
+    calls = []
+
+    def failing(radius_over_h, nu, grid, **kw):
+        if kw.get("cache") == "only":
+            return None                          # nothing in the disk cache
+        calls.append(kw)
+        if len(calls) == 1:
+            raise RuntimeError("Factor is exactly singular")
+        _w.warn(f"Newton failed beyond w/h = {0.4 + 0.01 * len(calls):.4g}", RuntimeWarning,
+                stacklevel=2)
+        return None
+
+    monkeypatch.setattr(_indenter, "sphere_indentation", failing)
+    _indenter.pad_sweep_result.cache_clear()
+    with pytest.raises(InputError) as err:
+        _indenter.pad_sweep_result(3.9, 0.4999, 1.53, "neo_hookean", "bonded", 0.01)
+    msg = str(err.value)
+    assert len(calls) == 3
+    assert "R/h = 3.9" in msg and "pad radius 1.53 h" in msg and "neo_hookean" in msg
+    assert "RuntimeError: Factor is exactly singular" in msg
+    assert "w/h = 0.42" in msg and "w/h = 0.43" in msg
+    assert msg.count("load steps per depth") == 3
+    _indenter.pad_sweep_result.cache_clear()

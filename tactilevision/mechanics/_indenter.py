@@ -410,7 +410,8 @@ def pad_sweep_result(radius_over_h: float, nu: float, pad_over_h: float, law: st
     Raises
     ------
     InputError
-        When Newton fails on three meshes.
+        When each of the three meshes fails, Newton or the linear solver (SuperLU on a
+        singular matrix); the message names the sweep and each mesh with its failure.
     """
     reach = sphere_reach(radius_over_h)
     grid = SPHERE_W_GRID[(SPHERE_W_GRID <= reach + 1e-12) & (SPHERE_W_GRID >= start - 1e-12)]
@@ -431,17 +432,27 @@ def pad_sweep_result(radius_over_h: float, nu: float, pad_over_h: float, law: st
     # it are not (only complete sweeps are kept), so it is looked for first
     res = next((hit for kw in attempts if (hit := sphere_indentation(
         radius_over_h, nu, grid, cache="only", **kw)) is not None), None)
+    failed = []
     for kw in attempts if res is None else ():
         with warnings.catch_warnings():
             warnings.simplefilter("error", RuntimeWarning)
             try:
                 res = sphere_indentation(radius_over_h, nu, grid, **kw)
                 break
-            except RuntimeWarning as exc:
-                why = str(exc)
+            except (RuntimeWarning, RuntimeError, np.linalg.LinAlgError) as exc:
+                # Newton's failure (a RuntimeWarning naming the depth reached) or the
+                # linear solver's (SuperLU's RuntimeError on a singular matrix)
+                failed.append(f"surface cells {kw['surface_cell']:.4g} h with "
+                              f"{kw['steps_per_depth']} load steps per depth: "
+                              f"{type(exc).__name__}: {exc}")
     if res is None:
-        raise InputError(f"the FEM sweep of the sphere on the pad did not converge on three "
-                         f"meshes: {why}")
+        raise InputError(
+            f"the FEM sweep of the sphere (R/h = {radius_over_h:.4g}, nu = {nu:.4g}, {law}, "
+            f"{contact} contact, pad radius {pad_over_h:.4g} h"
+            + (f", friction {friction:g}" if friction else "")
+            + (f", domed top of radius {dome_over_h:.4g} h" if dome_over_h else "")
+            + f", depths w/h {grid[0]:.4g} to {grid[-1]:.4g}) failed on each of its "
+            f"{len(attempts)} meshes: " + "; ".join(failed))
     return res
 
 
