@@ -53,8 +53,14 @@ MARK_HOLD_FORCE = 0.9
 MARK_Z_STEP = 5.0
 #: ... and a frame before the onset, rising towards it, shows a trace of the mark when its
 #: projection lies this many sds above the approach's level (the crossing's period then
-#: ends at it: :func:`~tactilevision.contact._onset._mark_template_onset`).
-MARK_Z_SEEN = 4.0
+#: ends at it: :func:`~tactilevision.contact._onset._mark_template_onset`). On five Taxim
+#: mark sessions of drawn designs the first traces past w0 lay 6.0 to 49 sds off; one at
+#: 4.4 sds (against the template, 22 um before w0: the punch's shading deepening over a
+#: three-frame approach at 25 frames/s, 1.24 mm/s) put its press's bracket a period early,
+#: its indenter's brackets disjoint, and a stiffness step on the session's null; under 5
+#: sds such a frame is a faint trace (:data:`MARK_Z_FAINT`): its period joins the bracket
+#: rather than ending it.
+MARK_Z_SEEN = 5.0
 #: ... and at least this share of the way to the hold's level (an approach whose shading
 #: moves lifts the frames before the crossing by a few sds of a steady one: 0.01 of the way
 #: at 5 sd on a Taxim session with shadows).
