@@ -5,6 +5,7 @@ was swallowed."""
 
 from __future__ import annotations
 
+import functools
 import signal
 import subprocess
 import sys
@@ -20,9 +21,24 @@ SESSION = ROOT / "sample_frames" / "gelsight_session"
 pytestmark = pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
 
 
+
+def _as_in_a_terminal() -> None:
+    """The child's Ctrl-C as a terminal gives it (the default disposition), whatever this
+    process inherited: a shell's background job runs with SIGINT ignored, a child keeps an
+    ignored signal across exec, and Python then installs no handler of its own, so an
+    interrupt sent before the command line's handler was lost (the suite run as a
+    background job failed the argparse cases)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
+#: subprocess.Popen and subprocess.run with the child's Ctrl-C as in a terminal
+_popen = functools.partial(subprocess.Popen, preexec_fn=_as_in_a_terminal)
+_run = functools.partial(subprocess.run, preexec_fn=_as_in_a_terminal)
+
+
 def _interrupt(argv: list[str], after_s: float) -> tuple[int, str, float]:
-    proc = subprocess.Popen([sys.executable, "-m", "tactilevision", *argv],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    proc = _popen([sys.executable, "-m", "tactilevision", *argv],
+                  stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     time.sleep(after_s)
     sent = time.perf_counter()
     proc.send_signal(signal.SIGINT)
@@ -74,8 +90,8 @@ def test_a_swallowed_interrupt_still_ends_the_command(tmp_path):
         "        time.sleep(10)\n"
         "    return 0\n"
         + _AS_FIT)
-    proc = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
+    proc = _popen([sys.executable, "-c", code], stdout=subprocess.PIPE,
+                  stderr=subprocess.PIPE, text=True)
     # the signal is sent once the child says it is in the finalizer, whatever its imports
     # took (a fixed 2.5 s wait landed in them on a machine that compiles every import)
     assert proc.stdout.readline().strip() == "in the finalizer"
@@ -115,8 +131,8 @@ def test_an_interrupt_landing_in_a_finalizer_is_raised_once_it_returns(tmp_path)
         "            raise\n"
         "    return 0\n"
         + _AS_FIT)
-    proc = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
+    proc = _popen([sys.executable, "-c", code], stdout=subprocess.PIPE,
+                  stderr=subprocess.PIPE, text=True)
     assert proc.stdout.readline().strip() == "finalizing"
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=30)
@@ -151,8 +167,8 @@ def test_an_interrupt_any_callback_swallowed_is_raised_in_the_command(tmp_path):
         "            raise\n"
         "    return 0\n"
         + _AS_FIT)
-    proc = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
+    proc = _popen([sys.executable, "-c", code], stdout=subprocess.PIPE,
+                  stderr=subprocess.PIPE, text=True)
     assert proc.stdout.readline().strip() == "in the callback"
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=30)
@@ -174,8 +190,8 @@ def test_an_interrupt_caught_from_exec_of_text_exits_130_under_python_m(tmp_path
         "         {'os': os, 'signal': signal})\n"
         "    return 0\n"
         + _AS_FIT)
-    proc = subprocess.run([sys.executable, "-m", "as_fit"], cwd=tmp_path,
-                          capture_output=True, text=True, timeout=60)
+    proc = _run([sys.executable, "-m", "as_fit"], cwd=tmp_path,
+                capture_output=True, text=True, timeout=60)
     assert proc.returncode == 130, (proc.returncode, proc.stderr)
     assert proc.stderr.strip().endswith("interrupted") and "Traceback" not in proc.stderr
 
@@ -216,8 +232,8 @@ def test_an_interrupt_during_the_imports_exits_130_without_a_traceback(tmp_path,
     """Issue 86: a Ctrl-C at any moment, imports included, exits 130 with one line; the
     entry point imports the command line inside its guard. (Sent by the child itself as
     the module starts to import, so that the moment does not depend on the load.)"""
-    r = subprocess.run([sys.executable, "-c", _AT_IMPORT, module, how, "fit",
-                        str(tmp_path / "x.csv")], capture_output=True, text=True, timeout=120)
+    r = _run([sys.executable, "-c", _AT_IMPORT, module, how, "fit",
+             str(tmp_path / "x.csv")], capture_output=True, text=True, timeout=120)
     assert r.stdout.startswith("sent"), (r.returncode, r.stderr)
     assert r.returncode == 130, r.stderr
     assert "Traceback" not in r.stderr and r.stderr.strip().endswith("interrupted"), r.stderr
@@ -238,8 +254,8 @@ def test_an_interrupted_run_leaves_no_empty_output_folder(tmp_path):
         "        time.sleep(10)\n"
         "    return 0\n"
         + _AS_FIT)
-    proc = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
+    proc = _popen([sys.executable, "-c", code], stdout=subprocess.PIPE,
+                  stderr=subprocess.PIPE, text=True)
     assert proc.stdout.readline().strip() == "staged"
     assert out.is_dir()
     proc.send_signal(signal.SIGINT)
