@@ -165,3 +165,33 @@ def test_press_clock_offset_leaves_out_a_search_that_ends_on_its_edge():
     runs = np.split(on, np.flatnonzero(np.diff(on) > 1) + 1)
     med, se, n = press_clock_offset(frames, area, runs, tf, fz, 0.137 + 0.45, span_s=0.2)
     assert np.isnan(med) and np.isnan(se) and n < MIN_CLOCK_PRESSES
+
+
+def test_a_clock_search_that_keeps_ending_on_its_edge_is_said(monkeypatch):
+    """Where the profile correlation's best lies on the search's edge every time, the
+    search moves on CLOCK_SEARCHES times and then says that the presses do not pin the
+    clock (and how far it searched), instead of taking the edge silently."""
+    from types import SimpleNamespace
+
+    from tactilevision.contact import _certify
+
+    depths = list(np.resize([0.1, 0.6, 0.3, 0.5, 0.2, 0.4], 20))
+    frames, area, tf, fz = _presses(0.137, depths)
+    on = np.flatnonzero(area > 0)
+    runs = np.split(on, np.flatnonzero(np.diff(on) > 1) + 1)
+    starts = []
+
+    def to_the_edge(times, signal, ft, f, offset_s, *, span_s, step_s):
+        starts.append(offset_s)
+        return offset_s + span_s, 0.5
+
+    monkeypatch.setattr(_certify, "refine_clock_offset", to_the_edge)
+    monkeypatch.setattr(_certify, "press_clock_offset",
+                        lambda *a, **k: (float("nan"), float("nan"), 0))
+    forces = np.column_stack([np.zeros_like(fz), np.zeros_like(fz), fz])
+    session = SimpleNamespace(config=SimpleNamespace(rate_hz=1000.0, clock_offset_s=None),
+                              force_times_s=tf, forces_n=forces, path="session")
+    offset, source, _, notes, _ = _certify._sync_clock(session, frames, area, runs, 0.1, None)
+    assert len(starts) == _certify.CLOCK_SEARCHES and source == "estimated"
+    assert np.isclose(offset, starts[-1] + 0.3)         # the span: 3 periods of 0.1 s
+    assert any("do not pin the clock" in n and "clock_offset_s" in n for n in notes)

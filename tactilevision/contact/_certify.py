@@ -531,8 +531,9 @@ def _sync_clock(session, times: np.ndarray, area: np.ndarray, runs: list[np.ndar
             warnings.append(
                 f"the frames' contact area and the F/T force correlate best ever further "
                 f"from the press onsets' clock offset ({clock.offset_s:.3f} s; searched "
-                f"to {refined:.3f} s): the clock is not read from the presses; give "
-                "[force_sensor] clock_offset_s in session.toml")
+                f"{CLOCK_SEARCHES} x +-{span:g} s to {refined:.3f} s, which is used): the "
+                "presses do not pin the clock; give [force_sensor] clock_offset_s in "
+                "session.toml")
         median, se, _ = press_clock_offset(times, area, runs, session.force_times_s, fz_sync,
                                            refined, span_s=span, step_s=step)
         # within one grid step of the all-press value, that value is kept (the same step:
