@@ -106,25 +106,21 @@ def test_a_swallowed_interrupt_still_ends_the_command(tmp_path):
     assert not (tmp_path / "o").exists()      # its staging folder, and the folder it made
 
 
-def test_an_interrupt_landing_in_a_finalizer_is_raised_once_it_returns(tmp_path):
-    """A Ctrl-C that lands in a finalizer (distributed's garbage-collector callback, a
-    weakref dictionary's) is not raised there, where Python would print and ignore it,
-    but sent again: it interrupts the command's own code once the finalizer returns,
-    which unwinds as usual (its except clause runs), exit 130, nothing printed as
-    ignored."""
+def _interrupted_in_a_callback(tmp_path, setup: str, trigger: str, marker: str) -> str:
+    """Run a command that writes into a staged folder, then triggers a callback (`setup`
+    defines it and prints `marker` in it, `trigger` sets it off); SIGINT once the child
+    prints `marker`. The interrupt must reach the command's own except clause and end the
+    run with 130, nothing printed as ignored, no traceback. Returns stderr."""
     code = (
-        "import sys, time\n"
+        "import sys, time, weakref\n"
         "from pathlib import Path\n"
         "from tactilevision.io import StagedOutput\n"
-        "class Slow:\n"
-        "    def __del__(self):\n"
-        "        print('finalizing', flush=True)\n"
-        "        time.sleep(0.3)\n"
-        "def run(args):\n"
+        + setup
+        + "def run(args):\n"
         f"    with StagedOutput(Path({str(tmp_path / 'o')!r})) as st:\n"
         "        (st.path / 'x.txt').write_text('half')\n"
         "        try:\n"
-        "            s = Slow(); del s\n"
+        f"            {trigger}\n"
         "            time.sleep(10)\n"
         "        except KeyboardInterrupt:\n"
         "            print('raised in the command', file=sys.stderr, flush=True)\n"
@@ -133,12 +129,28 @@ def test_an_interrupt_landing_in_a_finalizer_is_raised_once_it_returns(tmp_path)
         + _AS_FIT)
     proc = _popen([sys.executable, "-c", code], stdout=subprocess.PIPE,
                   stderr=subprocess.PIPE, text=True)
-    assert proc.stdout.readline().strip() == "finalizing"
+    assert proc.stdout.readline().strip() == marker
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=30)
     assert proc.returncode == 130, err
     assert "raised in the command" in err
     assert "Exception ignored" not in err and "Traceback" not in err
+    return err
+
+
+def test_an_interrupt_landing_in_a_finalizer_is_raised_once_it_returns(tmp_path):
+    """A Ctrl-C that lands in a finalizer (distributed's garbage-collector callback, a
+    weakref dictionary's) is not raised there, where Python would print and ignore it,
+    but sent again: it interrupts the command's own code once the finalizer returns,
+    which unwinds as usual (its except clause runs), exit 130, nothing printed as
+    ignored."""
+    _interrupted_in_a_callback(
+        tmp_path,
+        "class Slow:\n"
+        "    def __del__(self):\n"
+        "        print('finalizing', flush=True)\n"
+        "        time.sleep(0.3)\n",
+        "s = Slow(); del s", "finalizing")
     assert not list((tmp_path / "o").glob(".tactilevision-tmp-*"))
 
 
@@ -147,34 +159,14 @@ def test_an_interrupt_any_callback_swallowed_is_raised_in_the_command(tmp_path):
     kind _in_finalizer does not name (a weakref callback of one's own), is not printed
     but sent again (sys.unraisablehook): it interrupts the command's code, whose except
     clause runs, exit 130, well before the watchdog's grace."""
-    code = (
-        "import sys, time, weakref\n"
-        "from pathlib import Path\n"
-        "from tactilevision.io import StagedOutput\n"
+    _interrupted_in_a_callback(
+        tmp_path,
         "class Thing:\n"
         "    pass\n"
         "def on_collected(ref):\n"
         "    print('in the callback', flush=True)\n"
-        "    time.sleep(0.3)\n"
-        "def run(args):\n"
-        f"    with StagedOutput(Path({str(tmp_path / 'o')!r})) as st:\n"
-        "        (st.path / 'x.txt').write_text('half')\n"
-        "        try:\n"
-        "            t = Thing(); r = weakref.ref(t, on_collected); del t\n"
-        "            time.sleep(10)\n"
-        "        except KeyboardInterrupt:\n"
-        "            print('raised in the command', file=sys.stderr, flush=True)\n"
-        "            raise\n"
-        "    return 0\n"
-        + _AS_FIT)
-    proc = _popen([sys.executable, "-c", code], stdout=subprocess.PIPE,
-                  stderr=subprocess.PIPE, text=True)
-    assert proc.stdout.readline().strip() == "in the callback"
-    proc.send_signal(signal.SIGINT)
-    _, err = proc.communicate(timeout=30)
-    assert proc.returncode == 130, err
-    assert "raised in the command" in err
-    assert "Exception ignored" not in err and "Traceback" not in err
+        "    time.sleep(0.3)\n",
+        "t = Thing(); r = weakref.ref(t, on_collected); del t", "in the callback")
     assert not (tmp_path / "o").exists()
 
 
