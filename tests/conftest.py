@@ -8,10 +8,19 @@ from __future__ import annotations
 
 import math
 import os
+from pathlib import Path
 
 import cv2
 import pytest
 from threadpoolctl import threadpool_limits
+
+#: The suite's own disk cache (FEM sweeps, MLP tables, Taxim renders), apart from the
+#: user's (``$TACTILEVISION_CACHE`` or ``~/.cache/tactilevision``), which the suite never
+#: writes; ``$TACTILEVISION_SUITE_CACHE`` moves it. Set before any test runs: the workers
+#: and every command the tests start inherit it.
+SUITE_CACHE = Path(os.environ.get("TACTILEVISION_SUITE_CACHE",
+                                  Path.home() / ".cache" / "tactilevision-suite"))
+os.environ["TACTILEVISION_CACHE"] = str(SUITE_CACHE)
 
 _THREAD_VARS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 #: the worker's thread limit (threadpoolctl's handle), kept for the session

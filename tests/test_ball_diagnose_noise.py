@@ -36,6 +36,7 @@ def _circle_presses(seed: int, bias_px: float, law: str = "linear", sd_px: float
     return wm, P, dwda * sd_px * PX, dwda * bound_px * PX
 
 
+@pytest.mark.slow
 def test_shared_circle_error_is_not_named_as_physics():
     """Circles all 1.5 px small (the stated bound): read as exact, the ladder names an
     effect (a depth offset) on several seeds; with the fit's noise model it names nothing on

@@ -121,6 +121,7 @@ contact = "tied"
 """
 
 
+@pytest.mark.slow
 def test_cli_fit_and_diagnose_a_ball(tmp_path):
     _, w, P = _drawn("neo_hookean", "tied", E=0.3)
     path = _table(tmp_path / "s", w, P, TOML.format(r=2.0))
@@ -154,6 +155,7 @@ def test_cli_refuses_a_bad_ball(tmp_path, toml, rows, extra, match):
     assert str(path) in r.stderr or "session.toml" in r.stderr
 
 
+@pytest.mark.slow
 def test_cli_dome_needs_a_pad_and_a_ball(tmp_path):
     """A domed top is refused, in one sentence and exit 2, without the pad's radius, for a
     flat punch, or when it is not wider than the pad; the sidecar's key is read."""

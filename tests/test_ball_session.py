@@ -43,6 +43,7 @@ def calibrated(ball_session):
     return calibrate_ball_session(folder, nu=0.5, law="linear"), sched
 
 
+@pytest.mark.slow
 def test_every_press_found_with_its_force(calibrated):
     """The eight presses, each hold's force the closed form's at its depth (F/T noise
     1/80 N over 200 samples: the window's mean within 5 mN, once the F/T's 40 mN zero read
@@ -73,6 +74,7 @@ def test_depths_from_the_circles_hold_the_truth(calibrated):
     assert not fit.nu_identified and fit.nu == 0.5
 
 
+@pytest.mark.slow
 def test_cli_calibrate_writes_a_table_fit_reads_back(ball_session, tmp_path, capsys):
     """`calibrate` of a ball session writes measurements.csv with its sphere sidecar and
     the shared depth error; `fit` of that table gives the same E and interval."""
@@ -101,6 +103,7 @@ def test_cli_calibrate_writes_a_table_fit_reads_back(ball_session, tmp_path, cap
     assert refit["E_ci95_mpa"][1] == pytest.approx(obj["E_ci95_mpa"][1], rel=1e-2)
 
 
+@pytest.mark.slow
 def test_a_session_that_names_its_optics_has_its_caps_checked(ball_session, tmp_path):
     """With ``[optics] calibration`` the height map's cap of each press is read beside its
     circle (circles.csv's cap columns, a sentence in fit.json's warnings): deeper circles,
@@ -164,6 +167,7 @@ def test_the_closed_form_is_sneddons():
         sneddon_sphere([R], radius_mm=R, E_mpa=E)
 
 
+@pytest.mark.slow
 def test_bad_ball_sessions_refused_naming_the_key(ball_session, tmp_path):
     folder, _ = ball_session
     bad = tmp_path / "bad"

@@ -25,6 +25,7 @@ def taxim_weights(tmp_path_factory):
     return folder, w, a
 
 
+@pytest.mark.slow
 def test_depths_from_taxims_frames_and_E_inside_its_interval(taxim_weights):
     """Every frame read; at most one depth (the detector's worst case, a 20 px circle) off
     by more than its stated bounds; E's interval holds the truth, E within 15 %."""

@@ -168,6 +168,7 @@ def reference(sim):
 
 
 # ---------------------------------------------------------------------------- cases
+@pytest.mark.slow
 def test_dimpled_ball_covering_the_pad_under_a_drift(sim, reference):
     """The issue's failure, scaled to Taxim's pad: a dimpled ball (0.6 to 1.3 mm dimples, 20
     to 60 um deep) whose contact spans 2.8 of the pad's 7.1 mm height, the frame 12 % darker
@@ -312,6 +313,7 @@ def weights(sim, reference, tmp_path_factory):
     return folder, presses
 
 
+@pytest.mark.slow
 def test_dead_weights_refuse_the_wrong_force_and_the_cut_press(weights):
     """Right answers: presses 0 to 2 read within their stated bounds; press 3 refused
     because its force contradicts its (right) circle; press 4 refused by its circle (60 % of

@@ -137,6 +137,7 @@ def test_bad_videos_are_named(tmp_path):
 # ---------------------------------------------------------------- the cluster
 
 
+@pytest.mark.slow
 def test_batch_equals_the_single_process_run_frame_for_frame(client, clip, tmp_path):
     out = tmp_path / "out"
     broken = tmp_path / "broken.mp4"
@@ -298,6 +299,7 @@ def test_cli_batch_bad_options(tmp_path, capsys, clip):
     assert "not a folder" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_batch_calibrate_lists_a_broken_session_and_calibrates_the_others(client, tmp_path):
     from tactilevision.sim import SessionSpec, make_session, press_profile
 
@@ -355,6 +357,7 @@ def test_heights_are_rounded_as_numcodecs_quantize_rounds_them():
     assert np.all(np.isnan(got[0, 0, :5]))
 
 
+@pytest.mark.slow
 def test_own_cluster_workers_keep_frames_in_the_heap_and_zarr_codecs(clip, tmp_path):
     """run_batch's own cluster starts its workers without Dask's MALLOC_TRIM_THRESHOLD_
     (which made a height map 3 times dearer in a worker: checked in a fresh process, as

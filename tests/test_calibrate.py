@@ -61,6 +61,7 @@ def sample_run(tmp_path_factory):
     return out, truth
 
 
+@pytest.mark.slow
 def test_figures_show_the_forces_the_fit_used(sample_run):
     """The residual plot's points are the fit's residuals (issue 39: it showed the F/T
     window's mean before the bevel's band was taken off, nearly every point above zero):
@@ -265,6 +266,7 @@ def scenario(tmp_path_factory):
     return folder, truth
 
 
+@pytest.mark.slow
 def test_scenario_session(scenario):
     folder, truth = scenario
     cal = calibrate_session(folder)
@@ -316,6 +318,7 @@ def test_bad_sessions(scenario, tmp_path, capsys):
         calibrate_session(empty)
 
 
+@pytest.mark.slow
 def test_saturated_and_unseen_bevel_are_rejected(scenario, tmp_path):
     """Over-exposed frames of one press, and a bevel looked for on the wrong side."""
     import cv2
@@ -376,6 +379,7 @@ def test_nothing_is_lost_when_every_press_is_rejected(scenario, tmp_path, capsys
     assert (out / "bevel.png").is_file() and not (out / "fit.json").exists()
 
 
+@pytest.mark.slow
 def test_onset_rule_without_a_vernier(tmp_path):
     """A bevel mark with no vernier (bevel_angle_deg = 0, the stage stopping at w0): the
     default 'mark' rule reads w0 plus the force's rise past the crossing (none here: within
@@ -453,6 +457,7 @@ def test_onset_rule_without_a_vernier(tmp_path):
                          in r.detail for r in never)
 
 
+@pytest.mark.slow
 def test_mark_overshoot_read_from_the_force(tmp_path):
     """Issue 39: a mark session whose stage overshoots w0 by 5 to 60 um (30 frames/s, 10
     presses): the paper's w = w0 is 37 um short on average, and E's interval must not
@@ -519,6 +524,7 @@ def test_mark_overshoot_read_from_the_force(tmp_path):
     assert any("w = w0 leaves out" in w for w in nominal.warnings)
 
 
+@pytest.mark.slow
 def test_faint_mark_seen_with_the_sessions_own_threshold(tmp_path):
     """Issue 39: a mark that shows in every press but scores under the fixed threshold of
     12 was rejected. A faint drawn mark (a 10 um line, 30 frames/s, 10 presses): the fixed
@@ -549,6 +555,7 @@ def test_faint_mark_seen_with_the_sessions_own_threshold(tmp_path):
                for w in auto.warnings)
 
 
+@pytest.mark.slow
 def test_make_session_is_deterministic(tmp_path):
     pytest.importorskip("taxim")
     from tactilevision.sim import GaugeBlock, SessionSpec, make_session, press_profile
@@ -571,6 +578,7 @@ def test_make_session_is_deterministic(tmp_path):
         make_session(tmp_path / "a", spec, profile=prof)
 
 
+@pytest.mark.slow
 def test_the_steps_in_order_give_what_calibrate_gives(sample_run):
     """The main job run step by step, as docs/guide/calibrate.md shows it: each step's
     result can be looked at, and the steps in order give the depths, E, nu and intervals

@@ -45,6 +45,7 @@ def test_gelslim_shading_table_predicts_held_out_presses(gelslim_table):
     assert np.median(ratios) < 0.3
 
 
+@pytest.mark.slow
 def test_gelslim_session(gelslim_table, tmp_path):
     from tactilevision.sim import GaugeBlock, SessionSpec, make_session, press_profile
 

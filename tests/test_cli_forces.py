@@ -90,6 +90,7 @@ def test_forces_reads_E_and_nu_from_a_fit_json(tmp_path):
     assert rc == 2
 
 
+@pytest.mark.slow
 def test_forces_on_a_no_contact_frame_read_near_zero(tmp_path, capsys):
     """The sample session's first frame has no contact (F/T -4 mN). By default (heights
     pinned outside the contact, traction on the footprint) it reads 0; trusting the whole
@@ -175,6 +176,7 @@ def test_forces_by_default_match_the_ft_log(tmp_path, capsys):
         assert np.pi * 2.5 ** 2 < float(rows[f]["contact_area_mm2"]) < 4 * np.pi * 2.5 ** 2
 
 
+@pytest.mark.slow
 def test_forces_takes_the_clock_offset_from_fit_json(tmp_path):
     """With calibrate's fit.json (its clock_offset_s) the F/T column is filled: at the
     sample session's frame 40, in the hold of its first press, it reads the log's force

@@ -159,6 +159,7 @@ def gelsight_circles(taxim_presses):
             detect_contact_circles(ps.frames, ps.reference, edge="contact"))
 
 
+@pytest.mark.slow
 def test_contact_edge_matches_annotated_gelsight(taxim_presses, gelsight_circles):
     """48 real presses: the annotated circles (integer px, about 61 px) are the truth.
     Measured: contact edge 1.005 +- 0.022 of the annotated radius (median, sd), colour
@@ -172,6 +173,7 @@ def test_contact_edge_matches_annotated_gelsight(taxim_presses, gelsight_circles
     assert np.median(np.hypot(*(c1 - taxim_presses.centers_px).T)) < 3.0
 
 
+@pytest.mark.slow
 def test_calibration_to_the_contact_edge_reads_the_cap_depth(taxim_presses):
     """Detected circles, LUT, the even presses trained, the odd scored against their
     annotated circles: the deepest point of the cap within 3 % with the contact edge

@@ -78,6 +78,7 @@ def late_null():
     return [(_scan(c), crossing_tests(c)) for c in tables]
 
 
+@pytest.mark.slow
 def test_late_onsets_are_not_named_as_a_change_of_the_gel(late_null):
     """At the stated sds a change is named on at least 7 of the 8 tables (every one of
     these); checked against the scatter, on at most 3 (2 of these; 8 of 30 over seeds 0 to
@@ -132,6 +133,7 @@ def test_the_worst_press_is_calibrated_and_a_gross_misread_is_found():
         assert k == 7 and z < -3 and p == pytest.approx(1 / 1000)
 
 
+@pytest.mark.slow
 def test_a_gross_misread_is_left_out_not_named():
     """Nothing changes; press 10 (mid-session) is read two bracket widths low. At the stated
     sds a change is named in at least 6 of 8 tables (7 of these); checked, in at most 3 (2),

@@ -46,6 +46,7 @@ def _crossings(seed: int, scale) -> dict[str, np.ndarray]:
             "x_mm": X_MM, "y_mm": Y_MM, "force_w0_n": f, "force_w0_sem_n": SEM * f}
 
 
+@pytest.mark.slow
 def test_no_change_is_found_at_the_stated_level():
     """Nothing changes: the family-wise level is 1 %, so at most a few of 200 tables (1 of
     these 200: 2), and the family-wise p-value of the scan is about uniform under the stated
@@ -59,6 +60,7 @@ def test_no_change_is_found_at_the_stated_level():
     assert 0.35 < float(np.mean(chi)) < 0.65
 
 
+@pytest.mark.slow
 def test_a_stiffness_step_is_found_with_its_size():
     """E falls 12 % after the 10th press: named a stiffness step along press or time in
     at least 84 % of tables (88 of these 100; the step and the trend told apart by what
@@ -81,6 +83,7 @@ def test_a_stiffness_step_is_found_with_its_size():
     assert named >= 42 and either >= 48 and held >= 40, (named, either, held)
 
 
+@pytest.mark.slow
 def test_a_steady_softening_is_a_trend():
     """E falls 20 % steadily over the 20 presses: a stiffness trend along press or time
     found in at least 88 % of tables (92 of these 100), found or listed as equivalent to
@@ -98,6 +101,7 @@ def test_a_steady_softening_is_a_trend():
     assert found >= 44 and either >= 48, (found, either)
 
 
+@pytest.mark.slow
 def test_a_gradient_across_the_pad_is_spatial():
     """E 4 % higher per mm along x across the pad (+-10 % over the presses' 5 mm): named
     spatial_nonuniformity in at least 90 % of tables (99 of these 100; 90 at 3 %/mm)."""
@@ -106,6 +110,7 @@ def test_a_gradient_across_the_pad_is_spatial():
     assert hits >= 90, hits
 
 
+@pytest.mark.slow
 def test_the_sizes_said_are_named_that_often():
     """crossing_sizes on a table's presses (their stated brackets only): a step half-way
     through the presses, a steady change with time and a gradient along x of that size are
@@ -133,6 +138,7 @@ def test_the_sizes_said_are_named_that_often():
     assert crossing_sizes({"indenter": np.zeros(3)}) == {}
 
 
+@pytest.mark.slow
 def test_a_step_anywhere_is_ruled_out_only_at_its_own_places_size():
     """crossing_step_places: a step near the end of the presses has few on one side and
     needs to be larger than the half-way one to be named. On 20 presses (0 to 19) the
@@ -231,6 +237,7 @@ def _with_fz(src, folder, fz_of):
     return folder
 
 
+@pytest.mark.slow
 def test_an_ft_zeroed_before_a_fixture_moves_no_crossing(softening, tmp_path):
     """The same frames with 1 N on every F/T sample (zeroed before a fixture was
     mounted): the mark's onsets are found where they were (the press's force shares read
@@ -270,6 +277,7 @@ def test_the_command_line_reads_the_crossings(softening, tmp_path):
         assert 0 < c["p_trend_fits"] <= 1 and 0 < c["p_step_fits"] <= 1
 
 
+@pytest.mark.slow
 def test_a_softening_gel_is_found_through_its_crossings(softening):
     """The mark rule reads each depth past w0 from the force, so the softening moves the
     depths and the ladder alone does not see it; the crossing forces do: a stiffness
@@ -334,6 +342,7 @@ def test_fit_on_the_crossing_forces(softening, tmp_path, capsys):
     assert "--crossings and --holds" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_calibrate_says_when_the_crossings_scatter_beyond_their_brackets(softening, tmp_path):
     """The null session's frames with its F/T's fz falling 40 % over the log: each
     indenter's crossing forces then differ by up to about 30 %, far beyond their brackets

@@ -260,6 +260,7 @@ def test_temperature_effect_brings_E_back(seed):
     assert mf.rmse_n < 1.5 * floor
 
 
+@pytest.mark.slow
 def test_diagnose_takes_the_user_effect():
     t = make_measurement_table("temperature", 11)
     kw = {"thickness_mm": t.thickness_mm, "radius_mm": t.radius_mm}
@@ -306,6 +307,7 @@ def _table(folder, seed: int = 11):
     return t
 
 
+@pytest.mark.slow
 def test_cli_round_trip_with_a_module_in_the_working_directory(tmp_path, monkeypatch, capsys):
     (tmp_path / "tv_ce_effects.py").write_text(MY_EFFECTS)
     monkeypatch.chdir(tmp_path)

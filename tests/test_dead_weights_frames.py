@@ -28,6 +28,7 @@ def weights(tmp_path_factory):
     return folder, depth
 
 
+@pytest.mark.slow
 def test_depths_and_E_from_the_frames(weights):
     """Every frame's depth within its shared bound plus two sds of Sneddon's; E's 95 %
     interval holds the truth, E within 12 % (the detector's small circles sit inside the
@@ -44,6 +45,7 @@ def test_depths_and_E_from_the_frames(weights):
     assert abs(fit.E_mpa / E - 1) < 0.12, fit.E_mpa
 
 
+@pytest.mark.slow
 def test_dead_weights_take_an_optics_calibration_for_their_caps(weights):
     """With an optics calibration each resting weight's cap is read beside its circle:
     finite, deeper for the heavier weights, and said in the warnings."""
@@ -63,6 +65,7 @@ def test_dead_weights_take_an_optics_calibration_for_their_caps(weights):
                for w in bad.warnings)
 
 
+@pytest.mark.slow
 def test_cli_calibrate_reads_a_dead_weight_folder(weights, tmp_path, capsys):
     folder, _ = weights
     mine = tmp_path / "mine"

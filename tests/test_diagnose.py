@@ -80,6 +80,7 @@ def test_generator_tables_hold_every_column_and_are_deterministic():
         make_measurement_table("creep", 0)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", SEEDS)
 def test_null_tables_give_a_null_verdict(seed):
     t = make_measurement_table(None, seed)
@@ -91,6 +92,7 @@ def test_null_tables_give_a_null_verdict(seed):
     assert abs(d.E_mpa / t.truth["E_mpa"] - 1) < 0.05
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("hidden", CATALOGUE)
 def test_each_catalogue_effect_is_identified(hidden):
     ok, cv_ok, E_ok = 0, 0, 0
@@ -136,6 +138,7 @@ def test_offsets_are_reported_as_equivalent_with_the_separating_measurement():
     assert "tare" in d.separating_measurement
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("hidden", ["temperature"])
 def test_out_of_catalogue_effects_name_their_covariate(hidden):
     hits = 0
@@ -148,6 +151,7 @@ def test_out_of_catalogue_effects_name_their_covariate(hidden):
     assert hits >= len(SEEDS) - 1
 
 
+@pytest.mark.slow
 def test_responses_are_not_scanned_unless_asked():
     """fx_n, fy_n and force_std_n follow the force: they are not scanned as covariates
     (issue 23: a stiffness trend along fx_n was offered on a 5-row table), the result
@@ -254,6 +258,7 @@ def test_nothing_missing_says_what_it_rules_out():
     assert plain.rules_out == {} and "None larger than" not in plain.message
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("effect", ["stiffness_trend:time_s", "stiffness_step:press"])
 def test_nothing_missing_rules_out_a_stiffness_change_over_the_session(effect):
     """A table without crossing forces states the softening over time and the stiffness
@@ -351,6 +356,7 @@ def _shared_by_indenter(hidden, seed, s_mm=0.015):
     return t, c
 
 
+@pytest.mark.slow
 def test_a_depth_error_shared_by_each_indenter_is_carried_by_every_fit():
     """Issue 53, item 1. Ground truth: generator tables with each indenter's depths off by
     one shared error, stated. Taken as independent, null tables name an offset (seeds 1
@@ -392,6 +398,7 @@ def test_a_depth_error_shared_by_each_indenter_is_carried_by_every_fit():
     assert indenter_shared(c) is None
 
 
+@pytest.mark.slow
 def test_the_folds_take_the_fits_noise_model_under_a_shared_error():
     """Issue 53, item 1 (one noise model): the cross-validation fits each fold by the same
     generalized least squares and predicts a held-out press with its indenter's share of
@@ -458,6 +465,7 @@ def _write(tmp_path, t):
                               thickness_mm=t.thickness_mm, radius_mm=t.radius_mm)
 
 
+@pytest.mark.slow
 def test_cli_json_follows_the_contract_and_report(tmp_path, capsys):
     t = make_measurement_table("incomplete_recovery", 1)
     csv = _write(tmp_path, t)
@@ -487,6 +495,7 @@ def test_cli_json_follows_the_contract_and_report(tmp_path, capsys):
     assert "verdict: missing effect incomplete_recovery" in out
 
 
+@pytest.mark.slow
 def test_cli_layer_base_and_given_effects(tmp_path, capsys):
     t = make_measurement_table(None, 1)
     csv = _write(tmp_path, t)
@@ -521,6 +530,7 @@ def test_cli_bad_input(tmp_path, capsys, argv, expected):
     assert (tmp_path / "out.json").read_text() == "{}"     # nothing already written is lost
 
 
+@pytest.mark.slow
 def test_sample_session_with_a_hidden_effect(tmp_path, capsys):
     """The README's walk-through: calibrate the sample session, diagnose, add the effect."""
     from pathlib import Path
@@ -583,6 +593,7 @@ def test_a_stiffness_trend_competes_where_the_step_along_its_column_passes():
     assert _choose([cands[0], cands[3]], 0.05, partner, ("law_curvature",), "gate") is None
 
 
+@pytest.mark.slow
 def test_an_offset_along_depth_under_the_mark_rule_needs_the_crossing_forces():
     """A generated drawn-mark session with nothing hidden (tests/data/mark_null_8919):
     within each indenter the mark's depths are read through the force, and the ladder on

@@ -78,6 +78,7 @@ def test_fem_base_needs_a_over_h():
                  base="fem")
 
 
+@pytest.mark.slow
 def test_fem_base_on_a_null_table_needs_no_curvature_rung():
     """Null seed 5 reaches w/h = 0.19: against eq. (5) its misfit takes a law_curvature
     rung; against the FEM law the base is all there is, and E and nu are read from it
@@ -92,6 +93,7 @@ def test_fem_base_on_a_null_table_needs_no_curvature_rung():
     assert abs(fem.nu - t.truth["nu"]) < 0.01
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", [101, 105, 110])
 def test_fem_base_names_an_offset_eq5_hides(seed):
     """A force offset at the replicate noise (snr 1) that eq. (5)'s curvature cancels:

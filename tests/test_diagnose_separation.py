@@ -98,6 +98,7 @@ def test_a_force_drift_is_not_a_stiffness_change(seed):
                                       tried["stiffness_step:time_s"])
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("pair", ["incomplete_recovery+force_drift",
                                   "aging+spatial_nonuniformity"])
 def test_two_effects_at_once_are_both_named(pair):
@@ -113,6 +114,7 @@ def test_two_effects_at_once_are_both_named(pair):
     assert d.ladder[-1].cv_rmse_n < 0.3 * d.ladder[0].cv_rmse_n
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("curvature", ["gate", "nuisance"])
 def test_the_laws_own_curvature_is_not_an_effect(curvature):
     """A null table whose depths reach far enough for eq. 5's misfit to the finite-strain
@@ -157,6 +159,7 @@ def test_relaxation_reports_both_moduli():
     assert f"E_inf = (1 - g) E_0 = {fit.E_mpa * (1 - g):.4g} MPa" in note
 
 
+@pytest.mark.slow
 def test_fit_and_diagnose_give_one_base_model(tmp_path, capsys):
     """The same table, the same base: `fit` and `diagnose` report the same E and nu (the
     paper's fit, with the depth uncertainties in both variables where the table has

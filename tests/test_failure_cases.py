@@ -15,6 +15,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 from bench_failures import CASES
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("case", "seeds", "need"), [
     ("ramp_wrong_law", 20, 19), ("specimens", 20, 19), ("feats_shift", 20, 19),
     ("repeat_ramps", 2, 2)])

@@ -135,6 +135,7 @@ def _hat_loads(x, y, pressure, sub=10):
 A_HZ, P_HZ = 3.0, 0.5        # Hertz pressure on a disc: radius (mm), total force (N)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("nu", "field_excess"), [(0.45, 0.010), (0.49, 0.020)])
 def test_fem_recovers_the_hertz_load_of_a_finer_pad(nu, field_excess, cache):
     """The estimator's 40 x 30 x 4 B-bar pad (1.02 mm nodes) fed the top surface of an
@@ -212,6 +213,7 @@ def test_fem_recovers_the_hertz_load_of_a_finer_pad(nu, field_excess, cache):
         assert np.all(fm.forces_n[~fm.contact] == 0)
 
 
+@pytest.mark.slow
 def test_fem_footprint_keeps_the_rim_nodes_of_the_contact(cache):
     """'footprint' with method='fem' keeps every node whose hat function reaches a mask
     pixel (then drops those that pull): a node just outside the contact still carries

@@ -108,6 +108,7 @@ def test_closed_form_bbar_default_grid():
     assert pointwise < 0.06, pointwise           # includes the finite pad's edge effects
 
 
+@pytest.mark.slow
 def test_closed_form_hex2():
     pad = _pad(grid=(27, 20), element="hex2")
     assert pad.layers == 2

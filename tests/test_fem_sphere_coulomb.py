@@ -31,6 +31,7 @@ def _run(contact: str, mu: float | None):
     return res
 
 
+@pytest.mark.slow
 def test_limits_are_the_frictionless_and_the_tied_contact():
     """mu = 1e6 is the tied contact exactly; mu = 0 the frictionless one (within 0.1 %); a
     finite mu lies between, its stick zone inside the contact, shrinking as mu falls."""
@@ -66,6 +67,7 @@ def test_every_node_in_contact_obeys_coulombs_law():
         assert -2 * np.pi * fz.sum() == pytest.approx(res.force[k], rel=1e-6)
 
 
+@pytest.mark.slow
 def test_friction_does_nothing_on_an_incompressible_half_space():
     """A small contact (a/h ~ 0.05) on an incompressible layer is a half-space whose
     normal and shear problems uncouple (Dundurs' beta = 0; Johnson, Contact Mechanics,
@@ -97,6 +99,7 @@ def test_a_ball_with_friction_fits_through_the_indenter():
         ball.force(w, contact="coulomb", **{**kw, "law": "neo_hookean"})
 
 
+@pytest.mark.slow
 def test_cli_fit_reads_friction(tmp_path):
     """``fit --contact coulomb --friction MU`` on presses drawn from that law gives back
     E; the two options alone are refused with exit 2 naming them."""

@@ -244,6 +244,7 @@ def _stepped_session(seed, n=20):
             "depth_std_mm": u, "force_sem_n": sem}
 
 
+@pytest.mark.slow
 def test_a_model_with_effects_weighs_the_presses_by_their_stated_noise():
     """fit --effects used to drop depth_std_mm (issue 53: a Taxim vernier's step fitted
     E 0.1686 MPa, 95 % CI [0.1594, 0.1901], truth 0.2). Weighted by the stated noise

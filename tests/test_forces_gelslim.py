@@ -82,6 +82,7 @@ def force_maps():
     return out
 
 
+@pytest.mark.slow
 def test_force_maps_on_the_detected_circle_are_compressive_and_centred(force_maps):
     # Compressive: by construction in 'footprint' contact (nodes in tension
     # leave the footprint), pinned here. Centred: the pressure centroid lies

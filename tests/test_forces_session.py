@@ -170,6 +170,7 @@ def cell_recon(session, edge_balls):
     return DepthReconstructor(cal, reference=s.reference, boundary="contact")
 
 
+@pytest.mark.slow
 def test_partial_ball_presses_reach_the_image_edges(session, edge_balls):
     s, _ = session
     (H, W), c, r = s.shape, edge_balls.centers_px, edge_balls.radii_px
@@ -201,6 +202,7 @@ def _ft_force(s, truth, i):
 DEEP = [1, 6, 8, 9, 12, 16, 17, 19]
 
 
+@pytest.mark.slow
 def test_session_forces_within_5_percent_with_position_cells(session, cell_recon, estimator):
     """Frames -> heights (a LUT per cell of 8 x 6) -> force (spectral, footprint,
     beta) against the F/T log, one hold frame per press: all within 5 % (measured

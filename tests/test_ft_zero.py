@@ -126,6 +126,7 @@ def _true_zero(fit: dict, row: dict, t0: float, t1: float) -> float:
     return 0.3 + 0.1 * (t_win - t0) / (t1 - t0)
 
 
+@pytest.mark.slow
 def test_calibrate_takes_the_zero_off(offset_session, tmp_path):
     """End to end, default options: the zero and its drift are read within 2 mN at every
     press and taken off force_n (the drift seen, so its line: --ft-zero auto), which then
@@ -150,6 +151,7 @@ def test_calibrate_takes_the_zero_off(offset_session, tmp_path):
     assert 0.3 < z["zero_n"] < 0.4
 
 
+@pytest.mark.slow
 def test_calibrate_constant_zero_lists_the_drift(offset_session, tmp_path):
     """--ft-zero constant: the mean zero off, the drift left in force_n and listed per press
     (ft_drift_n: the measured zero less that mean), which diagnose reads as a covariate."""

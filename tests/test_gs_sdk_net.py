@@ -90,6 +90,7 @@ def test_the_graph_computes_gs_sdk_slopes_as_our_normals(tmp_path):
     assert again.model == "mlp" and again.provenance["layers"] == [5, 32, 32, 32, 2]
 
 
+@pytest.mark.slow
 def test_a_network_trained_the_gs_sdk_way_reads_held_out_balls():
     """Trained as gs_sdk trains (its labels, features, architecture) on six presses, run
     through from_gs_sdk: the held-out balls come back at their radius, with the normals

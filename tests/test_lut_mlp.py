@@ -750,6 +750,7 @@ def test_load_meta_missing_field(field, synth_lut, tmp_path):
         assert cal.model == "lut"
 
 
+@pytest.mark.slow
 def test_mlp_tabulation_is_cached_on_disk_and_a_damaged_file_is_a_miss(tmp_path, monkeypatch):
     """A reconstructor of an MLP calibration in a new process (memory cache empty) reads
     the tabulation from the disk cache instead of evaluating the network; the heights are

@@ -200,6 +200,7 @@ def test_effect_catalogue_names():
         check_fit_effects(["stiffness"])
 
 
+@pytest.mark.slow
 def test_kappa_n_reads_only_the_nodes_that_decide_it():
     """kappa_n interpolates along w/h, then nu, then a/h (PCHIP) on the few nodes that
     decide each value (issue 86: the suite's time; a ramp's 600 depths 12x faster): the

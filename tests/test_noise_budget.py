@@ -51,6 +51,7 @@ def _table(seed: int, lag_sd_mm: float = 0.0):
     return c, t
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", [311, 312, 313])
 def test_null_tables_scatter_within_the_budget(seed):
     c, t = _table(seed)
@@ -79,6 +80,7 @@ def test_a_wandering_depth_certification_is_a_finding(seed):
     assert obj["exceeds"] is True and obj["p_value"] < 1e-3
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", [311, 312])
 def test_a_coarse_but_honest_depth_link_is_said(seed):
     """A mark's onset certifies w0 while the stage goes on 0 to 50 um (uniform), and

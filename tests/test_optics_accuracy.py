@@ -347,6 +347,7 @@ def test_report_carries_the_circle_error_only_when_given(presses):
         assert a["normal_angle_08_deg"] == b["normal_angle_08_deg"]
 
 
+@pytest.mark.slow
 def test_held_out_report_on_detected_circles_agrees_with_hand_annotated_ones(taxim_presses):
     """The report's own circles against truth no code of ours drew: on the real GelSight
     presses of taxim (hand-annotated circles), a LUT trained on detected circles and scored

@@ -36,6 +36,7 @@ def test_the_slope_of_hertz_sink_in_peaks_at_the_contact_radius(a_mm):
     assert np.isnan(slope_peak_radius(gx, gy, (5.0, 150.0), a_px))
 
 
+@pytest.mark.slow
 def test_gelslim_detected_radii_rescaled_and_heights_to_scale(tmp_path, capsys):
     """GelSlim 3.0 (7.6 mm ball, circles detected), the colour table: the detected radii
     are scaled to where the first model's slope peaks (about 0.85); before, the held-out

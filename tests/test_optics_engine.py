@@ -158,6 +158,7 @@ def seven(tmp_path_factory):
     return out, report
 
 
+@pytest.mark.slow
 def test_seven_presses_keep_a_table_and_say_why_not_the_network(seven):
     """Seven presses: the tables cross-validated over them, the first fold's split too few
     for a network, which the report says. The engine kept is the candidate that scored best and

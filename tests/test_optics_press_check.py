@@ -33,6 +33,7 @@ def mixed(tmp_path_factory):
     return folder, others
 
 
+@pytest.mark.slow
 def test_other_objects_are_refused_by_file(mixed, tmp_path, capsys):
     """The ring, the punch and the screw head are refused, named by file, and neither
     trained on nor scored; every ball press is kept."""

@@ -47,6 +47,7 @@ def test_shipped_gelsight_calibration_table_engine(shipped, taxim_presses):
     assert rep.fitted_radius_std_px * MM < 0.08
 
 
+@pytest.mark.slow
 def test_shipped_gelsight_calibration_onnx_engine(shipped, taxim_presses):
     # the network itself, per pixel: benchmark 4.25 deg, 53.4 um, 1.997 +- 0.042 mm on the
     # 24 held-out presses; here every third of them (8; per-pixel inference is slow:

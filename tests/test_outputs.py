@@ -144,6 +144,7 @@ def test_reconstruct_refuses_foreign_files_and_keeps_nothing_on_ctrl_c(tmp_path,
     assert main(args) == 0                          # its own files: no --overwrite needed
 
 
+@pytest.mark.slow
 def test_diagnose_and_validate_reports_refuse_foreign_files(tmp_path, capsys):
     from tactilevision.io import write_measurements
     from tactilevision.sim import make_measurement_table

@@ -24,6 +24,7 @@ from tactilevision.planning import (
 PAPER_DEPTHS = (0.15, 0.30, 0.40, 0.50, 0.60)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("kw", [dict(radius_mm=3.0, bevel_angle_deg=5.0, repeats=4,
                                      overshoot_um=(30.0, 60.0)),
                                 dict(radius_mm=4.5, frame_rate_hz=30.0, repeats=2),
@@ -42,6 +43,7 @@ def test_predicted_sigmas_match_the_scatter_of_generated_sessions(kw):
     assert p.nu_sigma == pytest.approx(np.std(est[ok, 1], ddof=1), rel=0.15)
 
 
+@pytest.mark.slow
 def test_depth_uncertainty_of_a_mark_and_a_vernier():
     mark = Design(thickness_mm=3.0, radius_mm=2.5, depths_mm=PAPER_DEPTHS, frame_rate_hz=10.0,
                   stage_speed_mm_s=0.5)
@@ -71,6 +73,7 @@ def test_depth_uncertainty_of_a_mark_and_a_vernier():
     assert plus < -1.0 < 1.0 < minus       # a longer depth reads the gel softer
 
 
+@pytest.mark.slow
 def test_a_thin_punch_cannot_identify_nu():
     """At a/h 0.5 the bonded punch's beta does not increase with nu (FEM table)."""
     p = plan(Design(thickness_mm=3.0, radius_mm=1.5, depths_mm=PAPER_DEPTHS))
@@ -205,6 +208,7 @@ def test_the_vernier_threshold_is_the_contact_packages():
     assert plan_px == contact_px
 
 
+@pytest.mark.slow
 def test_effects_a_design_cannot_test_are_named_with_why():
     """Constant holds with the window at the hold's start, one day, one rest length: the
     effects along hold_s, day and wait_s cannot show (diagnose's own column test); holds
@@ -256,6 +260,7 @@ def test_relaxation_noncentrality_scales_as_the_signal_over_the_noise():
     assert fast.power == 0 and not fast.span_ok
 
 
+@pytest.mark.slow
 def test_relaxation_power_against_fit_relaxation_on_drawn_holds():
     """The prediction against fit_relaxation itself on holds drawn with the design's white
     F/T noise (benchmarks/bench_plan_relaxation.py draws more): where the plan says 1 %

@@ -75,6 +75,7 @@ def _varied_sensitivity():
     return effect_sensitivity(Design(**VARIED))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("effect", ["aging", "force_offset", "incomplete_recovery"])
 def test_diagnose_finds_the_predicted_sizes(effect):
     """diagnose itself on drawn sessions of the design: named in nearly every session at
@@ -106,6 +107,7 @@ DIP = dict(thickness_mm=4.0, radius_mm=2.4, depths_mm=(0.2, 0.4, 0.6, 0.75), rep
            window_samples=200)
 
 
+@pytest.mark.slow
 def test_an_offset_the_curvature_mimics_is_sized_past_its_dip():
     """The replay finds a depth offset in 95 % of sessions at a first size, then hardly
     at all a little larger; diagnose itself agrees on drawn sessions: few found in the

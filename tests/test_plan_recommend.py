@@ -38,6 +38,7 @@ def test_error_totals_add_the_systematic_part_in_quadrature():
     assert n == pytest.approx(math.hypot(p.nu_sigma, n_sys))
 
 
+@pytest.mark.slow
 def test_the_cheapest_design_meets_the_targets_on_generated_sessions():
     """The recommended design: its plan meets the targets, one repeat fewer does not (above
     the search's floor of two), and
@@ -78,6 +79,7 @@ def test_a_thin_punch_is_told_to_widen_for_nu():
     assert rec.changes[0].prediction.nu_identified
 
 
+@pytest.mark.slow
 def test_a_shared_lag_beyond_the_target_meets_it_at_no_repeats(tmp_path, capsys):
     """A mark at 30 frames/s and 0.1 mm/s: one frame's travel, 3.3 um, may be shared by every
     press and moves E by up to 14 % (a/h 1.2): no number of repeats meets E within 2 %;
@@ -110,6 +112,7 @@ def test_changes_that_open_effects_to_diagnose():
     assert {"aging", "spatial_nonuniformity", "viscoelastic_relaxation"} <= opens
 
 
+@pytest.mark.slow
 def test_cli_recommends_and_writes_the_cheapest_design(tmp_path, capsys):
     d = Design(thickness_mm=3.0, radius_mm=2.5, depths_mm=PAPER_DEPTHS, repeats=4,
                bevel_angle_deg=5.0, overshoot_um=(30.0, 60.0))
@@ -149,6 +152,7 @@ def test_bad_targets_exit_2(tmp_path, capsys, monkeypatch, argv, key):
         recommend(d, target_nu=float("nan"))
 
 
+@pytest.mark.slow
 def test_the_recommendation_is_a_fixed_point():
     """Issue 54, item 10: recommending again on the recommended design, with the same
     targets, finds nothing cheaper. On the paper's block (targets E 3 %, nu 0.01) the

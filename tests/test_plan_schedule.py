@@ -81,6 +81,7 @@ def test_crossing_brackets_span_the_periods_the_mark_rule_gives():
     assert 1.0 < per_indenter[0] / (0.1 / 15.0) < 10.0
 
 
+@pytest.mark.slow
 def test_a_gradient_is_sized_on_the_spread_of_each_indenters_places():
     """The crossing test sees a gradient only through x within each indenter: a schedule
     pressing every indenter at one place cannot see one, and stretching every x by 2
@@ -103,6 +104,7 @@ def test_a_gradient_is_sized_on_the_spread_of_each_indenters_places():
     assert one.size_param == pytest.approx(even, rel=0.10)
 
 
+@pytest.mark.slow
 def test_the_gradient_named_grows_as_each_indenters_places_spread_less():
     """Drawn schedules: the gradient the crossings name falls with the sd of x within each
     indenter (the only x the within-indenter test sees)."""
@@ -116,6 +118,7 @@ def test_the_gradient_named_grows_as_each_indenters_places_spread_less():
     assert np.corrcoef(spreads, sizes)[0, 1] < -0.7
 
 
+@pytest.mark.slow
 def test_the_schedule_reads_from_presses_csv_and_sets_repeats(tmp_path, capsys):
     sch = _random_schedule(3)
     (tmp_path / "presses.csv").write_text("press,indenter,x_mm,y_mm\n" + "".join(
@@ -188,6 +191,7 @@ def test_bracket_periods_average_what_the_design_says(mean):
         assert np.all(p == mean)
 
 
+@pytest.mark.slow
 def test_brackets_twice_as_wide_double_what_the_crossings_can_name():
     """Without F/T noise a bracket's width is its periods times one frame's travel times
     dP/dw, so every bracket two periods wide instead of one doubles it, and the crossing
@@ -262,6 +266,7 @@ def test_sessions_draw_each_press_s_periods_and_losses_as_the_design_says():
                for a, b in zip(lossy, again, strict=True))
 
 
+@pytest.mark.slow
 def test_unseen_presses_raise_what_the_crossings_can_name():
     """With whole periods and every press seen, the drawn sessions are the planned table
     (the sizes its own, to the bisection's 2 %); losing each press with probability 0.3

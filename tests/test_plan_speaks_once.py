@@ -51,6 +51,7 @@ def runs(tmp_path_factory) -> dict:
             "recommended": json.loads(got["recommended_json"])}
 
 
+@pytest.mark.slow
 def test_one_identification_verdict_agreeing_with_the_total(runs):
     """The paper's mark design: its scatter pins nu, but a depth error at the mark's bound
     takes beta beyond the table, and the total error says nu is not identified; the
@@ -76,6 +77,7 @@ def test_the_hold_is_described_as_the_table_holds_it(runs):
     assert "sits 0.1 s into its hold" in why and "constant (0.1" not in why
 
 
+@pytest.mark.slow
 def test_a_mark_design_does_not_promise_what_its_depth_rule_absorbs(runs):
     """Issue 53, item 3 (the plan's half): with a mark (bevel_angle_deg = 0) calibrate reads
     each depth past w0 from the press's own force, so diagnose cannot show a force effect
@@ -108,6 +110,7 @@ def test_a_mark_design_does_not_promise_what_its_depth_rule_absorbs(runs):
     assert 0.45 < fast["stiffness_step:press"].size / slow["stiffness_step:press"].size < 0.75
 
 
+@pytest.mark.slow
 def test_an_offset_along_depth_on_a_mark_design_needs_the_crossing_forces():
     """Under the mark rule diagnose names an offset along depth only where the crossing
     forces' own table names it too (tests/test_diagnose.py), so plan sizes it as the larger

@@ -75,6 +75,7 @@ def fit(case: str, z: np.ndarray, P: np.ndarray, **kw) -> RampFit:
     return fit_ramp(z, P, ind, thickness_mm=h, law=law, **kw)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("case", ["ball", "punch"])
 def test_contact_point_and_E_from_noisy_ramps(case):
     """20 ramps of 400 points, 2 mN force noise, 0.23 mm of approach and a 30 mN baseline:
@@ -265,6 +266,7 @@ def test_fit_ramp_checks_its_arguments():
         fit_ramp(z, P, BALL, thickness_mm=H_BALL, confidence=1.5)
 
 
+@pytest.mark.slow
 def test_fit_ramp_on_the_command_line(tmp_path):
     """``tactilevision fit RAMP.csv --ramp`` with the geometry in the sidecar: the contact
     point and E of a flat-punch ramp (small-strain law, kappa of the FEM table); without the

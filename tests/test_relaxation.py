@@ -452,6 +452,7 @@ def relaxing_session(tmp_path_factory):
     return folder, truth
 
 
+@pytest.mark.slow
 def test_calibrate_on_a_relaxing_gel(relaxing_session, tmp_path, capsys):
     """calibrate on a relaxing gel: the holds give g and tau back within 5 %; the clock
     (pulled early by a relaxing force: the unit test above) is synchronised on the
@@ -519,6 +520,7 @@ def test_press_schedule_holds_of_different_lengths():
             press_schedule((0.3,), hold_s=bad)
 
 
+@pytest.mark.slow
 def test_window_at_end_places_the_window_before_the_release(relaxing_session, tmp_path):
     """[force_sensor] window_at = "end": each press's force window ends where its hold ends
     (truth.json's hold_to_s), so hold_s is the hold's length less half the window, and
@@ -596,6 +598,7 @@ def test_diagnose_names_a_relaxation_from_the_holds(tmp_path):
         d.holds.smallest_rate_per_s) and "from the holds" in ruled.why
 
 
+@pytest.mark.slow
 def test_what_flat_holds_rule_out_is_named_at_one_and_a_half_times():
     """The smallest decay flat holds would have named (``smallest_rate_per_s``, 5.25
     standard errors of their rate: the F test's power at 0.95): a slow relaxation (tau 60

@@ -26,6 +26,7 @@ def calibrated(tmp_path_factory):
     return out, json.loads((SESSION / "truth.json").read_text())
 
 
+@pytest.mark.slow
 def test_calibrate_reads_E0_and_E_inf_from_the_holds(calibrated):
     """From the hold curves: g and tau within 5 %, E_0 and E_inf within 12 % of the truth
     (two of E's predicted sds for the sample session's design with its 1.8 um depth sd,

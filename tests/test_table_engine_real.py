@@ -39,6 +39,7 @@ def _angles(gx, gy, tgx, tgy, inside):
     return normal_angle_deg(gx[inside], gy[inside], tgx[inside], tgy[inside])
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("sensor", ["gelsight_mini", "gelslim3"])
 def test_table_engine_is_within_0_3_degrees_of_the_exact_one(sensor, torch_one_thread):
     if sensor == "gelsight_mini":

@@ -65,6 +65,7 @@ def _network_at_exact_colour(cal, recon, frame, cell_px):
     return gx.reshape(cal.shape), gy.reshape(cal.shape)
 
 
+@pytest.mark.slow
 def test_first_order_error_falls_as_the_square_of_the_colour_cell(tmp_path, monkeypatch):
     """On the shipped GelSight network and a real ball press, against the network at each
     pixel's exact colour (fed the table's position cells): halving the colour cell halves
@@ -121,6 +122,7 @@ def test_table_order_is_saved_loaded_and_checked(tmp_path):
         DepthReconstructor(cal, table_bins=1)
 
 
+@pytest.mark.slow
 def test_first_order_table_is_cached_on_disk_apart_from_order_zero(tmp_path, monkeypatch):
     """A first-order tabulation is read back from the disk cache with its slopes (same
     gradients, the network not evaluated again); an order-0 file is not taken for it."""

@@ -38,6 +38,7 @@ def taxim_run():
     return calibrate_session(TAXIM_SESSION), truth
 
 
+@pytest.mark.slow
 def test_taxim_session_is_certified_to_the_targets(taxim_run):
     """At least 95% of the presses certified; depth error mean within 2 um and sd under 3 um;
     each within its 3.5 sd."""
@@ -97,6 +98,7 @@ def taxim_bevel():
         yield render
 
 
+@pytest.mark.slow
 def test_taxim_live_render_reads_the_overshoot(taxim_bevel):
     """A band 13 px wide: the vernier reads the overshoot to within 1.5 um."""
     from tactilevision.contact import bevel_profile, read_bevel
@@ -234,6 +236,7 @@ def shallow_bevel_taxim_session(tmp_path_factory):
                                  seed=11, theta_deg=8.0)
 
 
+@pytest.mark.slow
 def test_a_shadow_block_beside_a_narrow_band_is_not_read(shallow_bevel_taxim_session):
     """A band read long must be seen by the shadows model too (SHADOW_RATIO): else the
     shadow block beside two narrow bands of this session passed for long bands, 29 and
@@ -330,6 +333,7 @@ def test_faint_mark_crossing_is_bracketed_from_its_first_trace(taxim_faint_mark_
     _crossing_in_bracket(cert, truth)
 
 
+@pytest.mark.slow
 def test_thin_mark_under_shadows_is_seen_at_its_step(taxim_mark_session):
     """Each press's own template (its hold's profile across the mark less its approach's)
     sees the mark where the generic score does not: every press certified, the onset the

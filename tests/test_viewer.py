@@ -221,6 +221,7 @@ def _clicked_title(page: Path) -> tuple[str, str]:
     return (title[1] if title else dom.stdout[:300]), dom.stdout
 
 
+@pytest.mark.slow
 def test_page_renders_in_chromium_and_the_slider_changes_the_frame(tmp_path):
     import cv2
 
