@@ -14,8 +14,9 @@ import numpy as np
 import pytest
 from _data import TAXIM_BALL_RADIUS_MM, TAXIM_MM_PER_PX
 
+from tactilevision import InputError
 from tactilevision.cli import main
-from tactilevision.cli._optics_run import _engine_text, _margin
+from tactilevision.cli._optics_run import _engine_text
 from tactilevision.io import read_ball_presses, taxim_datapack
 from tactilevision.optics import (
     CAP_DEG,
@@ -33,6 +34,7 @@ from tactilevision.optics import (
     position_cells,
     undecided_choice,
 )
+from tactilevision.optics._engine_choice import _margin
 
 SEVEN = "0:42:6"           # presses 0, 6, ..., 36: seven, spread over the folder
 
@@ -226,3 +228,36 @@ def test_engine_kept_is_near_the_best_on_the_other_presses(seven):
     kept = scores[report["engine"]["chosen"]]
     assert kept["angle_08_deg"] <= min(s["angle_08_deg"] for s in scores.values()) + 1.0
     assert abs(kept["inner_cap"]) <= min(abs(s["inner_cap"]) for s in scores.values()) + 0.03
+
+
+@pytest.mark.slow
+def test_the_python_default_chooses_as_the_command_does(seven):
+    """Issue 86, one default per choice: ``from_ball_presses`` with its defaults chooses the
+    engine by the procedure of ``optics calibrate``'s default ``--model auto``: on the same
+    seven presses the same candidates, each with the same cross-validated cost, the same
+    engine kept, the calibration returned of its kind."""
+    _, report = seven
+    ps = read_ball_presses(taxim_datapack("gelsight"))
+    train = np.arange(len(ps.frames))[slice(0, 42, 6)]
+    cal = PhotometricCalibration.from_ball_presses(
+        ps.reference, ps.frames[train], ps.centers_px[train], ps.radii_px[train],
+        ball_radius_mm=TAXIM_BALL_RADIUS_MM, mm_per_px=TAXIM_MM_PER_PX)
+    mine, cli = cal.provenance["engine"], report["engine"]
+    assert [r["engine"] for r in mine["candidates"]] == [r["engine"] for r in cli["candidates"]]
+    for a, b in zip(mine["candidates"], cli["candidates"], strict=True):
+        assert a["cost"] == pytest.approx(b["cost"], rel=1e-9, abs=1e-12)
+        assert a["lut_cells"] == b["lut_cells"]
+    assert mine["chosen"] == cli["chosen"] and mine["left_out"] == cli["left_out"]
+    assert cal.model == cli["model"]
+
+
+def test_auto_refuses_an_option_that_names_one_engine():
+    """``model='auto'`` chooses the engine: a LUT's position cells or a network to start
+    from name one, and are refused before any training, naming the option."""
+    ref = np.zeros((40, 50, 3), np.uint8)
+    frames = np.zeros((3, 40, 50, 3), np.uint8)
+    kw = dict(ball_radius_mm=2.0, mm_per_px=0.05)
+    with pytest.raises(InputError, match="lut_cells needs model='lut'"):
+        PhotometricCalibration.from_ball_presses(ref, frames, lut_cells=(4, 3), **kw)
+    with pytest.raises(InputError, match="warm_start needs model='mlp'"):
+        PhotometricCalibration.from_ball_presses(ref, frames, warm_start=object(), **kw)

@@ -7,7 +7,6 @@ Imported only when the command runs, so that its ``--help`` does not load this s
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import json
 import re
 from dataclasses import replace
@@ -24,33 +23,20 @@ from ..io import (
     taxim_datapack,
 )
 from ..optics import (
-    CAP_DEG,
     CIRCLE_ERROR,
     MIN_MARGIN_PRESSES,
     NON_BALL_RATIO,
-    UNDECIDED,
     DepthReconstructor,
     Engine,
     PhotometricCalibration,
     calibration_accuracy,
+    choose_engine,
     detect_contact_circles,
-    edge_cut,
-    engine_candidates,
-    engine_cost,
-    engine_margin,
     holdout_presses,
     non_ball_presses,
-    pooled_cost,
-    pooled_presses,
-    press_folds,
-    undecided_choice,
 )
 
 __all__ = ["parse_presses", "run_calibrate"]
-
-#: Folds the candidate tables are cross-validated over for the engine's choice.
-ENGINE_FOLDS = 10
-
 
 def parse_presses(text: str | None, n: int) -> np.ndarray:
     """Press selection: a Python slice ``start:stop:step`` or a comma list.
@@ -374,131 +360,22 @@ def _accuracy_report(args: argparse.Namespace, ps, scoring, train_idx: np.ndarra
     return report
 
 
-def _network_unavailable() -> str | None:
-    """Why this installation cannot train a network (None: it can)."""
-    if importlib.util.find_spec("torch") is None:
-        return "torch is not installed (pip install 'tactilevision[torch]')"
-    return None
-
-
 def _choose_engine(args: argparse.Namespace, ps, given: bool, circles, ball_px: np.ndarray,
                    train_idx: np.ndarray, cells: tuple[int, int], train
                    ) -> tuple[Engine, dict, tuple | None]:
-    """The engine the calibration keeps (:mod:`tactilevision.optics._engine`), the record
-    of the choice, and ``(calibration, fitted_on, scored_on)`` of the candidate kept on the
-    first fold (None where no choice was made).
-
-    The tables are cheap: each is cross-validated over the training presses
-    (:func:`press_folds`, :data:`ENGINE_FOLDS` folds) and the best kept. A network trains
-    once, on the first fold's split, and replaces that table where it scores better on the
-    first fold's presses."""
+    """The engine the calibration keeps, the record of the choice, and ``(calibration,
+    fitted_on, scored_on)`` of the candidate kept on the first fold (None where no choice
+    was made): ``--model lut|mlp`` as named, ``--model auto`` by :func:`choose_engine`
+    (the Python API's default procedure)."""
     if args.model != "auto":
         engine = (Engine("network", "mlp") if args.model == "mlp" else
                   Engine("table_cells" if cells != (1, 1) else "table", "lut", cells))
         return engine, {"chosen": engine.name, "model": engine.model,
                         "lut_cells": list(engine.lut_cells), "by": f"--model {args.model}",
                         "candidates": [], "left_out": {}}, None
-    centres, radii = circles[0][train_idx], circles[1][train_idx]
-    shape = ps.reference.shape[:2]
-    n_in = int(np.count_nonzero(~edge_cut(centres, radii, shape)))
-    fold = (press_folds(centres, radii, ball_px[train_idx], shape, min(ENGINE_FOLDS, n_in))
-            if n_in >= 2 else np.full(train_idx.size, -1))
-    if n_in < 2 or np.count_nonzero(fold != 0) < 2:
-        why = (f"{n_in} of the {train_idx.size} training presses lie inside the image: too "
-               "few to choose an engine on presses it did not see; the colour table")
-        return Engine("table", "lut"), {"chosen": "table", "model": "lut", "lut_cells": [1, 1],
-                                        "by": why, "candidates": [], "left_out": {}}, None
-    fit0, score0 = train_idx[fold != 0], train_idx[fold == 0]
-    cands, left = engine_candidates(shape, int(fit0.size), network=_network_unavailable())
-    rows, first, pooled = [], {}, {}
-    for engine in cands:
-        folds = [0] if engine.model == "mlp" else range(int(fold.max()) + 1)
-        reports = []
-        for f in folds:
-            if not args.no_progress:
-                print(f"choosing the engine: {engine.label()}, fold {f + 1} of {len(folds)}",
-                      flush=True)
-            fit_on, score_on = train_idx[fold != f], train_idx[fold == f]
-            cal = train(fit_on, engine)
-            rep = _score_split(args, ps, cal, fit_on, score_on, given,
-                               (centres[fold == f], radii[fold == f]), ball_px)
-            reports.append(rep)
-            if f == 0:
-                first[engine.name] = (cal, engine_cost(rep))
-        pooled[engine.name] = (pooled_presses(reports), pooled_presses(reports[:1]))
-        every = pooled[engine.name][0].values()
-        rows.append({"engine": engine.name, "label": engine.label(), "model": engine.model,
-                     "lut_cells": list(engine.lut_cells), "folds": len(folds),
-                     **pooled_cost(reports), "first_fold": first[engine.name][1],
-                     "per_press": {"angle_08_deg": [v for a, _ in every for v in a],
-                                   "inner_cap": [v for _, c in every for v in c]}})
-    chosen = _pick(rows)
-    margin = _margin(rows, chosen, pooled)
-    by = (f"the lowest angle inside 0.8 of the radius + {CAP_DEG:g} deg x |inner cap| "
-          f"(medians over the presses, as the report's) on training presses each "
-          f"candidate was not trained on (the tables cross-validated over "
-          f"{int(fold.max()) + 1} folds, a network on the first)")
-    keep = undecided_choice(chosen, margin)
-    if keep != chosen:
-        chosen, margin = keep, _margin(rows, keep, pooled)
-        by += f"; {UNDECIDED}"
-    engine = next(e for e in cands if e.name == chosen)
-    return engine, {
-        "chosen": chosen, "model": engine.model, "lut_cells": list(engine.lut_cells),
-        "by": by, "fitted_on": [int(i) for i in fit0], "scored_on": [int(i) for i in score0],
-        "candidates": rows, "left_out": left, "margin": margin}, (
-        first[chosen][0], fit0, score0)
-
-
-def _margin(rows: list[dict], chosen: str, pooled: dict) -> dict | None:
-    """The kept engine against the next best candidate scored on the same presses
-    (:func:`engine_margin`): the tables on every press their folds scored, a network (one
-    fold) against the table of the lowest first-fold cost on that fold's presses; None
-    where there is none."""
-    net = any(r["model"] == "mlp" for r in rows if r["engine"] == chosen)
-    key = (lambda r: r["first_fold"]["cost"]) if net else (lambda r: r["cost"])
-    others = sorted((r for r in rows if r["engine"] != chosen and np.isfinite(key(r))
-                     and (net or r["model"] != "mlp")), key=key)
-    if not others:
-        return None
-    m = engine_margin(pooled[chosen][int(net)], pooled[others[0]["engine"]][int(net)])
-    return None if m is None else {"runner_up": others[0]["engine"], **m,
-                                   "ci95": list(m["ci95"])}
-
-
-def _pick(rows: list[dict]) -> str:
-    """The engine kept: the table of the lowest cross-validated cost, unless a network
-    scores lower than it on the first fold, where both were scored on the same presses."""
-    tables = [r for r in rows if r["model"] == "lut" and np.isfinite(r["cost"])]
-    best = min(tables, key=lambda r: r["cost"]) if tables else rows[0]
-    for r in rows:
-        if (r["model"] == "mlp" and np.isfinite(r["first_fold"]["cost"])
-                and not r["first_fold"]["cost"] >= best["first_fold"]["cost"]):
-            return r["engine"]
-    return best["engine"]
-
-
-def _score_split(args: argparse.Namespace, ps, cal: PhotometricCalibration,
-                 fit_on: np.ndarray, score_on: np.ndarray, given: bool, circles,
-                 ball_px: np.ndarray) -> dict:
-    """`cal` (trained on `fit_on`) scored on the presses `score_on` alone, against their
-    circles (given, or detected by no calibration)."""
-    sel = np.concatenate([fit_on, score_on])
-    trained = np.zeros(sel.size, bool)
-    trained[:fit_on.size] = True
-    if given:
-        centres, radii = ps.centers_px[sel], ps.radii_px[sel]
-    else:
-        centres = np.concatenate([np.asarray(cal.provenance["centers_px"]), circles[0]])
-        radii = np.concatenate([np.asarray(cal.provenance["radii_px"]), circles[1]])
-    try:
-        return calibration_accuracy(DepthReconstructor(cal), ps.frames[sel], centres, radii,
-                                    ball_px[sel], trained=trained,
-                                    label_fraction=cal.provenance["label_fraction"],
-                                    circles="given" if given else "detected",
-                                    edge="contact" if given else args.detect_edge)
-    except InputError:
-        return {"balls": []}
+    return choose_engine(ps.reference, ps.frames, circles, ball_px, train_idx, train,
+                         given=given, detect_edge=args.detect_edge,
+                         progress=not args.no_progress)
 
 
 def _engine_text(choice: dict) -> str:

@@ -64,6 +64,7 @@ from ._engine import (
     position_cells,
     undecided_choice,
 )
+from ._engine_choice import ENGINE_FOLDS, choose_engine, network_unavailable
 from ._evaluate import BallPressReport, evaluate_ball_presses
 from ._features import colour_change, frame_gain, reference_inverse
 from ._lut import ColourLUT, fit_cell_luts, fit_colour_lut
@@ -91,6 +92,7 @@ __all__ = [
     "CAP_DEG",
     "CIRCLE_ERROR",
     "ENGINES",
+    "ENGINE_FOLDS",
     "KERNELS",
     "MIN_MARGIN_PRESSES",
     "MIN_NETWORK_PRESSES",
@@ -122,6 +124,7 @@ __all__ = [
     "calibration_accuracy",
     "cap_prediction",
     "cell_position_inputs",
+    "choose_engine",
     "colour_change",
     "colour_edge_circle",
     "default_position_cell_px",
@@ -154,6 +157,7 @@ __all__ = [
     "max_tilt_deg",
     "mlp_inputs",
     "mlp_layers",
+    "network_unavailable",
     "non_ball_presses",
     "normal_angle_deg",
     "normals_from_gradients",

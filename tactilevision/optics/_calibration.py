@@ -28,6 +28,7 @@ from .._assets import KNOWN_SENSORS, default_calibration_path
 from .._checks import InputError, check_array
 from .._version import __version__
 from ._calibration_data import CalibrationData, ModelKind
+from ._engine_choice import calibrate_choosing_engine
 from ._gs_sdk_net import gs_sdk_layers, onnx_from_gs_sdk
 from ._lut import ColourLUT
 from ._training import fit_from_ball_presses
@@ -113,7 +114,7 @@ class PhotometricCalibration(CalibrationData):
         *,
         ball_radius_mm: float | np.ndarray,
         mm_per_px: float,
-        model: ModelKind = "mlp",
+        model: ModelKind | Literal["auto"] = "auto",
         use_position: bool = True,
         markers: bool | None = None,
         label_fraction: float | None = None,
@@ -154,8 +155,16 @@ class PhotometricCalibration(CalibrationData):
             them: :attr:`tactilevision.io.BallPressSet.ball_radius_mm`).
         mm_per_px : float
             Image scale on the gel, mm per px.
-        model : {'lut', 'mlp'}, default 'mlp'
-            Binned colour table or position-aware network (needs torch).
+        model : {'auto', 'lut', 'mlp'}, default 'auto'
+            The engine: ``'lut'`` a binned colour table, ``'mlp'`` the
+            position-aware network (needs torch), ``'auto'`` the one of the
+            colour table, the table per position cell and (with 8 presses or
+            more and torch installed) the network that reads best on presses
+            it was not trained on (:func:`~tactilevision.optics.choose_engine`,
+            the procedure of ``optics calibrate``'s default ``--model auto``),
+            trained on every press; the choice is in
+            ``provenance['engine']``. It costs the candidates' trainings
+            (ten colour-table folds each, one network) beside one.
         use_position : bool, default True
             MLP only: feed the pixel position (False: colour-only ablation).
         markers : bool, optional
@@ -268,9 +277,20 @@ class PhotometricCalibration(CalibrationData):
             leaves no flat pixel, a detected press has no contact, or
             `warm_start` is not a network taking the same inputs, or
             ``detected=False`` without circles.
+            With ``model='auto'``: ``lut_cells`` other than (1, 1) or a
+            ``warm_start`` (each names an engine).
         ImportError
             For ``model='mlp'`` without torch.
         """
+        if model == "auto":
+            return calibrate_choosing_engine(
+                cls, reference, frames, centers_px, radii_px, ball_radius_mm=ball_radius_mm,
+                mm_per_px=mm_per_px, detect_edge=detect_edge, flat_fraction=flat_fraction,
+                detected=detected, lut_cells=lut_cells, warm_start=warm_start,
+                progress=progress, use_position=use_position, markers=markers,
+                label_fraction=label_fraction, refine_centers=refine_centers, bins=bins,
+                epochs=epochs, hidden=hidden, blur_sigma=blur_sigma, seed=seed, source=source,
+                max_steps=max_steps, position_cell_px=position_cell_px)
         return fit_from_ball_presses(
             cls, reference, frames, centers_px, radii_px, ball_radius_mm=ball_radius_mm,
             mm_per_px=mm_per_px, model=model, use_position=use_position, markers=markers,
