@@ -59,6 +59,7 @@ def test_every_press_found_with_its_force(calibrated):
     assert zero and abs(zero[0] - 40.0) < 2.0, cal.warnings
 
 
+@pytest.mark.slow
 def test_depths_from_the_circles_hold_the_truth(calibrated):
     """Each depth within its stated shared bound plus two sds of Sneddon's; E's interval
     holds the truth (the detector's circles sit inside the contact, the depths shallow, E
@@ -129,6 +130,7 @@ def test_a_session_that_names_its_optics_has_its_caps_checked(ball_session, tmp_
     assert any(w.startswith("cap cross-check: the height map's caps read") for w in warn)
 
 
+@pytest.mark.slow
 def test_a_sessions_dome_is_checked_and_named(ball_session, tmp_path):
     """``[sensor] gel_dome_radius_mm``: a number or refused naming the key; a dome without
     the pad's radius refused naming the file and key; no unknown-key warning."""
@@ -149,6 +151,7 @@ def test_a_sessions_dome_is_checked_and_named(ball_session, tmp_path):
         calibrate_ball_session(bad, law="linear")
 
 
+@pytest.mark.slow
 def test_a_ball_session_is_not_a_gauge_blocks(ball_session):
     folder, _ = ball_session
     with pytest.raises(InputError, match="calibrate_ball_session"):

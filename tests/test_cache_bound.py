@@ -6,13 +6,16 @@ from __future__ import annotations
 
 import json
 import os
+import subprocess
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from tactilevision import InputWarning
-from tactilevision._cache import cache_info, cache_limit_bytes, savez_atomic, touch
+from tactilevision._cache import cache_info, cache_limit_bytes, cache_root, savez_atomic, touch
 from tactilevision.cli import main
 
 
@@ -60,3 +63,16 @@ def test_a_bad_bound_is_warned_and_the_default_used(monkeypatch):
             assert cache_limit_bytes() == 1024 * 2**20
     monkeypatch.setenv("TACTILEVISION_CACHE_MB", "0.5")
     assert cache_limit_bytes() == 2**19
+
+
+def test_the_suite_writes_its_own_cache_never_the_users():
+    """Issue 86: the suite's cache is ``~/.cache/tactilevision-suite`` (tests/conftest.py),
+    in this worker and in every command a test starts, never the user's default folder."""
+    users = Path.home() / ".cache" / "tactilevision"
+    suite = Path(os.environ.get("TACTILEVISION_SUITE_CACHE",
+                                Path.home() / ".cache" / "tactilevision-suite"))
+    child = subprocess.run([sys.executable, "-c", "from tactilevision._cache import "
+                            "cache_root; print(cache_root())"],
+                           capture_output=True, text=True, timeout=60, check=True)
+    assert cache_root() == suite == Path(child.stdout.strip())
+    assert suite != users and users not in suite.parents

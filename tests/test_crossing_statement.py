@@ -93,6 +93,7 @@ def test_late_onsets_are_not_named_as_a_change_of_the_gel(late_null):
             assert new.stated_p_residual < 0.05
 
 
+@pytest.mark.slow
 def test_the_scaled_statement_is_reported(late_null):
     """The sentence calls it a certification problem and says the scale; the JSON carries
     the scale, the withheld change and its p; the chi2 printed is the stated one."""

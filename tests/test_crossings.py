@@ -253,6 +253,7 @@ def test_an_ft_zeroed_before_a_fixture_moves_no_crossing(softening, tmp_path):
     assert np.max(np.abs(got["force_w0_n"] - ref["force_w0_n"])) < 3e-3
 
 
+@pytest.mark.slow
 def test_the_command_line_reads_the_crossings(softening, tmp_path):
     """`diagnose` of the softening session's measurements.csv: the crossing forces are not
     scanned as covariates, and its JSON carries their tests and the verdict."""
@@ -305,6 +306,7 @@ def test_a_softening_gel_is_found_through_its_crossings(softening):
         assert ("half-way" in ruled[name].why) == (name == "stiffness_step:press")
 
 
+@pytest.mark.slow
 def test_fit_on_the_crossing_forces(softening, tmp_path, capsys):
     """``fit --crossings``: the model fitted to each press's force at its crossing of w0 (a
     depth the frames certify apart from the force), weighted by its stated sd. On the

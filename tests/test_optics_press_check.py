@@ -60,6 +60,7 @@ def test_other_objects_are_refused_by_file(mixed, tmp_path, capsys):
                                                                         strict=True))
 
 
+@pytest.mark.slow
 def test_with_detected_circles_too(mixed):
     folder, others = mixed
     from tactilevision.optics import detect_contact_circles

@@ -69,6 +69,7 @@ def test_one_identification_verdict_agreeing_with_the_total(runs):
         "nu identified (with the shared errors at their bounds too)"]
 
 
+@pytest.mark.slow
 def test_the_hold_is_described_as_the_table_holds_it(runs):
     """recommended.toml holds each press 1 s with the window at the hold's start: the
     table's hold_s is 0.1 s (the window's middle), and plan says so, not 'constant 0.1'."""

@@ -492,6 +492,7 @@ def test_calibrate_on_a_relaxing_gel(relaxing_session, tmp_path, capsys):
     assert again["c_n_per_mm"] == pytest.approx(obj["c_n_per_mm"], rel=0.02)
 
 
+@pytest.mark.slow
 def test_calibrate_relaxation_bad_value(relaxing_session):
     """An unknown relaxation mode is refused, naming the choices, before any work."""
     from tactilevision import calibrate_session

@@ -48,6 +48,7 @@ def test_calibrate_reads_E0_and_E_inf_from_the_holds(calibrated):
     assert np.ptp(rows["hold_s"]) > 1.5
 
 
+@pytest.mark.slow
 def test_diagnose_names_relaxation_from_the_table_alone(calibrated, capsys):
     """The table's force_n, taken at different times of the holds, relax: diagnose names
     viscoelastic_relaxation (no other effect, no unexplained covariate), and fitting it gives
@@ -70,6 +71,7 @@ def test_diagnose_names_relaxation_from_the_table_alone(calibrated, capsys):
     assert fit["E_mpa"] == pytest.approx(at_ramp_end, rel=0.03)
 
 
+@pytest.mark.slow
 def test_plan_from_this_calibration_keeps_its_holds_and_relaxation(calibrated):
     """``plan --from-calibration`` on the relaxing session plans a repeat of it: the holds
     in press order (0.5 to 2.8 s, the window at their ends), the rests, and the relaxation
@@ -99,6 +101,7 @@ def _quoted_row(label: str) -> list[float]:
          [0]]
 
 
+@pytest.mark.slow
 def test_the_docs_quote_what_calibrate_prints(calibrated):
     """docs/relaxation.md quotes this run (issue 54, item 8): g, tau, E_0 and E_inf with
     their intervals, each within one unit of the last digit it shows."""
