@@ -72,7 +72,7 @@ def main() -> None:
     for name, (H, W), dx, h in (("GelSlim 3.0", (320, 427), 0.10577, 4.0),
                                 ("GelSight", (480, 640), 0.0295, 3.0)):
         t0 = time.perf_counter()
-        est = ForceEstimator((H, W), dx, thickness_mm=h, E_mpa=0.2, nu=0.48)
+        est = ForceEstimator((H, W), dx, thickness_mm=h, E_mpa=0.2, nu=0.48, contact="field")
         setup = time.perf_counter() - t0
         for dtype in (np.float32, np.float64):
             u = press((H, W), dx).astype(dtype)
@@ -92,7 +92,8 @@ def main() -> None:
           "frames/s")
     try:
         t0 = time.perf_counter()
-        fem = ForceEstimator((H, W), dx, thickness_mm=4.0, E_mpa=0.2, nu=0.48, method="fem")
+        fem = ForceEstimator((H, W), dx, thickness_mm=4.0, E_mpa=0.2, nu=0.48, method="fem",
+                             contact="field")
         setup = time.perf_counter() - t0
         st = fem._op.stiffness
         print(f"fem 40 x 30 nodes: set-up {setup:.2f} s ({'cache' if st.cached else 'built'}"
@@ -108,10 +109,10 @@ def main() -> None:
         H2, W2, dx2, a = 320, 427, 0.0806, 2.5
         yy, xx = np.indices((H2, W2), dtype=np.float64)
         punch = np.where(np.hypot(xx - (W2 - 1) / 2, yy - (H2 - 1) / 2) * dx2 <= a, 0.1, 0.0)
-        kw = dict(thickness_mm=3.0, E_mpa=0.2, nu=0.48)
+        kw = dict(thickness_mm=3.0, E_mpa=0.2, nu=0.48, threshold_mm=0.01)
         hayes = 2 * a * 0.2 * 0.1 * kappa(0.48, a / 3.0) / (1 - 0.48**2)
         fp = ForceEstimator((H2, W2), dx2, method="fem", contact="footprint", **kw)
-        fd = ForceEstimator((H2, W2), dx2, method="fem", **kw)
+        fd = ForceEstimator((H2, W2), dx2, method="fem", contact="field", **kw)
         sp = ForceEstimator((H2, W2), dx2, contact="footprint", **kw)
         print(f"fem 40 x 30 footprint, 2.5 mm punch at 427 x 320 (h 3, nu 0.48): "
               f"{fp(punch).total_n[2] / hayes:.3f} of Hayes (spectral "
@@ -127,7 +128,8 @@ def main() -> None:
     table, reference = taxim_shading("gelsight")
     frame = table.render(press(cal.shape, cal.mm_per_px).astype(np.float32), reference)
     recon = DepthReconstructor(cal, reference=reference)
-    est = ForceEstimator(cal.shape, cal.mm_per_px, thickness_mm=3.0, E_mpa=0.2, nu=0.48)
+    est = ForceEstimator(cal.shape, cal.mm_per_px, thickness_mm=3.0, E_mpa=0.2, nu=0.48,
+                         contact="field")
     h_rate = rate(lambda: recon(frame), 10)
     both = rate(lambda: est(recon(frame)), 10)
     print(f"frame -> height map ({cal.shape[1]} x {cal.shape[0]}, shipped GelSight "

@@ -49,7 +49,7 @@ def punch() -> None:
     o = np.argsort(rr)
     r2 = radius((480, 480), 0.06)
     u = np.interp(r2, rr[o], -x[dofs][o] * W)
-    f2 = ForceEstimator((480, 480), 0.06, thickness_mm=H, E_mpa=E, nu=NU)(u)
+    f2 = ForceEstimator((480, 480), 0.06, thickness_mm=H, E_mpa=E, nu=NU, contact="field")(u)
     out = np.abs(f2.pressure_kpa[r2 > A + 0.5]).max() / (P / (np.pi * A**2) * 1e3)
     print(f"  the FEM's surface field, 'field': {f2.total_n[2]:.5f} N "
           f"({f2.total_n[2] / P - 1:+.2%}); largest |pressure| off the footprint "

@@ -190,7 +190,8 @@ def main(argv: list[str] | None = None) -> int:
     if not SET.is_dir():
         print(f"GelSlim 3.0 frames not found at {SET}", file=sys.stderr)
         return 1
-    mm, kw = args.mm_per_px, dict(thickness_mm=args.thickness_mm, E_mpa=args.E_mpa, nu=args.nu)
+    mm, kw = args.mm_per_px, dict(thickness_mm=args.thickness_mm, E_mpa=args.E_mpa, nu=args.nu,
+                                  threshold_mm=0.01)
     ps = read_ball_presses(SET)
     t0 = time.perf_counter()
     cc, rr = detect_contact_circles(ps.frames, ps.reference)
@@ -208,7 +209,7 @@ def main(argv: list[str] | None = None) -> int:
     est_full = ForceEstimator(shape, mm, mode="full", contact="footprint", **kw)
     t_full = time.perf_counter() - t0
     t0 = time.perf_counter()
-    est_fast = ForceEstimator(shape, mm, **kw)  # 'spectral', 'normal', 'field'
+    est_fast = ForceEstimator(shape, mm, contact="field", **kw)  # 'spectral', 'normal'
     t_fast = time.perf_counter() - t0
     t0 = time.perf_counter()
     markers = marker_centres(ps.reference)

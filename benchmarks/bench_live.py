@@ -66,13 +66,13 @@ def main() -> None:
         for forces, level, method in ((False, "median", None), (True, "median", "spectral"),
                                       (True, "median", "fem"), (True, "contact", "spectral"),
                                       (True, "contact", "fem")):
-            kw = ({"E_mpa": 0.2, "nu": 0.48, "thickness_mm": 3.0, "method": method}
-                  if forces else {})
+            kw = ({"E_mpa": 0.2, "nu": 0.48, "thickness_mm": 3.0, "method": method,
+                   "contact": "field"} if forces else {})
             # the bare work, in a plain loop (BLAS on one thread, as the pipeline runs it)
             recon = DepthReconstructor(cal, reference=ref,
                                        boundary="contact" if level == "contact" else "neumann")
             est = ForceEstimator(cal.shape, cal.mm_per_px, thickness_mm=3.0, E_mpa=0.2,
-                                 nu=0.48, method=method) if forces else None
+                                 nu=0.48, method=method, contact="field") if forces else None
             blas = _OneBlasThread()
             t0 = time.perf_counter()
             for f in frames:

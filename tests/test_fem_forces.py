@@ -60,7 +60,7 @@ def test_flat_punch_from_its_whole_surface_field(punch):
     dx, n = 0.06, 480                               # 28.8 mm square: the field has decayed
     r = _disc((n, n), dx, ((n - 1) / 2, (n - 1) / 2), A)
     u = np.interp(r, punch["r"], punch["depth"])
-    fm = ForceEstimator((n, n), dx, thickness_mm=H, E_mpa=E, nu=NU)(u)
+    fm = ForceEstimator((n, n), dx, thickness_mm=H, E_mpa=E, nu=NU, contact="field")(u)
     assert fm.total_n[2] == pytest.approx(punch["P"], rel=0.03)
     # the pressure off the footprint is small against the mean contact pressure
     p_mean = punch["P"] / (np.pi * A**2) * 1e3
@@ -97,7 +97,7 @@ def test_batches_equal_single_frames_and_modes_agree():
     r = _disc((n, n), dx, (40.0, 50.0), 1.0)
     u1 = 0.03 * np.exp(-(r / 1.5) ** 2)
     u2 = 0.5 * u1
-    est = ForceEstimator((n, n), dx, thickness_mm=H, E_mpa=E, nu=NU)
+    est = ForceEstimator((n, n), dx, thickness_mm=H, E_mpa=E, nu=NU, contact="field")
     b = est(np.stack([u1, u2]))
     assert b.forces_n.shape == (2, n, n, 3) and b.total_n.shape == (2, 3)
     np.testing.assert_allclose(b.forces_n[0], est(u1).forces_n, atol=1e-15)
@@ -113,8 +113,8 @@ def test_batches_equal_single_frames_and_modes_agree():
     ut = -np.linalg.solve(K[..., :2, :2], (K[..., :2, 2] * uz[..., None])[..., None])[..., 0]
     lat = np.real(np.fft.ifft2(ut, axes=(0, 1)))
     full = ForceEstimator((n, n), dx, thickness_mm=H, E_mpa=E, nu=NU, mode="full",
-                          pad_mm=0.0)
-    normal = ForceEstimator((n, n), dx, thickness_mm=H, E_mpa=E, nu=NU, pad_mm=0.0)
+                          pad_mm=0.0, contact="field")
+    normal = ForceEstimator((n, n), dx, thickness_mm=H, E_mpa=E, nu=NU, pad_mm=0.0, contact="field")
     f_full, f_norm = full(u1, lat), normal(u1)
     # (to 1e-4: the lateral field's Nyquist terms are not real on an even grid)
     np.testing.assert_allclose(f_full.forces_n[..., 2], f_norm.forces_n[..., 2],
@@ -129,7 +129,8 @@ def test_full_mode_shear_gives_tangential_force():
     lat = np.stack([0.02 * bump, np.zeros_like(bump)], axis=-1)   # pulled along +x
     # periodic (no padding): the sum over the image is the k = 0 term, mu / h times the
     # displaced area (the bump's integral), exactly
-    est = ForceEstimator((n, n), dx, thickness_mm=H, E_mpa=E, nu=NU, mode="full", pad_mm=0.0)
+    est = ForceEstimator((n, n), dx, thickness_mm=H, E_mpa=E, nu=NU, mode="full", pad_mm=0.0,
+                         contact="field")
     fm = est(np.zeros((n, n)), lat)
     assert fm.total_n[0] > 0 and abs(fm.total_n[1]) < 1e-9 * fm.total_n[0]
     mu = E / (2 * (1 + NU))
@@ -138,19 +139,21 @@ def test_full_mode_shear_gives_tangential_force():
 
 def test_bad_input():
     with pytest.raises(InputError, match="nu"):
-        ForceEstimator((10, 10), 0.1, thickness_mm=3, E_mpa=0.2, nu=0.5)
+        ForceEstimator((10, 10), 0.1, thickness_mm=3, E_mpa=0.2, nu=0.5, contact="field")
     with pytest.raises(InputError, match="method"):
-        ForceEstimator((10, 10), 0.1, thickness_mm=3, E_mpa=0.2, nu=0.4, method="bem")
+        ForceEstimator((10, 10), 0.1, thickness_mm=3, E_mpa=0.2, nu=0.4, method="bem",
+                       contact="field")
     with pytest.raises(InputError, match="thickness_mm"):
-        ForceEstimator((10, 10), 0.1, thickness_mm=0, E_mpa=0.2, nu=0.4)
-    est = ForceEstimator((10, 12), 0.1, thickness_mm=3, E_mpa=0.2, nu=0.4)
+        ForceEstimator((10, 10), 0.1, thickness_mm=0, E_mpa=0.2, nu=0.4, contact="field")
+    est = ForceEstimator((10, 12), 0.1, thickness_mm=3, E_mpa=0.2, nu=0.4, contact="field")
     with pytest.raises(InputError, match=r"\(10, 12\)"):
         est(np.zeros((12, 10)))
     bad = np.zeros((10, 12))
     bad[3, 3] = np.nan
     with pytest.raises(InputError, match="NaN"):
         est(bad)
-    full = ForceEstimator((10, 12), 0.1, thickness_mm=3, E_mpa=0.2, nu=0.4, mode="full")
+    full = ForceEstimator((10, 12), 0.1, thickness_mm=3, E_mpa=0.2, nu=0.4, mode="full",
+                          contact="field")
     with pytest.raises(InputError, match="lateral_mm"):
         full(np.zeros((10, 12)))
 
@@ -183,7 +186,7 @@ def test_single_precision_path_matches_double():
     n, dx = 96, 0.1
     r = _disc((n, n + 4), dx, ((n + 3) / 2, (n - 1) / 2), 0)
     u = np.maximum(0.2 - r**2 / 8.0, 0.0)                  # R = 4 mm, 0.2 mm deep
-    est = ForceEstimator((n, n + 4), dx, thickness_mm=H, E_mpa=E, nu=NU)
+    est = ForceEstimator((n, n + 4), dx, thickness_mm=H, E_mpa=E, nu=NU, contact="field")
     ref = est(u)
     one = est(u.astype(np.float32))
     assert one.forces_n.dtype == np.float32 and one.total_n.dtype == np.float64
@@ -195,7 +198,8 @@ def test_single_precision_path_matches_double():
     assert batch.total_n[1] == pytest.approx(ref.total_n, rel=1e-5, abs=1e-9)
     # no padding (96 x 100: fast FFT lengths, so no zeros are added): a uniform
     # 0.01 mm everywhere is the k = 0 stiffness times the area
-    periodic = ForceEstimator((n, n + 4), dx, thickness_mm=H, E_mpa=E, nu=NU, pad_mm=0.0)
+    periodic = ForceEstimator((n, n + 4), dx, thickness_mm=H, E_mpa=E, nu=NU, pad_mm=0.0,
+                              contact="field")
     k0 = E * (1 - NU) / ((1 + NU) * (1 - 2 * NU)) / H
     flat = periodic(np.full((n, n + 4), 0.01, np.float32)).total_n[2]
     assert flat == pytest.approx(k0 * 0.01 * n * (n + 4) * dx * dx, rel=1e-5)
@@ -206,7 +210,7 @@ def test_footprint_of_a_flat_gel_carries_no_force(method):
     # a contact mask (from the colour change) over a gel that did not move: zero traction,
     # not a division by zero in the conjugate gradients (a no-contact frame in `forces`)
     est = ForceEstimator((48, 64), 0.1, thickness_mm=3, E_mpa=0.2, nu=0.48,
-                         contact="footprint", method=method, grid=(16, 12))
+                         contact="footprint", method=method, grid=(16, 12), threshold_mm=0.01)
     mask = np.zeros((48, 64), bool)
     mask[20:25, 30:35] = True
     fm = est(np.zeros((48, 64), np.float32), contact_mask=mask)
@@ -226,13 +230,13 @@ def test_a_changed_setting_takes_effect_and_a_bad_one_changes_nothing():
     u = np.zeros((48, 64))
     yy, xx = np.mgrid[:48, :64]
     u[np.hypot(xx - 32, yy - 24) < 10] = 0.05
-    est = ForceEstimator((48, 64), 0.1, thickness_mm=3.0, E_mpa=0.2, nu=0.45)
+    est = ForceEstimator((48, 64), 0.1, thickness_mm=3.0, E_mpa=0.2, nu=0.45, contact="field")
     f0 = float(est(u).total_n[2])
     est.E_mpa = 0.4
     assert est.E_mpa == 0.4
     assert float(est(u).total_n[2]) == pytest.approx(2 * f0, rel=1e-9)
     est.thickness_mm = 4.0
-    fresh = ForceEstimator((48, 64), 0.1, thickness_mm=4.0, E_mpa=0.4, nu=0.45)
+    fresh = ForceEstimator((48, 64), 0.1, thickness_mm=4.0, E_mpa=0.4, nu=0.45, contact="field")
     assert float(est(u).total_n[2]) == pytest.approx(float(fresh(u).total_n[2]), rel=1e-12)
     before = float(est(u).total_n[2])
     with pytest.raises(InputError, match="nu"):

@@ -20,7 +20,7 @@ HPX, WPX, DX, H, NU, E = 320, 427, 0.0806, 3.0, 0.48, 0.2
 
 @pytest.fixture(scope="module")
 def estimators():
-    kw = dict(thickness_mm=H, E_mpa=E, nu=NU, contact="footprint")
+    kw = dict(thickness_mm=H, E_mpa=E, nu=NU, contact="footprint", threshold_mm=0.01)
     # the default cache: the default grid's stiffness is built once (4 s, 58 MB)
     return (ForceEstimator((HPX, WPX), DX, method="fem", **kw),
             ForceEstimator((HPX, WPX), DX, **kw))

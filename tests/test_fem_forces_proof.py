@@ -166,8 +166,9 @@ def test_fem_recovers_the_hertz_load_of_a_finer_pad(nu, field_excess, cache):
     assert load == pytest.approx(P_HZ, rel=1e-4)       # consistent loads: 6.8e-5
     u = _on_image(xs, ys, grid)
 
-    kw = dict(thickness_mm=H, E_mpa=E, nu=nu, method="fem", grid=(40, 30), cache_dir=cache)
-    field = ForceEstimator((HPX, WPX), DX, **kw)
+    kw = dict(thickness_mm=H, E_mpa=E, nu=nu, method="fem", grid=(40, 30), cache_dir=cache,
+              threshold_mm=0.01)
+    field = ForceEstimator((HPX, WPX), DX, contact="field", **kw)
     x, y = field.x_mm, field.y_mm
     sx, sy = x[1] - x[0], y[1] - y[0]
     exact = _hat_loads(x - LX / 2, y - LY / 2, pressure)      # N per node
@@ -231,7 +232,7 @@ def test_fem_footprint_keeps_the_rim_nodes_of_the_contact(cache):
     xs, ys, grid, load = _pad_forward(pressure, nu)
     u = _on_image(xs, ys, grid)
     est = ForceEstimator((HPX, WPX), DX, thickness_mm=H, E_mpa=E, nu=nu, method="fem",
-                         contact="footprint", cache_dir=cache)
+                         contact="footprint", cache_dir=cache, threshold_mm=0.01)
     exact = _hat_loads(est.x_mm - LX / 2, est.y_mm - LY / 2, pressure)
     tight = est(u, contact_mask=RPX <= a)
     assert tight.contact.sum() > 16
@@ -290,18 +291,18 @@ def test_baseline_offset_moves_field_by_the_k0_stiffness_not_footprint(hayes_tab
     kappa = rows[ah.index(0.6)][nus.index(0.45)]
     punch = 2 * a * E * kappa / (1 - nu**2)                      # N/mm
 
-    kw = dict(thickness_mm=H, E_mpa=E, nu=nu)
-    field = ForceEstimator((HPX, WPX), DX, **kw)
+    kw = dict(thickness_mm=H, E_mpa=E, nu=nu, threshold_mm=0.01)
+    field = ForceEstimator((HPX, WPX), DX, contact="field", **kw)
     f0, f1 = field(u).total_n[2], field(u + offset).total_n[2]
     assert f0 == pytest.approx(load, rel=0.015)                 # +0.86 %: the cropped tail
     assert 0.80 < (f1 - f0) / (k0 * offset * area) < 0.95       # 0.864
-    periodic = ForceEstimator((HPX, WPX), DX, pad_mm=0.0, **kw)
+    periodic = ForceEstimator((HPX, WPX), DX, pad_mm=0.0, contact="field", **kw)
     assert periodic(np.full((HPX, WPX), offset)).total_n[2] == pytest.approx(
         k0 * offset * area, rel=1e-9)
     # nearer incompressibility the layer's traction reaches further past the image's
     # edges: at nu = 0.49 the same offset gives 0.575 of its k = 0 bound
     k49 = E * 0.51 / (1.49 * 0.02) / H
-    f49 = ForceEstimator((HPX, WPX), DX, thickness_mm=H, E_mpa=E, nu=0.49)(
+    f49 = ForceEstimator((HPX, WPX), DX, thickness_mm=H, E_mpa=E, nu=0.49, contact="field")(
         np.full((HPX, WPX), offset)).total_n[2]
     assert 0.50 < f49 / (k49 * offset * area) < 0.65
     assert (f1 - f0) / load > 1.5                                # 197 % of the load
@@ -334,7 +335,7 @@ def test_oversized_footprint_shrinks_to_the_contact_by_dropping_tensile_nodes():
     r = np.hypot(xx, yy) * dx
     u = np.maximum(delta - r**2 / (2 * R), 0.0)             # positive out to sqrt(2) a
     est = ForceEstimator((n, n), dx, thickness_mm=h, E_mpa=E, nu=nu, contact="footprint",
-                         pad_mm=h)
+                         pad_mm=h, threshold_mm=0.01)
     exact = est(u, contact_mask=r <= a)
     big = est(u, contact_mask=r <= 1.3 * a)
     assert exact.total_n[2] / P == pytest.approx(1.076, abs=0.02)
@@ -395,9 +396,9 @@ def test_field_total_depends_on_the_pads_sides_as_nu_nears_half(cache):
         kw = dict(thickness_mm=H, E_mpa=E, nu=nu, threshold_mm=1e-6)
         fem = dict(method="fem", grid=(40, 30), cache_dir=cache)
         k0 = E * (1 - nu) / ((1 + nu) * (1 - 2 * nu)) / H
-        spec = ForceEstimator((HPX, WPX), DX, **kw)(bump).total_n[2]
-        far = ForceEstimator((HPX, WPX), DX, pad_mm=32.0, **kw)(bump).total_n[2]
-        fe = ForceEstimator((HPX, WPX), DX, **fem, **kw)(bump).total_n[2]
+        spec = ForceEstimator((HPX, WPX), DX, contact="field", **kw)(bump).total_n[2]
+        far = ForceEstimator((HPX, WPX), DX, pad_mm=32.0, contact="field", **kw)(bump).total_n[2]
+        fe = ForceEstimator((HPX, WPX), DX, contact="field", **fem, **kw)(bump).total_n[2]
         ratio[nu] = fe / spec
         # the infinite layer's 'field' total: below its k = 0 bound, and it keeps falling
         # as the padding grows (the tail of the traction), far more at nu = 0.49

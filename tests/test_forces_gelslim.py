@@ -61,7 +61,7 @@ def force_maps():
         model="lut")
     recon = DepthReconstructor(cal)
     est = ForceEstimator(cal.shape, mm, thickness_mm=H_MM, E_mpa=E_MPA, nu=NU, mode="full",
-                         contact="footprint")
+                         contact="footprint", threshold_mm=0.01)
     markers = marker_centres(ps.reference)
     rows, cols = np.indices(cal.shape)
     out = []

@@ -146,7 +146,8 @@ def test_beta_scales_by_the_contact_depth():
     assert f1.total_n[2] == pytest.approx(f0.total_n[2] * (1 + 0.8 * 0.3 / 3.0), rel=1e-9)
     np.testing.assert_allclose(f1.pressure_kpa, f0.pressure_kpa * 1.08, rtol=1e-9, atol=1e-12)
     with pytest.raises(InputError, match="beta"):
-        ForceEstimator((64, 64), 0.1, thickness_mm=3.0, E_mpa=0.2, nu=0.45, beta=-0.1)
+        ForceEstimator((64, 64), 0.1, thickness_mm=3.0, E_mpa=0.2, nu=0.45, beta=-0.1,
+                       contact="field")
 
 
 # -- position-cell optics: the end-to-end force per press ---------------------------------

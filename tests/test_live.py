@@ -224,6 +224,12 @@ def test_cli_live_writes_the_annotated_video_and_the_csv(sensor, tmp_path, capsy
     assert main(["live", str(tmp_path / "nothing.mp4"), "--calibration",
                  str(root / "optics.npz")]) == 2
     assert "no such file" in capsys.readouterr().err
+    # the footprint's threshold as forces checks it: named, nothing written
+    bad = tmp_path / "bad.csv"
+    assert main(["live", str(video), "--calibration", str(root / "optics.npz"),
+                 "--E-mpa", "0.2", "--nu", "0.48", "--thickness-mm", "3",
+                 "--threshold-mm", "-0.01", "--csv", str(bad), "--no-progress"]) == 2
+    assert "threshold_mm" in capsys.readouterr().err and not bad.exists()
 
 
 def test_reconstruct_takes_a_video(sensor, tmp_path, capsys):

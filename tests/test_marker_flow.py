@@ -124,7 +124,8 @@ def test_sign_convention_matches_force_estimator():
     assert np.allclose(flow.displacement_px[inner & flow.valid], [1.5, 0.8], atol=0.1)
     lat = lateral_displacement(flow, (H, W), 0.1)
     assert np.allclose(np.median(lat.reshape(-1, 2), axis=0), [0.15, 0.08], atol=0.01)
-    est = ForceEstimator((H, W), 0.1, thickness_mm=3.0, E_mpa=0.2, nu=0.45, mode="full")
+    est = ForceEstimator((H, W), 0.1, thickness_mm=3.0, E_mpa=0.2, nu=0.45, mode="full",
+                         contact="field")
     fx, fy, _ = est(np.zeros((H, W), np.float32), lat).total_n
     assert fx > 0 and fy > 0 and fx / fy == pytest.approx(1.5 / 0.8, rel=0.1)
 

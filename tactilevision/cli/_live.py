@@ -46,6 +46,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--level", choices=("contact", "median", "far_field"), default=None,
                    help="the height's zero (default: contact with forces, the accurate "
                    "footprint; median, several times faster, for camera rate)")
+    p.add_argument("--contact", choices=("footprint", "field"), default="footprint",
+                   help="the forces' traction region, as tactilevision forces: footprint "
+                   "(default: the pixels above --threshold-mm) or field (the whole height "
+                   "map; with --level median or far_field, the camera-rate choice)")
+    p.add_argument("--threshold-mm", type=float, default=0.02,
+                   help="the footprint's height threshold, mm (default 0.02)")
     p.add_argument("--out", metavar="VIDEO", type=Path, default=None,
                    help="annotated video to write (.mp4 or .avi)")
     p.add_argument("--csv", metavar="FILE", type=Path, default=None,

@@ -108,7 +108,8 @@ def run(args: argparse.Namespace) -> int:
         reference = read_reference(Path(reference))
     pipe = Pipeline(cal_path, reference=reference, n_reference=args.reference_frames,
                     E_mpa=args.E_mpa, nu=args.nu, thickness_mm=args.thickness_mm,
-                    level=args.level, method=args.method)
+                    level=args.level, method=args.method, contact=args.contact,
+                    threshold_mm=args.threshold_mm)
     for p in (args.out, args.csv):
         if p is not None:
             output_folder(p.parent, f"folder of {p.name}")

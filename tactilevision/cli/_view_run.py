@@ -155,6 +155,7 @@ def _from_frames(source: Path, args, material):
     pressure = None
     if material is not None:
         E, nu, h = material
-        est = ForceEstimator(cal.shape, cal.mm_per_px, thickness_mm=h, E_mpa=E, nu=nu)
+        est = ForceEstimator(cal.shape, cal.mm_per_px, thickness_mm=h, E_mpa=E, nu=nu,
+                             contact="field")
         pressure = np.stack([np.asarray(est(z).pressure_kpa, np.float32) for z in heights])
     return frames, heights, pressure, cal.mm_per_px, labels

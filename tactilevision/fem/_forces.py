@@ -126,16 +126,21 @@ class ForceEstimator:
     mode : {'normal', 'full'}, default 'normal'
         Normal displacement only (zero tangential traction), or the full 3D
         displacement (pass `lateral_mm` to the call).
-    contact : {'field', 'footprint'}, default 'field'
-        Trust the height map everywhere, or only where it exceeds
-        `threshold_mm` (zero traction elsewhere, non-negative pressure). With
+    contact : {'footprint', 'field'}, default 'footprint'
+        Trust the height map only where it exceeds `threshold_mm` (zero
+        traction elsewhere, non-negative pressure), or everywhere (a
+        simulation's height map, right beyond the contact too). The
+        default is ``tactilevision forces``' (and ``live``'s, ``batch
+        forces``'): on a measured height map every error beyond the
+        contact pushes or pulls with ``'field'``. With
         ``method='fem'`` a contact node is tied to the mean height of the
         footprint's pixels under its hat, a partly covered rim node by a spring
         (module docstring: a 2.5 mm flat punch reads 0.97 to 0.98 of Hayes 1972
         on the default grid, true Hertz surfaces with their sink-in 3 to 5 %
         high).
-    threshold_mm : float, default 0.01
-        Footprint threshold on the height, mm (above the height map's noise).
+    threshold_mm : float, default 0.02
+        Footprint threshold on the height, mm (above the height map's noise;
+        ``tactilevision forces --threshold-mm``'s default).
     pad_mm : float, optional
         Zero padding on each side for ``'spectral'``, mm; default 2 h.
     element : {'bbar', 'hex2', 'hex1'}, default 'bbar'
@@ -185,8 +190,8 @@ class ForceEstimator:
     grid: tuple[int, int] = (40, 30)
     method: str = "spectral"
     mode: str = "normal"
-    contact: str = "field"
-    threshold_mm: float = 0.01
+    contact: str = "footprint"
+    threshold_mm: float = 0.02
     pad_mm: float | None = None
     element: str = "bbar"
     layers: int | None = None

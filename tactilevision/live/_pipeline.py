@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from .._blas import openblas_thread_controls
-from .._checks import InputError
+from .._checks import InputError, check_positive
 from ..fem import ForceEstimator
 from ..io import open_source
 from ..optics import (
@@ -252,15 +252,15 @@ class Pipeline:
         once per sensor size and cached on disk).
     beta : float, default 0.0
         Eq. (5)'s large-deformation stiffening for the forces.
-    contact : {'field', 'footprint'}, default 'field'
-    threshold_mm : float, default 0.01
-        The forces' traction region (:class:`~tactilevision.fem.ForceEstimator`'s
-        defaults): the whole height map, or only the pixels higher than
-        `threshold_mm` (``tactilevision forces`` uses 'footprint' and 0.02 mm).
-        The footprint's solve is slow on median-levelled heights, whose
-        background is not zero: 432 ms a 427 x 320 frame against 15 ms with
-        'field' (``benchmarks/bench_live.py`` run once with the footprint,
-        2026-11-23); use it with ``level='contact'``.
+    contact : {'footprint', 'field'}, default 'footprint'
+    threshold_mm : float, default 0.02
+        The forces' traction region, :class:`~tactilevision.fem.ForceEstimator`'s
+        defaults and ``tactilevision forces``': only the pixels higher than
+        `threshold_mm`, or the whole height map. The footprint's solve is slow on
+        median-levelled heights, whose background is not zero (432 ms a 427 x 320
+        frame against 15 ms with 'field', ``benchmarks/bench_live.py``): it goes with
+        ``level='contact'``, the default with forces; 'field' with
+        ``level='far_field'`` is the camera-rate choice.
     engine : {'table', 'onnx'}, default 'table'
         The reconstructor's engine.
     markers : bool, optional
@@ -275,7 +275,8 @@ class Pipeline:
     Raises
     ------
     InputError
-        For only some of E_mpa, nu and thickness_mm, or a bad reference.
+        For only some of E_mpa, nu and thickness_mm, a bad reference, an unknown
+        method, level or contact, or a threshold_mm that is not positive.
 
     Examples
     --------
@@ -289,7 +290,7 @@ class Pipeline:
                  E_mpa: float | None = None, nu: float | None = None,
                  thickness_mm: float | None = None, beta: float = 0.0,
                  engine: str = "table", level: str | None = None,
-                 contact: str = "field", threshold_mm: float = 0.01,
+                 contact: str = "footprint", threshold_mm: float = 0.02,
                  method: str = "spectral", markers: bool | None = None) -> None:
         self.calibration = (calibration if isinstance(calibration, PhotometricCalibration)
                             else PhotometricCalibration.load(calibration))
@@ -297,7 +298,10 @@ class Pipeline:
         if any(given) and not all(given):
             raise InputError("forces need all of E_mpa, nu and thickness_mm")
         self.material = (E_mpa, nu, thickness_mm, beta) if all(given) else None
-        self.contact, self.threshold_mm = contact, float(threshold_mm)
+        if contact not in ("footprint", "field"):
+            raise InputError(f"contact must be 'footprint' or 'field', got {contact!r}")
+        self.contact = contact
+        self.threshold_mm = check_positive(threshold_mm, "threshold_mm")
         if method not in ("spectral", "fem"):
             raise InputError(f"method must be 'spectral' or 'fem', got {method!r}")
         self.method = method
