@@ -511,5 +511,55 @@ def _sphere_closed_forms(quick: bool) -> Result:
     ])
 
 
+@subject(
+    "long_checks", "The long checks: the suite's slow tests",
+    """The checks of 4 s or more that the README's test command leaves out (the `slow`
+    mark: end-to-end calibrations of rendered sessions, trained networks, sweeps over
+    real frames, Taxim renders, the browser), run by pytest as the suite runs them (its
+    workers, its own cache): per test file, the tests passed, failed and skipped and the
+    seconds they took. A failure fails the subject, so the report's run says it.
+    --quick runs the first file only.""",
+    ["python -m pytest -q -m slow"])
+def _long_checks(quick: bool) -> Result:
+    import xml.etree.ElementTree as ET
+    with tempfile.TemporaryDirectory(prefix="tv-report-") as tmp:
+        xml = Path(tmp) / "slow.xml"
+        cmd = [sys.executable, "-m", "pytest", "-q", "-m", "slow", "-p", "no:cacheprovider",
+               f"--junitxml={xml}"]
+        if quick:
+            first = subprocess.run([sys.executable, "-m", "pytest", "-q", "-m", "slow",
+                                    "--collect-only", "-n", "0", "-p", "no:cacheprovider"],
+                                   cwd=ROOT, capture_output=True, text=True, timeout=900)
+            files = sorted({line.split("::")[0] for line in first.stdout.splitlines()
+                            if "::" in line})
+            cmd.append(files[0])
+        done = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, timeout=5400)
+        if not xml.is_file():
+            raise RuntimeError(f"pytest wrote no report (exit {done.returncode}): "
+                               f"{done.stdout[-1500:]}{done.stderr[-1500:]}")
+        per: dict[str, list[float]] = {}
+        for case in ET.parse(xml).getroot().iter("testcase"):
+            name = case.get("classname", "").replace(".", "/") + ".py"
+            row = per.setdefault(name, [0, 0, 0, 0.0])
+            if case.find("skipped") is not None:
+                row[2] += 1
+            elif case.find("failure") is not None or case.find("error") is not None:
+                row[1] += 1
+            else:
+                row[0] += 1
+            row[3] += float(case.get("time", 0.0))
+    rows = [[f"`{name}`", int(r[0]), int(r[1]), int(r[2]), f"{r[3]:.0f}"]
+            for name, r in sorted(per.items())]
+    total = [sum(int(r[k]) for r in per.values()) for k in range(3)]
+    seconds = sum(r[3] for r in per.values())
+    if total[1] or done.returncode not in (0,):
+        raise RuntimeError(f"{total[1]} long check(s) failed (pytest exit "
+                           f"{done.returncode}): {done.stdout[-2000:]}")
+    return Result([Table("Per test file", ["file", "passed", "failed", "skipped", "s"], rows,
+                         note=f"{total[0]} passed, {total[1]} failed, {total[2]} skipped; "
+                              f"{seconds:.0f} test-seconds over the suite's workers.")],
+                  summary=f"{total[0]} long checks passed, {total[2]} skipped.")
+
+
 if __name__ == "__main__":
     sys.exit(main())
