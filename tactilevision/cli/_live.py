@@ -45,7 +45,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--max-frames", type=int, default=None, help="stop after N frames")
     p.add_argument("--level", choices=("contact", "median", "far_field"), default=None,
                    help="the height's zero (default: contact with forces, the accurate "
-                   "footprint; median, several times faster, for camera rate)")
+                   "footprint; median with --contact field, several times faster, for "
+                   "camera rate)")
     p.add_argument("--contact", choices=("footprint", "field"), default="footprint",
                    help="the forces' traction region, as tactilevision forces: footprint "
                    "(default: the pixels above --threshold-mm) or field (the whole height "

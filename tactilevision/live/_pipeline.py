@@ -260,7 +260,7 @@ class Pipeline:
         median-levelled heights, whose background is not zero (432 ms a 427 x 320
         frame against 15 ms with 'field', ``benchmarks/bench_live.py``): it goes with
         ``level='contact'``, the default with forces; 'field' with
-        ``level='far_field'`` is the camera-rate choice.
+        ``level='median'`` or ``'far_field'`` is the camera-rate choice.
     engine : {'table', 'onnx'}, default 'table'
         The reconstructor's engine.
     markers : bool, optional
