@@ -14,7 +14,6 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 
 
-@pytest.mark.slow
 def test_docs_build_strict(tmp_path):
     pytest.importorskip("mkdocs", reason="the docs extra (MkDocs) is not installed")
     pytest.importorskip("mkdocs_gallery", reason="the docs extra (mkdocs-gallery) is not installed")
