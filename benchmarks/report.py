@@ -513,7 +513,7 @@ def _sphere_closed_forms(quick: bool) -> Result:
 
 @subject(
     "long_checks", "The long checks: the suite's slow tests",
-    """The checks of 4 s or more that the README's test command leaves out (the `slow`
+    """The checks of about 3 s or more that the README's test command leaves out (the `slow`
     mark: end-to-end calibrations of rendered sessions, trained networks, sweeps over
     real frames, Taxim renders, the browser), run by pytest as the suite runs them (its
     workers, its own cache): per test file, the tests passed, failed and skipped and the

@@ -101,6 +101,7 @@ def test_bad_uncertainty_names_the_press():
         diagnose_indenter(w, P, BALL, thickness_mm=H, depth_shared_rel=1.5)
 
 
+@pytest.mark.slow
 def test_cli_diagnose_reads_the_tables_uncertainties(tmp_path):
     """`diagnose` of a ball's table takes its depth_std_mm, depth_shared_mm and force_sem_n
     columns, as `fit` does, and says so in its JSON."""

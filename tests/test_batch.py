@@ -256,6 +256,7 @@ def test_a_killed_worker_loses_and_duplicates_no_frame(client, clip, tmp_path):
     client.wait_for_workers(2, timeout=60)                # the nanny restarts it
 
 
+@pytest.mark.slow
 def test_cli_batch_forces_on_a_running_scheduler(client, clip, tmp_path, capsys):
     from tactilevision.fem import ForceEstimator
 
@@ -323,6 +324,7 @@ def test_batch_calibrate_lists_a_broken_session_and_calibrates_the_others(client
     assert again.inputs[0].status == "already complete"
 
 
+@pytest.mark.slow
 def test_cli_batch_starts_its_own_local_cluster(clip, tmp_path, capsys):
     """No --scheduler: a local cluster of worker processes, started and closed by the
     command; the printed summary and batch.json agree."""

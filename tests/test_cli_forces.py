@@ -16,6 +16,7 @@ from tactilevision.cli import main
 FRAMES = Path(__file__).resolve().parents[1] / "sample_frames" / "gelsight_ball" / "frames"
 
 
+@pytest.mark.slow
 def test_forces_on_a_frames_folder(tmp_path):
     out = tmp_path / "forces"
     rc = main(["forces", str(FRAMES), "--sensor", "gelsight", "--thickness-mm", "3.0",

@@ -54,6 +54,7 @@ def maps():
     return out
 
 
+@pytest.mark.slow
 def test_contact_pinned_height_matches_the_direct_solve(maps):
     for i, h_new, h_old, _, _ in maps:
         peak = float(np.abs(h_old).max())

@@ -294,6 +294,7 @@ def linear_mlp(torch_one_thread):
     return onnx_bytes, inp, nxy
 
 
+@pytest.mark.slow
 def test_mlp_onnx_learns_known_mapping(linear_mlp):
     onnx_bytes, _, _ = linear_mlp
     change, nxy = sample_normals(4096, seed=3)

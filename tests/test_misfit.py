@@ -178,6 +178,7 @@ def test_a_ramp_that_starts_in_contact_is_still_said_so():
         fit_ramp(z, P, BALL, thickness_mm=2.0)
 
 
+@pytest.mark.slow
 def test_a_flat_punch_ramp_at_the_default_nu_lies_inside_its_table():
     """The finite-strain flat punch's table stops at nu = 0.499: a ramp fitted with no nu
     stated is read at 0.499 (was refused: 'nu = 0.5 is outside the FEM kappa_n table')."""

@@ -196,6 +196,7 @@ def test_budget_sentence_follows_p_and_ratio():
     (1.0, (0.05, 1.0), "consistent with what the instruments explain"),
     (0.8, (BUDGET_ALPHA, 0.05), "somewhat above what the instruments explain"),
 ])
+@pytest.mark.slow
 def test_diagnose_says_consistent_only_at_p_not_small(sem_scale, p_range, words):
     """The null table of seed 311 (p = 0.073 with the generator's own F/T noise), and the
     same table with force_sem_n understated by 20 % (p = 0.019, 1.22 times the budget:

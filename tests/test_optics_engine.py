@@ -197,6 +197,7 @@ def test_seven_presses_keep_a_table_and_say_why_not_the_network(seven):
     assert report["balls"][0]["n_scored"] >= 35
 
 
+@pytest.mark.slow
 def test_engine_kept_is_near_the_best_on_the_other_presses(seven):
     """Each candidate trained on the same seven presses and scored on the other 41 against
     their hand-annotated circles: the one kept is within 1 deg and 3 % of cap of the best

@@ -157,6 +157,7 @@ def test_design_measurement_table_known_answers():
         design_measurement_table(d, "law_curvature", 1.0)
 
 
+@pytest.mark.slow
 def test_detect_sizes_read_written_and_planned(tmp_path, capsys):
     d = Design(**VARIED, detect=(("aging", 0.05), ("depth_offset", 2.0)))
     path = tmp_path / "d.toml"

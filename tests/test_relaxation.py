@@ -640,6 +640,7 @@ def test_holds_name_a_slow_relaxation_but_not_a_softening_gel():
     assert not found.named and found.relaxation.verdict == "softening"
 
 
+@pytest.mark.slow
 def test_diagnose_command_reads_the_holds_beside_the_table(tmp_path, capsys):
     """``diagnose`` reads holds.csv beside the table by default (the verdict and the JSON's
     ``holds``), not with --no-holds; a --holds file that cannot be fitted is exit 2 naming

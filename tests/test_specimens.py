@@ -80,6 +80,7 @@ def _cli(*args):
                           capture_output=True, text=True)
 
 
+@pytest.mark.slow
 def test_fit_of_several_tables_and_of_a_specimen_column(tmp_path):
     """Two specimens 30 % apart, as two files and as one table's specimen column: the same
     two fits, the batch's E between them, the disagreement said (exit 0, a warning)."""

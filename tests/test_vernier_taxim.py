@@ -135,6 +135,7 @@ def test_taxim_shadows_beside_narrow_bands(taxim_bevel, w0, overshoot):
         read_bevel(prof, geom, 0.0295, lines="shadow")
 
 
+@pytest.mark.slow
 def test_taxim_faint_shading_is_not_a_band(taxim_bevel):
     """A press stopped 0.9 um past w0 (band 0.36 px): Taxim's gel smoothing leaves only a
     broad shading of a few grey levels at the bevel, which the band model reads as a long
@@ -361,6 +362,7 @@ def test_thin_mark_under_shadows_is_seen_at_its_step(taxim_mark_session):
         assert abs(d - tp[p.press]["depth_mm"]) <= 3 * sd
 
 
+@pytest.mark.slow
 def test_a_mark_press_past_the_gauges_reach_is_refused_and_the_rest_checked(
         taxim_mark_session, tmp_path):
     """With ``[gauge_block] max_overshoot_mm = 0.03`` on the thin-mark session (stopped 5 to
