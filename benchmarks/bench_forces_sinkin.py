@@ -45,56 +45,61 @@ ROOT = Path(__file__).resolve().parents[1]
 SESSION = ROOT / "sample_frames" / "gelsight_session"
 
 
-def run(grow: int, fit: dict, truth: dict) -> list[tuple[float, float, float]]:
-    """(w0, face / depth, Fz / force) per press at a mask growth of `grow` px."""
-    cal = PhotometricCalibration.load(SESSION / "optics.npz")
-    ref = cv2.imread(str(SESSION / "reference.png"))
+def _hold_frames(truth: dict):
+    """(press, its frame 0.25 s into the hold) for every press not at the pad's edge nor
+    misaligned."""
     with (SESSION / "frames.csv").open() as fh:
         times = {r["frame"]: float(r["t_s"]) for r in csv.DictReader(fh)}
-    recon = DepthReconstructor(cal, reference=ref, boundary="contact", level="median")
-    recon._dilate = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * grow + 1, 2 * grow + 1))
-    mm = float(truth["mm_per_px"])
-    est = ForceEstimator(cal.shape, mm, thickness_mm=float(truth["thickness_mm"]),
-                         E_mpa=fit["E_mpa"], nu=fit["nu"], contact="footprint",
-                         threshold_mm=0.02, beta=fit.get("beta", 0.0))
-    out = []
     for p in truth["presses"]:
         if p["edge"] or p["misaligned"]:
             continue
         t = p["hold_from_s"] + 0.25
         name = min(times, key=lambda k: abs(times[k] - t))
-        z = recon(cv2.imread(str(SESSION / "frames" / name)))
-        fz = float(est(z).total_n[2])
-        h, w = z.shape
-        yy, xx = np.indices(z.shape)
-        d = np.hypot(xx - (w / 2 + p["x_mm"] / mm), yy - (h / 2 + p["y_mm"] / mm)) * mm
-        face = float(np.median(z[d < 0.6 * truth["radius_mm"]]))
-        out.append((p["w0_mm"], face / p["depth_mm"], fz / p["force_n"]))
+        yield p, cv2.imread(str(SESSION / "frames" / name))
+
+
+def _face(z: np.ndarray, p: dict, truth: dict) -> float:
+    """The punch face's height (median within 0.6 punch radii) over the press's depth."""
+    mm = float(truth["mm_per_px"])
+    h, w = z.shape
+    yy, xx = np.indices(z.shape)
+    d = np.hypot(xx - (w / 2 + p["x_mm"] / mm), yy - (h / 2 + p["y_mm"] / mm)) * mm
+    return float(np.median(z[d < 0.6 * truth["radius_mm"]])) / p["depth_mm"]
+
+
+def _setup(fit: dict, truth: dict, beta: float | None = None):
+    """The session's optics with the contact-pinned height, and the footprint estimator."""
+    cal = PhotometricCalibration.load(SESSION / "optics.npz")
+    ref = cv2.imread(str(SESSION / "reference.png"))
+    recon = DepthReconstructor(cal, reference=ref, boundary="contact", level="median")
+    est = ForceEstimator(cal.shape, float(truth["mm_per_px"]),
+                         thickness_mm=float(truth["thickness_mm"]), E_mpa=fit["E_mpa"],
+                         nu=fit["nu"], contact="footprint", threshold_mm=0.02,
+                         beta=fit.get("beta", 0.0) if beta is None else beta)
+    return cal, recon, est
+
+
+def run(grow: int, fit: dict, truth: dict) -> list[tuple[float, float, float]]:
+    """(w0, face / depth, Fz / force) per press at a mask growth of `grow` px."""
+    _, recon, est = _setup(fit, truth)
+    recon._dilate = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * grow + 1, 2 * grow + 1))
+    out = []
+    for p, frame in _hold_frames(truth):
+        z = recon(frame)
+        out.append((p["w0_mm"], _face(z, p, truth), float(est(z).total_n[2]) / p["force_n"]))
     return out
 
 
 def run_sinkin(fit: dict, truth: dict) -> list[tuple[float, float, float, float]]:
     """(w0, face / depth, Fz / force, delta mm) per press with the boundary's own sink-in
     (``--sinkin``)."""
-    cal = PhotometricCalibration.load(SESSION / "optics.npz")
-    ref = cv2.imread(str(SESSION / "reference.png"))
-    with (SESSION / "frames.csv").open() as fh:
-        times = {r["frame"]: float(r["t_s"]) for r in csv.DictReader(fh)}
-    recon = DepthReconstructor(cal, reference=ref, boundary="contact", level="median")
+    cal, recon, est = _setup(fit, truth)
+    _, _, lin = _setup(fit, truth, beta=0.0)
     mm = float(truth["mm_per_px"])
-    kw = dict(thickness_mm=float(truth["thickness_mm"]), E_mpa=fit["E_mpa"], nu=fit["nu"],
-              contact="footprint", threshold_mm=0.02)
-    est = ForceEstimator(cal.shape, mm, beta=fit.get("beta", 0.0), **kw)
-    lin = ForceEstimator(cal.shape, mm, beta=0.0, **kw)
     op, (H, W) = lin._op, cal.shape
     ring_kernel = np.ones((3, 3), np.uint8)
     out = []
-    for p in truth["presses"]:
-        if p["edge"] or p["misaligned"]:
-            continue
-        t = p["hold_from_s"] + 0.25
-        name = min(times, key=lambda k: abs(times[k] - t))
-        frame = cv2.imread(str(SESSION / "frames" / name))
+    for p, frame in _hold_frames(truth):
         z0 = recon(frame)
         mask = recon.contact_mask(frame, threshold="frame", fill_holes=True)
         ring = cv2.dilate(mask.astype(np.uint8), ring_kernel).astype(bool) & ~mask
@@ -110,12 +115,20 @@ def run_sinkin(fit: dict, truth: dict) -> list[tuple[float, float, float, float]
                 break
         z = z0 + delta * mask
         fz = float(est(z, contact_mask=first).total_n[2])
-        h, w = z.shape
-        yy, xx = np.indices(z.shape)
-        d = np.hypot(xx - (w / 2 + p["x_mm"] / mm), yy - (h / 2 + p["y_mm"] / mm)) * mm
-        face = float(np.median(z[d < 0.6 * truth["radius_mm"]]))
-        out.append((p["w0_mm"], face / p["depth_mm"], fz / p["force_n"], delta))
+        out.append((p["w0_mm"], _face(z, p, truth), fz / p["force_n"], delta))
     return out
+
+
+def _print_rows(head: str, rows: np.ndarray) -> None:
+    """A table row for the 0.15 mm presses and one for the deeper ones."""
+    for label, sel in (("0.15 mm", rows[:, 0] < 0.3), (">= 0.3 mm", rows[:, 0] >= 0.3)):
+        r = rows[sel]
+        face, force = r[:, 1], r[:, 2]
+        extra = f" (delta {1e3 * np.median(r[:, 3]):.1f} um)" if rows.shape[1] > 3 else ""
+        print(f"| {head}{extra} | {label} ({sel.sum()}) | {np.median(face):.3f} "
+              f"({face.min():.3f} to {face.max():.3f}) | {np.median(force):.3f} "
+              f"({force.min():.3f} to {force.max():.3f}) | "
+              f"{int(np.sum(np.abs(force - 1) <= 0.05))} of {sel.sum()} |", flush=True)
 
 
 def main() -> None:
@@ -136,24 +149,9 @@ def main() -> None:
           "| force within 5 % |")
     print("|---|---|---|---|---|")
     for grow in (int(g) for g in args.grow.split(",")):
-        rows = np.array(run(grow, fit, truth))
-        for label, sel in (("0.15 mm", rows[:, 0] < 0.3), (">= 0.3 mm", rows[:, 0] >= 0.3)):
-            r = rows[sel]
-            face, force = r[:, 1], r[:, 2]
-            print(f"| {grow} px | {label} ({sel.sum()}) | {np.median(face):.3f} "
-                  f"({face.min():.3f} to {face.max():.3f}) | {np.median(force):.3f} "
-                  f"({force.min():.3f} to {force.max():.3f}) | "
-                  f"{int(np.sum(np.abs(force - 1) <= 0.05))} of {sel.sum()} |", flush=True)
+        _print_rows(f"{grow} px", np.array(run(grow, fit, truth)))
     if args.sinkin:
-        rows = np.array(run_sinkin(fit, truth))
-        for label, sel in (("0.15 mm", rows[:, 0] < 0.3), (">= 0.3 mm", rows[:, 0] >= 0.3)):
-            r = rows[sel]
-            face, force = r[:, 1], r[:, 2]
-            print(f"| sink-in (delta {1e3 * np.median(r[:, 3]):.1f} um) | {label} ({sel.sum()}) "
-                  f"| {np.median(face):.3f} ({face.min():.3f} to {face.max():.3f}) | "
-                  f"{np.median(force):.3f} ({force.min():.3f} to {force.max():.3f}) | "
-                  f"{int(np.sum(np.abs(force - 1) <= 0.05))} of {sel.sum()} |", flush=True)
-
+        _print_rows("sink-in", np.array(run_sinkin(fit, truth)))
 
 if __name__ == "__main__":
     main()

@@ -262,3 +262,5 @@ def test_auto_refuses_an_option_that_names_one_engine():
         PhotometricCalibration.from_ball_presses(ref, frames, lut_cells=(4, 3), **kw)
     with pytest.raises(InputError, match="warm_start needs model='mlp'"):
         PhotometricCalibration.from_ball_presses(ref, frames, warm_start=object(), **kw)
+    with pytest.raises(InputError, match="detected=False needs the circles"):
+        PhotometricCalibration.from_ball_presses(ref, frames, detected=False, **kw)

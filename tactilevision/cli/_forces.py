@@ -6,7 +6,7 @@ import argparse
 import importlib
 from pathlib import Path
 
-from ._options import add_material_options, add_optics_options
+from ._options import add_contact_options, add_material_options, add_optics_options
 from ._out import add_overwrite_argument
 
 __all__ = ["add_parser", "run"]
@@ -46,12 +46,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--flat-reference", action="store_true",
                    help="subtract the optics model's gradient on the reference (right for "
                    "simulated frames; on real GelSight frames it adds background)")
-    p.add_argument("--contact", choices=("footprint", "field"), default="footprint",
-                   help="traction only on the footprint, the pixels whose height exceeds "
-                   "--threshold-mm, zero elsewhere (default), or the height map trusted "
-                   "everywhere (every error beyond the contact then pushes or pulls)")
-    p.add_argument("--threshold-mm", type=float, default=0.02,
-                   help="footprint: height above which a pixel is in contact (default 0.02)")
+    add_contact_options(p)
     p.add_argument("--beta", type=float, default=None,
                    help="large-deformation stiffening of eq. (5), forces x (1 + beta w/h); "
                    "default: the fit JSON's beta, else 0")

@@ -6,7 +6,7 @@ import argparse
 import importlib
 from pathlib import Path
 
-from ._options import add_material_options, add_optics_options
+from ._options import add_contact_options, add_material_options, add_optics_options
 
 __all__ = ["CSV_COLUMNS", "add_parser", "run"]
 
@@ -47,12 +47,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="the height's zero (default: contact with forces, the accurate "
                    "footprint; median with --contact field, several times faster, for "
                    "camera rate)")
-    p.add_argument("--contact", choices=("footprint", "field"), default="footprint",
-                   help="the forces' traction region, as tactilevision forces: footprint "
-                   "(default: the pixels above --threshold-mm) or field (the whole height "
-                   "map; with --level median or far_field, the camera-rate choice)")
-    p.add_argument("--threshold-mm", type=float, default=0.02,
-                   help="the footprint's height threshold, mm (default 0.02)")
+    add_contact_options(p, note="; field with --level median or far_field is the camera-rate "
+                        "choice")
     p.add_argument("--out", metavar="VIDEO", type=Path, default=None,
                    help="annotated video to write (.mp4 or .avi)")
     p.add_argument("--csv", metavar="FILE", type=Path, default=None,

@@ -10,7 +10,8 @@ from pathlib import Path
 
 from .. import KNOWN_SENSORS
 
-__all__ = ["add_dome_argument", "add_material_options", "add_optics_options"]
+__all__ = ["add_contact_options", "add_dome_argument", "add_material_options",
+           "add_optics_options"]
 
 _REFERENCE_HELP = ("no-contact frame (default: the session's own, else reference.png, ref.jpg, "
                    "gs_sdk's background.png or <video stem>_reference.png beside the frames, "
@@ -43,6 +44,18 @@ def add_material_options(p: argparse.ArgumentParser, *, fit: bool = True) -> Non
     p.add_argument("--nu", type=float, default=None, help="Poisson's ratio nu")
     p.add_argument("--thickness-mm", type=float, default=None,
                    help="gel layer thickness h, mm (a session's own by default)")
+
+
+def add_contact_options(p: argparse.ArgumentParser, *, note: str = "") -> None:
+    """``--contact {footprint,field}`` and ``--threshold-mm``: the forces' traction region,
+    with one default wherever forces are mapped (``ForceEstimator``'s); `note` ends the
+    ``--contact`` help."""
+    p.add_argument("--contact", choices=("footprint", "field"), default="footprint",
+                   help="traction only on the footprint, the pixels whose height exceeds "
+                   "--threshold-mm, zero elsewhere (default), or the height map trusted "
+                   "everywhere (every error beyond the contact then pushes or pulls)" + note)
+    p.add_argument("--threshold-mm", type=float, default=0.02,
+                   help="footprint: height above which a pixel is in contact (default 0.02)")
 
 
 def add_dome_argument(g) -> None:

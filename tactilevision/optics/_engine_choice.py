@@ -228,9 +228,9 @@ def calibrate_choosing_engine(cls: type, reference: np.ndarray, frames: np.ndarr
     reference, frames, ball_mm = _checked_presses(reference, frames, ball_radius_mm,
                                                   mm_per_px, "lut", detect_edge, flat_fraction)
     none_given = centers_px is None and radii_px is None
-    centres, radii = _press_circles(frames, reference, centers_px, radii_px, detect_edge)
     if detected is False and none_given:
         raise InputError("detected=False needs the circles: give centers_px and radii_px")
+    centres, radii = _press_circles(frames, reference, centers_px, radii_px, detect_edge)
     as_detected = none_given if detected is None else bool(detected)
 
     def train(sel: np.ndarray, engine: Engine, warm=None):
