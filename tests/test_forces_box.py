@@ -116,3 +116,21 @@ def test_a_footprint_one_pixel_wide_is_solved_on_its_box(shape):
     f_new, f_old = new(h), old(h)
     assert float(f_old.total_n[2]) > 0
     assert float(f_new.total_n[2]) == pytest.approx(float(f_old.total_n[2]), rel=5e-3)
+
+
+def test_masked_cg_solves_separate_regions_each_on_its_own_box():
+    """A press and specks of colour change far from it (the sample session's stripe of
+    glare): each 4-connected region is its own problem, solved on its own box, and the
+    height equals the direct solve of the whole mask."""
+    rng = np.random.default_rng(5)
+    gx, gy = rng.normal(size=(2, 96, 160)).astype(np.float32)
+    yy, xx = np.mgrid[:96, :160]
+    mask = np.hypot(yy - 48, xx - 35) < 25                  # the press
+    mask |= (np.abs(xx - 130) < 3) & (np.abs(yy - 30) < 12)  # a stripe far to the right
+    mask[80:84, 120:124] = True                             # a speck
+    direct = integrate_poisson_masked(gx, gy, mask, method="direct")
+    cg = integrate_poisson_masked(gx, gy, mask)
+    peak = float(np.abs(direct).max())
+    assert np.abs(cg - direct).max() <= 1e-5 * peak
+    assert not cg[~mask].any()
+    assert np.all(cg[80:84, 120:124] != 0)                  # the speck is solved too

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from typing import Literal
 
+import cv2
 import numpy as np
 from scipy import fft as sfft
 from scipy import sparse
@@ -264,6 +265,10 @@ def integrate_poisson_masked(gx: np.ndarray, gy: np.ndarray, mask: np.ndarray, *
     -----
     Only the pixels of the mask's bounding box take part: every pixel
     outside the mask is pinned at zero, so the box holds the whole problem.
+    The 5-point stencil couples only 4-neighbours, so each 4-connected
+    region of the mask is a problem of its own, solved on its own box (a
+    press and a speck of glare far from it: 25 iterations each instead of 85
+    on the box spanning both).
     'cg' solves the masked 5-point system by conjugate gradients with the
     box's own fast Poisson solve as the preconditioner: one pair of real
     trigonometric transforms per iteration, the type on each side of the box
@@ -316,7 +321,7 @@ def _masked_one(gx: np.ndarray, gy: np.ndarray, mask: np.ndarray, method: str, t
     if not mask.any():
         return out
     if method == "cg":
-        z = _masked_cg(gx, gy, mask, tol, z0)
+        z = _masked_cg_parts(gx, gy, mask, tol, z0)
         if z is not None:
             return z
     f = divergence(gx.astype(np.float64), gy.astype(np.float64), scale=0.5)
@@ -378,6 +383,28 @@ def _box_transforms(kind: str, n: int) -> tuple[str, int, np.ndarray]:
         return "dct", 2, 2.0 * np.cos(np.pi * k / n) - 2.0
     lam = 2.0 * np.cos(np.pi * (k + 0.5) / n) - 2.0
     return ("dct", 4, lam) if kind == "ND" else ("dst", 4, lam)
+
+
+def _masked_cg_parts(gx: np.ndarray, gy: np.ndarray, mask: np.ndarray, tol: float,
+                     z0: np.ndarray | None) -> np.ndarray | None:
+    """:func:`_masked_cg` on each 4-connected region of `mask` alone; None if one did not
+    converge. The 5-point system couples only 4-neighbours, so regions that do not touch
+    are independent problems: each on its own bounding box, where the box's fast Poisson
+    solve is a far better preconditioner than on a box spanning them all (a press and a
+    speck of colour change 300 px away: 85 iterations on their common box against 25)."""
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(mask.view(np.uint8), connectivity=4)
+    if n <= 2:
+        return _masked_cg(gx, gy, mask, tol, z0)
+    out = np.zeros(mask.shape, np.float32)
+    for k in range(1, n):
+        x, y, w, h = (int(v) for v in stats[k, :4])
+        part = np.zeros(mask.shape, bool)
+        part[y:y + h, x:x + w] = labels[y:y + h, x:x + w] == k
+        z = _masked_cg(gx, gy, part, tol, z0)
+        if z is None:
+            return None
+        out += z
+    return out
 
 
 def _masked_cg(gx: np.ndarray, gy: np.ndarray, mask: np.ndarray, tol: float,
