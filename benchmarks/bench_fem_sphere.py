@@ -14,6 +14,10 @@ Prints:
 5. The seam with the closed forms: the table at its smallest R/h (0.5; small strain,
    frictionless) against Hertz times Dimitriadis' bonded series, for a paraboloid and
    for Sneddon's (1965) sphere, at nu = 0.3 and 0.5 (no FEM solve).
+6. Below the seam: what the package reads at R/h 0.05 to 0.45 (the closed forms
+   carried on from the seam, scaled to meet the table) against direct FEM solves of a
+   sphere to w/R 0.6, the reach: the four cases the carrying rule was set on, then four
+   solved only after (--quick: the first two).
 
 Usage: python benchmarks/bench_fem_sphere.py [--quick] [--no-table]
 
@@ -155,6 +159,44 @@ def seam_check() -> None:
             f"{100 * (r['sphere'] / r['table'] - 1):+.2f}%" for r in rows))
 
 
+#: Below the seam: (R/h, nu, w/R, role). 'set': the cases on which the carrying rule
+#: (_sphere_table._below_seam) was set; 'judge': cases solved only after it was set.
+BELOW_SEAM = ((0.25, 0.3, (0.05, 0.15, 0.3, 0.45, 0.6), "set"),
+              (0.25, 0.5, (0.05, 0.15, 0.3, 0.45, 0.6), "set"),
+              (0.1, 0.3, (0.05, 0.15, 0.3, 0.45, 0.6), "set"),
+              (0.1, 0.5, (0.05, 0.15, 0.3, 0.45, 0.6), "set"),
+              (0.05, 0.45, (0.1, 0.25, 0.4, 0.55), "judge"),
+              (0.175, 0.4, (0.1, 0.25, 0.4, 0.55), "judge"),
+              (0.375, 0.48, (0.1, 0.25, 0.4, 0.55), "judge"),
+              (0.45, 0.35, (0.1, 0.25, 0.4, 0.55), "judge"))
+
+
+def below_seam_rows(R_over_h: float, nu: float, w_over_r) -> dict:
+    """Section 6's figures at one R/h under the table's smallest (0.5) and one nu: the
+    package's P/P_Hertz there (the closed forms carried on from the seam, scaled to meet
+    the table: ``sphere_force_ratio``) against a direct FEM solve of a sphere (linear,
+    frictionless, no cache) at w/R 0.05 to 0.6, the reach; ``{"rows", "dofs", "s"}``."""
+    w = np.asarray(w_over_r) * R_over_h
+    t = time.perf_counter()
+    r = sphere_indentation(R_over_h, nu, w, model="linear", contact="frictionless",
+                           profile="sphere", cache=False)
+    carried = sphere_force_ratio(R_over_h, nu, w, model="linear", contact="frictionless")
+    rows = [{"w_over_r": float(w[k] / R_over_h), "w_over_h": float(w[k]),
+             "chi": float(np.sqrt(R_over_h * w[k])), "fem": float(r.hertz_ratio[k]),
+             "carried": float(carried[k])} for k in range(w.size)]
+    return {"rows": rows, "dofs": r.n_dofs, "s": time.perf_counter() - t}
+
+
+def below_seam_check(quick: bool) -> None:
+    print("6. Below the table's smallest R/h: the carried closed form against the FEM "
+          "(linear, frictionless sphere): carried / FEM - 1")
+    for R, nu, w_over_r, role in BELOW_SEAM[:2] if quick else BELOW_SEAM:
+        b = below_seam_rows(R, nu, w_over_r)
+        print(f"   R/h {R}, nu {nu} ({role}; {b['dofs']} dofs, {b['s']:.0f} s): w/R "
+              + " ".join(f"{r['w_over_r']:g}: {100 * (r['carried'] / r['fem'] - 1):+.2f}%"
+                         for r in b["rows"]))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="fewer depths")
@@ -168,6 +210,7 @@ def main() -> None:
     if not args.no_table:
         table_check()
     seam_check()
+    below_seam_check(args.quick)
 
 
 if __name__ == "__main__":
