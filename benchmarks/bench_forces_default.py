@@ -88,8 +88,9 @@ def evaluate(rows: list[dict], truth: dict) -> dict:
     return out
 
 
-def rate(frames: int, start: int, before: int) -> None:
-    """Per-frame times of the default path and its pieces against bare height maps."""
+def rate_rows(frames: int, start: int, before: int) -> dict:
+    """Per-frame times of the default path and its pieces against bare height maps:
+    ``{"rows": [(path, ms, bare height maps)], "n", "n_spread", "every", "bare_ms"}``."""
     s = read_session(SESSION)
     cal = PhotometricCalibration.load(SESSION / "optics.npz")
     mm = s.config.mm_per_px
@@ -123,27 +124,64 @@ def rate(frames: int, start: int, before: int) -> None:
                        frames_)
     it = iter(heights * 2)
     t_forces = per_frame(lambda _f: est(next(it)), frames_)
-    sub = frames_[::max(1, len(frames_) // before)]
+    every = max(1, len(frames_) // before)
+    sub = frames_[::every]
     t_before = per_frame(old_path, sub)
     t_after = per_frame(lambda f: est(recon(f)), sub)
     t_bare2 = per_frame(bare, frames_)
+    ref = 0.5 * (t_bare + t_bare2)
+    rows = [(f"bare DepthReconstructor (the reference; mean of a run before and after: "
+             f"{t_bare * 1e3:.1f}, {t_bare2 * 1e3:.1f} ms)", ref),
+            ("default path: contact-pinned height + footprint force", t_default),
+            ("  its contact-pinned height map alone", t_heights),
+            ("    of which the frame's contact mask", t_mask),
+            ("  its footprint force map alone", t_forces),
+            ("the solvers before (direct masked solve, padded footprint solve), "
+             "on the spread frames", t_before),
+            ("the default path on the same spread frames", t_after)]
+    return {"rows": [(name, t * 1e3, t / ref) for name, t in rows], "n": len(frames_),
+            "n_spread": len(sub), "every": every, "bare_ms": ref * 1e3}
+
+
+def rate(frames: int, start: int, before: int) -> None:
+    """Print :func:`rate_rows` as a Markdown table."""
+    r = rate_rows(frames, start, before)
     print(f"Command: python benchmarks/bench_forces_default.py --rate --frames {frames} "
-          f"--start {start} --before {before}\n{len(frames_)} consecutive frames from "
-          f"{start} (every {max(1, len(frames_) // before)}th, {len(sub)} frames, for the "
+          f"--start {start} --before {before}\n{r['n']} consecutive frames from "
+          f"{start} (every {r['every']}th, {r['n_spread']} frames, for the "
           "solvers before), 640 x 480, one process\n")
     print("| path | ms per frame | bare height maps per frame |")
     print("|---|---|---|")
-    ref = 0.5 * (t_bare + t_bare2)
-    for name, t in (("bare DepthReconstructor (the reference; mean of a run before and "
-                     f"after: {t_bare * 1e3:.1f}, {t_bare2 * 1e3:.1f} ms)", ref),
-                    ("default path: contact-pinned height + footprint force", t_default),
-                    ("  its contact-pinned height map alone", t_heights),
-                    ("    of which the frame's contact mask", t_mask),
-                    ("  its footprint force map alone", t_forces),
-                    ("the solvers before (direct masked solve, padded footprint solve), "
-                     "on the spread frames", t_before),
-                    ("the default path on the same spread frames", t_after)):
-        print(f"| {name} | {t * 1e3:.1f} | {t / ref:.1f} |", flush=True)
+    for name, ms, ratio in r["rows"]:
+        print(f"| {name} | {ms:.1f} | {ratio:.1f} |", flush=True)
+
+
+def variant_rows(fit: Path | None, every: int, variants: list[str]) -> list[dict]:
+    """Each variant's ``tactilevision forces`` run on every `every`-th frame of the sample
+    session, evaluated (:func:`evaluate`): ``[{"name", "options", "frames", "s_per_frame",
+    "status", **evaluate}]``. `fit` None or missing: the truth's E, nu and clock offset,
+    beta 0.82."""
+    truth = json.loads((SESSION / "truth.json").read_text())
+    out_rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        if fit is None or not fit.is_file():
+            fit = Path(tmp) / "fit.json"
+            fit.write_text(json.dumps({"E_mpa": truth["E_mpa"], "nu": truth["nu"],
+                                       "beta": 0.82,
+                                       "clock_offset_s": truth["clock_offset_s"]}))
+        for name in variants:
+            out = Path(tmp) / name
+            t0 = time.perf_counter()
+            rc = cli(["forces", str(SESSION), "--fit", str(fit), "--every", str(every),
+                      "--out", str(out), "--no-images", "--no-progress", *VARIANTS[name]])
+            dt = time.perf_counter() - t0
+            row = {"name": name, "options": " ".join(VARIANTS[name]) or "(none)",
+                   "status": rc}
+            if rc == 0:
+                rows = list(csv.DictReader((out / "forces.csv").open()))
+                row.update(frames=len(rows), s_per_frame=dt / len(rows), **evaluate(rows, truth))
+            out_rows.append(row)
+    return out_rows
 
 
 def main() -> None:
@@ -162,36 +200,21 @@ def main() -> None:
     if args.rate:
         rate(args.frames, args.start, args.before)
         return
-    truth = json.loads((SESSION / "truth.json").read_text())
-    with tempfile.TemporaryDirectory() as tmp:
-        fit = args.fit
-        if not fit.is_file():
-            fit = Path(tmp) / "fit.json"
-            fit.write_text(json.dumps({"E_mpa": truth["E_mpa"], "nu": truth["nu"],
-                                       "beta": 0.82,
-                                       "clock_offset_s": truth["clock_offset_s"]}))
-        print(f"Command: python benchmarks/bench_forces_default.py --fit {args.fit} "
-              f"--every {args.every}\nfit: {fit}\n")
-        print("| variant | options | frames | s per frame | presses >= 0.3 mm: hold frames, "
-              "median Fz/F_T (range), within 5 % | 0.15 mm: median (range) | "
-              "no-contact frames: median, max |Fz| |")
-        print("|---|---|---|---|---|---|---|")
-        for name in args.variants.split(","):
-            out = Path(tmp) / name
-            t0 = time.perf_counter()
-            rc = cli(["forces", str(SESSION), "--fit", str(fit), "--every", str(args.every),
-                      "--out", str(out), "--no-images", "--no-progress", *VARIANTS[name]])
-            dt = time.perf_counter() - t0
-            if rc != 0:
-                print(f"| {name} | failed with status {rc} |")
-                continue
-            rows = list(csv.DictReader((out / "forces.csv").open()))
-            e = evaluate(rows, truth)
-            d, s, f = e["deep"], e["shallow"], e["free"]
-            print(f"| {name} | `{' '.join(VARIANTS[name]) or '(none)'}` | {len(rows)} | "
-                  f"{dt / len(rows):.2f} | {d['n']}, {d['median']:.3f} ({d['lo']:.3f} to "
-                  f"{d['hi']:.3f}), {d['within5']:.0%} | {s['median']:.3f} ({s['lo']:.3f} to "
-                  f"{s['hi']:.3f}) | {f['median_mn']:.1f}, {f['max_mn']:.1f} mN |", flush=True)
+    print(f"Command: python benchmarks/bench_forces_default.py --fit {args.fit} "
+          f"--every {args.every}\nfit: {args.fit if args.fit.is_file() else 'the truth'}\n")
+    print("| variant | options | frames | s per frame | presses >= 0.3 mm: hold frames, "
+          "median Fz/F_T (range), within 5 % | 0.15 mm: median (range) | "
+          "no-contact frames: median, max |Fz| |")
+    print("|---|---|---|---|---|---|---|")
+    for r in variant_rows(args.fit, args.every, args.variants.split(",")):
+        if r["status"] != 0:
+            print(f"| {r['name']} | failed with status {r['status']} |")
+            continue
+        d, s, f = r["deep"], r["shallow"], r["free"]
+        print(f"| {r['name']} | `{r['options']}` | {r['frames']} | {r['s_per_frame']:.2f} | "
+              f"{d['n']}, {d['median']:.3f} ({d['lo']:.3f} to {d['hi']:.3f}), "
+              f"{d['within5']:.0%} | {s['median']:.3f} ({s['lo']:.3f} to {s['hi']:.3f}) | "
+              f"{f['median_mn']:.1f}, {f['max_mn']:.1f} mN |", flush=True)
 
 
 if __name__ == "__main__":
