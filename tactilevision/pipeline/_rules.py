@@ -72,10 +72,11 @@ class DepthState:
     shared: tuple[np.ndarray, np.ndarray] | None = None
 
 
-#: The stiffening of eq. (5) that the 'mark' rule's dP/dw assumes. The FEM's beta of a
-#: bonded layer at w/h 0.05 to 0.2 (mechanics.beta_relation) is 0.77 to 0.82 at a/h 0.83
-#: and nu 0.45 to 0.499 (dP/dw within 1 %), and 0.37 to 1.14 over a/h 0.5 to 1.2: dP/dw
-#: then -6 to +4 % off at w/h 0.2, half that at 0.1, about mark_shared_mm's STIFFNESS_REL.
+#: The stiffening of eq. (5) the 'mark' rule's dP/dw starts from (then the fit's own). The
+#: FEM's beta of a bonded layer at w/h 0.05 to 0.2 (mechanics.beta_relation) is 0.77 to
+#: 0.82 at a/h 0.83 and nu 0.45 to 0.499 (dP/dw within 1 %), and 0.37 to 1.14 over a/h 0.5
+#: to 1.2: dP/dw then -6 to +4 % off at w/h 0.2, half that at 0.1, about mark_shared_mm's
+#: STIFFNESS_REL; the paper's relation gives 1.51 at nu 0.48 (5 % at w/h 0.1).
 MARK_BETA = 0.8
 #: The largest fitted beta the 'mark' rule takes into dP/dw (past it, a fit that cannot
 #: tell beta: MARK_BETA is kept).
@@ -86,7 +87,8 @@ def mark_rule(presses, force: np.ndarray, fit_at, cfg, period: float,
               clock_sd_s: float = CLOCK_SD_S):
     """The ``'mark'`` depth rule: depths from w0 and the force's rise from each indenter's
     P(w0) to the force window (:func:`~tactilevision.contact.crossing_forces`,
-    :func:`~tactilevision.contact.mark_depths`), dP/dw from each press's own P/w.
+    :func:`~tactilevision.contact.mark_depths`), dP/dw from each press's own P/w with
+    eq. 5's shape at the fit's own beta (:data:`MARK_BETA` first).
 
     Parameters
     ----------
