@@ -175,7 +175,7 @@ def mark_rule(presses, force: np.ndarray, fit_at, cfg, period: float,
     # eq. 5's beta in dP/dw: a typical gel's first (MARK_BETA), then the fit's own until
     # the depths stand still. A fixed 0.8 read every depth past w0 about 5 % long on gels
     # of beta 1.5 (the paper's relation at nu 0.48): the depth means of 18 Taxim mark
-    # designs drawn at random leaned +0.8 to +5.6 um deep on 16 of them
+    # designs drawn at random leaned deep on 16 of them, median +3.0 um
     # (benchmarks/bench_mark_sweep.py, seed 9781).
     beta_used = MARK_BETA
     depth, after = w0 + travel / 2, travel / 2
