@@ -1,10 +1,12 @@
 """Binary morphology on the hot path of a frame: OpenCV's flood fill in place of
-SciPy's hole filling (bottom layer, no imports from the package)."""
+SciPy's hole filling (bottom layer: only ``_errors`` from the package)."""
 
 from __future__ import annotations
 
 import cv2
 import numpy as np
+
+from ._errors import InputError
 
 __all__ = ["fill_holes"]
 
@@ -30,12 +32,12 @@ def fill_holes(mask: np.ndarray) -> np.ndarray:
 
     Raises
     ------
-    ValueError
+    InputError
         If `mask` is not 2-D.
     """
     mask = np.asarray(mask, bool)
     if mask.ndim != 2:
-        raise ValueError(f"mask must be 2-D, got shape {mask.shape}")
+        raise InputError(f"mask must be 2-D, got shape {mask.shape}")
     H, W = mask.shape
     framed = np.zeros((H + 2, W + 2), np.uint8)
     framed[1:-1, 1:-1] = mask

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 from scipy import ndimage as ndi
 
+from tactilevision import InputError
 from tactilevision._morphology import fill_holes
 
 
@@ -34,5 +35,5 @@ def test_a_ring_is_filled_and_a_ring_open_to_the_border_is_not():
 
 
 def test_fill_holes_refuses_a_stack():
-    with pytest.raises(ValueError, match="2-D"):
+    with pytest.raises(InputError, match="2-D"):
         fill_holes(np.zeros((2, 5, 5), bool))
