@@ -9,6 +9,7 @@ from functools import lru_cache
 
 import numpy as np
 from scipy import optimize, stats
+from scipy.interpolate import PchipInterpolator
 
 from .._checks import InputError, check_array
 from ._beta import beta_relation
@@ -795,8 +796,33 @@ def _in_table(m: _Moduli, rel, c: float, s: float, cov: np.ndarray, beta: float,
                 - dkap / kap)
     m.nu_se, m.nu_ci = _interval(nu, g_nu, cov, tq)
     m.E_se, m.E_ci = _interval(E, E * (np.array([1 / c, 0.0]) + dlnE_dnu * g_nu), cov, tq)
-    if (getattr(rel, "beta_grid", None) is not None and np.isfinite(beta_se)
-            and beta + tq * beta_se >= rel.beta_max):
+    grid = getattr(rel, "beta_grid", None) is not None
+    if (not grid and np.isfinite(beta_se) and beta - tq * beta_se >= rel.beta_min
+            and (beta + tq * beta_se >= rel.beta_max or m.nu_ci[1] >= rel.nu_max)):
+        # beta's interval (or nu's, by the delta method) reaches the relation's top, nu =
+        # 0.5, past which no solid lies:
+        # the delta method's nu interval ran past 0.5 (a Taxim mark session read nu [0.46,
+        # 0.52]) and E's, symmetric, over gels that cannot be. Its confidence region
+        # projected instead, the gels past the top put at it
+        got = _over_ellipse(rel, c, s, cov, tq, a=a, ah=ah, kappa_source=kappa_source,
+                            contact=contact)
+        if got is not None:
+            m.nu_ci = (min(got[0][0], nu), max(got[0][1], nu))
+            m.E_ci = (min(got[1][0], E), max(got[1][1], E))
+            m.nu_se, m.E_se = ((m.nu_ci[1] - m.nu_ci[0]) / (2 * tq),
+                               (m.E_ci[1] - m.E_ci[0]) / (2 * tq))
+            notes.append(f"the {confidence:.0%} interval of beta or nu reaches the relation's top "
+                         f"({rel.beta_max:.4f}, nu = {rel.nu_max:.2f}, an incompressible "
+                         "gel): the intervals of nu and E are the fit's confidence region "
+                         "of (c, c beta) projected through the relation and eq. (4), the "
+                         f"gels past its top put at nu = {rel.nu_max:.2f}, not the delta "
+                         "method")
+            return
+    if not grid and m.nu_ci[1] > rel.nu_max:
+        # the region reaches below the relation too (no E there to project): no solid lies
+        # past nu = 0.5 whatever the rest
+        m.nu_ci = (m.nu_ci[0], float(rel.nu_max))
+    if (grid and np.isfinite(beta_se) and beta + tq * beta_se >= rel.beta_max):
         # beta's interval reaches the table's peak, where d nu / d beta -> infinity and
         # the delta method fails: invert beta's interval through the table instead
         _, nu_ci, _, E_ci, _, _ = _at_table_top(rel, beta - tq * beta_se, c, cov, tq, a, ah,
@@ -813,6 +839,59 @@ def _in_table(m: _Moduli, rel, c: float, s: float, cov: np.ndarray, beta: float,
         notes.append(f"the {confidence:.0%} interval of nu, [{m.nu_ci[0]:.4f}, "
                      f"{m.nu_ci[1]:.4f}], reaches outside the beta table "
                      f"({rel.range_text()})")
+
+
+#: Points on the boundary of the confidence region :func:`_over_ellipse` reads.
+_ELLIPSE_POINTS = 361
+#: The nu at which :func:`_over_ellipse` reads the kappa table (then interpolates).
+_ELLIPSE_NU_GRID = 9
+
+
+def _over_ellipse(rel, c: float, s: float, cov: np.ndarray, tq: float, *, a: float,
+                  ah: float, kappa_source: str, contact: str
+                  ) -> tuple[tuple[float, float], tuple[float, float]] | None:
+    """nu's and E's intervals over the fit's confidence region of (c, c beta).
+
+    The region is the ellipse ``(x - x_hat)^T cov^-1 (x - x_hat) <= tq^2`` (one
+    parameter's Student t quantile: for a quantity linear in c and c beta the
+    projection is the delta method's interval exactly). Through the relation (7) and
+    eq. (4) nu and E are monotone along it, so their extremes lie on its boundary; a
+    point whose beta lies past the relation's top is a gel at the top (nu = ``nu_max``,
+    E of eq. 4 there), as a fitted beta past it is (:func:`_at_relation_top`).
+
+    Returns
+    -------
+    (nu_lo, nu_hi), (E_lo, E_hi) : tuple of two (float, float), or None
+        None where the covariance is not positive definite or the region reaches c <= 0
+        or below the relation's smallest beta.
+    """
+    try:
+        low = np.linalg.cholesky(np.asarray(cov, np.float64))
+    except np.linalg.LinAlgError:
+        return None
+    phi = np.linspace(0.0, 2 * np.pi, _ELLIPSE_POINTS)
+    pts = np.array([c, s])[:, None] + tq * low @ np.vstack([np.cos(phi), np.sin(phi)])
+    cc, ss = pts
+    if not np.all(cc > 0):
+        return None
+    beta = ss / cc
+    if np.any(beta < rel.beta_min):
+        return None
+    nus = np.minimum(np.asarray(rel.nu(np.minimum(beta, rel.beta_max)), np.float64),
+                     rel.nu_max)
+    if getattr(rel, "kappa_line_grid", None) is not None:
+        Es = np.array([_modulus(rel, ci, ni, a, ah, kappa_source, contact)[0]
+                       for ci, ni in zip(cc, nus, strict=True)])
+    else:
+        # eq. (4) through kappa read on a grid of nu (one table interpolant per nu read:
+        # 361 cost 0.1 s a fit), then exactly at the two extremes the grid finds
+        grid = np.linspace(float(nus.min()), float(nus.max()), _ELLIPSE_NU_GRID)
+        k = np.asarray(kappa(grid, ah, source=kappa_source, contact=contact), np.float64)
+        k_at = PchipInterpolator(grid, k)(nus) if np.ptp(grid) > 0 else np.full_like(nus, k[0])
+        Es = cc * (1 - nus ** 2) / (2 * a * k_at)
+        for i in (int(np.argmin(Es)), int(np.argmax(Es))):
+            Es[i] = _modulus(rel, float(cc[i]), float(nus[i]), a, ah, kappa_source, contact)[0]
+    return (float(nus.min()), float(nus.max())), (float(Es.min()), float(Es.max()))
 
 
 def _table_notes(notes: list[str], rel, *, a: float, h: float, ah: float, beta_table: str,
