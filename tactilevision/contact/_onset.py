@@ -21,6 +21,7 @@ from ._results import (
     MARK_HOLD_FORCE,
     MARK_NULL_FRAMES,
     MARK_TRACE,
+    MARK_TRACE_SHAPE,
     MARK_Z_BLOCK,
     MARK_Z_FAINT,
     MARK_Z_FRAME,
@@ -225,6 +226,20 @@ def _mark_template_onset(ctx: _PressContext, centre: tuple[float, float], run: n
     for j in hold_idx:                     # leave the frame out of its own template
         a[j] = along(D[j], (hold_sum - D[j]) / (hold_idx.size - 1))
     sd_a = max(float(np.std(a[base_idx], ddof=1)), 1e-3)
+    # what each frame shows besides the template's shape, in the template's norm, and its
+    # frame-to-frame noise over the approach (differences: a level that steps as the
+    # indenter touches is no noise)
+    shape = np.array([float(np.linalg.norm(D[j] - a[j] * T)) for j in range(last + 1)])
+    shape /= max(float(np.linalg.norm(T)), 1e-12)
+    step_sd = np.abs(np.diff(shape[base_idx]))
+    sd_shape = max(float(np.median(step_sd)) / 0.6745 / np.sqrt(2.0) if step_sd.size else 0.0,
+                   1e-3)
+
+    def shows_shape(k: int) -> bool:
+        """Frame `k` departs from the frames before it by a change the template's shape
+        does not hold (:data:`MARK_TRACE_SHAPE`)."""
+        d = shape[k] - _level_before(shape, k)
+        return bool(d >= MARK_TRACE_SHAPE and d >= MARK_Z_SEEN * sd_shape)
     why = "no frame of the press steps half-way"
     for j in range(1, last + 1):
         if a[j] < 0.5 or a[j:j + MARK_BLOCK].mean() < 0.5:
@@ -239,8 +254,9 @@ def _mark_template_onset(ctx: _PressContext, centre: tuple[float, float], run: n
                    f"{MARK_Z_STEP:g}")
             break
         first = j
-        while (first > 0 and a[first - 1] < a[first]
-               and _departs(a, first - 1, MARK_Z_SEEN * sd_a, MARK_TRACE)):
+        while first > 0 and ((a[first - 1] < a[first]
+                              and _departs(a, first - 1, MARK_Z_SEEN * sd_a, MARK_TRACE))
+                             or shows_shape(first - 1)):
             first -= 1
         faint = 0
         while (faint < MARK_FAINT_MAX and first - faint > 0

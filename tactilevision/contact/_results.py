@@ -61,6 +61,17 @@ MARK_Z_STEP = 5.0
 #: sds such a frame is a faint trace (:data:`MARK_Z_FAINT`): its period joins the bracket
 #: rather than ending it.
 MARK_Z_SEEN = 5.0
+#: A frame whose profile across the mark departs from the approach's, less its projection
+#: on the hold's template, by at least this share of the template's norm (and by
+#: :data:`MARK_Z_SEEN` sds of the approach frames' own, from the frames before it) shows
+#: the mark too, whatever its projection: on Taxim's frames a ridge a few um past w0 shows
+#: a change shaped otherwise than the hold's, which projects anywhere from -0.7 to +0.2 of
+#: the way. On a Taxim mark session of a drawn design (seed 9781, d24) four presses whose
+#: frame before the step projected -0.03 to +0.17 of the way (under :data:`MARK_TRACE`, or
+#: within the approach's scatter) departed from it by 1.19 to 1.41 of the template's norm,
+#: where the approach frames lay at 0.02 to 0.15: their brackets read a period late (18 to
+#: 34 mN above P(w0)), and their indenters' P(w0) up to 61 mN high.
+MARK_TRACE_SHAPE = 0.3
 #: ... and at least this share of the way to the hold's level (an approach whose shading
 #: moves lifts the frames before the crossing by a few sds of a steady one: 0.01 of the way
 #: at 5 sd on a Taxim session with shadows).
