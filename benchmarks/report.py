@@ -409,6 +409,23 @@ def _calibrate_sample(quick: bool) -> Result:
     ])
 
 
+@subject(
+    "relation_top", "Intervals at the top of the paper's relation (7)",
+    """E's and nu's 95 % intervals where beta's reaches relation (7)'s top (nu = 0.5): 20
+    presses of a gel with E 0.2 MPa and nu 0.48 (beta 1.51) drawn with Gaussian force noise
+    and fitted with `beta_table='paper'`, the package's projection of the fit's confidence
+    region against the delta method on the same draws: how often each interval holds the
+    truth, and E's half-width. 300 draws per row (60 with --quick), seed 5.""",
+    ["python benchmarks/bench_relation_top.py"])
+def _relation_top(quick: bool) -> Result:
+    import bench_relation_top
+    draws = 60 if quick else 300
+    return Result([Table("Coverage and width", bench_relation_top.COLUMNS,
+                         bench_relation_top.rows(draws, 5),
+                         note=f"{draws} draws per row; the nu interval is cut at 0.5 "
+                              "either way.")])
+
+
 def _run_json(argv: Sequence[str], ok: Sequence[int] = (0,)) -> dict:
     """Run ``python -m tactilevision ARGV --json FILE`` from the repository root (this
     tree's package; the cache the runner set) and return the JSON it wrote."""
