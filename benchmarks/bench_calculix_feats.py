@@ -37,9 +37,14 @@ ramp). The cases:
 - ``axisym-1``, ``axisym-2``: our problem in CalculiX, not their mesh: the round pad of
   equal area, axisymmetric (CAX8), the ``frictionless`` law, on two meshes (the second
   halves every cell), written by :func:`axisym_text`. Both stop converging past
-  1.7 mm (ccx cuts the increment again and again; the cause, in this model of ours or
-  in ccx, not found), so they give the first three depths: a run whose last six
-  attempts failed is ended there (the cached ones were ended by hand at that point).
+  1.7 mm (ccx cuts the increment again and again, the largest residuals on nodes near the
+  axis under the ball), so they give the first three depths: a run whose last six
+  attempts failed is ended there (the cached ones were ended by hand at that point);
+- ``axisym-tri-1``: the first grid with each cell cut into two CAX6 triangles (ccx's
+  wedges of C3D15, full integration, where CAX8 becomes the reduced-integration C3D20R):
+  it passes 1.7 mm and reaches 1.9 mm, where its stiffness matrix turns singular on the
+  way to 2.0 mm (spooles: "matrix found to be singular"; the gel under the apex
+  compressed by about half); ``--depths 0.5,1.0,1.5,1.9`` reads it to its last depth.
 
 A 3D run takes 8 to 22 minutes by ccx's own clock on the project's 2-core machine
 (43,299 equations; longer on the wall under load), an axisymmetric one 10 to 15 minutes
@@ -104,7 +109,8 @@ H_MM, R_MM = 4.0, 7.5         # gel thickness at the apex, ball radius
 PAD_MM = (20.75, 25.25)       # their gel's sides
 CONTACT_BLOCK = "*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=TIED\n*FRICTION\n1.0\n"
 FRICTIONLESS_K = 100.0        # MPa/mm, the 'frictionless' case's pressure-overclosure slope
-CCX_CASES = ("published", "frictionless", "frictionless-soft", "axisym-1", "axisym-2")
+CCX_CASES = ("published", "frictionless", "frictionless-soft", "axisym-1", "axisym-2",
+             "axisym-tri-1")
 CELLS = (0.04, 0.02)          # our surface cells, units of h (coarse: the default here)
 INSTALL = "apt-get install -y calculix-ccx"
 STALLED = 6                   # failed attempts in a row that end a ccx run
@@ -249,8 +255,8 @@ def case_folder(case: str, depths_mm: list[float], cache: Path, version: str
                 ) -> tuple[Path, str]:
     """The case's scratch folder (named by a digest of its driver, their files and the
     ccx version) and its driver text."""
-    text = axisym_text(int(case[-1]), depths_mm, dome_fit()[2]) if case.startswith("axisym") \
-        else driver_text(case, depths_mm)
+    text = (axisym_text(int(case[-1]), depths_mm, dome_fit()[2], triangles="tri" in case)
+            if case.startswith("axisym") else driver_text(case, depths_mm))
     key = hashlib.sha256((text + (FEATS / "materials.inp").read_text() + version
                           + "".join(f"{n}:{(FEATS / n).stat().st_size}" for n in TEMPLATE_FILES)
                           ).encode()).hexdigest()[:16]
@@ -356,10 +362,13 @@ def _graded(x0: float, x1: float, h0: float, growth: float) -> np.ndarray:
     return np.array(xs)
 
 
-def axisym_text(level: int, depths_mm: list[float], dome_mm: float) -> str:
+def axisym_text(level: int, depths_mm: list[float], dome_mm: float,
+                triangles: bool = False) -> str:
     """A CalculiX model of our problem: the round pad of equal area, axisymmetric.
 
-    CAX8 quadrilaterals (ccx expands them to a 2 degree wedge of C3D20R): the gel
+    CAX8 quadrilaterals (ccx expands them to a 2 degree wedge of C3D20R, reduced
+    integration), or with `triangles` each cut along its diagonal into two CAX6 (wedges of
+    C3D15, full integration; the same nodes plus each cell's centre): the gel
     (radius the equal-area one, 4 mm thick at the apex, its top the cap of radius
     `dome_mm`, the base fixed) on a grid of 0.25 / level mm out to 7 mm, graded beyond,
     layers from 0.25 / level mm at the top growing 15 % downwards; the ball a steel ring
@@ -392,8 +401,15 @@ def axisym_text(level: int, depths_mm: list[float], dome_mm: float) -> str:
     for i in range(ne_r):
         for j in range(ne_z):
             a, b = 2 * i, 2 * j
-            els.append([node(a, b), node(a + 2, b), node(a + 2, b + 2), node(a, b + 2),
-                        node(a + 1, b), node(a + 2, b + 1), node(a + 1, b + 2), node(a, b + 1)])
+            if triangles:       # corners counter-clockwise, then the sides' middles
+                els.append([node(a, b), node(a + 2, b), node(a + 2, b + 2),
+                            node(a + 1, b), node(a + 2, b + 1), node(a + 1, b + 1)])
+                els.append([node(a, b), node(a + 2, b + 2), node(a, b + 2),
+                            node(a + 1, b + 1), node(a + 1, b + 2), node(a, b + 1)])
+            else:
+                els.append([node(a, b), node(a + 2, b), node(a + 2, b + 2), node(a, b + 2),
+                            node(a + 1, b), node(a + 2, b + 1), node(a + 1, b + 2),
+                            node(a, b + 1)])
             if j == ne_z - 1 and rr[a] < radius:
                 top.append(len(els))
     n_gel = len(els)
@@ -417,7 +433,7 @@ def axisym_text(level: int, depths_mm: list[float], dome_mm: float) -> str:
     used = {n for e in els for n in e}
     lines = ["*NODE, NSET=NALL"]
     lines += [f"{n}, {x:.12g}, {y:.12g}, 0" for n, (x, y) in coords.items() if n in used]
-    lines.append("*ELEMENT, TYPE=CAX8, ELSET=GEL")
+    lines.append(f"*ELEMENT, TYPE={'CAX6' if triangles else 'CAX8'}, ELSET=GEL")
     lines += [f"{k}, " + ", ".join(map(str, e)) for k, e in enumerate(els[:n_gel], 1)]
     lines.append("*ELEMENT, TYPE=CAX8, ELSET=BALL")
     lines += [f"{k}, " + ", ".join(map(str, e)) for k, e in enumerate(els[n_gel:], n_gel + 1)]
@@ -425,7 +441,7 @@ def axisym_text(level: int, depths_mm: list[float], dome_mm: float) -> str:
         lines.append(f"*NSET, NSET={name}")
         lines += [", ".join(map(str, ids[s:s + 8])) + "," for s in range(0, len(ids), 8)]
     lines.append("*SURFACE, NAME=SGEL")
-    lines += [f"{e}, S3" for e in top]
+    lines += [f"{e}, {'S2' if triangles else 'S3'}" for e in top]    # the top side
     lines.append("*SURFACE, NAME=SBALL")
     lines += [f"{e}, S1" for e in master]
     points = ", ".join(str(round(d / d_max, 6)) for d in depths_mm)
@@ -619,8 +635,9 @@ def main() -> int:
         print("   " + f"{'ours ' + label:52s}" + "".join(f"{v:10.4f}" for v in fs[-1]))
     k100 = f"frictionless K {FRICTIONLESS_K:g}, nu {nu_ccx:.4f}, dome"
     pairs = [(f"ours frictionless K 100 dome / ccx {c}", table[k100][-1], runs[c].force_fixed)
-             for c in ("frictionless", "axisym-1", "axisym-2") if c in runs]
+             for c in ("frictionless", "axisym-1", "axisym-2", "axisym-tri-1") if c in runs]
     for num, den, what in (("axisym-2", "axisym-1", "mesh: fine / coarse"),
+                           ("axisym-tri-1", "axisym-1", "CAX6 / CAX8, one grid"),
                            ("frictionless", "axisym-2", "their pad + mesh / round"),
                            ("frictionless-soft", "frictionless", "K 3.625 / K 100"),
                            ("published", "frictionless-soft", "stick slope"),
