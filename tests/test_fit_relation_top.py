@@ -43,6 +43,7 @@ def test_nu_stays_at_most_a_half_and_E_is_the_region_projected():
     assert fit.nu_ci95[1] == pytest.approx(0.5, abs=1e-12)
     assert fit.nu_ci95[0] < fit.nu < 0.5
     assert any("relation's top" in n for n in fit.notes)
+    assert fit.nu_bound == f"nu >= {fit.nu_ci95[0]:.4g}"     # reaches the edge: a bound
     # brute force: E of eq. (4) over 20000 points filling the 1-dof ellipse of radius t,
     # nu clamped at the relation's top, kappa read point by point on a coarse nu grid
     tq = stats.t.ppf(0.975, W.size - 2)

@@ -800,10 +800,10 @@ def _in_table(m: _Moduli, rel, c: float, s: float, cov: np.ndarray, beta: float,
     if (not grid and np.isfinite(beta_se) and beta - tq * beta_se >= rel.beta_min
             and (beta + tq * beta_se >= rel.beta_max or m.nu_ci[1] >= rel.nu_max)):
         # beta's interval (or nu's, by the delta method) reaches the relation's top, nu =
-        # 0.5, past which no solid lies:
-        # the delta method's nu interval ran past 0.5 (a Taxim mark session read nu [0.46,
-        # 0.52]) and E's, symmetric, over gels that cannot be. Its confidence region
-        # projected instead, the gels past the top put at it
+        # 0.5, past which no solid lies: the delta method's nu interval ran past 0.5 (a
+        # Taxim mark session read nu [0.46, 0.52]) and E's, symmetric, over gels that
+        # cannot be. The fit's confidence region projected instead, the gels past the top
+        # put at it
         got = _over_ellipse(rel, c, s, cov, tq, a=a, ah=ah, kappa_source=kappa_source,
                             contact=contact)
         if got is not None:
@@ -811,6 +811,8 @@ def _in_table(m: _Moduli, rel, c: float, s: float, cov: np.ndarray, beta: float,
             m.E_ci = (min(got[1][0], E), max(got[1][1], E))
             m.nu_se, m.E_se = ((m.nu_ci[1] - m.nu_ci[0]) / (2 * tq),
                                (m.E_ci[1] - m.E_ci[0]) / (2 * tq))
+            # an interval that reaches the relation's end: a bound, not a value (issue 82)
+            m.bound = f"nu >= {m.nu_ci[0]:.4g}"
             notes.append(f"the {confidence:.0%} interval of beta or nu reaches the relation's top "
                          f"({rel.beta_max:.4f}, nu = {rel.nu_max:.2f}, an incompressible "
                          "gel): the intervals of nu and E are the fit's confidence region "
