@@ -856,8 +856,9 @@ def _over_ellipse(rel, c: float, s: float, cov: np.ndarray, tq: float, *, a: flo
 
     The region is the ellipse ``(x - x_hat)^T cov^-1 (x - x_hat) <= tq^2`` (one
     parameter's Student t quantile: for a quantity linear in c and c beta the
-    projection is the delta method's interval exactly). Through the relation (7) and
-    eq. (4) nu and E are monotone along it, so their extremes lie on its boundary; a
+    projection is the delta method's interval exactly). nu rises with beta and E with c
+    at a fixed beta (eq. 4, relation 7), so neither has an extreme inside the region and
+    both are read on its boundary; a
     point whose beta lies past the relation's top is a gel at the top (nu = ``nu_max``,
     E of eq. 4 there), as a fitted beta past it is (:func:`_at_relation_top`).
 
