@@ -30,11 +30,13 @@ import pytest
 from tactilevision import InputError
 from tactilevision.mechanics import Sphere
 from tactilevision.optics import (
+    MAX_SECTORS_BEYOND_RIM,
     MIN_RIM_IN_FRAME,
     colour_edge_circle,
     drift_free_change,
     find_contact_circle,
     rim_in_frame,
+    sectors_beyond_rim,
 )
 from tactilevision.pipeline import E_PLAUSIBLE_MPA, calibrate_dead_weights, circle_depths
 
@@ -217,6 +219,37 @@ def test_a_contact_mostly_off_the_image_is_refused_as_cut(sim, reference):
     assert not c.trusted
     assert c.rim_in_frame < MIN_RIM_IN_FRAME
     assert "cut by the image's edge" in c.problems[0]
+
+
+def test_a_large_contact_cut_by_the_edge_is_not_read_as_a_circle_inside_it(sim, reference):
+    """A dimpled contact 136 px in radius whose centre lies 8 px beyond the image's left
+    edge (a third of its rim in view; seed 2015 of ``benchmarks/bench_ball_texture.py``,
+    which the detector read as a circle 45 % small inside it, tangent to the rim it sees,
+    and trusted). Right answer: refused, and what refuses it is that the change does not
+    fall past that circle's rim in most directions."""
+    a, R, centre = 4.005, 6.272, (-7.71, 69.30)
+    assert true_rim_in_frame(centre, a) < 0.4
+    frame = render_press(sim, reference, kind="dimples", a=a, R=R, centre=centre, seed=2015)
+    c = find_contact_circle(frame, reference)
+    assert not c.trusted
+    cut = c.rim_in_frame < MIN_RIM_IN_FRAME
+    assert cut or c.sectors_beyond_rim > MAX_SECTORS_BEYOND_RIM, c
+    assert any("does not fall past its rim" in p or "cut by the image's edge" in p
+               for p in c.problems), c.problems
+
+
+def test_sectors_beyond_rim_on_a_disc_and_inside_it():
+    """A disc of colour change 60 px in radius falling to nothing past it: no sector holds
+    its level past the rim (0). A circle of 30 px tangent to the disc's rim from inside:
+    past its rim the disc goes on in every direction but where it touches (most sectors)."""
+    yy, xx = np.indices((240, 320))
+    r = np.hypot(xx - 160.0, yy - 120.0)
+    level = np.clip((64.0 - r) / 8.0, 0.0, 1.0) * 30.0
+    change = np.repeat(level[..., None], 3, axis=2).astype(np.float32)
+    assert sectors_beyond_rim(change, (160.0, 120.0), 60.0) == 0.0
+    inside = sectors_beyond_rim(change, (190.0, 120.0), 30.0)
+    assert MAX_SECTORS_BEYOND_RIM < inside < 1.0
+    assert np.isnan(sectors_beyond_rim(change, (-200.0, 120.0), 20.0))   # nothing in view
 
 
 def test_a_contact_over_most_of_the_pad_is_found_not_called_no_contact(sim, reference):

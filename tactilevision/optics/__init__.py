@@ -31,6 +31,7 @@ from ._ball import (
     slope_peak_radius,
 )
 from ._ball_contact import (
+    MAX_SECTORS_BEYOND_RIM,
     MIN_RIM_CONTRAST,
     MIN_RIM_IN_FRAME,
     PROFILE_AGREEMENT,
@@ -41,6 +42,7 @@ from ._ball_contact import (
     find_contact_circle,
     profile_radius,
     rim_in_frame,
+    sectors_beyond_rim,
 )
 from ._calibration import PhotometricCalibration
 from ._circles import (
@@ -94,6 +96,7 @@ __all__ = [
     "ENGINES",
     "ENGINE_FOLDS",
     "KERNELS",
+    "MAX_SECTORS_BEYOND_RIM",
     "MIN_MARGIN_PRESSES",
     "MIN_NETWORK_PRESSES",
     "MIN_RIM_CONTRAST",
@@ -168,6 +171,7 @@ __all__ = [
     "profile_radius",
     "reference_inverse",
     "rim_in_frame",
+    "sectors_beyond_rim",
     "slope_peak_radius",
     "track_markers",
     "train_mlp",
