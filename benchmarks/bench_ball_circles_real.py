@@ -19,7 +19,8 @@ the installed tree: ``detect_contact_circle(edge='contact')`` (the optics calibr
 labels) and :func:`tactilevision.optics.find_contact_circle` (a ball session's circle: the
 radial profile's edge, its checks). Printed per set: circles found, the after / before
 radius ratio (median; how many differ by more than 5 %), the centres' shift, how many of
-the ball session's circles are trusted and why the others are not, and the time per frame.
+the ball session's circles are trusted and why the others are not, the range of their
+share of sectors where the change does not fall past the rim, and the time per frame.
 With ``--figures``, the frames where before and after differ by more than 5 % are drawn
 (before red, after green, the ball session's circle blue) for a look.
 """
@@ -39,7 +40,12 @@ import numpy as np
 
 from tactilevision import InputError
 from tactilevision.io import read_ball_presses, taxim_datapack
-from tactilevision.optics import detect_contact_circle, edge_cut, find_contact_circle
+from tactilevision.optics import (
+    MAX_SECTORS_BEYOND_RIM,
+    detect_contact_circle,
+    edge_cut,
+    find_contact_circle,
+)
 
 ROOT = Path(__file__).resolve().parents[1]
 REAL = ROOT.parent / "shared" / "real"
@@ -79,7 +85,7 @@ def main() -> None:
              "gelslim09": REAL / "gelslim3" / "set_2020_09", "mini": REAL / "gelsight_mini"}
     for name in args.sets:
         ps = read_ball_presses(paths[name])
-        rows, reasons, tiles = [], Counter(), []
+        rows, reasons, tiles, beyond = [], Counter(), [], []
         t_old = t_new = t_find = 0.0
         for i, f in enumerate(ps.frames):
             t = time.perf_counter()
@@ -92,6 +98,7 @@ def main() -> None:
             try:
                 cc = find_contact_circle(f, ps.reference)
                 c2, r2, ok = cc.centre_px, cc.radius_px, cc.trusted
+                beyond.append(cc.sectors_beyond_rim)
                 for p in cc.problems:
                     reasons[p.split(" (")[0].split(":")[0][:60]] += 1
             except InputError as exc:
@@ -122,6 +129,10 @@ def main() -> None:
               f"{np.nanmedian(r[:, 2] / r[:, 0] - 1):+.4f}; trusted {int(r[:, 4].sum())} of {n} "
               f"(before: {int((r[:, 5] == 0).sum())} inside the image); not trusted: "
               f"{dict(reasons) or 'none'}")
+        if beyond:
+            print(f"   sectors where the change does not fall past the rim: "
+                  f"{np.nanmin(beyond):.2f} to {np.nanmax(beyond):.2f} (refused over "
+                  f"{MAX_SECTORS_BEYOND_RIM:g})")
         if ps.radii_px is not None:
             ann = np.asarray(ps.radii_px, np.float64)
             for label, k in (("before", 0), ("after", 1), ("session", 2)):
