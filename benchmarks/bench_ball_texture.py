@@ -135,38 +135,45 @@ def judge(case: dict, outcome: str, radius: float, bound: float) -> tuple[bool, 
     return within or outcome == "circle", outcome == "accepted" and not within
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--seeds", type=int, default=20)
-    ap.add_argument("--first", type=int, default=0)
-    args = ap.parse_args()
-    right = wrong = 0
-    refusals: Counter = Counter()
-    t0 = time.perf_counter()
+def run(first: int, n: int, *, echo: bool = False) -> list[dict]:
+    """Draw, render and read seeds `first` to `first + n - 1`: one dict a press (its case,
+    outcome, detail, radius and bound px, right, confidently wrong)."""
+    out = []
     with flat_gel_taxim() as sim:
         reference = render_reference(sim)
-        for seed in range(args.first, args.first + args.seeds):
+        for seed in range(first, first + n):
             case = draw(seed)
             frame = render_press(sim, reference, kind=case["kind"], a=case["a"], R=case["R"],
                                  centre=case["centre"], gain=case["gain"],
                                  offset=case["offset"], seed=seed)
             outcome, detail, radius, bound = read(frame, reference, case["R"], case["force"])
             ok, bad = judge(case, outcome, radius, bound)
-            right += ok
-            wrong += bad
-            if outcome != "accepted":
-                refusals[outcome] += 1
-            a_px = case["a"] / S
-            print(f"seed {seed:3d} {case['kind']:8s} a {a_px:5.1f} px (R {case['R']:.2f} mm, "
-                  f"w {1e3 * sneddon_depth(case['a'], case['R']):4.0f} um) rim in image "
-                  f"{100 * case['rim']:3.0f} %{' drift' if case['drift'] else '':6s}"
-                  f"{' FORCE FAULT' if case['fault'] else '':12s}: {outcome:8s} "
-                  f"r {radius:6.1f} px ({radius - a_px:+6.1f}, bound {bound:5.1f}) "
-                  f"{'right' if ok else 'WRONG' if bad else 'not right'}; {detail[:90]}",
-                  flush=True)
-    print(f"right answers: {right} of {args.seeds} (seeds {args.first} to "
-          f"{args.first + args.seeds - 1}); confidently wrong: {wrong}; refusals: "
-          f"{dict(refusals)}; {time.perf_counter() - t0:.0f} s")
+            out.append(dict(case=case, outcome=outcome, detail=detail, radius=radius,
+                            bound=bound, right=ok, wrong=bad))
+            if echo:
+                a_px = case["a"] / S
+                print(f"seed {seed:3d} {case['kind']:8s} a {a_px:5.1f} px (R {case['R']:.2f} mm, "
+                      f"w {1e3 * sneddon_depth(case['a'], case['R']):4.0f} um) rim in image "
+                      f"{100 * case['rim']:3.0f} %{' drift' if case['drift'] else '':6s}"
+                      f"{' FORCE FAULT' if case['fault'] else '':12s}: {outcome:8s} "
+                      f"r {radius:6.1f} px ({radius - a_px:+6.1f}, bound {bound:5.1f}) "
+                      f"{'right' if ok else 'WRONG' if bad else 'not right'}; {detail[:90]}",
+                      flush=True)
+    return out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--seeds", type=int, default=20)
+    ap.add_argument("--first", type=int, default=0)
+    args = ap.parse_args()
+    t0 = time.perf_counter()
+    got = run(args.first, args.seeds, echo=True)
+    refusals = Counter(g["outcome"] for g in got if g["outcome"] != "accepted")
+    print(f"right answers: {sum(g['right'] for g in got)} of {args.seeds} (seeds {args.first} "
+          f"to {args.first + args.seeds - 1}); confidently wrong: "
+          f"{sum(g['wrong'] for g in got)}; refusals: {dict(refusals)}; "
+          f"{time.perf_counter() - t0:.0f} s")
 
 
 if __name__ == "__main__":

@@ -426,6 +426,39 @@ def _relation_top(quick: bool) -> Result:
                               "either way.")])
 
 
+@subject(
+    "ball_texture", "A ball's contact on textured, drifted and cut presses",
+    """Ball presses drawn at random by Taxim's own renderer (smooth, dimpled, knurled or
+    printed balls; contacts 22 px to 60 % of the image's height, three in ten cut by the
+    image's edge; half under a drift of the light; one in five with a force that is not its
+    own), each one's right answer stated from its truth before it is read: the radius within
+    its stated bound, or refused by its circle (less than 65 % of the rim in view), or
+    refused for its force. Seeds 2100 to 2139, drawn after the detector's last rule was set
+    (10 seeds with --quick).""",
+    ["python benchmarks/bench_ball_texture.py --seeds 40 --first 2100"])
+def _ball_texture(quick: bool) -> Result:
+    import bench_ball_texture as b
+    got = b.run(2100, 10 if quick else 40)
+    by_kind: dict[str, list[int]] = {}
+    for g in got:
+        row = by_kind.setdefault(g["case"]["kind"], [0, 0, 0, 0, 0])
+        row[0] += 1
+        row[1] += g["right"]
+        row[2] += g["wrong"]
+        row[3] += g["outcome"] != "accepted" and not g["right"]
+        row[4] += g["case"]["rim"] < 0.75
+    rows = [[k, *v] for k, v in sorted(by_kind.items())]
+    rows.append(["all", *(sum(r[k] for r in by_kind.values()) for k in range(5))])
+    missed = [f"seed {g['case']['seed']}: {g['detail'].split(' (')[0]}" for g in got
+              if not g["right"]]
+    n, right, wrong = len(got), sum(g["right"] for g in got), sum(g["wrong"] for g in got)
+    return Result([Table("Right answers by ball", ["ball", "presses", "right",
+                                                   "confidently wrong", "refused, a radius was right",
+                                                   "cut by the edge (true rim < 75 %)"],
+                         rows, note="Not right: " + ("; ".join(missed) or "none") + ".")],
+                  summary=f"{right} of {n} right, {wrong} confidently wrong.")
+
+
 def _run_json(argv: Sequence[str], ok: Sequence[int] = (0,)) -> dict:
     """Run ``python -m tactilevision ARGV --json FILE`` from the repository root (this
     tree's package; the cache the runner set) and return the JSON it wrote."""
