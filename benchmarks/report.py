@@ -459,6 +459,31 @@ def _ball_texture(quick: bool) -> Result:
                   summary=f"{right} of {n} right, {wrong} confidently wrong.")
 
 
+@subject(
+    "failures", "The failures real recordings showed, drawn with their right answers",
+    """Four kinds of data whose right answer is known, each drawn on 20 seeds (5 with
+    --quick) and read by the library's own call: a flat punch's Instron ramp fitted as a
+    ball (right: refused because the law cannot follow the curve, or a warning naming the
+    misfit); two ramps of one specimen of a gel stiffer than the Neo-Hookean law (right:
+    each E within the other's interval, or a warning); six specimens with a 15 % spread
+    (right: the batch's interval holds the mean); FEATS-like presses with every depth 0.05
+    mm off (right: fitted, the depth offset named within 15 um, E within 5 %). An answer
+    given without a warning whose 95 % interval misses the truth is a silent miss (a 95 %
+    interval misses 1 time in 20 by its definition).""",
+    ["python benchmarks/bench_failures.py --seeds 20"])
+def _failures(quick: bool) -> Result:
+    import bench_failures as b
+    n = 5 if quick else 20
+    rows = []
+    for name, case in b.CASES.items():
+        scores = [case(seed) for seed in range(n)]
+        rows.append([f"`{name}`", n, sum(r for r, _ in scores), sum(m for _, m in scores)])
+    return Result([Table("Right answers by case", ["case", "seeds", "right", "silent misses"],
+                         rows, note=f"Seeds 0 to {n - 1}.")],
+                  summary=f"{sum(r[2] for r in rows)} of {n * len(rows)} right, "
+                          f"{sum(r[3] for r in rows)} silent misses.")
+
+
 def _run_json(argv: Sequence[str], ok: Sequence[int] = (0,)) -> dict:
     """Run ``python -m tactilevision ARGV --json FILE`` from the repository root (this
     tree's package; the cache the runner set) and return the JSON it wrote."""
