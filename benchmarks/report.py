@@ -452,9 +452,9 @@ def _ball_texture(quick: bool) -> Result:
     missed = [f"seed {g['case']['seed']}: {g['detail'].split(' (')[0]}" for g in got
               if not g["right"]]
     n, right, wrong = len(got), sum(g["right"] for g in got), sum(g["wrong"] for g in got)
-    return Result([Table("Right answers by ball", ["ball", "presses", "right",
-                                                   "confidently wrong", "refused, a radius was right",
-                                                   "cut by the edge (true rim < 75 %)"],
+    columns = ["ball", "presses", "right", "confidently wrong", "refused, a radius was right",
+               "cut by the edge (true rim < 75 %)"]
+    return Result([Table("Right answers by ball", columns,
                          rows, note="Not right: " + ("; ".join(missed) or "none") + ".")],
                   summary=f"{right} of {n} right, {wrong} confidently wrong.")
 
