@@ -8,13 +8,15 @@ a fresh folder and gets SIGINT at a moment uniform in the window (default 1 to 6
 its start; ``--window 0 2`` includes the interpreter's start and the imports, issue 86's
 "20 of 20 interrupts at random moments from 0 to 2 s": ``--n 20 --window 0 2``;
 ``--window 0.93 1.13`` hits batch's imports, where an interrupt caught inside code
-``exec``'d from text once ended ``python -m`` by the signal); printed per command: how
-many of n exited 130, within 1 s of the signal, without a traceback, with no
-``.tactilevision-tmp-*`` folder and no empty folder left (issue 54, item 5's target and
-issue 86's: all of them). A run that had ended before its signal was sent is counted
-apart ("ended first") and left out of the others; a failure while the interpreter itself
-started, before any of tactilevision's code ran (killed before Python's own handler was
-installed, or in its ``site`` module), is marked as such.
+``exec``'d from text once ended ``python -m`` by the signal). Printed per command: how
+many of n exited 130; how many a shell reports as 130 (a process the signal itself ended,
+before Python's own handler was installed, is -2 to ``subprocess`` and 130 in ``$?``);
+how many within 1 s of the signal, without a traceback, with no ``.tactilevision-tmp-*``
+folder and no empty folder left (issue 54, item 5's target and issue 86's: all of them).
+A run that had ended before its signal was sent is counted apart ("ended first") and left
+out of the others; a failure while the interpreter itself started, before any of
+tactilevision's code ran (killed before Python's own handler was installed, or in its
+``site`` module), is marked as such.
 """
 
 from __future__ import annotations
@@ -60,6 +62,12 @@ def interpreters_start(status: int, err: str) -> bool:
     return (status == -signal.SIGINT and not err.strip()) or "init_import_site" in err
 
 
+def shell_status(status: int) -> int:
+    """The exit status a POSIX shell reports (``$?``): 128 + N for a process the signal N
+    ended (``subprocess`` gives -N), the status itself otherwise."""
+    return 128 - status if status < 0 else status
+
+
 def interrupt_once(command: str, after_s: float) -> dict:
     """Run `command` into a fresh folder, send SIGINT `after_s` seconds after its start;
     how it ended."""
@@ -96,7 +104,8 @@ def main() -> None:
           f"{args.window[0]:g} to {args.window[1]:g} s, seed {args.seed}")
     rng = np.random.default_rng(args.seed)
     for command in args.commands:
-        ok = {"130": 0, "1 s": 0, "no traceback": 0, "no staging": 0, "no empty folder": 0}
+        ok = {"130": 0, "130 in a shell": 0, "1 s": 0, "no traceback": 0, "no staging": 0,
+              "no empty folder": 0}
         waits, codes, first, runs, starts = [], {}, 0, 0, 0
         for _ in range(args.n):
             after = float(rng.uniform(*args.window))
@@ -108,6 +117,7 @@ def main() -> None:
             waits.append(r["took"])
             codes[r["status"]] = codes.get(r["status"], 0) + 1
             ok["130"] += r["status"] == 130
+            ok["130 in a shell"] += shell_status(r["status"]) == 130
             ok["1 s"] += r["took"] <= 1.0
             ok["no traceback"] += "Traceback" not in r["err"]
             ok["no staging"] += not r["staging"]
