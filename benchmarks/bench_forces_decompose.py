@@ -1,0 +1,128 @@
+"""Where the default force path's error comes from, press by press: the force model, the
+height's pin at the contact's edge, and the optics.
+
+    python benchmarks/bench_forces_decompose.py [--fit FIT.json]
+
+On the shipped gauge-block session (``sample_frames/gelsight_session``), one hold frame per
+press (0.25 s into its hold, the misaligned and the pad-edge press left out; its truth from
+``truth.json``), the total Fz of ``ForceEstimator(contact='footprint')`` (what
+``tactilevision forces`` runs) on four height maps of that press:
+
+- ``true``: the gel's true surface under the indenter (the session's own finite-strain FEM
+  profile, :func:`tactilevision.fem.press_profile`, drawn where the press was); against
+  the indenter's true force: the force model's own error (linear layer with beta, a
+  frictionless face, against a bonded Neo-Hookean punch);
+- ``true, pinned``: the true surface's gradients integrated as the default path integrates
+  the frame's (zero outside the frame's contact mask,
+  :func:`tactilevision.optics.integrate_poisson_masked`): the pin's share;
+- ``frame, pinned``: the default path (``DepthReconstructor(boundary='contact')`` on the
+  frame through the session's optics); against the F/T log's force (the indenter's and the
+  bevel band's, which the frame also shows): what a user gets;
+- ``frame, far field``: the frame's height through the whole-image integration levelled on
+  the gel beyond the contact: the optics' share without the pin.
+
+E, nu and beta from ``--fit`` (default ``out/calibration/fit.json``, the README's first
+command), else the truth's E and nu with beta 0.82. Printed per depth: the median ratio of
+each to its truth and its range, and the face's depth (the median height over the
+indenter's face) over the true depth for the pinned and far-field maps; then how far the
+true surface rises beyond the sink-in at each w0 (the thin, nearly incompressible gel).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+import numpy as np
+
+from tactilevision.fem import ForceEstimator, press_profile
+from tactilevision.io import read_session
+from tactilevision.optics import (
+    DepthReconstructor,
+    PhotometricCalibration,
+    integrate_poisson_masked,
+)
+
+ROOT = Path(__file__).resolve().parents[1]
+SESSION = ROOT / "sample_frames" / "gelsight_session"
+MAPS = ("true", "true, pinned", "frame, pinned", "frame, far field")
+
+
+def material(fit: Path | None, truth: dict) -> tuple[float, float, float, str]:
+    """(E, nu, beta, where they came from)."""
+    if fit is not None and fit.is_file():
+        d = json.loads(fit.read_text())
+        return float(d["E_mpa"]), float(d["nu"]), float(d.get("beta") or 0.0), str(fit)
+    return float(truth["E_mpa"]), float(truth["nu"]), 0.82, "the truth (beta 0.82)"
+
+
+def rows(fit: Path | None) -> tuple[list[dict], str, object]:
+    """One dict a press: its w0, depth and the four ratios and three face depths; where E,
+    nu and beta came from; the true surface's profile (:class:`~tactilevision.fem.PressProfile`)."""
+    s = read_session(SESSION)
+    truth = json.loads((SESSION / "truth.json").read_text())
+    E, nu, beta, source = material(fit, truth)
+    cal = PhotometricCalibration.load(SESSION / "optics.npz")
+    mm, h = s.config.mm_per_px, float(truth["thickness_mm"])
+    shape = cal.shape
+    prof = press_profile(float(truth["radius_mm"]) / h, float(truth["nu"]),
+                         w_over_h_max=max(0.22, 1.05 * max(p["depth_mm"] for p in truth["presses"])
+                                          / h))
+    est = ForceEstimator(shape, mm, thickness_mm=h, E_mpa=E, nu=nu, contact="footprint",
+                         beta=beta)
+    pinned = DepthReconstructor(cal, reference=s.reference, boundary="contact")
+    far = DepthReconstructor(cal, reference=s.reference, level="far_field")
+    t_frames = s.frame_times_s + float(truth["clock_offset_s"])
+    out = []
+    for p in truth["presses"]:
+        if p["edge"] or p["misaligned"]:
+            continue
+        frame = s.frame(int(np.argmin(np.abs(t_frames - (p["hold_from_s"] + 0.25)))))
+        centre = (p["x_mm"] / mm + (shape[1] - 1) / 2, p["y_mm"] / mm + (shape[0] - 1) / 2)
+        true = prof.height_map(shape, mm, h, centre, p["depth_mm"]).astype(np.float64)
+        mask = pinned.contact_mask(frame, threshold="frame", fill_holes=True)
+        gy, gx = np.gradient(true)
+        maps = {"true": true,
+                "true, pinned": np.asarray(integrate_poisson_masked(gx, gy, mask), np.float64),
+                "frame, pinned": np.asarray(pinned(frame), np.float64),
+                "frame, far field": np.asarray(far(frame), np.float64)}
+        pinned._last_contact_z = None           # each press on its own, no warm start
+        face = true >= 0.999 * p["depth_mm"]            # the indenter's face (float32 map)
+        ft = p["force_n"] + p["bevel_force_n"]
+        r = {"w0": p["w0_mm"], "depth": p["depth_mm"]}
+        for name, z in maps.items():
+            fz = float(est(z).total_n[2])
+            r[name] = fz / (p["force_n"] if name.startswith("true") else ft)
+            r[f"face {name}"] = float(np.median(z[face])) / p["depth_mm"]
+        out.append(r)
+    return out, f"E {E:.4g} MPa, nu {nu:.4g}, beta {beta:.3g} from {source}", prof
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--fit", type=Path, default=ROOT / "out" / "calibration" / "fit.json")
+    args = ap.parse_args()
+    got, source, prof = rows(args.fit)
+    print(f"{len(got)} presses of {SESSION.name}; {source}")
+    print("w0 (mm) | n | " + " | ".join(f"Fz/true, {m}" for m in MAPS)
+          + " | face depth / true: true pinned, frame pinned, frame far field")
+    for w0 in sorted({r["w0"] for r in got}):
+        sub = [r for r in got if r["w0"] == w0]
+        cells = []
+        for m in MAPS:
+            v = np.array([r[m] for r in sub])
+            cells.append(f"{np.median(v):.3f} [{v.min():.3f}, {v.max():.3f}]")
+        faces = [f"{np.median([r[f'face {m}'] for r in sub]):.3f}" for m in MAPS[1:]]
+        print(f"{w0:g} | {len(sub)} | " + " | ".join(cells) + " | " + ", ".join(faces))
+    h = float(json.loads((SESSION / "truth.json").read_text())["thickness_mm"])
+    radii = np.linspace(0.0, 9.0, 361)
+    for w0 in sorted({row["w0"] for row in got}):
+        d = prof.depth_at(w0 / h, radii / h) * h
+        k = int(np.argmin(d))
+        print(f"true surface at w = {w0:g} mm: rises {-1e3 * d[k]:.0f} um at r = "
+              f"{radii[k]:.2f} mm from the axis, {-1e3 * d[-1]:.0f} um at {radii[-1]:g} mm")
+
+
+if __name__ == "__main__":
+    main()
