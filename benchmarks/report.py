@@ -433,12 +433,14 @@ def _relation_top(quick: bool) -> Result:
     image's edge; half under a drift of the light; one in five with a force that is not its
     own), each one's right answer stated from its truth before it is read: the radius within
     its stated bound, or refused by its circle (less than 65 % of the rim in view), or
-    refused for its force. Seeds 2100 to 2139, drawn after the detector's last rule was set
-    (10 seeds with --quick).""",
-    ["python benchmarks/bench_ball_texture.py --seeds 40 --first 2100"])
+    refused for its force. Seeds 2100 to 2139 and 2200 to 2239, drawn after the detector's
+    last rule was set (10 seeds of each with --quick).""",
+    ["python benchmarks/bench_ball_texture.py --seeds 40 --first 2100",
+     "python benchmarks/bench_ball_texture.py --seeds 40 --first 2200"])
 def _ball_texture(quick: bool) -> Result:
     import bench_ball_texture as b
-    got = b.run(2100, 10 if quick else 40)
+    n = 10 if quick else 40
+    got = b.run(2100, n) + b.run(2200, n)
     by_kind: dict[str, list[int]] = {}
     for g in got:
         row = by_kind.setdefault(g["case"]["kind"], [0, 0, 0, 0, 0])
@@ -449,14 +451,16 @@ def _ball_texture(quick: bool) -> Result:
         row[4] += g["case"]["rim"] < 0.75
     rows = [[k, *v] for k, v in sorted(by_kind.items())]
     rows.append(["all", *(sum(r[k] for r in by_kind.values()) for k in range(5))])
-    missed = [f"seed {g['case']['seed']}: {g['detail'].split(' (')[0]}" for g in got
-              if not g["right"]]
-    n, right, wrong = len(got), sum(g["right"] for g in got), sum(g["wrong"] for g in got)
+    missed = [f"seed {g['case']['seed']}: "
+              + (f"accepted, radius {g['radius'] - g['case']['a'] / b.S:+.1f} px off, bound "
+                 f"{g['bound']:.1f} px" if g["wrong"] else g['detail'].split(' (')[0])
+              for g in got if not g["right"]]
+    total, right, wrong = len(got), sum(g["right"] for g in got), sum(g["wrong"] for g in got)
     columns = ["ball", "presses", "right", "confidently wrong", "refused, a radius was right",
                "cut by the edge (true rim < 75 %)"]
     return Result([Table("Right answers by ball", columns,
                          rows, note="Not right: " + ("; ".join(missed) or "none") + ".")],
-                  summary=f"{right} of {n} right, {wrong} confidently wrong.")
+                  summary=f"{right} of {total} right, {wrong} confidently wrong.")
 
 
 @subject(
