@@ -38,6 +38,8 @@ from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
 
+import numpy as np
+
 ROOT = Path(__file__).resolve().parents[1]
 BENCH = ROOT / "benchmarks"
 
@@ -461,6 +463,39 @@ def _ball_texture(quick: bool) -> Result:
     return Result([Table("Right answers by ball", columns,
                          rows, note="Not right: " + ("; ".join(missed) or "none") + ".")],
                   summary=f"{right} of {total} right, {wrong} confidently wrong.")
+
+
+@subject(
+    "ball_taxim", "A ball's depths and E from frames drawn by Taxim's own renderer",
+    """Dead weights of a 2 mm ball on a thick gel of E = 1 MPa (no F/T: the force is m g):
+    the gel's surface from Sneddon's and Hertz's closed forms, each frame drawn by Taxim's
+    renderer (its GelSight calibration, the gel made flat; none of our shading), then
+    `calibrate_dead_weights` reads each circle, inverts a(w) and fits E. Per seed: the
+    frames read, the depths' error against the truth (and in units of their stated total
+    sd), E and whether its 95 % interval holds 1 MPa. 20 seeds of 3 repeats (3 seeds with
+    --quick).""",
+    ["python benchmarks/bench_ball_taxim.py --seeds 20"])
+def _ball_taxim(quick: bool) -> Result:
+    import bench_ball_taxim as b
+    got = b.run(3 if quick else 20)
+    rows = [[g["seed"], f"{g['read']} of {g['drawn']}",
+             f"{1e3 * float(np.mean(g['err_mm'])):+.1f}",
+             f"{1e3 * float(np.min(g['depth_mm'])):.0f} to "
+             f"{1e3 * float(np.max(g['depth_mm'])):.0f}",
+             f"{float(np.mean(g['z'])):+.2f}", f"{g['E_mpa']:.4f}",
+             f"[{g['E_ci95_mpa'][0]:.4f}, {g['E_ci95_mpa'][1]:.4f}]",
+             "yes" if g["holds"] else "no"] for g in got]
+    err = np.concatenate([g["err_mm"] for g in got])
+    E = [g["E_mpa"] for g in got]
+    held = sum(g["holds"] for g in got)
+    return Result([Table("Per seed", ["seed", "frames read", "depth error, mean (um)",
+                                      "depths (um)", "error / stated sd, mean", "E (MPa)",
+                                      "95 % interval", "holds 1 MPa"], rows,
+                         note=f"Depth error over all presses: mean {1e3 * err.mean():+.1f} um; "
+                              f"E {min(E):.3f} to {max(E):.3f} MPa; the interval holds the "
+                              f"truth on {held} of {len(got)}.")],
+                  summary=f"E {min(E):.3f} to {max(E):.3f} MPa; interval holds 1 MPa on {held} "
+                          f"of {len(got)}; depths {1e3 * err.mean():+.1f} um on average.")
 
 
 @subject(
