@@ -87,7 +87,6 @@ def rows(fit: Path | None) -> tuple[list[dict], str, object]:
                 "true, pinned": np.asarray(integrate_poisson_masked(gx, gy, mask), np.float64),
                 "frame, pinned": np.asarray(pinned(frame), np.float64),
                 "frame, far field": np.asarray(far(frame), np.float64)}
-        pinned._last_contact_z = None           # each press on its own, no warm start
         face = true >= 0.999 * p["depth_mm"]            # the indenter's face (float32 map)
         ft = p["force_n"] + p["bevel_force_n"]
         r = {"w0": p["w0_mm"], "depth": p["depth_mm"]}

@@ -458,8 +458,8 @@ def _ball_texture(quick: bool) -> Result:
                  f"{g['bound']:.1f} px" if g["wrong"] else g['detail'].split(' (')[0])
               for g in got if not g["right"]]
     total, right, wrong = len(got), sum(g["right"] for g in got), sum(g["wrong"] for g in got)
-    columns = ["ball", "presses", "right", "confidently wrong", "refused, a radius was right",
-               "cut by the edge (true rim < 75 %)"]
+    columns = ["ball", "presses", "right", "confidently wrong",
+               "refused, not the answer stated", "cut by the edge (true rim < 75 %)"]
     return Result([Table("Right answers by ball", columns,
                          rows, note="Not right: " + ("; ".join(missed) or "none") + ".")],
                   summary=f"{right} of {total} right, {wrong} confidently wrong.")

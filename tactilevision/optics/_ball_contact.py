@@ -659,7 +659,9 @@ def find_contact_circle(frame: np.ndarray, reference: np.ndarray, *, min_change:
         :data:`MIN_RIM_IN_FRAME` of its rim in the image; no edge in the radial profile
         near the colour edge; a rim whose contrast is under :data:`MIN_RIM_CONTRAST` noise
         sigmas of the pad outside it (a circle put on the background's structure, or on
-        part of a contact whose edge is not in the image).
+        part of a contact whose edge is not in the image); a change that does not fall past
+        the rim in more than :data:`MAX_SECTORS_BEYOND_RIM` of its sectors (a larger
+        contact's inner part).
 
     Raises
     ------
