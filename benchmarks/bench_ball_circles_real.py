@@ -42,6 +42,7 @@ from tactilevision import InputError
 from tactilevision.io import read_ball_presses, taxim_datapack
 from tactilevision.optics import (
     MAX_SECTORS_BEYOND_RIM,
+    MIN_RIM_CONTRAST,
     detect_contact_circle,
     edge_cut,
     find_contact_circle,
@@ -85,7 +86,7 @@ def main() -> None:
              "gelslim09": REAL / "gelslim3" / "set_2020_09", "mini": REAL / "gelsight_mini"}
     for name in args.sets:
         ps = read_ball_presses(paths[name])
-        rows, reasons, tiles, beyond = [], Counter(), [], []
+        rows, reasons, tiles, beyond, contrast = [], Counter(), [], [], []
         t_old = t_new = t_find = 0.0
         for i, f in enumerate(ps.frames):
             t = time.perf_counter()
@@ -99,6 +100,7 @@ def main() -> None:
                 cc = find_contact_circle(f, ps.reference)
                 c2, r2, ok = cc.centre_px, cc.radius_px, cc.trusted
                 beyond.append(cc.sectors_beyond_rim)
+                contrast.append(cc.rim_contrast)
                 for p in cc.problems:
                     reasons[p.split(" (")[0].split(":")[0][:60]] += 1
             except InputError as exc:
@@ -132,7 +134,8 @@ def main() -> None:
         if beyond:
             print(f"   sectors where the change does not fall past the rim: "
                   f"{np.nanmin(beyond):.2f} to {np.nanmax(beyond):.2f} (refused over "
-                  f"{MAX_SECTORS_BEYOND_RIM:g})")
+                  f"{MAX_SECTORS_BEYOND_RIM:g}); rim contrast {np.nanmin(contrast):.1f} to "
+                  f"{np.nanmax(contrast):.1f} noise sigmas (refused under {MIN_RIM_CONTRAST:g})")
         if ps.radii_px is not None:
             ann = np.asarray(ps.radii_px, np.float64)
             for label, k in (("before", 0), ("after", 1), ("session", 2)):

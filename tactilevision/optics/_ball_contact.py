@@ -33,9 +33,11 @@ The steps (:func:`find_contact_circle`):
    (:func:`~tactilevision.optics.locate_contact_edge`), their disagreement added to it.
 5. **Checks** (:class:`ContactCircle`): the rim's share inside the image
    (:data:`MIN_RIM_IN_FRAME`), its contrast against the pad outside
-   (:data:`MIN_RIM_CONTRAST`) and, sector by sector, that the change falls past it
-   (:data:`MAX_SECTORS_BEYOND_RIM`): a circle inside a larger contact whose own rim is
-   mostly outside the image has an edge where it touches that rim and none elsewhere.
+   (:data:`MIN_RIM_CONTRAST`; against the camera's noise where too little pad lies beyond
+   the contact to read the pad's own, :data:`PAD_SHARE`) and, sector by sector, that the
+   change falls past it (:data:`MAX_SECTORS_BEYOND_RIM`): a circle inside a larger contact
+   whose own rim is mostly outside the image has an edge where it touches that rim and none
+   elsewhere.
 """
 
 from __future__ import annotations
@@ -52,11 +54,11 @@ from scipy.ndimage import gaussian_filter1d, map_coordinates, maximum_filter
 from .._checks import InputError, check_array
 from ._circles import fit_circle, locate_contact_edge
 
-__all__ = ["MAX_SECTORS_BEYOND_RIM", "MIN_RIM_CONTRAST", "MIN_RIM_IN_FRAME",
+__all__ = ["MAX_SECTORS_BEYOND_RIM", "MIN_RIM_CONTRAST", "MIN_RIM_IN_FRAME", "PAD_SHARE",
            "PROFILE_AGREEMENT", "PROFILE_RULES",
            "ContactCircle",
            "colour_edge_circle", "drift_free_change", "find_contact_circle", "profile_radius",
-           "rim_in_frame", "sectors_beyond_rim"]
+           "rim_drop", "rim_in_frame", "sectors_beyond_rim"]
 
 #: The least share of a contact circle's rim that must lie inside the image for its radius
 #: to be read. A rim cut by the image's edge is fitted on the arc that is left; on the renders
@@ -70,6 +72,18 @@ MIN_RIM_IN_FRAME = 0.7
 #: ``tests/test_ball_texture.py`` (dev seeds) 3.8 to 10 where the circle was right and -0.3
 #: to 3.5 where it was put on the background or on half a rim.
 MIN_RIM_CONTRAST = 4.0
+#: The least share of the image beyond 1.6 radii of a circle for the pad's own noise to be
+#: read there (the share :func:`drift_free_change` needs to fit the drift without the
+#: contact; with less, the drift is fitted on the contact too and what is left on the pad
+#: beyond it is that fit's error, not the pad's). Where less lies beyond a circle, its rim's
+#: contrast is the median over the rays of the change's drop from 0.9 to 1.0 radii to 1.2 to
+#: 1.4 radii (:func:`rim_drop`), in sigmas of the camera's pixel noise, against the same
+#: :data:`MIN_RIM_CONTRAST`. On the renders of ``tests/test_ball_texture.py``, seeds 2000 to
+#: 2039, 2100 to 2139 and 2200 to 2239 (seen when the rule was set), the pad's rule refused
+#: 26 circles within their bound, 23 of them contacts over 100 px whose pad beyond was 0 to
+#: 12 % of the image (at 1.3 to 3.9 pad sigmas); the drop read 4.5 to 13.5 camera sigmas on
+#: 19 of those and 1.2 to 2.3 on the wrong circles whose pad was as small.
+PAD_SHARE = 0.2
 #: The largest share of a circle's sectors (12 about its centre, those the image shows both
 #: sides of the rim in) where the colour change just past the rim (median over 1.15 to 1.4
 #: radii) stays at :data:`BEYOND_RIM_LEVEL` or more of its level just inside (0.75 to 0.95
@@ -119,7 +133,8 @@ class ContactCircle:
         bootstrap sd), px (NaN where not read).
     rim_contrast : float
         The rim's contrast in noise sigmas of the pad outside the contact (see
-        :data:`MIN_RIM_CONTRAST`).
+        :data:`MIN_RIM_CONTRAST`), or of the camera where too little pad lies beyond it
+        (:data:`PAD_SHARE`); NaN where it cannot be read.
     rim_in_frame : float
         Share of the circle's rim inside the image.
     edge_scatter : float
@@ -175,7 +190,7 @@ def drift_free_change(frame: np.ndarray, reference: np.ndarray, *, sigma: float 
         Gaussian blur (px) of both before the difference (0: none).
     exclude : (H, W) bool ndarray, optional
         Pixels left out of the fit (a contact found before); ignored where it would leave
-        less than a fifth of the image.
+        less than :data:`PAD_SHARE` of the image.
 
     Returns
     -------
@@ -190,7 +205,7 @@ def drift_free_change(frame: np.ndarray, reference: np.ndarray, *, sigma: float 
     f = frame.astype(np.float32)
     r = reference.astype(np.float32)
     use = np.ones(frame.shape[:2], bool)
-    if exclude is not None and np.count_nonzero(~exclude) >= 0.2 * exclude.size:
+    if exclude is not None and np.count_nonzero(~exclude) >= PAD_SHARE * exclude.size:
         use = ~exclude
     use = use[::3, ::3]
     change = np.empty_like(f)
@@ -538,6 +553,43 @@ def _rim_contrast(change: np.ndarray, cx: float, cy: float, r: float) -> float:
     return contrast / _pad_noise(_magnitude(change), cx, cy, r)
 
 
+def rim_drop(change: np.ndarray, centre_px: tuple[float, float] | np.ndarray,
+             radius_px: float) -> float:
+    """A circle's rim contrast read ray by ray: the median over 360 rays of the colour
+    change's magnitude just inside the rim (mean over 0.9 to 1.0 radii) less just past it
+    (mean over 1.2 to 1.4 radii, the samples the image shows), grey levels.
+
+    Only rays that reach past 1.2 radii inside the image count. This is the contrast
+    :func:`find_contact_circle` reads where too little pad lies beyond the contact to read
+    the pad's own noise (:data:`PAD_SHARE`).
+
+    Parameters
+    ----------
+    change : (H, W, 3) float ndarray
+        The colour change (:func:`drift_free_change`), grey levels.
+    centre_px : (2,) float
+        (x, y), px.
+    radius_px : float
+        The circle's radius, px.
+
+    Returns
+    -------
+    float
+        Grey levels; NaN where fewer than 24 rays reach past 1.2 radii.
+    """
+    mag = _magnitude(np.asarray(change, np.float32))
+    r = float(radius_px)
+    rs = r * np.arange(0.85, 1.4 + 1e-9, 0.025)
+    _, _, p, run = _rays(mag, float(centre_px[0]), float(centre_px[1]), rs, 360)
+    past = rs >= 1.2 * r
+    ok = np.count_nonzero(run[:, past], axis=1) >= 2
+    if np.count_nonzero(ok) < 24:
+        return float("nan")
+    p = np.where(run, p, np.nan)[ok]
+    inside = np.mean(p[:, (rs >= 0.9 * r) & (rs <= r)], axis=1)
+    return float(np.median(inside - np.nanmean(p[:, past], axis=1)))
+
+
 def sectors_beyond_rim(change: np.ndarray, centre_px: tuple[float, float] | np.ndarray,
                        radius_px: float, *, n_sectors: int = 12) -> float:
     """Share of a circle's sectors where the colour change does not fall past its rim.
@@ -685,7 +737,14 @@ def find_contact_circle(frame: np.ndarray, reference: np.ndarray, *, min_change:
         ray_r = locate_contact_edge(frame, reference, centre, rc, change=fine)[1]
     except InputError:
         ray_r = float("nan")
-    noise = _pad_noise(_magnitude(fine), centre[0], centre[1], rc)
+    if np.mean(np.hypot(xx - centre[0], yy - centre[1]) > 1.6 * rc) >= PAD_SHARE:
+        noise = _pad_noise(_magnitude(fine), centre[0], centre[1], rc)
+        against = "the pad outside it"
+    else:              # too little pad beyond it: the drop past the rim, in camera sigmas
+        contrast = rim_drop(fine, centre, rp if np.isfinite(rp) else rc)
+        noise = max(_pixel_noise(fine), 0.5)
+        against = ("the gel just past it, in sigmas of the camera's noise (too little pad "
+                   "lies beyond it to read the pad's own)")
     notes = []
     radius, radius_sd = rp, sd
     if np.isfinite(rp) and np.isfinite(sd) and np.isfinite(ray_r):
@@ -704,9 +763,12 @@ def find_contact_circle(frame: np.ndarray, reference: np.ndarray, *, min_change:
     if not (np.isfinite(rp) and np.isfinite(sd)):
         problems.append("the radial profile of the colour change about its centre has no "
                         "edge near the colour edge")
+    elif not np.isfinite(contrast):
+        problems.append("fewer than 24 rays from its centre reach past 1.2 radii inside the "
+                        "image: its rim's contrast cannot be read")
     elif contrast < MIN_RIM_CONTRAST * noise:
-        problems.append(f"its rim stands {contrast / noise:.1f} noise sigmas above the pad "
-                        f"outside it ({MIN_RIM_CONTRAST:g} needed): not a contact's edge")
+        problems.append(f"its rim stands {contrast / noise:.1f} noise sigmas above {against} "
+                        f"({MIN_RIM_CONTRAST:g} needed): not a contact's edge")
     beyond = sectors_beyond_rim(fine, centre, radius if np.isfinite(radius) else rc)
     if beyond > MAX_SECTORS_BEYOND_RIM:
         problems.append(f"the colour change does not fall past its rim in {100 * beyond:.0f} % "
