@@ -20,7 +20,8 @@ labels) and :func:`tactilevision.optics.find_contact_circle` (a ball session's c
 radial profile's edge, its checks). Printed per set: circles found, the after / before
 radius ratio (median; how many differ by more than 5 %), the centres' shift, how many of
 the ball session's circles are trusted and why the others are not, the range of their
-share of sectors where the change does not fall past the rim, and the time per frame.
+share of sectors where the change does not fall past the rim, of their rim contrast and of
+the image's share beyond 1.6 radii, and the time per frame.
 With ``--figures``, the frames where before and after differ by more than 5 % are drawn
 (before red, after green, the ball session's circle blue) for a look.
 """
@@ -43,6 +44,7 @@ from tactilevision.io import read_ball_presses, taxim_datapack
 from tactilevision.optics import (
     MAX_SECTORS_BEYOND_RIM,
     MIN_RIM_CONTRAST,
+    PAD_SHARE,
     detect_contact_circle,
     edge_cut,
     find_contact_circle,
@@ -86,7 +88,7 @@ def main() -> None:
              "gelslim09": REAL / "gelslim3" / "set_2020_09", "mini": REAL / "gelsight_mini"}
     for name in args.sets:
         ps = read_ball_presses(paths[name])
-        rows, reasons, tiles, beyond, contrast = [], Counter(), [], [], []
+        rows, reasons, tiles, beyond, contrast, pad = [], Counter(), [], [], [], []
         t_old = t_new = t_find = 0.0
         for i, f in enumerate(ps.frames):
             t = time.perf_counter()
@@ -101,6 +103,8 @@ def main() -> None:
                 c2, r2, ok = cc.centre_px, cc.radius_px, cc.trusted
                 beyond.append(cc.sectors_beyond_rim)
                 contrast.append(cc.rim_contrast)
+                yy, xx = np.indices(f.shape[:2])
+                pad.append(np.mean(np.hypot(xx - c2[0], yy - c2[1]) > 1.6 * cc.colour_radius_px))
                 for p in cc.problems:
                     reasons[p.split(" (")[0].split(":")[0][:60]] += 1
             except InputError as exc:
@@ -135,7 +139,9 @@ def main() -> None:
             print(f"   sectors where the change does not fall past the rim: "
                   f"{np.nanmin(beyond):.2f} to {np.nanmax(beyond):.2f} (refused over "
                   f"{MAX_SECTORS_BEYOND_RIM:g}); rim contrast {np.nanmin(contrast):.1f} to "
-                  f"{np.nanmax(contrast):.1f} noise sigmas (refused under {MIN_RIM_CONTRAST:g})")
+                  f"{np.nanmax(contrast):.1f} noise sigmas (refused under {MIN_RIM_CONTRAST:g}); "
+                  f"image beyond 1.6 radii {min(pad):.2f} or more (the pad's noise read there "
+                  f"from {PAD_SHARE:g})")
         if ps.radii_px is not None:
             ann = np.asarray(ps.radii_px, np.float64)
             for label, k in (("before", 0), ("after", 1), ("session", 2)):
