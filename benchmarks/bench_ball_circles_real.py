@@ -42,6 +42,7 @@ import numpy as np
 from tactilevision import InputError
 from tactilevision.io import read_ball_presses, taxim_datapack
 from tactilevision.optics import (
+    CIRCLE_ERROR,
     MAX_SECTORS_BEYOND_RIM,
     MIN_RIM_CONTRAST,
     PAD_SHARE,
@@ -49,6 +50,7 @@ from tactilevision.optics import (
     edge_cut,
     find_contact_circle,
 )
+from tactilevision.pipeline._ball import CIRCLE_ERROR_RADIUS_PX
 
 ROOT = Path(__file__).resolve().parents[1]
 REAL = ROOT.parent / "shared" / "real"
@@ -88,7 +90,7 @@ def main() -> None:
              "gelslim09": REAL / "gelslim3" / "set_2020_09", "mini": REAL / "gelsight_mini"}
     for name in args.sets:
         ps = read_ball_presses(paths[name])
-        rows, reasons, tiles, beyond, contrast, pad = [], Counter(), [], [], [], []
+        rows, reasons, tiles, beyond, contrast, pad, sds = [], Counter(), [], [], [], [], []
         t_old = t_new = t_find = 0.0
         for i, f in enumerate(ps.frames):
             t = time.perf_counter()
@@ -101,6 +103,7 @@ def main() -> None:
             try:
                 cc = find_contact_circle(f, ps.reference)
                 c2, r2, ok = cc.centre_px, cc.radius_px, cc.trusted
+                sds.append(cc.radius_sd_px)
                 beyond.append(cc.sectors_beyond_rim)
                 contrast.append(cc.rim_contrast)
                 yy, xx = np.indices(f.shape[:2])
@@ -109,6 +112,7 @@ def main() -> None:
                     reasons[p.split(" (")[0].split(":")[0][:60]] += 1
             except InputError as exc:
                 c2, r2, ok = np.full(2, np.nan), float("nan"), False
+                sds.append(float("nan"))
                 reasons[str(exc)[:60]] += 1
             t_find += time.perf_counter() - t
             cut = bool(edge_cut(c0[None], [r0], f.shape[:2])[0]) if np.isfinite(r0) else True
@@ -149,6 +153,11 @@ def main() -> None:
                 print(f"   {label:8s} radius / annotated: median {np.nanmedian(q):.3f}, sd "
                       f"{np.nanstd(q):.3f}, within 5 %: {int(np.sum(np.abs(q - 1) < 0.05))} "
                       f"of {n}")
+            scale = np.maximum(r[:, 2], CIRCLE_ERROR_RADIUS_PX)
+            bound = (CIRCLE_ERROR.radius_bias * scale
+                     + 2 * np.hypot(CIRCLE_ERROR.radius_sd * scale, np.asarray(sds)))
+            print(f"   session  radius within its stated bound (circle_depths' shared error plus "
+                  f"twice its random one): {int(np.sum(np.abs(r[:, 2] - ann) <= bound))} of {n}")
         if tiles and args.figures is not None:
             args.figures.mkdir(parents=True, exist_ok=True)
             while len(tiles) % 4:

@@ -34,9 +34,11 @@ from tactilevision.optics import (
     MIN_RIM_CONTRAST,
     MIN_RIM_IN_FRAME,
     PAD_SHARE,
+    PROFILE_SHOULDER,
     colour_edge_circle,
     drift_free_change,
     find_contact_circle,
+    profile_radius,
     rim_drop,
     rim_in_frame,
     sectors_beyond_rim,
@@ -256,6 +258,40 @@ def test_a_contact_covering_the_pad_is_trusted_by_its_drop_past_the_rim(sim, ref
     assert c.trusted, c.problems
     assert c.rim_contrast >= MIN_RIM_CONTRAST
     assert abs(c.radius_px - a / S) < 0.05 * a / S, (c.radius_px, a / S)
+
+
+def test_a_large_dimpled_contact_is_read_at_its_rim_not_inside(sim, reference):
+    """A dimpled contact 111 px in radius on a ball of R = 8.3 mm (seed 2332 of
+    ``benchmarks/bench_ball_texture.py``): its tilt is shallow, the radial profile's peak
+    broad, and the shoulder within 3 % of the peak lay 10.3 px (9 %) inside the rim,
+    outside the stated bound. Right answer: the radius within its stated bound
+    (:func:`~tactilevision.pipeline.circle_depths`' shared error plus twice its random
+    one), read at a share of the rim's contrast below the peak."""
+    a, R, centre = 3.2869, 8.3051, (136.49, 117.02)
+    frame = render_press(sim, reference, kind="dimples", a=a, R=R, centre=centre, seed=2332)
+    c = find_contact_circle(frame, reference)
+    assert c.trusted, c.problems
+    d = circle_depths(c, Sphere(R), mm_per_px=S, thickness_mm=2 * R, nu=0.5, law="linear")
+    assert abs(c.radius_px - a / S) <= d.radius_bias_px + 2 * d.radius_sd_px, (
+        c.radius_px, a / S, d.radius_bias_px, d.radius_sd_px)
+
+
+def test_profile_radius_reads_a_broad_peak_at_its_knee():
+    """A closed-form radial profile: the change rises to a broad peak of 12 grey levels at
+    90 px, eases to 11.4 at 110 px, then falls to 2 by 120 px (the rim at the knee, 110 px).
+    3 % of the peak would stop at 0.36 below it, about 103 px; the shoulder at
+    :data:`PROFILE_SHOULDER` of the contrast (0.75 below) reads the knee. A shoulder
+    outside (0, 1) is refused."""
+    yy, xx = np.indices((300, 300))
+    r = np.hypot(xx - 150.0, yy - 150.0)
+    level = np.interp(r, [0.0, 90.0, 110.0, 120.0, 400.0], [8.0, 12.0, 11.4, 2.0, 2.0])
+    change = np.repeat((level / math.sqrt(3.0))[..., None], 3, axis=2).astype(np.float32)
+    radius, _, contrast = profile_radius(change, (150.0, 150.0), 115.0, n_boot=0)
+    assert 12.0 - PROFILE_SHOULDER * 10.0 < 11.4      # the knee's level is within the rule
+    assert radius == pytest.approx(110.0, abs=1.0)
+    assert contrast == pytest.approx(9.4, abs=0.3)
+    with pytest.raises(InputError, match="shoulder must lie in"):
+        profile_radius(change, (150.0, 150.0), 115.0, shoulder=1.5)
 
 
 def test_rim_drop_on_a_disc():
