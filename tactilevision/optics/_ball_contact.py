@@ -67,8 +67,10 @@ __all__ = ["MAX_SECTORS_BEYOND_RIM", "MIN_RIM_CONTRAST", "MIN_RIM_IN_FRAME", "PA
 MIN_RIM_IN_FRAME = 0.7
 #: The least contrast of the rim, in noise sigmas of the pad outside the contact: the
 #: radial profile at the contact edge less at 1.3 colour-edge radii, over 1.4826 MAD of the
-#: colour change beyond 1.6 radii. On the real presses of ``taxim``'s GelSight, GelSlim 3.0
-#: and the GelSight Mini it is 13 to 49 (first 20 of each set: minimum 13.3); on renders of
+#: colour change beyond 1.6 radii (where less than :data:`PAD_SHARE` of the image lies
+#: there, the drop past the rim over the camera's noise, :func:`rim_drop`). On the real
+#: presses of ``taxim``'s GelSight, GelSlim 3.0 and the GelSight Mini it is 10 to 86 (all 184;
+#: ``benchmarks/bench_ball_circles_real.py``); on renders of
 #: ``tests/test_ball_texture.py`` (dev seeds) 3.8 to 10 where the circle was right and -0.3
 #: to 3.5 where it was put on the background or on half a rim.
 MIN_RIM_CONTRAST = 4.0
@@ -729,8 +731,10 @@ def find_contact_circle(frame: np.ndarray, reference: np.ndarray, *, min_change:
         Its ``problems`` say why it cannot be trusted: less than
         :data:`MIN_RIM_IN_FRAME` of its rim in the image; no edge in the radial profile
         near the colour edge; a rim whose contrast is under :data:`MIN_RIM_CONTRAST` noise
-        sigmas of the pad outside it (a circle put on the background's structure, or on
-        part of a contact whose edge is not in the image); a change that does not fall past
+        sigmas of the pad outside it, or of the camera where less than :data:`PAD_SHARE` of
+        the image lies beyond it (a circle put on the background's structure, or on part of
+        a contact whose edge is not in the image), or whose contrast cannot be read (fewer
+        than 24 rays reach past 1.2 radii); a change that does not fall past
         the rim in more than :data:`MAX_SECTORS_BEYOND_RIM` of its sectors (a larger
         contact's inner part).
 
