@@ -79,6 +79,67 @@ def circle(fn, *args, **kwargs) -> tuple[np.ndarray, float]:
         return np.full(2, np.nan), float("nan")
 
 
+def set_paths() -> dict[str, Path]:
+    """The real sets by name: taxim's GelSight (the ``taxim`` package's data pack) and the
+    GelSlim 3.0 and Mini sets of ``../shared/real``."""
+    return {"taxim": taxim_datapack(), "gelslim11": REAL / "gelslim3" / "set_2020_11",
+            "gelslim09": REAL / "gelslim3" / "set_2020_09", "mini": REAL / "gelsight_mini"}
+
+
+def session_circle(frame: np.ndarray, reference: np.ndarray) -> dict:
+    """A ball session's circle on one frame (:func:`find_contact_circle`): centre, radius,
+    its sd, trusted, the problems' heads, the sector share, the rim contrast and the
+    image's share beyond 1.6 colour radii (NaN and the error's head where none is found)."""
+    try:
+        cc = find_contact_circle(frame, reference)
+    except InputError as exc:
+        return dict(centre=np.full(2, np.nan), radius=float("nan"), sd=float("nan"),
+                    trusted=False, problems=[str(exc)[:60]], sectors=float("nan"),
+                    contrast=float("nan"), pad=float("nan"))
+    yy, xx = np.indices(frame.shape[:2])
+    pad = float(np.mean(np.hypot(xx - cc.centre_px[0], yy - cc.centre_px[1])
+                        > 1.6 * cc.colour_radius_px))
+    return dict(centre=cc.centre_px, radius=cc.radius_px, sd=cc.radius_sd_px,
+                trusted=cc.trusted, problems=[p.split(" (")[0].split(":")[0][:60]
+                                              for p in cc.problems],
+                sectors=cc.sectors_beyond_rim, contrast=cc.rim_contrast, pad=pad)
+
+
+def within_bound(radius: np.ndarray, sd: np.ndarray, truth: np.ndarray) -> np.ndarray:
+    """Whether each radius lies within its stated bound of the truth: the shared error
+    plus twice the random one, as :func:`tactilevision.pipeline.circle_depths` states
+    them (2.5 % of the radius or of 61 px each, the profile's sd added to the random)."""
+    scale = np.maximum(radius, CIRCLE_ERROR_RADIUS_PX)
+    bound = (CIRCLE_ERROR.radius_bias * scale
+             + 2 * np.hypot(CIRCLE_ERROR.radius_sd * scale, sd))
+    return np.abs(radius - truth) <= bound
+
+
+def session_circles(name: str) -> dict:
+    """A ball session's circles on one real set: presses, trusted, the refusals' reasons,
+    the ranges of the checks' readings and, where the set is annotated, the radius against
+    the annotation (median, sd, within 5 %, within the stated bound)."""
+    ps = read_ball_presses(set_paths()[name])
+    got = [session_circle(f, ps.reference) for f in ps.frames]
+    reasons = Counter(p for g in got for p in g["problems"] if not g["trusted"])
+    r = np.array([g["radius"] for g in got])
+    out = dict(name=name, n=len(got), trusted=sum(g["trusted"] for g in got),
+               reasons=dict(reasons),
+               sectors=(np.nanmin([g["sectors"] for g in got]),
+                        np.nanmax([g["sectors"] for g in got])),
+               contrast=(np.nanmin([g["contrast"] for g in got]),
+                         np.nanmax([g["contrast"] for g in got])),
+               pad=np.nanmin([g["pad"] for g in got]), annotated=None)
+    if ps.radii_px is not None:
+        ann = np.asarray(ps.radii_px, np.float64)
+        q = r / ann
+        out["annotated"] = dict(median=float(np.nanmedian(q)), sd=float(np.nanstd(q)),
+                                within5=int(np.sum(np.abs(q - 1) < 0.05)),
+                                within_bound=int(np.sum(within_bound(
+                                    r, np.array([g["sd"] for g in got]), ann))))
+    return out
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--before", default="8f4cf4a")
@@ -86,8 +147,7 @@ def main() -> None:
     ap.add_argument("--sets", nargs="+", default=["taxim", "gelslim11", "gelslim09", "mini"])
     args = ap.parse_args()
     before = old_detector(args.before)
-    paths = {"taxim": taxim_datapack(), "gelslim11": REAL / "gelslim3" / "set_2020_11",
-             "gelslim09": REAL / "gelslim3" / "set_2020_09", "mini": REAL / "gelsight_mini"}
+    paths = set_paths()
     for name in args.sets:
         ps = read_ball_presses(paths[name])
         rows, reasons, tiles, beyond, contrast, pad, sds = [], Counter(), [], [], [], [], []
@@ -100,21 +160,15 @@ def main() -> None:
             c1, r1 = circle(detect_contact_circle, f, ps.reference, edge="contact")
             t_new += time.perf_counter() - t
             t = time.perf_counter()
-            try:
-                cc = find_contact_circle(f, ps.reference)
-                c2, r2, ok = cc.centre_px, cc.radius_px, cc.trusted
-                sds.append(cc.radius_sd_px)
-                beyond.append(cc.sectors_beyond_rim)
-                contrast.append(cc.rim_contrast)
-                yy, xx = np.indices(f.shape[:2])
-                pad.append(np.mean(np.hypot(xx - c2[0], yy - c2[1]) > 1.6 * cc.colour_radius_px))
-                for p in cc.problems:
-                    reasons[p.split(" (")[0].split(":")[0][:60]] += 1
-            except InputError as exc:
-                c2, r2, ok = np.full(2, np.nan), float("nan"), False
-                sds.append(float("nan"))
-                reasons[str(exc)[:60]] += 1
+            g = session_circle(f, ps.reference)
             t_find += time.perf_counter() - t
+            c2, r2, ok = g["centre"], g["radius"], g["trusted"]
+            sds.append(g["sd"])
+            beyond.append(g["sectors"])
+            contrast.append(g["contrast"])
+            pad.append(g["pad"])
+            if not ok:
+                reasons.update(g["problems"])
             cut = bool(edge_cut(c0[None], [r0], f.shape[:2])[0]) if np.isfinite(r0) else True
             rows.append((r0, r1, r2, np.hypot(*(c1 - c0)), ok, cut))
             if args.figures is not None and not abs(r1 / r0 - 1) <= 0.05:
@@ -144,8 +198,8 @@ def main() -> None:
                   f"{np.nanmin(beyond):.2f} to {np.nanmax(beyond):.2f} (refused over "
                   f"{MAX_SECTORS_BEYOND_RIM:g}); rim contrast {np.nanmin(contrast):.1f} to "
                   f"{np.nanmax(contrast):.1f} noise sigmas (refused under {MIN_RIM_CONTRAST:g}); "
-                  f"image beyond 1.6 radii {min(pad):.2f} or more (the pad's noise read there "
-                  f"from {PAD_SHARE:g})")
+                  f"image beyond 1.6 radii {np.nanmin(pad):.2f} or more (the pad's noise read "
+                  f"there from {PAD_SHARE:g})")
         if ps.radii_px is not None:
             ann = np.asarray(ps.radii_px, np.float64)
             for label, k in (("before", 0), ("after", 1), ("session", 2)):
@@ -153,11 +207,9 @@ def main() -> None:
                 print(f"   {label:8s} radius / annotated: median {np.nanmedian(q):.3f}, sd "
                       f"{np.nanstd(q):.3f}, within 5 %: {int(np.sum(np.abs(q - 1) < 0.05))} "
                       f"of {n}")
-            scale = np.maximum(r[:, 2], CIRCLE_ERROR_RADIUS_PX)
-            bound = (CIRCLE_ERROR.radius_bias * scale
-                     + 2 * np.hypot(CIRCLE_ERROR.radius_sd * scale, np.asarray(sds)))
+            inb = within_bound(r[:, 2], np.asarray(sds), ann)
             print(f"   session  radius within its stated bound (circle_depths' shared error plus "
-                  f"twice its random one): {int(np.sum(np.abs(r[:, 2] - ann) <= bound))} of {n}")
+                  f"twice its random one): {int(np.sum(inb))} of {n}")
         if tiles and args.figures is not None:
             args.figures.mkdir(parents=True, exist_ok=True)
             while len(tiles) % 4:

@@ -499,6 +499,59 @@ def _ball_taxim(quick: bool) -> Result:
 
 
 @subject(
+    "ball_circles_real", "A ball session's circles on real presses",
+    """The circle a ball session reads (`optics.find_contact_circle`: the radial profile's
+    edge and its checks) on the real ball presses at hand: taxim's 48 GelSight presses
+    (the `taxim` package's data, hand-annotated circles), GelSlim 3.0's 75 and 39 (the
+    second through a grid of markers) and the GelSight Mini's 22 (about half cut by the
+    image's edge); the last three are not redistributed with the package and are left out
+    where absent. Per set: how many circles are trusted, why the others are not, and the
+    range of each check's reading; on the annotated set the radius against the annotation
+    and how many lie within their stated bound (the shared error plus twice the random
+    one, as `pipeline.circle_depths` states them).""",
+    ["python benchmarks/bench_ball_circles_real.py"])
+def _ball_circles_real(quick: bool) -> Result:
+    import bench_ball_circles_real as b
+    names = ["taxim"] if quick else ["taxim", "gelslim11", "gelslim09", "mini"]
+    got, absent = [], []
+    for name in names:
+        if not Path(b.set_paths()[name]).exists():
+            absent.append(name)
+            continue
+        got.append(b.session_circles(name))
+    rows = [[g["name"], g["n"], g["trusted"],
+             "; ".join(f"{k} ({v})" for k, v in g["reasons"].items()) or "none",
+             f"{g['sectors'][0]:.2f} to {g['sectors'][1]:.2f}",
+             f"{g['contrast'][0]:.1f} to {g['contrast'][1]:.1f}", f"{g['pad']:.2f}"]
+            for g in got]
+    ann = [[g["name"], f"{g['annotated']['median']:.3f}", f"{g['annotated']['sd']:.3f}",
+            f"{g['annotated']['within5']} of {g['n']}",
+            f"{g['annotated']['within_bound']} of {g['n']}"]
+           for g in got if g["annotated"] is not None]
+    tables = [Table("Checks by set", ["set", "presses", "trusted", "not trusted, why",
+                                      "sectors not falling past the rim (share)",
+                                      "rim contrast (noise sigmas)",
+                                      "image beyond 1.6 radii (least share)"], rows,
+                    note=f"Refused over {b.MAX_SECTORS_BEYOND_RIM:g} of the sectors, under "
+                         f"{b.MIN_RIM_CONTRAST:g} sigmas; the pad's own noise read where "
+                         f"{b.PAD_SHARE:g} of the image or more lies beyond 1.6 radii."
+                         + (f" Absent here: {', '.join(absent)}." if absent else ""))]
+    if ann:
+        tables.append(Table("Against the annotated circles",
+                            ["set", "radius / annotated, median", "sd", "within 5 %",
+                             "within the stated bound"], ann))
+    trusted = sum(g["trusted"] for g in got)
+    summary = f"{trusted} of {sum(g['n'] for g in got)} circles trusted"
+    if ann:
+        g = next(g for g in got if g["annotated"] is not None)
+        a = g["annotated"]
+        summary += (f"; on {g['name']}'s annotated presses {a['median']:.3f} +- {a['sd']:.3f} "
+                    f"of the annotated radius, {a['within_bound']} of {g['n']} within their "
+                    "bound")
+    return Result(tables, summary=summary + ".")
+
+
+@subject(
     "failures", "The failures real recordings showed, drawn with their right answers",
     """Four kinds of data whose right answer is known, each drawn on 20 seeds (5 with
     --quick) and read by the library's own call: a flat punch's Instron ramp fitted as a
