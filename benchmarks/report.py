@@ -552,6 +552,46 @@ def _ball_circles_real(quick: bool) -> Result:
 
 
 @subject(
+    "ball_sessions_drawn", "A ball's sessions drawn by closed forms, calibrated from frames",
+    """Two sessions of a 2 mm ball on a 100 mm gel (a half-space) of E = 1 MPa, nu = 0.5,
+    each frame's surface Sneddon's at its depth and shaded by the Taxim authors' GelSight
+    table, read as a user reads them with the small-strain law: a ball session (eight
+    presses, four depths twice, an F/T log at 1 kHz with a 1/80 N sensor's noise, a 40 mN
+    tare offset and a 50 ms clock offset; `sim.make_ball_session`, then
+    `pipeline.calibrate_ball_session`) and dead weights (five masses of 20 to 200 g, three
+    times each; `sim.make_dead_weight_session(..., seed=1)`, then
+    `pipeline.calibrate_dead_weights`). The right answer: E's 95 % interval holds 1 MPa.""",
+    ["python -m pytest tests/test_ball_session.py tests/test_dead_weights_frames.py"])
+def _ball_sessions_drawn(quick: bool) -> Result:
+    from tactilevision.pipeline import calibrate_ball_session, calibrate_dead_weights
+    from tactilevision.sim import make_ball_session, make_dead_weight_session
+    rows = []
+    with tempfile.TemporaryDirectory(prefix="tv-report-") as tmp:
+        make_ball_session(Path(tmp) / "ball", radius_mm=2.0, E_mpa=1.0, thickness_mm=100.0,
+                          ft_bias_n=0.04)
+        make_dead_weight_session(Path(tmp) / "weights", (0.02, 0.05, 0.1, 0.15, 0.2),
+                                 repeats=3, E_mpa=1.0, seed=1)
+        for label, cal in (
+                ("ball session, 8 presses", calibrate_ball_session(Path(tmp) / "ball", nu=0.5,
+                                                                   law="linear")),
+                ("dead weights, 15 frames", calibrate_dead_weights(Path(tmp) / "weights",
+                                                                   nu=0.5, law="linear"))):
+            lo, hi = cal.fit.E_ci95_mpa
+            rows.append([label, f"{cal.fit.n_presses} of {cal.fit.n_presses + len(cal.rejected)}",
+                         f"{cal.fit.E_mpa:.3f}", f"[{lo:.3f}, {hi:.3f}]",
+                         "yes" if lo <= 1.0 <= hi else "no",
+                         "; ".join(n for n in cal.fit.notes if n.startswith("warning"))
+                         or "none"])
+    held = sum(r[4] == "yes" for r in rows)
+    return Result([Table("E from the frames", ["session", "presses fitted", "E (MPa)",
+                                               "95 % interval (MPa)", "holds 1 MPa",
+                                               "warnings"], rows)],
+                  summary=f"E's interval holds 1 MPa in {held} of {len(rows)}: "
+                          + "; ".join(f"{r[0].split(',')[0]} {r[2]} MPa {r[3]}" for r in rows)
+                          + ".")
+
+
+@subject(
     "failures", "The failures real recordings showed, drawn with their right answers",
     """Four kinds of data whose right answer is known, each drawn on 20 seeds (5 with
     --quick) and read by the library's own call: a flat punch's Instron ramp fitted as a
