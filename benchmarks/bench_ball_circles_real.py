@@ -140,6 +140,20 @@ def session_circles(name: str) -> dict:
     return out
 
 
+def rays_against_annotation(name: str) -> dict:
+    """The optics calibration's contact edge (the rays' detector,
+    ``detect_contact_circle(edge='contact')``) against an annotated set's circles:
+    radius / annotated, median and sd, and how many within 5 %."""
+    ps = read_ball_presses(set_paths()[name])
+    if ps.radii_px is None:
+        raise InputError(f"set {name!r} has no annotated circles")
+    r = np.array([circle(detect_contact_circle, f, ps.reference, edge="contact")[1]
+                  for f in ps.frames])
+    q = r / np.asarray(ps.radii_px, np.float64)
+    return dict(median=float(np.nanmedian(q)), sd=float(np.nanstd(q)),
+                within5=int(np.sum(np.abs(q - 1) < 0.05)), n=len(q))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--before", default="8f4cf4a")

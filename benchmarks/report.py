@@ -508,7 +508,8 @@ def _ball_taxim(quick: bool) -> Result:
     where absent. Per set: how many circles are trusted, why the others are not, and the
     range of each check's reading; on the annotated set the radius against the annotation
     and how many lie within their stated bound (the shared error plus twice the random
-    one, as `pipeline.circle_depths` states them).""",
+    one, as `pipeline.circle_depths` states them), beside the optics calibration's contact
+    edge (the rays' detector, `optics.detect_contact_circle(edge='contact')`).""",
     ["python benchmarks/bench_ball_circles_real.py"])
 def _ball_circles_real(quick: bool) -> Result:
     import bench_ball_circles_real as b
@@ -524,10 +525,16 @@ def _ball_circles_real(quick: bool) -> Result:
              f"{g['sectors'][0]:.2f} to {g['sectors'][1]:.2f}",
              f"{g['contrast'][0]:.1f} to {g['contrast'][1]:.1f}", f"{g['pad']:.2f}"]
             for g in got]
-    ann = [[g["name"], f"{g['annotated']['median']:.3f}", f"{g['annotated']['sd']:.3f}",
-            f"{g['annotated']['within5']} of {g['n']}",
+    ann = [[f"{g['name']}, a ball session's circle", f"{g['annotated']['median']:.3f}",
+            f"{g['annotated']['sd']:.3f}", f"{g['annotated']['within5']} of {g['n']}",
             f"{g['annotated']['within_bound']} of {g['n']}"]
            for g in got if g["annotated"] is not None]
+    for g in got:
+        if g["annotated"] is not None:
+            rays = b.rays_against_annotation(g["name"])
+            ann.append([f"{g['name']}, the optics calibration's contact edge (rays)",
+                        f"{rays['median']:.3f}", f"{rays['sd']:.3f}",
+                        f"{rays['within5']} of {rays['n']}", "(no bound stated)"])
     tables = [Table("Checks by set", ["set", "presses", "trusted", "not trusted, why",
                                       "sectors not falling past the rim (share)",
                                       "rim contrast (noise sigmas)",
