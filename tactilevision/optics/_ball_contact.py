@@ -82,9 +82,9 @@ MIN_RIM_CONTRAST = 4.0
 #: 1.4 radii (:func:`rim_drop`), in sigmas of the camera's pixel noise, against the same
 #: :data:`MIN_RIM_CONTRAST`. On the renders of ``tests/test_ball_texture.py``, seeds 2000 to
 #: 2039, 2100 to 2139 and 2200 to 2239 (seen when the rule was set), the pad's rule refused
-#: 26 circles within their bound, 23 of them contacts over 100 px whose pad beyond was 0 to
-#: 12 % of the image (at 1.3 to 3.9 pad sigmas); the drop read 4.5 to 13.5 camera sigmas on
-#: 19 of those and 1.2 to 2.3 on the wrong circles whose pad was as small.
+#: 25 circles within their bound whose pad beyond was 0 to 12 % of the image (contacts of
+#: 107 px or more, at 1.3 to 3.8 pad sigmas); the drop read 4.5 to 13.5 camera sigmas on 21
+#: of those and 1.2 to 2.3 on the three wrong circles whose pad was as small.
 PAD_SHARE = 0.2
 #: The largest share of a circle's sectors (12 about its centre, those the image shows both
 #: sides of the rim in) where the colour change just past the rim (median over 1.15 to 1.4
