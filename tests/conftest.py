@@ -140,19 +140,22 @@ def taxim_lut(taxim_presses):
 
 
 #: Test files by their measured time, longest first (``pytest --durations=0``, summed per
-#: file, 2026-11-27: test_crossings.py 190 s, test_calibrate.py 91, test_diagnose.py 81 of
-#: 1222 s in all). pytest-xdist hands out whole files (``--dist loadfile``) in
+#: file; those of 4 s or more: test_calibrate.py 59 s, test_vernier_taxim.py 34, test_relaxation.py
+#: 31 of 562 s in all). pytest-xdist hands out whole files (``--dist loadfile``) in
 #: collection order (``--no-loadscope-reorder`` in pyproject.toml): the long files first and
 #: the many short ones after fill the two workers evenly, where the default order (files
 #: with the most tests first) left the longest files to the end, one worker busy alone.
 LONGEST_FIRST = (
-    "test_crossings.py", "test_calibrate.py", "test_diagnose.py", "test_plan_effects.py",
-    "test_plan_recommend.py", "test_table_engine_real.py", "test_crossing_statement.py",
-    "test_ball_session.py", "test_plan.py", "test_relaxation.py", "test_fem_sphere_coulomb.py",
-    "test_optics_real.py", "test_table_order.py", "test_vernier_taxim.py", "test_batch.py",
-    "test_ft_zero.py", "test_calibrate_gelslim.py", "test_plan_schedule.py",
-    "test_ball_taxim.py", "test_plan_speaks_once.py", "test_optics_press_check.py",
-    "test_viewer.py", "test_noise_budget.py", "test_cli_forces.py",
+    "test_calibrate.py", "test_vernier_taxim.py", "test_relaxation.py", "test_config_strict.py",
+    "test_ball_texture.py", "test_docs.py", "test_diagnose.py", "test_batch.py",
+    "test_ball_fit.py", "test_fem_pad.py", "test_structure.py", "test_interrupts.py",
+    "test_forces_gelslim.py", "test_diagnose_separation.py", "test_cli_optics.py",
+    "test_fem_linear.py", "test_lut_mlp.py", "test_noise_budget.py", "test_forces_box.py",
+    "test_fem_forces.py", "test_plan_recommend.py", "test_crossing_statement.py",
+    "test_cli_contract.py", "test_fem_sphere_coulomb.py", "test_cli_help_imports.py",
+    "test_ramp.py", "test_history.py", "test_plan.py", "test_fuzz_inputs.py",
+    "test_custom_effects.py", "test_forces_session.py", "test_plan_effects.py",
+    "test_fit_depth_uncertainty.py",
 )
 
 
