@@ -280,7 +280,9 @@ class ForceEstimator:
             computed in single precision (the camera-rate path: with
             'spectral', 'normal', 'field' OpenCV's real DFT, about 3.5 times
             the float64 frame rate at 427 x 320, relative error about 1e-6,
-            ``tests/test_fem_forces.py``); anything else in double.
+            ``tests/test_fem_forces.py``; with 'footprint', the solve on the
+            footprint's box), its forces and pressures returned in float32;
+            anything else in double.
         lateral_mm : (H, W, 2) or (N, H, W, 2) array_like, optional
             Lateral displacement (ux, uy), mm, along columns and rows; needed
             with ``mode='full'``.
@@ -335,8 +337,8 @@ class ForceEstimator:
             forces, mask = self._op.footprint(disp, mask)
         else:
             forces, mask = self._op.field(disp), None
-        if self.beta > 0:
-            forces = forces * self._stiffening(u, mask)[:, None, None, None].astype(forces.dtype)
+        if self.beta > 0:       # in place: the operators' arrays are fresh
+            forces *= self._stiffening(u, mask)[:, None, None, None].astype(forces.dtype)
         area = self._op.node_area_mm2
         pressure = forces[..., 2] * (1e3 / area)
         if forces.dtype == np.float32:
@@ -432,12 +434,15 @@ class _Spectral:
         return self._forces(t)
 
     def _forces(self, t: np.ndarray) -> np.ndarray:
-        out = np.zeros((*t.shape[:3], 3))
+        """(N, H, W, c) traction, MPa -> (N, H, W, 3) forces, N, in t's dtype (float32 on
+        the camera-rate path, whose traction is single precision)."""
+        out = np.zeros((*t.shape[:3], 3), t.dtype)
         if t.shape[-1] == 3:
             out[:] = t
         else:
             out[..., 2] = t[..., 0]
-        return out * self.node_area_mm2
+        out *= out.dtype.type(self.node_area_mm2)
+        return out
 
     def footprint(self, disp: np.ndarray, contact: np.ndarray
                   ) -> tuple[np.ndarray, np.ndarray]:
@@ -467,6 +472,8 @@ class _Spectral:
                                  lambda x: self._apply32(self.K32, x), u, mask)
             out.append(self._forces(t[None, :H, :W])[0])
             masks.append(mask[:H, :W] & (t[:H, :W, -1] > 0))
+        if len(out) == 1:        # one frame: a view, not a copy (7 MB at 640 x 480)
+            return out[0][None], masks[0][None]
         return np.stack(out), np.stack(masks)
 
     def _box_spectra(self, size: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
@@ -496,7 +503,7 @@ class _Spectral:
         linear ones over the box's offsets: an FFT grid of twice the box, with the padded
         grid's own kernels. (H, W, 3) forces, N, and the final footprint."""
         H, W = self.shape
-        forces = np.zeros((H, W, 3))          # float64, as the padded grid's path gives
+        forces = np.zeros((H, W, 3), u.dtype)     # as the padded grid's path gives
         if not m.any():
             self._warm = None
             return forces, np.zeros((H, W), bool)
