@@ -19,7 +19,8 @@ gelsight``: the shipped calibration, fitted on real GelSight frames, instead
 of the session's own optics); ``field`` (``--contact field --level
 far_field``: the height field trusted everywhere); ``before`` (the defaults
 before issue 16: ``--sensor gelsight --contact field --level far_field
---beta 0``). ``--fit`` defaults to ``out/calibration/fit.json`` (the README's
+--beta 0``); the faster choices ``fem`` (``--method fem``), ``far_field`` (``--level
+far_field``) and ``far_field_fem`` (both). ``--fit`` defaults to ``out/calibration/fit.json`` (the README's
 first command), else the truth (E, nu, clock offset; beta 0.82).
 
 ``--rate``: the cost of a force frame on the default path in bare height maps,
@@ -30,7 +31,7 @@ default path (``boundary='contact'`` heights, 'footprint' forces with beta: what
 the command does per frame), through the pieces of that path alone, and through
 the solvers it had before (the sparse direct masked solve and the padded
 whole-image footprint solve) and the default path on a spread of those frames
-(no warm start between them); the ratios of
+(no warm start between them), and through the faster choices; the ratios of
 their per-frame times to the bare height map's.
 """
 
@@ -62,6 +63,11 @@ VARIANTS = {
     "field": ["--contact", "field", "--level", "far_field"],
     "before": ["--sensor", "gelsight", "--contact", "field", "--level", "far_field",
                "--beta", "0"],
+    # the faster choices: the FEM's force map on its node grid, the whole-image height
+    # levelled at the far field (no contact-pinned solve), and both
+    "fem": ["--method", "fem"],
+    "far_field": ["--level", "far_field"],
+    "far_field_fem": ["--level", "far_field", "--method", "fem"],
 }
 
 
@@ -99,7 +105,9 @@ def rate_rows(frames: int, start: int, before: int) -> dict:
     frames_ = [s.frame(i) for i in range(start, min(start + frames, s.n_frames))]
     bare = DepthReconstructor(cal, reference=s.reference)
     recon = DepthReconstructor(cal, reference=s.reference, boundary="contact")
+    far = DepthReconstructor(cal, reference=s.reference, level="far_field")
     est = ForceEstimator(cal.shape, mm, **kw)
+    fem = ForceEstimator(cal.shape, mm, method="fem", **kw)
     old = ForceEstimator(cal.shape, mm, **kw)
     old._op.box = False                     # the padded whole-image footprint solve
 
@@ -128,6 +136,9 @@ def rate_rows(frames: int, start: int, before: int) -> dict:
     sub = frames_[::every]
     t_before = per_frame(old_path, sub)
     t_after = per_frame(lambda f: est(recon(f)), sub)
+    t_fem = per_frame(lambda f: fem(recon(f)), frames_)
+    t_far = per_frame(lambda f: est(far(f)), frames_)
+    t_far_fem = per_frame(lambda f: fem(far(f)), frames_)
     t_bare2 = per_frame(bare, frames_)
     ref = 0.5 * (t_bare + t_bare2)
     rows = [(f"bare DepthReconstructor (the reference; mean of a run before and after: "
@@ -138,7 +149,12 @@ def rate_rows(frames: int, start: int, before: int) -> dict:
             ("  its footprint force map alone", t_forces),
             ("the solvers before (direct masked solve, padded footprint solve), "
              "on the spread frames", t_before),
-            ("the default path on the same spread frames", t_after)]
+            ("the default path on the same spread frames", t_after),
+            ("faster choice `--method fem`: contact-pinned height + the FEM's force map",
+             t_fem),
+            ("faster choice `--level far_field`: whole-image height + footprint force",
+             t_far),
+            ("faster choice `--level far_field --method fem`", t_far_fem)]
     return {"rows": [(name, t * 1e3, t / ref) for name, t in rows], "n": len(frames_),
             "n_spread": len(sub), "every": every, "bare_ms": ref * 1e3}
 

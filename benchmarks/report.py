@@ -745,6 +745,11 @@ def _sphere_closed_forms(quick: bool) -> Result:
     ])
 
 
+#: The forces command's faster choices the report measures beside its default
+#: (``bench_forces_default.VARIANTS``).
+FASTER = ("fem", "far_field", "far_field_fem")
+
+
 @subject(
     "forces_default", "Forces: the default path's accuracy against the F/T log and its cost",
     """`tactilevision forces` with its default options on the shipped gauge-block session
@@ -755,9 +760,11 @@ def _sphere_closed_forms(quick: bool) -> Result:
     `truth.json`, used only to group frames; the misaligned and the pad-edge press left
     out) and on the frames without contact; then the cost of a force frame on that path in
     bare `DepthReconstructor` height maps of the same frames, timed in the same process (60
-    consecutive frames from frame 30: presses being made, held and released). --quick:
-    one frame in 6 instead of one in 3, 30 frames for the cost.""",
-    ["python benchmarks/bench_forces_default.py --variants default --fit FIT",
+    consecutive frames from frame 30: presses being made, held and released); then the
+    command's faster choices (`--method fem`, `--level far_field`, both) measured the same
+    two ways. --quick: one frame in 6 instead of one in 3, 30 frames for the cost.""",
+    ["python benchmarks/bench_forces_default.py --variants "
+     "default,fem,far_field,far_field_fem --fit FIT",
      "python benchmarks/bench_forces_default.py --rate"])
 def _forces_default(quick: bool) -> Result:
     import bench_forces_default as b
@@ -770,7 +777,7 @@ def _forces_default(quick: bool) -> Result:
             raise RuntimeError(f"calibrate of {b.SESSION} failed with status {rc}")
         fit_path = Path(tmp) / "calibration" / "fit.json"
         fit = json.loads(fit_path.read_text())
-        runs = b.variant_rows(fit_path, 6 if quick else 3, ["default"])
+        runs = b.variant_rows(fit_path, 6 if quick else 3, ["default", *FASTER])
     r = runs[0]
     if r["status"] != 0:
         raise RuntimeError(f"forces failed with status {r['status']}")
@@ -784,6 +791,20 @@ def _forces_default(quick: bool) -> Result:
     rate = b.rate_rows(30 if quick else 60, 30, 5 if quick else 10)
     cost = [[name, f"{ms:.1f}", f"{ratio:.1f}"] for name, ms, ratio in rate["rows"]]
     default_ratio = rate["rows"][1][2]
+    ratios = dict(zip(["default", *FASTER], [default_ratio] + [row[2] for row in
+                                                                 rate["rows"][-len(FASTER):]],
+                      strict=True))
+    faster = []
+    for run in runs:
+        if run["status"] != 0:
+            raise RuntimeError(f"forces {run['options']} failed with status {run['status']}")
+        dd, ss, ff = run["deep"], run["shallow"], run["free"]
+        n = dd["n"] + ss["n"]
+        faster.append([f"`{run['options']}`", f"{ratios[run['name']]:.1f}",
+                       f"{dd['median']:.3f}, {dd['within5']:.0%}",
+                       f"{ss['median']:.3f}, {ss['within5']:.0%}",
+                       f"{(dd['within5'] * dd['n'] + ss['within5'] * ss['n']) / max(n, 1):.0%}",
+                       f"{ff['max_mn']:.1f}"])
     return Result([
         Table("Total force against the F/T log",
               ["frames", "n", "median Fz / F_T", "range", "within 5 %"], acc,
@@ -800,6 +821,16 @@ def _forces_default(quick: bool) -> Result:
                    f"the solvers before on one frame in {rate['every']} ({rate['n_spread']} "
                    f"frames). A force frame with the defaults costs {default_ratio:.1f} bare "
                    "height maps; the ratio, not the milliseconds, carries between machines."),
+        Table("The faster choices",
+              ["options", "bare height maps per frame", "presses >= 0.3 mm: median Fz / F_T, "
+               "within 5 %", "0.15 mm: median, within 5 %", "hold frames within 5 %",
+               "no contact: largest |Fz|, mN"], faster,
+              note="Each choice as `tactilevision forces` runs it on the same frames with the "
+                   "same fit, and its cost in bare height maps from the table above (same "
+                   "run). `--method fem`: the force map on the FEM's 40 x 30 nodes instead of "
+                   "the image's pixels; `--level far_field`: the whole image's height, "
+                   "levelled at the far field, instead of the height pinned to zero outside "
+                   "the contact."),
     ])
 
 
