@@ -3,6 +3,7 @@
     python benchmarks/bench_forces_default.py [--fit FIT.json] [--every N]
         [--variants default,shipped,field,before]
     python benchmarks/bench_forces_default.py --rate [--frames N] [--start I]
+    python benchmarks/bench_forces_default.py --sweeps [--frames N] [--start I]
 
 Runs the command on every N-th frame of ``sample_frames/gelsight_session``
 (default 3) once per variant and compares each frame's total Fz with the F/T
@@ -20,8 +21,9 @@ of the session's own optics); ``field`` (``--contact field --level
 far_field``: the height field trusted everywhere); ``before`` (the defaults
 before issue 16: ``--sensor gelsight --contact field --level far_field
 --beta 0``); the faster choices ``fem`` (``--method fem``), ``far_field`` (``--level
-far_field``) and ``far_field_fem`` (both). ``--fit`` defaults to ``out/calibration/fit.json`` (the README's
-first command), else the truth (E, nu, clock offset; beta 0.82).
+far_field``) and ``far_field_fem`` (both). ``--fit`` defaults to
+``out/calibration/fit.json`` (the README's first command), else the truth (E, nu, clock
+offset; beta 0.82).
 
 ``--rate``: the cost of a force frame on the default path in bare height maps,
 in one process and one run: N consecutive frames of the session from frame I
@@ -33,6 +35,10 @@ the solvers it had before (the sparse direct masked solve and the padded
 whole-image footprint solve) and the default path on a spread of those frames
 (no warm start between them), and through the faster choices; the ratios of
 their per-frame times to the bare height map's.
+
+``--sweeps``: where the default force solve's work goes on those frames (the sweeps of
+its tensile-node rule, the iterations of each), and how far the maps and totals move when
+every sweep but the last stops at a looser residual: the same rule along another path.
 """
 
 from __future__ import annotations
@@ -159,6 +165,112 @@ def rate_rows(frames: int, start: int, before: int) -> dict:
             "n_spread": len(sub), "every": every, "bare_ms": ref * 1e3}
 
 
+def _mixed_solve_loose(loose: float):
+    """The footprint solve of ``tactilevision.fem._forces._mixed_solve`` with every sweep but
+    the last stopped at the relative residual `loose` (the last at the solve's own tol):
+    the same tensile-node rule along another path. A probe for :func:`sweeps_rows`."""
+    from tactilevision.fem import _forces as F
+
+    def solve(compliance, stiffness, u, mask, *, tol=1e-5, max_iter=500, max_sweeps=8,
+              t0=None, log=None):
+        mask = mask.copy()
+        t = np.zeros_like(u) if t0 is None else t0
+        final = False
+        for _ in range(3 * max_sweeps):
+            if not mask.any():
+                return np.zeros_like(u)
+            m = mask[..., None]
+            b = np.where(m, u, 0.0)
+            t = np.where(m, t, 0.0)
+            r = b - np.where(m, compliance(t), 0.0)
+            if t0 is not None and F._norm(r) > F._norm(b):
+                t, r = np.zeros_like(u), b
+            t0 = None
+            z = np.where(m, stiffness(r), 0.0)
+            p, rz, bn = z.copy(), F._dot(r, z), F._norm(b) or 1.0
+            stop = (tol if final else loose) * bn
+            for _ in range(max_iter):
+                if F._norm(r) < stop:
+                    break
+                Ap = np.where(m, compliance(p), 0.0)
+                alpha = rz / F._dot(p, Ap)
+                t, r = t + alpha * p, r - alpha * Ap
+                if F._norm(r) < stop:
+                    break
+                z = np.where(m, stiffness(r), 0.0)
+                rz_new = F._dot(r, z)
+                p, rz = z + (rz_new / rz) * p, rz_new
+            tensile = mask & (t[..., -1] < 0)
+            if not tensile.any():
+                if final:
+                    break
+                final = True
+                continue
+            mask &= ~tensile
+        return t
+    return solve
+
+
+def sweeps_rows(frames: int, start: int, loose: tuple[float, ...] = (1e-3, 1e-2)) -> dict:
+    """Where the default path's force solve spends its work: per frame with contact, the
+    sweeps of the tensile-node rule and the conjugate-gradient iterations of each; then the
+    same heights solved along another path of the same rule (every sweep but the last
+    stopped at a looser residual, :func:`_mixed_solve_loose`), and how far the maps and
+    totals move from the default's."""
+    from tactilevision.fem import _forces as F
+
+    s = read_session(SESSION)
+    cal = PhotometricCalibration.load(SESSION / "optics.npz")
+    kw = dict(thickness_mm=s.config.gel_thickness_mm, E_mpa=0.2, nu=0.48,
+              contact="footprint", threshold_mm=0.02, beta=0.82)
+    recon = DepthReconstructor(cal, reference=s.reference, boundary="contact")
+    heights = [recon(s.frame(i)) for i in range(start, min(start + frames, s.n_frames))]
+    est = ForceEstimator(cal.shape, s.config.mm_per_px, **kw)
+    est._op.solve_log = log = []
+    ref = [est(h) for h in heights]
+    sweeps = [len(x) for x in log]
+    iters = [it for x in log for it, _ in x]
+    per_solve = [sum(it for it, _ in x) for x in log]
+    first = [x[0][1] for x in log]
+    moved = []
+    solve = F._mixed_solve
+    try:
+        for lo in loose:
+            F._mixed_solve = _mixed_solve_loose(lo)
+            other = ForceEstimator(cal.shape, s.config.mm_per_px, **kw)
+            maps, totals = [], []
+            for h, r in zip(heights, ref, strict=True):
+                fm = other(h)
+                if float(r.total_n[2]) > 1e-3:
+                    peak = float(np.abs(r.pressure_kpa).max())
+                    maps.append(float(np.abs(fm.pressure_kpa - r.pressure_kpa).max()) / peak)
+                    totals.append(abs(float(fm.total_n[2]) / float(r.total_n[2]) - 1))
+            moved.append((lo, max(maps), float(np.median(maps)), max(totals),
+                          int(np.sum(np.array(maps) > 0.01)), len(maps)))
+    finally:
+        F._mixed_solve = solve
+    return {"n": len(heights), "solves": len(log), "sweeps": sweeps, "iters": iters,
+            "per_solve": per_solve, "first": first, "moved": moved}
+
+
+def sweeps(frames: int, start: int) -> None:
+    """Print :func:`sweeps_rows`."""
+    r = sweeps_rows(frames, start)
+    print(f"Command: python benchmarks/bench_forces_default.py --sweeps --frames {frames} "
+          f"--start {start}\n{r['n']} consecutive frames, {r['solves']} with a footprint\n")
+    print(f"sweeps per solve: median {np.median(r['sweeps']):.0f} ({min(r['sweeps'])} to "
+          f"{max(r['sweeps'])}); conjugate-gradient iterations per sweep: median "
+          f"{np.median(r['iters']):.0f} ({min(r['iters'])} to {max(r['iters'])}); per solve: "
+          f"median {np.median(r['per_solve']):.0f} ({min(r['per_solve'])} to "
+          f"{max(r['per_solve'])}); tensile pixels dropped by the first sweep: "
+          f"{min(r['first'])} to {max(r['first'])}\n")
+    print("| sweeps before the last stopped at | map moved: largest, median (of its peak) | "
+          "frames moved over 1 % | total moved: largest |")
+    print("|---|---|---|---|")
+    for lo, mx, med, tot, over, n in r["moved"]:
+        print(f"| {lo:g} | {mx:.1%}, {med:.2%} | {over} of {n} | {tot:.1e} |")
+
+
 def rate(frames: int, start: int, before: int) -> None:
     """Print :func:`rate_rows` as a Markdown table."""
     r = rate_rows(frames, start, before)
@@ -212,7 +324,13 @@ def main() -> None:
     ap.add_argument("--before", type=int, default=10,
                     help="--rate: frames (spread over the N) through the solvers before "
                     "(about 1.5 s each)")
+    ap.add_argument("--sweeps", action="store_true",
+                    help="where the default force solve's work goes: its sweeps and "
+                    "iterations, and how far another path of its tensile rule moves the maps")
     args = ap.parse_args()
+    if args.sweeps:
+        sweeps(args.frames, args.start)
+        return
     if args.rate:
         rate(args.frames, args.start, args.before)
         return

@@ -134,3 +134,22 @@ def test_masked_cg_solves_separate_regions_each_on_its_own_box():
     assert np.abs(cg - direct).max() <= 1e-5 * peak
     assert not cg[~mask].any()
     assert np.all(cg[80:84, 120:124] != 0)                  # the speck is solved too
+
+
+def test_the_solve_log_counts_the_tensile_pixels_each_sweep_drops():
+    """A flat punch's face inside a footprint that also takes in a shallow ring around
+    it (just above the threshold, where the face's pressure would push the gel deeper):
+    held there the ring pulls, so sweeps drop it; the pixels the log says were dropped are
+    the footprint less the contact the map keeps, and the last sweep drops none."""
+    est = ForceEstimator((60, 60), 0.05, thickness_mm=3.0, E_mpa=0.2, nu=0.48,
+                         contact="footprint", threshold_mm=0.01)
+    yy, xx = np.mgrid[:60, :60]
+    r = np.hypot(yy - 30, xx - 30) * 0.05
+    h = np.where(r < 0.5, 0.05, 0.012 * (r < 1.0)).astype(np.float32)
+    est._op.solve_log = log = []
+    fm = est(h)
+    assert len(log) == 1 and len(log[0]) >= 2
+    dropped = sum(n for _, n in log[0])
+    assert log[0][-1][1] == 0 and dropped > 0
+    assert dropped == int((h > 0.01).sum()) - int(fm.contact.sum())
+    assert all(it >= 1 for it, _ in log[0][:-1])

@@ -402,6 +402,8 @@ class _Spectral:
         self.box = not self.full
         self._box_cache: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = {}
         self._warm: tuple[np.ndarray, tuple[int, int]] | None = None
+        #: a list to which each box solve appends its sweeps (:func:`_mixed_solve`'s `log`)
+        self.solve_log: list | None = None
         self._kernels = () if self.full else tuple(
             np.fft.irfft2(spec, s=self.fshape).astype(np.float32) for spec in (1.0 / kn, kn))
         self.node_area_mm2 = dx * dx
@@ -536,7 +538,8 @@ class _Spectral:
         t = _mixed_solve(lambda x: conv(c_ccs, x[..., 0])[..., None],
                          lambda x: conv(k_ccs, x[..., 0])[..., None],
                          np.ascontiguousarray(u[r0:r1, c0:c1], np.float32)[..., None],
-                         m[r0:r1, c0:c1], t0=None if t0 is None else t0[..., None])[..., 0]
+                         m[r0:r1, c0:c1], t0=None if t0 is None else t0[..., None],
+                         log=self.solve_log)[..., 0]
         self._warm = (t, (r0, c0))
         forces[r0:r1, c0:c1, 2] = t * self.node_area_mm2
         keep = np.zeros((H, W), bool)
@@ -546,7 +549,7 @@ class _Spectral:
 
 def _mixed_solve(compliance, stiffness, u: np.ndarray, mask: np.ndarray, *,
                  tol: float = 1e-5, max_iter: int = 500, max_sweeps: int = 8,
-                 t0: np.ndarray | None = None) -> np.ndarray:
+                 t0: np.ndarray | None = None, log: list | None = None) -> np.ndarray:
     """Traction t, zero outside `mask`, with (C t) = u on `mask`; pressure >= 0.
 
     Preconditioned conjugate gradients on the masked compliance operator,
@@ -557,8 +560,13 @@ def _mixed_solve(compliance, stiffness, u: np.ndarray, mask: np.ndarray, *,
     under 3e-6 N against 1e-8 (2.2 against 2.20 N) at 2.3 times less time
     (2.2 against 5.0 s per 640 x 480 frame, both timed in one run on this 2-core
     machine). `t0`, u's shape: the first guess (a previous frame's traction),
-    used while its residual is below the zero guess's.
+    used while its residual is below the zero guess's. `log`: a list to which the
+    solve appends one list of (conjugate-gradient iterations, tensile nodes dropped)
+    per sweep (``benchmarks/bench_forces_default.py --sweeps``).
     """
+    sweeps: list[tuple[int, int]] = []
+    if log is not None:
+        log.append(sweeps)
     mask = mask.copy()
     t = np.zeros_like(u) if t0 is None else t0
     for _ in range(max_sweeps):
@@ -575,8 +583,10 @@ def _mixed_solve(compliance, stiffness, u: np.ndarray, mask: np.ndarray, *,
         p = z.copy()
         rz = _dot(r, z)
         bn = _norm(b) or 1.0
-        for _ in range(max_iter):
+        iterations = 0
+        for iterations in range(1, max_iter + 1):
             if _norm(r) < tol * bn:
+                iterations -= 1
                 break       # converged, or nothing to solve (zero displacement on the mask)
             Ap = np.where(m, compliance(p), 0.0)
             alpha = rz / _dot(p, Ap)
@@ -589,6 +599,7 @@ def _mixed_solve(compliance, stiffness, u: np.ndarray, mask: np.ndarray, *,
             p = z + (rz_new / rz) * p
             rz = rz_new
         tensile = mask & (t[..., -1] < 0)
+        sweeps.append((iterations, int(np.count_nonzero(tensile))))
         if not tensile.any():
             break
         mask &= ~tensile
