@@ -36,9 +36,10 @@ whole-image footprint solve) and the default path on a spread of those frames
 (no warm start between them), and through the faster choices; the ratios of
 their per-frame times to the bare height map's.
 
-``--sweeps``: where the default force solve's work goes on those frames (the sweeps of
-its tensile-node rule, the iterations of each), and how far the maps and totals move when
-every sweep but the last stops at a looser residual: the same rule along another path.
+``--sweeps``: where the default force solve's work goes on those frames (its sweeps, the
+pixels each drops or takes back, the iterations), and its answer against the same
+problem solved with every sweep to 1e-5, against the rule before (pulling pixels dropped
+and never taken back) and that rule along a looser path.
 """
 
 from __future__ import annotations
@@ -165,20 +166,23 @@ def rate_rows(frames: int, start: int, before: int) -> dict:
             "n_spread": len(sub), "every": every, "bare_ms": ref * 1e3}
 
 
-def _mixed_solve_loose(loose: float):
-    """The footprint solve of ``tactilevision.fem._forces._mixed_solve`` with every sweep but
-    the last stopped at the relative residual `loose` (the last at the solve's own tol):
-    the same tensile-node rule along another path. A probe for :func:`sweeps_rows`."""
+def _mixed_solve_greedy(loose: float | None, counts: list):
+    """The footprint solve's rule before the Signorini one (a probe for :func:`sweeps_rows`):
+    sweeps that drop pulling pixels and never take one back, each a preconditioned
+    conjugate-gradient solve; every sweep but the last to the residual `loose` (None: every
+    sweep to the solve's tol, as that rule ran). Appends (sweeps, iterations) to
+    `counts`."""
     from tactilevision.fem import _forces as F
 
     def solve(compliance, stiffness, u, mask, *, tol=1e-5, max_iter=500, max_sweeps=8,
-              t0=None, log=None):
+              t0=None, log=None, sweep_tol=None):
         mask = mask.copy()
         t = np.zeros_like(u) if t0 is None else t0
-        final = False
+        final, sweeps, iterations = loose is None, 0, 0
         for _ in range(3 * max_sweeps):
             if not mask.any():
-                return np.zeros_like(u)
+                break
+            sweeps += 1
             m = mask[..., None]
             b = np.where(m, u, 0.0)
             t = np.where(m, t, 0.0)
@@ -189,9 +193,8 @@ def _mixed_solve_loose(loose: float):
             z = np.where(m, stiffness(r), 0.0)
             p, rz, bn = z.copy(), F._dot(r, z), F._norm(b) or 1.0
             stop = (tol if final else loose) * bn
-            for _ in range(max_iter):
-                if F._norm(r) < stop:
-                    break
+            while F._norm(r) >= stop and iterations < 10 * max_iter:
+                iterations += 1
                 Ap = np.where(m, compliance(p), 0.0)
                 alpha = rz / F._dot(p, Ap)
                 t, r = t + alpha * p, r - alpha * Ap
@@ -207,16 +210,21 @@ def _mixed_solve_loose(loose: float):
                 final = True
                 continue
             mask &= ~tensile
-        return t
+        counts.append((sweeps, iterations))
+        return np.where(mask[..., None], t, 0.0)
     return solve
 
 
-def sweeps_rows(frames: int, start: int, loose: tuple[float, ...] = (1e-3, 1e-2)) -> dict:
-    """Where the default path's force solve spends its work: per frame with contact, the
-    sweeps of the tensile-node rule and the conjugate-gradient iterations of each; then the
-    same heights solved along another path of the same rule (every sweep but the last
-    stopped at a looser residual, :func:`_mixed_solve_loose`), and how far the maps and
-    totals move from the default's."""
+def sweeps_rows(frames: int, start: int) -> dict:
+    """Where the default path's force solve spends its work, and its answer against other
+    solves of the same footprint problem, on the same heights: per frame with contact,
+    the default's sweeps (pixels dropped, taken back) and conjugate-gradient iterations;
+    then the maps and totals of (1) every sweep to the solve's own 1e-5, (2) the rule
+    before (pulling pixels dropped, never taken back, every sweep to 1e-5) and (3) that
+    rule along another path (sweeps before the last to 1e-3 or 1e-2), each against the
+    default's or the line it departs from."""
+    from functools import partial
+
     from tactilevision.fem import _forces as F
 
     s = read_session(SESSION)
@@ -227,30 +235,48 @@ def sweeps_rows(frames: int, start: int, loose: tuple[float, ...] = (1e-3, 1e-2)
     heights = [recon(s.frame(i)) for i in range(start, min(start + frames, s.n_frames))]
     est = ForceEstimator(cal.shape, s.config.mm_per_px, **kw)
     est._op.solve_log = log = []
-    ref = [est(h) for h in heights]
-    sweeps = [len(x) for x in log]
-    iters = [it for x in log for it, _ in x]
-    per_solve = [sum(it for it, _ in x) for x in log]
-    first = [x[0][1] for x in log]
-    moved = []
+    default = [est(h) for h in heights]
     solve = F._mixed_solve
-    try:
-        for lo in loose:
-            F._mixed_solve = _mixed_solve_loose(lo)
+
+    def apart(out, against) -> tuple[float, float, float, int, int]:
+        maps, totals = [], []
+        for fm, r in zip(out, against, strict=True):
+            if float(r.total_n[2]) > 1e-3:
+                peak = float(np.abs(r.pressure_kpa).max())
+                maps.append(float(np.abs(fm.pressure_kpa - r.pressure_kpa).max()) / peak)
+                totals.append(abs(float(fm.total_n[2]) / float(r.total_n[2]) - 1))
+        return (max(maps), float(np.median(maps)), max(totals),
+                int(np.sum(np.array(maps) > 0.01)), len(maps))
+
+    def run(solver, solve_log: list | None = None) -> list:
+        F._mixed_solve = solver
+        try:
             other = ForceEstimator(cal.shape, s.config.mm_per_px, **kw)
-            maps, totals = [], []
-            for h, r in zip(heights, ref, strict=True):
-                fm = other(h)
-                if float(r.total_n[2]) > 1e-3:
-                    peak = float(np.abs(r.pressure_kpa).max())
-                    maps.append(float(np.abs(fm.pressure_kpa - r.pressure_kpa).max()) / peak)
-                    totals.append(abs(float(fm.total_n[2]) / float(r.total_n[2]) - 1))
-            moved.append((lo, max(maps), float(np.median(maps)), max(totals),
-                          int(np.sum(np.array(maps) > 0.01)), len(maps)))
-    finally:
-        F._mixed_solve = solve
-    return {"n": len(heights), "solves": len(log), "sweeps": sweeps, "iters": iters,
-            "per_solve": per_solve, "first": first, "moved": moved}
+            other._op.solve_log = solve_log
+            return [other(h) for h in heights]
+        finally:
+            F._mixed_solve = solve
+
+    rows = []
+    tight_log: list = []
+    tight = run(partial(solve, sweep_tol=1e-5), tight_log)
+    rows.append(("every sweep to 1e-5", "the default", *apart(tight, default),
+                 float(np.median([sum(x[0] for x in sw) for sw in tight_log]))))
+    counts: list = []
+    before = run(_mixed_solve_greedy(None, counts))
+    rows.append(("the rule before: pulling pixels dropped, never taken back, every sweep "
+                 "to 1e-5", "the default", *apart(before, default),
+                 float(np.median([n for _, n in counts]))))
+    for lo in (1e-3, 1e-2):
+        counts = []
+        out = run(_mixed_solve_greedy(lo, counts))
+        rows.append((f"the rule before, sweeps before the last to {lo:g}", "the rule before",
+                     *apart(out, before), float(np.median([n for _, n in counts]))))
+    return {"n": len(heights), "solves": len(log),
+            "sweeps": [len(x) for x in log], "iters": [x[0] for sw in log for x in sw],
+            "per_solve": [sum(x[0] for x in sw) for sw in log],
+            "first": [sw[0][1] for sw in log], "taken": [sum(x[2] for x in sw) for sw in log],
+            "rows": rows}
 
 
 def sweeps(frames: int, start: int) -> None:
@@ -258,17 +284,19 @@ def sweeps(frames: int, start: int) -> None:
     r = sweeps_rows(frames, start)
     print(f"Command: python benchmarks/bench_forces_default.py --sweeps --frames {frames} "
           f"--start {start}\n{r['n']} consecutive frames, {r['solves']} with a footprint\n")
-    print(f"sweeps per solve: median {np.median(r['sweeps']):.0f} ({min(r['sweeps'])} to "
-          f"{max(r['sweeps'])}); conjugate-gradient iterations per sweep: median "
-          f"{np.median(r['iters']):.0f} ({min(r['iters'])} to {max(r['iters'])}); per solve: "
-          f"median {np.median(r['per_solve']):.0f} ({min(r['per_solve'])} to "
-          f"{max(r['per_solve'])}); tensile pixels dropped by the first sweep: "
-          f"{min(r['first'])} to {max(r['first'])}\n")
-    print("| sweeps before the last stopped at | map moved: largest, median (of its peak) | "
-          "frames moved over 1 % | total moved: largest |")
-    print("|---|---|---|---|")
-    for lo, mx, med, tot, over, n in r["moved"]:
-        print(f"| {lo:g} | {mx:.1%}, {med:.2%} | {over} of {n} | {tot:.1e} |")
+    print(f"the default solve: sweeps per frame median {np.median(r['sweeps']):.0f} "
+          f"({min(r['sweeps'])} to {max(r['sweeps'])}); conjugate-gradient iterations per "
+          f"sweep median {np.median(r['iters']):.0f} ({min(r['iters'])} to "
+          f"{max(r['iters'])}), per frame median {np.median(r['per_solve']):.0f} "
+          f"({min(r['per_solve'])} to {max(r['per_solve'])}); pixels dropped by the first "
+          f"sweep {min(r['first'])} to {max(r['first'])}; taken back per frame "
+          f"{min(r['taken'])} to {max(r['taken'])}\n")
+    print("| solve | against | map apart: largest, median (of its peak) | frames apart by "
+          "over 1 % of the peak | total apart: largest | iterations a frame, median |")
+    print("|---|---|---|---|---|---|")
+    for label, against, mx, med, tot, over, n, it in r["rows"]:
+        print(f"| {label} | {against} | {mx:.2%}, {med:.2%} | {over} of {n} | {tot:.1e} | "
+              f"{it:.0f} |")
 
 
 def rate(frames: int, start: int, before: int) -> None:

@@ -139,8 +139,9 @@ def test_masked_cg_solves_separate_regions_each_on_its_own_box():
 def test_the_solve_log_counts_the_tensile_pixels_each_sweep_drops():
     """A flat punch's face inside a footprint that also takes in a shallow ring around
     it (just above the threshold, where the face's pressure would push the gel deeper):
-    held there the ring pulls, so sweeps drop it; the pixels the log says were dropped are
-    the footprint less the contact the map keeps, and the last sweep drops none."""
+    held there the ring pulls, so sweeps drop it; the pixels the log says were dropped, less
+    those taken back, are the footprint less the contact the map keeps, and the last sweep
+    changes nothing."""
     est = ForceEstimator((60, 60), 0.05, thickness_mm=3.0, E_mpa=0.2, nu=0.48,
                          contact="footprint", threshold_mm=0.01)
     yy, xx = np.mgrid[:60, :60]
@@ -149,7 +150,30 @@ def test_the_solve_log_counts_the_tensile_pixels_each_sweep_drops():
     est._op.solve_log = log = []
     fm = est(h)
     assert len(log) == 1 and len(log[0]) >= 2
-    dropped = sum(n for _, n in log[0])
-    assert log[0][-1][1] == 0 and dropped > 0
-    assert dropped == int((h > 0.01).sum()) - int(fm.contact.sum())
-    assert all(it >= 1 for it, _ in log[0][:-1])
+    dropped = sum(d for _, d, _ in log[0])
+    taken = sum(b for _, _, b in log[0])
+    assert log[0][-1][1:] == (0, 0) and dropped > 0
+    assert dropped - taken == int((h > 0.01).sum()) - int(fm.contact.sum())
+    assert all(it >= 1 for it, _, _ in log[0][:-1])
+
+
+def test_the_answer_does_not_depend_on_the_frame_before():
+    """The footprint problem has one answer (the Signorini conditions): a deep press solved
+    after a shallow one (its smaller contact the first guess, so the solve must take
+    pixels back) equals the same press solved cold, and both keep the contact where the
+    pressure pushes and the model's surface off the rest."""
+    kw = dict(thickness_mm=3.0, E_mpa=0.2, nu=0.48, contact="footprint", threshold_mm=0.01)
+    yy, xx = np.mgrid[:80, :80]
+    r2 = ((yy - 40.0) ** 2 + (xx - 40.0) ** 2) * 0.05**2
+    shallow = np.maximum(0.03 - r2 / (2 * 4.0), 0).astype(np.float32)
+    deep = np.maximum(0.12 - r2 / (2 * 4.0), 0).astype(np.float32)
+    warm = ForceEstimator((80, 80), 0.05, **kw)
+    warm(shallow)
+    warm._op.solve_log = log = []
+    after = warm(deep)
+    cold = ForceEstimator((80, 80), 0.05, **kw)(deep)
+    assert sum(b for _, _, b in log[0]) > 0                  # pixels were taken back
+    peak = float(cold.pressure_kpa.max())
+    assert np.abs(after.pressure_kpa - cold.pressure_kpa).max() <= 1e-3 * peak
+    assert float(after.total_n[2]) == pytest.approx(float(cold.total_n[2]), rel=1e-4)
+    assert np.count_nonzero(after.contact != cold.contact) <= 4
