@@ -1,7 +1,7 @@
 """``batch`` on N local workers against one ``reconstruct`` / ``forces`` process, same video.
 
     python benchmarks/bench_batch_speedup.py [--frames 1200] [--workers 2]
-        [--kinds reconstruct forces] [--chunk-frames 32]
+        [--kinds reconstruct forces] [--chunk-frames 32] [--repeats 1]
 
 A 640 x 480 MJPG video of ``--frames`` frames is written from the real GelSight ball
 presses of ``sample_frames/gelsight_ball`` (shifted a pixel a frame, a third of them
@@ -74,6 +74,51 @@ def timed(cmd: list[str]) -> tuple[float, float]:
     return seconds, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
 
 
+def speedup_rows(frames: int = 1200, workers: int = 2, chunk_frames: int = 32,
+                 kinds: tuple[str, ...] = ("reconstruct", "forces"), repeats: int = 1,
+                 log=print) -> dict:
+    """Each kind's one process and batch, timed as a user runs them, `repeats` times in
+    turn: ``{"rows": [{"kind", "one_s", "batch_s", "ratio", "one_cpu_s", "batch_cpu_s",
+    "bound"}], "frames", "workers", "cores", "video_mib"}``."""
+    work = Path(tempfile.mkdtemp(prefix="bench_batch_speedup_"))
+    py = [sys.executable, "-m", "tactilevision"]
+    rows = []
+    try:
+        video = make_video(work, frames)
+        mib = video.stat().st_size / 2**20
+        log(f"machine: {os.cpu_count()} cores; video {frames} frames 640 x 480 MJPG "
+            f"({mib:.0f} MiB)")
+        # the network's table into the disk cache: neither timed run tabulates it
+        timed([*py, "reconstruct", str(BALL / "frames"), "--sensor", "gelsight", "--out",
+               str(work / "warm"), "--no-progress"])
+        cores = min(workers, os.cpu_count() or 1)
+        for r in range(repeats):
+            for kind in kinds:
+                extra = MATERIAL if kind == "forces" else []
+                one, one_cpu = timed([*py, kind, str(video), "--sensor", "gelsight", "--out",
+                                      str(work / f"{kind}_one_{r}"), "--no-progress", *extra])
+                many, many_cpu = timed([*py, "batch", kind, str(video), "--sensor",
+                                        "gelsight", "--out", str(work / f"{kind}_batch_{r}"),
+                                        "--workers", str(workers), "--chunk-frames",
+                                        str(chunk_frames), "--no-progress", *extra])
+                # the batch's own work bounds it: on `cores` cores it cannot finish before
+                # many_cpu / cores seconds, however well the frames are spread
+                row = {"kind": kind, "one_s": one, "batch_s": many, "ratio": one / many,
+                       "one_cpu_s": one_cpu, "batch_cpu_s": many_cpu,
+                       "bound": cores * one / many_cpu}
+                rows.append(row)
+                log(f"{kind}: one process {one:.1f} s ({frames / one:.1f} frames/s); batch "
+                    f"on {workers} workers {many:.1f} s ({frames / many:.1f} frames/s): "
+                    f"{one / many:.2f} x one process (target {0.8 * workers:.1f})")
+                log(f"  CPU (user + system): one process {one_cpu:.1f} s, batch "
+                    f"{many_cpu:.1f} s ({many_cpu / one_cpu:.2f} x); on {cores} cores the "
+                    f"batch can be at most {row['bound']:.2f} x one process")
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
+    return {"rows": rows, "frames": frames, "workers": workers, "cores": cores,
+            "video_mib": mib}
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--frames", type=int, default=1200)
@@ -81,36 +126,11 @@ def main() -> int:
     ap.add_argument("--chunk-frames", type=int, default=32)
     ap.add_argument("--kinds", nargs="+", default=["reconstruct", "forces"],
                     choices=("reconstruct", "forces"))
+    ap.add_argument("--repeats", type=int, default=1,
+                    help="run each kind's pair this many times, in turn")
     args = ap.parse_args()
-    work = Path(tempfile.mkdtemp(prefix="bench_batch_speedup_"))
-    py = [sys.executable, "-m", "tactilevision"]
-    try:
-        video = make_video(work, args.frames)
-        print(f"machine: {os.cpu_count()} cores; video {args.frames} frames 640 x 480 MJPG "
-              f"({video.stat().st_size / 2**20:.0f} MiB)")
-        # the network's table into the disk cache: neither timed run tabulates it
-        timed([*py, "reconstruct", str(BALL / "frames"), "--sensor", "gelsight", "--out",
-               str(work / "warm"), "--no-progress"])
-        for kind in args.kinds:
-            extra = MATERIAL if kind == "forces" else []
-            one, one_cpu = timed([*py, kind, str(video), "--sensor", "gelsight", "--out",
-                                  str(work / f"{kind}_one"), "--no-progress", *extra])
-            many, many_cpu = timed([*py, "batch", kind, str(video), "--sensor", "gelsight",
-                                    "--out", str(work / f"{kind}_batch"), "--workers",
-                                    str(args.workers), "--chunk-frames",
-                                    str(args.chunk_frames), "--no-progress", *extra])
-            cores = min(args.workers, os.cpu_count() or 1)
-            print(f"{kind}: one process {one:.1f} s ({args.frames / one:.1f} frames/s); "
-                  f"batch on {args.workers} workers {many:.1f} s ({args.frames / many:.1f} "
-                  f"frames/s): {one / many:.2f} x one process (target "
-                  f"{0.8 * args.workers:.1f})")
-            # the batch's own work bounds it: on `cores` cores it cannot finish before
-            # many_cpu / cores seconds, however well the frames are spread
-            print(f"  CPU (user + system): one process {one_cpu:.1f} s, batch {many_cpu:.1f} s "
-                  f"({many_cpu / one_cpu:.2f} x); on {cores} cores the batch can be at most "
-                  f"{cores * one / many_cpu:.2f} x one process")
-    finally:
-        shutil.rmtree(work, ignore_errors=True)
+    speedup_rows(args.frames, args.workers, args.chunk_frames, tuple(args.kinds),
+                 args.repeats)
     return 0
 
 

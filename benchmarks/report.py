@@ -835,6 +835,41 @@ def _forces_default(quick: bool) -> Result:
 
 
 @subject(
+    "batch_speedup", "Batch: two local workers against one process",
+    """`tactilevision batch reconstruct` and `batch forces` on 2 local workers against one
+    `reconstruct` or `forces` process over the same 640 x 480 MJPG video of 1200 frames
+    (the real GelSight presses of `sample_frames/gelsight_ball`, shifted a pixel a frame, a
+    third of them the reference), each command its own process as a user runs it, start-up
+    included, the shipped GelSight calibration and the default options (forces: E 0.2 MPa,
+    nu 0.48, a 3 mm gel); each pair twice, the kinds in turn. Beside each, the CPU
+    seconds (user + system) each run used, the batch's workers included: on 2 cores the
+    batch cannot finish before half of its CPU seconds, which bounds its ratio. --quick:
+    300 frames, once.""",
+    ["python benchmarks/bench_batch_speedup.py --frames 1200 --repeats 2"])
+def _batch_speedup(quick: bool) -> Result:
+    import bench_batch_speedup as b
+    r = b.speedup_rows(300 if quick else 1200, 2, 32, ("reconstruct", "forces"),
+                       1 if quick else 2, log=lambda *_: None)
+    rows = [[f"`{x['kind']}`", f"{x['one_s']:.1f}", f"{x['batch_s']:.1f}",
+             f"{x['ratio']:.2f}", f"{x['one_cpu_s']:.1f}", f"{x['batch_cpu_s']:.1f}",
+             f"{x['bound']:.2f}"] for x in r["rows"]]
+    summary = []
+    for kind in ("reconstruct", "forces"):
+        ratios = [x["ratio"] for x in r["rows"] if x["kind"] == kind]
+        summary.append(f"{kind} {min(ratios):.2f} to {max(ratios):.2f}")
+    return Result([Table("Batch over one process",
+                         ["kind", "one process (s)", "batch, 2 workers (s)",
+                          "batch / one process", "CPU s, one process", "CPU s, batch",
+                          "at most, from CPU s"], rows,
+                         note=f"{r['frames']} frames ({r['video_mib']:.0f} MiB), "
+                              f"{r['workers']} workers on {r['cores']} cores. The batch "
+                              f"over one process: {'; '.join(summary)} (the issue's "
+                              "target: 1.6). The last column is 2 x the one process's wall "
+                              "time over the batch's CPU seconds: what the batch's own work "
+                              "allows on 2 cores.")])
+
+
+@subject(
     "long_checks", "The long checks: the suite's slow tests",
     """The checks of about 3 s or more that the README's test command leaves out (the `slow`
     mark: end-to-end calibrations of rendered sessions, trained networks, sweeps over
