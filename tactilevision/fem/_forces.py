@@ -571,7 +571,7 @@ def _mixed_solve(compliance, stiffness, u: np.ndarray, mask: np.ndarray, *,
     frames (``benchmarks/bench_forces_default.py --sweeps``) 14 iterations a
     frame instead of 20 with every sweep at 1e-5, the maps within 0.26 % of
     their peak; the rule before this one (pulling pixels dropped, never taken
-    back, every sweep to 1e-5) read within 0.32 % of this answer in 23.
+    back, every sweep to 1e-5) read within 0.31 % of this answer in 23.
     `tol` 1e-5 moves the totals of the sample session's punch presses by under
     3e-6 N against 1e-8. `t0`, u's shape: the first guess (a previous frame's
     traction), its pushing pixels the first active set, used while its
