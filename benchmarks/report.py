@@ -745,6 +745,41 @@ def _sphere_closed_forms(quick: bool) -> Result:
     ])
 
 
+@subject(
+    "forces_closed_forms", "Forces: the spectral model against an FEM and Hertz",
+    """`tactilevision.fem.ForceEstimator` (spectral, the command's default model) against
+    answers no code of its own produced: a frictionless flat punch (a = 2.5 mm, h = 3 mm,
+    nu = 0.45, 0.05 mm pixels) against the axisymmetric P2/P1 FEM's punch reactions (the
+    total, and the share of the force inside rho a), and that FEM's whole surface field fed
+    through 'field'; Hertz's sphere (R = 5 mm, 0.08 mm deep, nu = 0.45, 0.04 mm pixels) on
+    layers 10 and 40 mm thick, its total over Hertz's (a finite layer is stiffer than the
+    half-space, less so the thicker it is) and the rms of its pressure's departure from
+    the ellipse scaled to that total.""",
+    ["python benchmarks/bench_forces_accuracy.py"])
+def _forces_closed_forms(quick: bool) -> Result:
+    import bench_forces_accuracy as b
+    p = b.punch_rows()
+    P = p["P_fem"]
+    punch = [["total, 'footprint'", f"{p['P_footprint']:.5f}", f"{P:.5f}",
+              _pct(p["P_footprint"] / P - 1)],
+             ["total, the FEM's surface through 'field'", f"{p['P_field']:.5f}", f"{P:.5f}",
+              _pct(p["P_field"] / P - 1)]]
+    punch += [[f"share of the force inside {rho:g} a", f"{sp:.4f}", f"{fem:.4f}",
+               f"{100 * (sp - fem):+.2f} points"] for rho, sp, fem in p["inside"]]
+    hertz = [[f"{h:g}", f"{a:.3f}", f"{ratio:.4f}", f"{100 * rms:.2f} %"]
+             for h, a, ratio, rms in b.hertz_rows()]
+    return Result([
+        Table("A flat punch against the axisymmetric FEM",
+              ["quantity", "spectral", "FEM", "spectral - FEM"], punch,
+              note=f"'field' on the FEM's surface: the largest |pressure| off the footprint "
+                   f"{p['off_footprint']:.1%} of the mean contact pressure."),
+        Table("Hertz's sphere on a layer",
+              ["h (mm)", "a (mm)", "total / Hertz", "pressure's shape: rms off the ellipse, "
+               "of p0"], hertz,
+              note="Hertz's total is the half-space's; the layer's surplus falls as h grows."),
+    ])
+
+
 #: The forces command's faster choices the report measures beside its default
 #: (``bench_forces_default.VARIANTS``).
 FASTER = ("fem", "far_field", "far_field_fem")
