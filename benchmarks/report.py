@@ -760,9 +760,9 @@ def _forces_closed_forms(quick: bool) -> Result:
     import bench_forces_accuracy as b
     p = b.punch_rows()
     P = p["P_fem"]
-    punch = [["total, 'footprint'", f"{p['P_footprint']:.5f}", f"{P:.5f}",
+    punch = [["total, 'footprint' (N)", f"{p['P_footprint']:.5f}", f"{P:.5f}",
               _pct(p["P_footprint"] / P - 1)],
-             ["total, the FEM's surface through 'field'", f"{p['P_field']:.5f}", f"{P:.5f}",
+             ["total, the FEM's surface through 'field' (N)", f"{p['P_field']:.5f}", f"{P:.5f}",
               _pct(p["P_field"] / P - 1)]]
     punch += [[f"share of the force inside {rho:g} a", f"{sp:.4f}", f"{fem:.4f}",
                f"{100 * (sp - fem):+.2f} points"] for rho, sp, fem in p["inside"]]
