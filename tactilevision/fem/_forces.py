@@ -43,9 +43,9 @@ C = K^-1 computed once (a small dense solve per frame). u_m is the hat-weighted
 mean height over the mask pixels alone, and S holds springs on the rim nodes: a
 node whose hat has the share f of the mask is tied to u_m by a spring of
 stiffness ``1.5 sqrt(f) / (1 - f)`` times its own diagonal stiffness (free
-at f = 0, prescribed at f = 1; sqrt(f): a punch's stiffness grows as the square root
-of its area). On the default grid (0.88 mm nodes at 427 x 320, 0.0806 mm/px, h
-3 mm, nu 0.48) a 2.5 mm flat punch reads 0.969 to 0.979 of Hayes (1972) over
+at f = 0, prescribed at f = 1; sqrt(f): a punch's stiffness grows as the square
+root of its area). On the default grid (0.88 mm nodes at 427 x 320, 0.0806
+mm/px, h 3 mm, nu 0.48) a 2.5 mm flat punch reads 0.969 to 0.979 of Hayes (1972) over
 three positions, 1.5 mm and 4 mm punches 0.959 to 0.984, rigid spheres 1.009 to
 1.039 of the spectral method (``tests/test_fem_forces_grid.py``). The rule
 before (every such node prescribed its tributary mean over all pixels, the zero
@@ -583,7 +583,7 @@ def _mixed_solve(compliance, stiffness, u: np.ndarray, mask: np.ndarray, *,
     if log is not None:
         log.append(sweeps)
     active = mask.copy()
-    t = np.zeros_like(u) if t0 is None else np.where(mask[..., None], t0, 0.0).astype(u.dtype)
+    t = np.zeros_like(u) if t0 is None else t0.astype(u.dtype, copy=False)
     if t0 is not None and (mask & (t0[..., -1] > 0)).any():
         active = mask & (t0[..., -1] > 0)           # the previous frame's contact first
     # a pixel returns where the model's surface lies above the measured height by more
@@ -613,7 +613,7 @@ def _mixed_solve(compliance, stiffness, u: np.ndarray, mask: np.ndarray, *,
             Ap = np.where(m, Cp, 0.0)
             alpha = rz / _dot(p, Ap)
             t = t + alpha * p
-            Ct = Ct + alpha * Cp
+            Ct += alpha * Cp                        # a fresh array: compliance's or zeros
             r = r - alpha * Ap
             if _norm(r) < stop:
                 break
