@@ -748,7 +748,9 @@ def _sphere_closed_forms(quick: bool) -> Result:
 @subject(
     "forces_closed_forms", "Forces: the spectral model against an FEM and Hertz",
     """`tactilevision.fem.ForceEstimator` (spectral, the command's default model) against
-    answers no code of its own produced: a frictionless flat punch (a = 2.5 mm, h = 3 mm,
+    a model it does not share (the project's axisymmetric FEM, a different discretisation
+    of the same linear elasticity, not an independent code) and a closed form (Hertz): a
+    frictionless flat punch (a = 2.5 mm, h = 3 mm,
     nu = 0.45, 0.05 mm pixels) against the axisymmetric P2/P1 FEM's punch reactions (the
     total, and the share of the force inside rho a), and that FEM's whole surface field fed
     through 'field'; Hertz's sphere (R = 5 mm, 0.08 mm deep, nu = 0.45, 0.04 mm pixels) on
