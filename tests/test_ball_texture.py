@@ -35,11 +35,14 @@ from tactilevision.optics import (
     MIN_RIM_IN_FRAME,
     PAD_SHARE,
     PROFILE_SHOULDER,
+    STEADY_RIM_CONTRAST,
+    STEADY_RIM_SHARE,
     colour_edge_circle,
     drift_free_change,
     find_contact_circle,
     profile_radius,
     rim_drop,
+    rim_fall_share,
     rim_in_frame,
     sectors_beyond_rim,
 )
@@ -276,6 +279,24 @@ def test_a_large_dimpled_contact_is_read_at_its_rim_not_inside(sim, reference):
         c.radius_px, a / S, d.radius_bias_px, d.radius_sd_px)
 
 
+def test_a_faint_rim_that_falls_on_every_ray_is_trusted(sim, reference):
+    """A knurled contact 73 px in radius under a drift of the light (seed 2021 of
+    ``benchmarks/bench_ball_texture.py``): its rim stands 3.9 sigmas of the pad's noise up,
+    under :data:`MIN_RIM_CONTRAST`, and it was refused though its circle was 2.6 px from the
+    truth. The change falls past its rim on nearly every ray, as a contact's edge does and a
+    circle on a texture's edge or the background does not. Right answer: trusted by
+    :data:`STEADY_RIM_CONTRAST` and :data:`STEADY_RIM_SHARE`, the radius within its stated
+    bound."""
+    a, R, centre = 2.1521, 5.2286, (82.49, 98.23)
+    frame = render_press(sim, reference, kind="knurl", a=a, R=R, centre=centre,
+                         gain=(0.941, 0.960, 0.958), offset=(-9.96, -5.51, 11.32), seed=2021)
+    c = find_contact_circle(frame, reference)
+    assert c.trusted, c.problems
+    assert STEADY_RIM_CONTRAST <= c.rim_contrast < MIN_RIM_CONTRAST
+    assert c.rim_fall_share >= STEADY_RIM_SHARE
+    assert abs(c.radius_px - a / S) <= stated_bound_px(c, R, 2 * R), (c.radius_px, a / S)
+
+
 def test_profile_radius_reads_a_broad_peak_at_its_knee():
     """A closed-form radial profile: the change rises to a broad peak of 12 grey levels at
     90 px, eases to 11.4 at 110 px, then falls to 2 by 120 px (the rim at the knee, 110 px).
@@ -306,6 +327,23 @@ def test_rim_drop_on_a_disc():
                                                                    rel=1e-4)
     assert rim_drop(change, (160.0, 120.0), 30.0) == pytest.approx(0.0, abs=1e-3)
     assert np.isnan(rim_drop(change, (-200.0, 120.0), 20.0))
+
+
+def test_rim_fall_share_on_a_disc_half_a_disc_and_noise():
+    """The share of rays on which the change falls past a rim: 1 on a disc's rim; 1/2 on a
+    circle whose change fills only half of it (the other half neither falls nor rises); near
+    1/2 on a circle drawn on noise alone (360 rays, 1/2 +- 0.08 at 3 sigmas of a binomial
+    share, the rays' samples being correlated); NaN for a circle off the image."""
+    yy, xx = np.indices((240, 320))
+    r = np.hypot(xx - 160.0, yy - 120.0)
+    level = np.clip((64.0 - r) / 2.0, 0.0, 1.0) * 30.0
+    disc = np.repeat(level[..., None], 3, axis=2).astype(np.float32)
+    assert rim_fall_share(disc, (160.0, 120.0), 60.0) == 1.0
+    half = np.where((xx < 160)[..., None], disc, 0.0).astype(np.float32)
+    assert rim_fall_share(half, (160.0, 120.0), 60.0) == pytest.approx(0.5, abs=0.01)
+    noise = np.random.default_rng(3).normal(0.0, 2.0, (240, 320, 3)).astype(np.float32)
+    assert rim_fall_share(noise, (160.0, 120.0), 60.0) == pytest.approx(0.5, abs=0.08)
+    assert np.isnan(rim_fall_share(disc, (-200.0, 120.0), 20.0))
 
 
 def test_sectors_beyond_rim_on_a_disc_and_inside_it():
