@@ -31,6 +31,7 @@ from tactilevision import InputError
 from tactilevision.mechanics import Sphere
 from tactilevision.optics import (
     MAX_SECTORS_BEYOND_RIM,
+    MAX_SECTORS_BEYOND_UNSTEADY_RIM,
     MIN_RIM_CONTRAST,
     MIN_RIM_IN_FRAME,
     PAD_SHARE,
@@ -295,6 +296,26 @@ def test_a_faint_rim_that_falls_on_every_ray_is_trusted(sim, reference):
     assert STEADY_RIM_CONTRAST <= c.rim_contrast < MIN_RIM_CONTRAST
     assert c.rim_fall_share >= STEADY_RIM_SHARE
     assert abs(c.radius_px - a / S) <= stated_bound_px(c, R, 2 * R), (c.radius_px, a / S)
+
+
+def test_a_circle_inside_a_cut_contact_is_refused_by_its_sectors_and_rays(sim, reference):
+    """A printed contact 72 px in radius whose centre lies near the image's corner, 31 % of
+    its rim in view (seed 2714 of ``benchmarks/bench_ball_texture.py``, under a drift): a
+    circle 39 px in radius, inside the contact and wholly in the image, stood 6.6 sigmas up
+    and was trusted though 45 % small. The change does not fall past it in half of its
+    sectors, nor on a fifth of its rays. Right answer: refused
+    (:data:`MAX_SECTORS_BEYOND_UNSTEADY_RIM`), never read as a radius."""
+    a, R = 2.118128612310012, 4.603590692500594
+    centre = (20.17612758874508, 234.0862845658034)
+    gain = (1.0765355076155967, 1.0748915306601017, 1.1178164021266013)
+    offset = (6.211202877445881, 0.20126552846652146, 2.494725447215851)
+    frame = render_press(sim, reference, kind="printed", a=a, R=R, centre=centre, gain=gain,
+                         offset=offset, seed=2714)
+    c = find_contact_circle(frame, reference)
+    assert not c.trusted
+    assert c.rim_fall_share < STEADY_RIM_SHARE
+    assert MAX_SECTORS_BEYOND_UNSTEADY_RIM < c.sectors_beyond_rim <= MAX_SECTORS_BEYOND_RIM
+    assert any("does not fall past its rim" in p for p in c.problems), c.problems
 
 
 def test_profile_radius_reads_a_broad_peak_at_its_knee():

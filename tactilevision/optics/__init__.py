@@ -32,6 +32,7 @@ from ._ball import (
 )
 from ._ball_contact import (
     MAX_SECTORS_BEYOND_RIM,
+    MAX_SECTORS_BEYOND_UNSTEADY_RIM,
     MIN_RIM_CONTRAST,
     MIN_RIM_IN_FRAME,
     PAD_SHARE,
@@ -103,6 +104,7 @@ __all__ = [
     "ENGINE_FOLDS",
     "KERNELS",
     "MAX_SECTORS_BEYOND_RIM",
+    "MAX_SECTORS_BEYOND_UNSTEADY_RIM",
     "MIN_MARGIN_PRESSES",
     "MIN_NETWORK_PRESSES",
     "MIN_RIM_CONTRAST",

@@ -54,9 +54,9 @@ from scipy.ndimage import gaussian_filter1d, map_coordinates, maximum_filter
 from .._checks import InputError, check_array
 from ._circles import fit_circle, locate_contact_edge
 
-__all__ = ["MAX_SECTORS_BEYOND_RIM", "MIN_RIM_CONTRAST", "MIN_RIM_IN_FRAME", "PAD_SHARE",
-           "PROFILE_AGREEMENT", "PROFILE_RULES", "PROFILE_SHOULDER", "STEADY_RIM_CONTRAST",
-           "STEADY_RIM_SHARE",
+__all__ = ["MAX_SECTORS_BEYOND_RIM", "MAX_SECTORS_BEYOND_UNSTEADY_RIM", "MIN_RIM_CONTRAST",
+           "MIN_RIM_IN_FRAME", "PAD_SHARE", "PROFILE_AGREEMENT", "PROFILE_RULES",
+           "PROFILE_SHOULDER", "STEADY_RIM_CONTRAST", "STEADY_RIM_SHARE",
            "ContactCircle",
            "colour_edge_circle", "drift_free_change", "find_contact_circle", "profile_radius",
            "rim_drop", "rim_fall_share", "rim_in_frame", "sectors_beyond_rim"]
@@ -113,6 +113,17 @@ PAD_SHARE = 0.2
 MAX_SECTORS_BEYOND_RIM = 0.5
 #: See :data:`MAX_SECTORS_BEYOND_RIM`.
 BEYOND_RIM_LEVEL = 0.8
+#: The largest share of sectors (:data:`MAX_SECTORS_BEYOND_RIM`) where the colour change
+#: does not fall past a rim that falls on fewer than :data:`STEADY_RIM_SHARE` of its rays:
+#: the two signs of a circle inside a larger contact together (with 12 sectors: half of
+#: them or more). On the renders of ``tests/test_ball_texture.py``, seeds 2000 to 2439 and
+#: 2700 to 2739 (seen when it was set), two circles inside contacts the image cuts (seeds
+#: 2304 and 2714, 35 and 45 % small) were trusted at 0.50 of their sectors with the change
+#: falling on 79 and 81 % of their rays; the rule refuses them, and one circle 4 % small
+#: (seed 2728, 0.50 and 87 %). On the 184 real presses of
+#: ``benchmarks/bench_ball_circles_real.py`` the sectors' share is at most 0.42 (one of
+#: ``taxim``'s, its change falling on 82 % of the rays: the margin thin), none refused.
+MAX_SECTORS_BEYOND_UNSTEADY_RIM = 0.45
 
 #: The radial profile's edge and the circle read ray by ray agree when they differ by at
 #: most this many of the profile's bootstrap standard deviations ...
@@ -852,11 +863,16 @@ def find_contact_circle(frame: np.ndarray, reference: np.ndarray, *, min_change:
                         f"change falls past it on {100 * STEADY_RIM_SHARE:.0f} % of the rays: "
                         f"it does on {100 * falls:.0f} %): not a contact's edge")
     beyond = sectors_beyond_rim(fine, centre, radius if np.isfinite(radius) else rc)
-    if beyond > MAX_SECTORS_BEYOND_RIM:
+    steady = falls >= STEADY_RIM_SHARE
+    most = MAX_SECTORS_BEYOND_RIM if steady else MAX_SECTORS_BEYOND_UNSTEADY_RIM
+    if beyond > most:
         problems.append(f"the colour change does not fall past its rim in {100 * beyond:.0f} % "
                         f"of the sectors seen (past the rim it holds {100 * BEYOND_RIM_LEVEL:.0f}"
-                        f" % of its level inside; at most {100 * MAX_SECTORS_BEYOND_RIM:.0f} % "
-                        "allowed): part of a larger contact, whose rim the image cuts, or a "
+                        f" % of its level inside; at most {100 * most:.0f} % allowed"
+                        + ("" if steady else f" where it falls on fewer than "
+                           f"{100 * STEADY_RIM_SHARE:.0f} % of the rays, here "
+                           f"{100 * falls:.0f} %")
+                        + "): part of a larger contact, whose rim the image cuts, or a "
                         "texture's edge, not the contact's")
     return ContactCircle(centre_px=np.asarray(centre, np.float64), radius_px=float(radius),
                          radius_sd_px=float(radius_sd), colour_radius_px=float(rc),
