@@ -1,6 +1,6 @@
 """Identification and false-alarm rates of ``diagnose`` over generated tables.
 
-    python benchmarks/bench_diagnose.py [TABLES_PER_KIND] [JOBS] [KIND,KIND,...]
+    python benchmarks/bench_diagnose.py [TABLES_PER_KIND] [JOBS] [KIND,KIND,...|all] [NULLS]
 
 For each hidden effect of :data:`tactilevision.sim.HIDDEN_EFFECTS` and for
 null tables, TABLES_PER_KIND (default 30) tables with seeds 1000, 1001, ...
@@ -13,7 +13,8 @@ the last rung against the noise floor, E within 5 % (with the hidden effect
 itself when the verdict names an equivalent partner), E inside its 95 %
 interval, E within 5 % among the tables whose interval is itself within
 +-5 % (the data resolve E to 5 %), and time per table. KIND,KIND,... runs those
-kinds only (``null`` for the null tables).
+kinds only (``null`` for the null tables; ``all``, every kind); NULLS null tables in
+place of TABLES_PER_KIND.
 """
 
 from __future__ import annotations
@@ -71,17 +72,56 @@ def one(job: tuple[str | None, int]) -> dict:
             "s": dt}
 
 
+#: The summary's columns (:func:`rows`).
+COLUMNS = ["hidden effect", "tables", "identified", "false alarms", "CV RMSE <= 1.3 x floor",
+           "E within 5 %", "median abs E error", "E in its 95 % interval", "s per table"]
+
+
+def run(n: int, jobs: int = 2, kinds: list[str | None] | None = None,
+        n_null: int | None = None) -> list[dict]:
+    """Diagnose `n` generated tables per kind (seeds 1000, 1001, ...; `n_null` null tables,
+    default `n`) on `jobs` processes: one dict a table (:func:`one`)."""
+    kinds = [None, *HIDDEN_EFFECTS] if kinds is None else kinds
+    work = [(k, 1000 + s) for k in kinds
+            for s in range(n if k is not None or n_null is None else n_null)]
+    with Pool(jobs) as pool:
+        return pool.map(one, work, chunksize=4)
+
+
+def rows(res: list[dict]) -> list[list[object]]:
+    """Per kind, in the order met: the kind ("none (null tables)" for the nulls), tables,
+    identified (for nulls: a null verdict), false alarms (nulls only: a verdict that
+    names something), the CV RMSE within 1.3 noise
+    floors, E within 5 %, the median |E error|, E inside its 95 % interval (these three
+    over the tables identified; the median over all), seconds per table."""
+    out = []
+    for k in dict.fromkeys(x["hidden"] for x in res):
+        r = [x for x in res if x["hidden"] == k]
+        ok = np.array([x["ok"] for x in r])
+        e = np.abs([x["E_err"] for x in r])
+        cv = np.array([x["cv_ratio"] for x in r])
+        cov = np.array([x["covered"] for x in r])
+
+        def pct(v: np.ndarray) -> str:
+            return f"{100 * np.mean(v):.0f} %" if v.size else "-"
+        out.append([("none (null tables)" if k is None else CATALOGUE_NAME.get(k, k)), len(r),
+                    pct(ok), pct(np.array([x["alarm"] for x in r])) if k is None else "-",
+                    pct(cv[ok] <= 1.3),
+                    pct(e[ok] <= 0.05), f"{100 * np.nanmedian(e):.1f} %", pct(cov[ok]),
+                    round(float(np.mean([x["s"] for x in r])), 2)])
+    return out
+
+
 def main() -> None:
     n = int(sys.argv[1]) if len(sys.argv) > 1 else 30
     jobs = int(sys.argv[2]) if len(sys.argv) > 2 else 2
     kinds: list[str | None] = [None, *HIDDEN_EFFECTS]
-    if len(sys.argv) > 3:
+    if len(sys.argv) > 3 and sys.argv[3] != "all":
         kinds = [None if k == "null" else k for k in sys.argv[3].split(",")]
-    work = [(k, 1000 + s) for k in kinds for s in range(n)]
+    n_null = int(sys.argv[4]) if len(sys.argv) > 4 else None
     t0 = time.perf_counter()
-    with Pool(jobs) as pool:
-        res = pool.map(one, work, chunksize=4)
-    print(f"{len(work)} tables, {n} per kind, {time.perf_counter() - t0:.0f} s on {jobs} "
+    res = run(n, jobs, kinds, n_null)
+    print(f"{len(res)} tables, {n} per kind, {time.perf_counter() - t0:.0f} s on {jobs} "
           "processes")
     print(f"{'hidden':26s} {'identified':>10s} {'alarms':>7s} {'cv<=1.3 fl':>10s} "
           f"{'|dE|<=5%':>9s} {'median|dE|':>10s} {'in CI':>6s} {'res.':>5s} {'|dE|<=5% res.':>13s} "
