@@ -493,6 +493,38 @@ def _diagnose_identification(quick: bool) -> Result:
 
 
 @subject(
+    "diagnose_pairs", "Diagnose: two hidden effects at once",
+    """Measurement tables generated as for the identification page
+    (`tactilevision.sim.make_measurement_table`, forces from the finite-strain FEM), each
+    with two hidden effects at once at the generator's default strength: a recovery and a
+    force drift, aging and a spatial non-uniformity, a force offset and a relaxation. Both
+    must be named on `diagnose`'s ladder (a depth and a force offset count as one: no
+    single table tells them apart). 30 tables per pair, seeds from 1000 (3 with --quick),
+    on 2 processes.""",
+    ["python benchmarks/bench_diagnose_power.py --tables 30 --nulls 0 --snr 1 --kinds "
+     "force_drift --pairs"])
+def _diagnose_pairs(quick: bool) -> Result:
+    from multiprocessing import Pool
+
+    import bench_diagnose_power as b
+    n = 3 if quick else 30
+    with Pool(2) as pool:
+        res = pool.map(b.one, [(pair, 1000 + s, None, "gate") for pair in b.PAIRS
+                               for s in range(n)], chunksize=2)
+    rows = []
+    for pair in b.PAIRS:
+        r = [x for x in res if x["hidden"] == pair]
+        e = np.abs([x["E_err"] for x in r])
+        rows.append([pair.replace("+", " + "), len(r), sum(x["ok"] for x in r),
+                     f"{100 * np.mean([x['ok'] for x in r]):.0f} %",
+                     f"{100 * np.nanmedian(e):.1f} %"])
+    return Result([Table("Both effects named", ["hidden effects", "tables", "both named",
+                                                "share", "median abs E error"], rows,
+                         note="E: the final model's fit against the table's truth.")],
+                  summary=f"both named in {sum(x['ok'] for x in res)} of {len(res)} tables.")
+
+
+@subject(
     "ball_taxim", "A ball's depths and E from frames drawn by Taxim's own renderer",
     """Dead weights of a 2 mm ball on a thick gel of E = 1 MPa (no F/T: the force is m g):
     the gel's surface from Sneddon's and Hertz's closed forms, each frame drawn by Taxim's
