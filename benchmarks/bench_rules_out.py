@@ -49,26 +49,25 @@ def _diag(t, columns=None):
                         thickness_mm=t.thickness_mm, radius_mm=t.radius_mm)
 
 
-def _said(seed: int, eff: str, ruled, factor: float, d) -> bool:
+def _said(seed: int, eff: str, ruled, factor: float, d, echo: bool = True) -> bool:
     """Whether `d` names `eff` (its verdict, an equivalent or the offered trend), printed."""
     hit = eff in (d.missing_effect, *d.equivalent_effects, d.offered_effect)
-    print(f"seed {seed}: {eff} ruled out above {ruled.size:.3g} {ruled.unit}; hidden at "
-          f"{factor:g} x: {'named' if hit else 'missed'} (verdict {d.missing_effect}, "
-          f"equivalent {list(d.equivalent_effects)}, offered {d.offered_effect})")
+    if echo:
+        print(f"seed {seed}: {eff} ruled out above {ruled.size:.3g} {ruled.unit}; hidden at "
+              f"{factor:g} x: {'named' if hit else 'missed'} (verdict {d.missing_effect}, "
+              f"equivalent {list(d.equivalent_effects)}, offered {d.offered_effect})")
     return hit
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--seeds", type=int, default=10)
-    ap.add_argument("--factor", type=float, default=1.5)
-    args = ap.parse_args()
-    print(f"machine: {platform.machine()}, python {platform.python_version()}; "
-          f"{args.seeds} seeds, effects at {args.factor:g} x the size ruled out")
+def run(seeds: int, factor: float = 1.5, *, echo: bool = False) -> dict:
+    """Seeds 0 to `seeds` - 1: each null table's verdict and what it rules out, then each
+    effect hidden at `factor` times that size. Returns ``named`` and ``tried`` (per effect),
+    ``null_alarms`` (seeds whose null table named something), and the null diagnoses'
+    times with and without the replay (``took``, ``bare``, s)."""
     named = {k: 0 for k in (*EFFECTS, *COLUMN)}
     tried = {k: 0 for k in (*EFFECTS, *COLUMN)}
-    took, bare = [], []
-    for seed in range(args.seeds):
+    took, bare, alarms = [], [], []
+    for seed in range(seeds):
         null = make_measurement_table(None, seed)
         t0 = time.perf_counter()
         d0 = _diag(null)
@@ -80,13 +79,16 @@ def main() -> None:
                      rules_out=False)
         bare.append(time.perf_counter() - t0)
         if d0.missing_effect or d0.unexplained_covariate:
-            print(f"seed {seed}: the null table named {d0.missing_effect or d0.offered_effect}")
+            alarms.append(seed)
+            if echo:
+                print(f"seed {seed}: the null table named "
+                      f"{d0.missing_effect or d0.offered_effect}")
             continue
         for eff in (*EFFECTS, *COLUMN):
             size = d0.rules_out[eff].size_param
             if not 0 < size < float("inf"):
                 continue
-            x = args.factor * size
+            x = factor * size
             if eff in EFFECTS:
                 hidden, key = EFFECTS[eff]
                 unit = make_measurement_table(hidden, seed).truth[key]
@@ -95,11 +97,22 @@ def main() -> None:
                 c = null.columns
                 d = _diag(null, {**c, "force_n": c["force_n"] * COLUMN[eff](c, x)})
             tried[eff] += 1
-            named[eff] += _said(seed, eff, d0.rules_out[eff], args.factor, d)
+            named[eff] += _said(seed, eff, d0.rules_out[eff], factor, d, echo)
+    return dict(named=named, tried=tried, null_alarms=alarms, took=took, bare=bare)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--seeds", type=int, default=10)
+    ap.add_argument("--factor", type=float, default=1.5)
+    args = ap.parse_args()
+    print(f"machine: {platform.machine()}, python {platform.python_version()}; "
+          f"{args.seeds} seeds, effects at {args.factor:g} x the size ruled out")
+    got = run(args.seeds, args.factor, echo=True)
     for eff in (*EFFECTS, *COLUMN):
-        print(f"{eff}: named in {named[eff]} of {tried[eff]}")
-    med = sorted(took)[len(took) // 2]
-    ref = sorted(bare)[len(bare) // 2]
+        print(f"{eff}: named in {got['named'][eff]} of {got['tried'][eff]}")
+    med = float(np.median(got["took"]))
+    ref = float(np.median(got["bare"]))
     print(f"diagnose of a null table with its replay: median {med:.2f} s; the same tables "
           f"without it (rules_out=False, same run): {ref:.2f} s; ratio {med / ref:.1f}")
 
