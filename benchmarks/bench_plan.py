@@ -91,22 +91,25 @@ def scatter(d: Design, n: int, seed: int) -> tuple[np.ndarray, float]:
     return out, float(np.mean(~np.isfinite(out[:, 1])))
 
 
-def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--sessions", type=int, default=50)
-    ap.add_argument("--seed", type=int, default=0)
-    args = ap.parse_args(argv)
-    print("| a/h | depths x repeats | depth sd (how) | sigma E % plan / MC | sigma nu plan / MC "
-          "| ratio E, nu | not computed | plan s |")
-    print("|---|---|---|---|---|---|---|---|")
-    ratios, t_plan, unidentified, e_only = [], [], [], []
+#: The table's columns (:func:`run`'s ``rows``).
+COLUMNS = ["a/h", "depths x repeats", "depth sd (how)", "sigma E % plan / sessions",
+           "sigma nu plan / sessions", "ratio E, nu", "not computed", "plan s"]
+
+
+def run(sessions: int, seed: int = 0, *, echo: bool = False) -> dict:
+    """Each design of :func:`designs`: `plan`'s sds of E and nu against the scatter of
+    `sessions` drawn sessions fitted as calibrate fits (design k's seed ``seed + k``).
+    Returns ``rows`` (:data:`COLUMNS`), ``ratios`` (plan / sessions, E and nu, designs that
+    identify nu), ``unidentified`` (per design that does not: whether the sessions agree),
+    ``e_only`` (E's ratio where plan still gives one) and ``t_plan`` (s per design)."""
+    rows, ratios, t_plan, unidentified, e_only = [], [], [], [], []
     for k, d in enumerate(designs()):
         t0 = time.perf_counter()
         p = plan(d)
         t_plan.append(time.perf_counter() - t0)
         how = (f"vernier {d.bevel_angle_deg:g} deg" if d.bevel_angle_deg
                else f"mark {d.frame_rate_hz:g} fps")
-        est, lost = scatter(d, args.sessions, args.seed + k)
+        est, lost = scatter(d, sessions, seed + k)
         ok = np.isfinite(est[:, 1])
         sE = np.std(est[ok, 0], ddof=1) if ok.sum() > 2 else np.nan
         snu = np.std(est[ok, 1], ddof=1) if ok.sum() > 2 else np.nan
@@ -119,25 +122,41 @@ def main(argv: list[str] | None = None) -> int:
             rE = p.E_sigma_mpa / sE if np.isfinite(p.E_sigma_mpa) and sE > 0 else np.nan
             if np.isfinite(rE):
                 e_only.append(rE)
-            print(f"| {d.a_over_h:.2f} | {len(d.depths_mm)} x {d.repeats} | {p.depth_std_um:.2f} "
-                  f"um ({how}) | nu not identified; E {p.E_sigma_pct:.2f} / "
-                  f"{100 * sE / d.E_mpa:.2f} | sessions: nu sd {snu:.4f} | E {rE:.2f} | "
-                  f"{100 * lost:.0f} % | {t_plan[-1]:.2f} |", flush=True)
-            continue
-        r = (p.E_sigma_mpa / sE, p.nu_sigma / snu)
-        ratios.append(r)
-        print(f"| {d.a_over_h:.2f} | {len(d.depths_mm)} x {d.repeats} | {p.depth_std_um:.2f} um "
-              f"({how}) | {p.E_sigma_pct:.2f} / {100 * sE / d.E_mpa:.2f} | {p.nu_sigma:.4f} / "
-              f"{snu:.4f} | {r[0]:.2f}, {r[1]:.2f} | {100 * lost:.0f} % | {t_plan[-1]:.2f} |",
-              flush=True)
-    ratios = np.array(ratios)
+            rows.append([f"{d.a_over_h:.2f}", f"{len(d.depths_mm)} x {d.repeats}",
+                         f"{p.depth_std_um:.2f} um ({how})",
+                         f"nu not identified; E {p.E_sigma_pct:.2f} / {100 * sE / d.E_mpa:.2f}",
+                         f"sessions: nu sd {snu:.4f}", f"E {rE:.2f}", f"{100 * lost:.0f} %",
+                         f"{t_plan[-1]:.2f}"])
+        else:
+            r = (p.E_sigma_mpa / sE, p.nu_sigma / snu)
+            ratios.append(r)
+            rows.append([f"{d.a_over_h:.2f}", f"{len(d.depths_mm)} x {d.repeats}",
+                         f"{p.depth_std_um:.2f} um ({how})",
+                         f"{p.E_sigma_pct:.2f} / {100 * sE / d.E_mpa:.2f}",
+                         f"{p.nu_sigma:.4f} / {snu:.4f}", f"{r[0]:.2f}, {r[1]:.2f}",
+                         f"{100 * lost:.0f} %", f"{t_plan[-1]:.2f}"])
+        if echo:
+            print("| " + " | ".join(rows[-1]) + " |", flush=True)
+    return dict(rows=rows, ratios=np.array(ratios), unidentified=unidentified,
+                e_only=np.array(e_only), t_plan=t_plan)
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--sessions", type=int, default=50)
+    ap.add_argument("--seed", type=int, default=0)
+    args = ap.parse_args(argv)
+    print("| " + " | ".join(COLUMNS) + " |")
+    print("|" + "---|" * len(COLUMNS))
+    got = run(args.sessions, args.seed, echo=True)
+    ratios, unidentified, e_only, t_plan = (got["ratios"], got["unidentified"],
+                                            got["e_only"], got["t_plan"])
     within = np.all(np.abs(ratios - 1) <= 0.2, axis=1)
     print(f"\n{within.sum()} of {len(ratios)} designs that identify nu within 20 % on both "
           f"sigmas ({args.sessions} sessions each); ratio plan / MC: E median "
           f"{np.median(ratios[:, 0]):.2f} (range {ratios[:, 0].min():.2f} to "
           f"{ratios[:, 0].max():.2f}), nu median {np.median(ratios[:, 1]):.2f} (range "
           f"{ratios[:, 1].min():.2f} to {ratios[:, 1].max():.2f})")
-    e_only = np.array(e_only)
     print(f"{len(unidentified)} designs where plan says nu is not identified: the sessions "
           f"agree (beta past the table in over 5 % of them, nu pinned, or nu's sd over 0.04) "
           f"on {sum(unidentified)}; E's sigma within "

@@ -555,6 +555,36 @@ def _diagnose_rules_out(quick: bool) -> Result:
 
 
 @subject(
+    "plan_sds", "Plan: predicted sds of E and nu against drawn sessions",
+    """For 50 designs (a/h 0.5 to 1.5; 4, 6 or 10 depths from 0.04 h to 0.19 h; 2, 4 or 6
+    repeats; a mark at 10, 30 or 90 frames/s or a vernier at 3, 5 or 15 degrees; the stage
+    stopping 0 to 50 or 30 to 90 um past w0; E 0.2 MPa, nu 0.45), `plan`'s sds of E and nu
+    against the scatter of 200 sessions drawn with the generator's finite-strain FEM force
+    law and the design's noise, each fitted as `calibrate` fits. Where `plan` says nu is
+    not identified, the sessions agree when beta leaves the table in over 5 % of them, nu
+    is pinned, or nu's sd exceeds 0.04. These check that `plan` propagates its own noise
+    model through the fit, not that the model is right for a given lab. 20 sessions per
+    design with --quick.""",
+    ["python benchmarks/bench_plan.py --sessions 200"])
+def _plan_sds(quick: bool) -> Result:
+    import bench_plan as b
+    got = b.run(20 if quick else 200, 0)
+    ratios, e_only = got["ratios"], got["e_only"]
+    within = int(np.sum(np.all(np.abs(ratios - 1) <= 0.2, axis=1)))
+    return Result([Table("Per design", b.COLUMNS, got["rows"],
+                         note="ratio: plan's sd over the sessions' scatter; not computed: "
+                              "the share of sessions whose beta left the table.")],
+                  summary=f"Where plan says nu is identified: both sds within 20 % of the "
+                          f"sessions' scatter on {within} of {len(ratios)} designs (ratio "
+                          f"median {np.median(ratios[:, 0]):.2f} for E, "
+                          f"{np.median(ratios[:, 1]):.2f} for nu). Where it says nu is not "
+                          f"identified, the sessions agree on {sum(got['unidentified'])} of "
+                          f"{len(got['unidentified'])}; E's sd within 20 % on "
+                          f"{int(np.sum(np.abs(e_only - 1) <= 0.2))} of the {e_only.size} "
+                          "where plan gives one.")
+
+
+@subject(
     "ball_taxim", "A ball's depths and E from frames drawn by Taxim's own renderer",
     """Dead weights of a 2 mm ball on a thick gel of E = 1 MPa (no F/T: the force is m g):
     the gel's surface from Sneddon's and Hertz's closed forms, each frame drawn by Taxim's
