@@ -1120,8 +1120,8 @@ def _optics_gs_sdk(quick: bool) -> Result:
     angles = [[a["name"], f"{min(a['medians']):.2f} to {max(a['medians']):.2f}",
                f"{a['largest']:.3f}", f"{a['mb']:.0f}"] for a in m["angles"]]
     names = list(m["costs"][0]["ms"])
-    costs = [[n, " to ".join(f"{c['ms'][n]:.3f}" for c in m["costs"]),
-              " to ".join(f"{c['ms'][n] / (c['dct'] + c['gather']):.2f}" for c in m["costs"])]
+    costs = [[n, ", ".join(f"{c['ms'][n]:.3f}" for c in m["costs"]),
+              ", ".join(f"{c['ms'][n] / (c['dct'] + c['gather']):.2f}" for c in m["costs"])]
              for n in names]
     refs = "; ".join(f"DCT-II pair {c['dct']:.3f} ms, gather {c['gather']:.3f} ms"
                      for c in m["costs"])
