@@ -1126,10 +1126,11 @@ def _optics_gs_sdk(quick: bool) -> Result:
     refs = "; ".join(f"DCT-II pair {c['dct']:.3f} ms, gather {c['gather']:.3f} ms"
                      for c in m["costs"])
     return Result([
-        Table("Angle to gs_sdk's gradients",
+        Table("Angle to the reference gradients",
               ["engine", "median per press (deg)", "largest at a contact pixel (deg)",
                "table (MB)"], angles,
-              note=f"Presses {', '.join(m['presses'])} at {m['shape'][1]} x {m['shape'][0]}; "
+              note=f"The reference: gs_sdk's own gradients of presses {', '.join(m['presses'])} "
+                   f"at {m['shape'][1]} x {m['shape'][0]}; "
                    f"first-order tables read by {m['kernel']} (kernel 'auto')."),
         Table("Cost per frame", ["engine", "ms per frame, each round",
                                  "x (DCT-II pair + gather), each round"], costs,
