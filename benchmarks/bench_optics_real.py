@@ -125,14 +125,13 @@ def time_frames(recon: DepthReconstructor, frames: np.ndarray, repeat: int = 3) 
     return 1000 * (time.perf_counter() - t0) / n
 
 
-def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--sensors", default="gelsight,gelslim")
-    ap.add_argument("--json", type=Path, default=None, help="also write the rows as JSON")
-    ap.add_argument("--skip-mlp", action="store_true", help="the LUT rows only (no torch)")
-    args = ap.parse_args(argv)
+def rows_for(sensors: list[str], skip_mlp: bool = False) -> list[dict]:
+    """The table's rows for the named sensors ('gelsight', 'gelslim'): per sensor and
+    model, ``angle`` (deg), ``rms`` and ``placed`` (shape RMS, px), ``radius`` and
+    ``radius_std`` (the fitted ball radius, px), ``ms`` (per frame, one core), ``scale``
+    (um a px, or 1 where ``units`` is 'px')."""
     rows = []
-    for ds in datasets(args.sensors.split(",")):
+    for ds in datasets(sensors):
         ps = ds["ps"]
         n = len(ps.frames)
         cal_i, ev_i = np.arange(0, n, 2), np.arange(1, n, 2)
@@ -148,7 +147,7 @@ def main(argv: list[str] | None = None) -> int:
                    ("MLP, position-aware (onnx)", "mlp", {}, "onnx"),
                    ("MLP, position-aware (table)", "mlp", {}, "table")]
         cals = {}
-        if args.skip_mlp:
+        if skip_mlp:
             configs = [c for c in configs if c[1] == "lut"]
         for label, model, kw, engine in configs:
             key = (model, tuple(kw.items()))
@@ -171,6 +170,16 @@ def main(argv: list[str] | None = None) -> int:
                              radius_std=rep.fitted_radius_std_px, scale=scale,
                              units=ds["units"]))
         rows[-1]["ball_px"] = ball_px
+    return rows
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--sensors", default="gelsight,gelslim")
+    ap.add_argument("--json", type=Path, default=None, help="also write the rows as JSON")
+    ap.add_argument("--skip-mlp", action="store_true", help="the LUT rows only (no torch)")
+    args = ap.parse_args(argv)
+    rows = rows_for(args.sensors.split(","), args.skip_mlp)
     print("\n| sensor | model | normal angle (deg) | shape RMS | shape RMS, ball placed | "
           "fitted ball radius | ms/frame (1 core) | frames/s |")
     print("|---|---|---|---|---|---|---|---|")

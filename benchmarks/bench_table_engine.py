@@ -53,10 +53,12 @@ def angles(gx, gy, tgx, tgy, inside):
     return normal_angle_deg(gx[inside], gy[inside], tgx[inside], tgy[inside])
 
 
-def main() -> int:
-    print("| sensor | network (position cells) | engine | median deg | p95 deg "
-          "| table vs exact median / p95 |")
-    print("|---|---|---|---|---|---|")
+def rows():
+    """Per sensor and network form, the held-out presses' angles: yields dicts with
+    ``sensor``, ``held`` (presses held out), ``form``, ``cell`` (the network's position
+    cells, None for every pixel's own), ``table_cell_px``, ``exact`` and ``table`` (median
+    and 95th percentile, degrees, against the ball) and ``diff`` (the table against the
+    exact engine, the same two)."""
     for name, ps, mm, ball_mm, given in sensors():
         centres, radii = given if given else detect_contact_circles(ps.frames, ps.reference)
         ball_px = ball_mm / mm
@@ -76,17 +78,26 @@ def main() -> int:
                 for e in engines:
                     got[e].append(angles(*g[e], tgx, tgy, inside))
                 got["diff"].append(angles(*g["table"], *g["onnx"], inside))
-            d = np.concatenate(got["diff"])
-            for e, label in (("onnx", "exact"), ("table", "table (default)")):
-                a = np.concatenate(got[e])
-                extra = (f"{np.median(d):.2f} / {np.percentile(d, 95):.2f}" if e == "table"
-                         else "")
-                print(f"| {name} ({np.count_nonzero(held)} held out) | {form} "
-                      f"({cal.position_cell_px or 'none'}; table cells {table_domain(cal)[2]} px)"
-                      f" | {label} | {np.median(a):.2f} | "
-                      f"{np.percentile(a, 95):.2f} | {extra} |", flush=True)
-    return 0
+            med_p95 = {k: (float(np.median(np.concatenate(v))),
+                           float(np.percentile(np.concatenate(v), 95)))
+                       for k, v in got.items()}
+            yield {"sensor": name, "held": int(np.count_nonzero(held)), "form": form,
+                   "cell": cal.position_cell_px or None, "table_cell_px": table_domain(cal)[2],
+                   "exact": med_p95["onnx"], "table": med_p95["table"],
+                   "diff": med_p95["diff"]}
 
+
+def main() -> int:
+    print("| sensor | network (position cells) | engine | median deg | p95 deg "
+          "| table vs exact median / p95 |")
+    print("|---|---|---|---|---|---|")
+    for r in rows():
+        head = (f"| {r['sensor']} ({r['held']} held out) | {r['form']} "
+                f"({r['cell'] or 'none'}; table cells {r['table_cell_px']} px)")
+        print(f"{head} | exact | {r['exact'][0]:.2f} | {r['exact'][1]:.2f} |  |")
+        print(f"{head} | table (default) | {r['table'][0]:.2f} | {r['table'][1]:.2f} | "
+              f"{r['diff'][0]:.2f} / {r['diff'][1]:.2f} |", flush=True)
+    return 0
 
 if __name__ == "__main__":
     sys.exit(main())

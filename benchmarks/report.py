@@ -1025,6 +1025,238 @@ def _batch_speedup(quick: bool) -> Result:
                               "allows on 2 cores.")])
 
 
+@contextlib.contextmanager
+def _one_thread() -> Iterator[None]:
+    """OpenCV held to one thread for the block, as the timing benchmarks hold it when first
+    imported (``cv2.setNumThreads(1)``, ``OMP_NUM_THREADS`` 1), then the runner's settings
+    back, so that neither a later subject nor a second import in this process differs."""
+    import cv2
+    threads, omp = cv2.getNumThreads(), os.environ.get("OMP_NUM_THREADS")
+    cv2.setNumThreads(1)
+    try:
+        yield
+    finally:
+        cv2.setNumThreads(threads)
+        if omp is None:
+            os.environ.pop("OMP_NUM_THREADS", None)
+        else:
+            os.environ["OMP_NUM_THREADS"] = omp
+
+
+@subject(
+    "optics_held_out", "Optics: the default calibration's held-out report on three sensors",
+    """`tactilevision optics calibrate` with its defaults (the engine chosen by `--model
+    auto`, one press in four held out for the report, detected circles rescaled to the
+    slope's peak) on taxim's 48 real GelSight presses (hand-annotated circles), GelSlim 3.0's
+    75 (`set_2020_11`, circles detected) and the GelSight Mini's 22 (detected); the last two
+    are not redistributed with the package and are left out where absent. Per sensor, from
+    the accuracy report the command writes beside the calibration: the engine kept, the
+    held-out presses' normal angle inside 0.8 of the radius, their inner cap (the median),
+    the prediction interval for a new press's inner cap (`inner_cap_expected`) and the
+    fitted ball radius. --quick: taxim's GelSight only.""",
+    ["tactilevision optics calibrate taxim:gelsight --mm-per-px 0.0295 --ball-radius-mm 2.0 "
+     "--out OUT",
+     "tactilevision optics calibrate ../shared/real/gelslim3/set_2020_11 --mm-per-px 0.10577 "
+     "--ball-radius-mm 3.8 --out OUT",
+     "tactilevision optics calibrate ../shared/real/gelsight_mini --mm-per-px 0.0634 --out OUT"])
+def _optics_held_out(quick: bool) -> Result:
+    from contextlib import redirect_stdout
+    from io import StringIO
+
+    from tactilevision.cli import main as cli
+    real = ROOT.parent / "shared" / "real"
+    sensors = [("GelSight (taxim, annotated)", "taxim:gelsight",
+                ["--mm-per-px", "0.0295", "--ball-radius-mm", "2.0"]),
+               ("GelSlim 3.0 (detected)", real / "gelslim3" / "set_2020_11",
+                ["--mm-per-px", "0.10577", "--ball-radius-mm", "3.8"]),
+               ("GelSight Mini (detected)", real / "gelsight_mini", ["--mm-per-px", "0.0634"])]
+    rows, absent = [], []
+    for label, src, opts in sensors[:1] if quick else sensors:
+        if not isinstance(src, str) and not src.exists():
+            absent.append(label)
+            continue
+        with tempfile.TemporaryDirectory(prefix="tv-report-") as tmp:
+            out = Path(tmp) / "optics.npz"
+            with redirect_stdout(StringIO()):
+                rc = cli(["optics", "calibrate", str(src), *opts, "--out", str(out),
+                          "--no-progress"])
+            if rc != 0:
+                raise RuntimeError(f"optics calibrate {src} exited {rc}")
+            rep = json.loads((Path(tmp) / "optics_accuracy.json").read_text())
+        if "error" in rep:
+            raise RuntimeError(f"optics calibrate {src}: {rep['error']}")
+        mm = rep["mm_per_px"]
+        for b in rep["balls"]:
+            ex = b.get("inner_cap_expected") or {}
+            rows.append([label, rep["engine"]["chosen"],
+                         b["n_scored"] if rep.get("held_out") else f"{b['n_scored']} (in sample)",
+                         f"{b['normal_angle_08_deg']:.2f}", _pct(b["inner_cap"], 1),
+                         f"{100 * ex['mean']:+.1f} %, [{100 * ex['low']:+.1f}, "
+                         f"{100 * ex['high']:+.1f}] %" if ex else "–",
+                         f"{b['fitted_radius_px'] * mm:.3f} +- "
+                         f"{b['fitted_radius_std_px'] * mm:.3f} "
+                         f"(true {b['ball_radius_px'] * mm:g})"])
+    return Result([Table("Held-out presses, default calibration",
+                         ["sensor (circles)", "engine kept", "held-out presses scored",
+                          "normal angle inside 0.8 of the radius (deg)", "inner cap, median",
+                          "a new press's inner cap: mean, 95 % of presses within",
+                          "fitted ball radius (mm)"], rows,
+                         note="Each scored by a calibration trained on the other presses "
+                              "(the first fold's share where the engine was chosen); the "
+                              "calibration saved is trained on every press. Inner cap: the "
+                              "height at the centre against 0.8 of the radius, over the "
+                              "ball's."
+                              + (f" Absent here: {', '.join(absent)}." if absent else ""))])
+
+
+@subject(
+    "optics_shape_real", "Optics: shape on real GelSight ball presses",
+    """Photometric calibrations trained on the even-numbered of taxim's 48 real GelSight
+    presses (a 2 mm ball, hand-annotated circles) and read on the 24 odd ones, inside each
+    contact disc, where the gel takes the ball's shape up to an unknown offset: the normal
+    angle against the ball's, the shape RMS after fitting that offset ('ball placed': the
+    ball's lateral position fitted too, which removes the annotated centre's error), the
+    ball radius fitted to the heights, and the time per frame on one core (OpenCV,
+    onnxruntime and scipy.fft on one thread). Models: a baseline (binned colour-difference
+    LUT, Dirichlet DST Poisson), the colour table, the table per 4 x 3 position cells, the
+    network without position inputs, the position-aware network exact (onnx) and tabulated
+    (the default engine). --quick: the tables only (no network).""",
+    ["python benchmarks/bench_optics_real.py --sensors gelsight"])
+def _optics_shape_real(quick: bool) -> Result:
+    with _one_thread():
+        import bench_optics_real as b
+        got = b.rows_for(["gelsight"], skip_mlp=quick)
+    rows = [[r["model"], f"{r['angle']:.2f}", f"{r['rms'] * r['scale']:.1f}",
+             f"{r['placed'] * r['scale']:.1f}",
+             f"{r['radius'] * r['scale'] / 1000:.3f} +- {r['radius_std'] * r['scale'] / 1000:.3f}",
+             f"{r['ms']:.1f}"] for r in got]
+    return Result([Table("24 odd presses, trained on the even ones",
+                         ["model", "normal angle (deg)", "shape RMS (um)",
+                          "shape RMS, ball placed (um)", "fitted ball radius (mm)",
+                          "ms per frame, one core"], rows,
+                         note="640 x 480 at 0.0295 mm/px, a 2.0 mm ball. Mean over the "
+                              "presses; the radius's +- is its sd over them. The times are "
+                              "this run's (they vary with the machine's load; "
+                              "`optics_speed` times the engines against a same-run "
+                              "reference).")])
+
+
+@subject(
+    "optics_speed", "Optics: reconstruction time at 640 x 480, one thread",
+    """`DepthReconstructor(cal)(frame)` on 8 real GelSight frames (taxim, 640 x 480) with
+    OpenCV, onnxruntime and scipy.fft held to one thread: each engine (a colour table
+    trained on the even presses, the shipped GelSight network tabulated, the default, and
+    exact), beside two references timed in the same run, a bare scipy DCT-II pair and a
+    bare gather of two components per pixel, whose ratio carries between machines. The
+    whole benchmark 3 times (once with --quick), one after the other.""",
+    ["python benchmarks/bench_speed.py"])
+def _optics_speed(quick: bool) -> Result:
+    with _one_thread():
+        import bench_speed as b
+        runs = [b.measure() for _ in range(1 if quick else 3)]
+    default = "MLP position-aware, table"
+    ref = [m["dct"] + m["gather"] for m in runs]
+    per_run = [[i + 1, f"{dict(m['rows'])[default]:.2f}", f"{m['dct']:.2f}",
+                f"{m['gather']:.2f}", f"{dict(m['rows'])[default] / r:.2f}",
+                f"{m['stages']['lookup']:.2f}", f"{m['stages']['poisson']:.2f}"]
+               for i, (m, r) in enumerate(zip(runs, ref, strict=True))]
+    def span(values: list[float]) -> str:
+        lo, hi = f"{min(values):.2f}", f"{max(values):.2f}"
+        return lo if lo == hi else f"{lo} to {hi}"
+
+    engines = []
+    for name, _ in runs[0]["rows"]:
+        ms = [dict(m["rows"])[name] for m in runs]
+        engines.append([name, span(ms), span([t / r for t, r in zip(ms, ref, strict=True)])])
+    ratios = [float(row[4]) for row in per_run]
+    return Result([
+        Table("The default engine against the references",
+              ["run", "default engine (ms)", "DCT-II pair (ms)", "gather (ms)",
+               "default / (pair + gather)", "colour table's lookup (ms)",
+               "its Poisson solve (ms)"], per_run,
+              note="The default engine: the shipped GelSight network tabulated "
+                   "(`DepthReconstructor(cal)`). Median over 15 rounds of the 8 frames."),
+        Table("Each engine",
+              ["engine", "ms per frame", "x (DCT-II pair + gather)"], engines,
+              note=f"Over the {len(runs)} run(s): the least and the most."),
+    ], summary=f"The default engine took {span(ratios)} times a bare DCT-II pair plus a "
+               "gather of the same run.")
+
+
+@subject(
+    "optics_table_engine", "Optics: the table engine against the exact network",
+    """The default engine (a table of the network's output over colour cells and position
+    cells) against the exact one (`engine='onnx'`, the network at every pixel) on held-out
+    real presses: for the GelSight Mini (22 presses, circles detected), GelSlim 3.0
+    (`set_2020_11`, 75, detected) and taxim's GelSight (48, annotated), one press in four
+    held out by the accuracy report's own split (`holdout_presses`), a network trained on
+    the rest in both forms (every pixel's own position, `position_cell_px=0`, and the
+    default position cells); the normal angle against the ball's inside 0.8 of the contact
+    radius, pooled over the held-out presses' pixels (median and 95th percentile), and the
+    table's angle from the exact engine's. The Mini and GelSlim sets are not redistributed
+    with the package and are left out where absent.""",
+    ["python benchmarks/bench_table_engine.py"])
+def _optics_table_engine(quick: bool) -> Result:
+    import bench_table_engine as b
+    got = list(b.rows())
+    rows = [[f"{r['sensor']} ({r['held']} held out)",
+             f"{r['form']} ({r['cell'] or 'none'}; table cells {r['table_cell_px']} px)",
+             f"{r['exact'][0]:.2f} / {r['exact'][1]:.2f}",
+             f"{r['table'][0]:.2f} / {r['table'][1]:.2f}",
+             f"{r['table'][0] - r['exact'][0]:+.2f} / {r['table'][1] - r['exact'][1]:+.2f}",
+             f"{r['diff'][0]:.2f} / {r['diff'][1]:.2f}"] for r in got]
+    cells = [r for r in got if r["form"] == "position cells"]
+    worst = max(max(abs(r["table"][0] - r["exact"][0]), abs(r["table"][1] - r["exact"][1]))
+                for r in cells)
+    return Result([Table("Held-out presses, both engines",
+                         ["sensor", "network (position cells)", "exact: median / p95 (deg)",
+                          "table (default): median / p95 (deg)", "table - exact (deg)",
+                          "table's angle from exact: median / p95 (deg)"], rows,
+                         note="Angles against the ball's sphere inside 0.8 of the contact "
+                              "radius. The default network is the one with position cells.")],
+                  summary=f"With position cells the default engine reads within "
+                          f"{worst:.2f} deg of the exact one at the median and the 95th "
+                          f"percentile on {len(cells)} sensor(s).")
+
+
+@subject(
+    "optics_gs_sdk", "Optics: an imported gs_sdk network against gs_sdk's own gradients",
+    """A real GelSight Mini's gs_sdk calibration (a network its owners trained with gs_sdk,
+    and gs_sdk's own gradients on six of the presses it was calibrated on, computed by
+    gs_sdk itself: `../shared/real/gelsight_mini`, not redistributed with the package),
+    imported with `PhotometricCalibration.from_gs_sdk`: per engine, the median angle between
+    gs_sdk's normal and ours inside each press's contact (gs_sdk's slope above 5 deg), the
+    largest at any contact pixel, and the table's size; then each table's cost per 320 x 240
+    frame, one thread, beside a bare DCT-II pair and gather of the same round (two rounds).""",
+    ["python benchmarks/bench_table_order.py"])
+def _optics_gs_sdk(quick: bool) -> Result:
+    mini = ROOT.parent / "shared" / "real" / "gelsight_mini"
+    with _one_thread():
+        import bench_table_order as b
+        m = b.measure(mini, rounds=1 if quick else 2)
+    if m is None:
+        raise RuntimeError(f"no {mini / 'gs_sdk_reference.npz'}")
+    angles = [[a["name"], f"{min(a['medians']):.2f} to {max(a['medians']):.2f}",
+               f"{a['largest']:.3f}", f"{a['mb']:.0f}"] for a in m["angles"]]
+    names = list(m["costs"][0]["ms"])
+    costs = [[n, ", ".join(f"{c['ms'][n]:.3f}" for c in m["costs"]),
+              ", ".join(f"{c['ms'][n] / (c['dct'] + c['gather']):.2f}" for c in m["costs"])]
+             for n in names]
+    refs = "; ".join(f"DCT-II pair {c['dct']:.3f} ms, gather {c['gather']:.3f} ms"
+                     for c in m["costs"])
+    return Result([
+        Table("Angle to the reference gradients",
+              ["engine", "median per press (deg)", "largest at a contact pixel (deg)",
+               "table (MB)"], angles,
+              note=f"The reference: gs_sdk's own gradients of presses {', '.join(m['presses'])} "
+                   f"at {m['shape'][1]} x {m['shape'][0]}; "
+                   f"first-order tables read by {m['kernel']} (kernel 'auto')."),
+        Table("Cost per frame", ["engine", "ms per frame, each round",
+                                 "x (DCT-II pair + gather), each round"], costs,
+              note=f"One thread. References of the rounds: {refs}."),
+    ])
+
+
 @subject(
     "long_checks", "The long checks: the suite's slow tests",
     """The checks of about 3 s or more that the README's test command leaves out (the `slow`
