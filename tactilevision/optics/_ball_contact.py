@@ -34,10 +34,12 @@ The steps (:func:`find_contact_circle`):
 5. **Checks** (:class:`ContactCircle`): the rim's share inside the image
    (:data:`MIN_RIM_IN_FRAME`), its contrast against the pad outside
    (:data:`MIN_RIM_CONTRAST`; against the camera's noise where too little pad lies beyond
-   the contact to read the pad's own, :data:`PAD_SHARE`) and, sector by sector, that the
-   change falls past it (:data:`MAX_SECTORS_BEYOND_RIM`): a circle inside a larger contact
-   whose own rim is mostly outside the image has an edge where it touches that rim and none
-   elsewhere.
+   the contact to read the pad's own, :data:`PAD_SHARE`; a lower one where the change falls
+   past the rim on nearly every ray, :data:`STEADY_RIM_CONTRAST`) and, sector by sector,
+   that the change falls past it (:data:`MAX_SECTORS_BEYOND_RIM`, fewer sectors where it
+   falls on fewer rays, :data:`MAX_SECTORS_BEYOND_UNSTEADY_RIM`): a circle inside a larger
+   contact whose own rim is mostly outside the image has an edge where it touches that rim
+   and none elsewhere.
 """
 
 from __future__ import annotations
@@ -800,10 +802,13 @@ def find_contact_circle(frame: np.ndarray, reference: np.ndarray, *, min_change:
         near the colour edge; a rim whose contrast is under :data:`MIN_RIM_CONTRAST` noise
         sigmas of the pad outside it, or of the camera where less than :data:`PAD_SHARE` of
         the image lies beyond it (a circle put on the background's structure, or on part of
-        a contact whose edge is not in the image), or whose contrast cannot be read (fewer
+        a contact whose edge is not in the image), unless it stands
+        :data:`STEADY_RIM_CONTRAST` sigmas and the change falls past it on
+        :data:`STEADY_RIM_SHARE` of the rays, or whose contrast cannot be read (fewer
         than 24 rays reach past 1.2 radii); a change that does not fall past
-        the rim in more than :data:`MAX_SECTORS_BEYOND_RIM` of its sectors (a larger
-        contact's inner part).
+        the rim in more than :data:`MAX_SECTORS_BEYOND_RIM` of its sectors, or
+        :data:`MAX_SECTORS_BEYOND_UNSTEADY_RIM` where it falls on fewer than
+        :data:`STEADY_RIM_SHARE` of the rays (a larger contact's inner part).
 
     Raises
     ------
@@ -862,7 +867,8 @@ def find_contact_circle(frame: np.ndarray, reference: np.ndarray, *, min_change:
         problems.append(f"its rim stands {contrast / noise:.1f} noise sigmas above {against} "
                         f"({MIN_RIM_CONTRAST:g} needed, or {STEADY_RIM_CONTRAST:g} where the "
                         f"change falls past it on {100 * STEADY_RIM_SHARE:.0f} % of the rays: "
-                        f"it does on {100 * falls:.0f} %): not a contact's edge")
+                        + (f"it does on {100 * falls:.0f} %" if np.isfinite(falls)
+                           else "too few rays to tell") + "): not a contact's edge")
     beyond = sectors_beyond_rim(fine, centre, radius if np.isfinite(radius) else rc)
     steady = falls >= STEADY_RIM_SHARE
     most = MAX_SECTORS_BEYOND_RIM if steady else MAX_SECTORS_BEYOND_UNSTEADY_RIM
@@ -872,7 +878,7 @@ def find_contact_circle(frame: np.ndarray, reference: np.ndarray, *, min_change:
                         f" % of its level inside; at most {100 * most:.0f} % allowed"
                         + ("" if steady else f" where it falls on fewer than "
                            f"{100 * STEADY_RIM_SHARE:.0f} % of the rays, here "
-                           f"{100 * falls:.0f} %")
+                           + (f"{100 * falls:.0f} %" if np.isfinite(falls) else "unread"))
                         + "): part of a larger contact, whose rim the image cuts, or a "
                         "texture's edge, not the contact's")
     return ContactCircle(centre_px=np.asarray(centre, np.float64), radius_px=float(radius),
