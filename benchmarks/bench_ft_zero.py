@@ -10,7 +10,7 @@ against the truth (at each press's force window), E against the same session wit
 a zero (the reference run, same command), and the drift's test.
 
     python benchmarks/bench_ft_zero.py [SESSION_DIR] [--zeros 0.05 0.3 0.5]
-                                       [--drifts 0 0.1 -0.1]
+                                       [--drifts 0 0.1 -0.1] [--modes auto ...]
 
 SESSION_DIR defaults to the bundled sample session (sample_frames/gelsight_session).
 """
@@ -56,6 +56,52 @@ def true_zero(session: Path, cal, zero_n: float, drift_n: float) -> np.ndarray:
     return zero_n + drift_n * (t - t0) / (t1 - t0)
 
 
+#: The table's columns (:func:`run`'s ``rows``).
+COLUMNS = ["zero (N)", "drift (N)", "mode", "zero read at the presses, error (mN): mean, max",
+           "drift read (mN) [p]", "E (MPa)", "E vs reference"]
+
+
+def run(session: Path, zeros=(0.05, 0.3, 0.5), drifts=(0.0, 0.1, -0.1),
+        modes=("auto", "constant", "drift", "off"), *, echo: bool = False) -> dict:
+    """The reference calibration of `session` and, for each zero, drift and mode, the
+    variant's calibration: ``reference`` (E, nu, presses, its own zero in mN, seconds) and
+    ``rows`` (:data:`COLUMNS`; the error of the zero read against the one added plus the
+    reference's own, at each press's force window)."""
+    t = time.perf_counter()
+    ref = calibrate_session(session)
+    out = {"reference": dict(E=ref.fit.E_mpa, nu=ref.fit.nu,
+                             presses=len(ref.certification.presses),
+                             zero_mn=1e3 * ref.ft_zero.zero_n, s=time.perf_counter() - t),
+           "rows": []}
+    if echo:
+        r = out["reference"]
+        print(f"reference (no zero added): E = {r['E']:.4f} MPa, nu = {r['nu']:.4f}, "
+              f"{r['presses']} presses, {r['s']:.1f} s; its own zero read {r['zero_mn']:+.2f} mN")
+        print("| " + " | ".join(COLUMNS) + " |")
+        print("|" + "---|" * len(COLUMNS))
+    with tempfile.TemporaryDirectory() as tmp:
+        for z0 in zeros:
+            for d in drifts:
+                folder = variant(session, Path(tmp) / f"z{z0}_d{d}", z0, d)
+                for mode in modes:
+                    cal = calibrate_session(folder, ft_zero=mode)
+                    zt = true_zero(folder, cal, z0, d) + ref.ft_zero.zero_n
+                    off = cal.certification.clock_offset_s
+                    tw = np.array([p.t_frame_s + off + p.hold_s
+                                   for p in cal.certification.presses])
+                    err = 1e3 * (cal.ft_zero.at(tw) - zt)
+                    e = cal.fit.E_mpa
+                    row = [f"{z0:g}", f"{d:+g}", mode,
+                           f"{err.mean():+.2f}, {np.abs(err).max():.2f}",
+                           f"{1e3 * cal.ft_zero.drift_n:+.1f} [{cal.ft_zero.drift_p_value:.2g}]",
+                           f"{e:.4f}", f"{100 * (e / ref.fit.E_mpa - 1):+.1f} %"]
+                    out["rows"].append(row)
+                    if echo:
+                        print("| " + " | ".join(row) + " |", flush=True)
+                shutil.rmtree(folder)
+    return out
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -63,31 +109,10 @@ def main() -> None:
                     default=ROOT / "sample_frames" / "gelsight_session")
     ap.add_argument("--zeros", type=float, nargs="+", default=[0.05, 0.3, 0.5])
     ap.add_argument("--drifts", type=float, nargs="+", default=[0.0, 0.1, -0.1])
+    ap.add_argument("--modes", nargs="+", default=["auto", "constant", "drift", "off"],
+                    choices=("auto", "constant", "drift", "off"))
     args = ap.parse_args()
-    t = time.perf_counter()
-    ref = calibrate_session(args.session)
-    print(f"reference (no zero added): E = {ref.fit.E_mpa:.4f} MPa, nu = {ref.fit.nu:.4f}, "
-          f"{len(ref.certification.presses)} presses, {time.perf_counter() - t:.1f} s; its own "
-          f"zero read {1e3 * ref.ft_zero.zero_n:+.2f} mN")
-    print("| zero (N) | drift (N) | mode | zero read at the presses, error (mN): mean, max | "
-          "drift read (mN) [p] | E (MPa) | E vs reference |")
-    print("|---|---|---|---|---|---|---|")
-    with tempfile.TemporaryDirectory() as tmp:
-        for z0 in args.zeros:
-            for d in args.drifts:
-                folder = variant(args.session, Path(tmp) / f"z{z0}_d{d}", z0, d)
-                for mode in ("auto", "constant", "drift", "off"):
-                    cal = calibrate_session(folder, ft_zero=mode)
-                    zt = true_zero(folder, cal, z0, d) + ref.ft_zero.zero_n
-                    off = cal.certification.clock_offset_s
-                    tw = np.array([p.t_frame_s + off + p.hold_s for p in cal.certification.presses])
-                    err = 1e3 * (cal.ft_zero.at(tw) - zt)
-                    e = cal.fit.E_mpa
-                    print(f"| {z0:g} | {d:+g} | {mode} | {err.mean():+.2f}, "
-                          f"{np.abs(err).max():.2f} | {1e3 * cal.ft_zero.drift_n:+.1f} "
-                          f"[{cal.ft_zero.drift_p_value:.2g}] | {e:.4f} | "
-                          f"{100 * (e / ref.fit.E_mpa - 1):+.1f} % |", flush=True)
-                shutil.rmtree(folder)
+    run(args.session, args.zeros, args.drifts, args.modes, echo=True)
 
 
 if __name__ == "__main__":

@@ -585,6 +585,30 @@ def _plan_sds(quick: bool) -> Result:
 
 
 @subject(
+    "ft_zero", "Calibrate: the F/T's zero read from the log",
+    """The sample session's F/T log with a known zero added (0.05, 0.3 or 0.5 N, constant or
+    drifting by +-0.1 N over the log; the frames are the same), calibrated with the default
+    `ft_zero='auto'` (the line when the zero drifts, else its mean): the zero read at each
+    press's force window against the one added (plus the session's own, read on the
+    reference run), the drift read with its test's p-value, and E against the same session
+    calibrated without a zero added. One zero (0.3 N, three drifts) with --quick.""",
+    ["python benchmarks/bench_ft_zero.py --modes auto"])
+def _ft_zero(quick: bool) -> Result:
+    import bench_ft_zero as b
+    got = b.run(ROOT / "sample_frames" / "gelsight_session",
+                zeros=(0.3,) if quick else (0.05, 0.3, 0.5), modes=("auto",))
+    r = got["reference"]
+    worst = max(float(row[3].split(", ")[1]) for row in got["rows"])
+    moved = max(abs(float(row[6].rstrip(" %"))) for row in got["rows"])
+    return Result([Table("The default, against the zero added", b.COLUMNS, got["rows"],
+                         note=f"Reference (no zero added): E = {r['E']:.4f} MPa, nu = "
+                              f"{r['nu']:.4f}, {r['presses']} presses; the session's own zero "
+                              f"read {r['zero_mn']:+.2f} mN.")],
+                  summary=f"Every zero read within {worst:.2f} mN at the presses; E moved by "
+                          f"at most {moved:.1f} % against the reference.")
+
+
+@subject(
     "ball_taxim", "A ball's depths and E from frames drawn by Taxim's own renderer",
     """Dead weights of a 2 mm ball on a thick gel of E = 1 MPa (no F/T: the force is m g):
     the gel's surface from Sneddon's and Hertz's closed forms, each frame drawn by Taxim's
