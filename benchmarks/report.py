@@ -1080,20 +1080,22 @@ def _one_thread() -> Iterator[None]:
     fitted ball radius. --quick: taxim's GelSight only.""",
     ["tactilevision optics calibrate taxim:gelsight --mm-per-px 0.0295 --ball-radius-mm 2.0 "
      "--out OUT",
-     "tactilevision optics calibrate ../shared/real/gelslim3/set_2020_11 --mm-per-px 0.10577 "
+     "tactilevision optics calibrate $TACTILEVISION_GELSLIM/set_2020_11 --mm-per-px 0.10577 "
      "--ball-radius-mm 3.8 --out OUT",
-     "tactilevision optics calibrate ../shared/real/gelsight_mini --mm-per-px 0.0634 --out OUT"])
+     "tactilevision optics calibrate $TACTILEVISION_GELSIGHT_MINI --mm-per-px 0.0634 --out OUT"])
 def _optics_held_out(quick: bool) -> Result:
     from contextlib import redirect_stdout
     from io import StringIO
 
     from tactilevision.cli import main as cli
     real = ROOT.parent / "shared" / "real"
+    gelslim = Path(os.environ.get("TACTILEVISION_GELSLIM", real / "gelslim3"))
+    mini = Path(os.environ.get("TACTILEVISION_GELSIGHT_MINI", real / "gelsight_mini"))
     sensors = [("GelSight (taxim, annotated)", "taxim:gelsight",
                 ["--mm-per-px", "0.0295", "--ball-radius-mm", "2.0"]),
-               ("GelSlim 3.0 (detected)", real / "gelslim3" / "set_2020_11",
+               ("GelSlim 3.0 (detected)", gelslim / "set_2020_11",
                 ["--mm-per-px", "0.10577", "--ball-radius-mm", "3.8"]),
-               ("GelSight Mini (detected)", real / "gelsight_mini", ["--mm-per-px", "0.0634"])]
+               ("GelSight Mini (detected)", mini, ["--mm-per-px", "0.0634"])]
     rows, absent = [], []
     for label, src, opts in sensors[:1] if quick else sensors:
         if not isinstance(src, str) and not src.exists():
@@ -1247,14 +1249,15 @@ def _optics_table_engine(quick: bool) -> Result:
     "optics_gs_sdk", "Optics: an imported gs_sdk network against gs_sdk's own gradients",
     """A real GelSight Mini's gs_sdk calibration (a network its owners trained with gs_sdk,
     and gs_sdk's own gradients on six of the presses it was calibrated on, computed by
-    gs_sdk itself: `../shared/real/gelsight_mini`, not redistributed with the package),
+    gs_sdk itself: `$TACTILEVISION_GELSIGHT_MINI`, not redistributed with the package),
     imported with `PhotometricCalibration.from_gs_sdk`: per engine, the median angle between
     gs_sdk's normal and ours inside each press's contact (gs_sdk's slope above 5 deg), the
     largest at any contact pixel, and the table's size; then each table's cost per 320 x 240
     frame, one thread, beside a bare DCT-II pair and gather of the same round (two rounds).""",
     ["python benchmarks/bench_table_order.py"])
 def _optics_gs_sdk(quick: bool) -> Result:
-    mini = ROOT.parent / "shared" / "real" / "gelsight_mini"
+    mini = Path(os.environ.get("TACTILEVISION_GELSIGHT_MINI",
+                               ROOT.parent / "shared" / "real" / "gelsight_mini"))
     with _one_thread():
         import bench_table_order as b
         m = b.measure(mini, rounds=1 if quick else 2)
