@@ -832,11 +832,16 @@ def find_contact_circle(frame: np.ndarray, reference: np.ndarray, *, min_change:
         ray_r = locate_contact_edge(frame, reference, centre, rc, change=fine)[1]
     except InputError:
         ray_r = float("nan")
+    # each ray's drop past the rim, read once: its median is the contrast where little pad
+    # is left (rim_drop), its positive share the fall's steadiness (rim_fall_share)
+    drops = _ray_drops(fine, centre, rp if np.isfinite(rp) else rc)
+    read = drops.size >= 24
+    falls = float(np.mean(drops > 0.0)) if read else float("nan")
     if np.mean(np.hypot(xx - centre[0], yy - centre[1]) > 1.6 * rc) >= PAD_SHARE:
         noise = _pad_noise(_magnitude(fine), centre[0], centre[1], rc)
         against = "the pad outside it"
     else:              # too little pad beyond it: the drop past the rim, in camera sigmas
-        contrast = rim_drop(fine, centre, rp if np.isfinite(rp) else rc)
+        contrast = float(np.median(drops)) if read else float("nan")
         noise = max(_pixel_noise(fine), 0.5)
         against = ("the gel just past it, in sigmas of the camera's noise (too little pad "
                    "lies beyond it to read the pad's own)")
@@ -851,7 +856,6 @@ def find_contact_circle(frame: np.ndarray, reference: np.ndarray, *, min_change:
                          f"more than {tol:.1f} px: half the difference is added to the "
                          "radius's uncertainty")
     inside = rim_in_frame(centre, radius if np.isfinite(radius) else rc, mag.shape)
-    falls = rim_fall_share(fine, centre, radius if np.isfinite(radius) else rc)
     problems = []
     if inside < MIN_RIM_IN_FRAME:
         problems.append(f"only {100 * inside:.0f} % of its rim is in the image (cut by the "
