@@ -35,9 +35,11 @@ reasons; "flagged": refused once their depth was read, by the second reading or 
 gauge's reach); the certified depths' error (mean, sd, um), their z-scores (error over
 the press's own stated sd, :func:`own_sd`), the stated sd's median; the largest error
 and whether every press more than 50 um off was refused or warned of; E with its 95 %
-interval, whether it holds the truth, its half-width (% of E); calibrate's time beside
-decoding every frame once in the same run (as ``benchmarks/bench_calibrate.py``). Then
-the pooled figures against the issue's targets.
+interval, whether it holds the truth, its half-width (% of E); where the crossing of w0
+lies in the period that brackets it (:func:`bracket_places`: 0 at the bracket's start,
+1 at its end; the mark rule takes it as uniform over the bracket); calibrate's time
+beside decoding every frame once in the same run (as ``benchmarks/bench_calibrate.py``).
+Then the pooled figures against the issue's targets.
 
 ``--render-only`` renders the designs (``--jobs`` at a time) and stops; ``--list``
 prints the designs drawn.
@@ -170,6 +172,23 @@ def true_depth_at_window(tp: dict, truth: dict, t0: float, t1: float) -> float:
     return (-c + math.sqrt(c * c + 4 * a * p_mean)) / (2 * a)
 
 
+def bracket_places(cal, tp: dict, clock_offset_s: float) -> list[float]:
+    """Where each press's true crossing of w0 lies in the F/T-clock period that the mark
+    rule says brackets it (``CertifiedPress.onset_span_s``): 0 at its start, 1 at its end,
+    outside [0, 1] where the bracket misses it. The crossing from the truth's ramp (the
+    generator's linear approach from ``t_start_s`` to ``hold_from_s``), put on the F/T
+    clock by the true offset. Presses without a bracket (a vernier's) are left out."""
+    out = []
+    for p in cal.certification.presses:
+        s0, s1 = p.onset_span_s
+        if not (np.isfinite(s0) and np.isfinite(s1) and s1 > s0):
+            continue
+        t = tp[p.press]
+        t_cross = t["t_start_s"] + (t["hold_from_s"] - t["t_start_s"]) * p.w0_mm / t["depth_mm"]
+        out.append(float((t_cross + clock_offset_s - s0) / (s1 - s0)))
+    return out
+
+
 def own_sd(cal) -> np.ndarray:
     """Each press's own depth sd, mm: ``depth_std_mm`` less the n-fold part of its
     indenter's shared error (``depth_indenter_std_mm``, carried n times over in the
@@ -230,6 +249,7 @@ def score(folder: Path, d: dict) -> dict:
         "calibrate_s": t_cal, "decode_s": t_decode, "n_frames": session.n_frames,
         "clock_error_ms": 1e3 * (cal.certification.clock_offset_s - truth["clock_offset_s"]),
         "depth_rule": cal.depth_rule, "failure": cal.failure,
+        "bracket_q": bracket_places(cal, tp, truth["clock_offset_s"]),
     }
 
 
@@ -275,6 +295,13 @@ def summary(rows: list[dict]) -> None:
             print(f"  {kind}: {len(sel)} designs, depth targets met on "
                   f"{sum(r in ok_depth for r in sel)}, z sd {zk.std():.2f}, E holds "
                   f"{sum(r['E_holds'] for r in sel)}")
+    q = np.concatenate([r.get("bracket_q", []) for r in rows]) if rows else np.zeros(0)
+    if q.size:
+        inside = (q >= 0) & (q <= 1)
+        print(f"the true crossing of w0 in the period that brackets it: {inside.sum()} of "
+              f"{q.size} presses inside; its place (0 start, 1 end) mean {q.mean():.2f}, "
+              f"deciles {np.histogram(np.clip(q, 0, 1), bins=10, range=(0, 1))[0].tolist()} "
+              "(uniform: the rule's assumption)")
     cal20 = [r["calibrate_s"] / r["decode_s"] for r in rows]
     if cal20:
         print(f"calibrate took {np.median([r['calibrate_s'] for r in rows]):.1f} s median "
