@@ -253,6 +253,46 @@ def score(folder: Path, d: dict) -> dict:
     }
 
 
+def run(seed: int, ks: range, kinds: tuple[str, ...], cache: Path, *,
+        on_row=None) -> list[dict]:
+    """Render (where not in `cache`) and score designs `ks` of `seed`: :func:`score`'s
+    rows, in order; ``on_row(k, row)`` is called after each."""
+    cache.mkdir(parents=True, exist_ok=True)
+    rows = []
+    for k in ks:
+        d = draw_design(seed, k, kinds)
+        folder = design_folder(cache, seed, k, d)
+        s = render(folder, d)
+        if s:
+            print(f"design {k} rendered in {s:.0f} s: {folder}", flush=True)
+        rows.append(score(folder, d))
+        if on_row is not None:
+            on_row(k, rows[-1])
+    return rows
+
+
+def figures(rows: list[dict]) -> dict:
+    """The pooled figures against issue 83's targets (:func:`summary` prints them)."""
+    ok = [abs(r["err_mean_um"]) <= 5 and r["err_sd_um"] <= 10 for r in rows]
+    z = np.concatenate([r["z"] for r in rows]) if rows else np.zeros(0)
+    q = np.concatenate([r.get("bracket_q", []) for r in rows]) if rows else np.zeros(0)
+    return {
+        "designs": len(rows), "depth_ok": int(sum(ok)),
+        "stated_median_um": float(np.median([r["stated_median_um"] for r in rows])),
+        "z_n": int(z.size), "z_mean": float(z.mean()), "z_sd": float(z.std()),
+        "E_holds": int(sum(r["E_holds"] for r in rows)),
+        "E_narrow": int(sum(r["E_half_pct"] <= 20 for r in rows)),
+        "silent": int(sum(len(r["silent_big"]) for r in rows)),
+        "largest_um": float(max(r["err_max_um"] for r in rows)),
+        "q_n": int(q.size), "q_inside": int(np.sum((q >= 0) & (q <= 1))),
+        "q_mean": float(q.mean()) if q.size else math.nan,
+        "q_deciles": np.histogram(np.clip(q, 0, 1), bins=10, range=(0, 1))[0].tolist(),
+        "cal_over_decode": float(np.median([r["calibrate_s"] / r["decode_s"] for r in rows])),
+        "cal_s": [float(min(r["calibrate_s"] for r in rows)),
+                  float(max(r["calibrate_s"] for r in rows))],
+    }
+
+
 def _design_text(d: dict) -> str:
     return (f"{d['kind']}, offset {d['offset_mm']:g} mm at {d['direction_deg']:g} deg, flank "
             f"{d['flank_deg']:g} deg, {d['fps']} frames/s, holds {d['hold_s'][0]:g}-"
@@ -337,7 +377,6 @@ def main(argv: list[str] | None = None) -> int:
         if s:
             print(f"design {k} rendered in {s:.0f} s: {folders[k]}", flush=True)
 
-    rows = []
     if a.render_only:
         with ThreadPoolExecutor(max_workers=max(1, a.jobs)) as pool:
             list(pool.map(job, ks))
@@ -346,11 +385,7 @@ def main(argv: list[str] | None = None) -> int:
     print("| k | design | certified | depth error (um): mean, sd | z sd | stated sd median "
           "(um) | largest error (um) | E [95 %] holds, half-width | calibrate / decode |")
     print("|---|---|---|---|---|---|---|---|---|")
-    for k in ks:
-        job(k)
-        r = score(folders[k], designs[k])
-        rows.append(r)
-        print_row(k, r)
+    rows = run(a.seed, ks, kinds, a.cache, on_row=print_row)
     summary(rows)
     if a.json:
         a.json.write_text(json.dumps(rows, indent=1, default=str) + "\n")
