@@ -613,73 +613,94 @@ MARK_SWEEP_CACHE_ENV = "TACTILEVISION_MARK_SWEEP"
 
 
 @subject(
-    "mark_sweep", "Calibrate: a drawn mark's depths on designs drawn at random",
-    f"""Gauge-block sessions with a drawn mark, their designs drawn at random over what labs
-    use (`benchmarks/bench_mark_sweep.py`: ridge 3.5 to 8 mm from the punch axis, flank 0 to
-    2 deg, 10 to 30 frames/s, approaches 0.4 to 1.6 mm/s, stage overshoot 0 to at most 30 to 60 um,
-    clock offset 0 to 0.3 s not stated, F/T 0.5 to 1 kHz, 16 to 24 presses; Taxim's
-    shadows on and off in turn) and rendered by Taxim's own renderer, each calibrated
+    "mark_sweep", "Calibrate: depths certified on gauge-block designs drawn at random",
+    f"""Gauge-block sessions, their designs drawn at random over what labs use
+    (`benchmarks/bench_mark_sweep.py`: a drawn mark 3.5 to 8 mm from the punch axis, flank 0
+    to 2 deg, or a vernier bevel of 5 to 10 deg; 10 to 30 frames/s, approaches 0.4 to 1.6
+    mm/s, stage overshoot 0 to at most 30 to 60 um, clock offset 0 to 0.3 s not stated, F/T
+    0.5 to 1 kHz, 16 to 24 presses; the marks with Taxim's shadows on and off in turn, the
+    verniers with them on) and rendered by Taxim's own renderer, each calibrated
     (`calibrate_session(..., beta_table='paper')`) and scored against its truth: the
     certified depths' error, their z-scores over the sd each press states, E's 95 %
-    interval against 0.2 MPa, and where the true crossing of w0 lies in the frame period
-    the mark rule says brackets it. Seed {MARK_SWEEP_SEED}, designs 0 to 19, drawn and
-    rendered after the mark rule's last change (2 designs with --quick). The renders (about
-    5 minutes each on this project's 2-core machine) are kept in
+    interval against 0.2 MPa, the clock offset, and for a mark where the true crossing of
+    w0 lies in the frame period the mark rule says brackets it. Seed {MARK_SWEEP_SEED}:
+    mark designs 0 to 19 and vernier designs 100 to 104, drawn and rendered after the
+    depth rules' last change (marks 0 and 1 and vernier 100 with --quick). The renders
+    (about 5 minutes each on this project's 2-core machine) are kept in
     ${MARK_SWEEP_CACHE_ENV} (default: a folder in the system's temporary directory).""",
     [f"python benchmarks/bench_mark_sweep.py --seed {MARK_SWEEP_SEED} --designs 20 "
-     "--kinds mark-shadow mark-plain --cache DIR"])
+     "--kinds mark-shadow mark-plain --cache DIR",
+     f"python benchmarks/bench_mark_sweep.py --seed {MARK_SWEEP_SEED} --first 100 "
+     "--designs 5 --kinds vernier --cache DIR"])
 def _mark_sweep(quick: bool) -> Result:
     import bench_mark_sweep as b
     cache = Path(os.environ.get(MARK_SWEEP_CACHE_ENV)
                  or Path(tempfile.gettempdir()) / "tactilevision_mark_sweep")
-    rows = b.run(MARK_SWEEP_SEED, range(2 if quick else 20), ("mark-shadow", "mark-plain"),
-                 cache)
-    f = b.figures(rows)
+    marks = b.run(MARK_SWEEP_SEED, range(2 if quick else 20), ("mark-shadow", "mark-plain"),
+                  cache)
+    verniers = b.run(MARK_SWEEP_SEED, range(100, 101 if quick else 105), ("vernier",), cache)
     per = []
-    for k, r in enumerate(rows):
+    for k, r in [*enumerate(marks), *zip(range(100, 100 + len(verniers)), verniers, strict=True)]:
         d = r["design"]
         q = r.get("bracket_q", [])
         lo, hi = r["E_ci"]
+        kind = {"mark-shadow": "mark, shadows", "mark-plain": "mark, no shadows",
+                "vernier": f"vernier {d['flank_deg']:.1f} deg"}[d["kind"]]
         per.append([
-            k, "shadows" if d["shadow"] else "no shadows", d["fps"], d["approach_mm_s"],
-            round(1e3 * d["approach_mm_s"] / d["fps"]), f"{r['certified']} of {r['n_presses']}",
+            k, kind, d["fps"], d["approach_mm_s"], round(1e3 * d["approach_mm_s"] / d["fps"]),
+            f"{r['certified']} of {r['n_presses']}",
             f"{r['err_mean_um']:+.1f}, {r['err_sd_um']:.1f}",
             f"{float(np.std(r['z'])):.2f}", f"{r['stated_median_um']:.1f}",
             f"{r['err_max_um']:.0f}" + (f" ({len(r['silent_big'])} silent)" if r["big"] else ""),
             f"{r['E']:.4f} [{lo:.4f}, {hi:.4f}]", "yes" if r["E_holds"] else "NO",
-            f"{r['E_half_pct']:.0f} %",
+            f"{r['E_half_pct']:.0f} %", f"{r['clock_error_ms']:+.1f}",
             f"{sum(0 <= v <= 1 for v in q)} of {len(q)}, {np.mean(q):.2f}" if q else "–",
         ])
-    pooled = [
-        ["depth mean within +-5 um and sd at most 10 um", f"{f['depth_ok']} of {f['designs']}"],
-        ["stated depth sd, median of the designs' medians (um)",
-         f"{f['stated_median_um']:.1f}"],
-        ["z-scores: presses, mean, sd", f"{f['z_n']}, {f['z_mean']:+.2f}, {f['z_sd']:.2f}"],
-        ["E's 95 % interval holds 0.2 MPa", f"{f['E_holds']} of {f['designs']}"],
-        ["E's half-width at most 20 %", f"{f['E_narrow']} of {f['designs']}"],
-        ["largest depth error (um); presses over 50 um without a refusal or warning",
-         f"{f['largest_um']:.1f}; {f['silent']}"],
-        ["the true crossing inside its bracket", f"{f['q_inside']} of {f['q_n']} presses"],
-        ["its place in the bracket (0 start, 1 end): mean; deciles",
-         f"{f['q_mean']:.2f}; {f['q_deciles']}"],
-        ["calibrate over decoding every frame once, same run (median)",
-         f"{f['cal_over_decode']:.1f} times ({f['cal_s'][0]:.1f} to {f['cal_s'][1]:.1f} s)"],
-    ]
-    cols = ["design", "shadows", "frames/s", "approach (mm/s)", "travel a frame (um)",
+
+    def pooled(rows: list[dict], bracket: bool) -> list[list[str]]:
+        f = b.figures(rows)
+        clock = np.array([r["clock_error_ms"] for r in rows])
+        out = [
+            ["depth mean within +-5 um and sd at most 10 um",
+             f"{f['depth_ok']} of {f['designs']}"],
+            ["stated depth sd, median of the designs' medians (um)",
+             f"{f['stated_median_um']:.1f}"],
+            ["z-scores: presses, mean, sd",
+             f"{f['z_n']}, {f['z_mean']:+.2f}, {f['z_sd']:.2f}"],
+            ["E's 95 % interval holds 0.2 MPa", f"{f['E_holds']} of {f['designs']}"],
+            ["E's half-width at most 20 %", f"{f['E_narrow']} of {f['designs']}"],
+            ["largest depth error (um); presses over 50 um without a refusal or warning",
+             f"{f['largest_um']:.1f}; {f['silent']}"],
+            ["clock offset error: RMS, largest (ms)",
+             f"{float(np.sqrt(np.mean(clock ** 2))):.1f}, {float(np.abs(clock).max()):.1f}"],
+        ]
+        if bracket:
+            out += [["the true crossing inside its bracket",
+                     f"{f['q_inside']} of {f['q_n']} presses"],
+                    ["its place in the bracket (0 start, 1 end): mean; deciles",
+                     f"{f['q_mean']:.2f}; {f['q_deciles']}"]]
+        out.append(["calibrate over decoding every frame once, same run (median)",
+                    f"{f['cal_over_decode']:.1f} times ({f['cal_s'][0]:.1f} to "
+                    f"{f['cal_s'][1]:.1f} s)"])
+        return out
+
+    cols = ["design", "kind", "frames/s", "approach (mm/s)", "travel a frame (um)",
             "certified", "depth error (um): mean, sd", "z sd", "stated sd median (um)",
             "largest error (um)", "E [95 %] (MPa)", "holds 0.2", "half-width",
-            "crossing in bracket: n, mean place"]
+            "clock error (ms)", "crossing in bracket: n, mean place"]
+    fm = b.figures(marks)
     return Result([
-        Table("Pooled", ["figure", "value"], pooled),
+        Table("The marks", ["figure", "value"], pooled(marks, True)),
+        Table("The verniers", ["figure", "value"], pooled(verniers, False)),
         Table("Per design", cols, per,
               note="Depth errors over the certified presses against each press's true depth "
                    "over its force window; z: error over the sd the press states (its "
                    "indenter's shared part counted once). The bracket: the frame period "
-                   "the mark rule says the press crossed w0 in, where the rule takes the "
-                   "crossing as uniform."),
-    ], summary=f"{f['depth_ok']} of {f['designs']} designs with depths within +-5 um "
-               f"(sd at most 10 um); E held the truth on {f['E_holds']}; the true crossing "
-               f"lay inside its bracket on {f['q_inside']} of {f['q_n']} presses.")
+                   "a mark's press crossed w0 in, by the mark rule, which takes the crossing "
+                   "as uniform over it."),
+    ], summary=f"Marks: {fm['depth_ok']} of {fm['designs']} designs with depths within +-5 "
+               f"um (sd at most 10 um); E held the truth on {fm['E_holds']}; the true "
+               f"crossing lay inside its bracket on {fm['q_inside']} of {fm['q_n']} presses.")
 
 
 @subject(
