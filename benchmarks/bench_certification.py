@@ -41,15 +41,29 @@ def bulge() -> None:
               + "; land meets it at w = " + ", ".join(f"{v:.4f}" for v in wc) + " mm")
 
 
-def sensitivity() -> None:
-    print("2. E and nu when every certified depth is short of the truth by d")
+#: The shared depth errors :func:`sensitivity_rows` tries, mm (every press short by d).
+SHORT_MM = (0.0, 0.00025, 0.001)
+
+
+def sensitivity_rows(shorts_mm: tuple[float, ...] = SHORT_MM) -> list[tuple[float, float, float,
+                                                                          float]]:
+    """E and nu fitted to exact FEM presses (E 0.20 MPa, nu 0.48, ten per indenter) whose
+    certified depths are all short of the truth by d: ``(d_um, E error %, nu error,
+    beta)`` per d."""
     p = press_profile(A / H, 0.48, w_over_h_max=0.22, steps=11)
     w = np.repeat(W0, 10)
     force = 0.20 * H * H * PchipInterpolator(p.w_over_h, p.force)(w / H)
-    for d in (0.0, 0.00025, 0.001):
+    rows = []
+    for d in shorts_mm:
         f = fit_indentation(w - d, force, thickness_mm=H, radius_mm=A)
-        print(f"  d = {1e3 * d:.2f} um: E {100 * (f.E_mpa / 0.2 - 1):+.2f}%, "
-              f"nu {f.nu - 0.48:+.4f}, beta {f.beta:.4f}")
+        rows.append((1e3 * d, 100 * (f.E_mpa / 0.2 - 1), f.nu - 0.48, f.beta))
+    return rows
+
+
+def sensitivity() -> None:
+    print("2. E and nu when every certified depth is short of the truth by d")
+    for d, e, nu, beta in sensitivity_rows():
+        print(f"  d = {d:.2f} um: E {e:+.2f}%, nu {nu:+.4f}, beta {beta:.4f}")
 
 
 def bevel_bulge() -> None:

@@ -608,6 +608,24 @@ def _ft_zero(quick: bool) -> Result:
                           f"at most {moved:.1f} % against the reference.")
 
 
+@subject(
+    "depth_error_sensitivity", "Calibrate: what a depth error every press shares does to E and nu",
+    """Exact presses of the sample session's gel (the finite-strain FEM's force against depth
+    for a bonded punch, a = 2.5 mm, h = 3 mm, E = 0.20 MPa, nu = 0.48; ten presses at each of
+    w0 = 0.15 to 0.60 mm) fitted by eq. (5) with their depths all certified short of the
+    truth by d: nu comes from beta, the curvature of P/w against w, so a depth error every
+    press shares moves it, and E with it, far more than the same error at random.""",
+    ["python benchmarks/bench_certification.py --skip-bevel"])
+def _depth_error_sensitivity(quick: bool) -> Result:
+    import bench_certification as b
+    rows = [[f"{d:.2f}", f"{e:+.2f} %", f"{nu:+.4f}", f"{beta:.4f}"]
+            for d, e, nu, beta in b.sensitivity_rows()]
+    return Result([Table("E and nu against a shared depth error",
+                         ["every depth short by (um)", "E error", "nu error", "beta"], rows,
+                         note="eq. (5) with the FEM tables (`fit_indentation` defaults), "
+                              "50 presses, no noise: the errors are the bias alone.")])
+
+
 MARK_SWEEP_SEED = 9931
 MARK_SWEEP_CACHE_ENV = "TACTILEVISION_MARK_SWEEP"
 
