@@ -36,6 +36,35 @@ def one_fit_s(repeat: int = 20) -> float:
     return (time.perf_counter() - t0) / repeat
 
 
+#: The targets :func:`meets` tries on the paper's block: (E %, nu).
+TARGETS = ((4.0, 0.01), (3.0, 0.01))
+
+
+def meets(sessions: int = 300, seed: int = 5, targets=TARGETS) -> list[dict]:
+    """For each (E %, nu) target on the paper's block: ``recommend``'s cheapest design, its
+    planned totals, and the RMS errors of E (%) and nu over `sessions` sessions drawn of it
+    (``bench_plan.scatter``: the FEM's forces, the design's noise, each fitted as
+    ``calibrate`` fits)."""
+    from bench_plan import scatter
+
+    d = read_design(PAPER)
+    out = []
+    for e_pct, nu in targets:
+        c = recommend(d, target_E_pct=e_pct, target_nu=nu).cheapest
+        row = {"target_E_pct": e_pct, "target_nu": nu, "found": c is not None}
+        if c is not None:
+            est, _ = scatter(c.design, sessions, seed)
+            ok = np.isfinite(est).all(axis=1)
+            err = np.column_stack([100 * (est[ok, 0] / c.design.E_mpa - 1),
+                                   est[ok, 1] - c.design.nu])
+            rms = np.sqrt(np.mean(err ** 2, axis=0))
+            row.update(presses=c.n_presses, what=c.what, plan_E_pct=c.E_total_pct,
+                       plan_nu=c.nu_total, rms_E_pct=float(rms[0]), rms_nu=float(rms[1]),
+                       computed=int(ok.sum()), sessions=sessions)
+        out.append(row)
+    return out
+
+
 def main() -> int:
     d = read_design(PAPER)
     f0 = one_fit_s()

@@ -626,6 +626,39 @@ def _depth_error_sensitivity(quick: bool) -> Result:
                               "50 presses, no noise: the errors are the bias alone.")])
 
 
+@subject(
+    "plan_recommend", "Plan: the cheapest design for targets, against sessions drawn of it",
+    """`tactilevision.planning.recommend` on the paper's gauge block
+    (`sample_frames/plan/paper_gauge_block.toml`) with targets for E's and nu's total
+    errors: the cheapest design it finds, and 300 sessions drawn of that design (the
+    finite-strain FEM's forces at its depths, its own noise: the F/T over the window, each
+    certified depth off by the design's depth sd), each fitted as `calibrate` fits: their
+    RMS errors of E and nu against the targets (100 with --quick).""",
+    ["python benchmarks/bench_plan_recommend.py"])
+def _plan_recommend(quick: bool) -> Result:
+    import bench_plan_recommend as b
+    rows = []
+    for m in b.meets(100 if quick else 300):
+        if not m["found"]:
+            rows.append([f"{m['target_E_pct']:g} %", f"{m['target_nu']:g}", "none found",
+                         "", "", "", ""])
+            continue
+        rows.append([f"{m['target_E_pct']:g} %", f"{m['target_nu']:g}",
+                     f"{m['presses']} presses ({m['what']})",
+                     f"{m['plan_E_pct']:.2f} %, {m['plan_nu']:.4f}",
+                     f"{m['rms_E_pct']:.2f} %, {m['rms_nu']:.4f}",
+                     f"{m['rms_E_pct'] / m['target_E_pct']:.2f}, "
+                     f"{m['rms_nu'] / m['target_nu']:.2f}",
+                     f"{m['computed']} of {m['sessions']}"])
+    return Result([Table("The cheapest design against drawn sessions",
+                         ["target E", "target nu", "cheapest design", "planned E, nu",
+                          "drawn sessions' RMS E, nu", "RMS over target: E, nu",
+                          "sessions fitted"], rows,
+                         note="The drawn sessions share the plan's force law and noise "
+                              "model: the check is that the recommendation meets its "
+                              "targets under that model, not that the model is your lab's.")])
+
+
 MARK_SWEEP_SEED = 9931
 MARK_SWEEP_CACHE_ENV = "TACTILEVISION_MARK_SWEEP"
 
