@@ -98,6 +98,35 @@ def rows(fit: Path | None) -> tuple[list[dict], str, object]:
     return out, f"E {E:.4g} MPa, nu {nu:.4g}, beta {beta:.3g} from {source}", prof
 
 
+def by_depth(got: list[dict]) -> list[dict]:
+    """Per w0, over the presses of :func:`rows`: ``{"w0", "n", <map>: (median, lo, hi),
+    "face <map>": median}`` for the four maps of :data:`MAPS` (the face depths of the last
+    three)."""
+    out = []
+    for w0 in sorted({r["w0"] for r in got}):
+        sub = [r for r in got if r["w0"] == w0]
+        d: dict = {"w0": w0, "n": len(sub)}
+        for m in MAPS:
+            v = np.array([r[m] for r in sub])
+            d[m] = (float(np.median(v)), float(v.min()), float(v.max()))
+        for m in MAPS[1:]:
+            d[f"face {m}"] = float(np.median([r[f"face {m}"] for r in sub]))
+        out.append(d)
+    return out
+
+
+def rises(prof, w0s, h: float, far_mm: float = 9.0) -> list[tuple[float, float, float, float]]:
+    """How far the true surface rises beyond the sink-in: per w0 (mm), ``(w0, the largest
+    rise (um), its distance from the axis (mm), the rise at far_mm (um))``."""
+    radii = np.linspace(0.0, far_mm, 361)
+    out = []
+    for w0 in sorted(set(w0s)):
+        d = prof.depth_at(w0 / h, radii / h) * h
+        k = int(np.argmin(d))
+        out.append((float(w0), float(-1e3 * d[k]), float(radii[k]), float(-1e3 * d[-1])))
+    return out
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--fit", type=Path, default=ROOT / "out" / "calibration" / "fit.json")
@@ -106,22 +135,14 @@ def main() -> None:
     print(f"{len(got)} presses of {SESSION.name}; {source}")
     print("w0 (mm) | n | " + " | ".join(f"Fz/true, {m}" for m in MAPS)
           + " | face depth / true: true pinned, frame pinned, frame far field")
-    for w0 in sorted({r["w0"] for r in got}):
-        sub = [r for r in got if r["w0"] == w0]
-        cells = []
-        for m in MAPS:
-            v = np.array([r[m] for r in sub])
-            cells.append(f"{np.median(v):.3f} [{v.min():.3f}, {v.max():.3f}]")
-        faces = [f"{np.median([r[f'face {m}'] for r in sub]):.3f}" for m in MAPS[1:]]
-        print(f"{w0:g} | {len(sub)} | " + " | ".join(cells) + " | " + ", ".join(faces))
+    for d in by_depth(got):
+        cells = [f"{d[m][0]:.3f} [{d[m][1]:.3f}, {d[m][2]:.3f}]" for m in MAPS]
+        faces = [f"{d[f'face {m}']:.3f}" for m in MAPS[1:]]
+        print(f"{d['w0']:g} | {d['n']} | " + " | ".join(cells) + " | " + ", ".join(faces))
     h = float(json.loads((SESSION / "truth.json").read_text())["thickness_mm"])
-    radii = np.linspace(0.0, 9.0, 361)
-    for w0 in sorted({row["w0"] for row in got}):
-        d = prof.depth_at(w0 / h, radii / h) * h
-        k = int(np.argmin(d))
-        print(f"true surface at w = {w0:g} mm: rises {-1e3 * d[k]:.0f} um at r = "
-              f"{radii[k]:.2f} mm from the axis, {-1e3 * d[-1]:.0f} um at {radii[-1]:g} mm")
-
+    for w0, rise, at, far in rises(prof, [r["w0"] for r in got], h):
+        print(f"true surface at w = {w0:g} mm: rises {rise:.0f} um at r = "
+              f"{at:.2f} mm from the axis, {far:.0f} um at 9 mm")
 
 if __name__ == "__main__":
     main()

@@ -178,28 +178,25 @@ def figure(path: Path, rows: list[dict], mm: float, h_mm: float, E: float, nu: f
     plt.close(fig)
 
 
-def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--presses", type=int, default=None, help="only the first N held-out presses")
-    ap.add_argument("--figure", type=Path, default=None, help="write the figure (PNG) here")
-    ap.add_argument("--mm-per-px", type=float, default=0.0806)
-    ap.add_argument("--thickness-mm", type=float, default=3.0)
-    ap.add_argument("--E-mpa", type=float, default=0.2)
-    ap.add_argument("--nu", type=float, default=0.48)
-    args = ap.parse_args(argv)
-    if not SET.is_dir():
-        print(f"GelSlim 3.0 frames not found at {SET}", file=sys.stderr)
-        return 1
-    mm, kw = args.mm_per_px, dict(thickness_mm=args.thickness_mm, E_mpa=args.E_mpa, nu=args.nu,
-                                  threshold_mm=0.01)
-    ps = read_ball_presses(SET)
+def measure(set_dir: Path = SET, *, presses: int | None = None, mm: float = 0.0806,
+            thickness_mm: float = 3.0, E_mpa: float = 0.2, nu: float = 0.48,
+            log=print) -> dict:
+    """Calibrate on the even presses of `set_dir`, map the held-out ones, time the steps.
+
+    Prints through `log` what the command prints. Returns ``{"n_presses", "shape",
+    "markers", "rows": [{"name", "height", "fm", "flow", "c", "r", "m"}] (one a held-out
+    press; ``m`` its figures, :func:`press_metrics` and more), "summary"``:
+    :func:`summaries`' figures (None without presses), ``"speed"``: :func:`speed`'s}``.
+    """
+    kw = dict(thickness_mm=thickness_mm, E_mpa=E_mpa, nu=nu, threshold_mm=0.01)
+    ps = read_ball_presses(set_dir)
     t0 = time.perf_counter()
     cc, rr = detect_contact_circles(ps.frames, ps.reference)
     t_detect = time.perf_counter() - t0
     t0 = time.perf_counter()
     cal = PhotometricCalibration.from_ball_presses(ps.reference, ps.frames[0::2],
                                                    ball_radius_mm=BALL_MM, mm_per_px=mm,
-                                                   model="lut", source=str(SET))
+                                                   model="lut", source=str(set_dir))
     t_cal = time.perf_counter() - t0
     t0 = time.perf_counter()
     recon = DepthReconstructor(cal)
@@ -214,17 +211,17 @@ def main(argv: list[str] | None = None) -> int:
     t0 = time.perf_counter()
     markers = marker_centres(ps.reference)
     t_markers = time.perf_counter() - t0
-    print(f"set_2020_09: {len(ps.frames)} presses, {shape[1]} x {shape[0]} px; calibration "
-          f"(LUT, even presses, markers {cal.markers}) {t_cal:.1f} s; circles detected in "
-          f"{t_detect:.1f} s; {len(markers)} markers in ref.jpg ({t_markers * 1e3:.0f} ms)")
-    print(f"assumed: h {args.thickness_mm} mm, E {args.E_mpa} MPa, nu {args.nu}, {mm} mm/px, "
-          f"ball radius {BALL_MM} mm\n")
-    idx = np.arange(1, len(ps.frames), 2)[: args.presses]
+    log(f"{set_dir.name}: {len(ps.frames)} presses, {shape[1]} x {shape[0]} px; calibration "
+        f"(LUT, even presses, markers {cal.markers}) {t_cal:.1f} s; circles detected in "
+        f"{t_detect:.1f} s; {len(markers)} markers in ref.jpg ({t_markers * 1e3:.0f} ms)")
+    log(f"assumed: h {thickness_mm} mm, E {E_mpa} MPa, nu {nu}, {mm} mm/px, "
+        f"ball radius {BALL_MM} mm\n")
+    idx = np.arange(1, len(ps.frames), 2)[:presses]
     hdr = (f"{'press':>13s} {'r px':>5s} {'Fx N':>7s} {'Fy N':>7s} {'Fz N':>6s} {'pmax kPa':>8s} "
            f"{'pos':>5s} {'cen px':>6s} {'in1.2r':>6s} {'Hertz N':>7s} {'tracks':>6s} {'d px':>5s} "
            f"{'Ft^d':>5s} "
            f"{'| 1.5r: Fz/Fz':>13s} {'in1.2r':>6s} {'cen px':>6s} {'r_eq/r':>6s}")
-    print(hdr)
+    log(hdr)
     rows, t_solve = [], []
     for i in idx:
         f = ps.frames[i]
@@ -245,22 +242,42 @@ def main(argv: list[str] | None = None) -> int:
                  marker_px=float(np.linalg.norm(d)),
                  wide_centroid=mw["centroid"],
                  wide_r=float(np.sqrt(wide.contact.sum() / np.pi) / rr[i]),
-                 hertz=hertz_n(0.85 * rr[i] * mm, BALL_MM, args.E_mpa, args.nu),
+                 hertz=hertz_n(0.85 * rr[i] * mm, BALL_MM, E_mpa, nu),
                  tracks=float(flow.valid.mean()))
         rows.append(dict(name=ps.names[i], height=h, fm=fm, flow=flow, c=cc[i], r=rr[i], m=m))
         F = m["F"]
-        print(f"{ps.names[i]:>13s} {rr[i]:5.1f} {F[0]:7.3f} {F[1]:7.3f} {F[2]:6.2f} "
-              f"{m['pmax']:8.0f} {m['positive']:5.3f} {m['centroid']:6.1f} {m['within']:6.3f} "
-              f"{m['hertz']:7.2f} {m['tracks']:6.3f} {m['marker_px']:5.1f} {m['angle']:5.0f} "
-              f"{m['wide_ratio']:13.2f} "
-              f"{m['wide_within']:6.3f} {m['wide_centroid']:6.1f} {m['wide_r']:6.2f}")
+        log(f"{ps.names[i]:>13s} {rr[i]:5.1f} {F[0]:7.3f} {F[1]:7.3f} {F[2]:6.2f} "
+            f"{m['pmax']:8.0f} {m['positive']:5.3f} {m['centroid']:6.1f} {m['within']:6.3f} "
+            f"{m['hertz']:7.2f} {m['tracks']:6.3f} {m['marker_px']:5.1f} {m['angle']:5.0f} "
+            f"{m['wide_ratio']:13.2f} "
+            f"{m['wide_within']:6.3f} {m['wide_centroid']:6.1f} {m['wide_r']:6.2f}")
 
     ms = [r["m"] for r in rows]
-    if rows:
-        summaries(ms)
-    speed(ps, recon, est_fast, shape, markers, t_solve,
-          dict(recon=t_recon, fast=t_fast, full=t_full, cal=t_cal))
+    summary = summaries(ms, log) if rows else None
+    rates = speed(ps, recon, est_fast, shape, markers, t_solve,
+                  dict(recon=t_recon, fast=t_fast, full=t_full, cal=t_cal), log)
+    return {"n_presses": len(ps.frames), "shape": shape, "markers": len(markers),
+            "rows": rows, "summary": summary, "speed": rates}
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--presses", type=int, default=None, help="only the first N held-out presses")
+    ap.add_argument("--figure", type=Path, default=None, help="write the figure (PNG) here")
+    ap.add_argument("--mm-per-px", type=float, default=0.0806)
+    ap.add_argument("--thickness-mm", type=float, default=3.0)
+    ap.add_argument("--E-mpa", type=float, default=0.2)
+    ap.add_argument("--nu", type=float, default=0.48)
+    args = ap.parse_args(argv)
+    if not SET.is_dir():
+        print(f"GelSlim 3.0 frames not found at {SET}", file=sys.stderr)
+        return 1
+    mm = args.mm_per_px
+    got = measure(SET, presses=args.presses, mm=mm, thickness_mm=args.thickness_mm,
+                  E_mpa=args.E_mpa, nu=args.nu)
+    rows = got["rows"]
     if args.figure and len(rows) >= 3:
+        ms = [r["m"] for r in rows]
         pick = np.argsort([m["F"][2] for m in ms])
         sel = [rows[k] for k in pick[[0, len(pick) // 2, -1]]]
         figure(args.figure, sel, mm, args.thickness_mm, args.E_mpa, args.nu)
@@ -268,34 +285,55 @@ def main(argv: list[str] | None = None) -> int:
     return 0
 
 
-def summ(name: str, vals, fmt: str = ".2f") -> None:
+#: The figures :func:`summaries` gives over the presses: (key, label, the value of a
+#: press's figures ``m``, format), for the detected circle and for the 1.5 r footprint.
+CIRCLE = [
+    ("fz", "Fz (N)", lambda m: m["F"][2], ".2f"),
+    ("tangential", "|(Fx, Fy)| / Fz", lambda m: np.hypot(*m["F"][:2]) / m["F"][2], ".2f"),
+    ("marker", "mean marker motion in the circle, d (px)", lambda m: m["marker_px"], ".1f"),
+    ("angle", "angle between (Fx, Fy) and d (deg)", lambda m: m["angle"], ".0f"),
+    ("hertz", "Fz / Hertz half-space", lambda m: m["F"][2] / m["hertz"], ".2f"),
+    ("pmax", "max pressure (kPa)", lambda m: m["pmax"], ".0f"),
+    ("positive", "share of |Fz| compressive (1 by construction: tensile nodes leave the "
+     "footprint)", lambda m: m["positive"], ".3f"),
+    ("centroid", "pressure centroid to circle centre (px)", lambda m: m["centroid"], ".1f"),
+    ("within", "share of Fz within 1.2 r (1 by construction)", lambda m: m["within"], ".3f"),
+    ("tracks", "valid marker tracks", lambda m: m["tracks"], ".3f"),
+]
+WIDE = [
+    ("wide_ratio", "Fz / Fz(circle)", lambda m: m["wide_ratio"], ".2f"),
+    ("wide_within", "share of Fz within 1.2 r", lambda m: m["wide_within"], ".3f"),
+    ("wide_centroid", "pressure centroid to circle centre (px)", lambda m: m["wide_centroid"],
+     ".1f"),
+    ("wide_r", "equivalent radius of the final contact / r", lambda m: m["wide_r"], ".2f"),
+]
+
+
+def summ(name: str, vals, fmt: str = ".2f", log=print) -> tuple[float, float, float]:
+    """Print the median and range of `vals`; return them."""
     v = np.asarray(vals, float)
-    print(f"  {name}: median {np.median(v):{fmt}}, range {v.min():{fmt}} to {v.max():{fmt}}")
+    log(f"  {name}: median {np.median(v):{fmt}}, range {v.min():{fmt}} to {v.max():{fmt}}")
+    return float(np.median(v)), float(v.min()), float(v.max())
 
 
-def summaries(ms: list[dict]) -> None:
-    """Medians and ranges over the presses."""
-    print(f"\n{len(ms)} held-out presses, footprint = detected circle:")
-    summ("Fz (N)", [m["F"][2] for m in ms])
-    summ("|(Fx, Fy)| / Fz", [np.hypot(*m["F"][:2]) / m["F"][2] for m in ms])
-    summ("mean marker motion in the circle, d (px)", [m["marker_px"] for m in ms], ".1f")
-    summ("angle between (Fx, Fy) and d (deg)", [m["angle"] for m in ms], ".0f")
-    summ("Fz / Hertz half-space", [m["F"][2] / m["hertz"] for m in ms])
-    summ("max pressure (kPa)", [m["pmax"] for m in ms], ".0f")
-    summ("share of |Fz| compressive (1 by construction: tensile nodes leave the footprint)",
-         [m["positive"] for m in ms], ".3f")
-    summ("pressure centroid to circle centre (px)", [m["centroid"] for m in ms], ".1f")
-    summ("share of Fz within 1.2 r (1 by construction)", [m["within"] for m in ms], ".3f")
-    summ("valid marker tracks", [m["tracks"] for m in ms], ".3f")
-    print("footprint = 1.5 r (the non-negativity sweep decides the contact):")
-    summ("Fz / Fz(circle)", [m["wide_ratio"] for m in ms])
-    summ("share of Fz within 1.2 r", [m["wide_within"] for m in ms], ".3f")
-    summ("pressure centroid to circle centre (px)", [m["wide_centroid"] for m in ms], ".1f")
-    summ("equivalent radius of the final contact / r", [m["wide_r"] for m in ms])
+def summaries(ms: list[dict], log=print) -> dict[str, tuple[float, float, float]]:
+    """Medians and ranges over the presses, printed: ``{key: (median, least, most)}`` for
+    the keys of :data:`CIRCLE` and :data:`WIDE`."""
+    out = {}
+    log(f"\n{len(ms)} held-out presses, footprint = detected circle:")
+    for key, name, value, fmt in CIRCLE:
+        out[key] = summ(name, [value(m) for m in ms], fmt, log)
+    log("footprint = 1.5 r (the non-negativity sweep decides the contact):")
+    for key, name, value, fmt in WIDE:
+        out[key] = summ(name, [value(m) for m in ms], fmt, log)
+    return out
 
 
-def speed(ps, recon, est_fast, shape, markers, t_solve, setup: dict) -> None:
-    """Per-frame times on one core (and set-up times)."""
+def speed(ps, recon, est_fast, shape, markers, t_solve, setup: dict, log=print) -> dict:
+    """Per-frame times on one core (and set-up times), printed: ``{"height", "force",
+    "both", "tracking"}``: (frames/s by the wall clock, by CPU time); ``"parts_ms"``:
+    {part: ms of CPU time}; ``"lateral_ms"``, ``"solve_s"`` (median, least, most, or
+    None), ``"setup"`` (as given), ``"load"`` (the load average), ``"cores"``."""
     frames = ps.frames[1::2][:8]
     heights = [recon(f) for f in frames]
     assert heights[0].dtype == np.float32
@@ -306,13 +344,14 @@ def speed(ps, recon, est_fast, shape, markers, t_solve, setup: dict) -> None:
     flow = track_markers(ps.reference, frames[0], positions_px=markers)
     f_lat = rate(lambda fl: lateral_displacement(fl, shape, recon.calibration.mm_per_px),
                  [flow], 5)
-    print(f"\nspeed on one core, {shape[1]} x {shape[0]}, frames/s by the wall clock (by CPU "
-          f"time; load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores):")
-    print(f"  frame -> height map (LUT, markers filled): {f_h[0]:.0f} ({f_h[1]:.0f})")
-    print(f"  height map -> force map (spectral, 'normal', 'field', float32): {f_f[0]:.0f} "
-          f"({f_f[1]:.0f})")
-    print(f"  frame -> height map -> force map: {f_hf[0]:.0f} ({f_hf[1]:.0f}); issue 6 target "
-          ">= 90")
+    load = os.getloadavg()[0]
+    log(f"\nspeed on one core, {shape[1]} x {shape[0]}, frames/s by the wall clock (by CPU "
+        f"time; load average {load:.1f} on {os.cpu_count()} cores):")
+    log(f"  frame -> height map (LUT, markers filled): {f_h[0]:.0f} ({f_h[1]:.0f})")
+    log(f"  height map -> force map (spectral, 'normal', 'field', float32): {f_f[0]:.0f} "
+        f"({f_f[1]:.0f})")
+    log(f"  frame -> height map -> force map: {f_hf[0]:.0f} ({f_hf[1]:.0f}); issue 6 target "
+        ">= 90")
     f0, h0 = frames[0], heights[0]
     gx, gy = recon.gradients(f0)
     solver = PoissonSolver(shape)
@@ -320,16 +359,22 @@ def speed(ps, recon, est_fast, shape, markers, t_solve, setup: dict) -> None:
              ("colour -> gradients (lookup, marker mask and fill)", recon.gradients),
              ("Poisson integration", lambda f: solver(gx, gy)),
              ("spectral force map", lambda f: est_fast(h0))]
-    print("  per frame, ms of CPU time: " + "; ".join(
-        f"{name} {1e3 / rate(fn, [f0], 50)[1]:.1f}" for name, fn in parts))
-    print(f"  marker tracking: {f_tr[0]:.0f} ({f_tr[1]:.0f}) frames/s; lateral field "
-          f"(thin-plate spline, step 4 px): {1e3 / f_lat[1]:.0f} ms of CPU time")
+    parts_ms = {name: 1e3 / rate(fn, [f0], 50)[1] for name, fn in parts}
+    log("  per frame, ms of CPU time: " + "; ".join(
+        f"{name} {ms:.1f}" for name, ms in parts_ms.items()))
+    log(f"  marker tracking: {f_tr[0]:.0f} ({f_tr[1]:.0f}) frames/s; lateral field "
+        f"(thin-plate spline, step 4 px): {1e3 / f_lat[1]:.0f} ms of CPU time")
+    solve = None
     if t_solve:
-        print(f"  'full' footprint solve (conjugate gradients), per press: median "
-              f"{np.median(t_solve):.1f} s, {min(t_solve):.1f} to {max(t_solve):.1f} s")
-    print(f"  set-up: DepthReconstructor {1e3 * setup['recon']:.0f} ms, ForceEstimator "
-          f"'normal' {1e3 * setup['fast']:.0f} ms, 'full' {1e3 * setup['full']:.0f} ms; "
-          f"calibration {setup['cal']:.1f} s")
+        solve = (float(np.median(t_solve)), min(t_solve), max(t_solve))
+        log(f"  'full' footprint solve (conjugate gradients), per press: median "
+            f"{solve[0]:.1f} s, {solve[1]:.1f} to {solve[2]:.1f} s")
+    log(f"  set-up: DepthReconstructor {1e3 * setup['recon']:.0f} ms, ForceEstimator "
+        f"'normal' {1e3 * setup['fast']:.0f} ms, 'full' {1e3 * setup['full']:.0f} ms; "
+        f"calibration {setup['cal']:.1f} s")
+    return {"height": f_h, "force": f_f, "both": f_hf, "tracking": f_tr,
+            "parts_ms": parts_ms, "lateral_ms": 1e3 / f_lat[1], "solve_s": solve,
+            "setup": setup, "load": load, "cores": os.cpu_count()}
 
 
 if __name__ == "__main__":

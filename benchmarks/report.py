@@ -1071,6 +1071,25 @@ def _forces_closed_forms(quick: bool) -> Result:
     ])
 
 
+#: The shipped gauge-block session the force subjects read.
+SAMPLE_SESSION = ROOT / "sample_frames" / "gelsight_session"
+
+
+def _sample_fit(folder: Path) -> Path:
+    """Calibrate the sample session as the README's first command does (`tactilevision
+    calibrate sample_frames/gelsight_session`), into `folder`/calibration; its fit.json."""
+    from contextlib import redirect_stdout
+    from io import StringIO
+
+    from tactilevision.cli import main as cli
+    out = folder / "calibration"
+    with redirect_stdout(StringIO()):
+        rc = cli(["calibrate", str(SAMPLE_SESSION), "--out", str(out), "--no-progress"])
+    if rc != 0:
+        raise RuntimeError(f"calibrate of {SAMPLE_SESSION} failed with status {rc}")
+    return out / "fit.json"
+
+
 #: The forces command's faster choices the report measures beside its default
 #: (``bench_forces_default.VARIANTS``).
 FASTER = ("fem", "far_field", "far_field_fem")
@@ -1095,13 +1114,8 @@ FASTER = ("fem", "far_field", "far_field_fem")
 def _forces_default(quick: bool) -> Result:
     import bench_forces_default as b
 
-    from tactilevision.cli import main as cli
     with tempfile.TemporaryDirectory() as tmp:
-        rc = cli(["calibrate", str(b.SESSION), "--out", str(Path(tmp) / "calibration"),
-                  "--no-progress"])
-        if rc != 0:
-            raise RuntimeError(f"calibrate of {b.SESSION} failed with status {rc}")
-        fit_path = Path(tmp) / "calibration" / "fit.json"
+        fit_path = _sample_fit(Path(tmp))
         fit = json.loads(fit_path.read_text())
         runs = b.variant_rows(fit_path, 6 if quick else 3, ["default", *FASTER])
     r = runs[0]
@@ -1160,6 +1174,153 @@ def _forces_default(quick: bool) -> Result:
     ])
 
 
+def _span(lo: float, hi: float, fmt: str = ".3f") -> str:
+    return f"{lo:{fmt}} to {hi:{fmt}}"
+
+
+@subject(
+    "forces_fem", "Forces: the FEM model against a finer pad and Hayes",
+    """`ForceEstimator(method='fem')` (the condensed top-surface stiffness of a 40 x 30-node
+    B-bar pad) on surfaces it did not make. First the top surface of a finer pad (80 x 60 x 8
+    B-bar hexahedra, non-nested, bottom bonded, sides free, assembled by the benchmark with
+    scikit-fem) under a known Hertz pressure (0.5 N on a disc of 3 mm at nu 0.45 and 0.49,
+    and of 2.5 mm at nu 0.45), 200 x 150 px at 0.2 mm/px, a 4 mm pad, E 0.2 MPa: the total
+    against the load, 'field' and 'footprint' with the default threshold (0.01 mm, the
+    sink-in included) or a given mask. Then 'footprint' on the default grid (427 x 320 px at
+    0.0806 mm/px, nodes 0.88 mm apart, a 3 mm layer, nu 0.48) on rigid profiles, zero off the
+    contact: flat punches 0.1 mm deep against Hayes (1972) (kappa from
+    `tactilevision.mechanics.kappa`), the spectral method beside them, and rigid spheres
+    against the spectral method, each at three positions. --quick runs the same.""",
+    ["python benchmarks/bench_forces_fem.py"])
+def _forces_fem(quick: bool) -> Result:
+    import bench_forces_fem as b
+    finer = [[f"{r['a']:g}", f"{r['nu']:g}", r["reading"], _pct(r["total"]),
+              f"{100 * r['rms']:.1f} %", f"{100 * r['largest']:.1f} %",
+              "–" if r["nodes"] is None else r["nodes"]] for r in b.finer_rows()]
+    g = b.grid_rows()
+    places = ", ".join(f"({x:g}, {y:g})" for x, y in b.OFFSETS)
+    punches = []
+    for a in b.PUNCHES:
+        sub = [p for p in g["punches"] if p["a"] == a]
+        punches.append([f"{a:g}", f"{a / b.GRID_H:.2f}",
+                        ", ".join(f"{p['fem']:.3f}" for p in sub),
+                        ", ".join(f"{p['spectral']:.3f}" for p in sub)])
+    spheres = []
+    for R, depth in b.SPHERES:
+        sub = [x for x in g["spheres"] if (x["R"], x["depth"]) == (R, depth)]
+        spheres.append([f"{R:g}", f"{depth:g}", f"{sub[0]['a']:.2f}",
+                        ", ".join(f"{x['fem_over_spectral']:.3f}" for x in sub)])
+    fem = [p["fem"] for p in g["punches"]]
+    mid = [p["fem"] for p in g["punches"] if p["a"] == 2.5]
+    return Result([
+        Table("The FEM against a finer pad",
+              ["Hertz load's radius (mm)", "nu", "reading", "total - load",
+               "pressure rms inside the disc, of p0", "largest pressure error, of p0",
+               "contact nodes"], finer,
+              note="p0: the peak of the applied pressure's hat-weighted average at the "
+                   "estimator's nodes, against which each node's pressure is compared; the "
+                   "largest error over the nodes whose hat reaches the loaded disc."),
+        Table("The FEM's footprint on its default grid",
+              ["punch radius a (mm)", "a / h", "FEM / Hayes at the three positions",
+               "spectral / Hayes"], punches,
+              note=f"Positions, px off the image's centre (x, y): {places}. The spectral "
+                   "method at the full pixel resolution."),
+        Table("Rigid spheres against the spectral method",
+              ["R (mm)", "depth (mm)", "contact radius sqrt(2 R depth) (mm)",
+               "FEM / spectral at the three positions"], spheres,
+              note=f"The same grid, layer and positions ({places})."),
+    ], summary=f"On the default grid the FEM's 'footprint' reads the 2.5 mm punch at "
+               f"{_span(min(mid), max(mid))} of Hayes, every punch at "
+               f"{_span(min(fem), max(fem))}.")
+
+
+@subject(
+    "forces_decompose", "Forces: where the default path's error lies, press by press",
+    """On the shipped gauge-block session (`sample_frames/gelsight_session`), with E, nu and
+    beta of the fit the README's first command writes (`tactilevision calibrate
+    sample_frames/gelsight_session`, run here first), one hold frame per press (0.25 s into
+    its hold; the misaligned and the pad-edge press left out) read by
+    `ForceEstimator(contact='footprint')` four ways: the gel's true surface (the session's
+    own finite-strain FEM profile where the press was) against the indenter's true force,
+    the model's own error; that surface's gradients integrated as the default path
+    integrates a frame (zero outside the frame's contact mask), the pin's share; the frame
+    through the session's optics as the default path reads it, against the F/T log's force
+    (the indenter's and the bevel band's); the frame's whole-image height levelled on the
+    gel far from the contact, the optics' share without the pin. Then how far the true
+    surface rises beyond the sink-in. --quick runs the same.""",
+    ["python benchmarks/bench_forces_decompose.py --fit FIT"])
+def _forces_decompose(quick: bool) -> Result:
+    import bench_forces_decompose as b
+    with tempfile.TemporaryDirectory() as tmp:
+        fit = _sample_fit(Path(tmp))
+        got, source, prof = b.rows(fit)
+        material = source.split(" from ")[0]
+    depths = b.by_depth(got)
+    ratios = [[f"{d['w0']:g}", d["n"],
+               *(f"{d[m][0]:.3f} ({_span(d[m][1], d[m][2])})" for m in b.MAPS)]
+              for d in depths]
+    faces = [[f"{d['w0']:g}", *(f"{d[f'face {m}']:.3f}" for m in b.MAPS[1:])] for d in depths]
+    h = float(json.loads((b.SESSION / "truth.json").read_text())["thickness_mm"])
+    rise = [[f"{w0:g}", f"{up:.0f}", f"{at:.2f}", f"{far:.0f}"]
+            for w0, up, at, far in b.rises(prof, [r["w0"] for r in got], h)]
+    true = [d["true"][0] for d in depths]
+    return Result([
+        Table("Where the error lies, press by press",
+              ["w0 (mm)", "presses", "true surface / true force",
+               "true surface, pinned / true force", "frame, pinned / F/T (the default path)",
+               "frame, far field / F/T"], ratios,
+              note=f"Median (range) over the presses of each w0. {material}, from the fit "
+                   "of the session's own calibration."),
+        Table("The face's depth",
+              ["w0 (mm)", "true surface, pinned", "frame, pinned", "frame, far field"], faces,
+              note="The median height over the indenter's face, over the press's true "
+                   "depth (median over the presses)."),
+        Table("The true surface beyond the sink-in",
+              ["w0 (mm)", "largest rise (um)", "at r (mm from the axis)", "rise at 9 mm (um)"],
+              rise,
+              note=f"The session's finite-strain FEM profile, a {h:g} mm gel."),
+    ], summary=f"On the true surface the force model reads {_span(min(true), max(true))} of "
+               "the indenter's force at every depth.")
+
+
+@subject(
+    "forces_session", "Forces: per press, through optics calibrated per cell",
+    """Every press of the shipped gauge-block session (`sample_frames/gelsight_session`; the
+    misaligned and the pad-edge press left out), the middle 2 frames of its hold (1 with
+    --quick) through photometric stereo calibrated for the session's sensor (256 presses of
+    a 2 mm ball up to 1.4 mm deep rendered through its shading table, contacts allowed off
+    the image's edges, one colour table per cell of an 8 x 6 grid:
+    `PhotometricCalibration.from_ball_presses(..., lut_cells=(8, 6))`), the height pinned
+    to zero outside the contact, then `ForceEstimator` ('footprint', beta) with E, nu, beta
+    and the clock offset of the fit the README's first command writes (run here first):
+    per press, the frames' mean total over the F/T log's mean at the same frames.""",
+    ["python benchmarks/bench_forces_session.py --frames-per-press 2 --fit FIT"])
+def _forces_session(quick: bool) -> Result:
+    import bench_forces_session as b
+    k = 1 if quick else 2
+    with tempfile.TemporaryDirectory() as tmp:
+        m = b.measure(_sample_fit(Path(tmp)), frames_per_press=k)
+    rows = [[f"{d['w0']:g}", d["n"], f"{d['median']:.3f}", _span(d["lo"], d["hi"]),
+             f"{d['within5']:.0%}"] for d in m["by_depth"]]
+    deep = [d for d in m["by_depth"] if d["w0"] >= 0.3]
+    t = m["trend"]
+    trend = (f" Over the presses >= 0.3 mm deep a linear trend, ratio ~ {t['coef'][0]:.3f} "
+             f"{t['coef'][1]:+.4f} x_mm {t['coef'][2]:+.4f} y_mm {t['coef'][3]:+.3f} w0_mm, "
+             f"takes their sd from {t['sd']:.3f} to {t['sd_after']:.3f}." if t else "")
+    table = Table("Total over the F/T log, per press",
+                  ["w0 (mm)", "presses", "median total / F/T", "range", "within 5 %"], rows,
+                  note=f"The fit: E = {m['E']:.4f} MPa, nu = {m['nu']:.4f}, beta = "
+                       f"{m['beta']:.3f}, clock offset {m['offset']:.3f} s. {m['frames']} "
+                       f"frames ({k} a press), {m['ms_per_frame']:.0f} ms each (masked "
+                       f"Poisson and footprint solve); the optics' set-up "
+                       f"{m['setup_s']:.0f} s." + trend)
+    medians, within = [d["median"] for d in deep], [d["within5"] for d in deep]
+    return Result([table], summary=f"Presses 0.3 mm deep and more: median "
+                  f"{_span(min(medians), max(medians))} by depth, "
+                  f"{_span(min(within), max(within), '.0%')} of the presses within 5 % "
+                  "of the F/T log.")
+
+
 @subject(
     "batch_speedup", "Batch: two local workers against one process",
     """`tactilevision batch reconstruct` and `batch forces` on 2 local workers against one
@@ -1195,22 +1356,28 @@ def _batch_speedup(quick: bool) -> Result:
                               "allows on 2 cores.")])
 
 
+#: The thread-count variables a timing benchmark may set when first imported.
+THREAD_VARS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+
+
 @contextlib.contextmanager
 def _one_thread() -> Iterator[None]:
     """OpenCV held to one thread for the block, as the timing benchmarks hold it when first
-    imported (``cv2.setNumThreads(1)``, ``OMP_NUM_THREADS`` 1), then the runner's settings
+    imported (``cv2.setNumThreads(1)``, :data:`THREAD_VARS` 1), then the runner's settings
     back, so that neither a later subject nor a second import in this process differs."""
     import cv2
-    threads, omp = cv2.getNumThreads(), os.environ.get("OMP_NUM_THREADS")
+    threads = cv2.getNumThreads()
+    saved = {v: os.environ.get(v) for v in THREAD_VARS}
     cv2.setNumThreads(1)
     try:
         yield
     finally:
         cv2.setNumThreads(threads)
-        if omp is None:
-            os.environ.pop("OMP_NUM_THREADS", None)
-        else:
-            os.environ["OMP_NUM_THREADS"] = omp
+        for v, value in saved.items():
+            if value is None:
+                os.environ.pop(v, None)
+            else:
+                os.environ[v] = value
 
 
 @subject(
@@ -1428,6 +1595,69 @@ def _optics_gs_sdk(quick: bool) -> Result:
                                  "x (DCT-II pair + gather), each round"], costs,
               note=f"One thread. References of the rounds: {refs}."),
     ])
+
+
+@subject(
+    "forces_gelslim", "Forces: real GelSlim 3.0 presses with markers",
+    """GelSlim 3.0's `set_2020_09` (Taylor, Dong, Rodriguez, MCube Lab, CC BY-NC 4.0; read
+    from `$TACTILEVISION_GELSLIM`, not redistributed with the package): a colour-table
+    calibration from the even-numbered ball presses (contact circles detected, marker dots
+    masked and filled), then each odd-numbered (held-out) press mapped with the marker
+    field: its height, the markers tracked from the reference and their dense lateral field,
+    and `ForceEstimator(mode='full', contact='footprint')` with the detected contact circle
+    as the footprint, then with a footprint of 1.5 radii. Stated, not measured: h 3 mm,
+    E 0.2 MPa, nu 0.48, 0.0806 mm/px, a 3.8 mm ball. No force log exists for these presses:
+    Hertz's force on a half-space (the same ball, contact radius 0.85 of the circle's) is a
+    reference, not a truth. Then the time per frame on one core. --quick: the first 5
+    held-out presses.""",
+    ["python benchmarks/bench_forces_gelslim.py"])
+def _forces_gelslim(quick: bool) -> Result:
+    gelslim = Path(os.environ.get("TACTILEVISION_GELSLIM",
+                                  ROOT.parent / "shared" / "real" / "gelslim3"))
+    folder = gelslim / "set_2020_09"
+    if not folder.is_dir():
+        raise RuntimeError(f"no GelSlim 3.0 frames at {folder}: set TACTILEVISION_GELSLIM to "
+                           "the folder that holds set_2020_09")
+    from tactilevision.fem._pad_mesh import single_blas_thread
+    with _one_thread(), single_blas_thread():
+        import bench_forces_gelslim as b
+        m = b.measure(folder, presses=5 if quick else None, log=lambda *a, **k: None)
+    if m["summary"] is None:
+        raise RuntimeError(f"{folder}: no held-out press")
+    summ = m["summary"]
+
+    def rows(spec):
+        return [[name, f"{summ[key][0]:{fmt}}", _span(summ[key][1], summ[key][2], fmt)]
+                for key, name, _, fmt in spec]
+
+    sp = m["speed"]
+    fps = [["frame -> height map (colour table, markers filled)", *map("{:.0f}".format,
+                                                                      sp["height"])],
+           ["height map -> force map (spectral, 'normal', 'field', float32)",
+            *map("{:.0f}".format, sp["force"])],
+           ["frame -> height map -> force map", *map("{:.0f}".format, sp["both"])],
+           ["marker tracking", *map("{:.0f}".format, sp["tracking"])]]
+    parts = "; ".join(f"{name} {ms:.1f}" for name, ms in sp["parts_ms"].items())
+    solve = sp["solve_s"]
+    n = len(m["rows"])
+    return Result([
+        Table("Held-out presses, the detected circle as the footprint",
+              ["over the held-out presses", "median", "range"], rows(b.CIRCLE),
+              note=f"{n} held-out presses of {m['n_presses']}, {m['shape'][1]} x "
+                   f"{m['shape'][0]} px, {m['markers']} markers in the reference."),
+        Table("A footprint of 1.5 radii", ["over the held-out presses", "median", "range"],
+              rows(b.WIDE),
+              note="The non-negativity sweep decides the contact; Fz against the same press's "
+                   "with the circle."),
+        Table("Speed on one core", ["step", "frames/s by the wall clock", "by CPU time"], fps,
+              note=f"OpenCV, BLAS and scipy.fft on one thread; load average {sp['load']:.1f} "
+                   f"on {sp['cores']} cores. Per frame, ms of CPU time: {parts}; the lateral "
+                   f"field (thin-plate spline) {sp['lateral_ms']:.0f} ms; the 'full' footprint "
+                   f"solve per press " + (f"{solve[0]:.1f} s (median, {solve[1]:.1f} to "
+                                          f"{solve[2]:.1f} s)" if solve else "not run") + "."),
+    ], summary=f"Fz {_span(summ['fz'][1], summ['fz'][2], '.2f')} N, "
+               f"{_span(summ['hertz'][1], summ['hertz'][2], '.2f')} times Hertz on a "
+               "half-space; plausible, not verified: no force log exists for these presses.")
 
 
 @subject(

@@ -2,9 +2,9 @@
 
 Inverse FEM (``method='fem'``): the height map is the top surface of a finer
 3D pad (B-bar hexahedra, twice as fine in plane and through the thickness, a
-non-nested grid) loaded by a known Hertz pressure, assembled here with
-scikit-fem and solved for that load (never the estimator's own condensed
-40 x 30 stiffness, nor its mesh). Footprint assumption (``contact``): a baseline error
+non-nested grid) loaded by a known Hertz pressure, assembled with scikit-fem by
+``benchmarks/bench_forces_fem.py`` and solved for that load (never the estimator's own
+condensed 40 x 30 stiffness, nor its mesh). Footprint assumption (``contact``): a baseline error
 outside the contact, a footprint larger than the contact, and the pad's side
 conditions as nu -> 0.5.
 """
@@ -13,33 +13,18 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-import scipy.sparse as sp
-from scipy.interpolate import RegularGridInterpolator
-from skfem import (
-    Basis,
-    BilinearForm,
-    ElementHex1,
-    ElementVector,
-    FacetBasis,
-    LinearForm,
-    MeshHex,
-)
-from skfem.helpers import ddot, div, sym_grad
+from _data import load_benchmark
 
 from tactilevision.fem import ForceEstimator, pad_surface_stiffness
 from tactilevision.fem._forces import _mixed_solve, _overlap
-from tactilevision.fem._pad_mesh import (
-    BlockTridiagonalCholesky,
-    assemble_translated,
-    single_blas_thread,
-)
 
+#: the finer forward model: benchmarks/bench_forces_fem.py (the report's forces_fem page)
+BENCH = load_benchmark("bench_forces_fem")
 # the sensed area of benchmarks/bench_forces_accuracy.py: 39.8 x 29.8 mm, a 4 mm pad
-HPX, WPX, DX, H, E = 150, 200, 0.2, 4.0, 0.2          # px, px, mm, mm, MPa
-LX, LY = (WPX - 1) * DX, (HPX - 1) * DX
-XC = np.arange(WPX) * DX - LX / 2                       # pixel x from the image centre, mm
-YC = np.arange(HPX) * DX - LY / 2
-RPX = np.hypot(XC[None, :], YC[:, None])               # pixel distance from the centre
+HPX, WPX, DX, H, E = BENCH.HPX, BENCH.WPX, BENCH.DX, BENCH.H, BENCH.E
+LX, LY, XC, YC, RPX = BENCH.LX, BENCH.LY, BENCH.XC, BENCH.YC, BENCH.RPX
+_hertz, _pad_forward, _on_image, _hat_loads = (BENCH.hertz, BENCH.pad_forward,
+                                               BENCH.on_image, BENCH.hat_loads)
 
 
 @pytest.fixture(scope="module")
@@ -47,87 +32,6 @@ def cache():
     """The package's FEM cache folder (the 40 x 30 stiffness is built once per nu and
     machine, as the estimator's users have it; tests/test_fem_pad.py tests the cache)."""
     return None
-
-
-def _hertz(p0, a):
-    return lambda x, y: p0 * np.sqrt(np.clip(1.0 - (x**2 + y**2) / a**2, 0.0, None))
-
-
-# -- the finer forward model ---------------------------------------------------------------
-
-@BilinearForm
-def _elasticity(u, v, w):
-    return 2.0 * w.mu * ddot(sym_grad(u), sym_grad(v)) + w.lam * div(u) * div(v)
-
-
-def _pad_forward(pressure, nu, cells=(40, 30), layers=8):
-    """Top-surface uz (mm, into the gel) of the pad under a normal pressure (MPa).
-
-    A quarter of the LX x LY x H pad (the load is symmetric about both centre
-    lines: ux = 0 on x = 0, uy = 0 on y = 0), bottom bonded, outer sides
-    free; `cells` B-bar hexahedra in plane (80 x 60 over the whole pad) and
-    `layers` through H. The load vector is the pressure's consistent nodal
-    forces (12-point Gauss per facet). Returns (x, y, uz[iy, ix]) on the
-    quarter's top vertices and the total load of the whole pad, N.
-    """
-    xs = np.linspace(0.0, LX / 2, cells[0] + 1)
-    ys = np.linspace(0.0, LY / 2, cells[1] + 1)
-    mesh = MeshHex.init_tensor(xs, ys, np.linspace(0.0, H, layers + 1))
-    mu, lam = E / (2 * (1 + nu)), E * nu / ((1 + nu) * (1 - 2 * nu))
-    full = Basis(mesh, ElementVector(ElementHex1()), intorder=3)          # 2 x 2 x 2
-    centre = Basis(mesh, full.elem, quadrature=(np.full((3, 1), 0.5), np.ones(1)))
-    A = sp.csr_matrix(assemble_translated(_elasticity, full, mu=mu, lam=0.0)
-                      + assemble_translated(_elasticity, centre, mu=0.0, lam=lam))
-
-    @LinearForm
-    def load(v, w):
-        return -pressure(w.x[0], w.x[1]) * v[2]         # the mesh's z points out of the gel
-
-    top = mesh.facets_satisfying(lambda x: np.abs(x[2] - H) < 1e-9)
-    f = load.assemble(FacetBasis(mesh, full.elem, facets=top, intorder=12))
-    fixed = np.concatenate([full.get_dofs(lambda x: np.abs(x[2]) < 1e-9).all(),
-                            full.get_dofs(lambda x: np.abs(x[0]) < 1e-9).all("u^1"),
-                            full.get_dofs(lambda x: np.abs(x[1]) < 1e-9).all("u^2")])
-    free = np.setdiff1d(np.arange(full.N), fixed)
-    # block tridiagonal in the vertex planes across x: a dense block Cholesky, one thread
-    planes = np.rint(full.doflocs[0, free] / (xs[1] - xs[0])).astype(np.int64)
-    x = np.zeros(full.N)
-    with single_blas_thread():
-        x[free] = BlockTridiagonalCholesky(A[free][:, free], planes).solve(f[free])
-    assert np.linalg.norm(A[free] @ x - f[free]) < 1e-10 * np.linalg.norm(f)
-    uz = -x[full.nodal_dofs[2]]
-    loc = mesh.p
-    top_nodes = np.abs(loc[2] - H) < 1e-9
-    ix = np.rint(loc[0, top_nodes] / (xs[1] - xs[0])).astype(int)
-    iy = np.rint(loc[1, top_nodes] / (ys[1] - ys[0])).astype(int)
-    grid = np.full((len(ys), len(xs)), np.nan)
-    grid[iy, ix] = uz[top_nodes]
-    return xs, ys, grid, -4.0 * float(f.sum())
-
-
-def _on_image(xs, ys, grid):
-    """The quarter's top surface, mirrored, at the image's pixel centres (bilinear: exact)."""
-    interp = RegularGridInterpolator((ys, xs), grid)
-    yy, xx = np.meshgrid(np.minimum(np.abs(YC), ys[-1]), np.minimum(np.abs(XC), xs[-1]),
-                         indexing="ij")
-    return interp(np.stack([yy, xx], axis=-1))
-
-
-def _hat_loads(x, y, pressure, sub=10):
-    """Exact nodal forces int p N_k dA of `pressure` on the bilinear node grid (x, y), N.
-
-    Midpoint rule on cells `sub` times finer than the image's pixels (0.02 mm:
-    the Hertz edge's square root costs < 1e-4 of the total).
-    """
-    step = DX / sub
-    xq = np.arange(-LX / 2 - DX / 2 + step / 2, LX / 2 + DX / 2, step)
-    yq = np.arange(-LY / 2 - DX / 2 + step / 2, LY / 2 + DX / 2, step)
-
-    def hats(nodes, q):
-        return np.maximum(0.0, 1.0 - np.abs(q[None, :] - nodes[:, None]) / (nodes[1] - nodes[0]))
-
-    p = pressure(xq[None, :], yq[:, None])
-    return hats(y, yq) @ p @ hats(x, xq).T * step * step
 
 
 # -- 1. the inverse FEM against a finer pad ------------------------------------------------
