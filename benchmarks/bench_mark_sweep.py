@@ -249,6 +249,9 @@ def score(folder: Path, d: dict) -> dict:
         "calibrate_s": t_cal, "decode_s": t_decode, "n_frames": session.n_frames,
         "clock_error_ms": 1e3 * (cal.certification.clock_offset_s - truth["clock_offset_s"]),
         "depth_rule": cal.depth_rule, "failure": cal.failure,
+        "E_refused": (None if e_ok else cal.failure or next(
+            (n for n in (f.notes if f is not None else ()) if "not computed" in n),
+            "no fit")),
         "bracket_q": bracket_places(cal, tp, truth["clock_offset_s"]),
     }
 
@@ -281,6 +284,7 @@ def figures(rows: list[dict]) -> dict:
         "stated_median_um": float(np.median([r["stated_median_um"] for r in rows])),
         "z_n": int(z.size), "z_mean": float(z.mean()), "z_sd": float(z.std()),
         "E_holds": int(sum(r["E_holds"] for r in rows)),
+        "E_refused": int(sum(bool(r.get("E_refused")) for r in rows)),
         "E_narrow": int(sum(r["E_half_pct"] <= 20 for r in rows)),
         "silent": int(sum(len(r["silent_big"]) for r in rows)),
         "largest_um": float(max(r["err_max_um"] for r in rows)),

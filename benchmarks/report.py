@@ -703,8 +703,11 @@ def _mark_sweep(quick: bool) -> Result:
             f"{r['err_mean_um']:+.1f}, {r['err_sd_um']:.1f}",
             f"{float(np.std(r['z'])):.2f}", f"{r['stated_median_um']:.1f}",
             f"{r['err_max_um']:.0f}" + (f" ({len(r['silent_big'])} silent)" if r["big"] else ""),
-            f"{r['E']:.4f} [{lo:.4f}, {hi:.4f}]", "yes" if r["E_holds"] else "NO",
-            f"{r['E_half_pct']:.0f} %", f"{r['clock_error_ms']:+.1f}",
+            (f"{r['E']:.4f} [{lo:.4f}, {hi:.4f}]" if not r.get("E_refused")
+             else f"not computed: {r['E_refused']}"),
+            "yes" if r["E_holds"] else ("refused" if r.get("E_refused") else "NO"),
+            f"{r['E_half_pct']:.0f} %" if not r.get("E_refused") else "–",
+            f"{r['clock_error_ms']:+.1f}",
             f"{sum(0 <= v <= 1 for v in q)} of {len(q)}, {np.mean(q):.2f}" if q else "–",
         ])
 
@@ -718,7 +721,8 @@ def _mark_sweep(quick: bool) -> Result:
              f"{f['stated_median_um']:.1f}"],
             ["z-scores: presses, mean, sd",
              f"{f['z_n']}, {f['z_mean']:+.2f}, {f['z_sd']:.2f}"],
-            ["E's 95 % interval holds 0.2 MPa", f"{f['E_holds']} of {f['designs']}"],
+            ["E's 95 % interval holds 0.2 MPa; E not computed (the reason in the table)",
+             f"{f['E_holds']} of {f['designs']}; {f['E_refused']}"],
             ["E's half-width at most 20 %", f"{f['E_narrow']} of {f['designs']}"],
             ["largest depth error (um); presses over 50 um without a refusal or warning",
              f"{f['largest_um']:.1f}; {f['silent']}"],
@@ -750,7 +754,8 @@ def _mark_sweep(quick: bool) -> Result:
                    "a mark's press crossed w0 in, by the mark rule, which takes the crossing "
                    "as uniform over it."),
     ], summary=f"Marks: {fm['depth_ok']} of {fm['designs']} designs with depths within +-5 "
-               f"um (sd at most 10 um); E held the truth on {fm['E_holds']}; the true "
+               f"um (sd at most 10 um); E held the truth on {fm['E_holds']} and was not "
+               f"computed on {fm['E_refused']}; the true "
                f"crossing lay inside its bracket on {fm['q_inside']} of {fm['q_n']} presses.")
 
 
