@@ -107,19 +107,36 @@ def convergence(quick: bool) -> None:
                   + f"  ({time.perf_counter() - t:.0f} s)")
 
 
-def table_check() -> None:
-    print("4. Sphere table interpolation against direct sweeps off its grid")
-    for R, nu, model, contact in ((1.4, 0.47, "neo_hookean", "tied"),
-                                  (3.0, 0.42, "linear", "frictionless"),
-                                  (6.0, 0.49, "neo_hookean", "frictionless")):
-        w = np.array([0.03, 0.15, 0.33])
+#: Off the sphere table's grid: (R/h, nu, law, contact) of :func:`table_rows`' sweeps.
+TABLE_CASES = ((1.4, 0.47, "neo_hookean", "tied"), (3.0, 0.42, "linear", "frictionless"),
+               (6.0, 0.49, "neo_hookean", "frictionless"))
+TABLE_DEPTHS = (0.03, 0.15, 0.33)
+
+
+def table_rows() -> list[dict]:
+    """The sphere table's interpolation against a direct sweep at each of
+    :data:`TABLE_CASES` (w/h :data:`TABLE_DEPTHS`): the force's and the contact radius's
+    error, %, per depth."""
+    out = []
+    for R, nu, model, contact in TABLE_CASES:
+        w = np.array(TABLE_DEPTHS)
         r = sphere_indentation(R, nu, w, model=model, contact=contact)
         f = sphere_force_ratio(R, nu, w, model=model, contact=contact)
         a = sphere_contact_ratio(R, nu, w, model=model, contact=contact)
-        df = 100 * (f / r.hertz_ratio - 1)
-        da = 100 * (a / (r.contact_radius / np.sqrt(R * w)) - 1)
-        print(f"   R/h {R}, nu {nu}, {model}, {contact}: force " + " ".join(
-            f"{v:+.2f}%" for v in df) + "; contact radius " + " ".join(f"{v:+.2f}%" for v in da))
+        out.append({"R_over_h": R, "nu": nu, "model": model, "contact": contact,
+                    "w_over_h": list(TABLE_DEPTHS),
+                    "force_pct": [float(v) for v in 100 * (f / r.hertz_ratio - 1)],
+                    "radius_pct": [float(v) for v in
+                                   100 * (a / (r.contact_radius / np.sqrt(R * w)) - 1)]})
+    return out
+
+
+def table_check() -> None:
+    print("4. Sphere table interpolation against direct sweeps off its grid")
+    for r in table_rows():
+        print(f"   R/h {r['R_over_h']}, nu {r['nu']}, {r['model']}, {r['contact']}: force "
+              + " ".join(f"{v:+.2f}%" for v in r["force_pct"]) + "; contact radius "
+              + " ".join(f"{v:+.2f}%" for v in r["radius_pct"]))
 
 
 def sneddon(w_over_r: float) -> float:
