@@ -47,26 +47,39 @@ def session(d, g: float, tau: float, rng: np.random.Generator):
             np.concatenate(ramp))
 
 
+def rows(sessions: int, cases=CASES, design: str = "sample_frames/plan/paper_gauge_block.toml",
+         *, echo: bool = False) -> list[dict]:
+    """Per (g, tau) of `cases`: ``plan``'s noncentrality and power, and the share of
+    `sessions` drawn sessions (seed 1) whose ``fit_relaxation`` calls g and tau identified."""
+    d = read_design(design)
+    out = []
+    for g, tau in cases:
+        r = relaxation_identifiability(d, g, tau)
+        rng = np.random.default_rng(1)
+        hits = 0
+        for _ in range(sessions):
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                fit = fit_relaxation(*session(d, g, tau, rng), n_boot=20)
+            hits += bool(fit.identified)
+        out.append({"g": g, "tau_s": tau, "noncentrality": float(r.noncentrality),
+                    "predicted": float(r.power), "identified": hits / sessions,
+                    "sessions": sessions})
+        if echo:
+            print(f"| {g:g} | {tau:g} | {r.noncentrality:.3g} | {100 * r.power:.0f} % | "
+                  f"{100 * hits / sessions:.0f} % | {sessions} |", flush=True)
+    return out
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sessions", type=int, default=40)
     ap.add_argument("--design", default="sample_frames/plan/paper_gauge_block.toml")
     args = ap.parse_args(argv)
-    d = read_design(args.design)
     print("| g | tau (s) | noncentrality | predicted | identified in | sessions |")
     print("|---|---|---|---|---|---|")
     t0 = time.perf_counter()
-    for g, tau in CASES:
-        r = relaxation_identifiability(d, g, tau)
-        rng = np.random.default_rng(1)
-        hits = 0
-        for _ in range(args.sessions):
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                fit = fit_relaxation(*session(d, g, tau, rng), n_boot=20)
-            hits += bool(fit.identified)
-        print(f"| {g:g} | {tau:g} | {r.noncentrality:.3g} | {100 * r.power:.0f} % | "
-              f"{100 * hits / args.sessions:.0f} % | {args.sessions} |", flush=True)
+    rows(args.sessions, design=args.design, echo=True)
     print(f"{time.perf_counter() - t0:.0f} s")
     return 0
 

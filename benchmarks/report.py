@@ -681,6 +681,31 @@ def _sphere_table(quick: bool) -> Result:
                               "default mesh.")])
 
 
+@subject(
+    "plan_relaxation", "Plan: will the holds identify a relaxation?",
+    """For the paper's gauge block (`sample_frames/plan/paper_gauge_block.toml`: 50
+    presses, 1 s holds, white F/T noise of 12.5 mN per sample) and three relaxations near
+    the threshold (g 0.004, 0.006, 0.008 at tau 0.3 s), sessions of holds drawn from the
+    plan's own hold model (the standard linear solid at each press's FEM force) and
+    fitted by `fit_relaxation`: how often it calls g and tau identified, against the power
+    `tactilevision.planning.relaxation_identifiability` predicts. The holds use the plan's
+    model and white noise: the check is the power calculation, not the noise model (60
+    sessions each; 20 with --quick).""",
+    ["python benchmarks/bench_plan_relaxation.py --sessions 60"])
+def _plan_relaxation(quick: bool) -> Result:
+    import bench_plan_relaxation as b
+    got = b.rows(20 if quick else 60, cases=b.CASES[:3],
+                 design=str(ROOT / "sample_frames" / "plan" / "paper_gauge_block.toml"))
+    rows = [[f"{r['g']:g}", f"{r['tau_s']:g}", f"{r['noncentrality']:.3g}",
+             f"{100 * r['predicted']:.0f} %", f"{100 * r['identified']:.0f} %",
+             r["sessions"]] for r in got]
+    return Result([Table("Predicted against identified",
+                         ["g", "tau (s)", "noncentrality", "predicted power",
+                          "identified", "sessions"], rows,
+                         note="Seed 1 for each case's sessions; `fit_relaxation` with 20 "
+                              "bootstrap draws.")])
+
+
 MARK_SWEEP_SEED = 9931
 MARK_SWEEP_CACHE_ENV = "TACTILEVISION_MARK_SWEEP"
 
