@@ -18,6 +18,7 @@ from pathlib import Path
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 import numpy as np
+from bench_plan import scatter
 
 from tactilevision.mechanics import fem_force, fit_indentation
 from tactilevision.planning import read_design, recommend
@@ -45,8 +46,6 @@ def meets(sessions: int = 300, seed: int = 5, targets=TARGETS) -> list[dict]:
     planned totals, and the RMS errors of E (%) and nu over `sessions` sessions drawn of it
     (``bench_plan.scatter``: the FEM's forces, the design's noise, each fitted as
     ``calibrate`` fits)."""
-    from bench_plan import scatter
-
     d = read_design(PAPER)
     out = []
     for e_pct, nu in targets:
