@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import io
 import json
 import os
 import platform
@@ -316,6 +317,12 @@ def main(argv: Sequence[str] | None = None) -> int:
 # ---------------------------------------------------------------- the subjects
 
 SAMPLE_FEATS = "sample_frames/feats/force_depth.csv"
+
+
+def real_set(env: str, sibling: str) -> Path:
+    """A real data set's folder: the one the environment variable `env` names, else
+    `sibling` in the real sets beside the repository (``../shared/real``)."""
+    return Path(os.environ.get(env, ROOT.parent / "shared" / "real" / sibling))
 
 
 def _pct(x: float, digits: int = 2) -> str:
@@ -1130,12 +1137,9 @@ SAMPLE_SESSION = ROOT / "sample_frames" / "gelsight_session"
 def _sample_fit(folder: Path) -> Path:
     """Calibrate the sample session as the README's first command does (`tactilevision
     calibrate sample_frames/gelsight_session`), into `folder`/calibration; its fit.json."""
-    from contextlib import redirect_stdout
-    from io import StringIO
-
     from tactilevision.cli import main as cli
     out = folder / "calibration"
-    with redirect_stdout(StringIO()):
+    with contextlib.redirect_stdout(io.StringIO()):
         rc = cli(["calibrate", str(SAMPLE_SESSION), "--out", str(out), "--no-progress"])
     if rc != 0:
         raise RuntimeError(f"calibrate of {SAMPLE_SESSION} failed with status {rc}")
@@ -1449,13 +1453,9 @@ def _one_thread() -> Iterator[None]:
      "--ball-radius-mm 3.8 --out OUT",
      "tactilevision optics calibrate $TACTILEVISION_GELSIGHT_MINI --mm-per-px 0.0634 --out OUT"])
 def _optics_held_out(quick: bool) -> Result:
-    from contextlib import redirect_stdout
-    from io import StringIO
-
     from tactilevision.cli import main as cli
-    real = ROOT.parent / "shared" / "real"
-    gelslim = Path(os.environ.get("TACTILEVISION_GELSLIM", real / "gelslim3"))
-    mini = Path(os.environ.get("TACTILEVISION_GELSIGHT_MINI", real / "gelsight_mini"))
+    gelslim = real_set("TACTILEVISION_GELSLIM", "gelslim3")
+    mini = real_set("TACTILEVISION_GELSIGHT_MINI", "gelsight_mini")
     sensors = [("GelSight (taxim, annotated)", "taxim:gelsight",
                 ["--mm-per-px", "0.0295", "--ball-radius-mm", "2.0"]),
                ("GelSlim 3.0 (detected)", gelslim / "set_2020_11",
@@ -1468,7 +1468,7 @@ def _optics_held_out(quick: bool) -> Result:
             continue
         with tempfile.TemporaryDirectory(prefix="tv-report-") as tmp:
             out = Path(tmp) / "optics.npz"
-            with redirect_stdout(StringIO()):
+            with contextlib.redirect_stdout(io.StringIO()):
                 rc = cli(["optics", "calibrate", str(src), *opts, "--out", str(out),
                           "--no-progress"])
             if rc != 0:
@@ -1621,8 +1621,7 @@ def _optics_table_engine(quick: bool) -> Result:
     frame, one thread, beside a bare DCT-II pair and gather of the same round (two rounds).""",
     ["python benchmarks/bench_table_order.py"])
 def _optics_gs_sdk(quick: bool) -> Result:
-    mini = Path(os.environ.get("TACTILEVISION_GELSIGHT_MINI",
-                               ROOT.parent / "shared" / "real" / "gelsight_mini"))
+    mini = real_set("TACTILEVISION_GELSIGHT_MINI", "gelsight_mini")
     with _one_thread():
         import bench_table_order as b
         m = b.measure(mini, rounds=1 if quick else 2)
@@ -1664,9 +1663,7 @@ def _optics_gs_sdk(quick: bool) -> Result:
     held-out presses.""",
     ["python benchmarks/bench_forces_gelslim.py"])
 def _forces_gelslim(quick: bool) -> Result:
-    gelslim = Path(os.environ.get("TACTILEVISION_GELSLIM",
-                                  ROOT.parent / "shared" / "real" / "gelslim3"))
-    folder = gelslim / "set_2020_09"
+    folder = real_set("TACTILEVISION_GELSLIM", "gelslim3") / "set_2020_09"
     if not folder.is_dir():
         raise RuntimeError(f"no GelSlim 3.0 frames at {folder}: set TACTILEVISION_GELSLIM to "
                            "the folder that holds set_2020_09")
