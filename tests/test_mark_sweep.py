@@ -15,7 +15,13 @@ from _data import load_benchmark
 from tactilevision import InputError
 from tactilevision.contact import STAGE_Z, stage_depths, touch_time
 from tactilevision.io import read_session
-from tactilevision.pipeline._rules import REACH_REASON, STAGE_REASON, depth_refusals
+from tactilevision.pipeline._rules import (
+    REACH_REASON,
+    STAGE_REASON,
+    depth_half95,
+    depth_refusals,
+    tolerance_note,
+)
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -159,6 +165,35 @@ def test_max_overshoot_is_read_from_the_gauge_block(tmp_path):
         with pytest.raises(InputError, match=r"\[gauge_block\] max_overshoot_mm"):
             read_session(_session(tmp_path / f"bad{len(bad)}{bad[0]}",
                                   f"max_overshoot_mm = {bad}\n"))
+
+
+def test_depth_tolerance_is_read_from_the_gauge_block(tmp_path):
+    assert read_session(_session(tmp_path / "a", "")).config.depth_tolerance_mm == 0.02
+    got = read_session(_session(tmp_path / "b", "depth_tolerance_mm = 0.01\n"))
+    assert got.config.depth_tolerance_mm == 0.01
+    assert not any("depth_tolerance_mm" in n for n in got.notes)
+    for bad in ("-0.02", "0", '"0.02"'):
+        with pytest.raises(InputError, match=r"session.toml: \[gauge_block\] depth_tolerance_mm"):
+            read_session(_session(tmp_path / f"bad{len(bad)}{bad[0]}",
+                                  f"depth_tolerance_mm = {bad}\n"))
+
+
+def test_the_95_percent_half_width_carries_the_shared_bound_as_a_uniform():
+    """sd 10 um and a shared +-30 um (a uniform's sd 17.3 um): 1.96 x 20 um."""
+    got = depth_half95(np.array([0.010, 0.010]), np.array([0.030, 0.0]))
+    assert got == pytest.approx([1.96 * 0.020, 1.96 * 0.010], rel=1e-12)
+    assert depth_half95(np.array([0.005])) == pytest.approx([0.0098], rel=1e-12)
+
+
+def test_a_depth_wider_than_the_tolerance_is_named_bounded_not_certified():
+    presses = [_press(0, 0.15), _press(1, 0.30), _press(2, 0.40)]
+    note = tolerance_note(presses, np.array([0.010, 0.030, 0.060]), 0.02)
+    assert note.startswith("1 of 3 depths certified within +-20 um")
+    assert "press(es) 1, 2 only bounded (+-30 to +-60 um)" in note
+    assert tolerance_note(presses, np.array([0.010, 0.020, 0.0]), 0.02) is None
+    # a depth whose interval could not be told (NaN) is not certified
+    assert "press(es) 2 only bounded" in tolerance_note(
+        presses, np.array([0.010, 0.020, np.nan]), 0.02)
 
 
 def _bench():

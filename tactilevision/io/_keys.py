@@ -30,7 +30,7 @@ KNOWN_KEYS: dict[str, tuple[str, ...]] = {
     "indenter": ("radius_mm", "shape", "contact"),
     "gauge_block": ("depths_mm", "bevel_offset_mm", "bevel_direction_deg", "bevel_angle_deg",
                     "bevel_length_mm", "bulge_correction", "bevel_force_correction",
-                    "max_overshoot_mm"),
+                    "max_overshoot_mm", "depth_tolerance_mm"),
     "force_sensor": ("rate_hz", "clock_offset_s", "window_samples", "window_at"),
     "optics": ("calibration",),
     "session": ("date",),

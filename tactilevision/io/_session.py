@@ -86,6 +86,12 @@ class SessionConfig:
         ``[gauge_block] max_overshoot_mm``: the most the stage goes past an
         indenter's w0, mm (default 0.1): a press certified deeper than its w0
         plus this is refused, never fitted.
+    depth_tolerance_mm : float
+        ``[gauge_block] depth_tolerance_mm``: a press's depth counts as certified
+        when its 95 % interval lies within +- this, mm (default 0.02); a press
+        read more loosely (a mark's crossing bracketed by a frame period of fast
+        stage travel, a vernier band too short to read) is still fitted with its
+        weight, but named as bounded, not certified.
     indenter_shape : {'flat_punch', 'sphere'}
         ``[indenter] shape`` (default 'flat_punch'). A ball (``'sphere'``)
         needs no ``[gauge_block]``: its depths come from its contact circles
@@ -114,6 +120,7 @@ class SessionConfig:
     bulge_correction: bool = True
     bevel_force_correction: bool = True
     max_overshoot_mm: float = 0.1
+    depth_tolerance_mm: float = 0.02
     window_at: str = "start"
     date: datetime.date | None = None
     indenter_shape: str = "flat_punch"
@@ -305,6 +312,8 @@ def _read_config(folder: Path) -> SessionConfig:
                                           default=True),
         max_overshoot_mm=_toml_number(doc, toml, "gauge_block", "max_overshoot_mm",
                                       default=0.1),
+        depth_tolerance_mm=_toml_number(doc, toml, "gauge_block", "depth_tolerance_mm",
+                                        default=0.02),
         date=_session_date(doc, toml),
     )
 

@@ -54,11 +54,13 @@ from ..mechanics import relaxed_moduli
 from ._calibration import SessionCalibration
 from ._rules import (
     DepthState,
+    depth_half95,
     depth_refusals,
     land_rule,
     mark_rule,
     mark_stage_reading,
     nominal_rule,
+    tolerance_note,
     vernier_rule,
 )
 from ._shared import with_shared_depth
@@ -197,6 +199,10 @@ def calibrate_session(session: Session | str | Path, *, depth_rule: str = "auto"
         check_notes.extend(n for n in round_notes if "refused" in n)
         cert, force0 = _without(cert, refused, force0)
     notes.extend(check_notes)
+    half95 = depth_half95(*_own_depth_sd(presses, st, std_indenter, depth_rule))
+    tol = tolerance_note(presses, half95, session.config.depth_tolerance_mm)
+    if tol is not None:
+        notes.append(tol)
     fit = st.fit
     for msg in fit_at.warnings_of(fit):      # the warnings of the fit reported
         if msg not in notes:
@@ -214,7 +220,8 @@ def calibrate_session(session: Session | str | Path, *, depth_rule: str = "auto"
                               moduli=moduli,
                               force0_n=force0 if force0 is not None else np.zeros(0),
                               force_fit_n=force - st.bevel_n,
-                              depth_indenter_std_mm=std_indenter, **common)
+                              depth_indenter_std_mm=std_indenter, depth_half95_mm=half95,
+                              **common)
 
 
 class _RuleFailed(Exception):
@@ -264,19 +271,26 @@ def _refusals(presses, st: DepthState, std_indenter: np.ndarray, depth_rule: str
     reading), and the notes."""
     if depth_rule not in ("mark", "vernier"):
         return [], []
-    std = np.asarray(st.std, np.float64)
-    stage, half = None, None
-    if depth_rule == "mark":
-        # each press's own sd: the indenter's shared part counted once, not n times over
-        ind = np.array([p.indenter for p in presses])
-        n = np.array([np.sum(ind == g) for g in ind], np.float64)
-        shared = np.asarray(std_indenter, np.float64) if len(std_indenter) else np.zeros_like(std)
-        std = np.sqrt(np.maximum(std ** 2 - shared ** 2 * (1 - 1 / n), 0.0))
-        stage = mark_stage_reading(presses, session, cert)
-        half = None if st.shared is None else np.asarray(st.shared[1], np.float64)
+    std, half = _own_depth_sd(presses, st, std_indenter, depth_rule)
+    stage = mark_stage_reading(presses, session, cert) if depth_rule == "mark" else None
     refused, notes = depth_refusals(presses, np.asarray(st.depth, np.float64), std,
                                     session.config, shared_half=half, stage=stage)
     return refused, notes
+
+
+def _own_depth_sd(presses, st: DepthState, std_indenter: np.ndarray, depth_rule: str
+                  ) -> tuple[np.ndarray, np.ndarray | None]:
+    """Each press's own depth sd, mm (under the mark rule the indenter's shared part
+    counted once, not n times over as the fit weighs it), and the half-width of the error
+    every press shares (None where there is none)."""
+    std = np.asarray(st.std, np.float64)
+    if depth_rule != "mark":
+        return std, None
+    ind = np.array([p.indenter for p in presses])
+    n = np.array([np.sum(ind == g) for g in ind], np.float64)
+    shared = np.asarray(std_indenter, np.float64) if len(std_indenter) else np.zeros_like(std)
+    std = np.sqrt(np.maximum(std ** 2 - shared ** 2 * (1 - 1 / n), 0.0))
+    return std, None if st.shared is None else np.asarray(st.shared[1], np.float64)
 
 
 def _without(cert, refused: list, force0: np.ndarray | None):

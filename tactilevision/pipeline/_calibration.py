@@ -44,6 +44,11 @@ class SessionCalibration:
     depth_indenter_std_mm : (N,) float64 ndarray
         For ``'mark'``: the part of `depth_std_mm` an indenter's presses share (the
         error of its P(w0), counted n times over as there), mm; empty otherwise.
+    depth_half95_mm : (N,) float64 ndarray
+        Each press's own 95 % depth half-width, mm (its own sd, an indenter's
+        shared part counted once, and the bound every press shares taken as a
+        uniform's); empty when nothing was fitted. :attr:`depth_certified`
+        compares it with ``[gauge_block] depth_tolerance_mm``.
     bulge_mm : (N,) float64 ndarray
         The bulge subtracted from each vernier depth, mm (0 otherwise).
     bevel_force_n : (N,) float64 ndarray
@@ -94,6 +99,7 @@ class SessionCalibration:
     warnings: list[str] = field(default_factory=list)
     depth_std_mm: np.ndarray = field(default_factory=lambda: np.zeros(0))
     depth_indenter_std_mm: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    depth_half95_mm: np.ndarray = field(default_factory=lambda: np.zeros(0))
     bulge_mm: np.ndarray = field(default_factory=lambda: np.zeros(0))
     bevel_force_n: np.ndarray = field(default_factory=lambda: np.zeros(0))
     failure: str | None = None
@@ -102,6 +108,17 @@ class SessionCalibration:
     force0_n: np.ndarray = field(default_factory=lambda: np.zeros(0))
     force_fit_n: np.ndarray = field(default_factory=lambda: np.zeros(0))
     ft_zero: ForceZero | None = None
+
+    @property
+    def depth_certified(self) -> np.ndarray:
+        """(N,) bool ndarray: each certified press's depth within +-
+        ``[gauge_block] depth_tolerance_mm`` at 95 % (:attr:`depth_half95_mm`); the
+        others are only bounded (fitted with their weight, named in a warning). All
+        False when nothing was fitted."""
+        n = len(self.certification.presses)
+        if len(self.depth_half95_mm) != n:
+            return np.zeros(n, bool)
+        return np.asarray(self.depth_half95_mm <= self.session.config.depth_tolerance_mm)
 
     def _window_times(self) -> np.ndarray:
         """The middle of each certified press's force window, F/T clock, s."""

@@ -80,6 +80,9 @@ def result_dict(cal: SessionCalibration) -> dict:
         "depth_rule": cal.depth_rule,
         "nu_rounds": cal.nu_rounds,
         "depth_std_median_mm": float(np.median(std)) if len(std) else None,
+        "depth_tolerance_mm": cfg.depth_tolerance_mm,
+        "depth_bounded": [p.press for p, ok in zip(c.presses, cal.depth_certified, strict=True)
+                          if not ok],
         "bevel_optics": c.bevel_optics,
         "bands_not_read": ([p.press for p in c.presses if not p.band_resolved]
                            if c.bevel_optics is not None else None),

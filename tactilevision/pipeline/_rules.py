@@ -37,9 +37,9 @@ from ..contact import (
 from ..mechanics import IndentationFit
 from ._steps import Fitter
 
-__all__ = ["MARK_BETA", "REACH_REASON", "STAGE_REASON", "DepthState", "depth_refusals",
-           "land_rule", "mark_rule", "mark_stage_reading", "nominal_rule", "vernier_depths",
-           "vernier_rule"]
+__all__ = ["MARK_BETA", "REACH_REASON", "STAGE_REASON", "DepthState", "depth_half95",
+           "depth_refusals", "land_rule", "mark_rule", "mark_stage_reading", "nominal_rule",
+           "tolerance_note", "vernier_depths", "vernier_rule"]
 
 
 @dataclass
@@ -480,6 +480,47 @@ def mark_stage_reading(presses, session, cert) -> StageReading:
                         touch, touch_sd, np.array([p.hold_start_s for p in presses]), windows)
 
 
+def depth_half95(std: np.ndarray, shared_half: np.ndarray | None = None) -> np.ndarray:
+    """Each press's 95 % depth half-width, mm: 1.96 times its own sd and the shared bound
+    taken as a uniform's, in quadrature.
+
+    Parameters
+    ----------
+    std : (N,) float64 ndarray
+        Each press's own sd (an indenter's shared part counted once), mm.
+    shared_half : (N,) float64 ndarray, optional
+        Half-width of the depth error the presses share, mm (a uniform over it).
+
+    Returns
+    -------
+    (N,) float64 ndarray
+    """
+    std = np.asarray(std, np.float64)
+    sh = np.zeros_like(std) if shared_half is None else np.asarray(shared_half, np.float64)
+    return 1.96 * np.sqrt(std ** 2 + sh ** 2 / 3.0)
+
+
+def tolerance_note(presses, half95: np.ndarray, tolerance_mm: float) -> str | None:
+    """The sentence naming the presses whose depths are only bounded: their 95 % intervals
+    wider than +- `tolerance_mm` (``[gauge_block] depth_tolerance_mm``), or None when
+    every depth is certified within it. They stay in the fit with their weight; they do
+    not count as certified (issue 83: a depth within 5 um, sd 10 um, or the press named)."""
+    half95 = np.asarray(half95, np.float64)
+    out = np.flatnonzero(~(half95 <= tolerance_mm))
+    if not out.size:
+        return None
+    which = ", ".join(str(presses[i].press) for i in out)
+    told = half95[out][np.isfinite(half95[out])]
+    span = (f"+-{1e3 * float(told.min()):.0f} to +-{1e3 * float(told.max()):.0f} um"
+            if told.size else "their intervals not told")
+    return (f"{len(presses) - out.size} of {len(presses)} depths certified within "
+            f"+-{1e3 * tolerance_mm:.0f} um ([gauge_block] depth_tolerance_mm, 95 %); "
+            f"press(es) {which} only bounded ({span}): fitted with that weight, not "
+            "counted as certified (a mark's crossing is bracketed by one frame period of stage "
+            "travel, a vernier band too short to read only bounded; more frames per second or "
+            "a slower approach certifies them)")
+
+
 def depth_refusals(presses, depth: np.ndarray, std: np.ndarray, cfg, *,
                    shared_half: np.ndarray | None = None,
                    stage: StageReading | None = None) -> tuple[list[Rejection], list[str]]:
@@ -560,8 +601,7 @@ def depth_refusals(presses, depth: np.ndarray, std: np.ndarray, cfg, *,
                 + (f"; {n_dis} refused ({STAGE_REASON}): press(es) {which}" if n_dis else "")
                 + (f"; {int((~np.isfinite(z)).sum())} not read (no touch found in the F/T "
                    "log)" if (~np.isfinite(z)).any() else ""))
-    sh = np.zeros_like(depth) if shared_half is None else np.asarray(shared_half, np.float64)
-    half95 = 1.96 * np.sqrt(std ** 2 + sh ** 2 / 3.0)
+    half95 = depth_half95(std, shared_half)
     loose = [i for i in np.flatnonzero(half95 > LOOSE_DEPTH_MM) if i not in gone]
     if loose:
         notes.append(
