@@ -28,6 +28,7 @@ from tactilevision.pipeline import (
     DepthState,
     Fitter,
     read_material,
+    result_dict,
     take_off_zero,
     vernier_rule,
     with_shared_depth,
@@ -518,6 +519,16 @@ def test_mark_overshoot_read_from_the_force(tmp_path):
     assert f.nu_ci95[0] <= truth["nu"] <= f.nu_ci95[1]
     assert any(n.startswith("shared depth error") for n in f.notes)
     assert any("depth rule 'mark'" in w for w in cal.warnings)
+    # a depth counts as certified within [gauge_block] depth_tolerance_mm at 95 %: its own
+    # sd (the indenter's shared part once) and the shared bound as a uniform's
+    own = np.sqrt(np.maximum(cal.depth_std_mm ** 2 - shared ** 2 * (1 - 1 / np.array(
+        [n_of[p.indenter] for p in ps])), 0.0))
+    assert np.all(cal.depth_half95_mm >= 1.96 * own - 1e-12)
+    assert cal.depth_certified.tolist() == (cal.depth_half95_mm <= 0.02).tolist()
+    obj = result_dict(cal)
+    assert obj["depth_tolerance_mm"] == 0.02
+    assert obj["depth_bounded"] == [p.press for p, ok in zip(ps, cal.depth_certified,
+                                                              strict=True) if not ok]
     nominal = calibrate_session(tmp_path / "s", depth_rule="nominal", allow_failure=True)
     over = np.array([tp["overshoot_mm"] for tp in truth["presses"]])
     assert over.mean() > 0.02

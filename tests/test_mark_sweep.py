@@ -196,6 +196,26 @@ def test_a_depth_wider_than_the_tolerance_is_named_bounded_not_certified():
         presses, np.array([0.010, 0.020, np.nan]), 0.02)
 
 
+def test_a_calibrations_certified_depths_are_those_within_the_tolerance():
+    """SessionCalibration.depth_certified: each press's 95 % half-width against the
+    session's [gauge_block] depth_tolerance_mm; all False where none was stated."""
+    from tactilevision.pipeline import SessionCalibration
+
+    presses = [_press(0, 0.15), _press(1, 0.30), _press(2, 0.40)]
+    session = SimpleNamespace(config=SimpleNamespace(depth_tolerance_mm=0.02))
+    cal = SessionCalibration(session=session, certification=SimpleNamespace(presses=presses),
+                             depth_rule="mark", depth_mm=np.array([0.16, 0.31, 0.42]),
+                             fit=None, nu_rounds=[], seconds=0.0,
+                             depth_half95_mm=np.array([0.0196, 0.0204, 0.005]))
+    assert cal.depth_certified.tolist() == [True, False, True]
+    session.config.depth_tolerance_mm = 0.01
+    assert cal.depth_certified.tolist() == [False, False, True]
+    bare = SessionCalibration(session=session, certification=SimpleNamespace(presses=presses),
+                              depth_rule="mark", depth_mm=np.zeros(3), fit=None, nu_rounds=[],
+                              seconds=0.0)
+    assert bare.depth_certified.tolist() == [False, False, False]
+
+
 def _bench():
     return load_benchmark("bench_mark_sweep")
 
