@@ -38,7 +38,8 @@ gauge's reach); the certified depths' error (mean, sd, um), their z-scores (erro
 the press's own stated sd, :func:`own_sd`; also over every press fitted, the bounded
 ones too), the stated sd's median; the largest error
 and whether every press more than 50 um off was refused or warned of; E with its 95 %
-interval, whether it holds the truth, its half-width (% of E); where the crossing of w0
+interval, whether it holds the truth, its half-width (% of E; and the press scatter's
+alone, before the hull over the shared depth error); where the crossing of w0
 lies in the period that brackets it (:func:`bracket_places`: 0 at the bracket's start,
 1 at its end; the mark rule takes it as uniform over the bracket); calibrate's time
 beside decoding every frame once in the same run (as ``benchmarks/bench_calibrate.py``).
@@ -238,6 +239,13 @@ def score(folder: Path, d: dict) -> dict:
     f = cal.fit
     e_ok = f is not None and np.isfinite(f.E_mpa)
     ci = tuple(f.E_ci95_mpa) if e_ok else (math.nan, math.nan)
+    # E's interval from the press scatter alone, before the shared depth error's hull
+    # (with_shared_depth's note), where calibrate widened it
+    alone = next((m for n in (f.notes if f is not None else ()) for m in re.findall(
+        r"the press scatter alone: E \[([-\d.]+), ([-\d.]+)\]", n)), None)
+    scatter_half = (100 * (float(alone[1]) - float(alone[0])) / 2 / f.E_mpa
+                    if alone and e_ok else (100 * (ci[1] - ci[0]) / 2 / f.E_mpa if e_ok
+                                            else math.nan))
     ek, sk = err[within], sd[within]
     z = ek / np.where(sk > 0, sk, np.nan)
     z_all = err / np.where(sd > 0, sd, np.nan)
@@ -256,6 +264,8 @@ def score(folder: Path, d: dict) -> dict:
         "E": float(f.E_mpa) if e_ok else math.nan, "E_ci": ci,
         "E_holds": bool(ci[0] <= E_TRUE <= ci[1]),
         "E_half_pct": (100 * (ci[1] - ci[0]) / 2 / f.E_mpa) if e_ok else math.nan,
+        "E_scatter_half_pct": scatter_half,
+        "beta_ci": tuple(f.beta_ci95) if f is not None else (math.nan, math.nan),
         "calibrate_s": t_cal, "decode_s": t_decode, "n_frames": session.n_frames,
         "clock_error_ms": 1e3 * (cal.certification.clock_offset_s - truth["clock_offset_s"]),
         "depth_rule": cal.depth_rule, "failure": cal.failure,
@@ -311,6 +321,8 @@ def figures(rows: list[dict]) -> dict:
         "E_holds": int(sum(r["E_holds"] for r in rows)),
         "E_refused": int(sum(bool(r.get("E_refused")) for r in rows)),
         "E_narrow": int(sum(r["E_half_pct"] <= 20 for r in rows)),
+        "E_scatter_narrow": int(sum(r.get("E_scatter_half_pct", math.nan) <= 20
+                                    for r in rows)),
         "silent": int(sum(len(r["silent_big"]) for r in rows)),
         "largest_um": float(max(r["err_max_um"] for r in rows)),
         "q_n": int(q.size), "q_inside": int(np.sum((q >= 0) & (q <= 1))),
