@@ -161,10 +161,11 @@ def _print_summary(cal, result, out: Path, args: argparse.Namespace) -> None:
             print("\n".join(relaxation_lines(cal.relaxation, cal.moduli, out / "holds.csv",
                                               e_finite=bool(np.isfinite(cal.fit.E_mpa)))))
         n_in = int(cal.depth_certified.sum())
-        within = ("" if n_in == len(c.presses) else
-                  f" ({n_in} within +-{1e3 * cal.session.config.depth_tolerance_mm:.0f} um, "
-                  f"{len(c.presses) - n_in} only bounded)")
-        print(f"  {len(c.presses)} presses certified{within}, {len(c.rejected)} rejected"
+        tol = 1e3 * cal.session.config.depth_tolerance_mm
+        read = (f"{len(c.presses)} presses certified," if n_in == len(c.presses) else
+                f"{len(c.presses)} presses fitted: {n_in} certified within +-{tol:.0f} um, "
+                f"{len(c.presses) - n_in} only bounded;")
+        print(f"  {read} {len(c.rejected)} rejected"
               + "".join(f"\n    press {r.press}: {r.reason} ({r.detail})" for r in c.rejected))
         print(f"  clock offset {c.clock_offset_s:.4f} s ({c.clock_source}); depth rule "
               f"{cal.depth_rule}; {cal.seconds:.1f} s")
