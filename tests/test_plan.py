@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -294,3 +295,20 @@ def test_plan_says_whether_the_relaxation_is_identified(tmp_path, capsys):
     assert got["power"] == 0 and got["span_ok"] is False and got["tau_s"] == 5
     d = read_design(path)
     assert "relaxation_tau_s = 5\n" in tactilevision.planning.design_toml(d)
+
+
+def test_plan_says_whether_calibrate_will_certify_the_depths(tmp_path, capsys):
+    """The paper's block at 30 frames/s and 0.1 mm/s: one frame's travel is 3.3 um, every
+    depth within calibrate's +-20 um; at 10 frames/s and 1.5 mm/s a frame is 150 um of
+    travel (sd 43 um a press): only bounded, and plan says what pins them."""
+    src = Path(__file__).resolve().parents[1] / "sample_frames" / "plan" / "paper_gauge_block.toml"
+    assert main(["plan", str(src)]) == 0
+    text = capsys.readouterr().out
+    assert "depths certified: 95 % within +-4.2 um, inside calibrate's +-20 um" in text
+    fast = tmp_path / "fast.toml"
+    fast.write_text(src.read_text().replace("frame_rate_hz = 30", "frame_rate_hz = 10")
+                    .replace("stage_speed_mm_s = 0.1", "stage_speed_mm_s = 1.5"))
+    assert main(["plan", str(fast)]) == 0
+    text = capsys.readouterr().out
+    assert "depths only bounded: 95 % within +-" in text
+    assert "more frames per second or a slower approach pins them" in text

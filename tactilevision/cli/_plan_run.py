@@ -11,7 +11,7 @@ import argparse
 import math
 
 from .. import InputError
-from ..io import write_output_file
+from ..io import DEPTH_TOLERANCE_MM, write_output_file
 from ..mechanics import EFFECT_SIZE_PARAMS
 from ..planning import (
     PlanPrediction,
@@ -27,6 +27,20 @@ from ._fit_run import _write_json
 __all__ = ["run"]
 
 
+def _certified_line(pred) -> str:
+    """Whether calibrate will count the design's depths as certified: their 95 %
+    half-width (the random sd and the shared bound as a uniform's, as calibrate states it)
+    against ``[gauge_block] depth_tolerance_mm``'s default."""
+    half = 1.96 * math.hypot(pred.depth_std_um, (pred.depth_shared_um or 0.0) / math.sqrt(3))
+    tol = 1e3 * DEPTH_TOLERANCE_MM
+    if half <= tol:
+        return (f"depths certified: 95 % within +-{half:.1f} um, inside calibrate's "
+                f"+-{tol:.0f} um ([gauge_block] depth_tolerance_mm)")
+    return (f"depths only bounded: 95 % within +-{half:.1f} um, past calibrate's +-{tol:.0f} "
+            "um ([gauge_block] depth_tolerance_mm): it fits them with that weight but "
+            "certifies none; more frames per second or a slower approach pins them")
+
+
 def summary(pred) -> str:
     """The prediction in a few lines of text."""
     d = pred.design
@@ -38,6 +52,7 @@ def summary(pred) -> str:
         f"depth per press: sd {pred.depth_std_um:.2f} um random"
         + (f", up to {pred.depth_shared_um:.1f} um shared" if pred.depth_shared_um else "")
         + f" ({pred.depth_source}); force per press: sd {1e3 * pred.force_std_n:.2f} mN",
+        _certified_line(pred),
         f"E: sd {pred.E_sigma_mpa:.4f} MPa ({pred.E_sigma_pct:.1f} %); nu: sd "
         f"{pred.nu_sigma:.4f}; their correlation {pred.E_nu_corr:+.2f}",
     ]
@@ -52,6 +67,9 @@ def summary(pred) -> str:
                 }[name]
         if math.isfinite(e) and math.isfinite(n):
             lines.append(f"bias from {what}: E {e:+.1f} %, nu {n:+.4f}")
+        elif name == "depth_shared_minus" and pred.depth_shared_um >= 1e3 * min(d.depths_mm):
+            lines.append(f"bias from {what}: no E or nu (the shallowest depth, "
+                         f"{1e3 * min(d.depths_mm):.0f} um, would be gone)")
         else:
             lines.append(f"bias from {what}: no E or nu (beta beyond the beta table)")
     lines.append(_verdict(pred))

@@ -38,9 +38,17 @@ __all__ += ["COLUMN_ORDER", "REQUIRED_COLUMNS", "STANDARD_GRAVITY", "Measurement
             "read_measurements", "sidecar_geometry", "write_measurements"]
 
 # indentation session folders (calibrate): names appended below
-from ._session import KNOWN_KEYS, Session, SessionConfig, read_presses, read_session  # noqa: E402
+from ._session import (  # noqa: E402
+    DEPTH_TOLERANCE_MM,
+    KNOWN_KEYS,
+    Session,
+    SessionConfig,
+    read_presses,
+    read_session,
+)
 
-__all__ += ["KNOWN_KEYS", "Session", "SessionConfig", "read_presses", "read_session"]
+__all__ += ["DEPTH_TOLERANCE_MM", "KNOWN_KEYS", "Session", "SessionConfig", "read_presses",
+            "read_session"]
 
 # the one rule for session.toml keys no reader reads (every reader of a session.toml)
 from ._keys import SIDECAR_KEYS, equal_area_radius, unknown_key_notes, warn_unknown_keys  # noqa: E402

@@ -24,7 +24,12 @@ from ._frames import read_image
 from ._keys import KNOWN_KEYS, equal_area_radius, unknown_key_notes
 from ._measurements import _read_table
 
-__all__ = ["Session", "SessionConfig", "read_presses", "read_session"]
+__all__ = ["DEPTH_TOLERANCE_MM", "Session", "SessionConfig", "read_presses", "read_session"]
+
+#: ``[gauge_block] depth_tolerance_mm``'s default: a depth counts as certified when its
+#: 95 % interval lies within +- this, mm (issue 83's target: a depth within 5 um, its sd at
+#: most 10 um).
+DEPTH_TOLERANCE_MM = 0.02
 
 _FORCE_COLUMNS = ("t_s", "fx_n", "fy_n", "fz_n")
 _TORQUE_COLUMNS = ("tx_nmm", "ty_nmm", "tz_nmm")
@@ -120,7 +125,7 @@ class SessionConfig:
     bulge_correction: bool = True
     bevel_force_correction: bool = True
     max_overshoot_mm: float = 0.1
-    depth_tolerance_mm: float = 0.02
+    depth_tolerance_mm: float = DEPTH_TOLERANCE_MM
     window_at: str = "start"
     date: datetime.date | None = None
     indenter_shape: str = "flat_punch"
@@ -313,7 +318,7 @@ def _read_config(folder: Path) -> SessionConfig:
         max_overshoot_mm=_toml_number(doc, toml, "gauge_block", "max_overshoot_mm",
                                       default=0.1),
         depth_tolerance_mm=_toml_number(doc, toml, "gauge_block", "depth_tolerance_mm",
-                                        default=0.02),
+                                        default=DEPTH_TOLERANCE_MM),
         date=_session_date(doc, toml),
     )
 

@@ -404,7 +404,10 @@ def _biases(d: Design, w: np.ndarray, P: np.ndarray, u: np.ndarray | None,
     bias = {"model": err(base[:2]), "noise": err(mean)}
     if shared_um > 0:
         bias["depth_shared"] = err(_fit(d, w + shared_um * 1e-3, P, u)[:2])
-        bias["depth_shared_minus"] = err(_fit(d, w - shared_um * 1e-3, P, u)[:2])
+        # a bound as deep as the shallowest gauge depth leaves no depth to fit: no E or nu
+        bias["depth_shared_minus"] = (err(_fit(d, w - shared_um * 1e-3, P, u)[:2])
+                                      if np.all(w - shared_um * 1e-3 > 0)
+                                      else (math.nan, math.nan))
     if d.force_zero_n > 0:
         bias["force_zero"] = err(_fit(d, w, P + d.force_zero_n, u)[:2])
         bias["force_zero_minus"] = err(_fit(d, w, P - d.force_zero_n, u)[:2])
