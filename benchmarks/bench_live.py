@@ -52,20 +52,25 @@ def _sensor(w: int, h: int):
     return cal, ref, presses
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--frames", type=int, default=600)
-    args = ap.parse_args()
+#: The work timed at each size: (forces, the heights' level, the force method).
+WORK = ((False, "median", None), (True, "median", "spectral"), (True, "median", "fem"),
+        (True, "contact", "spectral"), (True, "contact", "fem"))
+SIZES = ((427, 320), (640, 480))
+
+
+def rows(n_frames: int = 600) -> list[dict]:
+    """Every size and work of the module docstring, timed: one dict each with ``size``
+    (w, h), ``forces``, ``level``, ``method``, ``fps`` (the pipeline's own rate under
+    'every'), ``ms`` and ``bare_ms`` (a frame through the pipeline and in the plain loop),
+    ``latency_queued_ms`` (median, every frame queued) and ``latency_ms``,
+    ``latency_p95_ms`` (a camera at 0.9 times the pipeline's rate, 'latest')."""
     cv2.setNumThreads(1)
     os.environ.setdefault("OMP_NUM_THREADS", "1")
-    print(f"{os.cpu_count()} cores; OpenCV on 1 thread; {args.frames} frames per run, "
-          "'every' policy")
-    for w, h in ((427, 320), (640, 480)):
+    out = []
+    for w, h in SIZES:
         cal, ref, presses = _sensor(w, h)
-        frames = [np.roll(presses[i % 4], (i % 40) - 20, axis=1) for i in range(args.frames)]
-        for forces, level, method in ((False, "median", None), (True, "median", "spectral"),
-                                      (True, "median", "fem"), (True, "contact", "spectral"),
-                                      (True, "contact", "fem")):
+        frames = [np.roll(presses[i % 4], (i % 40) - 20, axis=1) for i in range(n_frames)]
+        for forces, level, method in WORK:
             kw = ({"E_mpa": 0.2, "nu": 0.48, "thickness_mm": 3.0, "method": method,
                    "contact": "field"} if forces else {})
             # the bare work, in a plain loop (BLAS on one thread, as the pipeline runs it)
@@ -99,13 +104,29 @@ def main() -> None:
                     yield f
 
             live = [r.latency_s for r in pipe.stream(camera(), policy="latest")]
-            what = (f"height + forces ({method}), level '{level}'" if forces
-                    else "height only")
-            print(f"{w} x {h}, {what}: {1 / per:.0f} frames/s ({1e3 * per:.2f} ms a frame, "
-                  f"{per / bare:.2f} x the bare loop's {1e3 * bare:.2f} ms); latency with "
-                  f"every frame queued: median {1e3 * np.median(lat):.0f} ms; from a camera "
-                  f"at 0.9 x that rate ('latest'): median {1e3 * np.median(live):.1f} ms, "
-                  f"95th percentile {1e3 * np.percentile(live, 95):.1f} ms")
+            out.append({"size": (w, h), "forces": forces, "level": level, "method": method,
+                        "fps": 1 / per, "ms": 1e3 * per, "bare_ms": 1e3 * bare,
+                        "latency_queued_ms": 1e3 * float(np.median(lat)),
+                        "latency_ms": 1e3 * float(np.median(live)),
+                        "latency_p95_ms": 1e3 * float(np.percentile(live, 95))})
+    return out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--frames", type=int, default=600)
+    args = ap.parse_args()
+    print(f"{os.cpu_count()} cores; OpenCV on 1 thread; {args.frames} frames per run, "
+          "'every' policy")
+    for r in rows(args.frames):
+        w, h = r["size"]
+        what = (f"height + forces ({r['method']}), level '{r['level']}'" if r["forces"]
+                else "height only")
+        print(f"{w} x {h}, {what}: {r['fps']:.0f} frames/s ({r['ms']:.2f} ms a frame, "
+              f"{r['ms'] / r['bare_ms']:.2f} x the bare loop's {r['bare_ms']:.2f} ms); latency "
+              f"with every frame queued: median {r['latency_queued_ms']:.0f} ms; from a camera "
+              f"at 0.9 x that rate ('latest'): median {r['latency_ms']:.1f} ms, "
+              f"95th percentile {r['latency_p95_ms']:.1f} ms")
 
 
 if __name__ == "__main__":

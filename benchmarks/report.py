@@ -1424,6 +1424,43 @@ def _batch_speedup(quick: bool) -> Result:
                               "allows on 2 cores.")])
 
 
+@subject(
+    "live", "Live: the pipeline's rate and latency at camera rate",
+    """`tactilevision.live.Pipeline` on one core (OpenCV on one thread, BLAS on one thread
+    around each frame's work, as the pipeline runs it) over the real GelSight presses of
+    `sample_frames/gelsight_ball` resized to GelSlim 3.0's 427 x 320 or kept at 640 x 480,
+    a LUT calibration fitted to them at each size: heights alone, and heights with forces
+    (the spectral method or the inverse FEM, `contact='field'`), the heights levelled at
+    their median (camera rate) or at the contact (zero outside it). The rate under the
+    'every' policy (every frame processed) beside the same work in a plain loop timed in
+    the same run, and the latency from capture to result with a camera at 0.9 times the
+    pipeline's own rate ('latest'). 300 frames a run (100 with --quick).""",
+    ["python benchmarks/bench_live.py --frames 300"])
+def _live(quick: bool) -> Result:
+    import bench_live as b
+    with _one_thread():
+        got = b.rows(100 if quick else 300)
+    rows = [[f"{r['size'][0]} x {r['size'][1]}",
+             (f"height + forces ({r['method']}), level {r['level']}" if r["forces"]
+              else "height"),
+             f"{r['fps']:.0f}", f"{r['ms'] / r['bare_ms']:.2f} x",
+             f"{r['latency_ms']:.1f} ms ({r['latency_p95_ms']:.1f})"] for r in got]
+    ratio = [r["ms"] / r["bare_ms"] for r in got]
+    fem = next(r for r in got if r["size"] == (427, 320) and r["method"] == "fem"
+               and r["level"] == "median")
+    return Result([Table("Rate and latency",
+                         ["frames", "work", "frames/s", "against the bare loop",
+                          "latency, median (95th pct.)"], rows,
+                         note=f"{os.cpu_count()} cores, the pipeline on one. The pipeline "
+                              f"over the bare loop: {min(ratio):.2f} to {max(ratio):.2f} "
+                              "times. Frames/s and milliseconds are this machine's at this "
+                              "hour; the ratio carries between machines.")],
+                  summary=f"427 x 320, heights and the inverse FEM's forces at level median: "
+                          f"{fem['fps']:.0f} frames/s, latency {fem['latency_ms']:.1f} ms "
+                          f"median ({fem['latency_p95_ms']:.1f} ms 95th pct.); the pipeline "
+                          f"{min(ratio):.2f} to {max(ratio):.2f} times the bare loop.")
+
+
 #: The thread-count variables a timing benchmark may set when first imported.
 THREAD_VARS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 
