@@ -10,9 +10,12 @@ from __future__ import annotations
 import argparse
 import math
 
+import numpy as np
+
 from .. import InputError
 from ..io import DEPTH_TOLERANCE_MM, write_output_file
 from ..mechanics import EFFECT_SIZE_PARAMS
+from ..pipeline import depth_half95
 from ..planning import (
     PlanPrediction,
     Recommendation,
@@ -29,9 +32,10 @@ __all__ = ["run"]
 
 def _certified_line(pred) -> str:
     """Whether calibrate will count the design's depths as certified: their 95 %
-    half-width (the random sd and the shared bound as a uniform's, as calibrate states it)
+    half-width (:func:`~tactilevision.pipeline.depth_half95`, as calibrate states it)
     against ``[gauge_block] depth_tolerance_mm``'s default."""
-    half = 1.96 * math.hypot(pred.depth_std_um, (pred.depth_shared_um or 0.0) / math.sqrt(3))
+    half = float(depth_half95(np.array([pred.depth_std_um]),
+                              np.array([pred.depth_shared_um or 0.0]))[0])
     tol = 1e3 * DEPTH_TOLERANCE_MM
     if half <= tol:
         return (f"depths certified: 95 % within +-{half:.1f} um, inside calibrate's "

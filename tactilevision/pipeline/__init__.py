@@ -24,14 +24,22 @@ cross-check of its depth (:func:`ball_press_caps`).
 
 from ._calibrate import calibrate_session
 from ._calibration import HOLD_SEARCH_S, SessionCalibration, hold_curves, hold_spans
-from ._rules import MARK_BETA, DepthState, land_rule, mark_rule, nominal_rule, vernier_rule
+from ._rules import (
+    MARK_BETA,
+    DepthState,
+    depth_half95,
+    land_rule,
+    mark_rule,
+    nominal_rule,
+    vernier_rule,
+)
 from ._shared import with_shared_depth
 from ._steps import Fitter, frame_period, relaxation_step, take_off_zero
 
 __all__ = ["HOLD_SEARCH_S", "MARK_BETA", "DepthState", "Fitter", "SessionCalibration",
-           "calibrate_session", "frame_period", "hold_curves", "hold_spans", "land_rule",
-           "mark_rule", "nominal_rule", "relaxation_step", "take_off_zero", "vernier_rule",
-           "with_shared_depth"]
+           "calibrate_session", "depth_half95", "frame_period", "hold_curves", "hold_spans",
+           "land_rule", "mark_rule", "nominal_rule", "relaxation_step", "take_off_zero",
+           "vernier_rule", "with_shared_depth"]
 
 from ._result import (
     CALIBRATION_FILES,
