@@ -73,6 +73,12 @@ def test_forces_on_a_frames_folder(tmp_path):
      "threshold_mm must be positive"),
     (["--thickness-mm", "3", "--E-mpa", "0.2", "--nu", "0.48", "--beta", "-1"],
      "--beta must be finite and >= 0"),
+    (["--thickness-mm", "3", "--E-mpa", "0.2", "--nu", "0.48", "--binning", "fine"],
+     "--binning must be 'auto' or a positive integer, got 'fine'"),
+    (["--thickness-mm", "3", "--E-mpa", "0.2", "--nu", "0.48", "--binning", "0"],
+     "binning must be 'auto' or a positive integer, got 0"),
+    (["--thickness-mm", "3", "--E-mpa", "0.2", "--nu", "0.48", "--binning", "2",
+      "--contact", "field"], "binning = 2 applies to contact='footprint'"),
 ])
 def test_forces_bad_input(tmp_path, capsys, extra, message):
     out = tmp_path / "out"
@@ -164,7 +170,7 @@ def test_forces_by_default_match_the_ft_log(tmp_path, capsys):
             in captured.err)
     assert "optics.npz (the session's own)" in printed
     assert "zero outside the contact region" in printed
-    assert "footprint above 0.02 mm" in printed
+    assert "footprint above 0.02 mm, solved on blocks of up to 8 x 8 pixels (auto)" in printed
     assert f"beta 0.82 from {fit}" in printed
     rows = {r["frame"]: r for r in csv.DictReader((out / "forces.csv").open())}
     assert abs(float(rows["00000.jpg"]["fz_n"])) < 0.02

@@ -16,6 +16,7 @@ from tqdm.auto import tqdm
 
 from .. import InputError
 from ..fem import ForceEstimator
+from ..fem._forces import AUTO_BIN_MAX
 from ..io import FrameSource, StagedOutput, check_output_folder, check_overwrite, open_source
 from ..optics import DepthReconstructor
 from ..viz import save_force_image
@@ -55,6 +56,13 @@ def run(args: argparse.Namespace) -> int:
         grid = tuple(int(v) for v in args.grid.split(","))
     except ValueError:
         raise InputError(f"--grid must be NX,NY, got {args.grid!r}") from None
+    binning = args.binning
+    if binning != "auto":
+        try:
+            binning = int(binning)
+        except ValueError:
+            raise InputError(f"--binning must be 'auto' or a positive integer, got "
+                             f"{args.binning!r}") from None
     recon = DepthReconstructor(
         cal, reference="calibration" if reference is None else reference,
         boundary="contact" if args.level == "contact" else "neumann",
@@ -62,7 +70,8 @@ def run(args: argparse.Namespace) -> int:
         flat_reference=args.flat_reference)
     est = ForceEstimator(cal.shape, mm_per_px, thickness_mm=h, E_mpa=E, nu=nu, grid=grid,
                          method=args.method, contact=args.contact,
-                         threshold_mm=args.threshold_mm, beta=beta)
+                         threshold_mm=args.threshold_mm, beta=beta,
+                         binning=binning)
     ft, ft_note = _ft_log(src, fit_obj)
     # written whole into a hidden folder in out, moved into place at the end (Ctrl-C:
     # nothing)
@@ -79,6 +88,11 @@ def run(args: argparse.Namespace) -> int:
              "far_field": "levelled at the far field", "median": "the frame's median at zero"}
     contact = (f"footprint above {args.threshold_mm:g} mm" if args.contact == "footprint"
                else "field")
+    if args.contact == "footprint" and args.method == "spectral":
+        contact += (f", solved on blocks of up to {AUTO_BIN_MAX} x {AUTO_BIN_MAX} pixels (auto)"
+                    if binning == "auto"
+                    else f", solved on blocks of {binning} x {binning} pixels"
+                    if binning > 1 else ", solved on every pixel")
     print(f"force maps of {len(rows)} frame(s) from {source} into {out}{ft_note}\n"
           f"  optics: {cal_path} ({optics_note})\n"
           f"  heights: {level[args.level]}"

@@ -542,7 +542,9 @@ def _bevel_force_table(angle_deg: float, length_mm: float, thickness_mm: float, 
     size = int(2 * math.ceil((half_v + 4.0 * thickness_mm) / s / 2)) + 1
     shape = (size, max(size, int(2 * math.ceil((max(_FORCE_CLOSURES_MM) / tan
                                                  + 4.0 * thickness_mm) / s / 2)) + 1))
-    est = ForceEstimator(shape, s, thickness_mm, 1.0, nu, contact="footprint", threshold_mm=0.01)
+    # every pixel: the band's footprint is a thin wedge, its force table computed once
+    est = ForceEstimator(shape, s, thickness_mm, 1.0, nu, contact="footprint", threshold_mm=0.01,
+                         binning=1)
     rows, cols = np.indices(shape, dtype=np.float64)
     u = (cols - (shape[1] - 1) / 2) * s
     v = (rows - (shape[0] - 1) / 2) * s
