@@ -21,7 +21,8 @@ of the session's own optics); ``field`` (``--contact field --level
 far_field``: the height field trusted everywhere); ``before`` (the defaults
 before issue 16: ``--sensor gelsight --contact field --level far_field
 --beta 0``); the faster choices ``fem`` (``--method fem``), ``far_field`` (``--level
-far_field``) and ``far_field_fem`` (both). ``--fit`` defaults to
+far_field``) and ``far_field_fem`` (both); ``every_pixel`` (``--binning 1``: the
+footprint solved on every pixel instead of blocks). ``--fit`` defaults to
 ``out/calibration/fit.json`` (the README's first command), else the truth (E, nu, clock
 offset; beta 0.82).
 
@@ -75,6 +76,8 @@ VARIANTS = {
     "fem": ["--method", "fem"],
     "far_field": ["--level", "far_field"],
     "far_field_fem": ["--level", "far_field", "--method", "fem"],
+    # the footprint solved on every pixel instead of blocks (the default before --binning)
+    "every_pixel": ["--binning", "1"],
 }
 
 
@@ -114,8 +117,9 @@ def rate_rows(frames: int, start: int, before: int) -> dict:
     recon = DepthReconstructor(cal, reference=s.reference, boundary="contact")
     far = DepthReconstructor(cal, reference=s.reference, level="far_field")
     est = ForceEstimator(cal.shape, mm, **kw)
+    every_px = ForceEstimator(cal.shape, mm, binning=1, **kw)
     fem = ForceEstimator(cal.shape, mm, method="fem", **kw)
-    old = ForceEstimator(cal.shape, mm, **kw)
+    old = ForceEstimator(cal.shape, mm, binning=1, **kw)
     old._op.box = False                     # the padded whole-image footprint solve
 
     def per_frame(fn, fs) -> float:
@@ -139,6 +143,9 @@ def rate_rows(frames: int, start: int, before: int) -> dict:
                        frames_)
     it = iter(heights * 2)
     t_forces = per_frame(lambda _f: est(next(it)), frames_)
+    it = iter(heights * 2)
+    t_forces1 = per_frame(lambda _f: every_px(next(it)), frames_)
+    t_default1 = per_frame(lambda f: every_px(recon(f)), frames_)
     every = max(1, len(frames_) // before)
     sub = frames_[::every]
     t_before = per_frame(old_path, sub)
@@ -153,9 +160,11 @@ def rate_rows(frames: int, start: int, before: int) -> dict:
             ("default path: contact-pinned height + footprint force", t_default),
             ("  its contact-pinned height map alone", t_heights),
             ("    of which the frame's contact mask", t_mask),
-            ("  its footprint force map alone", t_forces),
-            ("the solvers before (direct masked solve, padded footprint solve), "
-             "on the spread frames", t_before),
+            ("  its footprint force map alone (blocks: --binning auto)", t_forces),
+            ("the default path on every pixel (--binning 1)", t_default1),
+            ("  its footprint force map alone on every pixel", t_forces1),
+            ("the solvers before (direct masked solve, padded footprint solve on every "
+             "pixel), on the spread frames", t_before),
             ("the default path on the same spread frames", t_after),
             ("faster choice `--method fem`: contact-pinned height + the FEM's force map",
              t_fem),
