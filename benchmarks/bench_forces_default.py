@@ -114,7 +114,10 @@ def rate_rows(frames: int, start: int, before: int) -> dict:
               contact="footprint", threshold_mm=0.02, beta=0.82)
     frames_ = [s.frame(i) for i in range(start, min(start + frames, s.n_frames))]
     bare = DepthReconstructor(cal, reference=s.reference)
-    recon = DepthReconstructor(cal, reference=s.reference, boundary="contact")
+    # the command's default: heights and footprint on blocks ('auto'); every pixel beside it
+    recon = DepthReconstructor(cal, reference=s.reference, boundary="contact",
+                               binning="auto")
+    recon1 = DepthReconstructor(cal, reference=s.reference, boundary="contact")
     far = DepthReconstructor(cal, reference=s.reference, level="far_field")
     est = ForceEstimator(cal.shape, mm, **kw)
     every_px = ForceEstimator(cal.shape, mm, binning=1, **kw)
@@ -130,12 +133,13 @@ def rate_rows(frames: int, start: int, before: int) -> dict:
         return (time.perf_counter() - t0) / len(fs)
 
     def old_path(f):
-        gx, gy = recon.gradients(f)
-        mask = recon.contact_mask(f, threshold="frame", fill_holes=True)
+        gx, gy = recon1.gradients(f)
+        mask = recon1.contact_mask(f, threshold="frame", fill_holes=True)
         h = integrate_poisson_masked(gx, gy, mask, method="direct") * np.float32(mm)
         return old(h)
 
     heights = [recon(f) for f in frames_]
+    heights1 = [recon1(f) for f in frames_]
     t_bare = per_frame(bare, frames_)
     t_default = per_frame(lambda f: est(recon(f)), frames_)
     t_heights = per_frame(recon, frames_)
@@ -143,14 +147,15 @@ def rate_rows(frames: int, start: int, before: int) -> dict:
                        frames_)
     it = iter(heights * 2)
     t_forces = per_frame(lambda _f: est(next(it)), frames_)
-    it = iter(heights * 2)
+    it = iter(heights1 * 2)
     t_forces1 = per_frame(lambda _f: every_px(next(it)), frames_)
-    t_default1 = per_frame(lambda f: every_px(recon(f)), frames_)
+    t_default1 = per_frame(lambda f: every_px(recon1(f)), frames_)
+    t_heights1 = per_frame(recon1, frames_)
     every = max(1, len(frames_) // before)
     sub = frames_[::every]
     t_before = per_frame(old_path, sub)
     t_after = per_frame(lambda f: est(recon(f)), sub)
-    t_fem = per_frame(lambda f: fem(recon(f)), frames_)
+    t_fem = per_frame(lambda f: fem(recon1(f)), frames_)
     t_far = per_frame(lambda f: est(far(f)), frames_)
     t_far_fem = per_frame(lambda f: fem(far(f)), frames_)
     t_bare2 = per_frame(bare, frames_)
@@ -158,10 +163,11 @@ def rate_rows(frames: int, start: int, before: int) -> dict:
     rows = [(f"bare DepthReconstructor (the reference; mean of a run before and after: "
              f"{t_bare * 1e3:.1f}, {t_bare2 * 1e3:.1f} ms)", ref),
             ("default path: contact-pinned height + footprint force", t_default),
-            ("  its contact-pinned height map alone", t_heights),
-            ("    of which the frame's contact mask", t_mask),
+            ("  its contact-pinned height map alone (blocks)", t_heights),
+            ("    of which the frame's contact mask (every pixel)", t_mask),
             ("  its footprint force map alone (blocks: --binning auto)", t_forces),
             ("the default path on every pixel (--binning 1)", t_default1),
+            ("  its contact-pinned height map alone on every pixel", t_heights1),
             ("  its footprint force map alone on every pixel", t_forces1),
             ("the solvers before (direct masked solve, padded footprint solve on every "
              "pixel), on the spread frames", t_before),
@@ -242,7 +248,8 @@ def sweeps_rows(frames: int, start: int) -> dict:
               contact="footprint", threshold_mm=0.02, beta=0.82)
     recon = DepthReconstructor(cal, reference=s.reference, boundary="contact")
     heights = [recon(s.frame(i)) for i in range(start, min(start + frames, s.n_frames))]
-    est = ForceEstimator(cal.shape, s.config.mm_per_px, **kw)
+    # the solver on every pixel (with blocks each block size has its own operator)
+    est = ForceEstimator(cal.shape, s.config.mm_per_px, binning=1, **kw)
     est._op.solve_log = log = []
     default = [est(h) for h in heights]
     solve = F._mixed_solve

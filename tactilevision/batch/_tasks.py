@@ -61,6 +61,9 @@ class BatchSettings:
     grid : (int, int)
     contact : {'footprint', 'field'}
     threshold_mm : float
+    binning : int or 'auto'
+        Forces: the footprint's solve and the contact-pinned heights on blocks of pixels
+        (:class:`~tactilevision.fem.ForceEstimator`'s `binning`).
     """
 
     kind: str
@@ -79,6 +82,7 @@ class BatchSettings:
     grid: tuple[int, int] = (40, 30)
     contact: str = "footprint"
     threshold_mm: float = 0.02
+    binning: int | str = "auto"
 
     def to_json(self) -> str:
         """The settings as canonical JSON (stored with the outputs, compared on resume)."""
@@ -131,16 +135,19 @@ def worker_tools(settings: BatchSettings, reference: str | None):
     numcodecs.blosc.set_nthreads(1)     # the Zarr writes' compression likewise
     cal = PhotometricCalibration.load(settings.calibration)
     ref = read_reference(reference, cal.shape) if reference else "calibration"
-    recon = DepthReconstructor(
-        cal, reference=ref, boundary="contact" if settings.level == "contact" else "neumann",
-        level="median" if settings.level == "contact" else settings.level,
-        flat_reference=settings.flat_reference, engine=settings.engine)
     est = None
+    blocks = 1
     if settings.kind == "forces":
         est = ForceEstimator(cal.shape, cal.mm_per_px, thickness_mm=settings.thickness_mm,
                              E_mpa=settings.E_mpa, nu=settings.nu, grid=tuple(settings.grid),
                              method=settings.method, contact=settings.contact,
-                             threshold_mm=settings.threshold_mm, beta=settings.beta)
+                             threshold_mm=settings.threshold_mm, beta=settings.beta,
+                             binning=settings.binning)
+        blocks = est.blocks if settings.level == "contact" else 1
+    recon = DepthReconstructor(
+        cal, reference=ref, boundary="contact" if settings.level == "contact" else "neumann",
+        level="median" if settings.level == "contact" else settings.level,
+        flat_reference=settings.flat_reference, engine=settings.engine, binning=blocks)
     return cal, recon, est
 
 

@@ -36,11 +36,6 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     add_material_options(p)
     p.add_argument("--method", choices=("spectral", "fem"), default="spectral",
                    help="spectral layer model at full resolution (default) or inverse FEM")
-    p.add_argument("--binning", metavar="K", default="auto",
-                   help="the footprint's contact problem solved on K x K blocks of pixels "
-                   "(spectral method): 'auto' (default) takes per frame the largest K up to "
-                   "8 with K pixels at most the footprint's width over 20; 1 solves on "
-                   "every pixel")
     p.add_argument("--grid", metavar="NX,NY", default="40,30",
                    help="FEM surface nodes along x and y (default 40,30)")
     p.add_argument("--level", choices=("contact", "far_field", "median"), default="contact",

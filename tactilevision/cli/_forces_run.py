@@ -15,12 +15,12 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from .. import InputError
-from ..fem import ForceEstimator
-from ..fem._forces import AUTO_BIN_MAX
+from ..fem import AUTO_BIN_MAX, ForceEstimator
 from ..io import FrameSource, StagedOutput, check_output_folder, check_overwrite, open_source
 from ..optics import DepthReconstructor
 from ..viz import save_force_image
 from ._inputs import beta_from_args, material_from_args, optics_calibration
+from ._options import binning_from_args
 
 __all__ = ["run"]
 
@@ -56,22 +56,16 @@ def run(args: argparse.Namespace) -> int:
         grid = tuple(int(v) for v in args.grid.split(","))
     except ValueError:
         raise InputError(f"--grid must be NX,NY, got {args.grid!r}") from None
-    binning = args.binning
-    if binning != "auto":
-        try:
-            binning = int(binning)
-        except ValueError:
-            raise InputError(f"--binning must be 'auto' or a positive integer, got "
-                             f"{args.binning!r}") from None
+    binning = binning_from_args(args.binning)
+    est = ForceEstimator(cal.shape, mm_per_px, thickness_mm=h, E_mpa=E, nu=nu, grid=grid,
+                         method=args.method, contact=args.contact,
+                         threshold_mm=args.threshold_mm, beta=beta, binning=binning)
     recon = DepthReconstructor(
         cal, reference="calibration" if reference is None else reference,
         boundary="contact" if args.level == "contact" else "neumann",
         level="median" if args.level == "contact" else args.level,
-        flat_reference=args.flat_reference)
-    est = ForceEstimator(cal.shape, mm_per_px, thickness_mm=h, E_mpa=E, nu=nu, grid=grid,
-                         method=args.method, contact=args.contact,
-                         threshold_mm=args.threshold_mm, beta=beta,
-                         binning=binning)
+        flat_reference=args.flat_reference,
+        binning=est.blocks if args.level == "contact" else 1)
     ft, ft_note = _ft_log(src, fit_obj)
     # written whole into a hidden folder in out, moved into place at the end (Ctrl-C:
     # nothing)
@@ -88,14 +82,17 @@ def run(args: argparse.Namespace) -> int:
              "far_field": "levelled at the far field", "median": "the frame's median at zero"}
     contact = (f"footprint above {args.threshold_mm:g} mm" if args.contact == "footprint"
                else "field")
-    if args.contact == "footprint" and args.method == "spectral":
+    blocks = est.blocks
+    if blocks != 1:
         contact += (f", solved on blocks of up to {AUTO_BIN_MAX} x {AUTO_BIN_MAX} pixels (auto)"
-                    if binning == "auto"
-                    else f", solved on blocks of {binning} x {binning} pixels"
-                    if binning > 1 else ", solved on every pixel")
+                    if blocks == "auto" else f", solved on blocks of {blocks} x {blocks} pixels")
+    elif args.contact == "footprint" and args.method == "spectral":
+        contact += ", solved on every pixel"
+    blocks_note = ", integrated on blocks as the force solve"
     print(f"force maps of {len(rows)} frame(s) from {source} into {out}{ft_note}\n"
           f"  optics: {cal_path} ({optics_note})\n"
           f"  heights: {level[args.level]}"
+          f"{blocks_note if recon.binning != 1 else ''}"
           f"{', flat reference' if args.flat_reference else ''}\n"
           f"  forces: {args.method}, {contact}; E {E:.4g} MPa, nu {nu:.4g} from "
           f"{material_source}; beta {beta:.3g} from {beta_source}; h {h:g} mm")

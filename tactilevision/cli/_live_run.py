@@ -25,6 +25,7 @@ from ..io import (
 )
 from ..live import Pipeline
 from ._live import CSV_COLUMNS
+from ._options import binning_from_args
 
 __all__ = ["annotate", "run"]
 
@@ -109,7 +110,7 @@ def run(args: argparse.Namespace) -> int:
     pipe = Pipeline(cal_path, reference=reference, n_reference=args.reference_frames,
                     E_mpa=args.E_mpa, nu=args.nu, thickness_mm=args.thickness_mm,
                     level=args.level, method=args.method, contact=args.contact,
-                    threshold_mm=args.threshold_mm)
+                    threshold_mm=args.threshold_mm, binning=binning_from_args(args.binning))
     for p in (args.out, args.csv):
         if p is not None:
             output_folder(p.parent, f"folder of {p.name}")

@@ -8,10 +8,10 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from .. import KNOWN_SENSORS
+from .. import KNOWN_SENSORS, InputError
 
 __all__ = ["add_contact_options", "add_dome_argument", "add_material_options",
-           "add_optics_options"]
+           "add_optics_options", "binning_from_args"]
 
 _REFERENCE_HELP = ("no-contact frame (default: the session's own, else reference.png, ref.jpg, "
                    "gs_sdk's background.png or <video stem>_reference.png beside the frames, "
@@ -56,6 +56,28 @@ def add_contact_options(p: argparse.ArgumentParser, *, note: str = "") -> None:
                    "everywhere (every error beyond the contact then pushes or pulls)" + note)
     p.add_argument("--threshold-mm", type=float, default=0.02,
                    help="footprint: height above which a pixel is in contact (default 0.02)")
+    p.add_argument("--binning", metavar="K", default="auto",
+                   help="footprint (spectral): the contact-pinned heights and the "
+                   "footprint's solve on K x K blocks of pixels; 'auto' (default) takes per "
+                   "frame the largest K up to 8 with K pixels at most the footprint's width "
+                   "over 20 (the contact region's over 40 for the heights); 1: every pixel")
+
+
+def binning_from_args(text: str) -> int | str:
+    """``--binning``'s value: 'auto' or a whole number (checked further by the estimator).
+
+    Raises
+    ------
+    InputError
+        For anything else, naming the option.
+    """
+    if text == "auto":
+        return text
+    try:
+        return int(text)
+    except ValueError:
+        raise InputError(f"--binning must be 'auto' or a positive integer, got {text!r}"
+                         ) from None
 
 
 def add_dome_argument(g) -> None:

@@ -19,12 +19,13 @@ from ._finite import FiniteIndentation, neo_hookean_indentation  # noqa: E402
 __all__ += ["FiniteIndentation", "neo_hookean_indentation"]
 
 # contact force distribution: the spectral layer model and the inverse FEM
-from ._forces import ForceEstimator, ForceMap, auto_binning  # noqa: E402
+from ._forces import AUTO_BIN_MAX, ForceEstimator, ForceMap, auto_binning  # noqa: E402
 from ._layer import layer_normal_stiffness, layer_surface_stiffness, wavevectors  # noqa: E402
 from ._pad import PadStiffness, pad_surface_stiffness  # noqa: E402
 
-__all__ += ["ForceEstimator", "ForceMap", "PadStiffness", "auto_binning", "layer_normal_stiffness",
-            "layer_surface_stiffness", "pad_surface_stiffness", "wavevectors"]
+__all__ += ["AUTO_BIN_MAX", "ForceEstimator", "ForceMap", "PadStiffness", "auto_binning",
+            "layer_normal_stiffness", "layer_surface_stiffness", "pad_surface_stiffness",
+            "wavevectors"]
 
 # the gel's surface under a flat-punch press, from the finite-strain sweep (tactilevision.sim
 # draws sessions with it, tactilevision.contact reads the bulge at the bevel from it)

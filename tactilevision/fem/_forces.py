@@ -67,11 +67,12 @@ import numpy as np
 import scipy.fft as sfft
 import scipy.sparse as sp
 
+from .._blocks import AUTO_BIN_MAX, auto_binning, bin_blocks, unbin_blocks
 from .._checks import InputError, check_poisson, check_positive
 from ._layer import layer_normal_stiffness, layer_surface_stiffness
 from ._pad import pad_surface_stiffness
 
-__all__ = ["ForceEstimator", "ForceMap", "auto_binning"]
+__all__ = ["AUTO_BIN_MAX", "ForceEstimator", "ForceMap", "auto_binning"]
 
 
 @dataclass(frozen=True)
@@ -107,61 +108,6 @@ class ForceMap:
 _OPERATOR_FIELDS = frozenset({"shape_px", "mm_per_px", "thickness_mm", "E_mpa", "nu", "method",
                               "mode", "pad_mm", "grid", "element", "layers", "cache_dir",
                               "binning", "contact"})
-
-#: ``binning='auto'``: a frame's footprint solved on blocks whose side is at most its width
-#: (twice its area over its perimeter: the radius of a disc) over this. On a flat punch
-#: (a = 2.5 mm, h = 3 mm; pixels of 0.03 and 0.05 mm, edges sharp and blurred 1.5 px,
-#: ``tests/test_forces_binning.py``) blocks up to a / 20 moved the total by at most 0.4 %
-#: against every pixel, blocks of a / 12 by 1 to 4 %.
-AUTO_BIN_PER_WIDTH = 20.0
-
-#: The largest block ``binning='auto'`` uses, pixels.
-AUTO_BIN_MAX = 8
-
-
-def auto_binning(footprint: np.ndarray) -> int:
-    """The block side in pixels ``binning='auto'`` solves a footprint on: the largest k
-    with k pixels at most its width over 20 (:data:`AUTO_BIN_PER_WIDTH`), its width twice
-    its area over its perimeter (a disc's radius, a strip's half-width), from 1 to 8.
-
-    Parameters
-    ----------
-    footprint : (H, W) bool ndarray
-        The pixels in contact.
-
-    Returns
-    -------
-    int
-        1 for an empty footprint.
-    """
-    m = np.ascontiguousarray(footprint, np.uint8)
-    area = int(np.count_nonzero(m))
-    if area == 0:
-        return 1
-    inner = cv2.erode(m, _CROSS, borderType=cv2.BORDER_CONSTANT, borderValue=0)
-    perimeter = area - int(np.count_nonzero(inner))     # pixels with an outside 4-neighbour
-    width = 2.0 * area / max(perimeter, 1)
-    return int(min(AUTO_BIN_MAX, max(1, math.floor(width / AUTO_BIN_PER_WIDTH + 1e-9))))
-
-
-_CROSS = cv2.getStructuringElement(cv2.MORPH_CROSS, (3, 3))
-
-
-def bin_blocks(a: np.ndarray, k: int) -> np.ndarray:
-    """Means over k x k blocks of pixels of one (H, W) map: (ceil(H / k), ceil(W / k)),
-    the last row and column of blocks over the pixels they hold (the map's edge repeated)."""
-    H, W = a.shape
-    Hc, Wc = -(-H // k), -(-W // k)
-    if (Hc * k, Wc * k) != (H, W):
-        a = cv2.copyMakeBorder(a, 0, Hc * k - H, 0, Wc * k - W, cv2.BORDER_REPLICATE)
-    return cv2.resize(a, (Wc, Hc), interpolation=cv2.INTER_AREA)
-
-
-def unbin_blocks(a: np.ndarray, k: int, shape: tuple[int, int]) -> np.ndarray:
-    """Each block's value on its pixels: (Hc, Wc, ...) -> (H, W, ...) (nearest)."""
-    H, W = shape
-    return np.repeat(np.repeat(a, k, axis=0), k, axis=1)[:H, :W]
-
 
 @dataclass
 class ForceEstimator:
@@ -333,6 +279,13 @@ class ForceEstimator:
         return (self.contact == "footprint" and self.method == "spectral"
                 and self.mode == "normal")
 
+    @property
+    def blocks(self) -> int | str:
+        """`binning` where it applies (the spectral footprint, normal mode), else 1: what
+        a :class:`~tactilevision.optics.DepthReconstructor` with ``boundary='contact'``
+        takes for the heights it feeds this estimator (``forces``, ``live``, ``batch``)."""
+        return self.binning if self._binnable else 1
+
     def _build(self) -> None:
         if self.method == "spectral":
             pad = 2.0 * self.thickness_mm if self.pad_mm is None else float(self.pad_mm)
@@ -457,7 +410,7 @@ class ForceEstimator:
             if k == 1:
                 f, m = self._op.footprint(ui[None, ..., None], mi[None])
                 out_f.append(f[0])
-                out_m.append(m[0])
+                out_m.append(np.asarray(m[0], bool))
                 continue
             op = self._binned.get(k)
             if op is None:
@@ -472,13 +425,15 @@ class ForceEstimator:
             uc = bin_blocks(ui * mf, k) / np.maximum(frac, u.dtype.type(1e-6))
             fc, kc = op.footprint(uc[None, ..., None], mc[None])
             # each block's force over its footprint pixels (a block in it holds at least one)
-            n = bin_blocks(mf, k) * u.dtype.type(k * k)
+            n = bin_blocks(mf, k, edge="zero") * u.dtype.type(k * k)
             per = np.where(kc[0], fc[0, ..., 2] / np.maximum(n, 1), 0).astype(u.dtype)
             keep = unbin_blocks(kc[0], k, (H, W)) & mi
             f = np.zeros((H, W, 3), u.dtype)
             f[..., 2] = np.where(keep, unbin_blocks(per, k, (H, W)), 0)
             out_f.append(f)
             out_m.append(keep)
+        if len(out_f) == 1:                  # one frame: no copy (7 MB at 640 x 480)
+            return out_f[0][None], out_m[0][None]
         return np.stack(out_f), np.stack(out_m)
 
     def _stiffening(self, u: np.ndarray, mask: np.ndarray | None) -> np.ndarray:

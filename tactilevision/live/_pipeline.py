@@ -261,6 +261,10 @@ class Pipeline:
         frame against 15 ms with 'field', ``benchmarks/bench_live.py``): it goes with
         ``level='contact'``, the default with forces; 'field' with
         ``level='median'`` or ``'far_field'`` is the camera-rate choice.
+    binning : int or 'auto', default 'auto'
+        The footprint's solve and, with ``level='contact'``, the heights on
+        blocks of pixels (:class:`~tactilevision.fem.ForceEstimator`'s
+        `binning`, ``tactilevision forces --binning``); 1: every pixel.
     engine : {'table', 'onnx'}, default 'table'
         The reconstructor's engine.
     markers : bool, optional
@@ -276,7 +280,8 @@ class Pipeline:
     ------
     InputError
         For only some of E_mpa, nu and thickness_mm, a bad reference, an unknown
-        method, level or contact, or a threshold_mm that is not positive.
+        method, level or contact, a threshold_mm that is not positive, or a bad
+        binning.
 
     Examples
     --------
@@ -291,7 +296,8 @@ class Pipeline:
                  thickness_mm: float | None = None, beta: float = 0.0,
                  engine: str = "table", level: str | None = None,
                  contact: str = "footprint", threshold_mm: float = 0.02,
-                 method: str = "spectral", markers: bool | None = None) -> None:
+                 method: str = "spectral", markers: bool | None = None,
+                 binning: int | str = "auto") -> None:
         self.calibration = (calibration if isinstance(calibration, PhotometricCalibration)
                             else PhotometricCalibration.load(calibration))
         given = [v is not None for v in (E_mpa, nu, thickness_mm)]
@@ -305,6 +311,7 @@ class Pipeline:
         if method not in ("spectral", "fem"):
             raise InputError(f"method must be 'spectral' or 'fem', got {method!r}")
         self.method = method
+        self.binning = binning
         self.markers = bool(self.calibration.markers if markers is None else markers)
         self._marker_ref: np.ndarray | None = None
         self._marker_pos: np.ndarray | None = None
@@ -328,15 +335,18 @@ class Pipeline:
     def _build(self, reference) -> None:
         cal = self.calibration
         forces = self.material is not None
-        self._recon = DepthReconstructor(
-            cal, reference=reference, engine=self.engine,
-            boundary="contact" if self.level == "contact" else "neumann",
-            level="median" if self.level == "contact" else self.level)
+        blocks = 1
         if forces:
             E, nu, h, beta = self.material
             self._est = ForceEstimator(cal.shape, cal.mm_per_px, thickness_mm=h, E_mpa=E,
                                        nu=nu, beta=beta, contact=self.contact,
-                                       threshold_mm=self.threshold_mm, method=self.method)
+                                       threshold_mm=self.threshold_mm, method=self.method,
+                                       binning=self.binning)
+            blocks = self._est.blocks if self.level == "contact" else 1
+        self._recon = DepthReconstructor(
+            cal, reference=reference, engine=self.engine,
+            boundary="contact" if self.level == "contact" else "neumann",
+            level="median" if self.level == "contact" else self.level, binning=blocks)
         if self.markers:
             ref = cal.reference if isinstance(reference, str) else np.asarray(reference)
             pos = marker_centres(ref)
@@ -468,7 +478,7 @@ def stream(source, calibration, *, policy: str | None = None, max_frames: int | 
     max_frames : int, optional
     **kwargs
         :class:`Pipeline`'s (reference, n_reference, E_mpa, nu, thickness_mm,
-        beta, engine, level, contact, threshold_mm).
+        beta, engine, level, contact, threshold_mm, method, markers, binning).
 
     Yields
     ------
