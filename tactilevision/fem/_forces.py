@@ -417,21 +417,33 @@ class ForceEstimator:
                 op = self._binned[k] = _Spectral((-(-H // k), -(-W // k)), self.mm_per_px * k,
                                                  self.thickness_mm, self.E_mpa, self.nu,
                                                  self.mode, self._op.pad_mm)
+            f = np.zeros((H, W, 3), u.dtype)
+            keep = np.zeros((H, W), bool)
+            out_f.append(f)
+            out_m.append(keep)
+            rows = np.flatnonzero(mi.any(axis=1))
+            if rows.size == 0:
+                continue
+            cols = np.flatnonzero(mi.any(axis=0))
+            # the footprint's bounding box in whole blocks: only it is binned and solved
+            r0, c0 = int(rows[0]) // k * k, int(cols[0]) // k * k
+            r1, c1 = min(H, int(rows[-1]) // k * k + k), min(W, int(cols[-1]) // k * k + k)
             # a block is in the footprint when at least half its pixels are, at their mean
             # height (the indenter's, not the mean with the gel beside it)
-            mf = mi.astype(u.dtype)
+            mf = mi[r0:r1, c0:c1].astype(u.dtype)
             frac = bin_blocks(mf, k)
-            mc = frac >= 0.5
-            uc = bin_blocks(ui * mf, k) / np.maximum(frac, u.dtype.type(1e-6))
+            uc = np.zeros(op.shape, u.dtype)
+            mc = np.zeros(op.shape, bool)
+            box = (slice(r0 // k, r0 // k + frac.shape[0]), slice(c0 // k, c0 // k + frac.shape[1]))
+            uc[box] = bin_blocks(ui[r0:r1, c0:c1] * mf, k) / np.maximum(frac, u.dtype.type(1e-6))
+            mc[box] = frac >= 0.5
             fc, kc = op.footprint(uc[None, ..., None], mc[None])
             # each block's force over its footprint pixels (a block in it holds at least one)
             n = bin_blocks(mf, k, edge="zero") * u.dtype.type(k * k)
-            per = np.where(kc[0], fc[0, ..., 2] / np.maximum(n, 1), 0).astype(u.dtype)
-            keep = unbin_blocks(kc[0], k, (H, W)) & mi
-            f = np.zeros((H, W, 3), u.dtype)
-            f[..., 2] = np.where(keep, unbin_blocks(per, k, (H, W)), 0)
-            out_f.append(f)
-            out_m.append(keep)
+            per = np.where(kc[0][box], fc[0][box][..., 2] / np.maximum(n, 1), 0).astype(u.dtype)
+            inside = unbin_blocks(kc[0][box], k, (r1 - r0, c1 - c0)) & mi[r0:r1, c0:c1]
+            keep[r0:r1, c0:c1] = inside
+            f[r0:r1, c0:c1, 2] = np.where(inside, unbin_blocks(per, k, (r1 - r0, c1 - c0)), 0)
         if len(out_f) == 1:                  # one frame: no copy (7 MB at 640 x 480)
             return out_f[0][None], out_m[0][None]
         return np.stack(out_f), np.stack(out_m)

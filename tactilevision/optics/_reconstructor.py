@@ -143,7 +143,7 @@ class DepthReconstructor:
     binning : int or 'auto', default 1
         ``boundary='contact'`` only: the integration on k x k blocks of
         pixels (each block's mean gradient; a block is in the contact
-        region when half its pixels are), the height returned on the
+        region when all its pixels are), the height returned on the
         frame's grid, constant over each block. 'auto': per frame, the
         largest k up to 8 with k pixels at most the contact region's width
         over 40 (:func:`~tactilevision.fem.auto_binning`; the region holds
@@ -292,9 +292,13 @@ class DepthReconstructor:
                  else self.binning)
             if k > 1:
                 # on k x k blocks: each block's mean slope times k is the height step from
-                # one block to the next; a block is in the region when half its pixels are
+                # one block to the next; a block is in the region when all its pixels are,
+                # so that the zero beyond it lies, on average, where every pixel's does
+                # (the first block not wholly in the region: its centre (k - 1) / 2 px
+                # beyond the first pixel outside, less r for r from 0 to k - 1)
                 gx, gy = bin_blocks(gx, k) * np.float32(k), bin_blocks(gy, k) * np.float32(k)
-                mask = bin_blocks(mask.view(np.uint8).astype(np.float32), k) >= 0.5
+                mask = bin_blocks(mask.view(np.uint8).astype(np.float32), k,
+                                  edge="zero") > np.float32(1 - 1e-3)
             z0 = self._last_contact_z
             z = integrate_poisson_masked(gx, gy, mask, tol=_CONTACT_TOL,
                                          z0=z0 if z0 is not None and z0.shape == mask.shape
