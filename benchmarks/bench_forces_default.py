@@ -37,6 +37,10 @@ whole-image footprint solve) and the default path on a spread of those frames
 (no warm start between them), and through the faster choices; the ratios of
 their per-frame times to the bare height map's.
 
+``--blocks``: the contact-pinned heights' block rule (blocks at most the contact region's
+width over 20, 30 or 40): the default path's total over every pixel's on the presses' hold
+frames.
+
 ``--sweeps``: where the default force solve's work goes on those frames (its sweeps, the
 pixels each drops or takes back, the iterations), and its answer against the same
 problem solved with every sweep to 1e-5, against the rule before (pulling pixels dropped
@@ -328,6 +332,38 @@ def rate(frames: int, start: int, before: int) -> None:
         print(f"| {name} | {ms:.1f} | {ratio:.1f} |", flush=True)
 
 
+def blocks_rows(per_widths=(20.0, 30.0, 40.0)) -> list[tuple[float, int, float, float, float]]:
+    """The heights' block rule: for each width-over ratio of the contact region
+    (``auto_binning(mask, per_width)``; 40 is ``DepthReconstructor(binning='auto')``'s), the
+    default path's total (heights and footprint on blocks) over every pixel's on one hold
+    frame of each press of the sample session (0.25 s into its hold, truth.json's E, nu,
+    beta 0.82; presses reading over 0.3 N): ``[(per_width, n, smallest, median, largest)]``."""
+    from tactilevision.fem import auto_binning
+
+    s = read_session(SESSION)
+    truth = json.loads((SESSION / "truth.json").read_text())
+    cal = PhotometricCalibration.load(SESSION / "optics.npz")
+    mm = s.config.mm_per_px
+    kw = dict(thickness_mm=s.config.gel_thickness_mm, E_mpa=truth["E_mpa"], nu=truth["nu"],
+              beta=0.82)
+    every = (DepthReconstructor(cal, reference=s.reference, boundary="contact"),
+             ForceEstimator(cal.shape, mm, binning=1, **kw))
+    est = ForceEstimator(cal.shape, mm, **kw)
+    recons = {k: DepthReconstructor(cal, reference=s.reference, boundary="contact", binning=k)
+              for k in range(1, 9)}
+    t = s.frame_times_s + float(truth["clock_offset_s"])
+    frames = [s.frame(int(np.argmin(np.abs(t - (p["hold_from_s"] + 0.25)))))
+              for p in truth["presses"]]
+    ref = [float(every[1](every[0](f)).total_n[2]) for f in frames]
+    masks = [every[0].contact_mask(f, threshold="frame", fill_holes=True) for f in frames]
+    out = []
+    for per in per_widths:
+        ratios = [float(est(recons[auto_binning(m, per)](f)).total_n[2]) / a
+                  for f, m, a in zip(frames, masks, ref, strict=True) if a > 0.3]
+        out.append((per, len(ratios), min(ratios), float(np.median(ratios)), max(ratios)))
+    return out
+
+
 def variant_rows(fit: Path | None, every: int, variants: list[str]) -> list[dict]:
     """Each variant's ``tactilevision forces`` run on every `every`-th frame of the sample
     session, evaluated (:func:`evaluate`): ``[{"name", "options", "frames", "s_per_frame",
@@ -371,7 +407,18 @@ def main() -> None:
     ap.add_argument("--sweeps", action="store_true",
                     help="where the default force solve's work goes: its sweeps and "
                     "iterations, and how far another path of its tensile rule moves the maps")
+    ap.add_argument("--blocks", action="store_true",
+                    help="the heights' block rule: the default path's totals over every "
+                    "pixel's on the presses' hold frames, for three rules")
     args = ap.parse_args()
+    if args.blocks:
+        print("Command: python benchmarks/bench_forces_default.py --blocks\n")
+        print("| heights' blocks at most the region's width over | hold frames | "
+              "total / every pixel's: smallest, median, largest |")
+        print("|---|---|---|")
+        for per, n, lo, med, hi in blocks_rows():
+            print(f"| {per:g} | {n} | {lo:.4f}, {med:.4f}, {hi:.4f} |", flush=True)
+        return
     if args.sweeps:
         sweeps(args.frames, args.start)
         return

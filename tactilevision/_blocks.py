@@ -22,8 +22,8 @@ AUTO_BIN_PER_WIDTH = 20.0
 #: width over this (the region holds the footprint and the sink-in round it: at most the
 #: footprint's width over 20 while the footprint is half as wide as the region, or more).
 #: On the sample session's hold frames the default path read its totals 0.4 % below every
-#: pixel's (median; 1.0 % at most) with this, 0.7 % (1.9 %) with 30 and 1.3 % (3.8 %)
-#: with 20, at the same cost (``benchmarks/bench_forces_default.py --rate``'s frames).
+#: pixel's (median; 0.9 % at most) with this, 0.7 % (1.9 %) with 30 and 1.3 % (3.7 %)
+#: with 20 (``python benchmarks/bench_forces_default.py --blocks``).
 HEIGHT_BIN_PER_WIDTH = 40.0
 
 #: The largest block ``binning='auto'`` uses, pixels.
