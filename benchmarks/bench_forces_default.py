@@ -176,11 +176,11 @@ def rate_rows(frames: int, start: int, before: int) -> dict:
             ("the solvers before (direct masked solve, padded footprint solve on every "
              "pixel), on the spread frames", t_before),
             ("the default path on the same spread frames", t_after),
-            ("faster choice `--method fem`: contact-pinned height + the FEM's force map",
+            ("choice `--method fem`: contact-pinned height + the FEM's force map",
              t_fem),
-            ("faster choice `--level far_field`: whole-image height + footprint force",
+            ("choice `--level far_field`: whole-image height + footprint force",
              t_far),
-            ("faster choice `--level far_field --method fem`", t_far_fem)]
+            ("choice `--level far_field --method fem`", t_far_fem)]
     return {"rows": [(name, t * 1e3, t / ref) for name, t in rows], "n": len(frames_),
             "n_spread": len(sub), "every": every, "bare_ms": ref * 1e3}
 

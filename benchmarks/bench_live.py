@@ -6,7 +6,8 @@ with a LUT calibration fitted to them at each size. They come from an in-memory
 "camera" that never waits, through the pipeline's capture thread, under the
 'every' policy (every frame processed: the pipeline's own rate). For each size,
 height only and height + forces, with the spectral method (every pixel) and the
-inverse FEM (``method='fem'``, 40 x 30 nodes):
+inverse FEM (``method='fem'``, 40 x 30 nodes), on the whole height map ('field'), and the
+pipeline's default with forces (the footprint on blocks of pixels, level 'contact'):
 
 - frames/s and the latency from capture to result (median, 95th percentile);
   with forces, at the heights' level 'median' (camera rate) and 'contact' (zero
@@ -16,9 +17,8 @@ inverse FEM (``method='fem'``, 40 x 30 nodes):
   pipeline's own overhead.
 
 The design goal (issue 21): height + forces at 427 x 320 at 90 frames/s or more,
-latency under 2 frame periods (22 ms). The forces use the estimator's default
-'field' traction; the inverse FEM's node forces cost about a millisecond a
-frame on top of the heights, the spectral method's several.
+latency under 2 frame periods (22 ms). The inverse FEM's node forces cost about a
+millisecond a frame on top of the heights, the spectral method's several.
 
 Run: ``python benchmarks/bench_live.py [--frames 600]``.
 """
@@ -52,9 +52,12 @@ def _sensor(w: int, h: int):
     return cal, ref, presses
 
 
-#: The work timed at each size: (forces, the heights' level, the force method).
-WORK = ((False, "median", None), (True, "median", "spectral"), (True, "median", "fem"),
-        (True, "contact", "spectral"), (True, "contact", "fem"))
+#: The work timed at each size: (forces, the heights' level, the force method, the
+#: traction region). The last: the pipeline's default with forces (the footprint on blocks
+#: of pixels, heights pinned outside the contact, ``binning='auto'``).
+WORK = ((False, "median", None, "field"), (True, "median", "spectral", "field"),
+        (True, "median", "fem", "field"), (True, "contact", "spectral", "field"),
+        (True, "contact", "fem", "field"), (True, "contact", "spectral", "footprint"))
 SIZES = ((427, 320), (640, 480))
 
 
@@ -69,15 +72,21 @@ def rows(n_frames: int = 600) -> list[dict]:
     out = []
     for w, h in SIZES:
         cal, ref, presses = _sensor(w, h)
-        frames = [np.roll(presses[i % 4], (i % 40) - 20, axis=1) for i in range(n_frames)]
-        for forces, level, method in WORK:
+        # the presses moved sideways by up to 20 px: their colour change against the
+        # reference rolled, not the frame (whose rolled edge would read as contact)
+        change = [p.astype(np.int16) - ref for p in presses]
+        frames = [np.clip(ref + np.roll(change[i % 4], (i % 40) - 20, axis=1), 0, 255
+                          ).astype(np.uint8) for i in range(n_frames)]
+        for forces, level, method, contact in WORK:
             kw = ({"E_mpa": 0.2, "nu": 0.48, "thickness_mm": 3.0, "method": method,
-                   "contact": "field"} if forces else {})
+                   "contact": contact} if forces else {})
             # the bare work, in a plain loop (BLAS on one thread, as the pipeline runs it)
-            recon = DepthReconstructor(cal, reference=ref,
-                                       boundary="contact" if level == "contact" else "neumann")
             est = ForceEstimator(cal.shape, cal.mm_per_px, thickness_mm=3.0, E_mpa=0.2,
-                                 nu=0.48, method=method, contact="field") if forces else None
+                                 nu=0.48, method=method, contact=contact) if forces else None
+            blocks = est.blocks if est is not None and level == "contact" else 1
+            recon = DepthReconstructor(cal, reference=ref,
+                                       boundary="contact" if level == "contact" else "neumann",
+                                       binning=blocks)
             blas = _OneBlasThread()
             t0 = time.perf_counter()
             for f in frames:
@@ -105,6 +114,7 @@ def rows(n_frames: int = 600) -> list[dict]:
 
             live = [r.latency_s for r in pipe.stream(camera(), policy="latest")]
             out.append({"size": (w, h), "forces": forces, "level": level, "method": method,
+                        "contact": contact,
                         "fps": 1 / per, "ms": 1e3 * per, "bare_ms": 1e3 * bare,
                         "latency_queued_ms": 1e3 * float(np.median(lat)),
                         "latency_ms": 1e3 * float(np.median(live)),
@@ -120,8 +130,8 @@ def main() -> None:
           "'every' policy")
     for r in rows(args.frames):
         w, h = r["size"]
-        what = (f"height + forces ({r['method']}), level '{r['level']}'" if r["forces"]
-                else "height only")
+        what = (f"height + forces ({r['method']}, {r['contact']}), level '{r['level']}'"
+                if r["forces"] else "height only")
         print(f"{w} x {h}, {what}: {r['fps']:.0f} frames/s ({r['ms']:.2f} ms a frame, "
               f"{r['ms'] / r['bare_ms']:.2f} x the bare loop's {r['bare_ms']:.2f} ms); latency "
               f"with every frame queued: median {r['latency_queued_ms']:.0f} ms; from a camera "

@@ -1158,7 +1158,7 @@ def _sample_fit(folder: Path) -> Path:
     return out / "fit.json"
 
 
-#: The forces command's faster choices the report measures beside its default
+#: The forces command's choices other than its blocks the report measures beside its default
 #: (``bench_forces_default.VARIANTS``).
 FASTER = ("fem", "far_field", "far_field_fem")
 
@@ -1178,8 +1178,8 @@ CHOICES = ("every_pixel", *FASTER)
     out) and on the frames without contact; then the cost of a force frame on that path in
     bare `DepthReconstructor` height maps of the same frames, timed in the same process (60
     consecutive frames from frame 30: presses being made, held and released); then the
-    command's other choices (`--binning 1`: every pixel; the faster `--method fem`,
-    `--level far_field`, both) measured the same two ways. --quick: one frame in 6 instead
+    command's other choices (`--binning 1`: every pixel; `--method fem`, `--level
+    far_field`, both) measured the same two ways. --quick: one frame in 6 instead
     of one in 3, 30 frames for the cost.""",
     ["python benchmarks/bench_forces_default.py --variants "
      "default,every_pixel,fem,far_field,far_field_fem --fit FIT",
@@ -1236,7 +1236,7 @@ def _forces_default(quick: bool) -> Result:
                    f"the solvers before on one frame in {rate['every']} ({rate['n_spread']} "
                    f"frames). A force frame with the defaults costs {default_ratio:.1f} bare "
                    "height maps; the ratio, not the milliseconds, carries between machines."),
-        Table("The faster choices",
+        Table("The other choices",
               ["options", "bare height maps per frame", "presses >= 0.3 mm: median Fz / F_T, "
                "within 5 %", "0.15 mm: median, within 5 %", "hold frames within 5 %",
                "no contact: largest |Fz|, mN"], faster,
@@ -1452,7 +1452,9 @@ def _batch_speedup(quick: bool) -> Result:
     `sample_frames/gelsight_ball` resized to GelSlim 3.0's 427 x 320 or kept at 640 x 480,
     a LUT calibration fitted to them at each size: heights alone, and heights with forces
     (the spectral method or the inverse FEM, `contact='field'`), the heights levelled at
-    their median (camera rate) or at the contact (zero outside it). The rate under the
+    their median (camera rate) or at the contact (zero outside it); and the pipeline's
+    default with forces (`contact='footprint'`, the footprint and the heights on blocks of
+    pixels, level contact). The rate under the
     'every' policy (every frame processed) beside the same work in a plain loop timed in
     the same run, and the latency from capture to result with a camera at 0.9 times the
     pipeline's own rate ('latest'). 300 frames a run (100 with --quick).""",
@@ -1461,9 +1463,14 @@ def _live(quick: bool) -> Result:
     import bench_live as b
     with _one_thread():
         got = b.rows(100 if quick else 300)
-    rows = [[f"{r['size'][0]} x {r['size'][1]}",
-             (f"height + forces ({r['method']}), level {r['level']}" if r["forces"]
-              else "height"),
+    def work(r: dict) -> str:
+        if not r["forces"]:
+            return "height"
+        if r["contact"] == "footprint":
+            return f"height + forces ({r['method']}, footprint), level {r['level']} (default)"
+        return f"height + forces ({r['method']}), level {r['level']}"
+
+    rows = [[f"{r['size'][0]} x {r['size'][1]}", work(r),
              f"{r['fps']:.0f}", f"{r['ms'] / r['bare_ms']:.2f} x",
              f"{r['latency_ms']:.1f} ms ({r['latency_p95_ms']:.1f})"] for r in got]
     ratio = [r["ms"] / r["bare_ms"] for r in got]
