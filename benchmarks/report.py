@@ -1183,7 +1183,8 @@ CHOICES = ("every_pixel", *FASTER)
     of one in 3, 30 frames for the cost.""",
     ["python benchmarks/bench_forces_default.py --variants "
      "default,every_pixel,fem,far_field,far_field_fem --fit FIT",
-     "python benchmarks/bench_forces_default.py --rate"])
+     "python benchmarks/bench_forces_default.py --rate",
+     "python benchmarks/bench_forces_default.py --blocks"])
 def _forces_default(quick: bool) -> Result:
     import bench_forces_default as b
 
@@ -1202,6 +1203,8 @@ def _forces_default(quick: bool) -> Result:
     n_hold = d["n"] + sh["n"]
     within = (d["within5"] * d["n"] + sh["within5"] * sh["n"]) / max(n_hold, 1)
     rate = b.rate_rows(30 if quick else 60, 30, 5 if quick else 10)
+    blocks = [[f"{per:g}" + (" (the default)" if per == 40 else ""), n, f"{lo:.4f}",
+               f"{med:.4f}", f"{hi:.4f}"] for per, n, lo, med, hi in b.blocks_rows()]
     cost = [[name, f"{ms:.1f}", f"{ratio:.1f}"] for name, ms, ratio in rate["rows"]]
     default_ratio = rate["rows"][1][2]
     every_ratio = rate["rows"][5][2]
@@ -1236,6 +1239,16 @@ def _forces_default(quick: bool) -> Result:
                    f"the solvers before on one frame in {rate['every']} ({rate['n_spread']} "
                    f"frames). A force frame with the defaults costs {default_ratio:.1f} bare "
                    "height maps; the ratio, not the milliseconds, carries between machines."),
+        Table("Blocks against every pixel",
+              ["heights' blocks at most the contact region's width over", "hold frames",
+               "total / every pixel's: smallest", "median", "largest"], blocks,
+              note="The default path (heights pinned outside the contact and the footprint's "
+                   "solve on blocks of pixels, `--binning auto`) against the same path on "
+                   "every pixel (`--binning 1`), one hold frame of each press (0.25 s into "
+                   "its hold, truth.json's E and nu, beta 0.82, presses reading over 0.3 N), "
+                   "for three rules of the heights' blocks; the footprint's blocks at most "
+                   "its width over 20 in each. `python benchmarks/bench_forces_default.py "
+                   "--blocks`."),
         Table("The other choices",
               ["options", "bare height maps per frame", "presses >= 0.3 mm: median Fz / F_T, "
                "within 5 %", "0.15 mm: median, within 5 %", "hold frames within 5 %",
