@@ -109,6 +109,7 @@ _OPERATOR_FIELDS = frozenset({"shape_px", "mm_per_px", "thickness_mm", "E_mpa", 
                               "mode", "pad_mm", "grid", "element", "layers", "cache_dir",
                               "binning", "contact"})
 
+
 @dataclass
 class ForceEstimator:
     """Height map to contact force distribution, built once per sensor.
@@ -169,19 +170,20 @@ class ForceEstimator:
         over its footprint pixels; the maps keep the image's shape. 'auto':
         per frame, the largest k up to 8 with k pixels at most the
         footprint's width over 20 (:func:`auto_binning`; a disc's width is
-        its radius): a flat punch's total within 0.4 % of every pixel's
-        (``tests/test_forces_binning.py``), the solve a tenth to a
-        twentieth of the cost on the sample session's presses. 1: every
-        pixel. Other settings work on every pixel ('auto' gives 1; a k
-        above 1 is refused).
+        its radius): a flat punch's total within 0.5 % of every pixel's
+        (``tests/test_forces_binning.py``), the solve about a twentieth
+        of the cost on the sample session's presses (the validation
+        report's ``forces_default``). 1: every pixel. Other settings work
+        on every pixel ('auto' gives 1; a k above 1 is refused).
 
     Raises
     ------
     InputError
         For a non-positive size, nu outside [0, 0.5), an unknown method, mode
         or contact, a `binning` other than 'auto' or a positive integer (or
-        above 1 where it does not apply), or a grid with fewer than 2 nodes along an axis; also when
-        such a value is assigned later (the estimator then keeps its old one).
+        above 1 where it does not apply), or a grid with fewer than 2 nodes
+        along an axis; also when such a value is assigned later (the
+        estimator then keeps its old one).
 
     Notes
     -----
