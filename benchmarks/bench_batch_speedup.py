@@ -4,7 +4,7 @@
         [--kinds reconstruct forces] [--chunk-frames 32] [--repeats 1]
 
 A 640 x 480 MJPG video of ``--frames`` frames is written from the real GelSight ball
-presses of ``sample_frames/gelsight_ball`` (shifted a pixel a frame, a third of them
+presses of ``sample_frames/gelsight_ball`` (moved a pixel a frame, a third of them
 the reference), with its ``<stem>_reference.png``. Then, as a user runs them, each
 command as its own process (``python -m tactilevision ...``, default options, the
 shipped GelSight calibration ``--sensor gelsight``; forces with E 0.2 MPa, nu 0.48, a
@@ -53,9 +53,12 @@ def make_video(folder: Path, n: int) -> Path:
     h, w = ref.shape[:2]
     vw = cv2.VideoWriter(str(video), cv2.VideoWriter_fourcc(*"MJPG"), 30.0, (w, h))
     rng = np.random.default_rng(0)
+    # a press moved sideways: its colour change against the reference rolled, not the frame
+    # (whose rolled edge would read as contact beside the press)
+    change = [p.astype(np.int16) - ref for p in presses]
     for i in range(n):
-        vw.write(ref if rng.random() < 0.3 else np.roll(presses[i % len(presses)],
-                                                        (i % 60) - 30, axis=1))
+        moved = np.roll(change[i % len(change)], (i % 60) - 30, axis=1)
+        vw.write(ref if rng.random() < 0.3 else np.clip(ref + moved, 0, 255).astype(np.uint8))
     vw.release()
     return video
 

@@ -1415,7 +1415,7 @@ def _forces_session(quick: bool) -> Result:
     "batch_speedup", "Batch: two local workers against one process",
     """`tactilevision batch reconstruct` and `batch forces` on 2 local workers against one
     `reconstruct` or `forces` process over the same 640 x 480 MJPG video of 1200 frames
-    (the real GelSight presses of `sample_frames/gelsight_ball`, shifted a pixel a frame, a
+    (the real GelSight presses of `sample_frames/gelsight_ball`, moved a pixel a frame, a
     third of them the reference), each command its own process as a user runs it, start-up
     included, the shipped GelSight calibration and the default options (forces: E 0.2 MPa,
     nu 0.48, a 3 mm gel); each pair twice, the kinds in turn. Beside each, the CPU
