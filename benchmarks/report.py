@@ -1421,15 +1421,15 @@ def _forces_session(quick: bool) -> Result:
     nu 0.48, a 3 mm gel); each pair twice, the kinds in turn. Beside each, the CPU
     seconds (user + system) each run used, the batch's workers included: on 2 cores the
     batch cannot finish before half of its CPU seconds, which bounds its ratio. Then
-    `reconstruct` once more on a video four times as long (4800 frames), where the batch's
-    fixed start-up weighs a quarter as much. --quick: 300 frames, once, and 1200.""",
+    `reconstruct` and `forces` once more on a video four times as long (4800 frames), where
+    the batch's fixed start-up weighs a quarter as much. --quick: 300 frames, once, and 1200.""",
     ["python benchmarks/bench_batch_speedup.py --frames 1200 --repeats 2",
-     "python benchmarks/bench_batch_speedup.py --frames 4800 --kinds reconstruct"])
+     "python benchmarks/bench_batch_speedup.py --frames 4800 --kinds reconstruct forces"])
 def _batch_speedup(quick: bool) -> Result:
     import bench_batch_speedup as b
     r = b.speedup_rows(300 if quick else 1200, 2, 32, ("reconstruct", "forces"),
                        1 if quick else 2, log=lambda *_: None)
-    long = b.speedup_rows(1200 if quick else 4800, 2, 32, ("reconstruct",), 1,
+    long = b.speedup_rows(1200 if quick else 4800, 2, 32, ("reconstruct", "forces"), 1,
                           log=lambda *_: None)
     rows = [[f"`{x['kind']}`", f"{x['one_s']:.1f}", f"{x['batch_s']:.1f}",
              f"{x['ratio']:.2f}", f"{x['one_cpu_s']:.1f}", f"{x['batch_cpu_s']:.1f}",
