@@ -332,28 +332,34 @@ def rate(frames: int, start: int, before: int) -> None:
         print(f"| {name} | {ms:.1f} | {ratio:.1f} |", flush=True)
 
 
-def blocks_rows(per_widths=(20.0, 30.0, 40.0)) -> list[tuple[float, int, float, float, float]]:
+def blocks_rows(per_widths=(20.0, 30.0, 40.0), session: Path = SESSION,
+                sensor: str | None = None) -> list[tuple[float, int, float, float, float]]:
     """The heights' block rule: for each width-over ratio of the contact region
     (``auto_binning(mask, per_width)``; 40 is ``DepthReconstructor(binning='auto')``'s), the
     default path's total (heights and footprint on blocks) over every pixel's on one hold
-    frame of each press of the sample session (0.25 s into its hold, truth.json's E, nu,
-    beta 0.82; presses reading over 0.3 N): ``[(per_width, n, smallest, median, largest)]``."""
+    frame of each press of `session` (0.25 s into its hold, or its middle if shorter;
+    truth.json's E and nu, else 0.2 MPa and 0.48; beta 0.82; presses reading over 0.3 N),
+    through the session's own optics (``optics.npz``) or the shipped `sensor`'s:
+    ``[(per_width, n, smallest, median, largest)]``."""
+    from tactilevision import default_calibration_path
     from tactilevision.fem import auto_binning
 
-    s = read_session(SESSION)
-    truth = json.loads((SESSION / "truth.json").read_text())
-    cal = PhotometricCalibration.load(SESSION / "optics.npz")
+    s = read_session(session)
+    truth = json.loads((session / "truth.json").read_text())
+    cal = PhotometricCalibration.load(session / "optics.npz" if sensor is None
+                                      else default_calibration_path(sensor))
     mm = s.config.mm_per_px
-    kw = dict(thickness_mm=s.config.gel_thickness_mm, E_mpa=truth["E_mpa"], nu=truth["nu"],
-              beta=0.82)
+    kw = dict(thickness_mm=s.config.gel_thickness_mm, E_mpa=truth.get("E_mpa", 0.2),
+              nu=truth.get("nu", 0.48), beta=0.82)
     every = (DepthReconstructor(cal, reference=s.reference, boundary="contact"),
              ForceEstimator(cal.shape, mm, binning=1, **kw))
     est = ForceEstimator(cal.shape, mm, **kw)
     recons = {k: DepthReconstructor(cal, reference=s.reference, boundary="contact", binning=k)
               for k in range(1, 9)}
     t = s.frame_times_s + float(truth["clock_offset_s"])
-    frames = [s.frame(int(np.argmin(np.abs(t - (p["hold_from_s"] + 0.25)))))
-              for p in truth["presses"]]
+    at = [min(p["hold_from_s"] + 0.25, 0.5 * (p["hold_from_s"] + p.get("hold_to_s", 1e9)))
+          for p in truth["presses"]]
+    frames = [s.frame(int(np.argmin(np.abs(t - a)))) for a in at]
     ref = [float(every[1](every[0](f)).total_n[2]) for f in frames]
     masks = [every[0].contact_mask(f, threshold="frame", fill_holes=True) for f in frames]
     out = []
@@ -410,13 +416,20 @@ def main() -> None:
     ap.add_argument("--blocks", action="store_true",
                     help="the heights' block rule: the default path's totals over every "
                     "pixel's on the presses' hold frames, for three rules")
+    ap.add_argument("--session", type=Path, default=SESSION,
+                    help="--blocks: another session with a truth.json (e.g. one of "
+                    "benchmarks/taxim_gauge_session.py's)")
+    ap.add_argument("--sensor", default=None,
+                    help="--blocks: the shipped optics of this sensor instead of the "
+                    "session's optics.npz")
     args = ap.parse_args()
     if args.blocks:
-        print("Command: python benchmarks/bench_forces_default.py --blocks\n")
+        print(f"Command: python benchmarks/bench_forces_default.py --blocks --session "
+              f"{args.session}" + (f" --sensor {args.sensor}" if args.sensor else "") + "\n")
         print("| heights' blocks at most the region's width over | hold frames | "
               "total / every pixel's: smallest, median, largest |")
         print("|---|---|---|")
-        for per, n, lo, med, hi in blocks_rows():
+        for per, n, lo, med, hi in blocks_rows(session=args.session, sensor=args.sensor):
             print(f"| {per:g} | {n} | {lo:.4f}, {med:.4f}, {hi:.4f} |", flush=True)
         return
     if args.sweeps:
