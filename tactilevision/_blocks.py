@@ -8,8 +8,10 @@ import math
 import cv2
 import numpy as np
 
+from ._errors import InputError
+
 __all__ = ["AUTO_BIN_MAX", "AUTO_BIN_PER_WIDTH", "HEIGHT_BIN_PER_WIDTH", "auto_binning",
-           "bin_blocks", "unbin_blocks"]
+           "bin_blocks", "check_binning", "unbin_blocks"]
 
 #: ``binning='auto'``: a frame's footprint solved on blocks whose side is at most its width
 #: (twice its area over its perimeter: the radius of a disc) over this. On a flat punch
@@ -64,6 +66,27 @@ def auto_binning(footprint: np.ndarray, per_width: float = AUTO_BIN_PER_WIDTH) -
 _CROSS = cv2.getStructuringElement(cv2.MORPH_CROSS, (3, 3))
 
 
+def check_binning(binning: object) -> int | str:
+    """A `binning` value checked: 'auto', or a positive whole number (returned as int).
+
+    Raises
+    ------
+    InputError
+        For anything else (a bool, a fraction, zero or less, another string).
+    """
+    if isinstance(binning, str):
+        if binning != "auto":
+            raise InputError(f"binning must be 'auto' or a positive integer, got {binning!r}")
+        return binning
+    try:
+        whole = float(binning) == int(binning)
+    except (TypeError, ValueError):
+        whole = False
+    if isinstance(binning, bool) or not whole or int(binning) < 1:
+        raise InputError(f"binning must be 'auto' or a positive integer, got {binning!r}")
+    return int(binning)
+
+
 def bin_blocks(a: np.ndarray, k: int, *, edge: str = "repeat") -> np.ndarray:
     """Means over k x k blocks of pixels of one (H, W) map: (ceil(H / k), ceil(W / k)).
 
@@ -80,13 +103,10 @@ def bin_blocks(a: np.ndarray, k: int, *, edge: str = "repeat") -> np.ndarray:
 
 
 def unbin_blocks(a: np.ndarray, k: int, shape: tuple[int, int]) -> np.ndarray:
-    """Each block's value on its pixels: (Hc, Wc, ...) -> (H, W, ...) (nearest)."""
+    """Each block's value on its pixels: (Hc, Wc) -> (H, W), float or bool (OpenCV's nearest
+    resize by a whole factor repeats each value k x k, a fifth of numpy's two repeats)."""
     H, W = shape
-    Hc, Wc = a.shape[:2]
-    if a.ndim == 2 and a.dtype in (np.float32, np.float64, np.uint8, np.bool_):
-        # OpenCV's nearest resize by a whole factor repeats each value k x k (a fifth of
-        # numpy's two repeats at 640 x 480)
-        src = a.view(np.uint8) if a.dtype == np.bool_ else a
-        out = cv2.resize(src, (Wc * k, Hc * k), interpolation=cv2.INTER_NEAREST)[:H, :W]
-        return out.view(np.bool_) if a.dtype == np.bool_ else out
-    return np.repeat(np.repeat(a, k, axis=0), k, axis=1)[:H, :W]
+    Hc, Wc = a.shape
+    src = a.view(np.uint8) if a.dtype == np.bool_ else a
+    out = cv2.resize(src, (Wc * k, Hc * k), interpolation=cv2.INTER_NEAREST)[:H, :W]
+    return out.view(np.bool_) if a.dtype == np.bool_ else out

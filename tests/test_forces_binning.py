@@ -142,3 +142,12 @@ def test_bad_height_blocks_are_refused(sample, kw, message):
     s, cal, _ = sample
     with pytest.raises(InputError, match=message):
         DepthReconstructor(cal, reference=s.reference, **kw)
+
+
+@pytest.mark.parametrize("bad", [0, "x", 1.5])
+def test_the_live_pipeline_checks_binning_without_forces(bad):
+    from tactilevision.live import Pipeline
+
+    with pytest.raises(InputError, match="binning must be 'auto' or a positive integer"):
+        Pipeline(PhotometricCalibration.load(SESSION / "optics.npz"), reference="calibration",
+                 binning=bad)

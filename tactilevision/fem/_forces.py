@@ -67,7 +67,7 @@ import numpy as np
 import scipy.fft as sfft
 import scipy.sparse as sp
 
-from .._blocks import AUTO_BIN_MAX, auto_binning, bin_blocks, unbin_blocks
+from .._blocks import AUTO_BIN_MAX, auto_binning, bin_blocks, check_binning, unbin_blocks
 from .._checks import InputError, check_poisson, check_positive
 from ._layer import layer_normal_stiffness, layer_surface_stiffness
 from ._pad import pad_surface_stiffness
@@ -264,17 +264,10 @@ class ForceEstimator:
         if not (math.isfinite(float(self.beta)) and float(self.beta) >= 0):
             raise InputError(f"beta must be finite and >= 0, got {self.beta!r}")
         self.beta = float(self.beta)
-        b = self.binning
-        if isinstance(b, str):
-            if b != "auto":
-                raise InputError(f"binning must be 'auto' or a positive integer, got {b!r}")
-        elif isinstance(b, bool) or not float(b) == int(b) or int(b) < 1:
-            raise InputError(f"binning must be 'auto' or a positive integer, got {b!r}")
-        else:
-            self.binning = int(b)
-            if self.binning > 1 and not self._binnable:
-                raise InputError(f"binning = {self.binning} applies to contact='footprint', "
-                                 "method='spectral', mode='normal' only; use 1 or 'auto'")
+        self.binning = check_binning(self.binning)
+        if self.binning not in ("auto", 1) and not self._binnable:
+            raise InputError(f"binning = {self.binning} applies to contact='footprint', "
+                             "method='spectral', mode='normal' only; use 1 or 'auto'")
 
     @property
     def _binnable(self) -> bool:
@@ -432,16 +425,18 @@ class ForceEstimator:
             r1, c1 = min(H, int(rows[-1]) // k * k + k), min(W, int(cols[-1]) // k * k + k)
             # a block is in the footprint when at least half its pixels are, at their mean
             # height (the indenter's, not the mean with the gel beside it)
+            # (a block at the image's edge over the pixels it holds: zeros beyond)
             mf = mi[r0:r1, c0:c1].astype(u.dtype)
-            frac = bin_blocks(mf, k)
+            frac = bin_blocks(mf, k, edge="zero")
             uc = np.zeros(op.shape, u.dtype)
             mc = np.zeros(op.shape, bool)
             box = (slice(r0 // k, r0 // k + frac.shape[0]), slice(c0 // k, c0 // k + frac.shape[1]))
-            uc[box] = bin_blocks(ui[r0:r1, c0:c1] * mf, k) / np.maximum(frac, u.dtype.type(1e-6))
+            uc[box] = (bin_blocks(ui[r0:r1, c0:c1] * mf, k, edge="zero")
+                       / np.maximum(frac, u.dtype.type(1e-6)))
             mc[box] = frac >= 0.5
             fc, kc = op.footprint(uc[None, ..., None], mc[None])
             # each block's force over its footprint pixels (a block in it holds at least one)
-            n = bin_blocks(mf, k, edge="zero") * u.dtype.type(k * k)
+            n = frac * u.dtype.type(k * k)
             per = np.where(kc[0][box], fc[0][box][..., 2] / np.maximum(n, 1), 0).astype(u.dtype)
             inside = unbin_blocks(kc[0][box], k, (r1 - r0, c1 - c0)) & mi[r0:r1, c0:c1]
             keep[r0:r1, c0:c1] = inside

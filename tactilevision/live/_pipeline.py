@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from .._blas import openblas_thread_controls
+from .._blocks import check_binning
 from .._checks import InputError, check_positive
 from ..fem import ForceEstimator
 from ..io import open_source
@@ -311,7 +312,7 @@ class Pipeline:
         if method not in ("spectral", "fem"):
             raise InputError(f"method must be 'spectral' or 'fem', got {method!r}")
         self.method = method
-        self.binning = binning
+        self.binning = check_binning(binning)
         self.markers = bool(self.calibration.markers if markers is None else markers)
         self._marker_ref: np.ndarray | None = None
         self._marker_pos: np.ndarray | None = None

@@ -16,7 +16,13 @@ import cv2
 import numpy as np
 import onnxruntime
 
-from .._blocks import HEIGHT_BIN_PER_WIDTH, auto_binning, bin_blocks, unbin_blocks
+from .._blocks import (
+    HEIGHT_BIN_PER_WIDTH,
+    auto_binning,
+    bin_blocks,
+    check_binning,
+    unbin_blocks,
+)
 from .._cache import cache_root, savez_atomic, touch
 from .._checks import InputError, check_array
 from .._morphology import fill_holes as _fill_holes
@@ -599,15 +605,10 @@ def _table_cache_path(key: tuple):
     return cache_root() / "optics" / f"mlp_table_{h.hexdigest()}.npz"
 
 
-def _check_binning(binning: int | str, boundary: str) -> int | str:
-    """`binning` checked: 'auto' or a positive integer, above 1 only with 'contact'."""
-    if isinstance(binning, str):
-        if binning != "auto":
-            raise InputError(f"binning must be 'auto' or a positive integer, got {binning!r}")
-    elif isinstance(binning, bool) or not float(binning) == int(binning) or binning < 1:
-        raise InputError(f"binning must be 'auto' or a positive integer, got {binning!r}")
-    else:
-        binning = int(binning)
+def _check_binning(binning: object, boundary: str) -> int | str:
+    """`binning` checked (:func:`~tactilevision._blocks.check_binning`), above 1 only with
+    'contact'."""
+    binning = check_binning(binning)
     if binning != 1 and boundary != "contact":
         raise InputError(f"binning = {binning!r} applies to boundary='contact' only; use 1")
     return binning
