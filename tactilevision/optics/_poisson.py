@@ -279,8 +279,8 @@ def integrate_poisson_masked(gx: np.ndarray, gy: np.ndarray, mask: np.ndarray, *
     frame's height. At a `tol` of 1e-5 or looser the iterations run in
     single precision (dot products accumulated in double): the contact-pinned
     heights' 1e-4 then meets the direct solve within 1e-5 of the peak and
-    costs about 0.75 of the double-precision solve. Should it not converge in 400 iterations, the direct
-    solve is used. 'direct' (SuperLU through
+    costs about 0.75 of the double-precision solve. Should it not converge in
+    400 iterations, the direct solve is used. 'direct' (SuperLU through
     :func:`scipy.sparse.linalg.spsolve`) takes about 0.2 to 0.5 s for a
     46 000 px contact at 640 x 480 on one core.
 
