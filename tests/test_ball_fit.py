@@ -189,3 +189,33 @@ def test_cli_fit_of_the_feats_gel_with_its_dome(tmp_path):
     assert r.returncode == 0, r.stderr
     obj = json.loads((tmp_path / "fit.json").read_text())
     assert obj["E_mpa"] == pytest.approx(fit.E_mpa, rel=1e-9)
+
+
+def test_a_depth_offset_the_ladder_cannot_take_is_named_as_not_ruled_out(tmp_path):
+    """The FEATS presses read 0.05 mm deeper (a contact point found late): the ladder
+    takes contact slip alone (four presses: one more parameter needs the BIC to fall by
+    more than 2), and names the depth offset as not ruled out, at the offset it finds on
+    the presses as measured less the 0.05 mm (shifting every depth moves the offset by
+    the shift and leaves E as it was)."""
+    from tactilevision.cli import main
+
+    w, P = feats()
+    runs = {}
+    for name, shift in (("read", 0.0), ("late", 0.05)):
+        folder = tmp_path / name
+        folder.mkdir()
+        (folder / "session.toml").write_text((FEATS / "session.toml").read_text())
+        rows = "".join(f"{a + shift:.3f},{b}\n" for a, b in zip(w, P, strict=True))
+        (folder / "force_depth.csv").write_text("depth_mm,force_n\n" + rows)
+        assert main(["diagnose", str(folder / "force_depth.csv"), "--json",
+                     str(tmp_path / f"{name}.json")]) == 0
+        runs[name] = json.loads((tmp_path / f"{name}.json").read_text())
+    read, late = runs["read"], runs["late"]
+    assert "depth_offset" in read["missing_effects"]
+    assert "depth_offset" not in late["missing_effects"]
+    offset = late["not_ruled_out"]["depth_offset"]
+    assert offset["depth_offset_mm"] == pytest.approx(
+        read["ladder"][-1]["depth_offset_mm"] - 0.05, abs=0.005)
+    assert offset["E_mpa"] == pytest.approx(read["ladder"][-1]["E_mpa"], rel=0.01)
+    assert "Not ruled out" in late["message"] and "depth_offset (a depth offset of +0.0" \
+        in late["message"]

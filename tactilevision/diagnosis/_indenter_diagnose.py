@@ -137,6 +137,12 @@ class IndenterDiagnosis:
         The range a depth offset was searched in, mm (a quarter of the shallowest
         depth each way, the reach on the deep side): an offset at either end is a
         bound, not a value.
+    not_ruled_out : dict of str to dict
+        The changes of the last round, none taken, whose BIC lies within 2 of the
+        final model's (``E_mpa``, ``bic``, their offsets): the presses do not rule
+        them out, and E under each is named beside the final model's. With few
+        presses a real offset can fall here (four presses need the BIC to fall by
+        more than 2 for one more parameter).
     """
 
     ladder: tuple[IndenterRung, ...]
@@ -153,6 +159,7 @@ class IndenterDiagnosis:
     not_testable: dict = field(default_factory=dict)
     equivalent_effects: dict = field(default_factory=dict)
     offset_bounds: tuple[float, float] = (math.nan, math.nan)
+    not_ruled_out: dict = field(default_factory=dict)
 
     def to_json_dict(self) -> dict:
         """JSON-ready: arrays as lists, NaN as None."""
@@ -165,7 +172,8 @@ class IndenterDiagnosis:
                 "force_n": clean(self.force_n), "not_tried": dict(self.not_tried),
                 "noise": clean(self.noise), "not_testable": dict(self.not_testable),
                 "equivalent_effects": clean(self.equivalent_effects),
-                "offset_bounds_mm": clean(self.offset_bounds)}
+                "offset_bounds_mm": clean(self.offset_bounds),
+                "not_ruled_out": clean(self.not_ruled_out)}
 
 
 def _drift(depth: np.ndarray, apparent: np.ndarray) -> float:
@@ -341,13 +349,19 @@ def diagnose_indenter(depth_mm: np.ndarray, force_n: np.ndarray, indenter: Inden
         nu=float(nu), floor_n=floor, floor_test=test, message="", depth_mm=w, force_n=P,
         not_tried=not_tried, noise=_noise_summary(noise, resid, rung),
         not_testable=not_testable,
-        equivalent_effects={k: {e: {"E_mpa": r.E_mpa, "bic": r.bic,
-                                    "depth_offset_mm": r.depth_offset_mm,
-                                    "force_offset_n": r.force_offset_n}
-                                for e, r in v.items()} for k, v in equivalent.items() if v},
+        equivalent_effects={k: {e: _rung_words(r) for e, r in v.items()}
+                            for k, v in equivalent.items() if v},
         offset_bounds=(-0.25 * float(w.min()), min(reach - float(w.max()),
-                                                   0.25 * float(w.min()))))
+                                                   0.25 * float(w.min()))),
+        not_ruled_out={k: _rung_words(v[0]) for k, v in tried.items()
+                       if v[0].bic < rung.bic + BIC_STEP})
     return _with_message(diag)
+
+
+def _rung_words(r: IndenterRung) -> dict:
+    """What the message and the JSON say of a candidate model: E, BIC and offsets."""
+    return {"E_mpa": r.E_mpa, "bic": r.bic, "depth_offset_mm": r.depth_offset_mm,
+            "force_offset_n": r.force_offset_n}
 
 
 def _checked(depth_mm, force_n, thickness_mm) -> tuple[np.ndarray, np.ndarray, float]:
@@ -469,6 +483,14 @@ def _with_message(d: IndenterDiagnosis) -> IndenterDiagnosis:
     if "depth_offset" in last.effects:
         words = _offset_words({"depth_offset_mm": last.depth_offset_mm}, d.offset_bounds)
         s.append(f"The final model puts {words.removeprefix('a ')[:-2]}.")
+    if d.not_ruled_out:
+        es = [last.E_mpa, *(v["E_mpa"] for v in d.not_ruled_out.values())]
+        s.append("Not ruled out by these presses (their BIC within 2 of the final model's, "
+                 "none lower by more than 2): " + "; ".join(
+                     f"{e} ({_offset_words(v, d.offset_bounds)}E = {v['E_mpa']:.4g} MPa)"
+                     for e, v in d.not_ruled_out.items())
+                 + f". E lies between {min(es):.4g} and {max(es):.4g} MPa across these "
+                 "models and the final one.")
     for name, why in d.not_tried.items():
         s.append(f"Not tried: {name} ({why}).")
     for name, why in d.not_testable.items():
