@@ -123,6 +123,55 @@ def batch(video: Path, optics: Path, n_workers: int, out: Path, n: int | None = 
     return seconds, sorted(peaks.values())
 
 
+def scaling_rows(frames: int, short: int, loop: int, log=print) -> dict:
+    """Steps 1 to 4 of the module docstring on a new video of `frames` frames: ``{"frames",
+    "video_mib", "bare_ms", "loop_ms" (with the batch's rows), "batch": {workers:
+    (seconds, peaks MiB)}, "short": (frames, seconds, peaks), "scaling", "efficiency",
+    "cost": {workers: the batch's worker-ms a frame over the loop's}, "core_hours",
+    "cores"}``; `log` prints each step's line."""
+    work = Path(tempfile.mkdtemp(prefix="bench_batch_"))
+    try:
+        t0 = time.perf_counter()
+        video, optics = make_inputs(work, frames)
+        size = video.stat().st_size / 2**20
+        log(f"video: {frames} frames, MJPG, {size:.0f} MiB, written in "
+            f"{time.perf_counter() - t0:.1f} s")
+        bare, per_frame = single_loop(video, optics, loop)
+        log(f"single-process loop, one core, {loop} frames: decode + height map "
+            f"{1e3 * bare:.2f} ms/frame ({1 / bare:.0f} frames/s); with the batch's "
+            f"per-frame rows (maximum, contact area), nothing stored: {1e3 * per_frame:.2f} "
+            f"ms/frame ({1 / per_frame:.0f} frames/s)")
+        res, cost = {}, {}
+        for nw in (1, 2):
+            s, peaks = batch(video, optics, nw, work / f"out{nw}")
+            res[nw] = (s, peaks)
+            cost[nw] = s * nw / frames / per_frame
+            log(f"batch, {nw} worker(s), {frames} frames: {s:.1f} s = {frames / s:.0f} "
+                f"frames/s; {1e3 * s * nw / frames:.2f} worker-ms/frame = "
+                f"{cost[nw]:.2f} x the loop's with the same rows; peak RSS per worker "
+                f"{', '.join(f'{p:.0f}' for p in peaks)} MiB")
+        eff = res[1][0] / (2 * res[2][0])
+        log(f"scaling 1 -> 2 workers: {res[1][0] / res[2][0]:.2f} x, efficiency "
+            f"{100 * eff:.0f} %")
+        s_short, peaks_short = batch(video, optics, 2, work / "out_short", n=short)
+        log(f"batch, 2 workers, first {short} frames: {s_short:.1f} s; peak RSS per "
+            f"worker {', '.join(f'{p:.0f}' for p in peaks_short)} MiB (against the "
+            f"{frames}-frame run above: flat if equal within noise)")
+        need = 100 * 3600 * 90                  # frames: 100 sensors x 1 hour x 90 frames/s
+        core_s = need * res[2][0] * 2 / frames
+        cores = int(np.ceil(core_s / 3600 / eff))
+        log(f"on paper, 100 sensors x 1 hour at 90 frames/s = {need:,} frames: "
+            f"{core_s / 3600:.0f} core-hours at this machine's 2-worker cost; in one hour "
+            f"of wall time about {cores} cores (at the measured {100 * eff:.0f} % "
+            f"efficiency), e.g. {int(np.ceil(cores / 32))} nodes of 32 cores")
+        return {"frames": frames, "video_mib": size, "bare_ms": 1e3 * bare,
+                "loop_ms": 1e3 * per_frame, "batch": res, "short": (short, s_short, peaks_short),
+                "scaling": res[1][0] / res[2][0], "efficiency": eff, "cost": cost,
+                "core_hours": core_s / 3600, "cores": cores}
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--frames", type=int, default=20_000)
@@ -130,43 +179,7 @@ def main() -> None:
     ap.add_argument("--loop", type=int, default=2_000)
     args = ap.parse_args()
     print(f"machine: {os.cpu_count()} cores ({_cpu()}); frames {H} x {W}")
-    work = Path(tempfile.mkdtemp(prefix="bench_batch_"))
-    try:
-        t0 = time.perf_counter()
-        video, optics = make_inputs(work, args.frames)
-        size = video.stat().st_size / 2**20
-        print(f"video: {args.frames} frames, MJPG, {size:.0f} MiB, written in "
-              f"{time.perf_counter() - t0:.1f} s")
-        bare, per_frame = single_loop(video, optics, args.loop)
-        print(f"single-process loop, one core, {args.loop} frames: decode + height map "
-              f"{1e3 * bare:.2f} ms/frame ({1 / bare:.0f} frames/s); with the batch's "
-              f"per-frame rows (maximum, contact area), nothing stored: {1e3 * per_frame:.2f} "
-              f"ms/frame ({1 / per_frame:.0f} frames/s)")
-        res = {}
-        for nw in (1, 2):
-            s, peaks = batch(video, optics, nw, work / f"out{nw}")
-            res[nw] = s
-            fps = args.frames / s
-            print(f"batch, {nw} worker(s), {args.frames} frames: {s:.1f} s = {fps:.0f} "
-                  f"frames/s; {1e3 * s * nw / args.frames:.2f} worker-ms/frame = "
-                  f"{s * nw / args.frames / per_frame:.2f} x the loop's with the same rows; "
-                  "peak RSS per worker "
-                  f"{', '.join(f'{p:.0f}' for p in peaks)} MiB")
-        eff = res[1] / (2 * res[2])
-        print(f"scaling 1 -> 2 workers: {res[1] / res[2]:.2f} x, efficiency {100 * eff:.0f} %")
-        s_short, peaks_short = batch(video, optics, 2, work / "out_short", n=args.short)
-        print(f"batch, 2 workers, first {args.short} frames: {s_short:.1f} s; peak RSS per "
-              f"worker {', '.join(f'{p:.0f}' for p in peaks_short)} MiB (against the "
-              f"{args.frames}-frame run above: flat if equal within noise)")
-        need = 100 * 3600 * 90                  # frames: 100 sensors x 1 hour x 90 frames/s
-        core_s = need * res[2] * 2 / args.frames
-        print(f"on paper, 100 sensors x 1 hour at 90 frames/s = {need:,} frames: "
-              f"{core_s / 3600:.0f} core-hours at this machine's 2-worker cost; in one hour "
-              f"of wall time about {int(np.ceil(core_s / 3600 / eff))} cores (at the "
-              f"measured {100 * eff:.0f} % efficiency), e.g. "
-              f"{int(np.ceil(core_s / 3600 / eff / 32))} nodes of 32 cores")
-    finally:
-        shutil.rmtree(work, ignore_errors=True)
+    scaling_rows(args.frames, args.short, args.loop)
 
 
 def _cpu() -> str:

@@ -1459,6 +1459,60 @@ def _batch_speedup(quick: bool) -> Result:
 
 
 @subject(
+    "batch_scaling", "Batch: one and two workers against the bare loop, and their memory",
+    """`tactilevision batch reconstruct` (through the library, `run_batch`) over an MJPG
+    video of GelSlim-size frames (320 x 428: GelSlim 3.0's 427 x 320 padded to the even
+    width video codecs need) made from the real GelSight presses of
+    `sample_frames/gelsight_ball`, with a LUT calibration fitted to them at that size
+    (`benchmarks/bench_batch.py`): the single-process loop (decode and height map, then the
+    batch's per-frame rows, nothing stored) as the reference cost a frame; the batch on 1
+    and on 2 workers (chunks of 64 frames, heights to Zarr, rows to Parquet); each
+    worker's peak memory after the whole video and after its first quarter. 4000 frames,
+    the loop on 1000 (--quick: 1000 and 250).""",
+    ["python benchmarks/bench_batch.py --frames 4000 --short 1000 --loop 1000"])
+def _batch_scaling(quick: bool) -> Result:
+    import bench_batch as b
+    n, short, loop = (1000, 250, 250) if quick else (4000, 1000, 1000)
+    with _one_thread():
+        r = b.scaling_rows(n, short, loop, log=lambda *_: None)
+    rows = [["loop, one core: decode + height map", f"{1e3 / r['bare_ms']:.0f}",
+             f"{r['bare_ms']:.2f} ms", ""],
+            ["loop, one core, with the batch's per-frame rows, nothing stored",
+             f"{1e3 / r['loop_ms']:.0f}", f"{r['loop_ms']:.2f} ms", ""]]
+    for nw in (1, 2):
+        sec, peaks = r["batch"][nw]
+        rows.append([f"batch, {nw} worker{'s' if nw > 1 else ''}, {n} frames",
+                     f"{n / sec:.0f}", f"{r['loop_ms'] * r['cost'][nw]:.2f} ms "
+                     f"({r['cost'][nw]:.2f} x the loop)",
+                     ", ".join(f"{p:.0f}" for p in peaks) + " MiB"])
+    rows.append([f"batch, 2 workers, the first {r['short'][0]} frames", "", "",
+                 ", ".join(f"{p:.0f}" for p in r["short"][2]) + " MiB"])
+    cost = [r["cost"][1], r["cost"][2]]
+    return Result([Table("Batch against the bare loop",
+                         ["run", "frames/s", "per frame, one core", "peak memory a worker"],
+                         rows,
+                         note=f"{os.cpu_count()} cores; the video {r['video_mib']:.0f} MiB. "
+                              f"From 1 to 2 workers: {r['scaling']:.2f} times as fast, a "
+                              f"scaling efficiency of {100 * r['efficiency']:.0f} %. The batch "
+                              f"costs {min(cost):.1f} to {max(cost):.1f} times the loop's time "
+                              "a frame with the same per-frame work: the rest is writing the "
+                              "heights (rounded, compressed) and the rows, and Dask. On paper, "
+                              "100 sensors for an hour at 90 frames/s: "
+                              f"{r['core_hours']:.0f} core-hours at the 2-worker cost, about "
+                              f"{r['cores']} cores to keep up.")],
+                  summary=f"1 to 2 workers {r['scaling']:.2f} times as fast "
+                          f"({100 * r['efficiency']:.0f} % efficiency); the batch "
+                          f"{min(cost):.1f} to {max(cost):.1f} times the bare loop's cost a "
+                          f"frame; a worker's peak memory {_span(*_ends(r['short'][2]), '.0f')} "
+                          f"MiB after the first {r['short'][0]} frames, "
+                          f"{_span(*_ends(r['batch'][2][1]), '.0f')} MiB after all {n}.")
+
+
+def _ends(values: Sequence[float]) -> tuple[float, float]:
+    return float(min(values)), float(max(values))
+
+
+@subject(
     "live", "Live: the pipeline's rate and latency at camera rate",
     """`tactilevision.live.Pipeline` on one core (OpenCV on one thread, BLAS on one thread
     around each frame's work, as the pipeline runs it) over the real GelSight presses of
