@@ -25,9 +25,11 @@ import argparse
 import contextlib
 import io
 import json
+import math
 import os
 import platform
 import re
+import shutil
 import statistics
 import subprocess
 import sys
@@ -1003,9 +1005,14 @@ def _run_json(argv: Sequence[str], ok: Sequence[int] = (0,)) -> dict:
     against depth measured by E. Helmut et al. (`sample_frames/feats`, MIT): `fit` (E and
     its interval at the stated nu = 0.5, the apparent E of each press and the drift it
     warns of) and `diagnose` (the ladder of effects it adds and the E of the model it
-    selects). The authors' own fit, 0.435 MPa, is a peer's figure, not a truth.""",
+    selects). The authors' own fit, 0.435 MPa, is a peer's figure, not a truth. Then the
+    same presses with every depth shifted by -0.05 and +0.05 mm (a contact point found
+    early or late, the error any user makes), each in a copy of the sample's folder:
+    whether `fit` fits them, and the depth offset `diagnose` names (taken, or not ruled
+    out) against the one it finds on the presses as read less the shift.""",
     [f"tactilevision fit {SAMPLE_FEATS} --json FILE",
-     f"tactilevision diagnose {SAMPLE_FEATS} --json FILE"])
+     f"tactilevision diagnose {SAMPLE_FEATS} --json FILE",
+     "the same on copies with the depths shifted by -0.05 and +0.05 mm"])
 def _feats_fit(quick: bool) -> Result:
     fit = _run_json(["fit", SAMPLE_FEATS])
     diag = _run_json(["diagnose", SAMPLE_FEATS])
@@ -1030,6 +1037,34 @@ def _feats_fit(quick: bool) -> Result:
                f"{1e3 * r['rmse_n']:.1f}", _pct(r["drift"], 1),
                f"{r['depth_offset_mm']:+.3f}"] for r in diag["ladder"]]
     final = diag["ladder"][-1]
+    shifted = []
+    for shift in (-0.05, 0.05):
+        with tempfile.TemporaryDirectory(prefix="tv-report-feats-") as tmp:
+            folder = Path(tmp)
+            shutil.copy(ROOT / SAMPLE_FEATS.replace("force_depth.csv", "session.toml"),
+                        folder / "session.toml")
+            rows = "".join(f"{w + shift:.3f},{f}\n" for w, f in zip(
+                diag["depth_mm"], diag["force_n"], strict=True))
+            (folder / "force_depth.csv").write_text("depth_mm,force_n\n" + rows)
+            f_s = _run_json(["fit", str(folder / "force_depth.csv")], ok=(0, 2, 3))
+            d_s = _run_json(["diagnose", str(folder / "force_depth.csv")], ok=(0, 2, 3))
+        last = d_s["ladder"][-1]
+        if "depth_offset" in d_s["missing_effects"]:
+            named, off, e = "taken", last["depth_offset_mm"], last["E_mpa"]
+        elif "depth_offset" in d_s.get("not_ruled_out", {}):
+            v = d_s["not_ruled_out"]["depth_offset"]
+            named, off, e = "not ruled out", v["depth_offset_mm"], v["E_mpa"]
+        else:
+            named, off, e = "no", math.nan, math.nan
+        edge = any(abs(off - b) < 1e-6 for b in d_s.get("offset_bounds_mm") or ()
+                   if b is not None)
+        shifted.append([f"{shift:+.2f}",
+                        f"E = {f_s['E_mpa']:.4f}" if f_s.get("E_mpa") is not None
+                        else "refused", ", ".join(d_s["missing_effects"]) or "none", named,
+                        f"{off:+.3f}" + (" (the end of the range searched: a bound)"
+                                         if edge else ""),
+                        f"{final['depth_offset_mm'] - shift:+.3f}",
+                        f"{e:.4f}"])
     return Result([
         Table("fit", ["", "value"], summary),
         Table("Each press", ["depth (mm)", "force (N)", "fit's force (N)", "apparent E (MPa)"],
@@ -1039,6 +1074,13 @@ def _feats_fit(quick: bool) -> Result:
                "depth offset (mm)"], ladder,
               note=f"Missing effects named: {', '.join(diag['missing_effects']) or 'none'}; "
                    f"the selected model's E {final['E_mpa']:.4f} MPa."),
+        Table("Depths shifted",
+              ["shift (mm)", "fit", "diagnose: missing", "depth offset named",
+               "its offset (mm)", "as read, less the shift (mm)", "E under it (MPa)"],
+              shifted,
+              note="A depth offset is taken when it lowers the BIC by more than 2; one "
+                   "within 2 of the final model's BIC is named as not ruled out (four "
+                   "presses: one more parameter needs the BIC to fall by more than 2)."),
     ])
 
 
