@@ -482,3 +482,27 @@ def test_a_worker_thread_reuses_its_chunk_buffer_and_rounds_it_in_place():
     got = quantize_heights(h, out=h)
     assert got is h
     np.testing.assert_array_equal(got, want)
+
+
+def test_an_interrupt_while_the_cluster_starts_leaves_no_empty_folder(tmp_path, monkeypatch):
+    """Ctrl-C while the local cluster starts (its first 1 to 2 s): the folders the call made
+    for --out go again; a folder that was there stays, as do its files."""
+    import tactilevision.batch._run as run_mod
+
+    def interrupted(*_a, **_k):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(run_mod, "_client", interrupted)
+    settings = BatchSettings(kind="reconstruct", calibration=str(tmp_path / "none.npz"))
+    out = tmp_path / "new" / "out"
+    with pytest.raises(KeyboardInterrupt):
+        run_batch("reconstruct", [tmp_path], out, settings=settings)
+    assert not (tmp_path / "new").exists()
+    kept = tmp_path / "kept"
+    kept.mkdir()
+    with pytest.raises(KeyboardInterrupt):
+        run_batch("reconstruct", [tmp_path], kept, settings=settings)
+    assert kept.is_dir()
+    with pytest.raises(InputError, match="no inputs"):
+        run_batch("reconstruct", [], tmp_path / "none", settings=settings)
+    assert not (tmp_path / "none").exists()

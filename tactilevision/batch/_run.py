@@ -284,17 +284,24 @@ def run_batch(kind: str, inputs: Sequence[str | Path], out: str | Path, *,
     out = Path(out)
     if out.exists() and not out.is_dir():
         raise InputError(f"--out {out} is a file, not a folder")
-    out.mkdir(parents=True, exist_ok=True)
     paths = [Path(p) for p in inputs]
     if not paths:
         raise InputError("no inputs given")
+    made = _first_missing(out)
+    out.mkdir(parents=True, exist_ok=True)
     outcomes = [InputOutcome(str(p), n) for p, n in zip(paths, _names(paths), strict=True)]
     t0 = time.perf_counter()
     own_cluster = None
-    if client is None:
-        client, own_cluster = _client(scheduler, n_workers)
-    report = BatchReport(kind=kind, out=out, inputs=outcomes,
-                         workers=len(client.scheduler_info().get("workers", {})))
+    try:
+        if client is None:
+            client, own_cluster = _client(scheduler, n_workers)
+        report = BatchReport(kind=kind, out=out, inputs=outcomes,
+                             workers=len(client.scheduler_info().get("workers", {})))
+    except BaseException:
+        # interrupted (or failed) while the cluster started: nothing was written, so the
+        # folders this call made go again (an empty output folder is not left behind)
+        _remove_empty(out, made)
+        raise
     interrupted = False
     try:
         if kind == "calibrate":
@@ -311,6 +318,31 @@ def run_batch(kind: str, inputs: Sequence[str | Path], out: str | Path, *,
         if own_cluster is not None:
             _close(client, own_cluster, interrupted=interrupted)
     return report
+
+
+def _first_missing(path: Path) -> Path | None:
+    """The outermost of `path` and its parents that does not exist yet (None if `path`
+    does)."""
+    first = None
+    while not path.exists():
+        first, path = path, path.parent
+        if path == path.parent:
+            break
+    return first
+
+
+def _remove_empty(path: Path, top: Path | None) -> None:
+    """Remove `path` and its parents up to `top` (the folders a call made) while empty."""
+    if top is None:
+        return
+    while True:
+        try:
+            path.rmdir()                 # only an empty folder goes
+        except OSError:
+            return
+        if path == top:
+            return
+        path = path.parent
 
 
 def _close(client, cluster, *, interrupted: bool = False) -> None:
