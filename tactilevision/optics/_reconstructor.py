@@ -271,7 +271,6 @@ class DepthReconstructor:
         # BRIDGED_GAP_PX / 8 quarter-resolution pixels closes gaps under twice its radius)
         r = BRIDGED_GAP_PX // 8
         self._bridge = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1))
-        self._quarter = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (9, 9))
 
     # ---------------------------------------------------------------- pieces
     def _one(self, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -594,17 +593,17 @@ class DepthReconstructor:
         The gaps are bridged on the quarter-resolution grid (a closing), only the region
         they enclose is taken in; the gap itself stays out."""
         h, w = self.shape
-        # a quarter-resolution pixel is in when any of its pixels is
-        small = cv2.resize(mask.view(np.uint8).astype(np.float32), self._small_size,
+        # a quarter-resolution pixel is in when any of its pixels is (255 / 16 rounds up)
+        small = cv2.resize(np.multiply(mask.view(np.uint8), np.uint8(255)), self._small_size,
                            interpolation=cv2.INTER_AREA) > 0
         closed = cv2.morphologyEx(small.view(np.uint8), cv2.MORPH_CLOSE, self._bridge)
         enclosed = _fill_holes(closed) & ~closed.view(bool)
         if not enclosed.any():
             return _fill_holes(mask)
-        # the enclosed region back on the image's grid, grown by one quarter-resolution
-        # pixel to meet the ring's inner edge, then the holes filled as ever
-        up = cv2.resize(enclosed.view(np.uint8), (w, h), interpolation=cv2.INTER_NEAREST)
-        up = cv2.dilate(up, self._quarter)
+        # the enclosed region grown by one quarter-resolution pixel (to meet the ring's
+        # inner edge), back on the image's grid, then the holes filled as ever
+        grown = cv2.dilate(enclosed.view(np.uint8), self._grow)
+        up = cv2.resize(grown, (w, h), interpolation=cv2.INTER_NEAREST)
         return _fill_holes(mask | up.view(bool))
 
 
