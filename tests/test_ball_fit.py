@@ -211,6 +211,15 @@ def test_a_depth_offset_the_ladder_cannot_take_is_named_as_not_ruled_out(tmp_pat
                      str(tmp_path / f"{name}.json")]) == 0
         runs[name] = json.loads((tmp_path / f"{name}.json").read_text())
     read, late = runs["read"], runs["late"]
+    # the diagnose --json contract's keys beside the ladder's own
+    assert read["model"] == ["sphere", *read["ladder"][-1]["effects"]]
+    assert read["params"] == {"E_mpa": read["ladder"][-1]["E_mpa"], "nu": 0.5}
+    assert read["rmse_n"] == read["ladder"][-1]["rmse_n"]
+    assert read["verdict"] == {"missing_effect": read["missing_effects"][0],
+                               "equivalent_effects": sorted(
+                                   read["equivalent_effects"][read["missing_effects"][0]]),
+                               "unexplained_covariate": None}
+    assert late["verdict"]["missing_effect"] == "contact_slip"
     assert "depth_offset" in read["missing_effects"]
     assert "depth_offset" not in late["missing_effects"]
     offset = late["not_ruled_out"]["depth_offset"]

@@ -162,10 +162,21 @@ class IndenterDiagnosis:
     not_ruled_out: dict = field(default_factory=dict)
 
     def to_json_dict(self) -> dict:
-        """JSON-ready: arrays as lists, NaN as None."""
+        """JSON-ready: arrays as lists, NaN as None; with the ``diagnose --json`` contract's
+        keys (``model``, ``params``, ``rmse_n``, ``cv_rmse_n``, ``noise_floor_n``,
+        ``covariates``, ``verdict``) beside the ladder's own."""
         clean = json_ready
         rungs = [{k: clean(getattr(r, k)) for k in r.__dataclass_fields__} for r in self.ladder]
-        return {"ladder": rungs, "missing_effects": list(self.missing_effects),
+        last = self.ladder[-1]
+        first = self.missing_effects[0] if self.missing_effects else None
+        verdict = {"missing_effect": first,
+                   "equivalent_effects": sorted(self.equivalent_effects.get(first, {})),
+                   "unexplained_covariate": None}
+        return {"model": ["sphere", *last.effects],
+                "params": {"E_mpa": clean(last.E_mpa), "nu": self.nu},
+                "rmse_n": clean(last.rmse_n), "cv_rmse_n": None,
+                "noise_floor_n": clean(self.floor_n), "covariates": [], "verdict": verdict,
+                "ladder": rungs, "missing_effects": list(self.missing_effects),
                 "candidates": clean(self.candidates), "nu": self.nu,
                 "floor_n": clean(self.floor_n), "floor_test": clean(self.floor_test),
                 "message": self.message, "depth_mm": clean(self.depth_mm),
