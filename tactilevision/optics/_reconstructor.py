@@ -592,6 +592,8 @@ class DepthReconstructor:
         change of its own) would be left out of the contact, its heights pinned at zero.
         The gaps are bridged on the quarter-resolution grid (a closing), only the region
         they enclose is taken in; the gap itself stays out."""
+        if not mask.any():                # a frame without contact: nothing to fill
+            return mask.copy()
         h, w = self.shape
         # a quarter-resolution pixel is in when any of its pixels is (255 / 16 rounds up)
         small = cv2.resize(np.multiply(mask.view(np.uint8), np.uint8(255)), self._small_size,
