@@ -273,12 +273,15 @@ class DepthReconstructor:
         self._bridge = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1))
 
     # ---------------------------------------------------------------- pieces
-    def _one(self, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def _one(self, frame: np.ndarray, window: tuple[int, int, int, int] | None = None
+             ) -> tuple[np.ndarray, np.ndarray]:
+        """(gx, gy) of one frame, or of its rows ``r0:r1`` and columns ``c0:c1`` for a
+        `window` (a table only, without markers: :meth:`_gradient_window`)."""
         cal = self.calibration
         blurred = blur_frames(frame, cal.blur_sigma) if cal.blur_sigma > 0 else frame
         if self._table is not None:
             gx, gy = self._table.gradients(blurred, normalise_gain=cal.normalise_gain,
-                                           kernel=self.kernel)
+                                           kernel=self.kernel, window=window)
         else:
             change = colour_change(blurred, self._ref_inv,
                                    normalise_gain=cal.normalise_gain).reshape(-1, 3)
@@ -288,47 +291,108 @@ class DepthReconstructor:
             gx, gy = gradients_from_normals(nxy[:, 0], nxy[:, 1])
             gx, gy = gx.reshape(self.shape), gy.reshape(self.shape)
         if self._g0 is not None:
-            gx, gy = gx - self._g0[0], gy - self._g0[1]
+            g0x, g0y = self._g0
+            if window is not None:
+                r0, r1, c0, c1 = window
+                g0x, g0y = g0x[r0:r1, c0:c1], g0y[r0:r1, c0:c1]
+            gx, gy = gx - g0x, gy - g0y
         if cal.markers:
             gx, gy = fill_masked_fields([gx, gy], marker_mask(frame))
         return gx, gy
 
-    def _integrate(self, gx: np.ndarray, gy: np.ndarray, frame: np.ndarray) -> np.ndarray:
+    def _height(self, frame: np.ndarray) -> np.ndarray:
+        """One frame's height map, mm."""
         if self.boundary == "contact":
-            # warm-started from the previous frame's height (pixel units): a video's next
-            # frame is close to it, and a guess further off than zero is not used
-            mask = self.contact_mask(frame, threshold="frame", fill_holes=True)
-            k = (auto_binning(mask, HEIGHT_BIN_PER_WIDTH) if self.binning == "auto"
-                 else self.binning)
-            if k > 1:
-                # on k x k blocks: each block's mean slope times k is the height step from
-                # one block to the next; a block is in the region when all its pixels are,
-                # so that the zero beyond it lies, on average, where every pixel's does
-                # (the first block not wholly in the region: its centre (k - 1) / 2 px
-                # beyond the first pixel outside, less r for r from 0 to k - 1)
-                gx, gy = bin_blocks(gx, k) * np.float32(k), bin_blocks(gy, k) * np.float32(k)
-                mask = bin_blocks(mask.view(np.uint8).astype(np.float32), k,
-                                  edge="zero") > np.float32(1 - 1e-3)
-            z0 = self._last_contact_z
-            z = integrate_poisson_masked(gx, gy, mask, tol=_CONTACT_TOL,
-                                         z0=z0 if z0 is not None and z0.shape == mask.shape
-                                         else None)
-            self._last_contact_z = z.copy()
-            z *= self._mm
-            if k > 1:
-                z = np.ascontiguousarray(unbin_blocks(z, k, self.shape))
+            return self._contact_height(frame)
+        return self._integrate(*self._one(frame), frame)
+
+    def _contact_height(self, frame: np.ndarray) -> np.ndarray:
+        """``boundary='contact'``: the height solved on the frame's contact region, zero
+        outside it, its gradients looked up only where the solve reads them
+        (:meth:`_gradient_window`)."""
+        mask = self.contact_mask(frame, threshold="frame", fill_holes=True)
+        k = (auto_binning(mask, HEIGHT_BIN_PER_WIDTH) if self.binning == "auto"
+             else self.binning)
+        window = self._gradient_window(mask, k)
+        if window is None:
+            gx, gy = self._one(frame)
         else:
-            far_field = self.level == "far_field" and self.boundary == "neumann"
-            grown = self._contact_small(frame) if far_field or self.zero_background else None
-            if self.zero_background:
-                keep = self._hull(grown)
-                if keep.mean() <= 0.75:        # else the contact covers the frame: keep all
-                    h, w = self.shape
-                    keep = cv2.resize(keep, (w, h), interpolation=cv2.INTER_NEAREST).view(bool)
-                    gx, gy = gx * keep, gy * keep
-            z = self._solver.solve_unchecked(gx, gy)    # mm; the gradients are its own
-            if far_field:
-                z = self._level_far_field(z, grown)
+            # zero outside the window: the solve reads no gradient there
+            r0, r1, c0, c1 = window
+            wx, wy = self._one(frame, window) if r1 > r0 else (None, None)
+            if k > 1:
+                grid = (-(-self.shape[0] // k), -(-self.shape[1] // k))
+                gx, gy = np.zeros(grid, np.float32), np.zeros(grid, np.float32)
+                if wx is not None:
+                    # the window's edges lie on the blocks' (or the image's): its blocks
+                    # are the whole image's
+                    rows = slice(r0 // k, -(-r1 // k))
+                    cols = slice(c0 // k, -(-c1 // k))
+                    gx[rows, cols], gy[rows, cols] = bin_blocks(wx, k), bin_blocks(wy, k)
+            else:
+                gx, gy = np.zeros(self.shape, np.float32), np.zeros(self.shape, np.float32)
+                if wx is not None:
+                    gx[r0:r1, c0:c1], gy[r0:r1, c0:c1] = wx, wy
+        return self._contact_solve(gx, gy, mask, k, binned=window is not None)
+
+    def _gradient_window(self, mask: np.ndarray, k: int
+                         ) -> tuple[int, int, int, int] | None:
+        """The rows and columns ``(r0, r1, c0, c1)`` whose gradients the contact's solve
+        reads: the k x k blocks of the contact region `mask` and one block round them (the
+        divergence's central differences), on the blocks' grid; ``(0, 0, 0, 0)`` for no
+        contact; None where the whole frame is looked up (a network without its table,
+        or markers, which are filled from the whole frame)."""
+        if self._table is None or self.calibration.markers:
+            return None
+        rows = np.flatnonzero(mask.any(axis=1))
+        if rows.size == 0:
+            return (0, 0, 0, 0)
+        cols = np.flatnonzero(mask.any(axis=0))
+        H, W = self.shape
+        r0, r1 = max(0, (int(rows[0]) // k - 1) * k), min(H, (int(rows[-1]) // k + 2) * k)
+        c0, c1 = max(0, (int(cols[0]) // k - 1) * k), min(W, (int(cols[-1]) // k + 2) * k)
+        return r0, r1, c0, c1
+
+    def _contact_solve(self, gx: np.ndarray, gy: np.ndarray, mask: np.ndarray, k: int, *,
+                       binned: bool) -> np.ndarray:
+        """The contact-pinned integration of (gx, gy) on the region `mask` (pixels) on k x k
+        blocks; `binned`: the gradients are on the blocks' grid already (block means)."""
+        # warm-started from the previous frame's height (pixel units): a video's next
+        # frame is close to it, and a guess further off than zero is not used
+        if k > 1:
+            # on k x k blocks: each block's mean slope times k is the height step from
+            # one block to the next; a block is in the region when all its pixels are,
+            # so that the zero beyond it lies, on average, where every pixel's does
+            # (the first block not wholly in the region: its centre (k - 1) / 2 px
+            # beyond the first pixel outside, less r for r from 0 to k - 1)
+            if not binned:
+                gx, gy = bin_blocks(gx, k), bin_blocks(gy, k)
+            gx, gy = gx * np.float32(k), gy * np.float32(k)
+            mask = bin_blocks(mask.view(np.uint8).astype(np.float32), k,
+                              edge="zero") > np.float32(1 - 1e-3)
+        z0 = self._last_contact_z
+        z = integrate_poisson_masked(gx, gy, mask, tol=_CONTACT_TOL,
+                                     z0=z0 if z0 is not None and z0.shape == mask.shape
+                                     else None)
+        self._last_contact_z = z.copy()
+        z *= self._mm
+        if k > 1:
+            z = np.ascontiguousarray(unbin_blocks(z, k, self.shape))
+        return z
+
+    def _integrate(self, gx: np.ndarray, gy: np.ndarray, frame: np.ndarray) -> np.ndarray:
+        """The whole frame's height ('neumann' or 'dirichlet'), mm."""
+        far_field = self.level == "far_field" and self.boundary == "neumann"
+        grown = self._contact_small(frame) if far_field or self.zero_background else None
+        if self.zero_background:
+            keep = self._hull(grown)
+            if keep.mean() <= 0.75:        # else the contact covers the frame: keep all
+                h, w = self.shape
+                keep = cv2.resize(keep, (w, h), interpolation=cv2.INTER_NEAREST).view(bool)
+                gx, gy = gx * keep, gy * keep
+        z = self._solver.solve_unchecked(gx, gy)    # mm; the gradients are its own
+        if far_field:
+            z = self._level_far_field(z, grown)
         return z
 
     def _contact_small(self, frame: np.ndarray) -> np.ndarray:
@@ -430,8 +494,8 @@ class DepthReconstructor:
         """
         frames = self._check(frames)
         if frames.ndim == 3:
-            return self._integrate(*self._one(frames), frames)
-        return np.stack([self._integrate(*self._one(f), f) for f in frames])
+            return self._height(frames)
+        return np.stack([self._height(f) for f in frames])
 
     def out_of_range(self, frames: np.ndarray) -> np.ndarray:
         """Pixels whose colour lies outside what the calibration saw.

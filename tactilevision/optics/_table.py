@@ -101,7 +101,8 @@ class GradientTable:
         return 0 if self.slopes is None else 1
 
     def gradients(self, blurred: np.ndarray, *, normalise_gain: bool = True,
-                  kernel: str = "numpy") -> tuple[np.ndarray, np.ndarray]:
+                  kernel: str = "numpy", window: tuple[int, int, int, int] | None = None
+                  ) -> tuple[np.ndarray, np.ndarray]:
         """Look up one (already blurred) frame.
 
         Parameters
@@ -145,28 +146,37 @@ class GradientTable:
             gain = channel_medians(blurred[::8, ::8].reshape(-1, 3) * self._sub_ref_inv)
         else:
             gain = np.ones(3, np.float32)
+        scale_map, cell_offset = self._scale_map, self.cell_offset
+        kernel_in = getattr(self, "_kernel_in", ())          # a first-order table's
+        if window is not None:
+            r0, r1, c0, c1 = (int(v) for v in window)
+            blurred = blurred[r0:r1, c0:c1]
+            scale_map, cell_offset = scale_map[r0:r1, c0:c1], cell_offset[r0:r1, c0:c1]
+            if self._rows is not None:
+                kernel_in = (_read_only(scale_map), _read_only(cell_offset.astype(np.int32)),
+                             kernel_in[2])
         # only a first-order table has a compiled pass: an order-0 one never loads numba
         compiled = first_order_kernel(kernel) if self._rows is not None else check_kernel(kernel)
         if compiled is not None and blurred.dtype == np.uint8:
             gx = np.empty(blurred.shape[:2], np.float32)
             gy = np.empty_like(gx)
             coef = np.concatenate([np.float32(1.0) / gain, self._offset]).astype(np.float32)
-            compiled(_read_only(blurred), self._kernel_in[0], _read_only(coef),
-                     np.float32(self._top), int(self.bins), *self._kernel_in[1:], gx, gy)
+            compiled(_read_only(blurred), kernel_in[0], _read_only(coef),
+                     np.float32(self._top), int(self.bins), *kernel_in[1:], gx, gy)
             return gx, gy
         a = self._affine
         a[0, 0], a[1, 1], a[2, 2] = 1.0 / gain
         a[:, 3] = self._offset
-        q = cv2.multiply(blurred, self._scale_map, dtype=cv2.CV_32F)  # HxWx3
+        q = cv2.multiply(blurred, scale_map, dtype=cv2.CV_32F)  # HxWx3
         q = cv2.transform(q, a)
         cv2.threshold(q, self._top, self._top, cv2.THRESH_TRUNC, dst=q)
         cv2.threshold(q, 0.0, 0.0, cv2.THRESH_TOZERO, dst=q)
         if self._rows is not None:
-            return self._first_order(q)
+            return self._first_order(q, cell_offset)
         np.floor(q, out=q)
         idx = cv2.transform(q, self._weights).astype(np.int32)  # HxW
         if not self._single_cell:
-            idx += self.cell_offset
+            idx += cell_offset
         # two 1-D tables: two lookups give contiguous gx, gy, which the Poisson
         # solver's differences read faster than strided views of one (H, W, 2)
         gx, gy = self.gx_table.take(idx, mode="wrap"), self.gy_table.take(idx, mode="wrap")
@@ -179,12 +189,14 @@ class GradientTable:
             gx, gy = gx.astype(np.float32), gy.astype(np.float32)
         return gx, gy
 
-    def _first_order(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(gx, gy) of a first-order table from the colour coordinates q (H, W, 3)."""
+    def _first_order(self, q: np.ndarray, cell_offset: np.ndarray
+                     ) -> tuple[np.ndarray, np.ndarray]:
+        """(gx, gy) of a first-order table from the colour coordinates q (h, w, 3) and the
+        pixels' position-cell offsets (h, w)."""
         h, w = q.shape[:2]
         idx = cv2.transform(np.floor(q), self._weights).astype(np.int32)
         if not self._single_cell:
-            idx += self.cell_offset
+            idx += cell_offset
         # planes by transposing (N, 8) and (N, 3) pixel-major blocks: OpenCV's blocked
         # transpose takes a third of the time of cv2.split on eight channels
         # mode 'wrap': the rows are in range by construction, and numpy's wrapping gather
