@@ -278,3 +278,16 @@ def test_masked_conjugate_gradients_meet_the_direct_solve(tol):
     assert cg.dtype == np.float32 and np.all(cg[~mask] == 0)
     err = np.abs(cg - direct).max() / np.abs(direct).max()
     assert err < tol            # 0.04 to 0.07 times tol at 1e-3 to 1e-6 when written
+
+
+@pytest.mark.parametrize("n", [1, 2, 7, 34240])
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_the_partitioned_median_is_numpys_with_ties_and_batches(n, dtype):
+    """median_last_axis (one partition, then the lower middle as the largest value before
+    the upper) gives np.median's values along the last axis, ties (a quantised colour
+    change) and all."""
+    rng = np.random.default_rng(n)
+    x = rng.standard_normal((3, n)).astype(dtype)
+    x[1] = np.round(x[1] * 4) / 4               # many equal values
+    x[2] = 0.5                                  # all equal
+    np.testing.assert_array_equal(median_last_axis(x.copy()), np.median(x, axis=-1))

@@ -98,11 +98,20 @@ def median_last_axis(x: np.ndarray) -> np.ndarray:
     Returns
     -------
     median : (...) ndarray, dtype of `x`
+
+    Notes
+    -----
+    One partition at the upper middle, then, for an even N, the lower middle as the
+    largest value before it: numpy's partition at both middles at once took 7 times as
+    long on a frame's colour change (0.30 against 0.04 ms for 34 240 values, many of them
+    equal; 2-core x86_64), for the same two values and the same mean.
     """
     n = x.shape[-1]
-    mid = [n // 2] if n % 2 else [n // 2 - 1, n // 2]
-    x.partition(mid, axis=-1)
-    return x[..., mid].mean(axis=-1)
+    x.partition(n // 2, axis=-1)
+    if n % 2:
+        return x[..., [n // 2]].mean(axis=-1)
+    lower = x[..., :n // 2].max(axis=-1)
+    return np.stack([lower, x[..., n // 2]], axis=-1).mean(axis=-1)
 
 
 def blur_frames(frames: np.ndarray, sigma: float) -> np.ndarray:

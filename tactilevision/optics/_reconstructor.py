@@ -28,7 +28,13 @@ from .._checks import InputError, check_array
 from .._morphology import fill_holes as _fill_holes
 from ._ball import gradients_from_normals
 from ._calibration_data import CalibrationData
-from ._features import blur_frames, channel_magnitude, colour_change, reference_inverse
+from ._features import (
+    blur_frames,
+    channel_magnitude,
+    colour_change,
+    median_last_axis,
+    reference_inverse,
+)
 from ._markers import fill_masked_fields, marker_mask
 from ._mlp import (
     MLPGradientModel,
@@ -638,9 +644,9 @@ class DepthReconstructor:
                 # the pixels, every position of JPEG's 8 x 8 blocks): within 0.7 % of the
                 # whole frame's threshold on the sample session's presses, a seventh of
                 # the cost (every 4th: 1 to 4 % low, the same place in every block)
-                sample = mag[::3, ::3]
-                med = float(np.median(sample))
-                thr = med + 8.0 * 1.4826 * float(np.median(np.abs(sample - med)))
+                sample = np.ascontiguousarray(mag[::3, ::3]).ravel()    # a copy
+                med = float(median_last_axis(sample))                   # partitions it
+                thr = med + 8.0 * 1.4826 * float(median_last_axis(np.abs(sample - med)))
             else:
                 mag = channel_magnitude(colour_change(f, self._ref_inv,
                                                       blur_sigma=cal.blur_sigma))
