@@ -144,8 +144,8 @@ def test_the_solve_log_counts_the_tensile_pixels_each_sweep_drops():
     """A flat punch's face inside a footprint that also takes in a shallow ring around
     it (just above the threshold, where the face's pressure would push the gel deeper):
     held there the ring pulls, so sweeps drop it; the pixels the log says were dropped, less
-    those taken back, are the footprint less the contact the map keeps, and the last sweep
-    changes nothing."""
+    those taken back, are the footprint less the contact the map keeps, each sweep that
+    drops pixels ran iterations, and the last sweep changes nothing."""
     est = ForceEstimator((60, 60), 0.05, thickness_mm=3.0, E_mpa=0.2, nu=0.48,
                          contact="footprint", threshold_mm=0.01)
     yy, xx = np.mgrid[:60, :60]
@@ -158,7 +158,9 @@ def test_the_solve_log_counts_the_tensile_pixels_each_sweep_drops():
     taken = sum(b for _, _, b in log[0])
     assert log[0][-1][1:] == (0, 0) and dropped > 0
     assert dropped - taken == int((h > 0.01).sum()) - int(fm.contact.sum())
-    assert all(it >= 1 for it, _, _ in log[0][:-1])
+    # a sweep that drops pixels solved since the set last changed (a loose sweep may end
+    # at once: the residual already under its tolerance)
+    assert all(it >= 1 for it, d, _ in log[0] if d > 0)
 
 
 def test_the_answer_does_not_depend_on_the_frame_before():
