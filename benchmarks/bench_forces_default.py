@@ -4,6 +4,7 @@
         [--variants default,shipped,field,before]
     python benchmarks/bench_forces_default.py --rate [--frames N] [--start I]
     python benchmarks/bench_forces_default.py --sweeps [--frames N] [--start I]
+    python benchmarks/bench_forces_default.py --cli
 
 Runs the command on every N-th frame of ``sample_frames/gelsight_session``
 (default 3) once per variant and compares each frame's total Fz with the F/T
@@ -37,6 +38,10 @@ whole-image footprint solve) and the default path on a spread of those frames
 (no warm start between them), and through the faster choices; the ratios of
 their per-frame times to the bare height map's.
 
+``--cli``: the command's own marginal cost of a force frame (``--every 100`` against
+``--every 10``, the difference cancelling the set-up, as issue 85 measured it) against a bare
+``DepthReconstructor`` reading the same frames from the session, in the same run.
+
 ``--blocks``: the contact-pinned heights' block rule (blocks at most the contact region's
 width over 20, 30 or 40): the default path's total over every pixel's on the presses' hold
 frames.
@@ -52,6 +57,9 @@ from __future__ import annotations
 import argparse
 import csv
 import json
+import math
+import subprocess
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -332,6 +340,54 @@ def rate(frames: int, start: int, before: int) -> None:
         print(f"| {name} | {ms:.1f} | {ratio:.1f} |", flush=True)
 
 
+def cli_rows(every: tuple[int, int] = (100, 10), repeats: int = 2) -> dict:
+    """The command's own marginal cost of a force frame, measured as issue 85 did: ``tactilevision
+    forces SESSION --E-mpa 0.2 --nu 0.48 --every N`` (its defaults otherwise) for the two N
+    of `every`, the difference of their wall times over the difference of their frame
+    counts cancelling the set-up (imports, the session's reading, the first frame's tables);
+    beside them, in the same run (before and after, their mean), a bare
+    ``DepthReconstructor`` on the session's own optics over the same frames as a user's loop
+    reads them (``session.frame(i)`` then the height map). Each command's wall time is the
+    least of `repeats` runs. ``{"every": (n_a, n_b), "frames": (f_a, f_b), "wall_s": (t_a,
+    t_b), "marginal_ms", "bare_ms", "ratio"}``."""
+    s = read_session(SESSION)
+    cal = PhotometricCalibration.load(SESSION / "optics.npz")
+    bare = DepthReconstructor(cal, reference=s.reference)
+    picks = range(0, s.n_frames, min(every))
+
+    def bare_ms() -> float:
+        bare(s.frame(0))
+        t0 = time.perf_counter()
+        for i in picks:
+            bare(s.frame(i))
+        return (time.perf_counter() - t0) / len(picks) * 1e3
+
+    before = bare_ms()
+    walls, counts = [], []
+    for n in every:
+        best = math.inf
+        for _ in range(repeats):
+            with tempfile.TemporaryDirectory() as tmp:
+                t0 = time.perf_counter()
+                done = subprocess.run(
+                    [sys.executable, "-m", "tactilevision", "forces", str(SESSION), "--E-mpa",
+                     "0.2", "--nu", "0.48", "--every", str(n), "--out", tmp,
+                     "--no-progress"], capture_output=True, text=True)
+                wall = time.perf_counter() - t0
+                if done.returncode != 0:
+                    raise RuntimeError(f"forces --every {n} failed: {done.stderr[-500:]}")
+                rows = len((Path(tmp) / "forces.csv").read_text().splitlines()) - 1
+            best = min(best, wall)
+        walls.append(best)
+        counts.append(rows)
+    after = bare_ms()
+    marginal = (walls[1] - walls[0]) / (counts[1] - counts[0]) * 1e3
+    ref = 0.5 * (before + after)
+    return {"every": tuple(every), "frames": tuple(counts), "wall_s": tuple(walls),
+            "marginal_ms": marginal, "bare_ms": ref, "bare_runs_ms": (before, after),
+            "ratio": marginal / ref}
+
+
 def blocks_rows(per_widths=(20.0, 30.0, 40.0), session: Path = SESSION,
                 sensor: str | None = None) -> list[tuple[float, int, float, float, float]]:
     """The heights' block rule: for each width-over ratio of the contact region
@@ -410,6 +466,9 @@ def main() -> None:
     ap.add_argument("--before", type=int, default=10,
                     help="--rate: frames (spread over the N) through the solvers before "
                     "(about 1.5 s each)")
+    ap.add_argument("--cli", action="store_true",
+                    help="the command's own marginal cost of a force frame (--every 100 "
+                    "against --every 10) in bare height maps of the same run")
     ap.add_argument("--sweeps", action="store_true",
                     help="where the default force solve's work goes: its sweeps and "
                     "iterations, and how far another path of its tensile rule moves the maps")
@@ -431,6 +490,15 @@ def main() -> None:
         print("|---|---|---|")
         for per, n, lo, med, hi in blocks_rows(session=args.session, sensor=args.sensor):
             print(f"| {per:g} | {n} | {lo:.4f}, {med:.4f}, {hi:.4f} |", flush=True)
+        return
+    if args.cli:
+        r = cli_rows()
+        print(f"tactilevision forces --every {r['every'][0]} and --every {r['every'][1]}: "
+              f"{r['frames'][0]} and {r['frames'][1]} frames in {r['wall_s'][0]:.2f} and "
+              f"{r['wall_s'][1]:.2f} s (least of 2): {r['marginal_ms']:.1f} ms a frame; a bare "
+              f"height map with its frame's decoding {r['bare_ms']:.1f} ms (runs before and "
+              f"after: {r['bare_runs_ms'][0]:.1f}, {r['bare_runs_ms'][1]:.1f}): "
+              f"{r['ratio']:.2f} bare height maps a force frame")
         return
     if args.sweeps:
         sweeps(args.frames, args.start)

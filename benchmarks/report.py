@@ -1220,12 +1220,16 @@ CHOICES = ("every_pixel", *FASTER)
     out) and on the frames without contact; then the cost of a force frame on that path in
     bare `DepthReconstructor` height maps of the same frames, timed in the same process (60
     consecutive frames from frame 30: presses being made, held and released); then the
-    command's other choices (`--binning 1`: every pixel; `--method fem`, `--level
-    far_field`, both) measured the same two ways. --quick: one frame in 6 instead
-    of one in 3, 30 frames for the cost.""",
+    command's own cost of a frame, as a user runs it (`--every 100` against `--every
+    10`, the difference cancelling the set-up) against bare height maps read from the
+    session in the same run; then the command's other choices (`--binning 1`: every
+    pixel; `--method fem`, `--level far_field`, both) measured the same two ways.
+    --quick: one frame in 6 instead of one in 3, 30 frames for the cost, each command
+    once.""",
     ["python benchmarks/bench_forces_default.py --variants "
      "default,every_pixel,fem,far_field,far_field_fem --fit FIT",
      "python benchmarks/bench_forces_default.py --rate",
+     "python benchmarks/bench_forces_default.py --cli",
      "python benchmarks/bench_forces_default.py --blocks"])
 def _forces_default(quick: bool) -> Result:
     import bench_forces_default as b
@@ -1245,6 +1249,7 @@ def _forces_default(quick: bool) -> Result:
     n_hold = d["n"] + sh["n"]
     within = (d["within5"] * d["n"] + sh["within5"] * sh["n"]) / max(n_hold, 1)
     rate = b.rate_rows(30 if quick else 60, 30, 5 if quick else 10)
+    command = b.cli_rows(repeats=1 if quick else 2)
     blocks = [[f"{per:g}" + (" (the default)" if per == 40 else ""), n, f"{lo:.4f}",
                f"{med:.4f}", f"{hi:.4f}"] for per, n, lo, med, hi in b.blocks_rows()]
     cost = [[name, f"{ms:.1f}", f"{ratio:.1f}"] for name, ms, ratio in rate["rows"]]
@@ -1281,6 +1286,21 @@ def _forces_default(quick: bool) -> Result:
                    f"the solvers before on one frame in {rate['every']} ({rate['n_spread']} "
                    f"frames). A force frame with the defaults costs {default_ratio:.1f} bare "
                    "height maps; the ratio, not the milliseconds, carries between machines."),
+        Table("The command's own cost of a force frame",
+              ["run", "frames", "wall time (s)"],
+              [[f"`tactilevision forces {SAMPLE_SESSION.relative_to(ROOT)} --E-mpa 0.2 --nu "
+                f"0.48 --every {n}`", frames, f"{wall:.2f}"]
+               for n, frames, wall in zip(command["every"], command["frames"],
+                                          command["wall_s"], strict=True)],
+              note=f"The difference of the two over the difference of their frames (the "
+                   f"set-up cancels): {command['marginal_ms']:.1f} ms a force frame, decoding, "
+                   f"writing its pressure map and its row included; a bare "
+                   f"`DepthReconstructor` on the session's optics reading the same frames "
+                   f"from the session in the same run (before and after the commands: "
+                   f"{command['bare_runs_ms'][0]:.1f} and {command['bare_runs_ms'][1]:.1f} "
+                   f"ms): {command['ratio']:.2f} bare height maps a force frame. Each "
+                   f"command's time the least of {1 if quick else 2} runs. "
+                   "`python benchmarks/bench_forces_default.py --cli`."),
         Table("Blocks against every pixel",
               ["heights' blocks at most the contact region's width over", "hold frames",
                "total / every pixel's: smallest", "median", "largest"], blocks,
