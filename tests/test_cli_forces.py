@@ -248,3 +248,26 @@ def test_forces_contact_area_on_the_fem_grid(tmp_path):
     disc = np.pi * (float(circles[row["frame"]]["radius_px"]) * 0.0295) ** 2
     assert disc < float(row["contact_area_mm2"]) < 2 * disc
     assert float(row["fz_n"]) > 0
+
+
+def test_a_pressure_map_that_cannot_be_written_fails_the_command_and_stages_nothing(
+        tmp_path, monkeypatch):
+    """The pressure maps are written on a thread while the next frame is worked on: a write
+    that fails (a full disk) still fails the command, and the output folder is not made."""
+    import tactilevision.cli._forces_run as run
+
+    calls, save = [], np.save
+
+    def failing_save(path, arr):
+        calls.append(path)
+        if len(calls) == 2:
+            raise OSError(28, "No space left on device")
+        save(path, arr)
+
+    monkeypatch.setattr(run.np, "save", failing_save)
+    out = tmp_path / "forces"
+    with pytest.raises(OSError, match="No space left"):
+        main(["forces", str(FRAMES), "--sensor", "gelsight", "--thickness-mm", "3.0",
+              "--E-mpa", "0.2", "--nu", "0.48", "--out", str(out), "--no-progress"])
+    assert len(calls) == 2
+    assert not out.exists() or not any(out.iterdir())

@@ -9,6 +9,8 @@ from __future__ import annotations
 import argparse
 import csv
 import sys
+from collections.abc import Iterator
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -129,8 +131,40 @@ def _force_rows(src: FrameSource, picks, recon, est, ft, tmp: Path, args, shape,
     """Each picked frame's force map (its image into `tmp`) and forces.csv row; the frames
     skipped (their errors) and those whose footprint reaches the image's edge."""
     rows, skipped, at_edge = [], [], []
-    frames = tqdm(src.frames_at(picks, shape), total=len(picks), desc="forces", unit="frame",
-                  file=sys.stderr, mininterval=1.0, disable=args.no_progress)
+    with ThreadPoolExecutor(max_workers=1) as writer:
+        pending = None
+        frames = tqdm(_ahead(src.frames_at(picks, shape)), total=len(picks), desc="forces",
+                      unit="frame", file=sys.stderr, mininterval=1.0, disable=args.no_progress)
+        for i, pressure in _force_maps(frames, src, recon, est, ft, args, mm_per_px,
+                                       credit, tmp, rows, skipped, at_edge):
+            # the map written while the next frame is worked on; a failed write raises here
+            if pending is not None:
+                pending.result()
+            pending = writer.submit(np.save, tmp / f"{src.frame_stem(i)}_pressure_kpa.npy",
+                                    pressure)
+        if pending is not None:
+            pending.result()
+    return rows, skipped, at_edge
+
+
+def _ahead(items: Iterator) -> Iterator:
+    """The items of `items`, each read while the one before is worked on (one thread: a
+    frame's decoding overlaps the last frame's force map)."""
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        nxt = pool.submit(next, items, None)
+        while True:
+            item = nxt.result()
+            if item is None:
+                return
+            nxt = pool.submit(next, items, None)
+            yield item
+
+
+def _force_maps(frames, src: FrameSource, recon, est, ft, args, mm_per_px: float, credit,
+                tmp: Path, rows: list, skipped: list, at_edge: list) -> Iterator:
+    """Each readable frame's force map: its forces.csv row appended to `rows` (the skipped
+    frames' errors to `skipped`, those whose footprint reaches the edge to `at_edge`), its
+    image written into `tmp`; yields ``(i, pressure map (float32))``."""
     for i, frame in frames:
         if isinstance(frame, InputError):
             skipped.append(str(frame))
@@ -157,9 +191,7 @@ def _force_rows(src: FrameSource, picks, recon, est, ft, tmp: Path, args, shape,
         if ft is not None and np.isfinite(t):
             row["ft_fz_n"] = f"{float(np.interp(t, ft[0], ft[1])):.5f}"
         rows.append(row)
-        np.save(tmp / f"{src.frame_stem(i)}_pressure_kpa.npy",
-                np.asarray(fm.pressure_kpa, np.float32))
         if args.images and not args.no_images:
             save_force_image(tmp / f"{src.frame_stem(i)}_force.png", fm, mm_per_px=mm_per_px,
                              frame=frame, title=name, credit=credit)
-    return rows, skipped, at_edge
+        yield i, np.asarray(fm.pressure_kpa, np.float32)
