@@ -19,7 +19,11 @@ press (0.25 s into its hold, the misaligned and the pad-edge press left out; its
   frame through the session's optics); against the F/T log's force (the indenter's and the
   bevel band's, which the frame also shows): what a user gets;
 - ``frame, far field``: the frame's height through the whole-image integration levelled on
-  the gel beyond the contact: the optics' share without the pin.
+  the gel beyond the contact: the optics' share without the pin;
+- ``true, pinned at the layer's level`` and ``frame, pinned at the layer's level``: the two
+  pinned maps raised over the contact region by the level the force model itself puts on
+  the region's edge (:func:`layer_level`): the pin's share removed by the model, not by
+  the truth.
 
 E, nu and beta from ``--fit`` (default ``out/calibration/fit.json``, the README's first
 command), else the truth's E and nu with beta 0.82. Printed per depth: the median ratio of
@@ -34,6 +38,7 @@ import argparse
 import json
 from pathlib import Path
 
+import cv2
 import numpy as np
 
 from tactilevision.fem import ForceEstimator, press_profile
@@ -46,7 +51,39 @@ from tactilevision.optics import (
 
 ROOT = Path(__file__).resolve().parents[1]
 SESSION = ROOT / "sample_frames" / "gelsight_session"
-MAPS = ("true", "true, pinned", "frame, pinned", "frame, far field")
+MAPS = ("true", "true, pinned", "frame, pinned", "frame, far field",
+        "true, pinned at the layer's level", "frame, pinned at the layer's level")
+#: The ring just outside the contact region on which :func:`layer_level` reads the model's
+#: surface: the region dilated by this disc, less the region (3 px wide).
+_RING = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (7, 7))
+
+
+def layer_level(est0: ForceEstimator, z: np.ndarray, region: np.ndarray,
+                iters: int = 8) -> float:
+    """The level c at the contact region's edge that the linear layer model itself puts
+    there, mm: the height map `z` (zero outside `region`, as the contact-pinned
+    integration gives it) raised by c over the region, solved for the footprint's traction
+    (`est0`: 'footprint', every pixel, no beta), and the model's surface displacement from
+    that traction read on the ring just outside the region (median); c is set to it until
+    it moves by under 0.01 um (a fixed point: the edge where the model says it lies). A
+    pinned height lifts the face by the sink-in the gel still has at the region's edge
+    (or lowers it by the rise beyond it): c is the model's estimate of it."""
+    op = est0._op
+    H, W = z.shape
+    Hf, Wf = op.fshape
+    ring = cv2.dilate(region.view(np.uint8), _RING).view(bool) & ~region
+    c = 0.0
+    for _ in range(iters):
+        fm = est0((z + c * region).astype(np.float32))
+        t = np.zeros((Hf, Wf, 1), np.float32)
+        t[:H, :W, 0] = fm.forces_n[..., 2] / op.node_area_mm2
+        u = op._apply32(op.C32, t)[:H, :W, 0]
+        new = float(np.median(u[ring]))
+        done = abs(new - c) < 1e-5
+        c = new
+        if done:
+            break
+    return c
 
 
 def material(fit: Path | None, truth: dict) -> tuple[float, float, float, str]:
@@ -71,6 +108,8 @@ def rows(fit: Path | None) -> tuple[list[dict], str, object]:
                                           / h))
     est = ForceEstimator(shape, mm, thickness_mm=h, E_mpa=E, nu=nu, contact="footprint",
                          beta=beta)
+    est0 = ForceEstimator(shape, mm, thickness_mm=h, E_mpa=E, nu=nu, contact="footprint",
+                          beta=0.0, binning=1)
     pinned = DepthReconstructor(cal, reference=s.reference, boundary="contact")
     far = DepthReconstructor(cal, reference=s.reference, level="far_field")
     t_frames = s.frame_times_s + float(truth["clock_offset_s"])
@@ -87,9 +126,15 @@ def rows(fit: Path | None) -> tuple[list[dict], str, object]:
                 "true, pinned": np.asarray(integrate_poisson_masked(gx, gy, mask), np.float64),
                 "frame, pinned": np.asarray(pinned(frame), np.float64),
                 "frame, far field": np.asarray(far(frame), np.float64)}
+        ring = cv2.dilate(mask.view(np.uint8), _RING).view(bool) & ~mask
+        r = {"w0": p["w0_mm"], "depth": p["depth_mm"],
+             "ring true": float(np.median(true[ring]))}
+        for name in ("true", "frame"):
+            c = layer_level(est0, maps[f"{name}, pinned"], mask)
+            maps[f"{name}, pinned at the layer's level"] = maps[f"{name}, pinned"] + c * mask
+            r[f"level {name}"] = c
         face = true >= 0.999 * p["depth_mm"]            # the indenter's face (float32 map)
         ft = p["force_n"] + p["bevel_force_n"]
-        r = {"w0": p["w0_mm"], "depth": p["depth_mm"]}
         for name, z in maps.items():
             fz = float(est(z).total_n[2])
             r[name] = fz / (p["force_n"] if name.startswith("true") else ft)
@@ -100,8 +145,10 @@ def rows(fit: Path | None) -> tuple[list[dict], str, object]:
 
 def by_depth(got: list[dict]) -> list[dict]:
     """Per w0, over the presses of :func:`rows`: ``{"w0", "n", <map>: (median, lo, hi),
-    "face <map>": median}`` for the four maps of :data:`MAPS` (the face depths of the last
-    three)."""
+    "face <map>": median, "within5": {<map>: presses within 5 %}}`` for the maps of
+    :data:`MAPS` (the face depths of all but the first), and the medians of the true
+    surface on the region's edge ("ring true") and of the layer's levels there ("level
+    true", "level frame"), mm."""
     out = []
     for w0 in sorted({r["w0"] for r in got}):
         sub = [r for r in got if r["w0"] == w0]
@@ -111,6 +158,9 @@ def by_depth(got: list[dict]) -> list[dict]:
             d[m] = (float(np.median(v)), float(v.min()), float(v.max()))
         for m in MAPS[1:]:
             d[f"face {m}"] = float(np.median([r[f"face {m}"] for r in sub]))
+        for k in ("ring true", "level true", "level frame"):
+            d[k] = float(np.median([r[k] for r in sub]))
+        d["within5"] = {m: int(sum(abs(r[m] - 1) <= 0.05 for r in sub)) for m in MAPS}
         out.append(d)
     return out
 
