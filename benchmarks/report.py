@@ -1454,9 +1454,9 @@ def _forces_decompose(quick: bool) -> Result:
                    "error; on the frames it leaves the optics' own error, which the pin "
                    f"had partly cancelled: presses within 5 % of the F/T log "
                    f"{within['frame, pinned']} of {n_all} pinned at zero, "
-                   f"{within[at_level]} of {n_all} at the layer's level. Not the command's default: it takes "
-                   "the footprint's solve again until the level settles (two to eight "
-                   "times)."),
+                   f"{within[at_level]} of {n_all} at the layer's level. Not the command's "
+                   "default: it takes the footprint's solve again until the level settles "
+                   "(two to eight times)."),
         Table("The true surface beyond the sink-in",
               ["w0 (mm)", "largest rise (um)", "at r (mm from the axis)", "rise at 9 mm (um)"],
               rise,
