@@ -31,22 +31,25 @@ def session():
     return read_session(SESSION)
 
 
-@pytest.mark.parametrize("source", ["lut", "mlp_order1"])
-def test_a_window_looks_up_what_the_whole_frame_does_there(session, source):
+@pytest.mark.parametrize("source, kernel", [("lut", "numpy"), ("mlp_order1", "numpy"),
+                                            ("mlp_order1", "numba")])
+def test_a_window_looks_up_what_the_whole_frame_does_there(session, source, kernel):
+    if kernel == "numba":
+        pytest.importorskip("numba", reason="the compiled first-order kernel needs numba")
     if source == "lut":
         cal = PhotometricCalibration.load(SESSION / "optics.npz")
         recon = DepthReconstructor(cal, reference=session.reference)
-    else:           # a network's first-order table, read by numpy's whole-image operations
+    else:           # a network's first-order table, numpy's whole-image operations or numba's
         cal = PhotometricCalibration.load(CALIBRATION)
         recon = DepthReconstructor(cal, reference=session.reference, table_order=1,
-                                   kernel="numpy")
+                                   kernel=kernel)
     frame = session.frame(40)
     gx, gy = recon.gradients(frame)
     H, W = recon.shape
     for window in ((0, H, 0, W), (100, 260, 37, 301), (400, H, 0, 90), (0, 1, W - 1, W)):
         r0, r1, c0, c1 = window
         wx, wy = recon._table.gradients(frame, normalise_gain=cal.normalise_gain,
-                                        kernel="numpy", window=window)
+                                        kernel=kernel, window=window)
         assert wx.shape == (r1 - r0, c1 - c0)
         np.testing.assert_array_equal(wx, gx[r0:r1, c0:c1])
         np.testing.assert_array_equal(wy, gy[r0:r1, c0:c1])
