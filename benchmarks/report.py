@@ -966,19 +966,25 @@ def _ball_sessions_drawn(quick: bool) -> Result:
         caps.append([f"Hertz's surface, w = {w:g} mm, its true circle", 1,
                      f"{got.ratio[0]:.3f}", "", f"{got.depth_mm[0] / w:.3f}"])
     with tempfile.TemporaryDirectory(prefix="tv-report-") as tmp:
-        make_ball_session(Path(tmp) / "ball", radius_mm=2.0, E_mpa=1.0, thickness_mm=100.0,
-                          ft_bias_n=0.04)
-        make_dead_weight_session(Path(tmp) / "weights", (0.02, 0.05, 0.1, 0.15, 0.2),
-                                 repeats=3, E_mpa=1.0, seed=1)
-        for label, cal in (
+        schedule = make_ball_session(Path(tmp) / "ball", radius_mm=2.0, E_mpa=1.0,
+                                     thickness_mm=100.0, ft_bias_n=0.04)
+        weights_w = make_dead_weight_session(Path(tmp) / "weights", (0.02, 0.05, 0.1, 0.15, 0.2),
+                                             repeats=3, E_mpa=1.0, seed=1)
+        for label, cal, true_w in (
                 ("ball session, 8 presses", calibrate_ball_session(Path(tmp) / "ball", nu=0.5,
-                                                                   law="linear")),
+                                                                   law="linear"),
+                 np.asarray(schedule.depth_mm, np.float64)),
                 ("dead weights, 15 frames", calibrate_dead_weights(Path(tmp) / "weights",
-                                                                   nu=0.5, law="linear"))):
+                                                                   nu=0.5, law="linear"),
+                 weights_w)):
             lo, hi = cal.fit.E_ci95_mpa
+            d = cal.depths
+            bound = d.depth_shared_mm + 2 * d.depth_std_mm
+            inside = (f"{int(np.sum(np.abs(d.depth_mm - true_w) < bound))} of {true_w.size}"
+                      if d.depth_mm.shape == true_w.shape else "–")
             rows.append([label, f"{cal.fit.n_presses} of {cal.fit.n_presses + len(cal.rejected)}",
                          f"{cal.fit.E_mpa:.3f}", f"[{lo:.3f}, {hi:.3f}]",
-                         "yes" if lo <= 1.0 <= hi else "no",
+                         "yes" if lo <= 1.0 <= hi else "no", inside,
                          "; ".join(n for n in cal.fit.notes if n.startswith("warning"))
                          or "none"])
         shipped = calibrate_ball_session(Path(tmp) / "ball", nu=0.5, law="linear",
@@ -993,7 +999,10 @@ def _ball_sessions_drawn(quick: bool) -> Result:
     held = sum(r[4] == "yes" for r in rows)
     return Result([Table("E from the frames", ["session", "presses fitted", "E (MPa)",
                                                "95 % interval (MPa)", "holds 1 MPa",
-                                               "warnings"], rows),
+                                               "depths within their bounds", "warnings"],
+                         rows,
+                         note="A depth within its bounds: off the truth by less than its "
+                              "shared bound plus two of its own sds."),
                    Table("The height map's cap against the circles",
                          ["height maps", "presses", "cap / what the circle predicts: median",
                           "range", "depth the cap reads / the depth"], caps,
