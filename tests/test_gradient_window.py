@@ -62,13 +62,15 @@ def _whole_frame(recon: DepthReconstructor) -> DepthReconstructor:
     return recon
 
 
-@pytest.mark.parametrize("binning", [1, 3, "auto"])
-def test_the_contact_heights_from_the_window_are_the_whole_frames(session, binning):
+@pytest.mark.parametrize("binning, flat", [(1, False), (3, False), ("auto", False),
+                                           (1, True)])
+def test_the_contact_heights_from_the_window_are_the_whole_frames(session, binning, flat):
+    """(`flat`: the optics model's gradient on the reference subtracted, over the window.)"""
     cal = PhotometricCalibration.load(SESSION / "optics.npz")
-    win = DepthReconstructor(cal, reference=session.reference, boundary="contact",
-                             binning=binning)
-    whole = _whole_frame(DepthReconstructor(cal, reference=session.reference,
-                                            boundary="contact", binning=binning))
+    kw = dict(reference=session.reference, boundary="contact", binning=binning,
+              flat_reference=flat)
+    win = DepthReconstructor(cal, **kw)
+    whole = _whole_frame(DepthReconstructor(cal, **kw))
     for i in FRAMES:
         frame = session.frame(i)
         a, b = win(frame), whole(frame)
