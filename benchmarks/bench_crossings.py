@@ -99,13 +99,15 @@ def plan_sizes(spec: SessionSpec, truth: dict, k: float, folder: Path | None = N
 
 def one(work: Path, seed: int, fps: float, at_rules_out: float | None = None,
         at_plan: float | None = None, spiral: bool = False, kinds: tuple[str, ...] = KINDS,
-        step_after: float | None = None
+        step_after: float | None = None, record: dict | None = None
         ) -> dict[str, tuple[str | None, str | None, tuple[str, ...]]]:
     """The verdict, the crossings' finding and the verdict's equivalent effects of each
     kind on one generated session (with
     `at_rules_out`, each kind at that many times what the null table's crossing forces
     rule out: :func:`bench_loop.rules_out_sizes`; with `step_after`, the damage's step
-    after that press number, sized at its place)."""
+    after that press number, sized at its place). `record`: a dict that receives the
+    sizes, ``"plan"`` (with `at_plan`) and ``"own"`` (what the null table's crossing forces
+    rule out, times the same factor), each by kind."""
     folder = work / "s"
     spec = SessionSpec(E_mpa=0.2, nu=0.48, block=GaugeBlock(bevel_angle_deg=0.0), repeats=4,
                        fps=fps, overshoot_mm=(0.005, 0.06), seed=seed)
@@ -144,12 +146,35 @@ def one(work: Path, seed: int, fps: float, at_rules_out: float | None = None,
                                   at_rules_out or at_plan, step_after)
             if at_plan is None:
                 sizes = own
+            if record is not None:
+                record["own"] = dict(own)
+                if at_plan is not None:
+                    record["plan"] = dict(sizes)
             print(f"seed {seed} sizes (gradient /mm, fall over the session, step): "
                   + ("plan " + ", ".join(f"{sizes[k]:.4f}" for k in KINDS[1:]) + "; "
                      if at_plan is not None else "")
                   + "the null table's own " + ", ".join(f"{own[k]:.4f}" for k in KINDS[1:]),
                   flush=True)
     return out
+
+
+def at_plan_sessions(seeds: int, first_seed: int, at_plan: float = 1.0, fps: float = 15.0
+                     ) -> list[dict]:
+    """Each seed's session with every kind at `at_plan` times the sizes ``plan`` gives its
+    design (:func:`one`): ``[{"seed", "right": {kind: (verdict right, named itself,
+    crossings right)}, "plan", "own"}]``."""
+    rows = []
+    for seed in range(first_seed, first_seed + seeds):
+        work = Path(tempfile.mkdtemp(prefix="bench_crossings_"))
+        record: dict = {}
+        try:
+            res = one(work, seed, fps, at_plan=at_plan, record=record)
+        finally:
+            shutil.rmtree(work, ignore_errors=True)
+        rows.append({"seed": seed, "plan": record.get("plan", {}), "own": record.get("own", {}),
+                     "right": {k: (right(k, v, eq), right(k, v), right(k, c))
+                               for k, (v, c, eq) in res.items()}})
+    return rows
 
 
 def main() -> int:
