@@ -667,11 +667,12 @@ def _mixed_solve(compliance, stiffness, u: np.ndarray, mask: np.ndarray, *,
     frames (``benchmarks/bench_forces_default.py --sweeps``) 14 iterations a
     frame instead of 20 with every sweep at 1e-5, the maps within 0.26 % of
     their peak; the rule before this one (pulling pixels dropped, never taken
-    back, every sweep to 1e-5) read within 0.31 % of this answer in 23. A
-    `sweep_tol` of 1e-3 against 1e-4: on every 4th frame of that session the
-    solves took 11.8 iterations instead of 16.3 (mean; 7.3 instead of 9.6 on 60
-    consecutive frames, warm-started), the maps within 0.28 % of their peak
-    and the totals within 7.4e-6 of 1e-4's (issue 85's tolerance: 1 % and 0.5 %).
+    back, every sweep to 1e-5) read within 0.31 % of this answer in 23. With
+    `sweep_tol` 1e-3 (the same bench, 60 consecutive frames on every pixel): 10
+    iterations a frame (median) against 14 at 1e-4 and 20 with every sweep at
+    1e-5; the maps within 0.11 % of their peak of every sweep at 1e-5 (median),
+    on one frame of 38 1.7 %, where a single pixel at the contact's edge
+    changes sides; the totals within 1.2e-5.
     `tol` 1e-5 moves the totals of the sample session's punch presses by under
     3e-6 N against 1e-8. `t0`, u's shape: the first guess (a previous frame's
     traction), its pushing pixels the first active set, used while its
