@@ -87,6 +87,7 @@ class GradientTable:
         self._weights = np.array([[b * b, b, 1]], np.float32)
         self._single_cell = not np.any(self.cell_offset)
         self._rows = None
+        self._kernel_in: tuple = ()
         if self.slopes is not None:
             # one gather of 32 bytes a pixel: the eight values of its row at once
             rows = np.ascontiguousarray(self.slopes, dtype=np.float32)
@@ -146,8 +147,7 @@ class GradientTable:
             gain = channel_medians(blurred[::8, ::8].reshape(-1, 3) * self._sub_ref_inv)
         else:
             gain = np.ones(3, np.float32)
-        scale_map, cell_offset = self._scale_map, self.cell_offset
-        kernel_in = getattr(self, "_kernel_in", ())          # a first-order table's
+        scale_map, cell_offset, kernel_in = self._scale_map, self.cell_offset, self._kernel_in
         if window is not None:
             r0, r1, c0, c1 = (int(v) for v in window)
             blurred = blurred[r0:r1, c0:c1]
