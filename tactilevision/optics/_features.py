@@ -105,7 +105,7 @@ def median_last_axis(x: np.ndarray) -> np.ndarray:
     largest value before it: the same two values and the same mean as numpy's partition
     at both middles at once, which runs several times slower on a frame's quantised colour
     change (many equal values); the contact mask's cost fell from 0.9 to 0.6 bare height
-    maps with it and the window below (report ``forces_default``).
+    maps with it (report ``forces_default``).
     """
     n = x.shape[-1]
     x.partition(n // 2, axis=-1)
