@@ -12,7 +12,7 @@ import pytest
 from _data import load_benchmark, plan_sessions
 
 import tactilevision
-from tactilevision import InputError
+from tactilevision import InputError, InputWarning
 from tactilevision.cli import main
 from tactilevision.planning import (
     Design,
@@ -200,6 +200,35 @@ def test_design_from_a_calibration_folder_round_trips(tmp_path, capsys):
     assert main(["plan", "--from-calibration", str(tmp_path)]) == 2
     assert "fit.json" in capsys.readouterr().err
     assert main(["plan"]) == 2
+
+
+def test_a_fit_at_the_relations_top_is_planned_at_the_fem_tables_edge(tmp_path, capsys):
+    """A fit whose nu lies past the FEM table's 0.499 (the paper's relation reaches 0.5)
+    is planned at 0.499 with a warning naming fit.json and both values, not refused (the
+    FEM's kappa_n refuses nu = 0.4996); one inside the table is kept as it is."""
+    cal = tmp_path / "cal"
+    cal.mkdir()
+    rows = ["depth_mm,overshoot_mm,force_n,force_std_n"]
+    for w0 in (0.15, 0.30, 0.45):
+        rows += [f"{w0 + 0.02:.6f},0.020000,1.0,0.010"] * 4
+    (cal / "measurements.csv").write_text("\n".join(rows) + "\n")
+
+    def fit(nu: float) -> None:
+        (cal / "fit.json").write_text(json.dumps({"E_mpa": 0.25, "nu": nu,
+                                                  "thickness_mm": 3.0, "radius_mm": 3.6}))
+
+    fit(0.4996)
+    with pytest.warns(InputWarning, match=r"fit\.json: nu = 0\.4996 lies outside the FEM "
+                                          r"table's 0\.3 to 0\.499.*planned at 0\.499"):
+        d = design_from_calibration(cal)
+    assert d.nu == 0.499
+    assert main(["plan", "--from-calibration", str(cal)]) == 0
+    out = capsys.readouterr()
+    assert "E: sd" in out.out and "nu = 0.4996 lies outside" in out.err
+    fit(0.46)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert design_from_calibration(cal).nu == 0.46
 
 
 def test_the_vernier_threshold_is_the_contact_packages():

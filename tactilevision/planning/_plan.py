@@ -36,7 +36,7 @@ from typing import Any
 import numpy as np
 from scipy import stats
 
-from .._checks import InputError
+from .._checks import InputError, InputWarning
 from ..diagnosis import EffectSensitivity
 from ..io import KNOWN_KEYS, read_holds, warn_unknown_keys
 from ..mechanics import (
@@ -45,6 +45,7 @@ from ..mechanics import (
     TAU_MIN_HOLD_FRACTION,
     fit_indentation,
     hold_blocks,
+    kappa_n_nu_range,
     ramp_factor,
     straight_decay,
 )
@@ -594,6 +595,13 @@ def design_from_calibration(folder: str | Path, session: str | Path | None = Non
     ------
     InputError
         A folder without ``fit.json`` or ``measurements.csv``, or a fit without E and nu.
+
+    Warns
+    -----
+    InputWarning
+        A fitted nu outside the FEM table's range (0.30 to 0.499,
+        :func:`~tactilevision.mechanics.kappa_n_nu_range`; the paper's relation, eq. (7),
+        reaches 0.5): planned at the range's nearer end, said so.
     """
     folder = Path(folder)
     try:
@@ -609,6 +617,12 @@ def design_from_calibration(folder: str | Path, session: str | Path | None = Non
     if not (isinstance(E, int | float) and isinstance(nu, int | float)
             and math.isfinite(E) and math.isfinite(nu)):
         raise InputError(f"{folder}/fit.json has no E and nu to plan from")
+    lo, hi = kappa_n_nu_range()
+    if not lo <= nu <= hi:      # the paper's relation reaches 0.5; the FEM forces 0.499
+        warnings.warn(f"{folder}/fit.json: nu = {nu:.6g} lies outside the FEM table's "
+                      f"{lo:g} to {hi:g}, which the plan's forces are read from: planned at "
+                      f"{min(max(nu, lo), hi):g}", InputWarning, stacklevel=2)
+        nu = min(max(float(nu), lo), hi)
 
     def col(name: str) -> np.ndarray:
         return np.array([float(r[name]) if r.get(name) not in (None, "") else np.nan
@@ -620,7 +634,7 @@ def design_from_calibration(folder: str | Path, session: str | Path | None = Non
     kw: dict[str, Any] = dict(
         thickness_mm=float(fit["thickness_mm"]), radius_mm=float(fit["radius_mm"]),
         depths_mm=depths, repeats=max(1, round(len(rows) / max(len(depths), 1))),
-        E_mpa=float(E), nu=min(float(nu), 0.5))
+        E_mpa=float(E), nu=float(nu))
     if np.isfinite(over).any():
         kw["overshoot_um"] = (max(0.0, float(np.nanmin(over)) * 1e3),
                               max(0.0, float(np.nanmax(over)) * 1e3))
