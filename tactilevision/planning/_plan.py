@@ -617,12 +617,6 @@ def design_from_calibration(folder: str | Path, session: str | Path | None = Non
     if not (isinstance(E, int | float) and isinstance(nu, int | float)
             and math.isfinite(E) and math.isfinite(nu)):
         raise InputError(f"{folder}/fit.json has no E and nu to plan from")
-    lo, hi = kappa_n_nu_range()
-    if not lo <= nu <= hi:      # the paper's relation reaches 0.5; the FEM forces 0.499
-        warnings.warn(f"{folder}/fit.json: nu = {nu:.6g} lies outside the FEM table's "
-                      f"{lo:g} to {hi:g}, which the plan's forces are read from: planned at "
-                      f"{min(max(nu, lo), hi):g}", InputWarning, stacklevel=2)
-        nu = min(max(float(nu), lo), hi)
 
     def col(name: str) -> np.ndarray:
         return np.array([float(r[name]) if r.get(name) not in (None, "") else np.nan
@@ -634,7 +628,7 @@ def design_from_calibration(folder: str | Path, session: str | Path | None = Non
     kw: dict[str, Any] = dict(
         thickness_mm=float(fit["thickness_mm"]), radius_mm=float(fit["radius_mm"]),
         depths_mm=depths, repeats=max(1, round(len(rows) / max(len(depths), 1))),
-        E_mpa=float(E), nu=float(nu))
+        E_mpa=float(E), nu=_plannable_nu(float(nu), folder))
     if np.isfinite(over).any():
         kw["overshoot_um"] = (max(0.0, float(np.nanmin(over)) * 1e3),
                               max(0.0, float(np.nanmax(over)) * 1e3))
@@ -689,6 +683,18 @@ def design_from_calibration(folder: str | Path, session: str | Path | None = Non
             kw["repeats"] = len(schedule) // len(depths)
     sem = col("force_w0_sem_n") if rows and "force_w0_sem_n" in rows[0] else None
     return _with_mark_brackets(Design(**kw), w0, sem, fit.get("n_rejected"))
+
+
+def _plannable_nu(nu: float, folder: Path) -> float:
+    """`nu` within the FEM table's range that the plan's forces are read from, with a
+    warning naming ``fit.json`` where it lay outside (the paper's relation reaches 0.5,
+    the table 0.499)."""
+    lo, hi = kappa_n_nu_range()
+    if not lo <= nu <= hi:
+        warnings.warn(f"{folder}/fit.json: nu = {nu:.6g} lies outside the FEM table's "
+                      f"{lo:g} to {hi:g}, which the plan's forces are read from: planned at "
+                      f"{min(max(nu, lo), hi):g}", InputWarning, stacklevel=3)
+    return min(max(nu, lo), hi)
 
 
 def _with_mark_brackets(design: Design, w0: np.ndarray, sem: np.ndarray | None,
