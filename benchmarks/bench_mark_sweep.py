@@ -41,7 +41,9 @@ and whether every press more than 50 um off was refused or warned of; E with its
 interval, whether it holds the truth, its half-width (% of E; and the press scatter's
 alone, before the hull over the shared depth error); where the crossing of w0
 lies in the period that brackets it (:func:`bracket_places`: 0 at the bracket's start,
-1 at its end; the mark rule takes it as uniform over the bracket); calibrate's time
+1 at its end; the mark rule takes it as uniform over the bracket); the frame periods the
+brackets spanned on average as ``plan --from-calibration`` reads them
+(:func:`planned_periods`, against ``[plan] bracket_periods``'s default); calibrate's time
 beside decoding every frame once in the same run (as ``benchmarks/bench_calibrate.py``).
 Then the pooled figures against the issue's targets.
 
@@ -59,16 +61,20 @@ import os
 import re
 import subprocess
 import sys
+import tempfile
 import time
+import warnings
 from collections import Counter
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
 
-from tactilevision import calibrate_session
+from tactilevision import InputError, calibrate_session
 from tactilevision.io import read_session
 from tactilevision.mechanics import beta_relation, kappa
+from tactilevision.pipeline import write_calibration
+from tactilevision.planning import BRACKET_PERIODS, design_from_calibration
 
 ROOT = Path(__file__).resolve().parents[1]
 GENERATOR = ROOT / "benchmarks" / "taxim_gauge_session.py"
@@ -207,6 +213,23 @@ def own_sd(cal) -> np.ndarray:
     return np.sqrt(np.maximum(sd ** 2 - ind ** 2 * (1 - 1 / n), 0.0))
 
 
+def planned_periods(cal, folder: Path) -> float:
+    """The frame periods the session's crossing brackets spanned on average, as ``plan
+    --from-calibration`` reads them (:func:`~tactilevision.planning.design_from_calibration`
+    of the calibration written to a scratch folder: its ``bracket_periods``); NaN for a
+    vernier, or where no design can be read (no E and nu)."""
+    if cal.fit is None or not np.isfinite(cal.fit.E_mpa):
+        return math.nan
+    with tempfile.TemporaryDirectory() as tmp, warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        write_calibration(cal, tmp)
+        try:
+            design = design_from_calibration(tmp, folder)
+        except InputError:
+            return math.nan
+    return float(design.bracket_periods) if design.bevel_angle_deg == 0.0 else math.nan
+
+
 def score(folder: Path, d: dict) -> dict:
     """Calibrate the design's session and score it against its truth (module docstring)."""
     truth = json.loads((folder / "truth.json").read_text())
@@ -273,6 +296,7 @@ def score(folder: Path, d: dict) -> dict:
             (n for n in (f.notes if f is not None else ()) if "not computed" in n),
             "no fit")),
         "bracket_q": bracket_places(cal, tp, truth["clock_offset_s"]),
+        "bracket_periods": planned_periods(cal, folder),
     }
 
 
@@ -328,6 +352,8 @@ def figures(rows: list[dict]) -> dict:
         "q_n": int(q.size), "q_inside": int(np.sum((q >= 0) & (q <= 1))),
         "q_mean": float(q.mean()) if q.size else math.nan,
         "q_deciles": np.histogram(np.clip(q, 0, 1), bins=10, range=(0, 1))[0].tolist(),
+        "periods": [float(v) for r in rows
+                    if np.isfinite(v := r.get("bracket_periods", math.nan))],
         "cal_over_decode": float(np.median([r["calibrate_s"] / r["decode_s"] for r in rows])),
         "cal_s": [float(min(r["calibrate_s"] for r in rows)),
                   float(max(r["calibrate_s"] for r in rows))],
@@ -353,8 +379,9 @@ def print_row(k: int, r: dict) -> None:
           f"{np.std(z):.2f} | {r['stated_median_um']:.1f} | {r['err_max_um']:.0f} "
           f"({len(r['big'])} > {BIG_UM:g}, {len(r['silent_big'])} silent) | "
           f"{r['E']:.4f} [{ci[0]:.4f}, {ci[1]:.4f}] {'yes' if r['E_holds'] else 'NO'}, "
-          f"{r['E_half_pct']:.0f} % | {r['calibrate_s']:.1f} s / {r['decode_s']:.1f} s "
-          f"({r['n_frames']} frames) |", flush=True)
+          f"{r['E_half_pct']:.0f} % | {r.get('bracket_periods', math.nan):.2f} | "
+          f"{r['calibrate_s']:.1f} s / {r['decode_s']:.1f} s ({r['n_frames']} frames) |",
+          flush=True)
 
 
 def summary(rows: list[dict]) -> None:
@@ -387,6 +414,11 @@ def summary(rows: list[dict]) -> None:
               f"{q.size} presses inside; its place (0 start, 1 end) mean {q.mean():.2f}, "
               f"deciles {np.histogram(np.clip(q, 0, 1), bins=10, range=(0, 1))[0].tolist()} "
               "(uniform: the rule's assumption)")
+    periods = figures(rows)["periods"] if rows else []
+    if periods:
+        print(f"the crossing brackets' mean width as plan reads it: {np.mean(periods):.2f} "
+              f"frame periods ({min(periods):.2f} to {max(periods):.2f}, {len(periods)} "
+              f"designs; plan's default {BRACKET_PERIODS:.3g})")
     cal20 = [r["calibrate_s"] / r["decode_s"] for r in rows]
     if cal20:
         print(f"calibrate took {np.median([r['calibrate_s'] for r in rows]):.1f} s median "
@@ -428,8 +460,9 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     print(f"seed {a.seed}; E = {E_TRUE} MPa, nu = {NU_TRUE}; calibrate --beta-table paper")
     print("| k | design | certified | depth error (um): mean, sd | z sd | stated sd median "
-          "(um) | largest error (um) | E [95 %] holds, half-width | calibrate / decode |")
-    print("|---|---|---|---|---|---|---|---|---|")
+          "(um) | largest error (um) | E [95 %] holds, half-width | brackets (frame periods) "
+          "| calibrate / decode |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     rows = run(a.seed, ks, kinds, a.cache, on_row=print_row)
     summary(rows)
     if a.json:

@@ -822,6 +822,8 @@ def _mark_sweep(quick: bool) -> Result:
             f"{r['E_half_pct']:.0f} %" if not r.get("E_refused") else "–",
             f"{r['clock_error_ms']:+.1f}",
             f"{sum(0 <= v <= 1 for v in q)} of {len(q)}, {np.mean(q):.2f}" if q else "–",
+            f"{r['bracket_periods']:.2f}" if np.isfinite(r.get("bracket_periods", np.nan))
+            else "–",
         ])
 
     def pooled(rows: list[dict], bracket: bool) -> list[list[str]]:
@@ -852,7 +854,13 @@ def _mark_sweep(quick: bool) -> Result:
             out += [["the true crossing inside its bracket",
                      f"{f['q_inside']} of {f['q_n']} presses"],
                     ["its place in the bracket (0 start, 1 end): mean; deciles",
-                     f"{f['q_mean']:.2f}; {f['q_deciles']}"]]
+                     f"{f['q_mean']:.2f}; {f['q_deciles']}"],
+                    ["the brackets' mean width as `plan --from-calibration` reads it (frame "
+                     "periods): mean, median, range, designs; `plan`'s default",
+                     (f"{np.mean(f['periods']):.2f}, {np.median(f['periods']):.2f}, "
+                      f"{min(f['periods']):.2f} to {max(f['periods']):.2f}, "
+                      f"{len(f['periods'])}; {b.BRACKET_PERIODS:.3g}") if f["periods"]
+                     else "–"]]
         out.append(["calibrate over decoding every frame once, same run (median)",
                     f"{f['cal_over_decode']:.1f} times ({f['cal_s'][0]:.1f} to "
                     f"{f['cal_s'][1]:.1f} s)"])
@@ -861,7 +869,8 @@ def _mark_sweep(quick: bool) -> Result:
     cols = ["design", "kind", "frames/s", "approach (mm/s)", "travel a frame (um)",
             "certified", "depth error (um): mean, sd", "z sd", "stated sd median (um)",
             "largest error (um)", "E [95 %] (MPa)", "holds 0.2", "half-width",
-            "clock error (ms)", "crossing in bracket: n, mean place"]
+            "clock error (ms)", "crossing in bracket: n, mean place",
+            "brackets (frame periods)"]
     fm = b.figures(marks)
     return Result([
         Table("The marks", ["figure", "value"], pooled(marks, True)),
@@ -873,7 +882,9 @@ def _mark_sweep(quick: bool) -> Result:
                    "over its force window; z: error over the sd the press states (its "
                    "indenter's shared part counted once). The bracket: the frame period "
                    "a mark's press crossed w0 in, by the mark rule, which takes the crossing "
-                   "as uniform over it."),
+                   "as uniform over it; brackets: the frame periods they spanned on average, "
+                   "as `plan --from-calibration` reads them "
+                   "(`tactilevision.planning.measured_bracket_periods`, at least 1)."),
     ], summary=f"Marks: {fm['depth_ok']} of {fm['designs']} designs with certified depths "
                f"within +-5 um (sd at most 10 um) or none certified ({fm['all_bounded']}); "
                f"E held the truth on {fm['E_holds']} and was not "
