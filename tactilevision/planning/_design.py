@@ -38,6 +38,7 @@ __all__ = [
     "hold_lengths",
     "planned_columns",
     "press_indenters",
+    "press_times",
     "read_design",
     "read_schedule",
     "untestable_effects",
@@ -637,11 +638,30 @@ def hold_lengths(d: Design, n: int) -> np.ndarray:
     return holds[np.arange(n) % holds.size]
 
 
+def press_times(d: Design, indenters: np.ndarray) -> np.ndarray:
+    """(N,) float64 each press's time, s, for presses on `indenters` (indices into
+    ``depths_mm``) in that order: each press follows the last after its rest (``wait_s``,
+    from the last release), its approach (``approach_s``, or the depth ``w0 + o`` at
+    ``stage_speed_mm_s``, o the middle of ``overshoot_um``) and its hold. The stage's
+    retreat is not counted (no key gives it): a session whose stage retreats slowly runs
+    longer, and sees a change with time more easily, than planned."""
+    ind = np.asarray(indenters, np.int64)
+    n = ind.size
+    if d.approach_s is not None:
+        approach = np.full(n, float(d.approach_s))
+    else:
+        over = 0.5e-3 * (float(d.overshoot_um[0]) + float(d.overshoot_um[1]))
+        approach = (np.asarray(d.depths_mm, np.float64)[ind] + over) / float(d.stage_speed_mm_s)
+    waits = np.asarray(d.waits_s, np.float64)[np.arange(n) % len(d.waits_s)]
+    return np.cumsum(waits + approach + hold_lengths(d, n))
+
+
 def planned_columns(d: Design) -> dict[str, np.ndarray]:
     """The measurements table a session of the design will write, but its forces (formats.md
     §2 columns): each depth's ``repeats`` presses in turn (or the ``schedule``'s
     presses), the holds (``hold_s``: half the window with ``window_at = 'start'``, the
-    hold less half the window with ``'end'``), the rests, the press times, the days and
+    hold less half the window with ``'end'``), the rests, the press times
+    (:func:`press_times`), the days and
     the positions on the pad (the ``schedule``'s, else a spiral's); the
     tangential forces ``fx_n``, ``fy_n`` only as varying columns (an F/T sensor always
     records them).
@@ -666,7 +686,7 @@ def planned_columns(d: Design) -> dict[str, np.ndarray]:
     return {
         "press": i.astype(np.float64), "depth_mm": w,
         "hold_s": np.full(n, half) if d.window_at == "start" else hold - half,
-        "wait_s": waits, "time_s": np.cumsum(waits + hold),
+        "wait_s": waits, "time_s": press_times(d, press_indenters(d)),
         "day": np.floor(i * d.days / n), "x_mm": x, "y_mm": y, "fx_n": np.cos(i),
         "fy_n": np.sin(i),
     }

@@ -34,6 +34,7 @@ from ._design import (
     indenter_speeds,
     planned_columns,
     press_indenters,
+    press_times,
     untestable_effects,
 )
 
@@ -143,7 +144,8 @@ def crossing_table(design: Design) -> dict[str, np.ndarray]:
     periods = press_bracket_periods(float(design.bracket_periods), n)
     width = unit[ind] * periods + 4.0 * avg
     return {"indenter": ind.astype(np.float64), "press": np.arange(n, dtype=np.float64),
-            "time_s": cols["time_s"][:n], "x_mm": cols["x_mm"][:n], "y_mm": cols["y_mm"][:n],
+            "time_s": press_times(design, ind), "x_mm": cols["x_mm"][:n],
+            "y_mm": cols["y_mm"][:n],
             "force_w0_n": p0[ind], "force_w0_sem_n": width / math.sqrt(12.0)}
 
 
