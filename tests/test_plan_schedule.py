@@ -60,15 +60,15 @@ def test_the_schedule_sets_the_presses_order_indenters_and_places():
 
 
 def test_crossing_brackets_span_the_periods_the_mark_rule_gives():
-    """By default a drawn mark's crossing bracket spans one frame period on three presses in
-    four and two on the fourth, press by press in turn (BRACKET_PERIODS 1.25: the mark
-    rule's brackets on Taxim's designs, 1.0 to 1.4 periods): without F/T noise, each press's
+    """By default a drawn mark's crossing bracket spans one frame period and two in turn,
+    press by press (BRACKET_PERIODS 1.5: the mark rule's brackets on Taxim's designs, 1.0
+    to 1.7 periods): without F/T noise, each press's
     width over its periods is one frame's travel (0.1 mm/s at 15 frames/s) times dP/dw at
     its indenter's w0, the same for all of an indenter's presses and growing with w0."""
     tab = crossing_table(replace(MARK, force_noise_n=0.0))
     width = tab["force_w0_sem_n"] * np.sqrt(12.0)
     periods = press_bracket_periods(BRACKET_PERIODS, width.size)
-    np.testing.assert_array_equal(periods, np.resize([1.0, 1.0, 1.0, 2.0], width.size))
+    np.testing.assert_array_equal(periods, np.resize([1.0, 2.0], width.size))
     ind = tab["indenter"].astype(int)
     unit = width / periods
     per_indenter = []

@@ -47,8 +47,8 @@ __all__ = ["LOST_SESSIONS", "SESSION_SEED", "crossing_effect_sizes", "crossing_o
 def press_bracket_periods(mean: float, n: int) -> np.ndarray:
     """The frame periods each of `n` presses' crossing brackets spans, in press order,
     averaging `mean` (:attr:`Design.bracket_periods`): ``floor(mean)``, plus one on a
-    share ``mean - floor(mean)`` of the presses spread evenly over them (1, 1, 1, 2 in
-    turn for 1.25; every press 2 for 2).
+    share ``mean - floor(mean)`` of the presses spread evenly over them (1, 2 in turn
+    for 1.5; every press 2 for 2).
 
     Returns
     -------
@@ -126,8 +126,8 @@ def crossing_table(design: Design) -> dict[str, np.ndarray]:
     speed, :func:`indenter_speeds`) times dP/dw at w0 (the FEM's) times the periods,
     widened by four times the noise of its 10 ms average of the F/T; the stated sd is
     the bracket's width over sqrt(12) (a uniform crossing). The presses' periods average
-    the design's ``bracket_periods`` (:func:`press_bracket_periods`: 1, 1, 1, 2 in turn
-    by default).
+    the design's ``bracket_periods`` (:func:`press_bracket_periods`: 1, 2 in turn by
+    default).
 
     Returns
     -------
