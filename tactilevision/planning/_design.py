@@ -67,9 +67,10 @@ RESOLVED_PX = 10.0
 #: --kinds mark-shadow mark-plain``, its "brackets" column); over designs 0 to 11 of seed
 #: 10039 (``--seed 10039 --designs 12``) 1.00 to 1.70, mean 1.23, the widest without the
 #: renderer's shadows; a generated 15 frames/s session (seed 8600) 1.13. 1.5 here, at or
-#: above 29 of those 32 designs: a plan's crossing-force sizes err large rather than small
+#: above 30 of those 32 designs: a plan's crossing-force sizes err large rather than small
 #: on a session it has not seen (1 and 2 periods in turn). Judged on designs drawn after it
-#: was set: seed 10039's designs 12 to 19 and report ``plan_crossings``.
+#: was set: seed 10039's designs 12 to 19 (``--seed 10039 --first 12 --designs 8``) spanned
+#: 1.02 to 1.22, 8 of 8 within it; report ``plan_crossings``.
 BRACKET_PERIODS = 1.5
 
 #: nu's physical range as this project's beta tables hold it: a sigma of nu beyond a
