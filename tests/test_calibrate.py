@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tactilevision import InputError, calibrate_session
+from tactilevision import InputError, InputWarning, calibrate_session
 from tactilevision.cli import main
 from tactilevision.contact import certify_session
 from tactilevision.io import COLUMN_ORDER, read_measurements, read_presses, read_session
@@ -690,6 +690,26 @@ def test_calibrate_writes_the_sessions_design(sample_run):
     rows = read_presses(SAMPLE / "presses.csv", 5)
     assert d.schedule == tuple((int(i), float(x), float(y)) for i, x, y in zip(
         rows["indenter"], rows["x_mm"], rows["y_mm"], strict=True))
+
+
+def test_a_fit_past_the_fem_tables_nu_still_writes_its_design(sample_run, tmp_path):
+    """A fit whose nu lies past the FEM table's 0.499 (the paper's relation reaches 0.5)
+    still writes design.toml, planned at 0.499, with a warning naming design.toml, not the
+    staging folder the calibration was written through."""
+    from tactilevision.io import StagedOutput
+    from tactilevision.pipeline import CalibrationResult
+    from tactilevision.planning import read_design
+
+    out, _ = sample_run
+    res = CalibrationResult.load(out / "report")
+    res = replace(res, fit={**res.fit, "nu": 0.4996})
+    with pytest.warns(InputWarning) as said, StagedOutput(tmp_path / "cal") as stage:
+        res.save(stage.path)            # as write_calibration writes it
+        stage.commit()
+    text = [str(w.message) for w in said if "0.4996" in str(w.message)]
+    assert text == ["design.toml: the fit's nu = 0.4996 lies outside the FEM table's 0.3 to "
+                    "0.499, which the plan's forces are read from: planned at 0.499"]
+    assert read_design(tmp_path / "cal" / "design.toml").nu == 0.499
 
 
 @pytest.mark.parametrize("delta_mm", [0.015, -0.015])

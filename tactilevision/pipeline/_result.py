@@ -271,10 +271,16 @@ class CalibrationResult:
                 if self.measurements is not None and _has_material(self.fit):
                     # the session's design, to plan the next one from (tactilevision plan)
                     try:
-                        design = design_toml(design_from_calibration(folder))
+                        with warnings.catch_warnings(record=True) as said:
+                            warnings.simplefilter("always")
+                            design = design_toml(design_from_calibration(folder))
                     except InputError as exc:       # the calibration itself stands
                         warnings.warn(f"no design.toml: {exc}", stacklevel=2)
                     else:
+                        for w in said:      # a staging folder's path: the file the user gets
+                            warnings.warn(str(w.message).replace(
+                                f"{folder}/fit.json: ", "design.toml: the fit's "),
+                                w.category, stacklevel=2)
                         (folder / "design.toml").write_text(design, encoding="utf-8")
                         written.append("design.toml")
         except OSError as exc:
