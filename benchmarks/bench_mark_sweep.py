@@ -222,7 +222,7 @@ def planned_periods(cal, folder: Path) -> float:
         return math.nan
     with tempfile.TemporaryDirectory() as tmp, warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        write_calibration(cal, tmp)
+        write_calibration(cal, tmp, report=False)   # the tables: no figures
         try:
             design = design_from_calibration(tmp, folder)
         except InputError:
