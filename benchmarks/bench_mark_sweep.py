@@ -36,7 +36,10 @@ others fitted but only bounded, which calibrate names with the reason), refused 
 reasons; "flagged": refused once their depth was read, by the second reading or past the
 gauge's reach); the certified depths' error (mean, sd, um), their z-scores (error over
 the press's own stated sd, :func:`own_sd`; also over every press fitted, the bounded
-ones too), the stated sd's median; the largest error
+ones too), the stated sd's median; the sd of the certified depths' mean that the presses' own
+stated errors give (:func:`mean_sd`: an indenter's presses share its P(w0)'s error) and so
+the chance that it lies outside +-5 um, summed over the designs: the misses a design's
+own statement expects; the largest error
 and whether every press more than 50 um off was refused or warned of; E with its 95 %
 interval, whether it holds the truth, its half-width (% of E; and the press scatter's
 alone, before the hull over the shared depth error); where the crossing of w0
@@ -213,6 +216,39 @@ def own_sd(cal) -> np.ndarray:
     return np.sqrt(np.maximum(sd ** 2 - ind ** 2 * (1 - 1 / n), 0.0))
 
 
+def mean_sd(cal, within: np.ndarray) -> float:
+    """The sd of the certified depths' mean that their own stated errors give, mm: each
+    indenter's shared part (its P(w0)'s error, :func:`own_sd`'s ``depth_indenter_std_mm``
+    over sqrt(n)) adding up over its certified presses, each press's remaining own part
+    independently, and the bound every press shares (the clock and dP/dw, read back from
+    ``depth_half95_mm``: :func:`~tactilevision.pipeline.depth_half95` takes it as a
+    uniform's) whole; NaN with none certified."""
+    ps = cal.certification.presses
+    if not np.any(within):
+        return math.nan
+    own = own_sd(cal)
+    ind = np.asarray(cal.depth_indenter_std_mm, np.float64)
+    g = np.array([p.indenter for p in ps])
+    n = np.array([np.sum(g == k) for k in g], np.float64)
+    group = ind / np.sqrt(n) if ind.shape == own.shape else np.zeros_like(own)
+    half95 = np.asarray(cal.depth_half95_mm, np.float64)
+    shared = (np.sqrt(np.maximum((half95 / 1.96) ** 2 - own ** 2, 0.0))
+              if half95.shape == own.shape else np.zeros_like(own))
+    m = int(within.sum())
+    var = float(np.sum((own[within] ** 2 - group[within] ** 2).clip(0.0))) / m ** 2
+    for k in np.unique(g[within]):
+        sel = within & (g == k)
+        var += (sel.sum() / m) ** 2 * float(np.max(group[sel])) ** 2
+    return math.sqrt(var + float(np.median(shared[within])) ** 2)
+
+
+def p_outside(sd_um: float, bound_um: float = 5.0) -> float:
+    """The chance that a normal error of sd `sd_um` lies outside +-`bound_um`."""
+    if not np.isfinite(sd_um):
+        return 0.0
+    return math.erfc(bound_um / (sd_um * math.sqrt(2.0))) if sd_um > 0 else 0.0
+
+
 def planned_periods(cal, folder: Path) -> float:
     """The frame periods the session's crossing brackets spanned on average, as ``plan
     --from-calibration`` reads them (:func:`~tactilevision.planning.design_from_calibration`
@@ -272,6 +308,7 @@ def score(folder: Path, d: dict) -> dict:
     ek, sk = err[within], sd[within]
     z = ek / np.where(sk > 0, sk, np.nan)
     z_all = err / np.where(sd > 0, sd, np.nan)
+    msd = 1e3 * mean_sd(cal, within)
     return {
         "design": d, "folder": str(folder), "n_presses": len(truth["presses"]),
         "certified": int(within.sum()), "bounded": len(bounded), "fitted": len(ps),
@@ -281,6 +318,7 @@ def score(folder: Path, d: dict) -> dict:
         "err_sd_um": float(ek.std(ddof=1)) if ek.size > 1 else math.nan,
         "err_max_um": float(np.max(np.abs(err))) if err.size else math.nan,
         "stated_median_um": float(np.median(sk)) if sk.size else math.nan,
+        "mean_sd_um": msd, "p_mean_outside": p_outside(msd),
         "z": [float(v) for v in z if np.isfinite(v)],
         "z_all": [float(v) for v in z_all if np.isfinite(v)],
         "big": big, "silent_big": silent,
@@ -348,6 +386,10 @@ def figures(rows: list[dict]) -> dict:
         "E_scatter_narrow": int(sum(r.get("E_scatter_half_pct", math.nan) <= 20
                                     for r in rows)),
         "silent": int(sum(len(r["silent_big"]) for r in rows)),
+        "mean_outside": int(sum(r["certified"] > 0 and abs(r["err_mean_um"]) > 5
+                                for r in rows)),
+        "mean_outside_expected": float(sum(r.get("p_mean_outside", math.nan)
+                                           for r in rows)),
         "largest_um": float(max(r["err_max_um"] for r in rows)),
         "q_n": int(q.size), "q_inside": int(np.sum((q >= 0) & (q <= 1))),
         "q_mean": float(q.mean()) if q.size else math.nan,
@@ -400,6 +442,11 @@ def summary(rows: list[dict]) -> None:
           f"holds the truth "
           f"on {holds}, half-width <= 20 % on {narrow}; presses > {BIG_UM:g} um off without a "
           f"refusal, flag or warning: {silent}")
+    f = figures(rows)
+    print(f"certified depths' mean outside +-5 um on {f['mean_outside']} designs; "
+          f"{f['mean_outside_expected']:.1f} expected by chance at the designs' own stated "
+          "errors (each design's mean: its indenters' shared P(w0) errors, the presses' own, "
+          "the clock and dP/dw)")
     for kind in KINDS:
         sel = [r for r in rows if r["design"]["kind"] == kind]
         if sel:

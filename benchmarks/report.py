@@ -817,6 +817,8 @@ def _mark_sweep(quick: bool) -> Result:
             k, kind, d["fps"], d["approach_mm_s"], round(1e3 * d["approach_mm_s"] / d["fps"]),
             f"{r['certified']} of {r['n_presses']}, {r.get('bounded', 0)} bounded",
             f"{r['err_mean_um']:+.1f}, {r['err_sd_um']:.1f}" if r["certified"] else "–",
+            (f"{r['mean_sd_um']:.1f} ({100 * r['p_mean_outside']:.0f} %)"
+             if np.isfinite(r.get("mean_sd_um", np.nan)) else "–"),
             f"{float(np.std(r['z'])):.2f}", f"{r['stated_median_um']:.1f}",
             f"{r['err_max_um']:.0f}" + (f" ({len(r['silent_big'])} silent)" if r["big"] else ""),
             (f"{r['E']:.4f} [{lo:.4f}, {hi:.4f}]" if not r.get("E_refused")
@@ -835,6 +837,9 @@ def _mark_sweep(quick: bool) -> Result:
         out = [
             ["depth mean within +-5 um and sd at most 10 um (or no depth certified)",
              f"{f['depth_ok']} of {f['designs']} ({f['all_bounded']} with none certified)"],
+            ["certified depths' mean outside +-5 um: designs; expected by chance at the "
+             "designs' own stated errors (the sum of each one's chance)",
+             f"{f['mean_outside']}; {f['mean_outside_expected']:.1f}"],
             ["presses fitted; of them only bounded (95 % wider than +-20 um)",
              f"{f['fitted']}; {f['bounded']}"],
             ["stated depth sd, median of the designs' medians (um)",
@@ -870,7 +875,8 @@ def _mark_sweep(quick: bool) -> Result:
         return out
 
     cols = ["design", "kind", "frames/s", "approach (mm/s)", "travel a frame (um)",
-            "certified", "depth error (um): mean, sd", "z sd", "stated sd median (um)",
+            "certified", "depth error (um): mean, sd",
+            "the mean's stated sd (um) (chance outside +-5 um)", "z sd", "stated sd median (um)",
             "largest error (um)", "E [95 %] (MPa)", "holds 0.2", "half-width",
             "clock error (ms)", "crossing in bracket: n, mean place",
             "brackets (frame periods)"]
@@ -882,7 +888,10 @@ def _mark_sweep(quick: bool) -> Result:
               note="Depth errors over the certified presses (95 % within +-20 um, "
                    "`[gauge_block] depth_tolerance_mm`; the others fitted but only bounded) "
                    "against each press's true depth "
-                   "over its force window; z: error over the sd the press states (its "
+                   "over its force window; the mean's stated sd: what the certified "
+                   "presses' own stated errors give their mean (an indenter's presses "
+                   "share its P(w0)'s error; `bench_mark_sweep.mean_sd`); z: error over "
+                   "the sd the press states (its "
                    "indenter's shared part counted once). The bracket: the frame period "
                    "a mark's press crossed w0 in, by the mark rule, which takes the crossing "
                    "as uniform over it; brackets: the frame periods they spanned on average, "

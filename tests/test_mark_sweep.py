@@ -250,3 +250,25 @@ def test_the_sweeps_truth_is_the_depth_the_force_window_saw():
     w = np.linspace(0.2, 0.3, 201)
     p = np.mean(3.5 * w * (1 + 0.8 * w / 3.0))
     assert 3.5 * got * (1 + 0.8 * got / 3.0) == pytest.approx(p, rel=1e-9)
+
+
+def test_the_mean_of_certified_depths_carries_each_indenters_shared_error_whole():
+    """Two indenters of two presses: each one's P(w0) error (2 um) adds up over its
+    presses in the mean, their own parts (sqrt(5) um) average down, the bound every press
+    shares (1 um as an sd) stays whole: sd^2 = 4 x 5 / 16 + 2 x (2/4)^2 x 4 + 1 um^2."""
+    bench = _bench()
+    presses = [SimpleNamespace(indenter=k) for k in (0, 0, 1, 1)]
+    ind = np.full(4, 0.002 * np.sqrt(2.0))            # counted n = 2 times over
+    own = 0.003                                       # own sd, the indenter's part once
+    std = np.full(4, np.sqrt(own ** 2 + ind[0] ** 2 * (1 - 1 / 2)))
+    half95 = np.full(4, 1.96 * np.sqrt(own ** 2 + 0.001 ** 2))
+    cal = SimpleNamespace(certification=SimpleNamespace(presses=presses), depth_std_mm=std,
+                          depth_indenter_std_mm=ind, depth_half95_mm=half95)
+    want = np.sqrt(4 * 5e-6 / 16 + 2 * 0.25 * 4e-6 + 1e-6)
+    assert bench.mean_sd(cal, np.ones(4, bool)) == pytest.approx(want, rel=1e-9)
+    # one indenter's presses alone: its shared error whole, their own parts halved
+    one = bench.mean_sd(cal, np.array([True, True, False, False]))
+    assert one == pytest.approx(np.sqrt(2 * 5e-6 / 4 + 4e-6 + 1e-6), rel=1e-9)
+    assert np.isnan(bench.mean_sd(cal, np.zeros(4, bool)))
+    assert bench.p_outside(5.0 / 1.959964) == pytest.approx(0.05, abs=1e-6)
+    assert bench.p_outside(float("nan")) == 0.0
