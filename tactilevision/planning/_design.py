@@ -569,11 +569,16 @@ def indenter_speeds(d: Design) -> np.ndarray:
     duration at constant speed to the press's depth) ``(w0 + o) / approach_s``, o the
     middle of ``overshoot_um`` (mm).
     """
-    w0 = np.asarray(d.depths_mm, np.float64)
     if d.approach_s is None:
-        return np.full(w0.size, float(d.stage_speed_mm_s))
+        return np.full(len(d.depths_mm), float(d.stage_speed_mm_s))
+    return _travel_mm(d) / float(d.approach_s)
+
+
+def _travel_mm(d: Design) -> np.ndarray:
+    """(I,) float64 each indenter's approach, mm: its w0 plus the middle of
+    ``overshoot_um``."""
     over = 0.5e-3 * (float(d.overshoot_um[0]) + float(d.overshoot_um[1]))
-    return (w0 + over) / float(d.approach_s)
+    return np.asarray(d.depths_mm, np.float64) + over
 
 
 def speed_words(d: Design) -> str:
@@ -650,11 +655,7 @@ def press_times(d: Design, indenters: np.ndarray) -> np.ndarray:
     longer, and sees a change with time more easily, than planned."""
     ind = np.asarray(indenters, np.int64)
     n = ind.size
-    if d.approach_s is not None:
-        approach = np.full(n, float(d.approach_s))
-    else:
-        over = 0.5e-3 * (float(d.overshoot_um[0]) + float(d.overshoot_um[1]))
-        approach = (np.asarray(d.depths_mm, np.float64)[ind] + over) / float(d.stage_speed_mm_s)
+    approach = (_travel_mm(d) / indenter_speeds(d))[ind]
     waits = np.asarray(d.waits_s, np.float64)[np.arange(n) % len(d.waits_s)]
     return np.cumsum(waits + approach + hold_lengths(d, n))
 
