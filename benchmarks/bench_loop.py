@@ -188,7 +188,10 @@ def one(session: Path, out: Path, kind: str, seed: int, reuse: bool = False,
             "budget_ratio": budget.get("ratio"), "budget_exceeds": budget.get("exceeds"),
             "depth_error_um": [float(err_um.mean()), float(err_um.std()),
                                float(np.abs(err_um).max())],
-            "calibrate_s": t_cal, "message": d["message"]}
+            "calibrate_s": t_cal, "message": d["message"],
+            "fit_data": v.get("fit_data", "table") if fitted else None,
+            "holds": {k: (d.get("holds") or {}).get(k) for k in
+                      ("verdict", "named", "decay_rate_per_s", "smallest_rate_per_s")}}
 
 
 def rules_out_sizes(session: Path, table: Path, k: float, step_after: float | None = None

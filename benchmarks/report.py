@@ -907,6 +907,52 @@ def _mark_sweep(quick: bool) -> Result:
 MARK_VERDICT_DESIGNS = (*range(10), *range(100, 105))
 
 
+def _loop_reads(rows: list[tuple[dict, str]]) -> list[Table]:
+    """The null and offset logs' silence, the holds' reading and E fitted under a right
+    verdict, from :func:`bench_loop.one`'s rows with their :func:`bench_loop.score`."""
+    def of(kinds: tuple[str, ...], test) -> str:
+        got = [r for r, _ in rows if r["kind"] in kinds]
+        return f"{sum(bool(test(r)) for r in got)} of {len(got)}"
+
+    def rates(kinds: tuple[str, ...]) -> str:
+        x = [100 * r["holds"]["decay_rate_per_s"] for r, _ in rows
+             if r["kind"] in kinds and r["holds"]["decay_rate_per_s"] is not None]
+        return f"{min(x):+.2f} to {max(x):+.2f}" if x else "-"
+
+    quiet = ("null", "offset")
+    others = tuple(k for k in dict.fromkeys(r["kind"] for r, _ in rows) if k != "relaxation")
+    silent = [["nothing hidden: nothing named", of(("null",), lambda r: (
+                  not r["verdict"] and not r["unexplained"])), "-"],
+              ["a fixture's offset (the F/T's zero takes it off): nothing named",
+               of(("offset",), lambda r: not r["verdict"] and not r["unexplained"]), "-"],
+              ["a relaxing gel (g 0.25, tau 0.7 s): the holds name it",
+               of(("relaxation",), lambda r: r["holds"]["named"]), rates(("relaxation",))],
+              ["every other log: the holds read flat",
+               of(others, lambda r: r["holds"]["verdict"] == "flat"), rates(others)]]
+    fits: dict[str, list[int]] = {}
+    for r, m in rows:
+        ci = r.get("E_after_ci")
+        if m != "yes" or r["kind"] in quiet or not ci or None in ci:
+            continue
+        f = fits.setdefault(r["fit_data"], [0, 0])
+        f[0] += 1
+        f[1] += ci[0] <= r["E_named_truth"] <= ci[1]
+    where = {"crossings": "the crossing forces (`fit --crossings --effects`)",
+             "table": "the table (`fit --effects`)", "holds": "the holds (`fit --holds`)"}
+    return [
+        Table("The null, the offset and the holds", ["log", "right", "holds' decay (%/s)"],
+              silent, note="The holds' reading is diagnose's (`holds` in its JSON: F test "
+                           "against a constant force per press, p < 0.001); their decay, "
+                           f"its range over the logs (quiet logs: {', '.join(quiet)})."),
+        Table("E fitted under the effect named",
+              ["fitted to", "right verdicts fitted", "95 % interval holds the effect's E"],
+              [[where.get(k, k), v[0], f"{v[1]} of {v[0]}"] for k, v in sorted(fits.items())],
+              note="Each right verdict fitted as diagnose says (`fit_data`), its E against the "
+                   "truth in the effect's parametrisation (at x = 0, before the step, at the "
+                   "session's mean time; a relaxing gel's instantaneous E)."),
+    ]
+
+
 @subject(
     "mark_verdicts", "Diagnose: verdicts on gauge-block designs drawn at random",
     f"""The whole loop (`benchmarks/bench_loop.py`: calibrate, diagnose, then fit what
@@ -919,7 +965,10 @@ MARK_VERDICT_DESIGNS = (*range(10), *range(100, 105))
     where it names the hidden effect (or an equivalent, or offers it for an unexplained
     covariate), and for nothing hidden or the fixture's offset (the F/T's zero read between
     presses takes it off) where nothing is named; a change of stiffness named in the other
-    shape (a step for a trend, a trend for a step) is counted apart. The frames are those
+    shape (a step for a trend, a trend for a step) is counted apart. Beside the verdicts:
+    what the holds read (the relaxing gel named from them, every other log flat), and
+    whether E fitted as diagnose says (to the crossing forces, the table or the holds)
+    holds the effect's E on each right verdict. The frames are those
     of ${MARK_SWEEP_CACHE_ENV} (rendered there when missing, about 5 minutes each on this
     project's 2-core machine); --quick: mark 0 and vernier 100.""",
     [f"python benchmarks/bench_mark_sweep.py --seed {MARK_SWEEP_SEED} --designs 10 "
@@ -934,7 +983,7 @@ def _mark_verdicts(quick: bool) -> Result:
     ks = (0, 100) if quick else MARK_VERDICT_DESIGNS
     label = {"mark-shadow": "mark, shadows", "mark-plain": "mark, no shadows",
              "vernier": "vernier"}
-    per, pooled = [], {}
+    per, pooled, all_rows = [], {}, []
     for k in ks:
         kinds = ("vernier",) if k >= 100 else ("mark-shadow", "mark-plain")
         d = b.draw_design(MARK_SWEEP_SEED, k, kinds)
@@ -943,6 +992,7 @@ def _mark_verdicts(quick: bool) -> Result:
         with tempfile.TemporaryDirectory() as tmp:
             rows = [loop.one(folder, Path(tmp), kind, 1000) for kind in loop.KINDS]
         marks = [loop.score(r) for r in rows]
+        all_rows += [(r, m) for r, m in zip(rows, marks, strict=True)]
         said = []
         for r, m in zip(rows, marks, strict=True):
             v = r["verdict"] or (f"unexplained {r['unexplained']}" if r["unexplained"]
@@ -970,6 +1020,7 @@ def _mark_verdicts(quick: bool) -> Result:
                    "covariate diagnose could not explain (it offers a trend), or `nothing "
                    "missing`; in brackets whether it is right (`yes`, `shape`: a change of "
                    "stiffness named in the other shape, `no`)."),
+        *_loop_reads(all_rows),
     ], summary=f"{total[1]} of {total[3]} verdicts right over {total[0]} drawn designs "
                f"({total[2]} more a change of stiffness in the other shape).")
 
