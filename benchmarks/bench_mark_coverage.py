@@ -43,6 +43,75 @@ from tactilevision.fem import press_profile
 from tactilevision.mechanics import beta_from_nu
 from tactilevision.sim import GaugeBlock, SessionSpec, make_session, taxim_shading
 
+E_TRUE, NU_TRUE, H_MM = 0.20, 0.48, 3.0
+
+
+def coverage(sessions: int, fps: list[float], first_seed: int = 3000,
+             rules: tuple[str, ...] = ("mark",), theta: float = 0.0,
+             overshoot_um: tuple[float, float] = (5.0, 60.0), show=print) -> dict:
+    """Simulate and calibrate `sessions` sessions per frame rate (the designs interleaved,
+    so a partial run has both) and tally, per (fps, rule): whether E's, nu's and beta's 95 %
+    intervals hold the truth, the share of presses certified and E's relative error. Each
+    session's row goes to `show` as a markdown line."""
+    shading = taxim_shading()
+    block = GaugeBlock(bevel_angle_deg=theta)
+    E, nu, h = E_TRUE, NU_TRUE, H_MM
+    beta = float(beta_from_nu(nu, table="fem", a_over_h=block.radius_mm / h))
+    profile = press_profile(block.radius_mm / h, nu, w_over_h_max=max(
+        0.22, (max(block.depths_mm) + 0.06) / h * 1.05))
+    show(f"truth: E {E}, nu {nu}, beta {beta:.4f} (FEM table, a/h {block.radius_mm / h:.3g}); "
+         f"overshoot {overshoot_um[0]:g} to {overshoot_um[1]:g} um")
+    show("| fps | seed | rule | certified | E (MPa) [95 %] | covers | nu [95 %] | covers | "
+         "beta [95 %] | covers |")
+    show("|---|---|---|---|---|---|---|---|---|---|")
+    tally: dict = {}
+    for k in range(sessions):
+        for f_s in fps:
+            seed = first_seed + k
+            spec = SessionSpec(E_mpa=E, nu=nu, block=block, repeats=4, fps=f_s,
+                               overshoot_mm=tuple(v / 1e3 for v in overshoot_um),
+                               seed=seed)
+            tmp = Path(tempfile.mkdtemp(prefix="mark_cov_"))
+            try:
+                truth = make_session(tmp / "s", spec, shading=shading, profile=profile)
+                in_view = sum(1 for p in truth["presses"] if not p["misaligned"]
+                              and not p["edge"])
+                for rule in rules:
+                    cal = calibrate_session(tmp / "s", depth_rule=rule, allow_failure=True)
+                    n = len(cal.certification.presses)
+                    read = sum(p.band_resolved for p in cal.certification.presses
+                               if p.rule == "vernier")
+                    f = cal.fit
+                    row = tally.setdefault((f_s, rule), {"E": [], "nu": [], "cert": [],
+                                                         "err": [], "beta": [], "width": [],
+                                                         "read": []})
+                    row["cert"].append(n / in_view)
+                    row["read"].append(read)
+                    cb = bool(f is not None and f.beta_ci95[0] <= beta <= f.beta_ci95[1])
+                    bcell = ("-" if f is None else f"{f.beta:.3f} [{f.beta_ci95[0]:.3f}, "
+                             f"{f.beta_ci95[1]:.3f}] | {'yes' if cb else 'NO'}")
+                    row["beta"].append(cb)
+                    if f is None or not np.isfinite(f.E_mpa):
+                        row["E"].append(False)
+                        row["nu"].append(False)
+                        show(f"| {f_s:g} | {seed} | {rule} | {n}/{in_view} ({read} read) | "
+                             f"not computed | no | - | no | {bcell} |")
+                        continue
+                    ce = bool(f.E_ci95_mpa[0] <= E <= f.E_ci95_mpa[1])
+                    cn = bool(f.nu_ci95[0] <= nu <= f.nu_ci95[1])
+                    row["E"].append(ce)
+                    row["nu"].append(cn)
+                    row["err"].append(f.E_mpa / E - 1)
+                    row["width"].append((f.E_ci95_mpa[1] - f.E_ci95_mpa[0]) / E)
+                    show(f"| {f_s:g} | {seed} | {rule} | {n}/{in_view} ({read} read) | "
+                         f"{f.E_mpa:.4f} "
+                         f"[{f.E_ci95_mpa[0]:.4f}, {f.E_ci95_mpa[1]:.4f}] | "
+                         f"{'yes' if ce else 'NO'} | {f.nu:.4f} [{f.nu_ci95[0]:.4f}, "
+                         f"{f.nu_ci95[1]:.4f}] | {'yes' if cn else 'NO'} | {bcell} |")
+            finally:
+                shutil.rmtree(tmp, ignore_errors=True)
+    return tally
+
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__,
@@ -56,63 +125,9 @@ def main() -> None:
     ap.add_argument("--overshoot-um", type=float, nargs=2, default=(5.0, 60.0),
                     metavar=("LO", "HI"), help="the stage's overshoot past w0, uniform, um")
     args = ap.parse_args()
-    shading = taxim_shading()
-    block = GaugeBlock(bevel_angle_deg=args.theta)
-    E, nu, h = 0.20, 0.48, 3.0
-    beta = float(beta_from_nu(nu, table="fem", a_over_h=block.radius_mm / h))
-    profile = press_profile(block.radius_mm / h, nu, w_over_h_max=max(
-        0.22, (max(block.depths_mm) + 0.06) / h * 1.05))
-    print(f"truth: E {E}, nu {nu}, beta {beta:.4f} (FEM table, a/h {block.radius_mm / h:.3g}); "
-          f"overshoot {args.overshoot_um[0]:g} to {args.overshoot_um[1]:g} um")
-    print("| fps | seed | rule | certified | E (MPa) [95 %] | covers | nu [95 %] | covers | "
-          "beta [95 %] | covers |")
-    print("|---|---|---|---|---|---|---|---|---|---|")
-    tally = {}
     t_all = time.perf_counter()
-    for k in range(args.sessions):          # the designs interleaved: a partial run has both
-        for fps in args.fps:
-            seed = args.first_seed + k
-            spec = SessionSpec(E_mpa=E, nu=nu, block=block, repeats=4, fps=fps,
-                               overshoot_mm=tuple(v / 1e3 for v in args.overshoot_um),
-                               seed=seed)
-            tmp = Path(tempfile.mkdtemp(prefix="mark_cov_"))
-            try:
-                truth = make_session(tmp / "s", spec, shading=shading, profile=profile)
-                in_view = sum(1 for p in truth["presses"] if not p["misaligned"]
-                              and not p["edge"])
-                for rule in args.rules:
-                    cal = calibrate_session(tmp / "s", depth_rule=rule, allow_failure=True)
-                    n = len(cal.certification.presses)
-                    read = sum(p.band_resolved for p in cal.certification.presses
-                               if p.rule == "vernier")
-                    f = cal.fit
-                    row = tally.setdefault((fps, rule), {"E": [], "nu": [], "cert": [],
-                                                         "err": [], "beta": []})
-                    row["cert"].append(n / in_view)
-                    cb = bool(f is not None and f.beta_ci95[0] <= beta <= f.beta_ci95[1])
-                    bcell = ("-" if f is None else f"{f.beta:.3f} [{f.beta_ci95[0]:.3f}, "
-                             f"{f.beta_ci95[1]:.3f}] | {'yes' if cb else 'NO'}")
-                    row["beta"].append(cb)
-                    if f is None or not np.isfinite(f.E_mpa):
-                        row["E"].append(False)
-                        row["nu"].append(False)
-                        print(f"| {fps:g} | {seed} | {rule} | {n}/{in_view} ({read} read) | "
-                              f"not computed | "
-                              f"no | - | no | {bcell} |", flush=True)
-                        continue
-                    ce = bool(f.E_ci95_mpa[0] <= E <= f.E_ci95_mpa[1])
-                    cn = bool(f.nu_ci95[0] <= nu <= f.nu_ci95[1])
-                    row["E"].append(ce)
-                    row["nu"].append(cn)
-                    row["err"].append(f.E_mpa / E - 1)
-                    print(f"| {fps:g} | {seed} | {rule} | {n}/{in_view} ({read} read) | "
-                          f"{f.E_mpa:.4f} "
-                          f"[{f.E_ci95_mpa[0]:.4f}, {f.E_ci95_mpa[1]:.4f}] | "
-                          f"{'yes' if ce else 'NO'} | {f.nu:.4f} [{f.nu_ci95[0]:.4f}, "
-                          f"{f.nu_ci95[1]:.4f}] | {'yes' if cn else 'NO'} | {bcell} |",
-                          flush=True)
-            finally:
-                shutil.rmtree(tmp, ignore_errors=True)
+    tally = coverage(args.sessions, args.fps, args.first_seed, tuple(args.rules), args.theta,
+                     tuple(args.overshoot_um), show=lambda line: print(line, flush=True))
     print()
     for (fps, rule), row in tally.items():
         err = np.array(row["err"])

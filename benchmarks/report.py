@@ -617,6 +617,62 @@ def _ft_zero(quick: bool) -> Result:
                           f"at most {moved:.1f} % against the reference.")
 
 
+MARK_COVERAGE_SESSIONS = 20
+
+
+@subject(
+    "mark_coverage",
+    "Calibrate: how often the intervals hold the truth, a mark and an unread vernier",
+    f"""The project's own generator (`tactilevision.sim.make_session`: the finite-strain FEM
+    gel through Taxim's shading table, 5 depths x 4 presses, E 0.20 MPa, nu 0.48, h 3 mm),
+    each session calibrated with the defaults and its 95 % intervals of E, nu and beta
+    against the truth: a drawn mark at 10 and at 30 frames/s with the stage 5 to 60 um past
+    w0 (seeds from 3000), and an 8 deg vernier at 15 frames/s with the stage only 5 to 25
+    um past w0, where no band is long enough to read and every depth is only bounded
+    (seeds from 7000). {MARK_COVERAGE_SESSIONS} sessions per design (2 with --quick). This
+    checks the intervals' consistency with the generator that drew the frames; report
+    `mark_sweep` judges a mark on frames Taxim's own renderer drew.""",
+    [f"python benchmarks/bench_mark_coverage.py --sessions {MARK_COVERAGE_SESSIONS} "
+     "--fps 10 30 --rules mark",
+     f"python benchmarks/bench_mark_coverage.py --sessions {MARK_COVERAGE_SESSIONS} --fps 15 "
+     "--theta 8 --rules auto --first-seed 7000 --overshoot-um 5 25"])
+def _mark_coverage(quick: bool) -> Result:
+    import bench_mark_coverage as b
+    n = 2 if quick else MARK_COVERAGE_SESSIONS
+
+    def quiet(line: str) -> None:
+        """The per-session lines are the benchmark's, not the page's."""
+    designs = [("a mark, 10 frames/s", 10.0, b.coverage(n, [10.0, 30.0], 3000, ("mark",),
+                                                        show=quiet))]
+    designs.append(("a mark, 30 frames/s", 30.0, designs[0][2]))
+    designs.append(("a vernier, 8 deg, no band read", 15.0,
+                    b.coverage(n, [15.0], 7000, ("auto",), theta=8.0,
+                               overshoot_um=(5.0, 25.0), show=quiet)))
+    rows, held = [], []
+    for label, fps, tally in designs:
+        rule = "auto" if "vernier" in label else "mark"
+        t = tally[(fps, rule)]
+        err, width = np.asarray(t["err"]), np.asarray(t["width"])
+        m = len(t["E"])
+        held.append((label, sum(t["E"]), m))
+        rows.append([label, m, f"{sum(t['E'])} of {m}", f"{sum(t['nu'])} of {m}",
+                     f"{sum(t['beta'])} of {m}", m - err.size,
+                     f"{np.median(width):.2f}" if width.size else "-",
+                     f"{100 * np.median(err):+.1f}" if err.size else "-",
+                     f"{100 * np.sqrt(np.mean(err ** 2)):.1f}" if err.size else "-",
+                     f"{100 * np.mean(t['cert']):.0f}", sum(t["read"])])
+    return Result([Table(
+        "The intervals against the truth",
+        ["design", "sessions", "E's 95 % interval holds 0.20 MPa", "nu's holds 0.48",
+         "beta's holds the FEM's", "E not computed", "E's interval width / E, median",
+         "E's error, median (%)", "E's error, rms (%)", "presses certified (%)",
+         "vernier bands read"], rows,
+        note="beta's truth: eq. (5)'s beta of the FEM table at the true nu and the block's "
+             "a/h (`beta_from_nu(0.48, table='fem', a_over_h=a/h)`).")],
+        summary="; ".join(f"{label}: E's interval held the truth in {k} of {m}"
+                          for label, k, m in held) + ".")
+
+
 @subject(
     "depth_error_sensitivity", "Calibrate: what a depth error every press shares does to E and nu",
     """Exact presses of the sample session's gel (the finite-strain FEM's force against depth
