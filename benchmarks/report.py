@@ -963,6 +963,14 @@ def _mark_sweep(quick: bool) -> Result:
 MARK_VERDICT_DESIGNS = (*range(10), *range(100, 105))
 
 
+def _verdict_cell(row: dict, mark: str) -> str:
+    """One verdict of :func:`bench_loop.one` with its :func:`bench_loop.score`: the effect
+    named, ``unexplained COLUMN`` or ``nothing missing``, then the score in brackets."""
+    said = row["verdict"] or (f"unexplained {row['unexplained']}" if row["unexplained"]
+                              else "nothing missing")
+    return f"{said} ({mark})"
+
+
 def _loop_reads(rows: list[tuple[dict, str]]) -> list[Table]:
     """The null and offset logs' silence, the holds' reading and E fitted under a right
     verdict, from :func:`bench_loop.one`'s rows with their :func:`bench_loop.score`."""
@@ -1049,11 +1057,7 @@ def _mark_verdicts(quick: bool) -> Result:
             rows = [loop.one(folder, Path(tmp), kind, 1000) for kind in loop.KINDS]
         marks = [loop.score(r) for r in rows]
         all_rows += [(r, m) for r, m in zip(rows, marks, strict=True)]
-        said = []
-        for r, m in zip(rows, marks, strict=True):
-            v = r["verdict"] or (f"unexplained {r['unexplained']}" if r["unexplained"]
-                                 else "nothing missing")
-            said.append(f"{v} ({m})")
+        said = [_verdict_cell(r, m) for r, m in zip(rows, marks, strict=True)]
         kind = label[d["kind"]]
         p = pooled.setdefault(kind, [0, 0, 0, 0])
         p[0] += 1
@@ -1079,6 +1083,93 @@ def _mark_verdicts(quick: bool) -> Result:
         *_loop_reads(all_rows),
     ], summary=f"{total[1]} of {total[3]} verdicts right over {total[0]} drawn designs "
                f"({total[2]} more a change of stiffness in the other shape).")
+
+
+MARK_PLAN_DESIGNS = tuple(range(10))
+
+
+@subject(
+    "mark_plan_sizes", "Plan: changes hidden at the sizes plan gives a drawn design",
+    f"""What `plan` promises a drawn mark's design, tried on report `mark_sweep`'s marks
+    (seed {MARK_SWEEP_SEED}, designs 0 to 9, five with Taxim's shadows and five without):
+    each design's null calibration (`benchmarks/bench_loop.py`'s nothing hidden) gives its
+    design (`planning.design_from_calibration`: its presses, stage motion, frame rate and
+    F/T noise), planned with the crossing brackets' frame periods and the share of presses
+    whose mark is not seen measured on the other designs of its kind (shadows or none: the
+    mean of theirs, figures the design itself did not give); the gradient across the pad,
+    the steady softening and the step after the 10th press are then hidden at the sizes
+    plan says its crossing forces name in 95 % of sessions (`planning.crossing_effect_sizes`,
+    the step at its place), one F/T draw each, and diagnose's verdict scored as report
+    `mark_verdicts` scores it. --quick: designs 0 and 1, each planned with its own
+    figures.""",
+    [f"python benchmarks/bench_mark_sweep.py --seed {MARK_SWEEP_SEED} --designs 10 "
+     "--kinds mark-shadow mark-plain --cache DIR --render-only",
+     "python benchmarks/bench_loop.py DIR/<design> --kinds null spatial softening damage "
+     "--at-plan 1.0 --bracket-periods P --unseen-share Q"])
+def _mark_plan_sizes(quick: bool) -> Result:
+    import bench_loop as loop
+    import bench_mark_sweep as b
+    cache = Path(os.environ.get(MARK_SWEEP_CACHE_ENV)
+                 or Path(tempfile.gettempdir()) / "tactilevision_mark_sweep")
+    cache.mkdir(parents=True, exist_ok=True)
+    kinds = ("spatial", "softening", "damage")
+    label = {"mark-shadow": "shadows", "mark-plain": "no shadows"}
+    per, pooled = [], {}
+    with tempfile.TemporaryDirectory() as tmp:
+        own = {}
+        for k in (0, 1) if quick else MARK_PLAN_DESIGNS:
+            d = b.draw_design(MARK_SWEEP_SEED, k, ("mark-shadow", "mark-plain"))
+            folder = b.design_folder(cache, MARK_SWEEP_SEED, k, d)
+            b.render(folder, d)
+            out = Path(tmp) / str(k)
+            null = loop.one(folder, out, "null", 1000)
+            _, periods, unseen = loop.plan_sizes(folder, out / "null" / "calibration", 1.0,
+                                                 9.5)
+            own[k] = (d, folder, out, null, periods, unseen)
+        for k, (d, folder, out, null, periods, unseen) in own.items():
+            others = [v for j, v in own.items() if j != k and v[0]["kind"] == d["kind"]]
+            if others:
+                periods = float(np.mean([v[4] for v in others]))
+                unseen = float(np.mean([v[5] for v in others]))
+            sizes, periods, unseen = loop.plan_sizes(folder, out / "null" / "calibration",
+                                                     1.0, 9.5, periods, unseen)
+            rows = [null] + [loop.one(folder, out, kind, 1000, size=sizes[kind],
+                                      step_after=9.5) for kind in kinds]
+            marks = [loop.score(r) for r in rows]
+            kind = label[d["kind"]]
+            p = pooled.setdefault(kind, {"null": [0, 0], **{x: [0, 0, 0] for x in kinds}})
+            p["null"][0] += marks[0] == "yes"
+            p["null"][1] += 1
+            for x, m in zip(kinds, marks[1:], strict=True):
+                p[x][0] += m == "yes"
+                p[x][1] += m == "shape"
+                p[x][2] += 1
+            said = [_verdict_cell(r, m) for r, m in zip(rows, marks, strict=True)]
+            per.append([k, kind, d["fps"], f"{periods:.2f}", f"{unseen:.2f}",
+                        f"{100 * sizes['spatial']:.2f}", f"{100 * sizes['softening']:.1f}",
+                        f"{100 * sizes['damage']:.1f}", *said])
+    named = sum(v[x][0] for v in pooled.values() for x in kinds)
+    total = sum(v[x][2] for v in pooled.values() for x in kinds)
+    clean = sum(v["null"][0] for v in pooled.values())
+    nulls = sum(v["null"][1] for v in pooled.values())
+    return Result([
+        Table("Named at plan's sizes",
+              ["sessions", "designs", "nothing hidden: nothing named",
+               *[f"{x}: named (the other shape)" for x in kinds]],
+              [[kind, v["null"][1], f"{v['null'][0]} of {v['null'][1]}",
+                *[f"{v[x][0]} of {v[x][2]} ({v[x][1]})" for x in kinds]]
+               for kind, v in pooled.items()],
+              note="Plan promises each change named in 95 % of sessions of the design; a "
+                   "change of stiffness named in the other shape (a step for a trend, a trend "
+                   "for a step) is counted apart, in brackets."),
+        Table("Per design",
+              ["design", "kind", "frames/s", "bracket periods planned",
+               "share unseen planned", "gradient (%/mm)", "softening (% over the session)",
+               "step (%)", "null", *kinds], per,
+              note="The sizes hidden: plan's, with the periods and unseen share of the other "
+                   "designs of the kind; each verdict as report `mark_verdicts` writes it."),
+    ], summary=f"{named} of {total} changes hidden at plan's sizes named as hidden over "
+               f"{len(per)} drawn designs; nothing named on {clean} of {nulls} nulls.")
 
 
 @subject(
