@@ -1032,7 +1032,8 @@ def _loop_reads(rows: list[tuple[dict, str]]) -> list[Table]:
     shape (a step for a trend, a trend for a step) is counted apart. Beside the verdicts:
     what the holds read (the relaxing gel named from them, every other log flat), and
     whether E fitted as diagnose says (to the crossing forces, the table or the holds)
-    holds the effect's E on each right verdict. The frames are those
+    holds the effect's E on each right verdict, and each hidden change's size against the
+    smallest the design's own null table says it would name. The frames are those
     of ${MARK_SWEEP_CACHE_ENV} (rendered there when missing, about 5 minutes each on this
     project's 2-core machine); --quick: mark 0 and vernier 100.""",
     [f"python benchmarks/bench_mark_sweep.py --seed {MARK_SWEEP_SEED} --designs 10 "
@@ -1047,7 +1048,7 @@ def _mark_verdicts(quick: bool) -> Result:
     ks = (0, 100) if quick else MARK_VERDICT_DESIGNS
     label = {"mark-shadow": "mark, shadows", "mark-plain": "mark, no shadows",
              "vernier": "vernier"}
-    per, pooled, all_rows = [], {}, []
+    per, pooled, all_rows, reach = [], {}, [], {}
     for k in ks:
         kinds = ("vernier",) if k >= 100 else ("mark-shadow", "mark-plain")
         d = b.draw_design(MARK_SWEEP_SEED, k, kinds)
@@ -1055,8 +1056,18 @@ def _mark_verdicts(quick: bool) -> Result:
         b.render(folder, d)
         with tempfile.TemporaryDirectory() as tmp:
             rows = [loop.one(folder, Path(tmp), kind, 1000) for kind in loop.KINDS]
+            ruled = loop.rules_out_sizes(
+                folder, Path(tmp) / "null" / "calibration" / "measurements.csv", 1.0)
         marks = [loop.score(r) for r in rows]
         all_rows += [(r, m) for r, m in zip(rows, marks, strict=True)]
+        r_p = reach.setdefault(label[d["kind"]], {"at": [0, 0], "below": [0, 0], "ratio": []})
+        for r, m in zip(rows, marks, strict=True):
+            if r["kind"] in ruled:
+                ratio = loop.DEFAULT_SIZE[r["kind"]] / ruled[r["kind"]]
+                side = r_p["at" if ratio >= 1 else "below"]
+                side[0] += m == "yes"
+                side[1] += 1
+                r_p["ratio"].append(ratio)
         said = [_verdict_cell(r, m) for r, m in zip(rows, marks, strict=True)]
         kind = label[d["kind"]]
         p = pooled.setdefault(kind, [0, 0, 0, 0])
@@ -1080,6 +1091,20 @@ def _mark_verdicts(quick: bool) -> Result:
                    "covariate diagnose could not explain (it offers a trend), or `nothing "
                    "missing`; in brackets whether it is right (`yes`, `shape`: a change of "
                    "stiffness named in the other shape, `no`)."),
+        Table("Against what each design's null rules out",
+              ["sessions", "changes hidden at or above the size ruled out: named",
+               "below it: named", "hidden size / size ruled out, range"],
+              [[kind, f"{v['at'][0]} of {v['at'][1]}", f"{v['below'][0]} of {v['below'][1]}",
+                f"{min(v['ratio']):.2f} to {max(v['ratio']):.2f}"]
+               for kind, v in reach.items()],
+              note="The gradient (1 % per mm), the softening (10 % over the session) and the "
+                   "step (10 %) against the smallest of each that the design's own null table "
+                   "says it would name in 95 % of sessions (`rules_out_sizes` of "
+                   "`benchmarks/bench_loop.py`: the crossing forces' sizes, "
+                   "`diagnosis.crossing_sizes`, a vernier's its diagnosis's `rules_out`; "
+                   "diagnose prints them as \"none larger than\"). A change below it is one "
+                   "the design does not promise to see, and diagnose's verdict of nothing "
+                   "says so."),
         *_loop_reads(all_rows),
     ], summary=f"{total[1]} of {total[3]} verdicts right over {total[0]} drawn designs "
                f"({total[2]} more a change of stiffness in the other shape).")
