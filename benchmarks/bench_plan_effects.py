@@ -117,6 +117,58 @@ def achieved_ratio(factors: np.ndarray, shares: np.ndarray, n: int) -> float:
     return float(math.exp((stats.norm.ppf(0.95) - icpt) / slope))
 
 
+def run(sessions: int = 40, jobs: int = 2, which: list[int] | None = None,
+        effects: list[str] | None = None, json_path: str | None = None,
+        show=print) -> list[dict]:
+    """Draw `sessions` tables of each design (:func:`designs`, those in `which`) with each
+    effect (those in `effects`) at each of :data:`FACTORS` times its predicted size, run
+    diagnose on each on `jobs` processes, and return per (design, effect) the shares found
+    and the achieved 95 % size over the predicted (:func:`achieved_ratio`); progress lines
+    go to `show`; `json_path` is rewritten after every effect (a stop loses nothing)."""
+    ds = designs()
+    results: list[dict] = []
+    with Pool(jobs) as pool:
+        for i in which if which is not None else range(len(ds)):
+            d = ds[i]
+            t0 = time.perf_counter()
+            pred = effect_sensitivity(d)
+            t_plan = time.perf_counter() - t0
+            how = (f"vernier {d.bevel_angle_deg:g} deg" if d.bevel_angle_deg
+                   else f"mark {d.frame_rate_hz:g} frames/s")
+            show(f"design {i}: a/h {d.a_over_h:.2f}, {len(d.depths_mm)} depths x "
+                 f"{d.repeats}, {how}; sizes predicted in {t_plan:.2f} s")
+            for name, s in pred.items():
+                if effects and name not in effects:
+                    continue
+                if not math.isfinite(s.size_param):
+                    show(f"  {name:24s} {s.why}")
+                    continue
+                jobs_ = [(i, name, f * s.size_param, 10_000 * i + 100 * k + j)
+                         for k, f in enumerate(FACTORS) for j in range(sessions)]
+                t1 = time.perf_counter()
+                raw = pool.map(found, jobs_)
+                if any(r is None for r in raw):
+                    show(f"  {name:24s} predicted {s.size:9.4g} {s.unit:6s} not drawn: 1.3 "
+                         "times it takes a press past the FEM table")
+                    continue
+                hits = np.array(raw, bool).reshape(len(FACTORS), sessions)
+                shares = hits.mean(axis=1)
+                ratio = achieved_ratio(np.array(FACTORS), shares, sessions)
+                ok = 1 / 1.3 <= ratio <= 1.3 if math.isfinite(ratio) else False
+                show(f"  {name:24s} predicted {s.size:9.4g} {s.unit:6s} found "
+                     + " / ".join(f"{100 * v:3.0f} %" for v in shares)
+                     + f" at x{FACTORS[0]:.2f}/x1/x{FACTORS[2]:.1f};  achieved/predicted "
+                     f"{ratio:5.2f} {'ok' if ok else 'OUT'}  ({time.perf_counter() - t1:.0f} s)")
+                results.append(dict(design=i, effect=name, predicted=s.size, unit=s.unit,
+                                    predicted_param=s.size_param, snr=s.snr,
+                                    shares=shares.tolist(), ratio=ratio, within=bool(ok),
+                                    sessions=sessions, factors=list(FACTORS)))
+                if json_path:
+                    with open(json_path, "w") as fh:
+                        json.dump(results, fh, indent=1)
+    return results
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sessions", type=int, default=40)
@@ -134,50 +186,9 @@ def main(argv: list[str] | None = None) -> int:
             results = json.load(fh)
         report(results, a.figure)
         return 0
-    ds = designs()
-    which = a.designs if a.designs is not None else range(len(ds))
-    results = []
     t_all = time.perf_counter()
-    with Pool(a.jobs) as pool:
-        for i in which:
-            d = ds[i]
-            t0 = time.perf_counter()
-            pred = effect_sensitivity(d)
-            t_plan = time.perf_counter() - t0
-            how = (f"vernier {d.bevel_angle_deg:g} deg" if d.bevel_angle_deg
-                   else f"mark {d.frame_rate_hz:g} frames/s")
-            print(f"design {i}: a/h {d.a_over_h:.2f}, {len(d.depths_mm)} depths x "
-                  f"{d.repeats}, {how}; sizes predicted in {t_plan:.2f} s", flush=True)
-            for name, s in pred.items():
-                if a.effects and name not in a.effects:
-                    continue
-                if not math.isfinite(s.size_param):
-                    print(f"  {name:24s} {s.why}")
-                    continue
-                jobs = [(i, name, f * s.size_param, 10_000 * i + 100 * k + j)
-                        for k, f in enumerate(FACTORS) for j in range(a.sessions)]
-                t1 = time.perf_counter()
-                raw = pool.map(found, jobs)
-                if any(r is None for r in raw):
-                    print(f"  {name:24s} predicted {s.size:9.4g} {s.unit:6s} not drawn: 1.3 "
-                          "times it takes a press past the FEM table")
-                    continue
-                hits = np.array(raw, bool).reshape(len(FACTORS), a.sessions)
-                shares = hits.mean(axis=1)
-                ratio = achieved_ratio(np.array(FACTORS), shares, a.sessions)
-                ok = 1 / 1.3 <= ratio <= 1.3 if math.isfinite(ratio) else False
-                print(f"  {name:24s} predicted {s.size:9.4g} {s.unit:6s} found "
-                      + " / ".join(f"{100 * v:3.0f} %" for v in shares)
-                      + f" at x{FACTORS[0]:.2f}/x1/x{FACTORS[2]:.1f};  achieved/predicted "
-                      f"{ratio:5.2f} {'ok' if ok else 'OUT'}  ({time.perf_counter() - t1:.0f} s)",
-                      flush=True)
-                results.append(dict(design=i, effect=name, predicted=s.size, unit=s.unit,
-                                    predicted_param=s.size_param, snr=s.snr,
-                                    shares=shares.tolist(), ratio=ratio, within=bool(ok),
-                                    sessions=a.sessions, factors=list(FACTORS)))
-                if a.json:                     # after every effect: a stop loses nothing
-                    with open(a.json, "w") as fh:
-                        json.dump(results, fh, indent=1)
+    results = run(a.sessions, a.jobs, a.designs, a.effects, a.json,
+                  show=lambda line: print(line, flush=True))
     print(f"{time.perf_counter() - t_all:.0f} s in all")
     report(results, a.figure)
     return 0

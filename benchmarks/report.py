@@ -691,6 +691,49 @@ def _depth_error_sensitivity(quick: bool) -> Result:
                               "50 presses, no noise: the errors are the bias alone.")])
 
 
+PLAN_EFFECT_SESSIONS = 40
+
+
+@subject(
+    "plan_effects", "Plan: the smallest effects diagnose names, against diagnose itself",
+    f"""For each of six designs (`bench_plan_effects.designs`: a/h 0.6 to 1.5, 4 to 8
+    depths, 3 to 6 repeats, verniers at 3 and 5 deg and marks at 30 and 90 frames/s; holds,
+    rests, days and positions varied so that every effect can be tested) `plan`
+    (`planning.effect_sensitivity`) predicts the size of each catalogue effect `diagnose`
+    names in 95 % of sessions. {PLAN_EFFECT_SESSIONS} sessions of the design are drawn with
+    the effect at 1/1.3, 1 and 1.3 times that size (`sim.design_measurement_table`: the
+    finite-strain FEM's forces at each press's true depth, the effect in the catalogue's
+    exact form, the design's noise) and `diagnose` runs on each; the achieved 95 % size
+    (probit of the share found against log size) over the predicted is the figure, within
+    a factor 1.3 the target. The draws use plan's own noise model and the catalogue's
+    forms: this checks plan's replay of diagnose's rule, not the noise model. --quick:
+    design 0, 4 sessions.""",
+    [f"python benchmarks/bench_plan_effects.py --sessions {PLAN_EFFECT_SESSIONS}"])
+def _plan_effects(quick: bool) -> Result:
+    import bench_plan_effects as b
+
+    def quiet(line: str) -> None:
+        """The progress lines are the benchmark's, not the page's."""
+    got = b.run(4 if quick else PLAN_EFFECT_SESSIONS, 2, [0] if quick else None, show=quiet)
+    by: dict[str, list[dict]] = {}
+    for r in got:
+        by.setdefault(r["effect"], []).append(r)
+    summary = [[name, f"{sum(r['within'] for r in rs)} of {len(rs)}",
+                f"{min(r['ratio'] for r in rs):.2f} to {max(r['ratio'] for r in rs):.2f}"]
+               for name, rs in by.items()]
+    per = [[r["design"], r["effect"], f"{r['predicted']:.4g} {r['unit']}",
+            " / ".join(f"{100 * v:.0f} %" for v in r["shares"]), f"{r['ratio']:.2f}",
+            "yes" if r["within"] else "no"] for r in got]
+    n_ok = sum(r["within"] for r in got)
+    return Result([
+        Table("Achieved against predicted", ["effect", "designs within 1.3",
+                                             "achieved / predicted"], summary),
+        Table("Per design and effect", ["design", "effect", "predicted 95 % size",
+                                        "named at x0.77 / x1 / x1.3", "achieved / predicted",
+                                        "within 1.3"], per),
+    ], summary=f"{n_ok} of {len(got)} (design, effect) pairs within a factor 1.3.")
+
+
 @subject(
     "plan_recommend", "Plan: the cheapest design for targets, against sessions drawn of it",
     """`tactilevision.planning.recommend` on the paper's gauge block
