@@ -6,6 +6,7 @@ The laws here are closed forms written in this file (no table of ours in the loo
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import ClassVar
@@ -20,6 +21,7 @@ from tactilevision.mechanics import (
     FlatPunch,
     Indenter,
     assess_misfit,
+    carry_misfit,
     fit_indentation,
     fit_indenter,
     fit_ramp,
@@ -116,6 +118,23 @@ def test_log_interval_never_reaches_zero():
     assert log_interval(1.0, 1.0, 2.0) == pytest.approx((math.exp(-2), math.exp(2)))
     lo, hi = log_interval(5.43, 0.01, 1.96)
     assert (lo, hi) == pytest.approx((5.43 - 0.0196, 5.43 + 0.0196), rel=1e-4)
+
+
+def test_an_interval_past_a_floats_exponential_is_open_not_an_overflow():
+    """A delta-method interval thousands of times E wide (a table nothing pins E on: one
+    of plan_effects' drawn tables raised OverflowError inside diagnose) reads in log E as
+    [about 0, inf], said not identified, instead of raising."""
+    lo, hi = log_interval(0.2, 1e3, 1.96)
+    assert hi == math.inf and 0.0 <= lo < 1e-300
+    rng = np.random.default_rng(8)
+    w = np.repeat(np.linspace(0.1, 0.6, 8), 3)
+    P = w * 3.5 * (1 + 1.5 * w / 3.0) + 0.002 * rng.standard_normal(w.size)
+    kw = {"thickness_mm": 3.0, "radius_mm": 2.5, "beta_table": "paper", "a_over_h": 0.8}
+    fit = fit_indentation(w, P, **kw)
+    wide = dataclasses.replace(fit, E_ci95_mpa=(fit.E_mpa - 1e3, fit.E_mpa + 1e3), notes=())
+    got = carry_misfit(wide, w, P, P)
+    assert got.E_ci95_mpa[1] == math.inf and got.E_ci95_mpa[0] >= 0.0
+    assert any(n.startswith("E is not identified by these presses") for n in got.notes)
 
 
 def test_three_scattered_presses_give_no_modulus():

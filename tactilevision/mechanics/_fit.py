@@ -17,7 +17,7 @@ from ._effects import FIT_EFFECTS
 from ._fem_tables import TABLE_EXTRAPOLATION, fem_force, kappa_n_nu_range
 from ._kappa import _dkappa_dnu, kappa
 from ._kappa import _table as _kappa_table
-from ._misfit import assess_misfit, widen_interval
+from ._misfit import assess_misfit, log_interval, widen_interval
 from ._neohookean import neo_hookean_constants
 from ._result import IndentationFit
 
@@ -384,8 +384,7 @@ def carry_misfit(fit: IndentationFit, depth_mm: np.ndarray, force_n: np.ndarray,
     if finite and math.isfinite(E_ci[0]) and E_ci[0] <= 0 < E_ci[1]:
         # the delta method's symmetric interval reaches zero: a modulus is positive, its
         # interval is taken in log E (the same half-width in units of E's se)
-        q = (E_ci[1] - E) / E
-        E_ci = (E * math.exp(-q), E * math.exp(q))
+        E_ci = log_interval(E, E_ci[1] - E, 1.0)
         extra = (f"E is not identified by these presses: its interval reached zero, taken in "
                  f"log E it is [{E_ci[0]:.4g}, {E_ci[1]:.4g}] MPa",)
     if finite and m.factor > 1 and all(math.isfinite(v) and v > 0 for v in E_ci):

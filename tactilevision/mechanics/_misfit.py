@@ -40,6 +40,7 @@ factor and the drift) that ``fit``, ``calibrate`` and ``diagnose`` print and wri
 from __future__ import annotations
 
 import math
+import sys
 from dataclasses import dataclass
 from typing import Any
 
@@ -366,13 +367,20 @@ def widen_interval(value: float, ci: tuple[float, float], factor: float,
             min(limits[1], value + factor * (hi - value)))
 
 
+#: log of the largest float: math.exp past it raises OverflowError
+_LOG_FLOAT_MAX = math.log(sys.float_info.max)
+
+
 def log_interval(value: float, se: float, quantile: float) -> tuple[float, float]:
     """A positive quantity's interval in log space: value exp(-+ quantile se / value).
 
     Never reaches zero: a modulus of 1 +- 0.6 (quantile x se) reads [0.55, 1.8], not
-    [0.4, 1.6]; for se small against the value it is the symmetric interval.
+    [0.4, 1.6]; for se small against the value it is the symmetric interval. Where
+    ``quantile se / value`` is past what a float's exponential holds (about 709), the
+    upper end is infinite (nothing pins the value) and the lower end underflows towards
+    zero, instead of raising ``OverflowError``.
     """
     if not (value > 0 and math.isfinite(se) and se >= 0):
         return (math.nan, math.nan)
     s = quantile * se / value
-    return (value * math.exp(-s), value * math.exp(s))
+    return (value * math.exp(-s), value * math.exp(s) if s < _LOG_FLOAT_MAX else math.inf)
