@@ -1050,7 +1050,7 @@ def _loop_reads(rows: list[tuple[dict, str]]) -> list[Table]:
         Table("The null, the offset and the holds", ["log", "right", "holds' decay (%/s)"],
               silent, note="The holds' reading is diagnose's (`holds` in its JSON: F test "
                            "against a constant force per press, p < 0.001); their decay, "
-                           f"its range over the logs (quiet logs: {', '.join(quiet)})."),
+                           "its range over the logs of the row (%/s of the force)."),
         Table("E fitted under the effect named",
               ["fitted to", "right verdicts fitted", "95 % interval holds the effect's E"],
               [[where.get(k, k), v[0], f"{v[1]} of {v[0]}"] for k, v in sorted(fits.items())],
