@@ -172,3 +172,34 @@ def test_the_link_check_catches_a_missing_heading():
     assert "hertzs-half-space" in heads and "no-such-table" not in heads
     m = LINK.search("see [report](../validation/report/x.md#a-b) and")
     assert m and m.group(1) == "../validation/report/x.md" and m.group(2) == "#a-b"
+
+
+def _row(kind: str, verdict: str | None = None, holds: str = "flat", named: bool = False,
+         ci: tuple[float, float] | None = None, fit_data: str | None = None) -> dict:
+    """One row as ``bench_loop.one`` returns it, with only what ``_loop_reads`` reads."""
+    return {"kind": kind, "verdict": verdict, "unexplained": None, "E_after_ci": ci,
+            "E_named_truth": 0.2, "fit_data": fit_data,
+            "holds": {"verdict": holds, "named": named, "decay_rate_per_s": -0.1 if named
+                      else 0.001, "smallest_rate_per_s": 0.01}}
+
+
+def test_the_loops_reads_count_silence_holds_and_intervals():
+    """report mark_verdicts' tables of the null's silence, the holds and E after a right
+    verdict, on hand-made rows whose counts are known."""
+    rows = [(_row("null"), "yes"), (_row("null", "force_offset"), "no"),
+            (_row("offset"), "yes"),
+            (_row("relaxation", "viscoelastic_relaxation", "relaxing", True, (0.18, 0.22),
+                  "holds"), "yes"),
+            (_row("damage", "stiffness_step:time_s", ci=(0.21, 0.25), fit_data="crossings"),
+             "yes"),
+            (_row("spatial", "spatial_nonuniformity", ci=(0.19, 0.21), fit_data="crossings"),
+             "yes")]
+    silent, fits = report._loop_reads(rows)
+    got = {r[0].split(":")[0]: r[1] for r in silent.rows}
+    assert got["nothing hidden"] == "1 of 2" and got["a relaxing gel (g 0.25, tau 0.7 s)"] \
+        == "1 of 1"
+    assert got["every other log"] == "5 of 5"
+    assert silent.rows[2][2] == "-10.00 to -10.00"
+    by = {r[0]: r[1:] for r in fits.rows}
+    assert by["the crossing forces (`fit --crossings --effects`)"] == [2, "1 of 2"]
+    assert by["the holds (`fit --holds`)"] == [1, "1 of 1"]
