@@ -617,6 +617,10 @@ def _ft_zero(quick: bool) -> Result:
                           f"at most {moved:.1f} % against the reference.")
 
 
+def _quiet(line: str) -> None:
+    """A benchmark's per-session progress line: the benchmark's, not the page's."""
+
+
 MARK_COVERAGE_SESSIONS = 20
 
 
@@ -639,19 +643,14 @@ MARK_COVERAGE_SESSIONS = 20
 def _mark_coverage(quick: bool) -> Result:
     import bench_mark_coverage as b
     n = 2 if quick else MARK_COVERAGE_SESSIONS
-
-    def quiet(line: str) -> None:
-        """The per-session lines are the benchmark's, not the page's."""
-    designs = [("a mark, 10 frames/s", 10.0, b.coverage(n, [10.0, 30.0], 3000, ("mark",),
-                                                        show=quiet))]
-    designs.append(("a mark, 30 frames/s", 30.0, designs[0][2]))
-    designs.append(("a vernier, 8 deg, no band read", 15.0,
-                    b.coverage(n, [15.0], 7000, ("auto",), theta=8.0,
-                               overshoot_um=(5.0, 25.0), show=quiet)))
+    marks = b.coverage(n, [10.0, 30.0], 3000, ("mark",), show=_quiet)
+    vernier = b.coverage(n, [15.0], 7000, ("auto",), theta=8.0, overshoot_um=(5.0, 25.0),
+                         show=_quiet)
+    designs = [("a mark, 10 frames/s", marks[(10.0, "mark")]),
+               ("a mark, 30 frames/s", marks[(30.0, "mark")]),
+               ("a vernier, 8 deg, no band read", vernier[(15.0, "auto")])]
     rows, held = [], []
-    for label, fps, tally in designs:
-        rule = "auto" if "vernier" in label else "mark"
-        t = tally[(fps, rule)]
+    for label, t in designs:
         err, width = np.asarray(t["err"]), np.asarray(t["width"])
         m = len(t["E"])
         held.append((label, sum(t["E"]), m))
@@ -711,10 +710,7 @@ PLAN_EFFECT_SESSIONS = 40
     [f"python benchmarks/bench_plan_effects.py --sessions {PLAN_EFFECT_SESSIONS}"])
 def _plan_effects(quick: bool) -> Result:
     import bench_plan_effects as b
-
-    def quiet(line: str) -> None:
-        """The progress lines are the benchmark's, not the page's."""
-    got = b.run(4 if quick else PLAN_EFFECT_SESSIONS, 2, [0] if quick else None, show=quiet)
+    got = b.run(4 if quick else PLAN_EFFECT_SESSIONS, 2, [0] if quick else None, show=_quiet)
     by: dict[str, list[dict]] = {}
     for r in got:
         by.setdefault(r["effect"], []).append(r)
