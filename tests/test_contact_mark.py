@@ -190,6 +190,22 @@ def test_frames_before_the_first_trace_that_may_show_it_faintly_widen_its_bracke
     assert (onset, first, faint) == (10, 9, 0)
 
 
+def test_a_trace_that_passes_back_through_the_approachs_level_still_starts_the_bracket(
+        monkeypatch):
+    """A trace's change turns into the hold's shape on its way up: a frame just past w0 may
+    project far below the approach's level (Taxim without shadows: -0.5 to -2.0 of the way,
+    19 to 31 sds) and the next one back at it. The trace two frames before the first rising
+    one starts the bracket when it lies MARK_Z_BRIDGE sds off, and as far from the frame
+    between; a frame under that (here 0.105
+    of the way, 9.8 sds of the approach's frames' 0.0107) bridges nothing (issue 83: on two
+    drawn designs, four brackets began 3 to 43 um past w0)."""
+    assert _faint_press(monkeypatch, [0.0, -0.5, 0.01]) == (11, 9, 0)
+    assert _faint_press(monkeypatch, [0.0, -0.5, 0.3]) == (11, 9, 0)
+    assert _faint_press(monkeypatch, [0.0, 0.105, 0.01]) == (11, 11, 0)
+    # without the frame between, the walk is the rise's own
+    assert _faint_press(monkeypatch, [0.0, 0.0, 0.01]) == (11, 11, 0)
+
+
 def test_a_trace_rises_above_the_frames_before_it_not_an_approach_lifted_by_shading(
         monkeypatch):
     """An approach whose shading lifts the mark's profile lifts every frame before the

@@ -23,6 +23,7 @@ from ._results import (
     MARK_TRACE,
     MARK_TRACE_SHAPE,
     MARK_Z_BLOCK,
+    MARK_Z_BRIDGE,
     MARK_Z_FAINT,
     MARK_Z_FRAME,
     MARK_Z_SEEN,
@@ -180,6 +181,13 @@ def _mark_template_onset(ctx: _PressContext, centre: tuple[float, float], run: n
     last, 0.6 sd above that level, was taken for the first trace, its bracket 77 mN under
     P(w0), and the crossing forces named a stiffness step along time on the session's null;
     on seed 191 a frame 4.0 sds up, 3.7 above that level, put a bracket 120 mN under P(w0)).
+    A trace's change turns into the hold's shape on its way up, so its projection may pass
+    back through the approach's level for a frame: where the frame before ``first`` shows
+    nothing, the one before that still starts the trace when it lies :data:`MARK_Z_BRIDGE`
+    sds off (either way) and as far from that frame, and the walk goes on from there (an
+    approach lifted by shading lifts both alike; on Taxim sessions without
+    shadows, frames 3 to 10 um past w0 projected -0.5 to -2.0 of the way, their next frames
+    about 0, and four brackets began 3 to 43 um past w0 without it).
 
     A mark's trace grows from nothing at w0, so a frame taken just past it may show the
     mark below any threshold that noise does not cross: ``faint`` counts the frames before
@@ -254,10 +262,19 @@ def _mark_template_onset(ctx: _PressContext, centre: tuple[float, float], run: n
                    f"{MARK_Z_STEP:g}")
             break
         first = j
-        while first > 0 and ((a[first - 1] < a[first]
-                              and _departs(a, first - 1, MARK_Z_SEEN * sd_a, MARK_TRACE))
-                             or shows_shape(first - 1)):
-            first -= 1
+        while True:
+            while first > 0 and ((a[first - 1] < a[first]
+                                  and _departs(a, first - 1, MARK_Z_SEEN * sd_a, MARK_TRACE))
+                                 or shows_shape(first - 1)):
+                first -= 1
+            # a trace's change turns into the hold's shape on its way up: its projection
+            # may pass back through the approach's level for a frame between an
+            # unmistakable trace and the rest of the rise (MARK_Z_BRIDGE)
+            if (first >= 2 and _departs(a, first - 2, MARK_Z_BRIDGE * sd_a, MARK_TRACE)
+                    and abs(a[first - 2] - a[first - 1]) >= MARK_Z_BRIDGE * sd_a):
+                first -= 2
+                continue
+            break
         faint = 0
         while (faint < MARK_FAINT_MAX and first - faint > 0
                and _departs(a, first - faint - 1, MARK_Z_FAINT * sd_a, MARK_FAINT_FLOOR)):

@@ -76,6 +76,18 @@ MARK_TRACE_SHAPE = 0.3
 #: moves lifts the frames before the crossing by a few sds of a steady one: 0.01 of the way
 #: at 5 sd on a Taxim session with shadows).
 MARK_TRACE = 0.1
+#: ... and where the frame before the first trace so found does not show the mark, the one
+#: before it still does when its projection lies this many sds off the approach's level and
+#: as far off the frames before it (either way: :func:`~tactilevision.contact._onset._departs`),
+#: and as far from the frame after it (an approach lifted by shading lifts both alike): a
+#: trace's change turns into the hold's shape on its way up, and its projection can pass
+#: back through the approach's level for a frame. On two Taxim mark sessions without shadows
+#: of designs drawn at random (seeds 10039 d09 and 10141 d03, 16 and 33 um of travel per
+#: frame), four presses' frames 3.3 to 10 um past w0 projected -0.5 to -2.0 of the way (19
+#: to 31 sds), their next frames 0.03 to 0.43, and the first trace was read one or two periods
+#: late (the brackets began 3.3 to 43 um past w0). Over the 1,875 template-read presses of 100
+#: such sessions, no frame two before a first trace and before w0 lay past 5.6 sds.
+MARK_Z_BRIDGE = 10.0
 #: ... and the frame just before that first trace may show the mark too faintly to count
 #: (a renderer's toe: on a Taxim session without shadows, 14 of the 23 presses its template
 #: read showed their first frame past w0 at only 0.05 to 0.23 of the way, 1.9 to 3.7 sds)
