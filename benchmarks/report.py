@@ -895,12 +895,23 @@ MARK_SWEEP_CACHE_ENV = "TACTILEVISION_MARK_SWEEP"
      f"python benchmarks/bench_mark_sweep.py --seed {MARK_SWEEP_SEED} --first 100 "
      "--designs 5 --kinds vernier --cache DIR"])
 def _mark_sweep(quick: bool) -> Result:
+    return _sweep_result(MARK_SWEEP_SEED, range(2 if quick else 20),
+                         range(100, 101 if quick else 105),
+                         _cache(MARK_SWEEP_CACHE_ENV, "tactilevision_mark_sweep"))
+
+
+def _cache(env: str, name: str) -> Path:
+    """The folder of Taxim's renders: ``$env``, or `name` in the system's temporary one."""
+    return Path(os.environ.get(env) or Path(tempfile.gettempdir()) / name)
+
+
+def _sweep_result(seed: int, mark_designs: range, vernier_designs: range, cache: Path
+                  ) -> Result:
+    """Report `mark_sweep`'s tables on `seed`'s designs (no verniers: no vernier table)."""
     import bench_mark_sweep as b
-    cache = Path(os.environ.get(MARK_SWEEP_CACHE_ENV)
-                 or Path(tempfile.gettempdir()) / "tactilevision_mark_sweep")
-    marks = b.run(MARK_SWEEP_SEED, range(2 if quick else 20), ("mark-shadow", "mark-plain"),
-                  cache)
-    verniers = b.run(MARK_SWEEP_SEED, range(100, 101 if quick else 105), ("vernier",), cache)
+    marks = b.run(seed, mark_designs, ("mark-shadow", "mark-plain"), cache)
+    verniers = (b.run(seed, vernier_designs, ("vernier",), cache) if len(vernier_designs)
+                else [])
     per = []
     for k, r in [*enumerate(marks), *zip(range(100, 100 + len(verniers)), verniers, strict=True)]:
         d = r["design"]
@@ -978,7 +989,8 @@ def _mark_sweep(quick: bool) -> Result:
     fm = b.figures(marks)
     return Result([
         Table("The marks", ["figure", "value"], pooled(marks, True)),
-        Table("The verniers", ["figure", "value"], pooled(verniers, False)),
+        *([Table("The verniers", ["figure", "value"], pooled(verniers, False))]
+          if verniers else []),
         Table("Per design", cols, per,
               note="Depth errors over the certified presses (95 % within +-20 um, "
                    "`[gauge_block] depth_tolerance_mm`; the others fitted but only bounded) "
@@ -1079,19 +1091,22 @@ def _loop_reads(rows: list[tuple[dict, str]]) -> list[Table]:
      "--kinds mark-shadow mark-plain --cache DIR --render-only",
      "python benchmarks/bench_loop.py DIR/<design> --json FILE"])
 def _mark_verdicts(quick: bool) -> Result:
+    return _verdicts_result(MARK_SWEEP_SEED, (0, 100) if quick else MARK_VERDICT_DESIGNS,
+                            _cache(MARK_SWEEP_CACHE_ENV, "tactilevision_mark_sweep"))
+
+
+def _verdicts_result(seed: int, ks: tuple[int, ...], cache: Path) -> Result:
+    """Report `mark_verdicts`' tables on `seed`'s designs `ks` (100 and up: verniers)."""
     import bench_loop as loop
     import bench_mark_sweep as b
-    cache = Path(os.environ.get(MARK_SWEEP_CACHE_ENV)
-                 or Path(tempfile.gettempdir()) / "tactilevision_mark_sweep")
     cache.mkdir(parents=True, exist_ok=True)
-    ks = (0, 100) if quick else MARK_VERDICT_DESIGNS
     label = {"mark-shadow": "mark, shadows", "mark-plain": "mark, no shadows",
              "vernier": "vernier"}
     per, pooled, all_rows, reach = [], {}, [], {}
     for k in ks:
         kinds = ("vernier",) if k >= 100 else ("mark-shadow", "mark-plain")
-        d = b.draw_design(MARK_SWEEP_SEED, k, kinds)
-        folder = b.design_folder(cache, MARK_SWEEP_SEED, k, d)
+        d = b.draw_design(seed, k, kinds)
+        folder = b.design_folder(cache, seed, k, d)
         b.render(folder, d)
         with tempfile.TemporaryDirectory() as tmp:
             rows = [loop.one(folder, Path(tmp), kind, 1000) for kind in loop.KINDS]
@@ -1149,6 +1164,46 @@ def _mark_verdicts(quick: bool) -> Result:
                f"({total[2]} more a change of stiffness in the other shape).")
 
 
+#: The newest seed of drawn mark designs and the commit whose rules it judges: its ten
+#: designs were drawn before that commit's rule was set and calibrated only after it was
+#: committed. A rule changed later is judged on a newer seed, not on this one.
+MARK_FRESH_SEED, MARK_FRESH_RULES = 10333, "a022a69"
+MARK_FRESH_CACHE_ENV = "TACTILEVISION_MARK_FRESH"
+_FRESH_TEXT = (f"""Seed {MARK_FRESH_SEED}, mark designs 0 to 9 (five with Taxim's shadows,
+    five without), drawn by `benchmarks/bench_mark_sweep.py` before the mark rule of
+    {MARK_FRESH_RULES} (a trace that passes back through the approach's level still starts
+    the crossing's bracket) was set, rendered by Taxim's own renderer while it was, and
+    calibrated only after it was committed: designs nobody here chose, judged once on the
+    rules as they stood. Report `mark_sweep` and `mark_verdicts` hold seed
+    {MARK_SWEEP_SEED}'s, whose renders the rules after them were read on. The renders are
+    kept in ${MARK_FRESH_CACHE_ENV} (rendered there when missing, about 3 to 7 minutes each
+    on this project's 2-core machine); --quick: designs 0 and 1.""")
+
+
+@subject(
+    "mark_sweep_fresh", "Calibrate: depths certified on a fresh draw of gauge-block designs",
+    "Report `mark_sweep`'s scoring (certified depths, their z-scores, E against 0.2 MPa, "
+    "the crossing inside its bracket) on the newest drawn designs. " + _FRESH_TEXT,
+    [f"python benchmarks/bench_mark_sweep.py --seed {MARK_FRESH_SEED} --designs 10 "
+     "--kinds mark-shadow mark-plain --cache DIR"])
+def _mark_sweep_fresh(quick: bool) -> Result:
+    return _sweep_result(MARK_FRESH_SEED, range(2 if quick else 10), range(0),
+                         _cache(MARK_FRESH_CACHE_ENV, "tactilevision_mark_fresh"))
+
+
+@subject(
+    "mark_verdicts_fresh", "Diagnose: verdicts on a fresh draw of gauge-block designs",
+    "Report `mark_verdicts`' loop and scoring (six F/T logs per design: nothing hidden, a "
+    "gradient, a fixture's offset, a softening, a step, a relaxing gel) on the newest drawn "
+    "designs. " + _FRESH_TEXT,
+    [f"python benchmarks/bench_mark_sweep.py --seed {MARK_FRESH_SEED} --designs 10 "
+     "--kinds mark-shadow mark-plain --cache DIR --render-only",
+     "python benchmarks/bench_loop.py DIR/<design> --json FILE"])
+def _mark_verdicts_fresh(quick: bool) -> Result:
+    return _verdicts_result(MARK_FRESH_SEED, (0, 1) if quick else tuple(range(10)),
+                            _cache(MARK_FRESH_CACHE_ENV, "tactilevision_mark_fresh"))
+
+
 MARK_PLAN_DESIGNS = tuple(range(10))
 
 
@@ -1173,8 +1228,7 @@ MARK_PLAN_DESIGNS = tuple(range(10))
 def _mark_plan_sizes(quick: bool) -> Result:
     import bench_loop as loop
     import bench_mark_sweep as b
-    cache = Path(os.environ.get(MARK_SWEEP_CACHE_ENV)
-                 or Path(tempfile.gettempdir()) / "tactilevision_mark_sweep")
+    cache = _cache(MARK_SWEEP_CACHE_ENV, "tactilevision_mark_sweep")
     cache.mkdir(parents=True, exist_ok=True)
     kinds = ("spatial", "softening", "damage")
     label = {"mark-shadow": "shadows", "mark-plain": "no shadows"}
