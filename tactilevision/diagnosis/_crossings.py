@@ -151,7 +151,8 @@ class CrossingScan:
         Upper tail of chi2: small when the crossing forces vary within indenters beyond
         what they state.
     tests : tuple of CrossingTest
-        Best first (smallest p).
+        Best first: smallest p, and among equal p (the draws' floor) the best AIC on the
+        brackets' likelihood (:func:`_order`).
     p_trend_fits, p_step_fits : float
         Where a trend and a step along the most significant test's column are both
         significant: the chance that the fitted trend's brackets favour the best step over
@@ -247,7 +248,8 @@ class CrossingScan:
         :data:`_CHOICE_ALPHA`); without those, where their AIC on the brackets lie within 2
         (Burnham and Anderson, Model Selection and Multimodel Inference, 2002, sec. 2.6).
         A gel that softens steadily fits a step at its middle nearly as well at a
-        crossing's noise."""
+        crossing's noise. And any other effect as significant whose AIC lies within 2 of
+        the found one's (:meth:`_alike_elsewhere`)."""
         return self.shapes_at(_CHOICE_ALPHA)[1]
 
     def shapes_at(self, alpha: float) -> tuple[CrossingTest | None, tuple[CrossingTest, ...]]:
@@ -275,7 +277,29 @@ class CrossingScan:
         if not 0.0 < alpha < 1.0:
             raise InputError(f"alpha must lie in (0, 1), got {alpha!r}")
         found, rival, alike = self._rivals(alpha)
-        return found, ((rival,) if rival is not None and alike else ())
+        same = (rival,) if rival is not None and alike else ()
+        return found, same + self._alike_elsewhere(found, same)
+
+    def _alike_elsewhere(self, found: CrossingTest | None,
+                         already: tuple[CrossingTest, ...]) -> tuple[CrossingTest, ...]:
+        """Tests of other effects as significant as `found` (the same family-wise p: at the
+        draws' floor, where the draws cannot order them) whose AIC on the brackets lies
+        within 2 of its (:func:`_aic_gain`; Burnham and Anderson, sec. 2.6): the data do
+        not tell them apart (a gradient across the pad on presses that crossed it in time
+        order fits a step along time about as well). A step along press order is not
+        listed beside the same along time."""
+        if found is None:
+            return ()
+        named = [found, *already]
+        out = []
+        for t in self.tests:
+            twin = any(t.effect == u.effect or (t.kind == u.kind and {t.column, u.column}
+                                                <= {"time_s", "press"}) for u in named)
+            if (t.significant and t.p_value == found.p_value and not twin
+                    and abs(_aic_gain(found) - _aic_gain(t)) <= 1.0):
+                out.append(t)
+                named.append(t)
+        return tuple(out)
 
     def sentence(self) -> str:
         """What the crossing forces say, in one to three sentences."""
@@ -566,7 +590,7 @@ def _scan(columns: Mapping[str, np.ndarray]) -> CrossingScan | None:
         out.append(CrossingTest(col, kind, b, s, at[k], float(p), bool(p < CROSSING_ALPHA),
                                 gain))
     shape_p = (float("nan"), float("nan"))
-    sig = sorted((t for t in out if t.significant), key=lambda t: (t.p_value, -t.gain))
+    sig = sorted((t for t in out if t.significant), key=_order)
     if sig:
         j_of = {(t[0], t[1]): j for j, t in enumerate(tests)}
         col = sig[0].column
@@ -576,10 +600,25 @@ def _scan(columns: Mapping[str, np.ndarray]) -> CrossingScan | None:
             shape_p = _shape_fits(r + 1.0 - half, r + 1.0 + half, gid, width,
                                   shape_a[owner_a == jt][0], shape_a[owner_a == js],
                                   fine[jt][1], shape_a[best[js]], fine[js][1])
-    out.sort(key=lambda t: (t.p_value, -t.gain))
+    out.sort(key=_order)
     return CrossingScan(n=int(r.size), n_indenters=len(np.unique(groups)), chi2=chi2, dof=dof,
                         p_scatter=float(stats.chi2.sf(chi2, dof)) if dof > 0 else float("nan"),
                         tests=tuple(out), p_trend_fits=shape_p[0], p_step_fits=shape_p[1])
+
+
+def _aic_gain(t: CrossingTest) -> float:
+    """A test's log-likelihood gain less what Akaike's criterion charges its extra
+    parameters: a step's place costs 1 (AIC = 2 k - 2 log L; Akaike, IEEE Trans. Autom.
+    Control 19, 716, 1974)."""
+    return t.gain - (1.0 if t.kind == "step" else 0.0)
+
+
+def _order(t: CrossingTest) -> tuple[float, float]:
+    """The tests' order: family-wise p, then, among tests the draws cannot order (their p
+    at the draws' floor, 1 / (:data:`_BRACKET_DRAWS` + 1)), Akaike's criterion on the
+    brackets' likelihood (:func:`_aic_gain`): the raw gain would favour a step, whose
+    place is fitted too."""
+    return (t.p_value, -_aic_gain(t))
 
 
 def _shape_fits(lo: np.ndarray, hi: np.ndarray, groups: np.ndarray, width: np.ndarray,
