@@ -868,7 +868,7 @@ def _plan_crossings(quick: bool) -> Result:
 
 
 MARK_SWEEP_SEED = 9973
-MARK_SWEEP_CACHE_ENV = "TACTILEVISION_MARK_SWEEP"
+MARK_SWEEP_CACHE_ENV, MARK_SWEEP_CACHE_NAME = "TACTILEVISION_MARK_SWEEP", "tactilevision_mark_sweep"
 
 
 @subject(
@@ -897,7 +897,7 @@ MARK_SWEEP_CACHE_ENV = "TACTILEVISION_MARK_SWEEP"
 def _mark_sweep(quick: bool) -> Result:
     return _sweep_result(MARK_SWEEP_SEED, range(2 if quick else 20),
                          range(100, 101 if quick else 105),
-                         _cache(MARK_SWEEP_CACHE_ENV, "tactilevision_mark_sweep"))
+                         _cache(MARK_SWEEP_CACHE_ENV, MARK_SWEEP_CACHE_NAME))
 
 
 def _cache(env: str, name: str) -> Path:
@@ -1092,7 +1092,7 @@ def _loop_reads(rows: list[tuple[dict, str]]) -> list[Table]:
      "python benchmarks/bench_loop.py DIR/<design> --json FILE"])
 def _mark_verdicts(quick: bool) -> Result:
     return _verdicts_result(MARK_SWEEP_SEED, (0, 100) if quick else MARK_VERDICT_DESIGNS,
-                            _cache(MARK_SWEEP_CACHE_ENV, "tactilevision_mark_sweep"))
+                            _cache(MARK_SWEEP_CACHE_ENV, MARK_SWEEP_CACHE_NAME))
 
 
 def _verdicts_result(seed: int, ks: tuple[int, ...], cache: Path) -> Result:
@@ -1168,8 +1168,8 @@ def _verdicts_result(seed: int, ks: tuple[int, ...], cache: Path) -> Result:
 #: designs were drawn before that commit's rule was set and calibrated only after it was
 #: committed. A rule changed later is judged on a newer seed, not on this one.
 MARK_FRESH_SEED, MARK_FRESH_RULES = 10333, "a022a69"
-MARK_FRESH_CACHE_ENV = "TACTILEVISION_MARK_FRESH"
-_FRESH_TEXT = (f"""Seed {MARK_FRESH_SEED}, mark designs 0 to 9 (five with Taxim's shadows,
+MARK_FRESH_CACHE_ENV, MARK_FRESH_CACHE_NAME = "TACTILEVISION_MARK_FRESH", "tactilevision_mark_fresh"
+_FRESH_TEXT = f"""Seed {MARK_FRESH_SEED}, mark designs 0 to 9 (five with Taxim's shadows,
     five without), drawn by `benchmarks/bench_mark_sweep.py` before the mark rule of
     {MARK_FRESH_RULES} (a trace that passes back through the approach's level still starts
     the crossing's bracket) was set, rendered by Taxim's own renderer while it was, and
@@ -1177,7 +1177,7 @@ _FRESH_TEXT = (f"""Seed {MARK_FRESH_SEED}, mark designs 0 to 9 (five with Taxim'
     rules as they stood. Report `mark_sweep` and `mark_verdicts` hold seed
     {MARK_SWEEP_SEED}'s, whose renders the rules after them were read on. The renders are
     kept in ${MARK_FRESH_CACHE_ENV} (rendered there when missing, about 3 to 7 minutes each
-    on this project's 2-core machine); --quick: designs 0 and 1.""")
+    on this project's 2-core machine); --quick: designs 0 and 1."""
 
 
 @subject(
@@ -1188,7 +1188,7 @@ _FRESH_TEXT = (f"""Seed {MARK_FRESH_SEED}, mark designs 0 to 9 (five with Taxim'
      "--kinds mark-shadow mark-plain --cache DIR"])
 def _mark_sweep_fresh(quick: bool) -> Result:
     return _sweep_result(MARK_FRESH_SEED, range(2 if quick else 10), range(0),
-                         _cache(MARK_FRESH_CACHE_ENV, "tactilevision_mark_fresh"))
+                         _cache(MARK_FRESH_CACHE_ENV, MARK_FRESH_CACHE_NAME))
 
 
 @subject(
@@ -1201,7 +1201,7 @@ def _mark_sweep_fresh(quick: bool) -> Result:
      "python benchmarks/bench_loop.py DIR/<design> --json FILE"])
 def _mark_verdicts_fresh(quick: bool) -> Result:
     return _verdicts_result(MARK_FRESH_SEED, (0, 1) if quick else tuple(range(10)),
-                            _cache(MARK_FRESH_CACHE_ENV, "tactilevision_mark_fresh"))
+                            _cache(MARK_FRESH_CACHE_ENV, MARK_FRESH_CACHE_NAME))
 
 
 MARK_PLAN_DESIGNS = tuple(range(10))
@@ -1228,7 +1228,7 @@ MARK_PLAN_DESIGNS = tuple(range(10))
 def _mark_plan_sizes(quick: bool) -> Result:
     import bench_loop as loop
     import bench_mark_sweep as b
-    cache = _cache(MARK_SWEEP_CACHE_ENV, "tactilevision_mark_sweep")
+    cache = _cache(MARK_SWEEP_CACHE_ENV, MARK_SWEEP_CACHE_NAME)
     cache.mkdir(parents=True, exist_ok=True)
     kinds = ("spatial", "softening", "damage")
     label = {"mark-shadow": "shadows", "mark-plain": "no shadows"}
