@@ -167,14 +167,55 @@ SWEEP = {
 
 def sweep_cell(folder: Path, name: str) -> dict:
     """One cell of the sweep: render it if absent, calibrate, score against truth.json."""
-    import warnings
-
-    from tactilevision import calibrate_session
-
     if not (folder / "truth.json").exists():
         cmd = [sys.executable, str(ROOT / "benchmarks" / "taxim_gauge_session.py"), str(folder),
                "--repeats", "4", "--overshoot-mm", "0.005", "0.060", *SWEEP[name].split()]
         subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
+    return {"cell": name, "args": SWEEP[name], **score(folder)}
+
+
+#: The independent check's Taxim sessions (:func:`_taxim`, 20 presses, shadows on): name ->
+#: (overshoot range, mm; seed).
+TAXIM_CHECK = {"Taxim 26-50 um, seed 1": (0.026, 0.05, 1),
+               "Taxim 0-50 um, seed 2": (0.0, 0.05, 2),
+               "Taxim 0-50 um, seed 5": (0.0, 0.05, 5)}
+
+
+def check_session(folder: Path, name: str, presses: int = 20) -> dict:
+    """One of :data:`TAXIM_CHECK`'s sessions: render it if absent, calibrate, score."""
+    lo, hi, seed = TAXIM_CHECK[name]
+    if not (folder / "truth.json").exists():
+        _taxim(folder, presses, lo, hi, seed)
+    return {"cell": name, "args": f"--overshoot-mm {lo} {hi} --seed {seed}", **score(folder)}
+
+
+def plan_depth_sd(folder: Path) -> tuple[float, str]:
+    """What ``plan`` predicts for a press's certified depth sd on this session's design (its
+    ``session.toml``, the truth's overshoot range, else its presses' range, and frame rate
+    as ``[plan]``), um, and how (:func:`tactilevision.planning.depth_uncertainty`)."""
+    from tactilevision.planning import depth_uncertainty, read_design
+
+    truth = json.loads((folder / "truth.json").read_text())
+    over = [p["overshoot_mm"] for p in truth["presses"]]
+    lo, hi = (1e3 * v for v in truth.get("overshoot_range_mm", (min(over), max(over))))
+    text = ((folder / "session.toml").read_text()
+            + f"\n[plan]\novershoot_um = [{lo:.6g}, {hi:.6g}]\n"
+            + f"frame_rate_hz = {float(truth.get('fps', 10.0)):.6g}\n")
+    with tempfile.TemporaryDirectory() as tmp:
+        design = Path(tmp) / "design.toml"
+        design.write_text(text)
+        sd, _, how = depth_uncertainty(read_design(design))
+    return sd, how
+
+
+def score(folder: Path) -> dict:
+    """Calibrate a rendered session and score it against its truth.json: presses in view and
+    certified, bands read, the certified depths' error and z-scores, the stated sd, what
+    ``plan`` predicts (:func:`plan_depth_sd`), c and beta against the truth's law."""
+    import warnings
+
+    from tactilevision import calibrate_session
+
     truth = json.loads((folder / "truth.json").read_text())
     tp = {p["press"]: p for p in truth["presses"]}
     with warnings.catch_warnings():
@@ -182,9 +223,12 @@ def sweep_cell(folder: Path, name: str) -> dict:
         cal = calibrate_session(folder, allow_failure=True)
     cert = cal.certification
     out_of_view = {r.press for r in cert.rejected if r.reason == "bevel out of view"}
-    n_view = len([p for p in truth["presses"] if p["press"] not in out_of_view])
+    n_view = len([p for p in truth["presses"] if p["press"] not in out_of_view
+                  and not p.get("misaligned") and not p.get("edge")])
     ps = cert.presses
-    row = {"cell": name, "args": SWEEP[name], "in_view": n_view, "certified": len(ps)}
+    row = {"in_view": n_view, "certified": len(ps), "theta_deg": truth["bevel"]["angle_deg"],
+           "fps": truth.get("fps", float("nan"))}
+    row["plan_sd_um"], row["plan_how"] = plan_depth_sd(folder)
     optics = cert.bevel_optics or {}
     row["rss_ratio"] = optics.get("line_rss_ratio")
     row["edge_px"] = optics.get("edge_px")
@@ -195,6 +239,7 @@ def sweep_cell(folder: Path, name: str) -> dict:
         z = err / (1e3 * cal.depth_std_mm)
         read = np.array([getattr(p, "band_resolved", True) for p in ps])
         row.update(read=int(read.sum()), bias_um=err.mean(), sd_um=err.std(),
+                   max_um=float(np.abs(err).max()),
                    z_sd=float(z.std()), z_rms=float(np.sqrt(np.mean(z * z))),
                    stated_um=float(np.median(1e3 * cal.depth_std_mm)),
                    read_bias_um=float(err[read].mean()) if read.any() else float("nan"),
@@ -203,7 +248,7 @@ def sweep_cell(folder: Path, name: str) -> dict:
                    read_bias_px=float(err[read].mean()) / um_per_px if read.any()
                    else float("nan"))
     f = cal.fit
-    if f is not None and np.isfinite(f.beta):
+    if f is not None and np.isfinite(f.beta) and "c_n_per_mm" in truth:
         row.update(c_rel=f.c_n_per_mm / truth["c_n_per_mm"] - 1, beta=f.beta,
                    beta_covers=abs(f.beta - truth["beta"]) <= 1.96 * f.beta_se)
     return row

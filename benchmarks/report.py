@@ -1290,6 +1290,79 @@ def _mark_plan_sizes(quick: bool) -> Result:
                f"{len(per)} drawn designs; nothing named on {clean} of {nulls} nulls.")
 
 
+VERNIER_CACHE_ENV, VERNIER_CACHE_NAME = "TACTILEVISION_VERNIER", "tactilevision_vernier"
+
+
+@subject(
+    "vernier_taxim", "Calibrate: the vernier on frames Taxim drew, and plan's depth sd",
+    """The bevel read as a vernier on gauge-block sessions rendered by Taxim's own renderer
+    (`benchmarks/taxim_gauge_session.py`: its gel deformation and shadows, a flat gel map,
+    no code of ours; forces from eq. (5) with c and beta given, 20 presses each): three at
+    a 5 deg bevel with the stage stopping 26 to 50 or 0 to 50 um past w0 (seeds 1, 2, 5;
+    bands under 10 px get a block of Taxim's shadow beside them), and twelve on bevels the
+    project was not built on (`bench_vernier.SWEEP`: flank 3 to 15 deg, the bevel in each
+    of four directions, offsets 3 to 5 mm, 10 to 30 frames/s, constant or varied holds,
+    overshoot 5 to 60 um; cells A to F were looked at while the reading's rules were made,
+    G to L rendered after them), beside the shipped sample session (our FEM-rendered
+    frames, 5 deg). Each calibrated with its defaults and scored against its truth: presses
+    certified of those with the bevel in view, bands read (the others' depth only bounded
+    to the band's unresolved range), the certified depths' error and z-scores, and the
+    depth sd `plan` predicts for the design (`tactilevision.planning.depth_uncertainty`,
+    the session's overshoot range) against the sd measured. The renders (about 2 minutes
+    each on this project's 2-core machine) are kept in $TACTILEVISION_VERNIER (default: a
+    folder in the system's temporary directory). --quick: the sample, seed 2 and cells A
+    and G.""",
+    ["python benchmarks/bench_vernier.py --skip-ours --skip-90fps --keep DIR",
+     "python benchmarks/bench_vernier.py --sweep --keep DIR"])
+def _vernier_taxim(quick: bool) -> Result:
+    import bench_vernier as b
+    cache = _cache(VERNIER_CACHE_ENV, VERNIER_CACHE_NAME)
+    checks = ["Taxim 0-50 um, seed 2"] if quick else list(b.TAXIM_CHECK)
+    cells = ["A", "G"] if quick else list(b.SWEEP)
+    rows = [{"cell": "ours: the sample session", "args": "", **b.score(
+        ROOT / "sample_frames" / "gelsight_session")}]
+    rows += [b.check_session(cache / name.replace(" ", "_").replace(",", ""), name)
+             for name in checks]
+    rows += [b.sweep_cell(cache / f"sweep_{c}", c) for c in cells]
+
+    def num(r: dict, k: str, fmt: str) -> str:
+        v = r.get(k)
+        return "–" if v is None or not np.isfinite(v) else format(float(v), fmt)
+
+    per = [[r["cell"], f"{r['theta_deg']:g}", num(r, "fps", "g"),
+            f"{r['certified']} of {r['in_view']}", r.get("read", 0),
+            num(r, "bias_um", "+.2f"), num(r, "sd_um", ".2f"),
+            num(r, "max_um", ".1f"), num(r, "read_bias_um", "+.2f"), num(r, "z_sd", ".2f"),
+            num(r, "stated_um", ".2f"), f"{r['plan_sd_um']:.2f}",
+            "–" if not r.get("sd_um") else f"{r['plan_sd_um'] / r['sd_um']:.2f}",
+            "–" if "c_rel" not in r else _pct(r["c_rel"], 1),
+            "–" if "beta" not in r else f"{r['beta']:.3f}"] for r in rows]
+    taxim = rows[1:]
+    n_view = sum(r["in_view"] for r in taxim)
+    n_cert = sum(r["certified"] for r in taxim)
+    read_bias = [r["read_bias_um"] for r in taxim if np.isfinite(r.get("read_bias_um", np.nan))]
+    ratio = [r["plan_sd_um"] / r["sd_um"] for r in rows if r.get("sd_um")]
+    zsd = [r["z_sd"] for r in taxim if np.isfinite(r.get("z_sd", np.nan))]
+    narrow = sum(z > 1.2 for z in zsd)
+    summary = (f"On Taxim's frames {n_cert} of {n_view} presses with the bevel in view "
+               f"certified over {len(taxim)} sessions; the read bands' error mean "
+               f"{min(read_bias):+.2f} to {max(read_bias):+.2f} um; z-score sd "
+               f"{min(zsd):.2f} to {max(zsd):.2f} ({narrow} above 1.2, stated too narrow). "
+               f"`plan`'s depth sd {min(ratio):.2f} to {max(ratio):.2f} times the measured "
+               f"(the sample session: {ratio[0]:.2f}).")
+    return Result([Table(
+        "Per session", ["session", "flank (deg)", "frames/s", "certified", "bands read",
+                        "error mean (um)", "error sd (um)", "largest (um)",
+                        "read bands' mean (um)", "z sd", "stated sd, median (um)",
+                        "plan's sd (um)", "plan / measured sd", "c", "beta (truth 0.78)"],
+        per, note="Errors: certified depth less the true depth over the force window, over "
+                  "the certified presses (bands read and bounded alike); z: error over the sd "
+                  "the press states. plan's sd: a band read to 0.7 px (`VERNIER_EDGE_PX`) "
+                  "where it reaches 10 px, the rest bounded uniformly to that range, over the "
+                  "session's overshoot range. c against the truth's law; the sample's forces "
+                  "are an FEM gel's (no c given).")], summary=summary)
+
+
 @subject(
     "ball_taxim", "A ball's depths and E from frames drawn by Taxim's own renderer",
     """Dead weights of a 2 mm ball on a thick gel of E = 1 MPa (no F/T: the force is m g):
