@@ -101,6 +101,54 @@ def _cv_choice(choice: dict) -> str:
     return min(tables, key=lambda r: r["cost"])["engine"] if tables else choice["chosen"]
 
 
+def draws(sensors: list[str], presses: int, random: int, selections: int, seed: int
+          ) -> list[tuple[str, str]]:
+    """The selections judged, ``(sensor, presses)`` in order: `random` drawn at random a
+    sensor (one generator seeded `seed`, drawn through the sensors in turn), else
+    `selections` spread ones (every ``n // presses``-th press from an offset)."""
+    rng = np.random.default_rng(seed)
+    out = []
+    for name in sensors:
+        src, _ = SENSORS[name]
+        n = len(read_ball_presses(taxim_datapack(src.split(":")[1])
+                                  if src.startswith("taxim:") else src).frames)
+        stride = n // presses
+        sels = ([",".join(map(str, sorted(rng.choice(n, presses, replace=False))))
+                 for _ in range(random)] if random else
+                [f"{off}:{off + stride * presses}:{stride}"
+                 for off in range(min(selections, stride))])
+        out += [(name, sel) for sel in sels]
+    return out
+
+
+def judge(name: str, sel: str, out: Path) -> dict:
+    """One selection: ``optics calibrate --model auto`` and each candidate forced, each
+    scored on the presses it was not given. Returns the choice record (``choice``), each
+    candidate's ``(angle, cap)`` on the others (``scores``), whether each lies within 0.3
+    deg and 3 % of the best there (``ok``), the best by the choice's cost (``by_cost``),
+    the kept engine's cost less its (``excess``), the mean's and the folds' lowest cost's
+    choices (``mean``, ``cv``) and whether the margin told the candidates apart
+    (``told``)."""
+    src, opts = SENSORS[name]
+    choice = _run(src, opts, sel, [], out)["engine"]
+    scores = {}
+    for r in choice["candidates"]:
+        extra = ["--model", r["model"]]
+        if r["engine"] == "table_cells":
+            extra += ["--lut-cells", ",".join(map(str, r["lut_cells"]))]
+        scores[r["engine"]] = _score(_run(src, opts, sel, extra, out))
+    best_a = min(s[0] for s in scores.values())
+    best_c = min(abs(s[1]) for s in scores.values())
+    ok = {e: sc[0] - best_a <= 0.3 and abs(sc[1]) - best_c <= 0.03 for e, sc in scores.items()}
+    by_cost = min(scores, key=lambda e: _cost(scores[e]))
+    kept = scores[choice["chosen"]]
+    return {"sensor": name, "presses": sel, "choice": choice, "scores": scores, "ok": ok,
+            "by_cost": by_cost, "excess": _cost(kept) - _cost(scores[by_cost]),
+            "d_angle": kept[0] - best_a, "d_cap": abs(kept[1]) - best_c,
+            "mean": _mean_choice(choice), "cv": _cv_choice(choice),
+            "told": bool(choice.get("margin") and choice["margin"]["told_apart"])}
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sensors", nargs="+", default=list(SENSORS), choices=list(SENSORS))
@@ -119,63 +167,37 @@ def main() -> None:
           "inner cap | kept - best: angle, |cap| | within 0.3 deg and 3 % | the mean's "
           "choice, within | best by the cost on the others | told apart |")
     print("|---|---|---|---|---|---|---|---|---|")
-    rng = np.random.default_rng(a.seed)
     hits = {"median": 0, "mean": 0, "any": 0, "n": 0, "cost": 0, "cv": 0}
     excess: list[float] = []          # the kept engine's cost on the others less the best's
     best_out = 0                      # the best by the cost outside the bounds
     sure = {"n": 0, "within": 0, "cost": 0}
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "o.npz"
-        for name in a.sensors:
-            src, opts = SENSORS[name]
-            n = len(read_ball_presses(taxim_datapack(src.split(":")[1])
-                                      if src.startswith("taxim:") else src).frames)
-            stride = n // a.presses
-            sels = ([",".join(map(str, sorted(rng.choice(n, a.presses, replace=False))))
-                     for _ in range(a.random)] if a.random else
-                    [f"{off}:{off + stride * a.presses}:{stride}"
-                     for off in range(min(a.selections, stride))])
-            for sel in sels:
-                choice = _run(src, opts, sel, [], out)["engine"]
-                scores = {}
-                for r in choice["candidates"]:
-                    extra = ["--model", r["model"]]
-                    if r["engine"] == "table_cells":
-                        extra += ["--lut-cells", ",".join(map(str, r["lut_cells"]))]
-                    scores[r["engine"]] = _score(_run(src, opts, sel, extra, out))
-                best_a = min(s[0] for s in scores.values())
-                best_c = min(abs(s[1]) for s in scores.values())
-                ok = {e: sc[0] - best_a <= 0.3 and abs(sc[1]) - best_c <= 0.03
-                      for e, sc in scores.items()}
-                kept = scores[choice["chosen"]]
-                # the best by the choice's own cost (angle + CAP_DEG |cap|) on the others
-                by_cost = min(scores, key=lambda e: _cost(scores[e]))
-                hits["cost"] += by_cost == choice["chosen"]
-                excess.append(_cost(kept) - _cost(scores[by_cost]))
-                best_out += not ok[by_cost]
-                told = bool(choice.get("margin") and choice["margin"]["told_apart"])
-                if told:
-                    sure["n"] += 1
-                    sure["within"] += ok[choice["chosen"]]
-                    sure["cost"] += by_cost == choice["chosen"]
-                da, dc = kept[0] - best_a, abs(kept[1]) - best_c
-                mean = _mean_choice(choice)
-                cv = _cv_choice(choice)
-                hits["cv"] += ok[cv]
-                hits["n"] += 1
-                hits["median"] += ok[choice["chosen"]]
-                hits["mean"] += ok[mean]
-                hits["any"] += any(ok.values())
-                if a.dump:
-                    with a.dump.open("a") as fh:
-                        fh.write(json.dumps({"sensor": name, "presses": sel, "choice": choice,
-                                             "others": scores}) + "\n")
-                text = ", ".join(f"{k} {s[0]:.2f}, {100 * s[1]:+.1f} %"
-                                 for k, s in scores.items())
-                print(f"| {name} | {sel} | {choice['chosen']} | {text} | {da:+.2f}, "
-                      f"{100 * dc:+.1f} % | {'yes' if ok[choice['chosen']] else 'no'} | "
-                      f"{mean}, {'yes' if ok[mean] else 'no'} | {by_cost} | "
-                      f"{'yes' if told else 'no'} |", flush=True)
+        for name, sel in draws(a.sensors, a.presses, a.random, a.selections, a.seed):
+            j = judge(name, sel, out)
+            choice, scores, ok, by_cost = j["choice"], j["scores"], j["ok"], j["by_cost"]
+            hits["cost"] += by_cost == choice["chosen"]
+            excess.append(j["excess"])
+            best_out += not ok[by_cost]
+            if j["told"]:
+                sure["n"] += 1
+                sure["within"] += ok[choice["chosen"]]
+                sure["cost"] += by_cost == choice["chosen"]
+            mean = j["mean"]
+            hits["cv"] += ok[j["cv"]]
+            hits["n"] += 1
+            hits["median"] += ok[choice["chosen"]]
+            hits["mean"] += ok[mean]
+            hits["any"] += any(ok.values())
+            if a.dump:
+                with a.dump.open("a") as fh:
+                    fh.write(json.dumps({"sensor": name, "presses": sel, "choice": choice,
+                                         "others": scores}) + "\n")
+            text = ", ".join(f"{k} {s[0]:.2f}, {100 * s[1]:+.1f} %" for k, s in scores.items())
+            print(f"| {name} | {sel} | {choice['chosen']} | {text} | {j['d_angle']:+.2f}, "
+                  f"{100 * j['d_cap']:+.1f} % | {'yes' if ok[choice['chosen']] else 'no'} | "
+                  f"{mean}, {'yes' if ok[mean] else 'no'} | {by_cost} | "
+                  f"{'yes' if j['told'] else 'no'} |", flush=True)
     print(f"(the choice's cost: angle + {CAP_DEG:g} deg x |inner cap|, medians over the "
           "presses the folds scored)")
     print(f"within 0.3 deg and 3 %: kept (medians) {hits['median']} of {hits['n']}; the mean's "
