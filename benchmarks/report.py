@@ -2470,6 +2470,54 @@ def _optics_engine_choice(quick: bool) -> Result:
 
 
 @subject(
+    "optics_zero_background", "Optics: fewer flat samples and a zeroed background",
+    """What `flat_fraction` (the share of each press's flat gel the calibration trains on)
+    and `DepthReconstructor(zero_background=True)` (the gradients outside each frame's
+    contact region set to zero before the solve) trade, for the network (`mlp`) and the
+    colour table (`lut`) at the default 0.03 and at 0.003: each calibration trained on
+    the even presses of taxim's real GelSight set from detected circles and scored on the
+    odd ones against their hand-annotated circles (the normal angle and the deepest
+    point, `level='far_field'`; the radial slope within 0.2 of the radius against the
+    ball's; the flat gel beyond twice the radius, whose true tilt is 0: its tilt and its
+    height rms under the far-field and the median levels), and on 60 presses Taxim's own
+    renderer draws without shadows (`bench_contact_edge.render_taxim(40, 20)`: a 2 mm and
+    an unseen 3 mm ball), trained on the first ball's even presses and scored against
+    Taxim's own gel. --quick: the network at 0.003 only, 10 and 6 Taxim presses.""",
+    ["python benchmarks/bench_flat_samples.py --models mlp lut --fractions 0.03 0.003 "
+     "--zero-background both --render-taxim 40 20"])
+def _optics_zero_background(quick: bool) -> Result:
+    import bench_flat_samples as b
+    from bench_contact_edge import render_taxim
+
+    models = ["mlp"] if quick else ["mlp", "lut"]
+    fractions = [0.003] if quick else [0.03, 0.003]
+
+    def cells(line: str) -> list[str]:
+        return [c.strip() for c in line.strip().strip("|").split("|")]
+
+    with contextlib.redirect_stdout(io.StringIO()):
+        real = [cells(x) for x in b.real_rows(models, fractions, (False, True))]
+        data = render_taxim(*((10, 6) if quick else (40, 20)), shadow=False)
+        taxim = [cells(x) for x in b.taxim_rows(data, models, fractions, "Taxim, no shadows",
+                                                (False, True))]
+    return Result([
+        Table("Real GelSight presses", ["model", "flat_fraction", "angle, deepest point",
+                                        "centre slope / ball's", "background tilt",
+                                        "background rms, far_field / median",
+                                        "calibration time"],
+              [r[1:] for r in real],
+              note="24 odd presses held out, a 2 mm ball; the angle and the background tilt "
+                   "are the gradients' and do not change with zero_background."),
+        Table("Taxim's renders, no shadows", ["model", "flat_fraction",
+                                              "odd presses of the 2 mm ball: angle, deepest",
+                                              "the unseen 3 mm ball"],
+              [r[1:] for r in taxim],
+              note="Against Taxim's own gel (`bench_contact_edge.score`).")],
+        summary="Each calibration's held-out reading with the background as solved and "
+                "zeroed; the rows at 0.03 without zero_background are the defaults.")
+
+
+@subject(
     "optics_table_engine", "Optics: the table engine against the exact network",
     """The default engine (a table of the network's output over colour cells and position
     cells) against the exact one (`engine='onnx'`, the network at every pixel) on held-out
