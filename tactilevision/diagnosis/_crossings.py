@@ -212,8 +212,8 @@ class CrossingScan:
             return best, None, False
         step, trend = (best, rival[0]) if best.kind == "step" else (rival[0], best)
         # Akaike on the brackets' own likelihood (the tests' noise model): twice the step's
-        # gain over the trend's, less 2 for its change point
-        aic = 2.0 * (step.gain - trend.gain) - 2.0
+        # gain over the trend's, less 2 for its change point (:func:`_aic_gain`)
+        aic = 2.0 * (_aic_gain(step) - _aic_gain(trend))
         by_aic = (step, trend) if aic > 0 else (trend, step)
         if not np.isfinite(self.p_trend_fits):
             return (*by_aic, abs(aic) <= 2.0)
