@@ -174,10 +174,14 @@ def test_cli_dome_needs_a_pad_and_a_ball(tmp_path):
     assert str(side) in r.stderr and "unknown" not in r.stderr.lower()
 
 
+@pytest.mark.slow
 def test_cli_fit_of_the_feats_gel_with_its_dome(tmp_path):
     """`fit --dome-radius-mm` reads the FEATS gel as the Python call does; the dome (114 mm,
     their top's 0.28 mm at 8 mm) raises E, since a domed gel meets the ball over less of
-    its surface (the flat top's figure: test_feats_tied_law_drifts_...)."""
+    its surface (the flat top's figure: test_feats_tied_law_drifts_...). The domed pad's
+    sweep is not shipped: about 26 s from an empty cache, so this runs with the long
+    checks; the dome's mechanics are checked in the default suite by
+    ``tests/test_fem_sphere_dome.py``, the session key by the tests above."""
     w, P = feats()
     domed = Sphere(7.5, pad_radius_mm=12.92, dome_radius_mm=114.4)
     fit = fit_indenter(w, P, domed, thickness_mm=4.0, law="linear", contact="frictionless")
