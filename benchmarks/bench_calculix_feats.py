@@ -509,6 +509,64 @@ def ours(row: OurRow, depths_mm: list[float], cell: float, cache: Path
     return res.force * e * H_MM**2, time.perf_counter() - t0, res.from_cache
 
 
+# ---------------------------------------------------------------------------- round pad
+
+#: Depths (mm) of the round-pad comparison per CalculiX case: the CAX8 runs to 1.5 mm
+#: (they stall past 1.7 mm), the CAX6 run to 1.9 mm (singular between 1.9 and 2.0 mm).
+ROUND_PAD_DEPTHS = {"axisym-1": [0.5, 1.0, 1.5], "axisym-2": [0.5, 1.0, 1.5],
+                    "axisym-tri-1": [0.5, 1.0, 1.5, 1.9]}
+
+
+def use_model_dir(model_dir: Path) -> None:
+    """Set :data:`FEATS` to `model_dir` after checking it holds their files.
+
+    Raises
+    ------
+    FileNotFoundError
+        Naming the folder and each missing file.
+    """
+    global FEATS
+    missing = [n for n in ("sim.inp", "materials.inp", *TEMPLATE_FILES)
+               if not (Path(model_dir) / n).is_file()]
+    if missing:
+        raise FileNotFoundError(f"{model_dir}: missing {', '.join(missing)} (the FEATS "
+                                "authors' CalculiX files, see bench_calculix_feats.py)")
+    FEATS = Path(model_dir)
+
+
+def round_pad(model_dir: Path, cache: Path, *, quick: bool = False) -> dict:
+    """CalculiX and our FEM on the same problem: the FEATS ball on the round pad of equal
+    area, axisymmetric, their material as ccx 2.20 runs it (D1 = 0 replaced by 0.1 / mu),
+    frictionless with K = 100 MPa/mm, their dome's mean curvature.
+
+    CalculiX on :data:`ROUND_PAD_DEPTHS` (`quick`: the CAX6 run only); ours at the CAX6
+    run's depths on the surface cells :data:`CELLS` (`quick`: the coarser). Returns
+    ``{"version", "nu", "dome_mm", "pad_mm", "depths_mm", "ccx": {case: CcxResult},
+    "ours": {cell: forces (N)}, "ours_s": {cell: seconds}}``.
+
+    Raises
+    ------
+    FileNotFoundError
+        Without `ccx` on the path (how to install it is named) or their files.
+    """
+    use_model_dir(model_dir)
+    ccx = shutil.which("ccx")
+    if ccx is None:
+        raise FileNotFoundError(f"ccx (CalculiX) is not installed: `{INSTALL}`")
+    version = ccx_version(ccx)
+    cases = ["axisym-tri-1"] if quick else list(ROUND_PAD_DEPTHS)
+    runs = {c: run_ccx(ccx, c, ROUND_PAD_DEPTHS[c], cache, version) for c in cases}
+    nu = nu_from_bulk(2.0 / (0.1 / MU))
+    dome = dome_fit()[2]
+    depths = ROUND_PAD_DEPTHS["axisym-tri-1"]
+    row = OurRow("frictionless", nu, "frictionless", dome, FRICTIONLESS_K)
+    ours_f, ours_s = {}, {}
+    for cell in CELLS[:1] if quick else CELLS:
+        ours_f[cell], ours_s[cell], _ = ours(row, depths, cell, cache)
+    return {"version": version, "nu": nu, "dome_mm": dome, "pad_mm": equal_area_radius_mm(),
+            "depths_mm": depths, "ccx": runs, "ours": ours_f, "ours_s": ours_s}
+
+
 # ---------------------------------------------------------------------------- report
 
 def main() -> int:
@@ -527,13 +585,10 @@ def main() -> int:
     ap.add_argument("--ccx-cases", default=",".join(CCX_CASES),
                     help=f"CalculiX cases to run, from {', '.join(CCX_CASES)}")
     args = ap.parse_args()
-    global FEATS
-    FEATS = args.model_dir
-    missing = [n for n in ("sim.inp", "materials.inp", *TEMPLATE_FILES)
-               if not (FEATS / n).is_file()]
-    if missing:
-        ap.error(f"--model-dir {FEATS}: missing {', '.join(missing)} (the FEATS authors' "
-                 "CalculiX files, see this script's docstring)")
+    try:
+        use_model_dir(args.model_dir)
+    except FileNotFoundError as err:
+        ap.error(f"--model-dir {err}")
     depths = sorted(float(v) for v in args.depths.split(","))
     cases = [c for c in args.ccx_cases.split(",") if c]
     if any(c not in CCX_CASES for c in cases):

@@ -786,6 +786,74 @@ def _sphere_table(quick: bool) -> Result:
 
 
 @subject(
+    "ball_calculix", "A ball: our FEM against CalculiX on the same problem",
+    """The FEATS authors' steel ball (R 7.5 mm) on their GelSight Mini gel (4.0 mm at the
+    apex) as one problem for two FEMs: the round pad of equal area to their 20.75 x 25.25
+    mm one (12.92 mm), axisymmetric, their dome's mean curvature fitted to their mesh,
+    their Neo-Hookean material as CalculiX 2.20 runs it (their D1 = 0 replaced by
+    0.1 / mu), frictionless contact of slope 100 MPa/mm. CalculiX (Debian's `ccx`, not
+    our code; the model written by `bench_calculix_feats.axisym_text` from their files
+    in `$TACTILEVISION_FEATS_CALCULIX`, default the real sets' `feats/calculix`) on two
+    meshes of CAX8 to 1.5 mm (they stall past 1.7 mm) and the first mesh cut into CAX6
+    triangles to 1.9 mm (its stiffness matrix turns singular before 2.0 mm); ours
+    (`tactilevision.fem.sphere_indentation`, Neo-Hookean, mixed displacement and pressure)
+    on surface cells of h/25 and h/50. Every run afresh; `--quick`: the CAX6 run and our
+    coarser cell only.""",
+    ["python benchmarks/bench_calculix_feats.py --model-dir FEATS_DIR --cache DIR "
+     "--ccx-cases axisym-1,axisym-2,axisym-tri-1 --depths 0.5,1.0,1.5,1.9"])
+def _ball_calculix(quick: bool) -> Result:
+    import bench_calculix_feats as b
+    model_dir = real_set("TACTILEVISION_FEATS_CALCULIX", "feats/calculix")
+    with tempfile.TemporaryDirectory(prefix="tv-report-ccx-") as tmp:
+        got = b.round_pad(model_dir, Path(tmp), quick=quick)
+    depths = got["depths_mm"]
+    labels = {"axisym-1": "CalculiX, CAX8, coarse mesh", "axisym-2": "CalculiX, CAX8, fine "
+              "mesh (every cell halved)", "axisym-tri-1": "CalculiX, CAX6 (the coarse mesh's "
+              "cells cut in two)"}
+
+    def at(case) -> list[float]:
+        r = got["ccx"][case]
+        return [r.force_fixed[r.depths_mm.index(d)] if d in r.depths_mm else float("nan")
+                for d in depths]
+
+    def fmt(values) -> list[str]:
+        return ["" if not np.isfinite(v) else f"{v:.3f}" for v in values]
+
+    rows, spent = [], []
+    for case, r in got["ccx"].items():
+        rows.append([labels[case], *fmt(at(case))])
+        spent.append(f"{case} {r.seconds / 60:.1f} min by ccx's clock"
+                     + ("" if r.complete else ", stopped early"))
+    cells = sorted(got["ours"], reverse=True)
+    for c in cells:
+        rows.append([f"ours, surface cell h/{1 / c:g}", *fmt(got["ours"][c])])
+    best = np.asarray(got["ours"][cells[-1]])
+    worst = 0.0
+    for case in got["ccx"]:
+        ratio = best / np.asarray(at(case))
+        rows.append([f"ours (h/{1 / cells[-1]:g}) / {labels[case]}",
+                     *["" if not np.isfinite(v) else f"{v:.4f}" for v in ratio]])
+        worst = max(worst, float(np.nanmax(np.abs(ratio - 1))))
+    conv = []
+    if "axisym-2" in got["ccx"]:
+        f1, f2 = np.asarray(at("axisym-1")), np.asarray(at("axisym-2"))
+        conv.append(f"CalculiX's two CAX8 meshes {100 * np.nanmax(np.abs(f2 / f1 - 1)):.2f} %")
+    if len(cells) == 2:
+        o1, o2 = (np.asarray(got["ours"][c]) for c in cells)
+        conv.append(f"ours between h/{1 / cells[0]:g} and h/{1 / cells[1]:g} "
+                    f"{100 * np.max(np.abs(o2 / o1 - 1)):.2f} %")
+    table = Table("Force at each depth (N)", ["", *[f"{d:g} mm" for d in depths]], rows,
+                  note=f"CalculiX {got['version']}; nu = {got['nu']:.4f} (the small-strain "
+                       f"nu of ccx's bulk modulus), dome {got['dome_mm']:.0f} mm, pad "
+                       f"{got['pad_mm']:.2f} mm. Runs: {'; '.join(spent)}; ours "
+                       + ", ".join(f"h/{1 / c:g} {got['ours_s'][c]:.0f} s" for c in cells)
+                       + ". Converged: " + ("; ".join(conv) or "not checked (--quick)")
+                       + ". A blank: the run does not reach that depth.")
+    return Result([table], summary=f"Ours within {100 * worst:.2f} % of CalculiX at every "
+                                   "depth both reach, " + f"{depths[0]:g} to {depths[-1]:g} mm.")
+
+
+@subject(
     "plan_relaxation", "Plan: will the holds identify a relaxation?",
     """For the paper's gauge block (`sample_frames/plan/paper_gauge_block.toml`: 50
     presses, 1 s holds, white F/T noise of 12.5 mN per sample) and three relaxations near
