@@ -1233,19 +1233,20 @@ def _verdicts_result(seed: int, ks: tuple[int, ...], cache: Path) -> Result:
 
 
 #: The newest seed of drawn mark designs and the commit whose rules it judges: its ten
-#: designs were drawn before that commit's rule was set and calibrated only after it was
-#: committed. A rule changed later is judged on a newer seed, not on this one.
-MARK_FRESH_SEED, MARK_FRESH_RULES = 10333, "a022a69"
+#: designs were drawn, rendered and calibrated only after that commit's rules were set
+#: (the library's depth and verdict rules unchanged since). A rule changed later is
+#: judged on a newer seed, not on this one.
+MARK_FRESH_SEED, MARK_FRESH_RULES = 10789, "87a6346"
 MARK_FRESH_CACHE_ENV, MARK_FRESH_CACHE_NAME = "TACTILEVISION_MARK_FRESH", "tactilevision_mark_fresh"
 _FRESH_TEXT = f"""Seed {MARK_FRESH_SEED}, mark designs 0 to 9 (five with Taxim's shadows,
-    five without), drawn by `benchmarks/bench_mark_sweep.py` before the mark rule of
-    {MARK_FRESH_RULES} (a trace that passes back through the approach's level still starts
-    the crossing's bracket) was set, rendered by Taxim's own renderer while it was, and
-    calibrated only after it was committed: designs nobody here chose, judged once on the
-    rules as they stood. Report `mark_sweep` and `mark_verdicts` hold seed
-    {MARK_SWEEP_SEED}'s, whose renders the rules after them were read on. The renders are
-    kept in ${MARK_FRESH_CACHE_ENV} (rendered there when missing, about 3 to 7 minutes each
-    on this project's 2-core machine); --quick: designs 0 and 1."""
+    five without), drawn by `benchmarks/bench_mark_sweep.py`, rendered by Taxim's own
+    renderer and calibrated only after the rules of {MARK_FRESH_RULES} (the crossing
+    forces' tests ordered by AIC on the brackets' likelihood) were committed, the library's
+    depth and verdict rules unchanged since: designs nobody here chose, judged once on the
+    rules as they stand. Report `mark_sweep` and `mark_verdicts` hold seed
+    {MARK_SWEEP_SEED}'s, whose renders earlier rules were read on. The renders are kept in
+    ${MARK_FRESH_CACHE_ENV} (rendered there when missing, about 3 to 7 minutes each on
+    this project's 2-core machine); --quick: designs 0 and 1."""
 
 
 @subject(
