@@ -49,6 +49,7 @@ import argparse
 import json
 import math
 import shutil
+import tempfile
 import time
 from dataclasses import replace
 from pathlib import Path
@@ -58,7 +59,7 @@ import numpy as np
 from tactilevision.cli import main as cli
 from tactilevision.diagnosis import CROSSING_UNITS, crossing_sizes, crossing_step_places
 from tactilevision.io import read_measurements
-from tactilevision.mechanics import EFFECT_SIZE_PARAMS, beta_relation, kappa
+from tactilevision.mechanics import EFFECT_SIZE_PARAMS, beta_relation, fit_relaxation, kappa
 from tactilevision.planning import crossing_effect_sizes, design_from_calibration
 from tactilevision.sim._schedule import PressSchedule, ft_log
 
@@ -131,6 +132,32 @@ def write_forces(session: Path, dest: Path, kind: str, seed: int,
     np.savetxt(dest / "forces.csv", np.column_stack([t, f]), fmt="%.4f", delimiter=",",
                header="t_s,fx_n,fy_n,fz_n", comments="")
     return {"E_named": e_named, "c": c, "beta": beta, "relaxation": relax, "size": size}
+
+
+def null_holds_p(session: Path, seeds: list[int]) -> list[tuple[float, str]]:
+    """The holds' F test on the null F/T log of `session` drawn with each of `seeds` (the
+    loop draws one noise for all six logs of a design: seed 1000), over the truth's own
+    hold spans: its p-value and verdict (:func:`~tactilevision.mechanics.fit_relaxation`;
+    ``diagnose`` names a relaxation where the decay's p is under ``RELAX_ALPHA``)."""
+    truth = json.loads((session / "truth.json").read_text())
+    off = truth["clock_offset_s"]
+    out = []
+    for seed in seeds:
+        with tempfile.TemporaryDirectory() as tmp:
+            write_forces(session, Path(tmp) / "s", "null", seed)
+            log = np.genfromtxt(Path(tmp) / "s" / "forces.csv", delimiter=",", names=True)
+        t, fz = log["t_s"], log["fz_n"]
+        press, ts, fs = [], [], []
+        for i, p in enumerate(truth["presses"]):
+            t0, t1 = p["hold_from_s"] + off, p["hold_to_s"] + off
+            sel = (t >= t0) & (t <= t1)
+            press.append(np.full(int(sel.sum()), i))
+            ts.append(t[sel] - t0)
+            fs.append(fz[sel])
+        r = fit_relaxation(np.concatenate(press), np.concatenate(ts), np.concatenate(fs),
+                           n_boot=20)
+        out.append((float(r.p_value), r.verdict))
+    return out
 
 
 def one(session: Path, out: Path, kind: str, seed: int, reuse: bool = False,

@@ -74,6 +74,7 @@ from pathlib import Path
 import numpy as np
 
 from tactilevision import InputError, calibrate_session
+from tactilevision.contact import crossing_forces
 from tactilevision.io import read_session
 from tactilevision.mechanics import beta_relation, kappa
 from tactilevision.pipeline import write_calibration
@@ -264,6 +265,76 @@ def planned_periods(cal, folder: Path) -> float:
         except InputError:
             return math.nan
     return float(design.bracket_periods) if design.bevel_angle_deg == 0.0 else math.nan
+
+
+def depth_parts(folder: Path) -> dict:
+    """Where each certified press's mark-rule depth error comes from, against the truth.
+
+    The rule reads ``w = w0 + (P_window - P(w0)) / k`` (:func:`~tactilevision.contact.
+    mark_depths`: P(w0) its indenter's crossing force, :func:`~tactilevision.contact.
+    crossing_forces`; k its dP/dw). With the truth's eq. (5) (``P*``, its secant slope
+    ``k*`` from w0 to the window's true depth), the error splits exactly into
+
+    * the crossing: ``-(P(w0) - P*(w0)) / k``,
+    * the window: ``(P_window - P*_window) / k``,
+    * the stiffness: ``(P*_window - P*(w0)) (1 / k - 1 / k*)``.
+
+    Returns per design: the certified presses' mean of each part (um), dP/dw's error
+    (median over them, %), beta and E fitted against the truth's, and per indenter its
+    P(w0)'s error in its own stated sd (the intersection's, ``sd / sqrt(n)``; a uniform's
+    reaches sqrt 3 at most) and whether its presses were certified.
+    """
+    truth = json.loads((folder / "truth.json").read_text())
+    tp = {p["press"]: p for p in truth["presses"]}
+    c, beta, h = truth["c_n_per_mm"], truth["beta"], truth["thickness_mm"]
+
+    def law(w):
+        return c * w * (1 + beta * w / h)
+
+    session = read_session(folder)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        cal = calibrate_session(session, beta_table="paper", allow_failure=True)
+    ps = cal.certification.presses
+    half = session.config.window_samples / (2.0 * session.config.rate_hz)
+    true = np.array([true_depth_at_window(tp[p.press], truth, p.t_frame_s + p.hold_s - half,
+                                          p.t_frame_s + p.hold_s + half) for p in ps])
+    ind = np.array([p.indenter for p in ps])
+    f_on, sd_on, _ = crossing_forces(ind, np.array([p.force_onset_n for p in ps]),
+                                     np.array([p.force_onset_sem_n for p in ps]))
+    depth = np.asarray(cal.depth_mm, np.float64)
+    w0 = np.array([p.w0_mm for p in ps])
+    force = np.array([p.force_n for p in ps])
+    cert = np.asarray(cal.depth_certified, bool) & np.isfinite(f_on) & (depth - w0 > 1e-4)
+    k = (force - f_on) / np.where(cert, depth - w0, 1.0)
+    p_true = law(true)
+    k_true = (p_true - law(w0)) / (true - w0)
+    parts = {"crossing": -(f_on - law(w0)) / k, "window": (force - p_true) / k,
+             "stiffness": (p_true - law(w0)) * (1 / k - 1 / k_true)}
+    err = 1e3 * (depth - true)
+    groups = []
+    for g in np.unique(ind):
+        sel = (ind == g) & np.isfinite(f_on)
+        if not sel.any():
+            continue
+        sd = float(sd_on[sel][0]) / math.sqrt(sel.sum())
+        groups.append({"indenter": int(g), "w0_mm": float(w0[sel][0]), "n": int(sel.sum()),
+                       "certified": int(np.sum(sel & cert)),
+                       "error_mn": 1e3 * float(f_on[sel][0] - law(w0[sel][0])),
+                       "sd_mn": 1e3 * sd,
+                       "z": float((f_on[sel][0] - law(w0[sel][0])) / sd) if sd > 0 else math.nan})
+    f = cal.fit
+    return {"folder": str(folder), "certified": int(cert.sum()),
+            "err_um": float(err[cert].mean()) if cert.any() else math.nan,
+            **{f"{name}_um": 1e3 * float(v[cert].mean()) if cert.any() else math.nan
+               for name, v in parts.items()},
+            "closure_um": float(np.max(np.abs(err[cert] - 1e3 * sum(v[cert] for v in
+                                                                     parts.values()))))
+            if cert.any() else math.nan,
+            "k_error_pct": 100 * float(np.median(k[cert] / k_true[cert] - 1)) if cert.any()
+            else math.nan,
+            "beta_fit": float(f.beta) if f is not None else math.nan, "beta_true": beta,
+            "E_fit": float(f.E_mpa) if f is not None else math.nan, "groups": groups}
 
 
 def score(folder: Path, d: dict) -> dict:
