@@ -1054,9 +1054,22 @@ def _sweep_result(seed: int, mark_designs: range, vernier_designs: range, cache:
             "largest error (um)", "E [95 %] (MPa)", "holds 0.2", "half-width",
             "clock error (ms)", "crossing in bracket: n, mean place",
             "brackets (frame periods)"]
-    fm = b.figures(marks)
+    if marks:
+        fm = b.figures(marks)
+        summary = (f"Marks: {fm['depth_ok']} of {fm['designs']} designs with certified depths "
+                   f"within +-5 um (sd at most 10 um) or none certified ({fm['all_bounded']}); "
+                   f"E held the truth on {fm['E_holds']} and was not "
+                   f"computed on {fm['E_refused']}; the true "
+                   f"crossing lay inside its bracket on {fm['q_inside']} of {fm['q_n']} "
+                   "presses.")
+    else:
+        fv = b.figures(verniers)
+        summary = (f"Verniers: {fv['depth_ok']} of {fv['designs']} designs with certified "
+                   f"depths within +-5 um (sd at most 10 um) or none certified "
+                   f"({fv['all_bounded']}); E held the truth on {fv['E_holds']} and was not "
+                   f"computed on {fv['E_refused']}.")
     return Result([
-        Table("The marks", ["figure", "value"], pooled(marks, True)),
+        *([Table("The marks", ["figure", "value"], pooled(marks, True))] if marks else []),
         *([Table("The verniers", ["figure", "value"], pooled(verniers, False))]
           if verniers else []),
         Table("Per design", cols, per,
@@ -1072,11 +1085,7 @@ def _sweep_result(seed: int, mark_designs: range, vernier_designs: range, cache:
                    "as uniform over it; brackets: the frame periods they spanned on average, "
                    "as `plan --from-calibration` reads them "
                    "(`tactilevision.planning.measured_bracket_periods`, at least 1)."),
-    ], summary=f"Marks: {fm['depth_ok']} of {fm['designs']} designs with certified depths "
-               f"within +-5 um (sd at most 10 um) or none certified ({fm['all_bounded']}); "
-               f"E held the truth on {fm['E_holds']} and was not "
-               f"computed on {fm['E_refused']}; the true "
-               f"crossing lay inside its bracket on {fm['q_inside']} of {fm['q_n']} presses.")
+    ], summary=summary)
 
 
 MARK_VERDICT_DESIGNS = (*range(10), *range(100, 105))
@@ -1270,6 +1279,40 @@ def _mark_sweep_fresh(quick: bool) -> Result:
      "python benchmarks/bench_loop.py DIR/<design> --json FILE"])
 def _mark_verdicts_fresh(quick: bool) -> Result:
     return _verdicts_result(MARK_FRESH_SEED, (0, 1) if quick else tuple(range(10)),
+                            _cache(MARK_FRESH_CACHE_ENV, MARK_FRESH_CACHE_NAME))
+
+
+_VERNIER_FRESH_TEXT = f"""Seed {MARK_FRESH_SEED}, vernier designs 100 to 104 (a machined
+    bevel of 5 to 10 deg, Taxim's shadows on), drawn by `benchmarks/bench_mark_sweep.py`,
+    rendered by Taxim's own renderer and calibrated only after the rules of
+    {MARK_FRESH_RULES} were committed, the library's depth and verdict rules unchanged
+    since: designs nobody here chose, judged once on the rules as they stand. Report
+    `mark_sweep` and `mark_verdicts` hold seed {MARK_SWEEP_SEED}'s verniers, whose renders
+    earlier rules were read on. The renders are kept in ${MARK_FRESH_CACHE_ENV} (rendered
+    there when missing, about 5 to 10 minutes each on this project's 2-core machine);
+    --quick: design 100."""
+
+
+@subject(
+    "vernier_sweep_fresh", "Calibrate: depths certified on a fresh draw of vernier designs",
+    "Report `mark_sweep`'s scoring on the newest drawn vernier designs. "
+    + _VERNIER_FRESH_TEXT,
+    [f"python benchmarks/bench_mark_sweep.py --seed {MARK_FRESH_SEED} --first 100 "
+     "--designs 5 --kinds vernier --cache DIR"])
+def _vernier_sweep_fresh(quick: bool) -> Result:
+    return _sweep_result(MARK_FRESH_SEED, range(0), range(100, 101 if quick else 105),
+                         _cache(MARK_FRESH_CACHE_ENV, MARK_FRESH_CACHE_NAME))
+
+
+@subject(
+    "vernier_verdicts_fresh", "Diagnose: verdicts on a fresh draw of vernier designs",
+    "Report `mark_verdicts`' loop and scoring (six F/T logs per design) on the newest "
+    "drawn vernier designs. " + _VERNIER_FRESH_TEXT,
+    [f"python benchmarks/bench_mark_sweep.py --seed {MARK_FRESH_SEED} --first 100 "
+     "--designs 5 --kinds vernier --cache DIR --render-only",
+     "python benchmarks/bench_loop.py DIR/<design> --json FILE"])
+def _vernier_verdicts_fresh(quick: bool) -> Result:
+    return _verdicts_result(MARK_FRESH_SEED, (100,) if quick else tuple(range(100, 105)),
                             _cache(MARK_FRESH_CACHE_ENV, MARK_FRESH_CACHE_NAME))
 
 
