@@ -196,6 +196,25 @@ def test_a_depth_wider_than_the_tolerance_is_named_bounded_not_certified():
         presses, np.array([0.010, 0.020, np.nan]), 0.02)
 
 
+def test_a_bounded_press_is_told_what_would_certify_it_under_its_own_rule():
+    """A mark's press is bounded by its frame period of travel (a faster camera or a slower
+    approach); a vernier's by a band too short to read, which neither lengthens: the stage
+    must stop further past w0 (10 px of band at 0.0295 mm/px on an 8.24 deg bevel: 43 um)
+    or the bevel be shallower."""
+    marks = [_press(0, 0.15), _press(1, 0.30)]
+    verniers = [SimpleNamespace(**vars(p), rule="vernier") for p in marks]
+    readable = 10 * 0.0295 * math.tan(math.radians(8.24))
+    note = tolerance_note(verniers, np.array([0.010, 0.030]), 0.02,
+                          readable_overshoot_mm=readable)
+    assert "a stage stopping at least 43 um past w0, or a shallower bevel" in note
+    assert "more frames per second or a slower approach certifies" not in note
+    note = tolerance_note(marks, np.array([0.010, 0.030]), 0.02)
+    assert "more frames per second or a slower approach certifies them" in note
+    assert "shallower bevel" not in note
+    both = tolerance_note([marks[0], verniers[1]], np.array([0.030, 0.030]), 0.02)
+    assert "slower approach certifies them" in both and "further past w0" in both
+
+
 def test_a_calibrations_certified_depths_are_those_within_the_tolerance():
     """SessionCalibration.depth_certified: each press's 95 % half-width against the
     session's [gauge_block] depth_tolerance_mm; all False where none was stated."""

@@ -341,3 +341,19 @@ def test_plan_says_whether_calibrate_will_certify_the_depths(tmp_path, capsys):
     text = capsys.readouterr().out
     assert "depths only bounded: 95 % within +-" in text
     assert "more frames per second or a slower approach pins them" in text
+
+
+def test_plan_tells_a_vernier_design_what_lengthens_its_bands(tmp_path, capsys):
+    """The recommended vernier at 9 deg with the stage stopping 0 to 20 um past w0: no band
+    reaches 10 px (47 um of overshoot at 9 deg and 0.0295 mm/px), so the depths are only
+    bounded; plan names the overshoot and the bevel, not the camera (which a vernier's
+    band does not depend on)."""
+    src = Path(__file__).resolve().parents[1] / "sample_frames" / "plan" / "recommended.toml"
+    steep = tmp_path / "steep.toml"
+    steep.write_text(src.read_text().replace("overshoot_um = [30, 60]", "overshoot_um = [0, 20]")
+                     .replace("bevel_angle_deg = 5.0 ", "bevel_angle_deg = 9.0 "))
+    assert main(["plan", str(steep)]) == 0
+    text = capsys.readouterr().out
+    assert "depths only bounded" in text
+    assert "a stage stopping at least 47 um past w0 (a band of 10 px), or a shallower bevel" in text
+    assert "more frames per second or a slower approach pins them" not in text

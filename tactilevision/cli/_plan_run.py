@@ -13,6 +13,7 @@ import math
 import numpy as np
 
 from .. import InputError
+from ..contact import RESOLVED_PX
 from ..io import DEPTH_TOLERANCE_MM, write_output_file
 from ..mechanics import EFFECT_SIZE_PARAMS
 from ..pipeline import depth_half95
@@ -40,9 +41,16 @@ def _certified_line(pred) -> str:
     if half <= tol:
         return (f"depths certified: 95 % within +-{half:.1f} um, inside calibrate's "
                 f"+-{tol:.0f} um ([gauge_block] depth_tolerance_mm)")
+    d = pred.design
+    if d.bevel_angle_deg > 0:
+        past = 1e3 * RESOLVED_PX * d.mm_per_px * math.tan(math.radians(d.bevel_angle_deg))
+        how = (f"a stage stopping at least {past:.0f} um past w0 (a band of {RESOLVED_PX:g} "
+               "px), or a shallower bevel, pins them; more frames or a slower approach do not")
+    else:
+        how = "more frames per second or a slower approach pins them"
     return (f"depths only bounded: 95 % within +-{half:.1f} um, past calibrate's +-{tol:.0f} "
             "um ([gauge_block] depth_tolerance_mm): it fits them with that weight but "
-            "certifies none; more frames per second or a slower approach pins them")
+            f"certifies none; {how}")
 
 
 def summary(pred) -> str:

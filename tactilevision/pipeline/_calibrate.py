@@ -48,7 +48,7 @@ from pathlib import Path
 import numpy as np
 
 from .._checks import InputError
-from ..contact import CLOCK_SD_S, certify_session
+from ..contact import CLOCK_SD_S, RESOLVED_PX, certify_session
 from ..io import Session, read_session
 from ..mechanics import relaxed_moduli
 from ._calibration import SessionCalibration
@@ -200,7 +200,10 @@ def calibrate_session(session: Session | str | Path, *, depth_rule: str = "auto"
         cert, force0 = _without(cert, refused, force0)
     notes.extend(check_notes)
     half95 = depth_half95(*_own_depth_sd(presses, st, std_indenter, depth_rule))
-    tol = tolerance_note(presses, half95, session.config.depth_tolerance_mm)
+    readable = (RESOLVED_PX * cfg.mm_per_px * math.tan(math.radians(cfg.bevel_angle_deg))
+                if cfg.bevel_angle_deg > 0 else None)
+    tol = tolerance_note(presses, half95, cfg.depth_tolerance_mm,
+                         readable_overshoot_mm=readable)
     if tol is not None:
         notes.append(tol)
     fit = st.fit

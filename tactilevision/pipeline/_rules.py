@@ -500,11 +500,33 @@ def depth_half95(std: np.ndarray, shared_half: np.ndarray | None = None) -> np.n
     return 1.96 * np.sqrt(std ** 2 + sh ** 2 / 3.0)
 
 
-def tolerance_note(presses, half95: np.ndarray, tolerance_mm: float) -> str | None:
+def tolerance_note(presses, half95: np.ndarray, tolerance_mm: float, *,
+                   readable_overshoot_mm: float | None = None) -> str | None:
     """The sentence naming the presses whose depths are only bounded: their 95 % intervals
     wider than +- `tolerance_mm` (``[gauge_block] depth_tolerance_mm``), or None when
     every depth is certified within it. They stay in the fit with their weight; they do
-    not count as certified (issue 83: a depth within 5 um, sd 10 um, or the press named)."""
+    not count as certified (issue 83: a depth within 5 um, sd 10 um, or the press named).
+
+    Parameters
+    ----------
+    presses : sequence of CertifiedPress
+        Their ``press`` and ``rule`` (``'onset'``: a drawn mark's; ``'vernier'``).
+    half95 : (N,) float ndarray
+        Each depth's 95 % half-width, mm (:func:`depth_half95`; NaN: not told).
+    tolerance_mm : float
+    readable_overshoot_mm : float, optional
+        How far past w0 a vernier's stage must stop for its band to be read
+        (``RESOLVED_PX`` px of band: ``RESOLVED_PX x mm_per_px x tan(angle)``), mm.
+
+    Returns
+    -------
+    str or None
+        The sentence, with what would certify the bounded presses under their own rule:
+        for a mark, a faster camera or a slower approach (the crossing is bracketed by
+        one frame period of stage travel); for a vernier, a stage stopping further past
+        w0 or a shallower bevel (a band too short to read bounds the overshoot only;
+        frames and speed do not lengthen it).
+    """
     half95 = np.asarray(half95, np.float64)
     out = np.flatnonzero(~(half95 <= tolerance_mm))
     if not out.size:
@@ -513,12 +535,22 @@ def tolerance_note(presses, half95: np.ndarray, tolerance_mm: float) -> str | No
     told = half95[out][np.isfinite(half95[out])]
     span = (f"+-{1e3 * float(told.min()):.0f} to +-{1e3 * float(told.max()):.0f} um"
             if told.size else "their intervals not told")
+    rules = {getattr(presses[i], "rule", "onset") for i in out}
+    why = []
+    if rules - {"vernier"}:
+        why.append("a mark's crossing is bracketed by one frame period of stage travel: more "
+                   "frames per second or a slower approach certifies them")
+    if "vernier" in rules:
+        past = (f"at least {1e3 * readable_overshoot_mm:.0f} um past w0"
+                if readable_overshoot_mm is not None and np.isfinite(readable_overshoot_mm)
+                else "further past w0")
+        why.append("a vernier band too short to read bounds the overshoot only: a stage "
+                   f"stopping {past}, or a shallower bevel, lengthens the band (more frames "
+                   "or a slower approach do not)")
     return (f"{len(presses) - out.size} of {len(presses)} depths certified within "
             f"+-{1e3 * tolerance_mm:.0f} um ([gauge_block] depth_tolerance_mm, 95 %); "
             f"press(es) {which} only bounded ({span}): fitted with that weight, not "
-            "counted as certified (a mark's crossing is bracketed by one frame period of stage "
-            "travel, a vernier band too short to read only bounded; more frames per second or "
-            "a slower approach certifies them)")
+            f"counted as certified ({'; '.join(why)})")
 
 
 def depth_refusals(presses, depth: np.ndarray, std: np.ndarray, cfg, *,
