@@ -69,6 +69,15 @@ from ._steps import Fitter, frame_period, relaxation_step, take_off_zero
 __all__ = ["calibrate_session"]
 
 
+def _readable_overshoot_mm(cfg) -> float | None:
+    """How far past w0 a vernier's stage must stop for its band to be read, mm
+    (``RESOLVED_PX`` px of band on the bevel: ``RESOLVED_PX x mm_per_px x tan(angle)``);
+    None for a drawn mark."""
+    if not cfg.bevel_angle_deg > 0:
+        return None
+    return RESOLVED_PX * cfg.mm_per_px * math.tan(math.radians(cfg.bevel_angle_deg))
+
+
 def calibrate_session(session: Session | str | Path, *, depth_rule: str = "auto",
                       beta_table: str = "fem", nu_start: float = 0.48, max_rounds: int = 8,
                       nu_tol: float = 2e-4, progress: Callable | None = None,
@@ -200,10 +209,8 @@ def calibrate_session(session: Session | str | Path, *, depth_rule: str = "auto"
         cert, force0 = _without(cert, refused, force0)
     notes.extend(check_notes)
     half95 = depth_half95(*_own_depth_sd(presses, st, std_indenter, depth_rule))
-    readable = (RESOLVED_PX * cfg.mm_per_px * math.tan(math.radians(cfg.bevel_angle_deg))
-                if cfg.bevel_angle_deg > 0 else None)
     tol = tolerance_note(presses, half95, cfg.depth_tolerance_mm,
-                         readable_overshoot_mm=readable)
+                         readable_overshoot_mm=_readable_overshoot_mm(cfg))
     if tol is not None:
         notes.append(tol)
     fit = st.fit
