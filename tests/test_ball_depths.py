@@ -17,7 +17,9 @@ from tactilevision.mechanics import Sphere, fit_indenter
 from tactilevision.pipeline import ball_press_depths
 from tactilevision.sim import sneddon_sphere, sphere_press_surface, taxim_shading
 
-R, H, PAD, E = 2.0, 100.0, 1000.0, 0.2       # ball, thick gel, its pad (mm), modulus (MPa)
+#: ball, thick gel, its pad (mm), modulus (MPa); the pad 20 h, the default's, so that the
+#: FEM sweep is the one tests/test_ball_caps.py reads (one sweep from an empty cache)
+R, H, PAD, E = 2.0, 100.0, 2000.0, 0.2
 
 
 def sneddon(a):

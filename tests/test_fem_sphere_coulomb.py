@@ -83,14 +83,24 @@ def test_friction_does_nothing_on_an_incompressible_half_space():
     assert tied3.force[0] > 1.01 * free3.force[0]
 
 
+@pytest.mark.slow
 def test_a_ball_with_friction_fits_through_the_indenter():
-    """Sphere(friction=mu) answers contact='coulomb' (law 'linear'), its force between
-    the frictionless and tied ones; bad friction and contact are named."""
+    """Sphere(friction=mu) answers contact='coulomb' (law 'linear'): with mu large, the
+    tied ball's force (two pad sweeps, about 34 s from an empty cache: a long check; the
+    Coulomb law node by node stays in the default suite)."""
     ball = Sphere(4.0, pad_radius_mm=12.0, friction=1e6)
     w = np.array([1.0, 1.6])
     kw = dict(E_mpa=0.4, nu=0.5, thickness_mm=4.0, law="linear")
     assert ball.force(w, contact="coulomb", **kw) == pytest.approx(
         ball.force(w, contact="tied", **kw), rel=1e-4)
+
+
+def test_a_balls_bad_friction_or_contact_is_named():
+    """A negative friction, coulomb without a friction, coulomb under the Neo-Hookean law:
+    each refused naming it, before any sweep."""
+    ball = Sphere(4.0, pad_radius_mm=12.0, friction=1e6)
+    w = np.array([1.0, 1.6])
+    kw = dict(E_mpa=0.4, nu=0.5, thickness_mm=4.0, law="linear")
     with pytest.raises(InputError, match="friction"):
         Sphere(7.5, friction=-1.0)
     with pytest.raises(InputError, match="friction"):
