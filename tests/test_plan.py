@@ -326,19 +326,29 @@ def test_plan_says_whether_the_relaxation_is_identified(tmp_path, capsys):
     assert "relaxation_tau_s = 5\n" in tactilevision.planning.design_toml(d)
 
 
+def _plan_text(tmp_path, capsys, sample: str, swaps: dict[str, str]) -> str:
+    """What ``plan`` prints for the shipped design `sample` (sample_frames/plan/) with
+    each key of `swaps` replaced in its text by its value."""
+    src = Path(__file__).resolve().parents[1] / "sample_frames" / "plan" / sample
+    text = src.read_text()
+    for old, new in swaps.items():
+        assert old in text, old
+        text = text.replace(old, new)
+    path = tmp_path / sample
+    path.write_text(text)
+    assert main(["plan", str(path)]) == 0
+    return capsys.readouterr().out
+
+
 def test_plan_says_whether_calibrate_will_certify_the_depths(tmp_path, capsys):
     """The paper's block at 30 frames/s and 0.1 mm/s: one frame's travel is 3.3 um, every
     depth within calibrate's +-20 um; at 10 frames/s and 1.5 mm/s a frame is 150 um of
     travel (sd 43 um a press): only bounded, and plan says what pins them."""
-    src = Path(__file__).resolve().parents[1] / "sample_frames" / "plan" / "paper_gauge_block.toml"
-    assert main(["plan", str(src)]) == 0
-    text = capsys.readouterr().out
+    text = _plan_text(tmp_path, capsys, "paper_gauge_block.toml", {})
     assert "depths certified: 95 % within +-4.2 um, inside calibrate's +-20 um" in text
-    fast = tmp_path / "fast.toml"
-    fast.write_text(src.read_text().replace("frame_rate_hz = 30", "frame_rate_hz = 10")
-                    .replace("stage_speed_mm_s = 0.1", "stage_speed_mm_s = 1.5"))
-    assert main(["plan", str(fast)]) == 0
-    text = capsys.readouterr().out
+    text = _plan_text(tmp_path, capsys, "paper_gauge_block.toml", {
+        "frame_rate_hz = 30": "frame_rate_hz = 10",
+        "stage_speed_mm_s = 0.1": "stage_speed_mm_s = 1.5"})
     assert "depths only bounded: 95 % within +-" in text
     assert "more frames per second or a slower approach pins them" in text
 
@@ -348,12 +358,9 @@ def test_plan_tells_a_vernier_design_what_lengthens_its_bands(tmp_path, capsys):
     reaches 10 px (47 um of overshoot at 9 deg and 0.0295 mm/px), so the depths are only
     bounded; plan names the overshoot and the bevel, not the camera (which a vernier's
     band does not depend on)."""
-    src = Path(__file__).resolve().parents[1] / "sample_frames" / "plan" / "recommended.toml"
-    steep = tmp_path / "steep.toml"
-    steep.write_text(src.read_text().replace("overshoot_um = [30, 60]", "overshoot_um = [0, 20]")
-                     .replace("bevel_angle_deg = 5.0 ", "bevel_angle_deg = 9.0 "))
-    assert main(["plan", str(steep)]) == 0
-    text = capsys.readouterr().out
+    text = _plan_text(tmp_path, capsys, "recommended.toml", {
+        "overshoot_um = [30, 60]": "overshoot_um = [0, 20]",
+        "bevel_angle_deg = 5.0 ": "bevel_angle_deg = 9.0 "})
     assert "depths only bounded" in text
     assert "a stage stopping at least 47 um past w0 (a band of 10 px), or a shallower bevel" in text
     assert "more frames per second or a slower approach pins them" not in text
