@@ -13,7 +13,7 @@ import pytest
 from _data import load_benchmark
 
 from tactilevision import InputError
-from tactilevision.contact import STAGE_Z, stage_depths, touch_time
+from tactilevision.contact import STAGE_Z, readable_overshoot_mm, stage_depths, touch_time
 from tactilevision.io import read_session
 from tactilevision.pipeline._rules import (
     REACH_REASON,
@@ -80,7 +80,7 @@ def test_stage_depth_is_w0_times_the_time_since_the_touch_over_the_time_to_the_c
 
 
 def _press(k: int, w0: float):
-    return SimpleNamespace(press=k, w0_mm=w0, t_frame_s=1.0 + k, frame=10 * k,
+    return SimpleNamespace(press=k, w0_mm=w0, t_frame_s=1.0 + k, frame=10 * k, rule="onset",
                            bevel_score=9.0, footprint=SimpleNamespace(center_px=(100.0, 80.0)))
 
 
@@ -202,8 +202,10 @@ def test_a_bounded_press_is_told_what_would_certify_it_under_its_own_rule():
     must stop further past w0 (10 px of band at 0.0295 mm/px on an 8.24 deg bevel: 43 um)
     or the bevel be shallower."""
     marks = [_press(0, 0.15), _press(1, 0.30)]
-    verniers = [SimpleNamespace(**vars(p), rule="vernier") for p in marks]
-    readable = 10 * 0.0295 * math.tan(math.radians(8.24))
+    verniers = [SimpleNamespace(**{**vars(p), "rule": "vernier"}) for p in marks]
+    readable = readable_overshoot_mm(8.24, 0.0295)
+    assert readable == pytest.approx(10 * 0.0295 * math.tan(math.radians(8.24)), rel=1e-12)
+    assert readable_overshoot_mm(0.0, 0.0295) == 0.0
     note = tolerance_note(verniers, np.array([0.010, 0.030]), 0.02,
                           readable_overshoot_mm=readable)
     assert "a stage stopping at least 43 um past w0, or a shallower bevel" in note

@@ -24,6 +24,7 @@ from ..planning import (
     design_toml,
     plan_session,
     read_design,
+    readable_overshoot_um,
     recommend,
 )
 from ._fit_run import _write_json
@@ -41,11 +42,10 @@ def _certified_line(pred) -> str:
     if half <= tol:
         return (f"depths certified: 95 % within +-{half:.1f} um, inside calibrate's "
                 f"+-{tol:.0f} um ([gauge_block] depth_tolerance_mm)")
-    d = pred.design
-    if d.bevel_angle_deg > 0:
-        past = 1e3 * RESOLVED_PX * d.mm_per_px * math.tan(math.radians(d.bevel_angle_deg))
-        how = (f"a stage stopping at least {past:.0f} um past w0 (a band of {RESOLVED_PX:g} "
-               "px), or a shallower bevel, pins them; more frames or a slower approach do not")
+    if pred.design.bevel_angle_deg > 0:
+        how = (f"a stage stopping at least {readable_overshoot_um(pred.design):.0f} um past w0 "
+               f"(a band of {RESOLVED_PX:g} px), or a shallower bevel, pins them; more frames "
+               "or a slower approach do not")
     else:
         how = "more frames per second or a slower approach pins them"
     return (f"depths only bounded: 95 % within +-{half:.1f} um, past calibrate's +-{tol:.0f} "

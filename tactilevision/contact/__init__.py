@@ -45,6 +45,7 @@ from ._vernier_presses import (
     CREST_CHECK_P,
     EDGE_SHARED_FRACTION,
     crest_consistency,
+    readable_overshoot_mm,
     unresolved_closure,
     vernier_shared_mm,
 )
@@ -102,6 +103,7 @@ __all__ = [
     "noise_level",
     "press_clock_offset",
     "read_bevel",
+    "readable_overshoot_mm",
     "refine_clock_offset",
     "stage_depths",
     "touch_time",

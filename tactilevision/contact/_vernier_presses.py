@@ -36,7 +36,8 @@ from ._vernier import (
 )
 
 __all__ = ["CREST_CHECK_P", "CREST_NOMINAL_PX", "EDGE_SHARED_FRACTION", "SHADOW_RATIO",
-           "band_models_agree", "crest_consistency", "unresolved_closure", "vernier_shared_mm"]
+           "band_models_agree", "crest_consistency", "readable_overshoot_mm",
+           "unresolved_closure", "vernier_shared_mm"]
 
 
 #: With lines, a long band is read only when its edges alone (``read_bevel(lines='only')``)
@@ -260,6 +261,27 @@ def vernier_shared_mm(band_resolved: np.ndarray, bevel: BevelGeometry, mm_per_px
     return np.where(r, half, 0.0)
 
 
+def readable_overshoot_mm(angle_deg: float, mm_per_px: float,
+                          top_px: float = RESOLVED_PX) -> float:
+    """How far past w0 the stage must stop for a vernier's band to be read, mm.
+
+    Parameters
+    ----------
+    angle_deg : float
+        The bevel's flank angle theta, deg (0: a drawn mark, no band: 0 returned).
+    mm_per_px : float
+    top_px : float, default ``RESOLVED_PX``
+        The shortest half-width read, px.
+
+    Returns
+    -------
+    float
+        ``top_px x mm_per_px x tan(theta)`` (w = w0 + L tan(theta), formats.md §1): a
+        band of half-width L shorter than `top_px` only bounds the overshoot to it.
+    """
+    return max(float(top_px), 0.0) * math.tan(math.radians(angle_deg)) * float(mm_per_px)
+
+
 def unresolved_closure(bevel: BevelGeometry, mm_per_px: float,
                        top_px: float = RESOLVED_PX) -> tuple[float, float]:
     """The closure of a band too short to read, as a uniform over its possible range.
@@ -279,7 +301,7 @@ def unresolved_closure(bevel: BevelGeometry, mm_per_px: float,
         uniform over it (``/ sqrt(12)``), mm: the band was seen, so the crest
         reached the gel, but its half-width is somewhere under `top_px`.
     """
-    top = max(float(top_px), 0.0) * bevel.tan_theta * float(mm_per_px)
+    top = readable_overshoot_mm(bevel.angle_deg, mm_per_px, top_px)
     return 0.5 * top, top / math.sqrt(12.0)
 
 

@@ -48,7 +48,7 @@ from pathlib import Path
 import numpy as np
 
 from .._checks import InputError
-from ..contact import CLOCK_SD_S, RESOLVED_PX, certify_session
+from ..contact import CLOCK_SD_S, certify_session, readable_overshoot_mm
 from ..io import Session, read_session
 from ..mechanics import relaxed_moduli
 from ._calibration import SessionCalibration
@@ -67,15 +67,6 @@ from ._shared import with_shared_depth
 from ._steps import Fitter, frame_period, relaxation_step, take_off_zero
 
 __all__ = ["calibrate_session"]
-
-
-def _readable_overshoot_mm(cfg) -> float | None:
-    """How far past w0 a vernier's stage must stop for its band to be read, mm
-    (``RESOLVED_PX`` px of band on the bevel: ``RESOLVED_PX x mm_per_px x tan(angle)``);
-    None for a drawn mark."""
-    if not cfg.bevel_angle_deg > 0:
-        return None
-    return RESOLVED_PX * cfg.mm_per_px * math.tan(math.radians(cfg.bevel_angle_deg))
 
 
 def calibrate_session(session: Session | str | Path, *, depth_rule: str = "auto",
@@ -209,8 +200,8 @@ def calibrate_session(session: Session | str | Path, *, depth_rule: str = "auto"
         cert, force0 = _without(cert, refused, force0)
     notes.extend(check_notes)
     half95 = depth_half95(*_own_depth_sd(presses, st, std_indenter, depth_rule))
-    tol = tolerance_note(presses, half95, cfg.depth_tolerance_mm,
-                         readable_overshoot_mm=_readable_overshoot_mm(cfg))
+    tol = tolerance_note(presses, half95, cfg.depth_tolerance_mm, readable_overshoot_mm=(
+        readable_overshoot_mm(cfg.bevel_angle_deg, cfg.mm_per_px)))
     if tol is not None:
         notes.append(tol)
     fit = st.fit

@@ -515,8 +515,8 @@ def tolerance_note(presses, half95: np.ndarray, tolerance_mm: float, *,
         Each depth's 95 % half-width, mm (:func:`depth_half95`; NaN: not told).
     tolerance_mm : float
     readable_overshoot_mm : float, optional
-        How far past w0 a vernier's stage must stop for its band to be read
-        (``RESOLVED_PX`` px of band: ``RESOLVED_PX x mm_per_px x tan(angle)``), mm.
+        How far past w0 a vernier's stage must stop for its band to be read, mm
+        (:func:`~tactilevision.contact.readable_overshoot_mm`).
 
     Returns
     -------
@@ -535,15 +535,14 @@ def tolerance_note(presses, half95: np.ndarray, tolerance_mm: float, *,
     told = half95[out][np.isfinite(half95[out])]
     span = (f"+-{1e3 * float(told.min()):.0f} to +-{1e3 * float(told.max()):.0f} um"
             if told.size else "their intervals not told")
-    rules = {getattr(presses[i], "rule", "onset") for i in out}
+    rules = {presses[i].rule for i in out}
     why = []
     if rules - {"vernier"}:
         why.append("a mark's crossing is bracketed by one frame period of stage travel: more "
                    "frames per second or a slower approach certifies them")
     if "vernier" in rules:
         past = (f"at least {1e3 * readable_overshoot_mm:.0f} um past w0"
-                if readable_overshoot_mm is not None and np.isfinite(readable_overshoot_mm)
-                else "further past w0")
+                if readable_overshoot_mm else "further past w0")
         why.append("a vernier band too short to read bounds the overshoot only: a stage "
                    f"stopping {past}, or a shallower bevel, lengthens the band (more frames "
                    "or a slower approach do not)")

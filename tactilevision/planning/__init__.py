@@ -25,6 +25,7 @@ from ._design import (
     indenter_speeds,
     planned_columns,
     read_schedule,
+    readable_overshoot_um,
 )
 from ._plan import (
     Design,
@@ -77,6 +78,7 @@ __all__ = [
     "press_bracket_periods",
     "read_design",
     "read_schedule",
+    "readable_overshoot_um",
     "recommend",
     "relaxation_identifiability",
     "untestable_in_table",

@@ -41,6 +41,7 @@ __all__ = [
     "press_times",
     "read_design",
     "read_schedule",
+    "readable_overshoot_um",
     "untestable_effects",
     "untestable_in_table",
 ]
@@ -590,6 +591,12 @@ def speed_words(d: Design) -> str:
     return f"{v.min():.3g} to {v.max():.3g} mm/s, each depth reached in {d.approach_s:g} s"
 
 
+def readable_overshoot_um(d: Design) -> float:
+    """How far past w0 the stage must stop for the design's vernier bands to be read, um:
+    ``RESOLVED_PX x mm_per_px x tan(theta)`` (0 for a drawn mark)."""
+    return RESOLVED_PX * d.mm_per_px * math.tan(math.radians(d.bevel_angle_deg)) * 1e3
+
+
 def depth_uncertainty(d: Design) -> tuple[float, float, str]:
     """Random sd and shared bound of a press's certified depth, um, and how.
 
@@ -608,8 +615,8 @@ def depth_uncertainty(d: Design) -> tuple[float, float, str]:
     ``depth_std_um`` overrides the random part.
     """
     if d.bevel_angle_deg > 0:
-        t = math.tan(math.radians(d.bevel_angle_deg)) * d.mm_per_px * 1e3   # um per px
-        read_sd, o_r = VERNIER_EDGE_PX * t, RESOLVED_PX * t
+        o_r = readable_overshoot_um(d)
+        read_sd = VERNIER_EDGE_PX * o_r / RESOLVED_PX
         lo, hi = (float(v) for v in d.overshoot_um)
         f = 1.0 if o_r <= lo else (0.0 if o_r >= hi else (hi - o_r) / (hi - lo))
         sd = math.sqrt(f * read_sd**2 + (1 - f) * o_r**2 / 12)

@@ -18,7 +18,7 @@ import re
 from dataclasses import dataclass, field, replace
 
 from .._checks import InputError
-from ._design import RESOLVED_PX, Design
+from ._design import Design, readable_overshoot_um
 from ._plan import PlanPrediction, _no_nan, plan_session
 
 __all__ = ["DesignChange", "Recommendation", "error_totals", "recommend"]
@@ -185,7 +185,7 @@ def _changes(d: Design) -> list[tuple[str, Design, bool]]:
                     f"{d.a_over_h:.2f}) for nu", replace(d, radius_mm=a), True))
     if d.bevel_angle_deg > 0:
         # a band is read once RESOLVED_PX long: the stage stopping past that reads them all
-        o_r = RESOLVED_PX * d.mm_per_px * math.tan(math.radians(d.bevel_angle_deg)) * 1e3
+        o_r = readable_overshoot_um(d)
         lo, hi = d.overshoot_um
         if lo < o_r:
             span = max(hi - lo, 10.0)
