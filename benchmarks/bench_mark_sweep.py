@@ -187,6 +187,15 @@ def true_depth_at_window(tp: dict, truth: dict, t0: float, t1: float) -> float:
     return (-c + math.sqrt(c * c + 4 * a * p_mean)) / (2 * a)
 
 
+def true_depths(session, presses, truth: dict) -> np.ndarray:
+    """Each press's true depth over its own force window, mm (:func:`true_depth_at_window`
+    over the window's span, ``window_samples`` F/T samples about ``t_frame_s + hold_s``)."""
+    tp = {p["press"]: p for p in truth["presses"]}
+    half = session.config.window_samples / (2.0 * session.config.rate_hz)
+    return np.array([true_depth_at_window(tp[p.press], truth, p.t_frame_s + p.hold_s - half,
+                                          p.t_frame_s + p.hold_s + half) for p in presses])
+
+
 def bracket_places(cal, tp: dict, clock_offset_s: float) -> list[float]:
     """Where each press's true crossing of w0 lies in the F/T-clock period that the mark
     rule says brackets it (``CertifiedPress.onset_span_s``): 0 at its start, 1 at its end,
@@ -285,7 +294,6 @@ def depth_parts(folder: Path) -> dict:
     reaches sqrt 3 at most) and whether its presses were certified.
     """
     truth = json.loads((folder / "truth.json").read_text())
-    tp = {p["press"]: p for p in truth["presses"]}
     c, beta, h = truth["c_n_per_mm"], truth["beta"], truth["thickness_mm"]
 
     def law(w):
@@ -296,9 +304,7 @@ def depth_parts(folder: Path) -> dict:
         warnings.simplefilter("ignore")
         cal = calibrate_session(session, beta_table="paper", allow_failure=True)
     ps = cal.certification.presses
-    half = session.config.window_samples / (2.0 * session.config.rate_hz)
-    true = np.array([true_depth_at_window(tp[p.press], truth, p.t_frame_s + p.hold_s - half,
-                                          p.t_frame_s + p.hold_s + half) for p in ps])
+    true = true_depths(session, ps, truth)
     ind = np.array([p.indenter for p in ps])
     f_on, sd_on, _ = crossing_forces(ind, np.array([p.force_onset_n for p in ps]),
                                      np.array([p.force_onset_sem_n for p in ps]))
@@ -351,9 +357,7 @@ def score(folder: Path, d: dict) -> dict:
     t_decode = time.perf_counter() - t0
     ps = cal.certification.presses
     flagged = {r.press for r in cal.certification.rejected if r.reason in FLAG_REASONS}
-    half = session.config.window_samples / (2.0 * session.config.rate_hz)
-    true = np.array([true_depth_at_window(tp[p.press], truth, p.t_frame_s + p.hold_s - half,
-                                          p.t_frame_s + p.hold_s + half) for p in ps])
+    true = true_depths(session, ps, truth)
     err = 1e3 * (np.asarray(cal.depth_mm, np.float64) - true)
     sd = 1e3 * own_sd(cal)
     # certified: within [gauge_block] depth_tolerance_mm at 95 %; the others are only

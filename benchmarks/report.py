@@ -1366,10 +1366,11 @@ def _mark_misses_fresh(quick: bool) -> Result:
                "from P(w0)", "from the window", "from dP/dw", "dP/dw's error (%, median)",
                "beta fitted (true)", "E fitted (MPa)"], designs,
               "Means over each design's certified presses; the three parts add up to the "
-              "error (to 1e-9 um). P(w0): each indenter's crossing force, the intersection "
-              "of its presses' brackets (`tactilevision.contact.crossing_forces`); dP/dw: "
-              "the rule's, from each press's own P/w with eq. (5)'s shape at the fitted "
-              "beta, against the true secant from w0 to the window's depth."),
+              "error (to 1e-6 um, checked). P(w0): each indenter's crossing force, the "
+              "intersection of its presses' brackets "
+              "(`tactilevision.contact.crossing_forces`); dP/dw: the rule's, from each "
+              "press's own P/w with eq. (5)'s shape at the fitted beta, against the true "
+              "secant from w0 to the window's depth."),
         Table("Each indenter's P(w0) against the truth",
               ["design", "w0 (mm)", "presses certified", "error (mN)",
                "stated sd (mN)", "error / sd"], groups,
@@ -1385,7 +1386,7 @@ def _mark_misses_fresh(quick: bool) -> Result:
         others = got[1:]
         tables.append(Table(
             f"Design {MARK_FRESH_HELD}'s null log: the holds' F test",
-            ["noise", "p (median; least)", f"named (p < {RELAX_ALPHA:g})"],
+            ["noise", "p (median; least)", f"a decay found (p < {RELAX_ALPHA:g})"],
             [["the loop's (seed 1000)", f"{got[0][0]:.2g}", "yes" if got[0][0] < RELAX_ALPHA
               else "no"],
              [f"{len(others)} other draws (seeds 0 to {len(others) - 1})",
@@ -1394,10 +1395,17 @@ def _mark_misses_fresh(quick: bool) -> Result:
               f"{sum(p < RELAX_ALPHA for p, _ in others)} of {len(others)}"]],
             "The elastic gel's forces of `bench_loop.write_forces` (nothing hidden), its "
             "holds cut at the truth's own spans (no knee found from the log), fitted by "
-            "`tactilevision.mechanics.fit_relaxation`."))
-    z_txt = f"errors of {min(zs):+.2f} to {max(zs):+.2f} of their stated sd"
-    return Result(tables, f"Designs {', '.join(map(str, ks))}: each depth error mostly its "
-                  f"indenter's P(w0) ({z_txt}), the rest dP/dw read low.")
+            "`tactilevision.mechanics.fit_relaxation`: its F test against a constant force "
+            "per press, which `diagnose` reads (with the force falling) to name a "
+            "relaxation."))
+    def span(col: int) -> str:
+        v = [float(row[col]) for row in designs]
+        return f"{min(v):+.1f} to {max(v):+.1f} um"
+
+    return Result(tables, f"Designs {', '.join(map(str, ks))}: the certified depths' mean "
+                  f"error from P(w0) {span(5)} (indenters' errors {min(zs):+.2f} to "
+                  f"{max(zs):+.2f} of their stated sd), from dP/dw {span(7)}, from the force "
+                  f"window {span(6)}.")
 
 
 MARK_PLAN_DESIGNS = tuple(range(10))
