@@ -1,6 +1,7 @@
 """The whole loop on frames no project code drew: session -> calibrate -> diagnose -> fit.
 
     python benchmarks/bench_loop.py SESSION_DIR [--out DIR] [--kinds K1 K2 ...] [--seed S]
+        [--noise-per-log]
         [--json FILE] [--from-json FILE] [--reuse] [--at-rules-out K]
         [--at-plan K [--bracket-periods P] [--unseen-share Q]]
 
@@ -35,6 +36,12 @@ covariate), and the truth that effect's E stands for (the catalogue's parametris
 0 for spatial_nonuniformity, before the step for stiffness_step, at the
 table's mean of the column for stiffness_trend, at time 0 for force_drift's
 counterpart; E_0 for the relaxation).
+
+The noise of every log is drawn from seed S (default 1000): one draw shared by the six
+logs of a design, so that the null and the offset (which the F/T's zero takes off) read
+nearly the same data and one chance event costs both verdicts. ``--noise-per-log`` draws
+each log's own (seed S + the kind's place in :data:`KINDS`: :func:`noise_seed`), six
+independent trials.
 
 ``--at-rules-out K`` hides the gradient, the softening and the step at K times what the
 null session's own crossing forces rule out; ``--at-plan K`` at K times what ``plan`` says
@@ -83,6 +90,12 @@ def _schedule(truth: dict) -> PressSchedule:
 #: Each kind's size by default: gx (1/mm), the fall over the session, the step after the
 #: 10th press (``--at-rules-out`` replaces them).
 DEFAULT_SIZE = {"spatial": 0.01, "softening": 0.1, "damage": 0.1}
+
+
+def noise_seed(seed: int, kind: str, per_log: bool = False) -> int:
+    """The F/T noise's seed of the log hiding `kind`: `seed` for every log, or with
+    `per_log` its own, ``seed + KINDS.index(kind)``."""
+    return seed + KINDS.index(kind) if per_log else seed
 
 
 def write_forces(session: Path, dest: Path, kind: str, seed: int,
@@ -350,6 +363,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--out", type=Path, default=Path("out/loop"))
     ap.add_argument("--kinds", nargs="+", default=list(KINDS), choices=KINDS)
     ap.add_argument("--seed", type=int, default=1000)
+    ap.add_argument("--noise-per-log", action="store_true",
+                    help="each log its own noise (seed + the kind's place), not one shared")
     ap.add_argument("--json", type=Path)
     ap.add_argument("--from-json", type=Path, help="print the table of an earlier --json")
     ap.add_argument("--at-rules-out", type=float, metavar="K",
@@ -385,7 +400,8 @@ def main(argv: list[str] | None = None) -> int:
     if a.at_rules_out is not None and a.at_plan is not None:
         ap.error("--at-rules-out and --at-plan: one of them")
     if a.at_rules_out is not None or a.at_plan is not None:
-        rows = [one(a.session, a.out, "null", a.seed, a.reuse)]
+        rows = [one(a.session, a.out, "null", noise_seed(a.seed, "null", a.noise_per_log),
+                    a.reuse)]
         if a.at_plan is not None:
             sizes, periods, unseen = plan_sizes(a.session, a.out / "null" / "calibration",
                                                 a.at_plan, after, a.bracket_periods,
@@ -400,10 +416,12 @@ def main(argv: list[str] | None = None) -> int:
             print(f"sizes: {a.at_rules_out:g} times what the null session rules out (its "
                   f"crossing forces, or its diagnosis's rules_out): ", end="")
         print(", ".join(f"{k} {v:.4g}" for k, v in sizes.items()), flush=True)
-        rows += [one(a.session, a.out, k, a.seed, a.reuse, sizes.get(k), after)
+        rows += [one(a.session, a.out, k, noise_seed(a.seed, k, a.noise_per_log), a.reuse,
+                     sizes.get(k), after)
                  for k in a.kinds if k != "null"]
     else:
-        rows = [one(a.session, a.out, k, a.seed, a.reuse, step_after=after)
+        rows = [one(a.session, a.out, k, noise_seed(a.seed, k, a.noise_per_log), a.reuse,
+                    step_after=after)
                 for k in a.kinds]
     if a.json:
         a.json.write_text(json.dumps(rows, indent=1) + "\n")

@@ -973,15 +973,22 @@ def _cache(env: str, name: str) -> Path:
     return Path(os.environ.get(env) or Path(tempfile.gettempdir()) / name)
 
 
-def _sweep_result(seed: int, mark_designs: range, vernier_designs: range, cache: Path
-                  ) -> Result:
-    """Report `mark_sweep`'s tables on `seed`'s designs (no verniers: no vernier table)."""
+def _sweep_result(seed: int, mark_designs: range, vernier_designs: range, cache: Path, *,
+                  also: tuple[tuple[int, range], ...] = ()) -> Result:
+    """Report `mark_sweep`'s tables on `seed`'s designs (no verniers: no vernier table),
+    pooled with the mark designs of the draws `also` ((seed, designs) each; the designs
+    then named ``seed/k``)."""
     import bench_mark_sweep as b
-    marks = b.run(seed, mark_designs, ("mark-shadow", "mark-plain"), cache)
+    draws = ((seed, mark_designs), *also)
+    marks, names = [], []
+    for s, ks in draws:
+        marks += b.run(s, ks, ("mark-shadow", "mark-plain"), cache)
+        names += [f"{s}/{k}" if also else k for k in ks]
     verniers = (b.run(seed, vernier_designs, ("vernier",), cache) if len(vernier_designs)
                 else [])
     per = []
-    for k, r in [*enumerate(marks), *zip(range(100, 100 + len(verniers)), verniers, strict=True)]:
+    for k, r in [*zip(names, marks, strict=True),
+                 *zip(vernier_designs, verniers, strict=True)]:
         d = r["design"]
         q = r.get("bracket_q", [])
         lo, hi = r["E_ci"]
@@ -1172,8 +1179,11 @@ def _mark_verdicts(quick: bool) -> Result:
                             _cache(MARK_SWEEP_CACHE_ENV, MARK_SWEEP_CACHE_NAME))
 
 
-def _verdicts_result(seed: int, ks: tuple[int, ...], cache: Path) -> Result:
-    """Report `mark_verdicts`' tables on `seed`'s designs `ks` (100 and up: verniers)."""
+def _verdicts_result(seed: int, ks: tuple[int, ...], cache: Path, *,
+                     noise_per_log: bool = False) -> Result:
+    """Report `mark_verdicts`' tables on `seed`'s designs `ks` (100 and up: verniers); the
+    six logs of a design share one noise draw, or with `noise_per_log` each has its own
+    (:func:`bench_loop.noise_seed`)."""
     import bench_loop as loop
     import bench_mark_sweep as b
     cache.mkdir(parents=True, exist_ok=True)
@@ -1186,7 +1196,9 @@ def _verdicts_result(seed: int, ks: tuple[int, ...], cache: Path) -> Result:
         folder = b.design_folder(cache, seed, k, d)
         b.render(folder, d)
         with tempfile.TemporaryDirectory() as tmp:
-            rows = [loop.one(folder, Path(tmp), kind, 1000) for kind in loop.KINDS]
+            rows = [loop.one(folder, Path(tmp), kind,
+                             loop.noise_seed(1000, kind, noise_per_log))
+                    for kind in loop.KINDS]
             ruled = loop.rules_out_sizes(
                 folder, Path(tmp) / "null" / "calibration" / "measurements.csv", 1.0)
         marks = [loop.score(r) for r in rows]
@@ -1241,11 +1253,13 @@ def _verdicts_result(seed: int, ks: tuple[int, ...], cache: Path) -> Result:
                f"({total[2]} more a change of stiffness in the other shape).")
 
 
-#: The newest seed of drawn mark designs and the commit whose rules it judges: its ten
+#: The fresh seeds of drawn mark designs and the commit whose rules each judges: their
 #: designs were drawn, rendered and calibrated only after that commit's rules were set
-#: (the library's depth and verdict rules unchanged since). A rule changed later is
-#: judged on a newer seed, not on this one.
+#: (the library's depth and verdict rules unchanged since 87a6346). A rule changed later is
+#: judged on a newer seed, not on these. The second seed's verdicts draw each F/T log's
+#: noise apart (`bench_loop.noise_seed`), set before its designs were drawn.
 MARK_FRESH_SEED, MARK_FRESH_RULES = 10789, "87a6346"
+MARK_FRESH2_SEED, MARK_FRESH2_RULES = 14632, "87a6346"
 MARK_FRESH_CACHE_ENV, MARK_FRESH_CACHE_NAME = "TACTILEVISION_MARK_FRESH", "tactilevision_mark_fresh"
 _FRESH_TEXT = f"""Seed {MARK_FRESH_SEED}, mark designs 0 to 9 (five with Taxim's shadows,
     five without), drawn by `benchmarks/bench_mark_sweep.py`, rendered by Taxim's own
@@ -1256,17 +1270,43 @@ _FRESH_TEXT = f"""Seed {MARK_FRESH_SEED}, mark designs 0 to 9 (five with Taxim's
     {MARK_SWEEP_SEED}'s, whose renders earlier rules were read on. The renders are kept in
     ${MARK_FRESH_CACHE_ENV} (rendered there when missing, about 3 to 7 minutes each on
     this project's 2-core machine); --quick: designs 0 and 1."""
+_FRESH2_TEXT = f"""Seed {MARK_FRESH2_SEED}, mark designs 0 to 9 (five with Taxim's
+    shadows, five without), drawn by `benchmarks/bench_mark_sweep.py` as seed
+    {MARK_FRESH_SEED}'s were, rendered by Taxim's own renderer and calibrated after that
+    seed was judged, the library's depth and verdict rules those of {MARK_FRESH2_RULES}
+    still; each of a design's six F/T logs draws its own noise (seed 1000 plus the log's
+    place; seed {MARK_FRESH_SEED}'s six logs shared one draw, so that one chance event cost
+    the null and the offset both). The renders are kept in ${MARK_FRESH_CACHE_ENV};
+    --quick: designs 0 and 1."""
 
 
 @subject(
-    "mark_sweep_fresh", "Calibrate: depths certified on a fresh draw of gauge-block designs",
+    "mark_sweep_fresh", "Calibrate: depths certified on two fresh draws of gauge-block designs",
     "Report `mark_sweep`'s scoring (certified depths, their z-scores, E against 0.2 MPa, "
-    "the crossing inside its bracket) on the newest drawn designs. " + _FRESH_TEXT,
-    [f"python benchmarks/bench_mark_sweep.py --seed {MARK_FRESH_SEED} --designs 10 "
-     "--kinds mark-shadow mark-plain --cache DIR"])
+    "the crossing inside its bracket) on the newest drawn designs, twenty of them (issue "
+    "83's count), named seed/design. " + _FRESH_TEXT + " " + _FRESH2_TEXT,
+    [f"python benchmarks/bench_mark_sweep.py --seed {seed} --designs 10 "
+     "--kinds mark-shadow mark-plain --cache DIR" for seed in (MARK_FRESH_SEED,
+                                                              MARK_FRESH2_SEED)])
 def _mark_sweep_fresh(quick: bool) -> Result:
-    return _sweep_result(MARK_FRESH_SEED, range(2 if quick else 10), range(0),
-                         _cache(MARK_FRESH_CACHE_ENV, MARK_FRESH_CACHE_NAME))
+    designs = range(2 if quick else 10)
+    return _sweep_result(MARK_FRESH_SEED, designs, range(0),
+                         _cache(MARK_FRESH_CACHE_ENV, MARK_FRESH_CACHE_NAME),
+                         also=((MARK_FRESH2_SEED, designs),))
+
+
+@subject(
+    "mark_verdicts_fresh2", "Diagnose: verdicts on a second fresh draw of gauge-block designs",
+    "Report `mark_verdicts`' loop and scoring (six F/T logs per design: nothing hidden, a "
+    "gradient, a fixture's offset, a softening, a step, a relaxing gel) on the second "
+    "fresh draw. " + _FRESH2_TEXT,
+    [f"python benchmarks/bench_mark_sweep.py --seed {MARK_FRESH2_SEED} --designs 10 "
+     "--kinds mark-shadow mark-plain --cache DIR --render-only",
+     "python benchmarks/bench_loop.py DIR/<design> --noise-per-log --json FILE"])
+def _mark_verdicts_fresh2(quick: bool) -> Result:
+    return _verdicts_result(MARK_FRESH2_SEED, (0, 1) if quick else tuple(range(10)),
+                            _cache(MARK_FRESH_CACHE_ENV, MARK_FRESH_CACHE_NAME),
+                            noise_per_log=True)
 
 
 @subject(
