@@ -1356,6 +1356,39 @@ def _vernier_verdicts_fresh(quick: bool) -> Result:
                             _cache(MARK_FRESH_CACHE_ENV, MARK_FRESH_CACHE_NAME))
 
 
+_VERNIER_FRESH2_TEXT = f"""Seed {MARK_FRESH2_SEED}, vernier designs 100 to 104 (a
+    machined bevel of 5 to 10 deg, Taxim's shadows on), drawn by
+    `benchmarks/bench_mark_sweep.py` as seed {MARK_FRESH_SEED}'s were, rendered by Taxim's
+    own renderer and calibrated after that seed was judged, the library's depth and
+    verdict rules those of {MARK_FRESH2_RULES} still; each of a design's six F/T logs draws
+    its own noise (seed 1000 plus the log's place). The renders are kept in
+    ${MARK_FRESH_CACHE_ENV}; --quick: design 100."""
+
+
+@subject(
+    "vernier_sweep_fresh2", "Calibrate: depths certified on a second fresh draw of verniers",
+    "Report `mark_sweep`'s scoring on the second fresh draw of vernier designs. "
+    + _VERNIER_FRESH2_TEXT,
+    [f"python benchmarks/bench_mark_sweep.py --seed {MARK_FRESH2_SEED} --first 100 "
+     "--designs 5 --kinds vernier --cache DIR"])
+def _vernier_sweep_fresh2(quick: bool) -> Result:
+    return _sweep_result(MARK_FRESH2_SEED, range(0), range(100, 101 if quick else 105),
+                         _cache(MARK_FRESH_CACHE_ENV, MARK_FRESH_CACHE_NAME))
+
+
+@subject(
+    "vernier_verdicts_fresh2", "Diagnose: verdicts on a second fresh draw of verniers",
+    "Report `mark_verdicts`' loop and scoring (six F/T logs per design) on the second "
+    "fresh draw of vernier designs. " + _VERNIER_FRESH2_TEXT,
+    [f"python benchmarks/bench_mark_sweep.py --seed {MARK_FRESH2_SEED} --first 100 "
+     "--designs 5 --kinds vernier --cache DIR --render-only",
+     "python benchmarks/bench_loop.py DIR/<design> --noise-per-log --json FILE"])
+def _vernier_verdicts_fresh2(quick: bool) -> Result:
+    return _verdicts_result(MARK_FRESH2_SEED, (100,) if quick else tuple(range(100, 105)),
+                            _cache(MARK_FRESH_CACHE_ENV, MARK_FRESH_CACHE_NAME),
+                            noise_per_log=True)
+
+
 #: The fresh draw's designs taken apart (report `mark_misses_fresh`): the two whose
 #: certified depths' mean fell outside +-5 um on report `mark_sweep_fresh`, and one that
 #: held (its null log also named a relaxation on report `mark_verdicts_fresh`).
