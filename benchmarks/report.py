@@ -973,21 +973,15 @@ def _cache(env: str, name: str) -> Path:
     return Path(os.environ.get(env) or Path(tempfile.gettempdir()) / name)
 
 
-def _sweep_result(seed: int, mark_designs: range, vernier_designs: range, cache: Path, *,
-                  also: tuple[tuple[int, range], ...] = ()) -> Result:
-    """Report `mark_sweep`'s tables on `seed`'s designs (no verniers: no vernier table),
-    pooled with the mark designs of the draws `also` ((seed, designs) each; the designs
-    then named ``seed/k``)."""
+def _sweep_result(seed: int, mark_designs: range, vernier_designs: range, cache: Path
+                  ) -> Result:
+    """Report `mark_sweep`'s tables on `seed`'s designs (no verniers: no vernier table)."""
     import bench_mark_sweep as b
-    draws = ((seed, mark_designs), *also)
-    marks, names = [], []
-    for s, ks in draws:
-        marks += b.run(s, ks, ("mark-shadow", "mark-plain"), cache)
-        names += [f"{s}/{k}" if also else k for k in ks]
+    marks = b.run(seed, mark_designs, ("mark-shadow", "mark-plain"), cache)
     verniers = (b.run(seed, vernier_designs, ("vernier",), cache) if len(vernier_designs)
                 else [])
     per = []
-    for k, r in [*zip(names, marks, strict=True),
+    for k, r in [*zip(mark_designs, marks, strict=True),
                  *zip(vernier_designs, verniers, strict=True)]:
         d = r["design"]
         q = r.get("bracket_q", [])
@@ -1281,18 +1275,26 @@ _FRESH2_TEXT = f"""Seed {MARK_FRESH2_SEED}, mark designs 0 to 9 (five with Taxim
 
 
 @subject(
-    "mark_sweep_fresh", "Calibrate: depths certified on two fresh draws of gauge-block designs",
+    "mark_sweep_fresh", "Calibrate: depths certified on a fresh draw of gauge-block designs",
     "Report `mark_sweep`'s scoring (certified depths, their z-scores, E against 0.2 MPa, "
-    "the crossing inside its bracket) on the newest drawn designs, twenty of them (issue "
-    "83's count), named seed/design. " + _FRESH_TEXT + " " + _FRESH2_TEXT,
-    [f"python benchmarks/bench_mark_sweep.py --seed {seed} --designs 10 "
-     "--kinds mark-shadow mark-plain --cache DIR" for seed in (MARK_FRESH_SEED,
-                                                              MARK_FRESH2_SEED)])
+    "the crossing inside its bracket) on the newest drawn designs. " + _FRESH_TEXT,
+    [f"python benchmarks/bench_mark_sweep.py --seed {MARK_FRESH_SEED} --designs 10 "
+     "--kinds mark-shadow mark-plain --cache DIR"])
 def _mark_sweep_fresh(quick: bool) -> Result:
-    designs = range(2 if quick else 10)
-    return _sweep_result(MARK_FRESH_SEED, designs, range(0),
-                         _cache(MARK_FRESH_CACHE_ENV, MARK_FRESH_CACHE_NAME),
-                         also=((MARK_FRESH2_SEED, designs),))
+    return _sweep_result(MARK_FRESH_SEED, range(2 if quick else 10), range(0),
+                         _cache(MARK_FRESH_CACHE_ENV, MARK_FRESH_CACHE_NAME))
+
+
+@subject(
+    "mark_sweep_fresh2", "Calibrate: depths certified on a second fresh draw of designs",
+    "Report `mark_sweep`'s scoring (certified depths, their z-scores, E against 0.2 MPa, "
+    "the crossing inside its bracket) on the second fresh draw: with report "
+    "`mark_sweep_fresh`'s, twenty designs (issue 83's count). " + _FRESH2_TEXT,
+    [f"python benchmarks/bench_mark_sweep.py --seed {MARK_FRESH2_SEED} --designs 10 "
+     "--kinds mark-shadow mark-plain --cache DIR"])
+def _mark_sweep_fresh2(quick: bool) -> Result:
+    return _sweep_result(MARK_FRESH2_SEED, range(2 if quick else 10), range(0),
+                         _cache(MARK_FRESH_CACHE_ENV, MARK_FRESH_CACHE_NAME))
 
 
 @subject(
