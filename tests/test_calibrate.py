@@ -833,24 +833,25 @@ def test_a_balls_fit_refuses_crossings(tmp_path, capsys):
 
 @pytest.mark.slow
 def test_depths_wider_than_the_tolerance_are_named_only_bounded(tmp_path, capsys):
-    """The sample session with [gauge_block] depth_tolerance_mm = 0.003 (its vernier
-    depths' 95 % half-widths are 2.4 to 4.0 um): the summary counts the presses certified
-    within +-3 um and those only bounded, fit.json lists the bounded ones, a warning names
-    them, and E is fitted from every press as with the default tolerance."""
+    """The sample session with [gauge_block] depth_tolerance_mm = 0.004 (its vernier
+    depths' 95 % half-widths are 3.8 to 4.9 um, the band edges' shared +-2.6 um in them):
+    the summary counts the presses certified within +-4 um and those only bounded, fit.json
+    lists the bounded ones, a warning names them, and E is fitted from every press as with
+    the default tolerance."""
     session = tmp_path / "s"
     shutil.copytree(SAMPLE, session)
     toml = session / "session.toml"
     text = toml.read_text()
     assert "[gauge_block]\n" in text
-    toml.write_text(text.replace("[gauge_block]\n", "[gauge_block]\ndepth_tolerance_mm = 0.003\n"))
+    toml.write_text(text.replace("[gauge_block]\n", "[gauge_block]\ndepth_tolerance_mm = 0.004\n"))
     assert main(["calibrate", str(session), "--out", str(tmp_path / "out"), "--no-progress",
                  "--no-report"]) == 0
     out = capsys.readouterr().out
     fit = json.loads((tmp_path / "out" / "fit.json").read_text())
     bounded = fit["depth_bounded"]
-    assert fit["depth_tolerance_mm"] == 0.003 and 0 < len(bounded) < fit["n_presses"]
+    assert fit["depth_tolerance_mm"] == 0.004 and 0 < len(bounded) < fit["n_presses"]
     n = fit["n_presses"]
-    assert (f"{n} presses fitted: {n - len(bounded)} certified within +-3 um, "
+    assert (f"{n} presses fitted: {n - len(bounded)} certified within +-4 um, "
             f"{len(bounded)} only bounded; 2 rejected") in out
     assert f"press(es) {', '.join(map(str, bounded))} only bounded" in out
     ref = calibrate_session(SAMPLE)

@@ -15,9 +15,11 @@ from _data import load_benchmark
 from tactilevision import InputError
 from tactilevision.contact import STAGE_Z, readable_overshoot_mm, stage_depths, touch_time
 from tactilevision.io import read_session
+from tactilevision.pipeline._calibrate import _own_depth_sd
 from tactilevision.pipeline._rules import (
     REACH_REASON,
     STAGE_REASON,
+    DepthState,
     depth_half95,
     depth_refusals,
     tolerance_note,
@@ -183,6 +185,25 @@ def test_the_95_percent_half_width_carries_the_shared_bound_as_a_uniform():
     got = depth_half95(np.array([0.010, 0.010]), np.array([0.030, 0.0]))
     assert got == pytest.approx([1.96 * 0.020, 1.96 * 0.010], rel=1e-12)
     assert depth_half95(np.array([0.005])) == pytest.approx([0.0098], rel=1e-12)
+
+
+def test_a_verniers_half_width_carries_its_band_edges_shared_bound():
+    """The vernier's read bands share their edges' error (+-2.6 um on the sample session):
+    each depth's 95 % half-width carries it as a uniform's, as a mark's carries its clock
+    and dP/dw. Left out, the sample's half-widths read 2.5 to 2.9 um instead of 3.8 to 4.9,
+    and a drawn 9 deg design's certified depths lay +4.8 um off against a mean's stated sd
+    of 1.0 um. The paper's nominal rule states no shared bound of its own (None)."""
+    presses = [_press(0, 0.15), _press(1, 0.30), _press(2, 0.40)]
+    std = np.array([0.001, 0.002, 0.010])
+    half = np.array([0.0026, 0.0026, 0.0])              # the third band not read
+    st = DepthState(depth=np.array([0.16, 0.31, 0.42]), std=std, bulge=np.zeros(3),
+                    bevel_n=np.zeros(3), notes=[], shared=(-half, half))
+    own, shared = _own_depth_sd(presses, st, np.zeros(0), "vernier")
+    assert own.tolist() == std.tolist() and shared.tolist() == half.tolist()
+    got = depth_half95(own, shared)
+    assert got == pytest.approx(1.96 * np.sqrt(std ** 2 + half ** 2 / 3), rel=1e-12)
+    assert got[0] == pytest.approx(1.96 * np.hypot(0.001, 0.0026 / np.sqrt(3)), rel=1e-12)
+    assert _own_depth_sd(presses, st, np.zeros(0), "nominal")[1] is None
 
 
 def test_a_depth_wider_than_the_tolerance_is_named_bounded_not_certified():

@@ -283,15 +283,23 @@ def _own_depth_sd(presses, st: DepthState, std_indenter: np.ndarray, depth_rule:
                   ) -> tuple[np.ndarray, np.ndarray | None]:
     """Each press's own depth sd, mm (under the mark rule the indenter's shared part
     counted once, not n times over as the fit weighs it), and the half-width of the error
-    every press shares (None where there is none)."""
+    every press shares (the mark's clock and dP/dw, the vernier's band edges; None where
+    there is none). Until issue 83's second fresh draw the vernier's edge bound was left
+    out here: its depths' 95 % half-widths stated 2.5 to 2.9 um on the sample session
+    where its +-2.6 um edge bound makes them 3.8 to 4.1, and a 9 deg design read its
+    certified depths +4.8 um off against a mean's stated sd of 1.0
+    (`python benchmarks/report.py --subjects vernier_sweep_fresh2`)."""
     std = np.asarray(st.std, np.float64)
+    half = None if st.shared is None else np.asarray(st.shared[1], np.float64)
+    if depth_rule == "vernier":
+        return std, half
     if depth_rule != "mark":
         return std, None
     ind = np.array([p.indenter for p in presses])
     n = np.array([np.sum(ind == g) for g in ind], np.float64)
     shared = np.asarray(std_indenter, np.float64) if len(std_indenter) else np.zeros_like(std)
     std = np.sqrt(np.maximum(std ** 2 - shared ** 2 * (1 - 1 / n), 0.0))
-    return std, None if st.shared is None else np.asarray(st.shared[1], np.float64)
+    return std, half
 
 
 def _without(cert, refused: list, force0: np.ndarray | None):
