@@ -1391,6 +1391,30 @@ def _vernier_verdicts_fresh2(quick: bool) -> Result:
                             noise_per_log=True)
 
 
+#: The vernier designs drawn after 6209e01 (each depth's 95 % half-width carries its band
+#: edges' shared bound): a rule changed later is judged on a newer seed.
+VERNIER_FRESH3_SEED, VERNIER_FRESH3_RULES = 18166, "6209e01"
+_VERNIER_FRESH3_TEXT = f"""Seed {VERNIER_FRESH3_SEED}, vernier designs 100 to 104 (a
+    machined bevel of 5 to 10 deg, Taxim's shadows on), drawn by
+    `benchmarks/bench_mark_sweep.py` as the earlier fresh seeds' were, rendered by Taxim's
+    own renderer and calibrated only after {VERNIER_FRESH3_RULES} (each vernier depth's
+    95 % half-width carries its band edges' shared bound, which seed
+    {MARK_FRESH2_SEED}'s design 104 showed missing) was committed: designs nobody here
+    chose, judged once on the rules as they stand. The renders are kept in
+    ${MARK_FRESH_CACHE_ENV}; --quick: design 100."""
+
+
+@subject(
+    "vernier_sweep_fresh3", "Calibrate: depths certified on a third fresh draw of verniers",
+    "Report `mark_sweep`'s scoring on the vernier designs drawn after the band edges' "
+    "shared bound entered each depth's half-width. " + _VERNIER_FRESH3_TEXT,
+    [f"python benchmarks/bench_mark_sweep.py --seed {VERNIER_FRESH3_SEED} --first 100 "
+     "--designs 5 --kinds vernier --cache DIR"])
+def _vernier_sweep_fresh3(quick: bool) -> Result:
+    return _sweep_result(VERNIER_FRESH3_SEED, range(0), range(100, 101 if quick else 105),
+                         _cache(MARK_FRESH_CACHE_ENV, MARK_FRESH_CACHE_NAME))
+
+
 #: The fresh draw's designs taken apart (report `mark_misses_fresh`): the two whose
 #: certified depths' mean fell outside +-5 um on report `mark_sweep_fresh`, and one that
 #: held (its null log also named a relaxation on report `mark_verdicts_fresh`).
