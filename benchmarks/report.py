@@ -1247,6 +1247,23 @@ def _verdicts_result(seed: int, ks: tuple[int, ...], cache: Path, *,
                f"({total[2]} more a change of stiffness in the other shape).")
 
 
+def _fresh_sweep(seed: int, quick: bool, *, verniers: bool = False) -> Result:
+    """Report `mark_sweep`'s tables on a fresh seed's mark designs 0 to 9 or vernier
+    designs 100 to 104 (--quick: the first two, or the first), renders in the fresh cache."""
+    marks = range(0) if verniers else range(2 if quick else 10)
+    return _sweep_result(seed, marks, range(100, 101 if quick else 105) if verniers
+                         else range(0), _cache(MARK_FRESH_CACHE_ENV, MARK_FRESH_CACHE_NAME))
+
+
+def _fresh_verdicts(seed: int, quick: bool, *, verniers: bool = False,
+                    noise_per_log: bool = False) -> Result:
+    """Report `mark_verdicts`' tables on a fresh seed's designs, as :func:`_fresh_sweep`."""
+    ks = ((100,) if quick else tuple(range(100, 105))) if verniers else (
+        (0, 1) if quick else tuple(range(10)))
+    return _verdicts_result(seed, ks, _cache(MARK_FRESH_CACHE_ENV, MARK_FRESH_CACHE_NAME),
+                            noise_per_log=noise_per_log)
+
+
 #: The fresh seeds of drawn mark designs and the commit whose rules each judges: their
 #: designs were drawn, rendered and calibrated only after that commit's rules were set
 #: (the library's depth and verdict rules unchanged since 87a6346). A rule changed later is
@@ -1281,8 +1298,7 @@ _FRESH2_TEXT = f"""Seed {MARK_FRESH2_SEED}, mark designs 0 to 9 (five with Taxim
     [f"python benchmarks/bench_mark_sweep.py --seed {MARK_FRESH_SEED} --designs 10 "
      "--kinds mark-shadow mark-plain --cache DIR"])
 def _mark_sweep_fresh(quick: bool) -> Result:
-    return _sweep_result(MARK_FRESH_SEED, range(2 if quick else 10), range(0),
-                         _cache(MARK_FRESH_CACHE_ENV, MARK_FRESH_CACHE_NAME))
+    return _fresh_sweep(MARK_FRESH_SEED, quick)
 
 
 @subject(
@@ -1293,8 +1309,7 @@ def _mark_sweep_fresh(quick: bool) -> Result:
     [f"python benchmarks/bench_mark_sweep.py --seed {MARK_FRESH2_SEED} --designs 10 "
      "--kinds mark-shadow mark-plain --cache DIR"])
 def _mark_sweep_fresh2(quick: bool) -> Result:
-    return _sweep_result(MARK_FRESH2_SEED, range(2 if quick else 10), range(0),
-                         _cache(MARK_FRESH_CACHE_ENV, MARK_FRESH_CACHE_NAME))
+    return _fresh_sweep(MARK_FRESH2_SEED, quick)
 
 
 @subject(
@@ -1306,9 +1321,7 @@ def _mark_sweep_fresh2(quick: bool) -> Result:
      "--kinds mark-shadow mark-plain --cache DIR --render-only",
      "python benchmarks/bench_loop.py DIR/<design> --noise-per-log --json FILE"])
 def _mark_verdicts_fresh2(quick: bool) -> Result:
-    return _verdicts_result(MARK_FRESH2_SEED, (0, 1) if quick else tuple(range(10)),
-                            _cache(MARK_FRESH_CACHE_ENV, MARK_FRESH_CACHE_NAME),
-                            noise_per_log=True)
+    return _fresh_verdicts(MARK_FRESH2_SEED, quick, noise_per_log=True)
 
 
 @subject(
@@ -1320,8 +1333,7 @@ def _mark_verdicts_fresh2(quick: bool) -> Result:
      "--kinds mark-shadow mark-plain --cache DIR --render-only",
      "python benchmarks/bench_loop.py DIR/<design> --json FILE"])
 def _mark_verdicts_fresh(quick: bool) -> Result:
-    return _verdicts_result(MARK_FRESH_SEED, (0, 1) if quick else tuple(range(10)),
-                            _cache(MARK_FRESH_CACHE_ENV, MARK_FRESH_CACHE_NAME))
+    return _fresh_verdicts(MARK_FRESH_SEED, quick)
 
 
 _VERNIER_FRESH_TEXT = f"""Seed {MARK_FRESH_SEED}, vernier designs 100 to 104 (a machined
@@ -1342,8 +1354,7 @@ _VERNIER_FRESH_TEXT = f"""Seed {MARK_FRESH_SEED}, vernier designs 100 to 104 (a 
     [f"python benchmarks/bench_mark_sweep.py --seed {MARK_FRESH_SEED} --first 100 "
      "--designs 5 --kinds vernier --cache DIR"])
 def _vernier_sweep_fresh(quick: bool) -> Result:
-    return _sweep_result(MARK_FRESH_SEED, range(0), range(100, 101 if quick else 105),
-                         _cache(MARK_FRESH_CACHE_ENV, MARK_FRESH_CACHE_NAME))
+    return _fresh_sweep(MARK_FRESH_SEED, quick, verniers=True)
 
 
 @subject(
@@ -1354,8 +1365,7 @@ def _vernier_sweep_fresh(quick: bool) -> Result:
      "--designs 5 --kinds vernier --cache DIR --render-only",
      "python benchmarks/bench_loop.py DIR/<design> --json FILE"])
 def _vernier_verdicts_fresh(quick: bool) -> Result:
-    return _verdicts_result(MARK_FRESH_SEED, (100,) if quick else tuple(range(100, 105)),
-                            _cache(MARK_FRESH_CACHE_ENV, MARK_FRESH_CACHE_NAME))
+    return _fresh_verdicts(MARK_FRESH_SEED, quick, verniers=True)
 
 
 _VERNIER_FRESH2_TEXT = f"""Seed {MARK_FRESH2_SEED}, vernier designs 100 to 104 (a
@@ -1374,8 +1384,7 @@ _VERNIER_FRESH2_TEXT = f"""Seed {MARK_FRESH2_SEED}, vernier designs 100 to 104 (
     [f"python benchmarks/bench_mark_sweep.py --seed {MARK_FRESH2_SEED} --first 100 "
      "--designs 5 --kinds vernier --cache DIR"])
 def _vernier_sweep_fresh2(quick: bool) -> Result:
-    return _sweep_result(MARK_FRESH2_SEED, range(0), range(100, 101 if quick else 105),
-                         _cache(MARK_FRESH_CACHE_ENV, MARK_FRESH_CACHE_NAME))
+    return _fresh_sweep(MARK_FRESH2_SEED, quick, verniers=True)
 
 
 @subject(
@@ -1386,9 +1395,7 @@ def _vernier_sweep_fresh2(quick: bool) -> Result:
      "--designs 5 --kinds vernier --cache DIR --render-only",
      "python benchmarks/bench_loop.py DIR/<design> --noise-per-log --json FILE"])
 def _vernier_verdicts_fresh2(quick: bool) -> Result:
-    return _verdicts_result(MARK_FRESH2_SEED, (100,) if quick else tuple(range(100, 105)),
-                            _cache(MARK_FRESH_CACHE_ENV, MARK_FRESH_CACHE_NAME),
-                            noise_per_log=True)
+    return _fresh_verdicts(MARK_FRESH2_SEED, quick, verniers=True, noise_per_log=True)
 
 
 #: The vernier designs drawn after 6209e01 (each depth's 95 % half-width carries its band
@@ -1411,8 +1418,7 @@ _VERNIER_FRESH3_TEXT = f"""Seed {VERNIER_FRESH3_SEED}, vernier designs 100 to 10
     [f"python benchmarks/bench_mark_sweep.py --seed {VERNIER_FRESH3_SEED} --first 100 "
      "--designs 5 --kinds vernier --cache DIR"])
 def _vernier_sweep_fresh3(quick: bool) -> Result:
-    return _sweep_result(VERNIER_FRESH3_SEED, range(0), range(100, 101 if quick else 105),
-                         _cache(MARK_FRESH_CACHE_ENV, MARK_FRESH_CACHE_NAME))
+    return _fresh_sweep(VERNIER_FRESH3_SEED, quick, verniers=True)
 
 
 #: The fresh draw's designs taken apart (report `mark_misses_fresh`): the two whose
