@@ -190,7 +190,7 @@ def test_the_95_percent_half_width_carries_the_shared_bound_as_a_uniform():
 def test_a_verniers_half_width_carries_its_band_edges_shared_bound():
     """The vernier's read bands share their edges' error (+-2.6 um on the sample session):
     each depth's 95 % half-width carries it as a uniform's, as a mark's carries its clock
-    and dP/dw. Left out, the sample's half-widths read 2.5 to 2.9 um instead of 3.8 to 4.9,
+    and dP/dw. Left out, the sample's half-widths read 2.4 to 4.0 um instead of 3.8 to 4.9,
     and a drawn 9 deg design's certified depths lay +4.8 um off against a mean's stated sd
     of 1.0 um. The paper's nominal rule states no shared bound of its own (None)."""
     presses = [_press(0, 0.15), _press(1, 0.30), _press(2, 0.40)]

@@ -285,7 +285,7 @@ def _own_depth_sd(presses, st: DepthState, std_indenter: np.ndarray, depth_rule:
     counted once, not n times over as the fit weighs it), and the half-width of the error
     every press shares (the mark's clock and dP/dw, the vernier's band edges; None where
     there is none). Until issue 83's second fresh draw the vernier's edge bound was left
-    out here: its depths' 95 % half-widths stated 2.5 to 2.9 um on the sample session
+    out here: its depths' 95 % half-widths stated 2.4 to 4.0 um on the sample session
     where its +-2.6 um edge bound makes them 3.8 to 4.9, and a 9 deg design read its
     certified depths +4.8 um off against a mean's stated sd of 1.0
     (`python benchmarks/report.py --subjects vernier_sweep_fresh2`)."""
