@@ -291,10 +291,8 @@ def _own_depth_sd(presses, st: DepthState, std_indenter: np.ndarray, depth_rule:
     (`python benchmarks/report.py --subjects vernier_sweep_fresh2`)."""
     std = np.asarray(st.std, np.float64)
     half = None if st.shared is None else np.asarray(st.shared[1], np.float64)
-    if depth_rule == "vernier":
-        return std, half
     if depth_rule != "mark":
-        return std, None
+        return std, half if depth_rule == "vernier" else None
     ind = np.array([p.indenter for p in presses])
     n = np.array([np.sum(ind == g) for g in ind], np.float64)
     shared = np.asarray(std_indenter, np.float64) if len(std_indenter) else np.zeros_like(std)
