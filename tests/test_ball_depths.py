@@ -81,3 +81,33 @@ def test_a_circle_off_the_image_is_refused(session):
         ball_press_depths(np.stack([frames[0], edge]), ref, Sphere(R, pad_radius_mm=PAD),
                           mm_per_px=s, thickness_mm=H, law="linear",
                           names=["press 8", "press 9"])
+
+
+def test_an_inversion_reads_one_sweep_for_all_its_probes(monkeypatch):
+    """On a finite pad every probe of the inverse a -> w (and the reach's radius) reads the
+    sweep the shallowest press needs: one FEM sweep, not one per probe's own depth (three,
+    a minute of FEM, on this file's thick gel). A stand-in sweep (Hertz's a^2 = R w)
+    counts the sweeps asked for and gives the inverse its closed form."""
+    from types import SimpleNamespace
+
+    import tactilevision.mechanics._indenter as ind
+
+    keys = []
+
+    def hertz_sweep(radius_over_h, *rest):
+        keys.append((radius_over_h, *rest))
+        w = np.geomspace(rest[4], 0.02, 30)
+        return SimpleNamespace(w_over_h=w, hertz_ratio=np.ones_like(w),
+                               contact_radius=np.sqrt(radius_over_h * w))
+
+    monkeypatch.setattr(ind, "pad_sweep_result", hertz_sweep)
+    ind._pad_sweep.cache_clear()
+    try:
+        a = np.array([0.6, 0.9, 1.2])
+        w = Sphere(R, pad_radius_mm=PAD).depth_from_contact_radius(
+            a, nu=0.5, thickness_mm=H, law="linear", contact="frictionless")
+    finally:
+        ind._pad_sweep.cache_clear()
+    assert len(set(keys)) == 1, keys
+    assert keys[0][5] == 0.0005       # the start 0.6 mm's depth (w/h 0.0018) needs
+    np.testing.assert_allclose(w, a**2 / R, rtol=1e-6)

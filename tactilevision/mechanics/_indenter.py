@@ -298,7 +298,7 @@ class Sphere(Indenter):
         return law
 
     def _ratio(self, kind: str, w: np.ndarray, nu: float, h: float, law: str,
-               contact: str | None) -> np.ndarray:
+               contact: str | None, shallowest: float | None = None) -> np.ndarray:
         if contact == "coulomb" and self._law(law) != "linear":
             raise InputError("contact='coulomb' is computed for law='linear' only")
         if self.pad_radius_mm is None and contact != "coulomb":
@@ -310,7 +310,10 @@ class Sphere(Indenter):
         if np.any(x < 0) or np.any(x > reach * (1 + 1e-9)):
             raise InputError(f"w/h = {float(np.max(x)):.4g} is outside the sphere's 0 to "
                              f"{reach:.4g}")
-        sweep = _pad_sweep(*self.sweep_key(x, nu, h, law, contact))
+        # `shallowest` (w/h) chooses the sweep in place of these depths' own shallowest: one
+        # sweep for every probe of an inversion (depth_from_contact_radius)
+        sweep = _pad_sweep(*self.sweep_key(x if shallowest is None else np.array([shallowest]),
+                                           nu, h, law, contact))
         # past the sweep's last depth (up to PAD_EXTRAPOLATION of it) the spline in
         # sqrt(w/h) is carried on: smooth, as the beta table is read 15 % beyond its last w/h
         return sweep[0 if kind == "force" else 1](np.sqrt(np.minimum(x, reach)))
@@ -348,8 +351,17 @@ class Sphere(Indenter):
         a = np.atleast_1d(np.asarray(contact_radius_mm, np.float64))
         h = _positive(thickness_mm, "thickness_mm")
         top = self.reach_mm(h, law, contact)
-        kw = {"nu": nu, "thickness_mm": h, "law": law, "contact": contact}
-        a_top = float(self.contact_radius(np.array([top]), **kw)[0])
+        # one sweep (on a finite pad) for every probe: the one the shallowest press needs,
+        # its depth guessed by Hertz's a^2 = R w (a sweep per probe's own depth would be
+        # up to five FEM sweeps, each minutes, for one inversion)
+        pos = a[np.isfinite(a) & (a > 0)]
+        shallowest = float(pos.min()) ** 2 / self.radius_mm / h if pos.size else None
+
+        def radius_at(w: float) -> float:
+            ratio = self._ratio("contact", np.array([w]), nu, h, law, contact, shallowest)
+            return float(np.sqrt(self.radius_mm * max(w, 0.0)) * ratio[0])
+
+        a_top = radius_at(top)
         out = np.empty(a.size)
         for i, ai in enumerate(a.ravel()):
             if not (np.isfinite(ai) and ai >= 0):
@@ -363,8 +375,8 @@ class Sphere(Indenter):
             if ai == 0:
                 out[i] = 0.0
                 continue
-            out[i] = brentq(lambda w, ai=ai: float(self.contact_radius(np.array([w]), **kw)[0])
-                            - ai, 0.0, top, xtol=1e-12, rtol=1e-10)
+            out[i] = brentq(lambda w, ai=ai: radius_at(w) - ai, 0.0, top, xtol=1e-12,
+                            rtol=1e-10)
         return out.reshape(np.shape(contact_radius_mm))
 
     def config(self) -> dict:

@@ -132,12 +132,15 @@ def ball_press_depths(frames: np.ndarray, reference: np.ndarray, indenter: Inden
                          "the image's edge: its radius, hence its depth, is not measured")
     a = radii * s
     kw = {"nu": nu, "thickness_mm": thickness_mm, "law": law, "contact": contact}
-    w = np.empty(a.size)
-    for i, ai in enumerate(a):
-        try:
-            w[i] = float(indenter.depth_from_contact_radius(np.array([ai]), **kw)[0])
-        except InputError as exc:
-            raise InputError(f"{names[i]}: {exc}") from None
+    try:        # every press at once: one FEM sweep for all on a finite pad
+        w = np.asarray(indenter.depth_from_contact_radius(a, **kw), np.float64)
+    except InputError:
+        for i, ai in enumerate(a):      # the press it refuses, named
+            try:
+                indenter.depth_from_contact_radius(np.array([ai]), **kw)
+            except InputError as exc:
+                raise InputError(f"{names[i]}: {exc}") from None
+        raise
     eps = 1e-4 * float(np.min(w))
     da_dw = (indenter.contact_radius(w + eps, **kw) - indenter.contact_radius(w - eps, **kw)
              ) / (2 * eps)
