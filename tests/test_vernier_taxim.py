@@ -159,48 +159,89 @@ def test_taxim_faint_shading_is_not_a_band(taxim_bevel):
     assert faint.contrast < MIN_BAND_CONTRAST * long.contrast
 
 
+#: Renders shipped with the tests (``tests/data/taxim/taxim_<digest>``, the digest of
+#: :func:`_taxim_key`): the sessions the default suite reads, so that a fresh clone does
+#: not spend a minute and a half of Taxim on them. Written by running this module with
+#: ``TACTILEVISION_SHIP_TAXIM=1``; a changed generator or Taxim gives new digests, which
+#: are rendered live until shipped again (:func:`test_shipped_renders_are_the_ones_read`).
+SHIPPED_TAXIM = Path(__file__).resolve().parent / "data" / "taxim"
+GENERATOR = Path(__file__).resolve().parents[1] / "benchmarks" / "taxim_gauge_session.py"
+#: the default suite's renders: a 12 deg bevel's narrow bands, a thin mark without shadows
+STEEP_KW = dict(presses=5, fps=10.0, seed=3, theta_deg=12.0, offset_mm=4.0,
+                direction_deg=90.0, overshoot_mm=(0.005, 0.030))
+FAINT_KW = dict(presses=8, fps=10.0, seed=35, shadow=False, theta_deg=0.0,
+                overshoot_mm=(0.0, 0.050))
+
+
+def _taxim_key(**kw) -> str:
+    """The digest of the generator's source, Taxim's and jax's versions and the arguments:
+    the same inputs give the same frames."""
+    return hashlib.sha256(GENERATOR.read_bytes() + json.dumps(
+        [importlib.metadata.version("taxim"), importlib.metadata.version("jax"),
+         sorted(kw.items())], default=str).encode()).hexdigest()[:20]
+
+
+def _store(render: Path, entry: Path) -> Path:
+    """`render` copied whole into `entry` (a copy under another name, renamed at the end);
+    `render` itself where `entry` cannot be written."""
+    try:
+        entry.parent.mkdir(parents=True, exist_ok=True)
+        part = entry.with_name(f"{entry.name}.{os.getpid()}.part")
+        shutil.copytree(render, part)
+        shutil.rmtree(entry, ignore_errors=True)
+        os.replace(part, entry)
+    except OSError:
+        return render
+    return entry
+
+
 def _render_taxim_session(folder: Path, **kw) -> tuple[Path, dict]:
     """A gauge-block session rendered by Taxim through ``benchmarks/taxim_gauge_session.py``
     (no project code); ``(folder, truth)``.
 
-    The renders are kept in the package's disk cache (``tests/taxim_<digest>``, the digest
-    of the generator's source, Taxim's and jax's versions and the arguments: the same
-    inputs give the same frames, so an entry is only ever read for the render that wrote
-    it) and copied into `folder`; a damaged entry is rendered again.
+    Read from the renders shipped with the tests (:data:`SHIPPED_TAXIM`), else from the
+    package's disk cache (``tests/taxim_<digest>``, :func:`_taxim_key`: an entry is only
+    ever read for the render that wrote it), else rendered now and kept there; copied into
+    `folder`. A damaged cache entry is rendered again.
     """
     pytest.importorskip("taxim")
     pytest.importorskip("jax")
-    path = Path(__file__).resolve().parents[1] / "benchmarks" / "taxim_gauge_session.py"
-    key = hashlib.sha256(path.read_bytes() + json.dumps(
-        [importlib.metadata.version("taxim"), importlib.metadata.version("jax"),
-         sorted(kw.items())], default=str).encode()).hexdigest()[:20]
-    entry = cache_root() / "tests" / f"taxim_{key}"
+    key = _taxim_key(**kw)
+    entry = SHIPPED_TAXIM / f"taxim_{key}"
+    ship = os.environ.get("TACTILEVISION_SHIP_TAXIM") == "1"
     if not (entry / "truth.json").is_file():
-        spec = importlib.util.spec_from_file_location("taxim_gauge_session", path)
-        mod = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(mod)
-        staging = Path(tempfile.mkdtemp(prefix="taxim_", dir=folder.parent))
-        mod.make_taxim_session(staging / "s", **kw)
-        try:        # into the cache whole: a copy under another name, renamed at the end
-            entry.parent.mkdir(parents=True, exist_ok=True)
-            part = entry.with_name(f"{entry.name}.{os.getpid()}.part")
-            shutil.copytree(staging / "s", part)
-            shutil.rmtree(entry, ignore_errors=True)
-            os.replace(part, entry)
-        except OSError:
-            entry = staging / "s"                        # no cache: use the render itself
+        entry = cache_root() / "tests" / f"taxim_{key}"
+        if not (entry / "truth.json").is_file():
+            spec = importlib.util.spec_from_file_location("taxim_gauge_session", GENERATOR)
+            mod = importlib.util.module_from_spec(spec)
+            spec.loader.exec_module(mod)
+            staging = Path(tempfile.mkdtemp(prefix="taxim_", dir=folder.parent))
+            mod.make_taxim_session(staging / "s", **kw)
+            entry = _store(staging / "s", entry)
+        if ship:
+            entry = _store(entry, SHIPPED_TAXIM / f"taxim_{key}")
     shutil.copytree(entry, folder, dirs_exist_ok=True)
     truth = json.loads((folder / "truth.json").read_text())
     return folder, truth
+
+
+def test_shipped_renders_are_the_ones_read():
+    """Every shipped render is one the default suite reads with today's generator and Taxim
+    (else it is dead weight, or the suite renders for minutes what it should read)."""
+    pytest.importorskip("taxim")
+    pytest.importorskip("jax")
+    shipped = {p.name for p in SHIPPED_TAXIM.glob("taxim_*")}
+    wanted = {f"taxim_{_taxim_key(**kw)}" for kw in (STEEP_KW, FAINT_KW)}
+    assert shipped == wanted, ("regenerate tests/data/taxim: delete it and run `"
+                               "TACTILEVISION_SHIP_TAXIM=1 python -m pytest "
+                               "tests/test_vernier_taxim.py`")
 
 
 @pytest.fixture(scope="module")
 def steep_taxim_session(tmp_path_factory):
     """Five presses rendered by Taxim now on a 12 deg bevel 4 mm from the axis, toward +y,
     stopped 5 to 30 um past w0: bands of 0.8 to 4.8 px, which Taxim's shadows swamp."""
-    return _render_taxim_session(tmp_path_factory.mktemp("steep"), presses=5, fps=10.0,
-                                 seed=3, theta_deg=12.0, offset_mm=4.0, direction_deg=90.0,
-                                 overshoot_mm=(0.005, 0.030))
+    return _render_taxim_session(tmp_path_factory.mktemp("steep"), **STEEP_KW)
 
 
 def test_narrow_bands_are_bounded_not_read(steep_taxim_session):
@@ -295,9 +336,7 @@ def taxim_faint_mark_session(tmp_path_factory):
     :func:`taxim_mark_session`, stopped 0 to 50 um past w0 (seed 35): the mark's change grows
     with the land's depth past w0, so a press that crossed w0 shortly before a frame shows
     it there at less than half its hold's level."""
-    return _render_taxim_session(tmp_path_factory.mktemp("faint"), presses=8, fps=10.0,
-                                 seed=35, shadow=False, theta_deg=0.0,
-                                 overshoot_mm=(0.0, 0.050))
+    return _render_taxim_session(tmp_path_factory.mktemp("faint"), **FAINT_KW)
 
 
 def _crossing_in_bracket(cert, truth) -> None:
