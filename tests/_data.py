@@ -34,6 +34,13 @@ from pathlib import Path
 
 import numpy as np
 
+#: Renders shipped with the tests (``tests/data/taxim``): Taxim's frames the default suite
+#: reads, keyed by the digest of what drew them (each reader's own key), so that a fresh
+#: clone does not spend minutes of Taxim on them; written by running a reader's module
+#: with ``TACTILEVISION_SHIP_TAXIM=1``. A changed generator or Taxim gives a new digest,
+#: rendered live (and cached) until shipped again.
+SHIPPED_TAXIM = Path(__file__).resolve().parent / "data" / "taxim"
+
 ROOT = Path(__file__).resolve().parents[1]
 GELSLIM = Path(os.environ.get("TACTILEVISION_GELSLIM",
                               ROOT.parent / "shared" / "real" / "gelslim3"))

@@ -13,12 +13,14 @@ import hashlib
 import importlib.metadata
 import inspect
 import math
+import os
 import warnings
 
 import cv2
 import numpy as np
 import pytest
 from _data import (
+    SHIPPED_TAXIM,
     TAXIM_BALL_RADIUS_MM,
     TAXIM_MM_PER_PX,
     change_from_normals,
@@ -216,39 +218,67 @@ _TAXIM_CASES = {False: [(2.0, 0.3, (250.3, 200.6)), (2.0, 0.6, (380.2, 260.1)),
                        (3.0, 0.9, (350.4, 240.3))]}
 
 
+def _taxim_balls_key() -> str:
+    """The digest of :func:`taxim_ball_presses`'s rendering code, the circle fit's and
+    Taxim's and jax's versions."""
+    return hashlib.sha256("".join(
+        [inspect.getsource(_render_taxim_balls), inspect.getsource(flat_gel_taxim),
+         inspect.getsource(fit_circle), repr(_TAXIM_CASES), importlib.metadata.version("taxim"),
+         importlib.metadata.version("jax")]).encode()).hexdigest()[:20]
+
+
+def test_the_shipped_ball_renders_are_the_ones_read():
+    """The shipped ball renders are the ones :func:`taxim_ball_presses` reads today (else
+    dead weight, or minutes of Taxim on a fresh clone)."""
+    pytest.importorskip("taxim")
+    pytest.importorskip("jax")
+    shipped = {p.name for p in SHIPPED_TAXIM.glob("taxim_balls_*.npz")}
+    assert shipped == {f"taxim_balls_{_taxim_balls_key()}.npz"}, (
+        "regenerate: delete tests/data/taxim/taxim_balls_*.npz and run `"
+        "TACTILEVISION_SHIP_TAXIM=1 python -m pytest tests/test_contact_edge.py`")
+
+
 @pytest.fixture(scope="module")
 def taxim_ball_presses():
     """Ball presses drawn by Taxim's renderer (flat gel, contact_scale 0) with Taxim's own
     deformed gel: ``{shadow: [(frame, reference, centre, gel_edge_px)]}``, the gel edge
     being the radius where Taxim's gel tilt is largest (a circle fitted over 120 rays).
 
-    Kept in the package's disk cache (``tests/taxim_balls_<digest>.npz``: the digest of
-    this rendering code, the circle fit's and Taxim's and jax's versions), so the renders
-    are made once per machine and version."""
+    Shipped with the tests (``tests/data/taxim/taxim_balls_<digest>.npz``: the digest of
+    this rendering code, the circle fit's and Taxim's and jax's versions; written by
+    running this module with ``TACTILEVISION_SHIP_TAXIM=1``), else kept in the package's
+    disk cache under the same name, so the renders are made once per machine and version
+    where the digest changes."""
     pytest.importorskip("taxim")
     pytest.importorskip("jax")
-    key = hashlib.sha256("".join(
-        [inspect.getsource(_render_taxim_balls), inspect.getsource(flat_gel_taxim),
-         inspect.getsource(fit_circle), repr(_TAXIM_CASES), importlib.metadata.version("taxim"),
-         importlib.metadata.version("jax")]).encode()).hexdigest()[:20]
-    path = cache_root() / "tests" / f"taxim_balls_{key}.npz"
+    shipped = SHIPPED_TAXIM / f"taxim_balls_{_taxim_balls_key()}.npz"
+    path = cache_root() / "tests" / shipped.name
+    arrays = None
+    for where in (shipped, path):
+        try:
+            with np.load(where) as z:
+                arrays = {k: z[k] for k in z.files}
+            break
+        except (OSError, KeyError, ValueError):
+            pass                               # not rendered yet, or damaged: render
+    if arrays is None:
+        arrays = {}
+        for shadow, presses in _render_taxim_balls().items():
+            arrays[f"ref_{int(shadow)}"] = presses[0][1]
+            arrays[f"edge_{int(shadow)}"] = np.array([p[3] for p in presses])
+            for i, p in enumerate(presses):
+                arrays[f"frame_{int(shadow)}_{i}"] = p[0]
+        savez_atomic(path, **arrays)           # a cache only saves time: False is fine
+    if os.environ.get("TACTILEVISION_SHIP_TAXIM") == "1" and not shipped.is_file():
+        shipped.parent.mkdir(parents=True, exist_ok=True)
+        np.savez_compressed(shipped, **arrays)
     try:
-        with np.load(path) as z:
-            return {shadow: [(z[f"frame_{int(shadow)}_{i}"], z[f"ref_{int(shadow)}"],
-                              tuple(c), float(z[f"edge_{int(shadow)}"][i]))
-                             for i, (_, _, c) in enumerate(presses)]
-                    for shadow, presses in _TAXIM_CASES.items()}
-    except (OSError, KeyError, ValueError):
-        pass                                   # not rendered yet, or damaged: render
-    out = _render_taxim_balls()
-    arrays = {}
-    for shadow, presses in out.items():
-        arrays[f"ref_{int(shadow)}"] = presses[0][1]
-        arrays[f"edge_{int(shadow)}"] = np.array([p[3] for p in presses])
-        for i, p in enumerate(presses):
-            arrays[f"frame_{int(shadow)}_{i}"] = p[0]
-    savez_atomic(path, **arrays)               # a cache only saves time: False is fine
-    return out
+        return {shadow: [(arrays[f"frame_{int(shadow)}_{i}"], arrays[f"ref_{int(shadow)}"],
+                          tuple(c), float(arrays[f"edge_{int(shadow)}"][i]))
+                         for i, (_, _, c) in enumerate(presses)]
+                for shadow, presses in _TAXIM_CASES.items()}
+    except KeyError as exc:
+        raise AssertionError(f"{shipped}: no {exc} (delete it to render again)") from None
 
 
 def _render_taxim_balls():

@@ -23,6 +23,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from _data import SHIPPED_TAXIM
 
 from tactilevision import InputError, calibrate_session
 from tactilevision._cache import cache_root
@@ -159,12 +160,6 @@ def test_taxim_faint_shading_is_not_a_band(taxim_bevel):
     assert faint.contrast < MIN_BAND_CONTRAST * long.contrast
 
 
-#: Renders shipped with the tests (``tests/data/taxim/taxim_<digest>``, the digest of
-#: :func:`_taxim_key`): the sessions the default suite reads, so that a fresh clone does
-#: not spend a minute and a half of Taxim on them. Written by running this module with
-#: ``TACTILEVISION_SHIP_TAXIM=1``; a changed generator or Taxim gives new digests, which
-#: are rendered live until shipped again (:func:`test_shipped_renders_are_the_ones_read`).
-SHIPPED_TAXIM = Path(__file__).resolve().parent / "data" / "taxim"
 GENERATOR = Path(__file__).resolve().parents[1] / "benchmarks" / "taxim_gauge_session.py"
 #: the default suite's renders: a 12 deg bevel's narrow bands, a thin mark without shadows
 STEEP_KW = dict(presses=5, fps=10.0, seed=3, theta_deg=12.0, offset_mm=4.0,
@@ -230,7 +225,7 @@ def test_shipped_renders_are_the_ones_read():
     (else it is dead weight, or the suite renders for minutes what it should read)."""
     pytest.importorskip("taxim")
     pytest.importorskip("jax")
-    shipped = {p.name for p in SHIPPED_TAXIM.glob("taxim_*")}
+    shipped = {p.name for p in SHIPPED_TAXIM.glob("taxim_*") if p.is_dir()}
     wanted = {f"taxim_{_taxim_key(**kw)}" for kw in (STEEP_KW, FAINT_KW)}
     assert shipped == wanted, ("regenerate tests/data/taxim: delete it and run `"
                                "TACTILEVISION_SHIP_TAXIM=1 python -m pytest "
