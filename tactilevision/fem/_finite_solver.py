@@ -87,7 +87,9 @@ class ConstrainedNewton:
         Dirichlet and free dofs.
     cache : tuple or None
         (x, K(x), LU of K_FF) of the last linearisation; set to None whenever
-        the problem changes at equal x (contact set, depth).
+        the problem changes at equal x (contact set, depth). A problem whose
+        ``constant_tangent`` is True (linear elasticity) keeps it for every x
+        until its free dofs change.
     """
 
     def __init__(self, problem: AxisymmetricNeoHookean | IndentationProblem,
@@ -105,7 +107,9 @@ class ConstrainedNewton:
 
     def linearise(self, x: np.ndarray) -> tuple[sp.csr_matrix, _Factorised]:
         """Tangent K(x) and the factorised K_FF (cached for the last x)."""
-        if self.cache is None or not np.array_equal(self.cache[0], x):
+        # a constant tangent (linear elasticity) is factorised once per set of free dofs
+        if self.cache is None or not (np.array_equal(self.cache[0], x)
+                                      or getattr(self.problem, "constant_tangent", False)):
             k = self.problem.tangent(x)
             self.cache = (x.copy(), k, _Factorised(k[self.free][:, self.free].tocsc()))
         return self.cache[1], self.cache[2]

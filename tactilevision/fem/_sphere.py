@@ -339,6 +339,9 @@ class _LinearSolid:
     """K0 x - f: the Neo-Hookean tangent at the undeformed state (linear elasticity),
     less the nodal forces f (Coulomb contact's slip forces)."""
 
+    #: K0 at every x: :class:`ConstrainedNewton` factorises it once per set of free dofs
+    constant_tangent = True
+
     def __init__(self, solid: AxisymmetricNeoHookean) -> None:
         self.k0 = solid.tangent(np.zeros(solid.n_dofs)).tocsr()
         self.n_dofs = solid.n_dofs
@@ -651,7 +654,8 @@ class _Sweep:
         if self.coulomb:
             self.problem.f_ext[:] = 0.0
             self.problem.f_ext[self.surf.ur] = self.slip_force
-        self.newton.cache = None
+        if not self.linear:      # K0 does not change with depth, nor with the slip forces
+            self.newton.cache = None
         full = np.zeros(self.solid.n_dofs)
         full[fixed] = target                           # set_fixed drops repeated dofs
         return self.newton.solve(x, full[self.newton.fixed])
