@@ -115,8 +115,12 @@ class ConstrainedNewton:
         return self.cache[1], self.cache[2]
 
     def solve(self, x: np.ndarray, target: np.ndarray, *, max_iter: int = 30,
-              rtol: float = 1e-9) -> tuple[np.ndarray, int, bool]:
-        """Newton from `x` to R_F = 0 with x_D = `target`; returns (x, iterations, ok)."""
+              rtol: float = 1e-9, tangent_after: bool = True) -> tuple[np.ndarray, int, bool]:
+        """Newton from `x` to R_F = 0 with x_D = `target`; returns (x, iterations, ok).
+
+        `tangent_after` False skips the factorised tangent at the converged x (kept in
+        :attr:`cache` for dP/dw and the next predictor) where the caller has no use for
+        it: a quarter of a finite-strain sphere sweep's factorisations."""
         prob, free, fixed = self.problem, self.free, self.fixed
         r = prob.residual(x)
         history: list[float] = []
@@ -145,7 +149,8 @@ class ConstrainedNewton:
             small = np.linalg.norm(r[free]) <= rtol * np.linalg.norm(r[fixed]) or (
                 alpha == 1.0 and np.max(np.abs(dx)) <= 1e-10 * np.max(np.abs(x)))
             if np.array_equal(x[fixed], target) and small:
-                self.linearise(x)  # converged tangent: dP/dw and the next predictor
+                if tangent_after:
+                    self.linearise(x)  # converged tangent: dP/dw and the next predictor
                 return x, it, True
         return x, max_iter, False
 

@@ -658,7 +658,8 @@ class _Sweep:
             self.newton.cache = None
         full = np.zeros(self.solid.n_dofs)
         full[fixed] = target                           # set_fixed drops repeated dofs
-        return self.newton.solve(x, full[self.newton.fixed])
+        # no tangent at the converged x: the next solve starts from a fresh one
+        return self.newton.solve(x, full[self.newton.fixed], tangent_after=self.linear)
 
     def settle_coulomb(self, x: np.ndarray, w: float) -> tuple[np.ndarray, int, bool]:
         """Solve at depth w under Coulomb friction: contact, stick and slip sets and the
