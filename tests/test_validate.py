@@ -110,13 +110,17 @@ def test_bad_input(kwargs, exc, match):
 # ------------------------------------------------------------------- the CLI
 
 
-def _table(folder, presses, n=None):
+def _table(folder, presses, gel_radius_mm=40.0):
+    """The presses as a measurements table (every digit kept: the command fits what the
+    fixture fitted) beside a session.toml naming the pad's radius."""
     w, p = presses
-    rows = "".join(f"{i},{x:.4f},{f:.5f}\n" for i, (x, f) in enumerate(zip(w, p, strict=True)))
+    rows = "".join(f"{i},{float(x)!r},{float(f)!r}\n"
+                   for i, (x, f) in enumerate(zip(w, p, strict=True)))
     csv = folder / "measurements.csv"
     csv.write_text("press,depth_mm,force_n\n" + rows)
     (folder / "session.toml").write_text(
-        f"[sensor]\ngel_thickness_mm = {H}\ngel_radius_mm = 40.0\n\n[indenter]\nradius_mm = {A}\n")
+        f"[sensor]\ngel_thickness_mm = {H}\ngel_radius_mm = {gel_radius_mm}\n\n"
+        f"[indenter]\nradius_mm = {A}\n")
     return csv
 
 
@@ -137,7 +141,8 @@ def test_cli_validate_given_values(tmp_path, capsys, presses):
 
 
 def test_cli_validate_fits_first(tmp_path, capsys, presses, fitted):
-    csv = _table(tmp_path, presses)
+    # the pad 20 h, the default's: the command's sweep is the one the fixture's fit validated
+    csv = _table(tmp_path, presses, gel_radius_mm=20 * H)
     assert main(["validate", str(csv)]) == 0
     out = capsys.readouterr().out
     assert f"E = {fitted.E_mpa:.4f} MPa" in out and "fit (fem beta table)" in out
