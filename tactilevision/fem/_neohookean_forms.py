@@ -207,6 +207,14 @@ class AxisymmetricNeoHookean:
         dofs = np.concatenate([self.udofs, self.pdofs])                 # (15, E)
         self._rows = np.broadcast_to(dofs[:, None, :], (15, 15, dofs.shape[1])).ravel()
         self._cols = np.broadcast_to(dofs[None, :, :], (15, 15, dofs.shape[1])).ravel()
+        # the tangent's sparsity, once: each element entry's slot in the CSR data (the
+        # duplicates summed by bincount), and B with the points leading for batched products
+        lin = self._rows.astype(np.int64) * self.n_dofs + self._cols
+        uniq, self._slot = np.unique(lin, return_inverse=True)
+        self._indices = (uniq % self.n_dofs).astype(np.int32)
+        self._indptr = np.searchsorted(uniq // self.n_dofs,
+                                       np.arange(self.n_dofs + 1)).astype(np.int32)
+        self._Bt = np.ascontiguousarray(self.B.transpose(2, 3, 0, 1))  # (E, Q, 5, 12)
 
     def fields(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """f (5, E, Q) and p (E, Q) at the quadrature points for dofs `x`."""
@@ -256,11 +264,12 @@ class AxisymmetricNeoHookean:
         f, p = self.fields(x)
         _, g, H = jacobian(f)
         D = (self.iso_tangent(f) + p * H) * self.dv
-        DB = np.einsum("klen,ljen->kjen", D, self.B)
-        kuu = np.einsum("kien,kjen->ije", self.B, DB)                   # (12, 12, E)
+        DB = np.ascontiguousarray(D.transpose(2, 3, 0, 1)) @ self._Bt  # (E, Q, 5, 12)
+        kuu = np.einsum("eqki,eqkj->ije", self._Bt, DB, optimize=True)  # (12, 12, E)
         kup = np.einsum("kien,ken,jen->ije", self.B, g * self.dv, self.Np)  # (12, 3, E)
         kpp = -self.inv_bulk * np.einsum("ien,jen,en->ije", self.Np, self.Np, self.dv)
         ke = np.concatenate([np.concatenate([kuu, kup], axis=1),
                              np.concatenate([np.swapaxes(kup, 0, 1), kpp], axis=1)], axis=0)
-        return sp.csr_matrix((ke.ravel(), (self._rows, self._cols)),
+        data = np.bincount(self._slot, weights=ke.ravel(), minlength=self._indices.size)
+        return sp.csr_matrix((data, self._indices, self._indptr),
                              shape=(self.n_dofs, self.n_dofs))
