@@ -140,26 +140,27 @@ def taxim_lut(taxim_presses):
 
 
 #: Test files by their measured time from an empty suite cache, longest first (``pytest
-#: --durations=0``, summed per file: 758 s in all over 117 files on this project's 2-core
-#: machine; test_vernier_taxim.py 83 s, test_ball_depths.py 52, test_validate.py 48,
-#: test_fem_sphere.py 47, test_calibrate.py 47). pytest-xdist hands out whole files
-#: (``--dist loadfile``) in collection order (``--no-loadscope-reorder`` in pyproject.toml):
-#: the long files first and the many short ones after fill the two workers evenly, where
-#: the default order (files with the most tests first) left the longest files to the end,
-#: one worker busy alone. test_ball_caps.py is left to the end: its thick gel's FEM sweep
-#: is test_ball_depths.py's, read from the cache by then.
+#: --durations=0``, summed per file: 646 s in all on this project's 2-core machine;
+#: test_calibrate.py 52 s, test_validate.py 39, test_fem_sphere.py 36,
+#: test_fem_sphere_dome.py 29; test_config_strict.py's 30 s since cut to 9). pytest-xdist
+#: hands out whole files (``--dist loadfile``) in collection order
+#: (``--no-loadscope-reorder`` in pyproject.toml): the long files first and the many short
+#: ones after fill the two workers evenly, where the default order (files with the most
+#: tests first) left the longest files to the end, one worker busy alone. test_ball_caps.py
+#: is left to the end: its thick gel's FEM sweep is test_ball_depths.py's, read from the
+#: cache by then.
 LONGEST_FIRST = (
-    "test_vernier_taxim.py", "test_ball_depths.py", "test_validate.py", "test_fem_sphere.py",
-    "test_calibrate.py", "test_fem_sphere_dome.py", "test_config_strict.py", "test_plan.py",
-    "test_contact_edge.py", "test_docs.py", "test_ball_texture.py", "test_diagnose.py",
-    "test_forces_gelslim.py", "test_relaxation.py", "test_fem_pad.py", "test_batch.py",
-    "test_interrupts.py", "test_lut_mlp.py", "test_live.py", "test_fem_forces.py",
-    "test_cli_forces.py", "test_ball_fit.py", "test_fem_linear.py", "test_structure.py",
-    "test_diagnose_separation.py", "test_cli_optics.py", "test_noise_budget.py",
-    "test_forces_box.py", "test_plan_recommend.py", "test_crossing_statement.py",
-    "test_cli_contract.py", "test_fem_sphere_coulomb.py", "test_cli_help_imports.py",
-    "test_ramp.py", "test_history.py", "test_fuzz_inputs.py", "test_custom_effects.py",
-    "test_forces_session.py", "test_plan_effects.py", "test_fit_depth_uncertainty.py",
+    "test_calibrate.py", "test_validate.py", "test_fem_sphere.py", "test_fem_sphere_dome.py",
+    "test_plan.py", "test_ball_depths.py", "test_vernier_taxim.py", "test_forces_gelslim.py",
+    "test_relaxation.py", "test_docs.py", "test_ball_texture.py", "test_fem_pad.py",
+    "test_lut_mlp.py", "test_diagnose.py", "test_interrupts.py", "test_gs_sdk_net.py",
+    "test_batch.py", "test_live.py", "test_gradient_window.py", "test_config_strict.py",
+    "test_fem_linear.py", "test_cli_forces.py", "test_ball_fit.py", "test_structure.py",
+    "test_diagnose_separation.py", "test_fem_forces.py", "test_cli_optics.py",
+    "test_fem_beta_table.py", "test_forces_binning.py", "test_fem_finite.py",
+    "test_fem_forces_proof.py", "test_optics_load_by_name.py", "test_crossing_statement.py",
+    "test_history.py", "test_ramp.py", "test_fem_forces_grid.py", "test_noise_budget.py",
+    "test_forces_box.py", "test_io_source.py",
 )
 #: Files run after every other (:data:`LONGEST_FIRST`'s note).
 LAST = ("test_ball_caps.py",)

@@ -13,6 +13,7 @@ from pathlib import Path
 import pytest
 
 from tactilevision import InputError, InputWarning
+from tactilevision.cli import main
 from tactilevision.planning import read_design
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -40,15 +41,27 @@ def _design(tmp_path: Path, old: str, new: str) -> Path:
     ("hold_s = 1.0", "hold_sec = 1.0", "[plan] hold_sec is not a design key (did you mean "
      "hold_s?)"),
 ])
-def test_a_mistyped_value_names_file_table_and_key(tmp_path, old, new, fragment):
+def test_a_mistyped_value_names_file_table_and_key(tmp_path, capsys, old, new, fragment):
+    """The reader raises it, and the command says it in one line and exits 2 (run in this
+    process: :func:`test_the_command_says_it_in_one_line_from_a_shell` runs one case as a
+    shell does)."""
     path = _design(tmp_path, old, new)
     with pytest.raises(InputError) as err:
         read_design(path)
     assert fragment in str(err.value) and str(path) in str(err.value)
+    assert main(["plan", str(path)]) == 2
+    stderr = capsys.readouterr().err
+    assert "Traceback" not in stderr
+    assert stderr.count("\n") == 1 and fragment in stderr
+
+
+def test_the_command_says_it_in_one_line_from_a_shell(tmp_path):
+    path = _design(tmp_path, "repeats = 10", 'repeats = "ten"')
     r = subprocess.run([sys.executable, "-m", "tactilevision", "plan", str(path)],
                        capture_output=True, text=True)
     assert r.returncode == 2 and "Traceback" not in r.stderr
-    assert r.stderr.count("\n") == 1 and fragment in r.stderr
+    assert r.stderr.count("\n") == 1
+    assert "[plan] repeats must be a whole number, got 'ten'" in r.stderr
 
 
 def test_an_unknown_key_is_warned_with_the_nearest_and_the_default_used(tmp_path):
