@@ -197,3 +197,34 @@ def test_bad_ball_sessions_refused_naming_the_key(ball_session, tmp_path):
     (bad / "session.toml").write_text(toml.replace("radius_mm = 2.0", "radius_mm = 0.5"))
     with pytest.raises(InputError, match="too few to fit"):
         calibrate_ball_session(bad, law="linear")
+
+
+def test_a_sessions_depths_read_one_fem_sweep(tmp_path, monkeypatch):
+    """On a finite pad (the generator's 1000 mm) every press's circle, its dw/da, the force
+    check and the fit read one FEM sweep, the shallowest press's: read press by press they
+    asked for one per press's own depth (its sweep's first depth the largest of a few below
+    half the press's). A stand-in sweep (Hertz's a^2 = R w, force ratio 1) counts those
+    asked for."""
+    from types import SimpleNamespace
+
+    import tactilevision.mechanics._indenter as ind
+
+    keys = []
+
+    def hertz_sweep(radius_over_h, *rest):
+        keys.append((radius_over_h, *rest))
+        w = np.geomspace(rest[4], 0.05, 40)
+        return SimpleNamespace(w_over_h=w, hertz_ratio=np.ones_like(w),
+                               contact_radius=np.sqrt(radius_over_h * w))
+
+    folder = tmp_path / "session"           # three presses, shallowest to deepest
+    make_ball_session(folder, radius_mm=R, E_mpa=E, thickness_mm=H,
+                      contact_radii_mm=(0.6, 0.9, 1.2), repeats=1, fps=10.0)
+    monkeypatch.setattr(ind, "pad_sweep_result", hertz_sweep)
+    ind._pad_sweep.cache_clear()
+    try:
+        cal = calibrate_ball_session(folder, nu=0.5, law="linear")
+    finally:
+        ind._pad_sweep.cache_clear()
+    assert len(cal.used) == 3 and cal.depths.depth_mm.size == 3
+    assert len(set(keys)) == 1, sorted(set(keys))

@@ -351,11 +351,18 @@ class Sphere(Indenter):
         a = np.atleast_1d(np.asarray(contact_radius_mm, np.float64))
         h = _positive(thickness_mm, "thickness_mm")
         top = self.reach_mm(h, law, contact)
+        for ai in a.ravel():                        # checked before any table or sweep
+            if not (np.isfinite(ai) and ai >= 0):
+                raise InputError(f"contact radius {ai!r} mm: must be finite and >= 0")
+            if ai >= self.radius_mm:
+                raise InputError(f"contact radius {ai:.4g} mm is not smaller than the ball's "
+                                 f"radius {self.radius_mm:.4g} mm")
         # one sweep (on a finite pad) for every probe: the one the shallowest press needs,
         # its depth guessed by Hertz's a^2 = R w (a sweep per probe's own depth would be
         # up to five FEM sweeps, each minutes, for one inversion)
-        pos = a[np.isfinite(a) & (a > 0)]
-        shallowest = float(pos.min()) ** 2 / self.radius_mm / h if pos.size else None
+        pos = a[a > 0]
+        shallowest = (min(float(pos.min()) ** 2 / self.radius_mm, top) / h if pos.size
+                      else None)
 
         def radius_at(w: float) -> float:
             ratio = self._ratio("contact", np.array([w]), nu, h, law, contact, shallowest)
@@ -364,11 +371,6 @@ class Sphere(Indenter):
         a_top = radius_at(top)
         out = np.empty(a.size)
         for i, ai in enumerate(a.ravel()):
-            if not (np.isfinite(ai) and ai >= 0):
-                raise InputError(f"contact radius {ai!r} mm: must be finite and >= 0")
-            if ai >= self.radius_mm:
-                raise InputError(f"contact radius {ai:.4g} mm is not smaller than the ball's "
-                                 f"radius {self.radius_mm:.4g} mm")
             if ai > a_top:
                 raise InputError(f"contact radius {ai:.4g} mm is past the sphere table's "
                                  f"{a_top:.4g} mm (w = {top:.4g} mm on h = {h:g} mm)")

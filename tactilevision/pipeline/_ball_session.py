@@ -360,23 +360,42 @@ def circle_depths(circle: ContactCircle, indenter: Sphere, *, mm_per_px: float,
         Naming the frame: a contact radius the indenter's table does not reach or not
         smaller than the ball; or a bad scale.
     """
+    s = _scale(mm_per_px)
+    kw = {"nu": nu, "thickness_mm": thickness_mm, "law": law, "contact": contact}
+    try:
+        w, dw_da = _inverse(indenter, np.array([float(circle.radius_px) * s]), kw)
+    except InputError as exc:
+        raise InputError(f"{name}: {exc}") from None
+    return _circle_press(circle, s, float(w[0]), float(dw_da[0]), nu=nu, law=law,
+                         contact=indenter._contact(contact))
+
+
+def _scale(mm_per_px: float) -> float:
     s = float(mm_per_px)
     if not (np.isfinite(s) and s > 0):
         raise InputError(f"mm_per_px must be positive, got {mm_per_px!r}")
+    return s
+
+
+def _inverse(indenter: Sphere, a: np.ndarray, kw: dict) -> tuple[np.ndarray, np.ndarray]:
+    """Depths w (mm) of contact radii `a` (mm) and dw/da at each, all through one table or
+    FEM sweep (the shallowest press's: on a finite pad, one sweep for all, not one per
+    press's own depth)."""
+    w = np.asarray(indenter.depth_from_contact_radius(a, **kw), np.float64)
+    eps = 1e-4 * w
+    da_dw = (indenter.contact_radius(w + eps, **kw) - indenter.contact_radius(w - eps, **kw)
+             ) / (2 * eps)
+    return w, 1.0 / da_dw
+
+
+def _circle_press(circle: ContactCircle, s: float, w: float, dw_da: float, *, nu: float,
+                  law: str, contact: str) -> BallDepths:
+    """One press's :class:`BallDepths` from its circle, depth w (mm) and dw/da."""
     r = float(circle.radius_px)
     scale_px = max(r, CIRCLE_ERROR_RADIUS_PX)
     sd_px = float(np.hypot(CIRCLE_ERROR.radius_sd * scale_px, circle.radius_sd_px))
     bias_px = CIRCLE_ERROR.radius_bias * scale_px
     a = r * s
-    kw = {"nu": nu, "thickness_mm": thickness_mm, "law": law, "contact": contact}
-    try:
-        w = float(indenter.depth_from_contact_radius(np.array([a]), **kw)[0])
-    except InputError as exc:
-        raise InputError(f"{name}: {exc}") from None
-    eps = 1e-4 * w
-    da_dw = float(indenter.contact_radius(np.array([w + eps]), **kw)[0]
-                  - indenter.contact_radius(np.array([w - eps]), **kw)[0]) / (2 * eps)
-    dw_da = 1.0 / da_dw
     one = np.ones(1)
     return BallDepths(depth_mm=w * one, depth_std_mm=dw_da * sd_px * s * one,
                       depth_shared_mm=dw_da * bias_px * s * one, contact_radius_mm=a * one,
@@ -385,7 +404,7 @@ def circle_depths(circle: ContactCircle, indenter: Sphere, *, mm_per_px: float,
                       radius_bias_px=bias_px,
                       notes=(f"depths from the contact circles (the radial profile's edge "
                              f"about the colour edge's centre) through a(w) ({law}, "
-                             f"{indenter._contact(contact)}, nu = {nu:g}); circle radius "
+                             f"{contact}, nu = {nu:g}); circle radius "
                              "error 2.5 % of the radius or of 61 px, whichever is larger, "
                              "random and shared, and the profile's own sd",))
 
@@ -393,12 +412,14 @@ def circle_depths(circle: ContactCircle, indenter: Sphere, *, mm_per_px: float,
 def _circle_depths(session, ball: Sphere, frames: list[tuple[int, int, float]], nu: float,
                    law: str, frame_of: Callable[[int], np.ndarray]
                    ) -> tuple[list[int], BallDepths | None, list[Rejection]]:
-    """Each press's depth from its frame's circle, read alone so that one bad circle
-    rejects its press only: (indices of those read, their depths, the rejections)."""
+    """Each press's depth from its frame's circle, so that one bad circle rejects its press
+    only: (indices of those read, their depths, the rejections). The circles' depths are
+    read through one table or FEM sweep, the shallowest press's; where that refuses one,
+    each press alone, the refused one rejected."""
     cfg = session.config
     kw = dict(mm_per_px=cfg.mm_per_px, thickness_mm=cfg.gel_thickness_mm, nu=nu, law=law,
               contact=cfg.indenter_contact)
-    used, parts, rejected = [], [], []
+    found, rejected = [], []
     for i, (press, frame, t) in enumerate(frames):
         name = f"press {press} (frame {frame}, {session.frame_paths[frame].name})"
 
@@ -416,8 +437,21 @@ def _circle_depths(session, ball: Sphere, frames: list[tuple[int, int, float]], 
             reject("contact cut by the image's edge" if cut else "contact circle not trusted",
                    f"{name}: " + "; ".join(circle.problems))
             continue
+        found.append((i, name, circle, reject))
+    used, parts, w = [], [], None
+    try:
+        if not found:
+            raise InputError("no circle")
+        s = _scale(cfg.mm_per_px)
+        w, dw_da = _inverse(ball, np.array([c.radius_px for _, _, c, _ in found]) * s,
+                            {k: kw[k] for k in ("nu", "thickness_mm", "law", "contact")})
+    except InputError:
+        pass                                            # each alone: the refused one named
+    for k, (i, name, circle, reject) in enumerate(found):
         try:
-            parts.append(circle_depths(circle, ball, name=name, **kw))
+            parts.append(circle_depths(circle, ball, name=name, **kw) if w is None else
+                         _circle_press(circle, s, float(w[k]), float(dw_da[k]), nu=nu,
+                                       law=law, contact=ball._contact(kw["contact"])))
         except InputError as exc:
             reject("no depth from the circle", str(exc))
             continue
