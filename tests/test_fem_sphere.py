@@ -173,3 +173,20 @@ def test_a_finite_strain_sweep_factorises_once_per_newton_iteration(monkeypatch)
                              contact="tied", surface_cell=0.04, cache=False)
     assert res.complete and counts["iterations"] > 0
     assert counts["lu"] == counts["iterations"], counts
+
+
+def test_a_sphere_sweeps_cache_key_covers_the_code_it_runs():
+    """Every module of the package a sphere sweep imports (bar the cache's own reader)
+    enters its cache key: a change to the Newton solver or the Neo-Hookean forms misses
+    the old sweeps (the key once hashed _sphere.py alone, so such a change read sweeps
+    the old code had computed)."""
+    import ast
+    from pathlib import Path
+
+    import tactilevision.fem._sphere as sph
+
+    tree = ast.parse(Path(sph.__file__).read_text())
+    imported = {f"{node.module}.py" for node in ast.walk(tree)
+                if isinstance(node, ast.ImportFrom) and node.level == 1 and node.module}
+    assert imported - {"_sweep_cache.py"} <= set(sph.SPHERE_SOURCES) - {"_sphere.py"}
+    assert "_sphere.py" in sph.SPHERE_SOURCES

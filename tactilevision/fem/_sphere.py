@@ -569,12 +569,18 @@ def sphere_indentation(radius_over_h: float, nu: float, w_over_h: np.ndarray, *,
     return res
 
 
+#: The modules whose code decides a sphere sweep's numbers: this one (mesh, contact, load
+#: steps) and the solver and material forms it imports (their syntax trees enter the key).
+SPHERE_SOURCES = ("_sphere.py", "_finite_solver.py", "_neohookean_forms.py")
+
+
 @functools.lru_cache(maxsize=1)
 def _source_digest() -> str:
-    """SHA-256 of this module's code (docstrings and comments left out): a cached sphere
-    sweep misses when it changes (the flat punch's sweeps, keyed on their own modules,
-    are not touched)."""
-    return code_digest(Path(__file__))
+    """SHA-256 of :data:`SPHERE_SOURCES`' code (docstrings and comments left out): a cached
+    sphere sweep misses when any of them changes (the flat punch's sweeps, keyed on their
+    own modules, are not touched)."""
+    here = Path(__file__).resolve().parent
+    return code_digest(*(here / name for name in SPHERE_SOURCES))
 
 
 def _load_steps(w_req: np.ndarray, per: int, ds_max: float = np.inf) -> np.ndarray:
