@@ -385,3 +385,28 @@ def load_benchmark(name: str) -> types.ModuleType:
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     return mod
+
+
+@contextlib.contextmanager
+def hertz_pad_sweeps(monkeypatch, w_over_h_max: float):
+    """Stand in Hertz's ball (a^2 = R w, force ratio 1) for every finite pad's FEM sweep
+    (:func:`tactilevision.mechanics._indenter.pad_sweep_result`), from each sweep's first
+    depth to `w_over_h_max`: yields the list of sweep keys asked for, the sweeps'
+    in-memory cache cleared before and after."""
+    import tactilevision.mechanics._indenter as ind
+
+    keys: list[tuple] = []
+
+    def hertz_sweep(radius_over_h, *rest):
+        keys.append((radius_over_h, *rest))
+        w = np.geomspace(rest[4], w_over_h_max, 40)
+        return types.SimpleNamespace(w_over_h=w, hertz_ratio=np.ones_like(w),
+                                     contact_radius=np.sqrt(radius_over_h * w))
+
+    monkeypatch.setattr(ind, "pad_sweep_result", hertz_sweep)
+    ind._pad_sweep.cache_clear()
+    try:
+        yield keys
+    finally:
+        ind._pad_sweep.cache_clear()
+

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from _data import hertz_pad_sweeps
 
 from tactilevision import InputError
 from tactilevision.mechanics import Sphere, fit_indenter
@@ -88,26 +89,10 @@ def test_an_inversion_reads_one_sweep_for_all_its_probes(monkeypatch):
     sweep the shallowest press needs: one FEM sweep, not one per probe's own depth (three,
     a minute of FEM, on this file's thick gel). A stand-in sweep (Hertz's a^2 = R w)
     counts the sweeps asked for and gives the inverse its closed form."""
-    from types import SimpleNamespace
-
-    import tactilevision.mechanics._indenter as ind
-
-    keys = []
-
-    def hertz_sweep(radius_over_h, *rest):
-        keys.append((radius_over_h, *rest))
-        w = np.geomspace(rest[4], 0.02, 30)
-        return SimpleNamespace(w_over_h=w, hertz_ratio=np.ones_like(w),
-                               contact_radius=np.sqrt(radius_over_h * w))
-
-    monkeypatch.setattr(ind, "pad_sweep_result", hertz_sweep)
-    ind._pad_sweep.cache_clear()
-    try:
+    with hertz_pad_sweeps(monkeypatch, 0.02) as keys:
         a = np.array([0.6, 0.9, 1.2])
         w = Sphere(R, pad_radius_mm=PAD).depth_from_contact_radius(
             a, nu=0.5, thickness_mm=H, law="linear", contact="frictionless")
-    finally:
-        ind._pad_sweep.cache_clear()
     assert len(set(keys)) == 1, keys
     assert keys[0][5] == 0.0005       # the start 0.6 mm's depth (w/h 0.0018) needs
     np.testing.assert_allclose(w, a**2 / R, rtol=1e-6)

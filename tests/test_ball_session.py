@@ -14,6 +14,7 @@ import shutil
 
 import numpy as np
 import pytest
+from _data import hertz_pad_sweeps
 
 from tactilevision import InputError, default_calibration_path
 from tactilevision.cli import main
@@ -205,26 +206,10 @@ def test_a_sessions_depths_read_one_fem_sweep(tmp_path, monkeypatch):
     asked for one per press's own depth (its sweep's first depth the largest of a few below
     half the press's). A stand-in sweep (Hertz's a^2 = R w, force ratio 1) counts those
     asked for."""
-    from types import SimpleNamespace
-
-    import tactilevision.mechanics._indenter as ind
-
-    keys = []
-
-    def hertz_sweep(radius_over_h, *rest):
-        keys.append((radius_over_h, *rest))
-        w = np.geomspace(rest[4], 0.05, 40)
-        return SimpleNamespace(w_over_h=w, hertz_ratio=np.ones_like(w),
-                               contact_radius=np.sqrt(radius_over_h * w))
-
     folder = tmp_path / "session"           # three presses, shallowest to deepest
     make_ball_session(folder, radius_mm=R, E_mpa=E, thickness_mm=H,
                       contact_radii_mm=(0.6, 0.9, 1.2), repeats=1, fps=10.0)
-    monkeypatch.setattr(ind, "pad_sweep_result", hertz_sweep)
-    ind._pad_sweep.cache_clear()
-    try:
+    with hertz_pad_sweeps(monkeypatch, 0.05) as keys:
         cal = calibrate_ball_session(folder, nu=0.5, law="linear")
-    finally:
-        ind._pad_sweep.cache_clear()
     assert len(cal.used) == 3 and cal.depths.depth_mm.size == 3
     assert len(set(keys)) == 1, sorted(set(keys))

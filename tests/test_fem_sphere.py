@@ -113,6 +113,19 @@ def test_bad_arguments_are_named():
         sphere_mesh(5.0, 0.05, pad_radius_over_h=6.0)
 
 
+def _counted_factorisations(counts: dict):
+    """:class:`~tactilevision.fem._finite_solver._Factorised` adding 1 to ``counts['lu']``
+    per factorisation."""
+    import tactilevision.fem._finite_solver as fs
+
+    class Counted(fs._Factorised):
+        def __init__(self, k_ff):
+            counts["lu"] += 1
+            super().__init__(k_ff)
+
+    return Counted
+
+
 def test_a_linear_sweep_factorises_once_per_contact_set(monkeypatch):
     """Small strain: K0 is the same at every depth, so a sweep factorises it once per set
     of held nodes at most, not at every Newton iteration (twice per solve before), and
@@ -123,18 +136,13 @@ def test_a_linear_sweep_factorises_once_per_contact_set(monkeypatch):
 
     counts = {"lu": 0, "solve": 0}
 
-    class Counted(fs._Factorised):
-        def __init__(self, k_ff):
-            counts["lu"] += 1
-            super().__init__(k_ff)
-
     solve = sph._Sweep._solve
 
     def counted_solve(self, x, w):
         counts["solve"] += 1
         return solve(self, x, w)
 
-    monkeypatch.setattr(fs, "_Factorised", Counted)
+    monkeypatch.setattr(fs, "_Factorised", _counted_factorisations(counts))
     monkeypatch.setattr(sph._Sweep, "_solve", counted_solve)
     R, w = 0.5, np.array([0.01, 0.02, 0.04])
     kw = dict(model="linear", contact="frictionless", surface_cell=0.04, cache=False)
@@ -155,11 +163,6 @@ def test_a_finite_strain_sweep_factorises_once_per_newton_iteration(monkeypatch)
 
     counts = {"lu": 0, "iterations": 0}
 
-    class Counted(fs._Factorised):
-        def __init__(self, k_ff):
-            counts["lu"] += 1
-            super().__init__(k_ff)
-
     solve = fs.ConstrainedNewton.solve
 
     def counted(self, *args, **kwargs):
@@ -167,7 +170,7 @@ def test_a_finite_strain_sweep_factorises_once_per_newton_iteration(monkeypatch)
         counts["iterations"] += out[1]
         return out
 
-    monkeypatch.setattr(fs, "_Factorised", Counted)
+    monkeypatch.setattr(fs, "_Factorised", _counted_factorisations(counts))
     monkeypatch.setattr(fs.ConstrainedNewton, "solve", counted)
     res = sphere_indentation(0.5, 0.45, np.array([0.01, 0.02]), model="neo_hookean",
                              contact="tied", surface_cell=0.04, cache=False)
