@@ -67,6 +67,26 @@ class BallDepths:
     notes: tuple[str, ...] = ()
 
 
+def contact_depths(indenter: Indenter, a: np.ndarray, kw: dict
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """Depths w (mm) of contact radii `a` (mm, (N,)) and dw/da at each (central differences,
+    a step of 1e-4 w), all read through one table or FEM sweep: on a finite pad the
+    shallowest press's, not one per press's own depth. `kw`: the indenter's ``nu``,
+    ``thickness_mm``, ``law`` and ``contact``.
+
+    Raises
+    ------
+    InputError
+        From :meth:`~tactilevision.mechanics.Indenter.depth_from_contact_radius`, for the
+        first radius it refuses.
+    """
+    w = np.asarray(indenter.depth_from_contact_radius(a, **kw), np.float64)
+    eps = 1e-4 * w
+    da_dw = (indenter.contact_radius(w + eps, **kw) - indenter.contact_radius(w - eps, **kw)
+             ) / (2 * eps)
+    return w, 1.0 / da_dw
+
+
 def ball_press_depths(frames: np.ndarray, reference: np.ndarray, indenter: Indenter, *,
                       mm_per_px: float, thickness_mm: float, nu: float = 0.5,
                       law: str = "neo_hookean", contact: str | None = None,
@@ -133,7 +153,7 @@ def ball_press_depths(frames: np.ndarray, reference: np.ndarray, indenter: Inden
     a = radii * s
     kw = {"nu": nu, "thickness_mm": thickness_mm, "law": law, "contact": contact}
     try:        # every press at once: one FEM sweep for all on a finite pad
-        w = np.asarray(indenter.depth_from_contact_radius(a, **kw), np.float64)
+        w, dw_da = contact_depths(indenter, a, kw)
     except InputError:
         for i, ai in enumerate(a):      # the press it refuses, named
             try:
@@ -141,10 +161,6 @@ def ball_press_depths(frames: np.ndarray, reference: np.ndarray, indenter: Inden
             except InputError as exc:
                 raise InputError(f"{names[i]}: {exc}") from None
         raise
-    eps = 1e-4 * float(np.min(w))
-    da_dw = (indenter.contact_radius(w + eps, **kw) - indenter.contact_radius(w - eps, **kw)
-             ) / (2 * eps)
-    dw_da = 1.0 / da_dw
     sd_px = circle_error.radius_sd * float(error_radius_px)
     bias_px = circle_error.radius_bias * float(error_radius_px)
     return BallDepths(depth_mm=w, depth_std_mm=dw_da * sd_px * s,

@@ -43,7 +43,7 @@ from ..optics import (
     find_contact_circle,
 )
 from ..viz import ball_calibration_figure
-from ._ball import CIRCLE_ERROR_RADIUS_PX, BallDepths
+from ._ball import CIRCLE_ERROR_RADIUS_PX, BallDepths, contact_depths
 from ._ball_caps import CAP_PRESS_SD, CAP_SCALE_SD, BallCaps, ball_press_caps
 from ._steps import read_force_zero
 
@@ -363,7 +363,7 @@ def circle_depths(circle: ContactCircle, indenter: Sphere, *, mm_per_px: float,
     s = _scale(mm_per_px)
     kw = {"nu": nu, "thickness_mm": thickness_mm, "law": law, "contact": contact}
     try:
-        w, dw_da = _inverse(indenter, np.array([float(circle.radius_px) * s]), kw)
+        w, dw_da = contact_depths(indenter, np.array([float(circle.radius_px) * s]), kw)
     except InputError as exc:
         raise InputError(f"{name}: {exc}") from None
     return _circle_press(circle, s, float(w[0]), float(dw_da[0]), nu=nu, law=law,
@@ -375,17 +375,6 @@ def _scale(mm_per_px: float) -> float:
     if not (np.isfinite(s) and s > 0):
         raise InputError(f"mm_per_px must be positive, got {mm_per_px!r}")
     return s
-
-
-def _inverse(indenter: Sphere, a: np.ndarray, kw: dict) -> tuple[np.ndarray, np.ndarray]:
-    """Depths w (mm) of contact radii `a` (mm) and dw/da at each, all through one table or
-    FEM sweep (the shallowest press's: on a finite pad, one sweep for all, not one per
-    press's own depth)."""
-    w = np.asarray(indenter.depth_from_contact_radius(a, **kw), np.float64)
-    eps = 1e-4 * w
-    da_dw = (indenter.contact_radius(w + eps, **kw) - indenter.contact_radius(w - eps, **kw)
-             ) / (2 * eps)
-    return w, 1.0 / da_dw
 
 
 def _circle_press(circle: ContactCircle, s: float, w: float, dw_da: float, *, nu: float,
@@ -443,7 +432,7 @@ def _circle_depths(session, ball: Sphere, frames: list[tuple[int, int, float]], 
         if not found:
             raise InputError("no circle")
         s = _scale(cfg.mm_per_px)
-        w, dw_da = _inverse(ball, np.array([c.radius_px for _, _, c, _ in found]) * s,
+        w, dw_da = contact_depths(ball, np.array([c.radius_px for _, _, c, _ in found]) * s,
                             {k: kw[k] for k in ("nu", "thickness_mm", "law", "contact")})
     except InputError:
         pass                                            # each alone: the refused one named
