@@ -76,3 +76,26 @@ def test_the_suite_writes_its_own_cache_never_the_users():
                            capture_output=True, text=True, timeout=60, check=True)
     assert cache_root() == suite == Path(child.stdout.strip())
     assert suite != users and users not in suite.parents
+
+
+def test_a_tables_cache_path_covers_the_code_that_tabulates(monkeypatch):
+    """A network's disk-cached gradient table is keyed on the code of the tabulation, the
+    network's inputs and the gradients from normals, and on every module the tabulation
+    imports from the package (the key once held the format number alone, so a changed
+    tabulation read tables the old code had written until someone bumped it)."""
+    import ast
+
+    import tactilevision.optics._reconstructor as rec
+    import tactilevision.optics._table as table_module
+
+    tree = ast.parse(Path(table_module.__file__).read_text())
+    imported = {f"{node.module}.py" for node in ast.walk(tree)
+                if isinstance(node, ast.ImportFrom) and node.level == 1 and node.module}
+    # the LUT and the first-order kernel make other tables, not the network's
+    assert imported - {"_lut.py", "_table_kernel.py", "_features.py"} <= set(rec.TABLE_SOURCES)
+    assert "_table.py" in rec.TABLE_SOURCES
+    key = (b"net", b"ref", (4, 4), (0.0,), (1.0,), 64, False, 40, 0)
+    before = rec._table_cache_path(key)
+    monkeypatch.setattr(rec, "_table_source_digest", lambda: "0" * 64)
+    after = rec._table_cache_path(key)
+    assert after != before and after.parent == before.parent

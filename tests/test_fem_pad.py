@@ -272,6 +272,27 @@ def test_cache_key_changes_with_every_input():
     assert same.layers == 2 and same.key == keys[0]
 
 
+def test_a_pads_cache_key_covers_the_code_that_builds_it(monkeypatch):
+    """The key changes with the code of the mesh and the condensation, and every package
+    module _pad imports that computes (not the cache's own reader) is hashed: the key once
+    held the inputs and the format alone, so a changed mesh read matrices the old code had
+    built."""
+    import ast
+    from pathlib import Path
+
+    import tactilevision.fem._pad as pad_module
+    import tactilevision.fem._pad_cache as pc
+
+    tree = ast.parse(Path(pad_module.__file__).read_text())
+    imported = {f"{node.module}.py" for node in ast.walk(tree)
+                if isinstance(node, ast.ImportFrom) and node.level == 1 and node.module}
+    assert imported - {"_pad_cache.py"} <= set(pc.PAD_SOURCES)
+    assert "_pad.py" in pc.PAD_SOURCES
+    before = pad_surface_stiffness(**SMALL, cache=False).key
+    monkeypatch.setattr(pc, "_source_digest", lambda: "0" * 64)
+    assert pad_surface_stiffness(**SMALL, cache=False).key != before
+
+
 @pytest.mark.parametrize("damage", ["flip", "truncate", "garbage", "empty"])
 def test_corrupt_cache_file_is_rebuilt(tmp_path, damage):
     good = pad_surface_stiffness(**SMALL, cache_dir=tmp_path)

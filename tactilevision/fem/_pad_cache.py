@@ -12,6 +12,7 @@ reported as :class:`CacheError` and the caller rebuilds.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
 import os
@@ -23,14 +24,24 @@ import numpy as np
 import scipy
 import skfem
 
-from .._cache import ENV_VAR, cache_root, prune_cache, touch
+from .._cache import ENV_VAR, cache_root, code_digest, prune_cache, touch
 
-__all__ = ["ENV_VAR", "FORMAT_VERSION", "CacheError", "cache_directory", "cache_key", "cache_path",
-           "pack_upper", "read_entry", "unpack_upper", "write_entry"]
+__all__ = ["ENV_VAR", "FORMAT_VERSION", "PAD_SOURCES", "CacheError", "cache_directory",
+           "cache_key", "cache_path", "pack_upper", "read_entry", "unpack_upper", "write_entry"]
 
 #: Bump when the stored arrays or their meaning change: old files then miss.
 FORMAT_VERSION = 1
 
+#: The modules whose code decides a pad's stiffness: the mesh and its condensation, and the
+#: normal Schur complement (their syntax trees enter the key, docstrings and comments not).
+PAD_SOURCES = ("_pad.py", "_pad_mesh.py")
+
+
+@functools.lru_cache(maxsize=1)
+def _source_digest() -> str:
+    """SHA-256 of :data:`PAD_SOURCES`' code: a cached pad misses when either changes."""
+    here = Path(__file__).resolve().parent
+    return code_digest(*(here / name for name in PAD_SOURCES))
 
 
 class CacheError(Exception):
@@ -46,8 +57,11 @@ def cache_directory(cache_dir: str | os.PathLike | None) -> Path:
 
 
 def cache_key(inputs: dict) -> str:
-    """SHA-256 hex digest of the inputs (JSON, sorted keys) and :data:`FORMAT_VERSION`."""
-    text = json.dumps({"format": FORMAT_VERSION, **inputs}, sort_keys=True)
+    """SHA-256 hex digest of the inputs (JSON, sorted keys), :data:`FORMAT_VERSION` and the
+    code of :data:`PAD_SOURCES` (a change to the mesh or the condensation misses the
+    matrices the old code built)."""
+    text = json.dumps({"format": FORMAT_VERSION, "code": _source_digest(), **inputs},
+                      sort_keys=True)
     return hashlib.sha256(text.encode()).hexdigest()
 
 

@@ -8,8 +8,10 @@ does only per-frame work.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 from collections import OrderedDict
+from pathlib import Path
 from typing import Literal
 
 import cv2
@@ -23,7 +25,7 @@ from .._blocks import (
     check_binning,
     unbin_blocks,
 )
-from .._cache import cache_root, savez_atomic, touch
+from .._cache import cache_root, code_digest, savez_atomic, touch
 from .._checks import InputError, check_array
 from .._morphology import fill_holes as _fill_holes
 from ._ball import gradients_from_normals
@@ -699,13 +701,27 @@ _TABLES_KEPT = 2
 #: Bump when the stored tabulation or its meaning changes: old files then miss.
 _TABLE_FORMAT = 3       # 3: first-order rows hold their plane at the colour origin
 
+#: The modules whose code decides a network's tabulation: the tabulation itself and the
+#: network's inputs and the gradients from its normals (their syntax trees enter the disk
+#: cache's key).
+TABLE_SOURCES = ("_table.py", "_mlp.py", "_ball.py")
+
+
+@functools.lru_cache(maxsize=1)
+def _table_source_digest() -> str:
+    """SHA-256 of :data:`TABLE_SOURCES`' code, docstrings and comments left out."""
+    here = Path(__file__).resolve().parent
+    return code_digest(*(here / name for name in TABLE_SOURCES))
+
 
 def _table_cache_path(key: tuple):
     """``<cache root>/optics/mlp_table_<sha256>.npz``: the root is ``$TACTILEVISION_CACHE``
     if set, else ``~/.cache/tactilevision`` (the FEM cache's); the digest covers the
-    network, the reference, the colour range, the bins, the position input, the format
-    and the onnxruntime version that evaluated the network."""
-    h = hashlib.sha256(repr((_TABLE_FORMAT, onnxruntime.__version__, key)).encode())
+    network, the reference, the colour range, the bins, the position input, the format,
+    the code that tabulates (:data:`TABLE_SOURCES`) and the onnxruntime version that
+    evaluated the network."""
+    h = hashlib.sha256(repr((_TABLE_FORMAT, _table_source_digest(), onnxruntime.__version__,
+                             key)).encode())
     return cache_root() / "optics" / f"mlp_table_{h.hexdigest()}.npz"
 
 
