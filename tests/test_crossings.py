@@ -424,3 +424,27 @@ def test_calibrate_says_when_the_crossings_scatter_beyond_their_brackets(softeni
     said = [w for w in calibrate_session(folder).warnings if "crossing forces scatter within" in w]
     assert said and "may be too narrow" in said[0]
     assert float(said[0].split("within indenters ")[1].split(" times")[0]) > 2.0
+
+
+def test_changes_that_fit_alike_come_with_the_presses_that_tell_them_apart():
+    """A gradient found with a softening along time listed beside it: one sentence names
+    both shapes along time together, the correlation of position and time in the table,
+    and the presses that separate them; a step and a trend along one column ask for more
+    presses along it."""
+    from tactilevision.diagnosis._diagnose_verdict import crossing_separating
+
+    nan = float("nan")
+    grad = CrossingTest("x_mm", "trend", -0.0166, 0.0067, nan, 0.0073, True, 3.32)
+    step = CrossingTest("time_s", "step", -0.077, 0.029, 32.4, 0.016, False, 3.93)
+    trend = CrossingTest("time_s", "trend", -0.0027, 0.0014, nan, 0.016, False, 2.89)
+    t = np.arange(10.0)
+    columns = {"x_mm": 2.0 * t + np.r_[1.0, -1.0].repeat(5), "time_s": t}
+    text = crossing_separating(grad, (step, trend), columns)
+    r = np.corrcoef(columns["x_mm"], t)[0, 1]
+    assert text.startswith("spatial_nonuniformity vs stiffness_step:time_s and "
+                           "stiffness_trend:time_s: presses that separate x_mm from time_s")
+    assert f"(their correlation {r:.2f} in this table)" in text
+    assert "one spot pressed again at the session's start and end" in text
+    assert "more presses along time_s" in crossing_separating(step, (trend,), columns)
+    # a column the table lacks: no correlation claimed
+    assert "correlation" not in crossing_separating(grad, (step,), {"time_s": t})

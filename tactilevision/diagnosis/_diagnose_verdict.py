@@ -21,6 +21,7 @@ from ._budget import law_slope
 from ._crossings import (
     CROSSING_UNITS,
     CrossingScan,
+    CrossingTest,
     crossing_measurements,
     crossing_sizes,
     crossing_step_places,
@@ -423,6 +424,12 @@ def _with_crossings(d: Diagnosis, columns: Mapping[str, np.ndarray],
     if found is None or not _open_verdict(d, depth_rule):
         return d
     also = tuple(t.effect for t in scan.equivalent)
+    along: dict[str, list[CrossingTest]] = {}
+    for t in scan.equivalent:
+        along.setdefault(t.column, []).append(t)
+    sep = "; ".join(crossing_separating(found, ts, columns) for ts in along.values()) or None
+    if sep is not None:
+        d = replace(d, message=d.message + f" To tell them apart: {sep}.")
     how = "crossings" if depth_rule == "mark" else "table"
     if how == "crossings":
         d = replace(d, message=d.message + f" Fit {found.effect} on the crossing forces "
@@ -434,8 +441,51 @@ def _with_crossings(d: Diagnosis, columns: Mapping[str, np.ndarray],
                        "ones, and its intervals are too narrow by about as much."))
     if found.kind == "trend" and found.column not in ("x_mm", "y_mm"):
         return _gives_way(d, missing_effect=None, unexplained_covariate=found.column,
-                          offered_effect=found.effect, equivalent_effects=also, fit_data=how)
-    return _gives_way(d, missing_effect=found.effect, equivalent_effects=also, fit_data=how)
+                          offered_effect=found.effect, equivalent_effects=also,
+                          separating_measurement=sep, fit_data=how)
+    return _gives_way(d, missing_effect=found.effect, equivalent_effects=also,
+                      separating_measurement=sep, fit_data=how)
+
+
+def crossing_separating(a: CrossingTest, others: Sequence[CrossingTest],
+                        columns: Mapping[str, np.ndarray]) -> str:
+    """The presses that would tell changes the crossing forces fit about as well apart.
+
+    Parameters
+    ----------
+    a : CrossingTest
+        The change found.
+    others : sequence of CrossingTest
+        Changes listed beside it, along one column (a step and a trend along time).
+    columns : mapping of str to (N,) array_like
+        The measurements table (its columns of the tests, where it has them).
+
+    Returns
+    -------
+    str
+        ``"<a> vs <others>: ..."``: along `a`'s column, more presses along it (a step is a
+        jump between neighbours, a trend a steady change); along another, presses that
+        vary one with the other held fixed, with their correlation in this table.
+    """
+    b = others[0]
+    head = f"{a.effect} vs {' and '.join(t.effect for t in others)}: "
+    if a.column == b.column:
+        return head + (f"more presses along {a.column} (a step shows as a jump between "
+                       "neighbouring presses, a trend as a steady change)")
+    x = np.asarray(columns.get(a.column, ()), np.float64)
+    y = np.asarray(columns.get(b.column, ()), np.float64)
+    r = math.nan
+    if x.shape == y.shape and x.size > 2:
+        ok = np.isfinite(x) & np.isfinite(y)
+        if ok.sum() > 2 and np.ptp(x[ok]) > 0 and np.ptp(y[ok]) > 0:
+            r = float(np.corrcoef(x[ok], y[ok])[0, 1])
+    corr = f" (their correlation {r:.2f} in this table)" if math.isfinite(r) else ""
+    both = {a.column, b.column}
+    if both & {"x_mm", "y_mm"} and both & {"time_s", "press"}:
+        return head + (f"presses that separate {a.column} from {b.column}{corr}: one spot "
+                       "pressed again at the session's start and end, and spots across the "
+                       "pad pressed in an order unrelated to time")
+    return head + f"presses that vary {a.column} with {b.column} held fixed{corr}"
 
 
 def indenter_shared(columns: Mapping[str, np.ndarray]
